@@ -1,0 +1,1 @@
+#include "soa/trisoup.h"

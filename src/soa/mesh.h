@@ -1,0 +1,42 @@
+/* A mesh as plain arrays, the form every writer takes. Cells are rows of 8
+ * node indices (unused entries are ignored), with a type each. Node order
+ * inside a cell follows VTK's convention for every type. */
+#ifndef MX_MESH_H
+#define MX_MESH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+enum { MX_TET = 0, MX_PYRAMID = 1, MX_PRISM = 2, MX_HEX = 3 };
+static const int mx_cell_nodes[4] = {4, 5, 6, 8};
+static const int mx_vtk_cell_type[4] = {10, 14, 13, 12};
+
+typedef struct {
+  const char *name;
+  int is_double;       /* 0: int32 values, 1: double values */
+  const int32_t *ivalues;
+  const double *dvalues;
+} mx_field;
+
+typedef struct {
+  size_t nnodes;
+  const double *xyz;      /* 3*nnodes, interleaved */
+  size_t ncells;
+  const uint8_t *type;    /* ncells, MX_TET .. MX_HEX */
+  const uint32_t *conn;   /* 8*ncells */
+  int ncell_fields;
+  const mx_field *cell_fields;
+  int npoint_fields;
+  const mx_field *point_fields;
+} mx_mesh_view;
+
+/* Writers (src/io/write_*.c). The file is written under a temporary name in
+ * the same directory and renamed at the end; on any failure (permission, full
+ * disk) the temporary is removed, a message names the file, and MX_EINPUT is
+ * returned. */
+int mx_write_vtk_legacy(const char *path, const mx_mesh_view *m, int binary);
+int mx_write_vtu(const char *path, const mx_mesh_view *m);
+/* Dispatch on the extension: .vtk (legacy binary), .vtu. */
+int mx_write_mesh(const char *path, const mx_mesh_view *m);
+
+#endif
