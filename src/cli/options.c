@@ -1,1 +1,174 @@
+#include "cli/cli.h"
+
 #include "common.h"
+#include "morton/morton.h"
+
+#include <errno.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *usage_text =
+    "usage: mixoct -i FILE [-i FILE2 ...] [requests] [-o OUT] [options]\n"
+    "       mixoct --demo [requests] [-o OUT] [options]\n"
+    "\n"
+    "Input (OFF, MDL, STL ascii/binary, OBJ; several -i form one domain, a\n"
+    "shell inside another is a hole):\n"
+    "  -i, --input FILE            a closed triangulated surface\n"
+    "      --demo                  the built-in brain-like surface\n"
+    "\n"
+    "Refinement requests (an octant takes the largest level asked):\n"
+    "  -s, --surface-level RL      octants meeting the input surface\n"
+    "  -a, --all-level RL          every octant of the domain\n"
+    "  -b, --regions FILE.reg      boxes with levels\n"
+    "  -r, --region-surface S RL   octants meeting or inside surface S\n"
+    "\n"
+    "Output:\n"
+    "  -o, --output OUT            .vtk (legacy binary) or .vtu; without -o\n"
+    "                              nothing is written (a dry run)\n"
+    "      --stage octree          stop after the balanced octree (leaves as\n"
+    "                              hexahedra with their level)\n"
+    "      --json                  one JSON summary as the last stdout line\n"
+    "      --quiet                 no summary, no warnings\n"
+    "\n"
+    "Execution:\n"
+    "      --threads N             OpenMP threads (default: all cores)\n"
+    "      --balance edges|recursive\n"
+    "                              edge infos while refining (default), or the\n"
+    "                              original recursive search at the end\n"
+    "  -h, --help                  this text\n"
+    "      --version               version and threads\n"
+    "\n"
+    "Examples:\n"
+    "  mixoct --demo -s 5 -o demo.vtu --stage octree\n"
+    "  mixoct -i cortex.off -s 7 --json\n"
+    "  mixoct -i outer.mdl -i inner.mdl -s 5 -b roi.reg -o shell.vtk\n";
+
+static int parse_level(const char *opt, const char *s, int *out) {
+  char *end;
+  errno = 0;
+  long v = s ? strtol(s, &end, 10) : -1;
+  if (!s || errno || *end || v < 0 || v > MX_MAX_LEVEL) {
+    mx_error(NULL, 0, "%s wants a level between 0 and %d, got '%s'", opt,
+             MX_MAX_LEVEL, s ? s : "");
+    return MX_EINPUT;
+  }
+  *out = (int)v;
+  return MX_OK;
+}
+
+static int need_arg(int i, int argc, const char *opt) {
+  if (i + 1 >= argc) {
+    mx_error(NULL, 0, "%s needs an argument (see mixoct --help)", opt);
+    return MX_EINPUT;
+  }
+  return MX_OK;
+}
+
+int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
+  memset(o, 0, sizeof *o);
+  o->req.s_level = -1;
+  o->req.a_level = -1;
+  o->stage = MX_STAGE_OCTREE;
+  o->balance = MX_BALANCE_EDGES;
+  *exit_now = 0;
+  for (int i = 1; i < argc; i++) {
+    const char *a = argv[i];
+#define IS(s, l) (strcmp(a, s) == 0 || strcmp(a, l) == 0)
+    if (IS("-h", "--help")) {
+      fputs(usage_text, stdout);
+      *exit_now = 1;
+      return MX_OK;
+    } else if (strcmp(a, "--version") == 0) {
+      printf("mixoct 0.1.0 (OpenMP, %d threads available)\n",
+             omp_get_max_threads());
+      *exit_now = 1;
+      return MX_OK;
+    } else if (IS("-i", "--input")) {
+      MX_CHECK(need_arg(i, argc, a));
+      if (o->ninputs == MX_MAX_INPUTS) {
+        mx_error(NULL, 0, "at most %d inputs", MX_MAX_INPUTS);
+        return MX_EINPUT;
+      }
+      o->inputs[o->ninputs++] = argv[++i];
+    } else if (strcmp(a, "--demo") == 0) {
+      o->demo = 1;
+    } else if (IS("-s", "--surface-level")) {
+      MX_CHECK(need_arg(i, argc, a));
+      MX_CHECK(parse_level(a, argv[++i], &o->req.s_level));
+    } else if (IS("-a", "--all-level")) {
+      MX_CHECK(need_arg(i, argc, a));
+      MX_CHECK(parse_level(a, argv[++i], &o->req.a_level));
+    } else if (IS("-b", "--regions")) {
+      MX_CHECK(need_arg(i, argc, a));
+      o->regions_file = argv[++i];
+    } else if (IS("-r", "--region-surface")) {
+      if (i + 2 >= argc) {
+        mx_error(NULL, 0, "%s needs a surface and a level", a);
+        return MX_EINPUT;
+      }
+      if (o->nregion_surf == MX_MAX_REGIONS) {
+        mx_error(NULL, 0, "at most %d region surfaces", MX_MAX_REGIONS);
+        return MX_EINPUT;
+      }
+      o->region_surf[o->nregion_surf] = argv[++i];
+      MX_CHECK(parse_level(a, argv[++i], &o->req.rlevel[o->nregion_surf]));
+      o->nregion_surf++;
+    } else if (IS("-o", "--output")) {
+      MX_CHECK(need_arg(i, argc, a));
+      o->output = argv[++i];
+    } else if (strcmp(a, "--threads") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      char *end;
+      long v = strtol(argv[++i], &end, 10);
+      if (*end || v < 1 || v > 4096) {
+        mx_error(NULL, 0, "--threads wants a positive count, got '%s'", argv[i]);
+        return MX_EINPUT;
+      }
+      o->threads = (int)v;
+    } else if (strcmp(a, "--json") == 0) {
+      o->json = 1;
+    } else if (strcmp(a, "--quiet") == 0) {
+      o->quiet = 1;
+    } else if (strcmp(a, "--stage") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      const char *s = argv[++i];
+      if (strcmp(s, "octree") == 0)
+        o->stage = MX_STAGE_OCTREE;
+      else if (strcmp(s, "transition") == 0 || strcmp(s, "full") == 0) {
+        mx_error(NULL, 0, "--stage %s is not implemented yet (this build stops "
+                          "at the balanced octree: --stage octree)", s);
+        return MX_EINPUT;
+      } else {
+        mx_error(NULL, 0, "--stage wants octree, transition or full, got '%s'", s);
+        return MX_EINPUT;
+      }
+    } else if (strcmp(a, "--balance") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      const char *s = argv[++i];
+      if (strcmp(s, "edges") == 0)
+        o->balance = MX_BALANCE_EDGES;
+      else if (strcmp(s, "recursive") == 0)
+        o->balance = MX_BALANCE_RECURSIVE;
+      else {
+        mx_error(NULL, 0, "--balance wants edges or recursive, got '%s'", s);
+        return MX_EINPUT;
+      }
+    } else {
+      mx_error(NULL, 0, "unknown option '%s' (see mixoct --help)", a);
+      return MX_EINPUT;
+    }
+#undef IS
+  }
+  if (o->ninputs == 0 && !o->demo) {
+    mx_error(NULL, 0, "no input: give -i FILE or --demo (see mixoct --help)");
+    return MX_EINPUT;
+  }
+  if (o->ninputs > 0 && o->demo) {
+    mx_error(NULL, 0, "--demo and -i exclude each other");
+    return MX_EINPUT;
+  }
+  o->req.nregions = o->nregion_surf;
+  return MX_OK;
+}

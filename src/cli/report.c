@@ -1,1 +1,40 @@
-#include "common.h"
+#include "cli/cli.h"
+
+#include <inttypes.h>
+#include <stdio.h>
+
+void mx_print_json(const mx_summary *s) {
+  printf("{\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
+         "\"nodes\": %zu, \"elements\": %zu, "
+         "\"by_type\": {\"hex\": %zu, \"prism\": 0, \"pyramid\": 0, \"tet\": 0}, "
+         "\"stage\": \"octree\", \"balance\": \"%s\", \"max_level\": %d, "
+         "\"octants\": %zu, \"edges\": %zu, \"edge_mb\": %.1f, "
+         "\"located\": %zu, \"split_requested\": %zu, \"split_balance\": %zu, "
+         "\"dropped\": %zu, "
+         "\"phases\": {\"read\": %.6f, \"grid\": %.6f, \"refine\": %.6f, "
+         "\"balance\": %.6f, \"write\": %.6f}, "
+         "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"threads\": %d, "
+         "\"jens_min\": 1.0, \"invalid\": 0}\n",
+         s->leaves, s->leaves_hash, s->nodes, s->leaves, s->leaves,
+         s->balance ? "recursive" : "edges", s->max_level, s->octants,
+         s->edges, (double)s->edge_bytes / 1048576.0, s->located,
+         s->split_requested, s->split_balance, s->dropped, s->ph.read,
+         s->ph.grid, s->ph.refine, s->ph.balance, s->ph.write, s->ph.total,
+         s->peak_rss_mb, s->threads);
+  fflush(stdout);
+}
+
+void mx_print_summary(const mx_summary *s) {
+  printf("mixoct: balanced octree (%s balance), %d thread(s)\n",
+         s->balance ? "recursive" : "edges", s->threads);
+  printf("  leaves        %12zu   (octants created %zu, dropped outside %zu)\n",
+         s->leaves, s->octants, s->dropped);
+  printf("  splits        %12zu requested, %zu for balance\n",
+         s->split_requested, s->split_balance);
+  printf("  nodes         %12zu   (leaf corners)\n", s->nodes);
+  printf("  time (s)      read %.3f  grid %.3f  refine %.3f  balance %.3f  "
+         "write %.3f  total %.3f\n",
+         s->ph.read, s->ph.grid, s->ph.refine, s->ph.balance, s->ph.write,
+         s->ph.total);
+  printf("  peak memory   %.0f MB\n", s->peak_rss_mb);
+}

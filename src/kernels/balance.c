@@ -1,1 +1,123 @@
+/* Balance while refining, with the edge infos (Jaillet & Lobos 2021,
+ * Algorithm 1, steps 2 and 3).
+ *
+ * When an octant O of level l is split, its children (level l+1) touch every
+ * leaf that O touched. A leaf M of level l-1 touching O is now two levels
+ * coarser than its new neighbours: it goes on `to_balance`. Such an M touches
+ * O's parent P along a whole face or edge of P (same level, aligned), so M has
+ * one of P's edges as its own, and the edge infos of P's 12 edges (level l-1)
+ * list it. Leaves coarser than l-1 cannot touch O (the tree was balanced).
+ * Splitting M may in turn unbalance leaves of level l-2, and so on: the list
+ * is drained one level at a time, each wave in index order (deterministic). */
+#include "kernels/refine.h"
+
 #include "common.h"
+#include "soa/scan.h"
+
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+int mx_octants_touch(uint64_t ka, int la, uint64_t kb, int lb) {
+  uint32_t a[3], b[3];
+  mx_morton_decode(ka, a);
+  mx_morton_decode(kb, b);
+  const uint32_t sa = mx_octant_size(la), sb = mx_octant_size(lb);
+  int open = 0;
+  for (int d = 0; d < 3; d++) {
+    const uint32_t a1 = a[d] + sa, b1 = b[d] + sb;
+    if (a1 < b[d] || b1 < a[d]) return 0; /* apart */
+    if (a[d] < b1 && b[d] < a1) open++;    /* overlap of positive length */
+  }
+  return open >= 1 && open < 3;
+}
+
+/* Leaves of level l-1 touching the just-split octant o (level l), pushed once
+ * each (the MX_OCT_QUEUED flag) onto buf. */
+static void find_unbalanced(mx_builder *B, uint32_t o, uint32_t **buf,
+                            size_t *n, size_t *cap) {
+  mx_octree *T = &B->oct;
+  const uint32_t p = T->parent[o];
+  if (p == MX_NONE) return;
+  const int lp = T->level[p];
+  uint32_t c[3];
+  mx_morton_decode(T->key[p], c);
+  const int shift = MX_MAX_LEVEL - lp;
+  const uint32_t anchor[3] = {c[0] >> shift, c[1] >> shift, c[2] >> shift};
+  for (int a = 0; a < 3; a++) {
+    const mx_edge_table *E = &B->edges.t[lp][a];
+    for (int j = 0; j < 4; j++) {
+      const size_t e = mx_edge_find(E, mx_edge_key(anchor, a, j));
+      if (e == SIZE_MAX) continue;
+      for (int s = 0; s < 4; s++) {
+        const uint32_t m = __atomic_load_n(&E->e[e].slot[s], __ATOMIC_RELAXED);
+        if (m == MX_NONE || m == p) continue;
+        if (T->flags[m] & (MX_OCT_SPLIT | MX_OCT_QUEUED)) continue;
+        if (!mx_octants_touch(T->key[o], T->level[o], T->key[m], lp)) continue;
+        uint8_t old = __atomic_fetch_or(&T->flags[m], (uint8_t)MX_OCT_QUEUED,
+                                        __ATOMIC_RELAXED);
+        if (old & MX_OCT_QUEUED) continue;
+        if (*n == *cap) {
+          *cap = *cap ? 2 * *cap : 256;
+          *buf = realloc(*buf, *cap * sizeof **buf);
+          if (!*buf) abort(); /* out of memory in a worker: no way back */
+        }
+        (*buf)[(*n)++] = m;
+      }
+    }
+  }
+}
+
+static int cmp_u32(const void *a, const void *b) {
+  uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+  return (x > y) - (x < y);
+}
+
+int mx_balance_drain(mx_builder *B, const uint32_t *split, size_t n) {
+  uint32_t *wave = NULL;
+  const uint32_t *cur = split;
+  size_t ncur = n;
+  int st = MX_OK;
+  while (ncur > 0 && st == MX_OK) {
+    const int nth = omp_get_max_threads();
+    uint32_t **bufs = calloc((size_t)nth, sizeof *bufs);
+    size_t *cnt = calloc((size_t)nth, sizeof *cnt);
+    size_t *cap = calloc((size_t)nth, sizeof *cap);
+    if (!bufs || !cnt || !cap) {
+      free(bufs);
+      free(cnt);
+      free(cap);
+      st = MX_EINPUT;
+      break;
+    }
+#pragma omp parallel
+    {
+      const int t = omp_get_thread_num();
+#pragma omp for schedule(dynamic, 256)
+      for (size_t i = 0; i < ncur; i++)
+        find_unbalanced(B, cur[i], &bufs[t], &cnt[t], &cap[t]);
+    }
+    size_t total = 0;
+    for (int t = 0; t < nth; t++) total += cnt[t];
+    uint32_t *next = mx_alloc((total + 1) * sizeof *next);
+    if (!next) st = MX_EINPUT;
+    size_t w = 0;
+    for (int t = 0; t < nth; t++) {
+      if (next) memcpy(next + w, bufs[t], cnt[t] * sizeof *next);
+      w += cnt[t];
+      free(bufs[t]);
+    }
+    free(bufs);
+    free(cnt);
+    free(cap);
+    if (st) break;
+    qsort(next, total, sizeof *next, cmp_u32);
+    st = mx_split_octants(B, next, total, 1);
+    mx_free(wave);
+    wave = next;
+    cur = wave;
+    ncur = total;
+  }
+  mx_free(wave);
+  return st;
+}

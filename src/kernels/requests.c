@@ -1,1 +1,32 @@
-#include "common.h"
+#include "kernels/requests.h"
+
+static int box_overlaps(const mx_box_region *b, const double lo[3],
+                        const double hi[3]) {
+  for (int a = 0; a < 3; a++)
+    if (!(lo[a] < b->hi[a] && b->lo[a] < hi[a])) return 0;
+  return 1;
+}
+
+int mx_target_level(const mx_requests *R, const double lo[3],
+                    const double hi[3], int surf, unsigned rmask) {
+  int t = 0;
+  if (R->a_level > t) t = R->a_level;
+  if (surf && R->s_level > t) t = R->s_level;
+  for (size_t i = 0; i < R->nboxes; i++)
+    if (R->boxes[i].level > t && box_overlaps(&R->boxes[i], lo, hi))
+      t = R->boxes[i].level;
+  for (int r = 0; r < R->nregions; r++)
+    if ((rmask >> r) & 1u && R->rlevel[r] > t) t = R->rlevel[r];
+  return t;
+}
+
+int mx_max_requested_level(const mx_requests *R) {
+  int t = 0;
+  if (R->a_level > t) t = R->a_level;
+  if (R->s_level > t) t = R->s_level;
+  for (size_t i = 0; i < R->nboxes; i++)
+    if (R->boxes[i].level > t) t = R->boxes[i].level;
+  for (int r = 0; r < R->nregions; r++)
+    if (R->rlevel[r] > t) t = R->rlevel[r];
+  return t;
+}

@@ -1,1 +1,145 @@
+#include "soa/edges.h"
+
 #include "common.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static inline size_t edge_hash(uint64_t key, size_t cap) {
+  uint64_t h = key * 0x9E3779B97F4A7C15ULL;
+  h ^= h >> 29;
+  h *= 0xBF58476D1CE4E5B9ULL;
+  h ^= h >> 32;
+  return (size_t)(((unsigned __int128)h * cap) >> 64);
+}
+
+void mx_edges_free(mx_edges *E) {
+  for (int l = 0; l <= MX_MAX_LEVEL; l++)
+    for (int a = 0; a < 3; a++) free(E->t[l][a].e);
+  memset(E, 0, sizeof *E);
+}
+
+/* Rehash one entry into a fresh table, many threads at once. */
+static void put_concurrent(mx_edge_table *T, const mx_edge *src) {
+  size_t i = edge_hash((src->kw & ~MX_EDGE_MID) - 1, T->cap);
+  for (;;) {
+    uint64_t expected = 0;
+    if (__atomic_compare_exchange_n(&T->e[i].kw, &expected, src->kw, 0,
+                                    __ATOMIC_ACQ_REL, __ATOMIC_RELAXED)) {
+      memcpy(T->e[i].slot, src->slot, sizeof src->slot);
+      return;
+    }
+    i = (i + 1 == T->cap) ? 0 : i + 1;
+  }
+}
+
+static int table_grow(mx_edge_table *T, size_t need) {
+  if ((double)need <= 0.75 * (double)T->cap) return MX_OK;
+  size_t cap = (size_t)((double)need / 0.6) + 1024;
+  if (cap < T->cap + T->cap / 2) cap = T->cap + T->cap / 2;
+  mx_edge *e = mx_alloc(cap * sizeof *e);
+  if (!e) return MX_EINPUT;
+#pragma omp parallel for schedule(static)
+  for (size_t i = 0; i < cap; i++) {
+    e[i].kw = 0;
+    e[i].slot[0] = e[i].slot[1] = e[i].slot[2] = e[i].slot[3] = UINT32_MAX;
+  }
+  mx_edge_table nt = {e, cap, T->count};
+#pragma omp parallel for schedule(static)
+  for (size_t i = 0; i < T->cap; i++)
+    if (T->e[i].kw) put_concurrent(&nt, &T->e[i]);
+  free(T->e);
+  *T = nt;
+  return MX_OK;
+}
+
+int mx_edges_reserve(mx_edges *E, int level, size_t extra) {
+  for (int a = 0; a < 3; a++)
+    MX_CHECK(table_grow(&E->t[level][a], E->t[level][a].count + extra));
+  return MX_OK;
+}
+
+size_t mx_edge_find(const mx_edge_table *T, uint64_t key) {
+  if (!T->cap) return SIZE_MAX;
+  const uint64_t want = key + 1;
+  size_t i = edge_hash(key, T->cap);
+  for (;;) {
+    uint64_t kw = __atomic_load_n(&T->e[i].kw, __ATOMIC_ACQUIRE);
+    if (!kw) return SIZE_MAX;
+    if ((kw & ~MX_EDGE_MID) == want) return i;
+    i = (i + 1 == T->cap) ? 0 : i + 1;
+  }
+}
+
+/* Find or create; *created is set to 1 when this call claimed the entry. */
+static size_t edge_insert(mx_edge_table *T, uint64_t key, int *created) {
+  const uint64_t want = key + 1;
+  size_t i = edge_hash(key, T->cap);
+  for (;;) {
+    uint64_t kw = __atomic_load_n(&T->e[i].kw, __ATOMIC_ACQUIRE);
+    if (!kw) {
+      uint64_t expected = 0;
+      if (__atomic_compare_exchange_n(&T->e[i].kw, &expected, want, 0,
+                                      __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE)) {
+        *created = 1;
+        return i;
+      }
+      kw = expected;
+    }
+    if ((kw & ~MX_EDGE_MID) == want) {
+      *created = 0;
+      return i;
+    }
+    i = (i + 1 == T->cap) ? 0 : i + 1;
+  }
+}
+
+void mx_edges_register(mx_edges *E, uint32_t o, uint64_t key, int level,
+                       size_t created[3]) {
+  uint32_t c[3];
+  mx_morton_decode(key, c);
+  const int shift = MX_MAX_LEVEL - level;
+  const uint32_t anchor[3] = {c[0] >> shift, c[1] >> shift, c[2] >> shift};
+  for (int a = 0; a < 3; a++) {
+    mx_edge_table *T = &E->t[level][a];
+    for (int j = 0; j < 4; j++) {
+      int fresh;
+      size_t i = edge_insert(T, mx_edge_key(anchor, a, j), &fresh);
+      created[a] += (size_t)fresh;
+      __atomic_store_n(&T->e[i].slot[mx_edge_slot(j)], o, __ATOMIC_RELAXED);
+    }
+  }
+}
+
+void mx_edges_mark_split(mx_edges *E, uint64_t key, int level) {
+  uint32_t c[3];
+  mx_morton_decode(key, c);
+  const int shift = MX_MAX_LEVEL - level;
+  const uint32_t anchor[3] = {c[0] >> shift, c[1] >> shift, c[2] >> shift};
+  for (int a = 0; a < 3; a++) {
+    mx_edge_table *T = &E->t[level][a];
+    for (int j = 0; j < 4; j++) {
+      size_t i = mx_edge_find(T, mx_edge_key(anchor, a, j));
+      if (i != SIZE_MAX)
+        __atomic_fetch_or(&T->e[i].kw, MX_EDGE_MID, __ATOMIC_RELAXED);
+    }
+  }
+}
+
+void mx_edges_add_count(mx_edges *E, int level, const size_t created[3]) {
+  for (int a = 0; a < 3; a++) E->t[level][a].count += created[a];
+}
+
+size_t mx_edges_total(const mx_edges *E) {
+  size_t n = 0;
+  for (int l = 0; l <= MX_MAX_LEVEL; l++)
+    for (int a = 0; a < 3; a++) n += E->t[l][a].count;
+  return n;
+}
+
+size_t mx_edges_bytes(const mx_edges *E) {
+  size_t n = 0;
+  for (int l = 0; l <= MX_MAX_LEVEL; l++)
+    for (int a = 0; a < 3; a++) n += E->t[l][a].cap * sizeof(mx_edge);
+  return n;
+}

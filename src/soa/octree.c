@@ -1,1 +1,38 @@
+#include "soa/octree.h"
+
 #include "common.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+void mx_octree_free(mx_octree *t) {
+  free(t->key); free(t->level); free(t->flags); free(t->target);
+  free(t->kept); free(t->rmeet); free(t->rin); free(t->parent);
+  free(t->child0); free(t->tri_off); free(t->tri_cnt); free(t->tri_pool);
+  memset(t, 0, sizeof *t);
+}
+
+#define GROW(field, n)                                                      \
+  do {                                                                      \
+    void *p_ = mx_realloc(t->field, (n) * sizeof *t->field);                \
+    if (!p_) return MX_EINPUT;                                              \
+    t->field = p_;                                                          \
+  } while (0)
+
+int mx_octree_reserve(mx_octree *t, size_t n, size_t ntri) {
+  if (n > t->cap) {
+    size_t cap = t->cap ? t->cap : 1024;
+    while (cap < n) cap += cap / 2;
+    GROW(key, cap); GROW(level, cap); GROW(flags, cap); GROW(target, cap);
+    GROW(kept, cap); GROW(rmeet, cap); GROW(rin, cap); GROW(parent, cap);
+    GROW(child0, cap); GROW(tri_off, cap); GROW(tri_cnt, cap);
+    t->cap = cap;
+  }
+  if (ntri > t->tri_cap) {
+    size_t cap = t->tri_cap ? t->tri_cap : 4096;
+    while (cap < ntri) cap += cap / 2;
+    GROW(tri_pool, cap);
+    t->tri_cap = cap;
+  }
+  return MX_OK;
+}

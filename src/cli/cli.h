@@ -1,0 +1,53 @@
+/* The mixoct program: options, pipeline, report. */
+#ifndef MX_CLI_H
+#define MX_CLI_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "kernels/requests.h"
+
+enum { MX_STAGE_OCTREE = 0, MX_STAGE_TRANSITION = 1, MX_STAGE_FULL = 2 };
+enum { MX_BALANCE_EDGES = 0, MX_BALANCE_RECURSIVE = 1 };
+
+#define MX_MAX_INPUTS 64
+
+typedef struct {
+  const char *inputs[MX_MAX_INPUTS];
+  int ninputs;
+  int demo;              /* --demo: the built-in surface */
+  const char *output;    /* NULL: dry run */
+  const char *regions_file;
+  const char *region_surf[MX_MAX_REGIONS];
+  int nregion_surf;
+  mx_requests req;       /* levels; boxes filled after reading */
+  int threads;           /* 0: OpenMP default */
+  int json, quiet;
+  int stage;
+  int balance;
+} mx_options;
+
+/* Parses argv; on --help/--version prints and sets *exit_now = 1. Returns
+ * MX_OK or MX_EINPUT (usage error, message printed). */
+int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now);
+
+typedef struct {
+  double read, grid, refine, balance, write, total;
+} mx_phases;
+
+typedef struct {
+  size_t leaves, nodes, octants, edges, located, split_requested,
+      split_balance, dropped;
+  uint64_t leaves_hash;
+  size_t edge_bytes;
+  int threads;
+  int balance;
+  int max_level;
+  mx_phases ph;
+  double peak_rss_mb;
+} mx_summary;
+
+void mx_print_json(const mx_summary *s);
+void mx_print_summary(const mx_summary *s);
+
+#endif

@@ -1,0 +1,33 @@
+/* Refinement requests and the level each octant asks for.
+ *   -s RL  octants meeting the input surface
+ *   -a RL  every octant of the domain
+ *   -b reg boxes with levels (an octant overlapping a box's interior)
+ *   -r S RL octants meeting region surface S or inside it
+ * An octant asked by several requests takes the largest level. */
+#ifndef MX_REQUESTS_H
+#define MX_REQUESTS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "soa/regions.h"
+
+#define MX_MAX_REGIONS 8
+
+typedef struct {
+  int s_level; /* -1 when absent */
+  int a_level; /* -1 when absent */
+  const mx_box_region *boxes;
+  size_t nboxes;
+  int nregions;
+  int rlevel[MX_MAX_REGIONS];
+} mx_requests;
+
+/* Target level of the octant with world box [lo, hi]; surf: it meets the
+ * domain surface; rmask: bit r set when it meets or is inside region r. */
+int mx_target_level(const mx_requests *R, const double lo[3],
+                    const double hi[3], int surf, unsigned rmask);
+/* The largest level any request can ask for. */
+int mx_max_requested_level(const mx_requests *R);
+
+#endif

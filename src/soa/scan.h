@@ -1,0 +1,17 @@
+/* Parallel exclusive prefix sums and a radix sort, the two primitives every
+ * count-then-fill pass uses. */
+#ifndef MX_SCAN_H
+#define MX_SCAN_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* a[i] <- a[0] + ... + a[i-1]; returns the total. Parallel (OpenMP). */
+uint64_t mx_scan_u64(uint64_t *a, size_t n);
+
+/* Sorts keys ascending (LSD radix on the bits that vary); when vals is not
+ * NULL it is permuted along. tmp arrays are allocated inside. MX_OK or
+ * MX_EINPUT (out of memory). */
+int mx_sort_u64(uint64_t *keys, uint32_t *vals, size_t n);
+
+#endif
