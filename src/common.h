@@ -34,6 +34,11 @@ void *mx_calloc(size_t bytes);
 void *mx_realloc(void *p, size_t bytes);
 void mx_free(void *p);
 
+/* min/max of doubles that compile to one instruction (no NaN handling:
+ * inputs are checked finite when read). */
+static inline double mx_min(double a, double b) { return a < b ? a : b; }
+static inline double mx_max(double a, double b) { return a > b ? a : b; }
+
 double mx_wtime(void);        /* wall clock seconds */
 double mx_peak_rss_mb(void);  /* peak resident set size of this process */
 

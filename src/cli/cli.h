@@ -43,6 +43,7 @@ typedef struct {
   int threads;
   int balance;
   int max_level;
+  int nodes_counted;
   mx_phases ph;
   double peak_rss_mb;
 } mx_summary;

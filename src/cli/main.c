@@ -107,9 +107,12 @@ static int run(const mx_options *o) {
     S.ph.balance = B.stats.t_balance;
   }
   if (!st) st = mx_leaves(&B, &leaves, &nleaves);
-  if (!st) {
+  if (!st && o->output) {
+    /* The leaves' corners are numbered only for a file: a dry run stops at
+     * the leaves. */
     t = mx_wtime();
     st = write_octree(&B, leaves, nleaves, o->output, &S.nodes);
+    S.nodes_counted = 1;
     S.ph.write = mx_wtime() - t;
   }
   if (!st) {

@@ -4,8 +4,10 @@
 #include <stdio.h>
 
 void mx_print_json(const mx_summary *s) {
+  char nodes[32] = "null";
+  if (s->nodes_counted) snprintf(nodes, sizeof nodes, "%zu", s->nodes);
   printf("{\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
-         "\"nodes\": %zu, \"elements\": %zu, "
+         "\"nodes\": %s, \"elements\": %zu, "
          "\"by_type\": {\"hex\": %zu, \"prism\": 0, \"pyramid\": 0, \"tet\": 0}, "
          "\"stage\": \"octree\", \"balance\": \"%s\", \"max_level\": %d, "
          "\"octants\": %zu, \"edges\": %zu, \"edge_mb\": %.1f, "
@@ -15,7 +17,7 @@ void mx_print_json(const mx_summary *s) {
          "\"balance\": %.6f, \"write\": %.6f}, "
          "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"threads\": %d, "
          "\"jens_min\": 1.0, \"invalid\": 0}\n",
-         s->leaves, s->leaves_hash, s->nodes, s->leaves, s->leaves,
+         s->leaves, s->leaves_hash, nodes, s->leaves, s->leaves,
          s->balance ? "recursive" : "edges", s->max_level, s->octants,
          s->edges, (double)s->edge_bytes / 1048576.0, s->located,
          s->split_requested, s->split_balance, s->dropped, s->ph.read,
@@ -31,7 +33,8 @@ void mx_print_summary(const mx_summary *s) {
          s->leaves, s->octants, s->dropped);
   printf("  splits        %12zu requested, %zu for balance\n",
          s->split_requested, s->split_balance);
-  printf("  nodes         %12zu   (leaf corners)\n", s->nodes);
+  if (s->nodes_counted)
+    printf("  nodes         %12zu   (leaf corners)\n", s->nodes);
   printf("  time (s)      read %.3f  grid %.3f  refine %.3f  balance %.3f  "
          "write %.3f  total %.3f\n",
          s->ph.read, s->ph.grid, s->ph.refine, s->ph.balance, s->ph.write,

@@ -32,12 +32,13 @@ int mx_octants_touch(uint64_t ka, int la, uint64_t kb, int lb) {
   return open >= 1 && open < 3;
 }
 
-/* Leaves of level l-1 touching the just-split octant o (level l), pushed once
- * each (the MX_OCT_QUEUED flag) onto buf. */
-static void find_unbalanced(mx_builder *B, uint32_t o, uint32_t **buf,
-                            size_t *n, size_t *cap) {
+/* Leaves of level l-1 touching one of the just-split octants run[0..k)
+ * (level l, all children of the same parent P), pushed once each (the
+ * MX_OCT_QUEUED flag) onto buf. P's 12 edges are looked up once per run. */
+static void find_unbalanced(mx_builder *B, const uint32_t *run, size_t k,
+                            uint32_t **buf, size_t *n, size_t *cap) {
   mx_octree *T = &B->oct;
-  const uint32_t p = T->parent[o];
+  const uint32_t p = T->parent[run[0]];
   if (p == MX_NONE) return;
   const int lp = T->level[p];
   uint32_t c[3];
@@ -52,8 +53,14 @@ static void find_unbalanced(mx_builder *B, uint32_t o, uint32_t **buf,
       for (int s = 0; s < 4; s++) {
         const uint32_t m = __atomic_load_n(&E->e[e].slot[s], __ATOMIC_RELAXED);
         if (m == MX_NONE || m == p) continue;
-        if (T->flags[m] & (MX_OCT_SPLIT | MX_OCT_QUEUED)) continue;
-        if (!mx_octants_touch(T->key[o], T->level[o], T->key[m], lp)) continue;
+        if (__atomic_load_n(&T->flags[m], __ATOMIC_RELAXED) &
+            (MX_OCT_SPLIT | MX_OCT_QUEUED))
+          continue;
+        size_t i = 0;
+        while (i < k &&
+               !mx_octants_touch(T->key[run[i]], lp + 1, T->key[m], lp))
+          i++;
+        if (i == k) continue;
         uint8_t old = __atomic_fetch_or(&T->flags[m], (uint8_t)MX_OCT_QUEUED,
                                         __ATOMIC_RELAXED);
         if (old & MX_OCT_QUEUED) continue;
@@ -93,9 +100,15 @@ int mx_balance_drain(mx_builder *B, const uint32_t *split, size_t n) {
 #pragma omp parallel
     {
       const int t = omp_get_thread_num();
+      const uint32_t *par = B->oct.parent;
 #pragma omp for schedule(dynamic, 256)
-      for (size_t i = 0; i < ncur; i++)
-        find_unbalanced(B, cur[i], &bufs[t], &cnt[t], &cap[t]);
+      for (size_t i = 0; i < ncur; i++) {
+        /* Runs of siblings (the lists are grouped by parent). */
+        if (i > 0 && par[cur[i - 1]] == par[cur[i]]) continue;
+        size_t k = 1;
+        while (i + k < ncur && par[cur[i + k]] == par[cur[i]]) k++;
+        find_unbalanced(B, cur + i, k, &bufs[t], &cnt[t], &cap[t]);
+      }
     }
     size_t total = 0;
     for (int t = 0; t < nth; t++) total += cnt[t];

@@ -1,5 +1,7 @@
 #include "kernels/intersect.h"
 
+#include "common.h"
+
 #include <math.h>
 
 /* Projection interval of the triangle (vertices relative to the box centre)
@@ -10,7 +12,7 @@ static inline int separated(const double n[3], const double p0[3],
   double d0 = n[0] * p0[0] + n[1] * p0[1] + n[2] * p0[2];
   double d1 = n[0] * p1[0] + n[1] * p1[1] + n[2] * p1[2];
   double d2 = n[0] * p2[0] + n[1] * p2[1] + n[2] * p2[2];
-  double mn = fmin(d0, fmin(d1, d2)), mx = fmax(d0, fmax(d1, d2));
+  double mn = mx_min(d0, mx_min(d1, d2)), mx = mx_max(d0, mx_max(d1, d2));
   double r = h[0] * fabs(n[0]) + h[1] * fabs(n[1]) + h[2] * fabs(n[2]);
   return mn > r || mx < -r;
 }
@@ -22,8 +24,8 @@ int mx_tri_box_overlap(const double c[3], const double h[3],
     for (int a = 0; a < 3; a++) p[i][a] = v[3 * i + a] - c[a];
   /* Box normals: the triangle's bounding box against the box. */
   for (int a = 0; a < 3; a++) {
-    double mn = fmin(p[0][a], fmin(p[1][a], p[2][a]));
-    double mx = fmax(p[0][a], fmax(p[1][a], p[2][a]));
+    double mn = mx_min(p[0][a], mx_min(p[1][a], p[2][a]));
+    double mx = mx_max(p[0][a], mx_max(p[1][a], p[2][a]));
     if (mn > h[a] || mx < -h[a]) return 0;
   }
   double e[3][3];

@@ -25,8 +25,8 @@ static void tri_cells(const mx_locator *L, uint32_t t, int c0[2], int c1[2]) {
   const uint32_t *v = s->tri + 3 * (size_t)t;
   const double *co[2] = {s->y, s->z};
   for (int a = 0; a < 2; a++) {
-    double mn = fmin(co[a][v[0]], fmin(co[a][v[1]], co[a][v[2]]));
-    double mx = fmax(co[a][v[0]], fmax(co[a][v[1]], co[a][v[2]]));
+    double mn = mx_min(co[a][v[0]], mx_min(co[a][v[1]], co[a][v[2]]));
+    double mx = mx_max(co[a][v[0]], mx_max(co[a][v[1]], co[a][v[2]]));
     cell_range(L, mn, a, &c0[a]);
     cell_range(L, mx, a, &c1[a]);
   }
@@ -44,12 +44,12 @@ int mx_locator_build(mx_locator *L, const mx_trisoup *soup, uint32_t t0,
     for (int k = 0; k < 3; k++)
       for (int a = 0; a < 2; a++) {
         double v = co[a][soup->tri[3 * (size_t)t + k]];
-        lo[a] = fmin(lo[a], v);
-        hi[a] = fmax(hi[a], v);
+        lo[a] = mx_min(lo[a], v);
+        hi[a] = mx_max(hi[a], v);
       }
   size_t nt = t1 - t0;
   /* About 2 cells per triangle, shaped like the projected box. */
-  double ext[2] = {fmax(hi[0] - lo[0], 1e-300), fmax(hi[1] - lo[1], 1e-300)};
+  double ext[2] = {mx_max(hi[0] - lo[0], 1e-300), mx_max(hi[1] - lo[1], 1e-300)};
   double cells = 2.0 * (double)(nt ? nt : 1);
   double k = sqrt(cells / (ext[0] * ext[1]));
   for (int a = 0; a < 2; a++) {

@@ -44,8 +44,8 @@ int mx_builder_init(mx_builder *B, const mx_trisoup *soup, uint32_t nt_domain,
       uint32_t v = soup->tri[3 * t + k];
       const double p[3] = {soup->x[v], soup->y[v], soup->z[v]};
       for (int a = 0; a < 3; a++) {
-        lo[a] = fmin(lo[a], p[a]);
-        hi[a] = fmax(hi[a], p[a]);
+        lo[a] = mx_min(lo[a], p[a]);
+        hi[a] = mx_max(hi[a], p[a]);
       }
     }
   MX_CHECK(mx_grid_build(lo, hi, &B->grid));
@@ -144,8 +144,8 @@ static void classify_children(const mx_builder *B, uint32_t o, uint8_t *mask,
     const double *v = B->tri_xyz + 9 * (size_t)t;
     unsigned cand = 0xff;
     for (int a = 0; a < 3; a++) {
-      double mn = fmin(v[a], fmin(v[3 + a], v[6 + a]));
-      double mx = fmax(v[a], fmax(v[3 + a], v[6 + a]));
+      double mn = mx_min(v[a], mx_min(v[3 + a], v[6 + a]));
+      double mx = mx_max(v[a], mx_max(v[3 + a], v[6 + a]));
       const unsigned upper = a == 0 ? 0xaa : a == 1 ? 0xcc : 0xf0;
       if (mn > mid[a]) cand &= upper;
       if (mx < mid[a]) cand &= ~upper;
@@ -210,16 +210,16 @@ static int grow_scratch(void **p, size_t *cap, size_t need, size_t elem) {
   return MX_OK;
 }
 
-/* Edge infos after a split of octants of level l: the mid-node flag on the
- * parents' edges, and the children's edges (at most 18 new per axis per
- * split), in chunks small enough that the tables never pass 75% load. */
+/* Edge infos after a split of octants of level l: the children's edges (at
+ * most 18 new per axis per split), in chunks small enough that the tables
+ * never pass 75% load. An edge's mid-node needs no update: it exists exactly
+ * when one of the octants in its slots is split (mx_edge_is_split). */
 static int register_children_edges(mx_builder *B, const uint32_t *list,
                                    size_t n, int l) {
   const mx_octree *T = &B->oct;
-  const int reg = l + 1 <= B->edge_levels;
   for (size_t lo = 0; lo < n;) {
     size_t chunk = n - lo;
-    if (reg) {
+    {
       size_t room = SIZE_MAX;
       for (int a = 0; a < 3; a++) {
         const mx_edge_table *E = &B->edges.t[l + 1][a];
@@ -241,18 +241,13 @@ static int register_children_edges(mx_builder *B, const uint32_t *list,
 #pragma omp for schedule(static)
       for (size_t i = lo; i < lo + chunk; i++) {
         const uint32_t o = list[i];
-        mx_edges_mark_split(&B->edges, T->key[o], l);
-        if (!reg) continue;
-        const uint32_t c0 = T->child0[o];
-        const int nk = __builtin_popcount(T->kept[o]);
-        for (int k = 0; k < nk; k++)
-          mx_edges_register(&B->edges, c0 + (uint32_t)k, T->key[c0 + k],
-                            l + 1, mine);
+        mx_edges_register_children(&B->edges, T->child0[o], T->kept[o],
+                                   T->key[o], l, mine);
       }
 #pragma omp critical
       for (int a = 0; a < 3; a++) created[a] += mine[a];
     }
-    if (reg) mx_edges_add_count(&B->edges, l + 1, created);
+    mx_edges_add_count(&B->edges, l + 1, created);
     lo += chunk;
   }
   return MX_OK;
@@ -347,7 +342,7 @@ int mx_split_octants(mx_builder *B, const uint32_t *list, size_t n,
     B->stats.split_balance += n;
   else
     B->stats.split_requested += n;
-  if (!B->use_edges || l > B->edge_levels) return MX_OK;
+  if (!B->use_edges || l + 1 > B->edge_levels) return MX_OK;
   return register_children_edges(B, list, n, l);
 }
 
@@ -369,8 +364,8 @@ int mx_build_roots(mx_builder *B) {
       const double *v = B->tri_xyz + 9 * t;
       int r0[3], r1[3];
       for (int a = 0; a < 3; a++) {
-        double mn = fmin(v[a], fmin(v[3 + a], v[6 + a]));
-        double mx = fmax(v[a], fmax(v[3 + a], v[6 + a]));
+        double mn = mx_min(v[a], mx_min(v[3 + a], v[6 + a]));
+        double mx = mx_max(v[a], mx_max(v[3 + a], v[6 + a]));
         r0[a] = (int)floor((mn - g->origin[a]) / g->side);
         r1[a] = (int)floor((mx - g->origin[a]) / g->side);
         if (r0[a] < 0) r0[a] = 0;

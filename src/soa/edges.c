@@ -143,3 +143,45 @@ size_t mx_edges_bytes(const mx_edges *E) {
     for (int a = 0; a < 3; a++) n += E->t[l][a].cap * sizeof(mx_edge);
   return n;
 }
+
+void mx_edges_register_children(mx_edges *E, uint32_t child0, uint8_t kept,
+                                uint64_t key, int level, size_t created[3]) {
+  uint32_t cc[3];
+  mx_morton_decode(key, cc);
+  const int shift = MX_MAX_LEVEL - level;
+  /* Anchor of the parent on the children's lattice. */
+  const uint32_t A[3] = {(cc[0] >> shift) << 1, (cc[1] >> shift) << 1,
+                         (cc[2] >> shift) << 1};
+  uint32_t index[8];
+  for (int c = 0, k = 0; c < 8; c++)
+    index[c] = ((kept >> c) & 1) ? child0 + (uint32_t)k++ : UINT32_MAX;
+  for (int a = 0; a < 3; a++) {
+    const int b = (a + 1) % 3, d = (a + 2) % 3;
+    mx_edge_table *T = &E->t[level + 1][a];
+    for (int s = 0; s < 2; s++)
+      for (int jb = 0; jb < 3; jb++)
+        for (int jd = 0; jd < 3; jd++) {
+          uint32_t who[4] = {UINT32_MAX, UINT32_MAX, UINT32_MAX, UINT32_MAX};
+          int any = 0;
+          for (int cb = jb - 1; cb <= jb; cb++)
+            for (int cd = jd - 1; cd <= jd; cd++) {
+              if (cb < 0 || cb > 1 || cd < 0 || cd > 1) continue;
+              const int child = (s << a) | (cb << b) | (cd << d);
+              if (index[child] == UINT32_MAX) continue;
+              who[(cb == jb ? 1 : 0) | (cd == jd ? 2 : 0)] = index[child];
+              any = 1;
+            }
+          if (!any) continue;
+          uint32_t p[3] = {A[0], A[1], A[2]};
+          p[a] += (uint32_t)s;
+          p[b] += (uint32_t)jb;
+          p[d] += (uint32_t)jd;
+          int fresh;
+          size_t i = edge_insert(T, mx_morton_encode(p[0], p[1], p[2]), &fresh);
+          created[a] += (size_t)fresh;
+          for (int q = 0; q < 4; q++)
+            if (who[q] != UINT32_MAX)
+              __atomic_store_n(&T->e[i].slot[q], who[q], __ATOMIC_RELAXED);
+        }
+  }
+}

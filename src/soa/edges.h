@@ -62,6 +62,20 @@ static inline int mx_edge_slot(int j) { return 3 - j; }
  * as long as the tables have room (mx_edges_reserve). */
 void mx_edges_register(mx_edges *E, uint32_t o, uint64_t key, int level,
                        size_t created[3]);
+/* Register, in one go, the kept children of the octant (key, level) that has
+ * just been split: the 54 edges of level+1 inside and on that octant are each
+ * looked up once and given the slots of the children that have them. Same
+ * contract as mx_edges_register. */
+void mx_edges_register_children(mx_edges *E, uint32_t child0, uint8_t kept,
+                                uint64_t key, int level, size_t created[3]);
+/* 1 when the edge has a mid-node: one of the octants in its slots is split
+ * (flags: the octree's MX_OCT_* flags, split bit `split_bit`). */
+static inline int mx_edge_is_split(const mx_edge *e, const uint8_t *flags,
+                                   uint8_t split_bit) {
+  for (int s = 0; s < 4; s++)
+    if (e->slot[s] != UINT32_MAX && (flags[e->slot[s]] & split_bit)) return 1;
+  return 0;
+}
 /* Set the mid-node flag of the 12 edges of the octant (key, level). */
 void mx_edges_mark_split(mx_edges *E, uint64_t key, int level);
 /* Add the counts created by mx_edges_register to the (level, axis) tables. */
