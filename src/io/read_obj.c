@@ -1,1 +1,154 @@
+/* Wavefront OBJ reader: "v x y z [...]" and "f a b c ..." with 1-based,
+ * negative (relative to the vertices read so far) and "a/b/c", "a//c",
+ * "a/b" forms; polygons are fan-split; every other line is ignored. A first
+ * pass counts the vertices, so positive indices may refer forward. */
+#include <stdint.h>
+#include <string.h>
+
+#include "common.h"
 #include "soa/trisoup.h"
+
+/* Text helpers shared by the readers, defined in read_surface.c. */
+int mx_io_load(const char *path, char **buf, size_t *len);
+const char *mx_io_blank(const char *p);
+int mx_io_eol(const char *p, char comment);
+int mx_io_delim(const char *p, char comment);
+const char *mx_io_next_line(const char *p, const char *end, long *line);
+const char *mx_io_content(const char *p, const char *end, long *line,
+                          char comment);
+int mx_io_toklen(const char *p, char comment);
+const char *mx_io_double(const char *p, double *v);
+const char *mx_io_int(const char *p, int64_t *v);
+int mx_io_numbers(const char *path, long line, const char **p, char comment,
+                  int n, double *out, const char *what, size_t item);
+int mx_io_index(const char *path, long line, const char **p, char comment,
+                size_t nv, uint32_t *idx, const char *what, size_t item);
+
+typedef struct {
+  const char *path, *p, *end; /* p: the current content line */
+  long line;
+  size_t nv_total, nfaces;
+} obj_file;
+
+/* The keyword starting a content line: 'v', 'f', or 0 for anything else. */
+static char keyword(const char *p) {
+  if ((p[0] == 'v' || p[0] == 'f') && mx_io_delim(p + 1, '#')) return p[0];
+  return 0;
+}
+
+/* First pass: counts "v" and "f" lines. */
+static void count_lines(const char *buf, const char *end, size_t *nv,
+                        size_t *nf) {
+  long line = 1;
+  *nv = *nf = 0;
+  for (const char *p = mx_io_content(buf, end, &line, '#'); p < end;) {
+    char k = keyword(p);
+    *nv += k == 'v';
+    *nf += k == 'f';
+    p = mx_io_next_line(p, end, &line);
+    p = mx_io_content(p, end, &line, '#');
+  }
+}
+
+static int read_vertex(obj_file *f, mx_trisoup *s) {
+  const char *q = f->p + 1;
+  double c[3];
+  MX_CHECK(mx_io_numbers(f->path, f->line, &q, '#', 3, c, "vertex",
+                         s->nv + 1));
+  s->x[s->nv] = c[0];
+  s->y[s->nv] = c[1];
+  s->z[s->nv] = c[2];
+  s->nv++;
+  return MX_OK;
+}
+
+/* One "a", "a/b", "a//c" or "a/b/c" corner at *p: the 0-based vertex. */
+static int read_corner(obj_file *f, const char **p, const mx_trisoup *s,
+                       uint32_t *idx) {
+  const char *q = *p;
+  int64_t v;
+  const char *e = mx_io_int(q, &v);
+  int n = mx_io_toklen(q, '#');
+  if (!e || !(mx_io_delim(e, '#') || *e == '/')) {
+    mx_error(f->path, f->line, "face %zu: bad vertex reference '%.*s'",
+             f->nfaces + 1, n, q);
+    return MX_EINPUT;
+  }
+  int64_t i = v > 0 ? v - 1 : (int64_t)s->nv + v; /* 1-based or relative */
+  if (v == 0 || i < 0 || (uint64_t)i >= f->nv_total) {
+    mx_error(f->path, f->line,
+             "face %zu: vertex index %.*s out of range (%zu vertices, "
+             "1-based%s)",
+             f->nfaces + 1, n, q, v < 0 ? s->nv : f->nv_total,
+             v < 0 ? ", relative to the vertices read so far" : "");
+    return MX_EINPUT;
+  }
+  *idx = (uint32_t)i;
+  *p = q + n;
+  while (!mx_io_delim(*p, '#')) ++*p; /* rest of a token longer than 40 */
+  return MX_OK;
+}
+
+static int add_triangle(mx_trisoup *s, uint32_t a, uint32_t b, uint32_t c) {
+  if (s->nt >= s->cap_t) MX_CHECK(mx_trisoup_reserve(s, 0, s->nt + 1));
+  uint32_t *t = s->tri + 3 * s->nt;
+  t[0] = a;
+  t[1] = b;
+  t[2] = c;
+  s->shell[s->nt++] = 0;
+  return MX_OK;
+}
+
+static int read_face(obj_file *f, mx_trisoup *s) {
+  const char *q = mx_io_blank(f->p + 1);
+  uint32_t first = 0, prev = 0, cur;
+  int k = 0;
+  for (; !mx_io_eol(q, '#'); k++, q = mx_io_blank(q)) {
+    MX_CHECK(read_corner(f, &q, s, &cur));
+    if (k >= 2) MX_CHECK(add_triangle(s, first, prev, cur));
+    if (k == 0) first = cur;
+    prev = cur;
+  }
+  if (k < 3) {
+    mx_error(f->path, f->line, "face %zu has %d vertices (at least 3 needed)",
+             f->nfaces + 1, k);
+    return MX_EINPUT;
+  }
+  f->nfaces++;
+  return MX_OK;
+}
+
+static int parse_obj(obj_file *f, mx_trisoup *s) {
+  size_t nf;
+  count_lines(f->p, f->end, &f->nv_total, &nf);
+  if (nf == 0) {
+    mx_error(f->path, 0, "no faces ('f' lines)");
+    return MX_EINPUT;
+  }
+  if (f->nv_total > UINT32_MAX) {
+    mx_error(f->path, 0, "too many vertices (%zu)", f->nv_total);
+    return MX_EINPUT;
+  }
+  MX_CHECK(mx_trisoup_reserve(s, f->nv_total, nf));
+  for (f->p = mx_io_content(f->p, f->end, &f->line, '#'); f->p < f->end;) {
+    char k = keyword(f->p);
+    if (k == 'v') MX_CHECK(read_vertex(f, s));
+    if (k == 'f') MX_CHECK(read_face(f, s));
+    f->p = mx_io_next_line(f->p, f->end, &f->line);
+    f->p = mx_io_content(f->p, f->end, &f->line, '#');
+  }
+  return MX_OK;
+}
+
+int mx_read_obj(const char *path, mx_trisoup *out) {
+  memset(out, 0, sizeof *out);
+  char *buf;
+  size_t len;
+  MX_CHECK(mx_io_load(path, &buf, &len));
+  obj_file f = {path, buf, buf + len, 1, 0, 0};
+  out->nshells = 1;
+  int status = parse_obj(&f, out);
+  mx_free(buf);
+  if (status != MX_OK) mx_trisoup_free(out);
+  return status;
+}

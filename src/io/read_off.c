@@ -1,1 +1,188 @@
+/* OFF reader: "OFF" header, counts "nv nf ne" (same line or next), nv lines
+ * "x y z", nf lines "k i0 .. ik-1" (0-based; k > 3 fan-split; trailing
+ * values such as colours ignored). '#' starts a comment anywhere. */
+#include <stdint.h>
+#include <string.h>
+
+#include "common.h"
 #include "soa/trisoup.h"
+
+/* Text helpers shared by the readers, defined in read_surface.c. */
+int mx_io_load(const char *path, char **buf, size_t *len);
+const char *mx_io_blank(const char *p);
+int mx_io_eol(const char *p, char comment);
+int mx_io_delim(const char *p, char comment);
+const char *mx_io_next_line(const char *p, const char *end, long *line);
+const char *mx_io_content(const char *p, const char *end, long *line,
+                          char comment);
+int mx_io_toklen(const char *p, char comment);
+const char *mx_io_double(const char *p, double *v);
+const char *mx_io_int(const char *p, int64_t *v);
+int mx_io_numbers(const char *path, long line, const char **p, char comment,
+                  int n, double *out, const char *what, size_t item);
+int mx_io_index(const char *path, long line, const char **p, char comment,
+                size_t nv, uint32_t *idx, const char *what, size_t item);
+
+typedef struct {
+  const char *path, *p, *end; /* p: the current content line */
+  long line;
+  size_t nv, nf;
+} off_file;
+
+/* "OFF", or a variant whose extra per-vertex data we ignore (COFF, NOFF,
+ * CNOFF, STOFF...); not 4OFF or nOFF, which change the dimension. */
+static int header_ok(const char *tok, int n) {
+  if (n < 3 || memcmp(tok + n - 3, "OFF", 3) != 0) return 0;
+  for (int i = 0; i < n - 3; i++)
+    if (!strchr("CNST", tok[i])) return 0;
+  return 1;
+}
+
+/* Moves to the next content line; error if the file ends first. */
+static int next_item(off_file *f, const char *what, size_t i, size_t n) {
+  f->p = mx_io_next_line(f->p, f->end, &f->line);
+  f->p = mx_io_content(f->p, f->end, &f->line, '#');
+  if (f->p < f->end) return MX_OK;
+  mx_error(f->path, f->line,
+           "unexpected end of file: %zu of %zu %s read (truncated file or "
+           "wrong counts in the header)",
+           i, n, what);
+  return MX_EINPUT;
+}
+
+static int read_count(off_file *f, const char **q, size_t *v, size_t max,
+                      const char *name) {
+  int64_t x;
+  const char *s = mx_io_blank(*q);
+  const char *e = mx_io_int(s, &x);
+  if (!e || !mx_io_delim(e, '#') || x < 0 || (uint64_t)x > max) {
+    mx_error(f->path, f->line,
+             "bad header: expected the counts 'nv nf ne', found '%.*s' for "
+             "%s",
+             mx_io_toklen(s, '#'), s, name);
+    return MX_EINPUT;
+  }
+  *v = (size_t)x;
+  *q = e;
+  return MX_OK;
+}
+
+static int read_header(off_file *f) {
+  f->p = mx_io_content(f->p, f->end, &f->line, '#');
+  if (f->p == f->end) {
+    mx_error(f->path, f->line, "no 'OFF' header: the file has no content");
+    return MX_EINPUT;
+  }
+  int n = mx_io_toklen(f->p, '#');
+  if (!header_ok(f->p, n)) {
+    mx_error(f->path, f->line, "bad header: expected 'OFF', found '%.*s'", n,
+             f->p);
+    return MX_EINPUT;
+  }
+  const char *q = mx_io_blank(f->p + n);
+  if (mx_io_eol(q, '#')) {
+    f->p = mx_io_next_line(q, f->end, &f->line);
+    f->p = mx_io_content(f->p, f->end, &f->line, '#');
+    q = f->p;
+    if (q == f->end) {
+      mx_error(f->path, f->line, "bad header: missing counts 'nv nf ne'");
+      return MX_EINPUT;
+    }
+  }
+  MX_CHECK(read_count(f, &q, &f->nv, UINT32_MAX, "nv"));
+  MX_CHECK(read_count(f, &q, &f->nf, SIZE_MAX / 64, "nf"));
+  if (f->nf == 0) {
+    mx_error(f->path, f->line, "the header declares no faces");
+    return MX_EINPUT;
+  }
+  return MX_OK;
+}
+
+static int read_vertices(off_file *f, mx_trisoup *s) {
+  size_t guess = (size_t)(f->end - f->p) / 6 + 1; /* "0 0 0\n" at least */
+  MX_CHECK(mx_trisoup_reserve(s, f->nv < guess ? f->nv : guess, 0));
+  for (size_t i = 0; i < f->nv; i++) {
+    MX_CHECK(next_item(f, "vertices", i, f->nv));
+    double c[3];
+    MX_CHECK(mx_io_numbers(f->path, f->line, &f->p, '#', 3, c, "vertex", i));
+    if (i >= s->cap_v) MX_CHECK(mx_trisoup_reserve(s, i + 1, 0));
+    s->x[i] = c[0];
+    s->y[i] = c[1];
+    s->z[i] = c[2];
+    s->nv = i + 1;
+  }
+  return MX_OK;
+}
+
+static int add_triangle(mx_trisoup *s, uint32_t a, uint32_t b, uint32_t c) {
+  if (s->nt >= s->cap_t) MX_CHECK(mx_trisoup_reserve(s, 0, s->nt + 1));
+  uint32_t *t = s->tri + 3 * s->nt;
+  t[0] = a;
+  t[1] = b;
+  t[2] = c;
+  s->shell[s->nt++] = 0;
+  return MX_OK;
+}
+
+/* One face line "k i0 .. ik-1 [ignored]": a fan of k-2 triangles. */
+static int read_face(off_file *f, mx_trisoup *s, size_t i) {
+  int64_t k;
+  const char *e = mx_io_int(f->p, &k);
+  if (!e || !mx_io_delim(e, '#') || k < 3) {
+    mx_error(f->path, f->line,
+             "face %zu: expected 'k i0 .. ik-1' with k >= 3, found '%.*s'", i,
+             mx_io_toklen(f->p, '#'), f->p);
+    return MX_EINPUT;
+  }
+  f->p = e;
+  uint32_t first, prev, cur;
+  MX_CHECK(mx_io_index(f->path, f->line, &f->p, '#', f->nv, &first, "face", i));
+  MX_CHECK(mx_io_index(f->path, f->line, &f->p, '#', f->nv, &prev, "face", i));
+  for (int64_t j = 2; j < k; j++) {
+    MX_CHECK(mx_io_index(f->path, f->line, &f->p, '#', f->nv, &cur, "face", i));
+    MX_CHECK(add_triangle(s, first, prev, cur));
+    prev = cur;
+  }
+  return MX_OK;
+}
+
+static int read_faces(off_file *f, mx_trisoup *s) {
+  size_t guess = (size_t)(f->end - f->p) / 8 + 1; /* "3 0 1 2\n" at least */
+  MX_CHECK(mx_trisoup_reserve(s, 0, f->nf < guess ? f->nf : guess));
+  for (size_t i = 0; i < f->nf; i++) {
+    MX_CHECK(next_item(f, "faces", i, f->nf));
+    MX_CHECK(read_face(f, s, i));
+  }
+  return MX_OK;
+}
+
+static int read_trailer(off_file *f) {
+  f->p = mx_io_next_line(f->p, f->end, &f->line);
+  f->p = mx_io_content(f->p, f->end, &f->line, '#');
+  if (f->p == f->end) return MX_OK;
+  mx_error(f->path, f->line,
+           "more data than the header declares (%zu vertices, %zu faces): "
+           "wrong counts?",
+           f->nv, f->nf);
+  return MX_EINPUT;
+}
+
+static int parse_off(off_file *f, mx_trisoup *s) {
+  MX_CHECK(read_header(f));
+  MX_CHECK(read_vertices(f, s));
+  MX_CHECK(read_faces(f, s));
+  return read_trailer(f);
+}
+
+int mx_read_off(const char *path, mx_trisoup *out) {
+  memset(out, 0, sizeof *out);
+  char *buf;
+  size_t len;
+  MX_CHECK(mx_io_load(path, &buf, &len));
+  off_file f = {path, buf, buf + len, 1, 0, 0};
+  out->nshells = 1;
+  int status = parse_off(&f, out);
+  mx_free(buf);
+  if (status != MX_OK) mx_trisoup_free(out);
+  return status;
+}

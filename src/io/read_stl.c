@@ -1,1 +1,295 @@
+/* STL reader, ASCII and binary. Binary (80-byte header, uint32 facet count,
+ * 50 bytes a facet) is recognised by its exact size, even when the header
+ * starts with "solid". Identical vertices are merged exactly (hash on the
+ * coordinate bits, -0 taken as +0), so the surface comes out indexed and its
+ * closedness can be checked. Facet normals are ignored. */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+#include <strings.h>
+
+#include "common.h"
 #include "soa/trisoup.h"
+
+/* Text helpers shared by the readers, defined in read_surface.c. */
+int mx_io_load(const char *path, char **buf, size_t *len);
+const char *mx_io_blank(const char *p);
+int mx_io_eol(const char *p, char comment);
+int mx_io_delim(const char *p, char comment);
+const char *mx_io_next_line(const char *p, const char *end, long *line);
+const char *mx_io_content(const char *p, const char *end, long *line,
+                          char comment);
+int mx_io_toklen(const char *p, char comment);
+const char *mx_io_double(const char *p, double *v);
+const char *mx_io_int(const char *p, int64_t *v);
+int mx_io_numbers(const char *path, long line, const char **p, char comment,
+                  int n, double *out, const char *what, size_t item);
+int mx_io_index(const char *path, long line, const char **p, char comment,
+                size_t nv, uint32_t *idx, const char *what, size_t item);
+
+/* ---- exact vertex merging --------------------------------------------- */
+
+#define EMPTY UINT32_MAX
+
+typedef struct {
+  uint32_t *slot; /* vertex id, or EMPTY */
+  size_t mask;    /* capacity - 1, capacity a power of two */
+} vertex_map;
+
+static uint64_t mix64(uint64_t h) {
+  h ^= h >> 33;
+  h *= 0xff51afd7ed558ccdull;
+  h ^= h >> 33;
+  h *= 0xc4ceb9fe1a85ec53ull;
+  return h ^ (h >> 33);
+}
+
+static uint64_t bits(double v) {
+  uint64_t b;
+  memcpy(&b, &v, sizeof b);
+  return b;
+}
+
+static size_t hash_xyz(double x, double y, double z) {
+  return (size_t)mix64(bits(x) ^ mix64(bits(y) ^ mix64(bits(z))));
+}
+
+static int map_init(vertex_map *m, size_t expected) {
+  size_t cap = 64;
+  while (cap < 2 * expected) cap *= 2;
+  m->slot = mx_alloc(cap * sizeof *m->slot);
+  if (!m->slot) return MX_EINPUT;
+  memset(m->slot, 0xff, cap * sizeof *m->slot);
+  m->mask = cap - 1;
+  return MX_OK;
+}
+
+/* Doubles the table and re-inserts the vertices (all distinct). */
+static int map_grow(vertex_map *m, const mx_trisoup *s) {
+  mx_free(m->slot);
+  MX_CHECK(map_init(m, m->mask + 1));
+  for (size_t v = 0; v < s->nv; v++) {
+    size_t h = hash_xyz(s->x[v], s->y[v], s->z[v]) & m->mask;
+    while (m->slot[h] != EMPTY) h = (h + 1) & m->mask;
+    m->slot[h] = (uint32_t)v;
+  }
+  return MX_OK;
+}
+
+/* The id of vertex (x, y, z), added to the soup if new. */
+static int map_vertex(vertex_map *m, mx_trisoup *s, double x, double y,
+                      double z, uint32_t *id) {
+  if (x == 0) x = 0.0; /* -0 and +0 are the same point */
+  if (y == 0) y = 0.0;
+  if (z == 0) z = 0.0;
+  size_t h = hash_xyz(x, y, z) & m->mask;
+  for (; m->slot[h] != EMPTY; h = (h + 1) & m->mask) {
+    uint32_t v = m->slot[h];
+    if (s->x[v] == x && s->y[v] == y && s->z[v] == z) {
+      *id = v;
+      return MX_OK;
+    }
+  }
+  if (s->nv >= s->cap_v) MX_CHECK(mx_trisoup_reserve(s, s->nv + 1, 0));
+  *id = (uint32_t)s->nv;
+  m->slot[h] = *id;
+  s->x[s->nv] = x;
+  s->y[s->nv] = y;
+  s->z[s->nv] = z;
+  s->nv++;
+  if (2 * s->nv > m->mask) MX_CHECK(map_grow(m, s));
+  return MX_OK;
+}
+
+static int add_triangle(mx_trisoup *s, const uint32_t v[3]) {
+  if (s->nt >= s->cap_t) MX_CHECK(mx_trisoup_reserve(s, 0, s->nt + 1));
+  memcpy(s->tri + 3 * s->nt, v, 3 * sizeof *v);
+  s->shell[s->nt++] = 0;
+  return MX_OK;
+}
+
+/* ---- binary ----------------------------------------------------------- */
+
+static uint32_t le32(const unsigned char *b) {
+  return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 |
+         (uint32_t)b[3] << 24;
+}
+
+static double le_float(const unsigned char *b) {
+  uint32_t u = le32(b);
+  float f;
+  memcpy(&f, &u, sizeof f);
+  return (double)f;
+}
+
+static int binary_facet(const char *path, const unsigned char *rec, size_t i,
+                        vertex_map *m, mx_trisoup *s) {
+  uint32_t v[3];
+  for (int k = 0; k < 3; k++) {
+    const unsigned char *c = rec + 12 + 12 * k; /* after the normal */
+    double x = le_float(c), y = le_float(c + 4), z = le_float(c + 8);
+    if (!isfinite(x) || !isfinite(y) || !isfinite(z)) {
+      mx_error(path, 0, "binary STL facet %zu: vertex %d is not finite", i,
+               k);
+      return MX_EINPUT;
+    }
+    MX_CHECK(map_vertex(m, s, x, y, z, &v[k]));
+  }
+  return add_triangle(s, v);
+}
+
+static int read_binary(const char *path, const unsigned char *buf, size_t n,
+                       mx_trisoup *s) {
+  if (n == 0) {
+    mx_error(path, 0, "binary STL with no facets");
+    return MX_EINPUT;
+  }
+  vertex_map m;
+  MX_CHECK(map_init(&m, n / 2 + 8));
+  int status = mx_trisoup_reserve(s, n / 2 + 8, n);
+  for (size_t i = 0; i < n && status == MX_OK; i++)
+    status = binary_facet(path, buf + 84 + 50 * i, i, &m, s);
+  mx_free(m.slot);
+  return status;
+}
+
+/* ---- ASCII ------------------------------------------------------------ */
+
+typedef struct {
+  const char *path, *p, *end; /* p: the next unread character */
+  long line;
+  size_t nfacets;
+} stl_text;
+
+static int is_word(const char *p, const char *word) {
+  int n = mx_io_toklen(p, 0);
+  return (size_t)n == strlen(word) && strncasecmp(p, word, (size_t)n) == 0;
+}
+
+/* Consumes the next token, which must be `word`. */
+static int expect(stl_text *f, const char *word) {
+  f->p = mx_io_content(f->p, f->end, &f->line, 0);
+  if (f->p < f->end && is_word(f->p, word)) {
+    f->p += strlen(word);
+    return MX_OK;
+  }
+  if (f->p == f->end)
+    mx_error(f->path, f->line,
+             "unexpected end of file, expected '%s' (truncated file?)", word);
+  else
+    mx_error(f->path, f->line, "expected '%s', found '%.*s'", word,
+             mx_io_toklen(f->p, 0), f->p);
+  return MX_EINPUT;
+}
+
+static int ascii_facet(stl_text *f, vertex_map *m, mx_trisoup *s) {
+  MX_CHECK(expect(f, "normal"));
+  f->p = mx_io_next_line(f->p, f->end, &f->line); /* normal ignored */
+  MX_CHECK(expect(f, "outer"));
+  MX_CHECK(expect(f, "loop"));
+  uint32_t v[3];
+  for (int k = 0; k < 3; k++) {
+    MX_CHECK(expect(f, "vertex"));
+    double c[3];
+    MX_CHECK(mx_io_numbers(f->path, f->line, &f->p, 0, 3, c, "facet",
+                           f->nfacets));
+    MX_CHECK(map_vertex(m, s, c[0], c[1], c[2], &v[k]));
+  }
+  MX_CHECK(expect(f, "endloop"));
+  MX_CHECK(expect(f, "endfacet"));
+  f->nfacets++;
+  return add_triangle(s, v);
+}
+
+/* One "solid ... endsolid" block; f->p is just after "solid". */
+static int ascii_solid(stl_text *f, vertex_map *m, mx_trisoup *s) {
+  f->p = mx_io_next_line(f->p, f->end, &f->line); /* the name */
+  for (;;) {
+    f->p = mx_io_content(f->p, f->end, &f->line, 0);
+    if (f->p < f->end && is_word(f->p, "endsolid")) {
+      f->p = mx_io_next_line(f->p, f->end, &f->line);
+      return MX_OK;
+    }
+    if (f->p < f->end && !is_word(f->p, "facet")) {
+      mx_error(f->path, f->line, "expected 'facet' or 'endsolid', found '%.*s'",
+               mx_io_toklen(f->p, 0), f->p);
+      return MX_EINPUT;
+    }
+    MX_CHECK(expect(f, "facet"));
+    MX_CHECK(ascii_facet(f, m, s));
+  }
+}
+
+static int parse_ascii(stl_text *f, vertex_map *m, mx_trisoup *s) {
+  MX_CHECK(expect(f, "solid"));
+  for (;;) {
+    MX_CHECK(ascii_solid(f, m, s));
+    f->p = mx_io_content(f->p, f->end, &f->line, 0);
+    if (f->p == f->end) break;
+    MX_CHECK(expect(f, "solid"));
+  }
+  if (s->nt > 0) return MX_OK;
+  mx_error(f->path, f->line, "ASCII STL with no facets");
+  return MX_EINPUT;
+}
+
+static int read_ascii(const char *path, const char *buf, size_t len,
+                      mx_trisoup *s) {
+  stl_text f = {path, buf, buf + len, 1, 0};
+  vertex_map m;
+  size_t guess = len / 250 + 8; /* about 250 bytes a facet, V ~ F / 2 */
+  MX_CHECK(map_init(&m, guess));
+  int status = mx_trisoup_reserve(s, guess, 2 * guess);
+  if (status == MX_OK) status = parse_ascii(&f, &m, s);
+  mx_free(m.slot);
+  return status;
+}
+
+/* ---- format detection ------------------------------------------------- */
+
+/* Starts with "solid" and the beginning is plain text. */
+static int looks_ascii(const char *buf, size_t len) {
+  const char *p = buf;
+  while (p < buf + len && (*p == '\n' || *p == ' ' || *p == '\t' || *p == '\r'))
+    p++;
+  if ((size_t)(buf + len - p) < 5 || strncasecmp(p, "solid", 5) != 0)
+    return 0;
+  size_t n = len < 4096 ? len : 4096;
+  for (size_t i = 0; i < n; i++) {
+    unsigned char c = (unsigned char)buf[i];
+    if (c < 9 || (c > 13 && c < 32) || c == 127) return 0;
+  }
+  return 1;
+}
+
+static int parse_stl(const char *path, const char *buf, size_t len,
+                     mx_trisoup *s) {
+  const unsigned char *u = (const unsigned char *)buf;
+  uint64_t n = len >= 84 ? le32(u + 80) : 0;
+  if (len >= 84 && len == 84 + 50 * n)
+    return read_binary(path, u, (size_t)n, s);
+  if (looks_ascii(buf, len)) return read_ascii(path, buf, len, s);
+  if (len < 84)
+    mx_error(path, 0,
+             "neither ASCII STL (no 'solid') nor binary STL (%zu bytes, "
+             "at least 84 needed)",
+             len);
+  else
+    mx_error(path, 0,
+             "binary STL: the header declares %llu facets (%llu bytes) but "
+             "the file has %zu bytes: truncated file or wrong count",
+             (unsigned long long)n, (unsigned long long)(84 + 50 * n), len);
+  return MX_EINPUT;
+}
+
+int mx_read_stl(const char *path, mx_trisoup *out) {
+  memset(out, 0, sizeof *out);
+  char *buf;
+  size_t len;
+  MX_CHECK(mx_io_load(path, &buf, &len));
+  out->nshells = 1;
+  int status = parse_stl(path, buf, len, out);
+  mx_free(buf);
+  if (status != MX_OK) mx_trisoup_free(out);
+  return status;
+}

@@ -1,1 +1,141 @@
+/* Checks after reading: removes degenerate triangles and counts the edges
+ * that are not shared by exactly two triangles (open or non-manifold). */
+#include <stdlib.h>
+#include <string.h>
+
+#include "common.h"
 #include "soa/trisoup.h"
+
+static int indices_valid(const mx_trisoup *s, const char *path) {
+  for (size_t i = 0; i < 3 * s->nt; i++) {
+    if (s->tri[i] < s->nv) continue;
+    mx_error(path, 0, "internal error: triangle %zu uses vertex %u of %zu",
+             i / 3, s->tri[i], s->nv);
+    return MX_EINTERNAL;
+  }
+  return MX_OK;
+}
+
+/* Repeated vertex, or a cross product that is exactly zero (identical or
+ * exactly collinear points). */
+static int degenerate(const mx_trisoup *s, const uint32_t *t) {
+  uint32_t a = t[0], b = t[1], c = t[2];
+  if (a == b || b == c || a == c) return 1;
+  double ux = s->x[b] - s->x[a], uy = s->y[b] - s->y[a],
+         uz = s->z[b] - s->z[a];
+  double vx = s->x[c] - s->x[a], vy = s->y[c] - s->y[a],
+         vz = s->z[c] - s->z[a];
+  return uy * vz - uz * vy == 0 && uz * vx - ux * vz == 0 &&
+         ux * vy - uy * vx == 0;
+}
+
+/* Compacts the triangle arrays in place; returns how many were removed. */
+static size_t remove_degenerate(mx_trisoup *s) {
+  size_t kept = 0;
+  for (size_t i = 0; i < s->nt; i++) {
+    const uint32_t *t = s->tri + 3 * i;
+    if (degenerate(s, t)) continue;
+    if (kept != i) {
+      memmove(s->tri + 3 * kept, t, 3 * sizeof *t);
+      s->shell[kept] = s->shell[i];
+    }
+    kept++;
+  }
+  size_t removed = s->nt - kept;
+  s->nt = kept;
+  return removed;
+}
+
+static int cmp_u32(const void *a, const void *b) {
+  uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+  return (x > y) - (x < y);
+}
+
+static void sort_small(uint32_t *v, size_t n) {
+  if (n > 32) {
+    qsort(v, n, sizeof *v, cmp_u32);
+    return;
+  }
+  for (size_t i = 1; i < n; i++) {
+    uint32_t x = v[i];
+    size_t j = i;
+    for (; j > 0 && v[j - 1] > x; j--) v[j] = v[j - 1];
+    v[j] = x;
+  }
+}
+
+/* Distinct values in sorted v[0..n) that do not occur exactly twice. */
+static size_t odd_runs(const uint32_t *v, size_t n) {
+  size_t bad = 0;
+  for (size_t i = 0; i < n;) {
+    size_t j = i + 1;
+    while (j < n && v[j] == v[i]) j++;
+    bad += j - i != 2;
+    i = j;
+  }
+  return bad;
+}
+
+/* Buckets every edge under its smaller vertex (counting sort), stores the
+ * larger one, then counts per bucket. On return end[v] is the end of bucket
+ * v and its start is end[v - 1] (0 for v = 0). */
+static void bucket_edges(const mx_trisoup *s, size_t *end, uint32_t *other) {
+  memset(end, 0, (s->nv + 1) * sizeof *end);
+  for (size_t i = 0; i < 3 * s->nt; i++) {
+    uint32_t a = s->tri[i], b = s->tri[i % 3 == 2 ? i - 2 : i + 1];
+    end[(a < b ? a : b) + 1]++;
+  }
+  for (size_t v = 0; v < s->nv; v++) end[v + 1] += end[v];
+  for (size_t i = 0; i < 3 * s->nt; i++) {
+    uint32_t a = s->tri[i], b = s->tri[i % 3 == 2 ? i - 2 : i + 1];
+    uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
+    other[end[lo]++] = hi;
+  }
+}
+
+static int count_open_edges(const mx_trisoup *s, size_t *open) {
+  size_t *end = mx_alloc((s->nv + 1) * sizeof *end);
+  uint32_t *other = mx_alloc(3 * s->nt * sizeof *other);
+  if (!end || !other) {
+    mx_free(end);
+    mx_free(other);
+    return MX_EINPUT;
+  }
+  bucket_edges(s, end, other);
+  size_t bad = 0;
+  long nv = (long)s->nv;
+#pragma omp parallel for reduction(+ : bad) schedule(dynamic, 4096)
+  for (long v = 0; v < nv; v++) {
+    size_t b = v ? end[v - 1] : 0;
+    sort_small(other + b, end[v] - b);
+    bad += odd_runs(other + b, end[v] - b);
+  }
+  mx_free(end);
+  mx_free(other);
+  *open = bad;
+  return MX_OK;
+}
+
+int mx_trisoup_check(mx_trisoup *s, const char *path, size_t *open_edges) {
+  if (open_edges) *open_edges = 0;
+  MX_CHECK(indices_valid(s, path));
+  size_t removed = remove_degenerate(s);
+  if (removed)
+    mx_warning(path, 0,
+               "removed %zu degenerate triangle%s (zero area or repeated "
+               "vertex)",
+               removed, removed == 1 ? "" : "s");
+  if (s->nt == 0) {
+    mx_error(path, 0, "no triangles");
+    return MX_EINPUT;
+  }
+  size_t open;
+  MX_CHECK(count_open_edges(s, &open));
+  if (open)
+    mx_warning(path, 0,
+               "surface is not closed: %zu open or non-manifold edges; "
+               "inside/outside may be wrong",
+               open);
+  if (open_edges) *open_edges = open;
+  return MX_OK;
+}

@@ -1,1 +1,114 @@
+/* The triangle soup: growth, concatenation and bounding box. */
 #include "soa/trisoup.h"
+
+#include <string.h>
+
+#include "common.h"
+
+void mx_trisoup_free(mx_trisoup *s) {
+  if (!s) return;
+  mx_free(s->x);
+  mx_free(s->y);
+  mx_free(s->z);
+  mx_free(s->tri);
+  mx_free(s->shell);
+  memset(s, 0, sizeof *s);
+}
+
+/* Geometric growth so that repeated small reservations stay amortised O(1). */
+static size_t grown(size_t cap, size_t need) {
+  size_t c = cap + cap / 2;
+  if (c < 16) c = 16;
+  return c > need ? c : need;
+}
+
+/* Reallocates *p to hold n items of the given size; *p is left untouched on
+ * failure, so the soup stays consistent. */
+static int grow_array(void **p, size_t n, size_t item) {
+  if (n > SIZE_MAX / item) {
+    mx_error(NULL, 0, "out of memory (array of %zu items)", n);
+    return MX_EINPUT;
+  }
+  void *q = mx_realloc(*p, n * item);
+  if (!q) return MX_EINPUT;
+  *p = q;
+  return MX_OK;
+}
+
+static int reserve_vertices(mx_trisoup *s, size_t nv) {
+  if (nv <= s->cap_v) return MX_OK;
+  if (nv > (size_t)UINT32_MAX) {
+    mx_error(NULL, 0, "too many vertices (%zu): indices are 32-bit", nv);
+    return MX_EINPUT;
+  }
+  size_t cap = grown(s->cap_v, nv);
+  if (cap > (size_t)UINT32_MAX) cap = (size_t)UINT32_MAX;
+  MX_CHECK(grow_array((void **)&s->x, cap, sizeof(double)));
+  MX_CHECK(grow_array((void **)&s->y, cap, sizeof(double)));
+  MX_CHECK(grow_array((void **)&s->z, cap, sizeof(double)));
+  s->cap_v = cap;
+  return MX_OK;
+}
+
+static int reserve_triangles(mx_trisoup *s, size_t nt) {
+  if (nt <= s->cap_t) return MX_OK;
+  if (nt > SIZE_MAX / (3 * sizeof(uint32_t))) {
+    mx_error(NULL, 0, "too many triangles (%zu)", nt);
+    return MX_EINPUT;
+  }
+  size_t cap = grown(s->cap_t, nt);
+  MX_CHECK(grow_array((void **)&s->tri, 3 * cap, sizeof(uint32_t)));
+  MX_CHECK(grow_array((void **)&s->shell, cap, sizeof(uint16_t)));
+  s->cap_t = cap;
+  return MX_OK;
+}
+
+int mx_trisoup_reserve(mx_trisoup *s, size_t nv, size_t nt) {
+  MX_CHECK(reserve_vertices(s, nv));
+  return reserve_triangles(s, nt);
+}
+
+int mx_trisoup_append(mx_trisoup *dst, const mx_trisoup *src) {
+  if (dst->nshells == UINT16_MAX) {
+    mx_error(NULL, 0, "too many input surfaces (at most %d)", UINT16_MAX);
+    return MX_EINPUT;
+  }
+  if (src->nv > (size_t)UINT32_MAX - dst->nv) {
+    mx_error(NULL, 0, "too many vertices in total: indices are 32-bit");
+    return MX_EINPUT;
+  }
+  MX_CHECK(mx_trisoup_reserve(dst, dst->nv + src->nv, dst->nt + src->nt));
+  if (src->nv > 0) {
+    size_t bytes = src->nv * sizeof(double);
+    memcpy(dst->x + dst->nv, src->x, bytes);
+    memcpy(dst->y + dst->nv, src->y, bytes);
+    memcpy(dst->z + dst->nv, src->z, bytes);
+  }
+  uint32_t off = (uint32_t)dst->nv;
+  for (size_t i = 0; i < 3 * src->nt; i++)
+    dst->tri[3 * dst->nt + i] = src->tri[i] + off;
+  for (size_t i = 0; i < src->nt; i++) dst->shell[dst->nt + i] = dst->nshells;
+  dst->nv += src->nv;
+  dst->nt += src->nt;
+  dst->nshells++;
+  return MX_OK;
+}
+
+/* All vertices count, used or not. An empty soup gives lo = hi = 0. */
+void mx_trisoup_bbox(const mx_trisoup *s, double lo[3], double hi[3]) {
+  if (s->nv == 0) {
+    for (int d = 0; d < 3; d++) lo[d] = hi[d] = 0.0;
+    return;
+  }
+  const double *c[3] = {s->x, s->y, s->z};
+  for (int d = 0; d < 3; d++) {
+    double mn = c[d][0], mx = c[d][0];
+    for (size_t i = 1; i < s->nv; i++) {
+      double v = c[d][i];
+      mn = v < mn ? v : mn;
+      mx = v > mx ? v : mx;
+    }
+    lo[d] = mn;
+    hi[d] = mx;
+  }
+}
