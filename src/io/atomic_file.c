@@ -1,1 +1,249 @@
-#include "soa/mesh.h"
+/* mixoct: output files written under a temporary name and renamed when
+ * complete (see atomic_file.h). */
+#include "io/atomic_file.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <omp.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "common.h"
+
+enum {
+  AFILE_CHUNK = 8 << 20, /* bytes of one chunk of mx_afile_emit */
+  AFILE_PAR_MIN = 4096,  /* fewer items than this: one thread */
+  AFILE_MAX_PARTS = 256,
+  AFILE_TMP_TRIES = 1000,
+};
+
+static char *dup_string(const char *s) {
+  size_t n = strlen(s) + 1;
+  char *d = mx_alloc(n);
+  if (d) memcpy(d, s, n);
+  return d;
+}
+
+static void afile_reset(mx_afile *f) {
+  memset(f, 0, sizeof *f);
+}
+
+/* Closes the stream, unlinks the temporary, frees everything. Does not
+ * report anything: used on every failure path and by abort. */
+static void afile_discard(mx_afile *f) {
+  if (f->fp) fclose(f->fp);
+  if (f->tmp) unlink(f->tmp);
+  mx_free(f->tmp);
+  mx_free(f->path);
+  mx_free(f->buf);
+  int failed = f->failed;
+  afile_reset(f);
+  f->failed = failed;
+}
+
+/* Reports err about f->path, removes the temporary, returns MX_EINPUT. */
+static int afile_fail(mx_afile *f, int err) {
+  if (!f->failed) {
+    mx_error(f->path, 0, "cannot write: %s", strerror(err ? err : EIO));
+  }
+  f->failed = 1;
+  afile_discard(f);
+  return MX_EINPUT;
+}
+
+/* For failures already reported by someone else (out of memory). */
+static int afile_fail_quiet(mx_afile *f, int status) {
+  f->failed = 1;
+  afile_discard(f);
+  return status;
+}
+
+/* An existing target that is not a regular file is written in place. */
+static int target_is_special(const char *path) {
+  struct stat st;
+  if (stat(path, &st) != 0) return 0;
+  return !S_ISREG(st.st_mode);
+}
+
+static int open_in_place(mx_afile *f) {
+  f->fp = fopen(f->path, "wb");
+  if (!f->fp) return afile_fail(f, errno);
+  return MX_OK;
+}
+
+/* Creates the temporary exclusively: never clobbers another writer's file. */
+static int open_temporary(mx_afile *f) {
+  size_t n = strlen(f->path) + 64;
+  f->tmp = mx_alloc(n);
+  if (!f->tmp) return afile_fail_quiet(f, MX_EINPUT);
+  long pid = (long)getpid();
+  for (int k = 0; k < AFILE_TMP_TRIES; k++) {
+    if (k == 0)
+      snprintf(f->tmp, n, "%s.tmp.%ld", f->path, pid);
+    else
+      snprintf(f->tmp, n, "%s.tmp.%ld.%d", f->path, pid, k);
+    int fd = open(f->tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd < 0 && errno == EEXIST) continue;
+    if (fd < 0) {
+      int err = errno;
+      mx_free(f->tmp);
+      f->tmp = NULL; /* nothing was created: nothing to unlink */
+      return afile_fail(f, err);
+    }
+    f->fp = fdopen(fd, "wb");
+    if (!f->fp) {
+      int err = errno;
+      close(fd);
+      return afile_fail(f, err);
+    }
+    return MX_OK;
+  }
+  mx_free(f->tmp);
+  f->tmp = NULL;
+  return afile_fail(f, EEXIST);
+}
+
+int mx_afile_open(mx_afile *f, const char *path) {
+  afile_reset(f);
+  f->path = dup_string(path);
+  if (!f->path) {
+    f->failed = 1;
+    return MX_EINPUT;
+  }
+  if (target_is_special(path)) return open_in_place(f);
+  return open_temporary(f);
+}
+
+int mx_afile_from_stream(mx_afile *f, FILE *fp, const char *name) {
+  afile_reset(f);
+  f->path = dup_string(name ? name : "(stream)");
+  if (!f->path) {
+    if (fp) fclose(fp);
+    f->failed = 1;
+    return MX_EINPUT;
+  }
+  f->fp = fp;
+  if (!fp) return afile_fail(f, EBADF);
+  return MX_OK;
+}
+
+int mx_afile_write(mx_afile *f, const void *data, size_t bytes) {
+  if (f->failed || !f->fp) return MX_EINPUT;
+  if (bytes == 0) return MX_OK;
+  errno = 0;
+  if (fwrite(data, 1, bytes, f->fp) != bytes) return afile_fail(f, errno);
+  return MX_OK;
+}
+
+int mx_afile_printf(mx_afile *f, const char *fmt, ...) {
+  char line[4096];
+  va_list ap;
+  va_start(ap, fmt);
+  int n = vsnprintf(line, sizeof line, fmt, ap);
+  va_end(ap);
+  if (n < 0 || (size_t)n >= sizeof line) {
+    mx_error(f->path, 0, "internal error: header line too long");
+    return afile_fail_quiet(f, MX_EINTERNAL);
+  }
+  return mx_afile_write(f, line, (size_t)n);
+}
+
+/* fsync is refused by pipes, ttys and some devices: that is not a failure. */
+static int sync_ignorable(int err) {
+  return err == EINVAL || err == EROFS || err == ENOTSUP;
+}
+
+int mx_afile_commit(mx_afile *f) {
+  if (f->failed || !f->fp) {
+    afile_discard(f);
+    return MX_EINPUT;
+  }
+  errno = 0;
+  if (fflush(f->fp) != 0) return afile_fail(f, errno);
+  if (fsync(fileno(f->fp)) != 0 && !sync_ignorable(errno))
+    return afile_fail(f, errno);
+  FILE *fp = f->fp;
+  f->fp = NULL; /* closed below whatever fclose returns */
+  if (fclose(fp) != 0) return afile_fail(f, errno);
+  if (f->tmp && rename(f->tmp, f->path) != 0) return afile_fail(f, errno);
+  mx_free(f->tmp);
+  f->tmp = NULL;
+  afile_discard(f);
+  return MX_OK;
+}
+
+void mx_afile_abort(mx_afile *f) {
+  afile_discard(f);
+}
+
+/* ---- chunked parallel emission ------------------------------------------- */
+
+static int emit_reserve(mx_afile *f, size_t bytes) {
+  if (f->buf_cap >= bytes) return MX_OK;
+  mx_free(f->buf);
+  f->buf_cap = 0;
+  f->buf = mx_alloc(bytes);
+  if (!f->buf) return afile_fail_quiet(f, MX_EINPUT);
+  f->buf_cap = bytes;
+  return MX_OK;
+}
+
+/* Writes the filled parts in order, merging a part with the next one when
+ * it filled its whole room (fixed-size items): one fwrite per chunk then. */
+static int emit_flush_parts(mx_afile *f, const char *buf, size_t nparts,
+                            const size_t *room, const size_t *used) {
+  size_t run_start = 0, run_len = 0, pos = 0;
+  for (size_t p = 0; p < nparts; p++) {
+    if (run_len == 0) run_start = pos;
+    run_len += used[p];
+    int contiguous = used[p] == room[p] && p + 1 < nparts;
+    if (!contiguous) {
+      MX_CHECK(mx_afile_write(f, buf + run_start, run_len));
+      run_len = 0;
+    }
+    pos += room[p];
+  }
+  return MX_OK;
+}
+
+static int emit_chunk(mx_afile *f, size_t begin, size_t count,
+                      size_t max_item_bytes, mx_afile_fill_fn fill,
+                      const void *ctx) {
+  size_t room[AFILE_MAX_PARTS], used[AFILE_MAX_PARTS];
+  size_t nparts = 1;
+  if (count >= AFILE_PAR_MIN) {
+    int t = omp_get_max_threads();
+    nparts = t < 1 ? 1 : (size_t)t;
+    if (nparts > AFILE_MAX_PARTS) nparts = AFILE_MAX_PARTS;
+  }
+  char *buf = f->buf;
+  for (size_t p = 0; p < nparts; p++) {
+    room[p] = (count * (p + 1) / nparts - count * p / nparts) * max_item_bytes;
+  }
+#pragma omp parallel for num_threads((int)nparts) \
+    schedule(static, 1) if (nparts > 1)
+  for (size_t p = 0; p < nparts; p++) {
+    size_t lo = count * p / nparts, hi = count * (p + 1) / nparts;
+    used[p] = fill(ctx, begin + lo, begin + hi, buf + lo * max_item_bytes);
+  }
+  return emit_flush_parts(f, buf, nparts, room, used);
+}
+
+int mx_afile_emit(mx_afile *f, size_t nitems, size_t max_item_bytes,
+                  mx_afile_fill_fn fill, const void *ctx) {
+  if (f->failed || !f->fp) return MX_EINPUT;
+  if (nitems == 0) return MX_OK;
+  if (max_item_bytes == 0) max_item_bytes = 1;
+  size_t chunk_items = AFILE_CHUNK / max_item_bytes;
+  if (chunk_items == 0) chunk_items = 1;
+  if (chunk_items > nitems) chunk_items = nitems;
+  MX_CHECK(emit_reserve(f, chunk_items * max_item_bytes));
+  for (size_t begin = 0; begin < nitems; begin += chunk_items) {
+    size_t count = nitems - begin < chunk_items ? nitems - begin : chunk_items;
+    MX_CHECK(emit_chunk(f, begin, count, max_item_bytes, fill, ctx));
+  }
+  return MX_OK;
+}

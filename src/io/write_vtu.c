@@ -1,1 +1,318 @@
+/* mixoct: VTK XML UnstructuredGrid writer (.vtu), version 1.0, UInt64
+ * headers, little-endian raw appended data.
+ *
+ * Every DataArray is format="appended"; the blocks follow "_" in
+ * <AppendedData encoding="raw">, each preceded by its byte count as a
+ * UInt64, in the order their DataArray elements appear. On a little-endian
+ * host coordinates and fields are written straight from the mesh arrays;
+ * connectivity, offsets and types are converted in parallel chunks. */
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "common.h"
+#include "io/atomic_file.h"
 #include "soa/mesh.h"
+
+#define VTU_HOST_LE (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__)
+
+enum { OFFSET_BLOCK = 4096 }; /* cells per precomputed offsets prefix */
+
+typedef struct {
+  const mx_mesh_view *m;
+  const mx_field *fd;
+  const uint64_t *block_start; /* nodes before cell k*OFFSET_BLOCK */
+} vtu_ctx;
+
+/* ---- little-endian stores ------------------------------------------------ */
+
+static inline void put_le32(char *out, uint32_t v) {
+#if !VTU_HOST_LE
+  v = __builtin_bswap32(v);
+#endif
+  memcpy(out, &v, 4);
+}
+
+static inline void put_le64(char *out, uint64_t v) {
+#if !VTU_HOST_LE
+  v = __builtin_bswap64(v);
+#endif
+  memcpy(out, &v, 8);
+}
+
+static inline void put_le_double(char *out, double d) {
+  uint64_t v;
+  memcpy(&v, &d, 8);
+  put_le64(out, v);
+}
+
+/* ---- a growable string for the XML header -------------------------------- */
+
+typedef struct {
+  char *s;
+  size_t len, cap;
+  int failed;
+} strbuf;
+
+static void sb_grow(strbuf *b, size_t need) {
+  if (b->failed || b->len + need + 1 <= b->cap) return;
+  size_t cap = b->cap ? b->cap : 4096;
+  while (cap < b->len + need + 1) cap *= 2;
+  char *s = mx_realloc(b->s, cap);
+  if (!s) {
+    b->failed = 1;
+    return;
+  }
+  b->s = s;
+  b->cap = cap;
+}
+
+static void sb_printf(strbuf *b, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+static void sb_printf(strbuf *b, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  int n = vsnprintf(NULL, 0, fmt, ap);
+  va_end(ap);
+  if (n < 0) {
+    b->failed = 1;
+    return;
+  }
+  sb_grow(b, (size_t)n);
+  if (b->failed) return;
+  va_start(ap, fmt);
+  vsnprintf(b->s + b->len, (size_t)n + 1, fmt, ap);
+  va_end(ap);
+  b->len += (size_t)n;
+}
+
+/* Appends name with the XML special characters escaped. */
+static void sb_xml_name(strbuf *b, const char *name) {
+  for (const char *p = name; *p; p++) {
+    switch (*p) {
+      case '&':
+        sb_printf(b, "&amp;");
+        break;
+      case '<':
+        sb_printf(b, "&lt;");
+        break;
+      case '>':
+        sb_printf(b, "&gt;");
+        break;
+      case '"':
+        sb_printf(b, "&quot;");
+        break;
+      default:
+        sb_printf(b, "%c", *p);
+    }
+  }
+}
+
+/* ---- header -------------------------------------------------------------- */
+
+static size_t conn_length(const mx_mesh_view *m) {
+  size_t total = 0;
+#pragma omp parallel for reduction(+ : total) schedule(static) \
+    if (m->ncells > 65536)
+  for (size_t c = 0; c < m->ncells; c++)
+    total += (size_t)mx_cell_nodes[m->type[c]];
+  return total;
+}
+
+/* One DataArray element; advances *offset past its appended block. */
+static void xml_array(strbuf *b, const char *type, const char *name, int ncomp,
+                      uint64_t *offset, uint64_t data_bytes) {
+  sb_printf(b, "        <DataArray type=\"%s\" Name=\"", type);
+  sb_xml_name(b, name);
+  sb_printf(b, "\"");
+  if (ncomp > 1) sb_printf(b, " NumberOfComponents=\"%d\"", ncomp);
+  sb_printf(b, " format=\"appended\" offset=\"%llu\"/>\n",
+            (unsigned long long)*offset);
+  *offset += 8 + data_bytes;
+}
+
+static void xml_fields(strbuf *b, const char *tag, int nfields,
+                       const mx_field *fields, size_t count, uint64_t *offset) {
+  sb_printf(b, "      <%s>\n", tag);
+  for (int i = 0; i < nfields; i++) {
+    const mx_field *fd = &fields[i];
+    xml_array(b, fd->is_double ? "Float64" : "Int32", fd->name, 1, offset,
+              (uint64_t)count * (fd->is_double ? 8 : 4));
+  }
+  sb_printf(b, "      </%s>\n", tag);
+}
+
+static void xml_header(strbuf *b, const mx_mesh_view *m, size_t nconn) {
+  uint64_t off = 0;
+  sb_printf(b,
+            "<?xml version=\"1.0\"?>\n"
+            "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
+            "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+            "  <UnstructuredGrid>\n"
+            "    <Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n",
+            m->nnodes, m->ncells);
+  xml_fields(b, "PointData", m->npoint_fields, m->point_fields, m->nnodes,
+             &off);
+  xml_fields(b, "CellData", m->ncell_fields, m->cell_fields, m->ncells, &off);
+  sb_printf(b, "      <Points>\n");
+  xml_array(b, "Float64", "Points", 3, &off, 24 * (uint64_t)m->nnodes);
+  sb_printf(b, "      </Points>\n      <Cells>\n");
+  xml_array(b, "Int64", "connectivity", 1, &off, 8 * (uint64_t)nconn);
+  xml_array(b, "Int64", "offsets", 1, &off, 8 * (uint64_t)m->ncells);
+  xml_array(b, "UInt8", "types", 1, &off, (uint64_t)m->ncells);
+  sb_printf(b,
+            "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n"
+            "  <AppendedData encoding=\"raw\">\n   _");
+}
+
+/* ---- appended blocks ----------------------------------------------------- */
+
+#if !VTU_HOST_LE
+static size_t fill_doubles(const void *vctx, size_t b, size_t e, char *out) {
+  const double *v = ((const vtu_ctx *)vctx)->fd->dvalues;
+  size_t n = 0;
+  for (size_t i = b; i < e; i++, n += 8) put_le_double(out + n, v[i]);
+  return n;
+}
+
+static size_t fill_ints(const void *vctx, size_t b, size_t e, char *out) {
+  const int32_t *v = ((const vtu_ctx *)vctx)->fd->ivalues;
+  size_t n = 0;
+  for (size_t i = b; i < e; i++, n += 4) put_le32(out + n, (uint32_t)v[i]);
+  return n;
+}
+#endif
+
+static size_t fill_conn(const void *vctx, size_t b, size_t e, char *out) {
+  const mx_mesh_view *m = ((const vtu_ctx *)vctx)->m;
+  size_t n = 0;
+  for (size_t c = b; c < e; c++) {
+    const uint32_t *row = m->conn + 8 * c;
+    int nn = mx_cell_nodes[m->type[c]];
+    for (int j = 0; j < nn; j++, n += 8) put_le64(out + n, row[j]);
+  }
+  return n;
+}
+
+static size_t fill_offsets(const void *vctx, size_t b, size_t e, char *out) {
+  const vtu_ctx *ctx = vctx;
+  const mx_mesh_view *m = ctx->m;
+  size_t first = b / OFFSET_BLOCK * OFFSET_BLOCK;
+  uint64_t end = ctx->block_start[b / OFFSET_BLOCK];
+  for (size_t c = first; c < b; c++) end += (uint64_t)mx_cell_nodes[m->type[c]];
+  size_t n = 0;
+  for (size_t c = b; c < e; c++, n += 8) {
+    end += (uint64_t)mx_cell_nodes[m->type[c]];
+    put_le64(out + n, end);
+  }
+  return n;
+}
+
+static size_t fill_types(const void *vctx, size_t b, size_t e, char *out) {
+  const mx_mesh_view *m = ((const vtu_ctx *)vctx)->m;
+  for (size_t c = b; c < e; c++)
+    out[c - b] = (char)mx_vtk_cell_type[m->type[c]];
+  return e - b;
+}
+
+static int write_count(mx_afile *f, uint64_t bytes) {
+  char head[8];
+  put_le64(head, bytes);
+  return mx_afile_write(f, head, 8);
+}
+
+/* A block of doubles (ncomp per item): straight from memory when the host
+ * is little-endian, converted otherwise. */
+static int write_double_block(mx_afile *f, const double *v, size_t count) {
+  MX_CHECK(write_count(f, 8 * (uint64_t)count));
+#if VTU_HOST_LE
+  return mx_afile_write(f, v, 8 * count);
+#else
+  mx_field fd = {"", 1, NULL, v};
+  vtu_ctx ctx = {NULL, &fd, NULL};
+  return mx_afile_emit(f, count, 8, fill_doubles, &ctx);
+#endif
+}
+
+static int write_field_block(mx_afile *f, const mx_field *fd, size_t count) {
+  if (fd->is_double) return write_double_block(f, fd->dvalues, count);
+  MX_CHECK(write_count(f, 4 * (uint64_t)count));
+#if VTU_HOST_LE
+  return mx_afile_write(f, fd->ivalues, 4 * count);
+#else
+  vtu_ctx ctx = {NULL, fd, NULL};
+  return mx_afile_emit(f, count, 4, fill_ints, &ctx);
+#endif
+}
+
+static int write_fields(mx_afile *f, int nfields, const mx_field *fields,
+                        size_t count) {
+  for (int i = 0; i < nfields; i++) {
+    MX_CHECK(write_field_block(f, &fields[i], count));
+  }
+  return MX_OK;
+}
+
+/* Nodes before the first cell of each OFFSET_BLOCK-cell block. */
+static uint64_t *offset_block_starts(const mx_mesh_view *m) {
+  size_t nblocks = m->ncells / OFFSET_BLOCK + 1;
+  uint64_t *start = mx_alloc(nblocks * sizeof *start);
+  if (!start) return NULL;
+#pragma omp parallel for schedule(static) if (nblocks > 16)
+  for (size_t k = 0; k < nblocks; k++) {
+    size_t lo = k * OFFSET_BLOCK, hi = lo + OFFSET_BLOCK;
+    if (hi > m->ncells) hi = m->ncells;
+    uint64_t sum = 0;
+    for (size_t c = lo; c < hi; c++) sum += (uint64_t)mx_cell_nodes[m->type[c]];
+    start[k] = sum;
+  }
+  uint64_t run = 0;
+  for (size_t k = 0; k < nblocks; k++) {
+    uint64_t s = start[k];
+    start[k] = run;
+    run += s;
+  }
+  return start;
+}
+
+static int write_cell_blocks(mx_afile *f, const mx_mesh_view *m, size_t nconn) {
+  uint64_t *block_start = offset_block_starts(m);
+  if (!block_start) return MX_EINPUT;
+  vtu_ctx ctx = {m, NULL, block_start};
+  int st = write_count(f, 8 * (uint64_t)nconn);
+  if (st == MX_OK) st = mx_afile_emit(f, m->ncells, 64, fill_conn, &ctx);
+  if (st == MX_OK) st = write_count(f, 8 * (uint64_t)m->ncells);
+  if (st == MX_OK) st = mx_afile_emit(f, m->ncells, 8, fill_offsets, &ctx);
+  if (st == MX_OK) st = write_count(f, (uint64_t)m->ncells);
+  if (st == MX_OK) st = mx_afile_emit(f, m->ncells, 1, fill_types, &ctx);
+  mx_free(block_start);
+  return st;
+}
+
+static int write_body(mx_afile *f, const mx_mesh_view *m) {
+  size_t nconn = conn_length(m);
+  strbuf head = {0};
+  xml_header(&head, m, nconn);
+  int st = head.failed ? MX_EINPUT : mx_afile_write(f, head.s, head.len);
+  mx_free(head.s);
+  MX_CHECK(st);
+  MX_CHECK(write_fields(f, m->npoint_fields, m->point_fields, m->nnodes));
+  MX_CHECK(write_fields(f, m->ncell_fields, m->cell_fields, m->ncells));
+  MX_CHECK(write_double_block(f, m->xyz, 3 * m->nnodes));
+  MX_CHECK(write_cell_blocks(f, m, nconn));
+  static const char tail[] = "\n  </AppendedData>\n</VTKFile>\n";
+  return mx_afile_write(f, tail, sizeof tail - 1);
+}
+
+int mx_write_vtu(const char *path, const mx_mesh_view *m) {
+  MX_CHECK(mx_mesh_view_check(path, m));
+  mx_afile f;
+  MX_CHECK(mx_afile_open(&f, path));
+  int status = write_body(&f, m);
+  if (status != MX_OK) {
+    mx_afile_abort(&f);
+    return status;
+  }
+  return mx_afile_commit(&f);
+}

@@ -1,0 +1,68 @@
+/* mixoct: output files that appear whole or not at all.
+ *
+ * mx_afile_open() creates "<path>.tmp.<pid>" (".<k>" appended if that name is
+ * taken) in the directory of <path>; the data goes there and
+ * mx_afile_commit() flushes, fsyncs, closes and renames it onto <path>.
+ * mx_afile_abort() closes and unlinks the temporary. Every failure (open,
+ * fwrite, fflush, fsync, fclose, rename: EACCES, ENOSPC, EIO, ...) prints
+ * "mixoct: PATH: error: cannot write: <strerror>", removes the temporary at
+ * once and makes the call (and every later call on the same handle) return
+ * MX_EINPUT, so no partial or temporary file is ever left behind.
+ *
+ * When <path> already exists and is not a regular file (/dev/null,
+ * /dev/stdout, a FIFO, a device) it is written in place: renaming over it
+ * would replace the device node. mx_afile_from_stream() wraps a stream the
+ * caller opened (tests use it on /dev/full); commit then only flushes and
+ * closes it.
+ *
+ * Usage:
+ *   mx_afile f;
+ *   MX_CHECK(mx_afile_open(&f, path));
+ *   int st = mx_afile_write(&f, buf, n);              (repeat)
+ *   if (st == MX_OK) st = mx_afile_commit(&f); else mx_afile_abort(&f);
+ * abort is always safe (idempotent, also after a failed write or commit). */
+#ifndef MX_ATOMIC_FILE_H
+#define MX_ATOMIC_FILE_H
+
+#include <stddef.h>
+#include <stdio.h>
+
+#include "soa/mesh.h"
+
+typedef struct {
+  FILE *fp;   /* NULL once closed */
+  char *path; /* final name, used in messages */
+  char *tmp;  /* temporary name; NULL when writing in place or a stream */
+  int failed; /* sticky: a failure was reported, every call now fails */
+  char *buf;  /* scratch buffer of mx_afile_emit */
+  size_t buf_cap;
+} mx_afile;
+
+int mx_afile_open(mx_afile *f, const char *path);
+/* Takes ownership of fp (closed by commit/abort). name is for messages. */
+int mx_afile_from_stream(mx_afile *f, FILE *fp, const char *name);
+int mx_afile_write(mx_afile *f, const void *data, size_t bytes);
+/* printf-style convenience for short header lines (at most 4 KiB each). */
+int mx_afile_printf(mx_afile *f, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+int mx_afile_commit(mx_afile *f);
+void mx_afile_abort(mx_afile *f);
+
+/* Chunked, parallel writing of a sequence of nitems items. fill() writes
+ * the items [begin, end) to out, which has room for
+ * (end - begin) * max_item_bytes bytes, and returns the number of bytes it
+ * wrote. Items are cut into chunks of a few MiB, each chunk is split among
+ * the OpenMP threads and the parts are written in order, so the bytes do not
+ * depend on the number of threads. fill() must be thread-safe. */
+typedef size_t (*mx_afile_fill_fn)(const void *ctx, size_t begin, size_t end,
+                                   char *out);
+int mx_afile_emit(mx_afile *f, size_t nitems, size_t max_item_bytes,
+                  mx_afile_fill_fn fill, const void *ctx);
+
+/* Shared by the mesh writers (implemented in write_mesh.c): checks that a
+ * mesh view is consistent (types in range, node indices < nnodes, arrays and
+ * field values present). Prints a message naming path and returns
+ * MX_EINTERNAL otherwise. */
+int mx_mesh_view_check(const char *path, const mx_mesh_view *m);
+
+#endif
