@@ -1,9 +1,12 @@
 /* Balance while refining, with the edge infos (Jaillet & Lobos 2021,
  * Algorithm 1, steps 2 and 3).
  *
- * When an octant O of level l is split, its children (level l+1) touch every
- * leaf that O touched. A leaf M of level l-1 touching O is now two levels
- * coarser than its new neighbours: it goes on `to_balance`. Such an M touches
+ * When an octant O of level l is split, a leaf M of level l-1 touching one of
+ * its kept children (level l+1) is two levels coarser than that neighbour: it
+ * goes on `to_balance`. (Children found outside the domain are not stored and
+ * do not count; a child counts from its creation on, even once it is split
+ * itself, which is what makes the result independent of the order of the
+ * splits: see balance_recursive.c.) Such an M touches
  * O's parent P along a whole face or edge of P (same level, aligned), so M has
  * one of P's edges as its own, and the edge infos of P's 12 edges (level l-1)
  * list it. Leaves coarser than l-1 cannot touch O (the tree was balanced).
@@ -32,7 +35,23 @@ int mx_octants_touch(uint64_t ka, int la, uint64_t kb, int lb) {
   return open >= 1 && open < 3;
 }
 
-/* Leaves of level l-1 touching one of the just-split octants run[0..k)
+/* 1 when leaf m (level lm) touches a kept child of one of run[0..k). */
+static int touches_kept_child(const mx_octree *T, const uint32_t *run,
+                              size_t k, uint32_t m, int lm) {
+  for (size_t i = 0; i < k; i++) {
+    const uint32_t o = run[i];
+    if (!mx_octants_touch(T->key[o], lm + 1, T->key[m], lm)) continue;
+    const int nk = __builtin_popcount(T->kept[o]);
+    for (int j = 0; j < nk; j++) {
+      const uint32_t ch = T->child0[o] + (uint32_t)j;
+      if (mx_octants_touch(T->key[ch], lm + 2, T->key[m], lm)) return 1;
+    }
+  }
+  return 0;
+}
+
+/* Leaves of level l-1 touching a kept child of one of the just-split octants
+ * run[0..k)
  * (level l, all children of the same parent P), pushed once each (the
  * MX_OCT_QUEUED flag) onto buf. P's 12 edges are looked up once per run. */
 static void find_unbalanced(mx_builder *B, const uint32_t *run, size_t k,
@@ -56,11 +75,7 @@ static void find_unbalanced(mx_builder *B, const uint32_t *run, size_t k,
         if (__atomic_load_n(&T->flags[m], __ATOMIC_RELAXED) &
             (MX_OCT_SPLIT | MX_OCT_QUEUED))
           continue;
-        size_t i = 0;
-        while (i < k &&
-               !mx_octants_touch(T->key[run[i]], lp + 1, T->key[m], lp))
-          i++;
-        if (i == k) continue;
+        if (!touches_kept_child(T, run, k, m, lp)) continue;
         uint8_t old = __atomic_fetch_or(&T->flags[m], (uint8_t)MX_OCT_QUEUED,
                                         __ATOMIC_RELAXED);
         if (old & MX_OCT_QUEUED) continue;

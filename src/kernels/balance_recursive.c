@@ -1,10 +1,19 @@
 /* The published original's balance, kept as the benchmark's baseline: refine
  * without edge infos, then balance at the very end by recursive neighbour
- * search in a pointer tree (the classic up-then-mirror-down walk). Every leaf
- * looks at its 18 face and edge neighbours of its own size or larger; a leaf
- * neighbour more than one level coarser is split, its children are queued,
- * and the search is repeated until nothing changes. Serial, as the original.
- * It must give exactly the leaves of the default (tests check the hash). */
+ * search in a pointer tree (the classic up-then-mirror-down walk). Every
+ * octant looks at its 18 face and edge neighbours of its own size or larger;
+ * a leaf neighbour more than one level coarser is split, its children are
+ * queued, and the search is repeated until nothing changes. Serial, as the
+ * original. It gives exactly the leaves of the default (tests check it).
+ *
+ * The rule both balances implement: a leaf must be split when an octant of
+ * the domain two or more levels finer touches it along a face or an edge.
+ * "Octant" means every octant ever created and kept, leaf or already split,
+ * and children found outside the domain are never created. Balancing while
+ * refining level by level sees each octant while it is still a leaf, so this
+ * is what it computes; here, at the end, the split octants are checked as
+ * well as the leaves. The rule only ever adds splits as the tree grows, so its
+ * closure does not depend on the order of the splits. */
 #include "kernels/refine.h"
 
 #include "common.h"
@@ -144,19 +153,17 @@ int mx_balance_recursive(mx_builder *B) {
   }
   for (size_t o = 0; o < T->n && !st; o++)
     if (T->flags[o] & MX_OCT_SPLIT) st = attach_children(&R, R.of_oct[o]);
-  /* Worklist of leaves, first all of them. */
+  /* Worklist: every octant, leaf or split. */
   size_t cap = T->n + 16, top = 0;
   uint32_t *work = malloc(cap * sizeof *work);
   if (!work) st = MX_EINPUT;
-  for (size_t o = T->n; o-- > 0 && !st;)
-    if (!(T->flags[o] & MX_OCT_SPLIT)) work[top++] = (uint32_t)o;
+  for (size_t o = T->n; o-- > 0 && !st;) work[top++] = (uint32_t)o;
   static const int dirs[18][3] = {
       {1, 0, 0},  {-1, 0, 0}, {0, 1, 0},  {0, -1, 0}, {0, 0, 1},  {0, 0, -1},
       {1, 1, 0},  {1, -1, 0}, {-1, 1, 0}, {-1, -1, 0}, {1, 0, 1}, {1, 0, -1},
       {-1, 0, 1}, {-1, 0, -1}, {0, 1, 1}, {0, 1, -1}, {0, -1, 1}, {0, -1, -1}};
   while (top > 0 && !st) {
     const uint32_t o = work[--top];
-    if (T->flags[o] & MX_OCT_SPLIT) continue;
     const rnode *L = R.of_oct[o];
     for (int k = 0; k < 18 && !st; k++) {
       for (;;) {
