@@ -48,8 +48,9 @@ static int read_inputs(const mx_options *o, mx_trisoup *all,
   return MX_OK;
 }
 
-static int write_octree(const mx_builder *B, const uint32_t *leaves, size_t n,
+static int write_octree(const mx_builder *B, uint32_t *leaves, size_t n,
                         const char *path, size_t *nnodes) {
+  MX_CHECK(mx_leaves_sorted(B, leaves, n));
   mx_hexmesh h;
   MX_CHECK(mx_leaf_hex_mesh(B, leaves, n, &h));
   *nnodes = h.nnodes;
@@ -151,4 +152,3 @@ int main(int argc, char **argv) {
   st = run(&o);
   return st == MX_OK ? 0 : st;
 }
-/* TEMP-WEAK */ __attribute__((weak)) int mx_demo_surface(mx_trisoup *out, int subdiv) { (void)out; (void)subdiv; return MX_EINPUT; }

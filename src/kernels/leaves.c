@@ -3,6 +3,16 @@
 #include "common.h"
 #include "soa/scan.h"
 
+int mx_leaves_sorted(const mx_builder *B, uint32_t *leaves, size_t n) {
+  uint64_t *k = mx_alloc((n + 1) * sizeof *k);
+  if (!k) return MX_EINPUT;
+#pragma omp parallel for schedule(static)
+  for (size_t i = 0; i < n; i++) k[i] = B->oct.key[leaves[i]];
+  int st = mx_sort_u64(k, leaves, n);
+  mx_free(k);
+  return st;
+}
+
 int mx_leaves(const mx_builder *B, uint32_t **out, size_t *n) {
   const mx_octree *T = &B->oct;
   size_t k = 0;

@@ -85,6 +85,9 @@ int mx_balance_drain(mx_builder *B, const uint32_t *split, size_t n);
 /* Leaves (src/kernels/leaves.c): indices of the octants not split, in index
  * order (deterministic); *out allocated with mx_alloc. */
 int mx_leaves(const mx_builder *B, uint32_t **out, size_t *n);
+/* Reorder leaves into Morton order of their anchors (unique among leaves),
+ * the canonical order of every output. */
+int mx_leaves_sorted(const mx_builder *B, uint32_t *leaves, size_t n);
 /* Order-independent fingerprint of the leaf set (hash of the sorted
  * (key, level) pairs). */
 uint64_t mx_leaves_hash(const mx_builder *B, const uint32_t *leaves, size_t n);

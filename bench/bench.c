@@ -1,0 +1,165 @@
+/* mixoct benchmark harness: runs `mixoct --json` on the cortex at -s 4..9
+ * with both balances and 1 and 2 threads, and prints a table and one JSON
+ * object with leaves, refine and balance seconds, peak RSS, and the ratios
+ * (edges vs recursive, 2 threads vs 1, against the reference's figures).
+ *
+ * usage: mixoct-bench [--mixoct PATH] [--input cortex.off] [--levels 4-9]
+ *                     [--repeat N] [--json-only]
+ * Each configuration runs N times (default 3) and the fastest run is kept. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+
+typedef struct {
+  double leaves, refine, balance, rss, total;
+  char hash[32];
+  int ok;
+} result;
+
+/* Reference (REFERENCE.md): refine+balance seconds and octants entering the
+ * transition stage, published mesher, one thread. */
+static const double ref_rb[10] = {0, 0, 0, 0, 0.063, 0.181, 0.743, 2.757, 11.64, 48.67};
+static const double ref_leaves[10] = {0, 0, 0, 0, 2241, 10123, 43904, 183473, 751949, 3047636};
+
+static double json_num(const char *s, const char *key) {
+  char pat[64];
+  snprintf(pat, sizeof pat, "\"%s\": ", key);
+  const char *p = strstr(s, pat);
+  return p ? atof(p + strlen(pat)) : -1.0;
+}
+
+static void json_str(const char *s, const char *key, char *out, size_t n) {
+  char pat[64];
+  snprintf(pat, sizeof pat, "\"%s\": \"", key);
+  const char *p = strstr(s, pat);
+  out[0] = 0;
+  if (!p) return;
+  p += strlen(pat);
+  size_t i = 0;
+  while (p[i] && p[i] != '"' && i + 1 < n) {
+    out[i] = p[i];
+    i++;
+  }
+  out[i] = 0;
+}
+
+static result run_once(const char *mixoct, const char *input, int level,
+                       const char *balance, int threads) {
+  result r;
+  memset(&r, 0, sizeof r);
+  char cmd[2048];
+  snprintf(cmd, sizeof cmd, "'%s' -i '%s' -s %d --balance %s --threads %d "
+           "--json --quiet", mixoct, input, level, balance, threads);
+  FILE *p = popen(cmd, "r");
+  if (!p) return r;
+  char line[8192], last[8192] = "";
+  while (fgets(line, sizeof line, p)) memcpy(last, line, sizeof line);
+  int st = pclose(p);
+  if (st != 0 || !strchr(last, '{')) return r;
+  r.leaves = json_num(last, "leaves");
+  r.refine = json_num(last, "refine");
+  r.balance = json_num(last, "balance");
+  r.rss = json_num(last, "peak_rss_mb");
+  r.total = json_num(last, "total_s");
+  json_str(last, "leaves_hash", r.hash, sizeof r.hash);
+  r.ok = 1;
+  return r;
+}
+
+static result run_best(const char *mixoct, const char *input, int level,
+                       const char *balance, int threads, int repeat) {
+  result best;
+  memset(&best, 0, sizeof best);
+  for (int i = 0; i < repeat; i++) {
+    result r = run_once(mixoct, input, level, balance, threads);
+    if (!r.ok) return r;
+    if (!best.ok || r.refine + r.balance < best.refine + best.balance) best = r;
+  }
+  return best;
+}
+
+int main(int argc, char **argv) {
+  const char *mixoct = "build/mixoct";
+  const char *input = "../shared/data/surfaces/cortex.off";
+  int lo = 4, hi = 9, repeat = 3, json_only = 0;
+  for (int i = 1; i < argc; i++) {
+    if (!strcmp(argv[i], "--mixoct") && i + 1 < argc) mixoct = argv[++i];
+    else if (!strcmp(argv[i], "--input") && i + 1 < argc) input = argv[++i];
+    else if (!strcmp(argv[i], "--levels") && i + 1 < argc) {
+      if (sscanf(argv[++i], "%d-%d", &lo, &hi) != 2 || lo < 1 || hi > 9 || lo > hi) {
+        fprintf(stderr, "mixoct-bench: --levels wants A-B within 1-9\n");
+        return 2;
+      }
+    } else if (!strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--json-only")) json_only = 1;
+    else {
+      fprintf(stderr, "usage: mixoct-bench [--mixoct PATH] [--input FILE] "
+                      "[--levels 4-9] [--repeat N] [--json-only]\n");
+      return 2;
+    }
+  }
+  if (repeat < 1) repeat = 1;
+  const char *bal[2] = {"edges", "recursive"};
+  result R[10][2][2]; /* level, balance, threads-1 */
+  int fail = 0;
+  if (!json_only) {
+    printf("mixoct bench: %s, best of %d, refine+balance seconds (rb)\n", input, repeat);
+    printf("%3s %10s %7s | %9s %9s %9s %7s | %9s %9s %7s | %6s %6s | %8s %8s\n",
+           "RL", "leaves", "vs ref", "edges 1t", "edges 2t", "2t/1t", "MB",
+           "recur 1t", "recur 2t", "MB", "rec/ed", "rec/ed", "ref rb", "ref/2t");
+    printf("%3s %10s %7s | %9s %9s %9s %7s | %9s %9s %7s | %6s %6s | %8s %8s\n",
+           "", "", "", "rb s", "rb s", "speedup", "", "rb s", "rb s", "",
+           "1t", "2t", "s", "speedup");
+  }
+  for (int l = lo; l <= hi; l++) {
+    for (int b = 0; b < 2; b++)
+      for (int t = 0; t < 2; t++) {
+        R[l][b][t] = run_best(mixoct, input, l, bal[b], t + 1, repeat);
+        if (!R[l][b][t].ok) {
+          fprintf(stderr, "mixoct-bench: run failed: -s %d --balance %s --threads %d\n",
+                  l, bal[b], t + 1);
+          fail = 1;
+        }
+      }
+    if (fail) break;
+    const result *e1 = &R[l][0][0], *e2 = &R[l][0][1], *r1 = &R[l][1][0], *r2 = &R[l][1][1];
+    int same = !strcmp(e1->hash, e2->hash) && !strcmp(e1->hash, r1->hash) &&
+               !strcmp(e1->hash, r2->hash);
+    if (!same) {
+      fprintf(stderr, "mixoct-bench: leaves differ at -s %d\n", l);
+      fail = 1;
+    }
+    double rb[2][2];
+    for (int b = 0; b < 2; b++)
+      for (int t = 0; t < 2; t++) rb[b][t] = R[l][b][t].refine + R[l][b][t].balance;
+    if (!json_only)
+      printf("%3d %10.0f %+6.2f%% | %9.3f %9.3f %8.2fx %7.0f | %9.3f %9.3f %7.0f | "
+             "%5.2fx %5.2fx | %8.2f %7.1fx%s\n",
+             l, e1->leaves, 100.0 * (e1->leaves - ref_leaves[l]) / ref_leaves[l],
+             rb[0][0], rb[0][1], rb[0][0] / rb[0][1], e2->rss, rb[1][0], rb[1][1],
+             r2->rss, rb[1][0] / rb[0][0], rb[1][1] / rb[0][1], ref_rb[l],
+             ref_rb[l] / rb[0][1], same ? "" : "  LEAVES DIFFER");
+  }
+  if (fail) return 1;
+  printf("{\"bench\": \"octree\", \"input\": \"%s\", \"repeat\": %d, \"levels\": [", input, repeat);
+  for (int l = lo; l <= hi; l++) {
+    printf("%s{\"rl\": %d, \"leaves\": %.0f, \"reference_leaves\": %.0f, \"hash\": \"%s\", \"runs\": [",
+           l > lo ? ", " : "", l, R[l][0][0].leaves, ref_leaves[l], R[l][0][0].hash);
+    for (int b = 0; b < 2; b++)
+      for (int t = 0; t < 2; t++) {
+        const result *r = &R[l][b][t];
+        printf("%s{\"balance\": \"%s\", \"threads\": %d, \"refine_s\": %.6f, "
+               "\"balance_s\": %.6f, \"total_s\": %.6f, \"peak_rss_mb\": %.1f}",
+               b || t ? ", " : "", bal[b], t + 1, r->refine, r->balance, r->total, r->rss);
+      }
+    double e2 = R[l][0][1].refine + R[l][0][1].balance;
+    double e1 = R[l][0][0].refine + R[l][0][0].balance;
+    double r1 = R[l][1][0].refine + R[l][1][0].balance;
+    printf("], \"recursive_over_edges_1t\": %.3f, \"speedup_2t\": %.3f, "
+           "\"reference_rb_s\": %.3f, \"reference_over_edges_2t\": %.2f}",
+           r1 / e1, e1 / e2, ref_rb[l], ref_rb[l] / e2);
+  }
+  printf("]}\n");
+  return 0;
+}

@@ -1,0 +1,104 @@
+#!/usr/bin/env bash
+# End-to-end tests of the mixoct program: exit codes, messages that name the
+# file and line, no partial output, JSON summary, determinism across threads,
+# requests through the command line on box surfaces (counts reasoned in
+# test_octree.c).
+MIXOCT=${1:?usage: cli_test.sh path/to/mixoct}
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+ok() { echo "ok   $*"; }
+bad() { echo "FAIL $*"; fails=$((fails + 1)); }
+expect_exit() { # code, description, command...
+  local want=$1 what=$2; shift 2
+  "$@" >"$T/out" 2>"$T/err"; local got=$?
+  if [ "$got" -eq "$want" ]; then ok "$what (exit $got)"; else bad "$what: exit $got, wanted $want"; cat "$T/err"; fi
+}
+has() { if grep -q -- "$2" "$1"; then ok "$3"; else bad "$3: '$2' not in $(cat "$1")"; fi; }
+
+cube_off() { # file, half side
+  local h=$2
+  cat >"$1" <<EOS
+OFF
+8 12 0
+-$h -$h -$h
+$h -$h -$h
+-$h $h -$h
+$h $h -$h
+-$h -$h $h
+$h -$h $h
+-$h $h $h
+$h $h $h
+3 0 2 1
+3 1 2 3
+3 4 5 6
+3 5 7 6
+3 0 1 4
+3 1 5 4
+3 2 6 3
+3 3 6 7
+3 0 4 2
+3 2 4 6
+3 1 3 5
+3 3 7 5
+EOS
+}
+
+expect_exit 0 "--help" "$MIXOCT" --help
+has "$T/out" "--surface-level" "help lists the options"
+expect_exit 0 "--version" "$MIXOCT" --version
+expect_exit 2 "no input" "$MIXOCT" -s 3
+expect_exit 2 "unknown option" "$MIXOCT" --demo --frobnicate
+expect_exit 2 "bad level" "$MIXOCT" --demo -s x
+expect_exit 2 "missing file" "$MIXOCT" -i "$T/nope.off" -s 2
+has "$T/err" "nope.off" "missing file is named"
+
+cube_off "$T/cube.off" 0.5
+sed 's/^3 3 7 5$/3 3 7 99/' "$T/cube.off" >"$T/badidx.off"
+expect_exit 2 "index out of range" "$MIXOCT" -i "$T/badidx.off" -s 2
+has "$T/err" "badidx.off:22" "bad index names file and line"
+printf 'OFF\n8 12 0\n0 0 0\n' >"$T/trunc.off"
+expect_exit 2 "truncated file" "$MIXOCT" -i "$T/trunc.off" -s 2
+has "$T/err" "trunc.off" "truncated file is named"
+sed 's/^0.5 0.5 0.5$/nan 0.5 0.5/' "$T/cube.off" >"$T/nan.off"
+expect_exit 2 "NaN coordinate" "$MIXOCT" -i "$T/nan.off" -s 2
+has "$T/err" "nan.off:" "NaN names the file and line"
+
+# Requests on the unit cube (see test_octree.c for the reasoning).
+leaves() { "$MIXOCT" "$@" --json --quiet | tail -1 | python3 -c 'import json,sys; print(json.load(sys.stdin)["leaves"])'; }
+[ "$(leaves -i "$T/cube.off" -s 3)" = 456 ] && ok "-s 3 on the cube: 456 leaves" || bad "-s 3 on the cube"
+[ "$(leaves -i "$T/cube.off" -a 2)" = 64 ] && ok "-a 2 on the cube: 64 leaves" || bad "-a 2 on the cube"
+printf 'n_regions 1\n0.01 0.01 0.01\n0.02 0.02 0.02\n3\n' >"$T/roi.reg"
+[ "$(leaves -i "$T/cube.off" -b "$T/roi.reg")" = 64 ] && ok "-b box level 3: 64 leaves" || bad "-b box"
+cube_off "$T/inner.off" 0.15
+# Inward orientation does not matter for parity; the inner shell is a hole.
+[ "$(leaves -i "$T/cube.off" -i "$T/inner.off" -s 3)" = 504 ] && ok "two shells make a hole: 504 leaves" || bad "two shells"
+cube_off "$T/region.off" 0.2
+[ "$(leaves -i "$T/cube.off" -r "$T/region.off" 3)" = 120 ] && ok "-r region level 3: 120 leaves" || bad "-r region"
+
+# JSON summary keys, output written, nothing temporary left.
+"$MIXOCT" --demo -s 4 --stage octree -o "$T/demo.vtu" --json >"$T/json" 2>"$T/err"
+[ $? -eq 0 ] && ok "demo meshes" || bad "demo"
+tail -1 "$T/json" | python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+for k in ["nodes", "elements", "by_type", "leaves", "phases", "total_s", "peak_rss_mb", "threads", "jens_min", "invalid"]:
+    assert k in d, k
+for k in ["read", "grid", "refine", "balance", "write"]:
+    assert k in d["phases"], k
+assert d["leaves"] > 0 and d["elements"] == d["leaves"] and d["nodes"] > d["leaves"]
+' && ok "JSON summary has the keys" || bad "JSON summary"
+[ -s "$T/demo.vtu" ] && ok "VTU written" || bad "VTU missing"
+ls "$T" | grep -q tmp && bad "temporary file left" || ok "no temporary left"
+expect_exit 2 "unwritable output" "$MIXOCT" --demo -s 3 --stage octree -o "$T/no/such/dir/x.vtu"
+[ ! -e "$T/no" ] && ok "no partial output" || bad "partial output"
+
+# Determinism: byte-identical output for 1 and 2 threads, both balances.
+"$MIXOCT" --demo -s 5 --stage octree -o "$T/t1.vtk" --threads 1 --quiet
+"$MIXOCT" --demo -s 5 --stage octree -o "$T/t2.vtk" --threads 2 --quiet
+"$MIXOCT" --demo -s 5 --stage octree -o "$T/r2.vtk" --threads 2 --quiet --balance recursive
+cmp -s "$T/t1.vtk" "$T/t2.vtk" && ok "1 and 2 threads: identical bytes" || bad "threads differ"
+cmp -s "$T/t1.vtk" "$T/r2.vtk" && ok "edges and recursive: identical bytes" || bad "balances differ"
+
+echo "$fails failure(s)"
+[ "$fails" -eq 0 ]
