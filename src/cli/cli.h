@@ -48,6 +48,9 @@ typedef struct {
   double peak_rss_mb;
 } mx_summary;
 
+/* One line describing the machine (hwloc when built in, OpenMP threads). */
+void mx_topology_string(char *buf, size_t n);
+
 void mx_print_json(const mx_summary *s);
 void mx_print_summary(const mx_summary *s);
 

@@ -81,8 +81,9 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
       *exit_now = 1;
       return MX_OK;
     } else if (strcmp(a, "--version") == 0) {
-      printf("mixoct 0.1.0 (OpenMP, %d threads available)\n",
-             omp_get_max_threads());
+      char topo[256];
+      mx_topology_string(topo, sizeof topo);
+      printf("mixoct 0.1.0\n%s\n", topo);
       *exit_now = 1;
       return MX_OK;
     } else if (IS("-i", "--input")) {

@@ -6,6 +6,8 @@
 void mx_print_json(const mx_summary *s) {
   char nodes[32] = "null";
   if (s->nodes_counted) snprintf(nodes, sizeof nodes, "%zu", s->nodes);
+  char topo[256];
+  mx_topology_string(topo, sizeof topo);
   printf("{\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
          "\"nodes\": %s, \"elements\": %zu, "
          "\"by_type\": {\"hex\": %zu, \"prism\": 0, \"pyramid\": 0, \"tet\": 0}, "
@@ -16,13 +18,13 @@ void mx_print_json(const mx_summary *s) {
          "\"phases\": {\"read\": %.6f, \"grid\": %.6f, \"refine\": %.6f, "
          "\"balance\": %.6f, \"write\": %.6f}, "
          "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"threads\": %d, "
-         "\"jens_min\": 1.0, \"invalid\": 0}\n",
+         "\"jens_min\": 1.0, \"invalid\": 0, \"topology\": \"%s\"}\n",
          s->leaves, s->leaves_hash, nodes, s->leaves, s->leaves,
          s->balance ? "recursive" : "edges", s->max_level, s->octants,
          s->edges, (double)s->edge_bytes / 1048576.0, s->located,
          s->split_requested, s->split_balance, s->dropped, s->ph.read,
          s->ph.grid, s->ph.refine, s->ph.balance, s->ph.write, s->ph.total,
-         s->peak_rss_mb, s->threads);
+         s->peak_rss_mb, s->threads, topo);
   fflush(stdout);
 }
 

@@ -15,15 +15,31 @@ int mx_leaves_sorted(const mx_builder *B, uint32_t *leaves, size_t n) {
 
 int mx_leaves(const mx_builder *B, uint32_t **out, size_t *n) {
   const mx_octree *T = &B->oct;
-  size_t k = 0;
-  for (size_t o = 0; o < T->n; o++) k += !(T->flags[o] & MX_OCT_SPLIT);
-  uint32_t *l = mx_alloc((k + 1) * sizeof *l);
-  if (!l) return MX_EINPUT;
-  k = 0;
-  for (size_t o = 0; o < T->n; o++)
-    if (!(T->flags[o] & MX_OCT_SPLIT)) l[k++] = (uint32_t)o;
+  const size_t nb = (T->n + 4095) / 4096; /* blocks of octants */
+  uint64_t *off = mx_alloc((nb + 1) * sizeof *off);
+  if (!off) return MX_EINPUT;
+#pragma omp parallel for schedule(static)
+  for (size_t b = 0; b < nb; b++) {
+    uint64_t k = 0;
+    for (size_t o = 4096 * b; o < T->n && o < 4096 * (b + 1); o++)
+      k += !(T->flags[o] & MX_OCT_SPLIT);
+    off[b] = k;
+  }
+  const uint64_t total = mx_scan_u64(off, nb);
+  uint32_t *l = mx_alloc((total + 1) * sizeof *l);
+  if (!l) {
+    mx_free(off);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t b = 0; b < nb; b++) {
+    uint64_t w = off[b];
+    for (size_t o = 4096 * b; o < T->n && o < 4096 * (b + 1); o++)
+      if (!(T->flags[o] & MX_OCT_SPLIT)) l[w++] = (uint32_t)o;
+  }
+  mx_free(off);
   *out = l;
-  *n = k;
+  *n = total;
   return MX_OK;
 }
 
@@ -38,24 +54,15 @@ static inline uint64_t mix64(uint64_t x) {
 
 uint64_t mx_leaves_hash(const mx_builder *B, const uint32_t *leaves,
                         size_t n) {
+  /* A set hash: the sum of a strong mix of each (key, level) pair. Leaf keys
+   * are unique, so it fingerprints the set of leaves whatever their order,
+   * with no sort, in parallel. */
   const mx_octree *T = &B->oct;
-  uint64_t *k = mx_alloc((n + 1) * sizeof *k);
-  if (!k) return 0;
-  for (size_t i = 0; i < n; i++) k[i] = T->key[leaves[i]];
-  /* Leaf keys are unique (two leaves never share an anchor), so sorting the
-   * keys alone orders the (key, level) pairs; levels are folded in below. */
-  uint32_t *lv = mx_alloc((n + 1) * sizeof *lv);
-  if (!lv) {
-    mx_free(k);
-    return 0;
-  }
-  for (size_t i = 0; i < n; i++) lv[i] = T->level[leaves[i]];
-  uint64_t h = 0x6a09e667f3bcc908ULL ^ n;
-  if (mx_sort_u64(k, lv, n) == MX_OK)
-    for (size_t i = 0; i < n; i++) h = mix64(h ^ mix64(k[i] * 32 + lv[i]));
-  mx_free(k);
-  mx_free(lv);
-  return h;
+  uint64_t h = 0;
+#pragma omp parallel for schedule(static) reduction(+ : h)
+  for (size_t i = 0; i < n; i++)
+    h += mix64(mix64(T->key[leaves[i]]) ^ T->level[leaves[i]]);
+  return mix64(h ^ (uint64_t)n);
 }
 
 int mx_leaf_hex_mesh(const mx_builder *B, const uint32_t *leaves, size_t n,

@@ -88,8 +88,7 @@ int mx_leaves(const mx_builder *B, uint32_t **out, size_t *n);
 /* Reorder leaves into Morton order of their anchors (unique among leaves),
  * the canonical order of every output. */
 int mx_leaves_sorted(const mx_builder *B, uint32_t *leaves, size_t n);
-/* Order-independent fingerprint of the leaf set (hash of the sorted
- * (key, level) pairs). */
+/* Order-independent fingerprint of the set of (key, level) leaf pairs. */
 uint64_t mx_leaves_hash(const mx_builder *B, const uint32_t *leaves, size_t n);
 /* 1 when octants (ka, la) and (kb, lb) share a face or an edge, or part of
  * one (contact of dimension 1 or 2; corner contact does not count). */
