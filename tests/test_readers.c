@@ -69,6 +69,7 @@ static const char *capture_end(void) {
 static char *edit(const char *text, int line, const char *repl) {
   size_t n = strlen(text) + (repl ? strlen(repl) : 0) + 2;
   char *out = malloc(n), *o = out;
+  if (!out) abort();
   const char *p = text;
   for (int l = 1; *p; l++) {
     const char *nl = strchr(p, '\n');
@@ -160,7 +161,8 @@ static void bad_files(reader_fn rd, const char *ext) {
 /* Exactly representable in float, so binary STL gives the same numbers. */
 static const double TET_V[4][3] = {
     {0.5, -1.25, 2}, {3.5, -1.25, 2}, {0.5, 0.75, 2}, {0.5, -1.25, 4.25}};
-static const uint32_t TET_T[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+static const uint32_t TET_T[4][3] = {
+    {0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
 
 static const char *OFF_TET =
     "OFF\n"
@@ -198,32 +200,37 @@ static const char *MDL_TET =
     "0.5 -1.25 4.25\n";             /* 20 */
 
 static const char *OBJ_TET =
-    "# a tetrahedron\n"       /* 1 */
-    "o tet\n"                 /* 2 */
-    "v 0.5 -1.25 2\n"         /* 3 */
-    "v 3.5 -1.25 2\n"         /* 4 */
-    "v 0.5 0.75 2\n"          /* 5 */
-    "v 0.5 -1.25 4.25\n"      /* 6 */
-    "vn 0 0 1\n"              /* 7 */
-    "f 1 3 2\n"               /* 8 */
-    "f 1/1 2/2 4/4\n"         /* 9 */
-    "f 1//1 4//1 3//1\n"      /* 10 */
+    "# a tetrahedron\n"         /* 1 */
+    "o tet\n"                   /* 2 */
+    "v 0.5 -1.25 2\n"           /* 3 */
+    "v 3.5 -1.25 2\n"           /* 4 */
+    "v 0.5 0.75 2\n"            /* 5 */
+    "v 0.5 -1.25 4.25\n"        /* 6 */
+    "vn 0 0 1\n"                /* 7 */
+    "f 1 3 2\n"                 /* 8 */
+    "f 1/1 2/2 4/4\n"           /* 9 */
+    "f 1//1 4//1 3//1\n"        /* 10 */
     "f -3/1/1 -2/1/1 -1/1/1\n"; /* 11 */
 
 /* ASCII STL of the tetrahedron: facet f spans lines 2+7f .. 8+7f, its
  * vertex k is on line 4+7f+k; "endsolid" is line 30. */
 static char *stl_tet_text(void) {
-  char *t = malloc(4096), *o = t;
-  o += sprintf(o, "solid tet\n");
+  static const char *facet = "  facet normal 0 0 0\n    outer loop\n";
+  static const char *close = "    endloop\n  endfacet\n";
+  size_t cap = 4096, n = 0;
+  char *t = malloc(cap);
+  if (!t) abort();
+  n += (size_t)snprintf(t + n, cap - n, "solid tet\n");
   for (int f = 0; f < 4; f++) {
-    o += sprintf(o, "  facet normal 0 0 0\n    outer loop\n");
+    n += (size_t)snprintf(t + n, cap - n, "%s", facet);
     for (int k = 0; k < 3; k++) {
       const double *v = TET_V[TET_T[f][k]];
-      o += sprintf(o, "      vertex %g %g %g\n", v[0], v[1], v[2]);
+      n += (size_t)snprintf(t + n, cap - n, "      vertex %g %g %g\n", v[0],
+                            v[1], v[2]);
     }
-    o += sprintf(o, "    endloop\n  endfacet\n");
+    n += (size_t)snprintf(t + n, cap - n, "%s", close);
   }
-  sprintf(o, "endsolid tet\n");
+  snprintf(t + n, cap - n, "endsolid tet\n");
   return t;
 }
 
@@ -243,7 +250,8 @@ static size_t stl_binary(unsigned char *buf, const double (*v)[3],
     unsigned char *r = buf + 84 + 50 * f;
     memset(r, 0, 50);
     for (int k = 0; k < 3; k++)
-      for (int d = 0; d < 3; d++) put_float(r + 12 + 12 * k + 4 * d, v[t[f][k]][d]);
+      for (int d = 0; d < 3; d++)
+        put_float(r + 12 + 12 * k + 4 * d, v[t[f][k]][d]);
   }
   return 84 + 50 * (size_t)n;
 }
@@ -311,8 +319,7 @@ static void test_off(void) {
   bad_files(mx_read_off, "off");
   bad_text(mx_read_off, "blank.off", "\n  \n# only a comment\n", 0,
            "no 'OFF' header");
-  bad_edit(mx_read_off, "header.off", edit(OFF_TET, 1, "OFX"), 1,
-           "bad header");
+  bad_edit(mx_read_off, "header.off", edit(OFF_TET, 1, "OFX"), 1, "bad header");
   bad_edit(mx_read_off, "counts.off", edit(OFF_TET, 2, "4 four 0"), 2,
            "bad header");
   bad_text(mx_read_off, "nocounts.off", "OFF\n", 2, "missing counts");
@@ -324,8 +331,7 @@ static void test_off(void) {
            "3 of 4 faces");
   bad_edit(mx_read_off, "more_f.off", edit(OFF_TET, 2, "4 3 0"), 10,
            "more data");
-  bad_edit(mx_read_off, "nv_small.off", edit(OFF_TET, 2, "3 4 0"), 6,
-           "face 0");
+  bad_edit(mx_read_off, "nv_small.off", edit(OFF_TET, 2, "3 4 0"), 6, "face 0");
   bad_edit(mx_read_off, "nv_large.off", edit(OFF_TET, 2, "5 4 0"), 11,
            "3 of 4 faces");
   bad_edit(mx_read_off, "index.off", edit(OFF_TET, 9, "3 0 3 4"), 9,
@@ -352,14 +358,15 @@ static void test_off(void) {
 static void test_off_polygons(void) {
   char path[128];
   tpath(path, sizeof path, "quad.off");
-  const char *t = "OFF\n5 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 1\n"
-                  "4 0 1 2 3\n5 0 1 2 3 4 9 9 9\n";
+  const char *t =
+      "OFF\n5 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 1\n"
+      "4 0 1 2 3\n5 0 1 2 3 4 9 9 9\n";
   write_bytes(path, t, strlen(t));
   mx_trisoup s;
   CHECK(mx_read_off(path, &s) == MX_OK);
   CHECK(s.nv == 5 && s.nt == 5);
-  static const uint32_t want[15] = {0, 1, 2, 0, 2, 3, 0, 1, 2,
-                                    0, 2, 3, 0, 3, 4};
+  static const uint32_t want[15] = {0, 1, 2, 0, 2, 3, 0, 1,
+                                    2, 0, 2, 3, 0, 3, 4};
   CHECK(s.nt == 5 && memcmp(s.tri, want, sizeof want) == 0);
   mx_trisoup_free(&s);
   printf("ok   quad.off                     polygons fan-split\n");
@@ -371,6 +378,7 @@ static void test_mdl(void) {
   printf("-- MDL\n");
   good_text(mx_read_mdl, "tet.mdl", MDL_TET);
   char *crlf = malloc(2 * strlen(MDL_TET) + 1), *o = crlf;
+  if (!crlf) abort();
   for (const char *p = MDL_TET; *p; p++) {
     if (*p == '\n') *o++ = '\r';
     *o++ = *p;
@@ -405,17 +413,17 @@ static void test_mdl(void) {
            "not a finite number");
   bad_edit(mx_read_mdl, "inf.mdl", edit(MDL_TET, 19, "0.5 inf 2"), 19,
            "not a finite number");
-  bad_edit(mx_read_mdl, "huge.mdl", edit(MDL_TET, 20, "0.5 -1.25 -1e999"),
-           20, "not a finite number");
+  bad_edit(mx_read_mdl, "huge.mdl", edit(MDL_TET, 20, "0.5 -1.25 -1e999"), 20,
+           "not a finite number");
   bad_edit(mx_read_mdl, "twocoord.mdl", edit(MDL_TET, 17, "0.5 -1.25"), 17,
            "expected 3 numbers");
-  bad_edit(mx_read_mdl, "novert.mdl", cut(MDL_TET, 15, 20), 0,
-           "no [Vertices");
+  bad_edit(mx_read_mdl, "novert.mdl", cut(MDL_TET, 15, 20), 0, "no [Vertices");
   bad_edit(mx_read_mdl, "notri.mdl", cut(MDL_TET, 4, 9), 0, "no [Triangles");
   char *notri = cut(MDL_TET, 6, 9);
   bad_edit(mx_read_mdl, "notri0.mdl", edit(notri, 5, "0"), 5, "empty");
   free(notri);
   char *dup = malloc(strlen(MDL_TET) * 2 + 2);
+  if (!dup) abort();
   sprintf(dup, "%s\n%s", MDL_TET, MDL_TET);
   bad_text(mx_read_mdl, "duplicate.mdl", dup, 25, "duplicate");
   free(dup);
@@ -445,8 +453,7 @@ static void test_stl_ascii(void) {
            "not a finite number");
   bad_edit(mx_read_stl, "twocoord.stl", edit(t, 5, "vertex 0.5 0.75"), 5,
            "expected 3 numbers");
-  bad_text(mx_read_stl, "nofacet.stl", "solid x\nendsolid x\n", 0,
-           "no facets");
+  bad_text(mx_read_stl, "nofacet.stl", "solid x\nendsolid x\n", 0, "no facets");
   bad_text(mx_read_stl, "notstl.stl", "hello\n", 0, "neither");
   free(t);
 }
@@ -464,6 +471,7 @@ static void test_stl_binary(void) {
   write_bytes(path, buf, n - 10);
   expect_fail(mx_read_stl, path, 0, "truncated", "trunc_bin.stl");
   memcpy(buf, "binary", 6); /* header not starting with "solid" */
+  tpath(path, sizeof path, "trunc_bin2.stl");
   write_bytes(path, buf, n - 10);
   expect_fail(mx_read_stl, path, 0, "truncated", "trunc_bin2.stl");
   uint32_t five = 5;
@@ -477,6 +485,7 @@ static void test_stl_binary(void) {
   write_bytes(path, buf, n);
   expect_fail(mx_read_stl, path, 0, "facet 2", "nan_bin.stl");
   put_float(buf + 84 + 50 * 2 + 12 + 4, INFINITY);
+  tpath(path, sizeof path, "inf_bin.stl");
   write_bytes(path, buf, n);
   expect_fail(mx_read_stl, path, 0, "not finite", "inf_bin.stl");
   n = stl_binary(buf, TET_V, TET_T, 0);
@@ -509,8 +518,8 @@ static void test_obj(void) {
            "not a finite number");
   bad_edit(mx_read_obj, "inf.obj", edit(OBJ_TET, 5, "v 0.5 0.75 +inf"), 5,
            "not a finite number");
-  bad_edit(mx_read_obj, "huge.obj", edit(OBJ_TET, 6, "v 1e999 -1.25 4.25"),
-           6, "not a finite number");
+  bad_edit(mx_read_obj, "huge.obj", edit(OBJ_TET, 6, "v 1e999 -1.25 4.25"), 6,
+           "not a finite number");
   bad_edit(mx_read_obj, "twocoord.obj", edit(OBJ_TET, 3, "v 0.5 -1.25"), 3,
            "expected 3 numbers");
   bad_edit(mx_read_obj, "nofaces.obj", cut(OBJ_TET, 8, 11), 0, "no faces");
@@ -596,9 +605,10 @@ static void test_degenerate(void) {
   printf("open.off: %s", msg);
 
   /* A fin on edge 0-1: that edge is used 3 times, 1-4 and 4-0 once. */
-  const char *fin = "OFF\n5 5 0\n0.5 -1.25 2\n3.5 -1.25 2\n0.5 0.75 2\n"
-                    "0.5 -1.25 4.25\n2 -5 2\n"
-                    "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 0 1 4\n";
+  const char *fin =
+      "OFF\n5 5 0\n0.5 -1.25 2\n3.5 -1.25 2\n0.5 0.75 2\n"
+      "0.5 -1.25 4.25\n2 -5 2\n"
+      "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 0 1 4\n";
   CHECK(read_text(mx_read_off, "fin.off", fin, &s) == MX_OK);
   capture_begin();
   rc = mx_trisoup_check(&s, "fin.off", &open);
@@ -645,17 +655,17 @@ static void test_soup(void) {
 /* ---- .reg ------------------------------------------------------------- */
 
 static const char *REG_GOOD =
-    "n_regions 2\n"      /* 1 */
-    "\n"                 /* 2 */
-    "0 0 0\n"            /* 3 */
-    "300 100 170\n"      /* 4 */
-    "\n"                 /* 5 */
-    "5\n"                /* 6 */
-    "\n"                 /* 7 */
-    "-300 -300 0\n"      /* 8 */
-    "300 300 88.5\n"     /* 9 */
-    "\n"                 /* 10 */
-    "6\n";               /* 11 */
+    "n_regions 2\n"  /* 1 */
+    "\n"             /* 2 */
+    "0 0 0\n"        /* 3 */
+    "300 100 170\n"  /* 4 */
+    "\n"             /* 5 */
+    "5\n"            /* 6 */
+    "\n"             /* 7 */
+    "-300 -300 0\n"  /* 8 */
+    "300 300 88.5\n" /* 9 */
+    "\n"             /* 10 */
+    "6\n";           /* 11 */
 
 /* Adapts mx_read_reg to the reader signature for expect_fail. */
 static int read_reg_as_soup(const char *path, mx_trisoup *s) {
@@ -742,7 +752,8 @@ static double tet6(const mx_trisoup *s, const uint32_t *t, const double o[3]) {
     b[d] = X[d][t[1]] - o[d];
     c[d] = X[d][t[2]] - o[d];
   }
-  return a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+  return a[0] * (b[1] * c[2] - b[2] * c[1]) -
+         a[1] * (b[0] * c[2] - b[2] * c[0]) +
          a[2] * (b[0] * c[1] - b[1] * c[0]);
 }
 
@@ -773,10 +784,11 @@ static void test_demo(void) {
   double lo[3], hi[3];
   mx_trisoup_bbox(&s, lo, hi);
   CHECK(hi[0] - lo[0] > 70 && hi[0] - lo[0] < 90);
-  printf("demo subdiv 4: nv=%zu nt=%zu open=%zu volume=%.1f size %.1f x %.1f x "
-         "%.1f centroid (%.2f %.2f %.2f)\n",
-         s.nv, s.nt, open, vol_o, hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2],
-         c[0], c[1], c[2]);
+  printf(
+      "demo subdiv 4: nv=%zu nt=%zu open=%zu volume=%.1f size %.1f x %.1f x "
+      "%.1f centroid (%.2f %.2f %.2f)\n",
+      s.nv, s.nt, open, vol_o, hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2],
+      c[0], c[1], c[2]);
   mx_trisoup_free(&s);
   CHECK(mx_demo_surface(&s, 0) == MX_OK && s.nt == 20 && s.nv == 12);
   mx_trisoup_free(&s);
@@ -796,11 +808,16 @@ typedef struct {
 static void test_samples(void) {
   printf("-- sample surfaces in %s\n", SURF);
   static const sample files[] = {
-      {"cortex.off", 3152, 6300, 1},        {"cyl50.off", 102, 200, 1},
-      {"hex.off", 8, 12, 1},                {"hollow-coarse.off", 632, 1260, 1},
-      {"suture.off", 2202, 4400, 1},        {"femur.mdl", 1847, 3690, 1},
-      {"fertilityRotated.mdl", 3296, 6604, 1}, {"in_spher.mdl", 872, 1740, 1},
-      {"outer_sphere.mdl", 872, 1740, 1},   {"sein.mdl", 1248, 2492, 1},
+      {"cortex.off", 3152, 6300, 1},
+      {"cyl50.off", 102, 200, 1},
+      {"hex.off", 8, 12, 1},
+      {"hollow-coarse.off", 632, 1260, 1},
+      {"suture.off", 2202, 4400, 1},
+      {"femur.mdl", 1847, 3690, 1},
+      {"fertilityRotated.mdl", 3296, 6604, 1},
+      {"in_spher.mdl", 872, 1740, 1},
+      {"outer_sphere.mdl", 872, 1740, 1},
+      {"sein.mdl", 1248, 2492, 1},
   };
   for (size_t i = 0; i < sizeof files / sizeof *files; i++) {
     char path[256];
@@ -821,10 +838,11 @@ static void test_samples(void) {
     if (files[i].closed) CHECK(open == 0);
     double lo[3], hi[3];
     mx_trisoup_bbox(&s, lo, hi);
-    printf("%-22s nv=%zu nt=%zu degenerate=%zu open_edges=%zu read %.2f ms "
-           "bbox [%g %g %g]-[%g %g %g]\n",
-           files[i].name, s.nv, nt, nt - s.nt, open, 1e3 * (t1 - t0), lo[0],
-           lo[1], lo[2], hi[0], hi[1], hi[2]);
+    printf(
+        "%-22s nv=%zu nt=%zu degenerate=%zu open_edges=%zu read %.2f ms "
+        "bbox [%g %g %g]-[%g %g %g]\n",
+        files[i].name, s.nv, nt, nt - s.nt, open, 1e3 * (t1 - t0), lo[0], lo[1],
+        lo[2], hi[0], hi[1], hi[2]);
     mx_trisoup_free(&s);
   }
 }
@@ -873,10 +891,11 @@ static void timed_read(reader_fn rd, const char *path, mx_trisoup *s,
   double t0 = mx_wtime();
   CHECK(rd(path, s) == MX_OK);
   double dt = mx_wtime() - t0;
-  printf("speed: %-14s %8zu triangles, %6.1f MB in %7.1f ms: %6.1f MB/s, "
-         "%5.2f M triangles/s\n",
-         label, s->nt, file_mb(path), 1e3 * dt, file_mb(path) / dt,
-         1e-6 * (double)s->nt / dt);
+  printf(
+      "speed: %-14s %8zu triangles, %6.1f MB in %7.1f ms: %6.1f MB/s, "
+      "%5.2f M triangles/s\n",
+      label, s->nt, file_mb(path), 1e3 * dt, file_mb(path) / dt,
+      1e-6 * (double)s->nt / dt);
 }
 
 static void test_speed(void) {

@@ -28,8 +28,7 @@ static double det3(const mx_trisoup *s, uint32_t a, uint32_t b, uint32_t c) {
 }
 
 static double dist2(const mx_trisoup *s, uint32_t a, uint32_t b) {
-  double dx = s->x[a] - s->x[b], dy = s->y[a] - s->y[b],
-         dz = s->z[a] - s->z[b];
+  double dx = s->x[a] - s->x[b], dy = s->y[a] - s->y[b], dz = s->z[a] - s->z[b];
   return dx * dx + dy * dy + dz * dz;
 }
 
@@ -130,13 +129,15 @@ static int subdivide(mx_trisoup *s) {
  * z up-down. Each term is a spherical harmonic written as a polynomial;
  * |d| < 0.25, so the radius stays within [30, 50]. */
 static double displacement(double x, double y, double z) {
-  double elongate = 0.12 * (y * y - 1.0 / 3.0);   /* l=2, along y */
-  double flatten = -0.06 * (z * z - 1.0 / 3.0);   /* l=2, along z */
+  double elongate = 0.12 * (y * y - 1.0 / 3.0);     /* l=2, along y */
+  double flatten = -0.06 * (z * z - 1.0 / 3.0);     /* l=2, along z */
   double crown = 0.035 * 0.5 * z * (5 * z * z - 3); /* l=3, top vs bottom */
   double x2 = x * x, y2 = y * y;
   double lobes = 0.025 * (x2 * x2 - 6 * x2 * y2 + y2 * y2); /* l=4 */
+  /* Re (x + iy)^6 is harmonic in the plane, so z times it is a solid
+   * harmonic of degree 7. */
   double re6 = x2 * x2 * x2 - 15 * x2 * x2 * y2 + 15 * x2 * y2 * y2 -
-               y2 * y2 * y2; /* Re (x + iy)^6 */
+               y2 * y2 * y2;
   double folds = 0.03 * z * re6; /* l=7 */
   return elongate + flatten + crown + lobes + folds;
 }
@@ -162,8 +163,7 @@ int mx_demo_surface(mx_trisoup *out, int subdiv) {
   if (status == MX_OK) {
     out->nshells = 1;
     icosahedron(out);
-    for (int k = 0; k < subdiv && status == MX_OK; k++)
-      status = subdivide(out);
+    for (int k = 0; k < subdiv && status == MX_OK; k++) status = subdivide(out);
   }
   if (status != MX_OK) {
     mx_trisoup_free(out);

@@ -167,8 +167,8 @@ static int read_section(mdl_file *f, mx_trisoup *s) {
     f->p = mx_io_next_line(f->p, f->end, &f->line);
     return MX_OK;
   }
-  mx_error(f->path, f->line, "[%.*s] section: unsupported type '%.*s'",
-           h.nname, h.name, h.ntype, h.type);
+  mx_error(f->path, f->line, "[%.*s] section: unsupported type '%.*s'", h.nname,
+           h.name, h.ntype, h.type);
   return MX_EINPUT;
 }
 

@@ -53,8 +53,7 @@ static void count_lines(const char *buf, const char *end, size_t *nv,
 static int read_vertex(obj_file *f, mx_trisoup *s) {
   const char *q = f->p + 1;
   double c[3];
-  MX_CHECK(mx_io_numbers(f->path, f->line, &q, '#', 3, c, "vertex",
-                         s->nv + 1));
+  MX_CHECK(mx_io_numbers(f->path, f->line, &q, '#', 3, c, "vertex", s->nv + 1));
   s->x[s->nv] = c[0];
   s->y[s->nv] = c[1];
   s->z[s->nv] = c[2];
@@ -68,10 +67,11 @@ static int read_corner(obj_file *f, const char **p, const mx_trisoup *s,
   const char *q = *p;
   int64_t v;
   const char *e = mx_io_int(q, &v);
-  int n = mx_io_toklen(q, '#');
-  if (!e || !(mx_io_delim(e, '#') || *e == '/')) {
+  if (e && *e == '/') /* texture and normal indices are ignored */
+    while (!mx_io_delim(e, '#')) e++;
+  if (!e || !mx_io_delim(e, '#')) {
     mx_error(f->path, f->line, "face %zu: bad vertex reference '%.*s'",
-             f->nfaces + 1, n, q);
+             f->nfaces + 1, mx_io_toklen(q, '#'), q);
     return MX_EINPUT;
   }
   int64_t i = v > 0 ? v - 1 : (int64_t)s->nv + v; /* 1-based or relative */
@@ -79,13 +79,13 @@ static int read_corner(obj_file *f, const char **p, const mx_trisoup *s,
     mx_error(f->path, f->line,
              "face %zu: vertex index %.*s out of range (%zu vertices, "
              "1-based%s)",
-             f->nfaces + 1, n, q, v < 0 ? s->nv : f->nv_total,
+             f->nfaces + 1, mx_io_toklen(q, '#'), q,
+             v < 0 ? s->nv : f->nv_total,
              v < 0 ? ", relative to the vertices read so far" : "");
     return MX_EINPUT;
   }
   *idx = (uint32_t)i;
-  *p = q + n;
-  while (!mx_io_delim(*p, '#')) ++*p; /* rest of a token longer than 40 */
+  *p = e;
   return MX_OK;
 }
 

@@ -25,8 +25,8 @@ const char *mx_io_int(const char *p, int64_t *v);
 typedef struct {
   const char *path, *p, *end; /* p: the next unread character */
   long line;
-  size_t n;     /* declared count */
-  size_t cap;   /* boxes allocated */
+  size_t n;   /* declared count */
+  size_t cap; /* boxes allocated */
   mx_box_region *boxes;
 } reg_file;
 
@@ -94,8 +94,7 @@ static int read_count(reg_file *f) {
   f->p = mx_io_content(f->p, f->end, &f->line, '#');
   int n = f->p < f->end ? mx_io_toklen(f->p, '#') : 0;
   if (n != 9 || strncasecmp(f->p, "n_regions", 9) != 0) {
-    mx_error(f->path, f->line, "expected 'n_regions N', found '%.*s'", n,
-             f->p);
+    mx_error(f->path, f->line, "expected 'n_regions N', found '%.*s'", n, f->p);
     return MX_EINPUT;
   }
   f->p = mx_io_content(f->p + 9, f->end, &f->line, '#');
@@ -135,8 +134,8 @@ static int parse_reg(reg_file *f) {
   f->p = mx_io_content(f->p, f->end, &f->line, '#');
   if (f->p == f->end) return MX_OK;
   mx_error(f->path, f->line,
-           "more data than the %zu regions declared by n_regions: '%.*s'",
-           f->n, mx_io_toklen(f->p, '#'), f->p);
+           "more data than the %zu regions declared by n_regions: '%.*s'", f->n,
+           mx_io_toklen(f->p, '#'), f->p);
   return MX_EINPUT;
 }
 

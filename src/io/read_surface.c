@@ -4,8 +4,8 @@
  * The helpers (mx_io_*) are declared again at the top of each reader: there
  * is no private io header yet. Keep those declarations identical to these. */
 #include <errno.h>
-#include <math.h>
 #include <fcntl.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -34,9 +34,12 @@ int mx_io_index(const char *path, long line, const char **p, char comment,
 
 static int read_all(int fd, const char *path, char **buf, size_t *len,
                     size_t hint) {
-  size_t cap = hint + 1, n = 0;
+  size_t cap = hint + 2, n = 0; /* room for the NUL and the read at EOF */
   char *b = mx_alloc(cap);
-  if (!b) return MX_EINPUT;
+  if (!b) {
+    mx_error(path, 0, "cannot load the file: out of memory");
+    return MX_EINPUT;
+  }
   for (;;) {
     if (n + 1 >= cap) {
       char *nb = mx_realloc(b, 2 * cap);
@@ -98,27 +101,33 @@ int mx_io_load(const char *path, char **buf, size_t *len) {
 
 /* ---- lines and tokens ------------------------------------------------- */
 
-static int is_blank(char c) {
+static inline int is_blank(char c) {
   return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
 }
 
-static int is_digit(char c) { return c >= '0' && c <= '9'; }
+static inline int is_digit(char c) { return c >= '0' && c <= '9'; }
 
-/* Skips spaces and tabs, never a newline. */
-const char *mx_io_blank(const char *p) {
+static inline const char *skip_blank(const char *p) {
   while (is_blank(*p)) p++;
   return p;
 }
 
-/* At the end of a line's content: newline, end of buffer or a comment. */
-int mx_io_eol(const char *p, char comment) {
+static inline int at_eol(const char *p, char comment) {
   return *p == '\n' || *p == '\0' || (comment && *p == comment);
 }
 
-/* True if a token may end here. */
-int mx_io_delim(const char *p, char comment) {
-  return is_blank(*p) || mx_io_eol(p, comment);
+static inline int at_delim(const char *p, char comment) {
+  return is_blank(*p) || at_eol(p, comment);
 }
+
+/* Skips spaces and tabs, never a newline. */
+const char *mx_io_blank(const char *p) { return skip_blank(p); }
+
+/* At the end of a line's content: newline, end of buffer or a comment. */
+int mx_io_eol(const char *p, char comment) { return at_eol(p, comment); }
+
+/* True if a token may end here. */
+int mx_io_delim(const char *p, char comment) { return at_delim(p, comment); }
 
 /* The start of the next line, or end if there is none. */
 const char *mx_io_next_line(const char *p, const char *end, long *line) {
@@ -134,7 +143,7 @@ const char *mx_io_next_line(const char *p, const char *end, long *line) {
 const char *mx_io_content(const char *p, const char *end, long *line,
                           char comment) {
   while (p < end) {
-    p = mx_io_blank(p);
+    p = skip_blank(p);
     if (p >= end) return end;
     if (*p != '\n' && !(comment && *p == comment)) return p;
     p = mx_io_next_line(p, end, line);
@@ -145,7 +154,7 @@ const char *mx_io_content(const char *p, const char *end, long *line,
 /* Length of the token at p (for messages), at most 40. */
 int mx_io_toklen(const char *p, char comment) {
   int n = 0;
-  while (n < 40 && !mx_io_delim(p + n, comment)) n++;
+  while (n < 40 && !at_delim(p + n, comment)) n++;
   return n;
 }
 
@@ -156,10 +165,10 @@ static const double pow10_exact[23] = {
     1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
 
 typedef struct {
-  uint64_t m;    /* significant digits, at most 19 */
-  int e10;       /* value = m * 10^e10 */
-  int ndigits;   /* digits seen in the mantissa */
-  int exact;     /* no nonzero digit was dropped */
+  uint64_t m;  /* significant digits, at most 19 */
+  int e10;     /* value = m * 10^e10 */
+  int ndigits; /* digits seen in the mantissa */
+  int exact;   /* no nonzero digit was dropped */
 } decimal;
 
 static const char *scan_digits(const char *q, decimal *d, int fraction) {
@@ -194,7 +203,7 @@ static const char *scan_exponent(const char *q, decimal *d) {
  * Returns the end of the number, or NULL if there is none. The value may be
  * non-finite: callers check. */
 const char *mx_io_double(const char *p, double *v) {
-  if (mx_io_delim(p, 0)) return NULL; /* strtod would skip a newline */
+  if (at_delim(p, 0)) return NULL; /* strtod would skip a newline */
   const char *q = p;
   int neg = 0;
   if (*q == '+' || *q == '-') neg = (*q++ == '-');
@@ -241,21 +250,21 @@ int mx_io_numbers(const char *path, long line, const char **p, char comment,
                   int n, double *out, const char *what, size_t item) {
   const char *q = *p;
   for (int k = 0; k < n; k++) {
-    q = mx_io_blank(q);
+    q = skip_blank(q);
     const char *e = mx_io_double(q, &out[k]);
-    if (mx_io_eol(q, comment)) {
+    if (at_eol(q, comment)) {
       mx_error(path, line, "%s %zu: expected %d numbers, found %d", what, item,
                n, k);
       return MX_EINPUT;
     }
-    if (!e || !mx_io_delim(e, comment)) {
+    if (!e || !at_delim(e, comment)) {
       mx_error(path, line, "%s %zu: '%.*s' is not a number", what, item,
                mx_io_toklen(q, comment), q);
       return MX_EINPUT;
     }
     if (!isfinite(out[k])) {
-      mx_error(path, line, "%s %zu: '%.*s' is not a finite number", what,
-               item, mx_io_toklen(q, comment), q);
+      mx_error(path, line, "%s %zu: '%.*s' is not a finite number", what, item,
+               mx_io_toklen(q, comment), q);
       return MX_EINPUT;
     }
     q = e;
@@ -267,19 +276,24 @@ int mx_io_numbers(const char *path, long line, const char **p, char comment,
 /* Parses one 0-based vertex index < nv from the current line at *p. */
 int mx_io_index(const char *path, long line, const char **p, char comment,
                 size_t nv, uint32_t *idx, const char *what, size_t item) {
-  const char *q = mx_io_blank(*p);
+  const char *q = skip_blank(*p);
   int64_t v;
   const char *e = mx_io_int(q, &v);
-  if (mx_io_eol(q, comment)) {
+  if (at_eol(q, comment)) {
     mx_error(path, line, "%s %zu: missing vertex index", what, item);
     return MX_EINPUT;
   }
-  if (!e || !mx_io_delim(e, comment)) {
+  if (!e || !at_delim(e, comment)) {
     mx_error(path, line, "%s %zu: bad vertex index '%.*s'", what, item,
              mx_io_toklen(q, comment), q);
     return MX_EINPUT;
   }
-  if (v < 0 || (uint64_t)v >= nv) {
+  if (v < 0) {
+    mx_error(path, line, "%s %zu: vertex index %.*s out of range (negative)",
+             what, item, mx_io_toklen(q, comment), q);
+    return MX_EINPUT;
+  }
+  if ((uint64_t)v >= nv) {
     mx_error(path, line,
              "%s %zu: vertex index %.*s out of range (%zu vertices, 0-based)",
              what, item, mx_io_toklen(q, comment), q, nv);

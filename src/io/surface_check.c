@@ -21,10 +21,8 @@ static int indices_valid(const mx_trisoup *s, const char *path) {
 static int degenerate(const mx_trisoup *s, const uint32_t *t) {
   uint32_t a = t[0], b = t[1], c = t[2];
   if (a == b || b == c || a == c) return 1;
-  double ux = s->x[b] - s->x[a], uy = s->y[b] - s->y[a],
-         uz = s->z[b] - s->z[a];
-  double vx = s->x[c] - s->x[a], vy = s->y[c] - s->y[a],
-         vz = s->z[c] - s->z[a];
+  double ux = s->x[b] - s->x[a], uy = s->y[b] - s->y[a], uz = s->z[b] - s->z[a];
+  double vx = s->x[c] - s->x[a], vy = s->y[c] - s->y[a], vz = s->z[c] - s->z[a];
   return uy * vz - uz * vy == 0 && uz * vx - ux * vz == 0 &&
          ux * vy - uy * vx == 0;
 }
@@ -102,10 +100,8 @@ static int count_open_edges(const mx_trisoup *s, size_t *open) {
     return MX_EINPUT;
   }
   bucket_edges(s, end, other);
-  size_t bad = 0;
-  long nv = (long)s->nv;
-#pragma omp parallel for reduction(+ : bad) schedule(dynamic, 4096)
-  for (long v = 0; v < nv; v++) {
+  size_t bad = 0; /* serial: the bucketing above dominates anyway */
+  for (size_t v = 0; v < s->nv; v++) {
     size_t b = v ? end[v - 1] : 0;
     sort_small(other + b, end[v] - b);
     bad += odd_runs(other + b, end[v] - b);

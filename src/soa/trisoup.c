@@ -22,17 +22,14 @@ static size_t grown(size_t cap, size_t need) {
   return c > need ? c : need;
 }
 
-/* Reallocates *p to hold n items of the given size; *p is left untouched on
- * failure, so the soup stays consistent. */
-static int grow_array(void **p, size_t n, size_t item) {
+/* p grown to n items of the given size, or NULL (p is then untouched, so
+ * the soup stays consistent). */
+static void *resize(void *p, size_t n, size_t item) {
   if (n > SIZE_MAX / item) {
     mx_error(NULL, 0, "out of memory (array of %zu items)", n);
-    return MX_EINPUT;
+    return NULL;
   }
-  void *q = mx_realloc(*p, n * item);
-  if (!q) return MX_EINPUT;
-  *p = q;
-  return MX_OK;
+  return mx_realloc(p, n * item);
 }
 
 static int reserve_vertices(mx_trisoup *s, size_t nv) {
@@ -43,9 +40,15 @@ static int reserve_vertices(mx_trisoup *s, size_t nv) {
   }
   size_t cap = grown(s->cap_v, nv);
   if (cap > (size_t)UINT32_MAX) cap = (size_t)UINT32_MAX;
-  MX_CHECK(grow_array((void **)&s->x, cap, sizeof(double)));
-  MX_CHECK(grow_array((void **)&s->y, cap, sizeof(double)));
-  MX_CHECK(grow_array((void **)&s->z, cap, sizeof(double)));
+  double *x = resize(s->x, cap, sizeof *x);
+  if (!x) return MX_EINPUT;
+  s->x = x;
+  double *y = resize(s->y, cap, sizeof *y);
+  if (!y) return MX_EINPUT;
+  s->y = y;
+  double *z = resize(s->z, cap, sizeof *z);
+  if (!z) return MX_EINPUT;
+  s->z = z;
   s->cap_v = cap;
   return MX_OK;
 }
@@ -57,8 +60,12 @@ static int reserve_triangles(mx_trisoup *s, size_t nt) {
     return MX_EINPUT;
   }
   size_t cap = grown(s->cap_t, nt);
-  MX_CHECK(grow_array((void **)&s->tri, 3 * cap, sizeof(uint32_t)));
-  MX_CHECK(grow_array((void **)&s->shell, cap, sizeof(uint16_t)));
+  uint32_t *tri = resize(s->tri, 3 * cap, sizeof *tri);
+  if (!tri) return MX_EINPUT;
+  s->tri = tri;
+  uint16_t *shell = resize(s->shell, cap, sizeof *shell);
+  if (!shell) return MX_EINPUT;
+  s->shell = shell;
   s->cap_t = cap;
   return MX_OK;
 }
