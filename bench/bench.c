@@ -58,8 +58,10 @@ static result run_once(const char *mixoct, const char *input, int level,
   int st = pclose(p);
   if (st != 0 || !strchr(last, '{')) return r;
   r.leaves = json_num(last, "leaves");
-  r.refine = json_num(last, "refine");
-  r.balance = json_num(last, "balance");
+  const char *ph = strstr(last, "\"phases\"");
+  if (!ph) return r;
+  r.refine = json_num(ph, "refine");
+  r.balance = json_num(ph, "balance");
   r.rss = json_num(last, "peak_rss_mb");
   r.total = json_num(last, "total_s");
   json_str(last, "leaves_hash", r.hash, sizeof r.hash);

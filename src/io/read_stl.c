@@ -11,21 +11,7 @@
 #include "common.h"
 #include "soa/trisoup.h"
 
-/* Text helpers shared by the readers, defined in read_surface.c. */
-int mx_io_load(const char *path, char **buf, size_t *len);
-const char *mx_io_blank(const char *p);
-int mx_io_eol(const char *p, char comment);
-int mx_io_delim(const char *p, char comment);
-const char *mx_io_next_line(const char *p, const char *end, long *line);
-const char *mx_io_content(const char *p, const char *end, long *line,
-                          char comment);
-int mx_io_toklen(const char *p, char comment);
-const char *mx_io_double(const char *p, double *v);
-const char *mx_io_int(const char *p, int64_t *v);
-int mx_io_numbers(const char *path, long line, const char **p, char comment,
-                  int n, double *out, const char *what, size_t item);
-int mx_io_index(const char *path, long line, const char **p, char comment,
-                size_t nv, uint32_t *idx, const char *what, size_t item);
+#include "io/text_scan.h"
 
 /* ---- exact vertex merging --------------------------------------------- */
 
