@@ -106,13 +106,11 @@ int main(int argc, char **argv) {
   result R[10][2][2]; /* level, balance, threads-1 */
   int fail = 0;
   if (!json_only) {
-    printf("mixoct bench: %s, best of %d, refine+balance seconds (rb)\n", input, repeat);
-    printf("%3s %10s %7s | %9s %9s %9s %7s | %9s %9s %7s | %6s %6s | %8s %8s\n",
-           "RL", "leaves", "vs ref", "edges 1t", "edges 2t", "2t/1t", "MB",
-           "recur 1t", "recur 2t", "MB", "rec/ed", "rec/ed", "ref rb", "ref/2t");
-    printf("%3s %10s %7s | %9s %9s %9s %7s | %9s %9s %7s | %6s %6s | %8s %8s\n",
-           "", "", "", "rb s", "rb s", "speedup", "", "rb s", "rb s", "",
-           "1t", "2t", "s", "speedup");
+    printf("mixoct bench: %s, best of %d runs; rb = refine + balance seconds\n",
+           input, repeat);
+    printf("%3s %-9s %2s %10s %7s %9s %9s %9s %8s %8s %9s %9s\n", "RL", "balance",
+           "th", "leaves", "vs ref", "refine s", "balance s", "rb s", "peak MB",
+           "2t/1t", "rec/edges", "ref/this");
   }
   for (int l = lo; l <= hi; l++) {
     for (int b = 0; b < 2; b++)
@@ -125,23 +123,30 @@ int main(int argc, char **argv) {
         }
       }
     if (fail) break;
-    const result *e1 = &R[l][0][0], *e2 = &R[l][0][1], *r1 = &R[l][1][0], *r2 = &R[l][1][1];
-    int same = !strcmp(e1->hash, e2->hash) && !strcmp(e1->hash, r1->hash) &&
-               !strcmp(e1->hash, r2->hash);
+    const result *e1 = &R[l][0][0];
+    int same = 1;
+    for (int b = 0; b < 2; b++)
+      for (int t = 0; t < 2; t++) same &= !strcmp(e1->hash, R[l][b][t].hash);
     if (!same) {
       fprintf(stderr, "mixoct-bench: leaves differ at -s %d\n", l);
       fail = 1;
     }
-    double rb[2][2];
+    if (json_only) continue;
     for (int b = 0; b < 2; b++)
-      for (int t = 0; t < 2; t++) rb[b][t] = R[l][b][t].refine + R[l][b][t].balance;
-    if (!json_only)
-      printf("%3d %10.0f %+6.2f%% | %9.3f %9.3f %8.2fx %7.0f | %9.3f %9.3f %7.0f | "
-             "%5.2fx %5.2fx | %8.2f %7.1fx%s\n",
-             l, e1->leaves, 100.0 * (e1->leaves - ref_leaves[l]) / ref_leaves[l],
-             rb[0][0], rb[0][1], rb[0][0] / rb[0][1], e2->rss, rb[1][0], rb[1][1],
-             r2->rss, rb[1][0] / rb[0][0], rb[1][1] / rb[0][1], ref_rb[l],
-             ref_rb[l] / rb[0][1], same ? "" : "  LEAVES DIFFER");
+      for (int t = 0; t < 2; t++) {
+        const result *r = &R[l][b][t];
+        const double rb = r->refine + r->balance;
+        const double rb1 = R[l][b][0].refine + R[l][b][0].balance;
+        const double rbe = R[l][0][t].refine + R[l][0][t].balance;
+        char sp[16] = "", re[16] = "";
+        if (t) snprintf(sp, sizeof sp, "%.2fx", rb1 / rb);
+        if (b) snprintf(re, sizeof re, "%.2fx", rb / rbe);
+        printf("%3d %-9s %2d %10.0f %+6.2f%% %9.3f %9.3f %9.3f %8.0f %8s %9s %8.1fx%s\n",
+               l, bal[b], t + 1, r->leaves,
+               100.0 * (r->leaves - ref_leaves[l]) / ref_leaves[l], r->refine,
+               r->balance, rb, r->rss, sp, re, ref_rb[l] / rb,
+               same ? "" : "  LEAVES DIFFER");
+      }
   }
   if (fail) return 1;
   printf("{\"bench\": \"octree\", \"input\": \"%s\", \"repeat\": %d, \"levels\": [", input, repeat);
