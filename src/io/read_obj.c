@@ -75,23 +75,13 @@ static int read_corner(obj_file *f, const char **p, const mx_trisoup *s,
   return MX_OK;
 }
 
-static int add_triangle(mx_trisoup *s, uint32_t a, uint32_t b, uint32_t c) {
-  if (s->nt >= s->cap_t) MX_CHECK(mx_trisoup_reserve(s, 0, s->nt + 1));
-  uint32_t *t = s->tri + 3 * s->nt;
-  t[0] = a;
-  t[1] = b;
-  t[2] = c;
-  s->shell[s->nt++] = 0;
-  return MX_OK;
-}
-
 static int read_face(obj_file *f, mx_trisoup *s) {
   const char *q = mx_io_blank(f->p + 1);
   uint32_t first = 0, prev = 0, cur;
   int k = 0;
   for (; !mx_io_eol(q, '#'); k++, q = mx_io_blank(q)) {
     MX_CHECK(read_corner(f, &q, s, &cur));
-    if (k >= 2) MX_CHECK(add_triangle(s, first, prev, cur));
+    if (k >= 2) MX_CHECK(mx_trisoup_add_triangle(s, first, prev, cur));
     if (k == 0) first = cur;
     prev = cur;
   }

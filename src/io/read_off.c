@@ -100,16 +100,6 @@ static int read_vertices(off_file *f, mx_trisoup *s) {
   return MX_OK;
 }
 
-static int add_triangle(mx_trisoup *s, uint32_t a, uint32_t b, uint32_t c) {
-  if (s->nt >= s->cap_t) MX_CHECK(mx_trisoup_reserve(s, 0, s->nt + 1));
-  uint32_t *t = s->tri + 3 * s->nt;
-  t[0] = a;
-  t[1] = b;
-  t[2] = c;
-  s->shell[s->nt++] = 0;
-  return MX_OK;
-}
-
 /* One face line "k i0 .. ik-1 [ignored]": a fan of k-2 triangles. */
 static int read_face(off_file *f, mx_trisoup *s, size_t i) {
   int64_t k;
@@ -126,7 +116,7 @@ static int read_face(off_file *f, mx_trisoup *s, size_t i) {
   MX_CHECK(mx_io_index(f->path, f->line, &f->p, '#', f->nv, &prev, "face", i));
   for (int64_t j = 2; j < k; j++) {
     MX_CHECK(mx_io_index(f->path, f->line, &f->p, '#', f->nv, &cur, "face", i));
-    MX_CHECK(add_triangle(s, first, prev, cur));
+    MX_CHECK(mx_trisoup_add_triangle(s, first, prev, cur));
     prev = cur;
   }
   return MX_OK;

@@ -100,13 +100,6 @@ static int map_hashed(vertex_map *m, mx_trisoup *s, const double c[3],
   return MX_OK;
 }
 
-static int add_triangle(mx_trisoup *s, const uint32_t v[3]) {
-  if (s->nt >= s->cap_t) MX_CHECK(mx_trisoup_reserve(s, 0, s->nt + 1));
-  memcpy(s->tri + 3 * s->nt, v, 3 * sizeof *v);
-  s->shell[s->nt++] = 0;
-  return MX_OK;
-}
-
 /* Facets are merged in blocks: all hashes first, with their table slots
  * prefetched, then the lookups, which otherwise wait on cache misses. */
 #define BLOCK 16
@@ -126,7 +119,7 @@ static int merge_block(vertex_map *m, mx_trisoup *s, corner_block *b) {
     uint32_t v[3];
     for (int k = 0; k < 3; k++)
       MX_CHECK(map_hashed(m, s, b->c[i + k], h[i + k], &v[k]));
-    MX_CHECK(add_triangle(s, v));
+    MX_CHECK(mx_trisoup_add_triangle(s, v[0], v[1], v[2]));
   }
   b->n = 0;
   return MX_OK;

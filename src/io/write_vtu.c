@@ -14,6 +14,7 @@
 #include "common.h"
 #include "io/atomic_file.h"
 #include "soa/mesh.h"
+#include "soa/scan.h"
 
 #define VTU_HOST_LE (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__)
 
@@ -267,12 +268,7 @@ static uint64_t *offset_block_starts(const mx_mesh_view *m) {
     for (size_t c = lo; c < hi; c++) sum += (uint64_t)mx_cell_nodes[m->type[c]];
     start[k] = sum;
   }
-  uint64_t run = 0;
-  for (size_t k = 0; k < nblocks; k++) {
-    uint64_t s = start[k];
-    start[k] = run;
-    run += s;
-  }
+  mx_scan_u64(start, nblocks);
   return start;
 }
 

@@ -60,10 +60,8 @@ static void find_unbalanced(mx_builder *B, const uint32_t *run, size_t k,
   const uint32_t p = T->parent[run[0]];
   if (p == MX_NONE) return;
   const int lp = T->level[p];
-  uint32_t c[3];
-  mx_morton_decode(T->key[p], c);
-  const int shift = MX_MAX_LEVEL - lp;
-  const uint32_t anchor[3] = {c[0] >> shift, c[1] >> shift, c[2] >> shift};
+  uint32_t anchor[3];
+  mx_octant_anchor(T->key[p], lp, anchor);
   for (int a = 0; a < 3; a++) {
     const mx_edge_table *E = &B->edges.t[lp][a];
     for (int j = 0; j < 4; j++) {

@@ -53,6 +53,16 @@ static inline uint32_t mx_octant_size(int level) {
   return 1u << (MX_MAX_LEVEL - level);
 }
 
+/* Anchor of the octant (key, level) on the lattice of its own level. */
+static inline void mx_octant_anchor(uint64_t key, int level, uint32_t a[3]) {
+  uint32_t c[3];
+  mx_morton_decode(key, c);
+  const int shift = MX_MAX_LEVEL - level;
+  a[0] = c[0] >> shift;
+  a[1] = c[1] >> shift;
+  a[2] = c[2] >> shift;
+}
+
 /* Key of the parent of the octant (key, level >= 1): clear the bits below
  * the parent's size. */
 static inline uint64_t mx_morton_parent(uint64_t key, int level) {

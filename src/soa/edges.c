@@ -21,7 +21,7 @@ void mx_edges_free(mx_edges *E) {
 
 /* Rehash one entry into a fresh table, many threads at once. */
 static void put_concurrent(mx_edge_table *T, const mx_edge *src) {
-  size_t i = edge_hash((src->kw & ~MX_EDGE_MID) - 1, T->cap);
+  size_t i = edge_hash(src->kw - 1, T->cap);
   for (;;) {
     uint64_t expected = 0;
     if (__atomic_compare_exchange_n(&T->e[i].kw, &expected, src->kw, 0,
@@ -66,7 +66,7 @@ size_t mx_edge_find(const mx_edge_table *T, uint64_t key) {
   for (;;) {
     uint64_t kw = __atomic_load_n(&T->e[i].kw, __ATOMIC_ACQUIRE);
     if (!kw) return SIZE_MAX;
-    if ((kw & ~MX_EDGE_MID) == want) return i;
+    if (kw == want) return i;
     i = (i + 1 == T->cap) ? 0 : i + 1;
   }
 }
@@ -86,7 +86,7 @@ static size_t edge_insert(mx_edge_table *T, uint64_t key, int *created) {
       }
       kw = expected;
     }
-    if ((kw & ~MX_EDGE_MID) == want) {
+    if (kw == want) {
       *created = 0;
       return i;
     }
@@ -96,10 +96,8 @@ static size_t edge_insert(mx_edge_table *T, uint64_t key, int *created) {
 
 void mx_edges_register(mx_edges *E, uint32_t o, uint64_t key, int level,
                        size_t created[3]) {
-  uint32_t c[3];
-  mx_morton_decode(key, c);
-  const int shift = MX_MAX_LEVEL - level;
-  const uint32_t anchor[3] = {c[0] >> shift, c[1] >> shift, c[2] >> shift};
+  uint32_t anchor[3];
+  mx_octant_anchor(key, level, anchor);
   for (int a = 0; a < 3; a++) {
     mx_edge_table *T = &E->t[level][a];
     for (int j = 0; j < 4; j++) {
@@ -107,21 +105,6 @@ void mx_edges_register(mx_edges *E, uint32_t o, uint64_t key, int level,
       size_t i = edge_insert(T, mx_edge_key(anchor, a, j), &fresh);
       created[a] += (size_t)fresh;
       __atomic_store_n(&T->e[i].slot[mx_edge_slot(j)], o, __ATOMIC_RELAXED);
-    }
-  }
-}
-
-void mx_edges_mark_split(mx_edges *E, uint64_t key, int level) {
-  uint32_t c[3];
-  mx_morton_decode(key, c);
-  const int shift = MX_MAX_LEVEL - level;
-  const uint32_t anchor[3] = {c[0] >> shift, c[1] >> shift, c[2] >> shift};
-  for (int a = 0; a < 3; a++) {
-    mx_edge_table *T = &E->t[level][a];
-    for (int j = 0; j < 4; j++) {
-      size_t i = mx_edge_find(T, mx_edge_key(anchor, a, j));
-      if (i != SIZE_MAX)
-        __atomic_fetch_or(&T->e[i].kw, MX_EDGE_MID, __ATOMIC_RELAXED);
     }
   }
 }
@@ -146,12 +129,10 @@ size_t mx_edges_bytes(const mx_edges *E) {
 
 void mx_edges_register_children(mx_edges *E, uint32_t child0, uint8_t kept,
                                 uint64_t key, int level, size_t created[3]) {
-  uint32_t cc[3];
-  mx_morton_decode(key, cc);
-  const int shift = MX_MAX_LEVEL - level;
   /* Anchor of the parent on the children's lattice. */
-  const uint32_t A[3] = {(cc[0] >> shift) << 1, (cc[1] >> shift) << 1,
-                         (cc[2] >> shift) << 1};
+  uint32_t A[3];
+  mx_octant_anchor(key, level, A);
+  for (int a = 0; a < 3; a++) A[a] <<= 1;
   uint32_t index[8];
   for (int c = 0, k = 0; c < 8; c++)
     index[c] = ((kept >> c) & 1) ? child0 + (uint32_t)k++ : UINT32_MAX;

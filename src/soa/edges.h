@@ -22,10 +22,8 @@
 
 #include "morton/morton.h"
 
-#define MX_EDGE_MID (1ULL << 63)
-
 typedef struct {
-  uint64_t kw;       /* 0 = empty; else (key + 1) | MX_EDGE_MID if split */
+  uint64_t kw;       /* 0 = empty; else key + 1 */
   uint32_t slot[4];
 } mx_edge;
 
@@ -76,8 +74,6 @@ static inline int mx_edge_is_split(const mx_edge *e, const uint8_t *flags,
     if (e->slot[s] != UINT32_MAX && (flags[e->slot[s]] & split_bit)) return 1;
   return 0;
 }
-/* Set the mid-node flag of the 12 edges of the octant (key, level). */
-void mx_edges_mark_split(mx_edges *E, uint64_t key, int level);
 /* Add the counts created by mx_edges_register to the (level, axis) tables. */
 void mx_edges_add_count(mx_edges *E, int level, const size_t created[3]);
 size_t mx_edges_total(const mx_edges *E);

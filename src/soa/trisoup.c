@@ -119,3 +119,13 @@ void mx_trisoup_bbox(const mx_trisoup *s, double lo[3], double hi[3]) {
     hi[d] = mx;
   }
 }
+
+int mx_trisoup_add_triangle(mx_trisoup *s, uint32_t a, uint32_t b, uint32_t c) {
+  if (s->nt >= s->cap_t) MX_CHECK(mx_trisoup_reserve(s, 0, s->nt + 1));
+  uint32_t *t = s->tri + 3 * s->nt;
+  t[0] = a;
+  t[1] = b;
+  t[2] = c;
+  s->shell[s->nt++] = 0;
+  return MX_OK;
+}
