@@ -51,6 +51,9 @@ typedef struct {
 /* One line describing the machine (hwloc when built in, OpenMP threads). */
 void mx_topology_string(char *buf, size_t n);
 
+/* `mixoct check MESH [--surface FILE] [--json]` (src/cli/check_cmd.c). */
+int mx_check_main(int argc, char **argv);
+
 void mx_print_json(const mx_summary *s);
 void mx_print_summary(const mx_summary *s);
 

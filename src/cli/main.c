@@ -142,6 +142,8 @@ static int run(const mx_options *o) {
 }
 
 int main(int argc, char **argv) {
+  if (argc >= 2 && strcmp(argv[1], "check") == 0)
+    return mx_check_main(argc - 1, argv + 1);
   mx_options o;
   int exit_now = 0;
   int st = mx_parse_options(argc, argv, &o, &exit_now);
