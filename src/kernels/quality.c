@@ -97,24 +97,9 @@ double mx_jens(int type, const double (*p)[3]) {
   }
 }
 
-/* Faces of each type, VTK order, oriented outward. */
-static const int tet_f[4][4] = {{0, 2, 1, -1}, {0, 1, 3, -1}, {1, 2, 3, -1}, {0, 3, 2, -1}};
-static const int pyr_f[5][4] = {{0, 3, 2, 1}, {0, 1, 4, -1}, {1, 2, 4, -1},
-                                {2, 3, 4, -1}, {3, 0, 4, -1}};
-static const int pri_f[5][4] = {{0, 2, 1, -1}, {3, 4, 5, -1}, {0, 1, 4, 3},
-                                {1, 2, 5, 4}, {2, 0, 3, 5}};
-static const int hex_f[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
-                                {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
-
 double mx_element_volume(int type, const double (*p)[3]) {
-  const int (*f)[4];
-  int nf;
-  switch (type) {
-  case MX_TET: f = tet_f; nf = 4; break;
-  case MX_PYRAMID: f = pyr_f; nf = 5; break;
-  case MX_PRISM: f = pri_f; nf = 5; break;
-  default: f = hex_f; nf = 6; break;
-  }
+  const int8_t (*f)[4] = mx_cell_faces[type];
+  const int nf = mx_cell_nfaces[type];
   /* Divergence theorem: V = 1/6 sum over outward triangles of a.(b x c). */
   double v = 0.0;
   for (int i = 0; i < nf; i++) {

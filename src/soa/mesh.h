@@ -11,6 +11,16 @@ enum { MX_TET = 0, MX_PYRAMID = 1, MX_PRISM = 2, MX_HEX = 3 };
 static const int mx_cell_nodes[4] = {4, 5, 6, 8};
 static const int mx_vtk_cell_type[4] = {10, 14, 13, 12};
 
+/* Faces of each type in VTK node order, oriented outward (-1 ends a
+ * triangle). The first face's right-hand normal points into the element. */
+static const int mx_cell_nfaces[4] = {4, 5, 5, 6};
+static const int8_t mx_cell_faces[4][6][4] = {
+    {{0, 2, 1, -1}, {0, 1, 3, -1}, {1, 2, 3, -1}, {0, 3, 2, -1}},
+    {{0, 3, 2, 1}, {0, 1, 4, -1}, {1, 2, 4, -1}, {2, 3, 4, -1}, {3, 0, 4, -1}},
+    {{0, 2, 1, -1}, {3, 4, 5, -1}, {0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}},
+    {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6},
+     {3, 0, 4, 7}}};
+
 typedef struct {
   const char *name;
   int is_double;       /* 0: int32 values, 1: double values */
