@@ -32,7 +32,7 @@ typedef struct {
 int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now);
 
 typedef struct {
-  double read, grid, refine, balance, write, total;
+  double read, grid, refine, balance, transition, write, total;
 } mx_phases;
 
 typedef struct {
@@ -44,6 +44,9 @@ typedef struct {
   int balance;
   int max_level;
   int nodes_counted;
+  int mesh;                 /* a mixed mesh was built (not only leaves) */
+  size_t elements, by_type[4], invalid, closures, centre_leaves;
+  double jens_min;
   mx_phases ph;
   double peak_rss_mb;
 } mx_summary;
@@ -53,6 +56,8 @@ void mx_topology_string(char *buf, size_t n);
 
 /* `mixoct check MESH [--surface FILE] [--json]` (src/cli/check_cmd.c). */
 int mx_check_main(int argc, char **argv);
+/* `mixoct patterns [--json]` (src/cli/patterns_cmd.c). */
+int mx_patterns_main(int argc, char **argv);
 
 void mx_print_json(const mx_summary *s);
 void mx_print_summary(const mx_summary *s);

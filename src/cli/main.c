@@ -5,6 +5,7 @@
 #include "cli/cli.h"
 #include "common.h"
 #include "kernels/refine.h"
+#include "kernels/transition.h"
 #include "soa/mesh.h"
 #include "soa/regions.h"
 #include "soa/trisoup.h"
@@ -71,6 +72,19 @@ static int write_octree(const mx_builder *B, uint32_t *leaves, size_t n,
   return st;
 }
 
+static int write_mixed(const mx_mesh_out *M, const char *path) {
+  int32_t *type = mx_alloc((M->ncells + 1) * sizeof *type);
+  if (!type) return MX_EINPUT;
+  for (size_t i = 0; i < M->ncells; i++) type[i] = M->type[i];
+  mx_field f[3] = {{"type", 0, type, NULL},
+                   {"level", 0, M->level, NULL},
+                   {"jens", 1, NULL, M->jens}};
+  mx_mesh_view v = {M->nnodes, M->xyz, M->ncells, M->type, M->conn, 3, f, 0, NULL};
+  int st = mx_write_mesh(path, &v);
+  mx_free(type);
+  return st;
+}
+
 static int run(const mx_options *o) {
   const double t_start = mx_wtime();
   mx_summary S;
@@ -108,13 +122,37 @@ static int run(const mx_options *o) {
     S.ph.balance = B.stats.t_balance;
   }
   if (!st) st = mx_leaves(&B, &leaves, &nleaves);
-  if (!st && o->output) {
+  if (!st && o->stage == MX_STAGE_OCTREE && o->output) {
     /* The leaves' corners are numbered only for a file: a dry run stops at
      * the leaves. */
     t = mx_wtime();
     st = write_octree(&B, leaves, nleaves, o->output, &S.nodes);
     S.nodes_counted = 1;
     S.ph.write = mx_wtime() - t;
+  }
+  if (!st && o->stage == MX_STAGE_TRANSITION) {
+    t = mx_wtime();
+    mx_mesh_out M;
+    st = mx_leaves_sorted(&B, leaves, nleaves);
+    if (!st) st = mx_transition(&B, leaves, nleaves, &M);
+    S.ph.transition = mx_wtime() - t;
+    if (!st) {
+      S.nodes = M.nnodes;
+      S.nodes_counted = 1;
+      S.elements = M.ncells;
+      memcpy(S.by_type, M.by_type, sizeof S.by_type);
+      S.jens_min = M.jens_min;
+      S.invalid = M.invalid;
+      S.closures = M.closures;
+      S.centre_leaves = M.centre_leaves;
+      S.mesh = 1;
+      if (o->output) {
+        t = mx_wtime();
+        st = write_mixed(&M, o->output);
+        S.ph.write = mx_wtime() - t;
+      }
+      mx_mesh_out_free(&M);
+    }
   }
   if (!st) {
     S.leaves = nleaves;
@@ -144,6 +182,8 @@ static int run(const mx_options *o) {
 int main(int argc, char **argv) {
   if (argc >= 2 && strcmp(argv[1], "check") == 0)
     return mx_check_main(argc - 1, argv + 1);
+  if (argc >= 2 && strcmp(argv[1], "patterns") == 0)
+    return mx_patterns_main(argc - 1, argv + 1);
   mx_options o;
   int exit_now = 0;
   int st = mx_parse_options(argc, argv, &o, &exit_now);

@@ -29,6 +29,10 @@ static const char *usage_text =
     "                              nothing is written (a dry run)\n"
     "      --stage octree          stop after the balanced octree (leaves as\n"
     "                              hexahedra with their level)\n"
+    "      --stage transition      stop after the transition patterns: the\n"
+    "                              conforming mixed mesh of the whole octree\n"
+    "                              (cell data type, level, jens); the default\n"
+    "                              until the boundary stage lands\n"
     "      --json                  one JSON summary as the last stdout line\n"
     "      --quiet                 no summary, no warnings\n"
     "\n"
@@ -41,6 +45,7 @@ static const char *usage_text =
     "      --version               version and threads\n"
     "\n"
     "Examples:\n"
+    "  mixoct --demo -s 5 -o demo.vtu\n"
     "  mixoct --demo -s 5 -o demo.vtu --stage octree\n"
     "  mixoct -i cortex.off -s 7 --json\n"
     "  mixoct -i outer.mdl -i inner.mdl -s 5 -b roi.reg -o shell.vtk\n";
@@ -49,9 +54,10 @@ static int parse_level(const char *opt, const char *s, int *out) {
   char *end;
   errno = 0;
   long v = s ? strtol(s, &end, 10) : -1;
-  if (!s || errno || *end || v < 0 || v > MX_MAX_LEVEL) {
+  /* The top lattice level is kept for the transition patterns' midpoints. */
+  if (!s || errno || *end || v < 0 || v > MX_MAX_LEVEL - 1) {
     mx_error(NULL, 0, "%s wants a level between 0 and %d, got '%s'", opt,
-             MX_MAX_LEVEL, s ? s : "");
+             MX_MAX_LEVEL - 1, s ? s : "");
     return MX_EINPUT;
   }
   *out = (int)v;
@@ -70,7 +76,7 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
   memset(o, 0, sizeof *o);
   o->req.s_level = -1;
   o->req.a_level = -1;
-  o->stage = MX_STAGE_OCTREE;
+  o->stage = MX_STAGE_TRANSITION;
   o->balance = MX_BALANCE_EDGES;
   *exit_now = 0;
   for (int i = 1; i < argc; i++) {
@@ -137,9 +143,11 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
       const char *s = argv[++i];
       if (strcmp(s, "octree") == 0)
         o->stage = MX_STAGE_OCTREE;
-      else if (strcmp(s, "transition") == 0 || strcmp(s, "full") == 0) {
-        mx_error(NULL, 0, "--stage %s is not implemented yet (this build stops "
-                          "at the balanced octree: --stage octree)", s);
+      else if (strcmp(s, "transition") == 0)
+        o->stage = MX_STAGE_TRANSITION;
+      else if (strcmp(s, "full") == 0) {
+        mx_error(NULL, 0, "--stage full is not implemented yet (boundary "
+                          "processing comes next): use octree or transition");
         return MX_EINPUT;
       } else {
         mx_error(NULL, 0, "--stage wants octree, transition or full, got '%s'", s);

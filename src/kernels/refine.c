@@ -31,9 +31,11 @@ int mx_builder_init(mx_builder *B, const mx_trisoup *soup, uint32_t nt_domain,
   B->req = *req;
   B->use_edges = use_edges;
   /* Balance can only be lost next to an octant two levels finer, so a leaf of
-   * level max-1 or max is never split for balance and nobody looks up the edge
-   * infos of those levels: they are kept for levels <= max - 2 only. */
-  B->edge_levels = mx_max_requested_level(req) - 2;
+   * level max-1 or max is never split for balance; the transition stage reads
+   * the edge infos of a leaf's own level to find its split neighbours, and a
+   * leaf of the top level has none. So edge infos are kept for levels up to
+   * max - 1, never for the top level (the largest table by far). */
+  B->edge_levels = mx_max_requested_level(req) - 1;
   double lo[3], hi[3];
   mx_trisoup dom = *soup;
   dom.nt = nt_domain; /* the grid covers the domain's triangles' vertices */

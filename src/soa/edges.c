@@ -5,12 +5,16 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Edges are hashed by spatial blocks: the 8x8x8 lattice positions of a block
+ * share one window of the table, so octants taken in Morton order touch few
+ * windows at a time; the blocks are spread over the table by a mixing hash. */
 static inline size_t edge_hash(uint64_t key, size_t cap) {
-  uint64_t h = key * 0x9E3779B97F4A7C15ULL;
+  uint64_t h = (key >> 9) * 0x9E3779B97F4A7C15ULL;
   h ^= h >> 29;
   h *= 0xBF58476D1CE4E5B9ULL;
   h ^= h >> 32;
-  return (size_t)(((unsigned __int128)h * cap) >> 64);
+  const size_t s = (size_t)(((unsigned __int128)h * cap) >> 64) + (size_t)(key & 511);
+  return s >= cap ? s - cap : s;
 }
 
 void mx_edges_free(mx_edges *E) {
