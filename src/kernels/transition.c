@@ -25,7 +25,7 @@ static int kept_child_on_edge(const mx_octree *T, uint32_t x, int a, int s) {
   return 0;
 }
 
-uint32_t mx_leaf_mask(const mx_builder *B, uint32_t o, int *closure) {
+uint32_t mx_leaf_mask(const mx_builder *B, uint32_t o, uint32_t *closure) {
   const mx_octree *T = &B->oct;
   const int l = T->level[o];
   uint32_t mask = 0xffu;
@@ -72,10 +72,48 @@ uint32_t mx_leaf_mask(const mx_builder *B, uint32_t o, int *closure) {
     for (int k = 0; k < 4; k++)
       if (!((mask >> m[k]) & 1)) {
         mask |= 1u << m[k];
-        (*closure)++;
+        *closure |= 1u << m[k];
       }
   }
   return mask;
+}
+
+/* A midpoint added by the closure is a node of every leaf of that edge: the
+ * other leaves of the same level around it (its edge infos) get it too.
+ * (Closures are rare: they need a face neighbour split with some of its
+ * children dropped outside the domain.) */
+static int propagate_closures(const mx_builder *B, const uint32_t *leaves,
+                              size_t n, uint32_t *mask, const uint32_t *cbits) {
+  const mx_octree *T = &B->oct;
+  uint32_t *pos = mx_alloc((T->n + 1) * sizeof *pos);
+  if (!pos) return MX_EINPUT;
+#pragma omp parallel for schedule(static)
+  for (size_t o = 0; o < T->n; o++) pos[o] = MX_NONE;
+#pragma omp parallel for schedule(static)
+  for (size_t i = 0; i < n; i++) pos[leaves[i]] = (uint32_t)i;
+#pragma omp parallel for schedule(dynamic, 1024)
+  for (size_t i = 0; i < n; i++) {
+    if (!cbits[i]) continue;
+    const uint32_t o = leaves[i];
+    const int l = T->level[o];
+    uint32_t anchor[3];
+    mx_octant_anchor(T->key[o], l, anchor);
+    for (uint32_t b = cbits[i]; b; b &= b - 1) {
+      const int bit = __builtin_ctz(b), a = (bit - 8) / 4, j = (bit - 8) % 4;
+      const mx_edge_table *E = &B->edges.t[l][a];
+      const size_t e = mx_edge_find(E, mx_edge_key(anchor, a, j));
+      if (e == SIZE_MAX) continue;
+      for (int s = 0; s < 4; s++) {
+        const uint32_t x = E->e[e].slot[s];
+        if (x == MX_NONE || x == o || (T->flags[x] & MX_OCT_SPLIT)) continue;
+        if (pos[x] == MX_NONE) continue;
+        __atomic_fetch_or(&mask[pos[x]], 1u << (8 + 4 * a + mx_edge_slot(s)),
+                          __ATOMIC_RELAXED);
+      }
+    }
+  }
+  mx_free(pos);
+  return MX_OK;
 }
 
 /* ---- concurrent node hash ----------------------------------------------- */
@@ -182,12 +220,21 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
   }
   int st = (!mask || !ref || !noff || !eoff) ? MX_EINPUT : MX_OK;
   size_t closures = 0, centres = 0, bad = 0, points = 0;
+  uint32_t *cbits = mx_alloc((n + 1) * sizeof *cbits);
+  if (!cbits) st = MX_EINPUT;
   if (!st) {
-#pragma omp parallel for schedule(static) reduction(+ : closures, centres, bad, points)
+#pragma omp parallel for schedule(static) reduction(+ : closures)
     for (size_t i = 0; i < n; i++) {
-      int cl;
-      uint32_t m = mx_leaf_mask(B, leaves[i], &cl);
-      closures += (size_t)cl;
+      mask[i] = mx_leaf_mask(B, leaves[i], &cbits[i]);
+      closures += (size_t)__builtin_popcount(cbits[i]);
+    }
+  }
+  if (!st && closures) st = propagate_closures(B, leaves, n, mask, cbits);
+  mx_free(cbits);
+  if (!st) {
+#pragma omp parallel for schedule(static) reduction(+ : centres, bad, points)
+    for (size_t i = 0; i < n; i++) {
+      uint32_t m = mask[i];
       mx_pattern_ref r = mx_pattern_lookup((m >> 8) & ((1u << MX_CONFIG_BITS) - 1));
       if (r.cls == 0xffff) {
         bad++;
@@ -235,12 +282,24 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
       H.e[i].owner = UINT32_MAX;
       H.e[i].id = 0;
     }
-#pragma omp parallel for schedule(dynamic, 1024)
-    for (size_t i = 0; i < n; i++) {
-      const uint32_t o = leaves[i];
-      uint64_t pk[27];
-      const int k = leaf_points(T->key[o], T->level[o], mask[i], pk);
-      for (int j = 0; j < k; j++) slot[poff[i] + j] = (uint32_t)nh_insert(&H, pk[j], (uint32_t)i);
+    /* In blocks of leaves: all keys first, their home slots prefetched, then
+     * the inserts, which would otherwise wait on one cache miss at a time. */
+#pragma omp parallel for schedule(dynamic, 16)
+    for (size_t b = 0; b < n; b += 64) {
+      const size_t end = b + 64 < n ? b + 64 : n;
+      uint64_t pk[64 * 27];
+      size_t np = 0;
+      for (size_t i = b; i < end; i++) {
+        const uint32_t o = leaves[i];
+        np += (size_t)leaf_points(T->key[o], T->level[o], mask[i], pk + np);
+      }
+      for (size_t j = 0; j < np; j++) __builtin_prefetch(&H.e[nh_slot_of(pk[j], H.cap, H.shift)], 1);
+      size_t j = 0;
+      for (size_t i = b; i < end; i++) {
+        const int k = __builtin_popcount(mask[i]);
+        for (int q = 0; q < k; q++)
+          slot[poff[i] + (uint64_t)q] = (uint32_t)nh_insert(&H, pk[j++], (uint32_t)i);
+      }
     }
     if (!H.overflow) break;
   }
