@@ -1,1 +1,1135 @@
+/* mixoct: reading legacy VTK and VTU unstructured grids (see read_mesh.h).
+ *
+ * The file is mapped (or loaded) whole. Both formats are first cut into "parts" that
+ * point into the buffer (or into temporaries holding parsed ASCII values):
+ * the points, the cells either as a count-prefixed list (legacy) or as
+ * offsets + connectivity (VTU, legacy 5.x), and the cell types. One
+ * assembly step then converts and validates them in parallel, and re-runs
+ * the first failing item serially to print its message. Binary values are
+ * only read after the block holding them was checked to lie in the file. */
+#include "io/read_mesh.h"
+
+#include <fcntl.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "common.h"
+#include "io/text_scan.h"
+
+#define HOST_LE (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__)
+
+typedef enum {
+  T_I8, T_U8, T_I16, T_U16, T_I32, T_U32, T_I64, T_U64, T_F32, T_F64, T_NONE
+} vtype;
+static const int vsize[T_NONE + 1] = {1, 1, 2, 2, 4, 4, 8, 8, 4, 8, 0};
+static const char *const vtu_type_name[T_NONE] = {
+    "Int8",  "UInt8",  "Int16",  "UInt16",  "Int32",
+    "UInt32", "Int64", "UInt64", "Float32", "Float64"};
+
+/* n values of type t, stored from data on (byte-swapped when swap). */
+typedef struct {
+  const unsigned char *data;
+  size_t n;
+  vtype t;
+  int swap;
+  const char *text; /* parsed from ASCII starting here (for messages) */
+} rawarr;
+
+enum { MAX_TMP = 8, MSG = 512 };
+
+typedef struct {
+  const char *path, *buf, *end; /* the file, NUL-terminated at end */
+  const char *bin_from;         /* binary data starts here (or NULL) */
+  void *tmp[MAX_TMP];
+  int ntmp;
+} rd;
+
+/* ---- messages ------------------------------------------------------------ */
+
+static long line_of(const rd *r, const char *at) {
+  long line = 1;
+  const char *p = r->buf;
+  while (p < at) {
+    const char *nl = memchr(p, '\n', (size_t)(at - p));
+    if (!nl) break;
+    line++;
+    p = nl + 1;
+  }
+  return line;
+}
+
+/* Prints the message with the line of `at` in a text part, its byte offset
+ * in a binary part, nothing when at is NULL; returns MX_EINPUT. */
+static int fail(const rd *r, const char *at, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static int fail(const rd *r, const char *at, const char *fmt, ...) {
+  char msg[MSG];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  if (!at || at < r->buf || at > r->end)
+    mx_error(r->path, 0, "%s", msg);
+  else if (r->bin_from && at >= r->bin_from)
+    mx_error(r->path, 0, "%s (at byte %zu)", msg, (size_t)(at - r->buf));
+  else
+    mx_error(r->path, line_of(r, at), "%s", msg);
+  return MX_EINPUT;
+}
+
+static void *rd_alloc(rd *r, size_t bytes) {
+  if (r->ntmp == MAX_TMP) {
+    mx_error(r->path, 0, "internal error: too many temporaries");
+    return NULL;
+  }
+  void *p = mx_alloc(bytes);
+  if (p) r->tmp[r->ntmp++] = p;
+  return p;
+}
+
+/* ---- raw values ---------------------------------------------------------- */
+
+static inline uint64_t load_bits(const unsigned char *p, int size, int swap) {
+  switch (size) {
+    case 1:
+      return p[0];
+    case 2: {
+      uint16_t v;
+      memcpy(&v, p, 2);
+      return swap ? __builtin_bswap16(v) : v;
+    }
+    case 4: {
+      uint32_t v;
+      memcpy(&v, p, 4);
+      return swap ? __builtin_bswap32(v) : v;
+    }
+    default: {
+      uint64_t v;
+      memcpy(&v, p, 8);
+      return swap ? __builtin_bswap64(v) : v;
+    }
+  }
+}
+
+/* Element i of an integer array; -1 for values beyond INT64_MAX. */
+static inline int64_t raw_int(const rawarr *a, size_t i) {
+  uint64_t b = load_bits(a->data + i * (size_t)vsize[a->t], vsize[a->t],
+                         a->swap);
+  switch (a->t) {
+    case T_I8: return (int8_t)b;
+    case T_I16: return (int16_t)b;
+    case T_I32: return (int32_t)b;
+    case T_I64: return (int64_t)b;
+    case T_U64: return b > (uint64_t)INT64_MAX ? -1 : (int64_t)b;
+    default: return (int64_t)b; /* U8, U16, U32 */
+  }
+}
+
+static inline double raw_double(const rawarr *a, size_t i) {
+  if (a->t == T_F32) {
+    uint32_t b = (uint32_t)load_bits(a->data + 4 * i, 4, a->swap);
+    float f;
+    memcpy(&f, &b, 4);
+    return f;
+  }
+  uint64_t b = load_bits(a->data + 8 * i, 8, a->swap);
+  double d;
+  memcpy(&d, &b, 8);
+  return d;
+}
+
+static int is_float(vtype t) { return t == T_F32 || t == T_F64; }
+
+static inline int is_ws(char c);
+static const char *skip_ws(const char *p, const char *end);
+static size_t tok_len(const char *p, const char *end);
+
+/* Where element i lies in the file, for messages: in place, or found again
+ * by counting the tokens of the ASCII text it was parsed from. */
+static const char *arr_at(const rd *r, const rawarr *a, size_t i) {
+  if (a->text) {
+    const char *p = skip_ws(a->text, r->end);
+    for (size_t k = 0; k < i && p < r->end; k++)
+      p = skip_ws(p + tok_len(p, r->end), r->end);
+    return p;
+  }
+  const char *p = (const char *)a->data;
+  if (p < r->buf || p > r->end) return NULL;
+  return p + i * (size_t)vsize[a->t];
+}
+
+/* ---- text ---------------------------------------------------------------- */
+
+static inline int is_ws(char c) {
+  return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' ||
+         c == '\v';
+}
+
+static const char *skip_ws(const char *p, const char *end) {
+  while (p < end && is_ws(*p)) p++;
+  return p;
+}
+
+static size_t tok_len(const char *p, const char *end) {
+  const char *q = p;
+  while (q < end && *q && !is_ws(*q)) q++;
+  return (size_t)(q - p);
+}
+
+static int tok_eq(const char *t, size_t n, const char *kw) {
+  return strlen(kw) == n && strncasecmp(t, kw, n) == 0;
+}
+
+static int shown(size_t n) { return n > 40 ? 40 : (int)n; }
+
+/* n blank-separated numbers (any line breaks) from *pp, stopping at end, at
+ * a NUL or at `stop`. Into iv (integers) or dv (finite doubles). */
+static int ascii_values(const rd *r, const char **pp, char stop, size_t n,
+                        int64_t *iv, double *dv, const char *what) {
+  const char *p = *pp, *end = r->end;
+  for (size_t i = 0; i < n; i++) {
+    p = skip_ws(p, end);
+    if (p >= end || *p == '\0' || *p == stop)
+      return fail(r, p,
+                  "%s: expected %zu values, found %zu (truncated file or "
+                  "wrong count)",
+                  what, n, i);
+    const char *e = dv ? mx_io_double(p, &dv[i]) : mx_io_int(p, &iv[i]);
+    size_t tl = tok_len(p, end);
+    if (stop) {
+      const char *s = memchr(p, stop, tl);
+      if (s) tl = (size_t)(s - p);
+    }
+    if (!e || e != p + tl)
+      return fail(r, p, "%s: value %zu: '%.*s' is not %s", what, i,
+                  shown(tl), p, dv ? "a number" : "an integer");
+    if (dv && !isfinite(dv[i]))
+      return fail(r, p, "%s: value %zu: '%.*s' is not a finite number", what,
+                  i, shown(tl), p);
+    p = e;
+  }
+  *pp = p;
+  return MX_OK;
+}
+
+/* Parses values into a temporary and describes it as a host-order array. */
+static int ascii_array(rd *r, const char **pp, char stop, size_t n,
+                       int floats, rawarr *out, const char *what) {
+  /* Each value takes at least two bytes: refuse absurd counts early. */
+  if (n > (size_t)(r->end - *pp) / 2 + 1)
+    return fail(r, *pp,
+                "%s: %zu values announced but the file is too short "
+                "(truncated file or wrong count)",
+                what, n);
+  void *v = rd_alloc(r, n * 8);
+  if (!v) return MX_EINPUT;
+  const char *text = *pp;
+  MX_CHECK(ascii_values(r, pp, stop, n, floats ? NULL : v, floats ? v : NULL,
+                        what));
+  *out = (rawarr){v, n, floats ? T_F64 : T_I64, 0, text};
+  return MX_OK;
+}
+
+/* ---- assembly ------------------------------------------------------------ */
+
+typedef struct {
+  size_t nnodes, ncells;
+  rawarr pts; /* 3*nnodes floats */
+  int list_form;
+  uint8_t *nn;      /* list form: node count per cell (out->conn filled) */
+  rawarr off, cn;   /* offsets form */
+  int vtu_offsets;  /* 1: ncells end offsets; 0: ncells + 1 offsets from 0 */
+  rawarr types;
+} parts;
+
+static int vtk_to_mx(int64_t code) {
+  switch (code) {
+    case 10: return MX_TET;
+    case 14: return MX_PYRAMID;
+    case 13: return MX_PRISM;
+    case 12: return MX_HEX;
+    default: return -1;
+  }
+}
+
+static const char *const type_word[4] = {"tetrahedron", "pyramid", "wedge",
+                                         "hexahedron"};
+
+/* Cell c of the offsets form into row; 0 if fine, else 1 and (when msg is
+ * not NULL) the reason. */
+static int offset_cell(const parts *P, size_t c, int type, uint32_t *row,
+                       char *msg) {
+  int64_t s, e;
+  if (P->vtu_offsets) {
+    s = c ? raw_int(&P->off, c - 1) : 0;
+    e = raw_int(&P->off, c);
+  } else {
+    s = raw_int(&P->off, c);
+    e = raw_int(&P->off, c + 1);
+  }
+  const int64_t need = mx_cell_nodes[type];
+  if (s < 0 || e < s || (uint64_t)e > P->cn.n) {
+    if (msg)
+      snprintf(msg, MSG,
+               "cell %zu: offsets %lld..%lld are not an increasing range "
+               "inside the %zu connectivity entries",
+               c, (long long)s, (long long)e, P->cn.n);
+    return 1;
+  }
+  if (e - s != need) {
+    if (msg)
+      snprintf(msg, MSG, "cell %zu (%s) has %lld nodes, expected %lld", c,
+               type_word[type], (long long)(e - s), (long long)need);
+    return 1;
+  }
+  for (int j = 0; j < 8; j++) row[j] = 0;
+  for (int64_t j = 0; j < need; j++) {
+    int64_t v = raw_int(&P->cn, (size_t)(s + j));
+    if (v < 0 || v >= (int64_t)UINT32_MAX) {
+      if (msg)
+        snprintf(msg, MSG, "cell %zu: node index %lld out of range", c,
+                 (long long)v);
+      return 1;
+    }
+    row[j] = (uint32_t)v;
+  }
+  return 0;
+}
+
+static int assemble(rd *r, parts *P, mx_mesh_data *out) {
+  const size_t nn = P->nnodes, nc = P->ncells;
+  if (nn >= UINT32_MAX)
+    return fail(r, NULL, "%zu points: at most %u are supported", nn,
+                UINT32_MAX - 1);
+  out->nnodes = nn;
+  out->ncells = nc;
+  /* Points. */
+  out->xyz = mx_alloc(3 * nn * sizeof(double));
+  if (!out->xyz) return MX_EINPUT;
+  const rawarr *pa = &P->pts;
+  size_t bad = SIZE_MAX;
+  if (pa->t == T_F64 && !pa->swap) {
+    memcpy(out->xyz, pa->data, 24 * nn);
+  } else {
+#pragma omp parallel for schedule(static) if (nn > 65536)
+    for (size_t i = 0; i < 3 * nn; i++) out->xyz[i] = raw_double(pa, i);
+  }
+#pragma omp parallel for schedule(static) reduction(min : bad) if (nn > 65536)
+  for (size_t i = 0; i < 3 * nn; i++)
+    if (!isfinite(out->xyz[i]) && i < bad) bad = i;
+  if (bad != SIZE_MAX)
+    return fail(r, arr_at(r, pa, bad),
+                "point %zu: coordinate %zu is not a finite number", bad / 3,
+                bad % 3);
+  /* Types. */
+  out->type = mx_alloc(nc);
+  if (!out->type) return MX_EINPUT;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (nc > 65536)
+  for (size_t c = 0; c < nc; c++) {
+    int t = vtk_to_mx(raw_int(&P->types, c));
+    out->type[c] = (uint8_t)(t < 0 ? 0 : t);
+    if (t < 0 && c < bad) bad = c;
+  }
+  if (bad != SIZE_MAX)
+    return fail(r, arr_at(r, &P->types, bad),
+                "cell %zu has VTK type %lld: only tetrahedra (10), pyramids "
+                "(14), wedges (13) and hexahedra (12) are supported",
+                bad, (long long)raw_int(&P->types, bad));
+  /* Connectivity. */
+  if (P->list_form) {
+#pragma omp parallel for schedule(static) reduction(min : bad) if (nc > 65536)
+    for (size_t c = 0; c < nc; c++)
+      if (P->nn[c] != mx_cell_nodes[out->type[c]] && c < bad) bad = c;
+    if (bad != SIZE_MAX)
+      return fail(r, arr_at(r, &P->types, bad),
+                  "cell %zu (%s) has %d nodes, expected %d", bad,
+                  type_word[out->type[bad]], P->nn[bad],
+                  mx_cell_nodes[out->type[bad]]);
+  } else {
+    out->conn = mx_alloc(8 * nc * sizeof(uint32_t));
+    if (!out->conn) return MX_EINPUT;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (nc > 65536)
+    for (size_t c = 0; c < nc; c++)
+      if (offset_cell(P, c, out->type[c], out->conn + 8 * c, NULL) && c < bad)
+        bad = c;
+    if (bad != SIZE_MAX) {
+      char msg[MSG];
+      offset_cell(P, bad, out->type[bad], out->conn + 8 * bad, msg);
+      return fail(r, arr_at(r, &P->off, bad), "%s", msg);
+    }
+    int64_t last = nc ? raw_int(&P->off, P->vtu_offsets ? nc - 1 : nc) : 0;
+    if (!P->vtu_offsets && raw_int(&P->off, 0) != 0)
+      return fail(r, NULL, "OFFSETS: the first offset is %lld, expected 0",
+                  (long long)raw_int(&P->off, 0));
+    if ((uint64_t)last != P->cn.n)
+      return fail(r, NULL,
+                  "the connectivity has %zu entries but the cells use %lld",
+                  P->cn.n, (long long)last);
+  }
+  /* Node indices. */
+#pragma omp parallel for schedule(static) reduction(min : bad) if (nc > 65536)
+  for (size_t c = 0; c < nc; c++) {
+    const uint32_t *row = out->conn + 8 * c;
+    for (int j = 0; j < mx_cell_nodes[out->type[c]]; j++)
+      if (row[j] >= nn && c < bad) bad = c;
+  }
+  if (bad != SIZE_MAX) {
+    const uint32_t *row = out->conn + 8 * bad;
+    uint32_t v = 0;
+    for (int j = 0; j < mx_cell_nodes[out->type[bad]]; j++)
+      if (row[j] >= nn) {
+        v = row[j];
+        break;
+      }
+    return fail(r, NULL,
+                "cell %zu uses node %u, but there are %zu points (0-based "
+                "indices)",
+                bad, v, nn);
+  }
+  return MX_OK;
+}
+
+/* ---- legacy VTK ---------------------------------------------------------- */
+
+typedef struct {
+  rd *r;
+  int binary, v5;
+  const char *p;
+  parts P;
+  int have_points, have_cells, have_types;
+  mx_mesh_data *out;
+} legacy;
+
+/* The next blank-separated token (may be empty at the end of the file). */
+static const char *leg_token(legacy *L, size_t *n) {
+  L->p = skip_ws(L->p, L->r->end);
+  const char *t = L->p;
+  *n = tok_len(t, L->r->end);
+  L->p += *n;
+  return t;
+}
+
+static int leg_count(legacy *L, size_t *v, const char *what) {
+  size_t n;
+  const char *t = leg_token(L, &n);
+  if (n == 0) return fail(L->r, t, "%s: missing count", what);
+  size_t x = 0;
+  for (size_t i = 0; i < n; i++) {
+    if (t[i] < '0' || t[i] > '9' || x > ((size_t)1 << 50))
+      return fail(L->r, t, "%s: bad count '%.*s'", what, shown(n), t);
+    x = 10 * x + (size_t)(t[i] - '0');
+  }
+  *v = x;
+  return MX_OK;
+}
+
+/* Binary data starts after the newline that ends the section header. */
+static int leg_data_start(legacy *L, const char *what) {
+  if (!L->binary) return MX_OK;
+  const char *p = L->p, *end = L->r->end;
+  while (p < end && (*p == ' ' || *p == '\t' || *p == '\r')) p++;
+  if (p < end && *p != '\n')
+    return fail(L->r, p, "%s: unexpected '%.*s' after the section header",
+                what, shown(tok_len(p, end)), p);
+  L->p = p < end ? p + 1 : p;
+  if (!L->r->bin_from) L->r->bin_from = L->p;
+  return MX_OK;
+}
+
+static vtype legacy_type(const char *t, size_t n) {
+  static const struct {
+    const char *name;
+    vtype t;
+  } map[] = {{"float", T_F32},          {"double", T_F64},
+             {"int", T_I32},            {"unsigned_int", T_U32},
+             {"short", T_I16},          {"unsigned_short", T_U16},
+             {"char", T_I8},            {"unsigned_char", T_U8},
+             {"long", T_I64},           {"unsigned_long", T_U64},
+             {"vtktypeint64", T_I64},   {"vtktypeuint64", T_U64},
+             {"vtktypeint32", T_I32},   {"vtktypeuint32", T_U32},
+             {"vtkIdType", T_I32}};
+  for (size_t i = 0; i < sizeof map / sizeof map[0]; i++)
+    if (tok_eq(t, n, map[i].name)) return map[i].t;
+  return T_NONE;
+}
+
+/* n values of type t: in place (binary) or parsed (ASCII). */
+static int leg_array(legacy *L, size_t n, vtype t, rawarr *out,
+                     const char *what) {
+  MX_CHECK(leg_data_start(L, what));
+  if (!L->binary)
+    return ascii_array(L->r, &L->p, 0, n, is_float(t), out, what);
+  size_t left = (size_t)(L->r->end - L->p);
+  if (n > left / (size_t)vsize[t])
+    return fail(L->r, L->p,
+                "%s: %zu values of %d bytes announced but only %zu bytes are "
+                "left (truncated file or wrong count)",
+                what, n, vsize[t], left);
+  *out = (rawarr){(const unsigned char *)L->p, n, t, HOST_LE, NULL};
+  L->p += n * (size_t)vsize[t];
+  return MX_OK;
+}
+
+static int leg_points(legacy *L) {
+  size_t n, tl;
+  MX_CHECK(leg_count(L, &n, "POINTS"));
+  const char *t = leg_token(L, &tl);
+  vtype vt = legacy_type(t, tl);
+  if (!is_float(vt))
+    return fail(L->r, t,
+                "POINTS: type '%.*s' is not supported (float or double)",
+                shown(tl), t);
+  if (L->have_points) return fail(L->r, t, "POINTS given twice");
+  L->have_points = 1;
+  L->P.nnodes = n;
+  if (n >= UINT32_MAX)
+    return fail(L->r, t, "POINTS: %zu points, at most %u are supported", n,
+                UINT32_MAX - 1);
+  return leg_array(L, 3 * n, vt, &L->P.pts, "POINTS");
+}
+
+/* One integer of the classic CELLS list. */
+static inline int leg_int(legacy *L, int64_t *v, size_t cell) {
+  if (L->binary) { /* bounds checked by the caller */
+    *v = (int32_t)(uint32_t)load_bits((const unsigned char *)L->p, 4, HOST_LE);
+    L->p += 4;
+    return MX_OK;
+  }
+  const char *p = skip_ws(L->p, L->r->end);
+  if (p >= L->r->end || !*p)
+    return fail(L->r, p, "CELLS: unexpected end of file in cell %zu", cell);
+  const char *e = mx_io_int(p, v);
+  size_t tl = tok_len(p, L->r->end);
+  if (!e || e != p + tl)
+    return fail(L->r, p, "CELLS: cell %zu: '%.*s' is not an integer", cell,
+                shown(tl), p);
+  L->p = e;
+  return MX_OK;
+}
+
+static int leg_cell_list(legacy *L, size_t size) {
+  rd *r = L->r;
+  const size_t nc = L->P.ncells;
+  MX_CHECK(leg_data_start(L, "CELLS"));
+  size_t left = (size_t)(r->end - L->p);
+  if (L->binary ? size > left / 4 : size > left / 2 + 1)
+    return fail(r, L->p,
+                "CELLS: %zu values announced but the file is too short "
+                "(truncated file or wrong count)",
+                size);
+  L->out->conn = mx_calloc(8 * nc * sizeof(uint32_t));
+  L->P.nn = rd_alloc(r, nc);
+  if (!L->out->conn || !L->P.nn) return MX_EINPUT;
+  size_t used = 0;
+  for (size_t c = 0; c < nc; c++) {
+    const char *at = skip_ws(L->p, r->end);
+    if (used >= size)
+      return fail(r, at, "CELLS: the size %zu is used up before cell %zu",
+                  size, c);
+    int64_t k;
+    MX_CHECK(leg_int(L, &k, c));
+    if (k < 1 || k > 8)
+      return fail(r, at,
+                  "cell %zu has %lld nodes: only tetrahedra, pyramids, "
+                  "wedges and hexahedra are supported",
+                  c, (long long)k);
+    if ((size_t)k > size - used - 1)
+      return fail(r, at, "CELLS: cell %zu runs past the size %zu", c, size);
+    uint32_t *row = L->out->conn + 8 * c;
+    for (int64_t j = 0; j < k; j++) {
+      at = skip_ws(L->p, r->end);
+      int64_t v;
+      MX_CHECK(leg_int(L, &v, c));
+      if (v < 0 || v >= (int64_t)UINT32_MAX ||
+          (L->have_points && (uint64_t)v >= L->P.nnodes))
+        return fail(r, at,
+                    "cell %zu: node index %lld out of range (%zu points, "
+                    "0-based)",
+                    c, (long long)v, L->P.nnodes);
+      row[j] = (uint32_t)v;
+    }
+    L->P.nn[c] = (uint8_t)k;
+    used += 1 + (size_t)k;
+  }
+  if (used != size)
+    return fail(r, L->p, "CELLS: size %zu, but the cells use %zu values", size,
+                used);
+  L->P.list_form = 1;
+  return MX_OK;
+}
+
+/* Version 5: CELLS noffsets nconn, then OFFSETS and CONNECTIVITY arrays. */
+static int leg_cell_arrays(legacy *L, size_t noff, size_t nconn) {
+  static const char *const kw[2] = {"OFFSETS", "CONNECTIVITY"};
+  rawarr *dst[2] = {&L->P.off, &L->P.cn};
+  const size_t n[2] = {noff, nconn};
+  for (int i = 0; i < 2; i++) {
+    size_t tl;
+    const char *t = leg_token(L, &tl);
+    if (!tok_eq(t, tl, kw[i]))
+      return fail(L->r, t, "expected %s, found '%.*s'", kw[i], shown(tl), t);
+    t = leg_token(L, &tl);
+    vtype vt = legacy_type(t, tl);
+    if (vt == T_NONE || is_float(vt))
+      return fail(L->r, t, "%s: type '%.*s' is not an integer type", kw[i],
+                  shown(tl), t);
+    MX_CHECK(leg_array(L, n[i], vt, dst[i], kw[i]));
+  }
+  L->P.ncells = noff ? noff - 1 : 0;
+  L->P.vtu_offsets = 0;
+  if (noff == 0) { /* no cells at all */
+    static const int64_t zero = 0;
+    L->P.off = (rawarr){(const unsigned char *)&zero, 1, T_I64, 0, NULL};
+  }
+  return MX_OK;
+}
+
+static int leg_cells(legacy *L) {
+  size_t a, b;
+  const char *at = skip_ws(L->p, L->r->end);
+  MX_CHECK(leg_count(L, &a, "CELLS"));
+  MX_CHECK(leg_count(L, &b, "CELLS"));
+  if (L->have_cells) return fail(L->r, at, "CELLS given twice");
+  L->have_cells = 1;
+  if (L->v5) return leg_cell_arrays(L, a, b);
+  L->P.ncells = a;
+  return leg_cell_list(L, b);
+}
+
+static int leg_types(legacy *L) {
+  size_t n;
+  const char *at = skip_ws(L->p, L->r->end);
+  MX_CHECK(leg_count(L, &n, "CELL_TYPES"));
+  if (!L->have_cells) return fail(L->r, at, "CELL_TYPES before CELLS");
+  if (L->have_types) return fail(L->r, at, "CELL_TYPES given twice");
+  if (n != L->P.ncells)
+    return fail(L->r, at, "CELL_TYPES: %zu types for %zu cells", n,
+                L->P.ncells);
+  L->have_types = 1;
+  return leg_array(L, n, T_I32, &L->P.types, "CELL_TYPES");
+}
+
+/* METADATA blocks end at the first empty line. */
+static void leg_skip_metadata(legacy *L) {
+  const char *p = L->p, *end = L->r->end;
+  p = memchr(p, '\n', (size_t)(end - p));
+  while (p && p < end) {
+    const char *q = p + 1;
+    while (q < end && (*q == ' ' || *q == '\t' || *q == '\r')) q++;
+    if (q >= end || *q == '\n') {
+      L->p = q;
+      return;
+    }
+    p = memchr(q, '\n', (size_t)(end - q));
+  }
+  L->p = end;
+}
+
+/* FIELD name n, then n arrays "name ncomp ntuples type" + values. */
+static int leg_skip_field(legacy *L) {
+  size_t tl, narr;
+  leg_token(L, &tl); /* the field's name */
+  MX_CHECK(leg_count(L, &narr, "FIELD"));
+  for (size_t i = 0; i < narr; i++) {
+    const char *name = leg_token(L, &tl);
+    if (tok_eq(name, tl, "NULL_ARRAY")) continue;
+    size_t nc, nt;
+    MX_CHECK(leg_count(L, &nc, "FIELD array"));
+    MX_CHECK(leg_count(L, &nt, "FIELD array"));
+    const char *t = leg_token(L, &tl);
+    vtype vt = legacy_type(t, tl);
+    if (vt == T_NONE)
+      return fail(L->r, t, "FIELD array of type '%.*s' cannot be skipped",
+                  shown(tl), t);
+    if (nt && nc > SIZE_MAX / 16 / nt)
+      return fail(L->r, t, "FIELD array: bad size");
+    if (L->binary) {
+      rawarr dummy;
+      MX_CHECK(leg_array(L, nc * nt, vt, &dummy, "FIELD array"));
+    } else {
+      for (size_t k = 0; k < nc * nt; k++) {
+        const char *v = leg_token(L, &tl);
+        if (tl == 0)
+          return fail(L->r, v, "FIELD array: unexpected end of file");
+      }
+    }
+    const char *save = L->p;
+    const char *kwd = leg_token(L, &tl);
+    if (tok_eq(kwd, tl, "METADATA"))
+      leg_skip_metadata(L);
+    else
+      L->p = save;
+  }
+  return MX_OK;
+}
+
+static int read_legacy(rd *r, mx_mesh_data *out) {
+  legacy L;
+  memset(&L, 0, sizeof L);
+  L.r = r;
+  L.out = out;
+  const char *end = r->end;
+  /* Line 1: "# vtk DataFile Version x.y". */
+  const char *p = skip_ws(r->buf, end);
+  static const char magic[] = "# vtk DataFile Version";
+  const size_t ml = sizeof magic - 1;
+  if ((size_t)(end - p) < ml || strncasecmp(p, magic, ml) != 0)
+    return fail(r, p, "expected '%s x.y' on the first line", magic);
+  const char *v = p + ml;
+  while (v < end && (*v == ' ' || *v == '\t')) v++;
+  int major = 0;
+  while (v < end && *v >= '0' && *v <= '9' && major < 1000)
+    major = 10 * major + (*v++ - '0');
+  L.v5 = major >= 5;
+  /* Line 2: the title; line 3: ASCII or BINARY. */
+  const char *nl = memchr(p, '\n', (size_t)(end - p));
+  nl = nl ? memchr(nl + 1, '\n', (size_t)(end - nl - 1)) : NULL;
+  if (!nl) return fail(r, p, "truncated header (no title line)");
+  L.p = nl + 1;
+  size_t tl;
+  const char *t = leg_token(&L, &tl);
+  if (tok_eq(t, tl, "BINARY"))
+    L.binary = 1;
+  else if (!tok_eq(t, tl, "ASCII"))
+    return fail(r, t, "expected ASCII or BINARY, found '%.*s'", shown(tl), t);
+  t = leg_token(&L, &tl);
+  if (!tok_eq(t, tl, "DATASET"))
+    return fail(r, t, "expected DATASET, found '%.*s'", shown(tl), t);
+  t = leg_token(&L, &tl);
+  if (!tok_eq(t, tl, "UNSTRUCTURED_GRID"))
+    return fail(r, t, "DATASET %.*s: only UNSTRUCTURED_GRID is supported",
+                shown(tl), t);
+  for (;;) {
+    t = leg_token(&L, &tl);
+    if (tl == 0) {
+      if (t < end)
+        return fail(r, t, "unexpected NUL byte (binary data in an ASCII "
+                          "file, or a wrong count)");
+      break;
+    }
+    if (tok_eq(t, tl, "POINTS")) {
+      MX_CHECK(leg_points(&L));
+    } else if (tok_eq(t, tl, "CELLS")) {
+      MX_CHECK(leg_cells(&L));
+    } else if (tok_eq(t, tl, "CELL_TYPES")) {
+      MX_CHECK(leg_types(&L));
+    } else if (tok_eq(t, tl, "FIELD")) {
+      MX_CHECK(leg_skip_field(&L));
+    } else if (tok_eq(t, tl, "METADATA")) {
+      leg_skip_metadata(&L);
+    } else if (tok_eq(t, tl, "CELL_DATA") || tok_eq(t, tl, "POINT_DATA")) {
+      break; /* attributes: not needed */
+    } else {
+      return fail(r, t, "unexpected '%.*s' (expected POINTS, CELLS or "
+                  "CELL_TYPES)", shown(tl), t);
+    }
+  }
+  if (!L.have_points) return fail(r, NULL, "no POINTS section");
+  if (!L.have_cells) return fail(r, NULL, "no CELLS section");
+  if (!L.have_types) return fail(r, NULL, "no CELL_TYPES section");
+  return assemble(r, &L.P, out);
+}
+
+/* ---- VTU ----------------------------------------------------------------- */
+
+typedef struct {
+  const char *start, *name, *a, *ae, *after;
+  size_t nlen;
+  int closing, selfclose;
+} xtag;
+
+/* The next element tag at or after p; *found = 0 at the end. */
+static int xml_next(const rd *r, const char *p, xtag *t, int *found) {
+  const char *end = r->end;
+  for (;;) {
+    const char *lt = p < end ? memchr(p, '<', (size_t)(end - p)) : NULL;
+    if (!lt) {
+      *found = 0;
+      return MX_OK;
+    }
+    size_t left = (size_t)(end - lt);
+    if (left >= 2 && lt[1] == '?') {
+      const char *q = memmem(lt, left, "?>", 2);
+      if (!q) return fail(r, lt, "unterminated '<?'");
+      p = q + 2;
+      continue;
+    }
+    if (left >= 4 && memcmp(lt, "<!--", 4) == 0) {
+      const char *q = memmem(lt, left, "-->", 3);
+      if (!q) return fail(r, lt, "unterminated comment");
+      p = q + 3;
+      continue;
+    }
+    if (left >= 2 && lt[1] == '!') {
+      const char *q = memchr(lt, '>', left);
+      if (!q) return fail(r, lt, "unterminated '<!'");
+      p = q + 1;
+      continue;
+    }
+    t->start = lt;
+    t->closing = left >= 2 && lt[1] == '/';
+    t->name = lt + 1 + t->closing;
+    const char *q = t->name;
+    while (q < end && !is_ws(*q) && *q != '/' && *q != '>' && *q) q++;
+    t->nlen = (size_t)(q - t->name);
+    if (t->nlen == 0) return fail(r, lt, "malformed XML tag");
+    t->a = q;
+    char quote = 0;
+    while (q < end && (quote || *q != '>')) {
+      if (quote && *q == quote)
+        quote = 0;
+      else if (!quote && (*q == '"' || *q == '\''))
+        quote = *q;
+      q++;
+    }
+    if (q >= end)
+      return fail(r, lt, "unterminated tag <%.*s", shown(t->nlen), t->name);
+    t->selfclose = q[-1] == '/';
+    t->ae = t->selfclose ? q - 1 : q;
+    t->after = q + 1;
+    *found = 1;
+    return MX_OK;
+  }
+}
+
+static int tag_is(const xtag *t, const char *name) {
+  return t->nlen == strlen(name) && memcmp(t->name, name, t->nlen) == 0;
+}
+
+static int xml_attr(const xtag *t, const char *name, const char **v,
+                    size_t *vn) {
+  const char *p = t->a, *ae = t->ae;
+  const size_t nl = strlen(name);
+  while (p < ae) {
+    while (p < ae && is_ws(*p)) p++;
+    const char *ns = p;
+    while (p < ae && *p != '=' && !is_ws(*p)) p++;
+    size_t n = (size_t)(p - ns);
+    while (p < ae && is_ws(*p)) p++;
+    if (p >= ae || *p != '=') return 0;
+    p++;
+    while (p < ae && is_ws(*p)) p++;
+    if (p >= ae || (*p != '"' && *p != '\'')) return 0;
+    char q = *p++;
+    const char *vs = p;
+    while (p < ae && *p != q) p++;
+    if (p >= ae) return 0;
+    if (n == nl && memcmp(ns, name, n) == 0) {
+      *v = vs;
+      *vn = (size_t)(p - vs);
+      return 1;
+    }
+    p++;
+  }
+  return 0;
+}
+
+static int attr_eq(const xtag *t, const char *name, const char *value) {
+  const char *v;
+  size_t n;
+  return xml_attr(t, name, &v, &n) && n == strlen(value) &&
+         memcmp(v, value, n) == 0;
+}
+
+/* A non-negative integer attribute; *v untouched when absent and optional. */
+static int attr_size(const rd *r, const xtag *t, const char *name,
+                     uint64_t *v, int required) {
+  const char *s;
+  size_t n;
+  if (!xml_attr(t, name, &s, &n)) {
+    if (!required) return MX_OK;
+    return fail(r, t->start, "<%.*s> has no %s attribute", shown(t->nlen),
+                t->name, name);
+  }
+  uint64_t x = 0;
+  size_t i = 0;
+  while (i < n && is_ws(s[i])) i++;
+  if (i == n) return fail(r, s, "%s=\"\" is not a number", name);
+  for (; i < n && !is_ws(s[i]); i++) {
+    if (s[i] < '0' || s[i] > '9' || x > ((uint64_t)1 << 56))
+      return fail(r, s, "%s=\"%.*s\" is not a valid count", name, shown(n),
+                  s);
+    x = 10 * x + (uint64_t)(s[i] - '0');
+  }
+  *v = x;
+  return MX_OK;
+}
+
+typedef struct {
+  int present, appended;
+  vtype t;
+  uint64_t ncomp, offset;
+  const char *tag, *text;
+} xarr;
+
+static int parse_data_array(const rd *r, const xtag *t, xarr *x) {
+  const char *v;
+  size_t n;
+  x->present = 1;
+  x->tag = t->start;
+  x->t = T_NONE;
+  if (!xml_attr(t, "type", &v, &n))
+    return fail(r, t->start, "<DataArray> has no type attribute");
+  for (int k = 0; k < T_NONE; k++)
+    if (n == strlen(vtu_type_name[k]) && memcmp(v, vtu_type_name[k], n) == 0)
+      x->t = (vtype)k;
+  if (x->t == T_NONE)
+    return fail(r, t->start, "<DataArray> type \"%.*s\" is not supported",
+                shown(n), v);
+  x->ncomp = 1;
+  MX_CHECK(attr_size(r, t, "NumberOfComponents", &x->ncomp, 0));
+  if (!xml_attr(t, "format", &v, &n))
+    return fail(r, t->start, "<DataArray> has no format attribute");
+  if (n == 8 && memcmp(v, "appended", 8) == 0) {
+    x->appended = 1;
+    return attr_size(r, t, "offset", &x->offset, 1);
+  }
+  if (n == 5 && memcmp(v, "ascii", 5) == 0) {
+    if (t->selfclose) return fail(r, t->start, "empty ascii <DataArray/>");
+    x->text = t->after;
+    return MX_OK;
+  }
+  return fail(r, t->start,
+              "<DataArray> format \"%.*s\" is not supported (appended raw or "
+              "ascii only)",
+              shown(n), v);
+}
+
+typedef struct {
+  int swap, hsize;
+  const char *base; /* first byte after '_' */
+} vtu_layout;
+
+/* The values of x; want is the expected count (SIZE_MAX: any, appended
+ * only). */
+static int resolve(rd *r, const xarr *x, const vtu_layout *lay, size_t want,
+                   rawarr *out, const char *what) {
+  if (!x->appended) {
+    const char *p = x->text;
+    MX_CHECK(ascii_array(r, &p, '<', want, is_float(x->t), out, what));
+    p = skip_ws(p, r->end);
+    if (p < r->end && *p != '<')
+      return fail(r, p, "%s: more than the %zu expected values", what, want);
+    return MX_OK;
+  }
+  if (!lay->base)
+    return fail(r, x->tag, "%s: format=\"appended\" without <AppendedData>",
+                what);
+  const size_t avail = (size_t)(r->end - lay->base);
+  if (x->offset > avail || avail - x->offset < (size_t)lay->hsize)
+    return fail(r, x->tag,
+                "%s: appended offset %llu lies past the end of the file "
+                "(truncated file?)",
+                what, (unsigned long long)x->offset);
+  const unsigned char *at = (const unsigned char *)lay->base + x->offset;
+  uint64_t nbytes = load_bits(at, lay->hsize, lay->swap);
+  const size_t room = avail - x->offset - (size_t)lay->hsize;
+  const size_t es = (size_t)vsize[x->t];
+  if (nbytes > room)
+    return fail(r, (const char *)at,
+                "%s: block of %llu bytes but only %zu are left (truncated "
+                "file?)",
+                what, (unsigned long long)nbytes, room);
+  if (nbytes % es)
+    return fail(r, (const char *)at,
+                "%s: block of %llu bytes is not a whole number of %s values",
+                what, (unsigned long long)nbytes, vtu_type_name[x->t]);
+  size_t n = (size_t)nbytes / es;
+  if (want != SIZE_MAX && n != want)
+    return fail(r, (const char *)at, "%s: %zu values, expected %zu", what, n,
+                want);
+  *out = (rawarr){at + lay->hsize, n, x->t, lay->swap, NULL};
+  return MX_OK;
+}
+
+static int read_vtu(rd *r, mx_mesh_data *out) {
+  const char *p = r->buf, *end = r->end;
+  int seen = 0, pieces = 0, in_points = 0, in_cells = 0;
+  vtu_layout lay = {0, 4, NULL};
+  xarr pts = {0}, con = {0}, offs = {0}, typ = {0};
+  uint64_t npts = 0, ncells = 0;
+  const char *piece_tag = NULL;
+  for (;;) {
+    xtag t;
+    int found;
+    MX_CHECK(xml_next(r, p, &t, &found));
+    if (!found) break;
+    p = t.after;
+    if (tag_is(&t, "VTKFile")) {
+      if (t.closing) break;
+      seen = 1;
+      if (!attr_eq(&t, "type", "UnstructuredGrid"))
+        return fail(r, t.start,
+                    "not an UnstructuredGrid VTK XML file (type attribute)");
+      const int big = attr_eq(&t, "byte_order", "BigEndian");
+      lay.swap = big == HOST_LE;
+      if (attr_eq(&t, "header_type", "UInt64"))
+        lay.hsize = 8;
+      else if (xml_attr(&t, "header_type", &(const char *){0}, &(size_t){0}) &&
+               !attr_eq(&t, "header_type", "UInt32"))
+        return fail(r, t.start, "header_type must be UInt32 or UInt64");
+      const char *cv;
+      size_t cn;
+      if (xml_attr(&t, "compressor", &cv, &cn) && cn > 0)
+        return fail(r, t.start,
+                    "compressed data (%.*s) is not supported: write the file "
+                    "uncompressed",
+                    shown(cn), cv);
+    } else if (!seen) {
+      return fail(r, t.start, "expected <VTKFile>, found <%.*s>",
+                  shown(t.nlen), t.name);
+    } else if (tag_is(&t, "Piece")) {
+      if (t.closing) continue;
+      if (++pieces > 1)
+        return fail(r, t.start, "more than one <Piece> is not supported");
+      piece_tag = t.start;
+      MX_CHECK(attr_size(r, &t, "NumberOfPoints", &npts, 1));
+      MX_CHECK(attr_size(r, &t, "NumberOfCells", &ncells, 1));
+    } else if (tag_is(&t, "Points")) {
+      in_points = !t.closing && !t.selfclose;
+    } else if (tag_is(&t, "Cells")) {
+      in_cells = !t.closing && !t.selfclose;
+    } else if (tag_is(&t, "DataArray") && !t.closing) {
+      xarr *x = NULL;
+      if (in_points && !pts.present)
+        x = &pts;
+      else if (in_cells && attr_eq(&t, "Name", "connectivity"))
+        x = &con;
+      else if (in_cells && attr_eq(&t, "Name", "offsets"))
+        x = &offs;
+      else if (in_cells && attr_eq(&t, "Name", "types"))
+        x = &typ;
+      if (x) MX_CHECK(parse_data_array(r, &t, x));
+    } else if (tag_is(&t, "AppendedData") && !t.closing) {
+      if (!attr_eq(&t, "encoding", "raw"))
+        return fail(r, t.start,
+                    "<AppendedData> encoding must be \"raw\" (base64 is not "
+                    "supported)");
+      const char *q = skip_ws(t.after, end);
+      if (q >= end || *q != '_')
+        return fail(r, q, "expected '_' at the start of the appended data");
+      lay.base = q + 1;
+      r->bin_from = lay.base;
+      break;
+    }
+  }
+  if (!seen) return fail(r, NULL, "no <VTKFile> element");
+  if (!pieces) return fail(r, NULL, "no <Piece> element");
+  if (!pts.present) return fail(r, piece_tag, "no <Points> DataArray");
+  if (!is_float(pts.t) || pts.ncomp != 3)
+    return fail(r, pts.tag,
+                "Points: expected Float32 or Float64 with "
+                "NumberOfComponents=\"3\"");
+  if (npts >= UINT32_MAX || ncells > SIZE_MAX / 64)
+    return fail(r, piece_tag, "too many points or cells");
+  parts P;
+  memset(&P, 0, sizeof P);
+  P.nnodes = (size_t)npts;
+  P.ncells = (size_t)ncells;
+  P.vtu_offsets = 1;
+  MX_CHECK(resolve(r, &pts, &lay, 3 * P.nnodes, &P.pts, "Points"));
+  static const int64_t zero = 0;
+  const rawarr none = {(const unsigned char *)&zero, 0, T_I64, 0, NULL};
+  P.off = P.cn = P.types = none;
+  if (ncells > 0 || con.present || offs.present || typ.present) {
+    const char *names[3] = {"offsets", "types", "connectivity"};
+    xarr *xs[3] = {&offs, &typ, &con};
+    for (int i = 0; i < 3; i++) {
+      if (!xs[i]->present)
+        return fail(r, piece_tag, "no <Cells> DataArray Name=\"%s\"",
+                    names[i]);
+      if (is_float(xs[i]->t) || xs[i]->ncomp != 1)
+        return fail(r, xs[i]->tag,
+                    "%s: expected one component of an integer type",
+                    names[i]);
+    }
+    MX_CHECK(resolve(r, &offs, &lay, P.ncells, &P.off, "offsets"));
+    MX_CHECK(resolve(r, &typ, &lay, P.ncells, &P.types, "types"));
+    size_t want = SIZE_MAX;
+    if (!con.appended) {
+      int64_t last = P.ncells ? raw_int(&P.off, P.ncells - 1) : 0;
+      if (last < 0 || (uint64_t)last > 8 * (uint64_t)P.ncells)
+        return fail(r, offs.tag, "offsets: the last offset %lld is invalid",
+                    (long long)last);
+      want = (size_t)last;
+    }
+    MX_CHECK(resolve(r, &con, &lay, want, &P.cn, "connectivity"));
+  }
+  return assemble(r, &P, out);
+}
+
+/* ---- entry points -------------------------------------------------------- */
+
+void mx_mesh_data_free(mx_mesh_data *m) {
+  if (!m) return;
+  mx_free(m->xyz);
+  mx_free(m->type);
+  mx_free(m->conn);
+  memset(m, 0, sizeof *m);
+}
+
+/* A regular file whose size is not a multiple of the page size is mapped:
+ * no copy, and the rest of its last page reads as zeros, so the text is
+ * NUL-terminated like a loaded one. Anything else is loaded. *mapped
+ * receives the mapping's length, or 0. */
+static int load(const char *path, char **buf, size_t *len, size_t *mapped) {
+  *mapped = 0;
+  const long page = sysconf(_SC_PAGESIZE);
+  int fd = open(path, O_RDONLY | O_CLOEXEC);
+  if (fd >= 0) {
+    struct stat st;
+    if (fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0 &&
+        page > 0 && st.st_size % page != 0) {
+      void *p = mmap(NULL, (size_t)st.st_size, PROT_READ,
+                     MAP_PRIVATE | MAP_POPULATE, fd, 0);
+      if (p != MAP_FAILED) {
+        close(fd);
+        *buf = p;
+        *len = (size_t)st.st_size;
+        *mapped = *len;
+        return MX_OK;
+      }
+    }
+    close(fd);
+  }
+  return mx_io_load(path, buf, len); /* and its messages */
+}
+
+int mx_read_mesh(const char *path, mx_mesh_data *out) {
+  memset(out, 0, sizeof *out);
+  char *buf;
+  size_t len, mapped;
+  MX_CHECK(load(path, &buf, &len, &mapped));
+  rd r;
+  memset(&r, 0, sizeof r);
+  r.path = path;
+  r.buf = buf;
+  r.end = buf + len;
+  const char *p = r.buf;
+  if (len >= 3 && memcmp(p, "\xEF\xBB\xBF", 3) == 0) p += 3; /* UTF-8 BOM */
+  p = skip_ws(p, r.end);
+  static const char magic[] = "# vtk DataFile";
+  int st;
+  if ((size_t)(r.end - p) >= sizeof magic - 1 &&
+      strncasecmp(p, magic, sizeof magic - 1) == 0)
+    st = read_legacy(&r, out);
+  else if (p < r.end && *p == '<')
+    st = read_vtu(&r, out);
+  else
+    st = fail(&r, p,
+              "unknown mesh format: expected legacy VTK ('# vtk DataFile "
+              "Version') or VTK XML (.vtu)");
+  for (int i = 0; i < r.ntmp; i++) mx_free(r.tmp[i]);
+  if (mapped)
+    munmap(buf, mapped);
+  else
+    mx_free(buf);
+  if (st != MX_OK) mx_mesh_data_free(out);
+  return st;
+}

@@ -1,0 +1,47 @@
+/* Reading back the volume meshes mixoct writes (src/io/write_vtk.c,
+ * src/io/write_vtu.c), for `mixoct check` and the tests.
+ *
+ * Accepted, recognised by content (not by extension):
+ *  - legacy VTK, "# vtk DataFile Version x.y", ASCII or BINARY (big-endian),
+ *    DATASET UNSTRUCTURED_GRID: POINTS float|double, CELLS as the classic
+ *    count-prefixed list or, from version 5, as OFFSETS + CONNECTIVITY
+ *    (vtktypeint32/int64), CELL_TYPES; FIELD and METADATA blocks are
+ *    skipped; CELL_DATA / POINT_DATA and what follows are ignored;
+ *  - VTK XML UnstructuredGrid (.vtu), one Piece, byte_order Little- or
+ *    BigEndian, header_type UInt32 or UInt64, arrays format="appended" with
+ *    <AppendedData encoding="raw"> or format="ascii"; points Float32 or
+ *    Float64 with 3 components; connectivity, offsets and types of any
+ *    integer type (Int8 .. UInt64). Compressed and base64 data are refused.
+ * Cell types: VTK 10 (tetra), 14 (pyramid), 13 (wedge), 12 (hexahedron);
+ * any other type is an error. Node order stays VTK's (as in soa/mesh.h).
+ *
+ * Every problem (unreadable, truncated or inconsistent file, unsupported
+ * feature, non-finite coordinate, node index out of range) prints one
+ * message naming the file -- with the line in a text part, the byte offset
+ * in a binary part -- and returns MX_EINPUT; *out is then empty. */
+#ifndef MX_READ_MESH_H
+#define MX_READ_MESH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "soa/mesh.h"
+
+typedef struct {
+  size_t nnodes, ncells;
+  double *xyz;    /* 3*nnodes, interleaved */
+  uint8_t *type;  /* ncells, MX_TET .. MX_HEX */
+  uint32_t *conn; /* 8 per cell; entries past the type's node count are 0 */
+} mx_mesh_data;
+
+int mx_read_mesh(const char *path, mx_mesh_data *out);
+void mx_mesh_data_free(mx_mesh_data *m);
+
+/* A view for the writers (no fields). */
+static inline mx_mesh_view mx_mesh_data_view(const mx_mesh_data *m) {
+  mx_mesh_view v = {m->nnodes, m->xyz, m->ncells, m->type, m->conn,
+                    0,         NULL,   0,         NULL};
+  return v;
+}
+
+#endif

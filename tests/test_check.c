@@ -1,0 +1,1201 @@
+/* Tests of the mesh reader (src/io/read_mesh.c), the independent checker
+ * (src/kernels/check.c) and `mixoct check` (src/cli/check_cmd.c).
+ *
+ * Meshes are built by hand: one cube as a hexahedron, two prisms, six
+ * tetrahedra, six pyramids; conforming blocks; and defects made on purpose
+ * (inverted, duplicated and flipped elements, hanging nodes, a quad against
+ * two triangles, duplicate and unused nodes). Round trips go through the
+ * project's writers; truncated and corrupted files must fail cleanly.
+ * Run as "test_check small" to skip the large meshes (for valgrind). */
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "check.h"
+#include "common.h"
+#include "io/read_mesh.h"
+#include "kernels/check.h"
+#include "soa/mesh.h"
+#include "soa/trisoup.h"
+
+static int small_only = 0;
+static char tmpdir[64];
+static char mixoct[4096];
+
+/* ====================================================================== */
+/* Building meshes                                                        */
+/* ====================================================================== */
+
+typedef struct {
+  size_t nn, nc, capn, capc;
+  double *xyz;
+  uint8_t *type;
+  uint32_t *conn;
+} tm;
+
+static void *xrealloc(void *p, size_t n) {
+  void *q = realloc(p, n ? n : 1);
+  if (!q) {
+    fprintf(stderr, "test: out of memory\n");
+    exit(2);
+  }
+  return q;
+}
+
+static uint32_t tm_add(tm *t, double x, double y, double z) {
+  if (t->nn == t->capn) {
+    t->capn = t->capn ? 2 * t->capn : 16;
+    t->xyz = xrealloc(t->xyz, 3 * t->capn * sizeof(double));
+  }
+  t->xyz[3 * t->nn] = x;
+  t->xyz[3 * t->nn + 1] = y;
+  t->xyz[3 * t->nn + 2] = z;
+  return (uint32_t)t->nn++;
+}
+
+/* The node at (x, y, z), added if there is none. */
+static uint32_t tm_at(tm *t, double x, double y, double z) {
+  for (size_t i = 0; i < t->nn; i++)
+    if (t->xyz[3 * i] == x && t->xyz[3 * i + 1] == y && t->xyz[3 * i + 2] == z)
+      return (uint32_t)i;
+  return tm_add(t, x, y, z);
+}
+
+static void tm_cell(tm *t, int type, const uint32_t *v) {
+  if (t->nc == t->capc) {
+    t->capc = t->capc ? 2 * t->capc : 16;
+    t->type = xrealloc(t->type, t->capc);
+    t->conn = xrealloc(t->conn, 8 * t->capc * sizeof(uint32_t));
+  }
+  t->type[t->nc] = (uint8_t)type;
+  for (int j = 0; j < 8; j++)
+    t->conn[8 * t->nc + (size_t)j] = j < mx_cell_nodes[type] ? v[j] : 0;
+  t->nc++;
+}
+
+/* Appends a copy of cell c (its row is copied before the arrays grow). */
+static void tm_copy_cell(tm *t, size_t c) {
+  uint32_t v[8];
+  memcpy(v, t->conn + 8 * c, sizeof v);
+  tm_cell(t, t->type[c], v);
+}
+
+static void tm_free(tm *t) {
+  free(t->xyz);
+  free(t->type);
+  free(t->conn);
+  memset(t, 0, sizeof *t);
+}
+
+static mx_mesh_data tm_data(const tm *t) {
+  mx_mesh_data d = {t->nn, t->nc, t->xyz, t->type, t->conn};
+  return d;
+}
+
+static mx_check_report check_tm(const tm *t, const mx_trisoup *s) {
+  mx_mesh_data d = tm_data(t);
+  mx_check_report r;
+  int st = mx_check_mesh(&d, s, &r);
+  CHECK(st == MX_OK);
+  return r;
+}
+
+/* The 8 corners of a box in VTK hexahedron order. */
+static void box_corners(tm *t, const double lo[3], const double hi[3],
+                        uint32_t v[8]) {
+  for (int k = 0; k < 8; k++) {
+    const int bx = (k & 1) ^ ((k >> 1) & 1), by = (k >> 1) & 1, bz = k >> 2;
+    v[k] = tm_at(t, bx ? hi[0] : lo[0], by ? hi[1] : lo[1],
+                 bz ? hi[2] : lo[2]);
+  }
+}
+
+static void box_hex(tm *t, double x0, double y0, double z0, double x1,
+                    double y1, double z1) {
+  const double lo[3] = {x0, y0, z0}, hi[3] = {x1, y1, z1};
+  uint32_t v[8];
+  box_corners(t, lo, hi, v);
+  tm_cell(t, MX_HEX, v);
+}
+
+/* Kuhn's six tetrahedra along the diagonal lo -> hi, positively oriented. */
+static void box_tets(tm *t, const double lo[3], const double hi[3]) {
+  static const int perm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2},
+                                 {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (int p = 0; p < 6; p++) {
+    double c[4][3];
+    memcpy(c[0], lo, sizeof c[0]);
+    memcpy(c[1], c[0], sizeof c[0]);
+    c[1][perm[p][0]] = hi[perm[p][0]];
+    memcpy(c[2], c[1], sizeof c[0]);
+    c[2][perm[p][1]] = hi[perm[p][1]];
+    memcpy(c[3], hi, sizeof c[0]);
+    double e[3][3];
+    for (int k = 0; k < 3; k++)
+      for (int x = 0; x < 3; x++) e[k][x] = c[k + 1][x] - c[0][x];
+    double det = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
+                 e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                 e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+    if (det < 0) {
+      double tmp[3];
+      memcpy(tmp, c[1], sizeof tmp);
+      memcpy(c[1], c[2], sizeof tmp);
+      memcpy(c[2], tmp, sizeof tmp);
+    }
+    uint32_t v[4];
+    for (int k = 0; k < 4; k++) v[k] = tm_at(t, c[k][0], c[k][1], c[k][2]);
+    tm_cell(t, MX_TET, v);
+  }
+}
+
+/* Two prisms along z, the square split along (x0,y0)-(x1,y1). */
+static void box_prisms(tm *t, const double lo[3], const double hi[3]) {
+  const double tri[2][3][2] = {
+      {{lo[0], lo[1]}, {hi[0], lo[1]}, {hi[0], hi[1]}},
+      {{lo[0], lo[1]}, {hi[0], hi[1]}, {lo[0], hi[1]}}};
+  for (int p = 0; p < 2; p++) {
+    uint32_t v[6];
+    for (int k = 0; k < 3; k++) {
+      v[k] = tm_at(t, tri[p][k][0], tri[p][k][1], lo[2]);
+      v[k + 3] = tm_at(t, tri[p][k][0], tri[p][k][1], hi[2]);
+    }
+    tm_cell(t, MX_PRISM, v);
+  }
+}
+
+/* Six pyramids from the faces of the box to its centre. */
+static void box_pyramids(tm *t, const double lo[3], const double hi[3]) {
+  static const int hex_f[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                                  {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+  uint32_t c[8];
+  box_corners(t, lo, hi, c);
+  const uint32_t ctr = tm_at(t, 0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]),
+                             0.5 * (lo[2] + hi[2]));
+  for (int f = 0; f < 6; f++) { /* base: the outward face reversed */
+    uint32_t v[5] = {c[hex_f[f][0]], c[hex_f[f][3]], c[hex_f[f][2]],
+                     c[hex_f[f][1]], ctr};
+    tm_cell(t, MX_PYRAMID, v);
+  }
+}
+
+/* An n^3 grid of hexahedra of side h from the origin; cell `skip` left out
+ * (-1: none); nodes no cell uses are not created. */
+static void grid_hexes(tm *t, size_t n, double h, long skip) {
+  const size_t np = n + 1;
+  uint32_t *id = xrealloc(NULL, np * np * np * sizeof *id);
+  for (size_t i = 0; i < np * np * np; i++) id[i] = UINT32_MAX;
+  for (size_t k = 0; k < n; k++)
+    for (size_t j = 0; j < n; j++)
+      for (size_t i = 0; i < n; i++) {
+        if ((long)((k * n + j) * n + i) == skip) continue;
+        uint32_t v[8];
+        for (int c = 0; c < 8; c++) {
+          const size_t bx = (size_t)((c & 1) ^ ((c >> 1) & 1)),
+                       by = (size_t)((c >> 1) & 1), bz = (size_t)(c >> 2);
+          const size_t g = ((k + bz) * np + j + by) * np + i + bx;
+          if (id[g] == UINT32_MAX)
+            id[g] = tm_add(t, h * (double)(i + bx), h * (double)(j + by),
+                           h * (double)(k + bz));
+          v[c] = id[g];
+        }
+        tm_cell(t, MX_HEX, v);
+      }
+  free(id);
+}
+
+static const double O[3] = {0, 0, 0}, I[3] = {1, 1, 1};
+
+static int near(double a, double b, double tol) { return fabs(a - b) <= tol; }
+
+/* ====================================================================== */
+/* Valid meshes                                                           */
+/* ====================================================================== */
+
+static void expect_clean(const mx_check_report *r, double volume,
+                         const char *what) {
+  if (r->defects || !near(r->volume, volume, 1e-14) || !(r->jens_min > 0))
+    fprintf(stderr, "%s: defects %zu volume %.17g jens_min %g\n", what,
+            r->defects, r->volume, r->jens_min);
+  CHECK(r->defects == 0);
+  CHECK(r->invalid == 0);
+  CHECK(r->faces_overshared == 0 && r->faces_misoriented == 0);
+  CHECK(r->open_boundary_edges == 0 && r->quad_vs_triangles == 0);
+  CHECK(r->hanging_nodes == 0 && r->unused_nodes == 0);
+  CHECK(r->duplicate_nodes == 0);
+  CHECK(near(r->volume, volume, 1e-14));
+  CHECK(r->jens_min > 0);
+  CHECK(isnan(r->surface_volume) && isnan(r->volume_error) &&
+        isnan(r->boundary_max_dist));
+}
+
+static void test_valid(void) {
+  tm t = {0};
+  /* One hexahedron. */
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  mx_check_report r = check_tm(&t, NULL);
+  expect_clean(&r, 1.0, "hex");
+  CHECK(r.nodes == 8 && r.elements == 1 && r.by_type[MX_HEX] == 1);
+  CHECK(r.faces_boundary == 6 && r.faces_interior == 0);
+  CHECK(r.jens_min == 1.0 && r.jens_mean == 1.0);
+  tm_free(&t);
+
+  /* Two prisms. */
+  box_prisms(&t, O, I);
+  r = check_tm(&t, NULL);
+  expect_clean(&r, 1.0, "prisms");
+  CHECK(r.by_type[MX_PRISM] == 2 && r.nodes == 8);
+  CHECK(r.faces_interior == 1 && r.faces_boundary == 8);
+  tm_free(&t);
+
+  /* Kuhn's six tetrahedra. */
+  box_tets(&t, O, I);
+  r = check_tm(&t, NULL);
+  expect_clean(&r, 1.0, "tets");
+  CHECK(r.by_type[MX_TET] == 6 && r.nodes == 8);
+  CHECK(r.faces_interior == 6 && r.faces_boundary == 12);
+  tm_free(&t);
+
+  /* Six pyramids around the centre. */
+  box_pyramids(&t, O, I);
+  r = check_tm(&t, NULL);
+  expect_clean(&r, 1.0, "pyramids");
+  CHECK(r.by_type[MX_PYRAMID] == 6 && r.nodes == 9);
+  CHECK(r.faces_interior == 12 && r.faces_boundary == 6);
+  tm_free(&t);
+
+  /* Mixed: a hexahedron, two prisms, six pyramids and six tetrahedra in a
+   * row, sharing their square faces (the tetrahedra's diagonal differs
+   * from the pyramids', so they get a box of their own, joined to the
+   * prisms' by their x faces: the prisms' x=3 face is a quad, against the
+   * tetrahedra's two triangles -- not allowed, hence the gap). */
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  const double p0[3] = {1, 0, 0}, p1[3] = {2, 1, 1};
+  box_prisms(&t, p0, p1);
+  const double q0[3] = {2, 0, 0}, q1[3] = {3, 1, 1};
+  box_pyramids(&t, q0, q1);
+  const double s0[3] = {5, 0, 0}, s1[3] = {6, 1, 1};
+  box_tets(&t, s0, s1);
+  r = check_tm(&t, NULL);
+  expect_clean(&r, 4.0, "mixed");
+  CHECK(r.by_type[MX_HEX] == 1 && r.by_type[MX_PRISM] == 2 &&
+        r.by_type[MX_PYRAMID] == 6 && r.by_type[MX_TET] == 6);
+  CHECK(r.faces_interior == 1 + 1 + 1 + 12 + 6);
+  tm_free(&t);
+
+  /* A cube as two 1 x 1 x 0.5 hexahedra. */
+  box_hex(&t, 0, 0, 0, 1, 1, 0.5);
+  box_hex(&t, 0, 0, 0.5, 1, 1, 1);
+  r = check_tm(&t, NULL);
+  expect_clean(&r, 1.0, "two hexes");
+  CHECK(r.faces_interior == 1 && r.faces_boundary == 10 && r.nodes == 12);
+  tm_free(&t);
+
+  /* A 2x2x2 block, full and with a corner missing (still closed). */
+  grid_hexes(&t, 2, 0.5, -1);
+  r = check_tm(&t, NULL);
+  expect_clean(&r, 1.0, "2x2x2");
+  CHECK(r.faces_interior == 12 && r.faces_boundary == 24 && r.nodes == 27);
+  tm_free(&t);
+  grid_hexes(&t, 2, 0.5, 7);
+  r = check_tm(&t, NULL);
+  expect_clean(&r, 0.875, "2x2x2 minus one");
+  CHECK(r.volume == 0.875);
+  CHECK(r.elements == 7 && r.nodes == 26);
+  CHECK(r.faces_interior == 9 && r.faces_boundary == 24);
+  tm_free(&t);
+
+  /* An empty mesh has nothing wrong and NAN qualities. */
+  r = check_tm(&t, NULL);
+  CHECK(r.defects == 0 && r.elements == 0 && isnan(r.jens_min));
+}
+
+/* ====================================================================== */
+/* Defects                                                                */
+/* ====================================================================== */
+
+static void test_defects(void) {
+  tm t = {0};
+  /* An inverted tetrahedron. */
+  uint32_t v[8] = {tm_add(&t, 0, 0, 0), tm_add(&t, 0, 1, 0),
+                   tm_add(&t, 1, 0, 0), tm_add(&t, 0, 0, 1)};
+  tm_cell(&t, MX_TET, v);
+  mx_check_report r = check_tm(&t, NULL);
+  CHECK(r.invalid == 1 && r.defects == 1);
+  CHECK(r.jens_min < 0 && near(r.volume, -1.0 / 6.0, 1e-15));
+  CHECK(r.faces_boundary == 4 && r.open_boundary_edges == 0);
+  tm_free(&t);
+
+  /* A duplicated element: its face against the other hexahedron is used
+   * three times, its five other faces twice the same way round. */
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  box_hex(&t, 0, 0, 1, 1, 1, 2);
+  tm_copy_cell(&t, 0);
+  r = check_tm(&t, NULL);
+  CHECK(r.faces_overshared == 1);
+  CHECK(r.faces_misoriented == 5);
+  /* only the upper hexahedron's five faces are boundary faces: the four
+   * edges around their open bottom are used once */
+  CHECK(r.faces_boundary == 5 && r.open_boundary_edges == 4);
+  CHECK(r.defects == 10);
+  tm_free(&t);
+
+  /* A hexahedron next to two of half its height: the two nodes in the
+   * middle of its x=1 edges hang, and its x=1 face's top and bottom edges
+   * are used by four boundary faces each. */
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  box_hex(&t, 1, 0, 0, 2, 1, 0.5);
+  box_hex(&t, 1, 0, 0.5, 2, 1, 1);
+  r = check_tm(&t, NULL);
+  CHECK(r.hanging_nodes == 2);
+  CHECK(r.open_boundary_edges == 2);
+  CHECK(r.faces_interior == 1);
+  CHECK(r.defects == 4);
+  tm_free(&t);
+
+  /* Four small hexahedra against one face: the face centre hangs too. */
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  box_hex(&t, 1, 0, 0, 1.5, 0.5, 0.5);
+  box_hex(&t, 1, 0.5, 0, 1.5, 1, 0.5);
+  box_hex(&t, 1, 0, 0.5, 1.5, 0.5, 1);
+  box_hex(&t, 1, 0.5, 0.5, 1.5, 1, 1);
+  r = check_tm(&t, NULL);
+  CHECK(r.hanging_nodes == 5); /* 4 edge midpoints + the face centre */
+  CHECK(r.defects > 0);
+  tm_free(&t);
+
+  /* A quad face against two triangles of tetrahedra. */
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  const double a0[3] = {1, 0, 0}, a1[3] = {2, 1, 1};
+  box_tets(&t, a0, a1);
+  r = check_tm(&t, NULL);
+  CHECK(r.quad_vs_triangles == 1);
+  CHECK(r.open_boundary_edges == 4);
+  CHECK(r.hanging_nodes == 0 && r.invalid == 0);
+  CHECK(r.defects == 5);
+  tm_free(&t);
+
+  /* A flipped element: inverted, and its shared face has the same
+   * orientation on both sides. */
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  box_hex(&t, 0, 0, 1, 1, 1, 2);
+  uint32_t *row = t.conn + 8;
+  uint32_t flipped[8] = {row[4], row[5], row[6], row[7],
+                         row[0], row[1], row[2], row[3]};
+  memcpy(row, flipped, sizeof flipped);
+  r = check_tm(&t, NULL);
+  CHECK(r.faces_misoriented == 1 && r.invalid == 1);
+  CHECK(r.faces_interior == 1);
+  CHECK(r.defects == 2);
+  CHECK(near(r.volume, 0.0, 1e-14));
+  tm_free(&t);
+
+  /* Duplicate and unused nodes. */
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  tm_add(&t, 0, 0, 0);
+  tm_add(&t, 5, 5, 5);
+  tm_add(&t, -0.0, 0, 0); /* -0 equals 0 */
+  r = check_tm(&t, NULL);
+  CHECK(r.duplicate_nodes == 2 && r.unused_nodes == 3 && r.defects == 5);
+  tm_free(&t);
+
+  /* Two hexahedra that touch but do not share their nodes: two closed
+   * boxes, four duplicate nodes. */
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  size_t n0 = t.nn;
+  box_hex(&t, 0, 0, 1, 1, 1, 2);
+  for (int j = 0; j < 4; j++) { /* give the second its own bottom nodes */
+    const uint32_t old = t.conn[8 + (size_t)j];
+    t.conn[8 + (size_t)j] =
+        tm_add(&t, t.xyz[3 * old], t.xyz[3 * old + 1], t.xyz[3 * old + 2]);
+  }
+  CHECK(t.nn == n0 + 8);
+  r = check_tm(&t, NULL);
+  CHECK(r.duplicate_nodes == 4 && r.faces_interior == 0 &&
+        r.faces_boundary == 12 && r.open_boundary_edges == 0);
+  CHECK(r.defects == 4);
+  tm_free(&t);
+
+  /* Degenerate: a hexahedron with a repeated node. */
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  t.conn[6] = t.conn[5];
+  tm_add(&t, 9, 9, 9);
+  r = check_tm(&t, NULL);
+  CHECK(r.invalid == 1 && r.defects >= 1);
+  tm_free(&t);
+
+  /* Bad input: a node index out of range is refused. */
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  t.conn[3] = 99;
+  mx_mesh_data d = tm_data(&t);
+  fprintf(stderr, "(an error about cell 0 is expected)\n");
+  CHECK(mx_check_mesh(&d, NULL, &r) == MX_EINPUT);
+  tm_free(&t);
+}
+
+/* ====================================================================== */
+/* Files                                                                  */
+/* ====================================================================== */
+
+static const char *tpath(const char *name) {
+  static char buf[8][256];
+  static int k = 0;
+  k = (k + 1) % 8;
+  snprintf(buf[k], sizeof buf[k], "%s/%s", tmpdir, name);
+  return buf[k];
+}
+
+static void write_bytes(const char *path, const void *data, size_t n) {
+  FILE *f = fopen(path, "wb");
+  if (!f || fwrite(data, 1, n, f) != n) {
+    fprintf(stderr, "test: cannot write %s\n", path);
+    exit(2);
+  }
+  fclose(f);
+}
+
+static void write_text(const char *path, const char *s) {
+  write_bytes(path, s, strlen(s));
+}
+
+static char *slurp(const char *path, size_t *len) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  fseek(f, 0, SEEK_END);
+  long n = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  char *b = malloc((size_t)n + 1);
+  if (b && fread(b, 1, (size_t)n, f) != (size_t)n) {
+    free(b);
+    b = NULL;
+  }
+  fclose(f);
+  if (b) b[n] = '\0';
+  *len = (size_t)n;
+  return b;
+}
+
+/* Runs fn with stderr sent to a file; returns what was printed. */
+static char *captured(int (*fn)(const char *, mx_mesh_data *),
+                      const char *path, mx_mesh_data *out, int *status) {
+  const char *errf = tpath("stderr.txt");
+  fflush(stderr);
+  int saved = dup(2);
+  FILE *f = fopen(errf, "w");
+  dup2(fileno(f), 2);
+  *status = fn(path, out);
+  fflush(stderr);
+  dup2(saved, 2);
+  close(saved);
+  fclose(f);
+  size_t n;
+  return slurp(errf, &n);
+}
+
+static int same_mesh(const tm *a, const mx_mesh_data *b) {
+  if (a->nn != b->nnodes || a->nc != b->ncells) return 0;
+  if (memcmp(a->xyz, b->xyz, 3 * a->nn * sizeof(double))) return 0;
+  for (size_t c = 0; c < a->nc; c++) {
+    if (a->type[c] != b->type[c]) return 0;
+    for (int j = 0; j < mx_cell_nodes[a->type[c]]; j++)
+      if (a->conn[8 * c + (size_t)j] != b->conn[8 * c + (size_t)j]) return 0;
+    for (int j = mx_cell_nodes[a->type[c]]; j < 8; j++)
+      if (b->conn[8 * c + (size_t)j] != 0) return 0;
+  }
+  return 1;
+}
+
+/* The mixed mesh with awkward coordinates (bit-exact round trips). */
+static void awkward_mesh(tm *t) {
+  memset(t, 0, sizeof *t);
+  box_hex(t, 0, 0, 0, 1, 1, 1);
+  box_prisms(t, (const double[3]){1, 0, 0}, (const double[3]){2, 1, 1});
+  box_pyramids(t, (const double[3]){2, 0, 0}, (const double[3]){3, 1, 1});
+  box_tets(t, (const double[3]){5, 0, 0}, (const double[3]){6, 1, 1});
+  uint64_t s = 0x9E3779B97F4A7C15ull;
+  for (size_t i = 0; i < 3 * t->nn; i++) {
+    s ^= s << 13;
+    s ^= s >> 7;
+    s ^= s << 17;
+    t->xyz[i] = t->xyz[i] / 3.0 + (double)(s % 1000003) * 1e-13 - 1e-300;
+  }
+  t->xyz[0] = -0.0;
+  t->xyz[1] = 1e300;
+  t->xyz[2] = 4.9e-324;
+}
+
+static void test_round_trips(void) {
+  tm t;
+  awkward_mesh(&t);
+  int32_t *cf = calloc(t.nc, sizeof *cf);
+  double *pf = calloc(t.nn, sizeof *pf);
+  for (size_t i = 0; i < t.nn; i++) pf[i] = (double)i / 7.0;
+  mx_field cfield = {"cell id", 0, cf, NULL}, pfield = {"p", 1, NULL, pf};
+  mx_mesh_data d = tm_data(&t);
+  mx_mesh_view v = mx_mesh_data_view(&d);
+  mx_mesh_view vf = v;
+  vf.ncell_fields = 1;
+  vf.cell_fields = &cfield;
+  vf.npoint_fields = 1;
+  vf.point_fields = &pfield;
+  const char *names[6] = {"a.vtu",     "a.vtk",      "a_ascii.vtk",
+                          "f.vtu",     "f.vtk",      "f_ascii.vtk"};
+  for (int k = 0; k < 6; k++) {
+    const char *p = tpath(names[k]);
+    const mx_mesh_view *w = k < 3 ? &v : &vf;
+    int st = k % 3 == 0 ? mx_write_vtu(p, w)
+                        : mx_write_vtk_legacy(p, w, k % 3 == 1);
+    CHECK(st == MX_OK);
+    mx_mesh_data back;
+    st = mx_read_mesh(p, &back);
+    CHECK(st == MX_OK);
+    if (st == MX_OK) {
+      if (!same_mesh(&t, &back)) fprintf(stderr, "round trip %s\n", p);
+      CHECK(same_mesh(&t, &back));
+      mx_mesh_data_free(&back);
+    }
+  }
+  free(cf);
+  free(pf);
+  tm_free(&t);
+  /* An empty mesh round-trips too. */
+  mx_mesh_data empty = {0, 0, NULL, NULL, NULL};
+  mx_mesh_view ev = mx_mesh_data_view(&empty);
+  for (int k = 0; k < 3; k++) {
+    const char *p = tpath(k == 0 ? "e.vtu" : k == 1 ? "e.vtk" : "ea.vtk");
+    CHECK((k == 0 ? mx_write_vtu(p, &ev) : mx_write_vtk_legacy(p, &ev, k == 1))
+          == MX_OK);
+    mx_mesh_data back;
+    CHECK(mx_read_mesh(p, &back) == MX_OK);
+    CHECK(back.nnodes == 0 && back.ncells == 0);
+    mx_mesh_data_free(&back);
+  }
+}
+
+/* A VTU written here with other types: Float32 points, Int32 or UInt8
+ * arrays, UInt32 headers, ascii or appended. */
+static void write_vtu_variant(const char *path, const tm *t, int ascii,
+                              int h64) {
+  char *x = NULL;
+  size_t xn = 0;
+  FILE *f = open_memstream(&x, &xn);
+  size_t nconn = 0;
+  for (size_t c = 0; c < t->nc; c++) nconn += (size_t)mx_cell_nodes[t->type[c]];
+  fprintf(f,
+          "<?xml version=\"1.0\"?>\n<!-- a comment -->\n"
+          "<VTKFile type='UnstructuredGrid' version=\"0.1\" "
+          "byte_order=\"LittleEndian\"%s>\n<UnstructuredGrid>\n"
+          "<Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n",
+          h64 ? " header_type=\"UInt64\"" : "", t->nn, t->nc);
+  const size_t hs = h64 ? 8 : 4;
+  size_t off = 0;
+  const char *fmt = ascii ? "format=\"ascii\">" : "format=\"appended\" offset";
+  fprintf(f, "<PointData><DataArray type=\"Float64\" Name=\"x\" %s", fmt);
+  if (ascii) {
+    for (size_t i = 0; i < t->nn; i++) fprintf(f, " %zu", i);
+    fprintf(f, "</DataArray>");
+  } else {
+    fprintf(f, "=\"%zu\"/>", off);
+    off += hs + 8 * t->nn;
+  }
+  fprintf(f, "</PointData>\n<Points>\n<DataArray type=\"Float32\" "
+             "NumberOfComponents=\"3\" %s", fmt);
+  if (ascii) {
+    for (size_t i = 0; i < 3 * t->nn; i++) fprintf(f, "%g\n", t->xyz[i]);
+    fprintf(f, "</DataArray>\n");
+  } else {
+    fprintf(f, "=\"%zu\"/>\n", off);
+    off += hs + 12 * t->nn;
+  }
+  fprintf(f, "</Points>\n<Cells>\n");
+  const char *arr[3] = {"connectivity", "offsets", "types"};
+  const char *typ[3] = {"Int32", "UInt32", "UInt8"};
+  const size_t cnt[3] = {nconn, t->nc, t->nc}, sz[3] = {4, 4, 1};
+  for (int a = 0; a < 3; a++) {
+    fprintf(f, "<DataArray type=\"%s\" Name=\"%s\" %s", typ[a], arr[a], fmt);
+    if (ascii) {
+      size_t end = 0;
+      for (size_t c = 0; c < t->nc; c++) {
+        const int nn = mx_cell_nodes[t->type[c]];
+        if (a == 0)
+          for (int j = 0; j < nn; j++) fprintf(f, " %u", t->conn[8 * c + j]);
+        end += (size_t)nn;
+        if (a == 1) fprintf(f, " %zu", end);
+        if (a == 2) fprintf(f, " %d", mx_vtk_cell_type[t->type[c]]);
+      }
+      fprintf(f, "\n</DataArray>\n");
+    } else {
+      fprintf(f, "=\"%zu\"/>\n", off);
+      off += hs + sz[a] * cnt[a];
+    }
+  }
+  fprintf(f, "</Cells>\n</Piece>\n</UnstructuredGrid>\n");
+  if (!ascii) {
+    fprintf(f, "<AppendedData encoding=\"raw\">\n _");
+    uint64_t n8;
+    uint32_t n4;
+#define HEAD(bytes)                 \
+  do {                              \
+    n8 = (bytes);                   \
+    n4 = (uint32_t)(bytes);         \
+    if (h64)                        \
+      fwrite(&n8, 8, 1, f);         \
+    else                            \
+      fwrite(&n4, 4, 1, f);         \
+  } while (0)
+    HEAD(8 * t->nn);
+    for (size_t i = 0; i < t->nn; i++) {
+      double v = (double)i;
+      fwrite(&v, 8, 1, f);
+    }
+    HEAD(12 * t->nn);
+    for (size_t i = 0; i < 3 * t->nn; i++) {
+      float v = (float)t->xyz[i];
+      fwrite(&v, 4, 1, f);
+    }
+    HEAD(4 * nconn);
+    for (size_t c = 0; c < t->nc; c++)
+      for (int j = 0; j < mx_cell_nodes[t->type[c]]; j++)
+        fwrite(&t->conn[8 * c + j], 4, 1, f);
+    HEAD(4 * t->nc);
+    uint32_t end = 0;
+    for (size_t c = 0; c < t->nc; c++) {
+      end += (uint32_t)mx_cell_nodes[t->type[c]];
+      fwrite(&end, 4, 1, f);
+    }
+    HEAD(t->nc);
+    for (size_t c = 0; c < t->nc; c++) {
+      uint8_t ty = (uint8_t)mx_vtk_cell_type[t->type[c]];
+      fwrite(&ty, 1, 1, f);
+    }
+#undef HEAD
+    fprintf(f, "\n</AppendedData>\n");
+  }
+  fprintf(f, "</VTKFile>\n");
+  fclose(f);
+  write_bytes(path, x, xn);
+  free(x);
+}
+
+static const char hand_legacy[] =
+    "# vtk DataFile Version 3.0\n"
+    "written by hand\n"
+    "ASCII\n"
+    "DATASET UNSTRUCTURED_GRID\n"
+    "FIELD FieldData 1\n"
+    "TIME 1 1 double\n"
+    "0.5\n"
+    "POINTS 8 float\n"
+    "0 0 0 1 0 0 1 1 0 0 1 0\n"
+    "0 0 1 1 0 1 1 1 1 0 1 1\n"
+    "CELLS 1 9\n"
+    "8 0 1 2 3 4 5 6 7\n"
+    "CELL_TYPES 1\n"
+    "12\n"
+    "CELL_DATA 1\n"
+    "SCALARS q double 1\n"
+    "LOOKUP_TABLE default\n"
+    "1\n";
+
+static const char hand_v51[] =
+    "# vtk DataFile Version 5.1\n"
+    "vtk output\n"
+    "ASCII\n"
+    "DATASET UNSTRUCTURED_GRID\n"
+    "POINTS 8 double\n"
+    "0 0 0 1 0 0 1 1 0 0 1 0\n"
+    "0 0 1 1 0 1 1 1 1 0 1 1\n"
+    "METADATA\n"
+    "INFORMATION 0\n"
+    "\n"
+    "CELLS 2 8\n"
+    "OFFSETS vtktypeint64\n"
+    "0 8\n"
+    "CONNECTIVITY vtktypeint64\n"
+    "0 1 2 3 4 5 6 7\n"
+    "CELL_TYPES 1\n"
+    "12\n";
+
+/* Line 11 holds the bad type. */
+static const char bad_type[] =
+    "# vtk DataFile Version 3.0\n"
+    "a triangle\n"
+    "ASCII\n"
+    "DATASET UNSTRUCTURED_GRID\n"
+    "POINTS 3 double\n"
+    "0 0 0 1 0 0 0 1 0\n"
+    "CELLS 1 4\n"
+    "3 0 1 2\n"
+    "CELL_TYPES 1\n"
+    "\n"
+    "5\n";
+
+static const char bad_index[] =
+    "# vtk DataFile Version 3.0\n"
+    "index out of range on line 8\n"
+    "ASCII\n"
+    "DATASET UNSTRUCTURED_GRID\n"
+    "POINTS 4 double\n"
+    "0 0 0 1 0 0 0 1 0 0 0 1\n"
+    "CELLS 1 5\n"
+    "4 0 1 2 4\n"
+    "CELL_TYPES 1\n"
+    "10\n";
+
+static void expect_error(const char *name, const char *text,
+                         const char *want) {
+  const char *p = tpath(name);
+  write_text(p, text);
+  mx_mesh_data m;
+  int st;
+  char *err = captured(mx_read_mesh, p, &m, &st);
+  CHECK(st == MX_EINPUT);
+  CHECK(m.xyz == NULL && m.conn == NULL && m.nnodes == 0);
+  char full[512];
+  snprintf(full, sizeof full, "%s%s", p, want);
+  if (!err || !strstr(err, full))
+    fprintf(stderr, "expected '%s' in: %s\n", full, err ? err : "(null)");
+  CHECK(err && strstr(err, full));
+  free(err);
+}
+
+static void test_formats(void) {
+  /* Hand-written legacy files, classic and version 5.1. */
+  tm cube = {0};
+  box_hex(&cube, 0, 0, 0, 1, 1, 1);
+  const char *texts[2] = {hand_legacy, hand_v51};
+  for (int k = 0; k < 2; k++) {
+    const char *p = tpath(k ? "v51.vtk" : "hand.vtk");
+    write_text(p, texts[k]);
+    mx_mesh_data m;
+    CHECK(mx_read_mesh(p, &m) == MX_OK);
+    CHECK(same_mesh(&cube, &m));
+    mx_mesh_data_free(&m);
+  }
+  /* VTU variants: ascii / appended, UInt32 / UInt64 headers. */
+  tm t;
+  memset(&t, 0, sizeof t);
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  box_prisms(&t, (const double[3]){1, 0, 0}, (const double[3]){2, 1, 1});
+  box_pyramids(&t, (const double[3]){2, 0, 0}, (const double[3]){3, 1, 1});
+  box_tets(&t, (const double[3]){5, 0, 0}, (const double[3]){6, 1.5, 1});
+  for (int v = 0; v < 4; v++) {
+    const char *p = tpath("variant.vtu");
+    write_vtu_variant(p, &t, v & 1, v >> 1);
+    mx_mesh_data m;
+    int st = mx_read_mesh(p, &m);
+    CHECK(st == MX_OK);
+    if (st == MX_OK) {
+      CHECK(same_mesh(&t, &m));
+      mx_mesh_data_free(&m);
+    }
+  }
+  /* Errors name the file, and the line in text. */
+  expect_error("bad_type.vtk", bad_type, ":11: error: cell 0 has VTK type 5");
+  expect_error("bad_index.vtk", bad_index, ":8: error: cell 0: node index 4");
+  expect_error("garbage.vtk", "hello\n", ":1: error: unknown mesh format");
+  expect_error("polydata.vtk",
+               "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\n",
+               ":4: error: DATASET POLYDATA");
+  expect_error("nan.vtk",
+               "# vtk DataFile Version 3.0\nx\nASCII\nDATASET "
+               "UNSTRUCTURED_GRID\nPOINTS 1 double\n0 nan 0\n",
+               ":6: error: POINTS: value 1: 'nan' is not a finite number");
+  expect_error("short.vtk",
+               "# vtk DataFile Version 3.0\nx\nASCII\nDATASET "
+               "UNSTRUCTURED_GRID\nPOINTS 3 double\n0 0 0\n1 1 1\n",
+               ":5: error: POINTS: 9 values announced");
+  expect_error("compressed.vtu",
+               "<VTKFile type=\"UnstructuredGrid\" "
+               "compressor=\"vtkZLibDataCompressor\">\n",
+               ":1: error: compressed data");
+  /* Files ending in a number, around page-size multiples (mapped files
+   * rely on the zeros after the end of the file; exact multiples are
+   * copied). */
+  const long page = sysconf(_SC_PAGESIZE);
+  const long sizes[4] = {page - 1, page, page + 1, 2 * page};
+  for (int k = 0; k < 4; k++) {
+    const char *head =
+        "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+        "POINTS 8 double\n0 0 0 1 0 0 1 1 0 0 1 0 0 0 1 1 0 1 1 1 1 0 1 1";
+    const char *tail = "\nCELLS 1 9\n8 0 1 2 3 4 5 6 7\nCELL_TYPES 1\n12";
+    const size_t hl = strlen(head), tl = strlen(tail);
+    char *b = malloc((size_t)sizes[k] + 1);
+    memcpy(b, head, hl);
+    memset(b + hl, ' ', (size_t)sizes[k] - hl - tl);
+    memcpy(b + sizes[k] - (long)tl, tail, tl);
+    const char *p = tpath("page.vtk");
+    write_bytes(p, b, (size_t)sizes[k]);
+    free(b);
+    mx_mesh_data pm;
+    CHECK(mx_read_mesh(p, &pm) == MX_OK);
+    CHECK(same_mesh(&cube, &pm));
+    mx_mesh_data_free(&pm);
+  }
+  mx_mesh_data m;
+  int st;
+  char *err = captured(mx_read_mesh, tpath("missing.vtu"), &m, &st);
+  CHECK(st == MX_EINPUT && err && strstr(err, "missing.vtu: error: cannot open"));
+  free(err);
+  tm_free(&t);
+  tm_free(&cube);
+}
+
+/* Every prefix of a file, and many corrupted copies, must be read or
+ * refused cleanly; whatever is read must be a valid mesh. */
+static void test_damage(void) {
+  tm t;
+  awkward_mesh(&t);
+  mx_mesh_data d = tm_data(&t);
+  mx_mesh_view v = mx_mesh_data_view(&d);
+  const char *src[3] = {tpath("d.vtu"), tpath("d.vtk"), tpath("da.vtk")};
+  CHECK(mx_write_vtu(src[0], &v) == MX_OK);
+  CHECK(mx_write_vtk_legacy(src[1], &v, 1) == MX_OK);
+  CHECK(mx_write_vtk_legacy(src[2], &v, 0) == MX_OK);
+  const char *cut = tpath("cut.bin");
+  fflush(stderr);
+  int saved = dup(2); /* hundreds of expected messages: silence them */
+  FILE *null = fopen("/dev/null", "w");
+  dup2(fileno(null), 2);
+  size_t ok_prefix = 0, refused = 0;
+  for (int k = 0; k < 3; k++) {
+    size_t n;
+    char *b = slurp(src[k], &n);
+    CHECK(b != NULL);
+    if (!b) continue;
+    const size_t step = small_only ? 7 : 1;
+    for (size_t len = 0; len < n; len += step) {
+      write_bytes(cut, b, len);
+      mx_mesh_data m;
+      int st = mx_read_mesh(cut, &m);
+      if (st == MX_OK) { /* only trailing bytes were lost */
+        ok_prefix++;
+        CHECK(same_mesh(&t, &m));
+        mx_mesh_data_free(&m);
+      } else {
+        refused++;
+        CHECK(st == MX_EINPUT);
+      }
+    }
+    uint64_t s = 88172645463325252ull + (uint64_t)k;
+    const int trials = small_only ? 150 : 1500;
+    for (int trial = 0; trial < trials; trial++) {
+      char *c = malloc(n);
+      memcpy(c, b, n);
+      const int flips = 1 + trial % 4;
+      for (int f = 0; f < flips; f++) {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        c[s % n] = (char)(s >> 40);
+      }
+      write_bytes(cut, c, n);
+      free(c);
+      mx_mesh_data m;
+      int st = mx_read_mesh(cut, &m);
+      CHECK(st == MX_OK || st == MX_EINPUT);
+      if (st == MX_OK) {
+        mx_check_report r;
+        CHECK(mx_check_mesh(&m, NULL, &r) == MX_OK);
+        mx_mesh_data_free(&m);
+      }
+    }
+    free(b);
+  }
+  fflush(stderr);
+  dup2(saved, 2);
+  close(saved);
+  fclose(null);
+  CHECK(refused > 0);
+  printf("damaged files: %zu prefixes read whole, %zu refused\n", ok_prefix,
+         refused);
+  tm_free(&t);
+}
+
+/* ====================================================================== */
+/* Surfaces                                                               */
+/* ====================================================================== */
+
+static const char cube_off[] =
+    "OFF\n8 12 0\n"
+    "0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
+    "3 0 2 1\n3 1 2 3\n3 4 5 6\n3 5 7 6\n3 0 1 4\n3 1 5 4\n"
+    "3 2 6 3\n3 3 6 7\n3 0 4 2\n3 2 4 6\n3 1 3 5\n3 3 7 5\n";
+
+/* The box [lo, lo + side]^3 with each face cut into k x k squares. */
+static void fine_box(mx_trisoup *s, const double lo[3], double side, int k) {
+  memset(s, 0, sizeof *s);
+  for (int f = 0; f < 6; f++) {
+    const int ax = f / 2, up = f % 2;
+    const int u = (ax + 1) % 3, w = (ax + 2) % 3;
+    for (int i = 0; i < k; i++)
+      for (int j = 0; j < k; j++) {
+        uint32_t id[4];
+        for (int c = 0; c < 4; c++) {
+          double p[3];
+          p[ax] = lo[ax] + (up ? side : 0.0);
+          p[u] = lo[u] + side * (i + (c == 1 || c == 2)) / k;
+          p[w] = lo[w] + side * (j + (c >= 2)) / k;
+          CHECK(mx_trisoup_reserve(s, s->nv + 1, s->nt + 2) == MX_OK);
+          s->x[s->nv] = p[0];
+          s->y[s->nv] = p[1];
+          s->z[s->nv] = p[2];
+          id[c] = (uint32_t)s->nv++;
+        }
+        /* u x w = ax: counter-clockwise seen from +ax is outward on top */
+        if (up) {
+          mx_trisoup_add_triangle(s, id[0], id[1], id[2]);
+          mx_trisoup_add_triangle(s, id[0], id[2], id[3]);
+        } else {
+          mx_trisoup_add_triangle(s, id[0], id[2], id[1]);
+          mx_trisoup_add_triangle(s, id[0], id[3], id[2]);
+        }
+      }
+  }
+}
+
+/* Distance from p to the surface of the box [lo, hi]. */
+static double box_surface_dist(const double p[3], const double lo[3],
+                               const double hi[3]) {
+  double out2 = 0.0, in = INFINITY;
+  int inside = 1;
+  for (int a = 0; a < 3; a++) {
+    double d = fmax(fmax(lo[a] - p[a], p[a] - hi[a]), 0.0);
+    if (d > 0) inside = 0;
+    out2 += d * d;
+    in = fmin(in, fmin(p[a] - lo[a], hi[a] - p[a]));
+  }
+  return inside ? in : sqrt(out2);
+}
+
+static void test_surface(void) {
+  const char *off = tpath("cube.off");
+  write_text(off, cube_off);
+  mx_trisoup s;
+  CHECK(mx_read_surface(off, &s) == MX_OK);
+  CHECK(mx_trisoup_check(&s, off, NULL) == MX_OK);
+  tm t = {0};
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  mx_check_report r = check_tm(&t, &s);
+  CHECK(r.defects == 0);
+  CHECK(r.surface_volume == 1.0 && r.volume_error == 0.0);
+  CHECK(r.boundary_max_dist == 0.0);
+  tm_free(&t);
+  /* The same surface against the cube as 6 tetrahedra and as pyramids. */
+  box_tets(&t, O, I);
+  r = check_tm(&t, &s);
+  CHECK(near(r.volume_error, 0.0, 1e-15) && r.boundary_max_dist == 0.0);
+  tm_free(&t);
+  mx_trisoup_free(&s);
+
+  /* A 10^3 grid of the unit cube against finer boxes, moved: the distance
+   * must be what the box formula gives, inside and outside. */
+  grid_hexes(&t, 10, 0.1, -1);
+  const double shifts[3][3] = {
+      {0, 0, 0}, {0.013, -0.021, 0.007}, {3.5, 0.25, -2}};
+  const double sides[3] = {1.0, 1.1, 0.7};
+  for (int k = 0; k < 3; k++) {
+    fine_box(&s, shifts[k], sides[k], 8);
+    CHECK(s.nt == 6 * 8 * 8 * 2);
+    r = check_tm(&t, &s);
+    double hi[3], want = 0.0;
+    for (int a = 0; a < 3; a++) hi[a] = shifts[k][a] + sides[k];
+    mx_check_report noshape = check_tm(&t, NULL);
+    CHECK(noshape.faces_boundary == 600);
+    /* the boundary nodes of the grid: those on its box's surface */
+    for (size_t i = 0; i < t.nn; i++) {
+      const double *p = t.xyz + 3 * i;
+      int on = 0;
+      for (int a = 0; a < 3; a++) on |= p[a] == 0.0 || p[a] == 1.0;
+      if (on) want = fmax(want, box_surface_dist(p, shifts[k], hi));
+    }
+    const double diag = sqrt(3.0) * sides[k];
+    CHECK(near(r.boundary_max_dist, want / diag, 1e-12));
+    CHECK(near(r.surface_volume, pow(sides[k], 3), 1e-12));
+    CHECK(near(r.volume_error, (1.0 - pow(sides[k], 3)) / pow(sides[k], 3),
+               1e-12));
+    if (!near(r.boundary_max_dist, want / diag, 1e-12))
+      fprintf(stderr, "surface %d: distance %.17g, expected %.17g\n", k,
+              r.boundary_max_dist, want / diag);
+    mx_trisoup_free(&s);
+  }
+  tm_free(&t);
+}
+
+/* ====================================================================== */
+/* Determinism, the program, speed                                        */
+/* ====================================================================== */
+
+static void test_threads(void) {
+  tm t = {0};
+  grid_hexes(&t, 24, 1.0 / 24, 100);
+  box_hex(&t, 1, 0, 0, 2, 1, 0.5); /* a few defects too */
+  box_hex(&t, 1, 0, 0.5, 2, 1, 1);
+  tm_copy_cell(&t, 50);
+  mx_trisoup s;
+  fine_box(&s, (const double[3]){0.01, 0, 0}, 1.0, 5);
+  const int maxt = omp_get_max_threads();
+  mx_check_report r[3];
+  for (int k = 0; k < 3; k++) {
+    omp_set_num_threads(k == 0 ? 1 : k == 1 ? 2 : 7);
+    r[k] = check_tm(&t, &s);
+  }
+  omp_set_num_threads(maxt);
+  CHECK(memcmp(&r[0], &r[1], sizeof r[0]) == 0);
+  CHECK(memcmp(&r[0], &r[2], sizeof r[0]) == 0);
+  /* cell 50 lies on the z = 0 side: its five other faces are shared */
+  CHECK(r[0].hanging_nodes > 0 && r[0].faces_overshared == 5);
+  mx_trisoup_free(&s);
+  tm_free(&t);
+}
+
+/* Runs a shell command; returns its exit code. */
+static int run(const char *cmd) {
+  int st = system(cmd);
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+static void test_program(void) {
+  if (access(mixoct, X_OK) != 0) {
+    fprintf(stderr, "%s not found: program tests skipped\n", mixoct);
+    CHECK(0);
+    return;
+  }
+  tm t = {0};
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  mx_mesh_data d = tm_data(&t);
+  mx_mesh_view v = mx_mesh_data_view(&d);
+  const char *good = tpath("good.vtu");
+  CHECK(mx_write_vtu(good, &v) == MX_OK);
+  const char *off = tpath("cube.off");
+  write_text(off, cube_off);
+  box_hex(&t, 0, 0, 1, 1, 1, 2);
+  tm_copy_cell(&t, 0);
+  d = tm_data(&t);
+  v = mx_mesh_data_view(&d);
+  const char *bad = tpath("bad.vtk");
+  CHECK(mx_write_vtk_legacy(bad, &v, 1) == MX_OK);
+  tm_free(&t);
+  char cmd[8192];
+  const char *out = tpath("out.txt");
+  snprintf(cmd, sizeof cmd, "'%s' check '%s' > '%s' 2>&1", mixoct, good, out);
+  CHECK(run(cmd) == 0);
+  size_t n;
+  char *txt = slurp(out, &n);
+  CHECK(txt && strstr(txt, "OK, no defect"));
+  free(txt);
+  snprintf(cmd, sizeof cmd, "'%s' check '%s' --quiet > '%s' 2>&1", mixoct,
+           bad, out);
+  CHECK(run(cmd) == 3);
+  txt = slurp(out, &n);
+  CHECK(txt && n == 0);
+  free(txt);
+  snprintf(cmd, sizeof cmd, "'%s' check '%s' > /dev/null 2>&1", mixoct,
+           tpath("nope.vtu"));
+  CHECK(run(cmd) == 2);
+  snprintf(cmd, sizeof cmd, "'%s' check > /dev/null 2>&1", mixoct);
+  CHECK(run(cmd) == 2);
+  snprintf(cmd, sizeof cmd, "'%s' check '%s' --bogus > /dev/null 2>&1",
+           mixoct, good);
+  CHECK(run(cmd) == 2);
+  snprintf(cmd, sizeof cmd, "'%s' check '%s' --surface '%s' > /dev/null 2>&1",
+           mixoct, good, tpath("nope.off"));
+  CHECK(run(cmd) == 2);
+  snprintf(cmd, sizeof cmd, "'%s' check --help > /dev/null", mixoct);
+  CHECK(run(cmd) == 0);
+  /* The message names the file. */
+  snprintf(cmd, sizeof cmd, "'%s' check '%s' 2>&1 | grep -q 'nope.vtu'",
+           mixoct, tpath("nope.vtu"));
+  CHECK(run(cmd) == 0);
+  if (run("python3 -c pass") != 0) {
+    fprintf(stderr, "python3 not found: JSON not parsed\n");
+    return;
+  }
+  snprintf(cmd, sizeof cmd,
+           "'%s' check '%s' --json | tail -n 1 | python3 -c \"import json, "
+           "sys; d = json.loads(sys.stdin.read()); "
+           "assert d['defects'] == 0 and d['by_type']['hex'] == 1; "
+           "assert d['volume'] == 1 and d['boundary_max_dist'] is None; "
+           "assert d['surface_volume'] is None and d['faces_boundary'] == 6\"",
+           mixoct, good);
+  CHECK(run(cmd) == 0);
+  snprintf(cmd, sizeof cmd,
+           "'%s' check '%s' --surface '%s' --json | tail -n 1 | python3 -c "
+           "\"import json, sys; d = json.loads(sys.stdin.read()); "
+           "assert d['volume_error'] == 0 and d['boundary_max_dist'] == 0; "
+           "assert d['surface_volume'] == 1\"",
+           mixoct, good, off);
+  CHECK(run(cmd) == 0);
+  snprintf(cmd, sizeof cmd,
+           "'%s' check '%s' --json | tail -n 1 | python3 -c \"import json, "
+           "sys; d = json.loads(sys.stdin.read()); "
+           "assert d['defects'] == 10 and d['faces_overshared'] == 1; "
+           "assert set(d) == set('nodes elements by_type invalid jens_min "
+           "jens_mean faces_interior faces_boundary faces_overshared "
+           "faces_misoriented quad_vs_triangles open_boundary_edges "
+           "hanging_nodes unused_nodes duplicate_nodes volume surface_volume "
+           "volume_error boundary_max_dist defects'.split())\"",
+           mixoct, bad);
+  CHECK(run(cmd) == 0);
+}
+
+/* Reading and checking an n^3 hexahedral grid written as VTU. */
+static void test_speed(size_t n) {
+  tm t = {0};
+  grid_hexes(&t, n, 1.0 / (double)n, -1);
+  mx_mesh_data d = tm_data(&t);
+  mx_mesh_view v = mx_mesh_data_view(&d);
+  const char *p = tpath("big.vtu");
+  CHECK(mx_write_vtu(p, &v) == MX_OK);
+  double t0 = mx_wtime();
+  mx_mesh_data m;
+  CHECK(mx_read_mesh(p, &m) == MX_OK);
+  double t1 = mx_wtime();
+  mx_check_report r;
+  CHECK(mx_check_mesh(&m, NULL, &r) == MX_OK);
+  double t2 = mx_wtime();
+  CHECK(r.defects == 0 && r.elements == n * n * n);
+  CHECK(r.faces_boundary == 6 * n * n);
+  CHECK(r.faces_interior == 3 * n * n * (n - 1));
+  CHECK(near(r.volume, 1.0, 1e-9));
+  CHECK(same_mesh(&t, &m));
+  printf("%zu^3 hexahedra (%zu cells, %zu nodes), %d threads: read VTU "
+         "%.2f s, check %.2f s\n",
+         n, r.elements, r.nodes, omp_get_max_threads(), t1 - t0, t2 - t1);
+  mx_mesh_data_free(&m);
+  tm_free(&t);
+  remove(p);
+}
+
+int main(int argc, char **argv) {
+  small_only = argc > 1 && strcmp(argv[1], "small") == 0;
+  snprintf(tmpdir, sizeof tmpdir, "/tmp/mixoct_check_XXXXXX");
+  if (!mkdtemp(tmpdir)) {
+    perror("mkdtemp");
+    return 2;
+  }
+  /* The program sits next to the tests directory of the build. */
+  const char *slash = strrchr(argv[0], '/');
+  if (slash)
+    snprintf(mixoct, sizeof mixoct, "%.*s/../mixoct", (int)(slash - argv[0]),
+             argv[0]);
+  else
+    snprintf(mixoct, sizeof mixoct, "../mixoct");
+  test_valid();
+  test_defects();
+  test_round_trips();
+  test_formats();
+  test_damage();
+  test_surface();
+  test_threads();
+  test_program();
+  if (!small_only) test_speed(100);
+  char cmd[128];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
+  if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", tmpdir);
+  return TEST_DONE();
+}
