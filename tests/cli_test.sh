@@ -100,5 +100,30 @@ expect_exit 2 "unwritable output" "$MIXOCT" --demo -s 3 --stage octree -o "$T/no
 cmp -s "$T/t1.vtk" "$T/t2.vtk" && ok "1 and 2 threads: identical bytes" || bad "threads differ"
 cmp -s "$T/t1.vtk" "$T/r2.vtk" && ok "edges and recursive: identical bytes" || bad "balances differ"
 
+# Transition stage (the default): a conforming mesh that the independent
+# checker accepts, the same bytes for 1 and 2 threads, and the pattern table.
+"$MIXOCT" -i "$T/cube.off" -s 3 -o "$T/cube3.vtu" --quiet
+expect_exit 0 "check accepts the cube's transition mesh" "$MIXOCT" check "$T/cube3.vtu" --json
+tail -1 "$T/out" | python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+assert d["defects"] == 0 and d["invalid"] == 0, d
+assert abs(d["volume"] - 1.01**3) < 1e-9, d["volume"]
+' && ok "cube mesh: 0 defects, the root cube's volume" || bad "cube mesh check"
+"$MIXOCT" --demo -s 5 -o "$T/m1.vtu" --threads 1 --quiet
+"$MIXOCT" --demo -s 5 -o "$T/m2.vtu" --threads 2 --quiet
+cmp -s "$T/m1.vtu" "$T/m2.vtu" && ok "transition mesh: identical bytes for 1 and 2 threads" || bad "transition threads differ"
+expect_exit 0 "check accepts the demo's transition mesh" "$MIXOCT" check "$T/m1.vtu"
+printf 'not a mesh\n' >"$T/junk.vtu"
+expect_exit 2 "check refuses a broken file" "$MIXOCT" check "$T/junk.vtu"
+has "$T/err" "junk.vtu" "check names the broken file"
+"$MIXOCT" patterns --json >"$T/pat" && tail -1 "$T/pat" | python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+assert d["configurations"] == 6210 and d["classes"] == 325, d
+assert d["centre_classes"] <= 65 and d["worst_jens"] >= 0.172, d
+assert set(d["by_type"]) == {"tet", "pyramid", "prism", "hex"}
+' && ok "patterns --json: 325 classes, centre and quality targets" || bad "patterns --json"
+
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]

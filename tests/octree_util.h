@@ -86,7 +86,7 @@ static int ls_has(const leafset *s, uint64_t key, int level) {
   return 0;
 }
 
-static int check_balance(const mx_builder *B, const uint32_t *leaves,
+static inline int check_balance(const mx_builder *B, const uint32_t *leaves,
                          size_t n) {
   const mx_octree *T = &B->oct;
   leafset s;
@@ -141,7 +141,7 @@ static int check_balance(const mx_builder *B, const uint32_t *leaves,
 }
 
 /* Build with the given requests; use_edges selects the balance. */
-static run_result run_build(const mx_trisoup *soup, uint32_t nt_domain,
+static inline run_result run_build(const mx_trisoup *soup, uint32_t nt_domain,
                             const uint32_t *region_t0, const mx_requests *req,
                             int use_edges, int threads) {
   run_result r = {0, 0, 0};

@@ -49,11 +49,13 @@ static void print_json(const mx_check_report *r) {
   printf("\"faces_interior\":%zu,\"faces_boundary\":%zu,"
          "\"faces_overshared\":%zu,\"faces_misoriented\":%zu,"
          "\"quad_vs_triangles\":%zu,\"open_boundary_edges\":%zu,"
+         "\"nonmanifold_edges\":%zu,"
          "\"hanging_nodes\":%zu,\"unused_nodes\":%zu,"
          "\"duplicate_nodes\":%zu,",
          r->faces_interior, r->faces_boundary, r->faces_overshared,
          r->faces_misoriented, r->quad_vs_triangles, r->open_boundary_edges,
-         r->hanging_nodes, r->unused_nodes, r->duplicate_nodes);
+         r->nonmanifold_edges, r->hanging_nodes, r->unused_nodes,
+         r->duplicate_nodes);
   json_num("volume", r->volume, 0);
   json_num("surface_volume", r->surface_volume, 0);
   json_num("volume_error", r->volume_error, 0);
@@ -87,6 +89,8 @@ static void print_report(const char *mesh, const char *surf,
            "diagonal\n",
            r->boundary_max_dist);
   }
+  printf("  non-manifold edges     %zu (parts of the domain touching along an "
+         "edge; not a defect)\n", r->nonmanifold_edges);
   printf("  defects\n");
   defect_line("invalid elements", r->invalid);
   defect_line("overshared faces", r->faces_overshared);

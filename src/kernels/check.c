@@ -648,14 +648,19 @@ static int boundary_pass(const mx_mesh_data *m, const faces *F,
   }
   r->quad_vs_triangles = qvt;
   int st = mx_sort_u64(ek, NULL, 4 * nb);
-  size_t open = 0;
+  size_t open = 0, pinched = 0;
   for (size_t i = 0; st == MX_OK && i < 4 * nb && ek[i] != UINT64_MAX;) {
     size_t j = i + 1;
     while (j < 4 * nb && ek[j] == ek[i]) j++;
-    open += j - i != 2;
+    /* An odd count leaves the boundary open; 4, 6... boundary faces meet
+     * where two parts of the domain touch along an edge: closed, not
+     * manifold, and conforming. */
+    open += (j - i) % 2 != 0;
+    pinched += (j - i) % 2 == 0 && j - i > 2;
     i = j;
   }
   r->open_boundary_edges = open;
+  r->nonmanifold_edges = pinched;
   mx_free(bnd);
   mx_free(ek);
   return st;

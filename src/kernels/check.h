@@ -16,8 +16,11 @@
  *  quad_vs_triangles*  boundary quads a-b-c-d such that both triangles of one
  *                      diagonal (a-b-c + a-c-d, or a-b-d + b-c-d) are also
  *                      boundary faces;
- *  open_boundary_edges* distinct edges of boundary faces that are not used
- *                      by exactly two boundary faces;
+ *  nonmanifold_edges   distinct edges used by 4, 6... boundary faces: two
+ *                      parts of the domain touching along an edge (closed
+ *                      and conforming, reported, not a defect);
+ *  open_boundary_edges* distinct edges of boundary faces that are used an odd
+ *                      number of times (the boundary is not closed there);
  *  hanging_nodes*      used nodes lying exactly (bit-equal coordinates) at
  *                      the midpoint 0.5*(a+b) of an edge of an element they
  *                      are not a vertex of, or at the midpoint of a diagonal
@@ -52,7 +55,8 @@ typedef struct {
   size_t invalid;
   double jens_min, jens_mean;
   size_t faces_interior, faces_boundary, faces_overshared, faces_misoriented,
-      quad_vs_triangles, open_boundary_edges, hanging_nodes, unused_nodes,
+      quad_vs_triangles, open_boundary_edges, nonmanifold_edges, hanging_nodes,
+      unused_nodes,
       duplicate_nodes;
   double volume;
   double surface_volume;

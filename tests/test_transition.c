@@ -1,0 +1,173 @@
+/* The transition stage: conforming meshes of whole octrees, checked by the
+ * independent checker (src/kernels/check.c): no invalid element, faces
+ * matched, closed boundary, no hanging node, the volume of the leaves; and
+ * the same mesh for 1 and 2 threads. */
+#include <math.h>
+
+#include "check.h"
+#include "kernels/check.h"
+#include "kernels/transition.h"
+#include "soa/mesh.h"
+#include "octree_util.h"
+
+static int run_mesh(const mx_trisoup *s, uint32_t ntd, const uint32_t *rt0,
+                    const mx_requests *req, int threads, mx_mesh_out *M,
+                    double *leaf_volume) {
+  omp_set_num_threads(threads);
+  mx_builder B;
+  uint32_t r0[2] = {ntd, ntd};
+  if (!rt0) rt0 = r0;
+  int st = mx_builder_init(&B, s, ntd, rt0, req, 1);
+  if (!st) st = mx_build_roots(&B);
+  if (!st) st = mx_refine_balanced(&B);
+  uint32_t *leaves = NULL;
+  size_t n = 0;
+  if (!st) st = mx_leaves(&B, &leaves, &n);
+  if (!st) st = mx_leaves_sorted(&B, leaves, n);
+  if (!st) st = mx_transition(&B, leaves, n, M);
+  *leaf_volume = 0.0;
+  for (size_t i = 0; !st && i < n; i++) {
+    const double h = ldexp(B.grid.side, -B.oct.level[leaves[i]]);
+    *leaf_volume += h * h * h;
+  }
+  mx_free(leaves);
+  mx_builder_free(&B);
+  return st;
+}
+
+/* Check one configuration; returns the element count. */
+static size_t check_case(const char *what, const mx_trisoup *s, uint32_t ntd,
+                         const uint32_t *rt0, const mx_requests *req) {
+  mx_mesh_out A, C;
+  double va = 0, vc = 0;
+  CHECK(run_mesh(s, ntd, rt0, req, 1, &A, &va) == MX_OK);
+  CHECK(run_mesh(s, ntd, rt0, req, 2, &C, &vc) == MX_OK);
+  /* identical output for 1 and 2 threads */
+  CHECK(A.nnodes == C.nnodes && A.ncells == C.ncells);
+  if (A.nnodes == C.nnodes && A.ncells == C.ncells) {
+    CHECK(memcmp(A.xyz, C.xyz, 3 * A.nnodes * sizeof *A.xyz) == 0);
+    CHECK(memcmp(A.conn, C.conn, 8 * A.ncells * sizeof *A.conn) == 0);
+    CHECK(memcmp(A.type, C.type, A.ncells) == 0);
+  }
+  mx_mesh_data m = {A.nnodes, A.ncells, A.xyz, A.type, A.conn};
+  mx_check_report r;
+  CHECK(mx_check_mesh(&m, NULL, &r) == MX_OK);
+  printf("%-28s %8zu elements, %7zu nodes: defects %zu (open edges %zu, "
+         "hanging %zu, overshared %zu, misoriented %zu, quad/tri %zu, invalid "
+         "%zu), volume %.12g vs leaves %.12g\n", what, A.ncells, A.nnodes,
+         r.defects, r.open_boundary_edges, r.hanging_nodes, r.faces_overshared,
+         r.faces_misoriented, r.quad_vs_triangles, r.invalid, r.volume, va);
+  CHECK(r.defects == 0);
+  if (r.defects && getenv("MX_DUMP")) {
+    char fn[128];
+    snprintf(fn, sizeof fn, "/tmp/fail_%zu.vtu", A.ncells);
+    mx_mesh_view v = {A.nnodes, A.xyz, A.ncells, A.type, A.conn, 0, NULL, 0, NULL};
+    mx_write_vtu(fn, &v);
+  }
+  CHECK(fabs(r.volume - va) <= 1e-9 * va);
+  CHECK(r.invalid == 0 && A.invalid == 0);
+  const size_t ne = A.ncells;
+  mx_mesh_out_free(&A);
+  mx_mesh_out_free(&C);
+  return ne;
+}
+
+int main(void) {
+  const double lo[3] = {-0.5, -0.5, -0.5}, hi[3] = {0.5, 0.5, 0.5};
+  mx_trisoup cube;
+  memset(&cube, 0, sizeof cube);
+  add_box(&cube, lo, hi, 0);
+  char name[64];
+  for (int k = 0; k <= 4; k++) {
+    mx_requests r = no_requests();
+    r.s_level = k;
+    snprintf(name, sizeof name, "cube -s %d", k);
+    check_case(name, &cube, 12, NULL, &r);
+  }
+  {
+    mx_requests r = no_requests();
+    r.a_level = 2;
+    /* a uniform grid: 64 hexahedra, nothing else */
+    CHECK(check_case("cube -a 2", &cube, 12, NULL, &r) == 64);
+  }
+  {
+    mx_box_region box = {{0.01, 0.01, 0.01}, {0.02, 0.02, 0.02}, 4};
+    mx_requests r = no_requests();
+    r.boxes = &box;
+    r.nboxes = 1;
+    check_case("cube -b small box level 4", &cube, 12, NULL, &r);
+  }
+  {
+    mx_trisoup s;
+    memset(&s, 0, sizeof s);
+    add_box(&s, lo, hi, 0);
+    const double ilo[3] = {-0.15, -0.15, -0.15}, ihi[3] = {0.15, 0.15, 0.15};
+    add_box(&s, ilo, ihi, 1);
+    mx_requests r = no_requests();
+    r.s_level = 4;
+    check_case("cube with a hole -s 4", &s, (uint32_t)s.nt, NULL, &r);
+    mx_trisoup_free(&s);
+  }
+  /* Random octrees on the demo surface. */
+  {
+    mx_trisoup demo;
+    memset(&demo, 0, sizeof demo);
+    CHECK(mx_demo_surface(&demo, 3) == MX_OK);
+    double blo[3], bhi[3];
+    mx_trisoup_bbox(&demo, blo, bhi);
+    uint64_t seed = 11;
+    for (int it = 0; it < 10; it++) {
+      mx_box_region boxes[3];
+      const int nb = 1 + it % 3;
+      for (int b = 0; b < nb; b++) {
+        for (int a = 0; a < 3; a++) {
+          seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+          double u = (double)(seed >> 11) / 9007199254740992.0;
+          seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+          double w = 0.05 + 0.3 * (double)(seed >> 11) / 9007199254740992.0;
+          double c = blo[a] + u * (bhi[a] - blo[a]);
+          boxes[b].lo[a] = c - 0.5 * w * (bhi[a] - blo[a]);
+          boxes[b].hi[a] = c + 0.5 * w * (bhi[a] - blo[a]);
+        }
+        boxes[b].level = 3 + (int)((seed >> 40) % 3);
+      }
+      mx_requests r = no_requests();
+      r.boxes = boxes;
+      r.nboxes = (size_t)nb;
+      r.s_level = 2 + it % 3;
+      snprintf(name, sizeof name, "demo random %d", it);
+      check_case(name, &demo, (uint32_t)demo.nt, NULL, &r);
+    }
+    mx_trisoup_free(&demo);
+  }
+  /* The cortex, where it is. */
+  const char *dirs[] = {getenv("MIXOCT_DATA"), "../../shared/data", "/work/shared/data"};
+  char path[512] = "";
+  for (int i = 0; i < 3; i++) {
+    if (!dirs[i]) continue;
+    snprintf(path, sizeof path, "%s/surfaces/cortex.off", dirs[i]);
+    FILE *f = fopen(path, "rb");
+    if (f) {
+      fclose(f);
+      break;
+    }
+    path[0] = 0;
+  }
+  if (!path[0]) {
+    printf("SKIP cortex: not found\n");
+  } else {
+    mx_trisoup s;
+    memset(&s, 0, sizeof s);
+    CHECK(mx_read_surface(path, &s) == MX_OK);
+    CHECK(mx_trisoup_check(&s, path, NULL) == MX_OK);
+    for (int k = 4; k <= 6; k++) {
+      mx_requests r = no_requests();
+      r.s_level = k;
+      snprintf(name, sizeof name, "cortex -s %d", k);
+      check_case(name, &s, (uint32_t)s.nt, NULL, &r);
+    }
+    mx_trisoup_free(&s);
+  }
+  mx_trisoup_free(&cube);
+  return TEST_DONE();
+}
