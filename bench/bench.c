@@ -12,7 +12,7 @@
 #include <sys/wait.h>
 
 typedef struct {
-  double leaves, refine, balance, rss, total;
+  double leaves, refine, balance, transition, nodes, elements, rss, total;
   char hash[32];
   int ok;
 } result;
@@ -45,12 +45,12 @@ static void json_str(const char *s, const char *key, char *out, size_t n) {
 }
 
 static result run_once(const char *mixoct, const char *input, int level,
-                       const char *balance, int threads) {
+                       const char *balance, int threads, const char *stage) {
   result r;
   memset(&r, 0, sizeof r);
   char cmd[2048];
   snprintf(cmd, sizeof cmd, "'%s' -i '%s' -s %d --balance %s --threads %d "
-           "--json --quiet", mixoct, input, level, balance, threads);
+           "--stage %s --json --quiet", mixoct, input, level, balance, threads, stage);
   FILE *p = popen(cmd, "r");
   if (!p) return r;
   char line[8192], last[8192] = "";
@@ -62,6 +62,9 @@ static result run_once(const char *mixoct, const char *input, int level,
   if (!ph) return r;
   r.refine = json_num(ph, "refine");
   r.balance = json_num(ph, "balance");
+  r.transition = json_num(ph, "transition");
+  r.nodes = json_num(last, "nodes");
+  r.elements = json_num(last, "elements");
   r.rss = json_num(last, "peak_rss_mb");
   r.total = json_num(last, "total_s");
   json_str(last, "leaves_hash", r.hash, sizeof r.hash);
@@ -70,16 +73,22 @@ static result run_once(const char *mixoct, const char *input, int level,
 }
 
 static result run_best(const char *mixoct, const char *input, int level,
-                       const char *balance, int threads, int repeat) {
+                       const char *balance, int threads, int repeat,
+                       const char *stage) {
   result best;
   memset(&best, 0, sizeof best);
   for (int i = 0; i < repeat; i++) {
-    result r = run_once(mixoct, input, level, balance, threads);
+    result r = run_once(mixoct, input, level, balance, threads, stage);
     if (!r.ok) return r;
-    if (!best.ok || r.refine + r.balance < best.refine + best.balance) best = r;
+    if (!best.ok || r.refine + r.balance + r.transition <
+                        best.refine + best.balance + best.transition)
+      best = r;
   }
   return best;
 }
+
+/* Reference: seconds of the transition patterns at RL9 (REFERENCE.md). */
+static const double ref_transition9 = 21.3;
 
 int main(int argc, char **argv) {
   const char *mixoct = "build/mixoct";
@@ -115,7 +124,7 @@ int main(int argc, char **argv) {
   for (int l = lo; l <= hi; l++) {
     for (int b = 0; b < 2; b++)
       for (int t = 0; t < 2; t++) {
-        R[l][b][t] = run_best(mixoct, input, l, bal[b], t + 1, repeat);
+        R[l][b][t] = run_best(mixoct, input, l, bal[b], t + 1, repeat, "octree");
         if (!R[l][b][t].ok) {
           fprintf(stderr, "mixoct-bench: run failed: -s %d --balance %s --threads %d\n",
                   l, bal[b], t + 1);
@@ -149,7 +158,29 @@ int main(int argc, char **argv) {
       }
   }
   if (fail) return 1;
-  printf("{\"bench\": \"octree\", \"input\": \"%s\", \"repeat\": %d, \"levels\": [", input, repeat);
+  /* The transition stage (edge infos), 1 and 2 threads. */
+  result X[10][2];
+  if (!json_only)
+    printf("\ntransition stage (conforming mesh of the octree), best of %d\n"
+           "%3s %2s %10s %10s %12s %9s %8s %9s\n", repeat, "RL", "th", "nodes",
+           "elements", "transition s", "2t/1t", "peak MB", "ref/this");
+  for (int l = lo; l <= hi; l++)
+    for (int t = 0; t < 2; t++) {
+      X[l][t] = run_best(mixoct, input, l, "edges", t + 1, repeat, "transition");
+      if (!X[l][t].ok) return 1;
+      if (json_only) continue;
+      char sp[16] = "", rf[16] = "";
+      if (t) snprintf(sp, sizeof sp, "%.2fx", X[l][0].transition / X[l][1].transition);
+      if (l == 9) snprintf(rf, sizeof rf, "%.1fx", ref_transition9 / X[l][t].transition);
+      printf("%3d %2d %10.0f %10.0f %12.3f %9s %8.0f %9s\n", l, t + 1, X[l][t].nodes,
+             X[l][t].elements, X[l][t].transition, sp, X[l][t].rss, rf);
+    }
+  printf("{\"bench\": \"octree\", \"input\": \"%s\", \"repeat\": %d, \"transition\": [", input, repeat);
+  for (int l = lo; l <= hi; l++)
+    printf("%s{\"rl\": %d, \"nodes\": %.0f, \"elements\": %.0f, \"transition_s_1t\": %.6f, "
+           "\"transition_s_2t\": %.6f, \"peak_rss_mb_2t\": %.1f}", l > lo ? ", " : "", l,
+           X[l][1].nodes, X[l][1].elements, X[l][0].transition, X[l][1].transition, X[l][1].rss);
+  printf("], \"levels\": [");
   for (int l = lo; l <= hi; l++) {
     printf("%s{\"rl\": %d, \"leaves\": %.0f, \"reference_leaves\": %.0f, \"hash\": \"%s\", \"runs\": [",
            l > lo ? ", " : "", l, R[l][0][0].leaves, ref_leaves[l], R[l][0][0].hash);
