@@ -38,6 +38,46 @@ static void add_box(mx_trisoup *s, const double lo[3], const double hi[3],
   mx_trisoup_free(&b);
 }
 
+/* Read a surface of ../shared/data (MIXOCT_DATA, set by meson, or the
+ * usual places); 0 with "SKIP ..." printed when it is not there. */
+static inline int load_shared_surface(const char *name, mx_trisoup *s) {
+  const char *dirs[] = {getenv("MIXOCT_DATA"), "../../shared/data",
+                        "../../../shared/data", "/work/shared/data"};
+  char path[512];
+  for (int i = 0; i < 4; i++) {
+    if (!dirs[i]) continue;
+    snprintf(path, sizeof path, "%s/surfaces/%s", dirs[i], name);
+    FILE *f = fopen(path, "rb");
+    if (!f) continue;
+    fclose(f);
+    memset(s, 0, sizeof *s);
+    return mx_read_surface(path, s) == MX_OK &&
+           mx_trisoup_check(s, path, NULL) == MX_OK;
+  }
+  printf("SKIP: ../shared/data/surfaces/%s not found\n", name);
+  return 0;
+}
+
+/* nb random boxes inside [blo, bhi] of relative widths in [wmin, wmin+wr]
+ * with levels lmin .. lmin+lr-1, from the generator state *seed. */
+static inline void random_boxes(uint64_t *seed, const double blo[3],
+                                const double bhi[3], int nb, double wmin,
+                                double wr, int lmin, int lr,
+                                mx_box_region *boxes) {
+  for (int b = 0; b < nb; b++) {
+    for (int a = 0; a < 3; a++) {
+      *seed = *seed * 6364136223846793005ULL + 1442695040888963407ULL;
+      const double u = (double)(*seed >> 11) / 9007199254740992.0;
+      *seed = *seed * 6364136223846793005ULL + 1442695040888963407ULL;
+      const double w = wmin + wr * (double)(*seed >> 11) / 9007199254740992.0;
+      const double c = blo[a] + u * (bhi[a] - blo[a]);
+      boxes[b].lo[a] = c - 0.5 * w * (bhi[a] - blo[a]);
+      boxes[b].hi[a] = c + 0.5 * w * (bhi[a] - blo[a]);
+    }
+    boxes[b].level = lmin + (int)((*seed >> 40) % (uint64_t)lr);
+  }
+}
+
 static mx_requests no_requests(void) {
   mx_requests r;
   memset(&r, 0, sizeof r);

@@ -138,19 +138,8 @@ int main(void) {
     uint64_t seed = 7;
     for (int it = 0; it < 12; it++) {
       mx_box_region boxes[4];
-      int nb = 1 + it % 4;
-      for (int b = 0; b < nb; b++) {
-        for (int a = 0; a < 3; a++) {
-          seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
-          double u = (double)(seed >> 11) / 9007199254740992.0;
-          seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
-          double w = 0.02 + 0.3 * (double)(seed >> 11) / 9007199254740992.0;
-          double c = blo[a] + u * (bhi[a] - blo[a]);
-          boxes[b].lo[a] = c - 0.5 * w * (bhi[a] - blo[a]);
-          boxes[b].hi[a] = c + 0.5 * w * (bhi[a] - blo[a]);
-        }
-        boxes[b].level = 2 + (int)((seed >> 40) % 5);
-      }
+      const int nb = 1 + it % 4;
+      random_boxes(&seed, blo, bhi, nb, 0.02, 0.3, 2, 5, boxes);
       mx_requests r = no_requests();
       r.boxes = boxes;
       r.nboxes = (size_t)nb;
@@ -164,26 +153,8 @@ int main(void) {
    * REFERENCE.md; -s 4..6 within 1% of its "octants entering the transition
    * stage" column. */
   {
-    const char *dirs[] = {getenv("MIXOCT_DATA"), "../../shared/data",
-                          "../../../shared/data", "/work/shared/data"};
-    char path[512] = "";
-    for (int i = 0; i < 4; i++) {
-      if (!dirs[i]) continue;
-      snprintf(path, sizeof path, "%s/surfaces/cortex.off", dirs[i]);
-      FILE *f = fopen(path, "rb");
-      if (f) {
-        fclose(f);
-        break;
-      }
-      path[0] = 0;
-    }
-    if (!path[0]) {
-      printf("SKIP cortex: ../shared/data/surfaces/cortex.off not found\n");
-    } else {
-      mx_trisoup s;
-      memset(&s, 0, sizeof s);
-      CHECK(mx_read_surface(path, &s) == MX_OK);
-      CHECK(mx_trisoup_check(&s, path, NULL) == MX_OK);
+    mx_trisoup s;
+    if (load_shared_surface("cortex.off", &s)) {
       const size_t ref[7] = {0, 24, 0, 0, 2241, 10123, 43904};
       for (int k = 1; k <= 6; k++) {
         if (!ref[k]) continue;

@@ -119,18 +119,7 @@ int main(void) {
     for (int it = 0; it < 10; it++) {
       mx_box_region boxes[3];
       const int nb = 1 + it % 3;
-      for (int b = 0; b < nb; b++) {
-        for (int a = 0; a < 3; a++) {
-          seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
-          double u = (double)(seed >> 11) / 9007199254740992.0;
-          seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
-          double w = 0.05 + 0.3 * (double)(seed >> 11) / 9007199254740992.0;
-          double c = blo[a] + u * (bhi[a] - blo[a]);
-          boxes[b].lo[a] = c - 0.5 * w * (bhi[a] - blo[a]);
-          boxes[b].hi[a] = c + 0.5 * w * (bhi[a] - blo[a]);
-        }
-        boxes[b].level = 3 + (int)((seed >> 40) % 3);
-      }
+      random_boxes(&seed, blo, bhi, nb, 0.05, 0.3, 3, 3, boxes);
       mx_requests r = no_requests();
       r.boxes = boxes;
       r.nboxes = (size_t)nb;
@@ -141,25 +130,8 @@ int main(void) {
     mx_trisoup_free(&demo);
   }
   /* The cortex, where it is. */
-  const char *dirs[] = {getenv("MIXOCT_DATA"), "../../shared/data", "/work/shared/data"};
-  char path[512] = "";
-  for (int i = 0; i < 3; i++) {
-    if (!dirs[i]) continue;
-    snprintf(path, sizeof path, "%s/surfaces/cortex.off", dirs[i]);
-    FILE *f = fopen(path, "rb");
-    if (f) {
-      fclose(f);
-      break;
-    }
-    path[0] = 0;
-  }
-  if (!path[0]) {
-    printf("SKIP cortex: not found\n");
-  } else {
-    mx_trisoup s;
-    memset(&s, 0, sizeof s);
-    CHECK(mx_read_surface(path, &s) == MX_OK);
-    CHECK(mx_trisoup_check(&s, path, NULL) == MX_OK);
+  mx_trisoup s;
+  if (load_shared_surface("cortex.off", &s)) {
     for (int k = 4; k <= 6; k++) {
       mx_requests r = no_requests();
       r.s_level = k;
