@@ -120,12 +120,12 @@ static int propagate_closures(const mx_builder *B, const uint32_t *leaves,
 
 typedef struct {
   uint64_t kw;     /* lattice key + 1, 0 = empty */
-  uint32_t owner;  /* smallest leaf position using the node */
+  uint32_t owner;  /* 1 + the smallest leaf position using the node (0: none) */
   uint32_t id;
 } node_entry;
 
-/* Nodes are hashed by spatial blocks: the points of one block of 8x8x8
- * finest-level node spacings land in one window of the table, so leaves taken
+/* Nodes are hashed by spatial blocks: the points of one block of 4x4x4
+ * finest-level node spacings land in one window (twice its size) of the table, so leaves taken
  * in Morton order touch a few windows at a time (cache friendly), while the
  * blocks themselves are spread by a mixing hash. */
 typedef struct {
@@ -137,10 +137,10 @@ typedef struct {
 
 static inline size_t nh_slot_of(uint64_t key, size_t cap, int shift) {
   const uint64_t k = key >> shift;
-  uint64_t h = (k >> 9) * 0x9E3779B97F4A7C15ULL;
+  uint64_t h = (k >> 6) * 0x9E3779B97F4A7C15ULL;
   h ^= h >> 31;
   const size_t base = (size_t)(((unsigned __int128)h * cap) >> 64);
-  const size_t s = base + (size_t)(k & 511);
+  const size_t s = base + 2 * (size_t)(k & 63);
   return s >= cap ? s - cap : s;
 }
 #define nh_slot(key, cap) nh_slot_of(key, cap, H->shift)
@@ -164,7 +164,7 @@ static size_t nh_insert(node_hash *H, uint64_t key, uint32_t owner) {
     }
     if (kw == want) {
       uint32_t cur = __atomic_load_n(&H->e[i].owner, __ATOMIC_RELAXED);
-      while (owner < cur &&
+      while ((cur == 0 || owner < cur) &&
              !__atomic_compare_exchange_n(&H->e[i].owner, &cur, owner, 1,
                                           __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
       }
@@ -172,6 +172,15 @@ static size_t nh_insert(node_hash *H, uint64_t key, uint32_t owner) {
     }
     i = (i + 1 == H->cap) ? 0 : i + 1;
   }
+}
+
+/* Prefetch the node entries of the points a few leaves ahead: the passes
+ * below walk the (leaf, point) slots in order and would otherwise wait on one
+ * cache miss per point. */
+#define NH_AHEAD 48
+static inline void nh_prefetch(const node_hash *H, const uint32_t *slot,
+                               uint64_t q, uint64_t total) {
+  if (q + NH_AHEAD < total) __builtin_prefetch(&H->e[slot[q + NH_AHEAD]], 1);
 }
 
 /* Lattice keys of the points of mask m of the octant (key, level), in
@@ -225,6 +234,11 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
   if (!st) {
 #pragma omp parallel for schedule(static) reduction(+ : closures)
     for (size_t i = 0; i < n; i++) {
+      if (i + 4 < n) {
+        const uint32_t ahead = leaves[i + 4];
+        if (T->level[ahead] <= B->edge_levels)
+          mx_edges_prefetch_octant(&B->edges, T->key[ahead], T->level[ahead]);
+      }
       mask[i] = mx_leaf_mask(B, leaves[i], &cbits[i]);
       closures += (size_t)__builtin_popcount(cbits[i]);
     }
@@ -256,12 +270,13 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
   /* Where each leaf's points start in the slot array. */
   uint64_t *poff = mx_alloc((n + 1) * sizeof *poff);
   uint32_t *slot = NULL;
+  uint64_t npts = 0;
   if (!st && !poff) st = MX_EINPUT;
   if (!st) {
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < n; i++) poff[i] = (uint64_t)__builtin_popcount(mask[i]);
-    const uint64_t np = mx_scan_u64(poff, n);
-    slot = mx_alloc((np + 1) * sizeof *slot);
+    npts = mx_scan_u64(poff, n);
+    slot = mx_alloc((npts + 1) * sizeof *slot);
     if (!slot) st = MX_EINPUT;
   }
   /* Node hash: every point, with its owner (the first leaf using it); the
@@ -276,12 +291,10 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
       st = MX_EINPUT;
       break;
     }
+    /* zeroed in parallel, in order: the pages fault here, not one at a time
+     * in the random inserts */
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < cap; i++) {
-      H.e[i].kw = 0;
-      H.e[i].owner = UINT32_MAX;
-      H.e[i].id = 0;
-    }
+    for (size_t i = 0; i < cap; i++) memset(&H.e[i], 0, sizeof H.e[i]);
     /* In blocks of leaves: all keys first, their home slots prefetched, then
      * the inserts, which would otherwise wait on one cache miss at a time. */
 #pragma omp parallel for schedule(dynamic, 16)
@@ -298,7 +311,7 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
       for (size_t i = b; i < end; i++) {
         const int k = __builtin_popcount(mask[i]);
         for (int q = 0; q < k; q++)
-          slot[poff[i] + (uint64_t)q] = (uint32_t)nh_insert(&H, pk[j++], (uint32_t)i);
+          slot[poff[i] + (uint64_t)q] = (uint32_t)nh_insert(&H, pk[j++], (uint32_t)i + 1);
       }
     }
     if (!H.overflow) break;
@@ -310,7 +323,10 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
     for (size_t i = 0; i < n; i++) {
       const int k = __builtin_popcount(mask[i]);
       uint64_t own = 0;
-      for (int j = 0; j < k; j++) own += H.e[slot[poff[i] + j]].owner == i;
+      for (int j = 0; j < k; j++) {
+        nh_prefetch(&H, slot, poff[i] + (uint64_t)j, npts);
+        own += H.e[slot[poff[i] + j]].owner == i + 1;
+      }
       noff[i] = own;
       eoff[i] = mx_pattern_classes[ref[i].cls].count;
     }
@@ -333,8 +349,9 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
       const uint32_t *s = slot + poff[i];
       int j = 0;
       for (uint32_t m = mask[i]; m; m &= m - 1, j++) {
+        nh_prefetch(&H, slot, poff[i] + (uint64_t)j, npts);
         node_entry *e = &H.e[s[j]];
-        if (e->owner != i) continue;
+        if (e->owner != i + 1) continue;
         e->id = (uint32_t)id;
         uint32_t c[3];
         mx_morton_decode(e->kw - 1, c);
@@ -354,7 +371,10 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
       uint32_t id27[27];
       const uint32_t *s = slot + poff[i];
       int j = 0;
-      for (uint32_t m = mask[i]; m; m &= m - 1, j++) id27[__builtin_ctz(m)] = H.e[s[j]].id;
+      for (uint32_t m = mask[i]; m; m &= m - 1, j++) {
+        nh_prefetch(&H, slot, poff[i] + (uint64_t)j, npts);
+        id27[__builtin_ctz(m)] = H.e[s[j]].id;
+      }
       for (int k = 0; k < pc->count; k++) {
         const mx_pattern_elem *pe = &mx_pattern_elems[pc->first + k];
         const size_t c = eoff[i] + (size_t)k;

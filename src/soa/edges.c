@@ -5,15 +5,16 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Edges are hashed by spatial blocks: the 8x8x8 lattice positions of a block
+/* Edges are hashed by spatial blocks: the 4x4x4 lattice positions of a block
  * share one window of the table, so octants taken in Morton order touch few
  * windows at a time; the blocks are spread over the table by a mixing hash. */
 static inline size_t edge_hash(uint64_t key, size_t cap) {
-  uint64_t h = (key >> 9) * 0x9E3779B97F4A7C15ULL;
+  uint64_t h = (key >> 6) * 0x9E3779B97F4A7C15ULL;
   h ^= h >> 29;
   h *= 0xBF58476D1CE4E5B9ULL;
   h ^= h >> 32;
-  const size_t s = (size_t)(((unsigned __int128)h * cap) >> 64) + (size_t)(key & 511);
+  /* a 4x4x4 block spread over twice its size: short probe runs */
+  const size_t s = (size_t)(((unsigned __int128)h * cap) >> 64) + 2 * (size_t)(key & 63);
   return s >= cap ? s - cap : s;
 }
 
@@ -73,6 +74,17 @@ size_t mx_edge_find(const mx_edge_table *T, uint64_t key) {
     if (kw == want) return i;
     i = (i + 1 == T->cap) ? 0 : i + 1;
   }
+}
+
+void mx_edge_prefetch(const mx_edge_table *T, uint64_t key) {
+  if (T->cap) __builtin_prefetch(&T->e[edge_hash(key, T->cap)], 0);
+}
+
+void mx_edges_prefetch_octant(const mx_edges *E, uint64_t key, int level) {
+  uint32_t anchor[3];
+  mx_octant_anchor(key, level, anchor);
+  for (int a = 0; a < 3; a++)
+    for (int j = 0; j < 4; j++) mx_edge_prefetch(&E->t[level][a], mx_edge_key(anchor, a, j));
 }
 
 /* Find or create; *created is set to 1 when this call claimed the entry. */

@@ -42,6 +42,10 @@ void mx_edges_free(mx_edges *E);
 int mx_edges_reserve(mx_edges *E, int level, size_t extra);
 /* Index of the entry of `key`, or SIZE_MAX if absent. */
 size_t mx_edge_find(const mx_edge_table *T, uint64_t key);
+/* Start loading the home slot of `key` (to overlap cache misses). */
+void mx_edge_prefetch(const mx_edge_table *T, uint64_t key);
+/* Prefetch the 12 edge entries of the octant (key, level). */
+void mx_edges_prefetch_octant(const mx_edges *E, uint64_t key, int level);
 
 /* Lower end of edge j (0..3) of axis a of the octant with level-l anchor
  * (ax, ay, az), and the octant's slot in that edge. */
