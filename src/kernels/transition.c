@@ -306,12 +306,15 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
         const uint32_t o = leaves[i];
         np += (size_t)leaf_points(T->key[o], T->level[o], mask[i], pk + np);
       }
-      for (size_t j = 0; j < np; j++) __builtin_prefetch(&H.e[nh_slot_of(pk[j], H.cap, H.shift)], 1);
+      for (size_t j = 0; j < np && j < 16; j++)
+        __builtin_prefetch(&H.e[nh_slot_of(pk[j], H.cap, H.shift)], 1);
       size_t j = 0;
       for (size_t i = b; i < end; i++) {
         const int k = __builtin_popcount(mask[i]);
-        for (int q = 0; q < k; q++)
-          slot[poff[i] + (uint64_t)q] = (uint32_t)nh_insert(&H, pk[j++], (uint32_t)i + 1);
+        for (int q = 0; q < k; q++, j++) {
+          if (j + 16 < np) __builtin_prefetch(&H.e[nh_slot_of(pk[j + 16], H.cap, H.shift)], 1);
+          slot[poff[i] + (uint64_t)q] = (uint32_t)nh_insert(&H, pk[j], (uint32_t)i + 1);
+        }
       }
     }
     if (!H.overflow) break;

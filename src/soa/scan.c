@@ -43,9 +43,14 @@ uint64_t mx_scan_u64(uint64_t *a, size_t n) {
   return part[used];
 }
 
+/* LSD radix sort, 8 bits a pass, skipping the bytes where all keys agree.
+ * Each pass: per-thread histograms of contiguous slices, one prefix over
+ * (digit, thread), then each thread scatters its slice: stable, so the
+ * result does not depend on the thread count. */
 int mx_sort_u64(uint64_t *keys, uint32_t *vals, size_t n) {
   if (n < 2) return MX_OK;
   uint64_t all_or = 0, all_and = ~0ULL;
+#pragma omp parallel for reduction(| : all_or) reduction(& : all_and)
   for (size_t i = 0; i < n; i++) {
     all_or |= keys[i];
     all_and &= keys[i];
@@ -53,25 +58,56 @@ int mx_sort_u64(uint64_t *keys, uint32_t *vals, size_t n) {
   const uint64_t varying = all_or ^ all_and;
   uint64_t *k2 = mx_alloc(n * sizeof *k2);
   uint32_t *v2 = vals ? mx_alloc(n * sizeof *v2) : NULL;
-  if (!k2 || (vals && !v2)) {
+  int nt = n < 65536 ? 1 : omp_get_max_threads();
+  if (nt > 64) nt = 64;
+  size_t(*hist)[256] = mx_alloc((size_t)nt * sizeof *hist);
+  if (!k2 || (vals && !v2) || !hist) {
     mx_free(k2);
     mx_free(v2);
+    mx_free(hist);
     return MX_EINPUT;
   }
+  uint64_t *src = keys, *dst = k2;
+  uint32_t *vsrc = vals, *vdst = v2;
   for (int shift = 0; shift < 64; shift += 8) {
     if (!((varying >> shift) & 0xff)) continue;
-    size_t count[257] = {0};
-    for (size_t i = 0; i < n; i++) count[((keys[i] >> shift) & 0xff) + 1]++;
-    for (int b = 0; b < 256; b++) count[b + 1] += count[b];
-    for (size_t i = 0; i < n; i++) {
-      size_t d = count[(keys[i] >> shift) & 0xff]++;
-      k2[d] = keys[i];
-      if (vals) v2[d] = vals[i];
+#pragma omp parallel num_threads(nt)
+    {
+      const int t = omp_get_thread_num(), T = omp_get_num_threads();
+      const size_t lo = n * (size_t)t / (size_t)T, hi = n * (size_t)(t + 1) / (size_t)T;
+      size_t *h = hist[t];
+      memset(h, 0, 256 * sizeof *h);
+      for (size_t i = lo; i < hi; i++) h[(src[i] >> shift) & 0xff]++;
+#pragma omp barrier
+#pragma omp single
+      {
+        size_t s = 0;
+        for (int d = 0; d < 256; d++)
+          for (int u = 0; u < T; u++) {
+            const size_t c = hist[u][d];
+            hist[u][d] = s;
+            s += c;
+          }
+      }
+      for (size_t i = lo; i < hi; i++) {
+        const size_t d = h[(src[i] >> shift) & 0xff]++;
+        dst[d] = src[i];
+        if (vals) vdst[d] = vsrc[i];
+      }
     }
-    memcpy(keys, k2, n * sizeof *keys);
-    if (vals) memcpy(vals, v2, n * sizeof *vals);
+    uint64_t *tk = src;
+    src = dst;
+    dst = tk;
+    uint32_t *tv = vsrc;
+    vsrc = vdst;
+    vdst = tv;
+  }
+  if (src != keys) {
+    memcpy(keys, src, n * sizeof *keys);
+    if (vals) memcpy(vals, vsrc, n * sizeof *vals);
   }
   mx_free(k2);
   mx_free(v2);
+  mx_free(hist);
   return MX_OK;
 }
