@@ -78,6 +78,15 @@ static inline void random_boxes(uint64_t *seed, const double blo[3],
   }
 }
 
+/* The unit cube (side 1, centred at 0) with a cube hole of side 0.3. */
+static inline void cube_with_hole(mx_trisoup *s) {
+  const double lo[3] = {-0.5, -0.5, -0.5}, hi[3] = {0.5, 0.5, 0.5};
+  const double ilo[3] = {-0.15, -0.15, -0.15}, ihi[3] = {0.15, 0.15, 0.15};
+  memset(s, 0, sizeof *s);
+  add_box(s, lo, hi, 0);
+  add_box(s, ilo, ihi, 1);
+}
+
 static mx_requests no_requests(void) {
   mx_requests r;
   memset(&r, 0, sizeof r);

@@ -118,10 +118,7 @@ int main(void) {
    * the 8 innermost lie in the hole and are dropped: 456 - 8 + 56 = 504. */
   {
     mx_trisoup s;
-    memset(&s, 0, sizeof s);
-    add_box(&s, lo, hi, 0);
-    const double ilo[3] = {-0.15, -0.15, -0.15}, ihi[3] = {0.15, 0.15, 0.15};
-    add_box(&s, ilo, ihi, 1);
+    cube_with_hole(&s);
     mx_requests r = no_requests();
     r.s_level = 3;
     CHECK(leaves_all_ways(&s, (uint32_t)s.nt, NULL, &r) == 504);

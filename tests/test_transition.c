@@ -99,10 +99,7 @@ int main(void) {
   }
   {
     mx_trisoup s;
-    memset(&s, 0, sizeof s);
-    add_box(&s, lo, hi, 0);
-    const double ilo[3] = {-0.15, -0.15, -0.15}, ihi[3] = {0.15, 0.15, 0.15};
-    add_box(&s, ilo, ihi, 1);
+    cube_with_hole(&s);
     mx_requests r = no_requests();
     r.s_level = 4;
     check_case("cube with a hole -s 4", &s, (uint32_t)s.nt, NULL, &r);

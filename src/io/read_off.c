@@ -91,11 +91,7 @@ static int read_vertices(off_file *f, mx_trisoup *s) {
     MX_CHECK(next_item(f, "vertices", i, f->nv));
     double c[3];
     MX_CHECK(mx_io_numbers(f->path, f->line, &f->p, '#', 3, c, "vertex", i));
-    if (i >= s->cap_v) MX_CHECK(mx_trisoup_reserve(s, i + 1, 0));
-    s->x[i] = c[0];
-    s->y[i] = c[1];
-    s->z[i] = c[2];
-    s->nv = i + 1;
+    MX_CHECK(mx_trisoup_set_vertex(s, i, c));
   }
   return MX_OK;
 }

@@ -129,3 +129,12 @@ int mx_trisoup_add_triangle(mx_trisoup *s, uint32_t a, uint32_t b, uint32_t c) {
   s->shell[s->nt++] = 0;
   return MX_OK;
 }
+
+int mx_trisoup_set_vertex(mx_trisoup *s, size_t i, const double c[3]) {
+  if (i >= s->cap_v) MX_CHECK(mx_trisoup_reserve(s, i + 1, 0));
+  s->x[i] = c[0];
+  s->y[i] = c[1];
+  s->z[i] = c[2];
+  if (s->nv < i + 1) s->nv = i + 1;
+  return MX_OK;
+}

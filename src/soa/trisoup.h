@@ -21,6 +21,8 @@ void mx_trisoup_free(mx_trisoup *s);
 int mx_trisoup_reserve(mx_trisoup *s, size_t nv, size_t nt);
 /* Append src to dst; src's triangles get shell id dst->nshells. */
 int mx_trisoup_append(mx_trisoup *dst, const mx_trisoup *src);
+/* Set vertex i (growing the arrays as needed; nv becomes at least i+1). */
+int mx_trisoup_set_vertex(mx_trisoup *s, size_t i, const double c[3]);
 /* Append one triangle (shell 0), growing the arrays as needed. */
 int mx_trisoup_add_triangle(mx_trisoup *s, uint32_t a, uint32_t b, uint32_t c);
 /* Axis-aligned bounding box: lo[3], hi[3]. */
