@@ -5,6 +5,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "kernels/quality.h"
 #include "kernels/requests.h"
 
 enum { MX_STAGE_OCTREE = 0, MX_STAGE_TRANSITION = 1, MX_STAGE_FULL = 2 };
@@ -32,7 +33,7 @@ typedef struct {
 int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now);
 
 typedef struct {
-  double read, grid, refine, balance, transition, write, total;
+  double read, grid, refine, balance, transition, quality, write, total;
 } mx_phases;
 
 typedef struct {
@@ -47,6 +48,7 @@ typedef struct {
   int mesh;                 /* a mixed mesh was built (not only leaves) */
   size_t elements, by_type[4], invalid, closures, centre_leaves;
   double jens_min;
+  mx_quality_table quality;
   mx_phases ph;
   double peak_rss_mb;
 } mx_summary;

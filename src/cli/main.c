@@ -144,6 +144,9 @@ static int run(const mx_options *o) {
       S.jens_min = M.jens_min;
       S.invalid = M.invalid;
       S.closures = M.closures;
+      t = mx_wtime();
+      mx_quality_tabulate(M.type, M.jens, M.ncells, &S.quality);
+      S.ph.quality = mx_wtime() - t;
       S.centre_leaves = M.centre_leaves;
       S.mesh = 1;
       if (o->output) {

@@ -1,6 +1,7 @@
 #include "kernels/quality.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 #include "soa/mesh.h"
 
@@ -119,4 +120,55 @@ double mx_element_volume(int type, const double (*p)[3]) {
     }
   }
   return v / 6.0;
+}
+
+void mx_quality_tabulate(const uint8_t *type, const double *jens, size_t n,
+                         mx_quality_table *q) {
+  const size_t chunk = 65536, nch = (n + chunk - 1) / chunk;
+  for (int t = 0; t < 4; t++) {
+    q->count[t] = 0;
+    q->min[t] = INFINITY;
+    q->max[t] = -INFINITY;
+    q->mean[t] = 0.0;
+  }
+  for (int b = 0; b < MX_QBINS; b++) q->bins[b] = 0;
+  q->invalid = q->below_02 = 0;
+  q->min_all = INFINITY;
+  if (n == 0) return;
+  double *sum = calloc(4 * nch, sizeof *sum);
+  if (!sum) return;
+  size_t count[4] = {0}, bins[MX_QBINS] = {0}, invalid = 0, below = 0;
+  double mn[4] = {INFINITY, INFINITY, INFINITY, INFINITY};
+  double mx[4] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
+#pragma omp parallel for schedule(static) reduction(+ : count[:4], bins[:MX_QBINS], invalid, below) \
+    reduction(min : mn[:4]) reduction(max : mx[:4])
+  for (size_t c = 0; c < nch; c++) {
+    const size_t hi = (c + 1) * chunk < n ? (c + 1) * chunk : n;
+    for (size_t i = c * chunk; i < hi; i++) {
+      const int t = type[i];
+      const double v = jens[i];
+      count[t]++;
+      sum[4 * c + t] += v;
+      if (v < mn[t]) mn[t] = v;
+      if (v > mx[t]) mx[t] = v;
+      int b = 0;
+      while (b < MX_QBINS - 1 && !(v < mx_qbin_upper[b])) b++;
+      bins[b]++;
+      invalid += v <= 0.0;
+      below += v < 0.2;
+    }
+  }
+  for (int t = 0; t < 4; t++) {
+    double s = 0.0;
+    for (size_t c = 0; c < nch; c++) s += sum[4 * c + t];
+    q->count[t] = count[t];
+    q->min[t] = mn[t];
+    q->max[t] = mx[t];
+    q->mean[t] = count[t] ? s / (double)count[t] : 0.0;
+    if (mn[t] < q->min_all) q->min_all = mn[t];
+  }
+  for (int b = 0; b < MX_QBINS; b++) q->bins[b] = bins[b];
+  q->invalid = invalid;
+  q->below_02 = below;
+  free(sum);
 }

@@ -18,6 +18,9 @@
 #ifndef MX_QUALITY_H
 #define MX_QUALITY_H
 
+#include <stddef.h>
+#include <stdint.h>
+
 double mx_jens_tet(const double p[4][3]);
 double mx_jens_pyramid(const double p[5][3]);
 double mx_jens_prism(const double p[6][3]);
@@ -28,5 +31,23 @@ double mx_jens(int type, const double (*p)[3]);
 /* Signed volume of a linear element, its faces split into triangles around
  * each face's centroid (so two elements sharing a face agree exactly). */
 double mx_element_volume(int type, const double (*p)[3]);
+
+/* The quality table printed after each run: the J_ENS histogram with the
+ * bins of Table IV of the 2015 paper and min / max / mean per element type
+ * (Table V). Sums are formed in fixed chunks, so the table is the same for
+ * any thread count. */
+#define MX_QBINS 6
+static const double mx_qbin_upper[MX_QBINS] = {0.03, 0.2, 0.4, 0.6, 0.8, 1.0};
+typedef struct {
+  size_t count[4];
+  double min[4], max[4], mean[4];
+  size_t bins[MX_QBINS]; /* < 0.03 (including <= 0), < 0.2, < 0.4, < 0.6, < 0.8, <= 1 */
+  size_t invalid;        /* J_ENS <= 0 */
+  size_t below_02;       /* J_ENS < 0.2 */
+  double min_all;
+} mx_quality_table;
+
+void mx_quality_tabulate(const uint8_t *type, const double *jens, size_t n,
+                         mx_quality_table *q);
 
 #endif
