@@ -25,7 +25,9 @@ static int kept_child_on_edge(const mx_octree *T, uint32_t x, int a, int s) {
   return 0;
 }
 
-uint32_t mx_leaf_mask(const mx_builder *B, uint32_t o, uint32_t *closure) {
+/* The 27-bit node mask of leaf o before the body centre; *closure gets the
+ * midpoints added by the closure. */
+static uint32_t leaf_mask(const mx_builder *B, uint32_t o, uint32_t *closure) {
   const mx_octree *T = &B->oct;
   const int l = T->level[o];
   uint32_t mask = 0xffu;
@@ -239,7 +241,7 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
         if (T->level[ahead] <= B->edge_levels)
           mx_edges_prefetch_octant(&B->edges, T->key[ahead], T->level[ahead]);
       }
-      mask[i] = mx_leaf_mask(B, leaves[i], &cbits[i]);
+      mask[i] = leaf_mask(B, leaves[i], &cbits[i]);
       closures += (size_t)__builtin_popcount(cbits[i]);
     }
   }

@@ -41,8 +41,5 @@ typedef struct {
 int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
                   mx_mesh_out *out);
 void mx_mesh_out_free(mx_mesh_out *m);
-/* The 27-bit node mask of leaf o before the body centre; *closure gets the
- * midpoints added by the closure (exposed for tests). */
-uint32_t mx_leaf_mask(const mx_builder *B, uint32_t o, uint32_t *closure);
 
 #endif
