@@ -1,7 +1,7 @@
 /* The transition stage: every balanced leaf becomes the elements of its
  * transition pattern, giving a conforming mesh of the whole octree.
  *
- * 1. Node mask of each leaf (mx_leaf_mask): an edge midpoint is a node when
+ * 1. Node mask of each leaf (leaf_mask in transition.c): an edge midpoint is a node when
  *    a finer leaf has it as a corner, i.e. when an octant of the leaf's level
  *    around that edge (its edge infos) is split with a kept child along it; a
  *    face centre likewise from the octant across the face. Where a face has
