@@ -1,0 +1,112 @@
+/* Node states of the boundary stage: against the analytic answer on a cube,
+ * against the ray-parity locator on the cortex; nodes of leaves that meet no
+ * triangle are inside without a query. */
+#include <math.h>
+
+#include "check.h"
+#include "kernels/boundary.h"
+#include "kernels/locate.h"
+#include "soa/mesh.h"
+#include "octree_util.h"
+
+typedef struct {
+  mx_builder B;
+  uint32_t *leaves;
+  size_t n;
+  mx_mesh_out M;
+} built;
+
+static int build(const mx_trisoup *s, int level, built *b) {
+  mx_requests r = no_requests();
+  r.s_level = level;
+  uint32_t rt0[2] = {(uint32_t)s->nt, (uint32_t)s->nt};
+  int st = mx_builder_init(&b->B, s, (uint32_t)s->nt, rt0, &r, 1);
+  if (!st) st = mx_build_roots(&b->B);
+  if (!st) st = mx_refine_balanced(&b->B);
+  if (!st) st = mx_leaves(&b->B, &b->leaves, &b->n);
+  if (!st) st = mx_leaves_sorted(&b->B, b->leaves, b->n);
+  if (!st) st = mx_transition(&b->B, b->leaves, b->n, &b->M);
+  return st;
+}
+
+static void release(built *b) {
+  mx_mesh_out_free(&b->M);
+  mx_free(b->leaves);
+  mx_builder_free(&b->B);
+}
+
+int main(void) {
+  /* The unit cube at -s 4: every node's state is known analytically (the
+   * grid never puts a node on the cube's faces: they lie 0.005 inside the
+   * root). */
+  {
+    mx_trisoup cube;
+    memset(&cube, 0, sizeof cube);
+    const double lo[3] = {-0.5, -0.5, -0.5}, hi[3] = {0.5, 0.5, 0.5};
+    add_box(&cube, lo, hi, 0);
+    built b;
+    CHECK(build(&cube, 4, &b) == MX_OK);
+    mx_surface_index S;
+    CHECK(mx_surface_index_build(&S, &cube, 0, (uint32_t)cube.nt) == MX_OK);
+    uint8_t *st = mx_alloc(b.M.nnodes + 1);
+    size_t q = 0;
+    CHECK(mx_node_states(&b.B, b.leaves, &b.M, &S, st, &q) == MX_OK);
+    size_t wrong = 0, inside = 0;
+    for (size_t v = 0; v < b.M.nnodes; v++) {
+      const double *p = b.M.xyz + 3 * v;
+      const int in = fabs(p[0]) < 0.5 && fabs(p[1]) < 0.5 && fabs(p[2]) < 0.5;
+      wrong += in != (st[v] == MX_NODE_INSIDE);
+      inside += in;
+    }
+    printf("cube -s 4: %zu nodes, %zu inside, %zu located, %zu wrong\n", b.M.nnodes,
+           inside, q, wrong);
+    CHECK(wrong == 0);
+    CHECK(inside > 0 && inside < b.M.nnodes);
+    CHECK(q < b.M.nnodes); /* the inside leaves' nodes were not located */
+    mx_free(st);
+    mx_surface_index_free(&S);
+    release(&b);
+    mx_trisoup_free(&cube);
+  }
+  /* The cortex at -s 5: the same answer as the ray-parity locator for nodes
+   * not on the surface; every node of a leaf meeting no triangle inside. */
+  mx_trisoup s;
+  if (load_shared_surface("cortex.off", &s)) {
+    built b;
+    CHECK(build(&s, 5, &b) == MX_OK);
+    mx_surface_index S;
+    CHECK(mx_surface_index_build(&S, &s, 0, (uint32_t)s.nt) == MX_OK);
+    mx_locator L;
+    CHECK(mx_locator_build(&L, &s, 0, (uint32_t)s.nt) == MX_OK);
+    uint8_t *st = mx_alloc(b.M.nnodes + 1);
+    size_t q = 0;
+    double t = mx_wtime();
+    CHECK(mx_node_states(&b.B, b.leaves, &b.M, &S, st, &q) == MX_OK);
+    t = mx_wtime() - t;
+    size_t wrong = 0, checked = 0, inside = 0;
+    for (size_t v = 0; v < b.M.nnodes; v++) {
+      double cp[3];
+      const double *p = b.M.xyz + 3 * v;
+      inside += st[v] == MX_NODE_INSIDE;
+      if (fabs(mx_signed_distance(&S, p, cp)) < 1e-9) continue;
+      checked++;
+      wrong += mx_locate(&L, p) != (st[v] == MX_NODE_INSIDE);
+    }
+    size_t bad_inherit = 0;
+    for (size_t c = 0; c < b.M.ncells; c++) {
+      if (b.B.oct.flags[b.leaves[b.M.leaf[c]]] & MX_OCT_SURFACE) continue;
+      for (int k = 0; k < mx_cell_nodes[b.M.type[c]]; k++)
+        bad_inherit += st[b.M.conn[8 * c + k]] != MX_NODE_INSIDE;
+    }
+    printf("cortex -s 5: %zu nodes, %zu inside, %zu located in %.3f s, %zu compared, "
+           "%zu disagree\n", b.M.nnodes, inside, q, t, checked, wrong);
+    CHECK(wrong == 0 && bad_inherit == 0);
+    CHECK(q < b.M.nnodes);
+    mx_free(st);
+    mx_locator_free(&L);
+    mx_surface_index_free(&S);
+    release(&b);
+    mx_trisoup_free(&s);
+  }
+  return TEST_DONE();
+}
