@@ -5,6 +5,7 @@
 
 #include "check.h"
 #include "kernels/boundary.h"
+#include "kernels/check.h"
 #include "kernels/locate.h"
 #include "soa/mesh.h"
 #include "octree_util.h"
@@ -106,6 +107,66 @@ int main(void) {
     mx_locator_free(&L);
     mx_surface_index_free(&S);
     release(&b);
+    mx_trisoup_free(&s);
+  }
+  /* Remove close to boundary on the cortex at -s 5, for 1 and 2 threads. */
+  if (load_shared_surface("cortex.off", &s)) {
+    mx_surface_index S;
+    CHECK(mx_surface_index_build(&S, &s, 0, (uint32_t)s.nt) == MX_OK);
+    double lo[3], hi[3];
+    mx_trisoup_bbox(&s, lo, hi);
+    const double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                             (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    mx_mesh_out keep[2];
+    for (int th = 1; th <= 2; th++) {
+      omp_set_num_threads(th);
+      built b;
+      CHECK(build(&s, 5, &b) == MX_OK);
+      uint8_t *st = mx_alloc(b.M.nnodes + 1);
+      size_t q = 0, moved = 0, removed = 0;
+      CHECK(mx_node_states(&b.B, b.leaves, &b.M, &S, st, &q) == MX_OK);
+      size_t on0 = 0;
+      for (size_t v = 0; v < b.M.nnodes; v++)
+        on0 += fabs(mx_signed_distance(&S, b.M.xyz + 3 * v, NULL)) <= 1e-9 * diag;
+      const size_t n0 = b.M.nnodes, c0 = b.M.ncells;
+      CHECK(mx_remove_close_to_boundary(&b.M, &st, &S, 0.3, &moved, &removed) == MX_OK);
+      /* every element keeps an inside node; moved nodes are on the surface */
+      size_t no_inside = 0, on1 = 0;
+      for (size_t c = 0; c < b.M.ncells; c++) {
+        int in = 0;
+        for (int k = 0; k < mx_cell_nodes[b.M.type[c]]; k++)
+          in += st[b.M.conn[8 * c + k]] == MX_NODE_INSIDE;
+        no_inside += in == 0;
+      }
+      for (size_t v = 0; v < b.M.nnodes; v++)
+        on1 += fabs(mx_signed_distance(&S, b.M.xyz + 3 * v, NULL)) <= 1e-9 * diag;
+      /* still conforming: removing whole elements and moving nodes keeps the
+       * faces matched, nothing unused */
+      mx_mesh_data m = {b.M.nnodes, b.M.ncells, b.M.xyz, b.M.type, b.M.conn};
+      mx_check_report r;
+      CHECK(mx_check_mesh(&m, NULL, &r) == MX_OK);
+      printf("remove close (%d thread%s): %zu -> %zu nodes, %zu -> %zu elements, %zu moved, "
+             "%zu removed, %zu on the surface, %zu invalid after moving\n", th, th > 1 ? "s" : "",
+             n0, b.M.nnodes, c0, b.M.ncells, moved, removed, on1, r.invalid);
+      CHECK(moved > 0 && removed > 0);
+      CHECK(b.M.ncells == c0 - removed);
+      CHECK(no_inside == 0);
+      CHECK(on1 >= on0 && on1 - on0 <= moved);
+      CHECK(r.faces_overshared == 0 && r.faces_misoriented == 0 && r.quad_vs_triangles == 0 &&
+            r.open_boundary_edges == 0 && r.unused_nodes == 0);
+      keep[th - 1] = b.M;
+      memset(&b.M, 0, sizeof b.M);
+      mx_free(st);
+      release(&b);
+    }
+    CHECK(keep[0].nnodes == keep[1].nnodes && keep[0].ncells == keep[1].ncells);
+    if (keep[0].nnodes == keep[1].nnodes && keep[0].ncells == keep[1].ncells) {
+      CHECK(memcmp(keep[0].xyz, keep[1].xyz, 3 * keep[0].nnodes * sizeof(double)) == 0);
+      CHECK(memcmp(keep[0].conn, keep[1].conn, 8 * keep[0].ncells * sizeof(uint32_t)) == 0);
+    }
+    mx_mesh_out_free(&keep[0]);
+    mx_mesh_out_free(&keep[1]);
+    mx_surface_index_free(&S);
     mx_trisoup_free(&s);
   }
   return TEST_DONE();

@@ -1,7 +1,12 @@
 #include "kernels/boundary.h"
 
 #include "common.h"
+#include "kernels/quality.h"
 #include "soa/mesh.h"
+#include "soa/scan.h"
+
+#include <math.h>
+#include <string.h>
 
 int mx_node_states(const mx_builder *B, const uint32_t *leaves,
                    const mx_mesh_out *M, const mx_surface_index *S,
@@ -28,5 +33,215 @@ int mx_node_states(const mx_builder *B, const uint32_t *leaves,
     q++;
   }
   *queries = q;
+  return MX_OK;
+}
+
+/* Element edges by type, VTK order. */
+static const int8_t edges_of[4][12][2] = {
+    {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}},
+    {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}},
+    {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5}, {5, 3}, {0, 3}, {1, 4}, {2, 5}},
+    {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}, {7, 4}, {0, 4},
+     {1, 5}, {2, 6}, {3, 7}}};
+static const int nedges_of[4] = {6, 8, 9, 12};
+
+
+int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states_io,
+                                const mx_surface_index *S, double ratio,
+                                size_t *moved, size_t *removed) {
+  uint8_t *states = *states_io;
+  const size_t nn = M->nnodes, nc = M->ncells;
+  /* Candidates: inside nodes of surface elements. */
+  uint8_t *cand = mx_calloc(nn + 1);
+  uint64_t *len = mx_calloc((nn + 1) * sizeof *len); /* fixed point */
+  uint32_t *cnt = mx_calloc((nn + 1) * sizeof *cnt);
+  if (!cand || !len || !cnt) {
+    mx_free(cand);
+    mx_free(len);
+    mx_free(cnt);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++) {
+    const uint32_t *v = M->conn + 8 * c;
+    const int nv = mx_cell_nodes[M->type[c]];
+    int in = 0;
+    for (int k = 0; k < nv; k++) in += states[v[k]] == MX_NODE_INSIDE;
+    if (in == 0 || in == nv) continue;
+    for (int k = 0; k < nv; k++)
+      if (states[v[k]] == MX_NODE_INSIDE) __atomic_store_n(&cand[v[k]], 1, __ATOMIC_RELAXED);
+  }
+  /* Average length of the element edges at each candidate, summed in fixed
+   * point (integer additions: the same sums in any order, so the decisions
+   * are the same for any thread count). */
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+#pragma omp parallel for schedule(static) reduction(min : lo[:3]) reduction(max : hi[:3])
+  for (size_t v = 0; v < nn; v++)
+    for (int x = 0; x < 3; x++) {
+      lo[x] = fmin(lo[x], M->xyz[3 * v + x]);
+      hi[x] = fmax(hi[x], M->xyz[3 * v + x]);
+    }
+  double diag = 0.0;
+  for (int x = 0; x < 3 && nn; x++) diag += (hi[x] - lo[x]) * (hi[x] - lo[x]);
+  const double unit = ldexp(sqrt(diag) + 1e-300, -40); /* 2^40 units per diagonal */
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++) {
+    const uint32_t *v = M->conn + 8 * c;
+    const int t = M->type[c];
+    for (int e = 0; e < nedges_of[t]; e++) {
+      const uint32_t a = v[edges_of[t][e][0]], b = v[edges_of[t][e][1]];
+      if (!cand[a] && !cand[b]) continue;
+      double d2 = 0.0;
+      for (int x = 0; x < 3; x++) {
+        const double u = M->xyz[3 * (size_t)a + x] - M->xyz[3 * (size_t)b + x];
+        d2 += u * u;
+      }
+      const uint64_t l = (uint64_t)llround(sqrt(d2) / unit);
+      if (cand[a]) {
+        __atomic_fetch_add(&len[a], l, __ATOMIC_RELAXED);
+        __atomic_fetch_add(&cnt[a], 1, __ATOMIC_RELAXED);
+      }
+      if (cand[b]) {
+        __atomic_fetch_add(&len[b], l, __ATOMIC_RELAXED);
+        __atomic_fetch_add(&cnt[b], 1, __ATOMIC_RELAXED);
+      }
+    }
+  }
+  /* Decide on the old positions, then move. */
+  double *target = mx_alloc((3 * nn + 3) * sizeof *target);
+  if (!target) {
+    mx_free(cand);
+    mx_free(len);
+    mx_free(cnt);
+    return MX_EINPUT;
+  }
+  size_t nmoved = 0;
+#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : nmoved)
+  for (size_t v = 0; v < nn; v++) {
+    cand[v] = cand[v] ? 1 : 0;
+    if (!cand[v] || !cnt[v]) {
+      cand[v] = 0;
+      continue;
+    }
+    const double avg = (double)len[v] * unit / cnt[v];
+    const double d = mx_closest_point(S, M->xyz + 3 * v, target + 3 * v, NULL, NULL);
+    if (d < ratio * avg) {
+      cand[v] = 2;
+      nmoved++;
+    }
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < nn; v++)
+    if (cand[v] == 2) {
+      memcpy(M->xyz + 3 * v, target + 3 * v, 3 * sizeof(double));
+      states[v] = MX_NODE_OUTSIDE;
+    }
+  mx_free(target);
+  mx_free(len);
+  mx_free(cnt);
+  /* Remove elements with no inside node; recompute J_ENS where a node moved. */
+  uint64_t *keep = mx_alloc((nc + 1) * sizeof *keep);
+  if (!keep) {
+    mx_free(cand);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++) {
+    const uint32_t *v = M->conn + 8 * c;
+    const int nv = mx_cell_nodes[M->type[c]];
+    int in = 0, mv = 0;
+    for (int k = 0; k < nv; k++) {
+      in += states[v[k]] == MX_NODE_INSIDE;
+      mv |= cand[v[k]] == 2;
+    }
+    keep[c] = in > 0;
+    if (in > 0 && mv) {
+      double x[8][3];
+      for (int k = 0; k < nv; k++) memcpy(x[k], M->xyz + 3 * (size_t)v[k], sizeof x[k]);
+      M->jens[c] = mx_jens(M->type[c], x);
+    }
+  }
+  mx_free(cand);
+  /* Compact the kept elements, in order: count, prefix sum, fill. */
+  uint64_t *dst = mx_alloc((nc + 1) * sizeof *dst);
+  if (!dst) {
+    mx_free(keep);
+    return MX_EINPUT;
+  }
+  memcpy(dst, keep, nc * sizeof *dst);
+  const uint64_t nkeep = mx_scan_u64(dst, nc);
+  uint8_t *type = mx_alloc(nkeep + 1);
+  uint32_t *conn = mx_alloc((8 * nkeep + 1) * sizeof *conn);
+  int32_t *level = mx_alloc((nkeep + 1) * sizeof *level);
+  uint32_t *leaf = mx_alloc((nkeep + 1) * sizeof *leaf);
+  double *jens = mx_alloc((nkeep + 1) * sizeof *jens);
+  uint64_t *used = mx_calloc((nn + 1) * sizeof *used);
+  if (!type || !conn || !level || !leaf || !jens || !used) {
+    mx_free(type); mx_free(conn); mx_free(level); mx_free(leaf); mx_free(jens);
+    mx_free(used); mx_free(keep); mx_free(dst);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++) {
+    if (!keep[c]) continue;
+    const uint64_t w = dst[c];
+    type[w] = M->type[c];
+    memcpy(conn + 8 * w, M->conn + 8 * c, 8 * sizeof *conn);
+    level[w] = M->level[c];
+    leaf[w] = M->leaf[c];
+    jens[w] = M->jens[c];
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+      __atomic_store_n(&used[M->conn[8 * c + k]], 1, __ATOMIC_RELAXED);
+  }
+  mx_free(keep);
+  mx_free(dst);
+  mx_free(M->type); mx_free(M->conn); mx_free(M->level); mx_free(M->leaf); mx_free(M->jens);
+  M->type = type; M->conn = conn; M->level = level; M->leaf = leaf; M->jens = jens;
+  *removed = nc - nkeep;
+  M->ncells = nkeep;
+  /* Drop the nodes no element uses any more, keeping their order. */
+  uint64_t *newid = mx_alloc((nn + 1) * sizeof *newid);
+  if (!newid) {
+    mx_free(used);
+    return MX_EINPUT;
+  }
+  memcpy(newid, used, nn * sizeof *newid);
+  const uint64_t nused = mx_scan_u64(newid, nn);
+  double *xyz = mx_alloc((3 * nused + 3) * sizeof *xyz);
+  uint8_t *st2 = mx_alloc(nused + 1);
+  if (!xyz || !st2) {
+    mx_free(xyz); mx_free(st2); mx_free(used); mx_free(newid);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < nn; v++)
+    if (used[v]) {
+      memcpy(xyz + 3 * newid[v], M->xyz + 3 * v, 3 * sizeof *xyz);
+      st2[newid[v]] = states[v];
+    }
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++)
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+      M->conn[8 * c + k] = (uint32_t)newid[M->conn[8 * c + k]];
+  mx_free(used);
+  mx_free(newid);
+  mx_free(M->xyz);
+  M->xyz = xyz;
+  mx_free(*states_io);
+  *states_io = st2;
+  M->nnodes = nused;
+  *moved = nmoved;
+  /* refresh the summary */
+  size_t bt[4] = {0, 0, 0, 0}, invalid = 0;
+  double jmin = INFINITY;
+#pragma omp parallel for schedule(static) reduction(+ : bt[:4], invalid) reduction(min : jmin)
+  for (size_t c = 0; c < M->ncells; c++) {
+    bt[M->type[c]]++;
+    invalid += M->jens[c] <= 0.0;
+    if (M->jens[c] < jmin) jmin = M->jens[c];
+  }
+  memcpy(M->by_type, bt, sizeof bt);
+  M->invalid = invalid;
+  M->jens_min = M->ncells ? jmin : 1.0;
   return MX_OK;
 }

@@ -1,9 +1,8 @@
 /* The boundary stage (Lobos & Gonzalez 2015, Algorithm 1, lines 11-14).
- * This file holds its first step so far: the inside/outside state of every
- * node. Still to come (issue 4): projection of inside nodes close to the
- * surface and removal of the elements left without an inside node, surface
- * patterns, shrinking outside nodes onto the surface, staircase reduction,
- * repair of invalid elements. */
+ * Done so far: the inside/outside state of every node (mx_node_states) and
+ * "remove close to boundary" (mx_remove_close_to_boundary). Still to come
+ * (issue 4): surface patterns, shrinking outside nodes onto the surface,
+ * staircase reduction, repair of invalid elements. */
 #ifndef MX_BOUNDARY_H
 #define MX_BOUNDARY_H
 
@@ -26,5 +25,18 @@ enum { MX_NODE_OUTSIDE = 0, MX_NODE_INSIDE = 1 };
 int mx_node_states(const mx_builder *B, const uint32_t *leaves,
                    const mx_mesh_out *M, const mx_surface_index *S,
                    uint8_t *states, size_t *queries);
+
+/* Line 11 of Algorithm 1 (2015 paper), "remove close to boundary": every
+ * inside node of a surface element (one with inside and outside nodes) whose
+ * closest point on the surface lies within `ratio` (0.3 in the paper) of the
+ * average length of its incident element edges moves onto that point and
+ * becomes an outside node; all moves are decided on the positions before any
+ * of them. Then the elements left with no inside node are removed, the nodes
+ * no element uses any more are dropped (numbering kept in order), and the
+ * J_ENS of elements with a moved node is recomputed. *states is replaced by
+ * the states of the remaining nodes (allocated with mx_alloc). */
+int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states,
+                                const mx_surface_index *S, double ratio,
+                                size_t *moved, size_t *removed);
 
 #endif
