@@ -245,3 +245,126 @@ int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states_io,
   M->jens_min = M->ncells ? jmin : 1.0;
   return MX_OK;
 }
+
+/* Distinct outside nodes of the elements [c0, c1) (one leaf's), in order of
+ * first use. */
+static int leaf_outside_nodes(const mx_mesh_out *M, size_t c0, size_t c1,
+                              const uint8_t *states, uint32_t out[64]) {
+  int n = 0;
+  for (size_t c = c0; c < c1; c++)
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
+      const uint32_t v = M->conn[8 * c + k];
+      if (states[v] != MX_NODE_OUTSIDE) continue;
+      int seen = 0;
+      for (int j = 0; j < n && !seen; j++) seen = out[j] == v;
+      if (!seen && n < 64) out[n++] = v;
+    }
+  return n;
+}
+
+/* Closest domain triangle of leaf o's list to p: squared distance, id. */
+static double leaf_closest(const mx_builder *B, uint32_t o, const double p[3],
+                           uint32_t *tri) {
+  const mx_octree *T = &B->oct;
+  double best = INFINITY, q[3];
+  *tri = UINT32_MAX;
+  for (uint32_t k = 0; k < T->tri_cnt[o]; k++) {
+    const uint32_t t = T->tri_pool[T->tri_off[o] + k];
+    if (t >= B->nt_domain) continue;
+    const double d2 = mx_closest_on_triangle(B->tri_xyz + 9 * (size_t)t, p, q);
+    if (d2 < best || (d2 == best && t < *tri)) {
+      best = d2;
+      *tri = t;
+    }
+  }
+  return best;
+}
+
+static inline uint64_t dbits(double d) {
+  uint64_t u;
+  memcpy(&u, &d, sizeof u);
+  return u; /* non-negative doubles order as their bits */
+}
+
+int mx_shrink_to_boundary(const mx_builder *B, const uint32_t *leaves,
+                          mx_mesh_out *M, const uint8_t *states, size_t *moved) {
+  const size_t nn = M->nnodes, nc = M->ncells;
+  /* Elements are in leaf order: each leaf's elements form one run. */
+  uint64_t *run = mx_alloc((nc + 2) * sizeof *run);
+  uint64_t *best = mx_alloc((nn + 1) * sizeof *best);
+  uint32_t *btri = mx_alloc((nn + 1) * sizeof *btri);
+  if (!run || !best || !btri) {
+    mx_free(run); mx_free(best); mx_free(btri);
+    return MX_EINPUT;
+  }
+  size_t nr = 0;
+  for (size_t c = 0; c < nc; c++)
+    if (c == 0 || M->leaf[c] != M->leaf[c - 1]) run[nr++] = c;
+  run[nr] = nc;
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < nn; v++) {
+    best[v] = UINT64_MAX;
+    btri[v] = UINT32_MAX;
+  }
+  /* Two passes over (leaf, outside node): the least distance, then among
+   * the triangles reaching it the lowest id. */
+  for (int pass = 0; pass < 2; pass++) {
+#pragma omp parallel for schedule(dynamic, 256)
+    for (size_t r = 0; r < nr; r++) {
+      const uint32_t o = leaves[M->leaf[run[r]]];
+      if (!B->oct.tri_cnt[o]) continue;
+      uint32_t vs[64];
+      const int k = leaf_outside_nodes(M, run[r], run[r + 1], states, vs);
+      for (int j = 0; j < k; j++) {
+        uint32_t t;
+        const double d2 = leaf_closest(B, o, M->xyz + 3 * (size_t)vs[j], &t);
+        if (t == UINT32_MAX) continue;
+        if (pass == 0) {
+          uint64_t cur = __atomic_load_n(&best[vs[j]], __ATOMIC_RELAXED);
+          const uint64_t mine = dbits(d2);
+          while (mine < cur && !__atomic_compare_exchange_n(&best[vs[j]], &cur, mine, 1,
+                                                             __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+          }
+        } else if (dbits(d2) == best[vs[j]]) {
+          uint32_t cur = __atomic_load_n(&btri[vs[j]], __ATOMIC_RELAXED);
+          while (t < cur && !__atomic_compare_exchange_n(&btri[vs[j]], &cur, t, 1,
+                                                         __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+          }
+        }
+      }
+    }
+  }
+  size_t nm = 0;
+#pragma omp parallel for schedule(static) reduction(+ : nm)
+  for (size_t v = 0; v < nn; v++) {
+    if (btri[v] == UINT32_MAX) continue;
+    double q[3];
+    mx_closest_on_triangle(B->tri_xyz + 9 * (size_t)btri[v], M->xyz + 3 * v, q);
+    memcpy(M->xyz + 3 * v, q, sizeof q);
+    nm++;
+  }
+  /* J_ENS of the elements with an outside node. */
+  size_t invalid = 0;
+  double jmin = INFINITY;
+#pragma omp parallel for schedule(static) reduction(+ : invalid) reduction(min : jmin)
+  for (size_t c = 0; c < nc; c++) {
+    const int nv = mx_cell_nodes[M->type[c]];
+    int out = 0;
+    double x[8][3];
+    for (int k = 0; k < nv; k++) {
+      const uint32_t v = M->conn[8 * c + k];
+      out |= states[v] == MX_NODE_OUTSIDE;
+      memcpy(x[k], M->xyz + 3 * (size_t)v, sizeof x[k]);
+    }
+    if (out) M->jens[c] = mx_jens(M->type[c], x);
+    invalid += M->jens[c] <= 0.0;
+    if (M->jens[c] < jmin) jmin = M->jens[c];
+  }
+  M->invalid = invalid;
+  M->jens_min = nc ? jmin : 1.0;
+  mx_free(run);
+  mx_free(best);
+  mx_free(btri);
+  *moved = nm;
+  return MX_OK;
+}

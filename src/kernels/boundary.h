@@ -1,8 +1,9 @@
 /* The boundary stage (Lobos & Gonzalez 2015, Algorithm 1, lines 11-14).
- * Done so far: the inside/outside state of every node (mx_node_states) and
- * "remove close to boundary" (mx_remove_close_to_boundary). Still to come
- * (issue 4): surface patterns, shrinking outside nodes onto the surface,
- * staircase reduction, repair of invalid elements. */
+ * Done so far: the inside/outside state of every node (mx_node_states),
+ * "remove close to boundary" (mx_remove_close_to_boundary) and "shrink to
+ * boundary" (mx_shrink_to_boundary). Still to come (issue 4): surface
+ * patterns (between the two), staircase reduction, repair of invalid
+ * elements. */
 #ifndef MX_BOUNDARY_H
 #define MX_BOUNDARY_H
 
@@ -38,5 +39,13 @@ int mx_node_states(const mx_builder *B, const uint32_t *leaves,
 int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states,
                                 const mx_surface_index *S, double ratio,
                                 size_t *moved, size_t *removed);
+
+/* Line 13 of Algorithm 1, "shrink outside nodes": every outside node moves
+ * to its closest point among the domain triangles met by the leaves whose
+ * elements use it (ties: the lowest triangle id); then J_ENS is recomputed
+ * for the elements that moved. Deterministic. *moved receives the number of
+ * nodes moved. */
+int mx_shrink_to_boundary(const mx_builder *B, const uint32_t *leaves,
+                          mx_mesh_out *M, const uint8_t *states, size_t *moved);
 
 #endif

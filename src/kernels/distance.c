@@ -539,6 +539,11 @@ static inline void sort4_down(uint64_t k[4]) {
  * best the smallest exact distance so far and delta a rounding allowance,
  * 2^-17 of the coordinates' magnitude, far above the float errors; the
  * exact test runs in double. */
+double mx_closest_on_triangle(const double t[9], const double p[3], double q[3]) {
+  int feat;
+  return closest_on_triangle(t, p, q, &feat);
+}
+
 static double closest_slot(const mx_surface_index *S, const double p[3],
                            double q[3], uint32_t *slot, int *feat) {
   double best = INFINITY, thr = INFINITY;

@@ -184,6 +184,10 @@ void mx_surface_index_free(mx_surface_index *S);
 double mx_closest_point(const mx_surface_index *S, const double p[3],
                         double q[3], uint32_t *tri, int *feature);
 
+/* Closest point q of p on one triangle t (its 9 coordinates); returns the
+ * squared distance. */
+double mx_closest_on_triangle(const double t[9], const double p[3], double q[3]);
+
 /* Signed distance: negative inside the domain, 0 exactly on the surface.
  * Closed surfaces: sign of (p - q) . pseudonormal of the closest feature.
  * Surfaces that are not closed: sign from the winding number (> 1/2 inside).
