@@ -100,6 +100,13 @@ expect_exit 2 "unwritable output" "$MIXOCT" --demo -s 3 --stage octree -o "$T/no
 cmp -s "$T/t1.vtk" "$T/t2.vtk" && ok "1 and 2 threads: identical bytes" || bad "threads differ"
 cmp -s "$T/t1.vtk" "$T/r2.vtk" && ok "edges and recursive: identical bytes" || bad "balances differ"
 
+# Memory budget and output names are checked before any meshing.
+expect_exit 2 "a run that cannot fit is refused" "$MIXOCT" --demo -s 15
+has "$T/err" "needs about" "the refusal says how much it needs"
+expect_exit 2 "--max-memory is a limit" "$MIXOCT" --demo -s 7 --max-memory 10
+expect_exit 2 "an unknown output format is refused first" "$MIXOCT" --demo -s 3 -o "$T/x.obj"
+has "$T/err" "x.obj" "the refusal names the output"
+
 # Transition stage (the default): a conforming mesh that the independent
 # checker accepts, the same bytes for 1 and 2 threads, and the pattern table.
 "$MIXOCT" -i "$T/cube.off" -s 3 -o "$T/cube3.vtu" --quiet

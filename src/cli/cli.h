@@ -26,6 +26,7 @@ typedef struct {
   int json, quiet;
   int stage;
   int balance;
+  double max_memory_mb; /* 0: the memory available */
 } mx_options;
 
 /* Parses argv; on --help/--version prints and sets *exit_now = 1. Returns
@@ -49,6 +50,7 @@ typedef struct {
   size_t elements, by_type[4], invalid, closures, centre_leaves;
   double jens_min;
   mx_quality_table quality;
+  double memory_estimate_mb;
   mx_phases ph;
   double peak_rss_mb;
 } mx_summary;

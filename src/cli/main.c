@@ -4,6 +4,7 @@
  * 2 bad input or usage. */
 #include "cli/cli.h"
 #include "common.h"
+#include "kernels/estimate.h"
 #include "kernels/refine.h"
 #include "kernels/transition.h"
 #include "soa/mesh.h"
@@ -85,6 +86,28 @@ static int write_mixed(const mx_mesh_out *M, const char *path) {
   return st;
 }
 
+/* Refuse a run that cannot fit: the estimate (kernels/estimate.h) against
+ * --max-memory, or else the memory available now. */
+static int check_memory(const mx_options *o, const mx_trisoup *all,
+                        uint32_t nt_domain, const uint32_t *region_t0,
+                        const mx_requests *req, const mx_grid *g,
+                        mx_summary *S) {
+  const double need = mx_estimate_bytes(all, nt_domain, region_t0, req, g,
+                                        o->stage != MX_STAGE_OCTREE);
+  S->memory_estimate_mb = need / 1048576.0;
+  const double avail = mx_available_bytes();
+  const double limit = o->max_memory_mb > 0 ? o->max_memory_mb * 1048576.0 : avail;
+  if (limit > 0.0 && need > limit) {
+    mx_error(NULL, 0, "this run needs about %.0f MB (estimated from the surface "
+                      "and the requested levels) but %s %.0f MB: lower the "
+                      "levels or raise --max-memory", need / 1048576.0,
+             o->max_memory_mb > 0 ? "--max-memory allows" : "the machine has",
+             limit / 1048576.0);
+    return MX_EINPUT;
+  }
+  return MX_OK;
+}
+
 static int run(const mx_options *o) {
   const double t_start = mx_wtime();
   mx_summary S;
@@ -108,6 +131,7 @@ static int run(const mx_options *o) {
     req.nboxes = nboxes;
     st = mx_builder_init(&B, &all, nt_domain, region_t0, &req,
                          o->balance == MX_BALANCE_EDGES);
+    if (!st) st = check_memory(o, &all, nt_domain, region_t0, &req, &B.grid, &S);
     if (!st) st = mx_build_roots(&B);
     S.ph.grid = mx_wtime() - t;
   }

@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 static const char *usage_text =
     "usage: mixoct -i FILE [-i FILE2 ...] [requests] [-o OUT] [options]\n"
@@ -38,6 +39,8 @@ static const char *usage_text =
     "\n"
     "Execution:\n"
     "      --threads N             OpenMP threads (default: all cores)\n"
+    "      --max-memory MB         refuse runs estimated to need more (default:\n"
+    "                              the memory available)\n"
     "      --balance edges|recursive\n"
     "                              edge infos while refining (default), or the\n"
     "                              original recursive search at the end\n"
@@ -134,6 +137,15 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
         return MX_EINPUT;
       }
       o->threads = (int)v;
+    } else if (strcmp(a, "--max-memory") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      char *end;
+      const double v = strtod(argv[++i], &end);
+      if (*end || !(v > 0.0)) {
+        mx_error(NULL, 0, "--max-memory wants a size in MB, got '%s'", argv[i]);
+        return MX_EINPUT;
+      }
+      o->max_memory_mb = v;
     } else if (strcmp(a, "--json") == 0) {
       o->json = 1;
     } else if (strcmp(a, "--quiet") == 0) {
@@ -179,5 +191,14 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
     return MX_EINPUT;
   }
   o->req.nregions = o->nregion_surf;
+  if (o->output) {
+    /* fail before meshing, not after */
+    const char *dot = strrchr(o->output, '.');
+    if (!dot || (strcasecmp(dot, ".vtu") != 0 && strcasecmp(dot, ".vtk") != 0)) {
+      mx_error(o->output, 0, "unknown output format \"%s\" (use .vtu or .vtk)",
+               dot ? dot : "");
+      return MX_EINPUT;
+    }
+  }
   return MX_OK;
 }

@@ -40,7 +40,8 @@ void mx_print_json(const mx_summary *s) {
          "\"phases\": {\"read\": %.6f, \"grid\": %.6f, \"refine\": %.6f, "
          "\"balance\": %.6f, \"transition\": %.6f, \"quality\": %.6f, "
          "\"write\": %.6f}, "
-         "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"threads\": %d, "
+         "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"memory_estimate_mb\": %.1f, "
+         "\"threads\": %d, "
          "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, "
          "\"topology\": \"%s\"}\n",
          s->leaves, s->leaves_hash, nodes, elements, hex,
@@ -51,7 +52,8 @@ void mx_print_json(const mx_summary *s) {
          s->split_balance, s->dropped, s->centre_leaves, s->closures, s->ph.read,
          s->ph.grid, s->ph.refine, s->ph.balance, s->ph.transition,
          s->ph.quality, s->ph.write,
-         s->ph.total, s->peak_rss_mb, s->threads, s->mesh ? s->jens_min : 1.0,
+         s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->threads,
+         s->mesh ? s->jens_min : 1.0,
          s->mesh ? s->invalid : 0, qual, topo);
   fflush(stdout);
 }

@@ -1,0 +1,70 @@
+#include "kernels/estimate.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+static double area(const mx_trisoup *s, uint32_t t0, uint32_t t1) {
+  double a = 0.0;
+  for (uint32_t t = t0; t < t1; t++) {
+    const uint32_t *v = s->tri + 3 * (size_t)t;
+    const double u[3] = {s->x[v[1]] - s->x[v[0]], s->y[v[1]] - s->y[v[0]], s->z[v[1]] - s->z[v[0]]};
+    const double w[3] = {s->x[v[2]] - s->x[v[0]], s->y[v[2]] - s->y[v[0]], s->z[v[2]] - s->z[v[0]]};
+    const double c[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+    a += 0.5 * sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  }
+  return a;
+}
+
+static double bbox_volume(const mx_trisoup *s, uint32_t t0, uint32_t t1) {
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (uint32_t t = t0; t < t1; t++)
+    for (int k = 0; k < 3; k++) {
+      const uint32_t v = s->tri[3 * (size_t)t + k];
+      const double p[3] = {s->x[v], s->y[v], s->z[v]};
+      for (int a = 0; a < 3; a++) {
+        lo[a] = fmin(lo[a], p[a]);
+        hi[a] = fmax(hi[a], p[a]);
+      }
+    }
+  return t1 > t0 ? (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]) : 0.0;
+}
+
+double mx_estimate_bytes(const mx_trisoup *soup, uint32_t nt_domain,
+                         const uint32_t *region_t0, const mx_requests *req,
+                         const mx_grid *g, int stage) {
+  const double vol = bbox_volume(soup, 0, nt_domain);
+  double leaves = (double)g->dims[0] * g->dims[1] * g->dims[2];
+  if (req->s_level > 0) {
+    const double h = ldexp(g->side, -req->s_level);
+    leaves += 3.2 * area(soup, 0, nt_domain) / (h * h);
+  }
+  if (req->a_level > 0) {
+    const double h = ldexp(g->side, -req->a_level);
+    leaves += vol / (h * h * h);
+  }
+  for (size_t b = 0; b < req->nboxes; b++) {
+    const mx_box_region *r = &req->boxes[b];
+    const double h = ldexp(g->side, -r->level);
+    double v = 1.0;
+    for (int a = 0; a < 3; a++) v *= fmax(0.0, r->hi[a] - r->lo[a]);
+    leaves += fmin(v, vol) / (h * h * h);
+  }
+  for (int r = 0; r < req->nregions; r++) {
+    const double h = ldexp(g->side, -req->rlevel[r]);
+    leaves += fmin(bbox_volume(soup, region_t0[r], region_t0[r + 1]), vol) / (h * h * h);
+  }
+  const double per_leaf = stage ? 500.0 : 200.0;
+  return 32e6 + leaves * per_leaf + 600.0 * (double)soup->nt;
+}
+
+double mx_available_bytes(void) {
+  FILE *f = fopen("/proc/meminfo", "r");
+  if (!f) return 0.0;
+  char line[256];
+  double kb = 0.0;
+  while (fgets(line, sizeof line, f))
+    if (sscanf(line, "MemAvailable: %lf kB", &kb) == 1) break;
+  fclose(f);
+  return kb * 1024.0;
+}
