@@ -299,7 +299,6 @@ static int candidates(uint32_t present, cand_t *out) {
     if (finish(&c, present)) out[n++] = c;
   }
   free(keys);
-  if (getenv("PATTERNGEN_COUNT")) fprintf(stderr, "cands %07x %d\n", present, n);
   qsort(out, (size_t)n, sizeof *out, cmp_cand);
   return n;
 }
@@ -641,7 +640,7 @@ int main(int argc, char **argv) {
   }
   if (getenv("PATTERNGEN_VERBOSE"))
     for (int k = 0; k < nrep; k++)
-      fprintf(stderr, "class %3d mask %07x edges %2d faces %d centre %d elems %3d worst %.3f%s\n",
+      fprintf(stderr, "class %3d mask %07x edges %2d faces %d centre %u elems %3d worst %.3f%s\n",
               k, res[k].mask, __builtin_popcount((res[k].mask >> 8) & 0xfff),
               __builtin_popcount((res[k].mask >> 20) & 0x3f), (res[k].mask >> 26) & 1,
               res[k].nelem, res[k].worst,

@@ -157,6 +157,7 @@ static int run(const mx_options *o) {
   if (!st && o->stage == MX_STAGE_TRANSITION) {
     t = mx_wtime();
     mx_mesh_out M;
+    memset(&M, 0, sizeof M);
     st = mx_leaves_sorted(&B, leaves, nleaves);
     if (!st) st = mx_transition(&B, leaves, nleaves, &M);
     S.ph.transition = mx_wtime() - t;

@@ -373,7 +373,7 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
       const uint32_t o = leaves[i];
       const mx_pattern_class *pc = &mx_pattern_classes[ref[i].cls];
       const uint8_t *perm = mx_rot_perm[ref[i].rot];
-      uint32_t id27[27];
+      uint32_t id27[27] = {0}; /* patterns use mask points only (tested) */
       const uint32_t *s = slot + poff[i];
       int j = 0;
       for (uint32_t m = mask[i]; m; m &= m - 1, j++) {
