@@ -214,8 +214,8 @@ static int grow_scratch(void **p, size_t *cap, size_t need, size_t elem) {
 
 /* Edge infos after a split of octants of level l: the children's edges (at
  * most 18 new per axis per split), in chunks small enough that the tables
- * never pass 75% load. An edge's mid-node needs no update: it exists exactly
- * when one of the octants in its slots is split (mx_edge_is_split). */
+ * never pass 75% load. An edge's mid-node needs no update: it is read from
+ * the octants in its slots when needed (transition.c, leaf_mask). */
 static int register_children_edges(mx_builder *B, const uint32_t *list,
                                    size_t n, int l) {
   const mx_octree *T = &B->oct;

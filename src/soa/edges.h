@@ -70,14 +70,6 @@ void mx_edges_register(mx_edges *E, uint32_t o, uint64_t key, int level,
  * contract as mx_edges_register. */
 void mx_edges_register_children(mx_edges *E, uint32_t child0, uint8_t kept,
                                 uint64_t key, int level, size_t created[3]);
-/* 1 when the edge has a mid-node: one of the octants in its slots is split
- * (flags: the octree's MX_OCT_* flags, split bit `split_bit`). */
-static inline int mx_edge_is_split(const mx_edge *e, const uint8_t *flags,
-                                   uint8_t split_bit) {
-  for (int s = 0; s < 4; s++)
-    if (e->slot[s] != UINT32_MAX && (flags[e->slot[s]] & split_bit)) return 1;
-  return 0;
-}
 /* Add the counts created by mx_edges_register to the (level, axis) tables. */
 void mx_edges_add_count(mx_edges *E, int level, const size_t created[3]);
 size_t mx_edges_total(const mx_edges *E);
