@@ -1,10 +1,10 @@
 /* Edge infos (Jaillet & Lobos 2021, section 5.2), one hash table per level
  * and axis. An edge of level l is keyed by the Morton key of its lower end on
- * the level-l lattice. Its info holds:
- *   - the mid-node flag (bit 63 of the key word): set once one of the
- *     octants around the edge has been split, so the edge has a mid-node;
- *   - 4 slots, one per quadrant around the edge, holding the octant of level
- *     l that has this edge as one of its own 12 edges (MX_NONE if none).
+ * the level-l lattice. Its info holds 4 slots, one per quadrant around the
+ * edge, holding the octant of level l that has this edge as one of its own
+ * 12 edges (MX_NONE if none). Whether the edge has a mid-node is read from
+ * those octants when needed (a split one with a kept child along the edge:
+ * leaf_mask in src/kernels/transition.c), so it needs no separate update.
  * For an edge along axis a, with b = a+1 and c = a+2 (mod 3), an octant's
  * slot is bit 0 = "the octant lies on the + side of the edge along b",
  * bit 1 = same along c. Each slot has exactly one possible writer, so slots
