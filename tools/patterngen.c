@@ -38,7 +38,12 @@
  * (lattice.h); the two-adjacent-edges face was chosen as four triangles
  * because the kite variant needs the centre in 179 classes instead of 59.
  *
- * usage: patterngen OUT.c [--budget N]     (prints a report on stderr) */
+ * Surface mode (--surface, writes src/patterns/surface_table.c): the same
+ * search over one pyramid, prism or hexahedron embedded in the lattice, its
+ * quad faces split by the Fig. 9 rule for each mask of inside vertices; the
+ * quality bound applies only to the elements that keep an inside vertex.
+ *
+ * usage: patterngen OUT.c [--budget N] [--surface]   (report on stderr) */
 #include <math.h>
 #include <omp.h>
 #include <stdio.h>
@@ -47,6 +52,7 @@
 
 #include "kernels/quality.h"
 #include "patterns/lattice.h"
+#include "patterns/surface_table.h"
 #include "soa/mesh.h"
 
 #define NS 10                      /* samples per axis */
@@ -73,6 +79,15 @@ typedef struct {
 } fref_t;
 
 static double samples[NS * NS * NS][3];
+
+/* Surface mode (--surface): the region to tessellate is one element (its
+ * points g_present, its faces split by the Fig. 9 rule of the 2015 paper),
+ * and only the elements keeping an inside point (g_inside, lattice bits)
+ * are held to the quality bound: the others are dropped at run time. */
+static int g_surface = 0;
+static uint32_t g_inside = 0;
+static int g_front_n = 0;
+static face_t g_front[16];
 
 static int P(int i, int a) { return mx_lat_xyz[i][a]; }
 
@@ -144,6 +159,17 @@ static int finish(cand_t *c, uint32_t present) {
   if (mx_element_volume(c->type, x) <= 1e-12) return 0;
   c->q = mx_jens(c->type, x);
   if (!(c->q > 0.0)) return 0;
+  /* Surface mode with an outside centre: an element keeping an inside
+   * vertex and the centre would put the centre into the mesh; allowed only
+   * when nothing else works. */
+  if (g_surface && ((present >> MX_LAT_CENTRE) & 1) && !((g_inside >> MX_LAT_CENTRE) & 1)) {
+    int has_c = 0, has_in = 0;
+    for (int k = 0; k < c->nv; k++) {
+      has_c |= c->v[k] == MX_LAT_CENTRE;
+      has_in |= (g_inside >> c->v[k]) & 1;
+    }
+    if (has_c && has_in) c->q *= 1e-3;
+  }
   memset(c->occ, 0, sizeof c->occ);
   for (int s = 0; s < NS * NS * NS; s++) {
     int in = 1;
@@ -372,8 +398,15 @@ static void front_add(search_t *S, const face_t *f) {
 }
 
 /* Can candidate c be placed (closing the front face via its face fi)? */
+static int kept(const cand_t *c) {
+  if (!g_surface) return 1;
+  for (int k = 0; k < c->nv; k++)
+    if ((g_inside >> c->v[k]) & 1) return 1;
+  return 0;
+}
+
 static int fits(const search_t *S, const cand_t *c) {
-  if (c->q < S->thr) return 0;
+  if (c->q < S->thr && kept(c)) return 0;
   for (int w = 0; w < OCCW; w++)
     if (S->occ[w] & c->occ[w]) return 0;
   for (int i = 0; i < c->nf; i++) {
@@ -432,7 +465,8 @@ static int dfs(search_t *S) {
   if (S->nfront == 0) {
     double worst = INFINITY;
     for (int i = 0; i < S->depth; i++)
-      if (S->cand[S->stack[i]].q < worst) worst = S->cand[S->stack[i]].q;
+      if (kept(&S->cand[S->stack[i]]) && S->cand[S->stack[i]].q < worst)
+        worst = S->cand[S->stack[i]].q;
     S->best_worst = worst;
     S->nbest = S->depth;
     memcpy(S->best, S->stack, sizeof(int) * (size_t)S->depth);
@@ -471,6 +505,18 @@ static int dfs(search_t *S) {
     if (st != 0) return st;
   }
   return 0;
+}
+
+/* Surface mode: the element's faces as outward polygons (as
+ * mx_face_pattern gives them). */
+static int front_polys(uint8_t poly[16][4]) {
+  for (int k = 0; k < g_front_n; k++) {
+    const face_t *f = &g_front[k];
+    poly[k][0] = f->v[0];
+    for (int j = 1; j < f->n; j++) poly[k][j] = f->v[f->n - j];
+    if (f->n == 3) poly[k][3] = 255;
+  }
+  return g_front_n;
 }
 
 static int cmp_ref(const void *a, const void *b) {
@@ -512,9 +558,9 @@ static void solve(uint32_t mask, long budget, result_t *R, int *hit) {
      * the starting point; the search below only keeps something better. */
     int n = 0;
     double worst = INFINITY;
-    for (int f = 0; f < 6; f++) {
-      uint8_t poly[8][4];
-      int np = mx_face_pattern(f, mask, poly);
+    for (int f = 0; f < (g_surface ? 1 : 6); f++) {
+      uint8_t poly[16][4];
+      int np = g_surface ? front_polys(poly) : mx_face_pattern(f, mask, poly);
       for (int k = 0; k < np; k++) {
         cand_t e;
         const int nv = poly[k][3] == 255 ? 3 : 4;
@@ -543,7 +589,8 @@ static void solve(uint32_t mask, long budget, result_t *R, int *hit) {
     S->nodes = 0;
     S->budget = budget;
     S->thr = thr;
-    for (int f = 0; f < 6; f++) {
+    for (int k = 0; g_surface && k < g_front_n; k++) front_add(S, &g_front[k]);
+    for (int f = 0; f < 6 && !g_surface; f++) {
       uint8_t poly[8][4];
       int np = mx_face_pattern(f, mask, poly);
       for (int k = 0; k < np; k++) {
@@ -570,14 +617,155 @@ static void solve(uint32_t mask, long budget, result_t *R, int *hit) {
   free(cand);
 }
 
+/* ------------------------------------------------------------- surface mode */
+
+/* Fig. 9 rule on a quad (a b c d) of an element with inside mask `in`: split
+ * along the diagonal holding more outside nodes; keep the quad on a tie
+ * (0 or 4 inside, or 2 adjacent inside). Returns 0 quad, 1 diagonal a-c,
+ * 2 diagonal b-d. The run-time copy is mx_surface_diagonal (kernels). */
+static int fig9(uint32_t in, const uint8_t *v) {
+  int oa = !((in >> v[0]) & 1) + !((in >> v[2]) & 1);
+  int ob = !((in >> v[1]) & 1) + !((in >> v[3]) & 1);
+  return oa > ob ? 1 : ob > oa ? 2 : 0;
+}
+
+static void push_front(int n, const uint8_t *v) {
+  face_t fc;
+  fc.n = (uint8_t)n;
+  fc.v[0] = v[0];
+  for (int j = 1; j < n; j++) fc.v[j] = v[n - j]; /* reversed: into the element */
+  if (n == 3) fc.v[3] = 0;
+  fc.key = face_key(fc.n, fc.v);
+  fc.boundary = 1;
+  g_front[g_front_n++] = fc;
+}
+
+/* Surface patterns of the pyramid, prism and hexahedron for every inside
+ * mask over their vertices; elements are written with local vertex indices
+ * (VTK order of the parent element). */
+static int surface_main(const char *out, long budget) {
+  static const int nvs[4] = {4, 5, 6, 8};
+  static uint8_t lat[4][8] = {{0}, {0, 1, 3, 2, 25}, {0, 1, 2, 4, 5, 6}, {0, 1, 3, 2, 4, 5, 7, 6}};
+  FILE *f = fopen(out, "w");
+  if (!f) {
+    perror(out);
+    return 2;
+  }
+  fprintf(f, "/* GENERATED by tools/patterngen --surface: do not edit.\n"
+             " * Surface patterns (2015 paper, Figs. 8-10): for each element type and\n"
+             " * mask of inside vertices, the tessellation of the element whose quad\n"
+             " * faces follow the Fig. 9 rule (kernels/surface_patterns.h); elements\n"
+             " * with no inside vertex are the optional ones, dropped unless the\n"
+             " * staircase reduction keeps them. Local vertex indices, VTK order. */\n"
+             "#include \"patterns/surface_table.h\"\n\n");
+  char *cases = malloc(1 << 16), *elems = malloc(1 << 20);
+  size_t nc = 0, ne = 0;
+  int first = 0, failed = 0, ncentre = 0;
+  for (int t = MX_PYRAMID; t <= MX_HEX; t++) {
+    const int nv = nvs[t];
+    /* orientation of the embedding */
+    double x[8][3];
+    for (int k = 0; k < nv; k++)
+      for (int a = 0; a < 3; a++) x[k][a] = P(lat[t][k], a);
+    if (mx_element_volume(t, x) < 0) {
+      fprintf(stderr, "patterngen: embedding of type %d is inverted\n", t);
+      return 1;
+    }
+    uint32_t present = 0;
+    for (int k = 0; k < nv; k++) present |= 1u << lat[t][k];
+    nc += (size_t)sprintf(cases + nc, "    /* type %d */\n", t);
+    int worst_n = 0;
+    double worst = INFINITY;
+    for (uint32_t m = 0; m < (1u << nv); m++) {
+      if (m == 0 || m == (1u << nv) - 1) {
+        nc += (size_t)sprintf(cases + nc, "    {%d, 0, %u, 0, 0},\n", t, m);
+        continue;
+      }
+      g_surface = 1;
+      g_inside = 0;
+      for (int k = 0; k < nv; k++)
+        if ((m >> k) & 1) g_inside |= 1u << lat[t][k];
+      g_front_n = 0;
+      int split = 0;
+      for (int i = 0; i < mx_cell_nfaces[t]; i++) {
+        const int n = mx_cell_faces[t][i][3] < 0 ? 3 : 4;
+        uint8_t v[4];
+        for (int k = 0; k < n; k++) v[k] = lat[t][mx_cell_faces[t][i][k]];
+        const int d = n == 4 ? fig9(g_inside, v) : 0;
+        split |= d != 0;
+        if (d == 0) {
+          push_front(n, v);
+        } else {
+          const int s = d - 1; /* the diagonal from v[s] to v[s + 2] */
+          const uint8_t t1[3] = {v[s], v[s + 1], v[s + 2]};
+          const uint8_t t2[3] = {v[s], v[s + 2], v[(s + 3) % 4]};
+          push_front(3, t1);
+          push_front(3, t2);
+        }
+      }
+      result_t *R = calloc(1, sizeof *R);
+      int hit = 0;
+      solve(present, budget, R, &hit);
+      if (R->nelem == 0) {
+        /* No tessellation on the element's own vertices: add its centre,
+         * inside when most vertices are. */
+        if (2 * __builtin_popcount(m) > nv) g_inside |= 1u << MX_LAT_CENTRE;
+        solve(present | 1u << MX_LAT_CENTRE, budget, R, &hit);
+        ncentre++;
+      }
+      if (R->nelem == 0) {
+        fprintf(stderr, "patterngen: surface type %d mask %02x: NO TESSELLATION\n", t, m);
+        failed++;
+      }
+      int nkept = 0;
+      for (int i = 0; i < R->nelem; i++) {
+        const cand_t *c = &R->elem[i];
+        uint8_t loc[8] = {0};
+        int keep = 0;
+        for (int j = 0; j < c->nv; j++) {
+          loc[j] = MX_SURFACE_CENTRE;
+          for (int k = 0; k < nv; k++)
+            if (lat[t][k] == c->v[j]) loc[j] = (uint8_t)k;
+          keep |= (g_inside >> c->v[j]) & 1;
+        }
+        nkept += keep;
+        if (keep && c->q < worst) worst = c->q;
+        ne += (size_t)sprintf(elems + ne, "    {%d, {%d, %d, %d, %d, %d, %d, %d, %d}}, /* %s J_ENS %.3f */\n",
+                              c->type, loc[0], loc[1], loc[2], loc[3], loc[4], loc[5], loc[6],
+                              loc[7], keep ? "kept" : "optional", c->q);
+      }
+      (void)split;
+      const int centre = !((R->mask >> MX_LAT_CENTRE) & 1) ? 0
+                         : ((g_inside >> MX_LAT_CENTRE) & 1) ? 1 : 2;
+      nc += (size_t)sprintf(cases + nc, "    {%d, %d, %u, %d, %d}, /* %d kept%s */\n", t, first, m,
+                            R->nelem, centre, nkept, hit ? ", budget hit" : "");
+      first += R->nelem;
+      worst_n += R->nelem;
+      free(R);
+    }
+    fprintf(stderr, "patterngen: surface type %d: %d elements, worst kept J_ENS %.3f, "
+            "%d masks with the centre so far\n", t, worst_n, worst, ncentre);
+  }
+  fprintf(f, "const mx_surface_case mx_surface_cases[] = {\n%s};\n\n", cases);
+  fprintf(f, "const int mx_surface_nelems = %d;\n\n", first);
+  fprintf(f, "const mx_pattern_elem mx_surface_elems[] = {\n%s};\n", elems);
+  free(cases);
+  free(elems);
+  if (fclose(f)) return 2;
+  return failed ? 1 : 0;
+}
+
 int main(int argc, char **argv) {
   if (argc < 2) {
     fprintf(stderr, "usage: patterngen OUT.c [--budget N]\n");
     return 2;
   }
   long budget = 200000;
-  for (int i = 2; i < argc; i++)
+  int surface = 0;
+  for (int i = 2; i < argc; i++) {
     if (!strcmp(argv[i], "--budget") && i + 1 < argc) budget = atol(argv[++i]);
+    if (!strcmp(argv[i], "--surface")) surface = 1;
+  }
   mx_lattice_init();
   for (int i = 0, s = 0; i < NS; i++)
     for (int j = 0; j < NS; j++)
@@ -586,6 +774,7 @@ int main(int argc, char **argv) {
         samples[s][1] = 2.0 * (j + 0.5 + 0.0291) / NS;
         samples[s][2] = 2.0 * (k + 0.5 - 0.0419) / NS;
       }
+  if (surface) return surface_main(argv[1], budget);
   /* Configurations and classes. */
   uint32_t *reps = malloc(sizeof(uint32_t) * 400);
   int nconf = 0, nrep = 0;

@@ -5,6 +5,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "kernels/boundary_stage.h"
 #include "kernels/quality.h"
 #include "kernels/requests.h"
 
@@ -34,7 +35,7 @@ typedef struct {
 int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now);
 
 typedef struct {
-  double read, grid, refine, balance, transition, quality, write, total;
+  double read, grid, refine, balance, transition, boundary, quality, write, total;
 } mx_phases;
 
 typedef struct {
@@ -53,6 +54,10 @@ typedef struct {
   double memory_estimate_mb;
   mx_phases ph;
   double peak_rss_mb;
+  int full;                 /* the boundary stage ran */
+  mx_boundary_stats boundary;
+  size_t repaired;          /* invalid elements found before a repair round */
+  int repair_rounds;
 } mx_summary;
 
 /* One line describing the machine (hwloc when built in, OpenMP threads). */

@@ -1,10 +1,13 @@
-/* mixoct: from closed surfaces and refinement requests to a mesh.
- * This build runs read -> grid -> refine/balance and stops at the balanced
- * octree (--stage octree). Exit codes: 0 success, 1 internal failure,
+/* mixoct: from closed surfaces and refinement requests to a mesh:
+ * read -> grid -> refine/balance -> transition -> boundary (with repair of
+ * invalid elements by one more refinement) -> quality -> write; --stage
+ * stops earlier. Exit codes: 0 success, 1 internal failure,
  * 2 bad input or usage. */
 #include "cli/cli.h"
 #include "common.h"
+#include "kernels/boundary_stage.h"
 #include "kernels/estimate.h"
+#include "kernels/grid.h"
 #include "kernels/refine.h"
 #include "kernels/transition.h"
 #include "soa/mesh.h"
@@ -108,6 +111,41 @@ static int check_memory(const mx_options *o, const mx_trisoup *all,
   return MX_OK;
 }
 
+/* Boxes asking one more split of the leaves holding invalid elements (the
+ * repair of the 2021 paper: refine once, mesh again). A box strictly inside
+ * a leaf at the leaf's level + 1 splits that leaf and nothing else. */
+static int repair_boxes(const mx_builder *B, const uint32_t *leaves, const mx_mesh_out *M,
+                        mx_box_region **extra, size_t *nextra) {
+  size_t n = *nextra;
+  for (size_t c = 0; c < M->ncells; c++) {
+    if (M->jens[c] > 0.0) continue;
+    const uint32_t o = leaves[M->leaf[c]];
+    const int lv = B->oct.level[o];
+    if (lv + 1 > MX_MAX_LEVEL - 1) continue;
+    double lo[3], hi[3];
+    mx_octant_box(&B->grid, B->oct.key[o], lv, lo, hi);
+    mx_box_region r;
+    for (int a = 0; a < 3; a++) {
+      const double q = 0.25 * (hi[a] - lo[a]);
+      r.lo[a] = lo[a] + q;
+      r.hi[a] = hi[a] - q;
+    }
+    r.level = lv + 1;
+    int seen = 0;
+    for (size_t k = *nextra; k < n && !seen; k++)
+      seen = !memcmp((*extra)[k].lo, r.lo, sizeof r.lo) && (*extra)[k].level == r.level;
+    if (seen) continue;
+    mx_box_region *g = mx_realloc(*extra, (n + 1) * sizeof *g);
+    if (!g) return MX_EINPUT;
+    *extra = g;
+    g[n++] = r;
+  }
+  *nextra = n;
+  return MX_OK;
+}
+
+enum { MAX_REPAIR_ROUNDS = 3 };
+
 static int run(const mx_options *o) {
   const double t_start = mx_wtime();
   mx_summary S;
@@ -115,72 +153,121 @@ static int run(const mx_options *o) {
   mx_trisoup all;
   memset(&all, 0, sizeof all);
   uint32_t nt_domain = 0, region_t0[MX_MAX_REGIONS + 1];
-  mx_box_region *boxes = NULL;
-  size_t nboxes = 0;
+  mx_box_region *boxes = NULL, *extra = NULL;
+  size_t nboxes = 0, nextra = 0;
   mx_builder B;
   memset(&B, 0, sizeof B);
   uint32_t *leaves = NULL;
   size_t nleaves = 0;
+  mx_surface_index SI;
+  memset(&SI, 0, sizeof SI);
+  int have_index = 0;
 
   int st = read_inputs(o, &all, &nt_domain, region_t0, &boxes, &nboxes);
   double t = mx_wtime();
   S.ph.read = t - t_start;
-  if (!st) {
+  if (!st && o->stage == MX_STAGE_FULL) {
+    st = mx_surface_index_build(&SI, &all, 0, nt_domain);
+    have_index = !st;
+  }
+  S.ph.boundary = mx_wtime() - t;
+  for (int round = 0; !st; round++) {
+    t = mx_wtime();
+    /* the requested boxes, then the repair boxes of earlier rounds */
+    mx_box_region *req_boxes = NULL;
+    if (nboxes + nextra) {
+      req_boxes = mx_alloc((nboxes + nextra) * sizeof *req_boxes);
+      if (!req_boxes) {
+        st = MX_EINPUT;
+        break;
+      }
+      if (nboxes) memcpy(req_boxes, boxes, nboxes * sizeof *boxes);
+      if (nextra) memcpy(req_boxes + nboxes, extra, nextra * sizeof *extra);
+    }
     mx_requests req = o->req;
-    req.boxes = boxes;
-    req.nboxes = nboxes;
+    req.boxes = req_boxes;
+    req.nboxes = nboxes + nextra;
     st = mx_builder_init(&B, &all, nt_domain, region_t0, &req,
                          o->balance == MX_BALANCE_EDGES);
-    if (!st) st = check_memory(o, &all, nt_domain, region_t0, &req, &B.grid, &S);
+    if (!st && round == 0) st = check_memory(o, &all, nt_domain, region_t0, &req, &B.grid, &S);
     if (!st) st = mx_build_roots(&B);
-    S.ph.grid = mx_wtime() - t;
-  }
-  if (!st) {
-    if (o->balance == MX_BALANCE_EDGES) {
-      st = mx_refine_balanced(&B);
-    } else {
-      st = mx_refine_unbalanced(&B);
-      if (!st) st = mx_balance_recursive(&B);
-    }
-    S.ph.refine = B.stats.t_refine;
-    S.ph.balance = B.stats.t_balance;
-  }
-  if (!st) st = mx_leaves(&B, &leaves, &nleaves);
-  if (!st && o->stage == MX_STAGE_OCTREE && o->output) {
-    /* The leaves' corners are numbered only for a file: a dry run stops at
-     * the leaves. */
-    t = mx_wtime();
-    st = write_octree(&B, leaves, nleaves, o->output, &S.nodes);
-    S.nodes_counted = 1;
-    S.ph.write = mx_wtime() - t;
-  }
-  if (!st && o->stage == MX_STAGE_TRANSITION) {
-    t = mx_wtime();
-    mx_mesh_out M;
-    memset(&M, 0, sizeof M);
-    st = mx_leaves_sorted(&B, leaves, nleaves);
-    if (!st) st = mx_transition(&B, leaves, nleaves, &M);
-    S.ph.transition = mx_wtime() - t;
+    S.ph.grid += mx_wtime() - t;
     if (!st) {
-      S.nodes = M.nnodes;
-      S.nodes_counted = 1;
-      S.elements = M.ncells;
-      memcpy(S.by_type, M.by_type, sizeof S.by_type);
-      S.jens_min = M.jens_min;
-      S.invalid = M.invalid;
-      S.closures = M.closures;
+      if (o->balance == MX_BALANCE_EDGES) {
+        st = mx_refine_balanced(&B);
+      } else {
+        st = mx_refine_unbalanced(&B);
+        if (!st) st = mx_balance_recursive(&B);
+      }
+      S.ph.refine += B.stats.t_refine;
+      S.ph.balance += B.stats.t_balance;
+    }
+    mx_free(req_boxes);
+    if (!st) st = mx_leaves(&B, &leaves, &nleaves);
+    if (!st && o->stage == MX_STAGE_OCTREE && o->output) {
+      /* The leaves' corners are numbered only for a file: a dry run stops at
+       * the leaves. */
       t = mx_wtime();
-      mx_quality_tabulate(M.type, M.jens, M.ncells, &S.quality);
-      S.ph.quality = mx_wtime() - t;
-      S.centre_leaves = M.centre_leaves;
-      S.mesh = 1;
-      if (o->output) {
+      st = write_octree(&B, leaves, nleaves, o->output, &S.nodes);
+      S.nodes_counted = 1;
+      S.ph.write = mx_wtime() - t;
+    }
+    if (!st && o->stage != MX_STAGE_OCTREE) {
+      t = mx_wtime();
+      mx_mesh_out M;
+      memset(&M, 0, sizeof M);
+      st = mx_leaves_sorted(&B, leaves, nleaves);
+      if (!st) st = mx_transition(&B, leaves, nleaves, &M);
+      S.ph.transition += mx_wtime() - t;
+      if (!st && o->stage == MX_STAGE_FULL) {
         t = mx_wtime();
-        st = write_mixed(&M, o->output);
-        S.ph.write = mx_wtime() - t;
+        mx_boundary_stats bs;
+        st = mx_boundary_stage(&B, leaves, &SI, &M, 0.3, 0.2, &bs);
+        S.ph.boundary += mx_wtime() - t;
+        S.boundary = bs;
+        S.full = 1;
+        if (!st && M.invalid > 0 && round < MAX_REPAIR_ROUNDS) {
+          /* Repair: refine the leaves of the invalid elements once, mesh
+           * again from the start. */
+          const size_t before = nextra;
+          st = repair_boxes(&B, leaves, &M, &extra, &nextra);
+          if (!st && nextra > before) {
+            S.repaired += M.invalid;
+            S.repair_rounds++;
+            mx_mesh_out_free(&M);
+            mx_free(leaves);
+            leaves = NULL;
+            mx_builder_free(&B);
+            memset(&B, 0, sizeof B);
+            continue;
+          }
+        }
+      }
+      if (!st) {
+        S.nodes = M.nnodes;
+        S.nodes_counted = 1;
+        S.elements = M.ncells;
+        memcpy(S.by_type, M.by_type, sizeof S.by_type);
+        S.jens_min = M.jens_min;
+        S.invalid = M.invalid;
+        S.closures = M.closures;
+        t = mx_wtime();
+        mx_quality_tabulate(M.type, M.jens, M.ncells, &S.quality);
+        S.ph.quality = mx_wtime() - t;
+        S.centre_leaves = M.centre_leaves;
+        S.mesh = 1;
+        if (S.invalid)
+          mx_warning(NULL, 0, "%zu element(s) with J_ENS <= 0 remain after %d repair "
+                              "round(s)", S.invalid, S.repair_rounds);
+        if (o->output) {
+          t = mx_wtime();
+          st = write_mixed(&M, o->output);
+          S.ph.write = mx_wtime() - t;
+        }
       }
       mx_mesh_out_free(&M);
     }
+    break;
   }
   if (!st) {
     S.leaves = nleaves;
@@ -200,9 +287,11 @@ static int run(const mx_options *o) {
     if (!o->quiet && !o->json) mx_print_summary(&S);
     if (o->json) mx_print_json(&S);
   }
+  if (have_index) mx_surface_index_free(&SI);
   mx_free(leaves);
   mx_builder_free(&B);
   mx_free(boxes);
+  mx_free(extra);
   mx_trisoup_free(&all);
   return st;
 }

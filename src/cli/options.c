@@ -32,8 +32,10 @@ static const char *usage_text =
     "                              hexahedra with their level)\n"
     "      --stage transition      stop after the transition patterns: the\n"
     "                              conforming mixed mesh of the whole octree\n"
-    "                              (cell data type, level, jens); the default\n"
-    "                              until the boundary stage lands\n"
+    "                              (cell data type, level, jens)\n"
+    "      --stage full            the mesh of the domain (the default): nodes\n"
+    "                              on the surface, surface patterns, staircase\n"
+    "                              reduction, invalid elements repaired\n"
     "      --json                  one JSON summary as the last stdout line\n"
     "      --quiet                 no summary, no warnings\n"
     "\n"
@@ -79,7 +81,7 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
   memset(o, 0, sizeof *o);
   o->req.s_level = -1;
   o->req.a_level = -1;
-  o->stage = MX_STAGE_TRANSITION;
+  o->stage = MX_STAGE_FULL;
   o->balance = MX_BALANCE_EDGES;
   *exit_now = 0;
   for (int i = 1; i < argc; i++) {
@@ -156,12 +158,10 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
       if (strcmp(s, "octree") == 0)
         o->stage = MX_STAGE_OCTREE;
       else if (strcmp(s, "transition") == 0)
-        o->stage = MX_STAGE_TRANSITION;
-      else if (strcmp(s, "full") == 0) {
-        mx_error(NULL, 0, "--stage full is not implemented yet (boundary "
-                          "processing comes next): use octree or transition");
-        return MX_EINPUT;
-      } else {
+        o->stage = MX_STAGE_FULL;
+      else if (strcmp(s, "full") == 0)
+        o->stage = MX_STAGE_FULL;
+      else {
         mx_error(NULL, 0, "--stage wants octree, transition or full, got '%s'", s);
         return MX_EINPUT;
       }

@@ -1,6 +1,7 @@
 #include "kernels/boundary.h"
 
 #include "common.h"
+#include "kernels/mesh_edit.h"
 #include "kernels/quality.h"
 #include "soa/mesh.h"
 #include "soa/scan.h"
@@ -139,110 +140,27 @@ int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states_io,
   mx_free(target);
   mx_free(len);
   mx_free(cnt);
-  /* Remove elements with no inside node; recompute J_ENS where a node moved. */
-  uint64_t *keep = mx_alloc((nc + 1) * sizeof *keep);
-  if (!keep) {
-    mx_free(cand);
-    return MX_EINPUT;
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < nc; c++) {
-    const uint32_t *v = M->conn + 8 * c;
-    const int nv = mx_cell_nodes[M->type[c]];
-    int in = 0, mv = 0;
-    for (int k = 0; k < nv; k++) {
-      in += states[v[k]] == MX_NODE_INSIDE;
-      mv |= cand[v[k]] == 2;
-    }
-    keep[c] = in > 0;
-    if (in > 0 && mv) {
-      double x[8][3];
-      for (int k = 0; k < nv; k++) memcpy(x[k], M->xyz + 3 * (size_t)v[k], sizeof x[k]);
-      M->jens[c] = mx_jens(M->type[c], x);
-    }
-  }
+  /* Recompute J_ENS where a node moved; remove the elements left with no
+   * inside node, then the nodes no element uses. */
+  for (size_t v = 0; v < nn; v++) cand[v] = cand[v] == 2;
+  mx_mesh_update_jens(M, cand);
   mx_free(cand);
-  /* Compact the kept elements, in order: count, prefix sum, fill. */
-  uint64_t *dst = mx_alloc((nc + 1) * sizeof *dst);
-  if (!dst) {
-    mx_free(keep);
-    return MX_EINPUT;
-  }
-  memcpy(dst, keep, nc * sizeof *dst);
-  const uint64_t nkeep = mx_scan_u64(dst, nc);
-  uint8_t *type = mx_alloc(nkeep + 1);
-  uint32_t *conn = mx_alloc((8 * nkeep + 1) * sizeof *conn);
-  int32_t *level = mx_alloc((nkeep + 1) * sizeof *level);
-  uint32_t *leaf = mx_alloc((nkeep + 1) * sizeof *leaf);
-  double *jens = mx_alloc((nkeep + 1) * sizeof *jens);
-  uint64_t *used = mx_calloc((nn + 1) * sizeof *used);
-  if (!type || !conn || !level || !leaf || !jens || !used) {
-    mx_free(type); mx_free(conn); mx_free(level); mx_free(leaf); mx_free(jens);
-    mx_free(used); mx_free(keep); mx_free(dst);
-    return MX_EINPUT;
-  }
+  uint8_t *keep = mx_alloc(nc + 1);
+  if (!keep) return MX_EINPUT;
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
-    if (!keep[c]) continue;
-    const uint64_t w = dst[c];
-    type[w] = M->type[c];
-    memcpy(conn + 8 * w, M->conn + 8 * c, 8 * sizeof *conn);
-    level[w] = M->level[c];
-    leaf[w] = M->leaf[c];
-    jens[w] = M->jens[c];
+    int in = 0;
     for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
-      __atomic_store_n(&used[M->conn[8 * c + k]], 1, __ATOMIC_RELAXED);
+      in |= states[M->conn[8 * c + k]] == MX_NODE_INSIDE;
+    keep[c] = (uint8_t)in;
   }
+  int st = mx_mesh_keep_cells(M, keep);
   mx_free(keep);
-  mx_free(dst);
-  mx_free(M->type); mx_free(M->conn); mx_free(M->level); mx_free(M->leaf); mx_free(M->jens);
-  M->type = type; M->conn = conn; M->level = level; M->leaf = leaf; M->jens = jens;
-  *removed = nc - nkeep;
-  M->ncells = nkeep;
-  /* Drop the nodes no element uses any more, keeping their order. */
-  uint64_t *newid = mx_alloc((nn + 1) * sizeof *newid);
-  if (!newid) {
-    mx_free(used);
-    return MX_EINPUT;
-  }
-  memcpy(newid, used, nn * sizeof *newid);
-  const uint64_t nused = mx_scan_u64(newid, nn);
-  double *xyz = mx_alloc((3 * nused + 3) * sizeof *xyz);
-  uint8_t *st2 = mx_alloc(nused + 1);
-  if (!xyz || !st2) {
-    mx_free(xyz); mx_free(st2); mx_free(used); mx_free(newid);
-    return MX_EINPUT;
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < nn; v++)
-    if (used[v]) {
-      memcpy(xyz + 3 * newid[v], M->xyz + 3 * v, 3 * sizeof *xyz);
-      st2[newid[v]] = states[v];
-    }
-#pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < M->ncells; c++)
-    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
-      M->conn[8 * c + k] = (uint32_t)newid[M->conn[8 * c + k]];
-  mx_free(used);
-  mx_free(newid);
-  mx_free(M->xyz);
-  M->xyz = xyz;
-  mx_free(*states_io);
-  *states_io = st2;
-  M->nnodes = nused;
+  if (!st) st = mx_mesh_drop_unused_nodes(M, states_io, NULL);
+  if (st) return st;
+  *removed = nc - M->ncells;
   *moved = nmoved;
-  /* refresh the summary */
-  size_t bt[4] = {0, 0, 0, 0}, invalid = 0;
-  double jmin = INFINITY;
-#pragma omp parallel for schedule(static) reduction(+ : bt[:4], invalid) reduction(min : jmin)
-  for (size_t c = 0; c < M->ncells; c++) {
-    bt[M->type[c]]++;
-    invalid += M->jens[c] <= 0.0;
-    if (M->jens[c] < jmin) jmin = M->jens[c];
-  }
-  memcpy(M->by_type, bt, sizeof bt);
-  M->invalid = invalid;
-  M->jens_min = M->ncells ? jmin : 1.0;
+  mx_mesh_summarize(M);
   return MX_OK;
 }
 

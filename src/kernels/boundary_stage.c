@@ -1,0 +1,38 @@
+#include "kernels/boundary_stage.h"
+
+#include <string.h>
+
+#include "common.h"
+#include "kernels/mesh_edit.h"
+
+int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
+                      const mx_surface_index *S, mx_mesh_out *M,
+                      double close_ratio, double staircase_q,
+                      mx_boundary_stats *stats) {
+  memset(stats, 0, sizeof *stats);
+  uint8_t *states = mx_alloc(M->nnodes + 1);
+  if (!states) return MX_EINPUT;
+  double t = mx_wtime();
+  int st = mx_node_states(B, leaves, M, S, states, &stats->located);
+  double t1 = mx_wtime();
+  stats->t_states = t1 - t;
+  if (!st)
+    st = mx_remove_close_to_boundary(M, &states, S, close_ratio, &stats->moved_close,
+                                     &stats->removed);
+  t = mx_wtime();
+  stats->t_close = t - t1;
+  mx_optional opt;
+  memset(&opt, 0, sizeof opt);
+  if (!st) st = mx_surface_patterns(M, &states, &opt, &stats->sp);
+  t1 = mx_wtime();
+  stats->t_patterns = t1 - t;
+  if (!st) st = mx_shrink_to_boundary(B, leaves, M, states, &stats->shrunk);
+  t = mx_wtime();
+  stats->t_shrink = t - t1;
+  if (!st && staircase_q < 1.0) st = mx_staircase(M, &opt, staircase_q, &stats->sp);
+  stats->t_staircase = mx_wtime() - t;
+  mx_optional_free(&opt);
+  mx_free(states);
+  if (!st) mx_mesh_summarize(M);
+  return st;
+}

@@ -1,0 +1,118 @@
+#include "kernels/mesh_edit.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "common.h"
+#include "kernels/quality.h"
+#include "soa/mesh.h"
+#include "soa/scan.h"
+
+int mx_mesh_keep_cells(mx_mesh_out *M, const uint8_t *keep) {
+  const size_t nc = M->ncells;
+  uint64_t *dst = mx_alloc((nc + 1) * sizeof *dst);
+  if (!dst) return MX_EINPUT;
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++) dst[c] = keep[c] != 0;
+  const uint64_t nk = mx_scan_u64(dst, nc);
+  uint8_t *type = mx_alloc(nk + 1);
+  uint32_t *conn = mx_alloc((8 * nk + 1) * sizeof *conn);
+  int32_t *level = mx_alloc((nk + 1) * sizeof *level);
+  uint32_t *leaf = mx_alloc((nk + 1) * sizeof *leaf);
+  double *jens = mx_alloc((nk + 1) * sizeof *jens);
+  if (!type || !conn || !level || !leaf || !jens) {
+    mx_free(type); mx_free(conn); mx_free(level); mx_free(leaf); mx_free(jens);
+    mx_free(dst);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++) {
+    if (!keep[c]) continue;
+    const uint64_t w = dst[c];
+    type[w] = M->type[c];
+    memcpy(conn + 8 * w, M->conn + 8 * c, 8 * sizeof *conn);
+    level[w] = M->level[c];
+    leaf[w] = M->leaf[c];
+    jens[w] = M->jens[c];
+  }
+  mx_free(dst);
+  mx_free(M->type); mx_free(M->conn); mx_free(M->level); mx_free(M->leaf); mx_free(M->jens);
+  M->type = type; M->conn = conn; M->level = level; M->leaf = leaf; M->jens = jens;
+  M->ncells = nk;
+  return MX_OK;
+}
+
+int mx_mesh_drop_unused_nodes(mx_mesh_out *M, uint8_t **states, uint32_t **newid_out) {
+  const size_t nn = M->nnodes;
+  uint64_t *id = mx_calloc((nn + 1) * sizeof *id);
+  if (!id) return MX_EINPUT;
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++)
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+      __atomic_store_n(&id[M->conn[8 * c + k]], 1, __ATOMIC_RELAXED);
+  uint8_t *used = mx_alloc(nn + 1);
+  if (!used) {
+    mx_free(id);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < nn; v++) used[v] = (uint8_t)id[v];
+  const uint64_t nu = mx_scan_u64(id, nn);
+  double *xyz = mx_alloc((3 * nu + 3) * sizeof *xyz);
+  uint8_t *st2 = states ? mx_alloc(nu + 1) : NULL;
+  uint32_t *newid = newid_out ? mx_alloc((nn + 1) * sizeof *newid) : NULL;
+  if (!xyz || (states && !st2) || (newid_out && !newid)) {
+    mx_free(xyz); mx_free(st2); mx_free(newid); mx_free(used); mx_free(id);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < nn; v++) {
+    if (newid) newid[v] = used[v] ? (uint32_t)id[v] : UINT32_MAX;
+    if (!used[v]) continue;
+    memcpy(xyz + 3 * id[v], M->xyz + 3 * v, 3 * sizeof *xyz);
+    if (st2) st2[id[v]] = (*states)[v];
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++)
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+      M->conn[8 * c + k] = (uint32_t)id[M->conn[8 * c + k]];
+  mx_free(used);
+  mx_free(id);
+  mx_free(M->xyz);
+  M->xyz = xyz;
+  M->nnodes = nu;
+  if (states) {
+    mx_free(*states);
+    *states = st2;
+  }
+  if (newid_out) *newid_out = newid;
+  return MX_OK;
+}
+
+void mx_mesh_summarize(mx_mesh_out *M) {
+  size_t bt[4] = {0, 0, 0, 0}, invalid = 0;
+  double jmin = INFINITY;
+#pragma omp parallel for schedule(static) reduction(+ : bt[:4], invalid) reduction(min : jmin)
+  for (size_t c = 0; c < M->ncells; c++) {
+    bt[M->type[c]]++;
+    invalid += !(M->jens[c] > 0.0);
+    if (M->jens[c] < jmin) jmin = M->jens[c];
+  }
+  memcpy(M->by_type, bt, sizeof bt);
+  M->invalid = invalid;
+  M->jens_min = M->ncells ? jmin : 1.0;
+}
+
+void mx_mesh_update_jens(mx_mesh_out *M, const uint8_t *moved) {
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++) {
+    const int nv = mx_cell_nodes[M->type[c]];
+    int mv = moved == NULL;
+    for (int k = 0; k < nv && !mv; k++) mv = moved[M->conn[8 * c + k]] != 0;
+    if (!mv) continue;
+    double x[8][3];
+    for (int k = 0; k < nv; k++)
+      memcpy(x[k], M->xyz + 3 * (size_t)M->conn[8 * c + k], sizeof x[k]);
+    M->jens[c] = mx_jens(M->type[c], x);
+  }
+}

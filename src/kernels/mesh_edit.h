@@ -1,0 +1,27 @@
+/* Edits of the mixed mesh shared by the boundary steps: keep a subset of the
+ * elements, drop the nodes no element uses, refresh the summary. Every edit
+ * keeps the order of what remains (count, prefix sum, fill), so the result
+ * does not depend on the thread count. */
+#ifndef MX_MESH_EDIT_H
+#define MX_MESH_EDIT_H
+
+#include <stdint.h>
+
+#include "kernels/transition.h"
+
+/* Keep the elements c with keep[c] != 0, in order. */
+int mx_mesh_keep_cells(mx_mesh_out *M, const uint8_t *keep);
+
+/* Drop the nodes no element uses, renumbering the others in order; *states
+ * (one byte per node, may be NULL) follows. When newid is not NULL it
+ * receives (mx_alloc) the new id of every old node, UINT32_MAX if dropped. */
+int mx_mesh_drop_unused_nodes(mx_mesh_out *M, uint8_t **states, uint32_t **newid);
+
+/* Recount by_type, invalid (J_ENS <= 0) and jens_min from M->jens. */
+void mx_mesh_summarize(mx_mesh_out *M);
+
+/* Recompute J_ENS of the elements with a node flagged in `moved` (all
+ * elements when moved is NULL). */
+void mx_mesh_update_jens(mx_mesh_out *M, const uint8_t *moved);
+
+#endif

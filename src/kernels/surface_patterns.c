@@ -1,0 +1,260 @@
+#include "kernels/surface_patterns.h"
+
+#include <string.h>
+
+#include "common.h"
+#include "kernels/boundary.h"
+#include "kernels/mesh_edit.h"
+#include "kernels/quality.h"
+#include "patterns/surface_table.h"
+#include "soa/mesh.h"
+#include "soa/scan.h"
+
+static const int case_base[4] = {-1, MX_SURFACE_BASE_PYRAMID, MX_SURFACE_BASE_PRISM,
+                                 MX_SURFACE_BASE_HEX};
+
+/* The table case of element c, or NULL when it stays as it is. */
+static const mx_surface_case *case_of(const mx_mesh_out *M, const uint8_t *states, size_t c) {
+  const int t = M->type[c];
+  if (t == MX_TET) return NULL;
+  const int nv = mx_cell_nodes[t];
+  unsigned m = 0;
+  for (int k = 0; k < nv; k++)
+    m |= (unsigned)(states[M->conn[8 * c + k]] == MX_NODE_INSIDE) << k;
+  const mx_surface_case *sc = &mx_surface_cases[case_base[t] + (int)m];
+  return sc->count ? sc : NULL;
+}
+
+/* Sub-element e of case sc: 1 if kept (an inside vertex, or the centre when
+ * it is inside); *centre set when it uses the centre. */
+static int sub_kept(const mx_surface_case *sc, const mx_pattern_elem *e, int *centre) {
+  const int nv = mx_cell_nodes[e->type];
+  int kept = 0;
+  *centre = 0;
+  for (int k = 0; k < nv; k++) {
+    if (e->v[k] == MX_SURFACE_CENTRE) {
+      *centre = 1;
+      kept |= sc->centre == 1;
+    } else {
+      kept |= (sc->mask >> e->v[k]) & 1;
+    }
+  }
+  return kept;
+}
+
+int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, mx_optional *opt,
+                        mx_surface_stats *stats) {
+  const size_t nc = M->ncells, nn = M->nnodes;
+  const uint8_t *states = *states_io;
+  memset(opt, 0, sizeof *opt);
+  /* 1. Count kept and optional sub-elements and centres per element. */
+  uint64_t *nout = mx_alloc((nc + 1) * sizeof *nout);
+  uint64_t *nopt = mx_alloc((nc + 1) * sizeof *nopt);
+  uint64_t *ncen = mx_alloc((nc + 1) * sizeof *ncen);
+  if (!nout || !nopt || !ncen) {
+    mx_free(nout); mx_free(nopt); mx_free(ncen);
+    return MX_EINPUT;
+  }
+  size_t patterned = 0;
+#pragma omp parallel for schedule(static) reduction(+ : patterned)
+  for (size_t c = 0; c < nc; c++) {
+    const mx_surface_case *sc = case_of(M, states, c);
+    if (!sc) {
+      nout[c] = 1;
+      nopt[c] = ncen[c] = 0;
+      continue;
+    }
+    patterned++;
+    uint64_t k = 0, o = 0, cen = 0;
+    for (int i = 0; i < sc->count; i++) {
+      int uc;
+      if (sub_kept(sc, &mx_surface_elems[sc->first + i], &uc)) {
+        k++;
+        cen |= (uint64_t)uc;
+      } else {
+        o += !uc;
+      }
+    }
+    nout[c] = k;
+    nopt[c] = o;
+    ncen[c] = cen;
+  }
+  const uint64_t total = mx_scan_u64(nout, nc);
+  const uint64_t total_opt = mx_scan_u64(nopt, nc);
+  const uint64_t total_cen = mx_scan_u64(ncen, nc);
+  /* 2. Fill. */
+  uint8_t *type = mx_alloc(total + 1);
+  uint32_t *conn = mx_alloc((8 * total + 1) * sizeof *conn);
+  int32_t *level = mx_alloc((total + 1) * sizeof *level);
+  uint32_t *leaf = mx_alloc((total + 1) * sizeof *leaf);
+  double *jens = mx_alloc((total + 1) * sizeof *jens);
+  double *xyz = mx_realloc(M->xyz, (3 * (nn + total_cen) + 3) * sizeof *xyz);
+  uint8_t *st2 = xyz ? mx_realloc(*states_io, nn + total_cen + 1) : NULL;
+  opt->type = mx_alloc(total_opt + 1);
+  opt->conn = mx_alloc((8 * total_opt + 1) * sizeof *opt->conn);
+  opt->leaf = mx_alloc((total_opt + 1) * sizeof *opt->leaf);
+  opt->level = mx_alloc((total_opt + 1) * sizeof *opt->level);
+  if (xyz) M->xyz = xyz;
+  if (st2) *states_io = st2;
+  if (!type || !conn || !level || !leaf || !jens || !xyz || !st2 || !opt->type ||
+      !opt->conn || !opt->leaf || !opt->level) {
+    mx_free(type); mx_free(conn); mx_free(level); mx_free(leaf); mx_free(jens);
+    mx_free(nout); mx_free(nopt); mx_free(ncen);
+    mx_optional_free(opt);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++) {
+    const mx_surface_case *sc = case_of(M, st2, c);
+    const uint32_t *v = M->conn + 8 * c;
+    uint64_t w = nout[c];
+    if (!sc) {
+      type[w] = M->type[c];
+      memcpy(conn + 8 * w, v, 8 * sizeof *conn);
+      level[w] = M->level[c];
+      leaf[w] = M->leaf[c];
+      jens[w] = M->jens[c];
+      continue;
+    }
+    const int nv = mx_cell_nodes[M->type[c]];
+    uint32_t centre = UINT32_MAX;
+    int need = 0;
+    for (int i = 0; i < sc->count; i++) {
+      int uc;
+      need |= sub_kept(sc, &mx_surface_elems[sc->first + i], &uc) && uc;
+    }
+    if (need) {
+      centre = (uint32_t)(nn + ncen[c]);
+      double p[3] = {0.0, 0.0, 0.0};
+      for (int k = 0; k < nv; k++)
+        for (int a = 0; a < 3; a++) p[a] += M->xyz[3 * (size_t)v[k] + a];
+      for (int a = 0; a < 3; a++) xyz[3 * (size_t)centre + a] = p[a] / nv;
+      st2[centre] = sc->centre == 1 ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
+    }
+    uint64_t o = nopt[c];
+    for (int i = 0; i < sc->count; i++) {
+      const mx_pattern_elem *e = &mx_surface_elems[sc->first + i];
+      int uc;
+      const int kept = sub_kept(sc, e, &uc);
+      if (!kept && uc) continue;
+      const int ne = mx_cell_nodes[e->type];
+      uint32_t g[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+      for (int k = 0; k < ne; k++) g[k] = e->v[k] == MX_SURFACE_CENTRE ? centre : v[e->v[k]];
+      if (kept) {
+        type[w] = e->type;
+        memcpy(conn + 8 * w, g, sizeof g);
+        level[w] = M->level[c];
+        leaf[w] = M->leaf[c];
+        double x[8][3];
+        for (int k = 0; k < ne; k++) memcpy(x[k], xyz + 3 * (size_t)g[k], sizeof x[k]);
+        jens[w] = mx_jens(e->type, x);
+        w++;
+      } else {
+        opt->type[o] = e->type;
+        memcpy(opt->conn + 8 * o, g, sizeof g);
+        opt->leaf[o] = M->leaf[c];
+        opt->level[o] = M->level[c];
+        o++;
+      }
+    }
+  }
+  mx_free(nout); mx_free(nopt); mx_free(ncen);
+  mx_free(M->type); mx_free(M->conn); mx_free(M->level); mx_free(M->leaf); mx_free(M->jens);
+  M->type = type; M->conn = conn; M->level = level; M->leaf = leaf; M->jens = jens;
+  M->ncells = total;
+  M->nnodes = nn + total_cen;
+  opt->n = total_opt;
+  /* 3. Nodes only dropped elements used go; the optional elements keep
+   * only those whose nodes all remain. */
+  uint32_t *newid = NULL;
+  int st = mx_mesh_drop_unused_nodes(M, states_io, &newid);
+  if (st) {
+    mx_optional_free(opt);
+    return st;
+  }
+  size_t no = 0;
+  for (size_t i = 0; i < opt->n; i++) {
+    const int ne = mx_cell_nodes[opt->type[i]];
+    int ok = 1;
+    uint32_t g[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    for (int k = 0; k < ne && ok; k++) {
+      g[k] = newid[opt->conn[8 * i + k]];
+      ok = g[k] != UINT32_MAX;
+    }
+    if (!ok) continue;
+    opt->type[no] = opt->type[i];
+    memcpy(opt->conn + 8 * no, g, sizeof g);
+    opt->leaf[no] = opt->leaf[i];
+    opt->level[no] = opt->level[i];
+    no++;
+  }
+  mx_free(newid);
+  stats->patterned = patterned;
+  stats->kept = total;
+  stats->optional = total_opt;
+  stats->centres = total_cen;
+  opt->n = no;
+  mx_mesh_summarize(M);
+  return MX_OK;
+}
+
+int mx_staircase(mx_mesh_out *M, const mx_optional *opt, double q_min,
+                 mx_surface_stats *stats) {
+  uint8_t *ok = mx_alloc(opt->n + 1);
+  double *q = mx_alloc((opt->n + 1) * sizeof *q);
+  if (!ok || !q) {
+    mx_free(ok);
+    mx_free(q);
+    return MX_EINPUT;
+  }
+  size_t n = 0;
+#pragma omp parallel for schedule(static) reduction(+ : n)
+  for (size_t i = 0; i < opt->n; i++) {
+    double x[8][3];
+    const int ne = mx_cell_nodes[opt->type[i]];
+    for (int k = 0; k < ne; k++) memcpy(x[k], M->xyz + 3 * (size_t)opt->conn[8 * i + k], sizeof x[k]);
+    q[i] = mx_jens(opt->type[i], x);
+    ok[i] = q[i] > q_min;
+    n += ok[i];
+  }
+  const size_t nc = M->ncells, nt = nc + n;
+  uint8_t *type = mx_realloc(M->type, nt + 1);
+  if (type) M->type = type;
+  uint32_t *conn = type ? mx_realloc(M->conn, (8 * nt + 1) * sizeof *conn) : NULL;
+  if (conn) M->conn = conn;
+  int32_t *level = conn ? mx_realloc(M->level, (nt + 1) * sizeof *level) : NULL;
+  if (level) M->level = level;
+  uint32_t *leaf = level ? mx_realloc(M->leaf, (nt + 1) * sizeof *leaf) : NULL;
+  if (leaf) M->leaf = leaf;
+  double *jens = leaf ? mx_realloc(M->jens, (nt + 1) * sizeof *jens) : NULL;
+  if (jens) M->jens = jens;
+  if (!jens) {
+    mx_free(ok);
+    mx_free(q);
+    return MX_EINPUT;
+  }
+  size_t w = nc;
+  for (size_t i = 0; i < opt->n; i++) {
+    if (!ok[i]) continue;
+    M->type[w] = opt->type[i];
+    memcpy(M->conn + 8 * w, opt->conn + 8 * i, 8 * sizeof *M->conn);
+    M->level[w] = opt->level[i];
+    M->leaf[w] = opt->leaf[i];
+    M->jens[w] = q[i];
+    w++;
+  }
+  M->ncells = nt;
+  stats->restored = n;
+  mx_free(ok);
+  mx_free(q);
+  mx_mesh_summarize(M);
+  return MX_OK;
+}
+
+void mx_optional_free(mx_optional *opt) {
+  mx_free(opt->type);
+  mx_free(opt->conn);
+  mx_free(opt->leaf);
+  mx_free(opt->level);
+  memset(opt, 0, sizeof *opt);
+}

@@ -1,0 +1,64 @@
+/* Line 12 of Algorithm 1 (2015 paper), "apply surface patterns", and line
+ * 14, "decrease staircase effect".
+ *
+ * The quad-face rule (Fig. 9): a quad face of an element whose four nodes
+ * are not all on the same side is split along the diagonal holding more
+ * outside nodes, and kept whole on a tie: one inside node, the diagonal
+ * joins its two neighbours (the inside corner is cut off); three inside,
+ * the diagonal goes through the outside node; two opposite inside, the
+ * diagonal joins the two outside nodes; two adjacent, none or all inside,
+ * the quad stays. The rule reads only the face's four states, so the two
+ * elements sharing a face split it alike.
+ *
+ * Each pyramid, prism and hexahedron with both inside and outside nodes is
+ * replaced by the tessellation of the generated table
+ * (src/patterns/surface_table.c, tools/patterngen --surface) for its inside
+ * mask; the sub-elements with no inside node are outside and dropped. They
+ * are kept aside as the "optional" elements of the staircase reduction. */
+#ifndef MX_SURFACE_PATTERNS_H
+#define MX_SURFACE_PATTERNS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "kernels/transition.h"
+
+typedef struct {
+  size_t n;
+  uint8_t *type;
+  uint32_t *conn;   /* 8 per element */
+  uint32_t *leaf;
+  int32_t *level;
+} mx_optional;
+
+typedef struct {
+  size_t patterned;  /* elements replaced by a surface pattern */
+  size_t kept;       /* sub-elements kept */
+  size_t optional;   /* sub-elements dropped (candidates for the staircase) */
+  size_t centres;    /* element centres added (patterns that need one) */
+  size_t restored;   /* optional elements put back by the staircase step */
+} mx_surface_stats;
+
+/* The Fig. 9 rule for the quad (a b c d) with inside flags ia..id: 0 keep,
+ * 1 diagonal a-c, 2 diagonal b-d. */
+static inline int mx_surface_diagonal(int ia, int ib, int ic, int id) {
+  const int oa = !ia + !ic, ob = !ib + !id;
+  return oa > ob ? 1 : ob > oa ? 2 : 0;
+}
+
+/* Apply the surface patterns to M (elements stay in leaf order; the new
+ * nodes, element centres, are appended and *states grows with them). The
+ * dropped sub-elements whose nodes all remain in the mesh go to *opt
+ * (allocated here, node ids of the final mesh). */
+int mx_surface_patterns(mx_mesh_out *M, uint8_t **states, mx_optional *opt,
+                        mx_surface_stats *stats);
+
+/* Staircase reduction: put back the optional elements with J_ENS > q_min
+ * (0.2 in the paper), computed at the current node positions (after the
+ * shrink). They are appended to M. */
+int mx_staircase(mx_mesh_out *M, const mx_optional *opt, double q_min,
+                 mx_surface_stats *stats);
+
+void mx_optional_free(mx_optional *opt);
+
+#endif
