@@ -107,9 +107,9 @@ expect_exit 2 "--max-memory is a limit" "$MIXOCT" --demo -s 7 --max-memory 10
 expect_exit 2 "an unknown output format is refused first" "$MIXOCT" --demo -s 3 -o "$T/x.obj"
 has "$T/err" "x.obj" "the refusal names the output"
 
-# Transition stage (the default): a conforming mesh that the independent
+# Transition stage: a conforming mesh that the independent
 # checker accepts, the same bytes for 1 and 2 threads, and the pattern table.
-"$MIXOCT" -i "$T/cube.off" -s 3 -o "$T/cube3.vtu" --quiet
+"$MIXOCT" -i "$T/cube.off" -s 3 -o "$T/cube3.vtu" --quiet --stage transition
 expect_exit 0 "check accepts the cube's transition mesh" "$MIXOCT" check "$T/cube3.vtu" --json
 tail -1 "$T/out" | python3 -c '
 import json, sys
@@ -117,8 +117,8 @@ d = json.load(sys.stdin)
 assert d["defects"] == 0 and d["invalid"] == 0, d
 assert abs(d["volume"] - 1.01**3) < 1e-9, d["volume"]
 ' && ok "cube mesh: 0 defects, the root cube's volume" || bad "cube mesh check"
-"$MIXOCT" --demo -s 5 -o "$T/m1.vtu" --threads 1 --quiet
-"$MIXOCT" --demo -s 5 -o "$T/m2.vtu" --threads 2 --quiet
+"$MIXOCT" --demo -s 5 -o "$T/m1.vtu" --threads 1 --quiet --stage transition
+"$MIXOCT" --demo -s 5 -o "$T/m2.vtu" --threads 2 --quiet --stage transition
 cmp -s "$T/m1.vtu" "$T/m2.vtu" && ok "transition mesh: identical bytes for 1 and 2 threads" || bad "transition threads differ"
 expect_exit 0 "check accepts the demo's transition mesh" "$MIXOCT" check "$T/m1.vtu"
 printf 'not a mesh\n' >"$T/junk.vtu"

@@ -222,7 +222,7 @@ static int run(const mx_options *o) {
       if (!st && o->stage == MX_STAGE_FULL) {
         t = mx_wtime();
         mx_boundary_stats bs;
-        st = mx_boundary_stage(&B, leaves, &SI, &M, 0.3, 0.2, &bs);
+        st = mx_boundary_stage(&B, leaves, &SI, &M, MX_CLOSE_RATIO, 0.2, &bs);
         S.ph.boundary += mx_wtime() - t;
         S.boundary = bs;
         S.full = 1;

@@ -30,6 +30,21 @@ void mx_print_json(const mx_summary *s) {
   char qual[1024] = "null";
   if (s->mesh) quality_json(&s->quality, qual, sizeof qual);
   const size_t hex = s->mesh ? s->by_type[3] : s->leaves;
+  char bnd[1024] = "";
+  if (s->full) {
+    const mx_boundary_stats *b = &s->boundary;
+    snprintf(bnd, sizeof bnd,
+             "\"boundary\": {\"located\": %zu, \"moved_close\": %zu, \"removed\": %zu, "
+             "\"patterned\": %zu, \"sub_elements\": %zu, \"optional\": %zu, "
+             "\"centres\": %zu, \"shrunk\": %zu, \"restored\": %zu, "
+             "\"repaired\": %zu, \"repair_rounds\": %d, "
+             "\"seconds\": {\"states\": %.6f, \"close\": %.6f, \"patterns\": %.6f, "
+             "\"shrink\": %.6f, \"staircase\": %.6f}}, ",
+             b->located, b->moved_close, b->removed, b->sp.patterned, b->sp.kept,
+             b->sp.optional, b->sp.centres, b->shrunk, b->sp.restored, s->repaired,
+             s->repair_rounds, b->t_states, b->t_close, b->t_patterns, b->t_shrink,
+             b->t_staircase);
+  }
   printf("{\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
          "\"nodes\": %s, \"elements\": %zu, "
          "\"by_type\": {\"hex\": %zu, \"prism\": %zu, \"pyramid\": %zu, \"tet\": %zu}, "
@@ -38,28 +53,29 @@ void mx_print_json(const mx_summary *s) {
          "\"located\": %zu, \"split_requested\": %zu, \"split_balance\": %zu, "
          "\"dropped\": %zu, \"centre_leaves\": %zu, \"closures\": %zu, "
          "\"phases\": {\"read\": %.6f, \"grid\": %.6f, \"refine\": %.6f, "
-         "\"balance\": %.6f, \"transition\": %.6f, \"quality\": %.6f, "
-         "\"write\": %.6f}, "
+         "\"balance\": %.6f, \"transition\": %.6f, \"boundary\": %.6f, "
+         "\"quality\": %.6f, \"write\": %.6f}, "
          "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"memory_estimate_mb\": %.1f, "
          "\"threads\": %d, "
-         "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, "
+         "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, %s"
          "\"topology\": \"%s\"}\n",
          s->leaves, s->leaves_hash, nodes, elements, hex,
          s->mesh ? s->by_type[2] : 0, s->mesh ? s->by_type[1] : 0,
-         s->mesh ? s->by_type[0] : 0, s->mesh ? "transition" : "octree",
+         s->mesh ? s->by_type[0] : 0, s->full ? "full" : s->mesh ? "transition" : "octree",
          s->balance ? "recursive" : "edges", s->max_level, s->octants, s->edges,
          (double)s->edge_bytes / 1048576.0, s->located, s->split_requested,
          s->split_balance, s->dropped, s->centre_leaves, s->closures, s->ph.read,
          s->ph.grid, s->ph.refine, s->ph.balance, s->ph.transition,
-         s->ph.quality, s->ph.write,
+         s->ph.boundary, s->ph.quality, s->ph.write,
          s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->threads,
          s->mesh ? s->jens_min : 1.0,
-         s->mesh ? s->invalid : 0, qual, topo);
+         s->mesh ? s->invalid : 0, qual, bnd, topo);
   fflush(stdout);
 }
 
 void mx_print_summary(const mx_summary *s) {
   printf("mixoct: %s (%s balance), %d thread(s)\n",
+         s->full ? "mesh of the domain" :
          s->mesh ? "conforming mesh of the octree (transition stage)"
                  : "balanced octree",
          s->balance ? "recursive" : "edges", s->threads);
@@ -81,9 +97,17 @@ void mx_print_summary(const mx_summary *s) {
         printf("  %-8s      %12zu   J_ENS min %.3f  max %.3f  mean %.3f\n",
                type_name[t], q->count[t], q->min[t], q->max[t], q->mean[t]);
   }
+  if (s->full) {
+    const mx_boundary_stats *b = &s->boundary;
+    printf("  boundary      %zu nodes located, %zu moved close, %zu elements removed,\n"
+           "                %zu patterned into %zu (+%zu centres), %zu shrunk, %zu restored "
+           "(staircase), %zu invalid repaired in %d round(s)\n",
+           b->located, b->moved_close, b->removed, b->sp.patterned, b->sp.kept,
+           b->sp.centres, b->shrunk, b->sp.restored, s->repaired, s->repair_rounds);
+  }
   printf("  time (s)      read %.3f  grid %.3f  refine %.3f  balance %.3f  "
-         "transition %.3f  write %.3f  total %.3f\n",
+         "transition %.3f  boundary %.3f  write %.3f  total %.3f\n",
          s->ph.read, s->ph.grid, s->ph.refine, s->ph.balance, s->ph.transition,
-         s->ph.write, s->ph.total);
+         s->ph.boundary, s->ph.write, s->ph.total);
   printf("  peak memory   %.0f MB\n", s->peak_rss_mb);
 }

@@ -1,9 +1,9 @@
 /* The boundary stage (Lobos & Gonzalez 2015, Algorithm 1, lines 11-14).
  * Done so far: the inside/outside state of every node (mx_node_states),
  * "remove close to boundary" (mx_remove_close_to_boundary) and "shrink to
- * boundary" (mx_shrink_to_boundary). Still to come (issue 4): surface
- * patterns (between the two), staircase reduction, repair of invalid
- * elements. */
+ * boundary" (mx_shrink_to_boundary). The surface
+ * patterns and the staircase are in kernels/surface_patterns.h; the whole
+ * stage in kernels/boundary_stage.h. */
 #ifndef MX_BOUNDARY_H
 #define MX_BOUNDARY_H
 

@@ -2,8 +2,11 @@
 
 #include <string.h>
 
+#include "soa/mesh.h"
+
 #include "common.h"
 #include "kernels/mesh_edit.h"
+#include "kernels/smooth.h"
 
 int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
                       const mx_surface_index *S, mx_mesh_out *M,
@@ -27,6 +30,8 @@ int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
   t1 = mx_wtime();
   stats->t_patterns = t1 - t;
   if (!st) st = mx_shrink_to_boundary(B, leaves, M, states, &stats->shrunk);
+  /* untangle what the shrink inverted, and lift the worst elements */
+  if (!st) st = mx_smooth_nodes(M, states, S, staircase_q, 20, &stats->smoothed);
   t = mx_wtime();
   stats->t_shrink = t - t1;
   if (!st && staircase_q < 1.0) st = mx_staircase(M, &opt, staircase_q, &stats->sp);

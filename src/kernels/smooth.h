@@ -1,0 +1,23 @@
+/* Untangling and local smoothing after the shrink: the nodes of the
+ * elements whose J_ENS is below a target move, one at a time, to the best of
+ * a few points between their position and the centroid of their neighbours,
+ * when that raises the worst J_ENS of the elements around them. A boundary
+ * node (outside: on the surface) moves to the closest surface point of each
+ * such point, so the boundary stays on the surface. This is what makes elements inverted by the shrink valid again
+ * (the repair by refinement of the 2021 paper remains the fallback). */
+#ifndef MX_SMOOTH_H
+#define MX_SMOOTH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "kernels/distance.h"
+#include "kernels/transition.h"
+
+/* q_target: elements below it are worked on; sweeps: passes over the work
+ * set. Serial over a sorted work set: deterministic. *moved: node moves
+ * accepted. */
+int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S,
+                    double q_target, int sweeps, size_t *moved);
+
+#endif
