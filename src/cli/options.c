@@ -158,7 +158,7 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
       if (strcmp(s, "octree") == 0)
         o->stage = MX_STAGE_OCTREE;
       else if (strcmp(s, "transition") == 0)
-        o->stage = MX_STAGE_FULL;
+        o->stage = MX_STAGE_TRANSITION;
       else if (strcmp(s, "full") == 0)
         o->stage = MX_STAGE_FULL;
       else {
