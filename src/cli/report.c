@@ -39,11 +39,12 @@ void mx_print_json(const mx_summary *s) {
              "\"centres\": %zu, \"shrunk\": %zu, \"restored\": %zu, "
              "\"repaired\": %zu, \"repair_rounds\": %d, "
              "\"seconds\": {\"states\": %.6f, \"close\": %.6f, \"patterns\": %.6f, "
-             "\"shrink\": %.6f, \"staircase\": %.6f}}, ",
+             "\"shrink\": %.6f, \"smooth\": %.6f, \"staircase\": %.6f}, "
+             "\"smoothed\": %zu}, ",
              b->located, b->moved_close, b->removed, b->sp.patterned, b->sp.kept,
              b->sp.optional, b->sp.centres, b->shrunk, b->sp.restored, s->repaired,
              s->repair_rounds, b->t_states, b->t_close, b->t_patterns, b->t_shrink,
-             b->t_staircase);
+             b->t_smooth, b->t_staircase, b->smoothed);
   }
   printf("{\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
          "\"nodes\": %s, \"elements\": %zu, "

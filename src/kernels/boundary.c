@@ -125,7 +125,7 @@ int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states_io,
       continue;
     }
     const double avg = (double)len[v] * unit / cnt[v];
-    const double d = mx_closest_point(S, M->xyz + 3 * v, target + 3 * v, NULL, NULL);
+    const double d = mx_closest_point_within(S, M->xyz + 3 * v, ratio * avg, target + 3 * v);
     if (d < ratio * avg) {
       cand[v] = 2;
       nmoved++;

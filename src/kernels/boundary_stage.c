@@ -30,10 +30,13 @@ int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
   t1 = mx_wtime();
   stats->t_patterns = t1 - t;
   if (!st) st = mx_shrink_to_boundary(B, leaves, M, states, &stats->shrunk);
+  t = mx_wtime();
+  stats->t_shrink = t - t1;
+  t1 = t;
   /* untangle what the shrink inverted, and lift the worst elements */
   if (!st) st = mx_smooth_nodes(M, states, S, staircase_q, 20, &stats->smoothed);
   t = mx_wtime();
-  stats->t_shrink = t - t1;
+  stats->t_smooth = t - t1;
   if (!st && staircase_q < 1.0) st = mx_staircase(M, &opt, staircase_q, &stats->sp);
   stats->t_staircase = mx_wtime() - t;
   mx_optional_free(&opt);

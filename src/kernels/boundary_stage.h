@@ -16,7 +16,7 @@ typedef struct {
   mx_surface_stats sp;   /* surface patterns and staircase */
   size_t shrunk;         /* outside nodes moved onto the surface (line 13) */
   size_t smoothed;       /* inside-node moves by the untangling */
-  double t_states, t_close, t_patterns, t_shrink, t_staircase;
+  double t_states, t_close, t_patterns, t_shrink, t_smooth, t_staircase;
 } mx_boundary_stats;
 
 /* close_ratio: the "remove close to boundary" distance, as a fraction of

@@ -545,7 +545,7 @@ double mx_closest_on_triangle(const double t[9], const double p[3], double q[3])
 }
 
 static double closest_slot(const mx_surface_index *S, const double p[3],
-                           double q[3], uint32_t *slot, int *feat) {
+                           double q[3], uint32_t *slot, int *feat, double rmax) {
   double best = INFINITY, thr = INFINITY;
   if (!S->nt) return best;
   const double pm = mx_max(fabs(p[0]), mx_max(fabs(p[1]), fabs(p[2])));
@@ -583,6 +583,10 @@ static double closest_slot(const mx_surface_index *S, const double p[3],
     *slot = i;
     *feat = f;
     if (best == 0.0) return best;
+  }
+  if (rmax < INFINITY) { /* only a point within rmax is wanted */
+    const double r = rmax + delta;
+    thr = fmin(thr, r * r);
   }
   uint32_t stack[4 * STACK_MAX];
   uint8_t scnt[4 * STACK_MAX];
@@ -672,10 +676,20 @@ double mx_closest_point(const mx_surface_index *S, const double p[3],
   double qq[3] = {INFINITY, INFINITY, INFINITY};
   uint32_t slot = 0;
   int f = MX_FEATURE_FACE;
-  const double d2 = closest_slot(S, p, qq, &slot, &f);
+  const double d2 = closest_slot(S, p, qq, &slot, &f, INFINITY);
   if (q) memcpy(q, qq, sizeof qq);
   if (tri) *tri = S->nt ? S->tri_id[slot] : UINT32_MAX;
   if (feature) *feature = f;
+  return sqrt(d2);
+}
+
+double mx_closest_point_within(const mx_surface_index *S, const double p[3],
+                               double rmax, double q[3]) {
+  double qq[3] = {INFINITY, INFINITY, INFINITY};
+  uint32_t slot = 0;
+  int f = MX_FEATURE_FACE;
+  const double d2 = closest_slot(S, p, qq, &slot, &f, rmax);
+  if (q) memcpy(q, qq, sizeof qq);
   return sqrt(d2);
 }
 
@@ -749,7 +763,7 @@ double mx_signed_distance(const mx_surface_index *S, const double p[3],
   double qq[3] = {INFINITY, INFINITY, INFINITY};
   uint32_t slot = 0;
   int f = MX_FEATURE_FACE;
-  const double d2 = closest_slot(S, p, qq, &slot, &f);
+  const double d2 = closest_slot(S, p, qq, &slot, &f, INFINITY);
   if (q) memcpy(q, qq, sizeof qq);
   if (d2 == 0.0) return 0.0;
   const double d = sqrt(d2);
@@ -1253,7 +1267,7 @@ static int build_hints(mx_surface_index *S) {
     double q[3];
     uint32_t slot = 0;
     int f;
-    closest_slot(S, p, q, &slot, &f);
+    closest_slot(S, p, q, &slot, &f, INFINITY);
     hint[c] = slot;
   }
   S->hint = hint;

@@ -184,6 +184,12 @@ void mx_surface_index_free(mx_surface_index *S);
 double mx_closest_point(const mx_surface_index *S, const double p[3],
                         double q[3], uint32_t *tri, int *feature);
 
+/* The same, when only a point within rmax matters: the search prunes
+ * everything farther. Returns the exact distance and q when the closest
+ * point lies within rmax; otherwise a value >= rmax (q then unspecified). */
+double mx_closest_point_within(const mx_surface_index *S, const double p[3],
+                               double rmax, double q[3]);
+
 /* Closest point q of p on one triangle t (its 9 coordinates); returns the
  * squared distance. */
 double mx_closest_on_triangle(const double t[9], const double p[3], double q[3]);

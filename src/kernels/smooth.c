@@ -89,7 +89,8 @@ int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_inde
       qsort(inc + off[v], off[v + 1] - off[v], sizeof *inc, cmp_u32);
     }
   mx_free(cur);
-  mx_free(mark);
+  /* mark[v] now means "v is in the work set and its neighbourhood changed
+   * since it was last looked at". */
   /* Sweeps, one node at a time in id order. */
   static const double steps[] = {1.0, 0.5, 0.25, 0.125};
   size_t nm = 0;
@@ -97,6 +98,8 @@ int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_inde
     size_t changed = 0;
     for (size_t i = 0; i < nw; i++) {
       const uint32_t v = work[i];
+      if (!mark[v]) continue;
+      mark[v] = 0;
       const size_t e0 = off[v], e1 = off[v + 1];
       double *x = M->xyz + 3 * (size_t)v;
       const double w0 = worst_of(M, inc, e0, e1);
@@ -131,7 +134,12 @@ int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_inde
       memcpy(x, bx, sizeof bx);
       if (best > w0) {
         changed++;
-        for (size_t e = e0; e < e1; e++) M->jens[inc[e]] = elem_jens(M, inc[e]);
+        for (size_t e = e0; e < e1; e++) {
+          M->jens[inc[e]] = elem_jens(M, inc[e]);
+          const uint32_t *cv = M->conn + 8 * (size_t)inc[e];
+          for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++)
+            if (off[cv[k] + 1] > off[cv[k]]) mark[cv[k]] = 1; /* in the work set */
+        }
       }
     }
     nm += changed;
@@ -140,6 +148,7 @@ int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_inde
   mx_free(inc);
   mx_free(off);
   mx_free(work);
+  mx_free(mark);
   *moved = nm;
   mx_mesh_summarize(M);
   return MX_OK;
