@@ -1,7 +1,9 @@
 /* mixoct benchmark harness: runs `mixoct --json` on the cortex at -s 4..9
  * with both balances and 1 and 2 threads, and prints a table and one JSON
  * object with leaves, refine and balance seconds, peak RSS, and the ratios
- * (edges vs recursive, 2 threads vs 1, against the reference's figures).
+ * (edges vs recursive, 2 threads vs 1, against the reference's figures);
+ * then the transition stage, and the whole pipeline (--stage full) with
+ * its node and element counts, quality and time against the reference.
  *
  * usage: mixoct-bench [--mixoct PATH] [--input cortex.off] [--levels 4-9]
  *                     [--repeat N] [--json-only]
@@ -12,7 +14,8 @@
 #include <sys/wait.h>
 
 typedef struct {
-  double leaves, refine, balance, transition, nodes, elements, rss, total;
+  double leaves, refine, balance, transition, boundary, nodes, elements, rss, total;
+  double invalid, below02, jens_min;
   char hash[32];
   int ok;
 } result;
@@ -63,6 +66,10 @@ static result run_once(const char *mixoct, const char *input, int level,
   r.refine = json_num(ph, "refine");
   r.balance = json_num(ph, "balance");
   r.transition = json_num(ph, "transition");
+  r.boundary = json_num(ph, "boundary");
+  r.invalid = json_num(last, "invalid");
+  r.below02 = json_num(last, "below_0.2");
+  r.jens_min = json_num(last, "jens_min");
   r.nodes = json_num(last, "nodes");
   r.elements = json_num(last, "elements");
   r.rss = json_num(last, "peak_rss_mb");
@@ -80,8 +87,9 @@ static result run_best(const char *mixoct, const char *input, int level,
   for (int i = 0; i < repeat; i++) {
     result r = run_once(mixoct, input, level, balance, threads, stage);
     if (!r.ok) return r;
-    if (!best.ok || r.refine + r.balance + r.transition <
-                        best.refine + best.balance + best.transition)
+    if (!best.ok || (!strcmp(stage, "full") ? r.total < best.total
+                                            : r.refine + r.balance + r.transition <
+                                                  best.refine + best.balance + best.transition))
       best = r;
   }
   return best;
@@ -89,6 +97,13 @@ static result run_best(const char *mixoct, const char *input, int level,
 
 /* Reference: seconds of the transition patterns at RL9 (REFERENCE.md). */
 static const double ref_transition9 = 21.3;
+/* Reference final meshes (REFERENCE.md): nodes, elements, wall seconds
+ * without the write (generation), peak RSS, elements with J_ENS < 0.2. */
+static const double ref_nodes[10] = {0, 0, 0, 0, 2230, 10941, 49431, 211685, 877104, 3571742};
+static const double ref_elements[10] = {0, 0, 0, 0, 5111, 26209, 119910, 518987, 2160418, 8811570};
+static const double ref_gen_s[10] = {0, 0, 0, 0, 0.117, 0.369, 1.665, 7.157, 29.68, 128.99};
+static const double ref_rss[10] = {0, 0, 0, 0, 13, 34, 121, 490, 1996, 8072};
+static const double ref_below02[10] = {0, 0, 0, 0, 6, 17, 92, -1, -1, -1};
 
 int main(int argc, char **argv) {
   const char *mixoct = "build/mixoct";
@@ -175,7 +190,34 @@ int main(int argc, char **argv) {
       printf("%3d %2d %10.0f %10.0f %12.3f %9s %8.0f %9s\n", l, t + 1, X[l][t].nodes,
              X[l][t].elements, X[l][t].transition, sp, X[l][t].rss, rf);
     }
-  printf("{\"bench\": \"octree\", \"input\": \"%s\", \"repeat\": %d, \"transition\": [", input, repeat);
+  /* The whole pipeline (--stage full, no output file), 2 threads. */
+  result F[10];
+  if (!json_only)
+    printf("\nfull pipeline (domain mesh, no write), 2 threads, best of %d\n"
+           "%3s %10s %7s %10s %7s %7s %6s %9s %10s %9s %8s %8s\n", repeat, "RL", "nodes",
+           "vs ref", "elements", "vs ref", "invalid", "<0.2", "ref <0.2", "boundary s",
+           "total s", "ref/this", "MB");
+  for (int l = lo; l <= hi; l++) {
+    F[l] = run_best(mixoct, input, l, "edges", 2, repeat, "full");
+    if (!F[l].ok) return 1;
+    if (json_only) continue;
+    char rb[16] = "-";
+    if (ref_below02[l] >= 0) snprintf(rb, sizeof rb, "%.0f", ref_below02[l]);
+    printf("%3d %10.0f %+6.2f%% %10.0f %+6.2f%% %7.0f %6.0f %9s %10.3f %9.3f %7.1fx %8.0f\n", l,
+           F[l].nodes, 100.0 * (F[l].nodes - ref_nodes[l]) / ref_nodes[l], F[l].elements,
+           100.0 * (F[l].elements - ref_elements[l]) / ref_elements[l], F[l].invalid,
+           F[l].below02, rb, F[l].boundary, F[l].total, ref_gen_s[l] / F[l].total, F[l].rss);
+  }
+  printf("{\"bench\": \"octree\", \"input\": \"%s\", \"repeat\": %d, \"full\": [", input, repeat);
+  for (int l = lo; l <= hi; l++)
+    printf("%s{\"rl\": %d, \"nodes\": %.0f, \"reference_nodes\": %.0f, \"elements\": %.0f, "
+           "\"reference_elements\": %.0f, \"invalid\": %.0f, \"below_0.2\": %.0f, "
+           "\"jens_min\": %.6f, \"boundary_s_2t\": %.6f, \"total_s_2t\": %.6f, "
+           "\"reference_generation_s\": %.3f, \"peak_rss_mb\": %.1f, \"reference_rss_mb\": %.0f}",
+           l > lo ? ", " : "", l, F[l].nodes, ref_nodes[l], F[l].elements, ref_elements[l],
+           F[l].invalid, F[l].below02, F[l].jens_min, F[l].boundary, F[l].total, ref_gen_s[l],
+           F[l].rss, ref_rss[l]);
+  printf("], \"transition\": [");
   for (int l = lo; l <= hi; l++)
     printf("%s{\"rl\": %d, \"nodes\": %.0f, \"elements\": %.0f, \"transition_s_1t\": %.6f, "
            "\"transition_s_2t\": %.6f, \"peak_rss_mb_2t\": %.1f}", l > lo ? ", " : "", l,
