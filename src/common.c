@@ -3,6 +3,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <sys/mman.h>
 #include <string.h>
 #include <sys/resource.h>
 #include <time.h>
@@ -38,6 +39,21 @@ void mx_warning(const char *file, long line, const char *fmt, ...) {
 
 void *mx_alloc(size_t bytes) {
   if (bytes == 0) bytes = 1;
+  enum { HUGE = 2u << 20 };
+  if (bytes >= 8 * (size_t)HUGE) {
+    /* Big arrays on 2 MB pages where the kernel allows it (transparent huge
+     * pages in "madvise" mode): one page fault per 2 MB instead of 512. */
+    const size_t rounded = (bytes + HUGE - 1) & ~(size_t)(HUGE - 1);
+    void *p = aligned_alloc(HUGE, rounded);
+    if (!p) {
+      mx_error(NULL, 0, "out of memory (asked for %zu bytes)", bytes);
+      return NULL;
+    }
+#ifdef MADV_HUGEPAGE
+    madvise(p, rounded, MADV_HUGEPAGE);
+#endif
+    return p;
+  }
   size_t rounded = (bytes + 63) & ~(size_t)63;
   void *p = aligned_alloc(64, rounded);
   if (!p) mx_error(NULL, 0, "out of memory (asked for %zu bytes)", bytes);

@@ -14,6 +14,8 @@
 #include "soa/regions.h"
 #include "soa/trisoup.h"
 
+#include <limits.h>
+#include <malloc.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -301,6 +303,13 @@ int main(int argc, char **argv) {
     return mx_check_main(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "patterns") == 0)
     return mx_patterns_main(argc - 1, argv + 1);
+  if (!getenv("MX_NO_MALLOPT")) {
+    /* The passes allocate and free arrays of hundreds of MB; served from
+     * the heap and kept there, freed pages are reused instead of being
+     * mapped and faulted in again for every pass. */
+    mallopt(M_MMAP_MAX, 0);
+    mallopt(M_TRIM_THRESHOLD, INT_MAX);
+  }
   mx_options o;
   int exit_now = 0;
   int st = mx_parse_options(argc, argv, &o, &exit_now);

@@ -47,10 +47,8 @@ static const int8_t edges_of[4][12][2] = {
 static const int nedges_of[4] = {6, 8, 9, 12};
 
 
-int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states_io,
-                                const mx_surface_index *S, double ratio,
-                                size_t *moved, size_t *removed) {
-  uint8_t *states = *states_io;
+int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index *S,
+                        double ratio, size_t *moved, uint8_t **moved_flags) {
   const size_t nn = M->nnodes, nc = M->ncells;
   /* Candidates: inside nodes of surface elements. */
   uint8_t *cand = mx_calloc(nn + 1);
@@ -140,11 +138,26 @@ int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states_io,
   mx_free(target);
   mx_free(len);
   mx_free(cnt);
-  /* Recompute J_ENS where a node moved; remove the elements left with no
-   * inside node, then the nodes no element uses. */
+#pragma omp parallel for schedule(static)
   for (size_t v = 0; v < nn; v++) cand[v] = cand[v] == 2;
-  mx_mesh_update_jens(M, cand);
-  mx_free(cand);
+  if (moved_flags) {
+    *moved_flags = cand; /* the caller recomputes J_ENS */
+  } else {
+    mx_mesh_update_jens(M, cand);
+    mx_free(cand);
+  }
+  *moved = nmoved;
+  return MX_OK;
+}
+
+int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states_io,
+                                const mx_surface_index *S, double ratio,
+                                size_t *moved, size_t *removed) {
+  const size_t nc = M->ncells;
+  MX_CHECK(mx_move_close_nodes(M, *states_io, S, ratio, moved, NULL));
+  const uint8_t *states = *states_io;
+  /* Remove the elements left with no inside node, then the nodes no
+   * element uses. */
   uint8_t *keep = mx_alloc(nc + 1);
   if (!keep) return MX_EINPUT;
 #pragma omp parallel for schedule(static)
@@ -159,7 +172,6 @@ int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states_io,
   if (!st) st = mx_mesh_drop_unused_nodes(M, states_io, NULL);
   if (st) return st;
   *removed = nc - M->ncells;
-  *moved = nmoved;
   mx_mesh_summarize(M);
   return MX_OK;
 }

@@ -40,6 +40,14 @@ int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states,
                                 const mx_surface_index *S, double ratio,
                                 size_t *moved, size_t *removed);
 
+/* The moves of mx_remove_close_to_boundary alone (states updated),
+ * without removing anything: the surface patterns drop the elements left
+ * with no inside node in the same pass. With moved_flags NULL, J_ENS is
+ * recomputed here; otherwise *moved_flags receives (mx_alloc) one byte per
+ * node, 1 where it moved, and the caller recomputes. */
+int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index *S,
+                        double ratio, size_t *moved, uint8_t **moved_flags);
+
 /* Line 13 of Algorithm 1, "shrink outside nodes": every outside node moves
  * to its closest point among the domain triangles met by the leaves whose
  * elements use it (ties: the lowest triangle id); then J_ENS is recomputed

@@ -15,18 +15,20 @@ int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
   memset(stats, 0, sizeof *stats);
   uint8_t *states = mx_alloc(M->nnodes + 1);
   if (!states) return MX_EINPUT;
+  uint8_t *moved = NULL;
   double t = mx_wtime();
   int st = mx_node_states(B, leaves, M, S, states, &stats->located);
   double t1 = mx_wtime();
   stats->t_states = t1 - t;
   if (!st)
-    st = mx_remove_close_to_boundary(M, &states, S, close_ratio, &stats->moved_close,
-                                     &stats->removed);
+    st = mx_move_close_nodes(M, states, S, close_ratio, &stats->moved_close, &moved);
   t = mx_wtime();
   stats->t_close = t - t1;
   mx_optional opt;
   memset(&opt, 0, sizeof opt);
-  if (!st) st = mx_surface_patterns(M, &states, &opt, &stats->sp);
+  if (!st) st = mx_surface_patterns(M, &states, moved, &opt, &stats->sp);
+  mx_free(moved);
+  stats->removed = stats->sp.removed;
   t1 = mx_wtime();
   stats->t_patterns = t1 - t;
   if (!st) st = mx_shrink_to_boundary(B, leaves, M, states, &stats->shrunk);

@@ -13,14 +13,18 @@
 static const int case_base[4] = {-1, MX_SURFACE_BASE_PYRAMID, MX_SURFACE_BASE_PRISM,
                                  MX_SURFACE_BASE_HEX};
 
-/* The table case of element c, or NULL when it stays as it is. */
+static const mx_surface_case gone = {0, 0, 0, 0, 0};
+
+/* The table case of element c: NULL when it stays as it is, &gone when it
+ * has no inside node (it is removed). */
 static const mx_surface_case *case_of(const mx_mesh_out *M, const uint8_t *states, size_t c) {
   const int t = M->type[c];
-  if (t == MX_TET) return NULL;
   const int nv = mx_cell_nodes[t];
   unsigned m = 0;
   for (int k = 0; k < nv; k++)
     m |= (unsigned)(states[M->conn[8 * c + k]] == MX_NODE_INSIDE) << k;
+  if (m == 0) return &gone;
+  if (t == MX_TET) return NULL;
   const mx_surface_case *sc = &mx_surface_cases[case_base[t] + (int)m];
   return sc->count ? sc : NULL;
 }
@@ -42,8 +46,8 @@ static int sub_kept(const mx_surface_case *sc, const mx_pattern_elem *e, int *ce
   return kept;
 }
 
-int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, mx_optional *opt,
-                        mx_surface_stats *stats) {
+int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *moved,
+                        mx_optional *opt, mx_surface_stats *stats) {
   const size_t nc = M->ncells, nn = M->nnodes;
   const uint8_t *states = *states_io;
   memset(opt, 0, sizeof *opt);
@@ -51,16 +55,19 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, mx_optional *opt,
   uint64_t *nout = mx_alloc((nc + 1) * sizeof *nout);
   uint64_t *nopt = mx_alloc((nc + 1) * sizeof *nopt);
   uint64_t *ncen = mx_alloc((nc + 1) * sizeof *ncen);
-  if (!nout || !nopt || !ncen) {
-    mx_free(nout); mx_free(nopt); mx_free(ncen);
+  int16_t *cs = mx_alloc((nc + 1) * sizeof *cs); /* case per element: -1 as is, -2 gone */
+  if (!nout || !nopt || !ncen || !cs) {
+    mx_free(nout); mx_free(nopt); mx_free(ncen); mx_free(cs);
     return MX_EINPUT;
   }
-  size_t patterned = 0;
-#pragma omp parallel for schedule(static) reduction(+ : patterned)
+  size_t patterned = 0, removed = 0;
+#pragma omp parallel for schedule(static) reduction(+ : patterned, removed)
   for (size_t c = 0; c < nc; c++) {
     const mx_surface_case *sc = case_of(M, states, c);
-    if (!sc) {
-      nout[c] = 1;
+    cs[c] = (int16_t)(!sc ? -1 : sc == &gone ? -2 : (int)(sc - mx_surface_cases));
+    if (!sc || sc == &gone) {
+      nout[c] = sc ? 0 : 1;
+      removed += sc != NULL;
       nopt[c] = ncen[c] = 0;
       continue;
     }
@@ -99,13 +106,14 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, mx_optional *opt,
   if (!type || !conn || !level || !leaf || !jens || !xyz || !st2 || !opt->type ||
       !opt->conn || !opt->leaf || !opt->level) {
     mx_free(type); mx_free(conn); mx_free(level); mx_free(leaf); mx_free(jens);
-    mx_free(nout); mx_free(nopt); mx_free(ncen);
+    mx_free(nout); mx_free(nopt); mx_free(ncen); mx_free(cs);
     mx_optional_free(opt);
     return MX_EINPUT;
   }
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
-    const mx_surface_case *sc = case_of(M, st2, c);
+    if (cs[c] == -2) continue;
+    const mx_surface_case *sc = cs[c] < 0 ? NULL : &mx_surface_cases[cs[c]];
     const uint32_t *v = M->conn + 8 * c;
     uint64_t w = nout[c];
     if (!sc) {
@@ -113,7 +121,16 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, mx_optional *opt,
       memcpy(conn + 8 * w, v, 8 * sizeof *conn);
       level[w] = M->level[c];
       leaf[w] = M->leaf[c];
-      jens[w] = M->jens[c];
+      int mv = 0;
+      for (int k = 0; moved && k < mx_cell_nodes[M->type[c]]; k++) mv |= moved[v[k]];
+      if (mv) {
+        double x[8][3];
+        for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+          memcpy(x[k], xyz + 3 * (size_t)v[k], sizeof x[k]);
+        jens[w] = mx_jens(M->type[c], x);
+      } else {
+        jens[w] = M->jens[c];
+      }
       continue;
     }
     const int nv = mx_cell_nodes[M->type[c]];
@@ -158,7 +175,7 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, mx_optional *opt,
       }
     }
   }
-  mx_free(nout); mx_free(nopt); mx_free(ncen);
+  mx_free(nout); mx_free(nopt); mx_free(ncen); mx_free(cs);
   mx_free(M->type); mx_free(M->conn); mx_free(M->level); mx_free(M->leaf); mx_free(M->jens);
   M->type = type; M->conn = conn; M->level = level; M->leaf = leaf; M->jens = jens;
   M->ncells = total;
@@ -190,6 +207,7 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, mx_optional *opt,
   }
   mx_free(newid);
   stats->patterned = patterned;
+  stats->removed = removed;
   stats->kept = total;
   stats->optional = total_opt;
   stats->centres = total_cen;

@@ -32,6 +32,7 @@ typedef struct {
 } mx_optional;
 
 typedef struct {
+  size_t removed;    /* elements with no inside node, removed */
   size_t patterned;  /* elements replaced by a surface pattern */
   size_t kept;       /* sub-elements kept */
   size_t optional;   /* sub-elements dropped (candidates for the staircase) */
@@ -46,12 +47,15 @@ static inline int mx_surface_diagonal(int ia, int ib, int ic, int id) {
   return oa > ob ? 1 : ob > oa ? 2 : 0;
 }
 
-/* Apply the surface patterns to M (elements stay in leaf order; the new
+/* Apply the surface patterns to M (elements stay in leaf order; the
+ * elements with no inside node are removed on the way; the new
  * nodes, element centres, are appended and *states grows with them). The
  * dropped sub-elements whose nodes all remain in the mesh go to *opt
- * (allocated here, node ids of the final mesh). */
-int mx_surface_patterns(mx_mesh_out *M, uint8_t **states, mx_optional *opt,
-                        mx_surface_stats *stats);
+ * (allocated here, node ids of the final mesh). moved (may be NULL): nodes
+ * moved since J_ENS was computed; the elements kept as they are and using
+ * one get their J_ENS recomputed. */
+int mx_surface_patterns(mx_mesh_out *M, uint8_t **states, const uint8_t *moved,
+                        mx_optional *opt, mx_surface_stats *stats);
 
 /* Staircase reduction: put back the optional elements with J_ENS > q_min
  * (0.2 in the paper), computed at the current node positions (after the
