@@ -37,12 +37,12 @@ void mx_print_json(const mx_summary *s) {
              "\"boundary\": {\"located\": %zu, \"moved_close\": %zu, \"removed\": %zu, "
              "\"patterned\": %zu, \"sub_elements\": %zu, \"optional\": %zu, "
              "\"centres\": %zu, \"shrunk\": %zu, \"restored\": %zu, "
-             "\"repaired\": %zu, \"repair_rounds\": %d, "
+             "\"inverted_by_shrink\": %zu, \"repaired\": %zu, \"repair_rounds\": %d, "
              "\"seconds\": {\"states\": %.6f, \"close\": %.6f, \"patterns\": %.6f, "
              "\"shrink\": %.6f, \"smooth\": %.6f, \"staircase\": %.6f}, "
              "\"smoothed\": %zu}, ",
              b->located, b->moved_close, b->removed, b->sp.patterned, b->sp.kept,
-             b->sp.optional, b->sp.centres, b->shrunk, b->sp.restored, s->repaired,
+             b->sp.optional, b->sp.centres, b->shrunk, b->sp.restored, b->inverted, s->repaired,
              s->repair_rounds, b->t_states, b->t_close, b->t_patterns, b->t_shrink,
              b->t_smooth, b->t_staircase, b->smoothed);
   }
@@ -101,10 +101,13 @@ void mx_print_summary(const mx_summary *s) {
   if (s->full) {
     const mx_boundary_stats *b = &s->boundary;
     printf("  boundary      %zu nodes located, %zu moved close, %zu elements removed,\n"
-           "                %zu patterned into %zu (+%zu centres), %zu shrunk, %zu restored "
-           "(staircase), %zu invalid repaired in %d round(s)\n",
+           "                %zu patterned into %zu (+%zu centres), %zu shrunk,\n"
+           "                %zu inverted by the shrink, untangled with %zu node moves, "
+           "%zu restored (staircase),\n"
+           "                %zu invalid left for %d refinement round(s)\n",
            b->located, b->moved_close, b->removed, b->sp.patterned, b->sp.kept,
-           b->sp.centres, b->shrunk, b->sp.restored, s->repaired, s->repair_rounds);
+           b->sp.centres, b->shrunk, b->inverted, b->smoothed, b->sp.restored, s->repaired,
+           s->repair_rounds);
   }
   printf("  time (s)      read %.3f  grid %.3f  refine %.3f  balance %.3f  "
          "transition %.3f  boundary %.3f  write %.3f  total %.3f\n",
