@@ -824,12 +824,12 @@ static void test_dispatch(void) {
   char path[512];
   size_t len;
   path_in(path, sizeof path, "disp.VTK");
-  CHECK(mx_write_mesh(path, &t.v) == MX_OK);
+  CHECK(mx_write_mesh(path, &t.v, 0) == MX_OK);
   char *buf = slurp(path, &len);
   CHECK(buf && strstr(buf, "\nBINARY\n"));
   free(buf);
   path_in(path, sizeof path, "disp.Vtu");
-  CHECK(mx_write_mesh(path, &t.v) == MX_OK);
+  CHECK(mx_write_mesh(path, &t.v, 0) == MX_OK);
   rmesh r;
   CHECK(read_vtu(path, &r) && compare_mesh(&r, &t.v));
   rmesh_free(&r);
@@ -837,7 +837,7 @@ static void test_dispatch(void) {
   static const char *bad[] = {"disp.obj", "disp", "disp.vtk.gz", "vtk"};
   for (int k = 0; k < 4; k++) {
     path_in(path, sizeof path, bad[k]);
-    CHECK(mx_write_mesh(path, &t.v) == MX_EINPUT);
+    CHECK(mx_write_mesh(path, &t.v, 0) == MX_EINPUT);
     CHECK(!exists(path));
   }
   CHECK(count_entries(OUT_DIR, "disp") == 2);
@@ -863,7 +863,7 @@ static void expect_write_failure(const tmesh *t, const char *path,
   CHECK(mx_write_vtk_legacy(path, &t->v, 1) == MX_EINPUT);
   CHECK(mx_write_vtk_legacy(path, &t->v, 0) == MX_EINPUT);
   CHECK(mx_write_vtu(path, &t->v) == MX_EINPUT);
-  CHECK(mx_write_mesh(path, &t->v) == MX_EINPUT);
+  CHECK(mx_write_mesh(path, &t->v, 0) == MX_EINPUT);
   CHECK(!exists(path));
   if (dir) CHECK(count_entries(dir, prefix) <= 0);
 }

@@ -25,6 +25,7 @@ typedef struct {
   mx_requests req;       /* levels; boxes filled after reading */
   int threads;           /* 0: OpenMP default */
   int json, quiet;
+  int ascii;             /* --ascii: the ASCII variant of .vtk / .msh */
   int stage;
   int balance;
   double max_memory_mb; /* 0: the memory available */

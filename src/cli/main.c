@@ -56,7 +56,7 @@ static int read_inputs(const mx_options *o, mx_trisoup *all,
 }
 
 static int write_octree(const mx_builder *B, uint32_t *leaves, size_t n,
-                        const char *path, size_t *nnodes) {
+                        const char *path, int ascii, size_t *nnodes) {
   MX_CHECK(mx_leaves_sorted(B, leaves, n));
   mx_hexmesh h;
   MX_CHECK(mx_leaf_hex_mesh(B, leaves, n, &h));
@@ -71,14 +71,14 @@ static int write_octree(const mx_builder *B, uint32_t *leaves, size_t n,
     memset(type, MX_HEX, n);
     mx_field level = {"level", 0, h.level, NULL};
     mx_mesh_view v = {h.nnodes, h.xyz, n, type, h.conn, 1, &level, 0, NULL};
-    st = mx_write_mesh(path, &v);
+    st = mx_write_mesh(path, &v, ascii);
     mx_free(type);
   }
   mx_hexmesh_free(&h);
   return st;
 }
 
-static int write_mixed(const mx_mesh_out *M, const char *path) {
+static int write_mixed(const mx_mesh_out *M, const char *path, int ascii) {
   int32_t *type = mx_alloc((M->ncells + 1) * sizeof *type);
   if (!type) return MX_EINPUT;
   for (size_t i = 0; i < M->ncells; i++) type[i] = M->type[i];
@@ -86,7 +86,7 @@ static int write_mixed(const mx_mesh_out *M, const char *path) {
                    {"level", 0, M->level, NULL},
                    {"jens", 1, NULL, M->jens}};
   mx_mesh_view v = {M->nnodes, M->xyz, M->ncells, M->type, M->conn, 3, f, 0, NULL};
-  int st = mx_write_mesh(path, &v);
+  int st = mx_write_mesh(path, &v, ascii);
   mx_free(type);
   return st;
 }
@@ -210,7 +210,7 @@ static int run(const mx_options *o) {
       /* The leaves' corners are numbered only for a file: a dry run stops at
        * the leaves. */
       t = mx_wtime();
-      st = write_octree(&B, leaves, nleaves, o->output, &S.nodes);
+      st = write_octree(&B, leaves, nleaves, o->output, o->ascii, &S.nodes);
       S.nodes_counted = 1;
       S.ph.write = mx_wtime() - t;
     }
@@ -263,7 +263,7 @@ static int run(const mx_options *o) {
                               "round(s)", S.invalid, S.repair_rounds);
         if (o->output) {
           t = mx_wtime();
-          st = write_mixed(&M, o->output);
+          st = write_mixed(&M, o->output, o->ascii);
           S.ph.write = mx_wtime() - t;
         }
       }

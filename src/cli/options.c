@@ -1,4 +1,5 @@
 #include "cli/cli.h"
+#include "soa/mesh.h"
 
 #include "common.h"
 #include "morton/morton.h"
@@ -26,7 +27,8 @@ static const char *usage_text =
     "  -r, --region-surface S RL   octants meeting or inside surface S\n"
     "\n"
     "Output:\n"
-    "  -o, --output OUT            .vtk (legacy binary) or .vtu; without -o\n"
+    "  -o, --output OUT            .vtk (legacy), .vtu, .msh (Gmsh 4.1), .mesh /\n"
+    "                              .meshb (Medit), .getfem, .m3d; without -o\n"
     "                              nothing is written (a dry run)\n"
     "      --stage octree          stop after the balanced octree (leaves as\n"
     "                              hexahedra with their level)\n"
@@ -36,6 +38,7 @@ static const char *usage_text =
     "      --stage full            the mesh of the domain (the default): nodes\n"
     "                              on the surface, surface patterns, staircase\n"
     "                              reduction, invalid elements repaired\n"
+    "      --ascii                 ASCII .vtk / .msh (binary by default)\n"
     "      --json                  one JSON summary as the last stdout line\n"
     "      --quiet                 no summary, no warnings\n"
     "\n"
@@ -152,6 +155,8 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
       o->json = 1;
     } else if (strcmp(a, "--quiet") == 0) {
       o->quiet = 1;
+    } else if (strcmp(a, "--ascii") == 0) {
+      o->ascii = 1;
     } else if (strcmp(a, "--stage") == 0) {
       MX_CHECK(need_arg(i, argc, a));
       const char *s = argv[++i];
@@ -194,8 +199,9 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
   if (o->output) {
     /* fail before meshing, not after */
     const char *dot = strrchr(o->output, '.');
-    if (!dot || (strcasecmp(dot, ".vtu") != 0 && strcasecmp(dot, ".vtk") != 0)) {
-      mx_error(o->output, 0, "unknown output format \"%s\" (use .vtu or .vtk)",
+    if (!dot || !mx_mesh_format_known(o->output)) {
+      mx_error(o->output, 0, "unknown output format \"%s\" (use .vtk, .vtu, .msh, "
+                             ".mesh, .meshb, .getfem or .m3d)",
                dot ? dot : "");
       return MX_EINPUT;
     }

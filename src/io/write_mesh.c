@@ -16,15 +16,28 @@ static const char *path_extension(const char *path) {
   return dot && dot != base ? dot : "";
 }
 
-int mx_write_mesh(const char *path, const mx_mesh_view *m) {
+int mx_write_mesh(const char *path, const mx_mesh_view *m, int ascii) {
   const char *ext = path_extension(path);
-  if (strcasecmp(ext, ".vtk") == 0) return mx_write_vtk_legacy(path, m, 1);
+  if (strcasecmp(ext, ".vtk") == 0) return mx_write_vtk_legacy(path, m, !ascii);
   if (strcasecmp(ext, ".vtu") == 0) return mx_write_vtu(path, m);
+  if (strcasecmp(ext, ".msh") == 0) return mx_write_msh(path, m, !ascii);
+  if (strcasecmp(ext, ".mesh") == 0) return mx_write_medit(path, m, 0);
+  if (strcasecmp(ext, ".meshb") == 0) return mx_write_medit(path, m, 1);
+  if (strcasecmp(ext, ".getfem") == 0) return mx_write_getfem(path, m);
+  if (strcasecmp(ext, ".m3d") == 0) return mx_write_m3d(path, m);
   mx_error(path, 0,
-           "unknown output format \"%s\" (use .vtk for legacy VTK or .vtu "
-           "for VTK XML)",
+           "unknown output format \"%s\" (use .vtk, .vtu, .msh, .mesh, .meshb, "
+           ".getfem or .m3d)",
            ext);
   return MX_EINPUT;
+}
+
+int mx_mesh_format_known(const char *path) {
+  static const char *known[] = {".vtk", ".vtu", ".msh", ".mesh", ".meshb", ".getfem", ".m3d"};
+  const char *ext = path_extension(path);
+  for (size_t i = 0; i < sizeof known / sizeof *known; i++)
+    if (strcasecmp(ext, known[i]) == 0) return 1;
+  return 0;
 }
 
 /* ---- mesh view consistency ----------------------------------------------- */

@@ -46,7 +46,20 @@ typedef struct {
  * returned. */
 int mx_write_vtk_legacy(const char *path, const mx_mesh_view *m, int binary);
 int mx_write_vtu(const char *path, const mx_mesh_view *m);
-/* Dispatch on the extension: .vtk (legacy binary), .vtu. */
-int mx_write_mesh(const char *path, const mx_mesh_view *m);
+/* Gmsh MSH 4.1 (src/io/write_msh.c). */
+int mx_write_msh(const char *path, const mx_mesh_view *m, int binary);
+/* Medit .mesh (ASCII) / .meshb (binary), with the boundary triangles and
+ * quadrilaterals (src/io/write_medit.c). */
+int mx_write_medit(const char *path, const mx_mesh_view *m, int binary);
+/* The published mesher's GetFEM and M3D files (src/io/write_getfem.c,
+ * src/io/write_m3d.c). */
+int mx_write_getfem(const char *path, const mx_mesh_view *m);
+int mx_write_m3d(const char *path, const mx_mesh_view *m);
+/* Dispatch on the extension: .vtk (legacy), .vtu, .msh, .mesh, .meshb,
+ * .getfem, .m3d; ascii selects the ASCII variant where a format has both
+ * (.vtk, .msh). */
+int mx_write_mesh(const char *path, const mx_mesh_view *m, int ascii);
+/* 1 if the extension of path names a format mx_write_mesh knows. */
+int mx_mesh_format_known(const char *path);
 
 #endif

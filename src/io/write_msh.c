@@ -1,0 +1,10 @@
+/* Gmsh MSH 4.1 writer: not written yet (issue 5). */
+#include "common.h"
+#include "soa/mesh.h"
+
+int mx_write_msh(const char *path, const mx_mesh_view *m, int binary) {
+  (void)m;
+  (void)binary;
+  mx_error(path, 0, "the Gmsh MSH 4.1 writer is not available yet");
+  return MX_EINPUT;
+}
