@@ -98,7 +98,7 @@ static int check_memory(const mx_options *o, const mx_trisoup *all,
                         const mx_requests *req, const mx_grid *g,
                         mx_summary *S) {
   const double need = mx_estimate_bytes(all, nt_domain, region_t0, req, g,
-                                        o->stage != MX_STAGE_OCTREE);
+                                        o->stage);
   S->memory_estimate_mb = need / 1048576.0;
   const double avail = mx_available_bytes();
   const double limit = o->max_memory_mb > 0 ? o->max_memory_mb * 1048576.0 : avail;

@@ -15,7 +15,7 @@
 #include "kernels/requests.h"
 #include "soa/trisoup.h"
 
-/* Estimated peak bytes of a run; stage 0: octree, 1: transition. */
+/* Estimated peak bytes of a run; stage 0: octree, 1: transition, 2: full. */
 double mx_estimate_bytes(const mx_trisoup *soup, uint32_t nt_domain,
                          const uint32_t *region_t0, const mx_requests *req,
                          const mx_grid *g, int stage);
