@@ -132,5 +132,76 @@ assert d["centre_classes"] <= 65 and d["worst_jens"] >= 0.172, d
 assert set(d["by_type"]) == {"tet", "pyramid", "prism", "hex"}
 ' && ok "patterns --json: 325 classes, centre and quality targets" || bad "patterns --json"
 
+# --help groups, --version contents, and no progress line when stderr is not
+# a terminal (job scripts and these tests): a clean run prints nothing there.
+"$MIXOCT" --help >"$T/help"
+for g in "Input" "Refinement requests" "Output:" "Execution:" "Subcommands:" "Examples:"; do
+  has "$T/help" "$g" "help has the group '$g'"
+done
+"$MIXOCT" --version >"$T/version"
+for k in "mixoct [0-9]" "build " "compiler " "OpenMP max threads" "topology "; do
+  has "$T/version" "$k" "version shows '$k'"
+done
+"$MIXOCT" --demo -s 5 >"$T/out" 2>"$T/err"
+[ ! -s "$T/err" ] && ok "no progress on stderr when it is not a terminal" || bad "stderr not empty: $(cat "$T/err")"
+has "$T/out" "J_ENS" "the summary has the J_ENS table"
+has "$T/out" "peak memory" "the summary has the peak memory"
+
+# Full disk and denied permission: exit 2, a message naming the file, and no
+# partial or temporary file left in the directory.
+only_has() { # dir, expected listing (space separated, sorted), description
+  local got; got=$(ls -A "$1" | sort | tr '\n' ' ' | sed 's/ $//')
+  [ "$got" = "$2" ] && ok "$3" || bad "$3: '$got' left in $1"
+}
+expect_exit 2 "output under /dev/full (not a directory)" "$MIXOCT" --demo -s 3 -o /dev/full/x.vtu
+has "$T/err" "/dev/full/x.vtu" "the message names /dev/full/x.vtu"
+# A full disk: /dev/full behind a .vtu name is written in place (a device).
+mkdir "$T/full" && ln -s /dev/full "$T/full/out.vtu"
+expect_exit 2 "full disk (/dev/full)" "$MIXOCT" --demo -s 3 -o "$T/full/out.vtu"
+has "$T/err" "full/out.vtu" "the full-disk message names the file"
+has "$T/err" "No space left" "the full-disk message says why"
+only_has "$T/full" "out.vtu" "full disk: nothing but the link left"
+[ "$(readlink "$T/full/out.vtu")" = /dev/full ] && ok "full disk: the device link is untouched" || bad "the /dev/full link was replaced"
+# A disk filling up half-way through a regular file: a file-size limit
+# (SIGXFSZ ignored, so writes fail with EFBIG as they would with ENOSPC).
+mkdir "$T/fsize"
+(ulimit -f 16 && trap '' XFSZ && exec "$MIXOCT" --demo -s 5 -o "$T/fsize/x.vtu") >"$T/out" 2>"$T/err"
+got=$?
+[ "$got" -eq 2 ] && ok "output cut short by a full disk (exit 2)" || bad "output cut short: exit $got, wanted 2"
+has "$T/err" "fsize/x.vtu" "the cut-short message names the file"
+only_has "$T/fsize" "" "cut short: no partial or temporary file left"
+# A read-only directory. Root ignores permissions: then run as nobody
+# (setpriv), or, if that cannot run mixoct, skip this one case (the next two
+# cover a directory that cannot be written whoever runs the test).
+mkdir "$T/ro" && chmod 555 "$T/ro"
+as_user=()
+if [ "$(id -u)" -eq 0 ]; then
+  chmod 711 "$T"
+  if command -v setpriv >/dev/null &&
+     setpriv --reuid=65534 --regid=65534 --clear-groups "$MIXOCT" --version >/dev/null 2>&1 &&
+     ! setpriv --reuid=65534 --regid=65534 --clear-groups touch "$T/ro/probe" 2>/dev/null; then
+    as_user=(setpriv --reuid=65534 --regid=65534 --clear-groups)
+  else
+    as_user=(skip)
+  fi
+fi
+if [ "${as_user[0]:-}" = skip ]; then
+  ok "read-only directory: skipped (root, and setpriv cannot run mixoct as nobody)"
+else
+  expect_exit 2 "read-only directory" "${as_user[@]}" "$MIXOCT" --demo -s 3 -o "$T/ro/x.vtu"
+  has "$T/err" "ro/x.vtu" "the read-only message names the file"
+  has "$T/err" "Permission denied" "the read-only message says why"
+  only_has "$T/ro" "" "read-only directory: nothing left"
+fi
+chmod 700 "$T/ro"
+printf 'x\n' >"$T/plain"
+expect_exit 2 "output under a regular file" "$MIXOCT" --demo -s 3 -o "$T/plain/x.vtu"
+has "$T/err" "plain/x.vtu" "the message names the file under a regular file"
+if [ -d /sys/kernel ]; then
+  expect_exit 2 "output in /sys (denied even to root)" "$MIXOCT" --demo -s 3 -o /sys/mixoct-test.vtu
+  has "$T/err" "/sys/mixoct-test.vtu" "the /sys message names the file"
+  [ ! -e /sys/mixoct-test.vtu ] && ok "nothing written in /sys" || bad "a file appeared in /sys"
+fi
+
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]

@@ -4,6 +4,7 @@
  * stops earlier. Exit codes: 0 success, 1 internal failure,
  * 2 bad input or usage. */
 #include "cli/cli.h"
+#include "cli/progress.h"
 #include "common.h"
 #include "kernels/boundary_stage.h"
 #include "kernels/estimate.h"
@@ -165,16 +166,21 @@ static int run(const mx_options *o) {
   memset(&SI, 0, sizeof SI);
   int have_index = 0;
 
+  mx_progress_start(!o->quiet && !o->json, o->stage, o->output != NULL);
+  mx_progress_stage("read");
   int st = read_inputs(o, &all, &nt_domain, region_t0, &boxes, &nboxes);
   double t = mx_wtime();
   S.ph.read = t - t_start;
   if (!st && o->stage == MX_STAGE_FULL) {
+    mx_progress_stage("index");
     st = mx_surface_index_build(&SI, &all, 0, nt_domain);
     have_index = !st;
   }
   S.ph.boundary = mx_wtime() - t;
   for (int round = 0; !st; round++) {
     t = mx_wtime();
+    mx_progress_round(round);
+    mx_progress_stage("grid");
     /* the requested boxes, then the repair boxes of earlier rounds */
     mx_box_region *req_boxes = NULL;
     if (nboxes + nextra) {
@@ -191,14 +197,17 @@ static int run(const mx_options *o) {
     req.nboxes = nboxes + nextra;
     st = mx_builder_init(&B, &all, nt_domain, region_t0, &req,
                          o->balance == MX_BALANCE_EDGES);
+    B.on_level = mx_progress_on_level; /* NULL user data */
     if (!st && round == 0) st = check_memory(o, &all, nt_domain, region_t0, &req, &B.grid, &S);
     if (!st) st = mx_build_roots(&B);
     S.ph.grid += mx_wtime() - t;
     if (!st) {
+      mx_progress_stage("refine");
       if (o->balance == MX_BALANCE_EDGES) {
         st = mx_refine_balanced(&B);
       } else {
         st = mx_refine_unbalanced(&B);
+        if (!st) mx_progress_stage("balance");
         if (!st) st = mx_balance_recursive(&B);
       }
       S.ph.refine += B.stats.t_refine;
@@ -210,12 +219,14 @@ static int run(const mx_options *o) {
       /* The leaves' corners are numbered only for a file: a dry run stops at
        * the leaves. */
       t = mx_wtime();
+      mx_progress_stage("write");
       st = write_octree(&B, leaves, nleaves, o->output, o->ascii, &S.nodes);
       S.nodes_counted = 1;
       S.ph.write = mx_wtime() - t;
     }
     if (!st && o->stage != MX_STAGE_OCTREE) {
       t = mx_wtime();
+      mx_progress_stage("transition");
       mx_mesh_out M;
       memset(&M, 0, sizeof M);
       st = mx_leaves_sorted(&B, leaves, nleaves);
@@ -223,6 +234,7 @@ static int run(const mx_options *o) {
       S.ph.transition += mx_wtime() - t;
       if (!st && o->stage == MX_STAGE_FULL) {
         t = mx_wtime();
+        mx_progress_stage("boundary");
         mx_boundary_stats bs;
         st = mx_boundary_stage(&B, leaves, &SI, &M, MX_CLOSE_RATIO, 0.2, &bs);
         S.ph.boundary += mx_wtime() - t;
@@ -254,6 +266,7 @@ static int run(const mx_options *o) {
         S.invalid = M.invalid;
         S.closures = M.closures;
         t = mx_wtime();
+        mx_progress_stage("quality");
         mx_quality_tabulate(M.type, M.jens, M.ncells, &S.quality);
         S.ph.quality = mx_wtime() - t;
         S.centre_leaves = M.centre_leaves;
@@ -263,6 +276,7 @@ static int run(const mx_options *o) {
                               "round(s)", S.invalid, S.repair_rounds);
         if (o->output) {
           t = mx_wtime();
+          mx_progress_stage("write");
           st = write_mixed(&M, o->output, o->ascii);
           S.ph.write = mx_wtime() - t;
         }
@@ -286,6 +300,7 @@ static int run(const mx_options *o) {
     S.max_level = mx_max_requested_level(&B.req);
     S.ph.total = mx_wtime() - t_start;
     S.peak_rss_mb = mx_peak_rss_mb();
+    mx_progress_done(); /* before the summary, on the same terminal */
     if (!o->quiet && !o->json) mx_print_summary(&S);
     if (o->json) mx_print_json(&S);
   }
@@ -295,6 +310,7 @@ static int run(const mx_options *o) {
   mx_free(boxes);
   mx_free(extra);
   mx_trisoup_free(&all);
+  mx_progress_done();
   return st;
 }
 

@@ -12,15 +12,21 @@
 #include <strings.h>
 
 static const char *usage_text =
+    "mixoct: a parallel mixed-element octree mesher (hexahedra, prisms,\n"
+    "pyramids, tetrahedra) from closed triangulated surfaces.\n"
+    "\n"
     "usage: mixoct -i FILE [-i FILE2 ...] [requests] [-o OUT] [options]\n"
     "       mixoct --demo [requests] [-o OUT] [options]\n"
+    "       mixoct check MESH [--surface FILE] [--json] [--quiet]\n"
+    "       mixoct patterns [--json]\n"
     "\n"
     "Input (OFF, MDL, STL ascii/binary, OBJ; several -i form one domain, a\n"
     "shell inside another is a hole):\n"
-    "  -i, --input FILE            a closed triangulated surface\n"
+    "  -i, --input FILE            a closed triangulated surface (repeatable)\n"
     "      --demo                  the built-in brain-like surface\n"
     "\n"
-    "Refinement requests (an octant takes the largest level asked):\n"
+    "Refinement requests (an octant takes the largest level asked; levels 0 to\n"
+    "15, each one halves the octant size):\n"
     "  -s, --surface-level RL      octants meeting the input surface\n"
     "  -a, --all-level RL          every octant of the domain\n"
     "  -b, --regions FILE.reg      boxes with levels\n"
@@ -29,34 +35,101 @@ static const char *usage_text =
     "Output:\n"
     "  -o, --output OUT            .vtk (legacy), .vtu, .msh (Gmsh 4.1), .mesh /\n"
     "                              .meshb (Medit), .getfem, .m3d; without -o\n"
-    "                              nothing is written (a dry run)\n"
-    "      --stage octree          stop after the balanced octree (leaves as\n"
-    "                              hexahedra with their level)\n"
-    "      --stage transition      stop after the transition patterns: the\n"
-    "                              conforming mixed mesh of the whole octree\n"
-    "                              (cell data type, level, jens)\n"
+    "                              nothing is written (a dry run). Written to a\n"
+    "                              temporary name and renamed: never partial\n"
     "      --stage full            the mesh of the domain (the default): nodes\n"
     "                              on the surface, surface patterns, staircase\n"
     "                              reduction, invalid elements repaired\n"
+    "      --stage transition      stop after the transition patterns: the\n"
+    "                              conforming mixed mesh of the whole octree\n"
+    "                              (cell data type, level, jens)\n"
+    "      --stage octree          stop after the balanced octree (leaves as\n"
+    "                              hexahedra with their level)\n"
     "      --ascii                 ASCII .vtk / .msh (binary by default)\n"
     "      --json                  one JSON summary as the last stdout line\n"
-    "      --quiet                 no summary, no warnings\n"
+    "                              (no summary table, no progress line)\n"
+    "      --quiet                 no summary, no warnings, no progress line\n"
     "\n"
     "Execution:\n"
-    "      --threads N             OpenMP threads (default: all cores)\n"
+    "      --threads N             OpenMP threads (default: OMP_NUM_THREADS, or\n"
+    "                              all cores); the output bytes do not depend\n"
+    "                              on it. Pinning: OMP_PLACES=cores\n"
+    "                              OMP_PROC_BIND=close (see README, Threads)\n"
     "      --max-memory MB         refuse runs estimated to need more (default:\n"
     "                              the memory available)\n"
     "      --balance edges|recursive\n"
     "                              edge infos while refining (default), or the\n"
     "                              original recursive search at the end\n"
     "  -h, --help                  this text\n"
-    "      --version               version and threads\n"
+    "      --version               version, build, compiler, threads, topology\n"
+    "  A progress line (stage, level, percentage) is drawn on stderr only when\n"
+    "  stderr is a terminal.\n"
+    "\n"
+    "Subcommands:\n"
+    "  check MESH [--surface FILE] [--json] [--quiet]\n"
+    "                              independent checker of a .vtk / .vtu mesh:\n"
+    "                              J_ENS > 0, faces matched, closed boundary,\n"
+    "                              no hanging node, volume (and its error\n"
+    "                              against FILE); exit 0 clean, 3 defects\n"
+    "  patterns [--json]           the transition-pattern table: classes,\n"
+    "                              sub-elements per type, worst J_ENS\n"
+    "\n"
+    "Exit codes: 0 success, 1 internal failure, 2 bad input or usage, or an\n"
+    "output that cannot be written (the message names the file and line).\n"
     "\n"
     "Examples:\n"
     "  mixoct --demo -s 5 -o demo.vtu\n"
     "  mixoct --demo -s 5 -o demo.vtu --stage octree\n"
-    "  mixoct -i cortex.off -s 7 --json\n"
-    "  mixoct -i outer.mdl -i inner.mdl -s 5 -b roi.reg -o shell.vtk\n";
+    "  mixoct -i cortex.off -s 7 -o cortex7.vtu && mixoct check cortex7.vtu\n"
+    "  mixoct -i cortex.off -s 7 --json --threads 8 > run.json\n"
+    "  mixoct -i outer.mdl -i inner.mdl -s 5 -b roi.reg -o shell.vtk\n"
+    "  mixoct -i head.stl -s 4 -r tumour.off 7 -o head.msh\n"
+    "  mixoct patterns --json\n";
+
+/* --version: what was built, how, and what it runs on. */
+static const char *openmp_name(long v) {
+  return v >= 202111 ? "5.2" : v >= 202011 ? "5.1" : v >= 201811 ? "5.0"
+       : v >= 201511 ? "4.5" : v >= 201307 ? "4.0" : v >= 201107 ? "3.1" : "3.0";
+}
+
+static void print_version(void) {
+#ifndef MX_VERSION
+#define MX_VERSION "0.1.0"
+#endif
+#ifndef MX_BUILD_TYPE
+#define MX_BUILD_TYPE "unknown"
+#endif
+#if defined(__clang__)
+  const char *compiler = "clang " __clang_version__;
+#elif defined(__GNUC__)
+  const char *compiler = "gcc " __VERSION__;
+#else
+  const char *compiler = "unknown compiler";
+#endif
+#ifdef NDEBUG
+  const char *asserts = "off";
+#else
+  const char *asserts = "on";
+#endif
+  char topo[512];
+  mx_topology_string(topo, sizeof topo);
+  const char *env[3] = {"OMP_NUM_THREADS", "OMP_PLACES", "OMP_PROC_BIND"};
+  printf("mixoct %s\n", MX_VERSION);
+  printf("build      %s, asserts %s\n", MX_BUILD_TYPE, asserts);
+  printf("compiler   %s, OpenMP %s (%ld)\n", compiler, openmp_name((long)_OPENMP),
+         (long)_OPENMP);
+  static const char *bind_name[] = {"false", "true", "primary", "close", "spread"};
+  const int bind = (int)omp_get_proc_bind();
+  printf("threads    OpenMP max threads %d, proc_bind %s, %d place(s)\n          ",
+         omp_get_max_threads(), bind >= 0 && bind <= 4 ? bind_name[bind] : "?",
+         omp_get_num_places());
+  for (int k = 0; k < 3; k++) {
+    const char *v = getenv(env[k]);
+    printf(" %s=%s", env[k], v && *v ? v : "unset");
+  }
+  printf("\n");
+  printf("topology   %s\n", topo);
+}
 
 static int parse_level(const char *opt, const char *s, int *out) {
   char *end;
@@ -95,9 +168,7 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
       *exit_now = 1;
       return MX_OK;
     } else if (strcmp(a, "--version") == 0) {
-      char topo[256];
-      mx_topology_string(topo, sizeof topo);
-      printf("mixoct 0.1.0\n%s\n", topo);
+      print_version();
       *exit_now = 1;
       return MX_OK;
     } else if (IS("-i", "--input")) {

@@ -74,44 +74,88 @@ void mx_print_json(const mx_summary *s) {
   fflush(stdout);
 }
 
+/* The summary printed after a run (unless --quiet or --json): what was
+ * built, the J_ENS table (Tables IV and V of the 2015 paper), the boundary
+ * steps, seconds per stage, peak memory. Labels in a 14-column margin. */
+static void quality_summary(const mx_summary *s) {
+  const mx_quality_table *q = &s->quality;
+  printf("  J_ENS          %12s %9s %9s %9s\n", "count", "min", "mean", "max");
+  for (int t = 3; t >= 0; t--)
+    if (q->count[t])
+      printf("    %-10s   %12zu %9.3f %9.3f %9.3f\n", type_name[t], q->count[t],
+             q->min[t], q->mean[t], q->max[t]);
+  printf("    %-10s   %12zu %9.3f   (%zu invalid: J_ENS <= 0; %zu below 0.2)\n",
+         "all", s->elements, s->jens_min, s->invalid, q->below_02);
+  static const char *bin_name[MX_QBINS] = {"<0.03", "<0.2", "<0.4",
+                                           "<0.6",  "<0.8", "<=1"};
+  printf("  J_ENS bins   ");
+  for (int b = 0; b < MX_QBINS; b++) printf(" %10s", bin_name[b]);
+  printf("\n    elements   ");
+  for (int b = 0; b < MX_QBINS; b++) printf(" %10zu", q->bins[b]);
+  printf("\n    share      ");
+  for (int b = 0; b < MX_QBINS; b++) {
+    const double pc = s->elements ? 100.0 * (double)q->bins[b] / (double)s->elements : 0.0;
+    if (q->bins[b] > 0 && pc < 0.1)
+      printf(" %10s", "<0.1%");
+    else
+      printf(" %9.1f%%", pc);
+  }
+  printf("\n");
+}
+
 void mx_print_summary(const mx_summary *s) {
-  printf("mixoct: %s (%s balance), %d thread(s)\n",
+  printf("mixoct: %s; %d thread(s), %s balance, levels up to %d\n",
          s->full ? "mesh of the domain" :
-         s->mesh ? "conforming mesh of the octree (transition stage)"
-                 : "balanced octree",
-         s->balance ? "recursive" : "edges", s->threads);
-  printf("  leaves        %12zu   (octants created %zu, dropped outside %zu)\n",
-         s->leaves, s->octants, s->dropped);
-  printf("  splits        %12zu requested, %zu for balance\n",
-         s->split_requested, s->split_balance);
-  if (s->nodes_counted) printf("  nodes         %12zu\n", s->nodes);
+         s->mesh ? "conforming mesh of the whole octree (transition stage)"
+                 : "balanced octree (octree stage)",
+         s->threads, s->balance ? "recursive" : "edges", s->max_level);
+  printf("  octree       %12zu leaves (%zu octants created, %zu outside dropped;\n"
+         "               %12s %zu splits requested, %zu for balance)\n",
+         s->leaves, s->octants, s->dropped, "", s->split_requested, s->split_balance);
+  if (s->nodes_counted) printf("  nodes        %12zu\n", s->nodes);
   if (s->mesh) {
-    printf("  elements      %12zu   (hex %zu, prism %zu, pyramid %zu, tet %zu)\n",
+    printf("  elements     %12zu (hex %zu, prism %zu, pyramid %zu, tet %zu)\n",
            s->elements, s->by_type[3], s->by_type[2], s->by_type[1], s->by_type[0]);
-    printf("  J_ENS min     %12.3f   (%zu invalid; %zu leaves use the body centre)\n",
-           s->jens_min, s->invalid, s->centre_leaves);
-    const mx_quality_table *q = &s->quality;
-    printf("  J_ENS bins    <0.03 %zu  <0.2 %zu  <0.4 %zu  <0.6 %zu  <0.8 %zu  <=1 %zu\n",
-           q->bins[0], q->bins[1], q->bins[2], q->bins[3], q->bins[4], q->bins[5]);
-    for (int t = 3; t >= 0; t--)
-      if (q->count[t])
-        printf("  %-8s      %12zu   J_ENS min %.3f  max %.3f  mean %.3f\n",
-               type_name[t], q->count[t], q->min[t], q->max[t], q->mean[t]);
+    if (s->centre_leaves)
+      printf("               %12s %zu leaves use their body centre\n", "",
+             s->centre_leaves);
+    quality_summary(s);
+  } else {
+    printf("  elements     %12zu hexahedra (the leaves, hanging nodes kept)\n",
+           s->leaves);
   }
   if (s->full) {
     const mx_boundary_stats *b = &s->boundary;
-    printf("  boundary      %zu nodes located, %zu moved close, %zu elements removed,\n"
-           "                %zu patterned into %zu (+%zu centres), %zu shrunk,\n"
-           "                %zu inverted by the shrink, untangled with %zu node moves, "
-           "%zu restored (staircase),\n"
-           "                %zu invalid left for %d refinement round(s)\n",
-           b->located, b->moved_close, b->removed, b->sp.patterned, b->sp.kept,
-           b->sp.centres, b->shrunk, b->inverted, b->smoothed, b->sp.restored, s->repaired,
-           s->repair_rounds);
+    printf("  boundary     %zu nodes located; %zu moved close, %zu shrunk onto the surface\n"
+           "               %zu elements removed; %zu patterned into %zu (+%zu centres)\n"
+           "               %zu inverted by the shrink, untangled with %zu node moves;"
+           " %zu restored (staircase)\n",
+           b->located, b->moved_close, b->shrunk, b->removed, b->sp.patterned,
+           b->sp.kept, b->sp.centres, b->inverted, b->smoothed, b->sp.restored);
+    if (s->repair_rounds)
+      printf("               %zu invalid element(s) repaired by %d refinement round(s)\n",
+             s->repaired, s->repair_rounds);
   }
-  printf("  time (s)      read %.3f  grid %.3f  refine %.3f  balance %.3f  "
-         "transition %.3f  boundary %.3f  write %.3f  total %.3f\n",
-         s->ph.read, s->ph.grid, s->ph.refine, s->ph.balance, s->ph.transition,
-         s->ph.boundary, s->ph.write, s->ph.total);
-  printf("  peak memory   %.0f MB\n", s->peak_rss_mb);
+  /* Seconds per stage, only the stages that ran. */
+  struct { const char *name; double t; int ran; } ph[] = {
+      {"read", s->ph.read, 1},
+      {"grid", s->ph.grid, 1},
+      {"refine", s->ph.refine, 1},
+      {"balance", s->ph.balance, 1},
+      {"transition", s->ph.transition, s->mesh},
+      {"boundary", s->ph.boundary, s->full},
+      {"quality", s->ph.quality, s->mesh},
+      {"write", s->ph.write, s->ph.write > 0.0},
+  };
+  printf("  time (s)     %12.3f total:", s->ph.total);
+  int col = 0;
+  for (size_t k = 0; k < sizeof ph / sizeof ph[0]; k++) {
+    if (!ph[k].ran) continue;
+    if (col == 4) printf("\n               %12s       ", "");
+    printf(" %s %.3f", ph[k].name, ph[k].t);
+    col++;
+  }
+  printf("\n");
+  printf("  peak memory  %12.0f MB (estimated %.0f MB before meshing)\n",
+         s->peak_rss_mb, s->memory_estimate_mb);
 }

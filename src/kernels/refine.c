@@ -517,6 +517,9 @@ static int refine_levels(mx_builder *B, int balance_now) {
   for (size_t o = 0; o < T->n; o++)
     if (T->target[o] > T->level[o]) cand[n++] = (uint32_t)o;
   while (n > 0) {
+    if (B->on_level)
+      B->on_level(B->on_level_user, T->level[cand[0]] + 1,
+                  mx_max_requested_level(&B->req));
     double t0 = mx_wtime();
     int st = mx_split_octants(B, cand, n, 0);
     double t1 = mx_wtime();

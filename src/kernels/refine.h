@@ -49,6 +49,13 @@ typedef struct {
   int use_edges;              /* maintain edge infos while splitting */
   int edge_levels;            /* edge infos kept for levels <= this one */
   mx_refine_stats stats;
+  /* Optional, NULL by default: called by the level loop of
+   * mx_refine_balanced / mx_refine_unbalanced before each level is created,
+   * with that level (1..max_level) and the finest level asked; never from a
+   * parallel region. Set it after mx_builder_init (which clears the
+   * builder). The program uses it for its progress line. */
+  void (*on_level)(void *user, int level, int max_level);
+  void *on_level_user;
 
   /* scratch of mx_split_octants, grown on demand, reused */
   uint8_t *scratch_mask;
