@@ -2,6 +2,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static double area(const mx_trisoup *s, uint32_t t0, uint32_t t1) {
@@ -61,13 +62,41 @@ double mx_estimate_bytes(const mx_trisoup *soup, uint32_t nt_domain,
   return 32e6 + leaves * per_leaf + 600.0 * (double)soup->nt;
 }
 
+/* The limit of the memory cgroup this process runs in (a batch job's
+ * --mem), minus what it already uses; 0 when there is none. */
+static double cgroup_room(void) {
+  double max = 0.0, cur = 0.0;
+  FILE *f = fopen("/sys/fs/cgroup/memory.max", "r"); /* cgroup v2 */
+  if (f) {
+    char w[64] = "";
+    if (fscanf(f, "%63s", w) == 1 && strcmp(w, "max") != 0) max = atof(w);
+    fclose(f);
+    f = fopen("/sys/fs/cgroup/memory.current", "r");
+    if (f) {
+      if (fscanf(f, "%lf", &cur) != 1) cur = 0.0;
+      fclose(f);
+    }
+  } else if ((f = fopen("/sys/fs/cgroup/memory/memory.limit_in_bytes", "r"))) { /* v1 */
+    if (fscanf(f, "%lf", &max) != 1 || max > 1e18) max = 0.0;
+    fclose(f);
+    f = fopen("/sys/fs/cgroup/memory/memory.usage_in_bytes", "r");
+    if (f) {
+      if (fscanf(f, "%lf", &cur) != 1) cur = 0.0;
+      fclose(f);
+    }
+  }
+  return max > cur ? max - cur : 0.0;
+}
+
 double mx_available_bytes(void) {
   FILE *f = fopen("/proc/meminfo", "r");
-  if (!f) return 0.0;
-  char line[256];
   double kb = 0.0;
-  while (fgets(line, sizeof line, f))
-    if (sscanf(line, "MemAvailable: %lf kB", &kb) == 1) break;
-  fclose(f);
-  return kb * 1024.0;
+  if (f) {
+    char line[256];
+    while (fgets(line, sizeof line, f))
+      if (sscanf(line, "MemAvailable: %lf kB", &kb) == 1) break;
+    fclose(f);
+  }
+  const double avail = kb * 1024.0, room = cgroup_room();
+  return room > 0.0 && (avail <= 0.0 || room < avail) ? room : avail;
 }

@@ -19,7 +19,9 @@
 double mx_estimate_bytes(const mx_trisoup *soup, uint32_t nt_domain,
                          const uint32_t *region_t0, const mx_requests *req,
                          const mx_grid *g, int stage);
-/* MemAvailable from /proc/meminfo, in bytes; 0 when unknown. */
+/* The memory this process may still use, in bytes: MemAvailable from
+ * /proc/meminfo, or less when a memory cgroup (a batch job's --mem) leaves
+ * less room; 0 when unknown. */
 double mx_available_bytes(void);
 
 #endif
