@@ -19,6 +19,10 @@ typedef struct {
   int ninputs;
   int demo;              /* --demo: the built-in surface */
   const char *output;    /* NULL: dry run */
+  /* More files of the same mesh (the mesher_roi front's -v -g -m): when
+   * noutputs > 0, outputs[0] == output and mx_run writes each of them. */
+  const char *outputs[4];
+  int noutputs;
   const char *regions_file;
   const char *region_surf[MX_MAX_REGIONS];
   int nregion_surf;
@@ -63,6 +67,13 @@ typedef struct {
 
 /* One line describing the machine (hwloc when built in, OpenMP threads). */
 void mx_topology_string(char *buf, size_t n);
+
+/* The pipeline: read, mesh, write o->output (and o->outputs[1..]), report
+ * (src/cli/main.c). Returns MX_OK or an error code, message printed. */
+int mx_run(const mx_options *o);
+/* The program invoked as `mesher_roi`: the published mesher's flags
+ * (src/cli/mesher_roi.c). Returns the exit code. */
+int mx_mesher_roi_main(int argc, char **argv);
 
 /* `mixoct check MESH [--surface FILE] [--json]` (src/cli/check_cmd.c). */
 int mx_check_main(int argc, char **argv);

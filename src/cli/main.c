@@ -149,7 +149,7 @@ static int repair_boxes(const mx_builder *B, const uint32_t *leaves, const mx_me
 
 enum { MAX_REPAIR_ROUNDS = 3 };
 
-static int run(const mx_options *o) {
+int mx_run(const mx_options *o) {
   const double t_start = mx_wtime();
   mx_summary S;
   memset(&S, 0, sizeof S);
@@ -213,6 +213,7 @@ static int run(const mx_options *o) {
       S.ph.refine += B.stats.t_refine;
       S.ph.balance += B.stats.t_balance;
     }
+    S.max_level = mx_max_requested_level(&req); /* B.req.boxes is freed next */
     mx_free(req_boxes);
     if (!st) st = mx_leaves(&B, &leaves, &nleaves);
     if (!st && o->stage == MX_STAGE_OCTREE && o->output) {
@@ -221,6 +222,8 @@ static int run(const mx_options *o) {
       t = mx_wtime();
       mx_progress_stage("write");
       st = write_octree(&B, leaves, nleaves, o->output, o->ascii, &S.nodes);
+      for (int k = 1; !st && k < o->noutputs; k++)
+        st = write_octree(&B, leaves, nleaves, o->outputs[k], o->ascii, &S.nodes);
       S.nodes_counted = 1;
       S.ph.write = mx_wtime() - t;
     }
@@ -278,6 +281,8 @@ static int run(const mx_options *o) {
           t = mx_wtime();
           mx_progress_stage("write");
           st = write_mixed(&M, o->output, o->ascii);
+          for (int k = 1; !st && k < o->noutputs; k++)
+            st = write_mixed(&M, o->outputs[k], o->ascii);
           S.ph.write = mx_wtime() - t;
         }
       }
@@ -297,7 +302,6 @@ static int run(const mx_options *o) {
     S.dropped = B.stats.dropped;
     S.threads = omp_get_max_threads();
     S.balance = o->balance;
-    S.max_level = mx_max_requested_level(&B.req);
     S.ph.total = mx_wtime() - t_start;
     S.peak_rss_mb = mx_peak_rss_mb();
     mx_progress_done(); /* before the summary, on the same terminal */
@@ -326,6 +330,9 @@ int main(int argc, char **argv) {
     mallopt(M_MMAP_MAX, 0);
     mallopt(M_TRIM_THRESHOLD, INT_MAX);
   }
+  const char *base = strrchr(argv[0], '/');
+  if (strcmp(base ? base + 1 : argv[0], "mesher_roi") == 0)
+    return mx_mesher_roi_main(argc, argv);
   mx_options o;
   int exit_now = 0;
   int st = mx_parse_options(argc, argv, &o, &exit_now);
@@ -333,6 +340,6 @@ int main(int argc, char **argv) {
   if (exit_now) return 0;
   if (o.quiet) mx_quiet = 1;
   if (o.threads > 0) omp_set_num_threads(o.threads);
-  st = run(&o);
+  st = mx_run(&o);
   return st == MX_OK ? 0 : st;
 }

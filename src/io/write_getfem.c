@@ -1,9 +1,181 @@
-/* GetFEM writer: not written yet (issue 5). */
+/* mixoct: GetFEM mesh writer (the text format of GetFEM's
+ * mesh::write_to_file / read_from_file, ".mesh" in GetFEM's own examples;
+ * mixoct names it ".getfem" so it cannot be taken for a Medit .mesh).
+ *
+ * Layout, as GetFEM writes and reads it (GetFEM user documentation, "Save
+ * and load meshes", and the mesh files shipped with GetFEM):
+ *
+ *   % GETFEM MESH FILE
+ *   % GETFEM VERSION 5.4
+ *   % mixoct: <n> points, <m> convexes
+ *
+ *   BEGIN POINTS LIST
+ *
+ *     POINT  0  x y z
+ *     ...
+ *
+ *   END POINTS LIST
+ *
+ *   BEGIN MESH STRUCTURE DESCRIPTION
+ *
+ *     CONVEX 0    'GT_QK(3,1)'      i0 i1 ... i7
+ *     ...
+ *
+ *   END MESH STRUCTURE DESCRIPTION
+ *
+ * Points and convexes are numbered from 0 in the mesh's order; a convex
+ * lists its points' numbers. Lines starting with '%' before BEGIN POINTS
+ * LIST are comments (GetFEM's reader skips to that line). The "POINT COUNT"
+ * and "CONVEX COUNT" lines newer GetFEM versions write are left out, so
+ * older readers accept the file too; the counts are in the comment line.
+ * Cell fields (type, level, jens) are not written: the format has no place
+ * for them.
+ *
+ * Geometric transformations and GetFEM's node order (GetFEM documentation:
+ * the figure "vertex numeration for usual elements" of "Build a mesh", the
+ * tensor-product construction of Q_K and prism elements and the pyramid
+ * shape functions of appendix A "Finite element method list"; names from
+ * the gf_geotrans / GeoTrans reference):
+ *
+ *   tet     'GT_PK(3,1)'    (0,0,0) (1,0,0) (0,1,0) (0,0,1)
+ *   pyramid 'GT_PYRAMID(1)' (-1,-1,0) (1,-1,0) (-1,1,0) (1,1,0) (0,0,1)
+ *   prism   'GT_PRISM(3,1)' (0,0,0) (1,0,0) (0,1,0) (0,0,1) (1,0,1) (0,1,1)
+ *   hex     'GT_QK(3,1)'    (0,0,0) (1,0,0) (0,1,0) (1,1,0) (0,0,1) (1,0,1)
+ *                           (0,1,1) (1,1,1)
+ *
+ * i.e. quadrilateral faces in tensor (x fastest) order, not around the face
+ * as VTK has them. (The pyramid is named with its degree only: the
+ * documentation gives "GT_PYRAMID(K)" for K = 1 or 2.) An element has a
+ * positive volume in GetFEM's convention when the Jacobian of the map from
+ * that reference element is positive, which for these orders and mixoct's
+ * VTK-ordered elements (positive in VTK's convention) gives:
+ *
+ *   tet     GetFEM k = VTK k
+ *   pyramid GetFEM (0 1 2 3 4) = VTK (0 1 3 2 4)
+ *   prism   GetFEM k = VTK k  (both: 0 1 2 counter-clockwise seen from 3 4 5)
+ *   hex     GetFEM (0 1 2 3 4 5 6 7) = VTK (0 1 3 2 4 5 7 6)
+ *
+ * Numbers are ASCII, doubles to 15 significant digits when that reads back
+ * to the same double, else 17 (always exact). The points and convexes are
+ * produced in chunks filled in parallel by mx_afile_emit, so the file is the
+ * same byte for byte whatever the number of threads. */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
 #include "common.h"
+#include "io/atomic_file.h"
 #include "soa/mesh.h"
 
+/* GetFEM's node k of each type is mixoct's (VTK's) node getfem_order[t][k]. */
+static const int8_t getfem_order[4][8] = {
+    {0, 1, 2, 3, -1, -1, -1, -1},
+    {0, 1, 3, 2, 4, -1, -1, -1},
+    {0, 1, 2, 3, 4, 5, -1, -1},
+    {0, 1, 3, 2, 4, 5, 7, 6}};
+
+static const char *const getfem_geotrans[4] = {
+    "'GT_PK(3,1)'", "'GT_PYRAMID(1)'", "'GT_PRISM(3,1)'", "'GT_QK(3,1)'"};
+
+enum {
+  NUM_MAX = 26,        /* one double, "%.17g" is at most 24 characters */
+  POINT_LINE_MAX = 128, /* "  POINT  " + index + 3 doubles + blanks */
+  CONVEX_LINE_MAX = 192 /* "  CONVEX " + index + name + 8 indices */
+};
+
+/* ---- ASCII numbers -------------------------------------------------------- */
+
+static size_t put_u64(char *out, uint64_t v) {
+  char tmp[24];
+  size_t n = 0;
+  do {
+    tmp[n++] = (char)('0' + v % 10);
+    v /= 10;
+  } while (v);
+  for (size_t i = 0; i < n; i++) out[i] = tmp[n - 1 - i];
+  return n;
+}
+
+/* The shortest of "%.15g" and "%.17g" that reads back as x (C locale: the
+ * program never calls setlocale). */
+static size_t put_double(char *out, double x) {
+  char tmp[40];
+  int n = snprintf(tmp, sizeof tmp, "%.15g", x);
+  if (n <= 0 || n >= (int)sizeof tmp || strtod(tmp, NULL) != x)
+    n = snprintf(tmp, sizeof tmp, "%.17g", x);
+  if (n <= 0 || n >= (int)sizeof tmp) n = snprintf(tmp, sizeof tmp, "nan");
+  memcpy(out, tmp, (size_t)n);
+  return (size_t)n;
+}
+
+static size_t put_str(char *out, const char *s) {
+  size_t n = strlen(s);
+  memcpy(out, s, n);
+  return n;
+}
+
+/* ---- fill functions ------------------------------------------------------- */
+
+static size_t fill_points(const void *vctx, size_t b, size_t e, char *out) {
+  const mx_mesh_view *m = vctx;
+  size_t n = 0;
+  for (size_t i = b; i < e; i++) {
+    n += put_str(out + n, "  POINT  ");
+    n += put_u64(out + n, i);
+    for (int d = 0; d < 3; d++) {
+      out[n++] = ' ';
+      out[n++] = ' ';
+      n += put_double(out + n, m->xyz[3 * i + d]);
+    }
+    out[n++] = '\n';
+  }
+  return n;
+}
+
+static size_t fill_convexes(const void *vctx, size_t b, size_t e, char *out) {
+  const mx_mesh_view *m = vctx;
+  size_t n = 0;
+  for (size_t c = b; c < e; c++) {
+    const int t = m->type[c];
+    const uint32_t *row = m->conn + 8 * c;
+    n += put_str(out + n, "  CONVEX ");
+    n += put_u64(out + n, c);
+    n += put_str(out + n, "    ");
+    n += put_str(out + n, getfem_geotrans[t]);
+    n += put_str(out + n, "     ");
+    for (int k = 0; k < mx_cell_nodes[t]; k++) {
+      out[n++] = ' ';
+      n += put_u64(out + n, row[getfem_order[t][k]]);
+    }
+    out[n++] = '\n';
+  }
+  return n;
+}
+
+/* ---- file ----------------------------------------------------------------- */
+
+static int write_body(mx_afile *f, const mx_mesh_view *m) {
+  MX_CHECK(mx_afile_printf(f,
+                           "%% GETFEM MESH FILE\n%% GETFEM VERSION 5.4\n"
+                           "%% mixoct: %zu points, %zu convexes\n\n"
+                           "BEGIN POINTS LIST\n\n",
+                           m->nnodes, m->ncells));
+  MX_CHECK(mx_afile_emit(f, m->nnodes, POINT_LINE_MAX, fill_points, m));
+  MX_CHECK(mx_afile_printf(f, "\nEND POINTS LIST\n\n\n\n"
+                              "BEGIN MESH STRUCTURE DESCRIPTION\n\n"));
+  MX_CHECK(mx_afile_emit(f, m->ncells, CONVEX_LINE_MAX, fill_convexes, m));
+  return mx_afile_printf(f, "\nEND MESH STRUCTURE DESCRIPTION\n");
+}
+
 int mx_write_getfem(const char *path, const mx_mesh_view *m) {
-  (void)m;
-  mx_error(path, 0, "the GetFEM writer is not available yet");
-  return MX_EINPUT;
+  MX_CHECK(mx_mesh_view_check(path, m));
+  mx_afile f;
+  MX_CHECK(mx_afile_open(&f, path));
+  int status = write_body(&f, m);
+  if (status != MX_OK) {
+    mx_afile_abort(&f);
+    return status;
+  }
+  return mx_afile_commit(&f);
 }

@@ -1,0 +1,208 @@
+#!/usr/bin/env bash
+# End-to-end tests of the mesher_roi front (src/cli/mesher_roi.c): the
+# commands of a typical job script written for the published mesher, run on
+# the shared surfaces. The argument is mixoct (or the mesher_roi link); the
+# script makes its own link named mesher_roi in a temporary directory and
+# runs there. Data from $MIXOCT_DATA (default /work/shared/data), never
+# copied into the repository. Needs python3 (the files are parsed back).
+MIXOCT=${1:?usage: mesher_roi_test.sh path/to/mixoct}
+MIXOCT=$(readlink -f "$MIXOCT")
+DATA=${MIXOCT_DATA:-/work/shared/data}
+S=$DATA/surfaces
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+ln -s "$MIXOCT" "$T/mesher_roi"
+ROI=$T/mesher_roi
+cd "$T" || exit 1
+fails=0
+ok() { echo "ok   $*"; }
+bad() { echo "FAIL $*"; fails=$((fails + 1)); }
+expect_exit() { # code, description, command...
+  local want=$1 what=$2; shift 2
+  "$@" >"$T/out" 2>"$T/err"; local got=$?
+  if [ "$got" -eq "$want" ]; then ok "$what (exit $got)"; else bad "$what: exit $got, wanted $want"; cat "$T/err"; fi
+}
+has() { if grep -q -- "$2" "$1"; then ok "$3"; else bad "$3: '$2' not in $(cat "$1")"; fi; }
+exists() { if [ -s "$1" ]; then ok "$1 written"; else bad "$1 missing"; fi; }
+absent() { if [ ! -e "$1" ]; then ok "$2"; else bad "$2: $1 exists"; fi; }
+check_mesh() { # file, description
+  if "$MIXOCT" check "$1" >"$T/check" 2>&1; then ok "$2: mixoct check clean"; else bad "$2: mixoct check"; cat "$T/check"; fi
+}
+
+# Compares NAME.getfem and NAME.m3d with NAME.vtk: same points (bit for
+# bit), same elements; M3D rows are VTK's; GetFEM rows are VTK's in GetFEM's
+# node order, with a positive Jacobian at each element's centre under
+# GetFEM's shape functions, and a total volume that matches mixoct check's.
+compare_formats() { # name, volume from mixoct check
+  python3 - "$1" "$2" <<'EOF'
+import sys
+name, want_volume = sys.argv[1], float(sys.argv[2])
+fails = 0
+def bad(msg):
+    global fails
+    fails += 1
+    print("FAIL", msg)
+
+def read_vtk(path):
+    tok = open(path).read().split()
+    i = tok.index("POINTS"); n = int(tok[i + 1]); i += 3
+    xyz = [tuple(float(t) for t in tok[i + 3 * k:i + 3 * k + 3]) for k in range(n)]
+    i = tok.index("CELLS"); m = int(tok[i + 1]); i += 3
+    cells = []
+    for _ in range(m):
+        k = int(tok[i]); cells.append([int(t) for t in tok[i + 1:i + 1 + k]]); i += 1 + k
+    return xyz, cells
+
+def read_getfem(path):
+    text = open(path).read()
+    body = text[text.index("BEGIN POINTS LIST"):]
+    tok = body.split()
+    i = 3; xyz = []
+    while tok[i] != "END":
+        assert tok[i] == "POINT"
+        if tok[i + 1] == "COUNT": i += 3; continue
+        assert int(tok[i + 1]) == len(xyz)
+        xyz.append(tuple(float(t) for t in tok[i + 2:i + 5])); i += 5
+    assert tok[i:i + 3] == ["END", "POINTS", "LIST"]; i += 3
+    assert tok[i:i + 4] == ["BEGIN", "MESH", "STRUCTURE", "DESCRIPTION"]; i += 4
+    nodes = {"'GT_PK(3,1)'": 4, "'GT_PYRAMID(1)'": 5, "'GT_PRISM(3,1)'": 6, "'GT_QK(3,1)'": 8}
+    cells = []
+    while tok[i] != "END":
+        assert tok[i] == "CONVEX"
+        if tok[i + 1] == "COUNT": i += 3; continue
+        assert int(tok[i + 1]) == len(cells)
+        k = nodes[tok[i + 2]]
+        cells.append([int(t) for t in tok[i + 3:i + 3 + k]]); i += 3 + k
+    assert tok[i:] == ["END", "MESH", "STRUCTURE", "DESCRIPTION"]
+    return xyz, cells
+
+def read_m3d(path):
+    tok = open(path).read().split()
+    assert tok[:2] == ["[Nodes,", "ARRAY1<POINT3D>]"]
+    n = int(tok[2]); i = 3
+    xyz = [tuple(float(t) for t in tok[i + 3 * k:i + 3 * k + 3]) for k in range(n)]
+    i += 3 * n
+    assert tok[i:i + 2] == ["[Elements,", "ARRAY1<STRING>]"]
+    m = int(tok[i + 2]); i += 3; cells = []
+    for _ in range(m):
+        k = int(tok[i]); cells.append([int(t) for t in tok[i + 1:i + 1 + k]]); i += 1 + k
+    assert i == len(tok)
+    return xyz, cells
+
+# GetFEM shape functions (documented reference elements) and their gradients.
+def shape(k, x, y, z):
+    if k == 4: return [1 - x - y - z, x, y, z]
+    if k == 5:
+        q = x * y / (1 - z)
+        return [0.25 * (1 - x - y - z + q), 0.25 * (1 + x - y - z - q),
+                0.25 * (1 - x + y - z - q), 0.25 * (1 + x + y - z + q), z]
+    if k == 6:
+        t = [1 - x - y, x, y]; s = [1 - z, z]
+        return [t[i] * s[j] for j in range(2) for i in range(3)]
+    s = [[1 - x, x], [1 - y, y], [1 - z, z]]
+    return [s[0][a] * s[1][b] * s[2][c] for c in range(2) for b in range(2) for a in range(2)]
+centre = {4: (0.25, 0.25, 0.25), 5: (0.0, 0.0, 0.25), 6: (1 / 3, 1 / 3, 0.5), 8: (0.5, 0.5, 0.5)}
+ref_volume = {4: 1 / 6, 5: 4 / 3, 6: 0.5, 8: 1.0}
+def jacobian(k, p):
+    h = 1e-6; r = centre[k]; J = []
+    for b in range(3):
+        rp = list(r); rm = list(r); rp[b] += h; rm[b] -= h
+        fp = shape(k, *rp); fm = shape(k, *rm)
+        J.append([sum((fp[i] - fm[i]) * p[i][a] for i in range(k)) / (2 * h) for a in range(3)])
+    (a, b, c), (d, e, f), (g, hh, i) = J
+    return a * (e * i - f * hh) - b * (d * i - f * g) + c * (d * hh - e * g)
+
+vxyz, vcells = read_vtk(name + ".vtk")
+order = {4: [0, 1, 2, 3], 5: [0, 1, 3, 2, 4], 6: [0, 1, 2, 3, 4, 5], 8: [0, 1, 3, 2, 4, 5, 7, 6]}
+gxyz, gcells = read_getfem(name + ".getfem")
+if gxyz != vxyz: bad("getfem points differ from vtk")
+if len(gcells) != len(vcells): bad("getfem: %d convexes, vtk %d cells" % (len(gcells), len(vcells)))
+volume = 0.0; worst = float("inf")
+for g, v in zip(gcells, vcells):
+    if len(g) != len(v) or g != [v[j] for j in order[len(v)]]:
+        bad("getfem convex %s is not vtk cell %s in GetFEM's order" % (g, v)); break
+    j = jacobian(len(g), [gxyz[n] for n in g])
+    worst = min(worst, j)
+    volume += j * ref_volume[len(g)]
+if not worst > 0: bad("getfem: an element has J <= 0 at its centre (%g)" % worst)
+if abs(volume - want_volume) > 0.01 * want_volume:
+    bad("getfem volume %g, mixoct check %g" % (volume, want_volume))
+mxyz, mcells = read_m3d(name + ".m3d")
+if mxyz != vxyz: bad("m3d nodes differ from vtk")
+if mcells != vcells: bad("m3d elements differ from vtk cells")
+print("%s: %d nodes, %d elements; getfem volume %.6g (check %.6g), min J %.3g" %
+      (name, len(vxyz), len(vcells), volume, want_volume, worst))
+sys.exit(1 if fails else 0)
+EOF
+}
+volume_of() { "$MIXOCT" check "$1" --json 2>/dev/null | tail -1 | python3 -c 'import json,sys; print(json.load(sys.stdin)["volume"])'; }
+
+# Help and refusals.
+expect_exit 0 "-h" "$ROI" -h
+has "$T/out" "-u NAME" "help lists -u"
+has "$T/out" "NAME.getfem" "help names the GetFEM file"
+expect_exit 2 "-c refused" "$ROI" -c "$T/in.oct" -s 4 -u x -v
+has "$T/err" "in.oct" "-c names its file"
+has "$T/err" "not supported" "-c says why"
+expect_exit 2 "-l refused" "$ROI" -o "$S/cortex.off" -l "$T/list.txt" -s 4 -u x -v
+has "$T/err" "list.txt" "-l names its file"
+absent "$T/x.vtk" "nothing written after a refusal"
+expect_exit 2 "missing input" "$ROI" -o "$T/nope.off" -s 4 -u x -v
+has "$T/err" "nope.off" "missing input is named"
+expect_exit 2 "missing MDL input" "$ROI" -d "$T/nope.mdl" -s 4 -u x -v
+has "$T/err" "nope.mdl" "missing MDL is named"
+expect_exit 2 "no input" "$ROI" -s 4 -u x -v
+expect_exit 2 "format without -u" "$ROI" -o "$S/cortex.off" -s 4 -v
+expect_exit 2 "-u without a format" "$ROI" -o "$S/cortex.off" -s 4 -u x
+expect_exit 2 "unknown flag" "$ROI" -o "$S/cortex.off" -s 4 -q
+expect_exit 2 "bad level" "$ROI" -o "$S/cortex.off" -s x -u x -v
+expect_exit 2 "-s without its level" "$ROI" -o "$S/cortex.off" -s
+absent "$T/x.vtk" "no output from failed runs"
+
+# The reference job: mesher_roi -o cortex.off -s RL -u out -v
+expect_exit 0 "-o cortex.off -s 4 -u out -v" "$ROI" -o "$S/cortex.off" -s 4 -u out -v
+exists out.vtk
+absent out.getfem "-v alone writes no GetFEM file"
+check_mesh out.vtk "cortex -s 4"
+if head -3 out.vtk | grep -qx ASCII; then ok "out.vtk is ASCII legacy VTK"; else bad "out.vtk is not ASCII"; fi
+[ -z "$(ls "$T" | grep '\.tmp\.')" ] && ok "no temporaries left" || bad "temporaries left: $(ls "$T")"
+
+# All three formats of one mesh from an MDL surface.
+expect_exit 0 "-d femur.mdl -s 4 -u f -v -g -m" "$ROI" -d "$S/femur.mdl" -s 4 -u f -v -g -m
+exists f.vtk; exists f.getfem; exists f.m3d
+check_mesh f.vtk "femur -s 4"
+if compare_formats f "$(volume_of f.vtk)"; then ok "femur: .getfem and .m3d match .vtk"; else bad "femur: formats differ"; fi
+
+# The same mesh as mixoct -i ... -o gives (the front only translates).
+"$MIXOCT" -i "$S/femur.mdl" -s 4 -o direct.vtk --ascii --quiet
+if cmp -s direct.vtk f.vtk; then ok "same bytes as mixoct -i femur.mdl -s 4 -o .vtk --ascii"; else bad "front and mixoct differ"; fi
+
+# Formats one by one, and a path in -u.
+mkdir -p sub
+expect_exit 0 "-u sub/g -g" "$ROI" -o "$S/cortex.off" -s 4 -u sub/g -g
+exists sub/g.getfem; absent sub/g.vtk "-g alone writes no VTK"
+expect_exit 0 "-u sub/m -m" "$ROI" -o "$S/cortex.off" -s 4 -u sub/m -m
+exists sub/m.m3d
+expect_exit 0 "-u sub/c -v -g -m (cortex)" "$ROI" -o "$S/cortex.off" -s 4 -u sub/c -m -g -v
+if compare_formats sub/c "$(volume_of sub/c.vtk)"; then ok "cortex: .getfem and .m3d match .vtk"; else bad "cortex: formats differ"; fi
+if cmp -s sub/g.getfem sub/c.getfem && cmp -s sub/m.m3d sub/c.m3d && cmp -s out.vtk sub/c.vtk; then
+  ok "one format at a time gives the same files"; else bad "files depend on the other format flags"; fi
+
+# Box regions with a surface level, as in the ROI jobs.
+expect_exit 0 "-o cortex.off -s 3 -b cortex.reg -u roi -v" "$ROI" -o "$S/cortex.off" -s 3 -b "$S/cortex.reg" -u roi -v
+check_mesh roi.vtk "cortex -s 3 -b cortex.reg"
+n_s3=$("$ROI" -o "$S/cortex.off" -s 3 --json --quiet | tail -1 | python3 -c 'import json,sys; print(json.load(sys.stdin)["elements"])')
+n_b=$(python3 -c 'import sys; t=open("roi.vtk").read().split(); print(t[t.index("CELLS")+1])')
+[ "$n_b" -gt "$n_s3" ] && ok "-b refines beyond -s 3 ($n_b > $n_s3 elements)" || bad "-b had no effect ($n_b vs $n_s3)"
+expect_exit 2 "missing .reg" "$ROI" -o "$S/cortex.off" -s 3 -b "$T/nope.reg" -u r2 -v
+has "$T/err" "nope.reg" "missing .reg is named"
+
+# A region surface, all-level refinement, threads and JSON pass through.
+expect_exit 0 "-r region surface" "$ROI" -d "$S/outer_sphere.mdl" -s 2 -r "$S/in_spher.mdl" 4 -u rs -v --threads 2
+check_mesh rs.vtk "sphere -r"
+expect_exit 0 "-a 3 dry run" "$ROI" -o "$S/cortex.off" -a 3 --json
+if tail -1 "$T/out" | python3 -c 'import json,sys; d=json.load(sys.stdin); sys.exit(0 if d["elements"] > 0 else 1)'; then
+  ok "--json passes through"; else bad "--json output"; fi
+
+echo "$fails failure(s)"
+[ "$fails" -eq 0 ]
