@@ -129,7 +129,7 @@ int mx_balance_drain(mx_builder *B, const uint32_t *split, size_t n) {
     if (!next) st = MX_EINPUT;
     size_t w = 0;
     for (int t = 0; t < nth; t++) {
-      if (next) memcpy(next + w, bufs[t], cnt[t] * sizeof *next);
+      if (next && cnt[t]) memcpy(next + w, bufs[t], cnt[t] * sizeof *next);
       w += cnt[t];
       free(bufs[t]);
     }

@@ -1051,9 +1051,11 @@ static int cap_node(cap_ctx *X, uint32_t b) {
   if (2 * m <= N->ntri && X->keep.n + m <= X->budget) {
     edge_list *K = &X->keep;
     MX_CHECK(edge_list_reserve(K, K->n + m));
-    memcpy(K->k + K->n, L->k + s0, m * sizeof *K->k);
-    memcpy(K->w + K->n, L->w + s0, m * sizeof *K->w);
-    memcpy(K->c + K->n, L->c + s0, m * sizeof *K->c);
+    if (m) {
+      memcpy(K->k + K->n, L->k + s0, m * sizeof *K->k);
+      memcpy(K->w + K->n, L->w + s0, m * sizeof *K->w);
+      memcpy(K->c + K->n, L->c + s0, m * sizeof *K->c);
+    }
     S->cap_off[b] = K->n;
     S->cap_cnt[b] = (uint32_t)m;
     K->n += m;
