@@ -1,0 +1,44 @@
+/* mixoct: the boundary of a volume mesh, as the faces used by exactly one
+ * element.
+ *
+ * Every face of every element (mx_cell_faces of soa/mesh.h) is filed
+ * under its smallest node; each node's short list is sorted by the face's
+ * sorted node tuple and runs of equal tuples give how many elements use the
+ * face. A face used once is a boundary face: it is returned with the node
+ * order of mx_cell_faces, so oriented outward of its element. Triangles and
+ * quadrilaterals come in two lists, each ordered by element index and then
+ * by local face index, so the result does not depend on the number of
+ * threads. Work and memory are linear in the number of faces (about 13
+ * bytes a face and 8 a node while it runs); every pass is parallel.
+ *
+ * A triangle and a quadrilateral are never the same face, so a quadrilateral
+ * facing two triangles (a non-conforming mesh) is a boundary face, and so
+ * are the two triangles. A face used three times or more is not. */
+#ifndef MX_BOUNDARY_FACES_H
+#define MX_BOUNDARY_FACES_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "soa/mesh.h"
+
+typedef struct {
+  size_t ntri, nquad;
+  uint32_t *tri;      /* 3 * ntri node indices, outward */
+  uint32_t *quad;     /* 4 * nquad node indices, outward */
+  uint64_t *tri_src;  /* per triangle: 8 * element + local face index */
+  uint64_t *quad_src; /* per quadrilateral: the same */
+} mx_boundary_faces;
+
+/* Fills *bf (zeroed first; free with mx_boundary_faces_free). The view must
+ * be consistent (types in range, node indices below nnodes: see
+ * mx_mesh_view_check); cells are limited to 2^32 / 6. Returns MX_OK, or
+ * MX_EINPUT with a message when memory runs out or the mesh is too large. */
+int mx_boundary_faces_extract(const mx_mesh_view *m, mx_boundary_faces *bf);
+void mx_boundary_faces_free(mx_boundary_faces *bf);
+
+/* flags[i] = 1 when node i lies on a boundary face, 0 otherwise (nnodes
+ * values; the VTU point field "boundary"). MX_OK or MX_EINPUT as above. */
+int mx_boundary_node_flags(const mx_mesh_view *m, int32_t *flags);
+
+#endif
