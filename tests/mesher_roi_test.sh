@@ -113,7 +113,9 @@ def jacobian(k, p):
     return a * (e * i - f * hh) - b * (d * i - f * g) + c * (d * hh - e * g)
 
 vxyz, vcells = read_vtk(name + ".vtk")
-order = {4: [0, 1, 2, 3], 5: [0, 1, 3, 2, 4], 6: [0, 1, 2, 3, 4, 5], 8: [0, 1, 3, 2, 4, 5, 7, 6]}
+# from the .vtk file's order (a VTK wedge is our prism with 1-2 and 4-5
+# swapped, see src/soa/mesh.h) to GetFEM's
+order = {4: [0, 1, 2, 3], 5: [0, 1, 3, 2, 4], 6: [0, 2, 1, 3, 5, 4], 8: [0, 1, 3, 2, 4, 5, 7, 6]}
 gxyz, gcells = read_getfem(name + ".getfem")
 if gxyz != vxyz: bad("getfem points differ from vtk")
 if len(gcells) != len(vcells): bad("getfem: %d convexes, vtk %d cells" % (len(gcells), len(vcells)))
@@ -129,7 +131,8 @@ if abs(volume - want_volume) > 0.01 * want_volume:
     bad("getfem volume %g, mixoct check %g" % (volume, want_volume))
 mxyz, mcells = read_m3d(name + ".m3d")
 if mxyz != vxyz: bad("m3d nodes differ from vtk")
-if mcells != vcells: bad("m3d elements differ from vtk cells")
+ours = [[v[j] for j in [0, 2, 1, 3, 5, 4]] if len(v) == 6 else v for v in vcells]
+if mcells != ours: bad("m3d elements differ from vtk cells")
 print("%s: %d nodes, %d elements; getfem volume %.6g (check %.6g), min J %.3g" %
       (name, len(vxyz), len(vcells), volume, want_volume, worst))
 sys.exit(1 if fails else 0)

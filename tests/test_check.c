@@ -633,7 +633,7 @@ static void write_vtu_variant(const char *path, const tm *t, int ascii,
       for (size_t c = 0; c < t->nc; c++) {
         const int nn = mx_cell_nodes[t->type[c]];
         if (a == 0)
-          for (int j = 0; j < nn; j++) fprintf(f, " %u", t->conn[8 * c + j]);
+          for (int j = 0; j < nn; j++) fprintf(f, " %u", t->conn[8 * c + mx_vtk_order[t->type[c]][j]]);
         end += (size_t)nn;
         if (a == 1) fprintf(f, " %zu", end);
         if (a == 2) fprintf(f, " %d", mx_vtk_cell_type[t->type[c]]);
@@ -671,7 +671,7 @@ static void write_vtu_variant(const char *path, const tm *t, int ascii,
     HEAD(4 * nconn);
     for (size_t c = 0; c < t->nc; c++)
       for (int j = 0; j < mx_cell_nodes[t->type[c]]; j++)
-        fwrite(&t->conn[8 * c + j], 4, 1, f);
+        fwrite(&t->conn[8 * c + mx_vtk_order[t->type[c]][j]], 4, 1, f);
     HEAD(4 * t->nc);
     uint32_t end = 0;
     for (size_t c = 0; c < t->nc; c++) {

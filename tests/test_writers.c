@@ -330,7 +330,7 @@ static int compare_cells(const rmesh *r, const mx_mesh_view *m) {
     if (r->types[c] != mx_vtk_cell_type[m->type[c]]) return 0;
     if (pos + 1 + (size_t)nn > r->list_len || r->list[pos] != nn) return 0;
     for (int j = 0; j < nn; j++) {
-      if (r->list[pos + 1 + j] != (int64_t)m->conn[8 * c + j]) return 0;
+      if (r->list[pos + 1 + j] != (int64_t)m->conn[8 * c + (size_t)mx_vtk_order[m->type[c]][j]]) return 0;
     }
     pos += 1 + (size_t)nn;
   }
@@ -1144,7 +1144,7 @@ static void expected_result(const mx_mesh_view *m, char *out, size_t cap) {
   for (size_t c = 0; c < m->ncells; c++) {
     typesum += mx_vtk_cell_type[m->type[c]];
     for (int j = 0; j < mx_cell_nodes[m->type[c]]; j++)
-      cs += (long long)(j + 1) * m->conn[8 * c + j];
+      cs += (long long)(j + 1) * m->conn[8 * c + (size_t)mx_vtk_order[m->type[c]][j]];
     levelsum += m->cell_fields[0].ivalues[c];
     js += m->cell_fields[1].dvalues[c];
   }

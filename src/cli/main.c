@@ -6,6 +6,7 @@
 #include "cli/cli.h"
 #include "cli/progress.h"
 #include "common.h"
+#include "io/boundary_faces.h"
 #include "kernels/boundary_stage.h"
 #include "kernels/estimate.h"
 #include "kernels/grid.h"
@@ -79,16 +80,35 @@ static int write_octree(const mx_builder *B, uint32_t *leaves, size_t n,
   return st;
 }
 
-static int write_mixed(const mx_mesh_out *M, const char *path, int ascii) {
+/* Cell data type, level, jens; point data "boundary": 1 for the nodes on
+ * the boundary (the surface nodes of the boundary stage when it ran, else
+ * the nodes of the faces used by one element). */
+static int write_mixed(const mx_mesh_out *M, const uint8_t *states, const char *path,
+                       int ascii) {
   int32_t *type = mx_alloc((M->ncells + 1) * sizeof *type);
-  if (!type) return MX_EINPUT;
+  int32_t *bnd = mx_alloc((M->nnodes + 1) * sizeof *bnd);
+  if (!type || !bnd) {
+    mx_free(type);
+    mx_free(bnd);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
   for (size_t i = 0; i < M->ncells; i++) type[i] = M->type[i];
   mx_field f[3] = {{"type", 0, type, NULL},
                    {"level", 0, M->level, NULL},
                    {"jens", 1, NULL, M->jens}};
-  mx_mesh_view v = {M->nnodes, M->xyz, M->ncells, M->type, M->conn, 3, f, 0, NULL};
-  int st = mx_write_mesh(path, &v, ascii);
+  mx_field pf[1] = {{"boundary", 0, bnd, NULL}};
+  mx_mesh_view v = {M->nnodes, M->xyz, M->ncells, M->type, M->conn, 3, f, 1, pf};
+  int st = MX_OK;
+  if (states) {
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < M->nnodes; i++) bnd[i] = states[i] == MX_NODE_OUTSIDE;
+  } else {
+    st = mx_boundary_node_flags(&v, bnd);
+  }
+  if (!st) st = mx_write_mesh(path, &v, ascii);
   mx_free(type);
+  mx_free(bnd);
   return st;
 }
 
@@ -232,6 +252,7 @@ int mx_run(const mx_options *o) {
       mx_progress_stage("transition");
       mx_mesh_out M;
       memset(&M, 0, sizeof M);
+      uint8_t *states = NULL; /* per node, from the boundary stage */
       st = mx_leaves_sorted(&B, leaves, nleaves);
       if (!st) st = mx_transition(&B, leaves, nleaves, &M);
       S.ph.transition += mx_wtime() - t;
@@ -239,7 +260,7 @@ int mx_run(const mx_options *o) {
         t = mx_wtime();
         mx_progress_stage("boundary");
         mx_boundary_stats bs;
-        st = mx_boundary_stage(&B, leaves, &SI, &M, MX_CLOSE_RATIO, 0.2, &bs);
+        st = mx_boundary_stage(&B, leaves, &SI, &M, MX_CLOSE_RATIO, 0.2, &bs, &states);
         S.ph.boundary += mx_wtime() - t;
         S.boundary = bs;
         S.full = 1;
@@ -251,6 +272,7 @@ int mx_run(const mx_options *o) {
           if (!st && nextra > before) {
             S.repaired += M.invalid;
             S.repair_rounds++;
+            mx_free(states);
             mx_mesh_out_free(&M);
             mx_free(leaves);
             leaves = NULL;
@@ -280,12 +302,13 @@ int mx_run(const mx_options *o) {
         if (o->output) {
           t = mx_wtime();
           mx_progress_stage("write");
-          st = write_mixed(&M, o->output, o->ascii);
+          st = write_mixed(&M, states, o->output, o->ascii);
           for (int k = 1; !st && k < o->noutputs; k++)
-            st = write_mixed(&M, o->outputs[k], o->ascii);
+            st = write_mixed(&M, states, o->outputs[k], o->ascii);
           S.ph.write = mx_wtime() - t;
         }
       }
+      mx_free(states);
       mx_mesh_out_free(&M);
     }
     break;

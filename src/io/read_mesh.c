@@ -1125,6 +1125,13 @@ int mx_read_mesh(const char *path, mx_mesh_data *out) {
     st = fail(&r, p,
               "unknown mesh format: expected legacy VTK ('# vtk DataFile "
               "Version') or VTK XML (.vtu)");
+  if (st == MX_OK) /* VTK wedges to our prism order (mesh.h) */
+    for (size_t c = 0; c < out->ncells; c++)
+      if (out->type[c] == MX_PRISM) {
+        uint32_t row[8];
+        memcpy(row, out->conn + 8 * c, sizeof row);
+        for (int j = 0; j < 6; j++) out->conn[8 * c + j] = row[mx_vtk_order[MX_PRISM][j]];
+      }
   for (int i = 0; i < r.ntmp; i++) mx_free(r.tmp[i]);
   if (mapped)
     munmap(buf, mapped);

@@ -282,7 +282,8 @@ static size_t fill_cells_bin(const void *vctx, size_t b, size_t e, char *out) {
     const uint32_t *row = m->conn + 8 * c;
     put_be32(out + n, (uint32_t)nn);
     n += 4;
-    for (int j = 0; j < nn; j++, n += 4) put_be32(out + n, row[j]);
+    const int8_t *ord = mx_vtk_order[m->type[c]];
+    for (int j = 0; j < nn; j++, n += 4) put_be32(out + n, row[ord[j]]);
   }
   return n;
 }
@@ -295,9 +296,10 @@ static size_t fill_cells_ascii(const void *vctx, size_t b, size_t e,
     int nn = mx_cell_nodes[m->type[c]];
     const uint32_t *row = m->conn + 8 * c;
     out[n++] = (char)('0' + nn);
+    const int8_t *ord = mx_vtk_order[m->type[c]];
     for (int j = 0; j < nn; j++) {
       out[n++] = ' ';
-      n += put_u64(out + n, row[j]);
+      n += put_u64(out + n, row[ord[j]]);
     }
     out[n++] = '\n';
   }

@@ -191,7 +191,8 @@ static size_t fill_conn(const void *vctx, size_t b, size_t e, char *out) {
   for (size_t c = b; c < e; c++) {
     const uint32_t *row = m->conn + 8 * c;
     int nn = mx_cell_nodes[m->type[c]];
-    for (int j = 0; j < nn; j++, n += 8) put_le64(out + n, row[j]);
+    const int8_t *ord = mx_vtk_order[m->type[c]];
+    for (int j = 0; j < nn; j++, n += 8) put_le64(out + n, row[ord[j]]);
   }
   return n;
 }

@@ -11,7 +11,7 @@
 int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
                       const mx_surface_index *S, mx_mesh_out *M,
                       double close_ratio, double staircase_q,
-                      mx_boundary_stats *stats) {
+                      mx_boundary_stats *stats, uint8_t **states_out) {
   memset(stats, 0, sizeof *stats);
   uint8_t *states = mx_alloc(M->nnodes + 1);
   if (!states) return MX_EINPUT;
@@ -43,6 +43,10 @@ int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
   if (!st && staircase_q < 1.0) st = mx_staircase(M, &opt, staircase_q, &stats->sp);
   stats->t_staircase = mx_wtime() - t;
   mx_optional_free(&opt);
+  if (states_out && !st) {
+    *states_out = states;
+    states = NULL;
+  }
   mx_free(states);
   if (!st) mx_mesh_summarize(M);
   return st;

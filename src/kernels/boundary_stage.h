@@ -20,7 +20,9 @@ typedef struct {
   double t_states, t_close, t_patterns, t_shrink, t_smooth, t_staircase;
 } mx_boundary_stats;
 
-/* close_ratio: the "remove close to boundary" distance, as a fraction of
+/* states_out (may be NULL) receives (mx_alloc) the final state of every
+ * node: MX_NODE_OUTSIDE for the nodes on the surface.
+ * close_ratio: the "remove close to boundary" distance, as a fraction of
  * the average length of a node's incident element edges. The 2015 paper
  * says 0.3 of the incident edges; the 2021 paper, 0.3 of the shortest octant
  * diagonal sharing the node, which is about 0.5 of the average element edge
@@ -32,6 +34,6 @@ typedef struct {
 int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
                       const mx_surface_index *S, mx_mesh_out *M,
                       double close_ratio, double staircase_q,
-                      mx_boundary_stats *stats);
+                      mx_boundary_stats *stats, uint8_t **states_out);
 
 #endif

@@ -1,6 +1,10 @@
 /* A mesh as plain arrays, the form every writer takes. Cells are rows of 8
  * node indices (unused entries are ignored), with a type each. Node order
- * inside a cell follows VTK's convention for every type. */
+ * inside a cell follows VTK's convention for tetrahedra, pyramids and
+ * hexahedra; for prisms it is Gmsh's (the triangle 0 1 2 turns, by the right
+ * hand, towards the triangle 3 4 5), which VTK's wedge reverses (its 0 1 2
+ * normal points away from 3 4 5): the VTK writers and reader go through
+ * mx_vtk_order. */
 #ifndef MX_MESH_H
 #define MX_MESH_H
 
@@ -10,8 +14,14 @@
 enum { MX_TET = 0, MX_PYRAMID = 1, MX_PRISM = 2, MX_HEX = 3 };
 static const int mx_cell_nodes[4] = {4, 5, 6, 8};
 static const int mx_vtk_cell_type[4] = {10, 14, 13, 12};
+/* Node j of a VTK cell is node mx_vtk_order[type][j] of ours (an
+ * involution: the same table converts back). */
+static const int8_t mx_vtk_order[4][8] = {{0, 1, 2, 3, 4, 5, 6, 7},
+                                          {0, 1, 2, 3, 4, 5, 6, 7},
+                                          {0, 2, 1, 3, 5, 4, 6, 7},
+                                          {0, 1, 2, 3, 4, 5, 6, 7}};
 
-/* Faces of each type in VTK node order, oriented outward (-1 ends a
+/* Faces of each type in our node order, oriented outward (-1 ends a
  * triangle). The first face's right-hand normal points into the element. */
 static const int mx_cell_nfaces[4] = {4, 5, 5, 6};
 static const int8_t mx_cell_faces[4][6][4] = {
