@@ -684,11 +684,14 @@ static int vtu_take_field(rmesh *r, const vtu_array *a, int on_points) {
 static int vtu_take_cells(rmesh *r, const vtu_array *conn,
                           const vtu_array *offs, const vtu_array *types) {
   size_t nc = r->ncells;
-  if (!conn || !offs || !types || strcmp(conn->type, "Int64") ||
-      strcmp(offs->type, "Int64") || strcmp(types->type, "UInt8") ||
-      offs->bytes != 8 * (uint64_t)nc || types->bytes != nc)
+  /* Int32 indices, or Int64 when Int32 cannot hold them */
+  if (!conn || !offs || !types || strcmp(types->type, "UInt8") || types->bytes != nc ||
+      strcmp(conn->type, offs->type) ||
+      (strcmp(conn->type, "Int64") && strcmp(conn->type, "Int32")))
     return 0;
-  size_t nconn = conn->bytes / 8;
+  const size_t w = strcmp(conn->type, "Int64") ? 4 : 8;
+  if (offs->bytes != w * (uint64_t)nc) return 0;
+  size_t nconn = conn->bytes / w;
   r->list_len = nconn + nc;
   r->list = calloc(r->list_len + 1, sizeof(int64_t));
   r->types = calloc(nc + 1, sizeof(int64_t));
@@ -696,11 +699,24 @@ static int vtu_take_cells(rmesh *r, const vtu_array *conn,
   size_t pos = 0;
   for (size_t c = 0; c < nc; c++) {
     int64_t end;
-    memcpy(&end, offs->data + 8 * c, 8);
+    if (w == 8) {
+      memcpy(&end, offs->data + 8 * c, 8);
+    } else {
+      int32_t e32;
+      memcpy(&e32, offs->data + 4 * c, 4);
+      end = e32;
+    }
     if (end < prev || (uint64_t)end > nconn) return 0;
     r->list[pos++] = end - prev;
-    for (int64_t k = prev; k < end; k++)
-      memcpy(&r->list[pos++], conn->data + 8 * k, 8);
+    for (int64_t k = prev; k < end; k++) {
+      if (w == 8) {
+        memcpy(&r->list[pos++], conn->data + 8 * k, 8);
+      } else {
+        int32_t v32;
+        memcpy(&v32, conn->data + 4 * k, 4);
+        r->list[pos++] = v32;
+      }
+    }
     prev = end;
     r->types[c] = (unsigned char)types->data[c];
   }

@@ -24,6 +24,7 @@ typedef struct {
   const mx_mesh_view *m;
   const mx_field *fd;
   const uint64_t *block_start; /* nodes before cell k*OFFSET_BLOCK */
+  int wide;                    /* Int64 connectivity and offsets, else Int32 */
 } vtu_ctx;
 
 /* ---- little-endian stores ------------------------------------------------ */
@@ -144,7 +145,13 @@ static void xml_fields(strbuf *b, const char *tag, int nfields,
   sb_printf(b, "      </%s>\n", tag);
 }
 
+/* Int64 indices only when Int32 cannot hold them (smaller, faster files). */
+static int needs_wide(const mx_mesh_view *m, size_t nconn) {
+  return nconn > (size_t)INT32_MAX || m->nnodes > (size_t)INT32_MAX;
+}
+
 static void xml_header(strbuf *b, const mx_mesh_view *m, size_t nconn) {
+  const int wide = needs_wide(m, nconn);
   uint64_t off = 0;
   sb_printf(b,
             "<?xml version=\"1.0\"?>\n"
@@ -159,8 +166,10 @@ static void xml_header(strbuf *b, const mx_mesh_view *m, size_t nconn) {
   sb_printf(b, "      <Points>\n");
   xml_array(b, "Float64", "Points", 3, &off, 24 * (uint64_t)m->nnodes);
   sb_printf(b, "      </Points>\n      <Cells>\n");
-  xml_array(b, "Int64", "connectivity", 1, &off, 8 * (uint64_t)nconn);
-  xml_array(b, "Int64", "offsets", 1, &off, 8 * (uint64_t)m->ncells);
+  const char *it = wide ? "Int64" : "Int32";
+  const uint64_t isz = wide ? 8 : 4;
+  xml_array(b, it, "connectivity", 1, &off, isz * (uint64_t)nconn);
+  xml_array(b, it, "offsets", 1, &off, isz * (uint64_t)m->ncells);
   xml_array(b, "UInt8", "types", 1, &off, (uint64_t)m->ncells);
   sb_printf(b,
             "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n"
@@ -186,13 +195,17 @@ static size_t fill_ints(const void *vctx, size_t b, size_t e, char *out) {
 #endif
 
 static size_t fill_conn(const void *vctx, size_t b, size_t e, char *out) {
-  const mx_mesh_view *m = ((const vtu_ctx *)vctx)->m;
+  const vtu_ctx *ctx = vctx;
+  const mx_mesh_view *m = ctx->m;
   size_t n = 0;
   for (size_t c = b; c < e; c++) {
     const uint32_t *row = m->conn + 8 * c;
     int nn = mx_cell_nodes[m->type[c]];
     const int8_t *ord = mx_vtk_order[m->type[c]];
-    for (int j = 0; j < nn; j++, n += 8) put_le64(out + n, row[ord[j]]);
+    if (ctx->wide)
+      for (int j = 0; j < nn; j++, n += 8) put_le64(out + n, row[ord[j]]);
+    else
+      for (int j = 0; j < nn; j++, n += 4) put_le32(out + n, row[ord[j]]);
   }
   return n;
 }
@@ -204,9 +217,15 @@ static size_t fill_offsets(const void *vctx, size_t b, size_t e, char *out) {
   uint64_t end = ctx->block_start[b / OFFSET_BLOCK];
   for (size_t c = first; c < b; c++) end += (uint64_t)mx_cell_nodes[m->type[c]];
   size_t n = 0;
-  for (size_t c = b; c < e; c++, n += 8) {
+  for (size_t c = b; c < e; c++) {
     end += (uint64_t)mx_cell_nodes[m->type[c]];
-    put_le64(out + n, end);
+    if (ctx->wide) {
+      put_le64(out + n, end);
+      n += 8;
+    } else {
+      put_le32(out + n, (uint32_t)end);
+      n += 4;
+    }
   }
   return n;
 }
@@ -276,10 +295,12 @@ static uint64_t *offset_block_starts(const mx_mesh_view *m) {
 static int write_cell_blocks(mx_afile *f, const mx_mesh_view *m, size_t nconn) {
   uint64_t *block_start = offset_block_starts(m);
   if (!block_start) return MX_EINPUT;
-  vtu_ctx ctx = {m, NULL, block_start};
-  int st = write_count(f, 8 * (uint64_t)nconn);
+  const int wide = needs_wide(m, nconn);
+  const uint64_t isz = wide ? 8 : 4;
+  vtu_ctx ctx = {m, NULL, block_start, wide};
+  int st = write_count(f, isz * (uint64_t)nconn);
   if (st == MX_OK) st = mx_afile_emit(f, m->ncells, 64, fill_conn, &ctx);
-  if (st == MX_OK) st = write_count(f, 8 * (uint64_t)m->ncells);
+  if (st == MX_OK) st = write_count(f, isz * (uint64_t)m->ncells);
   if (st == MX_OK) st = mx_afile_emit(f, m->ncells, 8, fill_offsets, &ctx);
   if (st == MX_OK) st = write_count(f, (uint64_t)m->ncells);
   if (st == MX_OK) st = mx_afile_emit(f, m->ncells, 1, fill_types, &ctx);
