@@ -56,16 +56,16 @@
  *   hex     GetFEM (0 1 2 3 4 5 6 7) = VTK (0 1 3 2 4 5 7 6)
  *
  * Numbers are ASCII, doubles to 15 significant digits when that reads back
- * to the same double, else 17 (always exact). The points and convexes are
- * produced in chunks filled in parallel by mx_afile_emit, so the file is the
- * same byte for byte whatever the number of threads. */
+ * to the same double, else 17 (always exact; mx_put_double of io/text_num.h,
+ * laid out like "%g"). The points and convexes are produced in chunks filled
+ * in parallel by mx_afile_emit, so the file is the same byte for byte
+ * whatever the number of threads. */
 #include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "common.h"
 #include "io/atomic_file.h"
+#include "io/text_num.h"
 #include "soa/mesh.h"
 
 /* GetFEM's node k of each type is mixoct's (VTK's) node getfem_order[t][k]. */
@@ -79,35 +79,14 @@ static const char *const getfem_geotrans[4] = {
     "'GT_PK(3,1)'", "'GT_PYRAMID(1)'", "'GT_PRISM(3,1)'", "'GT_QK(3,1)'"};
 
 enum {
-  NUM_MAX = 26,        /* one double, "%.17g" is at most 24 characters */
-  POINT_LINE_MAX = 128, /* "  POINT  " + index + 3 doubles + blanks */
-  CONVEX_LINE_MAX = 192 /* "  CONVEX " + index + name + 8 indices */
+  /* "  POINT  ", the index, 3 doubles after 2 blanks each, '\n' */
+  POINT_LINE_MAX = 9 + MX_U64_CHARS + 3 * (2 + MX_DOUBLE_CHARS) + 1,
+  /* "  CONVEX ", the index, 4 blanks, the name (at most 15), 5 blanks,
+   * 8 indices after a blank each, '\n' */
+  CONVEX_LINE_MAX = 9 + MX_U64_CHARS + 24 + 8 * (1 + MX_U64_CHARS) + 1,
 };
 
-/* ---- ASCII numbers -------------------------------------------------------- */
-
-static size_t put_u64(char *out, uint64_t v) {
-  char tmp[24];
-  size_t n = 0;
-  do {
-    tmp[n++] = (char)('0' + v % 10);
-    v /= 10;
-  } while (v);
-  for (size_t i = 0; i < n; i++) out[i] = tmp[n - 1 - i];
-  return n;
-}
-
-/* The shortest of "%.15g" and "%.17g" that reads back as x (C locale: the
- * program never calls setlocale). */
-static size_t put_double(char *out, double x) {
-  char tmp[40];
-  int n = snprintf(tmp, sizeof tmp, "%.15g", x);
-  if (n <= 0 || n >= (int)sizeof tmp || strtod(tmp, NULL) != x)
-    n = snprintf(tmp, sizeof tmp, "%.17g", x);
-  if (n <= 0 || n >= (int)sizeof tmp) n = snprintf(tmp, sizeof tmp, "nan");
-  memcpy(out, tmp, (size_t)n);
-  return (size_t)n;
-}
+/* ---- text ---------------------------------------------------------------- */
 
 static size_t put_str(char *out, const char *s) {
   size_t n = strlen(s);
@@ -122,11 +101,11 @@ static size_t fill_points(const void *vctx, size_t b, size_t e, char *out) {
   size_t n = 0;
   for (size_t i = b; i < e; i++) {
     n += put_str(out + n, "  POINT  ");
-    n += put_u64(out + n, i);
+    n += mx_put_u64(out + n, i);
     for (int d = 0; d < 3; d++) {
       out[n++] = ' ';
       out[n++] = ' ';
-      n += put_double(out + n, m->xyz[3 * i + d]);
+      n += mx_put_double(out + n, m->xyz[3 * i + d]);
     }
     out[n++] = '\n';
   }
@@ -140,13 +119,13 @@ static size_t fill_convexes(const void *vctx, size_t b, size_t e, char *out) {
     const int t = m->type[c];
     const uint32_t *row = m->conn + 8 * c;
     n += put_str(out + n, "  CONVEX ");
-    n += put_u64(out + n, c);
+    n += mx_put_u64(out + n, c);
     n += put_str(out + n, "    ");
     n += put_str(out + n, getfem_geotrans[t]);
     n += put_str(out + n, "     ");
     for (int k = 0; k < mx_cell_nodes[t]; k++) {
       out[n++] = ' ';
-      n += put_u64(out + n, row[getfem_order[t][k]]);
+      n += mx_put_u64(out + n, row[getfem_order[t][k]]);
     }
     out[n++] = '\n';
   }

@@ -29,56 +29,21 @@
  * positive in that convention. Cell fields are not written.
  *
  * Doubles are ASCII, 15 significant digits when that reads back to the same
- * double, else 17 (always exact). Nodes and elements are produced in chunks
- * filled in parallel by mx_afile_emit, so the file is the same byte for byte
- * whatever the number of threads. */
+ * double, else 17 (always exact; mx_put_double of io/text_num.h, laid out
+ * like "%g"). Nodes and elements are produced in chunks filled in parallel
+ * by mx_afile_emit, so the file is the same byte for byte whatever the
+ * number of threads. */
 #include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
 
 #include "common.h"
 #include "io/atomic_file.h"
+#include "io/text_num.h"
 #include "soa/mesh.h"
 
-enum {
-  NODE_LINE_MAX = 80,     /* 3 doubles of at most 24 characters + blanks */
-  ELEMENT_LINE_MAX = 100  /* count + 8 indices of at most 10 digits */
-};
-
-static size_t put_u64(char *out, uint64_t v) {
-  char tmp[24];
-  size_t n = 0;
-  do {
-    tmp[n++] = (char)('0' + v % 10);
-    v /= 10;
-  } while (v);
-  for (size_t i = 0; i < n; i++) out[i] = tmp[n - 1 - i];
-  return n;
-}
-
-/* The shortest of "%.15g" and "%.17g" that reads back as x (C locale: the
- * program never calls setlocale). */
-static size_t put_double(char *out, double x) {
-  char tmp[40];
-  int n = snprintf(tmp, sizeof tmp, "%.15g", x);
-  if (n <= 0 || n >= (int)sizeof tmp || strtod(tmp, NULL) != x)
-    n = snprintf(tmp, sizeof tmp, "%.17g", x);
-  if (n <= 0 || n >= (int)sizeof tmp) n = snprintf(tmp, sizeof tmp, "nan");
-  memcpy(out, tmp, (size_t)n);
-  return (size_t)n;
-}
+enum { ELEMENT_LINE_MAX = 2 + 8 * (1 + MX_U64_CHARS) }; /* k, 8 indices, \n */
 
 static size_t fill_nodes(const void *vctx, size_t b, size_t e, char *out) {
-  const mx_mesh_view *m = vctx;
-  size_t n = 0;
-  for (size_t i = b; i < e; i++) {
-    for (int d = 0; d < 3; d++) {
-      n += put_double(out + n, m->xyz[3 * i + d]);
-      out[n++] = d < 2 ? ' ' : '\n';
-    }
-  }
-  return n;
+  return mx_put_xyz_lines(out, ((const mx_mesh_view *)vctx)->xyz, b, e);
 }
 
 static size_t fill_elements(const void *vctx, size_t b, size_t e, char *out) {
@@ -90,7 +55,7 @@ static size_t fill_elements(const void *vctx, size_t b, size_t e, char *out) {
     out[n++] = (char)('0' + k);
     for (int j = 0; j < k; j++) {
       out[n++] = ' ';
-      n += put_u64(out + n, row[j]);
+      n += mx_put_u64(out + n, row[j]);
     }
     out[n++] = '\n';
   }
@@ -99,7 +64,7 @@ static size_t fill_elements(const void *vctx, size_t b, size_t e, char *out) {
 
 static int write_body(mx_afile *f, const mx_mesh_view *m) {
   MX_CHECK(mx_afile_printf(f, "[Nodes, ARRAY1<POINT3D>]\n%zu\n", m->nnodes));
-  MX_CHECK(mx_afile_emit(f, m->nnodes, NODE_LINE_MAX, fill_nodes, m));
+  MX_CHECK(mx_afile_emit(f, m->nnodes, MX_XYZ_LINE_MAX, fill_nodes, m));
   MX_CHECK(mx_afile_printf(f, "\n[Elements, ARRAY1<STRING>]\n%zu\n",
                            m->ncells));
   return mx_afile_emit(f, m->ncells, ELEMENT_LINE_MAX, fill_elements, m);

@@ -47,8 +47,8 @@
  *
  * Every block is produced in parallel chunks by mx_afile_emit: the bytes do
  * not depend on the number of threads. ASCII reals are written with 17
- * significant digits (15 when those read back to the same double). */
-#include <math.h>
+ * significant digits (15 when those read back to the same double): see
+ * mx_put_double in io/text_num.h. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -57,6 +57,7 @@
 #include "common.h"
 #include "io/atomic_file.h"
 #include "io/boundary_faces.h"
+#include "io/text_num.h"
 #include "soa/mesh.h"
 
 enum {
@@ -69,8 +70,7 @@ enum {
   KW_HEXAHEDRA = 10,
   KW_PYRAMIDS = 49,
   KW_END = 54,
-  REAL_MAX_CHARS = 25, /* longest real written, with its separator */
-  TYPE_CHUNK = 65536,  /* cells per chunk when grouping them by type */
+  TYPE_CHUNK = 65536, /* cells per chunk when grouping them by type */
 };
 
 static const int32_t VERTEX_REF = 0, ELEMENT_REF = 1, FACE_REF = 1;
@@ -95,199 +95,6 @@ typedef struct {
   int face_size;
 } medit_ctx;
 
-/* ---- numbers as text ------------------------------------------------------
- */
-
-static size_t put_u64(char *out, uint64_t v) {
-  char tmp[24];
-  size_t n = 0;
-  do {
-    tmp[n++] = (char)('0' + v % 10);
-    v /= 10;
-  } while (v);
-  for (size_t i = 0; i < n; i++) out[i] = tmp[n - 1 - i];
-  return n;
-}
-
-static size_t put_i32(char *out, int32_t v) {
-  if (v >= 0) return put_u64(out, (uint64_t)v);
-  out[0] = '-';
-  return 1 + put_u64(out + 1, (uint64_t)(-(int64_t)v));
-}
-
-/* 5^k for k <= 27 (5^27 < 2^63), and the exact doubles 10^k, k <= 22. */
-static const uint64_t pow5[28] = {1ULL,
-                                  5ULL,
-                                  25ULL,
-                                  125ULL,
-                                  625ULL,
-                                  3125ULL,
-                                  15625ULL,
-                                  78125ULL,
-                                  390625ULL,
-                                  1953125ULL,
-                                  9765625ULL,
-                                  48828125ULL,
-                                  244140625ULL,
-                                  1220703125ULL,
-                                  6103515625ULL,
-                                  30517578125ULL,
-                                  152587890625ULL,
-                                  762939453125ULL,
-                                  3814697265625ULL,
-                                  19073486328125ULL,
-                                  95367431640625ULL,
-                                  476837158203125ULL,
-                                  2384185791015625ULL,
-                                  11920928955078125ULL,
-                                  59604644775390625ULL,
-                                  298023223876953125ULL,
-                                  1490116119384765625ULL,
-                                  7450580596923828125ULL};
-static const double pow10_d[23] = {
-    1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
-    1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-
-/* round(ax * 10^k) exactly, for finite ax > 0, |k| <= 27 and a result
- * below 2^63. With ax = m 2^e and 10^k = 5^k 2^k the product is an
- * integer times a power of two: m 5^k (at most 116 bits) shifted, or, for
- * k < 0, m 2^(e+k) divided by 5^-k; both fit in 128 bits here. Halves
- * round up (they cannot occur in the division: 5^-k is odd). */
-static uint64_t scaled_digits(double ax, int k) {
-  uint64_t bits;
-  memcpy(&bits, &ax, 8);
-  const int be = (int)((bits >> 52) & 0x7ff);
-  uint64_t m = bits & ((1ULL << 52) - 1);
-  int e = -1074;
-  if (be) {
-    m |= 1ULL << 52;
-    e = be - 1075;
-  }
-  if (k >= 0) {
-    const unsigned __int128 p = (unsigned __int128)m * pow5[k];
-    int s = e + k;
-    if (s >= 0) return s >= 64 ? UINT64_MAX : (uint64_t)(p << s);
-    s = -s;
-    if (s > 120) return 0;
-    const unsigned __int128 half = (unsigned __int128)1 << (s - 1);
-    return (uint64_t)((p + half) >> s);
-  }
-  const uint64_t q = pow5[-k];
-  const int s = e + k;
-  if (s >= 0) {
-    if (s > 70) return UINT64_MAX;
-    const unsigned __int128 num = (unsigned __int128)m << s;
-    return (uint64_t)((num + q / 2) / q);
-  }
-  if (-s > 60) return 0;
-  const unsigned __int128 den = (unsigned __int128)q << -s;
-  return (uint64_t)(((unsigned __int128)m + den / 2) / den);
-}
-
-/* The decimal digits[0..ndig) times 10^(E - ndig + 1), formatted like %g. */
-static size_t put_digits(char *out, const char *dig, int ndig, int E) {
-  size_t n = 0;
-  if (E >= 0 && E < 17) {
-    for (int i = 0; i <= E; i++) out[n++] = i < ndig ? dig[i] : '0';
-    if (ndig > E + 1) {
-      out[n++] = '.';
-      for (int i = E + 1; i < ndig; i++) out[n++] = dig[i];
-    }
-  } else if (E < 0 && E >= -5) {
-    out[n++] = '0';
-    out[n++] = '.';
-    for (int i = -1; i > E; i--) out[n++] = '0';
-    for (int i = 0; i < ndig; i++) out[n++] = dig[i];
-  } else {
-    out[n++] = dig[0];
-    if (ndig > 1) {
-      out[n++] = '.';
-      for (int i = 1; i < ndig; i++) out[n++] = dig[i];
-    }
-    out[n++] = 'e';
-    out[n++] = E < 0 ? '-' : '+';
-    int a = E < 0 ? -E : E;
-    if (a < 10) out[n++] = '0';
-    n += put_u64(out + n, (uint64_t)a);
-  }
-  return n;
-}
-
-/* Out of the tables' range: %.15g when it reads back, else %.17g. */
-static size_t put_real_slow(char *out, double x) {
-  char tmp[32];
-  int n = snprintf(tmp, sizeof tmp, "%.15g", x);
-  if (strtod(tmp, NULL) != x || !isfinite(x))
-    n = snprintf(tmp, sizeof tmp, "%.17g", x);
-  memcpy(out, tmp, (size_t)n);
-  return (size_t)n;
-}
-
-/* A real that reads back to the same double, at most 24 characters.
- *
- * D = round(|x| * 10^(16-E)), computed exactly, has 17 digits and lies
- * within half a unit of its last digit from |x|; one such unit is below
- * 2^53 / 10^16 = 0.9008 ulp of x, so D * 10^(E-16) is within 0.46 ulp of x
- * and reads back as x. When
- * D rounded to 15 digits, times the power of ten, gives x in double
- * arithmetic (exact operands, one correctly rounded operation: what strtod
- * returns for that decimal), the 15 digits are written instead, so 0.1 is
- * "0.1". Out of the range of the tables, snprintf and strtod are used. */
-static size_t put_real(char *out, double x) {
-  if (x == 0.0) {
-    out[0] = '0';
-    return 1;
-  }
-  if (!isfinite(x)) return put_real_slow(out, x);
-  size_t n = 0;
-  if (x < 0) out[n++] = '-';
-  const double ax = fabs(x);
-  int e2;
-  frexp(ax, &e2);                                     /* 2^(e2-1) <= ax */
-  int E = (int)floor((e2 - 1) * 0.30102999566398120); /* <= floor(log10) */
-  uint64_t D = 0;
-  for (int tries = 0;; tries++) {
-    const int k = 16 - E;
-    if (k < -27 || k > 27 || tries == 3) return put_real_slow(out, x);
-    D = scaled_digits(ax, k);
-    if (D >= 100000000000000000ULL)
-      E++;
-    else if (D < 10000000000000000ULL)
-      E--;
-    else
-      break;
-  }
-  /* try 15 digits */
-  uint64_t D15 = (D + 50) / 100;
-  int E15 = E;
-  if (D15 >= 1000000000000000ULL) {
-    D15 /= 10;
-    E15++;
-  }
-  const int p = E15 - 14;
-  int use15 = 0;
-  if (p >= -22 && p <= 22) {
-    const double v =
-        p >= 0 ? (double)D15 * pow10_d[p] : (double)D15 / pow10_d[-p];
-    use15 = v == ax;
-  }
-  char dig[20];
-  int ndig;
-  if (use15) {
-    D = D15;
-    E = E15;
-    ndig = 15;
-  } else {
-    ndig = 17;
-  }
-  for (int i = ndig - 1; i >= 0; i--) {
-    dig[i] = (char)('0' + D % 10);
-    D /= 10;
-  }
-  while (ndig > 1 && dig[ndig - 1] == '0') ndig--;
-  return n + put_digits(out + n, dig, ndig, E);
-}
-
 /* ---- fill functions --------------------------------------------------------
  */
 
@@ -297,10 +104,10 @@ static size_t fill_vertices_ascii(const void *vctx, size_t b, size_t e,
   size_t n = 0;
   for (size_t i = b; i < e; i++) {
     for (int d = 0; d < 3; d++) {
-      n += put_real(out + n, xyz[3 * i + d]);
+      n += mx_put_double(out + n, xyz[3 * i + d]);
       out[n++] = ' ';
     }
-    n += put_i32(out + n, VERTEX_REF);
+    n += mx_put_i64(out + n, VERTEX_REF);
     out[n++] = '\n';
   }
   return n;
@@ -326,10 +133,10 @@ static size_t fill_cells_ascii(const void *vctx, size_t b, size_t e,
   for (size_t i = b; i < e; i++) {
     const uint32_t *row = ctx->m->conn + 8 * (size_t)ctx->cells[i];
     for (int j = 0; j < nv; j++) {
-      n += put_u64(out + n, (uint64_t)row[medit_order[t][j]] + 1);
+      n += mx_put_u64(out + n, (uint64_t)row[medit_order[t][j]] + 1);
       out[n++] = ' ';
     }
-    n += put_i32(out + n, ELEMENT_REF);
+    n += mx_put_i64(out + n, ELEMENT_REF);
     out[n++] = '\n';
   }
   return n;
@@ -358,10 +165,10 @@ static size_t fill_faces_ascii(const void *vctx, size_t b, size_t e,
   size_t n = 0;
   for (size_t i = b; i < e; i++) {
     for (int j = 0; j < k; j++) {
-      n += put_u64(out + n, (uint64_t)ctx->faces[(size_t)k * i + j] + 1);
+      n += mx_put_u64(out + n, (uint64_t)ctx->faces[(size_t)k * i + j] + 1);
       out[n++] = ' ';
     }
-    n += put_i32(out + n, FACE_REF);
+    n += mx_put_i64(out + n, FACE_REF);
     out[n++] = '\n';
   }
   return n;
@@ -470,7 +277,7 @@ static int emit_section(mx_afile *f, const medit_data *d, const section *s,
   switch (s->code) {
     case KW_VERTICES:
       return binary ? mx_afile_emit(f, s->lines, 28, fill_vertices_bin, &ctx)
-                    : mx_afile_emit(f, s->lines, 3 * REAL_MAX_CHARS + 8,
+                    : mx_afile_emit(f, s->lines, 4 * MX_NUM_MAX,
                                     fill_vertices_ascii, &ctx);
     case KW_TRIANGLES:
     case KW_QUADRILATERALS:
