@@ -19,6 +19,9 @@
 # then fail).
 MIXOCT=${1:?usage: boundary_full_test.sh path/to/mixoct}
 DATA=${MIXOCT_DATA:-/work/shared/data}
+# meson points MIXOCT_DATA at the source tree's ../shared/data; a clone made
+# elsewhere falls back to the usual place
+[ -d "$DATA/surfaces" ] || DATA=/work/shared/data
 STAGE=${MIXOCT_TEST_STAGE:-full}
 HERE=$(cd "$(dirname "$0")" && pwd)
 T=$(mktemp -d)

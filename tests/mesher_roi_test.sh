@@ -8,6 +8,9 @@
 MIXOCT=${1:?usage: mesher_roi_test.sh path/to/mixoct}
 MIXOCT=$(readlink -f "$MIXOCT")
 DATA=${MIXOCT_DATA:-/work/shared/data}
+# meson points MIXOCT_DATA at the source tree's ../shared/data; a clone made
+# elsewhere falls back to the usual place
+[ -d "$DATA/surfaces" ] || DATA=/work/shared/data
 S=$DATA/surfaces
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
