@@ -664,13 +664,16 @@ static int vtu_take_points(rmesh *r, const vtu_array *a) {
 static int vtu_take_field(rmesh *r, const vtu_array *a, int on_points) {
   size_t count = on_points ? r->nnodes : r->ncells;
   int is_double = !strcmp(a->type, "Float64");
-  if (!is_double && strcmp(a->type, "Int32")) return 0;
-  if (a->ncomp != 1 || a->bytes != count * (is_double ? 8u : 4u)) return 0;
+  const int u8 = !strcmp(a->type, "UInt8"); /* integer fields within 0..255 */
+  if (!is_double && !u8 && strcmp(a->type, "Int32")) return 0;
+  if (a->ncomp != 1 || a->bytes != count * (is_double ? 8u : u8 ? 1u : 4u)) return 0;
   rfield *f = rmesh_add_field(r, a->name, is_double, on_points, count);
   if (!f) return 0;
   for (size_t i = 0; i < count; i++) {
     if (is_double) {
       memcpy(&f->d[i], a->data + 8 * i, 8);
+    } else if (u8) {
+      f->i[i] = (uint8_t)a->data[i];
     } else {
       int32_t v;
       memcpy(&v, a->data + 4 * i, 4);

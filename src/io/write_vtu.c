@@ -134,16 +134,29 @@ static void xml_array(strbuf *b, const char *type, const char *name, int ncomp,
   *offset += 8 + data_bytes;
 }
 
+/* An integer field whose values all lie in 0..255 is written as UInt8
+ * (element types, levels, boundary flags: a quarter of the bytes). */
+static int fits_u8(const mx_field *fd, size_t count) {
+  if (fd->is_double) return 0;
+  size_t out = 0;
+#pragma omp parallel for reduction(+ : out) schedule(static) if (count > 65536)
+  for (size_t i = 0; i < count; i++) out += (uint32_t)fd->ivalues[i] > 255u;
+  return out == 0;
+}
+
 static void xml_fields(strbuf *b, const char *tag, int nfields,
                        const mx_field *fields, size_t count, uint64_t *offset) {
   sb_printf(b, "      <%s>\n", tag);
   for (int i = 0; i < nfields; i++) {
     const mx_field *fd = &fields[i];
-    xml_array(b, fd->is_double ? "Float64" : "Int32", fd->name, 1, offset,
-              (uint64_t)count * (fd->is_double ? 8 : 4));
+    const int u8 = fits_u8(fd, count);
+    xml_array(b, fd->is_double ? "Float64" : u8 ? "UInt8" : "Int32", fd->name, 1, offset,
+              (uint64_t)count * (fd->is_double ? 8 : u8 ? 1 : 4));
   }
   sb_printf(b, "      </%s>\n", tag);
 }
+
+static size_t fill_u8(const void *vctx, size_t b, size_t e, char *out);
 
 /* Int64 indices only when Int32 cannot hold them (smaller, faster files). */
 static int needs_wide(const mx_mesh_view *m, size_t nconn) {
@@ -256,8 +269,19 @@ static int write_double_block(mx_afile *f, const double *v, size_t count) {
 #endif
 }
 
+static size_t fill_u8(const void *vctx, size_t b, size_t e, char *out) {
+  const int32_t *v = ((const vtu_ctx *)vctx)->fd->ivalues;
+  for (size_t i = b; i < e; i++) out[i - b] = (char)(uint8_t)v[i];
+  return e - b;
+}
+
 static int write_field_block(mx_afile *f, const mx_field *fd, size_t count) {
   if (fd->is_double) return write_double_block(f, fd->dvalues, count);
+  if (fits_u8(fd, count)) {
+    MX_CHECK(write_count(f, (uint64_t)count));
+    vtu_ctx ctx = {NULL, fd, NULL, 0};
+    return mx_afile_emit(f, count, 1, fill_u8, &ctx);
+  }
   MX_CHECK(write_count(f, 4 * (uint64_t)count));
 #if VTU_HOST_LE
   return mx_afile_write(f, fd->ivalues, 4 * count);
