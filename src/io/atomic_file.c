@@ -179,6 +179,12 @@ void mx_afile_abort(mx_afile *f) {
   afile_discard(f);
 }
 
+int mx_afile_finish(mx_afile *f, int status) {
+  if (status == MX_OK) return mx_afile_commit(f);
+  mx_afile_abort(f);
+  return status;
+}
+
 /* ---- chunked parallel emission ------------------------------------------- */
 
 static int emit_reserve(mx_afile *f, size_t bytes) {

@@ -47,6 +47,9 @@ int mx_afile_printf(mx_afile *f, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 int mx_afile_commit(mx_afile *f);
 void mx_afile_abort(mx_afile *f);
+/* The end of every writer: commit when status is MX_OK, otherwise abort
+ * and return status. */
+int mx_afile_finish(mx_afile *f, int status);
 
 /* Chunked, parallel writing of a sequence of nitems items. fill() writes
  * the items [begin, end) to out, which has room for

@@ -151,10 +151,5 @@ int mx_write_getfem(const char *path, const mx_mesh_view *m) {
   MX_CHECK(mx_mesh_view_check(path, m));
   mx_afile f;
   MX_CHECK(mx_afile_open(&f, path));
-  int status = write_body(&f, m);
-  if (status != MX_OK) {
-    mx_afile_abort(&f);
-    return status;
-  }
-  return mx_afile_commit(&f);
+  return mx_afile_finish(&f, write_body(&f, m));
 }

@@ -382,11 +382,7 @@ int mx_write_medit(const char *path, const mx_mesh_view *m, int binary) {
   else
     mx_error(path, 0, "out of memory");
   if (st == MX_OK) {
-    st = binary ? write_binary(&f, &d, path) : write_ascii(&f, &d);
-    if (st == MX_OK)
-      st = mx_afile_commit(&f);
-    else
-      mx_afile_abort(&f);
+    st = mx_afile_finish(&f, binary ? write_binary(&f, &d, path) : write_ascii(&f, &d));
   }
   mx_free(cells);
   mx_boundary_faces_free(&bf);

@@ -249,10 +249,5 @@ int mx_write_vtk_legacy(const char *path, const mx_mesh_view *m, int binary) {
   }
   mx_afile f;
   MX_CHECK(mx_afile_open(&f, path));
-  int status = write_body(&f, m, binary);
-  if (status != MX_OK) {
-    mx_afile_abort(&f);
-    return status;
-  }
-  return mx_afile_commit(&f);
+  return mx_afile_finish(&f, write_body(&f, m, binary));
 }
