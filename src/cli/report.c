@@ -127,7 +127,7 @@ void mx_print_summary(const mx_summary *s) {
   if (s->full) {
     const mx_boundary_stats *b = &s->boundary;
     printf("  boundary     %zu nodes located; %zu moved close, %zu shrunk onto the surface\n"
-           "               %zu elements removed; %zu patterned into %zu (+%zu centres)\n"
+           "               %zu elements removed; %zu patterned (%zu elements after, +%zu centres)\n"
            "               %zu inverted by the shrink, untangled with %zu node moves;"
            " %zu restored (staircase)\n",
            b->located, b->moved_close, b->shrunk, b->removed, b->sp.patterned,
