@@ -18,6 +18,7 @@
 
 #include "check.h"
 #include "common.h"
+#include "file_util.h"
 #include "io/read_mesh.h"
 #include "kernels/check.h"
 #include "soa/mesh.h"
@@ -471,23 +472,6 @@ static void write_bytes(const char *path, const void *data, size_t n) {
 
 static void write_text(const char *path, const char *s) {
   write_bytes(path, s, strlen(s));
-}
-
-static char *slurp(const char *path, size_t *len) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  fseek(f, 0, SEEK_END);
-  long n = ftell(f);
-  fseek(f, 0, SEEK_SET);
-  char *b = malloc((size_t)n + 1);
-  if (b && fread(b, 1, (size_t)n, f) != (size_t)n) {
-    free(b);
-    b = NULL;
-  }
-  fclose(f);
-  if (b) b[n] = '\0';
-  *len = (size_t)n;
-  return b;
 }
 
 /* Runs fn with stderr sent to a file; returns what was printed. */

@@ -26,45 +26,7 @@
 #include "soa/mesh.h"
 
 #define OUT_DIR "getfem_m3d_out"
-
-/* ====================================================================== */
-/* A test mesh                                                            */
-/* ====================================================================== */
-
-typedef struct {
-  size_t nnodes, ncells;
-  double *xyz;
-  uint8_t *type;
-  uint32_t *conn;
-  mx_mesh_view v;
-} tmesh;
-
-static void tmesh_alloc(tmesh *t, size_t nnodes, size_t ncells) {
-  memset(t, 0, sizeof *t);
-  t->nnodes = nnodes;
-  t->ncells = ncells;
-  t->xyz = calloc(3 * nnodes + 1, sizeof(double));
-  t->type = calloc(ncells + 1, 1);
-  t->conn = calloc(8 * ncells + 1, sizeof(uint32_t));
-  if (!t->xyz || !t->type || !t->conn) {
-    fprintf(stderr, "test: out of memory\n");
-    exit(2);
-  }
-  t->v = (mx_mesh_view){nnodes, t->xyz, ncells, t->type, t->conn, 0, NULL, 0, NULL};
-}
-
-static void tmesh_free(tmesh *t) {
-  free(t->xyz);
-  free(t->type);
-  free(t->conn);
-  memset(t, 0, sizeof *t);
-}
-
-static void set_cell(tmesh *t, size_t c, int type, const uint32_t *nodes) {
-  static const int nn[4] = {4, 5, 6, 8};
-  t->type[c] = (uint8_t)type;
-  for (int j = 0; j < 8; j++) t->conn[8 * c + j] = j < nn[type] ? nodes[j] : 0xdeadbeefu;
-}
+#include "file_util.h"
 
 /* ====================================================================== */
 /* Readers                                                                */
@@ -84,23 +46,6 @@ static void rmesh_free(rmesh *r) {
   free(r->conn);
   free(r->name);
   memset(r, 0, sizeof *r);
-}
-
-static char *slurp(const char *path, size_t *len) {
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return NULL;
-  fseek(fp, 0, SEEK_END);
-  long n = ftell(fp);
-  fseek(fp, 0, SEEK_SET);
-  char *buf = malloc((size_t)n + 1);
-  if (buf && fread(buf, 1, (size_t)n, fp) != (size_t)n) {
-    free(buf);
-    buf = NULL;
-  }
-  fclose(fp);
-  if (buf) buf[n] = '\0';
-  if (len) *len = (size_t)n;
-  return buf;
 }
 
 /* Whitespace-separated tokens; '%' starts a comment to the end of the line. */
@@ -401,23 +346,6 @@ static double vtk_volume(int k, const double (*p)[3]) {
 /* Tests                                                                  */
 /* ====================================================================== */
 
-static void path_in(char *out, size_t cap, const char *name) {
-  snprintf(out, cap, "%s/%s", OUT_DIR, name);
-}
-
-static int count_entries(const char *dir, const char *prefix) {
-  DIR *d = opendir(dir);
-  if (!d) return -1;
-  int n = 0;
-  struct dirent *e;
-  while ((e = readdir(d))) {
-    if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-    if (strncmp(e->d_name, prefix, strlen(prefix)) == 0) n++;
-  }
-  closedir(d);
-  return n;
-}
-
 /* VTK-ordered reference elements (positive in VTK's convention), the volume
  * of each before the map. */
 static const double ref_vtk[4][8][3] = {
@@ -669,14 +597,10 @@ static void test_threads(void) {
 static void test_failures(void) {
   tmesh t;
   small_mesh(&t);
-  struct stat st;
-  if (stat("/dev/full", &st) == 0 && S_ISCHR(st.st_mode)) {
+  if (have_dev_full()) {
     CHECK(mx_write_getfem("/dev/full", &t.v) == MX_EINPUT);
     CHECK(mx_write_m3d("/dev/full", &t.v) == MX_EINPUT);
-    CHECK(stat("/dev/full", &st) == 0 && S_ISCHR(st.st_mode));
-    CHECK(count_entries("/dev", "full.") == 0);
-  } else {
-    printf("SKIP /dev/full: not available\n");
+    CHECK(dev_full_intact());
   }
   char path[256];
   path_in(path, sizeof path, "no/such/dir/x.getfem");

@@ -28,6 +28,7 @@
 #include "soa/mesh.h"
 
 #define OUT_DIR "medit_out"
+#include "file_util.h"
 
 /* ====================================================================== */
 /* Medit conventions, written here from the documentation                 */
@@ -114,23 +115,6 @@ static void mfile_free(mfile *f) {
   free(f->vref);
   for (int k = 0; k < NKINDS; k++) free(f->el[k]);
   memset(f, 0, sizeof *f);
-}
-
-static char *slurp(const char *path, size_t *len) {
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return NULL;
-  fseek(fp, 0, SEEK_END);
-  long n = ftell(fp);
-  fseek(fp, 0, SEEK_SET);
-  char *buf = malloc((size_t)n + 1);
-  if (buf && fread(buf, 1, (size_t)n, fp) != (size_t)n) {
-    free(buf);
-    buf = NULL;
-  }
-  fclose(fp);
-  if (buf) buf[n] = '\0';
-  *len = (size_t)n;
-  return buf;
 }
 
 /* Next whitespace-separated token ('#' starts a comment line). */
@@ -322,50 +306,6 @@ static int read_medit(const char *path, int binary, mfile *f) {
 /* Helpers                                                                */
 /* ====================================================================== */
 
-typedef struct {
-  size_t nnodes, ncells;
-  double *xyz;
-  uint8_t *type;
-  uint32_t *conn;
-  mx_mesh_view v;
-} tmesh;
-
-static void tmesh_init(tmesh *t, size_t nnodes, size_t ncells) {
-  memset(t, 0, sizeof *t);
-  t->nnodes = nnodes;
-  t->ncells = ncells;
-  t->xyz = calloc(3 * nnodes + 1, sizeof *t->xyz);
-  t->type = calloc(ncells + 1, 1);
-  t->conn = calloc(8 * ncells + 1, sizeof *t->conn);
-  t->v = (mx_mesh_view){nnodes, t->xyz, ncells, t->type, t->conn,
-                        0,      NULL,   0,      NULL};
-}
-
-static void tmesh_free(tmesh *t) {
-  free(t->xyz);
-  free(t->type);
-  free(t->conn);
-  memset(t, 0, sizeof *t);
-}
-
-static void path_in(char *out, size_t cap, const char *name) {
-  snprintf(out, cap, "%s/%s", OUT_DIR, name);
-}
-
-static int exists(const char *path) {
-  struct stat st;
-  return stat(path, &st) == 0;
-}
-
-static int same_bytes(const char *a, const char *b) {
-  size_t la, lb;
-  char *x = slurp(a, &la), *y = slurp(b, &lb);
-  int same = x && y && la == lb && memcmp(x, y, la) == 0;
-  free(x);
-  free(y);
-  return same;
-}
-
 /* A fixed proper rigid motion, so the reference elements are not aligned. */
 static void move(const double in[3], double out[3]) {
   const double a = 0.3, b = -0.7, c = 1.1;
@@ -533,7 +473,7 @@ static void reference_element(int t, tmesh *m) {
                         : t == MX_PRISM   ? pri
                                           : hex;
   const int n = mx_cell_nodes[t];
-  tmesh_init(m, (size_t)n, 1);
+  tmesh_alloc(m, (size_t)n, 1);
   m->type[0] = (uint8_t)t;
   for (int j = 0; j < n; j++) {
     move(p[j], m->xyz + 3 * j);
@@ -613,7 +553,7 @@ static void test_reference_elements(void) {
 /* A block of nx x ny x nz unit hexahedra. */
 static void hex_block(tmesh *m, size_t nx, size_t ny, size_t nz) {
   const size_t px = nx + 1, py = ny + 1, pz = nz + 1;
-  tmesh_init(m, px * py * pz, nx * ny * nz);
+  tmesh_alloc(m, px * py * pz, nx * ny * nz);
   for (size_t k = 0; k < pz; k++)
     for (size_t j = 0; j < py; j++)
       for (size_t i = 0; i < px; i++) {
@@ -814,7 +754,7 @@ static void test_mixed_round_trip(void) {
 static void test_ascii_reals(void) {
   const size_t nextra = 20000;
   tmesh m;
-  tmesh_init(&m, 4 + nextra, 1);
+  tmesh_alloc(&m, 4 + nextra, 1);
   static const double tet[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   memcpy(m.xyz, tet, sizeof tet);
   for (int j = 0; j < 4; j++) m.conn[j] = (uint32_t)j;
@@ -899,7 +839,7 @@ static void test_threads_identical(void) {
       omp_set_num_threads(2);
       CHECK(mx_write_medit(p2, views[w], binary) == MX_OK);
       omp_set_num_threads(saved);
-      CHECK(same_bytes(p1, p2));
+      CHECK(files_equal(p1, p2));
       mfile f;
       CHECK(read_medit(p1, binary, &f));
       check_boundary(&f, NULL);
@@ -928,19 +868,6 @@ static void test_threads_identical(void) {
   tmesh_free(&big);
 }
 
-static size_t count_prefix(const char *dir, const char *prefix) {
-  char cmd[512];
-  snprintf(cmd, sizeof cmd, "ls -a '%s' 2>/dev/null | grep -c '^%s' ", dir,
-           prefix);
-  FILE *p = popen(cmd, "r");
-  size_t n = 0;
-  if (p) {
-    if (fscanf(p, "%zu", &n) != 1) n = 0;
-    pclose(p);
-  }
-  return n;
-}
-
 static void test_failures(void) {
   tmesh m;
   hex_block(&m, 2, 1, 1);
@@ -960,10 +887,8 @@ static void test_failures(void) {
             binary ? "plainfile/x.meshb" : "plainfile/x.mesh");
     CHECK(mx_write_medit(path, &m.v, binary) == MX_EINPUT);
   }
-  struct stat st;
-  CHECK(stat("/dev/full", &st) == 0 && S_ISCHR(st.st_mode));
-  CHECK(count_prefix("/dev", "full\\.") == 0);
-  CHECK(count_prefix(OUT_DIR, "plainfile\\.") == 0);
+  CHECK(dev_full_intact());
+  CHECK(count_entries(OUT_DIR, "plainfile.") == 0);
   /* an inconsistent mesh is refused before any file is created */
   m.conn[3] = 99;
   char path[256];
@@ -973,7 +898,7 @@ static void test_failures(void) {
   tmesh_free(&m);
   /* an empty mesh is a valid file */
   tmesh e;
-  tmesh_init(&e, 0, 0);
+  tmesh_alloc(&e, 0, 0);
   path_in(path, sizeof path, "empty.meshb");
   CHECK(mx_write_medit(path, &e.v, 1) == MX_OK);
   mfile f;

@@ -32,6 +32,7 @@
 #include "soa/mesh.h"
 
 #define OUT_DIR "msh_out"
+#include "file_util.h"
 
 /* ====================================================================== */
 /* Gmsh's conventions, from the Gmsh manual (not from the writer)         */
@@ -413,23 +414,6 @@ static void read_elements(cursor *c, msh_file *f) {
   end_section(c, "$EndElements");
 }
 
-static char *slurp(const char *path, size_t *len) {
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return NULL;
-  fseek(fp, 0, SEEK_END);
-  long n = ftell(fp);
-  fseek(fp, 0, SEEK_SET);
-  char *buf = malloc((size_t)n + 1);
-  if (buf && fread(buf, 1, (size_t)n, fp) != (size_t)n) {
-    free(buf);
-    buf = NULL;
-  }
-  fclose(fp);
-  if (buf) buf[n] = '\0';
-  *len = (size_t)n;
-  return buf;
-}
-
 static void msh_free(msh_file *f) {
   free(f->node_tag);
   free(f->xyz);
@@ -476,98 +460,6 @@ static int msh_read(const char *path, msh_file *f) {
     fprintf(stderr, "%s: %s (offset %ld)\n", path, c.why, (long)(c.p - buf));
   free(buf);
   return !c.bad;
-}
-
-/* ====================================================================== */
-/* Test meshes and files                                                  */
-/* ====================================================================== */
-
-static void path_in(char *out, size_t cap, const char *name) {
-  snprintf(out, cap, "%s/%s", OUT_DIR, name);
-}
-
-static int exists(const char *path) {
-  struct stat st;
-  return lstat(path, &st) == 0;
-}
-
-static int count_entries(const char *dir, const char *prefix) {
-  DIR *d = opendir(dir);
-  if (!d) return -1;
-  int n = 0;
-  struct dirent *e;
-  while ((e = readdir(d))) {
-    if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-    if (strncmp(e->d_name, prefix, strlen(prefix)) == 0) n++;
-  }
-  closedir(d);
-  return n;
-}
-
-static void remove_dir_files(const char *dir) {
-  DIR *d = opendir(dir);
-  if (!d) return;
-  struct dirent *e;
-  char path[4096];
-  while ((e = readdir(d))) {
-    if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-    snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-    struct stat st;
-    if (lstat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
-      chmod(path, 0755);
-      remove_dir_files(path);
-      rmdir(path);
-    } else {
-      unlink(path);
-    }
-  }
-  closedir(d);
-}
-
-static int files_equal(const char *a, const char *b) {
-  size_t la, lb;
-  char *x = slurp(a, &la), *y = slurp(b, &lb);
-  int eq = x && y && la == lb && memcmp(x, y, la) == 0;
-  free(x);
-  free(y);
-  return eq;
-}
-
-/* A mesh owning its arrays. */
-typedef struct {
-  size_t nnodes, ncells;
-  double *xyz;
-  uint8_t *type;
-  uint32_t *conn;
-  mx_mesh_view v;
-} tmesh;
-
-static void tmesh_alloc(tmesh *t, size_t nnodes, size_t ncells) {
-  memset(t, 0, sizeof *t);
-  t->nnodes = nnodes;
-  t->ncells = ncells;
-  t->xyz = calloc(3 * nnodes + 1, sizeof(double));
-  t->type = calloc(ncells + 1, 1);
-  t->conn = calloc(8 * ncells + 1, sizeof(uint32_t));
-  if (!t->xyz || !t->type || !t->conn) {
-    fprintf(stderr, "test: out of memory\n");
-    exit(2);
-  }
-  t->v = (mx_mesh_view){nnodes, t->xyz, ncells, t->type, t->conn,
-                        0,      NULL,   0,      NULL};
-}
-
-static void tmesh_free(tmesh *t) {
-  free(t->xyz);
-  free(t->type);
-  free(t->conn);
-  memset(t, 0, sizeof *t);
-}
-
-static void set_cell(tmesh *t, size_t c, int type, const uint32_t *nodes) {
-  t->type[c] = (uint8_t)type;
-  for (int j = 0; j < mx_cell_nodes[type]; j++) t->conn[8 * c + j] = nodes[j];
-  for (int j = mx_cell_nodes[type]; j < 8; j++) t->conn[8 * c + j] = 0xdeadbeef;
 }
 
 /* ====================================================================== */
@@ -899,8 +791,9 @@ static void test_threads(void) {
 /* Failures leave nothing behind                                          */
 /* ====================================================================== */
 
-static void expect_failure(const tmesh *t, const char *path, const char *dir,
+static void expect_failure(const void *ctx, const char *path, const char *dir,
                            const char *prefix) {
+  const tmesh *t = ctx;
   CHECK(mx_write_msh(path, &t->v, 1) == MX_EINPUT);
   CHECK(mx_write_msh(path, &t->v, 0) == MX_EINPUT);
   CHECK(mx_write_mesh(path, &t->v, 0) == MX_EINPUT);
@@ -911,38 +804,11 @@ static void expect_failure(const tmesh *t, const char *path, const char *dir,
 static void test_failures(void) {
   tmesh t;
   mixed_mesh(&t, 20, 0, -1); /* 8000 cells: more than the stdio buffer */
-  char path[512], dir[512];
-  path_in(path, sizeof path, "no_such_dir/x.msh");
-  expect_failure(&t, path, NULL, "");
-  path_in(dir, sizeof dir, "no_such_dir");
-  CHECK(!exists(dir));
-  if (geteuid() != 0) {
-    path_in(dir, sizeof dir, "readonly");
-    CHECK(mkdir(dir, 0755) == 0 && chmod(dir, 0555) == 0);
-    path_in(path, sizeof path, "readonly/x.msh");
-    expect_failure(&t, path, dir, "");
-    chmod(dir, 0755);
-  } else {
-    printf("running as root: using a path under a regular file and one "
-           "under /proc as unwritable places\n");
-  }
-  path_in(path, sizeof path, "plainfile");
-  FILE *fp = fopen(path, "w");
-  CHECK(fp && fclose(fp) == 0);
-  path_in(path, sizeof path, "plainfile/x.msh");
-  expect_failure(&t, path, OUT_DIR, "plainfile.");
-  char proc_path[128];
-  snprintf(proc_path, sizeof proc_path, "/proc/mixoct_msh_%ld.msh",
-           (long)getpid());
-  expect_failure(&t, proc_path, "/proc", "mixoct_msh_");
-  struct stat st;
-  if (stat("/dev/full", &st) == 0 && S_ISCHR(st.st_mode)) {
+  unwritable_places(expect_failure, &t, "msh", ".msh", ".msh");
+  if (have_dev_full()) {
     CHECK(mx_write_msh("/dev/full", &t.v, 1) == MX_EINPUT);
     CHECK(mx_write_msh("/dev/full", &t.v, 0) == MX_EINPUT);
-    CHECK(stat("/dev/full", &st) == 0 && S_ISCHR(st.st_mode));
-    CHECK(count_entries("/dev", "full.") == 0);
-  } else {
-    printf("SKIP /dev/full: not available\n");
+    CHECK(dev_full_intact());
   }
   CHECK(count_entries(OUT_DIR, "") == 1); /* only plainfile */
   tmesh_free(&t);

@@ -24,6 +24,7 @@
 #include "soa/mesh.h"
 
 #define OUT_DIR "writers_out"
+#include "file_util.h"
 
 /* ====================================================================== */
 /* Test meshes                                                            */
@@ -38,9 +39,9 @@ typedef struct {
   double *jens, *dist;
   mx_field cf[2], pf[2];
   mx_mesh_view v;
-} tmesh;
+} fmesh;
 
-static void tmesh_alloc(tmesh *t, size_t nnodes, size_t ncells) {
+static void fmesh_alloc(fmesh *t, size_t nnodes, size_t ncells) {
   memset(t, 0, sizeof *t);
   t->nnodes = nnodes;
   t->ncells = ncells;
@@ -58,7 +59,7 @@ static void tmesh_alloc(tmesh *t, size_t nnodes, size_t ncells) {
   }
 }
 
-static void tmesh_view(tmesh *t) {
+static void fmesh_view(fmesh *t) {
   t->cf[0] = (mx_field){"level", 0, t->level, NULL};
   t->cf[1] = (mx_field){"jens", 1, NULL, t->jens};
   t->pf[0] = (mx_field){"dist", 1, NULL, t->dist};
@@ -67,7 +68,7 @@ static void tmesh_view(tmesh *t) {
                         2,         t->cf,  2,         t->pf};
 }
 
-static void tmesh_free(tmesh *t) {
+static void fmesh_free(fmesh *t) {
   free(t->xyz);
   free(t->dist);
   free(t->tag);
@@ -78,7 +79,7 @@ static void tmesh_free(tmesh *t) {
   memset(t, 0, sizeof *t);
 }
 
-static void set_cell(tmesh *t, size_t c, int type, const uint32_t *nodes) {
+static void fmesh_set_cell(fmesh *t, size_t c, int type, const uint32_t *nodes) {
   t->type[c] = (uint8_t)type;
   for (int j = 0; j < mx_cell_nodes[type]; j++) t->conn[8 * c + j] = nodes[j];
   for (int j = mx_cell_nodes[type]; j < 8; j++) t->conn[8 * c + j] = 0xdeadbeef;
@@ -86,7 +87,7 @@ static void set_cell(tmesh *t, size_t c, int type, const uint32_t *nodes) {
 
 /* A unit hexahedron, a prism on its x=1 face side, a pyramid on its top and
  * a tetrahedron, all sharing nodes; awkward coordinates and field values. */
-static void small_mesh(tmesh *t) {
+static void small_mesh(fmesh *t) {
   static const double xyz[12][3] = {
       {0, 0, 0},
       {1, 0, 0},
@@ -100,7 +101,7 @@ static void small_mesh(tmesh *t) {
       {2, 0, 1},
       {0.5, 0.5, 1.0 + 1.0 / 3.0},
       {2.0000000000000004, -2.5e-7, 123456789.123}};
-  tmesh_alloc(t, 12, 4);
+  fmesh_alloc(t, 12, 4);
   memcpy(t->xyz, xyz, sizeof xyz);
   t->xyz[3 * 3 + 1] = 0.1;
   t->xyz[3 * 7 + 2] = -1e-300;
@@ -108,10 +109,10 @@ static void small_mesh(tmesh *t) {
   static const uint32_t prism[6] = {1, 8, 2, 5, 9, 6};
   static const uint32_t pyr[5] = {4, 5, 6, 7, 10};
   static const uint32_t tet[4] = {5, 9, 6, 11};
-  set_cell(t, 0, MX_HEX, hex);
-  set_cell(t, 1, MX_PRISM, prism);
-  set_cell(t, 2, MX_PYRAMID, pyr);
-  set_cell(t, 3, MX_TET, tet);
+  fmesh_set_cell(t, 0, MX_HEX, hex);
+  fmesh_set_cell(t, 1, MX_PRISM, prism);
+  fmesh_set_cell(t, 2, MX_PYRAMID, pyr);
+  fmesh_set_cell(t, 3, MX_TET, tet);
   static const int32_t level[4] = {0, 1, -2, 2147483647};
   static const double jens[4] = {1.0, 0.5, 1.0 / 3.0, -1e-9};
   memcpy(t->level, level, sizeof level);
@@ -120,7 +121,7 @@ static void small_mesh(tmesh *t) {
     t->dist[i] = sqrt((double)i) - 1.5;
     t->tag[i] = (int32_t)(i * 1000003u) - 5000000;
   }
-  tmesh_view(t);
+  fmesh_view(t);
 }
 
 static uint64_t rng_state = 0x9E3779B97F4A7C15ull;
@@ -145,9 +146,9 @@ static double rng_double(void) {
 
 /* An n^3 grid of hexahedra over [-1.3, 1.3]^3; when mixed, some cells are
  * relabelled tet/pyramid/prism (format-valid, geometry irrelevant). */
-static void grid_mesh(tmesh *t, size_t n, int mixed) {
+static void grid_mesh(fmesh *t, size_t n, int mixed) {
   size_t np = n + 1;
-  tmesh_alloc(t, np * np * np, n * n * n);
+  fmesh_alloc(t, np * np * np, n * n * n);
   double h = 2.6 / (double)n;
   for (size_t k = 0; k < np; k++)
     for (size_t j = 0; j < np; j++)
@@ -169,85 +170,11 @@ static void grid_mesh(tmesh *t, size_t n, int mixed) {
             b,      b + sx,      b + sx + sy,      b + sy,
             b + sz, b + sx + sz, b + sx + sy + sz, b + sy + sz};
         int type = mixed ? (int)(rng_next() % 4) : MX_HEX;
-        set_cell(t, c, type, nodes);
+        fmesh_set_cell(t, c, type, nodes);
         t->level[c] = (int32_t)(c % 11) - 3;
         t->jens[c] = mixed ? rng_double() : 1.0 / (double)(c + 1);
       }
-  tmesh_view(t);
-}
-
-/* ====================================================================== */
-/* Files                                                                  */
-/* ====================================================================== */
-
-static char *slurp(const char *path, size_t *len) {
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return NULL;
-  fseek(fp, 0, SEEK_END);
-  long n = ftell(fp);
-  fseek(fp, 0, SEEK_SET);
-  char *buf = malloc((size_t)n + 1);
-  if (buf && fread(buf, 1, (size_t)n, fp) != (size_t)n) {
-    free(buf);
-    buf = NULL;
-  }
-  fclose(fp);
-  if (buf) buf[n] = '\0';
-  *len = (size_t)n;
-  return buf;
-}
-
-static int exists(const char *path) {
-  struct stat st;
-  return lstat(path, &st) == 0;
-}
-
-static long long file_size(const char *path) {
-  struct stat st;
-  return stat(path, &st) == 0 ? (long long)st.st_size : -1;
-}
-
-/* Entries of dir whose name starts with prefix ("" counts all). */
-static int count_entries(const char *dir, const char *prefix) {
-  DIR *d = opendir(dir);
-  if (!d) return -1;
-  int n = 0;
-  struct dirent *e;
-  while ((e = readdir(d))) {
-    if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-    if (strncmp(e->d_name, prefix, strlen(prefix)) == 0) n++;
-  }
-  closedir(d);
-  return n;
-}
-
-static void remove_tree_files(const char *dir) {
-  DIR *d = opendir(dir);
-  if (!d) return;
-  struct dirent *e;
-  char path[4096];
-  while ((e = readdir(d))) {
-    if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-    snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-    struct stat st;
-    if (lstat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
-      chmod(path, 0755);
-      remove_tree_files(path);
-      rmdir(path);
-    } else {
-      unlink(path);
-    }
-  }
-  closedir(d);
-}
-
-static int files_equal(const char *a, const char *b) {
-  size_t la, lb;
-  char *x = slurp(a, &la), *y = slurp(b, &lb);
-  int eq = x && y && la == lb && memcmp(x, y, la) == 0;
-  free(x);
-  free(y);
-  return eq;
+  fmesh_view(t);
 }
 
 /* ====================================================================== */
@@ -772,11 +699,7 @@ static int read_vtu(const char *path, rmesh *r) {
 /* Round trips                                                            */
 /* ====================================================================== */
 
-static void path_in(char *out, size_t cap, const char *name) {
-  snprintf(out, cap, "%s/%s", OUT_DIR, name);
-}
-
-static int roundtrip_legacy(const tmesh *t, const char *name, int binary) {
+static int roundtrip_legacy(const fmesh *t, const char *name, int binary) {
   char path[512];
   path_in(path, sizeof path, name);
   int st = mx_write_vtk_legacy(path, &t->v, binary);
@@ -790,7 +713,7 @@ static int roundtrip_legacy(const tmesh *t, const char *name, int binary) {
   return st == MX_OK && ok && same;
 }
 
-static int roundtrip_vtu(const tmesh *t, const char *name) {
+static int roundtrip_vtu(const fmesh *t, const char *name) {
   char path[512];
   path_in(path, sizeof path, name);
   int st = mx_write_vtu(path, &t->v);
@@ -805,7 +728,7 @@ static int roundtrip_vtu(const tmesh *t, const char *name) {
 }
 
 static void test_small_roundtrips(void) {
-  tmesh t;
+  fmesh t;
   small_mesh(&t);
   CHECK(roundtrip_legacy(&t, "small_bin.vtk", 1));
   CHECK(roundtrip_legacy(&t, "small_ascii.vtk", 0));
@@ -821,24 +744,24 @@ static void test_small_roundtrips(void) {
   t.v.npoint_fields = 0;
   CHECK(roundtrip_legacy(&t, "nofield.vtk", 1));
   CHECK(roundtrip_vtu(&t, "nofield.vtu"));
-  tmesh_free(&t);
+  fmesh_free(&t);
   printf(
       "small mixed mesh: legacy binary, legacy ASCII, VTU read back "
       "bit-exact\n");
 }
 
 static void test_empty_mesh(void) {
-  tmesh t;
-  tmesh_alloc(&t, 0, 0);
-  tmesh_view(&t);
+  fmesh t;
+  fmesh_alloc(&t, 0, 0);
+  fmesh_view(&t);
   CHECK(roundtrip_legacy(&t, "empty_bin.vtk", 1));
   CHECK(roundtrip_legacy(&t, "empty_ascii.vtk", 0));
   CHECK(roundtrip_vtu(&t, "empty.vtu"));
-  tmesh_free(&t);
+  fmesh_free(&t);
 }
 
 static void test_dispatch(void) {
-  tmesh t;
+  fmesh t;
   small_mesh(&t);
   char path[512];
   size_t len;
@@ -868,7 +791,7 @@ static void test_dispatch(void) {
   t.type[1] = 7;
   CHECK(mx_write_vtk_legacy(path, &t.v, 1) == MX_EINTERNAL);
   CHECK(count_entries(OUT_DIR, "badmesh") == 0);
-  tmesh_free(&t);
+  fmesh_free(&t);
 }
 
 /* ====================================================================== */
@@ -877,8 +800,9 @@ static void test_dispatch(void) {
 
 /* All three writers must fail with MX_EINPUT on path; dir (may be NULL)
  * must have no entry starting with prefix afterwards. */
-static void expect_write_failure(const tmesh *t, const char *path,
+static void expect_write_failure(const void *ctx, const char *path,
                                  const char *dir, const char *prefix) {
+  const fmesh *t = ctx;
   CHECK(mx_write_vtk_legacy(path, &t->v, 1) == MX_EINPUT);
   CHECK(mx_write_vtk_legacy(path, &t->v, 0) == MX_EINPUT);
   CHECK(mx_write_vtu(path, &t->v) == MX_EINPUT);
@@ -888,49 +812,22 @@ static void expect_write_failure(const tmesh *t, const char *path,
 }
 
 static void test_unwritable(void) {
-  tmesh t;
+  fmesh t;
   small_mesh(&t);
-  char path[512], dir[512];
-  path_in(path, sizeof path, "no_such_dir/x.vtk");
-  expect_write_failure(&t, path, NULL, "");
-  path_in(dir, sizeof dir, "no_such_dir");
-  CHECK(!exists(dir));
-  if (geteuid() != 0) {
-    path_in(dir, sizeof dir, "readonly");
-    CHECK(mkdir(dir, 0755) == 0 && chmod(dir, 0555) == 0);
-    path_in(path, sizeof path, "readonly/x.vtk");
-    expect_write_failure(&t, path, dir, "");
-    chmod(dir, 0755);
-  } else {
-    printf(
-        "running as root: chmod 0555 does not deny writing; using a "
-        "path under a regular file and one under /proc instead\n");
-  }
-  path_in(path, sizeof path, "plainfile");
-  FILE *fp = fopen(path, "w");
-  CHECK(fp && fclose(fp) == 0);
-  path_in(path, sizeof path, "plainfile/x.vtu");
-  expect_write_failure(&t, path, OUT_DIR, "plainfile.");
-  char proc_path[128];
-  snprintf(proc_path, sizeof proc_path, "/proc/mixoct_writers_%ld.vtk",
-           (long)getpid());
-  expect_write_failure(&t, proc_path, "/proc", "mixoct_writers_");
+  unwritable_places(expect_write_failure, &t, "writers", ".vtk", ".vtu");
+  char path[512];
   /* the output path is a directory */
   path_in(path, sizeof path, "adir.vtk");
   CHECK(mkdir(path, 0755) == 0);
   CHECK(mx_write_vtk_legacy(path, &t.v, 1) == MX_EINPUT);
   CHECK(count_entries(OUT_DIR, "adir.vtk") == 1);
-  tmesh_free(&t);
+  fmesh_free(&t);
 }
 
 /* /dev/full: through a stream handed to mx_afile_from_stream, and as an
  * output path (an existing device is written in place, never replaced). */
 static void test_full_disk(void) {
-  struct stat st;
-  if (stat("/dev/full", &st) != 0 || !S_ISCHR(st.st_mode)) {
-    printf("SKIP /dev/full: not available\n");
-    return;
-  }
+  if (!have_dev_full()) return;
   mx_afile f;
   FILE *fp = fopen("/dev/full", "wb");
   CHECK(fp != NULL);
@@ -946,17 +843,17 @@ static void test_full_disk(void) {
   CHECK(mx_afile_write(&f, big, 1) == MX_EINPUT); /* sticky */
   CHECK(mx_afile_commit(&f) == MX_EINPUT);
   mx_afile_abort(&f);
-  tmesh t;
+  fmesh t;
   small_mesh(&t);
   CHECK(mx_write_vtk_legacy("/dev/full", &t.v, 1) == MX_EINPUT);
   CHECK(mx_write_vtk_legacy("/dev/full", &t.v, 0) == MX_EINPUT);
   CHECK(mx_write_vtu("/dev/full", &t.v) == MX_EINPUT);
-  CHECK(stat("/dev/full", &st) == 0 && S_ISCHR(st.st_mode));
-  CHECK(count_entries("/dev", "full.") == 0);
+  CHECK(dev_full_intact());
   /* /dev/null as output works in place */
+  struct stat st;
   CHECK(mx_write_vtu("/dev/null", &t.v) == MX_OK);
   CHECK(stat("/dev/null", &st) == 0 && S_ISCHR(st.st_mode));
-  tmesh_free(&t);
+  fmesh_free(&t);
 }
 
 /* A real failure in the middle of a regular temporary file: the file size
@@ -964,7 +861,7 @@ static void test_full_disk(void) {
 static void test_size_limit(void) {
   struct rlimit old, lim;
   if (getrlimit(RLIMIT_FSIZE, &old) != 0) return;
-  tmesh t;
+  fmesh t;
   grid_mesh(&t, 20, 1);
   char path[512];
   void (*prev)(int) = signal(SIGXFSZ, SIG_IGN);
@@ -983,7 +880,7 @@ static void test_size_limit(void) {
     CHECK(count_entries(OUT_DIR, "limited") == 0);
   }
   signal(SIGXFSZ, prev);
-  tmesh_free(&t);
+  fmesh_free(&t);
 }
 
 /* Two writers of the same path from one process get distinct temporaries;
@@ -1016,7 +913,7 @@ static void test_temp_names(void) {
 /* Thread-count invariance and speed                                      */
 /* ====================================================================== */
 
-static void write_all(const tmesh *t, const char *tag) {
+static void write_all(const fmesh *t, const char *tag) {
   char a[512], b[512], c[512], name[128];
   snprintf(name, sizeof name, "inv_%s_bin.vtk", tag);
   path_in(a, sizeof a, name);
@@ -1030,7 +927,7 @@ static void write_all(const tmesh *t, const char *tag) {
 }
 
 static void test_thread_invariance(void) {
-  tmesh t;
+  fmesh t;
   grid_mesh(&t, 60, 1);
   int saved = omp_get_max_threads();
   omp_set_num_threads(1);
@@ -1055,25 +952,25 @@ static void test_thread_invariance(void) {
   path_in(path, sizeof path, "inv_t5.vtu");
   CHECK(read_vtu(path, &r) && compare_mesh(&r, &t.v));
   rmesh_free(&r);
-  remove_tree_files(OUT_DIR);
+  remove_dir_files(OUT_DIR);
   printf(
       "216000 mixed cells: identical bytes with 1 and 5 threads, ASCII "
       "doubles (random bits) read back bit-exact\n");
-  tmesh_free(&t);
+  fmesh_free(&t);
 }
 
-typedef int (*writer_fn)(const char *path, const tmesh *t);
-static int w_bin(const char *p, const tmesh *t) {
+typedef int (*writer_fn)(const char *path, const fmesh *t);
+static int w_bin(const char *p, const fmesh *t) {
   return mx_write_vtk_legacy(p, &t->v, 1);
 }
-static int w_ascii(const char *p, const tmesh *t) {
+static int w_ascii(const char *p, const fmesh *t) {
   return mx_write_vtk_legacy(p, &t->v, 0);
 }
-static int w_vtu(const char *p, const tmesh *t) {
+static int w_vtu(const char *p, const fmesh *t) {
   return mx_write_vtu(p, &t->v);
 }
 
-static void time_writer(const tmesh *t, const char *label, const char *name,
+static void time_writer(const fmesh *t, const char *label, const char *name,
                         writer_fn fn, int binary_legacy) {
   char path[512];
   path_in(path, sizeof path, name);
@@ -1095,12 +992,12 @@ static void time_writer(const tmesh *t, const char *label, const char *name,
 }
 
 static void test_speed(void) {
-  tmesh t;
+  fmesh t;
   grid_mesh(&t, 100, 0);
   time_writer(&t, "legacy binary", "big_bin.vtk", w_bin, 1);
   time_writer(&t, "legacy ASCII", "big_ascii.vtk", w_ascii, 0);
   time_writer(&t, "VTU raw", "big.vtu", w_vtu, -1);
-  tmesh_free(&t);
+  fmesh_free(&t);
 }
 
 /* ====================================================================== */
@@ -1235,7 +1132,7 @@ static void test_external(void) {
   path_in(script, sizeof script, "reader.py");
   FILE *fp = fopen(script, "w");
   CHECK(fp && fputs(py_script, fp) >= 0 && fclose(fp) == 0);
-  tmesh t;
+  fmesh t;
   small_mesh(&t);
   char expect[512];
   expected_result(&t.v, expect, sizeof expect);
@@ -1254,7 +1151,7 @@ static void test_external(void) {
     }
     for (int k = 0; k < 3; k++) run_external(py, backends[b], paths[k], expect);
   }
-  tmesh_free(&t);
+  fmesh_free(&t);
 }
 
 /* ====================================================================== */
@@ -1262,7 +1159,7 @@ static void test_external(void) {
 int main(int argc, char **argv) {
   int small_only = argc > 1 && !strcmp(argv[1], "small");
   mkdir(OUT_DIR, 0755);
-  remove_tree_files(OUT_DIR);
+  remove_dir_files(OUT_DIR);
   test_small_roundtrips();
   test_empty_mesh();
   test_dispatch();
@@ -1275,7 +1172,7 @@ int main(int argc, char **argv) {
     test_thread_invariance();
     test_speed();
   }
-  remove_tree_files(OUT_DIR);
+  remove_dir_files(OUT_DIR);
   int fails = TEST_DONE();
   printf("%d passed, %d failed\n", fails ? 0 : 1, fails ? 1 : 0);
   return fails;
