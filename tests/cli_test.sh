@@ -203,5 +203,12 @@ if [ -d /sys/kernel ]; then
   [ ! -e /sys/mixoct-test.vtu ] && ok "nothing written in /sys" || bad "a file appeared in /sys"
 fi
 
+# Two inputs that overlap (the same cube twice) bound no domain: refused,
+# naming both files.
+cube_off "$T/twin.off" 0.5
+expect_exit 2 "overlapping inputs are refused" "$MIXOCT" -i "$T/cube.off" -i "$T/twin.off" -s 2
+has "$T/err" "twin.off" "the refusal names the second input"
+has "$T/err" "cube.off" "the refusal names the first input"
+
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]

@@ -48,6 +48,13 @@ static int read_inputs(const mx_options *o, mx_trisoup *all,
   }
   for (int i = 0; i < o->ninputs; i++) MX_CHECK(read_one(o->inputs[i], all));
   *nt_domain = (uint32_t)all->nt;
+  {
+    const char *names[MX_MAX_INPUTS + 1];
+    int n = 0;
+    if (o->demo) names[n++] = "--demo";
+    for (int i = 0; i < o->ninputs; i++) names[n++] = o->inputs[i];
+    MX_CHECK(mx_trisoup_check_shells(all, *nt_domain, names));
+  }
   for (int r = 0; r < o->nregion_surf; r++) {
     region_t0[r] = (uint32_t)all->nt;
     MX_CHECK(read_one(o->region_surf[r], all));

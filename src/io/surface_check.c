@@ -135,3 +135,78 @@ int mx_trisoup_check(mx_trisoup *s, const char *path, size_t *open_edges) {
   if (open_edges) *open_edges = open;
   return MX_OK;
 }
+
+/* ---- shells that overlap ------------------------------------------------- */
+
+typedef struct {
+  uint64_t key;
+  uint32_t tri;
+} tri_key;
+
+static int cmp_tri_key(const void *a, const void *b) {
+  const tri_key *x = a, *y = b;
+  if (x->key != y->key) return x->key < y->key ? -1 : 1;
+  return (x->tri > y->tri) - (x->tri < y->tri);
+}
+
+static int cmp_point(const double *a, const double *b) {
+  for (int k = 0; k < 3; k++)
+    if (a[k] != b[k]) return a[k] < b[k] ? -1 : 1;
+  return 0;
+}
+
+/* The triangle's three points in a canonical order (lexicographic). */
+static void sorted_points(const mx_trisoup *s, uint32_t t, double p[3][3]) {
+  for (int k = 0; k < 3; k++) {
+    const uint32_t v = s->tri[3 * (size_t)t + k];
+    p[k][0] = s->x[v];
+    p[k][1] = s->y[v];
+    p[k][2] = s->z[v];
+  }
+  for (int i = 0; i < 3; i++)
+    for (int j = i + 1; j < 3; j++)
+      if (cmp_point(p[j], p[i]) < 0) {
+        double q[3];
+        memcpy(q, p[i], sizeof q);
+        memcpy(p[i], p[j], sizeof q);
+        memcpy(p[j], q, sizeof q);
+      }
+}
+
+int mx_trisoup_check_shells(const mx_trisoup *s, uint32_t nt, const char *const *names) {
+  if (s->nshells < 2 || nt < 2) return MX_OK;
+  tri_key *k = mx_alloc(nt * sizeof *k);
+  if (!k) return MX_EINPUT;
+  for (uint32_t t = 0; t < nt; t++) {
+    double p[3][3];
+    sorted_points(s, t, p);
+    uint64_t h = 1469598103934665603ull;
+    const unsigned char *b = (const unsigned char *)p;
+    for (size_t i = 0; i < sizeof p; i++) h = (h ^ b[i]) * 1099511628211ull;
+    k[t] = (tri_key){h, t};
+  }
+  qsort(k, nt, sizeof *k, cmp_tri_key);
+  int st = MX_OK;
+  for (uint32_t i = 0; i + 1 < nt && st == MX_OK; i++) {
+    for (uint32_t j = i + 1; j < nt && k[j].key == k[i].key; j++) {
+      const uint32_t a = k[i].tri, b = k[j].tri;
+      if (s->shell[a] == s->shell[b]) continue;
+      double p[3][3], q[3][3];
+      sorted_points(s, a, p);
+      sorted_points(s, b, q);
+      if (memcmp(p, q, sizeof p) != 0) continue;
+      const uint32_t a0 = a < b ? a : b, b0 = a < b ? b : a;
+      uint32_t first_a = a0, first_b = b0;
+      while (first_a > 0 && s->shell[first_a - 1] == s->shell[a0]) first_a--;
+      while (first_b > 0 && s->shell[first_b - 1] == s->shell[b0]) first_b--;
+      mx_error(names[s->shell[b0]], 0,
+               "triangle %u lies on triangle %u of %s: the two surfaces overlap, so "
+               "they do not bound a domain (give one of them, or separate them)",
+               b0 - first_b, a0 - first_a, names[s->shell[a0]]);
+      st = MX_EINPUT;
+      break;
+    }
+  }
+  mx_free(k);
+  return st;
+}
