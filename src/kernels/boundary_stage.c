@@ -35,7 +35,7 @@ int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
   t = mx_wtime();
   stats->t_shrink = t - t1;
   t1 = t;
-  for (size_t c = 0; !st && c < M->ncells; c++) stats->inverted += !(M->jens[c] > 0.0);
+  if (!st) stats->inverted = M->invalid; /* counted by the shrink */
   /* untangle what the shrink inverted, and lift the worst elements */
   if (!st) st = mx_smooth_nodes(M, states, S, staircase_q, 20, &stats->smoothed);
   t = mx_wtime();
