@@ -9,11 +9,31 @@
 #include <time.h>
 
 int mx_quiet = 0;
+mx_message_fn mx_msg_fn = NULL;
+void *mx_msg_user = NULL;
+int mx_oom_seen = 0;
+
+int mx_status_refine(int status) {
+  if (status == MX_EINPUT && mx_oom_seen) status = MX_ENOMEM;
+  mx_oom_seen = 0;
+  return status;
+}
 
 static void vreport(const char *kind, const char *file, long line,
                     const char *fmt, va_list ap) {
   char msg[1024];
   vsnprintf(msg, sizeof msg, fmt, ap);
+  if (mx_msg_fn) {
+    char full[1400];
+    if (file && line > 0)
+      snprintf(full, sizeof full, "%s:%ld: %s", file, line, msg);
+    else if (file)
+      snprintf(full, sizeof full, "%s: %s", file, msg);
+    else
+      snprintf(full, sizeof full, "%s", msg);
+    mx_msg_fn(mx_msg_user, kind[0] == 'e' ? MX_MSG_ERROR : MX_MSG_WARNING, full);
+    return;
+  }
   if (file && line > 0)
     fprintf(stderr, "mixoct: %s:%ld: %s%s\n", file, line, kind, msg);
   else if (file)
@@ -46,6 +66,7 @@ void *mx_alloc(size_t bytes) {
     const size_t rounded = (bytes + HUGE - 1) & ~(size_t)(HUGE - 1);
     void *p = aligned_alloc(HUGE, rounded);
     if (!p) {
+      mx_oom_seen = 1;
       mx_error(NULL, 0, "out of memory (asked for %zu bytes)", bytes);
       return NULL;
     }
@@ -56,7 +77,10 @@ void *mx_alloc(size_t bytes) {
   }
   size_t rounded = (bytes + 63) & ~(size_t)63;
   void *p = aligned_alloc(64, rounded);
-  if (!p) mx_error(NULL, 0, "out of memory (asked for %zu bytes)", bytes);
+  if (!p) {
+    mx_oom_seen = 1;
+    mx_error(NULL, 0, "out of memory (asked for %zu bytes)", bytes);
+  }
   return p;
 }
 
@@ -68,7 +92,10 @@ void *mx_calloc(size_t bytes) {
 
 void *mx_realloc(void *p, size_t bytes) {
   void *q = realloc(p, bytes ? bytes : 1);
-  if (!q) mx_error(NULL, 0, "out of memory (asked for %zu bytes)", bytes);
+  if (!q) {
+    mx_oom_seen = 1;
+    mx_error(NULL, 0, "out of memory (asked for %zu bytes)", bytes);
+  }
   return q;
 }
 

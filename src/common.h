@@ -7,11 +7,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-enum {
-  MX_OK = 0,
-  MX_EINTERNAL = 1, /* a bug or an unexpected system failure */
-  MX_EINPUT = 2,    /* bad input, bad usage, unwritable output, no memory */
-};
+#include "mixoct.h" /* mx_status: MX_OK, MX_EINPUT, MX_ENOMEM, MX_EIO, ... */
 
 #define MX_CHECK(expr)                                                        \
   do {                                                                        \
@@ -26,6 +22,20 @@ void mx_error(const char *file, long line, const char *fmt, ...)
 void mx_warning(const char *file, long line, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 extern int mx_quiet; /* when set, warnings are not printed */
+
+/* Where messages go: NULL (the default) prints them on stderr as above;
+ * otherwise fn(user, MX_MSG_ERROR or MX_MSG_WARNING, "FILE:LINE: text").
+ * The mesher object installs its handler for the duration of each call. */
+extern mx_message_fn mx_msg_fn;
+extern void *mx_msg_user;
+
+/* Set when an allocation failed (mx_alloc & co.), so a caller that received
+ * MX_EINPUT from deep inside can tell "out of memory" apart; cleared by
+ * whoever reads it (mx_status_refine). */
+extern int mx_oom_seen;
+/* MX_EINPUT turned into MX_ENOMEM when an allocation failed since the flag
+ * was last cleared; clears the flag. */
+int mx_status_refine(int status);
 
 /* Allocation in one place: 64-byte aligned, zeroed on request. Failure prints
  * a message and returns NULL; callers return MX_EINPUT ("out of memory"). */

@@ -5,12 +5,10 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "kernels/boundary_stage.h"
-#include "kernels/quality.h"
+#include "mesher/mesher.h"
 #include "kernels/requests.h"
 
-enum { MX_STAGE_OCTREE = 0, MX_STAGE_TRANSITION = 1, MX_STAGE_FULL = 2 };
-enum { MX_BALANCE_EDGES = 0, MX_BALANCE_RECURSIVE = 1 };
+#include "mixoct.h" /* MX_STAGE_*, MX_BALANCE_* */
 
 #define MX_MAX_INPUTS 64
 
@@ -33,37 +31,15 @@ typedef struct {
   int stage;
   int balance;
   double max_memory_mb; /* 0: the memory available */
+  const char *restart_out; /* --restart FILE: write the restart file */
+  const char *restart_in;  /* -c FILE: re-mesh from a restart file */
+  const char *list_in;     /* -l LIST: elements to refine */
+  int keep_invalid;        /* write a mesh with invalid elements (exit 5) */
 } mx_options;
 
 /* Parses argv; on --help/--version prints and sets *exit_now = 1. Returns
  * MX_OK or MX_EINPUT (usage error, message printed). */
 int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now);
-
-typedef struct {
-  double read, grid, refine, balance, transition, boundary, quality, write, total;
-} mx_phases;
-
-typedef struct {
-  size_t leaves, nodes, octants, edges, located, split_requested,
-      split_balance, dropped;
-  uint64_t leaves_hash;
-  size_t edge_bytes;
-  int threads;
-  int balance;
-  int max_level;
-  int nodes_counted;
-  int mesh;                 /* a mixed mesh was built (not only leaves) */
-  size_t elements, by_type[4], invalid, closures, centre_leaves;
-  double jens_min;
-  mx_quality_table quality;
-  double memory_estimate_mb;
-  mx_phases ph;
-  double peak_rss_mb;
-  int full;                 /* the boundary stage ran */
-  mx_boundary_stats boundary;
-  size_t repaired;          /* invalid elements found before a repair round */
-  int repair_rounds;
-} mx_summary;
 
 /* One line describing the machine (hwloc when built in, OpenMP threads). */
 void mx_topology_string(char *buf, size_t n);

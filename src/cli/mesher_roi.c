@@ -13,8 +13,10 @@
  *   -v               write outname.vtk     (legacy VTK, ASCII)
  *   -g               write outname.getfem  (GetFEM mesh file)
  *   -m               write outname.m3d     (M3D, see src/io/write_m3d.c)
- *   -c in.oct        restart from an octree file   (refused for now, exit 2)
- *   -l list.txt      list of elements to refine    (refused for now, exit 2)
+ *   -c in.oct        restart from an octree file (ours or the published one's)
+ *   -l list.txt      elements of the mesh written with in.oct to refine
+ *   with -u NAME, NAME.oct (the restart file) is written too, as the
+ *   published mesher does
  *
  * Output names. "-u out -v" writes out.vtk, as the published mesher does
  * (REFERENCE.md: its runs `mesher_roi -o cortex.off -s RL -u out -v` produce
@@ -58,9 +60,11 @@ static const char *roi_usage =
     "  -g                 NAME.getfem  GetFEM mesh file\n"
     "  -m                 NAME.m3d     M3D\n"
     "\n"
-    "Not supported yet (exit 2):\n"
+    "  (with -u NAME, the restart file NAME.oct is written too)\n"
+    "\n"
+    "Re-meshing:\n"
     "  -c FILE.oct        restart from an octree file\n"
-    "  -l LIST.txt        list of elements to refine\n"
+    "  -l LIST.txt        elements (of the mesh written with FILE.oct) to refine\n"
     "\n"
     "Also accepted: --threads N, --json, --quiet, --max-memory MB,\n"
     "--balance edges|recursive, --stage octree|transition|full, --version.\n"
@@ -100,12 +104,9 @@ static int translate(int argc, char **argv, char **margv, int *margc, const char
       *exit_now = 1;
       return MX_OK;
     } else if (!strcmp(a, "-c") || !strcmp(a, "-l")) {
-      const int restart = a[1] == 'c';
-      mx_error(i + 1 < argc ? argv[i + 1] : NULL, 0,
-               "mesher_roi: %s (%s) is not supported yet; mesh from the "
-               "input surface with -d/-o and the requests instead",
-               a, restart ? "restart from an octree file" : "list of elements to refine");
-      return MX_EINPUT;
+      MX_CHECK(need(i, argc, 1, a));
+      margv[n++] = argv[i];
+      margv[n++] = argv[++i];
     } else if (!strcmp(a, "-d") || !strcmp(a, "-o")) {
       MX_CHECK(need(i, argc, 1, a));
       margv[n++] = "-i";
@@ -168,7 +169,7 @@ static int translate(int argc, char **argv, char **margv, int *margc, const char
 }
 
 int mx_mesher_roi_main(int argc, char **argv) {
-  char **margv = malloc(((size_t)argc + 2) * sizeof *margv);
+  char **margv = malloc(((size_t)argc + 4) * sizeof *margv);
   if (!margv) {
     mx_error(NULL, 0, "out of memory");
     return MX_EINPUT;
@@ -190,7 +191,7 @@ int mx_mesher_roi_main(int argc, char **argv) {
    * writes a file sees it; mx_run writes each of outputs[]. */
   const char *ext[3] = {".vtk", ".getfem", ".m3d"};
   const int want[3] = {vtk, getfem, m3d};
-  char *names[3] = {NULL, NULL, NULL};
+  char *names[3] = {NULL, NULL, NULL}, *oct = NULL;
   for (int f = 0; f < 3; f++) {
     if (!want[f]) continue;
     const size_t len = strlen(outname) + strlen(ext[f]) + 1;
@@ -204,6 +205,17 @@ int mx_mesher_roi_main(int argc, char **argv) {
     o.outputs[o.noutputs++] = names[f];
   }
   if (o.noutputs > 0) o.output = o.outputs[0];
+  if (!st && outname) {
+    const size_t len = strlen(outname) + 5;
+    oct = malloc(len);
+    if (!oct) {
+      mx_error(NULL, 0, "out of memory");
+      st = MX_ENOMEM;
+    } else {
+      snprintf(oct, len, "%s.oct", outname);
+      o.restart_out = oct;
+    }
+  }
   o.ascii = 1; /* the published mesher writes ASCII legacy VTK */
   if (!st) {
     if (o.quiet) mx_quiet = 1;
@@ -211,5 +223,6 @@ int mx_mesher_roi_main(int argc, char **argv) {
     st = mx_run(&o);
   }
   for (int f = 0; f < 3; f++) free(names[f]);
+  free(oct);
   return st == MX_OK ? 0 : st;
 }

@@ -17,6 +17,7 @@ static const char *usage_text =
     "\n"
     "usage: mixoct -i FILE [-i FILE2 ...] [requests] [-o OUT] [options]\n"
     "       mixoct --demo [requests] [-o OUT] [options]\n"
+    "       mixoct remesh -c FILE.oct -i FILE -l LIST [requests] [-o OUT] [options]\n"
     "       mixoct check MESH [--surface FILE] [--json] [--quiet]\n"
     "       mixoct patterns [--json]\n"
     "\n"
@@ -49,6 +50,17 @@ static const char *usage_text =
     "      --json                  one JSON summary as the last stdout line\n"
     "                              (no summary table, no progress line)\n"
     "      --quiet                 no summary, no warnings, no progress line\n"
+    "      --restart FILE.oct      also write the restart file (Appendix A of\n"
+    "                              the 2021 paper; .octb: our binary variant)\n"
+    "      --keep-invalid          write the mesh even when elements with\n"
+    "                              J_ENS <= 0 remain (exit 5 all the same)\n"
+    "\n"
+    "Re-meshing (from a restart file, ours or the published program's):\n"
+    "  -c, --from-restart FILE     rebuild the octree of FILE.oct / .octb (the\n"
+    "                              same -i surfaces), refine, mesh again\n"
+    "  -l, --list LIST             element indices (of the mesh written with\n"
+    "                              the restart file) whose octants are split\n"
+    "                              once (Algorithm 3); requests apply on top\n"
     "\n"
     "Execution:\n"
     "      --threads N             OpenMP threads (default: OMP_NUM_THREADS, or\n"
@@ -74,8 +86,10 @@ static const char *usage_text =
     "  patterns [--json]           the transition-pattern table: classes,\n"
     "                              sub-elements per type, worst J_ENS\n"
     "\n"
-    "Exit codes: 0 success, 1 internal failure, 2 bad input or usage, or an\n"
-    "output that cannot be written (the message names the file and line).\n"
+    "Exit codes: 0 success (a valid mesh), 1 internal failure, 2 bad input or\n"
+    "usage (the message names the file and line), 3 out of memory or over the\n"
+    "memory budget, 4 an output that cannot be written, 5 elements with\n"
+    "J_ENS <= 0 left after repair (not written unless --keep-invalid).\n"
     "\n"
     "Examples:\n"
     "  mixoct --demo -s 5 -o demo.vtu\n"
@@ -84,6 +98,8 @@ static const char *usage_text =
     "  mixoct -i cortex.off -s 7 --json --threads 8 > run.json\n"
     "  mixoct -i outer.mdl -i inner.mdl -s 5 -b roi.reg -o shell.vtk\n"
     "  mixoct -i head.stl -s 4 -r tumour.off 7 -o head.msh\n"
+    "  mixoct -i cortex.off -s 5 -o c5.vtk --restart c5.oct\n"
+    "  mixoct remesh -c c5.oct -i cortex.off -l list.txt -o c5r.vtk\n"
     "  mixoct patterns --json\n";
 
 /* --version: what was built, how, and what it runs on. */
@@ -222,6 +238,17 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
         return MX_EINPUT;
       }
       o->max_memory_mb = v;
+    } else if (strcmp(a, "--restart") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      o->restart_out = argv[++i];
+    } else if (IS("-c", "--from-restart")) {
+      MX_CHECK(need_arg(i, argc, a));
+      o->restart_in = argv[++i];
+    } else if (IS("-l", "--list")) {
+      MX_CHECK(need_arg(i, argc, a));
+      o->list_in = argv[++i];
+    } else if (strcmp(a, "--keep-invalid") == 0) {
+      o->keep_invalid = 1;
     } else if (strcmp(a, "--json") == 0) {
       o->json = 1;
     } else if (strcmp(a, "--quiet") == 0) {
@@ -267,6 +294,11 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
     return MX_EINPUT;
   }
   o->req.nregions = o->nregion_surf;
+  if (o->list_in && !o->restart_in) {
+    mx_error(NULL, 0, "-l LIST refers to the elements of a mesh written with a "
+                      "restart file: give that file with -c FILE.oct");
+    return MX_EINPUT;
+  }
   if (o->output) {
     /* fail before meshing, not after */
     const char *dot = strrchr(o->output, '.');

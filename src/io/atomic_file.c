@@ -44,14 +44,14 @@ static void afile_discard(mx_afile *f) {
   f->failed = failed;
 }
 
-/* Reports err about f->path, removes the temporary, returns MX_EINPUT. */
+/* Reports err about f->path, removes the temporary, returns MX_EIO. */
 static int afile_fail(mx_afile *f, int err) {
   if (!f->failed) {
     mx_error(f->path, 0, "cannot write: %s", strerror(err ? err : EIO));
   }
   f->failed = 1;
   afile_discard(f);
-  return MX_EINPUT;
+  return MX_EIO;
 }
 
 /* For failures already reported by someone else (out of memory). */
@@ -131,7 +131,7 @@ int mx_afile_from_stream(mx_afile *f, FILE *fp, const char *name) {
 }
 
 int mx_afile_write(mx_afile *f, const void *data, size_t bytes) {
-  if (f->failed || !f->fp) return MX_EINPUT;
+  if (f->failed || !f->fp) return MX_EIO;
   if (bytes == 0) return MX_OK;
   errno = 0;
   if (fwrite(data, 1, bytes, f->fp) != bytes) return afile_fail(f, errno);
@@ -159,7 +159,7 @@ static int sync_ignorable(int err) {
 int mx_afile_commit(mx_afile *f) {
   if (f->failed || !f->fp) {
     afile_discard(f);
-    return MX_EINPUT;
+    return MX_EIO;
   }
   errno = 0;
   if (fflush(f->fp) != 0) return afile_fail(f, errno);

@@ -7,7 +7,7 @@
  * fwrite, fflush, fsync, fclose, rename: EACCES, ENOSPC, EIO, ...) prints
  * "mixoct: PATH: error: cannot write: <strerror>", removes the temporary at
  * once and makes the call (and every later call on the same handle) return
- * MX_EINPUT, so no partial or temporary file is ever left behind.
+ * MX_EIO, so no partial or temporary file is ever left behind.
  *
  * When <path> already exists and is not a regular file (/dev/null,
  * /dev/stdout, a FIFO, a device) it is written in place: renaming over it

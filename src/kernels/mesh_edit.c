@@ -116,3 +116,40 @@ void mx_mesh_update_jens(mx_mesh_out *M, const uint8_t *moved) {
     M->jens[c] = mx_jens(M->type[c], x);
   }
 }
+
+int mx_mesh_sort_by_leaf(mx_mesh_out *M, size_t nleaves) {
+  const size_t n = M->ncells;
+  size_t bad = 0;
+#pragma omp parallel for schedule(static) reduction(+ : bad)
+  for (size_t c = 1; c < n; c++) bad += M->leaf[c] < M->leaf[c - 1];
+  if (bad == 0) return MX_OK;
+  uint64_t *start = mx_calloc((nleaves + 1) * sizeof *start);
+  uint32_t *perm = mx_alloc((n + 1) * sizeof *perm);
+  uint8_t *type = mx_alloc(n + 1);
+  uint32_t *conn = mx_alloc((8 * n + 1) * sizeof *conn);
+  int32_t *level = mx_alloc((n + 1) * sizeof *level);
+  uint32_t *leaf = mx_alloc((n + 1) * sizeof *leaf);
+  double *jens = mx_alloc((n + 1) * sizeof *jens);
+  if (!start || !perm || !type || !conn || !level || !leaf || !jens) {
+    mx_free(start); mx_free(perm); mx_free(type); mx_free(conn);
+    mx_free(level); mx_free(leaf); mx_free(jens);
+    return MX_EINPUT;
+  }
+  for (size_t c = 0; c < n; c++) start[M->leaf[c] + 1]++;
+  for (size_t l = 0; l < nleaves; l++) start[l + 1] += start[l];
+  for (size_t c = 0; c < n; c++) perm[start[M->leaf[c]]++] = (uint32_t)c;
+#pragma omp parallel for schedule(static)
+  for (size_t w = 0; w < n; w++) {
+    const uint32_t c = perm[w];
+    type[w] = M->type[c];
+    memcpy(conn + 8 * w, M->conn + 8 * (size_t)c, 8 * sizeof *conn);
+    level[w] = M->level[c];
+    leaf[w] = M->leaf[c];
+    jens[w] = M->jens[c];
+  }
+  mx_free(M->type); mx_free(M->conn); mx_free(M->level); mx_free(M->leaf); mx_free(M->jens);
+  M->type = type; M->conn = conn; M->level = level; M->leaf = leaf; M->jens = jens;
+  mx_free(start);
+  mx_free(perm);
+  return MX_OK;
+}

@@ -24,4 +24,8 @@ void mx_mesh_summarize(mx_mesh_out *M);
  * elements when moved is NULL). */
 void mx_mesh_update_jens(mx_mesh_out *M, const uint8_t *moved);
 
+/* Elements grouped by leaf, in leaf order, keeping the order inside each
+ * leaf (a stable counting sort; nothing moves when already grouped). */
+int mx_mesh_sort_by_leaf(mx_mesh_out *M, size_t nleaves);
+
 #endif

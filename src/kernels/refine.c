@@ -87,6 +87,18 @@ void mx_builder_free(mx_builder *B) {
   memset(B, 0, sizeof *B);
 }
 
+int mx_split_set_has(const mx_builder *B, uint64_t key, int level) {
+  const size_t n = B->nsplit[level];
+  if (n == 0) return 0;
+  const uint64_t *k = B->split_keys[level];
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (k[mid] < key) lo = mid + 1; else hi = mid;
+  }
+  return lo < n && k[lo] == key;
+}
+
 static void box_centre(const double lo[3], const double hi[3], double c[3],
                        double h[3]) {
   for (int a = 0; a < 3; a++) {
@@ -198,6 +210,8 @@ static void classify_children(const mx_builder *B, uint32_t o, uint8_t *mask,
     si->target[c] = (uint8_t)mx_target_level(
         &B->req, clo[c], chi[c], (si->surf >> c) & 1,
         (unsigned)(si->rmeet[c] | si->rin[c]));
+    if (si->target[c] < l + 2 && mx_split_set_has(B, mx_morton_child(key, l, c), l + 1))
+      si->target[c] = (uint8_t)(l + 2);
   }
 }
 
@@ -448,6 +462,8 @@ int mx_build_roots(mx_builder *B) {
         T->flags[o] = surf ? MX_OCT_SURFACE : 0;
         T->target[o] =
             (uint8_t)mx_target_level(&B->req, lo, hi, surf, rmeet | rin);
+        if (T->target[o] < 1 && mx_split_set_has(B, key, 0))
+          T->target[o] = 1;
         T->kept[o] = 0;
         T->rmeet[o] = rmeet;
         T->rin[o] = rin;

@@ -49,6 +49,13 @@ typedef struct {
   int use_edges;              /* maintain edge infos while splitting */
   int edge_levels;            /* edge infos kept for levels <= this one */
   mx_refine_stats stats;
+  /* Optional (NULL by default): octants that must be split whatever the
+   * requests ask, sorted (mx_octkeys_sort_unique); a restart file's octree
+   * is rebuilt from the split ancestors of its leaves, and tests split
+   * chosen leaves in a from-scratch run. Set after mx_builder_init, with
+   * edge_levels raised to the deepest level split. */
+  const uint64_t *split_keys[MX_MAX_LEVEL + 1]; /* per level, sorted */
+  size_t nsplit[MX_MAX_LEVEL + 1];
   /* Optional, NULL by default: called by the level loop of
    * mx_refine_balanced / mx_refine_unbalanced before each level is created,
    * with that level (1..max_level) and the finest level asked; never from a
@@ -68,6 +75,9 @@ typedef struct {
 
 /* soup: domain triangles first (nt_domain of them), then the triangles of
  * each region surface r in [region_t0[r], region_t0[r+1]). */
+/* 1 when (key, level) is in the builder's split set. */
+int mx_split_set_has(const mx_builder *B, uint64_t key, int level);
+
 int mx_builder_init(mx_builder *B, const mx_trisoup *soup, uint32_t nt_domain,
                     const uint32_t *region_t0, const mx_requests *req,
                     int use_edges);

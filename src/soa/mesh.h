@@ -11,7 +11,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-enum { MX_TET = 0, MX_PYRAMID = 1, MX_PRISM = 2, MX_HEX = 3 };
+#include "mixoct.h" /* MX_TET, MX_PYRAMID, MX_PRISM, MX_HEX */
 static const int mx_cell_nodes[4] = {4, 5, 6, 8};
 static const int mx_vtk_cell_type[4] = {10, 14, 13, 12};
 /* Node j of a VTK cell is node mx_vtk_order[type][j] of ours (an

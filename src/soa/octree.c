@@ -36,3 +36,4 @@ int mx_octree_reserve(mx_octree *t, size_t n, size_t ntri) {
   }
   return MX_OK;
 }
+

@@ -1,0 +1,211 @@
+/* libmixoct: the mixed-element octree mesher as a library.
+ *
+ * From closed triangulated surfaces and refinement requests to a conforming
+ * mesh of hexahedra, prisms, pyramids and tetrahedra (Jaillet & Lobos 2021;
+ * Lobos & Gonzalez 2015), and re-meshing of that mesh without starting over.
+ *
+ * A mesher object keeps, between calls, the input surfaces, the requests,
+ * the balanced octree with its edge infos, the current mesh and the map from
+ * each element to the octree leaf it came from:
+ *
+ *   mx_params p;  mx_params_default(&p);  p.surface_level = 5;
+ *   mx_mesher *m = mx_mesher_new(&p);
+ *   mx_mesher_add_surface(m, "cortex.off");
+ *   mx_mesher_mesh(m);                        // octree, transition, boundary
+ *   mx_mesh_arrays a;  mx_mesher_mesh_arrays(m, &a);   // no copy
+ *   mx_mesher_write(m, "cortex.vtu", 0);
+ *   mx_mesher_save_restart(m, "cortex.oct");
+ *   uint64_t bad[] = {12, 40};                // elements with a large error
+ *   mx_mesher_refine_elements(m, bad, 2);     // Algorithm 3, then re-mesh
+ *   mx_mesher_free(m);
+ *
+ * Every function returning int returns a status (mx_status): MX_OK or the
+ * class of the failure; the message that explains it (naming the file and
+ * line for bad input) goes to the mesher's message handler (stderr, prefixed
+ * "mixoct: ", unless replaced) and is kept as mx_mesher_last_error. A failed
+ * call leaves the mesher as it was before the call, or, for a failure inside
+ * meshing, without a mesh (mx_mesher_mesh can be called again).
+ *
+ * Threads: every pass is parallel (OpenMP); mx_params.threads sets how many
+ * (0: OMP_NUM_THREADS, else one per processor). The result does not depend
+ * on the thread count. One mesher must not be used by two threads at once;
+ * message handlers are per process (the handler of the mesher whose call
+ * is running receives the messages). */
+#ifndef MIXOCT_H
+#define MIXOCT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Status codes; the programs exit with the same numbers. */
+typedef enum {
+  MX_OK = 0,
+  MX_EINTERNAL = 1, /* a bug or an unexpected system failure */
+  MX_EINPUT = 2,    /* bad input file, bad argument, bad usage */
+  MX_ENOMEM = 3,    /* out of memory, or over the memory budget */
+  MX_EIO = 4,       /* an output could not be written (permission, disk) */
+  MX_EINVALID = 5,  /* the mesh breaks the validity contract (J_ENS <= 0) */
+} mx_status;
+
+/* Element types, and their node counts: 4, 5, 6, 8. Node order: VTK's for
+ * tetrahedra, pyramids and hexahedra; Gmsh's for prisms (the triangle 0 1 2
+ * turns, by the right hand, towards 3 4 5). */
+enum { MX_TET = 0, MX_PYRAMID = 1, MX_PRISM = 2, MX_HEX = 3 };
+
+/* How far mx_mesher_mesh goes. */
+enum {
+  MX_STAGE_OCTREE = 0,     /* the balanced leaves only */
+  MX_STAGE_TRANSITION = 1, /* the conforming mesh of the whole octree */
+  MX_STAGE_FULL = 2,       /* the domain's mesh: boundary stage, repair */
+};
+enum { MX_BALANCE_EDGES = 0, MX_BALANCE_RECURSIVE = 1 };
+
+/* Message levels given to the handler. */
+enum { MX_MSG_ERROR = 0, MX_MSG_WARNING = 1 };
+typedef void (*mx_message_fn)(void *user, int level, const char *text);
+
+typedef struct {
+  int surface_level;   /* -s: octants meeting the domain surface; -1 none */
+  int all_level;       /* -a: every octant of the domain; -1 none */
+  int stage;           /* MX_STAGE_*, default MX_STAGE_FULL */
+  int balance;         /* MX_BALANCE_*, default MX_BALANCE_EDGES */
+  int threads;         /* 0: the OpenMP default */
+  double max_memory_mb; /* refuse runs estimated above; 0: memory available */
+  double close_ratio;   /* remove-close distance, 0: 0.5 (see boundary) */
+  double staircase_quality; /* 0: 0.2 (the papers) */
+  int repair_rounds;   /* list refinements of invalid elements' leaves, 3 */
+} mx_params;
+
+void mx_params_default(mx_params *p);
+
+typedef struct mx_mesher mx_mesher;
+
+/* NULL when out of memory. The parameters are copied. */
+mx_mesher *mx_mesher_new(const mx_params *p);
+void mx_mesher_free(mx_mesher *m);
+/* Replace the message handler (NULL: stderr, the default). */
+void mx_mesher_set_message_handler(mx_mesher *m, mx_message_fn fn, void *user);
+/* The last error message of this mesher ("" when none). */
+const char *mx_mesher_last_error(const mx_mesher *m);
+/* The status code's name, e.g. "bad input". */
+const char *mx_status_string(int status);
+
+/* ---- Inputs and requests (before the first mx_mesher_mesh) ----------- */
+
+/* A closed surface bounding the domain: OFF, MDL, STL, OBJ by extension.
+ * Several form one domain; a shell inside another is a hole. */
+int mx_mesher_add_surface(mx_mesher *m, const char *path);
+/* The same from arrays: nv points (3 doubles each), nt triangles (3 0-based
+ * indices each, outward by the right hand); name is used in messages. */
+int mx_mesher_add_surface_arrays(mx_mesher *m, const char *name, size_t nv,
+                                 const double *xyz, size_t nt,
+                                 const uint32_t *tri);
+/* The built-in demo surface (a brain-like closed surface). */
+int mx_mesher_add_demo_surface(mx_mesher *m);
+/* -r: octants meeting or inside a region surface go to `level`. */
+int mx_mesher_add_region_surface(mx_mesher *m, const char *path, int level);
+/* -b: a box [lo, hi] whose octants go to `level` (also after meshing: see
+ * mx_mesher_refine). */
+int mx_mesher_add_box(mx_mesher *m, const double lo[3], const double hi[3],
+                      int level);
+/* The boxes of a .reg file. */
+int mx_mesher_read_boxes(mx_mesher *m, const char *path);
+/* Change the -s / -a levels (-1: none); after meshing, mx_mesher_refine
+ * applies them to the existing octree. */
+int mx_mesher_set_levels(mx_mesher *m, int surface_level, int all_level);
+
+/* ---- Meshing ----------------------------------------------------------- */
+
+/* Every stage up to params.stage. With MX_STAGE_FULL, elements left with
+ * J_ENS <= 0 after the boundary stage are repaired by list refinement of
+ * their leaves (up to params.repair_rounds); if some remain the call returns
+ * MX_EINVALID (the mesh is still there to inspect or write). */
+int mx_mesher_mesh(mx_mesher *m);
+/* The stages one at a time, in this order. */
+int mx_mesher_build_octree(mx_mesher *m); /* grid, refine and balance */
+int mx_mesher_transition(mx_mesher *m);   /* transition patterns */
+int mx_mesher_boundary(mx_mesher *m);     /* boundary stage, with repair */
+
+/* ---- Re-meshing (Algorithm 3 of the 2021 paper) ------------------------ */
+
+/* Split once the leaves that own the listed elements of the current mesh (a
+ * leaf listed through several elements is split once), restore balance
+ * through the edge infos, apply the requests (boxes, levels, regions) to the
+ * refined octree, and mesh again up to params.stage. Element indices refer
+ * to the current mesh; an index out of range is MX_EINPUT (nothing done). */
+int mx_mesher_refine_elements(mx_mesher *m, const uint64_t *elements,
+                              size_t n);
+/* The same with leaf indices (0 .. nleaves-1, Morton order of the leaves). */
+int mx_mesher_refine_leaves(mx_mesher *m, const uint64_t *leaves, size_t n);
+/* Apply the current requests (after mx_mesher_add_box, set_levels, ...) to
+ * the existing octree and mesh again. */
+int mx_mesher_refine(mx_mesher *m);
+
+/* ---- The restart file (Appendix A of the 2021 paper) ------------------- */
+
+/* Write the restart file of the current octree and mesh: the published text
+ * format, or, when the name ends in ".octb", the binary variant (version,
+ * sizes, checksum). */
+int mx_mesher_save_restart(const mx_mesher *m, const char *path);
+/* Rebuild the balanced octree and the element -> leaf map from a restart
+ * file (ours or the published program's), then mesh it. The domain surfaces
+ * must have been added (the same ones). Requests already set apply on top
+ * (as after mx_mesher_refine). Elements listed later refer to the mesh that
+ * was written with the restart file (its per-octant element counts). */
+int mx_mesher_load_restart(mx_mesher *m, const char *path);
+/* Read a list of element indices (the published format: indices separated
+ * by white space; words that are not all digits are ignored). *out is
+ * malloc'ed (free with mx_free_array). Indices >= limit are MX_EINPUT with
+ * the file and line. */
+int mx_read_element_list(const char *path, uint64_t limit, uint64_t **out,
+                         size_t *n);
+void mx_free_array(void *p);
+
+/* ---- The mesh, as arrays, without copying ------------------------------ */
+
+typedef struct {
+  size_t nnodes, nelements, nleaves;
+  const double *xyz;      /* 3 * nnodes, interleaved x y z */
+  const uint8_t *type;    /* nelements, MX_TET .. MX_HEX */
+  const uint32_t *conn;   /* 8 * nelements, rows padded with UINT32_MAX */
+  const double *jens;     /* J_ENS of each element */
+  const uint32_t *leaf;   /* the leaf (0 .. nleaves-1) each element is in */
+  const int32_t *level;   /* that leaf's level */
+  const uint8_t *boundary;/* per node: 1 on the domain boundary */
+  size_t by_type[4];
+  double jens_min;
+  size_t invalid;         /* elements with J_ENS <= 0 */
+} mx_mesh_arrays;
+
+/* Valid until the next call that changes the mesh. MX_EINPUT without a
+ * mesh. */
+int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a);
+
+/* Write the current mesh; format by extension: .vtk .vtu .msh .mesh .meshb
+ * .getfem .m3d; ascii: the ASCII variant of .vtk / .msh. Written under a
+ * temporary name and renamed. */
+int mx_mesher_write(const mx_mesher *m, const char *path, int ascii);
+
+/* Figures of the last run. */
+typedef struct {
+  size_t leaves, octants, nodes, elements, invalid;
+  size_t refined_listed;   /* leaves split by the last list refinement */
+  size_t split_balance;    /* of which ... octants split for balance */
+  size_t repaired;         /* invalid elements repaired by refinement */
+  int repair_rounds;
+  double jens_min;
+  uint64_t leaves_hash;    /* order-independent hash of the leaves */
+  double t_read, t_grid, t_refine, t_balance, t_transition, t_boundary,
+      t_quality, t_write, t_restart; /* seconds, last run */
+} mx_stats;
+void mx_mesher_stats(const mx_mesher *m, mx_stats *s);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

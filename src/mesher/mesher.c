@@ -1,0 +1,722 @@
+/* The mesher object (include/mixoct.h): inputs and requests, the stages of
+ * the pipeline as calls, the mesh as arrays. Re-meshing is in remesh.c, the
+ * restart file in restart_octree.c. */
+#include "mesher/mesher_impl.h"
+
+#include "io/boundary_faces.h"
+#include "kernels/estimate.h"
+#include "kernels/mesh_edit.h"
+#include "kernels/remesh.h"
+#include "soa/mesh.h"
+
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- calls, messages, status ------------------------------------------ */
+
+static void collect_message(void *user, int level, const char *text) {
+  mx_mesher *m = user;
+  if (level == MX_MSG_ERROR && !m->last_error[0])
+    snprintf(m->last_error, sizeof m->last_error, "%s", text);
+  if (m->fn)
+    m->fn(m->user, level, text);
+  else if (level == MX_MSG_ERROR || !mx_quiet)
+    fprintf(stderr, "mixoct: %s%s\n", level == MX_MSG_ERROR ? "error: " : "warning: ",
+            text);
+}
+
+void mx_call_begin(mx_mesher *m, mx_call *c) {
+  c->fn = mx_msg_fn;
+  c->user = mx_msg_user;
+  c->threads = omp_get_max_threads();
+  mx_msg_fn = collect_message;
+  mx_msg_user = m;
+  m->last_error[0] = 0;
+  mx_oom_seen = 0;
+  if (m->p.threads > 0) omp_set_num_threads(m->p.threads);
+}
+
+int mx_call_end(mx_mesher *m, mx_call *c, int status) {
+  (void)m;
+  status = mx_status_refine(status);
+  mx_msg_fn = c->fn;
+  mx_msg_user = c->user;
+  omp_set_num_threads(c->threads);
+  return status;
+}
+
+const char *mx_status_string(int status) {
+  switch (status) {
+    case MX_OK: return "success";
+    case MX_EINTERNAL: return "internal failure";
+    case MX_EINPUT: return "bad input";
+    case MX_ENOMEM: return "out of memory";
+    case MX_EIO: return "output failure";
+    case MX_EINVALID: return "invalid mesh";
+    default: return "unknown status";
+  }
+}
+
+void mx_params_default(mx_params *p) {
+  memset(p, 0, sizeof *p);
+  p->surface_level = -1;
+  p->all_level = -1;
+  p->stage = MX_STAGE_FULL;
+  p->balance = MX_BALANCE_EDGES;
+  p->repair_rounds = 3;
+}
+
+mx_mesher *mx_mesher_new(const mx_params *p) {
+  mx_mesher *m = calloc(1, sizeof *m);
+  if (!m) return NULL;
+  if (p)
+    m->p = *p;
+  else
+    mx_params_default(&m->p);
+  if (m->p.close_ratio <= 0) m->p.close_ratio = MX_CLOSE_RATIO;
+  if (m->p.staircase_quality <= 0) m->p.staircase_quality = 0.2;
+  if (m->p.repair_rounds < 0) m->p.repair_rounds = 0;
+  m->mesh_stage = -1;
+  return m;
+}
+
+void mx_mesh_clear(mx_mesher *m) {
+  mx_mesh_out_free(&m->M);
+  memset(&m->M, 0, sizeof m->M);
+  mx_free(m->states);
+  mx_free(m->bnd);
+  m->states = m->bnd = NULL;
+  if (m->have_hex) mx_hexmesh_free(&m->hex);
+  m->have_hex = 0;
+  m->mesh_stage = -1;
+}
+
+void mx_tree_clear(mx_mesher *m) {
+  mx_mesh_clear(m);
+  if (m->have_tree) mx_builder_free(&m->B);
+  memset(&m->B, 0, sizeof m->B);
+  mx_free(m->leaves);
+  m->leaves = NULL;
+  m->nleaves = 0;
+  m->have_tree = 0;
+  mx_free(m->file_leaf);
+  m->file_leaf = NULL;
+  m->file_nelem = 0;
+}
+
+void mx_mesher_free(mx_mesher *m) {
+  if (!m) return;
+  mx_tree_clear(m);
+  if (m->have_index) mx_surface_index_free(&m->SI);
+  mx_trisoup_free(&m->domain);
+  mx_trisoup_free(&m->soup);
+  for (int i = 0; i < m->ndomain; i++) free(m->domain_name[i]);
+  for (int r = 0; r < m->nregions; r++) {
+    mx_trisoup_free(&m->region[r]);
+    free(m->region_name[r]);
+  }
+  mx_free(m->boxes);
+  for (int l = 0; l <= MX_MAX_LEVEL; l++) mx_free(m->split_keys[l]);
+  free(m);
+}
+
+void mx_mesher_set_message_handler(mx_mesher *m, mx_message_fn fn, void *user) {
+  m->fn = fn;
+  m->user = user;
+}
+
+const char *mx_mesher_last_error(const mx_mesher *m) { return m->last_error; }
+
+const mx_summary *mx_mesher_summary(const mx_mesher *m) { return &m->S; }
+
+void mx_free_array(void *p) { mx_free(p); }
+
+/* ---- inputs and requests ---------------------------------------------- */
+
+static int refuse_after_build(const mx_mesher *m, const char *what) {
+  if (!m->assembled) return MX_OK;
+  mx_error(NULL, 0, "%s must be added before the first mesh", what);
+  return MX_EINPUT;
+}
+
+static int add_domain(mx_mesher *m, mx_trisoup *s, const char *name) {
+  MX_CHECK(refuse_after_build(m, "domain surfaces"));
+  if (m->ndomain >= 64) {
+    mx_error(name, 0, "too many input surfaces (at most 64)");
+    return MX_EINPUT;
+  }
+  char *nm = strdup(name);
+  if (!nm) return MX_ENOMEM;
+  int st = mx_trisoup_append(&m->domain, s);
+  if (st) {
+    free(nm);
+    return st;
+  }
+  m->domain_name[m->ndomain++] = nm;
+  return MX_OK;
+}
+
+int mx_mesher_add_surface(mx_mesher *m, const char *path) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  mx_trisoup s;
+  memset(&s, 0, sizeof s);
+  const double t = mx_wtime();
+  int st = path ? MX_OK : MX_EINPUT;
+  if (!path) mx_error(NULL, 0, "no surface file given");
+  if (!st) st = mx_read_surface(path, &s);
+  if (!st) st = mx_trisoup_check(&s, path, NULL);
+  if (!st) st = add_domain(m, &s, path);
+  mx_trisoup_free(&s);
+  m->S.ph.read += mx_wtime() - t;
+  return mx_call_end(m, &c, st);
+}
+
+int mx_mesher_add_surface_arrays(mx_mesher *m, const char *name, size_t nv,
+                                 const double *xyz, size_t nt,
+                                 const uint32_t *tri) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  if (!name) name = "(arrays)";
+  mx_trisoup s;
+  memset(&s, 0, sizeof s);
+  int st = MX_OK;
+  if (nv == 0 || nt == 0 || !xyz || !tri) {
+    mx_error(name, 0, "empty surface (%zu points, %zu triangles)", nv, nt);
+    st = MX_EINPUT;
+  }
+  if (!st) st = mx_trisoup_reserve(&s, nv, nt);
+  for (size_t i = 0; !st && i < nv; i++) {
+    for (int a = 0; a < 3; a++)
+      if (!(xyz[3 * i + a] == xyz[3 * i + a]) || xyz[3 * i + a] > 1e300 ||
+          xyz[3 * i + a] < -1e300) {
+        mx_error(name, 0, "point %zu: coordinate %d is not a finite number", i, a);
+        st = MX_EINPUT;
+        break;
+      }
+    if (!st) st = mx_trisoup_set_vertex(&s, i, xyz + 3 * i);
+  }
+  for (size_t t = 0; !st && t < nt; t++) {
+    const uint32_t *v = tri + 3 * t;
+    if (v[0] >= nv || v[1] >= nv || v[2] >= nv) {
+      mx_error(name, 0, "triangle %zu: index out of range (%zu points)", t, nv);
+      st = MX_EINPUT;
+    } else {
+      st = mx_trisoup_add_triangle(&s, v[0], v[1], v[2]);
+    }
+  }
+  if (!st) st = mx_trisoup_check(&s, name, NULL);
+  if (!st) st = add_domain(m, &s, name);
+  mx_trisoup_free(&s);
+  return mx_call_end(m, &c, st);
+}
+
+int mx_mesher_add_demo_surface(mx_mesher *m) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  mx_trisoup s;
+  memset(&s, 0, sizeof s);
+  int st = mx_demo_surface(&s, 4);
+  if (!st) st = add_domain(m, &s, "--demo");
+  mx_trisoup_free(&s);
+  return mx_call_end(m, &c, st);
+}
+
+static int check_level(const char *what, int level, int allow_none) {
+  if ((allow_none && level == -1) || (level >= 0 && level <= MX_MAX_LEVEL - 1))
+    return MX_OK;
+  mx_error(NULL, 0, "%s level %d out of range (0..%d)", what, level, MX_MAX_LEVEL - 1);
+  return MX_EINPUT;
+}
+
+int mx_mesher_add_region_surface(mx_mesher *m, const char *path, int level) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  int st = refuse_after_build(m, "region surfaces");
+  if (!st) st = check_level("region surface", level, 0);
+  if (!st && m->nregions >= MX_MAX_REGIONS) {
+    mx_error(path, 0, "too many region surfaces (at most %d)", MX_MAX_REGIONS);
+    st = MX_EINPUT;
+  }
+  if (!st) {
+    const int r = m->nregions;
+    memset(&m->region[r], 0, sizeof m->region[r]);
+    st = mx_read_surface(path, &m->region[r]);
+    if (!st) st = mx_trisoup_check(&m->region[r], path, NULL);
+    if (!st) {
+      m->region_name[r] = strdup(path);
+      m->region_level[r] = level;
+      m->nregions++;
+    } else {
+      mx_trisoup_free(&m->region[r]);
+    }
+  }
+  return mx_call_end(m, &c, st);
+}
+
+static int push_box(mx_mesher *m, const mx_box_region *b) {
+  mx_box_region *g = mx_realloc(m->boxes, (m->nboxes + 1) * sizeof *g);
+  if (!g) return MX_ENOMEM;
+  m->boxes = g;
+  g[m->nboxes++] = *b;
+  return MX_OK;
+}
+
+int mx_mesher_add_box(mx_mesher *m, const double lo[3], const double hi[3], int level) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  int st = check_level("box", level, 0);
+  mx_box_region b;
+  for (int a = 0; !st && a < 3; a++) {
+    if (!(lo[a] <= hi[a])) {
+      mx_error(NULL, 0, "box: min corner above max corner (or not a number) on axis %d", a);
+      st = MX_EINPUT;
+    }
+    b.lo[a] = lo[a];
+    b.hi[a] = hi[a];
+  }
+  b.level = level;
+  if (!st) st = push_box(m, &b);
+  return mx_call_end(m, &c, st);
+}
+
+int mx_mesher_read_boxes(mx_mesher *m, const char *path) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  mx_box_region *b = NULL;
+  size_t n = 0;
+  int st = mx_read_reg(path, &b, &n);
+  for (size_t i = 0; !st && i < n; i++) st = push_box(m, &b[i]);
+  mx_free(b);
+  return mx_call_end(m, &c, st);
+}
+
+int mx_mesher_set_levels(mx_mesher *m, int surface_level, int all_level) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  int st = check_level("surface", surface_level, 1);
+  if (!st) st = check_level("all", all_level, 1);
+  if (!st) {
+    m->p.surface_level = surface_level;
+    m->p.all_level = all_level;
+  }
+  return mx_call_end(m, &c, st);
+}
+
+/* The requests as the kernels take them (boxes point into m->boxes). */
+mx_requests mx_mesher_requests(const mx_mesher *m) {
+  mx_requests r;
+  memset(&r, 0, sizeof r);
+  r.s_level = m->p.surface_level;
+  r.a_level = m->p.all_level;
+  r.boxes = m->boxes;
+  r.nboxes = m->nboxes;
+  r.nregions = m->nregions;
+  for (int i = 0; i < m->nregions; i++) r.rlevel[i] = m->region_level[i];
+  return r;
+}
+
+/* Domain then region triangles in one soup, checked once. */
+static int assemble_inputs(mx_mesher *m) {
+  if (m->assembled) return MX_OK;
+  if (m->ndomain == 0) {
+    mx_error(NULL, 0, "no input surface: add one (-i FILE) or the demo (--demo)");
+    return MX_EINPUT;
+  }
+  MX_CHECK(mx_trisoup_check_shells(&m->domain, (uint32_t)m->domain.nt,
+                                   (const char *const *)m->domain_name));
+  MX_CHECK(mx_trisoup_append(&m->soup, &m->domain));
+  /* one shell per input file, as the readers gave them */
+  memcpy(m->soup.shell, m->domain.shell, m->domain.nt * sizeof *m->soup.shell);
+  m->soup.nshells = m->domain.nshells;
+  m->nt_domain = (uint32_t)m->soup.nt;
+  for (int r = 0; r < m->nregions; r++) {
+    m->region_t0[r] = (uint32_t)m->soup.nt;
+    MX_CHECK(mx_trisoup_append(&m->soup, &m->region[r]));
+  }
+  m->region_t0[m->nregions] = (uint32_t)m->soup.nt;
+  m->assembled = 1;
+  return MX_OK;
+}
+
+/* ---- stages ------------------------------------------------------------ */
+
+static void stage(const mx_mesher *m, const char *name) {
+  if (m->on_stage) m->on_stage(name);
+}
+
+/* Refuse a run that cannot fit: the estimate (kernels/estimate.h) against
+ * max_memory_mb, or else the memory available now. */
+static int check_memory(mx_mesher *m, const mx_requests *req) {
+  const double need = mx_estimate_bytes(&m->soup, m->nt_domain, m->region_t0, req,
+                                        &m->B.grid, m->p.stage);
+  m->S.memory_estimate_mb = need / 1048576.0;
+  const double avail = mx_available_bytes();
+  const double limit = m->p.max_memory_mb > 0 ? m->p.max_memory_mb * 1048576.0 : avail;
+  if (limit > 0.0 && need > limit) {
+    mx_error(NULL, 0, "this run needs about %.0f MB (estimated from the surface "
+                      "and the requested levels) but %s %.0f MB: lower the "
+                      "levels or raise --max-memory", need / 1048576.0,
+             m->p.max_memory_mb > 0 ? "--max-memory allows" : "the machine has",
+             limit / 1048576.0);
+    return MX_ENOMEM;
+  }
+  return MX_OK;
+}
+
+int mx_update_leaves(mx_mesher *m) {
+  mx_free(m->leaves);
+  m->leaves = NULL;
+  MX_CHECK(mx_leaves(&m->B, &m->leaves, &m->nleaves));
+  return mx_leaves_sorted(&m->B, m->leaves, m->nleaves);
+}
+
+int mx_build_tree(mx_mesher *m) {
+  mx_tree_clear(m);
+  const double t0 = mx_wtime();
+  stage(m, "grid");
+  MX_CHECK(assemble_inputs(m));
+  const mx_requests req = mx_mesher_requests(m);
+  const int use_edges = m->p.balance == MX_BALANCE_EDGES;
+  MX_CHECK(mx_builder_init(&m->B, &m->soup, m->nt_domain, m->region_t0, &req, use_edges));
+  m->have_tree = 1;
+  m->B.on_level = m->on_level;
+  for (int l = 0; l <= MX_MAX_LEVEL; l++) {
+    m->B.split_keys[l] = m->split_keys[l];
+    m->B.nsplit[l] = m->nsplit[l];
+    if (m->nsplit[l] && l > m->B.edge_levels) m->B.edge_levels = l;
+  }
+  MX_CHECK(check_memory(m, &req));
+  MX_CHECK(mx_build_roots(&m->B));
+  m->S.ph.grid += mx_wtime() - t0;
+  stage(m, "refine");
+  if (use_edges) {
+    MX_CHECK(mx_refine_balanced(&m->B));
+    /* with a split set, octants split for balance may have children that
+     * must be split too (kernels/remesh.h) */
+    {
+      int any = 0;
+      for (int l = 0; l <= MX_MAX_LEVEL; l++) any |= m->nsplit[l] != 0;
+      if (any) MX_CHECK(mx_refine_leaves_to_target(&m->B));
+    }
+  } else {
+    MX_CHECK(mx_refine_unbalanced(&m->B));
+    stage(m, "balance");
+    MX_CHECK(mx_balance_recursive(&m->B));
+  }
+  m->S.ph.refine += m->B.stats.t_refine;
+  m->S.ph.balance += m->B.stats.t_balance;
+  m->S.max_level = mx_max_requested_level(&req);
+  return mx_update_leaves(m);
+}
+
+int mx_mesher_build_octree(mx_mesher *m) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  memset(&m->S, 0, sizeof m->S);
+  int st = mx_build_tree(m);
+  if (st) mx_tree_clear(m);
+  else m->S.leaves = m->nleaves;
+  return mx_call_end(m, &c, st);
+}
+
+/* Per node: 1 on the boundary (the surface nodes of the boundary stage, else
+ * the nodes of faces used by one element). */
+static int boundary_flags(mx_mesher *m) {
+  const mx_mesh_out *M = &m->M;
+  mx_free(m->bnd);
+  m->bnd = mx_alloc(M->nnodes + 1);
+  if (!m->bnd) return MX_ENOMEM;
+  if (m->states) {
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < M->nnodes; i++) m->bnd[i] = m->states[i] == MX_NODE_OUTSIDE;
+    return MX_OK;
+  }
+  int32_t *f = mx_alloc((M->nnodes + 1) * sizeof *f);
+  if (!f) return MX_ENOMEM;
+  mx_mesh_view v = {M->nnodes, M->xyz, M->ncells, M->type, M->conn, 0, NULL, 0, NULL};
+  int st = mx_boundary_node_flags(&v, f);
+#pragma omp parallel for schedule(static)
+  for (size_t i = 0; i < M->nnodes; i++) m->bnd[i] = (uint8_t)f[i];
+  mx_free(f);
+  return st;
+}
+
+static void count_mesh(mx_mesher *m) {
+  mx_summary *S = &m->S;
+  const mx_mesh_out *M = &m->M;
+  S->nodes = M->nnodes;
+  S->nodes_counted = 1;
+  S->elements = M->ncells;
+  memcpy(S->by_type, M->by_type, sizeof S->by_type);
+  S->jens_min = M->jens_min;
+  S->invalid = M->invalid;
+  S->closures = M->closures;
+  S->centre_leaves = M->centre_leaves;
+  S->mesh = 1;
+  const double t = mx_wtime();
+  stage(m, "quality");
+  mx_quality_tabulate(M->type, M->jens, M->ncells, &S->quality);
+  S->ph.quality += mx_wtime() - t;
+}
+
+static int transition(mx_mesher *m) {
+  if (!m->have_tree) MX_CHECK(mx_build_tree(m));
+  mx_mesh_clear(m);
+  const double t = mx_wtime();
+  stage(m, "transition");
+  MX_CHECK(mx_transition(&m->B, m->leaves, m->nleaves, &m->M));
+  m->mesh_stage = MX_STAGE_TRANSITION;
+  m->S.ph.transition += mx_wtime() - t;
+  return MX_OK;
+}
+
+int mx_mesher_transition(mx_mesher *m) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  int st = transition(m);
+  if (!st) st = boundary_flags(m);
+  if (!st) count_mesh(m);
+  if (st) mx_mesh_clear(m);
+  return mx_call_end(m, &c, st);
+}
+
+/* The boundary stage on the transition mesh, then elements grouped by leaf
+ * (the restart file's element -> octant map). */
+static int boundary_once(mx_mesher *m) {
+  const double t = mx_wtime();
+  stage(m, "boundary");
+  if (!m->have_index) {
+    stage(m, "index");
+    MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
+    m->have_index = 1;
+    stage(m, "boundary");
+  }
+  mx_boundary_stats bs;
+  MX_CHECK(mx_boundary_stage(&m->B, m->leaves, &m->SI, &m->M, m->p.close_ratio,
+                             m->p.staircase_quality, &bs, &m->states));
+  m->S.boundary = bs;
+  m->S.full = 1;
+  MX_CHECK(mx_mesh_sort_by_leaf(&m->M, m->nleaves));
+  m->mesh_stage = MX_STAGE_FULL;
+  m->S.ph.boundary += mx_wtime() - t;
+  return MX_OK;
+}
+
+/* Repair (the 2021 paper, section 6): the leaves holding elements with
+ * J_ENS <= 0 are split once by list refinement (Algorithm 3), and the
+ * octree is meshed again, up to repair_rounds times. */
+static int boundary_with_repair(mx_mesher *m) {
+  MX_CHECK(boundary_once(m));
+  for (int round = 0; m->M.invalid > 0 && round < m->p.repair_rounds; round++) {
+    if (m->on_round) m->on_round(round + 1);
+    size_t n = 0;
+    uint32_t *octs = mx_alloc((m->M.invalid + 1) * sizeof *octs);
+    if (!octs) return MX_ENOMEM;
+    for (size_t c = 0; c < m->M.ncells; c++)
+      if (m->M.jens[c] <= 0.0) octs[n++] = m->leaves[m->M.leaf[c]];
+    const size_t before = m->M.invalid;
+    int st = mx_refine_list(&m->B, octs, n);
+    mx_free(octs);
+    MX_CHECK(st);
+    m->S.repaired += before;
+    m->S.repair_rounds++;
+    MX_CHECK(mx_update_leaves(m));
+    MX_CHECK(transition(m));
+    MX_CHECK(boundary_once(m));
+  }
+  return MX_OK;
+}
+
+/* Mesh the current octree up to params.stage. */
+int mx_mesh_stages(mx_mesher *m) {
+  if (!m->have_tree) MX_CHECK(mx_build_tree(m));
+  m->S.leaves = m->nleaves;
+  if (m->p.stage == MX_STAGE_OCTREE) {
+    mx_mesh_clear(m);
+    m->mesh_stage = MX_STAGE_OCTREE;
+    return MX_OK;
+  }
+  MX_CHECK(transition(m));
+  if (m->p.stage == MX_STAGE_FULL) MX_CHECK(boundary_with_repair(m));
+  MX_CHECK(boundary_flags(m));
+  m->S.leaves = m->nleaves;
+  count_mesh(m);
+  if (m->M.invalid > 0) {
+    mx_error(NULL, 0, "%zu element(s) with J_ENS <= 0 remain after %d repair round(s)",
+             m->M.invalid, m->S.repair_rounds);
+    return MX_EINVALID;
+  }
+  return MX_OK;
+}
+
+int mx_mesher_boundary(mx_mesher *m) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  int st = MX_OK;
+  if (m->mesh_stage != MX_STAGE_TRANSITION) {
+    mx_error(NULL, 0, "the boundary stage runs on the transition mesh: call "
+                      "mx_mesher_transition first");
+    st = MX_EINPUT;
+  }
+  if (!st) st = boundary_with_repair(m);
+  if (!st) st = boundary_flags(m);
+  if (!st) {
+    count_mesh(m);
+    if (m->M.invalid > 0) st = MX_EINVALID;
+  }
+  if (st && st != MX_EINVALID) mx_mesh_clear(m);
+  return mx_call_end(m, &c, st);
+}
+
+static void fill_tree_stats(mx_mesher *m) {
+  mx_summary *S = &m->S;
+  if (!m->have_tree) return;
+  S->leaves = m->nleaves;
+  S->leaves_hash = mx_leaves_hash(&m->B, m->leaves, m->nleaves);
+  S->octants = m->B.oct.n;
+  S->edges = mx_edges_total(&m->B.edges);
+  S->edge_bytes = mx_edges_bytes(&m->B.edges);
+  S->located = m->B.stats.located;
+  S->split_requested = m->B.stats.split_requested;
+  S->split_balance = m->B.stats.split_balance;
+  S->dropped = m->B.stats.dropped;
+  S->threads = omp_get_max_threads();
+  S->balance = m->p.balance;
+}
+
+int mx_mesher_mesh(mx_mesher *m) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  const double t0 = mx_wtime();
+  const double read = m->S.ph.read, restart = m->S.t_restart;
+  const int keep = m->have_tree; /* a restart file was read: keep its figures */
+  if (!keep) {
+    memset(&m->S, 0, sizeof m->S);
+    m->S.ph.read = read;
+  }
+  m->S.t_restart = restart;
+  int st = mx_mesh_stages(m);
+  fill_tree_stats(m);
+  m->S.ph.total += mx_wtime() - t0;
+  if (st && st != MX_EINVALID) mx_mesh_clear(m);
+  return mx_call_end(m, &c, st);
+}
+
+/* ---- the mesh ---------------------------------------------------------- */
+
+int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a) {
+  memset(a, 0, sizeof *a);
+  if (m->mesh_stage < MX_STAGE_TRANSITION) {
+    mx_call c;
+    mx_call_begin((mx_mesher *)m, &c);
+    mx_error(NULL, 0, "no mesh yet: call mx_mesher_mesh first");
+    return mx_call_end((mx_mesher *)m, &c, MX_EINPUT);
+  }
+  const mx_mesh_out *M = &m->M;
+  a->nnodes = M->nnodes;
+  a->nelements = M->ncells;
+  a->nleaves = m->nleaves;
+  a->xyz = M->xyz;
+  a->type = M->type;
+  a->conn = M->conn;
+  a->jens = M->jens;
+  a->leaf = M->leaf;
+  a->level = M->level;
+  a->boundary = m->bnd;
+  memcpy(a->by_type, M->by_type, sizeof a->by_type);
+  a->jens_min = M->jens_min;
+  a->invalid = M->invalid;
+  return MX_OK;
+}
+
+static int write_mixed(const mx_mesher *m, const char *path, int ascii) {
+  const mx_mesh_out *M = &m->M;
+  int32_t *type = mx_alloc((M->ncells + 1) * sizeof *type);
+  int32_t *bnd = mx_alloc((M->nnodes + 1) * sizeof *bnd);
+  if (!type || !bnd) {
+    mx_free(type);
+    mx_free(bnd);
+    return MX_ENOMEM;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t i = 0; i < M->ncells; i++) type[i] = M->type[i];
+#pragma omp parallel for schedule(static)
+  for (size_t i = 0; i < M->nnodes; i++) bnd[i] = m->bnd[i];
+  mx_field f[3] = {{"type", 0, type, NULL},
+                   {"level", 0, M->level, NULL},
+                   {"jens", 1, NULL, M->jens}};
+  mx_field pf[1] = {{"boundary", 0, bnd, NULL}};
+  mx_mesh_view v = {M->nnodes, M->xyz, M->ncells, M->type, M->conn, 3, f, 1, pf};
+  int st = mx_write_mesh(path, &v, ascii);
+  mx_free(type);
+  mx_free(bnd);
+  return st;
+}
+
+static int write_octree(mx_mesher *m, const char *path, int ascii) {
+  if (!m->have_hex) {
+    MX_CHECK(mx_leaf_hex_mesh(&m->B, m->leaves, m->nleaves, &m->hex));
+    m->have_hex = 1;
+  }
+  m->S.nodes = m->hex.nnodes;
+  m->S.nodes_counted = 1;
+  uint8_t *type = mx_alloc(m->nleaves + 1);
+  if (!type) return MX_ENOMEM;
+  memset(type, MX_HEX, m->nleaves);
+  mx_field level = {"level", 0, m->hex.level, NULL};
+  mx_mesh_view v = {m->hex.nnodes, m->hex.xyz, m->nleaves, type, m->hex.conn, 1, &level, 0, NULL};
+  int st = mx_write_mesh(path, &v, ascii);
+  mx_free(type);
+  return st;
+}
+
+int mx_mesher_write(const mx_mesher *cm, const char *path, int ascii) {
+  mx_mesher *m = (mx_mesher *)cm; /* the octree stage's hex mesh is cached */
+  mx_call c;
+  mx_call_begin(m, &c);
+  const double t = mx_wtime();
+  int st = MX_OK;
+  if (!path || !mx_mesh_format_known(path)) {
+    mx_error(path, 0, "unknown output format (use .vtk .vtu .msh .mesh .meshb "
+                      ".getfem .m3d)");
+    st = MX_EINPUT;
+  } else if (m->mesh_stage == MX_STAGE_OCTREE) {
+    st = write_octree(m, path, ascii);
+  } else if (m->mesh_stage < 0) {
+    mx_error(path, 0, "no mesh to write: call mx_mesher_mesh first");
+    st = MX_EINPUT;
+  } else {
+    stage(m, "write");
+    st = write_mixed(m, path, ascii);
+  }
+  m->S.ph.write += mx_wtime() - t;
+  return mx_call_end(m, &c, st);
+}
+
+void mx_mesher_stats(const mx_mesher *m, mx_stats *s) {
+  const mx_summary *S = &m->S;
+  memset(s, 0, sizeof *s);
+  s->leaves = m->nleaves;
+  s->octants = m->have_tree ? m->B.oct.n : 0;
+  s->nodes = S->nodes;
+  s->elements = S->elements;
+  s->invalid = S->invalid;
+  s->refined_listed = S->refined_listed;
+  s->split_balance = m->have_tree ? m->B.stats.split_balance : 0;
+  s->repaired = S->repaired;
+  s->repair_rounds = S->repair_rounds;
+  s->jens_min = S->jens_min;
+  s->leaves_hash = m->have_tree ? mx_leaves_hash(&m->B, m->leaves, m->nleaves) : 0;
+  s->t_read = S->ph.read;
+  s->t_grid = S->ph.grid;
+  s->t_refine = S->ph.refine;
+  s->t_balance = S->ph.balance;
+  s->t_transition = S->ph.transition;
+  s->t_boundary = S->ph.boundary;
+  s->t_quality = S->ph.quality;
+  s->t_write = S->ph.write;
+  s->t_restart = S->t_restart;
+}

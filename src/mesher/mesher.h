@@ -1,0 +1,99 @@
+/* The mesher object behind include/mixoct.h: what it keeps between calls,
+ * and the figures of a run (mx_summary, printed by the programs). Only the
+ * library and the programs in src/cli include this header. */
+#ifndef MX_MESHER_H
+#define MX_MESHER_H
+
+#include "mixoct.h"
+
+#include "kernels/boundary_stage.h"
+#include "kernels/distance.h"
+#include "kernels/quality.h"
+#include "kernels/refine.h"
+#include "kernels/transition.h"
+#include "soa/regions.h"
+#include "soa/trisoup.h"
+
+typedef struct {
+  double read, grid, refine, balance, transition, boundary, quality, write, total;
+} mx_phases;
+
+typedef struct {
+  size_t leaves, nodes, octants, edges, located, split_requested,
+      split_balance, dropped;
+  uint64_t leaves_hash;
+  size_t edge_bytes;
+  int threads;
+  int balance;
+  int max_level;
+  int nodes_counted;
+  int mesh;                 /* a mixed mesh was built (not only leaves) */
+  size_t elements, by_type[4], invalid, closures, centre_leaves;
+  double jens_min;
+  mx_quality_table quality;
+  double memory_estimate_mb;
+  mx_phases ph;
+  double peak_rss_mb;
+  int full;                 /* the boundary stage ran */
+  mx_boundary_stats boundary;
+  size_t repaired;          /* invalid elements found before a repair round */
+  int repair_rounds;
+  size_t refined_listed;    /* leaves split by the last list refinement */
+  size_t remesh_splits;     /* octants split by the last re-mesh (list, balance, requests) */
+  double t_restart;         /* seconds reading or writing the restart file */
+} mx_summary;
+
+
+struct mx_mesher {
+  mx_params p;
+  mx_message_fn fn;
+  void *user;
+  char last_error[1024];
+
+  /* inputs: the domain's shells; region surfaces apart until the octree is
+   * first built, then appended after the domain's triangles in soup */
+  mx_trisoup domain, soup;
+  int ndomain;
+  char *domain_name[64];
+  int nregions;
+  mx_trisoup region[MX_MAX_REGIONS];
+  char *region_name[MX_MAX_REGIONS];
+  int region_level[MX_MAX_REGIONS];
+  uint32_t nt_domain, region_t0[MX_MAX_REGIONS + 1];
+  int assembled;            /* soup holds domain + regions */
+  mx_box_region *boxes;
+  size_t nboxes;
+
+  /* the octree, its leaves in Morton order */
+  int have_tree;
+  mx_builder B;
+  uint32_t *leaves;
+  size_t nleaves;
+  uint64_t *split_keys[MX_MAX_LEVEL + 1]; /* restart: split octants, */
+  size_t nsplit[MX_MAX_LEVEL + 1];        /* per level, sorted */
+  /* restart read, not meshed yet: element of the file's mesh -> leaf */
+  uint32_t *file_leaf;
+  size_t file_nelem;
+
+  int have_index;
+  mx_surface_index SI;
+
+  /* the mesh: the stage reached (-1: none) */
+  int mesh_stage;
+  mx_mesh_out M;
+  uint8_t *states;          /* per node (boundary stage), or NULL */
+  uint8_t *bnd;             /* per node: 1 on the boundary */
+  mx_hexmesh hex;           /* MX_STAGE_OCTREE: the leaves as hexahedra */
+  int have_hex;
+
+  mx_summary S;
+  /* hooks for the program's progress line (NULL: none) */
+  void (*on_stage)(const char *name);
+  void (*on_round)(int round);
+  void (*on_level)(void *user, int level, int max_level);
+};
+
+/* The figures of the last run (counts, phases, boundary steps). */
+const mx_summary *mx_mesher_summary(const mx_mesher *m);
+
+#endif

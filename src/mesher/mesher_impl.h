@@ -1,0 +1,28 @@
+/* Shared by the files of src/mesher: one public call's set-up and tear-down
+ * (the mesher's message handler installed, the status refined), and the
+ * steps the calls share. */
+#ifndef MX_MESHER_IMPL_H
+#define MX_MESHER_IMPL_H
+
+#include "common.h"
+#include "mesher/mesher.h"
+
+typedef struct {
+  mx_message_fn fn;
+  void *user;
+  int threads;
+} mx_call;
+
+void mx_call_begin(mx_mesher *m, mx_call *c);
+/* Restores what mx_call_begin changed; MX_EINPUT after a failed allocation
+ * becomes MX_ENOMEM. Returns the status to give the caller. */
+int mx_call_end(mx_mesher *m, mx_call *c, int status);
+
+void mx_mesh_clear(mx_mesher *m);   /* drop the mesh */
+void mx_tree_clear(mx_mesher *m);   /* drop the octree and the mesh */
+int mx_update_leaves(mx_mesher *m); /* leaves of the octree, Morton order */
+int mx_mesh_stages(mx_mesher *m);   /* the stages up to params.stage */
+int mx_build_tree(mx_mesher *m);    /* grid, refine, balance, leaves */
+mx_requests mx_mesher_requests(const mx_mesher *m);
+
+#endif

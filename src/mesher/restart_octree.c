@@ -1,0 +1,419 @@
+/* The restart file (Appendix A of the 2021 paper) of a mesher, and the
+ * octree rebuilt from one (src/io/restart.h holds the file formats).
+ *
+ * Written: the nodes are the corners of every stored octant (split ones
+ * too), in Morton order of their lattice points; the edges are the 12 edges
+ * of every stored octant, with their mid-node when a finer octant has it as
+ * a corner; the octants are the leaves in Morton order (the order of the
+ * element -> leaf map), each with its corners in the published order, its
+ * level and the domain triangles it meets; the transform is zero; the
+ * sub-element counts are the elements of each leaf (the mesh's elements are
+ * grouped by leaf). The binary variant (.octb) has no edges: they are
+ * implied by the octants, and the reader does not need them.
+ *
+ * Read: each octant's lowest corner and level give its Morton key on the
+ * grid of the input surfaces; every ancestor of a leaf is split, so the
+ * octree is rebuilt by refining from the roots with that split set (the
+ * requests apply on top), exactly the octree of the run that wrote it when
+ * the file is ours. Elements of the file's mesh map to the leaf holding
+ * their octant's centre. */
+#include "mesher/mesher_impl.h"
+
+#include "io/restart.h"
+#include "kernels/grid.h"
+#include "soa/scan.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Corner c of the published order: bit pattern (x, y, z) per corner. */
+static const uint8_t corner_xyz[8][3] = {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0},
+                                         {0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0}};
+
+static uint64_t corner_key(uint64_t key, int level, int c) {
+  uint32_t p[3];
+  mx_morton_decode(key, p);
+  const uint32_t s = mx_octant_size(level);
+  return mx_morton_encode(p[0] + corner_xyz[c][0] * s, p[1] + corner_xyz[c][1] * s,
+                          p[2] + corner_xyz[c][2] * s);
+}
+
+/* Index of key in the sorted unique keys v[0..n), or UINT32_MAX. */
+static uint32_t find_key(const uint64_t *v, size_t n, uint64_t key) {
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (v[mid] < key) lo = mid + 1; else hi = mid;
+  }
+  return lo < n && v[lo] == key ? (uint32_t)lo : UINT32_MAX;
+}
+
+static size_t sort_unique(uint64_t *k, size_t n, int *st) {
+  *st = mx_sort_u64(k, NULL, n);
+  if (*st || n == 0) return 0;
+  size_t w = 1;
+  for (size_t i = 1; i < n; i++)
+    if (k[i] != k[w - 1]) k[w++] = k[i];
+  return w;
+}
+
+/* Edges of every stored octant, per (level, axis), sorted and unique. */
+static int restart_edges(const mx_mesher *m, const uint64_t *vkey, size_t nv, mx_restart *r) {
+  const mx_octree *T = &m->B.oct;
+  size_t cnt[MX_MAX_LEVEL + 1] = {0};
+  for (size_t o = 0; o < T->n; o++) cnt[T->level[o]]++;
+  size_t total = 0;
+  uint64_t *keys[MX_MAX_LEVEL + 1][3];
+  size_t nk[MX_MAX_LEVEL + 1][3];
+  int st = MX_OK;
+  memset(keys, 0, sizeof keys);
+  for (int l = 0; l <= MX_MAX_LEVEL && !st; l++)
+    for (int a = 0; a < 3 && !st; a++) {
+      nk[l][a] = 0;
+      if (!cnt[l]) continue;
+      keys[l][a] = mx_alloc((4 * cnt[l] + 1) * sizeof **keys);
+      if (!keys[l][a]) st = MX_ENOMEM;
+    }
+  if (!st) {
+    for (size_t o = 0; o < T->n; o++) {
+      const int l = T->level[o];
+      uint32_t anchor[3];
+      mx_octant_anchor(T->key[o], l, anchor);
+      const uint32_t s = mx_octant_size(l);
+      for (int a = 0; a < 3; a++)
+        for (int j = 0; j < 4; j++) {
+          uint32_t p[3];
+          mx_morton_decode(T->key[o], p);
+          p[(a + 1) % 3] += (uint32_t)(j & 1) * s;
+          p[(a + 2) % 3] += (uint32_t)(j >> 1) * s;
+          keys[l][a][nk[l][a]++] = mx_morton_encode(p[0], p[1], p[2]);
+        }
+      (void)anchor;
+    }
+    for (int l = 0; l <= MX_MAX_LEVEL && !st; l++)
+      for (int a = 0; a < 3 && !st; a++) {
+        if (!keys[l][a]) continue;
+        nk[l][a] = sort_unique(keys[l][a], nk[l][a], &st);
+        total += nk[l][a];
+      }
+  }
+  if (!st) {
+    r->edge = mx_alloc((3 * total + 1) * sizeof *r->edge);
+    if (!r->edge) st = MX_ENOMEM;
+  }
+  size_t w = 0;
+  for (int l = 0; l <= MX_MAX_LEVEL && !st; l++) {
+    const uint32_t s = mx_octant_size(l);
+    for (int a = 0; a < 3; a++) {
+      for (size_t i = 0; i < nk[l][a]; i++) {
+        uint32_t p[3], q[3];
+        mx_morton_decode(keys[l][a][i], p);
+        memcpy(q, p, sizeof q);
+        q[a] += s;
+        uint32_t h[3] = {p[0], p[1], p[2]};
+        h[a] += s / 2;
+        const uint32_t ia = find_key(vkey, nv, keys[l][a][i]);
+        const uint32_t ib = find_key(vkey, nv, mx_morton_encode(q[0], q[1], q[2]));
+        const uint32_t im = s > 1 ? find_key(vkey, nv, mx_morton_encode(h[0], h[1], h[2]))
+                                  : UINT32_MAX;
+        r->edge[3 * w + 0] = ia;
+        r->edge[3 * w + 1] = ib;
+        r->edge[3 * w + 2] = im == UINT32_MAX ? 0 : im;
+        w++;
+      }
+    }
+  }
+  r->ne = w;
+  for (int l = 0; l <= MX_MAX_LEVEL; l++)
+    for (int a = 0; a < 3; a++) mx_free(keys[l][a]);
+  return st;
+}
+
+static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r) {
+  const mx_octree *T = &m->B.oct;
+  memset(r, 0, sizeof *r);
+  /* nodes: corners of every stored octant */
+  uint64_t *vkey = mx_alloc((8 * T->n + 1) * sizeof *vkey);
+  if (!vkey) return MX_ENOMEM;
+#pragma omp parallel for schedule(static)
+  for (size_t o = 0; o < T->n; o++)
+    for (int c = 0; c < 8; c++) vkey[8 * o + c] = corner_key(T->key[o], T->level[o], c);
+  int st = MX_OK;
+  const size_t nv = sort_unique(vkey, 8 * T->n, &st);
+  if (!st) {
+    r->nv = nv;
+    r->xyz = mx_alloc((3 * nv + 1) * sizeof *r->xyz);
+    if (!r->xyz) st = MX_ENOMEM;
+  }
+  if (!st) {
+    const mx_grid *g = &m->B.grid;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < nv; i++) {
+      uint32_t p[3];
+      mx_morton_decode(vkey[i], p);
+      for (int a = 0; a < 3; a++) r->xyz[3 * i + a] = g->origin[a] + (double)p[a] * g->unit;
+    }
+  }
+  if (!st && with_edges) st = restart_edges(m, vkey, nv, r);
+  if (!st && !with_edges) {
+    r->edge = mx_alloc(sizeof *r->edge); /* none: implied by the octants */
+    if (!r->edge) st = MX_ENOMEM;
+  }
+  /* octants: the leaves, in Morton order */
+  const size_t no = m->nleaves;
+  if (!st) {
+    r->no = no;
+    r->oct_node = mx_alloc((8 * no + 1) * sizeof *r->oct_node);
+    r->oct_level = mx_alloc(no + 1);
+    r->oct_tri_off = mx_alloc((no + 1) * sizeof *r->oct_tri_off);
+    if (!r->oct_node || !r->oct_level || !r->oct_tri_off) st = MX_ENOMEM;
+  }
+  if (!st) {
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < no; i++) {
+      const uint32_t o = m->leaves[i];
+      for (int c = 0; c < 8; c++)
+        r->oct_node[8 * i + c] = find_key(vkey, nv, corner_key(T->key[o], T->level[o], c));
+      r->oct_level[i] = T->level[o];
+      uint64_t k = 0;
+      for (uint32_t j = 0; j < T->tri_cnt[o]; j++)
+        k += T->tri_pool[T->tri_off[o] + j] < m->nt_domain;
+      r->oct_tri_off[i] = k;
+    }
+    uint64_t total = 0;
+    for (size_t i = 0; i < no; i++) {
+      const uint64_t k = r->oct_tri_off[i];
+      r->oct_tri_off[i] = total;
+      total += k;
+    }
+    r->oct_tri_off[no] = total;
+    r->oct_tri = mx_alloc((total + 1) * sizeof *r->oct_tri);
+    if (!r->oct_tri) st = MX_ENOMEM;
+  }
+  if (!st) {
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < no; i++) {
+      const uint32_t o = m->leaves[i];
+      uint64_t w = r->oct_tri_off[i];
+      for (uint32_t j = 0; j < T->tri_cnt[o]; j++) {
+        const uint32_t t = T->tri_pool[T->tri_off[o] + j];
+        if (t < m->nt_domain) r->oct_tri[w++] = t;
+      }
+    }
+    r->has_transform = 1; /* zeros: no transform */
+  }
+  if (!st && m->mesh_stage >= MX_STAGE_TRANSITION) {
+    r->nsub = mx_calloc((no + 1) * sizeof *r->nsub);
+    if (!r->nsub) st = MX_ENOMEM;
+    for (size_t c = 0; !st && c < m->M.ncells; c++) r->nsub[m->M.leaf[c]]++;
+  }
+  mx_free(vkey);
+  return st;
+}
+
+static int ends_with(const char *s, const char *suffix) {
+  const size_t n = strlen(s), k = strlen(suffix);
+  return n >= k && strcmp(s + n - k, suffix) == 0;
+}
+
+int mx_mesher_save_restart(const mx_mesher *cm, const char *path) {
+  mx_mesher *m = (mx_mesher *)cm;
+  mx_call c;
+  mx_call_begin(m, &c);
+  const double t = mx_wtime();
+  int st = MX_OK;
+  if (!m->have_tree || m->mesh_stage < MX_STAGE_TRANSITION) {
+    mx_error(path, 0, "no mesh to write a restart file for: mesh first");
+    st = MX_EINPUT;
+  }
+  const int binary = path && ends_with(path, ".octb");
+  mx_restart r;
+  memset(&r, 0, sizeof r);
+  if (!st) st = restart_from_mesher(m, !binary, &r);
+  if (!st) st = binary ? mx_restart_write_binary(path, &r) : mx_restart_write_text(path, &r);
+  mx_restart_free(&r);
+  m->S.t_restart += mx_wtime() - t;
+  return mx_call_end(m, &c, st);
+}
+
+/* ---- reading ----------------------------------------------------------- */
+
+/* Key and level of octant i of the file on grid g; MX_EINPUT when its
+ * corners are not a cube of the grid. */
+static int octant_key(const mx_restart *r, size_t i, const mx_grid *g, const char *path,
+                      uint64_t *key) {
+  const int l = r->oct_level[i];
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int c = 0; c < 8; c++) {
+    const double *p = r->xyz + 3 * (size_t)r->oct_node[8 * i + c];
+    for (int a = 0; a < 3; a++) {
+      lo[a] = mx_min(lo[a], p[a]);
+      hi[a] = mx_max(hi[a], p[a]);
+    }
+  }
+  const uint32_t s = mx_octant_size(l);
+  uint32_t q[3];
+  for (int a = 0; a < 3; a++) {
+    const double u = (lo[a] - g->origin[a]) / g->unit;
+    const double e = (hi[a] - lo[a]) / g->unit;
+    const double lim = (double)g->dims[a] * (double)mx_octant_size(0);
+    if (!(u > -0.25 && u + e < lim + 0.25) || fabs(e - (double)s) > 0.01 * s + 0.25) {
+      mx_error(path, 0, "octant %zu (level %d) does not lie on the root grid of the "
+                        "input surfaces: is it the surface the file was written for?",
+               i + 1, l);
+      return MX_EINPUT;
+    }
+    const double rq = floor(u + 0.5);
+    if (fabs(u - rq) > 0.25 || ((uint32_t)rq & (s - 1)) != 0) {
+      mx_error(path, 0, "octant %zu (level %d) is not aligned on the octree of the "
+                        "input surfaces: is it the surface the file was written for?",
+               i + 1, l);
+      return MX_EINPUT;
+    }
+    q[a] = (uint32_t)rq;
+  }
+  *key = mx_morton_encode(q[0], q[1], q[2]);
+  return MX_OK;
+}
+
+/* Index of the leaf holding the lattice point p (its Morton key), or
+ * UINT32_MAX (outside the domain's leaves). keys: the leaves' sorted keys. */
+static uint32_t leaf_holding(const mx_mesher *m, const uint64_t *keys, uint64_t pk) {
+  size_t lo = 0, hi = m->nleaves;
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (keys[mid] <= pk) lo = mid + 1; else hi = mid;
+  }
+  if (lo == 0) return UINT32_MAX;
+  const uint32_t o = m->leaves[lo - 1];
+  uint32_t a[3], p[3];
+  mx_morton_decode(m->B.oct.key[o], a);
+  mx_morton_decode(pk, p);
+  const uint32_t s = mx_octant_size(m->B.oct.level[o]);
+  for (int d = 0; d < 3; d++)
+    if (p[d] < a[d] || p[d] >= a[d] + s) return UINT32_MAX;
+  return (uint32_t)(lo - 1);
+}
+
+static int load_restart(mx_mesher *m, const char *path) {
+  mx_restart r;
+  memset(&r, 0, sizeof r);
+  MX_CHECK(mx_restart_read(path, &r));
+  int st = MX_OK;
+  /* the grid of the input surfaces */
+  mx_tree_clear(m);
+  for (int l = 0; l <= MX_MAX_LEVEL; l++) {
+    mx_free(m->split_keys[l]);
+    m->split_keys[l] = NULL;
+    m->nsplit[l] = 0;
+  }
+  mx_grid g;
+  {
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    if (m->ndomain == 0) {
+      mx_error(path, 0, "add the input surface the restart file was written for (-i FILE)");
+      st = MX_EINPUT;
+    }
+    for (size_t t = 0; !st && t < m->domain.nt; t++)
+      for (int k = 0; k < 3; k++) {
+        const uint32_t v = m->domain.tri[3 * t + k];
+        const double p[3] = {m->domain.x[v], m->domain.y[v], m->domain.z[v]};
+        for (int a = 0; a < 3; a++) {
+          lo[a] = mx_min(lo[a], p[a]);
+          hi[a] = mx_max(hi[a], p[a]);
+        }
+      }
+    if (!st) st = mx_grid_build(lo, hi, &g);
+  }
+  uint64_t *key = NULL;
+  uint32_t *perm = NULL;
+  if (!st) {
+    key = mx_alloc((r.no + 1) * sizeof *key);
+    perm = mx_alloc((r.no + 1) * sizeof *perm);
+    if (!key || !perm) st = MX_ENOMEM;
+  }
+  for (size_t i = 0; !st && i < r.no; i++) {
+    st = octant_key(&r, i, &g, path, &key[i]);
+    perm[i] = (uint32_t)i;
+  }
+  /* split set: the ancestors of the leaves, level by level; in Morton order
+   * of the leaves, each level's ancestors come sorted */
+  uint64_t *skey = NULL;
+  if (!st) {
+    skey = mx_alloc((r.no + 1) * sizeof *skey);
+    if (!skey) st = MX_ENOMEM;
+  }
+  if (!st) {
+    memcpy(skey, key, r.no * sizeof *skey);
+    st = mx_sort_u64(skey, perm, r.no);
+  }
+  for (int l = 0; !st && l < MX_MAX_LEVEL; l++) {
+    const uint64_t mask = ~(uint64_t)0 << (3 * (MX_MAX_LEVEL - l));
+    size_t n = 0;
+    uint64_t *v = NULL;
+    for (size_t i = 0; i < r.no; i++) {
+      if (r.oct_level[perm[i]] <= l) continue;
+      const uint64_t a = skey[i] & mask;
+      if (n && v[n - 1] == a) continue;
+      if (!v) {
+        v = mx_alloc((r.no + 1) * sizeof *v);
+        if (!v) {
+          st = MX_ENOMEM;
+          break;
+        }
+      }
+      v[n++] = a;
+    }
+    m->split_keys[l] = v;
+    m->nsplit[l] = n;
+  }
+  mx_free(skey);
+  if (!st) st = mx_build_tree(m);
+  /* the file's elements -> our leaves */
+  uint64_t *lkeys = NULL;
+  if (!st && r.nsub) {
+    lkeys = mx_alloc((m->nleaves + 1) * sizeof *lkeys);
+    uint64_t total = 0;
+    for (size_t i = 0; i < r.no; i++) total += r.nsub[i];
+    m->file_leaf = mx_alloc((total + 1) * sizeof *m->file_leaf);
+    if (!lkeys || !m->file_leaf) st = MX_ENOMEM;
+    m->file_nelem = st ? 0 : (size_t)total;
+  }
+  if (!st && r.nsub) {
+    for (size_t i = 0; i < m->nleaves; i++) lkeys[i] = m->B.oct.key[m->leaves[i]];
+    size_t e = 0, lost = 0;
+    for (size_t i = 0; i < r.no; i++) {
+      uint32_t p[3];
+      mx_morton_decode(key[i], p);
+      const uint32_t h = mx_octant_size(r.oct_level[i]) / 2;
+      const uint32_t lf = leaf_holding(m, lkeys, mx_morton_encode(p[0] + h, p[1] + h, p[2] + h));
+      lost += lf == UINT32_MAX && r.nsub[i];
+      for (uint32_t k = 0; k < r.nsub[i]; k++) m->file_leaf[e++] = lf;
+    }
+    if (lost)
+      mx_warning(path, 0, "%zu octant(s) with elements lie outside the domain as this "
+                          "mixoct sees it; their elements cannot be refined", lost);
+  }
+  mx_free(lkeys);
+  mx_free(key);
+  mx_free(perm);
+  mx_restart_free(&r);
+  return st;
+}
+
+int mx_mesher_load_restart(mx_mesher *m, const char *path) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  const double t = mx_wtime();
+  memset(&m->S, 0, sizeof m->S);
+  int st = load_restart(m, path);
+  if (st) mx_tree_clear(m);
+  m->S.t_restart = mx_wtime() - t;
+  return mx_call_end(m, &c, st);
+}
+
+int mx_read_element_list(const char *path, uint64_t limit, uint64_t **out, size_t *n) {
+  *out = NULL;
+  *n = 0;
+  return mx_status_refine(mx_read_index_list(path, limit, out, n));
+}

@@ -1,0 +1,374 @@
+/* Re-meshing through the library (include/mixoct.h): list refinement
+ * (Algorithm 3 of the 2021 paper) against an independent construction,
+ * balance after every refinement (an independent checker), repeated
+ * refinement of one element (Fig. 18: local, balanced, valid), restart
+ * round trips (text and binary), the published c5.oct re-meshed with its
+ * list, and bad restart and list files. */
+#include "check.h"
+#include "common.h"
+#include "io/read_mesh.h"
+#include "kernels/check.h"
+#include "mesher/mesher.h"
+#include "mixoct.h"
+#include "octree_util.h"
+#include "file_util.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#define OUT "remesh_out"
+
+static char data_dir[512];
+
+static int cmp_u64(const void *a, const void *b) {
+  const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+  return (x > y) - (x < y);
+}
+
+static int find_data(void) {
+  const char *dirs[] = {getenv("MIXOCT_DATA"), "../../shared/data", "../../../shared/data",
+                        "/work/shared/data"};
+  for (int i = 0; i < 4; i++) {
+    if (!dirs[i]) continue;
+    char p[600];
+    snprintf(p, sizeof p, "%s/surfaces/cortex.off", dirs[i]);
+    if (access(p, R_OK) == 0) {
+      snprintf(data_dir, sizeof data_dir, "%s", dirs[i]);
+      return 1;
+    }
+  }
+  return 0;
+}
+
+static char *data(const char *rel) {
+  static char buf[4][700];
+  static int k = 0;
+  k = (k + 1) % 4;
+  snprintf(buf[k], sizeof buf[k], "%s/%s", data_dir, rel);
+  return buf[k];
+}
+
+static mx_mesher *cortex_mesher(int s, int stage) {
+  mx_params p;
+  mx_params_default(&p);
+  p.surface_level = s;
+  p.stage = stage;
+  mx_mesher *m = mx_mesher_new(&p);
+  CHECK(m && mx_mesher_add_surface(m, data("surfaces/cortex.off")) == MX_OK);
+  return m;
+}
+
+/* Independent validity of the current mesh: mx_check_mesh (faces matched,
+ * no hanging node, J_ENS > 0). */
+static int mesh_is_valid(const mx_mesher *m) {
+  mx_mesh_arrays a;
+  if (mx_mesher_mesh_arrays(m, &a)) return 0;
+  mx_mesh_data d = {a.nnodes, a.nelements, (double *)a.xyz, (uint8_t *)a.type,
+                    (uint32_t *)a.conn};
+  mx_check_report r;
+  if (mx_check_mesh(&d, NULL, &r) != MX_OK) return 0;
+  if (r.defects)
+    fprintf(stderr, "check: %zu defects (%zu invalid, %zu hanging, %zu overshared)\n",
+            r.defects, r.invalid, r.hanging_nodes, r.faces_overshared);
+  return r.defects == 0 && r.invalid == 0 && a.nelements > 0;
+}
+
+static int balanced(const mx_mesher *m) {
+  return check_balance(&m->B, m->leaves, m->nleaves);
+}
+
+/* 1. Algorithm 3 against a from-scratch run told to split the same leaves. */
+static void test_list_vs_scratch(void) {
+  mx_mesher *a = cortex_mesher(4, MX_STAGE_TRANSITION);
+  CHECK(mx_mesher_mesh(a) == MX_OK);
+  const size_t n0 = a->nleaves;
+  /* every 13th leaf, and one listed twice through two of its elements */
+  uint64_t *list = malloc((n0 / 13 + 2) * sizeof *list);
+  size_t n = 0;
+  for (size_t i = 0; i < n0; i += 13) list[n++] = i;
+  list[n++] = 0;
+  /* the same leaves as (key, level), for the independent run */
+  uint64_t *keys[MX_MAX_LEVEL + 1] = {0};
+  size_t nk[MX_MAX_LEVEL + 1] = {0};
+  for (size_t i = 0; i < n; i++) {
+    const uint32_t o = a->leaves[list[i]];
+    const int l = a->B.oct.level[o];
+    keys[l] = realloc(keys[l], (nk[l] + 1) * sizeof **keys);
+    keys[l][nk[l]++] = a->B.oct.key[o];
+  }
+  CHECK(mx_mesher_refine_leaves(a, list, n) == MX_OK);
+  CHECK(a->nleaves > n0);
+  CHECK(balanced(a));
+  CHECK(a->S.refined_listed == n - 1);
+
+  mx_mesher *b = cortex_mesher(4, MX_STAGE_TRANSITION);
+  for (int l = 0; l <= MX_MAX_LEVEL; l++) {
+    if (!nk[l]) continue;
+    qsort(keys[l], nk[l], sizeof **keys, cmp_u64);
+    b->split_keys[l] = mx_alloc(nk[l] * sizeof **keys);
+    memcpy(b->split_keys[l], keys[l], nk[l] * sizeof **keys);
+    b->nsplit[l] = nk[l];
+    free(keys[l]);
+  }
+  CHECK(mx_mesher_mesh(b) == MX_OK);
+  mx_stats sa, sb;
+  mx_mesher_stats(a, &sa);
+  mx_mesher_stats(b, &sb);
+  printf("list refinement: %zu leaves listed, %zu -> %zu leaves; from scratch %zu; "
+         "hashes %016llx %016llx\n", n - 1, n0, sa.leaves, sb.leaves,
+         (unsigned long long)sa.leaves_hash, (unsigned long long)sb.leaves_hash);
+  CHECK(sa.leaves == sb.leaves);
+  CHECK(sa.leaves_hash == sb.leaves_hash);
+  /* same octree -> same mesh (transition stage: no untangling involved) */
+  CHECK(sa.nodes == sb.nodes && sa.elements == sb.elements);
+  mx_mesh_arrays xa, xb;
+  CHECK(mx_mesher_mesh_arrays(a, &xa) == MX_OK && mx_mesher_mesh_arrays(b, &xb) == MX_OK);
+  CHECK(xa.nelements == xb.nelements &&
+        !memcmp(xa.conn, xb.conn, 8 * xa.nelements * sizeof *xa.conn) &&
+        !memcmp(xa.xyz, xb.xyz, 3 * xa.nnodes * sizeof *xa.xyz));
+  free(list);
+  mx_mesher_free(a);
+  mx_mesher_free(b);
+}
+
+/* 1b. The full stage: re-meshing equals meshing from scratch the same
+ * octree (both run every step on the whole octree). */
+static void test_full_equals_scratch(void) {
+  mx_mesher *a = cortex_mesher(4, MX_STAGE_FULL);
+  CHECK(mx_mesher_mesh(a) == MX_OK);
+  CHECK(mesh_is_valid(a));
+  uint64_t el[3] = {5, 1000, 3000};
+  CHECK(mx_mesher_refine_elements(a, el, 3) == MX_OK);
+  CHECK(balanced(a));
+  CHECK(mesh_is_valid(a));
+  /* from scratch: split set = every split octant of a */
+  mx_mesher *b = cortex_mesher(4, MX_STAGE_FULL);
+  const mx_octree *T = &a->B.oct;
+  for (size_t o = 0; o < T->n; o++) {
+    if (!(T->flags[o] & MX_OCT_SPLIT)) continue;
+    const int l = T->level[o];
+    b->split_keys[l] = realloc(b->split_keys[l], (b->nsplit[l] + 1) * sizeof(uint64_t));
+    b->split_keys[l][b->nsplit[l]++] = T->key[o];
+  }
+  for (int l = 0; l <= MX_MAX_LEVEL; l++)
+    if (b->nsplit[l]) qsort(b->split_keys[l], b->nsplit[l], sizeof(uint64_t), cmp_u64);
+  CHECK(mx_mesher_mesh(b) == MX_OK);
+  mx_stats sa, sb;
+  mx_mesher_stats(a, &sa);
+  mx_mesher_stats(b, &sb);
+  CHECK(sa.leaves_hash == sb.leaves_hash);
+  CHECK(sa.nodes == sb.nodes && sa.elements == sb.elements);
+  mx_mesh_arrays xa, xb;
+  CHECK(mx_mesher_mesh_arrays(a, &xa) == MX_OK && mx_mesher_mesh_arrays(b, &xb) == MX_OK);
+  CHECK(xa.nnodes == xb.nnodes &&
+        !memcmp(xa.xyz, xb.xyz, 3 * xa.nnodes * sizeof *xa.xyz));
+  printf("full stage after list refinement: %zu nodes, %zu elements, same as from "
+         "scratch\n", sa.nodes, sa.elements);
+  mx_mesher_free(a);
+  mx_mesher_free(b);
+}
+
+/* 2. Fig. 18: one element refined again and again (the element holding a
+ * fixed point), down to the finest level: local, balanced, valid. */
+static void test_repeated(void) {
+  mx_params p;
+  mx_params_default(&p);
+  p.surface_level = 2;
+  mx_mesher *m = mx_mesher_new(&p);
+  CHECK(mx_mesher_add_demo_surface(m) == MX_OK);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  const double target[3] = {3.0, -2.0, 1.5};
+  size_t prev = m->nleaves;
+  int rounds = 0, finest = 0;
+  size_t maxgrew = 0;
+  for (int r = 0; r < 20; r++) {
+    /* the element whose centroid is closest to target */
+    mx_mesh_arrays a;
+    CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+    uint64_t best = 0;
+    double bd = INFINITY;
+    for (size_t c = 0; c < a.nelements; c++) {
+      const int nn = mx_cell_nodes[a.type[c]];
+      double g[3] = {0, 0, 0};
+      for (int k = 0; k < nn; k++)
+        for (int d = 0; d < 3; d++) g[d] += a.xyz[3 * a.conn[8 * c + k] + d] / nn;
+      const double dd = (g[0] - target[0]) * (g[0] - target[0]) +
+                        (g[1] - target[1]) * (g[1] - target[1]) +
+                        (g[2] - target[2]) * (g[2] - target[2]);
+      if (dd < bd) {
+        bd = dd;
+        best = c;
+      }
+    }
+    if (a.level[best] >= MX_MAX_LEVEL - 1) {
+      finest = 1;
+      break;
+    }
+    CHECK(mx_mesher_refine_elements(m, &best, 1) == MX_OK);
+    rounds++;
+    CHECK(balanced(m));
+    CHECK(mesh_is_valid(m));
+    /* local: one split adds 7 leaves, balance a bounded ring more */
+    const size_t grew = m->nleaves - prev;
+    if (grew > maxgrew) maxgrew = grew;
+    CHECK(grew >= 7 && grew <= 2000);
+    prev = m->nleaves;
+  }
+  printf("repeated refinement of one element: %d rounds%s, %zu leaves (at most %zu "
+         "new in one round), valid and balanced after each\n", rounds,
+         finest ? " (finest level reached)" : "", m->nleaves, maxgrew);
+  CHECK(rounds >= 12);
+  mx_mesher_free(m);
+}
+
+/* 3. Restart round trips: write, read, write gives the same bytes; read and
+ * mesh gives the run's mesh. */
+static void test_restart_round_trip(const char *ext) {
+  char oct1[256], oct2[256], vtu1[256], vtu2[256];
+  snprintf(oct1, sizeof oct1, OUT "/a.%s", ext);
+  snprintf(oct2, sizeof oct2, OUT "/b.%s", ext);
+  snprintf(vtu1, sizeof vtu1, OUT "/a_%s.vtu", ext);
+  snprintf(vtu2, sizeof vtu2, OUT "/b_%s.vtu", ext);
+  mx_mesher *a = cortex_mesher(4, MX_STAGE_FULL);
+  CHECK(mx_mesher_mesh(a) == MX_OK);
+  uint64_t el[2] = {17, 2048};
+  CHECK(mx_mesher_refine_elements(a, el, 2) == MX_OK); /* not a plain -s run */
+  CHECK(mx_mesher_save_restart(a, oct1) == MX_OK);
+  CHECK(mx_mesher_write(a, vtu1, 0) == MX_OK);
+  mx_params p;
+  mx_params_default(&p); /* no level: the file's octree alone */
+  mx_mesher *b = mx_mesher_new(&p);
+  CHECK(mx_mesher_add_surface(b, data("surfaces/cortex.off")) == MX_OK);
+  CHECK(mx_mesher_load_restart(b, oct1) == MX_OK);
+  CHECK(mx_mesher_mesh(b) == MX_OK);
+  mx_stats sa, sb;
+  mx_mesher_stats(a, &sa);
+  mx_mesher_stats(b, &sb);
+  CHECK(sa.leaves_hash == sb.leaves_hash && sa.nodes == sb.nodes &&
+        sa.elements == sb.elements);
+  CHECK(mx_mesher_save_restart(b, oct2) == MX_OK);
+  CHECK(mx_mesher_write(b, vtu2, 0) == MX_OK);
+  CHECK(files_equal(oct1, oct2));
+  CHECK(files_equal(vtu1, vtu2));
+  /* the element list of the file refers to the written mesh */
+  CHECK(mx_mesher_load_restart(b, oct1) == MX_OK);
+  CHECK(mx_mesher_refine_elements(b, el, 2) == MX_OK);
+  CHECK(mx_mesher_refine_elements(a, el, 2) == MX_OK);
+  mx_mesher_stats(a, &sa);
+  mx_mesher_stats(b, &sb);
+  CHECK(sa.leaves_hash == sb.leaves_hash && sa.elements == sb.elements);
+  printf("restart round trip (.%s): %zu leaves, %zu elements, same bytes\n", ext,
+         sa.leaves, sa.elements);
+  mx_mesher_free(a);
+  mx_mesher_free(b);
+}
+
+/* 4. The published program's c5.oct with its list. */
+static void test_published(void) {
+  mx_params p;
+  mx_params_default(&p);
+  mx_mesher *m = mx_mesher_new(&p);
+  CHECK(mx_mesher_add_surface(m, data("surfaces/cortex.off")) == MX_OK);
+  CHECK(mx_mesher_load_restart(m, data("remesh/c5.oct")) == MX_OK);
+  CHECK(m->file_nelem == 26209);
+  CHECK(m->nleaves >= 10123 - 100 && m->nleaves <= 10123 + 100);
+  uint64_t *list = NULL;
+  size_t n = 0;
+  CHECK(mx_read_element_list(data("remesh/list.txt"), m->file_nelem, &list, &n) == MX_OK);
+  CHECK(n == 1139);
+  const size_t before = m->nleaves;
+  CHECK(mx_mesher_refine_elements(m, list, n) == MX_OK);
+  CHECK(balanced(m));
+  CHECK(mesh_is_valid(m));
+  mx_stats s;
+  mx_mesher_stats(m, &s);
+  printf("published c5.oct + list.txt: %zu -> %zu leaves, %zu listed leaves split, %zu "
+         "nodes, %zu elements (published: 14,319 / 33,254)\n", before, s.leaves,
+         s.refined_listed, s.nodes, s.elements);
+  CHECK(s.nodes > 10941 && s.elements > 26209);
+  mx_free_array(list);
+  mx_mesher_free(m);
+}
+
+static void put(const char *path, const char *text) {
+  FILE *f = fopen(path, "wb");
+  fputs(text, f);
+  fclose(f);
+}
+
+/* 5. Bad files: MX_EINPUT and a message, nothing changed. */
+static void test_bad(void) {
+  mx_mesher *m = cortex_mesher(3, MX_STAGE_FULL);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  CHECK(mx_mesher_save_restart(m, OUT "/good.oct") == MX_OK);
+  mx_stats s0;
+  mx_mesher_stats(m, &s0);
+  uint64_t big = s0.elements;
+  CHECK(mx_mesher_refine_elements(m, &big, 1) == MX_EINPUT);
+  CHECK(strstr(mx_mesher_last_error(m), "out of range") != NULL);
+  uint64_t leaf = s0.leaves;
+  CHECK(mx_mesher_refine_leaves(m, &leaf, 1) == MX_EINPUT);
+  uint64_t *l = NULL;
+  size_t n = 0;
+  put(OUT "/neg.txt", "1 2\n-3\n");
+  CHECK(mx_read_element_list(OUT "/neg.txt", 100, &l, &n) == MX_EINPUT);
+  put(OUT "/range.txt", "1 2\n3 400\n");
+  CHECK(mx_read_element_list(OUT "/range.txt", 100, &l, &n) == MX_EINPUT);
+  put(OUT "/words.txt", "# elements\n1 2 x3 7\n");
+  CHECK(mx_read_element_list(OUT "/words.txt", 100, &l, &n) == MX_OK && n == 3);
+  mx_free_array(l);
+  CHECK(mx_read_element_list(OUT "/missing.txt", 100, &l, &n) == MX_EINPUT);
+  /* truncated restart file */
+  size_t len = 0;
+  char *txt = slurp(OUT "/good.oct", &len);
+  CHECK(txt != NULL);
+  FILE *f = fopen(OUT "/trunc.oct", "wb");
+  fwrite(txt, 1, len / 2, f);
+  fclose(f);
+  mx_params p;
+  mx_params_default(&p);
+  mx_mesher *b = mx_mesher_new(&p);
+  CHECK(mx_mesher_add_surface(b, data("surfaces/cortex.off")) == MX_OK);
+  CHECK(mx_mesher_load_restart(b, OUT "/trunc.oct") == MX_EINPUT);
+  CHECK(strstr(mx_mesher_last_error(b), "trunc.oct") != NULL);
+  /* wrong counts in the header */
+  char *nl = strchr(txt, '\n');
+  f = fopen(OUT "/counts.oct", "wb");
+  fprintf(f, "1 2 3");
+  fwrite(nl, 1, len - (size_t)(nl - txt), f);
+  fclose(f);
+  CHECK(mx_mesher_load_restart(b, OUT "/counts.oct") == MX_EINPUT);
+  free(txt);
+  /* wrong surface: the demo's grid is another one */
+  mx_mesher *c = mx_mesher_new(&p);
+  CHECK(mx_mesher_add_demo_surface(c) == MX_OK);
+  CHECK(mx_mesher_load_restart(c, OUT "/good.oct") == MX_EINPUT);
+  CHECK(strstr(mx_mesher_last_error(c), "surface") != NULL);
+  /* no surface at all */
+  mx_mesher *d = mx_mesher_new(&p);
+  CHECK(mx_mesher_load_restart(d, OUT "/good.oct") == MX_EINPUT);
+  mx_mesher_free(b);
+  mx_mesher_free(c);
+  mx_mesher_free(d);
+  mx_mesher_free(m);
+}
+
+int main(void) {
+  if (!find_data()) {
+    printf("SKIP: ../shared/data not found\n");
+    return 77;
+  }
+  mx_quiet = 1;
+  mkdir(OUT, 0755);
+  test_list_vs_scratch();
+  test_full_equals_scratch();
+  test_repeated();
+  test_restart_round_trip("oct");
+  test_restart_round_trip("octb");
+  test_published();
+  test_bad();
+  return TEST_DONE();
+}
