@@ -90,7 +90,7 @@ assert d["leaves"] > 0 and d["elements"] == d["leaves"] and d["nodes"] > d["leav
 ' && ok "JSON summary has the keys" || bad "JSON summary"
 [ -s "$T/demo.vtu" ] && ok "VTU written" || bad "VTU missing"
 ls "$T" | grep -q tmp && bad "temporary file left" || ok "no temporary left"
-expect_exit 2 "unwritable output" "$MIXOCT" --demo -s 3 --stage octree -o "$T/no/such/dir/x.vtu"
+expect_exit 4 "unwritable output" "$MIXOCT" --demo -s 3 --stage octree -o "$T/no/such/dir/x.vtu"
 [ ! -e "$T/no" ] && ok "no partial output" || bad "partial output"
 
 # Determinism: byte-identical output for 1 and 2 threads, both balances.
@@ -101,9 +101,9 @@ cmp -s "$T/t1.vtk" "$T/t2.vtk" && ok "1 and 2 threads: identical bytes" || bad "
 cmp -s "$T/t1.vtk" "$T/r2.vtk" && ok "edges and recursive: identical bytes" || bad "balances differ"
 
 # Memory budget and output names are checked before any meshing.
-expect_exit 2 "a run that cannot fit is refused" "$MIXOCT" --demo -s 15
+expect_exit 3 "a run that cannot fit is refused" "$MIXOCT" --demo -s 15
 has "$T/err" "needs about" "the refusal says how much it needs"
-expect_exit 2 "--max-memory is a limit" "$MIXOCT" --demo -s 7 --max-memory 10
+expect_exit 3 "--max-memory is a limit" "$MIXOCT" --demo -s 7 --max-memory 10
 expect_exit 2 "an unknown output format is refused first" "$MIXOCT" --demo -s 3 -o "$T/x.obj"
 has "$T/err" "x.obj" "the refusal names the output"
 
@@ -153,11 +153,11 @@ only_has() { # dir, expected listing (space separated, sorted), description
   local got; got=$(ls -A "$1" | sort | tr '\n' ' ' | sed 's/ $//')
   [ "$got" = "$2" ] && ok "$3" || bad "$3: '$got' left in $1"
 }
-expect_exit 2 "output under /dev/full (not a directory)" "$MIXOCT" --demo -s 3 -o /dev/full/x.vtu
+expect_exit 4 "output under /dev/full (not a directory)" "$MIXOCT" --demo -s 3 -o /dev/full/x.vtu
 has "$T/err" "/dev/full/x.vtu" "the message names /dev/full/x.vtu"
 # A full disk: /dev/full behind a .vtu name is written in place (a device).
 mkdir "$T/full" && ln -s /dev/full "$T/full/out.vtu"
-expect_exit 2 "full disk (/dev/full)" "$MIXOCT" --demo -s 3 -o "$T/full/out.vtu"
+expect_exit 4 "full disk (/dev/full)" "$MIXOCT" --demo -s 3 -o "$T/full/out.vtu"
 has "$T/err" "full/out.vtu" "the full-disk message names the file"
 has "$T/err" "No space left" "the full-disk message says why"
 only_has "$T/full" "out.vtu" "full disk: nothing but the link left"
@@ -167,7 +167,7 @@ only_has "$T/full" "out.vtu" "full disk: nothing but the link left"
 mkdir "$T/fsize"
 (ulimit -f 16 && trap '' XFSZ && exec "$MIXOCT" --demo -s 5 -o "$T/fsize/x.vtu") >"$T/out" 2>"$T/err"
 got=$?
-[ "$got" -eq 2 ] && ok "output cut short by a full disk (exit 2)" || bad "output cut short: exit $got, wanted 2"
+[ "$got" -eq 4 ] && ok "output cut short by a full disk (exit 4)" || bad "output cut short: exit $got, wanted 4"
 has "$T/err" "fsize/x.vtu" "the cut-short message names the file"
 only_has "$T/fsize" "" "cut short: no partial or temporary file left"
 # A read-only directory. Root ignores permissions: then run as nobody
@@ -188,17 +188,17 @@ fi
 if [ "${as_user[0]:-}" = skip ]; then
   ok "read-only directory: skipped (root, and setpriv cannot run mixoct as nobody)"
 else
-  expect_exit 2 "read-only directory" "${as_user[@]}" "$MIXOCT" --demo -s 3 -o "$T/ro/x.vtu"
+  expect_exit 4 "read-only directory" "${as_user[@]}" "$MIXOCT" --demo -s 3 -o "$T/ro/x.vtu"
   has "$T/err" "ro/x.vtu" "the read-only message names the file"
   has "$T/err" "Permission denied" "the read-only message says why"
   only_has "$T/ro" "" "read-only directory: nothing left"
 fi
 chmod 700 "$T/ro"
 printf 'x\n' >"$T/plain"
-expect_exit 2 "output under a regular file" "$MIXOCT" --demo -s 3 -o "$T/plain/x.vtu"
+expect_exit 4 "output under a regular file" "$MIXOCT" --demo -s 3 -o "$T/plain/x.vtu"
 has "$T/err" "plain/x.vtu" "the message names the file under a regular file"
 if [ -d /sys/kernel ]; then
-  expect_exit 2 "output in /sys (denied even to root)" "$MIXOCT" --demo -s 3 -o /sys/mixoct-test.vtu
+  expect_exit 4 "output in /sys (denied even to root)" "$MIXOCT" --demo -s 3 -o /sys/mixoct-test.vtu
   has "$T/err" "/sys/mixoct-test.vtu" "the /sys message names the file"
   [ ! -e /sys/mixoct-test.vtu ] && ok "nothing written in /sys" || bad "a file appeared in /sys"
 fi

@@ -147,12 +147,34 @@ volume_of() { "$MIXOCT" check "$1" --json 2>/dev/null | tail -1 | python3 -c 'im
 expect_exit 0 "-h" "$ROI" -h
 has "$T/out" "-u NAME" "help lists -u"
 has "$T/out" "NAME.getfem" "help names the GetFEM file"
-expect_exit 2 "-c refused" "$ROI" -c "$T/in.oct" -s 4 -u x -v
+expect_exit 2 "-c with a missing restart file" "$ROI" -o "$S/cortex.off" -c "$T/in.oct" -u x -v
 has "$T/err" "in.oct" "-c names its file"
-has "$T/err" "not supported" "-c says why"
-expect_exit 2 "-l refused" "$ROI" -o "$S/cortex.off" -l "$T/list.txt" -s 4 -u x -v
-has "$T/err" "list.txt" "-l names its file"
+expect_exit 2 "-l without -c" "$ROI" -o "$S/cortex.off" -l "$T/list.txt" -s 4 -u x -v
+has "$T/err" "restart file" "-l without -c says why"
 absent "$T/x.vtk" "nothing written after a refusal"
+
+# Re-meshing as a job script does it: mesh with -u NAME (NAME.oct written
+# too), then -c NAME.oct -l LIST; and from the published program's c5.oct.
+R=$DATA/remesh
+expect_exit 0 "mesh and restart file" "$ROI" -o "$S/cortex.off" -s 4 -u c4 -v
+exists "$T/c4.oct"
+printf '0 5 17\n100 100\n' >"$T/l4.txt"
+expect_exit 0 "re-mesh from our restart file" "$ROI" -o "$S/cortex.off" -c c4.oct -l l4.txt -u c4r -v
+exists "$T/c4r.vtk"
+exists "$T/c4r.oct"
+check_mesh "$T/c4r.vtk" "re-meshed from c4.oct"
+if [ -f "$R/c5.oct" ]; then
+  expect_exit 0 "re-mesh the published c5.oct with its list" "$ROI" -o "$S/cortex.off" -c "$R/c5.oct" -l "$R/list.txt" -u p5r -v --json
+  exists "$T/p5r.vtk"
+  check_mesh "$T/p5r.vtk" "published c5.oct re-meshed"
+  tail -1 "$T/out" | python3 -c 'import json,sys; d=json.load(sys.stdin); print("published c5.oct + list.txt: nodes", d["nodes"], "elements", d["elements"], "(published 14319 / 33254)"); sys.exit(0 if d["nodes"] > 10941 and d["invalid"] == 0 else 1)' && ok "c5.oct re-mesh grew the mesh" || bad "c5.oct re-mesh counts"
+  printf '1 2 26209\n' >"$T/l_big.txt"
+  expect_exit 2 "a list index out of range" "$ROI" -o "$S/cortex.off" -c "$R/c5.oct" -l "$T/l_big.txt" -u bad -v
+  has "$T/err" "l_big.txt:1" "the out-of-range index is named with its line"
+  expect_exit 2 "the restart file of another surface" "$ROI" -o "$S/$(ls "$S" | grep -v cortex | head -1)" -c "$R/c5.oct" -u bad -v
+  has "$T/err" "c5.oct" "the wrong-surface message names the file"
+  absent "$T/bad.vtk" "nothing written after a bad re-mesh"
+fi
 expect_exit 2 "missing input" "$ROI" -o "$T/nope.off" -s 4 -u x -v
 has "$T/err" "nope.off" "missing input is named"
 expect_exit 2 "missing MDL input" "$ROI" -d "$T/nope.mdl" -s 4 -u x -v

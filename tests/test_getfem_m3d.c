@@ -598,15 +598,15 @@ static void test_failures(void) {
   tmesh t;
   small_mesh(&t);
   if (have_dev_full()) {
-    CHECK(mx_write_getfem("/dev/full", &t.v) == MX_EINPUT);
-    CHECK(mx_write_m3d("/dev/full", &t.v) == MX_EINPUT);
+    CHECK(mx_write_getfem("/dev/full", &t.v) == MX_EIO);
+    CHECK(mx_write_m3d("/dev/full", &t.v) == MX_EIO);
     CHECK(dev_full_intact());
   }
   char path[256];
   path_in(path, sizeof path, "no/such/dir/x.getfem");
-  CHECK(mx_write_getfem(path, &t.v) == MX_EINPUT);
+  CHECK(mx_write_getfem(path, &t.v) == MX_EIO);
   path_in(path, sizeof path, "no/such/dir/x.m3d");
-  CHECK(mx_write_m3d(path, &t.v) == MX_EINPUT);
+  CHECK(mx_write_m3d(path, &t.v) == MX_EIO);
   CHECK(count_entries(OUT_DIR, "no") == 0);
   /* a bad node index is refused before any file is created */
   t.conn[8 * 3 + 2] = 99;

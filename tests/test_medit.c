@@ -873,11 +873,11 @@ static void test_failures(void) {
   hex_block(&m, 2, 1, 1);
   fprintf(stderr, "(expected errors follow)\n");
   for (int binary = 0; binary <= 1; binary++) {
-    CHECK(mx_write_medit("/dev/full", &m.v, binary) == MX_EINPUT);
+    CHECK(mx_write_medit("/dev/full", &m.v, binary) == MX_EIO);
     char path[256];
     path_in(path, sizeof path,
             binary ? "no_such_dir/x.meshb" : "no_such_dir/x.mesh");
-    CHECK(mx_write_medit(path, &m.v, binary) == MX_EINPUT);
+    CHECK(mx_write_medit(path, &m.v, binary) == MX_EIO);
     CHECK(!exists(path));
     /* a directory under a regular file cannot be created, even by root */
     path_in(path, sizeof path, "plainfile");
@@ -885,7 +885,7 @@ static void test_failures(void) {
     CHECK(fp && fclose(fp) == 0);
     path_in(path, sizeof path,
             binary ? "plainfile/x.meshb" : "plainfile/x.mesh");
-    CHECK(mx_write_medit(path, &m.v, binary) == MX_EINPUT);
+    CHECK(mx_write_medit(path, &m.v, binary) == MX_EIO);
   }
   CHECK(dev_full_intact());
   CHECK(count_entries(OUT_DIR, "plainfile.") == 0);

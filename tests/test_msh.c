@@ -794,9 +794,9 @@ static void test_threads(void) {
 static void expect_failure(const void *ctx, const char *path, const char *dir,
                            const char *prefix) {
   const tmesh *t = ctx;
-  CHECK(mx_write_msh(path, &t->v, 1) == MX_EINPUT);
-  CHECK(mx_write_msh(path, &t->v, 0) == MX_EINPUT);
-  CHECK(mx_write_mesh(path, &t->v, 0) == MX_EINPUT);
+  CHECK(mx_write_msh(path, &t->v, 1) == MX_EIO);
+  CHECK(mx_write_msh(path, &t->v, 0) == MX_EIO);
+  CHECK(mx_write_mesh(path, &t->v, 0) == MX_EIO);
   CHECK(!exists(path));
   if (dir) CHECK(count_entries(dir, prefix) <= 0);
 }
@@ -806,8 +806,8 @@ static void test_failures(void) {
   mixed_mesh(&t, 20, 0, -1); /* 8000 cells: more than the stdio buffer */
   unwritable_places(expect_failure, &t, "msh", ".msh", ".msh");
   if (have_dev_full()) {
-    CHECK(mx_write_msh("/dev/full", &t.v, 1) == MX_EINPUT);
-    CHECK(mx_write_msh("/dev/full", &t.v, 0) == MX_EINPUT);
+    CHECK(mx_write_msh("/dev/full", &t.v, 1) == MX_EIO);
+    CHECK(mx_write_msh("/dev/full", &t.v, 0) == MX_EIO);
     CHECK(dev_full_intact());
   }
   CHECK(count_entries(OUT_DIR, "") == 1); /* only plainfile */

@@ -803,10 +803,10 @@ static void test_dispatch(void) {
 static void expect_write_failure(const void *ctx, const char *path,
                                  const char *dir, const char *prefix) {
   const fmesh *t = ctx;
-  CHECK(mx_write_vtk_legacy(path, &t->v, 1) == MX_EINPUT);
-  CHECK(mx_write_vtk_legacy(path, &t->v, 0) == MX_EINPUT);
-  CHECK(mx_write_vtu(path, &t->v) == MX_EINPUT);
-  CHECK(mx_write_mesh(path, &t->v, 0) == MX_EINPUT);
+  CHECK(mx_write_vtk_legacy(path, &t->v, 1) == MX_EIO);
+  CHECK(mx_write_vtk_legacy(path, &t->v, 0) == MX_EIO);
+  CHECK(mx_write_vtu(path, &t->v) == MX_EIO);
+  CHECK(mx_write_mesh(path, &t->v, 0) == MX_EIO);
   CHECK(!exists(path));
   if (dir) CHECK(count_entries(dir, prefix) <= 0);
 }
@@ -819,7 +819,7 @@ static void test_unwritable(void) {
   /* the output path is a directory */
   path_in(path, sizeof path, "adir.vtk");
   CHECK(mkdir(path, 0755) == 0);
-  CHECK(mx_write_vtk_legacy(path, &t.v, 1) == MX_EINPUT);
+  CHECK(mx_write_vtk_legacy(path, &t.v, 1) == MX_EIO);
   CHECK(count_entries(OUT_DIR, "adir.vtk") == 1);
   fmesh_free(&t);
 }
@@ -834,20 +834,20 @@ static void test_full_disk(void) {
   if (!fp) return;
   CHECK(mx_afile_from_stream(&f, fp, "/dev/full") == MX_OK);
   CHECK(mx_afile_write(&f, "small", 5) == MX_OK); /* still in the buffer */
-  CHECK(mx_afile_commit(&f) == MX_EINPUT);        /* fflush: ENOSPC */
+  CHECK(mx_afile_commit(&f) == MX_EIO);        /* fflush: ENOSPC */
   mx_afile_abort(&f);                             /* harmless after */
   fp = fopen("/dev/full", "wb");
   CHECK(mx_afile_from_stream(&f, fp, "/dev/full") == MX_OK);
   static char big[1 << 20];
-  CHECK(mx_afile_write(&f, big, sizeof big) == MX_EINPUT);
-  CHECK(mx_afile_write(&f, big, 1) == MX_EINPUT); /* sticky */
-  CHECK(mx_afile_commit(&f) == MX_EINPUT);
+  CHECK(mx_afile_write(&f, big, sizeof big) == MX_EIO);
+  CHECK(mx_afile_write(&f, big, 1) == MX_EIO); /* sticky */
+  CHECK(mx_afile_commit(&f) == MX_EIO);
   mx_afile_abort(&f);
   fmesh t;
   small_mesh(&t);
-  CHECK(mx_write_vtk_legacy("/dev/full", &t.v, 1) == MX_EINPUT);
-  CHECK(mx_write_vtk_legacy("/dev/full", &t.v, 0) == MX_EINPUT);
-  CHECK(mx_write_vtu("/dev/full", &t.v) == MX_EINPUT);
+  CHECK(mx_write_vtk_legacy("/dev/full", &t.v, 1) == MX_EIO);
+  CHECK(mx_write_vtk_legacy("/dev/full", &t.v, 0) == MX_EIO);
+  CHECK(mx_write_vtu("/dev/full", &t.v) == MX_EIO);
   CHECK(dev_full_intact());
   /* /dev/null as output works in place */
   struct stat st;
@@ -876,7 +876,7 @@ static void test_size_limit(void) {
     path_in(path, sizeof path, "limited.vtu");
     int c = mx_write_vtu(path, &t.v);
     setrlimit(RLIMIT_FSIZE, &old);
-    CHECK(a == MX_EINPUT && b == MX_EINPUT && c == MX_EINPUT);
+    CHECK(a == MX_EIO && b == MX_EIO && c == MX_EIO);
     CHECK(count_entries(OUT_DIR, "limited") == 0);
   }
   signal(SIGXFSZ, prev);
