@@ -1,0 +1,231 @@
+/* Re-meshing benchmark (issue 9 targets), through the library:
+ *
+ * 1. The Table 1 scenario of the 2021 paper on the cortex (shared/data/remesh):
+ *    initial -s 5 run written as ASCII VTK with its restart file; then
+ *    re-meshing (read the restart file, refine the listed elements, mesh,
+ *    write ASCII VTK) from the published c5.oct with its list.txt, and from
+ *    our own restart file with the elements of our mesh that have a node in
+ *    roi.box (the same rule that made list.txt).
+ * 2. Cortex -s L (default 8): the elements with a node inside a box around
+ *    roi.box's centre grown until it holds about 4% of the elements; their
+ *    re-meshing in memory (mx_mesher_refine_elements) and from the binary
+ *    restart file (read .octb, refine, mesh), against the initial run.
+ *
+ * usage: mixoct-remesh-bench [--data DIR] [--level L] [--repeat N] [--out DIR]
+ * Times are the median of N runs (default 3), in seconds; the last line is
+ * one JSON object. */
+#include "mixoct.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int cmp_d(const void *a, const void *b) {
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+static double median(double *v, int n) {
+  qsort(v, (size_t)n, sizeof *v, cmp_d);
+  return v[n / 2];
+}
+
+static void die(mx_mesher *m, const char *what, int st) {
+  fprintf(stderr, "remesh-bench: %s failed (%s): %s\n", what, mx_status_string(st),
+          m ? mx_mesher_last_error(m) : "");
+  exit(1);
+}
+#define RUN(m, call, what)              \
+  do {                                  \
+    int st_ = (call);                   \
+    if (st_) die(m, what, st_);         \
+  } while (0)
+
+static mx_mesher *new_mesher(const char *surface, int level) {
+  mx_params p;
+  mx_params_default(&p);
+  p.surface_level = level;
+  mx_mesher *m = mx_mesher_new(&p);
+  if (!m) die(NULL, "new", MX_ENOMEM);
+  RUN(m, mx_mesher_add_surface(m, surface), "add_surface");
+  return m;
+}
+
+/* Elements of m's mesh with a node inside [lo, hi]. */
+static uint64_t *elements_in_box(const mx_mesher *m, const double lo[3], const double hi[3],
+                                 size_t *n) {
+  mx_mesh_arrays a;
+  mx_mesher_mesh_arrays(m, &a);
+  uint64_t *list = malloc((a.nelements + 1) * sizeof *list);
+  static const int nn[4] = {4, 5, 6, 8};
+  *n = 0;
+  for (size_t c = 0; c < a.nelements; c++)
+    for (int k = 0; k < nn[a.type[c]]; k++) {
+      const double *p = a.xyz + 3 * (size_t)a.conn[8 * c + k];
+      if (p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1] &&
+          p[2] >= lo[2] && p[2] <= hi[2]) {
+        list[(*n)++] = c;
+        break;
+      }
+    }
+  return list;
+}
+
+static void write_list(const char *path, const uint64_t *l, size_t n) {
+  FILE *f = fopen(path, "w");
+  for (size_t i = 0; i < n; i++) fprintf(f, "%llu\n", (unsigned long long)l[i]);
+  fclose(f);
+}
+
+int main(int argc, char **argv) {
+  const char *data = "../shared/data", *out = "/tmp";
+  int level = 8, repeat = 3;
+  for (int i = 1; i < argc; i++) {
+    if (!strcmp(argv[i], "--data") && i + 1 < argc) data = argv[++i];
+    else if (!strcmp(argv[i], "--level") && i + 1 < argc) level = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
+    else {
+      fprintf(stderr, "usage: %s [--data DIR] [--level L] [--repeat N] [--out DIR]\n", argv[0]);
+      return 2;
+    }
+  }
+  if (repeat < 1) repeat = 1;
+  if (repeat > 15) repeat = 15;
+  char surface[1024], pub_oct[1024], pub_list[1024], box[1024];
+  snprintf(surface, sizeof surface, "%s/surfaces/cortex.off", data);
+  snprintf(pub_oct, sizeof pub_oct, "%s/remesh/c5.oct", data);
+  snprintf(pub_list, sizeof pub_list, "%s/remesh/list.txt", data);
+  snprintf(box, sizeof box, "%s/remesh/roi.box", data);
+  double blo[3], bhi[3];
+  {
+    FILE *f = fopen(box, "r");
+    if (!f || fscanf(f, "%lf %lf %lf %lf %lf %lf", &blo[0], &blo[1], &blo[2], &bhi[0],
+                     &bhi[1], &bhi[2]) != 6) {
+      fprintf(stderr, "remesh-bench: cannot read %s\n", box);
+      return 1;
+    }
+    fclose(f);
+  }
+  char o_vtk[1200], o_oct[1200], o_list[1200], r_vtk[1200], b_oct[1200];
+  snprintf(o_vtk, sizeof o_vtk, "%s/rb_c5.vtk", out);
+  snprintf(o_oct, sizeof o_oct, "%s/rb_c5.oct", out);
+  snprintf(o_list, sizeof o_list, "%s/rb_c5_list.txt", out);
+  snprintf(r_vtk, sizeof r_vtk, "%s/rb_c5r.vtk", out);
+  snprintf(b_oct, sizeof b_oct, "%s/rb_big.octb", out);
+
+  /* ---- 1. Table 1 scenario at -s 5 ---------------------------------- */
+  double t_init[15], t_pub[15], t_own[15];
+  mx_stats s_init, s_pub, s_own;
+  size_t n_own = 0;
+  for (int r = 0; r < repeat; r++) {
+    double t0 = now();
+    mx_mesher *m = new_mesher(surface, 5);
+    RUN(m, mx_mesher_mesh(m), "mesh -s 5");
+    RUN(m, mx_mesher_write(m, o_vtk, 1), "write");
+    RUN(m, mx_mesher_save_restart(m, o_oct), "save restart");
+    t_init[r] = now() - t0;
+    mx_mesher_stats(m, &s_init);
+    uint64_t *l = elements_in_box(m, blo, bhi, &n_own);
+    write_list(o_list, l, n_own);
+    free(l);
+    mx_mesher_free(m);
+  }
+  for (int pass = 0; pass < 2; pass++)
+    for (int r = 0; r < repeat; r++) {
+      double t0 = now();
+      mx_mesher *m = new_mesher(surface, -1);
+      RUN(m, mx_mesher_load_restart(m, pass ? o_oct : pub_oct), "load restart");
+      uint64_t *l = NULL;
+      size_t n = 0;
+      RUN(m, mx_read_element_list(pass ? o_list : pub_list, UINT64_MAX, &l, &n), "list");
+      RUN(m, mx_mesher_refine_elements(m, l, n), "refine elements");
+      RUN(m, mx_mesher_write(m, r_vtk, 1), "write");
+      (pass ? t_own : t_pub)[r] = now() - t0;
+      mx_mesher_stats(m, pass ? &s_own : &s_pub);
+      mx_free_array(l);
+      mx_mesher_free(m);
+    }
+  const double mi = median(t_init, repeat), mp = median(t_pub, repeat),
+               mo = median(t_own, repeat);
+  printf("Table 1 scenario, cortex -s 5 (median of %d; each includes reading the surface "
+         "and writing ASCII VTK):\n", repeat);
+  printf("  initial run (mesh, write .vtk, write .oct): %zu nodes, %zu elements, %.1f ms "
+         "(published: 728 ms)\n", s_init.nodes, s_init.elements, 1e3 * mi);
+  printf("  re-mesh from the published c5.oct + list.txt (1,139 elements): %zu nodes, %zu "
+         "elements, %zu invalid, %.1f ms (published: 14,319 / 33,254, 637 ms): %.1fx "
+         "faster\n", s_pub.nodes, s_pub.elements, s_pub.invalid, 1e3 * mp, 0.637 / mp);
+  printf("  re-mesh from our restart file + our %zu elements in roi.box: %zu nodes, %zu "
+         "elements, %zu invalid, %.1f ms: %.1fx faster than the published re-mesh\n",
+         n_own, s_own.nodes, s_own.elements, s_own.invalid, 1e3 * mo, 0.637 / mo);
+
+  /* ---- 2. -s level: 4% of the elements ------------------------------ */
+  double t_big[15], t_mem[15], t_bin[15], t_save = 0;
+  size_t n_big = 0;
+  mx_stats s_big, s_mem, s_bin;
+  for (int r = 0; r < repeat; r++) {
+    double t0 = now();
+    mx_mesher *m = new_mesher(surface, level);
+    RUN(m, mx_mesher_mesh(m), "mesh");
+    t_big[r] = now() - t0;
+    mx_mesher_stats(m, &s_big);
+    /* a box around roi.box's centre holding about 4% of the elements */
+    double c[3], h = 0.5 * (bhi[0] - blo[0]);
+    for (int a = 0; a < 3; a++) c[a] = 0.5 * (blo[a] + bhi[a]);
+    uint64_t *l = NULL;
+    for (int it = 0; it < 40; it++) {
+      double lo[3] = {c[0] - h, c[1] - h, c[2] - h}, hi[3] = {c[0] + h, c[1] + h, c[2] + h};
+      free(l);
+      l = elements_in_box(m, lo, hi, &n_big);
+      const double f = (double)n_big / (double)s_big.elements;
+      if (fabs(f - 0.04) < 0.004) break;
+      h *= f > 0 ? pow(0.04 / f, 1.0 / 3.0) : 2.0;
+    }
+    t0 = now();
+    RUN(m, mx_mesher_save_restart(m, b_oct), "save binary restart");
+    t_save = now() - t0;
+    t0 = now();
+    RUN(m, mx_mesher_refine_elements(m, l, n_big), "refine in memory");
+    t_mem[r] = now() - t0;
+    mx_mesher_stats(m, &s_mem);
+    mx_mesher_free(m);
+    t0 = now();
+    m = new_mesher(surface, -1);
+    RUN(m, mx_mesher_load_restart(m, b_oct), "load binary restart");
+    RUN(m, mx_mesher_refine_elements(m, l, n_big), "refine from the binary restart");
+    t_bin[r] = now() - t0;
+    mx_mesher_stats(m, &s_bin);
+    mx_mesher_free(m);
+    free(l);
+  }
+  const double mb = median(t_big, repeat), mm = median(t_mem, repeat),
+               mbn = median(t_bin, repeat);
+  printf("cortex -s %d: initial %zu nodes, %zu elements, %.3f s; %zu elements listed "
+         "(%.1f%%)\n", level, s_big.nodes, s_big.elements, mb, n_big,
+         100.0 * (double)n_big / (double)s_big.elements);
+  printf("  re-mesh in memory: %.3f s = %.1f%% of the initial run (target 10%%); %zu nodes, "
+         "%zu elements, %zu invalid\n", mm, 100 * mm / mb, s_mem.nodes, s_mem.elements,
+         s_mem.invalid);
+  printf("  re-mesh from the binary restart file: %.3f s = %.1f%% (target 25%%); same "
+         "mesh: %s; writing the .octb took %.3f s\n", mbn, 100 * mbn / mb,
+         s_bin.leaves_hash == s_mem.leaves_hash && s_bin.elements == s_mem.elements ? "yes" : "NO",
+         t_save);
+  printf("{\"c5\": {\"initial_ms\": %.2f, \"nodes\": %zu, \"elements\": %zu, "
+         "\"remesh_published_ms\": %.2f, \"remesh_published_nodes\": %zu, "
+         "\"remesh_published_elements\": %zu, \"remesh_published_invalid\": %zu, "
+         "\"remesh_own_ms\": %.2f, \"remesh_own_nodes\": %zu, \"remesh_own_elements\": %zu}, "
+         "\"big\": {\"level\": %d, \"initial_s\": %.4f, \"listed\": %zu, \"elements\": %zu, "
+         "\"remesh_memory_s\": %.4f, \"remesh_binary_s\": %.4f, \"save_binary_s\": %.4f}}\n",
+         1e3 * mi, s_init.nodes, s_init.elements, 1e3 * mp, s_pub.nodes, s_pub.elements,
+         s_pub.invalid, 1e3 * mo, s_own.nodes, s_own.elements, level, mb, n_big,
+         s_big.elements, mm, mbn, t_save);
+  return 0;
+}

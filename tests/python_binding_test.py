@@ -1,0 +1,373 @@
+#!/usr/bin/python3
+"""Checks of the Python binding (python/mixoct) over libmixoct.
+
+Run with PYTHONPATH=<build>/python (tests/python_test.sh does). Argument:
+a scratch directory. Prints one line per check and "N passed, N failed".
+"""
+
+import ctypes
+import gc
+import os
+import sys
+import traceback
+import weakref
+
+import numpy as np
+
+import mixoct
+
+TMP = sys.argv[1] if len(sys.argv) > 1 else "/tmp/mixoct_pytest"
+os.makedirs(TMP, exist_ok=True)
+
+RESULTS = []
+
+
+def check(fn):
+    try:
+        fn()
+    except Exception:
+        RESULTS.append((fn.__name__, False))
+        print("FAIL %s" % fn.__name__)
+        traceback.print_exc(file=sys.stdout)
+    else:
+        RESULTS.append((fn.__name__, True))
+        print("ok   %s" % fn.__name__)
+    return fn
+
+
+def raises(exc, fn, *args, **kw):
+    try:
+        fn(*args, **kw)
+    except exc as e:
+        return e
+    raise AssertionError("%s not raised by %s" % (exc.__name__, fn.__name__))
+
+
+def demo(level=3, **kw):
+    m = mixoct.Mesher(surface_level=level, **kw)
+    m.add_demo_surface()
+    m.mesh()
+    return m
+
+
+def cube(h=10.0):
+    """A closed cube, outward triangles."""
+    xyz = np.array([[x, y, z] for z in (0, h) for y in (0, h) for x in (0, h)],
+                   dtype=np.float64)
+    quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3),
+             (0, 4, 6, 2), (1, 3, 7, 5)]
+    tri = []
+    for a, b, c, d in quads:
+        tri += [(a, b, c), (a, c, d)]
+    return xyz, np.array(tri, dtype=np.uint32)
+
+
+M = demo(3)
+
+
+@check
+def shapes_and_counts():
+    n, e = M.nnodes, M.nelements
+    assert n > 0 and e > 0
+    assert M.nodes.shape == (n, 3) and M.nodes.dtype == np.float64
+    assert M.conn.shape == (e, 8) and M.conn.dtype == np.uint32
+    assert M.types.shape == (e,) and M.types.dtype == np.uint8
+    assert M.jens.shape == (e,) and M.jens.dtype == np.float64
+    assert M.leaf.shape == (e,) and M.leaf.dtype == np.uint32
+    assert M.level.shape == (e,) and M.level.dtype == np.int32
+    assert M.boundary.shape == (n,) and M.boundary.dtype == np.uint8
+    st = M.stats()
+    assert st["nodes"] == n and st["elements"] == e, (st, n, e)
+    assert st["invalid"] == 0 and M.invalid == 0
+    bc = np.bincount(M.types, minlength=4)
+    assert len(bc) == 4
+    for t, name in enumerate(mixoct.TYPE_NAMES):
+        assert M.counts[name] == bc[t], (name, M.counts, bc)
+    assert sum(M.counts.values()) == e
+    assert all(M.counts[k] > 0 for k in mixoct.TYPE_NAMES), M.counts
+    assert st["leaves"] == M.nleaves
+
+
+@check
+def connectivity():
+    conn, types = M.conn, M.types
+    for t, nn in enumerate(mixoct.NODES_PER_TYPE):
+        rows = conn[types == t]
+        assert np.all(rows[:, :nn] < M.nnodes), t
+        assert np.all(rows[:, nn:] == mixoct.NO_NODE), t
+        # no repeated node in a row
+        s = np.sort(rows[:, :nn].astype(np.int64), axis=1)
+        assert np.all(s[:, 1:] != s[:, :-1]), t
+    idx, rows = M.cells_of_type("prism")
+    assert rows.shape == (M.counts["prism"], 6)
+    assert np.all(M.types[idx] == mixoct.PRISM)
+    used = np.zeros(M.nnodes, dtype=bool)
+    used[conn[conn != mixoct.NO_NODE]] = True
+    assert used.all(), "unused nodes"
+
+
+@check
+def quality_and_fields():
+    assert np.all(M.jens > 0) and M.jens_min > 0
+    assert abs(M.jens.min() - M.jens_min) < 1e-12
+    assert np.all(M.leaf < M.nleaves)
+    assert M.level.min() >= 0 and M.level.max() <= 3
+    assert set(np.unique(M.boundary)) <= {0, 1}
+    assert M.boundary.sum() > 0 and M.boundary.sum() < M.nnodes
+
+
+@check
+def arrays_are_views():
+    a = M._arrays()
+    for name, ptr in (("nodes", a.xyz), ("conn", a.conn), ("types", a.type),
+                      ("jens", a.jens), ("leaf", a.leaf),
+                      ("level", a.level), ("boundary", a.boundary)):
+        v = getattr(M, name)
+        assert not v.flags.owndata, name
+        assert not v.flags.writeable, name
+        assert v.base is not None, name
+        addr = ctypes.cast(ptr, ctypes.c_void_p).value
+        assert v.ctypes.data == addr, (name, v.ctypes.data, addr)
+        assert getattr(M, name) is v                   # cached, same object
+        assert np.shares_memory(v, getattr(M, name)), name
+        assert M.is_current(v), name
+    try:
+        M.nodes[0, 0] = 1.0
+    except ValueError:
+        pass
+    else:
+        raise AssertionError("views must be read-only")
+    assert not M.is_current(M.nodes.copy())
+    c = M.arrays(copy=True)
+    assert c["nodes"].flags.owndata and np.array_equal(c["nodes"], M.nodes)
+
+
+@check
+def refine_elements_grows():
+    m = demo(3)
+    e0, l0, lv0 = m.nelements, m.nleaves, m.level.max()
+    old = m.nodes
+    # elements of the finest (surface) leaves, as a Python list of ints
+    # (splitting an interior leaf can lower the element count: transition
+    # elements around it become hexahedra)
+    worst = [int(i) for i in np.flatnonzero(m.level == lv0)[:5]]
+    m.refine_elements(worst)
+    assert not m.is_current(old)
+    assert m.is_current(m.nodes)
+    assert m.nleaves > l0, (m.nleaves, l0)
+    assert m.nelements > e0, (m.nelements, e0)
+    assert m.stats()["refined_listed"] >= 1
+    assert m.invalid == 0 and np.all(m.jens > 0)
+    # numpy int32, a boolean mask, a tuple: all accepted
+    l1 = m.nleaves
+    m.refine_elements(np.array([0, 1], dtype=np.int32))
+    mask = np.zeros(m.nelements, dtype=bool)
+    mask[-3:] = True
+    m.refine_elements(mask)
+    m.refine_leaves((0,))
+    assert m.nleaves > l1
+    m.close()
+
+
+@check
+def refine_requests():
+    m = demo(3)
+    e0 = m.nelements
+    lo, hi = M.nodes.min(axis=0), M.nodes.max(axis=0)
+    mid = 0.5 * (lo + hi)
+    m.add_box(mid - 5, mid + 5, 5)
+    m.refine()
+    assert m.nelements > e0 and m.level.max() == 5
+    e1 = m.nelements
+    m.set_levels(4, -1)
+    m.refine()
+    assert m.nelements > e1
+    m.close()
+
+
+@check
+def out_of_range_index():
+    m = demo(3)
+    e0, h0 = m.nelements, m.stats()["leaves_hash"]
+    e = raises(mixoct.InputError, m.refine_elements, [0, m.nelements])
+    assert e.status == 2 and isinstance(e, ValueError)
+    assert str(m.nelements - 1) in str(e) or str(m.nelements) in str(e), e
+    raises(mixoct.InputError, m.refine_elements, [-1])
+    raises(mixoct.InputError, m.refine_elements, [1.5])
+    # the header: "an index out of range is MX_EINPUT (nothing done)"
+    assert m.nelements == e0 and m.stats()["leaves_hash"] == h0
+    m.close()
+
+
+@check
+def bad_path():
+    m = mixoct.Mesher(surface_level=3)
+    path = os.path.join(TMP, "no_such_surface.off")
+    e = raises(mixoct.InputError, m.add_surface, path)
+    assert path in str(e) and e.status == 2, str(e)
+    assert isinstance(e, mixoct.Error)
+    assert m.last_error == str(e)
+    bad = os.path.join(TMP, "bad.off")
+    with open(bad, "w") as f:
+        f.write("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 oops\n3 0 1 2\n")
+    e = raises(mixoct.InputError, m.add_surface, bad)
+    assert bad in str(e), str(e)
+    # no surface at all: meshing is bad usage
+    raises(mixoct.InputError, m.mesh)
+    # no mesh: no arrays
+    raises(mixoct.InputError, lambda: m.nodes)
+    m.close()
+
+
+@check
+def warnings_collected():
+    xyz, tri = cube()
+    tri = np.vstack([tri, [[0, 0, 1]]])        # a degenerate triangle
+    m = mixoct.Mesher(surface_level=2)
+    m.add_surface_arrays(xyz, tri, name="cube_arrays")
+    assert len(m.warnings) == 1, m.warnings
+    assert "cube_arrays" in m.warnings[0] and "degenerate" in m.warnings[0]
+    m.mesh()
+    assert m.nelements > 0 and np.all(m.jens > 0)
+    # the cube's volume (hexahedra: 2 triangles per face of the box)
+    lo, hi = m.nodes.min(axis=0), m.nodes.max(axis=0)
+    assert np.allclose(lo, 0, atol=1e-9) and np.allclose(hi, 10, atol=1e-9)
+    m.close()
+
+
+@check
+def surface_arrays_checked():
+    m = mixoct.Mesher(surface_level=2)
+    xyz, tri = cube()
+    raises(mixoct.InputError, m.add_surface_arrays, xyz[:, :2], tri)
+    raises(mixoct.InputError, m.add_surface_arrays, xyz, tri[:, :2])
+    raises(mixoct.InputError, m.add_surface_arrays, xyz, -tri.astype(int))
+    bad = tri.copy()
+    bad[0, 0] = 99
+    e = raises(mixoct.InputError, m.add_surface_arrays, xyz, bad, "idx")
+    assert "idx" in str(e), str(e)
+    m.close()
+
+
+@check
+def restart_round_trip():
+    for name in ("demo.oct", "demo.octb"):
+        path = os.path.join(TMP, name)
+        m = demo(3)
+        m.refine_elements([0, 7, 30])
+        m.save_restart(path)
+        assert os.path.getsize(path) > 0
+        want = (m.nnodes, m.nelements, m.nleaves, m.counts,
+                m.stats()["leaves_hash"])
+        m.close()
+        r = mixoct.Mesher(surface_level=3)
+        r.add_demo_surface()
+        r.load_restart(path)
+        got = (r.nnodes, r.nelements, r.nleaves, r.counts,
+               r.stats()["leaves_hash"])
+        assert got == want, (name, got, want)
+        r.close()
+
+
+@check
+def element_list():
+    path = os.path.join(TMP, "elements.txt")
+    with open(path, "w") as f:
+        f.write("3 1\n4 x 1 5\n")
+    a = mixoct.read_element_list(path, 10)
+    assert a.dtype == np.uint64 and list(a) == [3, 1, 4, 1, 5], a
+    e = raises(mixoct.InputError, mixoct.read_element_list, path, 5)
+    assert path in str(e)
+
+
+@check
+def write_files():
+    for name in ("demo.vtu", "demo.vtk", "demo.msh", "demo.getfem"):
+        path = os.path.join(TMP, name)
+        M.write(path)
+        assert os.path.getsize(path) > 1000, name
+    path = os.path.join(TMP, "demo_ascii.vtk")
+    M.write(path, ascii=True)
+    with open(path, "rb") as f:
+        assert b"ASCII" in f.read(200)
+    raises(mixoct.InputError, M.write, os.path.join(TMP, "demo.unknown"))
+    e = raises(mixoct.OutputError, M.write,
+               os.path.join(TMP, "no_such_dir", "x.vtu"))
+    assert e.status == 4 and "no_such_dir" in str(e), str(e)
+
+
+@check
+def memory_budget():
+    m = mixoct.Mesher(surface_level=9, max_memory_mb=1)
+    m.add_demo_surface()
+    e = raises(mixoct.OutOfMemoryError, m.mesh)
+    assert e.status == 3 and isinstance(e, MemoryError)
+    m.close()
+
+
+@check
+def stages():
+    m = mixoct.Mesher(surface_level=3, stage="octree")
+    m.add_demo_surface()
+    m.mesh()
+    assert m.stats()["leaves"] > 0
+    try:
+        n = m.nelements
+    except mixoct.InputError:
+        pass                    # the octree stage may leave no mesh arrays
+    else:
+        assert m.counts["hex"] == n == m.nleaves, (m.counts, m.nleaves)
+    m.close()
+    m = mixoct.Mesher(surface_level=3, stage="transition")
+    m.add_demo_surface()
+    m.mesh()
+    assert m.nelements > m.nleaves
+    m.close()
+
+
+@check
+def threads_deterministic():
+    a = demo(3, threads=1)
+    b = demo(3, threads=2)
+    assert a.stats()["leaves_hash"] == b.stats()["leaves_hash"]
+    assert np.array_equal(a.nodes, b.nodes)
+    assert np.array_equal(a.conn, b.conn)
+    a.close()
+    b.close()
+
+
+@check
+def close_keeps_views_alive():
+    m = demo(3)
+    j, n = m.jens, m.nodes
+    total = float(j.sum())
+    m.close()
+    assert m.closed
+    raises(mixoct.InputError, m.mesh)
+    del m
+    gc.collect()
+    assert float(j.sum()) == total          # the C object is still there
+    assert n.shape[1] == 3
+    with demo(3) as m2:
+        assert m2.nelements > 0
+    assert m2.closed
+
+
+@check
+def handle_freed():
+    m = demo(3)
+    h = weakref.ref(m._handle)
+    v = m.types
+    m.close()
+    gc.collect()
+    assert h() is not None and h().ptr      # a view is alive: not freed
+    del v
+    gc.collect()
+    assert h() is None                      # the last view gone: freed
+
+
+M.close()
+npass = sum(1 for _, ok in RESULTS if ok)
+nfail = len(RESULTS) - npass
+print("%d passed, %d failed" % (npass, nfail))
+sys.exit(1 if nfail else 0)
