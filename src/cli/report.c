@@ -55,7 +55,8 @@ void mx_print_json(const mx_summary *s) {
          "\"dropped\": %zu, \"centre_leaves\": %zu, \"closures\": %zu, "
          "\"phases\": {\"read\": %.6f, \"grid\": %.6f, \"refine\": %.6f, "
          "\"balance\": %.6f, \"transition\": %.6f, \"boundary\": %.6f, "
-         "\"quality\": %.6f, \"write\": %.6f}, "
+         "\"quality\": %.6f, \"write\": %.6f, \"restart\": %.6f}, "
+         "\"refined_listed\": %zu, \"repaired\": %zu, \"repair_rounds\": %d, "
          "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"memory_estimate_mb\": %.1f, "
          "\"threads\": %d, "
          "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, %s"
@@ -67,7 +68,8 @@ void mx_print_json(const mx_summary *s) {
          (double)s->edge_bytes / 1048576.0, s->located, s->split_requested,
          s->split_balance, s->dropped, s->centre_leaves, s->closures, s->ph.read,
          s->ph.grid, s->ph.refine, s->ph.balance, s->ph.transition,
-         s->ph.boundary, s->ph.quality, s->ph.write,
+         s->ph.boundary, s->ph.quality, s->ph.write, s->t_restart,
+         s->refined_listed, s->repaired, s->repair_rounds,
          s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->threads,
          s->mesh ? s->jens_min : 1.0,
          s->mesh ? s->invalid : 0, qual, bnd, topo);

@@ -184,14 +184,16 @@ static const char *fast_real(const char *t, const char *e, double *v) {
  * returned: callers check). */
 static int parse_real(const char *t, const char *e, double *v) {
   if (fast_real(t, e, v) == e) return 1;
-  char tmp[256];
+  char small[256], *tmp = small, *end;
   size_t n = (size_t)(e - t);
-  if (n == 0 || n >= sizeof tmp) return 0;
+  if (n == 0) return 0;
+  if (n >= sizeof small && !(tmp = mx_alloc(n + 1))) return 0; /* "%f" of 1e300 */
   memcpy(tmp, t, n);
   tmp[n] = '\0';
-  char *end;
   *v = strtod(tmp, &end);
-  return end == tmp + n;
+  int ok = end == tmp + n;
+  if (tmp != small) mx_free(tmp);
+  return ok;
 }
 
 static const uint64_t pow10_u64[20] = {1ull,
@@ -349,9 +351,11 @@ typedef struct {
   const char *p, *end; /* p: the current position */
   long line;           /* the line of p, from 1 */
   int gap;             /* blank lines came before the current line */
+  int first;           /* the current line is a section's first item */
 } tscan;
 
-/* Reports "NAME:LINE: <text>" and returns MX_EINPUT. */
+/* Reports "NAME:LINE: <text>" and returns MX_EINPUT. Control characters
+ * of quoted tokens (binary junk) are shown as '?'. */
 static int terr(const tscan *s, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 static int terr(const tscan *s, const char *fmt, ...) {
@@ -360,6 +364,8 @@ static int terr(const tscan *s, const char *fmt, ...) {
   va_start(ap, fmt);
   vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
+  for (char *c = msg; *c; c++)
+    if ((unsigned char)*c < 0x20 || *c == 0x7f) *c = '?';
   mx_error(s->name, s->line, "%s", msg);
   return MX_EINPUT;
 }
@@ -369,7 +375,7 @@ static int terr(const tscan *s, const char *fmt, ...) {
 static const char *hint(const tscan *s) {
   if (!memchr(s->p, '\n', (size_t)(s->end - s->p)))
     return " (the file ends on this line: truncated?)";
-  if (s->gap) return " (after a blank line: do the header's counts match?)";
+  if (s->gap || s->first) return " (do the header's counts match the file?)";
   return "";
 }
 
@@ -526,10 +532,21 @@ static int text_header(tscan *s, mx_restart *r) {
   return MX_OK;
 }
 
+/* The number of words on the current line. */
+static int count_words_line(tscan s) {
+  int n = 0;
+  for (const char *e; next_tok(&s, &e); s.p = e) n++;
+  return n;
+}
+
 static int text_nodes(tscan *s, mx_restart *r) {
   size_t cap = fits(s, r->nv, 6); /* "0 0 0\n" */
   for (size_t i = 0; i < r->nv; i++) {
     if (i == cap || !next_line(s)) return truncated(s, "nodes", r->nv, i);
+    s->first = i == 0;
+    if (i == 0 && count_words_line(*s) == 2)
+      return terr(s, "node 0: 2 coordinates: a quadtree restart file; "
+                     "mixoct remeshes octrees only");
     MX_CHECK(get_reals(s, 3, r->xyz + 3 * i, "node", i));
   }
   return MX_OK;
@@ -539,6 +556,7 @@ static int text_edges(tscan *s, mx_restart *r) {
   size_t cap = fits(s, r->ne, 6); /* "0 0 0\n" */
   for (size_t i = 0; i < r->ne; i++) {
     if (i == cap || !next_line(s)) return truncated(s, "edges", r->ne, i);
+    s->first = i == 0;
     for (int k = 0; k < 3; k++)
       MX_CHECK(get_node(s, r->nv, &r->edge[3 * i + k], "edge", i));
     if (!at_eol(s))
@@ -565,6 +583,7 @@ static int text_octant(tscan *s, mx_restart *r, size_t i, size_t *tcap) {
   const char *e, *t;
   uint64_t k;
   if (!next_line(s)) return truncated(s, "octants", r->no, i);
+  s->first = i == 0;
   t = next_tok(s, &e);
   int ok = parse_uint(t, e, &k);
   if (ok != 1) {
@@ -586,6 +605,7 @@ static int text_octant(tscan *s, mx_restart *r, size_t i, size_t *tcap) {
   r->oct_level[i] = (uint8_t)k;
   if (!at_eol(s))
     return terr(s, "octant %zu: more than '8 n0 .. n7 level'%s", i, hint(s));
+  s->first = 0;
   if (!next_line(s))
     return terr(s, "truncated: expected %zu octants, found %zu (the last "
                    "one has no line of intersected faces)", r->no, i);
@@ -647,6 +667,7 @@ static size_t count_words(tscan s, int *ints) {
  * each optional; then nothing but blanks and comments. At entry s is at the
  * end of the last octant's line. */
 static int text_tail(tscan *s, mx_restart *r) {
+  s->first = 0;
   if (!next_line(s)) return MX_OK;
   const char *e, *t = next_tok(s, &e);
   int transform, at_content = 1;
@@ -690,8 +711,7 @@ static int text_tail(tscan *s, mx_restart *r) {
       if (!next_line(s))
         return terr(s, "octant sub-elements: expected %zu counts (one per "
                        "octant), found %zu", r->no, i);
-    MX_CHECK(get_uint(s, UINT32_MAX, &v, "octant sub-elements: count", i,
-                      "value"));
+    MX_CHECK(get_uint(s, UINT32_MAX, &v, "octant", i, "sub-element count"));
     r->nsub[i] = (uint32_t)v;
   }
   if ((t = next_tok(s, &e)) || (next_line(s) && (t = next_tok(s, &e))))
@@ -702,7 +722,7 @@ static int text_tail(tscan *s, mx_restart *r) {
 
 static int text_parse(const char *name, const char *buf, size_t len,
                       mx_restart *r) {
-  tscan s = {name, buf, buf + len, 1, 0};
+  tscan s = {name, buf, buf + len, 1, 0, 0};
   skip_sp(&s);
   if (s.p < s.end && (*s.p == '\n' || *s.p == '#')) next_line(&s);
   if (s.p == s.end)
@@ -1078,9 +1098,9 @@ int mx_parse_index_list(const char *name, const uint8_t *buf, size_t len,
     uint64_t v;
     int ok = parse_uint(t, p, &v);
     if (ok == 0) continue; /* a word, not all digits: ignored */
-    const char *why = ok < 0 ? "negative"
-                      : ok == 2 ? "too large"
-                      : v >= limit ? "out of range" : NULL;
+    const char *why = ok < 0 ? "is negative"
+                      : ok == 2 ? "is too large"
+                      : v >= limit ? "is out of range" : NULL;
     if (why) {
       mx_error(name, line, "element index %.*s %s (%llu elements, 0-based)",
                tok_show(t, p), t, why, (unsigned long long)limit);

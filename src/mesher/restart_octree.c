@@ -405,7 +405,9 @@ int mx_mesher_load_restart(mx_mesher *m, const char *path) {
   mx_call c;
   mx_call_begin(m, &c);
   const double t = mx_wtime();
+  const double read = m->S.ph.read;
   memset(&m->S, 0, sizeof m->S);
+  m->S.ph.read = read;
   int st = load_restart(m, path);
   if (st) mx_tree_clear(m);
   m->S.t_restart = mx_wtime() - t;
