@@ -33,6 +33,10 @@ the global errors, and the seconds spent in mixoct (meshing) and in GetFEM
     ... --surface ../shared/data/surfaces/cortex.off -s 4 --rounds 5
     ... --check /tmp/rounds --json     # the meshes (.vtu) and JSON lines
 
+Timing: the mixoct calls use OpenMP threads (--threads); on a machine
+shared with other jobs, OMP_WAIT_POLICY=passive keeps idle threads from
+spinning (tests/python_test.sh sets it).
+
 --linear-check also solves with a linear exact solution, which every
 element reproduces exactly when the geometric transformations and the node
 orders are right: its error (printed as lin_err) must be at rounding level.
@@ -131,16 +135,12 @@ class Poisson:
         m = gm.mesh
         self.mf = gf.MeshFem(m, 1)
         gm.set_fems(self.mf, GF_FEM)
-        self.mf0 = gf.MeshFem(m, 1)          # one dof per element
-        gm.set_fems(self.mf0, GF_FEM0)
         self.mim = gf.MeshIm(m, degree)       # classical rules, per type
         self.mim_err = gf.MeshIm(m, err_degree)
         m.set_region(self.BND, m.outer_faces())
         self.solver = solver
         self.dof_xyz = self.mf.basic_dof_nodes().T   # (ndof, 3)
-        d0 = self.mf0.basic_dof_from_cv(np.arange(m.nbcvs()))
-        # element e's P0 dof
-        self.p0_of_elem = np.asarray(d0, dtype=np.int64)[gm.cv_of_elem]
+        self._mfk = None       # P0 fem(s) for per-element integrals
 
     def solve(self, data, f_expr, g_nodal):
         """data: {name: value} for the expressions; f_expr: GWFL of f;
@@ -166,20 +166,29 @@ class Poisson:
         self.md = md
         return md.variable("u")
 
-    def per_element(self, expr):
-        """The integral of expr over each element (numpy, element order)."""
-        z = np.zeros(self.mf0.nbdof())
-        v = gf.asm_generic(self.mim_err, 1, "(%s)*Test_p" % expr, -1,
-                           self.md, "p", 1, self.mf0, z, "select_output", "p")
-        return np.asarray(v)[self.p0_of_elem]
+    def per_element(self, *exprs):
+        """The integrals of the expressions over each element: an array
+        (nelements, len(exprs)) in element order, from one assembly."""
+        k = len(exprs)
+        if self._mfk is None or self._mfk.qdim() != k:
+            self._mfk = gf.MeshFem(self.gm.mesh, k)   # k P0 dofs per element
+            self.gm.set_fems(self._mfk, GF_FEM0)
+            d = self._mfk.basic_dof_from_cv(np.arange(self.gm.mesh.nbcvs()))
+            d = np.asarray(d, dtype=np.int64).reshape(-1, k)
+            self._dofs_k = d[self.gm.cv_of_elem]
+        z = np.zeros(self._mfk.nbdof())
+        v = gf.asm_generic(self.mim_err, 1,
+                           "[%s].Test_p" % ", ".join(exprs), -1,
+                           self.md, "p", 1, self._mfk, z,
+                           "select_output", "p")
+        return np.asarray(v)[self._dofs_k]
 
     def min_jacobian_sign_check(self):
-        """The number of elements of each type with a quadrature point where
-        the Jacobian determinant of GetFEM's transformation is <= 0."""
-        z = np.zeros(self.mf0.nbdof())
-        v = gf.asm_generic(self.mim, 1, "Heaviside(-Det(element_K))*Test_p",
-                           -1, "p", 1, self.mf0, z)
-        bad = np.asarray(v)[self.p0_of_elem] > 0
+        """The number of elements of each type with a quadrature point (of
+        the error integrals) where the Jacobian determinant of GetFEM's
+        geometric transformation is <= 0 (after solve())."""
+        v = self.per_element("Heaviside(-Det(element_K))")[:, 0]
+        bad = v > 0
         return [int(np.count_nonzero(bad & (self.gm.types == t)))
                 for t in range(4)]
 
@@ -209,13 +218,15 @@ def linear_problem():
 
 
 def solve_and_estimate(pb, problem):
+    """Solve; per element: |u_h - u|^2 (L2), |grad(u_h - u)|^2 (H1 semi-norm)
+    and |grad u|^2 (for the relative error)."""
     data, ex, u_np = problem
     U = pb.solve(data, ex["f"], u_np(pb.dof_xyz))
-    e_l2 = pb.per_element("sqr(u - %s)" % ex["u"])
-    e_h1 = pb.per_element("Norm_sqr(Grad_u - %s)" % ex["grad"])
-    e_l2 = np.maximum(e_l2, 0.0)
-    e_h1 = np.maximum(e_h1, 0.0)
-    return U, e_l2, e_h1
+    e = pb.per_element("sqr(u - %s)" % ex["u"],
+                       "Norm_sqr(Grad_u - %s)" % ex["grad"],
+                       "Norm_sqr(%s)" % ex["grad"])
+    e = np.maximum(e, 0.0)
+    return U, e[:, 0], e[:, 1], float(np.sum(e[:, 2]))
 
 
 def doerfler(err2, theta):
@@ -262,8 +273,10 @@ def parse_args(argv):
     ap.add_argument("--err-degree", type=int, default=6,
                     help="quadrature degree of the error integrals (6)")
     ap.add_argument("--solver", default="auto",
-                    help="GetFEM linear solver: auto, superlu, mumps, "
-                         "cg/ildlt (auto)")
+                    choices=("auto", "mumps", "cg/ildlt", "gmres/ilu"),
+                    help="GetFEM linear solver (auto: MUMPS here; 'superlu' "
+                         "is left out: it crashes in Debian's "
+                         "python3-getfem 5.4)")
     ap.add_argument("--threads", type=int, default=0,
                     help="mixoct threads (0: OpenMP's default)")
     ap.add_argument("--linear-check", action="store_true",
@@ -339,14 +352,11 @@ def main(argv=None):
             gm = GetfemMesh(nodes, conn, types)
             t_conv = time.perf_counter() - t0
             pb = Poisson(gm, args.degree, args.err_degree, args.solver)
-            U, e_l2, e_h1 = solve_and_estimate(pb, problem)
+            U, e_l2, e_h1, u_h1 = solve_and_estimate(pb, problem)
             t_solve = time.perf_counter() - t0
-            # |u|_H1 for the relative error (same quadrature)
-            u_h1 = float(np.sum(pb.per_element(
-                "Norm_sqr(%s)" % problem[1]["grad"])))
             lin_err = None
             if args.linear_check:
-                Ul, l_l2, l_h1 = solve_and_estimate(pb, linear_problem())
+                Ul = solve_and_estimate(pb, linear_problem())[0]
                 lin_err = float(np.max(np.abs(
                     Ul - linear_problem()[2](pb.dof_xyz))))
             bad_jac = pb.min_jacobian_sign_check() if args.verify_orders \
@@ -362,9 +372,11 @@ def main(argv=None):
                 hit = np.zeros(len(lerr), dtype=bool)
                 hit[mleaves] = True
                 marked = np.flatnonzero(hit[leaf])
+                nmarked_leaves = int(mleaves.size)
                 del leaf
             else:
                 marked = doerfler(err, args.theta)
+                nmarked_leaves = int(np.unique(mx.leaf[marked]).size)
             row = {
                 "round": rnd,
                 "nodes": int(len(nodes)),
@@ -376,6 +388,7 @@ def main(argv=None):
                 "h1": float(np.sqrt(np.sum(e_h1))),
                 "rel_h1": float(np.sqrt(np.sum(e_h1) / u_h1)),
                 "marked": int(marked.size),
+                "marked_leaves": nmarked_leaves,
                 "mesh_s": t_mesh,
                 "solve_s": t_solve,
                 "convert_s": t_conv,

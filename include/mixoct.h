@@ -30,7 +30,10 @@
  * (0: OMP_NUM_THREADS, else one per processor). The result does not depend
  * on the thread count. One mesher must not be used by two threads at once;
  * message handlers are per process (the handler of the mesher whose call
- * is running receives the messages). */
+ * is running receives the messages): use one mesher at a time per process
+ * when handlers matter. Mesh arrays are the mesher's own memory: they stay
+ * valid until the next call that changes the mesh (refine, mesh, load,
+ * free), and nothing tells a holder that they went stale. */
 #ifndef MIXOCT_H
 #define MIXOCT_H
 
@@ -152,15 +155,20 @@ int mx_mesher_refine(mx_mesher *m);
  * sizes, checksum). */
 int mx_mesher_save_restart(const mx_mesher *m, const char *path);
 /* Rebuild the balanced octree and the element -> leaf map from a restart
- * file (ours or the published program's), then mesh it. The domain surfaces
- * must have been added (the same ones). Requests already set apply on top
- * (as after mx_mesher_refine). Elements listed later refer to the mesh that
- * was written with the restart file (its per-octant element counts). */
+ * file (ours or the published program's); it does not mesh: call
+ * mx_mesher_refine_elements (with the list, possibly empty), mx_mesher_refine
+ * or mx_mesher_mesh next. The domain surfaces must have been added (the same
+ * ones: a file whose octants do not lie on their grid is MX_EINPUT). Until
+ * the next mesh, element indices refer to the mesh that was written with the
+ * restart file (its per-octant element counts), of which there are
+ * mx_mesher_restart_elements (0 when the file has no counts). */
 int mx_mesher_load_restart(mx_mesher *m, const char *path);
+size_t mx_mesher_restart_elements(const mx_mesher *m);
 /* Read a list of element indices (the published format: indices separated
- * by white space; words that are not all digits are ignored). *out is
- * malloc'ed (free with mx_free_array). Indices >= limit are MX_EINPUT with
- * the file and line. */
+ * by white space; words that are not all digits are ignored; a negative
+ * index is an error). *out is allocated (free with mx_free_array). Indices
+ * >= limit are MX_EINPUT with the file and line. Messages go to the current
+ * handler (stderr outside a mesher call). */
 int mx_read_element_list(const char *path, uint64_t limit, uint64_t **out,
                          size_t *n);
 void mx_free_array(void *p);
@@ -182,7 +190,8 @@ typedef struct {
 } mx_mesh_arrays;
 
 /* Valid until the next call that changes the mesh. MX_EINPUT without a
- * mesh. */
+ * mixed mesh (none yet, or params.stage == MX_STAGE_OCTREE, whose leaves
+ * only mx_mesher_write writes, as hexahedra). */
 int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a);
 
 /* Write the current mesh; format by extension: .vtk .vtu .msh .mesh .meshb

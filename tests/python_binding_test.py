@@ -98,9 +98,11 @@ def connectivity():
         # no repeated node in a row
         s = np.sort(rows[:, :nn].astype(np.int64), axis=1)
         assert np.all(s[:, 1:] != s[:, :-1]), t
-    idx, rows = M.cells_of_type("prism")
+    idx, rows = M.cells_of_type("prism", return_indices=True)
     assert rows.shape == (M.counts["prism"], 6)
     assert np.all(M.types[idx] == mixoct.PRISM)
+    assert np.array_equal(M.cells_of_type(mixoct.HEX),
+                          M.conn[M.types == mixoct.HEX])
     used = np.zeros(M.nnodes, dtype=bool)
     used[conn[conn != mixoct.NO_NODE]] = True
     assert used.all(), "unused nodes"
@@ -266,6 +268,29 @@ def restart_round_trip():
         got = (r.nnodes, r.nelements, r.nleaves, r.counts,
                r.stats()["leaves_hash"])
         assert got == want, (name, got, want)
+        r.close()
+
+
+@check
+def restart_then_list():
+    """The -c / -l workflow: a restart file and a list of elements of the
+    mesh written with it give the same octree as refining in place."""
+    path = os.path.join(TMP, "list.oct")
+    lst = os.path.join(TMP, "list.txt")
+    m = demo(3)
+    m.save_restart(path)
+    sel = np.flatnonzero(m.level == m.level.max())[[0, 3, 9]]
+    with open(lst, "w") as f:
+        f.write("elements\n%s\n" % " ".join(str(i) for i in sel))
+    m.refine_elements(sel)
+    want = (m.nelements, m.nleaves, m.stats()["leaves_hash"])
+    m.close()
+    for elements in (lst, sel, list(sel)):
+        r = mixoct.Mesher(surface_level=3)
+        r.add_demo_surface()
+        r.load_restart(path, elements=elements)
+        got = (r.nelements, r.nleaves, r.stats()["leaves_hash"])
+        assert got == want, (type(elements), got, want)
         r.close()
 
 

@@ -16,6 +16,7 @@ BUILD=$(cd "$BUILD" && pwd) || exit 1
 SRC=$(cd "$(dirname "$0")/.." && pwd)
 PY=/usr/bin/python3
 export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}   # getfem shares the cores
+export PYTHONDONTWRITEBYTECODE=1                    # no __pycache__ in the tree
 
 skip() {
   if [ -n "${CI:-}" ]; then

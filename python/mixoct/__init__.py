@@ -14,7 +14,8 @@ A thin binding over the C API of ``include/mixoct.h`` (``libmixoct.so``)::
 The library is looked for, in this order: the path in the environment
 variable ``MIXOCT_LIB``; ``libmixoct.so`` in this package's directory; the
 build directory this package was copied into (``<build>/python/mixoct`` ->
-``<build>/libmixoct.so``); the installed library (``ctypes.util``).
+``<build>/libmixoct.so``); the path meson wrote into ``_libpath.py`` at
+install time; the library on the linker's path (``ctypes.util``).
 
 Mesh arrays are views, not copies
 ---------------------------------
@@ -44,7 +45,9 @@ write). Warnings of the library do not go to stderr: they are collected in
 
 Threads: the library runs its passes with OpenMP threads and the GIL is
 released during each call; one Mesher must not be used from two Python
-threads at once.
+threads at once. The library's message handler is per process (the mesher
+whose call is running gets the messages), so two Meshers working at the same
+time in two Python threads may see each other's warnings.
 """
 
 import ctypes
@@ -175,7 +178,14 @@ def _candidates():
     here = os.path.dirname(os.path.abspath(__file__))
     names = [os.path.join(here, "libmixoct.so"),
              # <build>/python/mixoct/__init__.py -> <build>/libmixoct.so
-             os.path.join(here, os.pardir, os.pardir, "libmixoct.so")]
+             os.path.normpath(os.path.join(here, os.pardir, os.pardir,
+                                           "libmixoct.so"))]
+    try:
+        # written by meson at install time: the installed library
+        from ._libpath import LIBMIXOCT
+        names.append(LIBMIXOCT)
+    except ImportError:
+        pass
     found = ctypes.util.find_library("mixoct")
     if found:
         names.append(found)
@@ -534,11 +544,11 @@ class Mesher:
     def add_box(self, lo, hi, level):
         """-b: a box [lo, hi] whose octants go to `level` (after meshing too:
         then call refine())."""
-        lo3 = (ctypes.c_double * 3)(*[float(v) for v in np.ravel(lo)[:3]])
-        hi3 = (ctypes.c_double * 3)(*[float(v) for v in np.ravel(hi)[:3]])
         if np.size(lo) != 3 or np.size(hi) != 3:
             raise InputError("add_box: lo and hi need 3 coordinates each",
                              EINPUT)
+        lo3 = (ctypes.c_double * 3)(*[float(v) for v in np.ravel(lo)])
+        hi3 = (ctypes.c_double * 3)(*[float(v) for v in np.ravel(hi)])
         self._call("mx_mesher_add_box", lo3, hi3, int(level))
 
     def read_boxes(self, path):
@@ -607,11 +617,32 @@ class Mesher:
         """The restart file of the current octree and mesh (".octb": binary)."""
         self._call("mx_mesher_save_restart", _fspath(path))
 
-    def load_restart(self, path, allow_invalid=False):
+    def load_restart(self, path, elements=None, allow_invalid=False):
         """Rebuild the octree from a restart file and mesh it (add the same
-        surfaces first)."""
-        return self._mesh_call("mx_mesher_load_restart", allow_invalid,
-                               _fspath(path))
+        surfaces first; requests already set apply on top).
+
+        elements: indices (array-like) or the path of an element list (the
+        published format) of elements of the mesh that was written with the
+        restart file, to refine at once (the -c / -l workflow of the
+        published mesher)."""
+        self._call("mx_mesher_load_restart", _fspath(path), changes_mesh=True)
+        if isinstance(elements, (str, bytes, os.PathLike)):
+            # the element count of the file's mesh is not in the C API: the
+            # range is checked by refine_elements instead (no file line)
+            elements = read_element_list(elements, 2 ** 64 - 1)
+        if elements is None and self._has_mesh():
+            return True
+        # libmixoct 0.1 loads the octree without meshing it; the mesh (and
+        # the list refinement) comes with refine_elements, whose indices
+        # refer to the file's mesh until then
+        return self.refine_elements([] if elements is None else elements,
+                                    allow_invalid)
+
+    def _has_mesh(self):
+        a = _MeshArrays()
+        ok = self._lib.mx_mesher_mesh_arrays(self._ptr, ctypes.byref(a)) == OK
+        del self.messages[:]
+        return ok
 
     # ---- output --------------------------------------------------------------------
 
@@ -701,13 +732,15 @@ class Mesher:
     def invalid(self):
         return self._get_views()["invalid"]
 
-    def cells_of_type(self, t):
-        """(indices, nodes): the element indices of type t (int or name) and
-        their (k, NODES_PER_TYPE[t]) node rows (a copy, uint32)."""
+    def cells_of_type(self, t, return_indices=False):
+        """The (k, NODES_PER_TYPE[t]) node rows of the elements of type t
+        (int or name: "tet", "pyramid", "prism", "hex"), a uint32 copy; with
+        return_indices, (indices, rows) where indices are those elements'."""
         if isinstance(t, str):
             t = TYPE_NAMES.index(t)
         idx = np.flatnonzero(self.types == t)
-        return idx, self.conn[idx, :NODES_PER_TYPE[t]]
+        rows = self.conn[idx, :NODES_PER_TYPE[t]]
+        return (idx, rows) if return_indices else rows
 
     def arrays(self, copy=False):
         """All mesh arrays in a dict (views, or copies that outlive re-meshes)."""

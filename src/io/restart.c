@@ -95,9 +95,9 @@ static int load_file(const char *path, int allow_empty, uint8_t **buf,
 /* ---- numbers ------------------------------------------------------------- */
 
 /* Character classes: 1 blank, 2 end of a line's content ('\n', '#'). */
-static const uint8_t char_class[256] = {[' '] = 1,  ['\t'] = 1, ['\r'] = 1,
-                                        ['\f'] = 1, ['\v'] = 1, ['\n'] = 2,
-                                        ['#'] = 2};
+static const uint8_t char_class[256] = {
+    [' '] = 1,  ['\t'] = 1, ['\r'] = 1, ['\f'] = 1,
+    ['\v'] = 1, ['\n'] = 2, ['#'] = 2};
 static inline int is_digit(char c) { return (unsigned)(c - '0') < 10; }
 static inline int is_sp(char c) { return char_class[(uint8_t)c] == 1; }
 static inline int is_delim(char c) { return char_class[(uint8_t)c] != 0; }
@@ -187,7 +187,8 @@ static int parse_real(const char *t, const char *e, double *v) {
   char small[256], *tmp = small, *end;
   size_t n = (size_t)(e - t);
   if (n == 0) return 0;
-  if (n >= sizeof small && !(tmp = mx_alloc(n + 1))) return 0; /* "%f" of 1e300 */
+  /* a long token ("%f" of 1e300 has 308 characters) goes to the heap */
+  if (n >= sizeof small && !(tmp = mx_alloc(n + 1))) return 0;
   memcpy(tmp, t, n);
   tmp[n] = '\0';
   *v = strtod(tmp, &end);
@@ -295,8 +296,8 @@ static int alloc_arrays(mx_restart *r, size_t nv, size_t ne, size_t no,
   r->oct_level = mx_alloc(no);
   r->oct_tri_off = mx_alloc(8 * (no + 1));
   if (with_nsub) r->nsub = mx_alloc(4 * no);
-  if (!r->xyz || !r->edge || !r->oct_node || !r->oct_level ||
-      !r->oct_tri_off || (with_nsub && !r->nsub))
+  if (!r->xyz || !r->edge || !r->oct_node || !r->oct_level || !r->oct_tri_off ||
+      (with_nsub && !r->nsub))
     return MX_EINPUT;
   r->oct_tri_off[0] = 0;
   return MX_OK;
@@ -307,24 +308,24 @@ static int alloc_arrays(mx_restart *r, size_t nv, size_t ne, size_t no,
  * first problem as "<what>: ..." and returns status, else MX_OK. */
 static int check_restart(const char *name, const mx_restart *r, int status,
                          const char *what) {
-#define BAD(...)                                                              \
-  do {                                                                        \
-    char msg_[256];                                                           \
-    snprintf(msg_, sizeof msg_, __VA_ARGS__);                                 \
-    mx_error(name, 0, "%s: %s", what, msg_);                                  \
-    return status;                                                            \
+#define BAD(...)                              \
+  do {                                        \
+    char msg_[256];                           \
+    snprintf(msg_, sizeof msg_, __VA_ARGS__); \
+    mx_error(name, 0, "%s: %s", what, msg_);  \
+    return status;                            \
   } while (0)
   if (r->no == 0) BAD("no octants");
   if (r->nv > UINT32_MAX) BAD("%zu nodes: more than 32-bit indices", r->nv);
-  if (!r->xyz || !r->edge || !r->oct_node || !r->oct_level ||
-      !r->oct_tri_off || (r->oct_tri_off[r->no] > 0 && !r->oct_tri))
+  if (!r->xyz || !r->edge || !r->oct_node || !r->oct_level || !r->oct_tri_off ||
+      (r->oct_tri_off[r->no] > 0 && !r->oct_tri))
     BAD("missing arrays");
   for (size_t i = 0; i < 3 * r->nv; i++)
     if (!isfinite(r->xyz[i])) BAD("node %zu: non-finite coordinate", i / 3);
   for (size_t i = 0; i < 3 * r->ne; i++)
     if (r->edge[i] >= r->nv)
-      BAD("edge %zu: node index %u out of range (%zu nodes)", i / 3,
-          r->edge[i], r->nv);
+      BAD("edge %zu: node index %u out of range (%zu nodes)", i / 3, r->edge[i],
+          r->nv);
   for (size_t i = 0; i < 8 * r->no; i++)
     if (r->oct_node[i] >= r->nv)
       BAD("octant %zu: node index %u out of range (%zu nodes)", i / 8,
@@ -507,21 +508,26 @@ static int text_header(tscan *s, mx_restart *r) {
   for (int k = 0; k < 3; k++) {
     const char *e, *t = next_tok(s, &e);
     if (!t)
-      return terr(s, "bad header: expected 'nodes edges octants', missing "
-                     "the number of %s", names[k]);
+      return terr(s,
+                  "bad header: expected 'nodes edges octants', missing "
+                  "the number of %s",
+                  names[k]);
     int ok = parse_uint(t, e, &c[k]);
     if (ok < 0)
       return terr(s, "bad header: the number of %s is negative (%.*s)",
                   names[k], tok_show(t, e), t);
     if (ok != 1 || c[k] > ((uint64_t)1 << 40))
-      return terr(s, "bad header: expected 'nodes edges octants', found "
-                     "'%.*s' for the number of %s%s", tok_show(t, e), t,
-                  names[k], ok == 1 || ok == 2 ? " (too large)" : "");
+      return terr(s,
+                  "bad header: expected 'nodes edges octants', found "
+                  "'%.*s' for the number of %s%s",
+                  tok_show(t, e), t, names[k],
+                  ok == 1 || ok == 2 ? " (too large)" : "");
     s->p = e;
   }
   if (!at_eol(s))
-    return terr(s, "bad header: more than the 3 numbers 'nodes edges "
-                   "octants'");
+    return terr(s,
+                "bad header: more than the 3 numbers 'nodes edges "
+                "octants'");
   if (c[0] > UINT32_MAX)
     return terr(s, "%llu nodes: more than 32-bit indices allow",
                 (unsigned long long)c[0]);
@@ -545,8 +551,9 @@ static int text_nodes(tscan *s, mx_restart *r) {
     if (i == cap || !next_line(s)) return truncated(s, "nodes", r->nv, i);
     s->first = i == 0;
     if (i == 0 && count_words_line(*s) == 2)
-      return terr(s, "node 0: 2 coordinates: a quadtree restart file; "
-                     "mixoct remeshes octrees only");
+      return terr(s,
+                  "node 0: 2 coordinates: a quadtree restart file; "
+                  "mixoct remeshes octrees only");
     MX_CHECK(get_reals(s, 3, r->xyz + 3 * i, "node", i));
   }
   return MX_OK;
@@ -560,8 +567,7 @@ static int text_edges(tscan *s, mx_restart *r) {
     for (int k = 0; k < 3; k++)
       MX_CHECK(get_node(s, r->nv, &r->edge[3 * i + k], "edge", i));
     if (!at_eol(s))
-      return terr(s, "edge %zu: more than 3 numbers ('a b mid')%s", i,
-                  hint(s));
+      return terr(s, "edge %zu: more than 3 numbers ('a b mid')%s", i, hint(s));
   }
   return MX_OK;
 }
@@ -589,12 +595,14 @@ static int text_octant(tscan *s, mx_restart *r, size_t i, size_t *tcap) {
   if (ok != 1) {
     if (e - t == 9 && strncasecmp(t, "Geometric", 9) == 0)
       return truncated(s, "octants", r->no, i);
-    return terr(s, "octant %zu: expected '8 n0 .. n7 level', found '%.*s'%s",
-                i, tok_show(t, e), t, hint(s));
+    return terr(s, "octant %zu: expected '8 n0 .. n7 level', found '%.*s'%s", i,
+                tok_show(t, e), t, hint(s));
   }
   if (k == 4)
-    return terr(s, "octant %zu: 4 corner nodes: a quadtree restart file; "
-                   "mixoct remeshes octrees only", i);
+    return terr(s,
+                "octant %zu: 4 corner nodes: a quadtree restart file; "
+                "mixoct remeshes octrees only",
+                i);
   if (k != 8)
     return terr(s, "octant %zu: %llu corner nodes, an octant has 8%s", i,
                 (unsigned long long)k, hint(s));
@@ -607,27 +615,33 @@ static int text_octant(tscan *s, mx_restart *r, size_t i, size_t *tcap) {
     return terr(s, "octant %zu: more than '8 n0 .. n7 level'%s", i, hint(s));
   s->first = 0;
   if (!next_line(s))
-    return terr(s, "truncated: expected %zu octants, found %zu (the last "
-                   "one has no line of intersected faces)", r->no, i);
+    return terr(s,
+                "truncated: expected %zu octants, found %zu (the last "
+                "one has no line of intersected faces)",
+                r->no, i);
   MX_CHECK(get_uint(s, UINT32_MAX, &k, "octant", i, "face count"));
   size_t used = r->oct_tri_off[i];
   if (k > (size_t)(s->end - s->p) / 2)
-    return terr(s, "octant %zu: %llu intersected faces announced, the file "
-                   "is too short to list them%s", i, (unsigned long long)k,
-                hint(s));
+    return terr(s,
+                "octant %zu: %llu intersected faces announced, the file "
+                "is too short to list them%s",
+                i, (unsigned long long)k, hint(s));
   MX_CHECK(grow_tri(s, r, used, (size_t)k, tcap));
   for (uint64_t j = 0; j < k; j++) {
     uint64_t f;
     if (!next_tok(s, &e))
-      return terr(s, "octant %zu: %llu intersected faces announced, %llu "
-                     "listed%s", i, (unsigned long long)k,
-                  (unsigned long long)j, hint(s));
+      return terr(s,
+                  "octant %zu: %llu intersected faces announced, %llu "
+                  "listed%s",
+                  i, (unsigned long long)k, (unsigned long long)j, hint(s));
     MX_CHECK(get_uint(s, UINT32_MAX, &f, "octant", i, "face index"));
     r->oct_tri[used + j] = (uint32_t)f;
   }
   if (!at_eol(s))
-    return terr(s, "octant %zu: more intersected faces listed than the %llu "
-                   "announced%s", i, (unsigned long long)k, hint(s));
+    return terr(s,
+                "octant %zu: more intersected faces listed than the %llu "
+                "announced%s",
+                i, (unsigned long long)k, hint(s));
   r->oct_tri_off[i + 1] = used + k;
   return MX_OK;
 }
@@ -677,7 +691,8 @@ static int text_tail(tscan *s, mx_restart *r) {
     if (!t || e - t != 9 || strncasecmp(t, "Transform", 9) != 0)
       return terr(s, "expected the title 'Geometric Transform'");
     s->p = e;
-    if (!at_eol(s)) return terr(s, "unexpected text after 'Geometric Transform'");
+    if (!at_eol(s))
+      return terr(s, "unexpected text after 'Geometric Transform'");
     transform = 1;
     at_content = 0;
   } else {
@@ -685,20 +700,23 @@ static int text_tail(tscan *s, mx_restart *r) {
     size_t n = count_words(*s, &ints);
     transform = n == r->no + 6 || (n == 6 && !(r->no == 6 && ints));
     if (!transform && n != r->no)
-      return terr(s, "after the %zu octants: expected the geometric "
-                     "transform (6 numbers) and/or the %zu octant "
-                     "sub-element counts, found %zu words%s", r->no, r->no, n,
-                  n > r->no ? " (more octants than the header declares?)"
-                            : "");
+      return terr(s,
+                  "after the %zu octants: expected the geometric "
+                  "transform (6 numbers) and/or the %zu octant "
+                  "sub-element counts, found %zu words%s",
+                  r->no, r->no, n,
+                  n > r->no ? " (more octants than the header declares?)" : "");
   }
   if (transform) {
     for (int k = 0; k < 2; k++) {
       if (!at_content && !next_line(s))
-        return terr(s, "truncated: the geometric transform needs 2 lines of "
-                       "3 numbers, found %d", k);
+        return terr(s,
+                    "truncated: the geometric transform needs 2 lines of "
+                    "3 numbers, found %d",
+                    k);
       at_content = 0;
-      MX_CHECK(get_reals(s, 3, r->transform + 3 * k, "geometric transform "
-                         "line", (size_t)k + 1));
+      MX_CHECK(get_reals(s, 3, r->transform + 3 * k, "geometric transform line",
+                         (size_t)k + 1));
     }
     r->has_transform = 1;
   }
@@ -709,8 +727,10 @@ static int text_tail(tscan *s, mx_restart *r) {
     uint64_t v;
     while (!next_tok(s, &e))
       if (!next_line(s))
-        return terr(s, "octant sub-elements: expected %zu counts (one per "
-                       "octant), found %zu", r->no, i);
+        return terr(s,
+                    "octant sub-elements: expected %zu counts (one per "
+                    "octant), found %zu",
+                    r->no, i);
     MX_CHECK(get_uint(s, UINT32_MAX, &v, "octant", i, "sub-element count"));
     r->nsub[i] = (uint32_t)v;
   }
@@ -843,16 +863,20 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
            add_section(&need, flags & BIN_TRANSFORM ? 6 : 0, 8) &&
            add_section(&need, flags & BIN_NSUB ? no : 0, 4);
   if (!ok || need > len) {
-    mx_error(name, 0, "truncated: the header declares %llu nodes, %llu "
+    mx_error(name, 0,
+             "truncated: the header declares %llu nodes, %llu "
              "edges, %llu octants, %llu faces: expected %s%llu bytes, file "
-             "has %zu", (unsigned long long)nv, (unsigned long long)ne,
+             "has %zu",
+             (unsigned long long)nv, (unsigned long long)ne,
              (unsigned long long)no, (unsigned long long)ntri,
              ok ? "" : "more than ", (unsigned long long)need, len);
     return MX_EINPUT;
   }
   if (need < len) {
-    mx_error(name, 0, "corrupted: expected %llu bytes, file has %zu (data "
-             "after the end)", (unsigned long long)need, len);
+    mx_error(name, 0,
+             "corrupted: expected %llu bytes, file has %zu (data "
+             "after the end)",
+             (unsigned long long)need, len);
     return MX_EINPUT;
   }
   rs_hash h;
@@ -886,8 +910,10 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
     r->oct_tri_off[i + 1] = r->oct_tri_off[i] + count[i];
   mx_free(count);
   if (i < no || r->oct_tri_off[no] != ntri) {
-    mx_error(name, 0, "corrupted: the octants' face counts do not add up to "
-             "the %llu of the header", (unsigned long long)ntri);
+    mx_error(name, 0,
+             "corrupted: the octants' face counts do not add up to "
+             "the %llu of the header",
+             (unsigned long long)ntri);
     return MX_EINPUT;
   }
   return check_restart(name, r, MX_EINPUT, "corrupted");
@@ -920,6 +946,8 @@ int mx_restart_read(const char *path, mx_restart *r) {
   mx_free(buf);
   return st;
 }
+
+#define BAD_DATA "internal error: bad restart data"
 
 /* ---- text writing -------------------------------------------------------- */
 
@@ -1007,8 +1035,7 @@ static int text_body(mx_afile *f, const mx_restart *r) {
 }
 
 int mx_restart_write_text(const char *path, const mx_restart *r) {
-  MX_CHECK(check_restart(path, r, MX_EINTERNAL, "internal error: bad restart "
-                         "data"));
+  MX_CHECK(check_restart(path, r, MX_EINTERNAL, BAD_DATA));
   mx_afile f;
   MX_CHECK(mx_afile_open(&f, path));
   return mx_afile_finish(&f, text_body(&f, r));
@@ -1064,8 +1091,7 @@ static int bin_body(bin_out *o, const mx_restart *r, const uint32_t *count) {
 }
 
 int mx_restart_write_binary(const char *path, const mx_restart *r) {
-  MX_CHECK(check_restart(path, r, MX_EINTERNAL, "internal error: bad restart "
-                         "data"));
+  MX_CHECK(check_restart(path, r, MX_EINTERNAL, BAD_DATA));
   uint32_t *count = mx_alloc(4 * r->no);
   if (!count) return MX_EINPUT;
   for (size_t i = 0; i < r->no; i++)
@@ -1098,9 +1124,10 @@ int mx_parse_index_list(const char *name, const uint8_t *buf, size_t len,
     uint64_t v;
     int ok = parse_uint(t, p, &v);
     if (ok == 0) continue; /* a word, not all digits: ignored */
-    const char *why = ok < 0 ? "is negative"
-                      : ok == 2 ? "is too large"
-                      : v >= limit ? "is out of range" : NULL;
+    const char *why = ok < 0       ? "is negative"
+                      : ok == 2    ? "is too large"
+                      : v >= limit ? "is out of range"
+                                   : NULL;
     if (why) {
       mx_error(name, line, "element index %.*s %s (%llu elements, 0-based)",
                tok_show(t, p), t, why, (unsigned long long)limit);

@@ -3,22 +3,25 @@
  *
  * ---- The text format (what the published program writes and reads) ----
  *
- *   20506 81363 10123                  header: nodes edges octants
+ *   20506 81363 10123              header: nodes edges octants
  *   (blank)
- *   +2.85692000E-01  +2.21920000E-02  +1.91885460E+01     nv node lines
- *   (blank)                                  ("%+1.8E" twice-space separated)
- *   0 1 21                             ne edge lines: a b mid (mid 0: not split)
+ *   +2.85692000E-01  +2.21920000E-02  +1.91885460E+01
+ *   ...                            nv node lines, "%+1.8E" two blanks apart
  *   (blank)
- *   8 4979 4975 4967 4976 4978 4970 1316 4971 5    no octants, two lines each:
- *   2 4739 4854                          "8", 8 corner nodes, level; then the
- *   ...                                  count of intersected input faces
- *   (blank)                              and their indices ("0" when none)
+ *   0 1 21                         ne edge lines: a b mid (0: not split)
+ *   ...
+ *   (blank)
+ *   8 4979 4975 4967 4976 4978 4970 1316 4971 5
+ *   2 4739 4854                    no octants of two lines: "8", 8 corner
+ *   ...                            nodes, level; the count of intersected
+ *                                  input faces, their indices ("0": none)
+ *   (blank)
  *   Geometric Transform
- *   0.000000 0.000000 0.000000           two lines of three numbers ("%f")
+ *   0.000000 0.000000 0.000000     two lines of three numbers ("%f")
  *   0.000000 0.000000 0.000000
  *   (blank)
- *   1 4 1 1 ...                          octant sub-elements: no counts on
- *                                        one line, each followed by a blank
+ *   1 4 1 1 ...                    octant sub-elements: no counts on one
+ *                                  line, each followed by a blank
  *
  * Corner order of an octant [x0,x1] x [y0,y1] x [z0,z1] (the published
  * program's; the reader does not depend on it):

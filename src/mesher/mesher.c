@@ -446,7 +446,12 @@ static int boundary_flags(mx_mesher *m) {
 
 static void count_mesh(mx_mesher *m) {
   mx_summary *S = &m->S;
-  const mx_mesh_out *M = &m->M;
+  mx_mesh_out *M = &m->M;
+  /* rows padded with UINT32_MAX past each type's node count (the API's
+   * promise; the kernels leave 0 or stale ids there) */
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++)
+    for (int k = mx_cell_nodes[M->type[c]]; k < 8; k++) M->conn[8 * c + k] = UINT32_MAX;
   S->nodes = M->nnodes;
   S->nodes_counted = 1;
   S->elements = M->ncells;

@@ -102,9 +102,13 @@ int mx_mesher_refine_elements(mx_mesher *m, const uint64_t *elements, size_t n) 
   if (lost)
     mx_warning(NULL, 0, "%zu listed element(s) lie in octants outside the domain as "
                         "this mixoct sees it: not refined", lost);
-  if (!st) st = refine_and_mesh(m, octs, k);
+  int ran = 0;
+  if (!st) {
+    ran = 1;
+    st = refine_and_mesh(m, octs, k);
+  }
   mx_free(octs);
-  if (st && st != MX_EINVALID) mx_mesh_clear(m);
+  if (ran && st && st != MX_EINVALID) mx_mesh_clear(m);
   return mx_call_end(m, &c, st);
 }
 
@@ -124,9 +128,13 @@ int mx_mesher_refine_leaves(mx_mesher *m, const uint64_t *leaves, size_t n) {
     if (!octs) st = MX_ENOMEM;
   }
   for (size_t i = 0; !st && i < n; i++) octs[i] = m->leaves[leaves[i]];
-  if (!st) st = refine_and_mesh(m, octs, n);
+  int ran = 0;
+  if (!st) {
+    ran = 1;
+    st = refine_and_mesh(m, octs, n);
+  }
   mx_free(octs);
-  if (st && st != MX_EINVALID) mx_mesh_clear(m);
+  if (ran && st && st != MX_EINVALID) mx_mesh_clear(m);
   return mx_call_end(m, &c, st);
 }
 
@@ -138,3 +146,5 @@ int mx_mesher_refine(mx_mesher *m) {
   if (st && st != MX_EINVALID) mx_mesh_clear(m);
   return mx_call_end(m, &c, st);
 }
+
+size_t mx_mesher_restart_elements(const mx_mesher *m) { return m->file_leaf ? m->file_nelem : 0; }
