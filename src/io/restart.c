@@ -489,6 +489,7 @@ static int get_reals(tscan *s, int n, double *v, const char *what,
   return MX_OK;
 }
 
+/* "truncated: expected N <what>, found K" at the current line. */
 static int truncated(const tscan *s, const char *what, size_t n, size_t k) {
   return terr(s, "truncated: expected %zu %s, found %zu", n, what, k);
 }
@@ -502,6 +503,7 @@ static size_t fits(const tscan *s, size_t n, size_t min_bytes) {
 
 /* ---- text reading -------------------------------------------------------- */
 
+/* The header line "nodes edges octants", checked. */
 static int text_header(tscan *s, mx_restart *r) {
   static const char *names[3] = {"nodes", "edges", "octants"};
   uint64_t c[3];
@@ -545,6 +547,7 @@ static int count_words_line(tscan s) {
   return n;
 }
 
+/* nv lines "x y z" of finite numbers. */
 static int text_nodes(tscan *s, mx_restart *r) {
   size_t cap = fits(s, r->nv, 6); /* "0 0 0\n" */
   for (size_t i = 0; i < r->nv; i++) {
@@ -559,6 +562,7 @@ static int text_nodes(tscan *s, mx_restart *r) {
   return MX_OK;
 }
 
+/* ne lines "a b mid" of node indices. */
 static int text_edges(tscan *s, mx_restart *r) {
   size_t cap = fits(s, r->ne, 6); /* "0 0 0\n" */
   for (size_t i = 0; i < r->ne; i++) {
@@ -646,6 +650,7 @@ static int text_octant(tscan *s, mx_restart *r, size_t i, size_t *tcap) {
   return MX_OK;
 }
 
+/* no octants of two lines each; oct_tri grows as the face lists come. */
 static int text_octants(tscan *s, mx_restart *r) {
   size_t cap = fits(s, r->no, 22); /* "8 0 0 0 0 0 0 0 0 0\n0\n" */
   size_t tcap = 4 * cap + 16;
@@ -740,6 +745,7 @@ static int text_tail(tscan *s, mx_restart *r) {
   return MX_OK;
 }
 
+/* The text format: the sections in order, arrays sized by fits(). */
 static int text_parse(const char *name, const char *buf, size_t len,
                       mx_restart *r) {
   tscan s = {name, buf, buf + len, 1, 0, 0};
@@ -773,11 +779,13 @@ static inline uint64_t hash_step(uint64_t h, uint64_t w) {
   return h ^ (h >> 32);
 }
 
+/* Distinct starting values of the lanes. */
 static void hash_init(rs_hash *h) {
   for (int l = 0; l < 4; l++) h->lane[l] = 0x9E3779B97F4A7C15ull * (l + 1);
   h->nwords = 0;
 }
 
+/* Adds n words at p (any alignment), four lanes a step. */
 static void hash_words(rs_hash *h, const uint8_t *p, size_t n) {
   size_t i = 0;
   uint64_t w;
@@ -802,6 +810,7 @@ static void hash_words(rs_hash *h, const uint8_t *p, size_t n) {
   }
 }
 
+/* The word count and the four lanes, combined. */
 static uint64_t hash_final(const rs_hash *h) {
   uint64_t x = hash_step(0x243F6A8885A308D3ull, h->nwords);
   for (int l = 0; l < 4; l++) x = hash_step(x, h->lane[l]);
@@ -834,6 +843,9 @@ static void take(void *dst, const uint8_t **p, size_t n, size_t size) {
   *p += (n * size + 7) & ~(size_t)7;
 }
 
+/* The binary variant: magic, version, flags, the sizes against the length
+ * (before any allocation), the checksum, then the arrays and their
+ * semantic checks. */
 static int bin_parse(const char *name, const uint8_t *b, size_t len,
                      mx_restart *r) {
   if (memcmp(b, bin_magic, len < 8 ? len : 8) != 0) {
@@ -937,6 +949,7 @@ int mx_restart_parse(const char *name, const uint8_t *buf, size_t len,
   return st;
 }
 
+/* Loads the file and parses it from memory. */
 int mx_restart_read(const char *path, mx_restart *r) {
   memset(r, 0, sizeof *r);
   uint8_t *buf;
@@ -951,6 +964,8 @@ int mx_restart_read(const char *path, mx_restart *r) {
 
 /* ---- text writing -------------------------------------------------------- */
 
+/* Fill functions of mx_afile_emit (items [b, e) of one section, in the
+ * published layout; see the max_item_bytes given in text_body). */
 static size_t fill_nodes(const void *ctx, size_t b, size_t e, char *out) {
   const double *xyz = ((const mx_restart *)ctx)->xyz;
   char *o = out;
@@ -1009,6 +1024,7 @@ static size_t fill_nsub(const void *ctx, size_t b, size_t e, char *out) {
   return (size_t)(o - out);
 }
 
+/* The whole text file, section by section. */
 static int text_body(mx_afile *f, const mx_restart *r) {
   uint64_t maxk = 0;
   for (size_t i = 0; i < r->no; i++)
@@ -1034,6 +1050,7 @@ static int text_body(mx_afile *f, const mx_restart *r) {
   return MX_OK;
 }
 
+/* Checks the struct, then writes under a temporary name. */
 int mx_restart_write_text(const char *path, const mx_restart *r) {
   MX_CHECK(check_restart(path, r, MX_EINTERNAL, BAD_DATA));
   mx_afile f;
@@ -1065,6 +1082,7 @@ static void bin_put(bin_out *o, const void *data, size_t bytes) {
   }
 }
 
+/* Header, sections and checksum; count: the per-octant face counts. */
 static int bin_body(bin_out *o, const mx_restart *r, const uint32_t *count) {
   uint8_t head[BIN_HEADER];
   uint32_t version = BIN_VERSION, flags = 0;
@@ -1090,6 +1108,7 @@ static int bin_body(bin_out *o, const mx_restart *r, const uint32_t *count) {
   return o->status;
 }
 
+/* Checks the struct, then writes under a temporary name. */
 int mx_restart_write_binary(const char *path, const mx_restart *r) {
   MX_CHECK(check_restart(path, r, MX_EINTERNAL, BAD_DATA));
   uint32_t *count = mx_alloc(4 * r->no);
@@ -1105,6 +1124,9 @@ int mx_restart_write_binary(const char *path, const mx_restart *r) {
 
 /* ---- element index lists ------------------------------------------------- */
 
+/* Whitespace-separated words; all-digit words are indices, '-' and digits
+ * is an error, other words are skipped. The output has room for len / 2 + 1
+ * indices, the most len bytes can hold. */
 int mx_parse_index_list(const char *name, const uint8_t *buf, size_t len,
                         uint64_t limit, uint64_t **out, size_t *n) {
   *out = NULL;
@@ -1141,6 +1163,7 @@ int mx_parse_index_list(const char *name, const uint8_t *buf, size_t len,
   return MX_OK;
 }
 
+/* Loads the file (an empty one is an empty list) and parses it. */
 int mx_read_index_list(const char *path, uint64_t limit, uint64_t **out,
                        size_t *n) {
   *out = NULL;
