@@ -87,7 +87,7 @@ static inline void cube_with_hole(mx_trisoup *s) {
   add_box(s, ilo, ihi, 1);
 }
 
-static mx_requests no_requests(void) {
+static inline mx_requests no_requests(void) {
   mx_requests r;
   memset(&r, 0, sizeof r);
   r.s_level = -1;
