@@ -7,6 +7,7 @@
 #ifndef MX_TEST_FILE_UTIL_H
 #define MX_TEST_FILE_UTIL_H
 #include <dirent.h>
+#include <fcntl.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -96,6 +97,33 @@ static inline int files_equal(const char *a, const char *b) {
   free(x);
   free(y);
   return eq;
+}
+
+/* ---- stderr capture ------------------------------------------------ */
+
+/* stderr goes to the file at path until capture_stderr_end, which restores
+ * it and returns what was written (NUL-terminated in buf, cut to cap - 1
+ * bytes). */
+static int capture_saved_fd = -1;
+static inline void capture_stderr_begin(const char *path) {
+  fflush(stderr);
+  capture_saved_fd = dup(2);
+  int fd = open(path, O_RDWR | O_CREAT | O_TRUNC, 0600);
+  dup2(fd, 2);
+  close(fd);
+}
+static inline const char *capture_stderr_end(const char *path, char *buf, size_t cap) {
+  fflush(stderr);
+  dup2(capture_saved_fd, 2);
+  close(capture_saved_fd);
+  buf[0] = '\0';
+  FILE *f = fopen(path, "rb");
+  if (f) {
+    size_t n = fread(buf, 1, cap - 1, f);
+    buf[n] = '\0';
+    fclose(f);
+  }
+  return buf;
 }
 
 /* ---- failure checks ------------------------------------------------- */

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "file_util.h"
 #include "common.h"
 #include "soa/regions.h"
 #include "soa/trisoup.h"
@@ -22,7 +23,6 @@ typedef int (*reader_fn)(const char *path, mx_trisoup *out);
 
 static char tmpdir[64];
 static char captured[16384];
-static int saved_stderr = -1;
 
 /* ---- files and stderr capture ----------------------------------------- */
 
@@ -38,30 +38,17 @@ static void write_bytes(const char *path, const void *data, size_t len) {
   fclose(f);
 }
 
+/* stderr goes to tmpdir/stderr.txt until capture_end, which returns it. */
 static void capture_begin(void) {
   char path[128];
   tpath(path, sizeof path, "stderr.txt");
-  fflush(stderr);
-  saved_stderr = dup(2);
-  int fd = open(path, O_RDWR | O_CREAT | O_TRUNC, 0600);
-  dup2(fd, 2);
-  close(fd);
+  capture_stderr_begin(path);
 }
 
 static const char *capture_end(void) {
   char path[128];
   tpath(path, sizeof path, "stderr.txt");
-  fflush(stderr);
-  dup2(saved_stderr, 2);
-  close(saved_stderr);
-  captured[0] = '\0';
-  FILE *f = fopen(path, "rb");
-  if (f) {
-    size_t n = fread(captured, 1, sizeof captured - 1, f);
-    captured[n] = '\0';
-    fclose(f);
-  }
-  return captured;
+  return capture_stderr_end(path, captured, sizeof captured);
 }
 
 /* Replaces 1-based line `line` of text by repl (deleted if repl is NULL);

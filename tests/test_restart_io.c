@@ -26,6 +26,7 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "file_util.h"
 #include "common.h"
 #include "io/restart.h"
 
@@ -39,7 +40,6 @@ static int npass;
 
 static char tmpdir[64] = "restart_io_XXXXXX";
 static char captured[1 << 20];
-static int saved_stderr = -1;
 
 /* ---- files and stderr capture ------------------------------------------ */
 
@@ -56,59 +56,17 @@ static void write_bytes(const char *path, const void *data, size_t len) {
   fclose(f);
 }
 
-/* The whole file (malloc'ed, NUL-terminated), its length in *len. */
-static char *slurp(const char *path, size_t *len) {
-  FILE *f = fopen(path, "rb");
-  *len = 0;
-  if (!f) return NULL;
-  fseek(f, 0, SEEK_END);
-  long n = ftell(f);
-  fseek(f, 0, SEEK_SET);
-  char *b = malloc((size_t)n + 1);
-  if (b && fread(b, 1, (size_t)n, f) != (size_t)n) {
-    free(b);
-    b = NULL;
-  }
-  fclose(f);
-  if (b) b[n] = '\0', *len = (size_t)n;
-  return b;
-}
-
-/* Whether both files are readable and hold the same bytes. */
-static int same_files(const char *a, const char *b) {
-  size_t la, lb;
-  char *x = slurp(a, &la), *y = slurp(b, &lb);
-  int eq = x && y && la == lb && memcmp(x, y, la) == 0;
-  free(x);
-  free(y);
-  return eq;
-}
-
 /* stderr goes to tmpdir/stderr.txt until capture_end, which returns it. */
 static void capture_begin(void) {
   char path[128];
   tpath(path, sizeof path, "stderr.txt");
-  fflush(stderr);
-  saved_stderr = dup(2);
-  int fd = open(path, O_RDWR | O_CREAT | O_TRUNC, 0600);
-  dup2(fd, 2);
-  close(fd);
+  capture_stderr_begin(path);
 }
 
 static const char *capture_end(void) {
   char path[128];
   tpath(path, sizeof path, "stderr.txt");
-  fflush(stderr);
-  dup2(saved_stderr, 2);
-  close(saved_stderr);
-  captured[0] = '\0';
-  FILE *f = fopen(path, "rb");
-  if (f) {
-    size_t n = fread(captured, 1, sizeof captured - 1, f);
-    captured[n] = '\0';
-    fclose(f);
-  }
-  return captured;
+  return capture_stderr_end(path, captured, sizeof captured);
 }
 
 /* Replaces 1-based line `line` of text by repl (deleted if NULL; repl gets
@@ -378,11 +336,11 @@ static void test_c5(const char *c5) {
   t0 = mx_wtime();
   T(mx_restart_write_text(p1, &r) == MX_OK);
   double t_wtext = mx_wtime() - t0;
-  T(same_files(p1, c5)); /* the published layout, byte for byte */
+  T(files_equal(p1, c5)); /* the published layout, byte for byte */
   T(mx_restart_read(p1, &t) == MX_OK);
   T(same_restart(&r, &t));
   T(mx_restart_write_text(p2, &t) == MX_OK);
-  T(same_files(p1, p2));
+  T(files_equal(p1, p2));
   mx_restart_free(&t);
 
   t0 = mx_wtime();
@@ -395,9 +353,9 @@ static void test_c5(const char *c5) {
   if (rc == MX_OK) {
     T(same_restart(&r, &b));
     T(mx_restart_write_binary(b2, &b) == MX_OK);
-    T(same_files(b1, b2));
+    T(files_equal(b1, b2));
     T(mx_restart_write_text(p3, &b) == MX_OK); /* text -> binary -> text */
-    T(same_files(p1, p3));
+    T(files_equal(p1, p3));
     mx_restart_free(&b);
   }
   struct stat st;
@@ -510,7 +468,7 @@ static void test_small(void) {
   mx_restart_free(&r);
   T(mx_restart_write_binary(bpath, &s) == MX_OK);
   T(mx_restart_read(bpath, &r) == MX_OK && same_restart(&r, &s));
-  T(mx_restart_write_text(path2, &r) == MX_OK && same_files(path, path2));
+  T(mx_restart_write_text(path2, &r) == MX_OK && files_equal(path, path2));
   mx_restart_free(&r);
 
   /* tolerance: comments, blank lines, tabs, CR LF, no final newline */
