@@ -79,7 +79,7 @@ int mx_run(const mx_options *o) {
     uint64_t *list = NULL;
     size_t n = 0;
     /* indices of the mesh written with the restart file */
-    if (!st && o->list_in) st = mx_read_element_list(o->list_in, m->file_nelem, &list, &n);
+    if (!st && o->list_in) st = mx_read_element_list(o->list_in, mx_mesher_restart_elements(m), &list, &n);
     if (!st) st = mx_mesher_refine_elements(m, list, n);
     mx_free_array(list);
   } else if (!st) {

@@ -576,7 +576,7 @@ int mx_mesher_boundary(mx_mesher *m) {
   return mx_call_end(m, &c, st);
 }
 
-static void fill_tree_stats(mx_mesher *m) {
+void mx_fill_tree_stats(mx_mesher *m) {
   mx_summary *S = &m->S;
   if (!m->have_tree) return;
   S->leaves = m->nleaves;
@@ -604,7 +604,7 @@ int mx_mesher_mesh(mx_mesher *m) {
   }
   m->S.t_restart = restart;
   int st = mx_mesh_stages(m);
-  fill_tree_stats(m);
+  mx_fill_tree_stats(m);
   m->S.ph.total += mx_wtime() - t0;
   if (st && st != MX_EINVALID) mx_mesh_clear(m);
   return mx_call_end(m, &c, st);

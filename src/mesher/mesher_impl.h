@@ -24,5 +24,7 @@ int mx_update_leaves(mx_mesher *m); /* leaves of the octree, Morton order */
 int mx_mesh_stages(mx_mesher *m);   /* the stages up to params.stage */
 int mx_build_tree(mx_mesher *m);    /* grid, refine, balance, leaves */
 mx_requests mx_mesher_requests(const mx_mesher *m);
+/* The octree's figures (leaves, hash, octants, edges, splits) into m->S. */
+void mx_fill_tree_stats(mx_mesher *m);
 
 #endif

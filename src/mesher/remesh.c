@@ -41,16 +41,7 @@ static int refine_and_mesh(mx_mesher *m, uint32_t *octs, size_t n) {
   m->file_leaf = NULL;
   m->file_nelem = 0;
   int st = mx_mesh_stages(m);
-  m->S.octants = B->oct.n;
-  m->S.leaves = m->nleaves;
-  m->S.leaves_hash = mx_leaves_hash(B, m->leaves, m->nleaves);
-  m->S.edges = mx_edges_total(&B->edges);
-  m->S.edge_bytes = mx_edges_bytes(&B->edges);
-  m->S.split_requested = B->stats.split_requested;
-  m->S.split_balance = B->stats.split_balance;
-  m->S.located = B->stats.located;
-  m->S.dropped = B->stats.dropped;
-  m->S.balance = m->p.balance;
+  mx_fill_tree_stats(m);
   m->S.ph.total = mx_wtime() - t0;
   return st;
 }
@@ -61,54 +52,53 @@ static int need_tree(mx_mesher *m) {
   return MX_EINPUT;
 }
 
-int mx_mesher_refine_elements(mx_mesher *m, const uint64_t *elements, size_t n) {
-  mx_call c;
-  mx_call_begin(m, &c);
-  int st = need_tree(m);
-  /* the element -> leaf map of the current mesh, or of the mesh written
-   * with the restart file just read */
-  const uint32_t *map = NULL;
-  size_t nelem = 0;
-  if (!st && m->file_leaf) {
-    map = m->file_leaf;
-    nelem = m->file_nelem;
-  } else if (!st && m->mesh_stage >= MX_STAGE_TRANSITION) {
-    map = m->M.leaf;
-    nelem = m->M.ncells;
-  } else if (!st) {
-    mx_error(NULL, 0, "no mesh whose elements could be refined");
-    st = MX_EINPUT;
-  }
-  for (size_t i = 0; !st && i < n; i++)
-    if (elements[i] >= nelem) {
-      mx_error(NULL, 0, "element %llu of the list (entry %zu) is out of range: the mesh "
-                        "has %zu elements (0 .. %zu)",
-               (unsigned long long)elements[i], i + 1, nelem, nelem ? nelem - 1 : 0);
-      st = MX_EINPUT;
+/* The leaves of the listed indices (elements, through map, or leaves when
+ * map is NULL) split once, then the requests, and the octree meshed again.
+ * A refused list leaves the mesher as it was. */
+static int refine_indices(mx_mesher *m, const uint64_t *idx, size_t n, const uint32_t *map,
+                          size_t limit, const char *what, const char *whole) {
+  for (size_t i = 0; i < n; i++)
+    if (idx[i] >= limit) {
+      mx_error(NULL, 0, "%s %llu of the list (entry %zu) is out of range: there are %zu "
+                        "%s (0 .. %zu)", what, (unsigned long long)idx[i], i + 1, limit,
+               whole, limit ? limit - 1 : 0);
+      return MX_EINPUT;
     }
-  uint32_t *octs = NULL;
-  if (!st) {
-    octs = mx_alloc((n + 1) * sizeof *octs);
-    if (!octs) st = MX_ENOMEM;
-  }
+  uint32_t *octs = mx_alloc((n + 1) * sizeof *octs);
+  if (!octs) return MX_ENOMEM;
   size_t k = 0, lost = 0;
-  for (size_t i = 0; !st && i < n; i++) {
-    if (map[elements[i]] == UINT32_MAX) {
+  for (size_t i = 0; i < n; i++) {
+    const uint32_t leaf = map ? map[idx[i]] : (uint32_t)idx[i];
+    if (leaf == UINT32_MAX)
       lost++;
-      continue;
-    }
-    octs[k++] = m->leaves[map[elements[i]]];
+    else
+      octs[k++] = m->leaves[leaf];
   }
   if (lost)
     mx_warning(NULL, 0, "%zu listed element(s) lie in octants outside the domain as "
                         "this mixoct sees it: not refined", lost);
-  int ran = 0;
-  if (!st) {
-    ran = 1;
-    st = refine_and_mesh(m, octs, k);
-  }
+  int st = refine_and_mesh(m, octs, k);
   mx_free(octs);
-  if (ran && st && st != MX_EINVALID) mx_mesh_clear(m);
+  if (st && st != MX_EINVALID) mx_mesh_clear(m);
+  return st;
+}
+
+int mx_mesher_refine_elements(mx_mesher *m, const uint64_t *elements, size_t n) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  int st = need_tree(m);
+  /* the element -> leaf map of the mesh written with the restart file just
+   * read, or of the current mesh */
+  if (!st && m->file_leaf) {
+    st = refine_indices(m, elements, n, m->file_leaf, m->file_nelem, "element",
+                        "elements in the restart file's mesh");
+  } else if (!st && m->mesh_stage >= MX_STAGE_TRANSITION) {
+    st = refine_indices(m, elements, n, m->M.leaf, m->M.ncells, "element",
+                        "elements in the mesh");
+  } else if (!st) {
+    mx_error(NULL, 0, "no mesh whose elements could be refined");
+    st = MX_EINPUT;
+  }
   return mx_call_end(m, &c, st);
 }
 
@@ -116,25 +106,7 @@ int mx_mesher_refine_leaves(mx_mesher *m, const uint64_t *leaves, size_t n) {
   mx_call c;
   mx_call_begin(m, &c);
   int st = need_tree(m);
-  for (size_t i = 0; !st && i < n; i++)
-    if (leaves[i] >= m->nleaves) {
-      mx_error(NULL, 0, "leaf %llu (entry %zu) is out of range: the octree has %zu "
-                        "leaves", (unsigned long long)leaves[i], i + 1, m->nleaves);
-      st = MX_EINPUT;
-    }
-  uint32_t *octs = NULL;
-  if (!st) {
-    octs = mx_alloc((n + 1) * sizeof *octs);
-    if (!octs) st = MX_ENOMEM;
-  }
-  for (size_t i = 0; !st && i < n; i++) octs[i] = m->leaves[leaves[i]];
-  int ran = 0;
-  if (!st) {
-    ran = 1;
-    st = refine_and_mesh(m, octs, n);
-  }
-  mx_free(octs);
-  if (ran && st && st != MX_EINVALID) mx_mesh_clear(m);
+  if (!st) st = refine_indices(m, leaves, n, NULL, m->nleaves, "leaf", "leaves in the octree");
   return mx_call_end(m, &c, st);
 }
 
@@ -142,8 +114,7 @@ int mx_mesher_refine(mx_mesher *m) {
   mx_call c;
   mx_call_begin(m, &c);
   int st = need_tree(m);
-  if (!st) st = refine_and_mesh(m, NULL, 0);
-  if (st && st != MX_EINVALID) mx_mesh_clear(m);
+  if (!st) st = refine_indices(m, NULL, 0, NULL, 0, "", "");
   return mx_call_end(m, &c, st);
 }
 

@@ -77,18 +77,16 @@ static int restart_edges(const mx_mesher *m, const uint64_t *vkey, size_t nv, mx
   if (!st) {
     for (size_t o = 0; o < T->n; o++) {
       const int l = T->level[o];
-      uint32_t anchor[3];
-      mx_octant_anchor(T->key[o], l, anchor);
       const uint32_t s = mx_octant_size(l);
+      uint32_t c[3];
+      mx_morton_decode(T->key[o], c);
       for (int a = 0; a < 3; a++)
         for (int j = 0; j < 4; j++) {
-          uint32_t p[3];
-          mx_morton_decode(T->key[o], p);
+          uint32_t p[3] = {c[0], c[1], c[2]};
           p[(a + 1) % 3] += (uint32_t)(j & 1) * s;
           p[(a + 2) % 3] += (uint32_t)(j >> 1) * s;
           keys[l][a][nk[l][a]++] = mx_morton_encode(p[0], p[1], p[2]);
         }
-      (void)anchor;
     }
     for (int l = 0; l <= MX_MAX_LEVEL && !st; l++)
       for (int a = 0; a < 3 && !st; a++) {
