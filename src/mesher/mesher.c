@@ -218,9 +218,11 @@ int mx_mesher_add_demo_surface(mx_mesher *m) {
   mx_call_begin(m, &c);
   mx_trisoup s;
   memset(&s, 0, sizeof s);
+  const double t = mx_wtime();
   int st = mx_demo_surface(&s, 4);
   if (!st) st = add_domain(m, &s, "--demo");
   mx_trisoup_free(&s);
+  m->S.ph.read += mx_wtime() - t;
   return mx_call_end(m, &c, st);
 }
 
