@@ -79,6 +79,29 @@ static uint64_t *elements_in_box(const mx_mesher *m, const double lo[3], const d
   return list;
 }
 
+/* Local re-mesh against a full one: same nodes and elements? */
+typedef struct {
+  int same_counts;
+  size_t cells_differ;  /* type or connectivity */
+  double max_move;      /* largest node position difference */
+} mesh_diff;
+
+static mesh_diff compare_meshes(const mx_mesher *x, const mx_mesher *y) {
+  mx_mesh_arrays a, b;
+  mx_mesher_mesh_arrays(x, &a);
+  mx_mesher_mesh_arrays(y, &b);
+  mesh_diff d = {a.nnodes == b.nnodes && a.nelements == b.nelements, 0, 0.0};
+  if (!d.same_counts) return d;
+  for (size_t c = 0; c < a.nelements; c++)
+    d.cells_differ += a.type[c] != b.type[c] ||
+                      memcmp(a.conn + 8 * c, b.conn + 8 * c, 8 * sizeof *a.conn) != 0;
+  for (size_t v = 0; v < 3 * a.nnodes; v++) {
+    const double e = fabs(a.xyz[v] - b.xyz[v]);
+    if (e > d.max_move) d.max_move = e;
+  }
+  return d;
+}
+
 static void write_list(const char *path, const uint64_t *l, size_t n) {
   FILE *f = fopen(path, "w");
   for (size_t i = 0; i < n; i++) fprintf(f, "%llu\n", (unsigned long long)l[i]);
@@ -168,7 +191,8 @@ int main(int argc, char **argv) {
          n_own, s_own.nodes, s_own.elements, s_own.invalid, 1e3 * mo, 0.637 / mo);
 
   /* ---- 2. -s level: 4% of the elements ------------------------------ */
-  double t_big[15], t_mem[15], t_bin[15], t_save = 0;
+  double t_big[15], t_mem[15], t_bin[15], t_save = 0, list_lo[3] = {0, 0, 0},
+                                                     list_hi[3] = {0, 0, 0};
   size_t n_big = 0;
   mx_stats s_big, s_mem, s_bin;
   for (int r = 0; r < repeat; r++) {
@@ -185,6 +209,8 @@ int main(int argc, char **argv) {
       double lo[3] = {c[0] - h, c[1] - h, c[2] - h}, hi[3] = {c[0] + h, c[1] + h, c[2] + h};
       free(l);
       l = elements_in_box(m, lo, hi, &n_big);
+      memcpy(list_lo, lo, sizeof lo);
+      memcpy(list_hi, hi, sizeof hi);
       const double f = (double)n_big / (double)s_big.elements;
       if (fabs(f - 0.04) < 0.004) break;
       h *= f > 0 ? pow(0.04 / f, 1.0 / 3.0) : 2.0;
@@ -206,6 +232,29 @@ int main(int argc, char **argv) {
     mx_mesher_free(m);
     free(l);
   }
+  /* the local re-mesh against a full re-mesh of the same octree */
+  mesh_diff diff;
+  double t_full = 0;
+  {
+    mx_mesher *m = new_mesher(surface, level);
+    RUN(m, mx_mesher_mesh(m), "mesh");
+    mx_params p;
+    mx_params_default(&p);
+    p.surface_level = level;
+    p.remesh_full = 1;
+    mx_mesher *f = mx_mesher_new(&p);
+    RUN(f, mx_mesher_add_surface(f, surface), "add_surface");
+    RUN(f, mx_mesher_mesh(f), "mesh");
+    uint64_t *l = elements_in_box(m, list_lo, list_hi, &n_big);
+    RUN(m, mx_mesher_refine_elements(m, l, n_big), "local re-mesh");
+    double t0 = now();
+    RUN(f, mx_mesher_refine_elements(f, l, n_big), "full re-mesh");
+    t_full = now() - t0;
+    diff = compare_meshes(m, f);
+    free(l);
+    mx_mesher_free(m);
+    mx_mesher_free(f);
+  }
   const double mb = median(t_big, repeat), mm = median(t_mem, repeat),
                mbn = median(t_bin, repeat);
   printf("cortex -s %d: initial %zu nodes, %zu elements, %.3f s; %zu elements listed "
@@ -214,6 +263,17 @@ int main(int argc, char **argv) {
   printf("  re-mesh in memory: %.3f s = %.1f%% of the initial run (target 10%%); %zu nodes, "
          "%zu elements, %zu invalid\n", mm, 100 * mm / mb, s_mem.nodes, s_mem.elements,
          s_mem.invalid);
+  printf("    phases of the last in-memory re-mesh (s): refine %.3f balance %.3f transition "
+         "%.3f boundary %.3f quality %.3f; %zu leaves split by the list, %zu repaired in %d "
+         "round(s)\n", s_mem.t_refine, s_mem.t_balance, s_mem.t_transition, s_mem.t_boundary,
+         s_mem.t_quality, s_mem.refined_listed, s_mem.repaired, s_mem.repair_rounds);
+  printf("    phases of the initial run (s): refine %.3f balance %.3f transition %.3f boundary "
+         "%.3f quality %.3f\n", s_big.t_refine, s_big.t_balance, s_big.t_transition,
+         s_big.t_boundary, s_big.t_quality);
+  printf("  full re-mesh of the same octree (params.remesh_full): %.3f s; local against full: "
+         "%s, %zu element(s) differ, largest node position difference %.3g\n", t_full,
+         diff.same_counts ? "same node and element counts" : "COUNTS DIFFER", diff.cells_differ,
+         diff.max_move);
   printf("  re-mesh from the binary restart file: %.3f s = %.1f%% (target 25%%); same "
          "mesh: %s; writing the .octb took %.3f s\n", mbn, 100 * mbn / mb,
          s_bin.leaves_hash == s_mem.leaves_hash && s_bin.elements == s_mem.elements ? "yes" : "NO",

@@ -129,7 +129,8 @@ class _Params(ctypes.Structure):
                 ("max_memory_mb", ctypes.c_double),
                 ("close_ratio", ctypes.c_double),
                 ("staircase_quality", ctypes.c_double),
-                ("repair_rounds", ctypes.c_int)]
+                ("repair_rounds", ctypes.c_int),
+                ("remesh_full", ctypes.c_int)]
 
 
 class _MeshArrays(ctypes.Structure):

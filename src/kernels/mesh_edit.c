@@ -61,8 +61,9 @@ int mx_mesh_drop_unused_nodes(mx_mesh_out *M, uint8_t **states, uint32_t **newid
   double *xyz = mx_alloc((3 * nu + 3) * sizeof *xyz);
   uint8_t *st2 = states ? mx_alloc(nu + 1) : NULL;
   uint32_t *newid = newid_out ? mx_alloc((nn + 1) * sizeof *newid) : NULL;
-  if (!xyz || (states && !st2) || (newid_out && !newid)) {
-    mx_free(xyz); mx_free(st2); mx_free(newid); mx_free(used); mx_free(id);
+  uint64_t *nkey = M->nkey ? mx_alloc((nu + 1) * sizeof *nkey) : NULL;
+  if (!xyz || (states && !st2) || (newid_out && !newid) || (M->nkey && !nkey)) {
+    mx_free(xyz); mx_free(st2); mx_free(newid); mx_free(used); mx_free(id); mx_free(nkey);
     return MX_EINPUT;
   }
 #pragma omp parallel for schedule(static)
@@ -71,6 +72,7 @@ int mx_mesh_drop_unused_nodes(mx_mesh_out *M, uint8_t **states, uint32_t **newid
     if (!used[v]) continue;
     memcpy(xyz + 3 * id[v], M->xyz + 3 * v, 3 * sizeof *xyz);
     if (st2) st2[id[v]] = (*states)[v];
+    if (nkey) nkey[id[v]] = M->nkey[v];
   }
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < M->ncells; c++)
@@ -80,6 +82,8 @@ int mx_mesh_drop_unused_nodes(mx_mesh_out *M, uint8_t **states, uint32_t **newid
   mx_free(id);
   mx_free(M->xyz);
   M->xyz = xyz;
+  mx_free(M->nkey);
+  M->nkey = nkey;
   M->nnodes = nu;
   if (states) {
     mx_free(*states);

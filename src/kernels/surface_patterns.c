@@ -97,13 +97,17 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *move
   double *jens = mx_alloc((total + 1) * sizeof *jens);
   double *xyz = mx_realloc(M->xyz, (3 * (nn + total_cen) + 3) * sizeof *xyz);
   uint8_t *st2 = xyz ? mx_realloc(*states_io, nn + total_cen + 1) : NULL;
+  uint64_t *nkey = M->nkey && st2 ? mx_realloc(M->nkey, (nn + total_cen + 1) * sizeof *nkey)
+                                  : NULL;
+  if (nkey) M->nkey = nkey;
   opt->type = mx_alloc(total_opt + 1);
   opt->conn = mx_alloc((8 * total_opt + 1) * sizeof *opt->conn);
   opt->leaf = mx_alloc((total_opt + 1) * sizeof *opt->leaf);
   opt->level = mx_alloc((total_opt + 1) * sizeof *opt->level);
   if (xyz) M->xyz = xyz;
   if (st2) *states_io = st2;
-  if (!type || !conn || !level || !leaf || !jens || !xyz || !st2 || !opt->type ||
+  if (!type || !conn || !level || !leaf || !jens || !xyz || !st2 || (M->nkey && !nkey) ||
+      !opt->type ||
       !opt->conn || !opt->leaf || !opt->level) {
     mx_free(type); mx_free(conn); mx_free(level); mx_free(leaf); mx_free(jens);
     mx_free(nout); mx_free(nopt); mx_free(ncen); mx_free(cs);
@@ -147,6 +151,7 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *move
         for (int a = 0; a < 3; a++) p[a] += M->xyz[3 * (size_t)v[k] + a];
       for (int a = 0; a < 3; a++) xyz[3 * (size_t)centre + a] = p[a] / nv;
       st2[centre] = sc->centre == 1 ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
+      if (nkey) nkey[centre] = MX_NKEY_NONE;
     }
     uint64_t o = nopt[c];
     for (int i = 0; i < sc->count; i++) {

@@ -209,6 +209,7 @@ void mx_mesh_out_free(mx_mesh_out *m) {
   mx_free(m->level);
   mx_free(m->leaf);
   mx_free(m->jens);
+  mx_free(m->nkey);
   memset(m, 0, sizeof *m);
 }
 
@@ -343,7 +344,9 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
     out->level = mx_alloc((out->ncells + 1) * sizeof *out->level);
     out->leaf = mx_alloc((out->ncells + 1) * sizeof *out->leaf);
     out->jens = mx_alloc((out->ncells + 1) * sizeof *out->jens);
-    if (!out->xyz || !out->type || !out->conn || !out->level || !out->leaf || !out->jens)
+    out->nkey = mx_alloc((out->nnodes + 1) * sizeof *out->nkey);
+    if (!out->xyz || !out->type || !out->conn || !out->level || !out->leaf || !out->jens ||
+        !out->nkey)
       st = MX_EINPUT;
   }
   /* Number the nodes: owners in leaf order, points in lattice order. */
@@ -358,6 +361,7 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
         node_entry *e = &H.e[s[j]];
         if (e->owner != i + 1) continue;
         e->id = (uint32_t)id;
+        out->nkey[id] = e->kw - 1;
         uint32_t c[3];
         mx_morton_decode(e->kw - 1, c);
         for (int a = 0; a < 3; a++)

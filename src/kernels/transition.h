@@ -30,12 +30,16 @@ typedef struct {
   int32_t *level;   /* level of the leaf each element comes from */
   uint32_t *leaf;   /* index (in the leaves list) of that leaf */
   double *jens;     /* J_ENS of each element */
+  uint64_t *nkey;   /* per node: its lattice key (mx_lattice_key), or
+                     * MX_NKEY_NONE for a node off the lattice (an element
+                     * centre of the surface patterns); kept by every edit */
   size_t closures;  /* face midpoints added by the closure */
   size_t centre_leaves; /* leaves whose pattern uses the body centre */
   size_t by_type[4];
   double jens_min;
   size_t invalid;   /* elements with J_ENS <= 0 */
 } mx_mesh_out;
+#define MX_NKEY_NONE UINT64_MAX
 
 /* leaves: the balanced leaves, in Morton order (mx_leaves_sorted). */
 int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,

@@ -3,10 +3,13 @@
  * restart file in restart_octree.c. */
 #include "mesher/mesher_impl.h"
 
+#include "kernels/splice.h"
+
 #include "io/boundary_faces.h"
 #include "kernels/estimate.h"
 #include "kernels/mesh_edit.h"
 #include "kernels/remesh.h"
+#include "kernels/splice.h"
 #include "soa/mesh.h"
 
 #include <omp.h>
@@ -507,16 +510,23 @@ static int boundary_once(mx_mesher *m) {
   m->S.boundary = bs;
   m->S.full = 1;
   MX_CHECK(mx_mesh_sort_by_leaf(&m->M, m->nleaves));
+  MX_CHECK(mx_mesh_renumber_first_use(&m->M, &m->states));
   m->mesh_stage = MX_STAGE_FULL;
   m->S.ph.boundary += mx_wtime() - t;
   return MX_OK;
 }
 
+/* Transition and boundary stage on the whole octree. */
+int mx_mesh_full(mx_mesher *m) {
+  MX_CHECK(transition(m));
+  return boundary_once(m);
+}
+
 /* Repair (the 2021 paper, section 6): the leaves holding elements with
  * J_ENS <= 0 are split once by list refinement (Algorithm 3), and the
- * octree is meshed again, up to repair_rounds times. */
-static int boundary_with_repair(mx_mesher *m) {
-  MX_CHECK(boundary_once(m));
+ * octree is meshed again around them (remesh_local.c), up to
+ * repair_rounds times. */
+int mx_repair(mx_mesher *m) {
   for (int round = 0; m->M.invalid > 0 && round < m->p.repair_rounds; round++) {
     if (m->on_round) m->on_round(round + 1);
     size_t n = 0;
@@ -530,9 +540,27 @@ static int boundary_with_repair(mx_mesher *m) {
     MX_CHECK(st);
     m->S.repaired += before;
     m->S.repair_rounds++;
-    MX_CHECK(mx_update_leaves(m));
-    MX_CHECK(transition(m));
-    MX_CHECK(boundary_once(m));
+    uint32_t *old = m->leaves;
+    const size_t nold = m->nleaves;
+    m->leaves = NULL;
+    st = mx_update_leaves(m);
+    if (!st) st = mx_remesh_changed(m, old, nold);
+    mx_free(old);
+    MX_CHECK(st);
+  }
+  return MX_OK;
+}
+
+/* Per-node flags, counts and quality of the mesh just made; MX_EINVALID
+ * when elements with J_ENS <= 0 remain. */
+int mx_mesh_finish(mx_mesher *m) {
+  MX_CHECK(boundary_flags(m));
+  m->S.leaves = m->nleaves;
+  count_mesh(m);
+  if (m->M.invalid > 0) {
+    mx_error(NULL, 0, "%zu element(s) with J_ENS <= 0 remain after %d repair round(s)",
+             m->M.invalid, m->S.repair_rounds);
+    return MX_EINVALID;
   }
   return MX_OK;
 }
@@ -547,16 +575,11 @@ int mx_mesh_stages(mx_mesher *m) {
     return MX_OK;
   }
   MX_CHECK(transition(m));
-  if (m->p.stage == MX_STAGE_FULL) MX_CHECK(boundary_with_repair(m));
-  MX_CHECK(boundary_flags(m));
-  m->S.leaves = m->nleaves;
-  count_mesh(m);
-  if (m->M.invalid > 0) {
-    mx_error(NULL, 0, "%zu element(s) with J_ENS <= 0 remain after %d repair round(s)",
-             m->M.invalid, m->S.repair_rounds);
-    return MX_EINVALID;
+  if (m->p.stage == MX_STAGE_FULL) {
+    MX_CHECK(boundary_once(m));
+    MX_CHECK(mx_repair(m));
   }
-  return MX_OK;
+  return mx_mesh_finish(m);
 }
 
 int mx_mesher_boundary(mx_mesher *m) {
@@ -568,12 +591,9 @@ int mx_mesher_boundary(mx_mesher *m) {
                       "mx_mesher_transition first");
     st = MX_EINPUT;
   }
-  if (!st) st = boundary_with_repair(m);
-  if (!st) st = boundary_flags(m);
-  if (!st) {
-    count_mesh(m);
-    if (m->M.invalid > 0) st = MX_EINVALID;
-  }
+  if (!st) st = boundary_once(m);
+  if (!st) st = mx_repair(m);
+  if (!st) st = mx_mesh_finish(m);
   if (st && st != MX_EINVALID) mx_mesh_clear(m);
   return mx_call_end(m, &c, st);
 }

@@ -10,6 +10,7 @@
 #include "kernels/distance.h"
 #include "kernels/quality.h"
 #include "kernels/refine.h"
+#include "kernels/splice.h"
 #include "kernels/transition.h"
 #include "soa/regions.h"
 #include "soa/trisoup.h"
@@ -41,6 +42,11 @@ typedef struct {
   size_t refined_listed;    /* leaves split by the last list refinement */
   size_t remesh_splits;     /* octants split by the last re-mesh (list, balance, requests) */
   double t_restart;         /* seconds reading or writing the restart file */
+  /* the last re-mesh after a refinement (remesh_local.c) */
+  int local;                /* 1: only a patch of leaves was meshed again */
+  size_t patch_leaves;      /* leaves meshed again (core and context) */
+  size_t core_leaves;       /* of which the elements were kept */
+  mx_splice_stats splice;
 } mx_summary;
 
 

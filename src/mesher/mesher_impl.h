@@ -22,6 +22,14 @@ void mx_mesh_clear(mx_mesher *m);   /* drop the mesh */
 void mx_tree_clear(mx_mesher *m);   /* drop the octree and the mesh */
 int mx_update_leaves(mx_mesher *m); /* leaves of the octree, Morton order */
 int mx_mesh_stages(mx_mesher *m);   /* the stages up to params.stage */
+int mx_mesh_full(mx_mesher *m);     /* transition + boundary, whole octree */
+int mx_repair(mx_mesher *m);        /* repair rounds on the full-stage mesh */
+int mx_mesh_finish(mx_mesher *m);   /* flags, counts; MX_EINVALID if invalid */
+/* After a refinement of the octree (old_leaves: the leaves before it, in
+ * Morton order): the transition and boundary stages again, only on the
+ * leaves around what was split when the current mesh allows it
+ * (remesh_local.c), else on the whole octree. Does not repair. */
+int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold);
 int mx_build_tree(mx_mesher *m);    /* grid, refine, balance, leaves */
 mx_requests mx_mesher_requests(const mx_mesher *m);
 /* The octree's figures (leaves, hash, octants, edges, splits) into m->S. */

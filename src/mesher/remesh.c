@@ -36,11 +36,24 @@ static int refine_and_mesh(mx_mesher *m, uint32_t *octs, size_t n) {
   m->S.remesh_splits = B->stats.split_requested + B->stats.split_balance - s0;
   m->S.ph.refine += B->stats.t_refine - tr;
   m->S.ph.balance += B->stats.t_balance - tb;
-  MX_CHECK(mx_update_leaves(m));
   mx_free(m->file_leaf);
   m->file_leaf = NULL;
   m->file_nelem = 0;
-  int st = mx_mesh_stages(m);
+  int st;
+  if (m->mesh_stage == MX_STAGE_FULL && m->p.stage == MX_STAGE_FULL) {
+    /* mesh again around what changed, keep the rest */
+    uint32_t *old = m->leaves;
+    const size_t nold = m->nleaves;
+    m->leaves = NULL;
+    st = mx_update_leaves(m);
+    if (!st) st = mx_remesh_changed(m, old, nold);
+    mx_free(old);
+    if (!st) st = mx_repair(m);
+    if (!st) st = mx_mesh_finish(m);
+  } else {
+    MX_CHECK(mx_update_leaves(m));
+    st = mx_mesh_stages(m);
+  }
   mx_fill_tree_stats(m);
   m->S.ph.total = mx_wtime() - t0;
   return st;

@@ -1,0 +1,375 @@
+#include "kernels/splice.h"
+
+#include <string.h>
+
+#include "common.h"
+#include "kernels/quality.h"
+#include "soa/mesh.h"
+#include "soa/scan.h"
+
+/* ---- leaves meeting boxes ---------------------------------------------- */
+
+static int box_meets(const mx_octree *T, uint32_t o, const mx_lattice_box *b) {
+  uint32_t a[3];
+  mx_morton_decode(T->key[o], a);
+  const uint32_t s = mx_octant_size(T->level[o]);
+  for (int d = 0; d < 3; d++)
+    if (a[d] > b->hi[d] || a[d] + s < b->lo[d]) return 0;
+  return 1;
+}
+
+int mx_leaves_in_boxes(const mx_builder *B, const uint32_t *pos, const mx_lattice_box *boxes,
+                       size_t nb, uint8_t *mark, uint8_t value) {
+  const mx_octree *T = &B->oct;
+  /* the roots are the first octants built */
+  size_t nroots = 0;
+  while (nroots < T->n && T->parent[nroots] == MX_NONE) nroots++;
+#pragma omp parallel for schedule(dynamic, 4)
+  for (size_t q = 0; q < nb; q++) {
+    uint32_t stack[8 * (MX_MAX_LEVEL + 2)];
+    for (size_t r = 0; r < nroots; r++) {
+      if (!box_meets(T, (uint32_t)r, &boxes[q])) continue;
+      int top = 0;
+      stack[top++] = (uint32_t)r;
+      while (top) {
+        const uint32_t o = stack[--top];
+        if (!(T->flags[o] & MX_OCT_SPLIT)) {
+          const uint32_t p = pos[o];
+          uint8_t zero = 0;
+          if (p != MX_NONE && !__atomic_load_n(&mark[p], __ATOMIC_RELAXED))
+            __atomic_compare_exchange_n(&mark[p], &zero, value, 0, __ATOMIC_RELAXED,
+                                        __ATOMIC_RELAXED);
+          continue;
+        }
+        for (int c = 7; c >= 0; c--) {
+          const uint32_t ch = mx_octree_child(T, o, c);
+          if (ch != MX_NONE && box_meets(T, ch, &boxes[q])) stack[top++] = ch;
+        }
+      }
+    }
+  }
+  return MX_OK;
+}
+
+/* ---- numbering by first use --------------------------------------------- */
+
+/* newid[v] for v < nn: the rank of node v in the order of first use in
+ * conn (UINT32_MAX when unused); *nused: the nodes used. */
+static int first_use_ids(const uint8_t *type, const uint32_t *conn, size_t nc, size_t nn,
+                         uint32_t **newid_out, size_t *nused) {
+  uint64_t *first = mx_alloc((nn + 1) * sizeof *first);
+  uint64_t *cnt = mx_alloc((nc + 1) * sizeof *cnt);
+  uint32_t *newid = mx_alloc((nn + 1) * sizeof *newid);
+  if (!first || !cnt || !newid) {
+    mx_free(first); mx_free(cnt); mx_free(newid);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < nn; v++) {
+    first[v] = UINT64_MAX;
+    newid[v] = UINT32_MAX;
+  }
+  /* the smallest slot 8c+k holding each node; in increasing c per thread,
+   * so a node is written about once per thread */
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++)
+    for (int k = 0; k < mx_cell_nodes[type[c]]; k++) {
+      uint64_t *f = &first[conn[8 * c + k]];
+      const uint64_t slot = 8 * (uint64_t)c + (uint64_t)k;
+      uint64_t cur = __atomic_load_n(f, __ATOMIC_RELAXED);
+      while (slot < cur &&
+             !__atomic_compare_exchange_n(f, &cur, slot, 1, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+      }
+    }
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++) {
+    uint64_t n = 0;
+    for (int k = 0; k < mx_cell_nodes[type[c]]; k++)
+      n += first[conn[8 * c + k]] == 8 * (uint64_t)c + (uint64_t)k;
+    cnt[c] = n;
+  }
+  *nused = mx_scan_u64(cnt, nc);
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++) {
+    uint64_t id = cnt[c];
+    for (int k = 0; k < mx_cell_nodes[type[c]]; k++) {
+      const uint32_t v = conn[8 * c + k];
+      if (first[v] == 8 * (uint64_t)c + (uint64_t)k) newid[v] = (uint32_t)id++;
+    }
+  }
+  mx_free(first);
+  mx_free(cnt);
+  *newid_out = newid;
+  return MX_OK;
+}
+
+int mx_mesh_renumber_first_use(mx_mesh_out *M, uint8_t **states) {
+  uint32_t *newid = NULL;
+  size_t nu = 0;
+  MX_CHECK(first_use_ids(M->type, M->conn, M->ncells, M->nnodes, &newid, &nu));
+  double *xyz = mx_alloc((3 * nu + 3) * sizeof *xyz);
+  uint8_t *st2 = states ? mx_alloc(nu + 1) : NULL;
+  uint64_t *nkey = M->nkey ? mx_alloc((nu + 1) * sizeof *nkey) : NULL;
+  if (!xyz || (states && !st2) || (M->nkey && !nkey)) {
+    mx_free(xyz); mx_free(st2); mx_free(nkey); mx_free(newid);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < M->nnodes; v++) {
+    const uint32_t w = newid[v];
+    if (w == UINT32_MAX) continue;
+    memcpy(xyz + 3 * (size_t)w, M->xyz + 3 * v, 3 * sizeof *xyz);
+    if (st2) st2[w] = (*states)[v];
+    if (nkey) nkey[w] = M->nkey[v];
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++)
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+      M->conn[8 * c + k] = newid[M->conn[8 * c + k]];
+  mx_free(newid);
+  mx_free(M->xyz);
+  M->xyz = xyz;
+  mx_free(M->nkey);
+  M->nkey = nkey;
+  M->nnodes = nu;
+  if (states) {
+    mx_free(*states);
+    *states = st2;
+  }
+  return MX_OK;
+}
+
+/* ---- splice ------------------------------------------------------------- */
+
+/* Where each leaf's elements start and end in a mesh sorted by leaf. */
+static int leaf_ranges(const mx_mesh_out *M, size_t nleaves, uint64_t **lo_out,
+                       uint64_t **hi_out) {
+  uint64_t *lo = mx_alloc((nleaves + 1) * sizeof *lo);
+  uint64_t *hi = mx_alloc((nleaves + 1) * sizeof *hi);
+  if (!lo || !hi) {
+    mx_free(lo); mx_free(hi);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t l = 0; l < nleaves; l++) lo[l] = hi[l] = 0;
+  const size_t n = M->ncells;
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < n; c++) {
+    if (c == 0 || M->leaf[c] != M->leaf[c - 1]) lo[M->leaf[c]] = c;
+    if (c + 1 == n || M->leaf[c] != M->leaf[c + 1]) hi[M->leaf[c]] = c + 1;
+  }
+  *lo_out = lo;
+  *hi_out = hi;
+  return MX_OK;
+}
+
+/* A small concurrent hash: lattice key -> node of the patch mesh. */
+typedef struct {
+  uint64_t *key; /* key + 1, 0: empty */
+  uint32_t *val;
+  size_t cap;    /* power of two */
+} key_map;
+
+static inline size_t km_slot(uint64_t k, size_t cap) {
+  k ^= k >> 31;
+  k *= 0x9e3779b97f4a7c15ull;
+  return (size_t)(k >> 17) & (cap - 1);
+}
+
+static void km_insert(key_map *H, uint64_t k, uint32_t v) {
+  for (size_t i = km_slot(k, H->cap);; i = (i + 1) & (H->cap - 1)) {
+    uint64_t expected = 0;
+    if (__atomic_compare_exchange_n(&H->key[i], &expected, k + 1, 0, __ATOMIC_ACQ_REL,
+                                    __ATOMIC_ACQUIRE)) {
+      __atomic_store_n(&H->val[i], v, __ATOMIC_RELEASE);
+      return;
+    }
+    if (expected == k + 1) return; /* lattice keys are unique per mesh */
+  }
+}
+
+static uint32_t km_find(const key_map *H, uint64_t k) {
+  for (size_t i = km_slot(k, H->cap);; i = (i + 1) & (H->cap - 1)) {
+    const uint64_t x = H->key[i];
+    if (!x) return UINT32_MAX;
+    if (x == k + 1) return H->val[i];
+  }
+}
+
+int mx_mesh_splice(const mx_mesh_out *O, const uint8_t *ostates, size_t nold_leaves,
+                   const mx_mesh_out *P, const uint8_t *pstates, size_t npatch_leaves,
+                   const uint32_t *from_old, const uint32_t *from_patch, size_t nleaves,
+                   mx_mesh_out *out, uint8_t **states_out, mx_splice_stats *stats) {
+  memset(out, 0, sizeof *out);
+  memset(stats, 0, sizeof *stats);
+  *states_out = NULL;
+  if (!O->nkey || !P->nkey) {
+    mx_error(NULL, 0, "internal: splice without lattice keys");
+    return MX_EINTERNAL;
+  }
+  uint64_t *olo = NULL, *ohi = NULL, *plo = NULL, *phi = NULL;
+  uint64_t *off = mx_alloc((nleaves + 1) * sizeof *off);
+  uint8_t *ouse = mx_calloc(O->nnodes + 1), *puse = mx_calloc(P->nnodes + 1);
+  uint32_t *pmap = mx_alloc((P->nnodes + 1) * sizeof *pmap);
+  key_map H = {NULL, NULL, 0};
+  int st = (!off || !ouse || !puse || !pmap) ? MX_EINPUT : MX_OK;
+  if (!st) st = leaf_ranges(O, nold_leaves, &olo, &ohi);
+  if (!st) st = leaf_ranges(P, npatch_leaves, &plo, &phi);
+  /* 1. Elements per leaf, and the nodes each side keeps. */
+  if (!st) {
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < nleaves; i++) {
+      uint64_t n = 0;
+      if (from_patch[i] != MX_NONE) {
+        n = phi[from_patch[i]] - plo[from_patch[i]];
+        for (uint64_t c = plo[from_patch[i]]; c < phi[from_patch[i]]; c++)
+          for (int k = 0; k < mx_cell_nodes[P->type[c]]; k++) __atomic_store_n(&puse[P->conn[8 * c + k]], 1, __ATOMIC_RELAXED);
+      } else if (from_old[i] != MX_NONE) {
+        n = ohi[from_old[i]] - olo[from_old[i]];
+        for (uint64_t c = olo[from_old[i]]; c < ohi[from_old[i]]; c++)
+          for (int k = 0; k < mx_cell_nodes[O->type[c]]; k++) __atomic_store_n(&ouse[O->conn[8 * c + k]], 1, __ATOMIC_RELAXED);
+      }
+      off[i] = n;
+    }
+    out->ncells = mx_scan_u64(off, nleaves);
+  }
+  /* 2. Patch nodes on the lattice that the old elements kept also use: one
+   * node, at its old place (the elements kept are not touched). */
+  size_t npk = 0;
+  if (!st) {
+#pragma omp parallel for schedule(static) reduction(+ : npk)
+    for (size_t w = 0; w < P->nnodes; w++) npk += puse[w] && P->nkey[w] != MX_NKEY_NONE;
+    H.cap = 64;
+    while (H.cap < 2 * npk + 64) H.cap *= 2;
+    H.key = mx_calloc(H.cap * sizeof *H.key);
+    H.val = mx_alloc(H.cap * sizeof *H.val);
+    if (!H.key || !H.val) st = MX_EINPUT;
+  }
+  size_t shared = 0, moved = 0;
+  if (!st) {
+#pragma omp parallel for schedule(static)
+    for (size_t w = 0; w < P->nnodes; w++) {
+      pmap[w] = MX_NONE;
+      if (puse[w] && P->nkey[w] != MX_NKEY_NONE) km_insert(&H, P->nkey[w], (uint32_t)w);
+    }
+#pragma omp parallel for schedule(static) reduction(+ : shared, moved)
+    for (size_t v = 0; v < O->nnodes; v++) {
+      if (!ouse[v] || O->nkey[v] == MX_NKEY_NONE) continue;
+      const uint32_t w = km_find(&H, O->nkey[v]);
+      if (w == UINT32_MAX) continue;
+      pmap[w] = (uint32_t)v;
+      shared++;
+      moved += memcmp(O->xyz + 3 * v, P->xyz + 3 * (size_t)w, 3 * sizeof(double)) != 0 ||
+               ostates[v] != pstates[w];
+    }
+    stats->shared_nodes = shared;
+    stats->shared_moved = moved;
+  }
+  /* 3. The elements, on provisional node ids: old v -> v, patch w -> its old
+   * node or O->nnodes + w. */
+  const size_t ntmp = O->nnodes + P->nnodes;
+  if (!st) {
+    const size_t nc = out->ncells;
+    out->type = mx_alloc(nc + 1);
+    out->conn = mx_alloc((8 * nc + 1) * sizeof *out->conn);
+    out->level = mx_alloc((nc + 1) * sizeof *out->level);
+    out->leaf = mx_alloc((nc + 1) * sizeof *out->leaf);
+    out->jens = mx_alloc((nc + 1) * sizeof *out->jens);
+    if (!out->type || !out->conn || !out->level || !out->leaf || !out->jens) st = MX_EINPUT;
+    if (ntmp >= UINT32_MAX) st = MX_EINPUT;
+  }
+  size_t kept = 0, patched = 0;
+  if (!st) {
+#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : kept, patched)
+    for (size_t i = 0; i < nleaves; i++) {
+      const int patch = from_patch[i] != MX_NONE;
+      const mx_mesh_out *S = patch ? P : O;
+      uint64_t lo = 0, hi = 0;
+      if (patch) {
+        lo = plo[from_patch[i]];
+        hi = phi[from_patch[i]];
+      } else if (from_old[i] != MX_NONE) {
+        lo = olo[from_old[i]];
+        hi = ohi[from_old[i]];
+      }
+      uint64_t w = off[i];
+      for (uint64_t c = lo; c < hi; c++, w++) {
+        const int nv = mx_cell_nodes[S->type[c]];
+        out->type[w] = S->type[c];
+        out->level[w] = S->level[c];
+        out->leaf[w] = (uint32_t)i;
+        int remeasure = 0;
+        for (int k = 0; k < 8; k++) {
+          uint32_t v = S->conn[8 * c + k];
+          if (k < nv && patch) {
+            if (pmap[v] != MX_NONE) {
+              remeasure |= memcmp(O->xyz + 3 * (size_t)pmap[v], P->xyz + 3 * (size_t)v,
+                                  3 * sizeof(double)) != 0;
+              v = pmap[v];
+            } else {
+              v = (uint32_t)(O->nnodes + v);
+            }
+          }
+          out->conn[8 * w + k] = k < nv ? v : 0;
+        }
+        out->jens[w] = S->jens[c];
+        if (remeasure) {
+          double x[8][3];
+          for (int k = 0; k < nv; k++) {
+            const uint32_t v = out->conn[8 * w + k];
+            const double *p = v < O->nnodes ? O->xyz + 3 * (size_t)v
+                                            : P->xyz + 3 * (size_t)(v - O->nnodes);
+            memcpy(x[k], p, sizeof x[k]);
+          }
+          out->jens[w] = mx_jens(S->type[c], x);
+        }
+      }
+      if (patch)
+        patched += hi - lo;
+      else
+        kept += hi - lo;
+    }
+    stats->kept_cells = kept;
+    stats->patch_cells = patched;
+  }
+  /* 4. Nodes by first use. */
+  uint32_t *newid = NULL;
+  size_t nu = 0;
+  if (!st) st = first_use_ids(out->type, out->conn, out->ncells, ntmp, &newid, &nu);
+  uint8_t *states = NULL;
+  if (!st) {
+    out->nnodes = nu;
+    out->xyz = mx_alloc((3 * nu + 3) * sizeof *out->xyz);
+    out->nkey = mx_alloc((nu + 1) * sizeof *out->nkey);
+    states = mx_alloc(nu + 1);
+    if (!out->xyz || !out->nkey || !states) st = MX_EINPUT;
+  }
+  if (!st) {
+#pragma omp parallel for schedule(static)
+    for (size_t v = 0; v < ntmp; v++) {
+      const uint32_t u = newid[v];
+      if (u == UINT32_MAX) continue;
+      const int old = v < O->nnodes;
+      const size_t s = old ? v : v - O->nnodes;
+      const mx_mesh_out *S = old ? O : P;
+      memcpy(out->xyz + 3 * (size_t)u, S->xyz + 3 * s, 3 * sizeof(double));
+      out->nkey[u] = S->nkey[s];
+      states[u] = old ? ostates[s] : pstates[s];
+    }
+#pragma omp parallel for schedule(static)
+    for (size_t c = 0; c < out->ncells; c++)
+      for (int k = 0; k < mx_cell_nodes[out->type[c]]; k++)
+        out->conn[8 * c + k] = newid[out->conn[8 * c + k]];
+  }
+  mx_free(newid);
+  mx_free(olo); mx_free(ohi); mx_free(plo); mx_free(phi);
+  mx_free(off); mx_free(ouse); mx_free(puse); mx_free(pmap);
+  mx_free(H.key); mx_free(H.val);
+  if (st) {
+    mx_free(states);
+    mx_mesh_out_free(out);
+    return st;
+  }
+  *states_out = states;
+  return MX_OK;
+}
