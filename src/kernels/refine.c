@@ -1,4 +1,5 @@
 #include "kernels/refine.h"
+#include "kernels/remesh.h"
 
 #include "common.h"
 #include "kernels/intersect.h"
@@ -36,6 +37,7 @@ int mx_builder_init(mx_builder *B, const mx_trisoup *soup, uint32_t nt_domain,
    * leaf of the top level has none. So edge infos are kept for levels up to
    * max - 1, never for the top level (the largest table by far). */
   B->edge_levels = mx_max_requested_level(req) - 1;
+  B->edge_lazy_top = -1;
   double lo[3], hi[3];
   mx_trisoup dom = *soup;
   dom.nt = nt_domain; /* the grid covers the domain's triangles' vertices */
@@ -84,6 +86,7 @@ void mx_builder_free(mx_builder *B) {
   mx_free(B->scratch_mask);
   mx_free(B->scratch_info);
   mx_free(B->scratch_off);
+  mx_free(B->root_of);
   memset(B, 0, sizeof *B);
 }
 
@@ -274,6 +277,10 @@ int mx_split_octants(mx_builder *B, const uint32_t *list, size_t n,
   if (n == 0) return MX_OK;
   mx_octree *T = &B->oct;
   const int l = T->level[list[0]];
+  /* below the levels whose edge infos are complete: those of these octants
+   * and their neighbours (transition masks), and of their parents and the
+   * parents' neighbours (the balance looks for leaves there) */
+  if (B->use_edges && l > B->edge_levels) MX_CHECK(mx_edges_ensure(B, list, n, 1));
   /* Offsets of each parent's triangles in the mask scratch. */
   MX_CHECK(grow_scratch((void **)&B->scratch_off, &B->scratch_off_cap,
                         2 * n + 2, sizeof(uint64_t)));

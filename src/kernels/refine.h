@@ -48,6 +48,12 @@ typedef struct {
   mx_edges edges;
   int use_edges;              /* maintain edge infos while splitting */
   int edge_levels;            /* edge infos kept for levels <= this one */
+  /* Deeper levels, reached by refining an existing octree, hold edge infos
+   * only where needed (mx_edges_ensure, kernels/remesh.c): the octants split
+   * there and their face and edge neighbours (flag MX_OCT_EDGES). The
+   * deepest such level, -1 for none. */
+  int edge_lazy_top;
+  uint32_t *root_of;          /* root octant of each root cube (lazy) */
   mx_refine_stats stats;
   /* Optional (NULL by default): octants that must be split whatever the
    * requests ask, sorted (mx_octkeys_sort_unique); a restart file's octree
@@ -77,6 +83,12 @@ typedef struct {
  * each region surface r in [region_t0[r], region_t0[r+1]). */
 /* 1 when (key, level) is in the builder's split set. */
 int mx_split_set_has(const mx_builder *B, uint64_t key, int level);
+
+/* The deepest level whose octants can have edge infos (the transition looks
+ * edges up for leaves up to this level). */
+static inline int mx_edge_top(const mx_builder *B) {
+  return B->edge_lazy_top > B->edge_levels ? B->edge_lazy_top : B->edge_levels;
+}
 
 int mx_builder_init(mx_builder *B, const mx_trisoup *soup, uint32_t nt_domain,
                     const uint32_t *region_t0, const mx_requests *req,

@@ -35,6 +35,106 @@ int mx_raise_edge_levels(mx_builder *B, int levels) {
   return MX_OK;
 }
 
+/* The octant (key, level), or MX_NONE when the octree does not hold it. */
+static uint32_t find_octant(const mx_builder *B, uint64_t key, int level) {
+  const mx_octree *T = &B->oct;
+  uint32_t c[3];
+  mx_morton_decode(key, c);
+  const int *d = B->grid.dims;
+  const size_t r = ((size_t)(c[2] >> MX_MAX_LEVEL) * (size_t)d[1] + (c[1] >> MX_MAX_LEVEL)) *
+                       (size_t)d[0] + (c[0] >> MX_MAX_LEVEL);
+  uint32_t o = B->root_of[r];
+  for (int l = 1; l <= level && o != MX_NONE; l++) {
+    if (!(T->flags[o] & MX_OCT_SPLIT)) return MX_NONE;
+    o = mx_octree_child(T, o, mx_morton_child_id(key, l));
+  }
+  return o;
+}
+
+/* The face and edge neighbours: (dx, dy, dz) with one or two non-zero. */
+static const int8_t near18[18][3] = {
+    {-1, 0, 0}, {1, 0, 0},  {0, -1, 0}, {0, 1, 0},  {0, 0, -1}, {0, 0, 1},
+    {-1, -1, 0}, {-1, 1, 0}, {1, -1, 0}, {1, 1, 0},  {-1, 0, -1}, {-1, 0, 1},
+    {1, 0, -1},  {1, 0, 1},  {0, -1, -1}, {0, -1, 1}, {0, 1, -1},  {0, 1, 1}};
+
+int mx_edges_ensure(mx_builder *B, const uint32_t *list, size_t n, int with_parents) {
+  mx_octree *T = &B->oct;
+  if (!B->use_edges || n == 0) return MX_OK;
+  if (!B->root_of) {
+    const size_t nr = (size_t)B->grid.dims[0] * B->grid.dims[1] * B->grid.dims[2];
+    B->root_of = mx_alloc((nr + 1) * sizeof *B->root_of);
+    if (!B->root_of) return MX_EINPUT;
+    for (size_t r = 0; r < nr; r++) B->root_of[r] = MX_NONE;
+    for (size_t o = 0; o < T->n; o++) {
+      if (T->parent[o] != MX_NONE) continue;
+      uint32_t c[3];
+      mx_morton_decode(T->key[o], c);
+      const int *d = B->grid.dims;
+      B->root_of[((size_t)(c[2] >> MX_MAX_LEVEL) * (size_t)d[1] + (c[1] >> MX_MAX_LEVEL)) *
+                     (size_t)d[0] + (c[0] >> MX_MAX_LEVEL)] = (uint32_t)o;
+    }
+  }
+  /* up to 19 octants around each listed octant and each parent, taken once
+   * (the flag, set atomically, says who registers) */
+  enum { K = 38 };
+  uint32_t *got = mx_alloc((K * n + 1) * sizeof *got);
+  if (!got) return MX_EINPUT;
+  size_t count[2] = {0, 0};
+#pragma omp parallel for schedule(static) reduction(+ : count[:2])
+  for (size_t i = 0; i < n; i++) {
+    uint32_t *g = got + K * i;
+    for (int k = 0; k < K; k++) g[k] = MX_NONE;
+    for (int up = 0; up < 1 + (with_parents != 0); up++) {
+      const uint32_t o = up ? T->parent[list[i]] : list[i];
+      if (o == MX_NONE || T->level[o] <= B->edge_levels) continue;
+      const int l = T->level[o];
+      for (int k = 0; k < 19; k++) {
+        uint32_t x = o;
+        if (k < 18) {
+          const uint64_t nk = mx_morton_neighbor(T->key[o], l, near18[k][0], near18[k][1],
+                                                 near18[k][2], B->grid.dims);
+          x = nk == UINT64_MAX ? MX_NONE : find_octant(B, nk, l);
+        }
+        if (x == MX_NONE || (__atomic_load_n(&T->flags[x], __ATOMIC_RELAXED) & MX_OCT_EDGES))
+          continue;
+        if (__atomic_fetch_or(&T->flags[x], (uint8_t)MX_OCT_EDGES, __ATOMIC_RELAXED) &
+            MX_OCT_EDGES)
+          continue;
+        g[19 * up + k] = x;
+        count[up]++;
+      }
+    }
+  }
+  const int l0 = T->level[list[0]];
+  int st = MX_OK;
+  for (int up = 0; up < 2 && !st; up++)
+    if (count[up]) st = mx_edges_reserve(&B->edges, l0 - up, 4 * count[up] + 16);
+  if (!st) {
+    size_t created[2][3] = {{0, 0, 0}, {0, 0, 0}};
+#pragma omp parallel
+    {
+      size_t mine[2][3] = {{0, 0, 0}, {0, 0, 0}};
+#pragma omp for schedule(static)
+      for (size_t i = 0; i < K * n; i++) {
+        const uint32_t x = got[i];
+        if (x == MX_NONE) continue;
+        const int up = (int)(i % K) >= 19;
+        mx_edges_register(&B->edges, x, T->key[x], T->level[x], mine[up]);
+      }
+#pragma omp critical
+      for (int up = 0; up < 2; up++)
+        for (int a = 0; a < 3; a++) created[up][a] += mine[up][a];
+    }
+    for (int up = 0; up < 2; up++)
+      if (count[up]) {
+        mx_edges_add_count(&B->edges, l0 - up, created[up]);
+        if (l0 - up > B->edge_lazy_top) B->edge_lazy_top = l0 - up;
+      }
+  }
+  mx_free(got);
+  return st;
+}
+
 void mx_retarget_leaves(mx_builder *B) {
   mx_octree *T = &B->oct;
 #pragma omp parallel for schedule(static)
@@ -90,7 +190,8 @@ static int sweep_levels(mx_builder *B, int *done) {
     return MX_OK;
   }
   if (maxt > MX_MAX_LEVEL) maxt = MX_MAX_LEVEL;
-  MX_CHECK(mx_raise_edge_levels(B, maxt - 1));
+  /* no mx_raise_edge_levels: the splits below edge_levels register what
+   * they need (mx_edges_ensure, from mx_split_octants) */
   uint32_t *want = mx_alloc((n + 1) * sizeof *want);
   if (!want) return MX_EINPUT;
   size_t w = 0;

@@ -10,9 +10,10 @@
  * mx_refine_leaves_to_target  Algorithm 1 from the existing leaves: level
  *                           by level, split the leaves asking for more,
  *                           drain to_balance before the next level
- * mx_raise_edge_levels      edge infos for levels that were not kept (the
- *                           finest level of a run keeps none; a refinement
- *                           needs them one level deeper)
+ * mx_raise_edge_levels      edge infos for every octant of levels that were
+ *                           not kept (the finest level of a run keeps none)
+ * mx_edges_ensure           edge infos at such levels only around the
+ *                           octants a refinement splits
  *
  * The octree's octants stay where they are (indices do not move); new
  * octants are appended. */
@@ -22,6 +23,12 @@
 #include "kernels/refine.h"
 
 int mx_raise_edge_levels(mx_builder *B, int levels);
+/* Edge infos, at levels deeper than edge_levels, for the octants list[0..n)
+ * (one level; about to be split) and their face and edge neighbours of the
+ * same level, and with_parents, for their parents and the parents'
+ * neighbours: what the transition masks and the balance look up there.
+ * Octants already registered are skipped (flag MX_OCT_EDGES). */
+int mx_edges_ensure(mx_builder *B, const uint32_t *list, size_t n, int with_parents);
 void mx_retarget_leaves(mx_builder *B);
 int mx_refine_leaves_to_target(mx_builder *B);
 /* octs: octant indices (leaves; octants no longer leaves are skipped). */

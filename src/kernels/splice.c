@@ -7,7 +7,11 @@
 #include "soa/mesh.h"
 #include "soa/scan.h"
 
-/* ---- leaves meeting boxes ---------------------------------------------- */
+/* ---- leaves touching octants -------------------------------------------- */
+
+typedef struct {
+  uint32_t lo[3], hi[3]; /* closed, on the finest lattice */
+} mx_lattice_box;
 
 static int box_meets(const mx_octree *T, uint32_t o, const mx_lattice_box *b) {
   uint32_t a[3];
@@ -18,35 +22,65 @@ static int box_meets(const mx_octree *T, uint32_t o, const mx_lattice_box *b) {
   return 1;
 }
 
-int mx_leaves_in_boxes(const mx_builder *B, const uint32_t *pos, const mx_lattice_box *boxes,
-                       size_t nb, uint8_t *mark, uint8_t value) {
+/* Mark the leaves under octant r meeting box b. */
+static void mark_under(const mx_builder *B, const uint32_t *pos, uint32_t r,
+                       const mx_lattice_box *b, uint8_t *mark, uint8_t value) {
+  const mx_octree *T = &B->oct;
+  uint32_t stack[8 * (MX_MAX_LEVEL + 2)];
+  int top = 0;
+  stack[top++] = r;
+  while (top) {
+    const uint32_t o = stack[--top];
+    if (!(T->flags[o] & MX_OCT_SPLIT)) {
+      const uint32_t p = pos[o];
+      uint8_t zero = 0;
+      if (p != MX_NONE && !__atomic_load_n(&mark[p], __ATOMIC_RELAXED))
+        __atomic_compare_exchange_n(&mark[p], &zero, value, 0, __ATOMIC_RELAXED,
+                                    __ATOMIC_RELAXED);
+      continue;
+    }
+    for (int c = 7; c >= 0; c--) {
+      const uint32_t ch = mx_octree_child(T, o, c);
+      if (ch != MX_NONE && box_meets(T, ch, b)) stack[top++] = ch;
+    }
+  }
+}
+
+/* 1 if the box of octant o holds b grown by one lattice unit (so every
+ * leaf meeting b lies under o). */
+static int holds_grown(const mx_octree *T, uint32_t o, const mx_lattice_box *b) {
+  uint32_t a[3];
+  mx_morton_decode(T->key[o], a);
+  const uint32_t s = mx_octant_size(T->level[o]);
+  for (int d = 0; d < 3; d++)
+    if (b->lo[d] < a[d] + 1 || b->hi[d] + 1 > a[d] + s) return 0;
+  return 1;
+}
+
+int mx_leaves_touching(const mx_builder *B, const uint32_t *pos, const uint32_t *octs, size_t n,
+                       uint8_t *mark, uint8_t value) {
   const mx_octree *T = &B->oct;
   /* the roots are the first octants built */
   size_t nroots = 0;
   while (nroots < T->n && T->parent[nroots] == MX_NONE) nroots++;
-#pragma omp parallel for schedule(dynamic, 4)
-  for (size_t q = 0; q < nb; q++) {
-    uint32_t stack[8 * (MX_MAX_LEVEL + 2)];
-    for (size_t r = 0; r < nroots; r++) {
-      if (!box_meets(T, (uint32_t)r, &boxes[q])) continue;
-      int top = 0;
-      stack[top++] = (uint32_t)r;
-      while (top) {
-        const uint32_t o = stack[--top];
-        if (!(T->flags[o] & MX_OCT_SPLIT)) {
-          const uint32_t p = pos[o];
-          uint8_t zero = 0;
-          if (p != MX_NONE && !__atomic_load_n(&mark[p], __ATOMIC_RELAXED))
-            __atomic_compare_exchange_n(&mark[p], &zero, value, 0, __ATOMIC_RELAXED,
-                                        __ATOMIC_RELAXED);
-          continue;
-        }
-        for (int c = 7; c >= 0; c--) {
-          const uint32_t ch = mx_octree_child(T, o, c);
-          if (ch != MX_NONE && box_meets(T, ch, &boxes[q])) stack[top++] = ch;
-        }
-      }
+#pragma omp parallel for schedule(dynamic, 64)
+  for (size_t q = 0; q < n; q++) {
+    mx_lattice_box b;
+    uint32_t a[3];
+    mx_morton_decode(T->key[octs[q]], a);
+    const uint32_t s = mx_octant_size(T->level[octs[q]]);
+    for (int d = 0; d < 3; d++) {
+      b.lo[d] = a[d];
+      b.hi[d] = a[d] + s;
     }
+    uint32_t r = octs[q];
+    while (r != MX_NONE && !holds_grown(T, r, &b)) r = T->parent[r];
+    if (r != MX_NONE) {
+      mark_under(B, pos, r, &b, mark, value);
+      continue;
+    }
+    for (size_t k = 0; k < nroots; k++)
+      if (box_meets(T, (uint32_t)k, &b)) mark_under(B, pos, (uint32_t)k, &b, mark, value);
   }
   return MX_OK;
 }

@@ -3,8 +3,8 @@
  * patch of leaves around what was split, and the patch's elements spliced
  * into the previous mesh in place of the old ones.
  *
- * 1. mx_leaves_in_boxes: the leaves whose closed box meets one of a set of
- *    lattice boxes (a range query down the octree from its roots).
+ * 1. mx_leaves_touching: the leaves touching a set of octants (a range
+ *    query down the octree), from which the rings around what changed.
  * 2. mx_mesh_renumber_first_use: the canonical node numbering every mixed
  *    mesh of the full stage gets, from scratch or spliced: nodes numbered in
  *    the order of their first use in the element list (elements grouped by
@@ -22,15 +22,13 @@
 #include "kernels/refine.h"
 #include "kernels/transition.h"
 
-typedef struct {
-  uint32_t lo[3], hi[3]; /* closed, on the finest lattice */
-} mx_lattice_box;
-
-/* mark[i] = value, where it is 0, for every leaf whose closed box meets one
- * of boxes[0..nb); i = pos[o] for the leaf octant o (pos: the position of
- * each octant in the leaf list, MX_NONE if not in it). */
-int mx_leaves_in_boxes(const mx_builder *B, const uint32_t *pos, const mx_lattice_box *boxes,
-                       size_t nb, uint8_t *mark, uint8_t value);
+/* mark[i] = value, where it is 0, for every leaf meeting (touching or
+ * inside) the closed box of one of the octants octs[0..n): i = pos[o] for
+ * the leaf octant o (pos: the position of each octant in the leaf list,
+ * MX_NONE if not in it). Each query starts from the smallest ancestor
+ * holding the octant's neighbourhood. */
+int mx_leaves_touching(const mx_builder *B, const uint32_t *pos, const uint32_t *octs, size_t n,
+                       uint8_t *mark, uint8_t value);
 
 /* Renumber the nodes of M by first use (see above); *states (may be NULL)
  * and M->nkey follow; nodes no element uses are dropped. */

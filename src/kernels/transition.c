@@ -32,7 +32,7 @@ static uint32_t leaf_mask(const mx_builder *B, uint32_t o, uint32_t *closure) {
   const int l = T->level[o];
   uint32_t mask = 0xffu;
   *closure = 0;
-  if (l > B->edge_levels) return mask; /* no finer octant anywhere */
+  if (l > mx_edge_top(B)) return mask; /* no finer octant anywhere */
   uint32_t anchor[3];
   mx_octant_anchor(T->key[o], l, anchor);
   uint32_t across[6]; /* octant of level l across each face, or MX_NONE */
@@ -239,7 +239,7 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
     for (size_t i = 0; i < n; i++) {
       if (i + 4 < n) {
         const uint32_t ahead = leaves[i + 4];
-        if (T->level[ahead] <= B->edge_levels)
+        if (T->level[ahead] <= mx_edge_top(B))
           mx_edges_prefetch_octant(&B->edges, T->key[ahead], T->level[ahead]);
       }
       mask[i] = leaf_mask(B, leaves[i], &cbits[i]);

@@ -44,6 +44,7 @@ typedef struct {
   double t_restart;         /* seconds reading or writing the restart file */
   /* the last re-mesh after a refinement (remesh_local.c) */
   int local;                /* 1: only a patch of leaves was meshed again */
+  int local_attempts;       /* patches tried (more rings when one fell short) */
   size_t patch_leaves;      /* leaves meshed again (core and context) */
   size_t core_leaves;       /* of which the elements were kept */
   mx_splice_stats splice;

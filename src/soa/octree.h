@@ -14,6 +14,7 @@ enum {
   MX_OCT_SURFACE = 2,  /* meets a triangle of the domain surface */
   MX_OCT_QUEUED = 4,   /* already on the to_balance list */
   MX_OCT_BALANCE = 8,  /* was split to restore balance (not requested) */
+  MX_OCT_EDGES = 16,   /* registered in its edges (levels > edge_levels) */
 };
 
 #define MX_NONE UINT32_MAX
