@@ -46,15 +46,17 @@ static void mark_under(const mx_builder *B, const uint32_t *pos, uint32_t r,
   }
 }
 
-/* 1 if the box of octant o holds b grown by one lattice unit (so every
- * leaf meeting b lies under o). */
-static int holds_grown(const mx_octree *T, uint32_t o, const mx_lattice_box *b) {
-  uint32_t a[3];
-  mx_morton_decode(T->key[o], a);
-  const uint32_t s = mx_octant_size(T->level[o]);
-  for (int d = 0; d < 3; d++)
-    if (b->lo[d] < a[d] + 1 || b->hi[d] + 1 > a[d] + s) return 0;
-  return 1;
+/* The 26 directions around an octant. */
+static const int8_t dir26[26][3] = {
+    {-1, -1, -1}, {0, -1, -1}, {1, -1, -1}, {-1, 0, -1}, {0, 0, -1}, {1, 0, -1}, {-1, 1, -1},
+    {0, 1, -1},   {1, 1, -1},  {-1, -1, 0}, {0, -1, 0},  {1, -1, 0}, {-1, 0, 0}, {1, 0, 0},
+    {-1, 1, 0},   {0, 1, 0},   {1, 1, 0},   {-1, -1, 1}, {0, -1, 1}, {1, -1, 1}, {-1, 0, 1},
+    {0, 0, 1},    {1, 0, 1},   {-1, 1, 1},  {0, 1, 1},   {1, 1, 1}};
+
+/* 1 if the octant x holds the lattice point of key k. */
+static inline int holds_key(const mx_octree *T, uint32_t x, uint64_t k) {
+  const int sh = 3 * (MX_MAX_LEVEL - T->level[x]);
+  return (T->key[x] >> sh) == (k >> sh);
 }
 
 int mx_leaves_touching(const mx_builder *B, const uint32_t *pos, const uint32_t *octs, size_t n,
@@ -63,24 +65,39 @@ int mx_leaves_touching(const mx_builder *B, const uint32_t *pos, const uint32_t 
   /* the roots are the first octants built */
   size_t nroots = 0;
   while (nroots < T->n && T->parent[nroots] == MX_NONE) nroots++;
-#pragma omp parallel for schedule(dynamic, 64)
+#pragma omp parallel for schedule(dynamic, 256)
   for (size_t q = 0; q < n; q++) {
+    const uint32_t o = octs[q];
+    const int l = T->level[o];
     mx_lattice_box b;
     uint32_t a[3];
-    mx_morton_decode(T->key[octs[q]], a);
-    const uint32_t s = mx_octant_size(T->level[octs[q]]);
+    mx_morton_decode(T->key[o], a);
+    const uint32_t s = mx_octant_size(l);
     for (int d = 0; d < 3; d++) {
       b.lo[d] = a[d];
       b.hi[d] = a[d] + s;
     }
-    uint32_t r = octs[q];
-    while (r != MX_NONE && !holds_grown(T, r, &b)) r = T->parent[r];
-    if (r != MX_NONE) {
-      mark_under(B, pos, r, &b, mark, value);
-      continue;
+    mark_under(B, pos, o, &b, mark, value); /* o itself, or what is under it */
+    for (int d = 0; d < 26; d++) {
+      const uint64_t nk = mx_morton_neighbor(T->key[o], l, dir26[d][0], dir26[d][1],
+                                             dir26[d][2], B->grid.dims);
+      if (nk == UINT64_MAX) continue;
+      /* up from o to an ancestor holding the neighbour cell, then down */
+      uint32_t x = T->parent[o];
+      while (x != MX_NONE && !holds_key(T, x, nk)) x = T->parent[x];
+      if (x == MX_NONE) { /* another root cube */
+        for (size_t r = 0; r < nroots && x == MX_NONE; r++)
+          if (holds_key(T, (uint32_t)r, nk)) x = (uint32_t)r;
+        if (x == MX_NONE) continue;
+      }
+      while (T->level[x] < l && (T->flags[x] & MX_OCT_SPLIT)) {
+        const uint32_t ch = mx_octree_child(T, x, mx_morton_child_id(nk, T->level[x] + 1));
+        if (ch == MX_NONE) break; /* a child outside the domain */
+        x = ch;
+      }
+      if (holds_key(T, x, nk) && (T->level[x] == l || !(T->flags[x] & MX_OCT_SPLIT)))
+        mark_under(B, pos, x, &b, mark, value);
     }
-    for (size_t k = 0; k < nroots; k++)
-      if (box_meets(T, (uint32_t)k, &b)) mark_under(B, pos, (uint32_t)k, &b, mark, value);
   }
   return MX_OK;
 }
