@@ -34,6 +34,7 @@ enum {
   BIN_HEADER = 48, /* magic, version, flags, nv, ne, no, ntri */
   BIN_TRANSFORM = 1u,
   BIN_NSUB = 2u,
+  BIN_MESH = 4u,   /* a mesh section: 16 more header bytes (nodes, elements) */
   TOK_SHOW = 40, /* at most this many characters of a token in messages */
 };
 static const uint8_t bin_magic[8] = {0x89, 'M', 'X', 'O', 'C', 'T', '\r', '\n'};
@@ -283,6 +284,13 @@ void mx_restart_free(mx_restart *r) {
   mx_free(r->oct_tri_off);
   mx_free(r->oct_tri);
   mx_free(r->nsub);
+  mx_free(r->mesh_xyz);
+  mx_free(r->mesh_nkey);
+  mx_free(r->mesh_state);
+  mx_free(r->mesh_type);
+  mx_free(r->mesh_conn);
+  mx_free(r->mesh_leaf);
+  mx_free(r->mesh_jens);
   memset(r, 0, sizeof *r);
 }
 
@@ -843,6 +851,44 @@ static void take(void *dst, const uint8_t **p, size_t n, size_t size) {
   *p += (n * size + 7) & ~(size_t)7;
 }
 
+/* The mesh section against the octants: node ids in range, types known,
+ * states 0 or 1, finite coordinates, elements grouped by octant as nsub
+ * says. */
+static int check_mesh(const char *name, const mx_restart *r, int status, const char *what) {
+  static const int corners[4] = {4, 5, 6, 8}; /* nodes per element type */
+  if (!r->has_mesh) return MX_OK;
+  const char *bad = NULL;
+  size_t at = 0;
+  if (!r->nsub) bad = "a mesh without elements per octant";
+  for (size_t v = 0; !bad && v < r->mesh_nn; v++) {
+    at = v;
+    if (r->mesh_state[v] > 1) bad = "a node state that is neither 0 nor 1";
+    for (int a = 0; a < 3 && !bad; a++)
+      if (!isfinite(r->mesh_xyz[3 * v + a])) bad = "a node coordinate that is not finite";
+  }
+  uint64_t c = 0;
+  for (size_t i = 0; !bad && i < r->no; i++)
+    for (uint32_t k = 0; !bad && k < r->nsub[i]; k++, c++) {
+      at = (size_t)c;
+      if (c >= r->mesh_nc) {
+        bad = "more elements per octant than mesh elements";
+        break;
+      }
+      if (r->mesh_leaf[c] != i) bad = "an element in another octant than nsub says";
+      else if (r->mesh_type[c] > 3) bad = "an unknown element type";
+      for (int j = 0; !bad && j < 8; j++) {
+        const uint32_t v = r->mesh_conn[8 * c + (size_t)j];
+        if (j < corners[r->mesh_type[c]] ? v >= r->mesh_nn : v != UINT32_MAX)
+          bad = "an element node out of range";
+      }
+      if (!bad && !(r->mesh_jens[c] == r->mesh_jens[c])) bad = "an element quality that is NaN";
+    }
+  if (!bad && c != r->mesh_nc) bad = "fewer elements per octant than mesh elements";
+  if (!bad) return MX_OK;
+  mx_error(name, 0, "%s: %s (item %zu of the mesh section)", what, bad, at);
+  return status;
+}
+
 /* The binary variant: magic, version, flags, the sizes against the length
  * (before any allocation), the checksum, then the arrays and their
  * semantic checks. */
@@ -863,17 +909,31 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
              BIN_VERSION);
     return MX_EINPUT;
   }
-  if (flags & ~(uint32_t)(BIN_TRANSFORM | BIN_NSUB)) {
+  if (flags & ~(uint32_t)(BIN_TRANSFORM | BIN_NSUB | BIN_MESH)) {
     mx_error(name, 0, "corrupted: unknown flags 0x%x", flags);
     return MX_EINPUT;
   }
+  const int with_mesh = (flags & BIN_MESH) != 0;
+  if (with_mesh && len < BIN_HEADER + 16) {
+    mx_error(name, 0, "truncated: the header needs %d bytes, file has %zu", BIN_HEADER + 16,
+             len);
+    return MX_EINPUT;
+  }
+  if (with_mesh && !(flags & BIN_NSUB)) {
+    mx_error(name, 0, "corrupted: a mesh section without elements per octant");
+    return MX_EINPUT;
+  }
   uint64_t nv = rd64(b + 16), ne = rd64(b + 24), no = rd64(b + 32),
-           ntri = rd64(b + 40), need = BIN_HEADER + 8;
+           ntri = rd64(b + 40), need = BIN_HEADER + 8 + (with_mesh ? 16 : 0);
+  const uint64_t mnn = with_mesh ? rd64(b + 48) : 0, mnc = with_mesh ? rd64(b + 56) : 0;
   int ok = add_section(&need, nv, 24) && add_section(&need, ne, 12) &&
            add_section(&need, no, 32) && add_section(&need, no, 1) &&
            add_section(&need, no, 4) && add_section(&need, ntri, 4) &&
            add_section(&need, flags & BIN_TRANSFORM ? 6 : 0, 8) &&
-           add_section(&need, flags & BIN_NSUB ? no : 0, 4);
+           add_section(&need, flags & BIN_NSUB ? no : 0, 4) && add_section(&need, mnn, 24) &&
+           add_section(&need, mnn, 8) && add_section(&need, mnn, 1) &&
+           add_section(&need, mnc, 1) && add_section(&need, mnc, 32) &&
+           add_section(&need, mnc, 4) && add_section(&need, mnc, 8) && mnn < UINT32_MAX;
   if (!ok || need > len) {
     mx_error(name, 0,
              "truncated: the header declares %llu nodes, %llu "
@@ -908,7 +968,7 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
     mx_free(count);
     return MX_EINPUT;
   }
-  const uint8_t *p = b + BIN_HEADER;
+  const uint8_t *p = b + BIN_HEADER + (with_mesh ? 16 : 0);
   take(r->xyz, &p, 3 * nv, 8);
   take(r->edge, &p, 3 * ne, 4);
   take(r->oct_node, &p, 8 * no, 4);
@@ -917,6 +977,30 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
   take(r->oct_tri, &p, ntri, 4);
   if (r->has_transform) take(r->transform, &p, 6, 8);
   if (r->nsub) take(r->nsub, &p, no, 4);
+  if (with_mesh) {
+    r->has_mesh = 1;
+    r->mesh_nn = (size_t)mnn;
+    r->mesh_nc = (size_t)mnc;
+    r->mesh_xyz = mx_alloc(24 * mnn + 8);
+    r->mesh_nkey = mx_alloc(8 * mnn + 8);
+    r->mesh_state = mx_alloc(mnn + 8);
+    r->mesh_type = mx_alloc(mnc + 8);
+    r->mesh_conn = mx_alloc(32 * mnc + 8);
+    r->mesh_leaf = mx_alloc(4 * mnc + 8);
+    r->mesh_jens = mx_alloc(8 * mnc + 8);
+    if (!r->mesh_xyz || !r->mesh_nkey || !r->mesh_state || !r->mesh_type || !r->mesh_conn ||
+        !r->mesh_leaf || !r->mesh_jens) {
+      mx_free(count);
+      return MX_EINPUT;
+    }
+    take(r->mesh_xyz, &p, 3 * mnn, 8);
+    take(r->mesh_nkey, &p, mnn, 8);
+    take(r->mesh_state, &p, mnn, 1);
+    take(r->mesh_type, &p, mnc, 1);
+    take(r->mesh_conn, &p, 8 * mnc, 4);
+    take(r->mesh_leaf, &p, mnc, 4);
+    take(r->mesh_jens, &p, mnc, 8);
+  }
   size_t i = 0;
   for (; i < no && r->oct_tri_off[i] <= ntri; i++)
     r->oct_tri_off[i + 1] = r->oct_tri_off[i] + count[i];
@@ -928,7 +1012,8 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
              (unsigned long long)ntri);
     return MX_EINPUT;
   }
-  return check_restart(name, r, MX_EINPUT, "corrupted");
+  MX_CHECK(check_restart(name, r, MX_EINPUT, "corrupted"));
+  return check_mesh(name, r, MX_EINPUT, "corrupted");
 }
 
 /* ---- reading: entry points ----------------------------------------------- */
@@ -1089,12 +1174,17 @@ static int bin_body(bin_out *o, const mx_restart *r, const uint32_t *count) {
   uint64_t sizes[4] = {r->nv, r->ne, r->no, r->oct_tri_off[r->no]};
   if (r->has_transform) flags |= BIN_TRANSFORM;
   if (r->nsub) flags |= BIN_NSUB;
+  if (r->has_mesh) flags |= BIN_MESH;
   memcpy(head, bin_magic, 8);
   memcpy(head + 8, &version, 4);
   memcpy(head + 12, &flags, 4);
   memcpy(head + 16, sizes, 32);
   hash_init(&o->h);
   bin_put(o, head, sizeof head);
+  if (r->has_mesh) {
+    const uint64_t msz[2] = {r->mesh_nn, r->mesh_nc};
+    bin_put(o, msz, sizeof msz);
+  }
   bin_put(o, r->xyz, 24 * r->nv);
   bin_put(o, r->edge, 12 * r->ne);
   bin_put(o, r->oct_node, 32 * r->no);
@@ -1103,6 +1193,15 @@ static int bin_body(bin_out *o, const mx_restart *r, const uint32_t *count) {
   bin_put(o, r->oct_tri, 4 * sizes[3]);
   if (r->has_transform) bin_put(o, r->transform, 48);
   if (r->nsub) bin_put(o, r->nsub, 4 * r->no);
+  if (r->has_mesh) {
+    bin_put(o, r->mesh_xyz, 24 * r->mesh_nn);
+    bin_put(o, r->mesh_nkey, 8 * r->mesh_nn);
+    bin_put(o, r->mesh_state, r->mesh_nn);
+    bin_put(o, r->mesh_type, r->mesh_nc);
+    bin_put(o, r->mesh_conn, 32 * r->mesh_nc);
+    bin_put(o, r->mesh_leaf, 4 * r->mesh_nc);
+    bin_put(o, r->mesh_jens, 8 * r->mesh_nc);
+  }
   uint64_t sum = hash_final(&o->h);
   if (o->status == MX_OK) o->status = mx_afile_write(&o->f, &sum, 8);
   return o->status;
@@ -1111,6 +1210,7 @@ static int bin_body(bin_out *o, const mx_restart *r, const uint32_t *count) {
 /* Checks the struct, then writes under a temporary name. */
 int mx_restart_write_binary(const char *path, const mx_restart *r) {
   MX_CHECK(check_restart(path, r, MX_EINTERNAL, BAD_DATA));
+  MX_CHECK(check_mesh(path, r, MX_EINTERNAL, BAD_DATA));
   uint32_t *count = mx_alloc(4 * r->no);
   if (!count) return MX_EINPUT;
   for (size_t i = 0; i < r->no; i++)

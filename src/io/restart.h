@@ -87,6 +87,19 @@ typedef struct {
   int has_transform;     /* the "Geometric Transform" section is present */
   double transform[6];   /* its two lines */
   uint32_t *nsub;        /* no: mesh elements per octant; NULL if absent */
+  /* Binary variant only, optional: the mesh written with the file (the
+   * full stage: element -> octant, node lattice keys and states), so that
+   * a re-mesh from the file is local (mesher/remesh_local.c). Elements are
+   * grouped by octant, nsub[i] of them for octant i. */
+  int has_mesh;
+  size_t mesh_nn, mesh_nc;
+  double *mesh_xyz;      /* 3*mesh_nn */
+  uint64_t *mesh_nkey;   /* mesh_nn: lattice key, UINT64_MAX off the lattice */
+  uint8_t *mesh_state;   /* mesh_nn: 0 on the boundary, 1 inside */
+  uint8_t *mesh_type;    /* mesh_nc: MX_TET .. MX_HEX */
+  uint32_t *mesh_conn;   /* 8*mesh_nc, rows padded with UINT32_MAX */
+  uint32_t *mesh_leaf;   /* mesh_nc: octant index, non-decreasing */
+  double *mesh_jens;     /* mesh_nc */
 } mx_restart;
 
 /* Reads a restart file, text or binary (told by the binary magic). */

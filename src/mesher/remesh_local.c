@@ -172,6 +172,12 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
 int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold) {
   int done = 0;
   if (!m->p.remesh_full && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states &&
+      old_leaves && !m->have_index) {
+    /* a mesh read from a restart file: the surface index is built here */
+    MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
+    m->have_index = 1;
+  }
+  if (!m->p.remesh_full && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states &&
       m->have_index && old_leaves)
     for (int a = 0; a < 2 && !done; a++) {
       m->S.local_attempts++;

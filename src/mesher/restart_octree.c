@@ -19,6 +19,8 @@
  * their octant's centre. */
 #include "mesher/mesher_impl.h"
 
+#include "kernels/mesh_edit.h"
+
 #include "io/restart.h"
 #include "kernels/grid.h"
 #include "soa/scan.h"
@@ -228,7 +230,24 @@ int mx_mesher_save_restart(const mx_mesher *cm, const char *path) {
   mx_restart r;
   memset(&r, 0, sizeof r);
   if (!st) st = restart_from_mesher(m, !binary, &r);
+  /* the binary variant carries the mesh too: a re-mesh from it is local */
+  if (!st && binary && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states) {
+    r.has_mesh = 1;
+    r.mesh_nn = m->M.nnodes;
+    r.mesh_nc = m->M.ncells;
+    r.mesh_xyz = m->M.xyz;
+    r.mesh_nkey = m->M.nkey;
+    r.mesh_state = m->states;
+    r.mesh_type = m->M.type;
+    r.mesh_conn = m->M.conn;
+    r.mesh_leaf = m->M.leaf;
+    r.mesh_jens = m->M.jens;
+  }
   if (!st) st = binary ? mx_restart_write_binary(path, &r) : mx_restart_write_text(path, &r);
+  r.mesh_xyz = r.mesh_jens = NULL; /* the mesher's */
+  r.mesh_nkey = NULL;
+  r.mesh_state = r.mesh_type = NULL;
+  r.mesh_conn = r.mesh_leaf = NULL;
   mx_restart_free(&r);
   m->S.t_restart += mx_wtime() - t;
   return mx_call_end(m, &c, st);
@@ -238,6 +257,21 @@ int mx_mesher_save_restart(const mx_mesher *cm, const char *path) {
 
 /* Key and level of octant i of the file on grid g; MX_EINPUT when its
  * corners are not a cube of the grid. */
+static int octant_key(const mx_restart *r, size_t i, const mx_grid *g, const char *path,
+                      uint64_t *key);
+
+/* The keys of all the file's octants, in parallel; the first octant off the
+ * grid, if any, is reported. */
+static int octant_keys(const mx_restart *r, const mx_grid *g, const char *path, uint64_t *key) {
+  size_t bad = SIZE_MAX;
+#pragma omp parallel for schedule(static) reduction(min : bad)
+  for (size_t i = 0; i < r->no; i++)
+    if (octant_key(r, i, g, NULL, &key[i]) != MX_OK && i < bad) bad = i;
+  if (bad == SIZE_MAX) return MX_OK;
+  return octant_key(r, bad, g, path, &key[bad]);
+}
+
+/* path NULL: no message. */
 static int octant_key(const mx_restart *r, size_t i, const mx_grid *g, const char *path,
                       uint64_t *key) {
   const int l = r->oct_level[i];
@@ -256,14 +290,16 @@ static int octant_key(const mx_restart *r, size_t i, const mx_grid *g, const cha
     const double e = (hi[a] - lo[a]) / g->unit;
     const double lim = (double)g->dims[a] * (double)mx_octant_size(0);
     if (!(u > -0.25 && u + e < lim + 0.25) || fabs(e - (double)s) > 0.01 * s + 0.25) {
-      mx_error(path, 0, "octant %zu (level %d) does not lie on the root grid of the "
+      if (path)
+        mx_error(path, 0, "octant %zu (level %d) does not lie on the root grid of the "
                         "input surfaces: is it the surface the file was written for?",
                i + 1, l);
       return MX_EINPUT;
     }
     const double rq = floor(u + 0.5);
     if (fabs(u - rq) > 0.25 || ((uint32_t)rq & (s - 1)) != 0) {
-      mx_error(path, 0, "octant %zu (level %d) is not aligned on the octree of the "
+      if (path)
+        mx_error(path, 0, "octant %zu (level %d) is not aligned on the octree of the "
                         "input surfaces: is it the surface the file was written for?",
                i + 1, l);
       return MX_EINPUT;
@@ -291,6 +327,42 @@ static uint32_t leaf_holding(const mx_mesher *m, const uint64_t *keys, uint64_t 
   for (int d = 0; d < 3; d++)
     if (p[d] < a[d] || p[d] >= a[d] + s) return UINT32_MAX;
   return (uint32_t)(lo - 1);
+}
+
+/* The mesh section of a binary restart file becomes the current mesh when
+ * the rebuilt leaves are the file's octants in the same order (always, for
+ * a file this mixoct wrote for the same surface). */
+static int adopt_mesh(mx_mesher *m, mx_restart *r, const uint64_t *key) {
+  if (r->no != m->nleaves) return MX_OK;
+  size_t differ = 0;
+#pragma omp parallel for schedule(static) reduction(+ : differ)
+  for (size_t i = 0; i < r->no; i++)
+    differ += m->B.oct.key[m->leaves[i]] != key[i] ||
+              m->B.oct.level[m->leaves[i]] != r->oct_level[i];
+  if (differ) return MX_OK; /* meshed again from the octree when refined */
+  mx_mesh_out *M = &m->M;
+  memset(M, 0, sizeof *M);
+  M->level = mx_alloc((r->mesh_nc + 1) * sizeof *M->level);
+  if (!M->level) return MX_ENOMEM;
+  M->nnodes = r->mesh_nn;
+  M->ncells = r->mesh_nc;
+  M->xyz = r->mesh_xyz;
+  M->nkey = r->mesh_nkey;
+  M->type = r->mesh_type;
+  M->conn = r->mesh_conn;
+  M->leaf = r->mesh_leaf;
+  M->jens = r->mesh_jens;
+  m->states = r->mesh_state;
+  r->mesh_xyz = r->mesh_jens = NULL; /* the mesher's now */
+  r->mesh_nkey = NULL;
+  r->mesh_state = r->mesh_type = NULL;
+  r->mesh_conn = r->mesh_leaf = NULL;
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++) M->level[c] = r->oct_level[M->leaf[c]];
+  mx_mesh_summarize(M);
+  m->mesh_stage = MX_STAGE_FULL;
+  m->S.full = 1;
+  return mx_mesh_finish(m) == MX_EINVALID ? MX_EINPUT : MX_OK;
 }
 
 static int load_restart(mx_mesher *m, const char *path) {
@@ -330,9 +402,10 @@ static int load_restart(mx_mesher *m, const char *path) {
     perm = mx_alloc((r.no + 1) * sizeof *perm);
     if (!key || !perm) st = MX_ENOMEM;
   }
-  for (size_t i = 0; !st && i < r.no; i++) {
-    st = octant_key(&r, i, &g, path, &key[i]);
-    perm[i] = (uint32_t)i;
+  if (!st) {
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < r.no; i++) perm[i] = (uint32_t)i;
+    st = octant_keys(&r, &g, path, key);
   }
   /* split set: the ancestors of the leaves, level by level; in Morton order
    * of the leaves, each level's ancestors come sorted */
@@ -379,20 +452,31 @@ static int load_restart(mx_mesher *m, const char *path) {
   }
   if (!st && r.nsub) {
     for (size_t i = 0; i < m->nleaves; i++) lkeys[i] = m->B.oct.key[m->leaves[i]];
-    size_t e = 0, lost = 0;
-    for (size_t i = 0; i < r.no; i++) {
-      uint32_t p[3];
-      mx_morton_decode(key[i], p);
-      const uint32_t h = mx_octant_size(r.oct_level[i]) / 2;
-      const uint32_t lf = leaf_holding(m, lkeys, mx_morton_encode(p[0] + h, p[1] + h, p[2] + h));
-      lost += lf == UINT32_MAX && r.nsub[i];
-      for (uint32_t k = 0; k < r.nsub[i]; k++) m->file_leaf[e++] = lf;
+    size_t lost = 0;
+    uint64_t *first = mx_alloc((r.no + 1) * sizeof *first);
+    if (!first) st = MX_ENOMEM;
+    if (!st) {
+#pragma omp parallel for schedule(static)
+      for (size_t i = 0; i < r.no; i++) first[i] = r.nsub[i];
+      mx_scan_u64(first, r.no);
+#pragma omp parallel for schedule(static) reduction(+ : lost)
+      for (size_t i = 0; i < r.no; i++) {
+        uint32_t p[3];
+        mx_morton_decode(key[i], p);
+        const uint32_t h = mx_octant_size(r.oct_level[i]) / 2;
+        const uint32_t lf =
+            leaf_holding(m, lkeys, mx_morton_encode(p[0] + h, p[1] + h, p[2] + h));
+        lost += lf == UINT32_MAX && r.nsub[i];
+        for (uint32_t k = 0; k < r.nsub[i]; k++) m->file_leaf[first[i] + k] = lf;
+      }
     }
+    mx_free(first);
     if (lost)
       mx_warning(path, 0, "%zu octant(s) with elements lie outside the domain as this "
                           "mixoct sees it; their elements cannot be refined", lost);
   }
   mx_free(lkeys);
+  if (!st && r.has_mesh) st = adopt_mesh(m, &r, key);
   mx_free(key);
   mx_free(perm);
   mx_restart_free(&r);
