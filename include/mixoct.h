@@ -213,6 +213,12 @@ typedef struct {
   uint64_t leaves_hash;    /* order-independent hash of the leaves */
   double t_read, t_grid, t_refine, t_balance, t_transition, t_boundary,
       t_quality, t_write, t_restart; /* seconds, last run */
+  /* the last refinement call: 1 when each re-mesh (after the refinement
+   * and in the repair rounds) was local, meshing again only the leaves
+   * around what was split: remesh_patch_leaves of them after the
+   * refinement */
+  int remesh_local;
+  size_t remesh_patch_leaves;
 } mx_stats;
 void mx_mesher_stats(const mx_mesher *m, mx_stats *s);
 

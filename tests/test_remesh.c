@@ -2,8 +2,9 @@
  * (Algorithm 3 of the 2021 paper) against an independent construction,
  * balance after every refinement (an independent checker), repeated
  * refinement of one element (Fig. 18: local, balanced, valid), restart
- * round trips (text and binary), the published c5.oct re-meshed with its
- * list, and bad restart and list files. */
+ * round trips (text and binary), local re-meshing against full re-meshing
+ * and a run from scratch, the published c5.oct re-meshed with its list, and
+ * bad restart and list files. */
 #include "check.h"
 #include "common.h"
 #include "io/read_mesh.h"
@@ -171,19 +172,122 @@ static void test_full_equals_scratch(void) {
   mx_mesher_free(b);
 }
 
+/* Same nodes (bit for bit), same elements in the same order. */
+static int same_mesh(const mx_mesher *a, const mx_mesher *b) {
+  mx_mesh_arrays x, y;
+  if (mx_mesher_mesh_arrays(a, &x) || mx_mesher_mesh_arrays(b, &y)) return 0;
+  return x.nnodes == y.nnodes && x.nelements == y.nelements &&
+         !memcmp(x.xyz, y.xyz, 3 * x.nnodes * sizeof *x.xyz) &&
+         !memcmp(x.type, y.type, x.nelements) &&
+         !memcmp(x.conn, y.conn, 8 * x.nelements * sizeof *x.conn) &&
+         !memcmp(x.leaf, y.leaf, x.nelements * sizeof *x.leaf);
+}
+
+/* Elements with their first node in the slab lo <= x < hi of the bounding
+ * box (fractions), and below `yf` of it along y. */
+static uint64_t *slab(const mx_mesher *m, double lo, double hi, double yf, size_t *n) {
+  mx_mesh_arrays a;
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  double b0[3] = {INFINITY, INFINITY, INFINITY}, b1[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (size_t v = 0; v < a.nnodes; v++)
+    for (int k = 0; k < 3; k++) {
+      b0[k] = fmin(b0[k], a.xyz[3 * v + k]);
+      b1[k] = fmax(b1[k], a.xyz[3 * v + k]);
+    }
+  uint64_t *l = malloc((a.nelements + 1) * sizeof *l);
+  *n = 0;
+  for (size_t c = 0; c < a.nelements; c++) {
+    const double *x = a.xyz + 3 * (size_t)a.conn[8 * c];
+    const double u = (x[0] - b0[0]) / (b1[0] - b0[0]), w = (x[1] - b0[1]) / (b1[1] - b0[1]);
+    if (u >= lo && u < hi && w < yf) l[(*n)++] = c;
+  }
+  return l;
+}
+
+/* Local re-meshing (only the leaves around what was split are meshed
+ * again) against a full re-mesh of the same octree, over several rounds:
+ * the same mesh, bit for bit, while the patch stays a part of the octree;
+ * then the local result against a run from scratch on its octree (a text
+ * restart file has no mesh: reading it and meshing is a run from scratch),
+ * and the binary restart file, which carries the mesh: read back, the same
+ * mesh; refined from it, the same mesh as refined in memory. */
+static void test_local_vs_full(void) {
+  mx_params p;
+  mx_params_default(&p);
+  p.surface_level = 5;
+  mx_mesher *loc = mx_mesher_new(&p);
+  p.remesh_full = 1;
+  mx_mesher *full = mx_mesher_new(&p);
+  CHECK(mx_mesher_add_surface(loc, data("surfaces/cortex.off")) == MX_OK);
+  CHECK(mx_mesher_add_surface(full, data("surfaces/cortex.off")) == MX_OK);
+  CHECK(mx_mesher_mesh(loc) == MX_OK && mx_mesher_mesh(full) == MX_OK);
+  CHECK(same_mesh(loc, full));
+  for (int round = 0; round < 4; round++) {
+    size_t n = 0;
+    uint64_t *l = slab(loc, 0.15 + 0.2 * round, 0.25 + 0.2 * round, 0.6, &n);
+    CHECK(n > 0);
+    CHECK(mx_mesher_refine_elements(loc, l, n) == MX_OK);
+    CHECK(mx_mesher_refine_elements(full, l, n) == MX_OK);
+    free(l);
+    mx_stats sl, sf;
+    mx_mesher_stats(loc, &sl);
+    mx_mesher_stats(full, &sf);
+    CHECK(sl.remesh_local == 1 && sf.remesh_local == 0);
+    CHECK(sl.leaves_hash == sf.leaves_hash);
+    CHECK(same_mesh(loc, full));
+    CHECK(mesh_is_valid(loc));
+    CHECK(balanced(loc));
+    CHECK(sl.remesh_patch_leaves > 0 && sl.remesh_patch_leaves < sl.leaves);
+    printf("round %d: %zu elements listed, a patch of %zu leaves (%d attempt(s) with the "
+           "repair rounds, %d repair round(s)) for %zu leaves\n", round + 1, n, sl.remesh_patch_leaves,
+           loc->S.local_attempts, sl.repair_rounds, sl.leaves);
+  }
+  printf("local re-mesh, 4 rounds at -s 5: the full re-mesh's mesh each time\n");
+  /* against a run from scratch on the same octree */
+  CHECK(mx_mesher_save_restart(loc, OUT "/local.oct") == MX_OK);
+  CHECK(mx_mesher_save_restart(loc, OUT "/local.octb") == MX_OK);
+  mx_params_default(&p);
+  mx_mesher *s = mx_mesher_new(&p);
+  CHECK(mx_mesher_add_surface(s, data("surfaces/cortex.off")) == MX_OK);
+  CHECK(mx_mesher_load_restart(s, OUT "/local.oct") == MX_OK);
+  CHECK(mx_mesher_mesh(s) == MX_OK);
+  CHECK(same_mesh(loc, s));
+  /* the binary file's mesh, read back */
+  mx_mesher *b = mx_mesher_new(&p);
+  CHECK(mx_mesher_add_surface(b, data("surfaces/cortex.off")) == MX_OK);
+  CHECK(mx_mesher_load_restart(b, OUT "/local.octb") == MX_OK);
+  CHECK(same_mesh(loc, b));
+  size_t n = 0;
+  uint64_t *l = slab(loc, 0.5, 0.6, 1.0, &n);
+  CHECK(mx_mesher_refine_elements(loc, l, n) == MX_OK);
+  CHECK(mx_mesher_refine_elements(b, l, n) == MX_OK);
+  CHECK(mx_mesher_refine_elements(full, l, n) == MX_OK);
+  free(l);
+  mx_stats sb;
+  mx_mesher_stats(b, &sb);
+  CHECK(sb.remesh_local == 1);
+  CHECK(same_mesh(loc, b) && same_mesh(loc, full));
+  printf("local re-mesh = run from scratch on its octree; from the binary restart file: "
+         "the same mesh as in memory\n");
+  mx_mesher_free(loc);
+  mx_mesher_free(full);
+  mx_mesher_free(s);
+  mx_mesher_free(b);
+}
+
 /* 2. Fig. 18: one element refined again and again (the element holding a
  * fixed point), down to the finest level: local, balanced, valid. */
 static void test_repeated(void) {
   mx_params p;
   mx_params_default(&p);
-  p.surface_level = 2;
+  p.surface_level = 4;
   mx_mesher *m = mx_mesher_new(&p);
   CHECK(mx_mesher_add_demo_surface(m) == MX_OK);
   CHECK(mx_mesher_mesh(m) == MX_OK);
   const double target[3] = {3.0, -2.0, 1.5};
   size_t prev = m->nleaves;
   int rounds = 0, finest = 0;
-  size_t maxgrew = 0;
+  size_t maxgrew = 0, last_patch = 0, last_leaves = 0;
   for (int r = 0; r < 20; r++) {
     /* the element whose centroid is closest to target */
     mx_mesh_arrays a;
@@ -216,10 +320,21 @@ static void test_repeated(void) {
     if (grew > maxgrew) maxgrew = grew;
     CHECK(grew >= 7 && grew <= 2000);
     prev = m->nleaves;
+    /* and meshed again locally: the patch is a small part of the leaves */
+    mx_stats s;
+    mx_mesher_stats(m, &s);
+    CHECK(s.remesh_local == 1);
+    CHECK(s.remesh_patch_leaves > 0 && s.remesh_patch_leaves <= s.leaves);
+    last_patch = s.remesh_patch_leaves;
+    last_leaves = s.leaves;
   }
+  /* the patch: 6 rings of leaves around the split one, all of the coarse
+   * octree of the first rounds, a part once the refinement is deep */
+  CHECK(2 * last_patch < last_leaves);
   printf("repeated refinement of one element: %d rounds%s, %zu leaves (at most %zu "
-         "new in one round), valid and balanced after each\n", rounds,
-         finest ? " (finest level reached)" : "", m->nleaves, maxgrew);
+         "new in one round; the last one meshed again %zu leaves of %zu), valid and balanced "
+         "after each\n", rounds, finest ? " (finest level reached)" : "", m->nleaves, maxgrew,
+         last_patch, last_leaves);
   CHECK(rounds >= 12);
   mx_mesher_free(m);
 }
@@ -365,6 +480,7 @@ int main(void) {
   mkdir(OUT, 0755);
   test_list_vs_scratch();
   test_full_equals_scratch();
+  test_local_vs_full();
   test_repeated();
   test_restart_round_trip("oct");
   test_restart_round_trip("octb");

@@ -749,7 +749,7 @@ static void test_bad_binary(void) {
   expect_fail(path, 0, "version 2, this mixoct reads version 1",
               "version.octb");
   memcpy(b, bin, len);
-  b[12] |= 4;
+  b[12] |= 0x80;
   tpath(path, sizeof path, "flags.octb");
   write_bytes(path, b, len);
   expect_fail(path, 0, "unknown flags", "flags.octb");

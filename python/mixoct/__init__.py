@@ -160,7 +160,9 @@ class _Stats(ctypes.Structure):
                 + [("repair_rounds", ctypes.c_int),
                    ("jens_min", ctypes.c_double),
                    ("leaves_hash", ctypes.c_uint64)]
-                + [(n, ctypes.c_double) for n in _STAT_TIMES])
+                + [(n, ctypes.c_double) for n in _STAT_TIMES]
+                + [("remesh_local", ctypes.c_int),
+                   ("remesh_patch_leaves", ctypes.c_size_t)])
 
 
 _MESSAGE_FN = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_int,

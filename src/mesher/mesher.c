@@ -746,4 +746,6 @@ void mx_mesher_stats(const mx_mesher *m, mx_stats *s) {
   s->t_quality = S->ph.quality;
   s->t_write = S->ph.write;
   s->t_restart = S->t_restart;
+  s->remesh_local = S->local;
+  s->remesh_patch_leaves = S->local ? S->patch_leaves : 0;
 }

@@ -43,10 +43,11 @@ typedef struct {
   size_t remesh_splits;     /* octants split by the last re-mesh (list, balance, requests) */
   double t_restart;         /* seconds reading or writing the restart file */
   /* the last re-mesh after a refinement (remesh_local.c) */
-  int local;                /* 1: only a patch of leaves was meshed again */
+  int local;                /* 1: every re-mesh of the call was local */
   int local_attempts;       /* patches tried (more rings when one fell short) */
-  size_t patch_leaves;      /* leaves meshed again (core and context) */
-  size_t core_leaves;       /* of which the elements were kept */
+  size_t patch_leaves;      /* leaves meshed again (core and context) after */
+  size_t core_leaves;       /* the refinement (before repair rounds); of them,
+                             * those whose elements were kept */
   mx_splice_stats splice;
 } mx_summary;
 

@@ -154,9 +154,10 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
         m->mesh_stage = MX_STAGE_FULL;
         m->S.boundary = bs;
         m->S.full = 1;
-        m->S.local = 1;
-        m->S.patch_leaves = np;
-        m->S.core_leaves = ncore;
+        if (!m->S.patch_leaves) { /* the refinement's, not the repair rounds' */
+          m->S.patch_leaves = np;
+          m->S.core_leaves = ncore;
+        }
         m->S.splice = ss;
         *done = 1;
       }
@@ -171,6 +172,7 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
 
 int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold) {
   int done = 0;
+  if (m->S.local_attempts == 0) m->S.local = 1; /* until a re-mesh is not */
   if (!m->p.remesh_full && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states &&
       old_leaves && !m->have_index) {
     /* a mesh read from a restart file: the surface index is built here */
