@@ -60,7 +60,17 @@ static int same(const mx_restart *a, const mx_restart *b) {
          (nt == 0 || memcmp(a->oct_tri, b->oct_tri, 4 * nt) == 0) &&
          (!a->has_transform ||
           memcmp(a->transform, b->transform, sizeof a->transform) == 0) &&
-         (!a->nsub || memcmp(a->nsub, b->nsub, 4 * a->no) == 0);
+         (!a->nsub || memcmp(a->nsub, b->nsub, 4 * a->no) == 0) &&
+         a->has_mesh == b->has_mesh &&
+         (!a->has_mesh ||
+          (a->mesh_nn == b->mesh_nn && a->mesh_nc == b->mesh_nc &&
+           memcmp(a->mesh_xyz, b->mesh_xyz, 24 * a->mesh_nn) == 0 &&
+           memcmp(a->mesh_nkey, b->mesh_nkey, 8 * a->mesh_nn) == 0 &&
+           memcmp(a->mesh_state, b->mesh_state, a->mesh_nn) == 0 &&
+           memcmp(a->mesh_type, b->mesh_type, a->mesh_nc) == 0 &&
+           memcmp(a->mesh_conn, b->mesh_conn, 32 * a->mesh_nc) == 0 &&
+           memcmp(a->mesh_leaf, b->mesh_leaf, 4 * a->mesh_nc) == 0 &&
+           memcmp(a->mesh_jens, b->mesh_jens, 8 * a->mesh_nc) == 0));
 }
 
 static char *slurp(const char *path, size_t *len) {
