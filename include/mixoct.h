@@ -142,7 +142,10 @@ int mx_mesher_boundary(mx_mesher *m);     /* boundary stage, with repair */
  * leaf listed through several elements is split once), restore balance
  * through the edge infos, apply the requests (boxes, levels, regions) to the
  * refined octree, and mesh again up to params.stage. Element indices refer
- * to the current mesh; an index out of range is MX_EINPUT (nothing done). */
+ * to the current mesh; an index out of range is MX_EINPUT (nothing done).
+ * When the current mesh is a full-stage one, only the leaves around what
+ * was split are meshed again (the rest of the mesh is kept) and the result
+ * is the mesh a full re-mesh gives; params.remesh_full turns this off. */
 int mx_mesher_refine_elements(mx_mesher *m, const uint64_t *elements,
                               size_t n);
 /* The same with leaf indices (0 .. nleaves-1, Morton order of the leaves). */
@@ -155,10 +158,12 @@ int mx_mesher_refine(mx_mesher *m);
 
 /* Write the restart file of the current octree and mesh: the published text
  * format, or, when the name ends in ".octb", the binary variant (version,
- * sizes, checksum). */
+ * sizes, checksum), which also holds a full-stage mesh. */
 int mx_mesher_save_restart(const mx_mesher *m, const char *path);
 /* Rebuild the balanced octree and the element -> leaf map from a restart
- * file (ours or the published program's); it does not mesh: call
+ * file (ours or the published program's). A binary file's mesh becomes the
+ * current mesh (a re-mesh from it is then local); otherwise there is no
+ * mesh until the next call that meshes: call
  * mx_mesher_refine_elements (with the list, possibly empty), mx_mesher_refine
  * or mx_mesher_mesh next. The domain surfaces must have been added (the same
  * ones: a file whose octants do not lie on their grid is MX_EINPUT). Until

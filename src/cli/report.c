@@ -57,6 +57,7 @@ void mx_print_json(const mx_summary *s) {
          "\"balance\": %.6f, \"transition\": %.6f, \"boundary\": %.6f, "
          "\"quality\": %.6f, \"write\": %.6f, \"restart\": %.6f}, "
          "\"refined_listed\": %zu, \"repaired\": %zu, \"repair_rounds\": %d, "
+         "\"remesh_local\": %s, \"remesh_patch_leaves\": %zu, \"remesh_core_leaves\": %zu, "
          "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"memory_estimate_mb\": %.1f, "
          "\"threads\": %d, "
          "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, %s"
@@ -69,8 +70,8 @@ void mx_print_json(const mx_summary *s) {
          s->split_balance, s->dropped, s->centre_leaves, s->closures, s->ph.read,
          s->ph.grid, s->ph.refine, s->ph.balance, s->ph.transition,
          s->ph.boundary, s->ph.quality, s->ph.write, s->t_restart,
-         s->refined_listed, s->repaired, s->repair_rounds,
-         s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->threads,
+         s->refined_listed, s->repaired, s->repair_rounds, s->local ? "true" : "false",
+         s->local ? s->patch_leaves : 0, s->local ? s->core_leaves : 0, s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->threads,
          s->mesh ? s->jens_min : 1.0,
          s->mesh ? s->invalid : 0, qual, bnd, topo);
   fflush(stdout);
@@ -137,6 +138,10 @@ void mx_print_summary(const mx_summary *s) {
     if (s->repair_rounds)
       printf("               %zu invalid element(s) repaired by %d refinement round(s)\n",
              s->repaired, s->repair_rounds);
+    if (s->local)
+      printf("  re-meshed    locally: %zu leaves meshed again, the elements of %zu of them "
+             "new\n               (the boundary figures above are the patch's)\n",
+             s->patch_leaves, s->core_leaves);
   }
   /* Seconds per stage, only the stages that ran. */
   struct { const char *name; double t; int ran; } ph[] = {
