@@ -216,11 +216,16 @@ static void test_local_vs_full(void) {
   mx_params_default(&p);
   p.surface_level = 5;
   mx_mesher *loc = mx_mesher_new(&p);
+  p.threads = 1; /* and the same local re-mesh on one thread */
+  mx_mesher *one = mx_mesher_new(&p);
+  p.threads = 0;
   p.remesh_full = 1;
   mx_mesher *full = mx_mesher_new(&p);
   CHECK(mx_mesher_add_surface(loc, data("surfaces/cortex.off")) == MX_OK);
+  CHECK(mx_mesher_add_surface(one, data("surfaces/cortex.off")) == MX_OK);
   CHECK(mx_mesher_add_surface(full, data("surfaces/cortex.off")) == MX_OK);
   CHECK(mx_mesher_mesh(loc) == MX_OK && mx_mesher_mesh(full) == MX_OK);
+  CHECK(mx_mesher_mesh(one) == MX_OK);
   CHECK(same_mesh(loc, full));
   for (int round = 0; round < 4; round++) {
     size_t n = 0;
@@ -228,7 +233,9 @@ static void test_local_vs_full(void) {
     CHECK(n > 0);
     CHECK(mx_mesher_refine_elements(loc, l, n) == MX_OK);
     CHECK(mx_mesher_refine_elements(full, l, n) == MX_OK);
+    CHECK(mx_mesher_refine_elements(one, l, n) == MX_OK);
     free(l);
+    CHECK(same_mesh(loc, one));
     mx_stats sl, sf;
     mx_mesher_stats(loc, &sl);
     mx_mesher_stats(full, &sf);
@@ -242,7 +249,8 @@ static void test_local_vs_full(void) {
            "repair rounds, %d repair round(s)) for %zu leaves\n", round + 1, n, sl.remesh_patch_leaves,
            loc->S.local_attempts, sl.repair_rounds, sl.leaves);
   }
-  printf("local re-mesh, 4 rounds at -s 5: the full re-mesh's mesh each time\n");
+  printf("local re-mesh, 4 rounds at -s 5: the full re-mesh's mesh each time, the same on "
+         "1 thread\n");
   /* against a run from scratch on the same octree */
   CHECK(mx_mesher_save_restart(loc, OUT "/local.oct") == MX_OK);
   CHECK(mx_mesher_save_restart(loc, OUT "/local.octb") == MX_OK);
@@ -270,6 +278,7 @@ static void test_local_vs_full(void) {
   printf("local re-mesh = run from scratch on its octree; from the binary restart file: "
          "the same mesh as in memory\n");
   mx_mesher_free(loc);
+  mx_mesher_free(one);
   mx_mesher_free(full);
   mx_mesher_free(s);
   mx_mesher_free(b);
