@@ -42,44 +42,27 @@ int mx_mesh_keep_cells(mx_mesh_out *M, const uint8_t *keep) {
   return MX_OK;
 }
 
-int mx_mesh_drop_unused_nodes(mx_mesh_out *M, uint8_t **states, uint32_t **newid_out) {
-  const size_t nn = M->nnodes;
-  uint64_t *id = mx_calloc((nn + 1) * sizeof *id);
-  if (!id) return MX_EINPUT;
-#pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < M->ncells; c++)
-    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
-      __atomic_store_n(&id[M->conn[8 * c + k]], 1, __ATOMIC_RELAXED);
-  uint8_t *used = mx_alloc(nn + 1);
-  if (!used) {
-    mx_free(id);
-    return MX_EINPUT;
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < nn; v++) used[v] = (uint8_t)id[v];
-  const uint64_t nu = mx_scan_u64(id, nn);
+int mx_mesh_apply_node_ids(mx_mesh_out *M, uint8_t **states, const uint32_t *newid,
+                           size_t nu) {
   double *xyz = mx_alloc((3 * nu + 3) * sizeof *xyz);
   uint8_t *st2 = states ? mx_alloc(nu + 1) : NULL;
-  uint32_t *newid = newid_out ? mx_alloc((nn + 1) * sizeof *newid) : NULL;
   uint64_t *nkey = M->nkey ? mx_alloc((nu + 1) * sizeof *nkey) : NULL;
-  if (!xyz || (states && !st2) || (newid_out && !newid) || (M->nkey && !nkey)) {
-    mx_free(xyz); mx_free(st2); mx_free(newid); mx_free(used); mx_free(id); mx_free(nkey);
+  if (!xyz || (states && !st2) || (M->nkey && !nkey)) {
+    mx_free(xyz); mx_free(st2); mx_free(nkey);
     return MX_EINPUT;
   }
 #pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < nn; v++) {
-    if (newid) newid[v] = used[v] ? (uint32_t)id[v] : UINT32_MAX;
-    if (!used[v]) continue;
-    memcpy(xyz + 3 * id[v], M->xyz + 3 * v, 3 * sizeof *xyz);
-    if (st2) st2[id[v]] = (*states)[v];
-    if (nkey) nkey[id[v]] = M->nkey[v];
+  for (size_t v = 0; v < M->nnodes; v++) {
+    const uint32_t w = newid[v];
+    if (w == UINT32_MAX) continue;
+    memcpy(xyz + 3 * (size_t)w, M->xyz + 3 * v, 3 * sizeof *xyz);
+    if (st2) st2[w] = (*states)[v];
+    if (nkey) nkey[w] = M->nkey[v];
   }
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < M->ncells; c++)
     for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
-      M->conn[8 * c + k] = (uint32_t)id[M->conn[8 * c + k]];
-  mx_free(used);
-  mx_free(id);
+      M->conn[8 * c + k] = newid[M->conn[8 * c + k]];
   mx_free(M->xyz);
   M->xyz = xyz;
   mx_free(M->nkey);
@@ -89,8 +72,34 @@ int mx_mesh_drop_unused_nodes(mx_mesh_out *M, uint8_t **states, uint32_t **newid
     mx_free(*states);
     *states = st2;
   }
-  if (newid_out) *newid_out = newid;
   return MX_OK;
+}
+
+int mx_mesh_drop_unused_nodes(mx_mesh_out *M, uint8_t **states, uint32_t **newid_out) {
+  const size_t nn = M->nnodes;
+  uint64_t *id = mx_calloc((nn + 1) * sizeof *id);
+  uint32_t *newid = mx_alloc((nn + 1) * sizeof *newid);
+  if (!id || !newid) {
+    mx_free(id); mx_free(newid);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++)
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+      __atomic_store_n(&id[M->conn[8 * c + k]], 1, __ATOMIC_RELAXED);
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < nn; v++) newid[v] = id[v] ? 0 : UINT32_MAX;
+  const uint64_t nu = mx_scan_u64(id, nn); /* new ids, in order */
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < nn; v++)
+    if (!newid[v]) newid[v] = (uint32_t)id[v];
+  mx_free(id);
+  const int st = mx_mesh_apply_node_ids(M, states, newid, (size_t)nu);
+  if (st || !newid_out)
+    mx_free(newid);
+  else
+    *newid_out = newid;
+  return st;
 }
 
 void mx_mesh_summarize(mx_mesh_out *M) {

@@ -12,6 +12,12 @@
 /* Keep the elements c with keep[c] != 0, in order. */
 int mx_mesh_keep_cells(mx_mesh_out *M, const uint8_t *keep);
 
+/* Renumber the nodes: node v becomes newid[v] (UINT32_MAX: dropped; the
+ * others take the ids 0 .. nu-1); coordinates, lattice keys and *states
+ * (may be NULL) follow, connectivity is rewritten. */
+int mx_mesh_apply_node_ids(mx_mesh_out *M, uint8_t **states, const uint32_t *newid,
+                           size_t nu);
+
 /* Drop the nodes no element uses, renumbering the others in order; *states
  * (one byte per node, may be NULL) follows. When newid is not NULL it
  * receives (mx_alloc) the new id of every old node, UINT32_MAX if dropped. */

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "common.h"
+#include "kernels/mesh_edit.h"
 #include "kernels/quality.h"
 #include "soa/mesh.h"
 #include "soa/scan.h"
@@ -158,36 +159,9 @@ int mx_mesh_renumber_first_use(mx_mesh_out *M, uint8_t **states) {
   uint32_t *newid = NULL;
   size_t nu = 0;
   MX_CHECK(first_use_ids(M->type, M->conn, M->ncells, M->nnodes, &newid, &nu));
-  double *xyz = mx_alloc((3 * nu + 3) * sizeof *xyz);
-  uint8_t *st2 = states ? mx_alloc(nu + 1) : NULL;
-  uint64_t *nkey = M->nkey ? mx_alloc((nu + 1) * sizeof *nkey) : NULL;
-  if (!xyz || (states && !st2) || (M->nkey && !nkey)) {
-    mx_free(xyz); mx_free(st2); mx_free(nkey); mx_free(newid);
-    return MX_EINPUT;
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < M->nnodes; v++) {
-    const uint32_t w = newid[v];
-    if (w == UINT32_MAX) continue;
-    memcpy(xyz + 3 * (size_t)w, M->xyz + 3 * v, 3 * sizeof *xyz);
-    if (st2) st2[w] = (*states)[v];
-    if (nkey) nkey[w] = M->nkey[v];
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < M->ncells; c++)
-    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
-      M->conn[8 * c + k] = newid[M->conn[8 * c + k]];
+  const int st = mx_mesh_apply_node_ids(M, states, newid, nu);
   mx_free(newid);
-  mx_free(M->xyz);
-  M->xyz = xyz;
-  mx_free(M->nkey);
-  M->nkey = nkey;
-  M->nnodes = nu;
-  if (states) {
-    mx_free(*states);
-    *states = st2;
-  }
-  return MX_OK;
+  return st;
 }
 
 /* ---- splice ------------------------------------------------------------- */

@@ -540,13 +540,7 @@ int mx_repair(mx_mesher *m) {
     MX_CHECK(st);
     m->S.repaired += before;
     m->S.repair_rounds++;
-    uint32_t *old = m->leaves;
-    const size_t nold = m->nleaves;
-    m->leaves = NULL;
-    st = mx_update_leaves(m);
-    if (!st) st = mx_remesh_changed(m, old, nold);
-    mx_free(old);
-    MX_CHECK(st);
+    MX_CHECK(mx_remesh_after_refine(m));
   }
   return MX_OK;
 }

@@ -30,6 +30,9 @@ int mx_mesh_finish(mx_mesher *m);   /* flags, counts; MX_EINVALID if invalid */
  * leaves around what was split when the current mesh allows it
  * (remesh_local.c), else on the whole octree. Does not repair. */
 int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold);
+/* The leaves of the refined octree, then mx_remesh_changed from the leaves
+ * the mesher held. */
+int mx_remesh_after_refine(mx_mesher *m);
 int mx_build_tree(mx_mesher *m);    /* grid, refine, balance, leaves */
 mx_requests mx_mesher_requests(const mx_mesher *m);
 /* The octree's figures (leaves, hash, octants, edges, splits) into m->S. */

@@ -42,12 +42,7 @@ static int refine_and_mesh(mx_mesher *m, uint32_t *octs, size_t n) {
   int st;
   if (m->mesh_stage == MX_STAGE_FULL && m->p.stage == MX_STAGE_FULL) {
     /* mesh again around what changed, keep the rest */
-    uint32_t *old = m->leaves;
-    const size_t nold = m->nleaves;
-    m->leaves = NULL;
-    st = mx_update_leaves(m);
-    if (!st) st = mx_remesh_changed(m, old, nold);
-    mx_free(old);
+    st = mx_remesh_after_refine(m);
     if (!st) st = mx_repair(m);
     if (!st) st = mx_mesh_finish(m);
   } else {

@@ -190,3 +190,13 @@ int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold) {
   m->S.local = 0;
   return mx_mesh_full(m);
 }
+
+int mx_remesh_after_refine(mx_mesher *m) {
+  uint32_t *old = m->leaves;
+  const size_t nold = m->nleaves;
+  m->leaves = NULL;
+  int st = mx_update_leaves(m);
+  if (!st) st = mx_remesh_changed(m, old, nold);
+  mx_free(old);
+  return st;
+}
