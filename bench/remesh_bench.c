@@ -286,8 +286,11 @@ int main(int argc, char **argv) {
          s_mem.invalid);
   printf("    phases of the last in-memory re-mesh (s): refine %.3f balance %.3f transition "
          "%.3f boundary %.3f quality %.3f; %zu leaves split by the list, %zu repaired in %d "
-         "round(s)\n", s_mem.t_refine, s_mem.t_balance, s_mem.t_transition, s_mem.t_boundary,
-         s_mem.t_quality, s_mem.refined_listed, s_mem.repaired, s_mem.repair_rounds);
+         "round(s); %s re-mesh: %zu of the %zu leaves meshed again (%.1f%%)\n",
+         s_mem.t_refine, s_mem.t_balance, s_mem.t_transition, s_mem.t_boundary,
+         s_mem.t_quality, s_mem.refined_listed, s_mem.repaired, s_mem.repair_rounds,
+         s_mem.remesh_local ? "local" : "FULL", s_mem.remesh_patch_leaves, s_mem.leaves,
+         100.0 * (double)s_mem.remesh_patch_leaves / (double)s_mem.leaves);
   printf("    phases of the initial run (s): refine %.3f balance %.3f transition %.3f boundary "
          "%.3f quality %.3f\n", s_big.t_refine, s_big.t_balance, s_big.t_transition,
          s_big.t_boundary, s_big.t_quality);
