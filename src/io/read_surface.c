@@ -17,8 +17,25 @@
 
 /* ---- loading ---------------------------------------------------------- */
 
+/* The most an input file may hold: half the physical memory (a surface
+ * file larger than that cannot be meshed here; a device that never ends,
+ * like /dev/zero, is refused when it gets there). */
+static size_t input_limit(void) {
+  const long pages = sysconf(_SC_PHYS_PAGES), psize = sysconf(_SC_PAGESIZE);
+  if (pages <= 0 || psize <= 0) return (size_t)1 << 34;
+  return (size_t)pages / 2 * (size_t)psize;
+}
+
+static int too_large(const char *path, size_t limit) {
+  mx_error(path, 0, "larger than %.0f MB, half the memory of this machine: not read (is "
+                    "it a surface file?)", (double)limit / 1048576.0);
+  return MX_EINPUT;
+}
+
 static int read_all(int fd, const char *path, char **buf, size_t *len,
                     size_t hint) {
+  const size_t limit = input_limit();
+  if (hint > limit) return too_large(path, limit);
   size_t cap = hint + 2, n = 0; /* room for the NUL and the read at EOF */
   char *b = mx_alloc(cap);
   if (!b) {
@@ -27,6 +44,10 @@ static int read_all(int fd, const char *path, char **buf, size_t *len,
   }
   for (;;) {
     if (n + 1 >= cap) {
+      if (n > limit) {
+        mx_free(b);
+        return too_large(path, limit);
+      }
       char *nb = mx_realloc(b, 2 * cap);
       if (!nb) {
         mx_free(b);
@@ -46,6 +67,12 @@ static int read_all(int fd, const char *path, char **buf, size_t *len,
     n += (size_t)r;
   }
   b[n] = '\0';
+  /* a UTF-8 byte-order mark, as some Windows editors write, is not content */
+  if (n >= 3 && (unsigned char)b[0] == 0xef && (unsigned char)b[1] == 0xbb &&
+      (unsigned char)b[2] == 0xbf) {
+    memmove(b, b + 3, n - 2);
+    n -= 3;
+  }
   *buf = b;
   *len = n;
   return MX_OK;
@@ -69,6 +96,11 @@ int mx_io_load(const char *path, char **buf, size_t *len) {
   }
   if (S_ISDIR(st.st_mode)) {
     mx_error(path, 0, "cannot read: is a directory");
+    close(fd);
+    return MX_EINPUT;
+  }
+  if (S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode)) {
+    mx_error(path, 0, "cannot read: a device, not a file");
     close(fd);
     return MX_EINPUT;
   }
