@@ -1,0 +1,2 @@
+/* Defects of input surfaces (placeholder, being written). */
+#include "kernels/surface_defects.h"
