@@ -198,7 +198,7 @@ static inline run_result run_build(const mx_trisoup *soup, uint32_t nt_domain,
   mx_builder B;
   uint32_t rt0[2] = {nt_domain, nt_domain};
   if (!region_t0) region_t0 = rt0;
-  if (mx_builder_init(&B, soup, nt_domain, region_t0, req, use_edges) ||
+  if (mx_builder_init(&B, soup, nt_domain, region_t0, req, use_edges, NULL) ||
       mx_build_roots(&B)) {
     mx_builder_free(&B);
     return r;

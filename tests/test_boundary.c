@@ -21,7 +21,7 @@ static int build(const mx_trisoup *s, int level, built *b) {
   mx_requests r = no_requests();
   r.s_level = level;
   uint32_t rt0[2] = {(uint32_t)s->nt, (uint32_t)s->nt};
-  int st = mx_builder_init(&b->B, s, (uint32_t)s->nt, rt0, &r, 1);
+  int st = mx_builder_init(&b->B, s, (uint32_t)s->nt, rt0, &r, 1, NULL);
   if (!st) st = mx_build_roots(&b->B);
   if (!st) st = mx_refine_balanced(&b->B);
   if (!st) st = mx_leaves(&b->B, &b->leaves, &b->n);

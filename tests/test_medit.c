@@ -625,7 +625,7 @@ static int transition_mesh(mx_mesh_out *M, int s_level) {
   r.s_level = s_level;
   mx_builder B;
   uint32_t r0[2] = {(uint32_t)demo.nt, (uint32_t)demo.nt};
-  if (!st) st = mx_builder_init(&B, &demo, (uint32_t)demo.nt, r0, &r, 1);
+  if (!st) st = mx_builder_init(&B, &demo, (uint32_t)demo.nt, r0, &r, 1, NULL);
   if (!st) st = mx_build_roots(&B);
   if (!st) st = mx_refine_balanced(&B);
   uint32_t *leaves = NULL;

@@ -17,7 +17,7 @@ static int run_mesh(const mx_trisoup *s, uint32_t ntd, const uint32_t *rt0,
   mx_builder B;
   uint32_t r0[2] = {ntd, ntd};
   if (!rt0) rt0 = r0;
-  int st = mx_builder_init(&B, s, ntd, rt0, req, 1);
+  int st = mx_builder_init(&B, s, ntd, rt0, req, 1, NULL);
   if (!st) st = mx_build_roots(&B);
   if (!st) st = mx_refine_balanced(&B);
   uint32_t *leaves = NULL;

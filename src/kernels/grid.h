@@ -15,9 +15,12 @@ typedef struct {
   int dims[3];      /* root cubes per axis */
 } mx_grid;
 
-/* MX_OK, or MX_EINPUT (with a message) for an empty/flat box or a grid that
- * needs more than MX_MAX_ROOTS_PER_AXIS cubes on an axis. */
-int mx_grid_build(const double lo[3], const double hi[3], mx_grid *g);
+/* MX_OK, or MX_EINPUT (with a message naming `name`, the input, may be
+ * NULL) for an empty or flat box, coordinates out of range, or an input
+ * thinner than the finest octant. An input too elongated for the published
+ * rule (more than MX_MAX_ROOTS_PER_AXIS cubes of its shortest extent on an
+ * axis) gets larger root cubes. */
+int mx_grid_build(const double lo[3], const double hi[3], const char *name, mx_grid *g);
 
 /* World box of the octant (key, level). Computed the same way everywhere so
  * neighbouring octants share bit-identical faces. */

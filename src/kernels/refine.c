@@ -25,7 +25,7 @@ typedef struct {
 
 int mx_builder_init(mx_builder *B, const mx_trisoup *soup, uint32_t nt_domain,
                     const uint32_t *region_t0, const mx_requests *req,
-                    int use_edges) {
+                    int use_edges, const char *name) {
   memset(B, 0, sizeof *B);
   B->soup = soup;
   B->nt_domain = nt_domain;
@@ -52,7 +52,7 @@ int mx_builder_init(mx_builder *B, const mx_trisoup *soup, uint32_t nt_domain,
         hi[a] = mx_max(hi[a], p[a]);
       }
     }
-  MX_CHECK(mx_grid_build(lo, hi, &B->grid));
+  MX_CHECK(mx_grid_build(lo, hi, name, &B->grid));
   const size_t nt = soup->nt;
   B->tri_xyz = mx_alloc(9 * nt * sizeof *B->tri_xyz);
   B->tri_region = mx_alloc(nt + 1);

@@ -92,7 +92,7 @@ static inline int mx_edge_top(const mx_builder *B) {
 
 int mx_builder_init(mx_builder *B, const mx_trisoup *soup, uint32_t nt_domain,
                     const uint32_t *region_t0, const mx_requests *req,
-                    int use_edges);
+                    int use_edges, const char *name);
 void mx_builder_free(mx_builder *B);
 
 int mx_build_roots(mx_builder *B);

@@ -385,7 +385,8 @@ int mx_build_tree(mx_mesher *m) {
   MX_CHECK(assemble_inputs(m));
   const mx_requests req = mx_mesher_requests(m);
   const int use_edges = m->p.balance == MX_BALANCE_EDGES;
-  MX_CHECK(mx_builder_init(&m->B, &m->soup, m->nt_domain, m->region_t0, &req, use_edges));
+  MX_CHECK(mx_builder_init(&m->B, &m->soup, m->nt_domain, m->region_t0, &req, use_edges,
+                           m->ndomain ? m->domain_name[0] : NULL));
   m->have_tree = 1;
   m->B.on_level = m->on_level;
   for (int l = 0; l <= MX_MAX_LEVEL; l++) {

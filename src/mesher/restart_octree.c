@@ -393,7 +393,7 @@ static int load_restart(mx_mesher *m, const char *path) {
           hi[a] = mx_max(hi[a], p[a]);
         }
       }
-    if (!st) st = mx_grid_build(lo, hi, &g);
+    if (!st) st = mx_grid_build(lo, hi, m->domain_name[0], &g);
   }
   uint64_t *key = NULL;
   uint32_t *perm = NULL;
