@@ -51,7 +51,7 @@ typedef enum {
   MX_EINPUT = 2,    /* bad input file, bad argument, bad usage */
   MX_ENOMEM = 3,    /* out of memory, or over the memory budget */
   MX_EIO = 4,       /* an output could not be written (permission, disk) */
-  MX_EINVALID = 5,  /* the mesh breaks the validity contract (J_ENS <= 0) */
+  MX_EINVALID = 5,  /* the mesh breaks the validity contract (J_ENS < 1e-6) */
 } mx_status;
 
 /* Element types, and their node counts: 4, 5, 6, 8. Node order: VTK's for
@@ -127,7 +127,7 @@ int mx_mesher_set_levels(mx_mesher *m, int surface_level, int all_level);
 /* ---- Meshing ----------------------------------------------------------- */
 
 /* Every stage up to params.stage. With MX_STAGE_FULL, elements left with
- * J_ENS <= 0 after the boundary stage are repaired by list refinement of
+ * J_ENS < 1e-6 after the boundary stage are repaired by list refinement of
  * their leaves (up to params.repair_rounds); if some remain the call returns
  * MX_EINVALID (the mesh is still there to inspect or write). */
 int mx_mesher_mesh(mx_mesher *m);
@@ -194,7 +194,7 @@ typedef struct {
   const uint8_t *boundary;/* per node: 1 on the domain boundary */
   size_t by_type[4];
   double jens_min;
-  size_t invalid;         /* elements with J_ENS <= 0 */
+  size_t invalid;         /* elements with J_ENS < 1e-6 */
 } mx_mesh_arrays;
 
 /* Valid until the next call that changes the mesh. MX_EINPUT without a

@@ -19,27 +19,45 @@ int mx_status_refine(int status) {
   return status;
 }
 
+/* Control characters (from a file name or bytes of an input echoed in a
+ * message) are shown as \xNN: a message never drives the terminal. */
+static void escape_controls(const char *in, char *out, size_t n) {
+  size_t w = 0;
+  for (const unsigned char *p = (const unsigned char *)in; *p && w + 5 < n; p++) {
+    if (*p < 0x20 || *p == 0x7f) {
+      snprintf(out + w, n - w, "\\x%02x", *p);
+      w += 4;
+    } else {
+      out[w++] = (char)*p;
+    }
+  }
+  out[w] = '\0';
+}
+
 static void vreport(const char *kind, const char *file, long line,
                     const char *fmt, va_list ap) {
-  char msg[1024];
+  char msg[1024], full[1400], safe[2800];
   vsnprintf(msg, sizeof msg, fmt, ap);
+  if (file && line > 0)
+    snprintf(full, sizeof full, "%s:%ld: %s", file, line, msg);
+  else if (file)
+    snprintf(full, sizeof full, "%s: %s", file, msg);
+  else
+    snprintf(full, sizeof full, "%s", msg);
+  escape_controls(full, safe, sizeof safe);
   if (mx_msg_fn) {
-    char full[1400];
-    if (file && line > 0)
-      snprintf(full, sizeof full, "%s:%ld: %s", file, line, msg);
-    else if (file)
-      snprintf(full, sizeof full, "%s: %s", file, msg);
-    else
-      snprintf(full, sizeof full, "%s", msg);
-    mx_msg_fn(mx_msg_user, kind[0] == 'e' ? MX_MSG_ERROR : MX_MSG_WARNING, full);
+    mx_msg_fn(mx_msg_user, kind[0] == 'e' ? MX_MSG_ERROR : MX_MSG_WARNING, safe);
     return;
   }
-  if (file && line > 0)
-    fprintf(stderr, "mixoct: %s:%ld: %s%s\n", file, line, kind, msg);
-  else if (file)
-    fprintf(stderr, "mixoct: %s: %s%s\n", file, kind, msg);
-  else
-    fprintf(stderr, "mixoct: %s%s\n", kind, msg);
+  /* "mixoct: FILE:LINE: error: text" */
+  const char *colon = file ? strstr(safe, ": ") : NULL;
+  if (colon && line > 0) { /* after FILE:LINE */
+    fprintf(stderr, "mixoct: %.*s: %s%s\n", (int)(colon - safe), safe, kind, colon + 2);
+  } else if (colon) {
+    fprintf(stderr, "mixoct: %.*s: %s%s\n", (int)(colon - safe), safe, kind, colon + 2);
+  } else {
+    fprintf(stderr, "mixoct: %s%s\n", kind, safe);
+  }
 }
 
 void mx_error(const char *file, long line, const char *fmt, ...) {

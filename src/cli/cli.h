@@ -11,6 +11,7 @@
 #include "mixoct.h" /* MX_STAGE_*, MX_BALANCE_* */
 
 #define MX_MAX_INPUTS 64
+#define MX_MAX_OUTPUTS 16
 
 typedef struct {
   const char *inputs[MX_MAX_INPUTS];
@@ -19,7 +20,7 @@ typedef struct {
   const char *output;    /* NULL: dry run */
   /* More files of the same mesh (the mesher_roi front's -v -g -m): when
    * noutputs > 0, outputs[0] == output and mx_run writes each of them. */
-  const char *outputs[4];
+  const char *outputs[MX_MAX_OUTPUTS];
   int noutputs;
   const char *regions_file;
   const char *region_surf[MX_MAX_REGIONS];
@@ -41,6 +42,11 @@ typedef struct {
  * MX_OK or MX_EINPUT (usage error, message printed). */
 int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now);
 
+/* Before meshing: the output's format is known (mesh = 1), it is not a
+ * directory, and its directory exists and is writable. MX_EINPUT / MX_EIO
+ * with a message naming it. */
+int mx_check_output_path(const char *path, int mesh);
+
 /* One line describing the machine (hwloc when built in, OpenMP threads). */
 void mx_topology_string(char *buf, size_t n);
 
@@ -56,7 +62,25 @@ int mx_check_main(int argc, char **argv);
 /* `mixoct patterns [--json]` (src/cli/patterns_cmd.c). */
 int mx_patterns_main(int argc, char **argv);
 
-void mx_print_json(const mx_summary *s);
-void mx_print_summary(const mx_summary *s);
+/* What a run did besides meshing, for the report: the files written, the
+ * warnings, the outcome (src/cli/main.c fills it). */
+#define MX_MAX_WARNINGS 64
+typedef struct {
+  int status;                          /* the exit code */
+  int valid;                           /* exit 0's promise: a valid mesh */
+  int noutputs;
+  const char *outputs[MX_MAX_OUTPUTS + 1]; /* written, the restart file last */
+  long long bytes[MX_MAX_OUTPUTS + 1];
+  int dry_run;                         /* no -o */
+  int nwarnings;
+  size_t warnings_dropped;             /* beyond MX_MAX_WARNINGS */
+  char *warnings[MX_MAX_WARNINGS];
+  char error[1024];                    /* the first error, "" if none */
+} mx_run_info;
+
+/* --json: one line, always valid JSON (non-finite numbers are null); s may
+ * be NULL when the run stopped before meshing. */
+void mx_print_json(const mx_summary *s, const mx_run_info *ri);
+void mx_print_summary(const mx_summary *s, const mx_run_info *ri);
 
 #endif

@@ -7,15 +7,46 @@
 #include "cli/cli.h"
 #include "cli/progress.h"
 #include "common.h"
+#include "io/atomic_file.h"
 #include "mixoct.h"
 
 #include <limits.h>
+#include <signal.h>
+#include <sys/stat.h>
 #include <malloc.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+
+/* What the run did, for the report (warnings, files written, outcome). */
+static mx_run_info run_info;
+static int quiet_warnings; /* --quiet: warnings kept for --json, not printed */
+
+/* The mesher's messages: printed as before, warnings kept for --json. */
+static void on_message(void *user, int level, const char *text) {
+  mx_run_info *ri = user;
+  if (level == MX_MSG_ERROR) {
+    if (!ri->error[0]) snprintf(ri->error, sizeof ri->error, "%s", text);
+    fprintf(stderr, "mixoct: error: %s\n", text);
+    return;
+  }
+  if (ri->nwarnings < MX_MAX_WARNINGS) {
+    ri->warnings[ri->nwarnings] = strdup(text);
+    if (ri->warnings[ri->nwarnings]) ri->nwarnings++;
+  } else {
+    ri->warnings_dropped++;
+  }
+  if (!quiet_warnings) fprintf(stderr, "mixoct: warning: %s\n", text);
+}
+
+/* Ctrl-C or a scheduler's time limit: no temporary output is left. */
+static void on_signal(int sig) {
+  mx_afile_remove_temporaries();
+  signal(sig, SIG_DFL);
+  raise(sig);
+}
 
 /* Hooks of the mesher for the progress line. */
 static void on_stage(const char *name) { mx_progress_stage(name); }
@@ -36,6 +67,7 @@ static int setup(const mx_options *o, mx_mesher **out) {
     return MX_ENOMEM;
   }
   *out = m;
+  mx_mesher_set_message_handler(m, on_message, &run_info);
   m->on_stage = on_stage;
   m->on_round = on_round;
   m->on_level = mx_progress_on_level;
@@ -48,14 +80,25 @@ static int setup(const mx_options *o, mx_mesher **out) {
   return MX_OK;
 }
 
+static void written(const char *path) {
+  mx_run_info *ri = &run_info;
+  struct stat st;
+  ri->outputs[ri->noutputs] = path;
+  ri->bytes[ri->noutputs] = stat(path, &st) == 0 ? (long long)st.st_size : -1;
+  ri->noutputs++;
+}
+
 /* Write every output, then the restart file when asked. */
 static int write_outputs(const mx_options *o, mx_mesher *m) {
-  if (o->output) {
-    MX_CHECK(mx_mesher_write(m, o->output, o->ascii));
-    for (int k = 1; k < o->noutputs; k++)
-      MX_CHECK(mx_mesher_write(m, o->outputs[k], o->ascii));
+  for (int k = 0; k < o->noutputs; k++) {
+    MX_CHECK(mx_mesher_write(m, o->outputs[k], o->ascii));
+    written(o->outputs[k]);
   }
-  if (o->restart_out) MX_CHECK(mx_mesher_save_restart(m, o->restart_out));
+  if (o->restart_out) {
+    MX_CHECK(mx_mesher_save_restart(m, o->restart_out));
+    written(o->restart_out);
+  }
+  run_info.dry_run = o->noutputs == 0 && !o->restart_out;
   return MX_OK;
 }
 
@@ -65,8 +108,8 @@ static void report(const mx_options *o, mx_mesher *m, double t_start) {
   S.peak_rss_mb = mx_peak_rss_mb();
   S.threads = omp_get_max_threads();
   mx_progress_done(); /* before the summary, on the same terminal */
-  if (!o->quiet && !o->json) mx_print_summary(&S);
-  if (o->json) mx_print_json(&S);
+  if (!o->quiet && !o->json) mx_print_summary(&S, &run_info);
+  if (o->json) mx_print_json(&S, &run_info);
 }
 
 int mx_run(const mx_options *o) {
@@ -90,13 +133,25 @@ int mx_run(const mx_options *o) {
     const int wst = write_outputs(o, m);
     if (wst) st = wst;
   }
-  if (!st || st == MX_EINVALID) report(o, m, t_start);
+  run_info.status = st;
+  run_info.valid = st == MX_OK;
+  if (m && (!st || st == MX_EINVALID)) {
+    report(o, m, t_start);
+  } else if (o->json) {
+    mx_progress_done();
+    mx_print_json(NULL, &run_info); /* the outcome, even without a mesh */
+  }
   mx_mesher_free(m);
   mx_progress_done();
+  for (int k = 0; k < run_info.nwarnings; k++) free(run_info.warnings[k]);
   return st;
 }
 
 int main(int argc, char **argv) {
+  /* every message goes through on_message: --json keeps the warnings and
+   * the first error */
+  mx_msg_fn = on_message;
+  mx_msg_user = &run_info;
   if (argc >= 2 && strcmp(argv[1], "check") == 0)
     return mx_check_main(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "patterns") == 0)
@@ -116,14 +171,23 @@ int main(int argc, char **argv) {
   int exit_now = 0;
   int st = remesh ? mx_parse_options(argc - 1, argv + 1, &o, &exit_now)
                   : mx_parse_options(argc, argv, &o, &exit_now);
-  if (st) return MX_EINPUT;
+  if (st) {
+    if (!exit_now && argc > 1 && o.json) { /* the outcome as JSON all the same */
+      run_info.status = st;
+      mx_print_json(NULL, &run_info);
+    }
+    return st;
+  }
   if (remesh && !exit_now && !o.restart_in) {
     mx_error(NULL, 0, "remesh needs the restart file: -c FILE.oct (see mixoct --help)");
     return MX_EINPUT;
   }
   if (exit_now) return 0;
-  if (o.quiet) mx_quiet = 1;
+  quiet_warnings = o.quiet;
   if (o.threads > 0) omp_set_num_threads(o.threads);
+  signal(SIGINT, on_signal);
+  signal(SIGTERM, on_signal);
+  signal(SIGHUP, on_signal);
   st = mx_run(&o);
   return st == MX_OK ? 0 : st;
 }

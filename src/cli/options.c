@@ -10,6 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 static const char *usage_text =
     "mixoct: a parallel mixed-element octree mesher (hexahedra, prisms,\n"
@@ -35,9 +37,11 @@ static const char *usage_text =
     "\n"
     "Output:\n"
     "  -o, --output OUT            .vtk (legacy), .vtu, .msh (Gmsh 4.1), .mesh /\n"
-    "                              .meshb (Medit), .getfem, .m3d; without -o\n"
-    "                              nothing is written (a dry run). Written to a\n"
-    "                              temporary name and renamed: never partial\n"
+    "                              .meshb (Medit), .getfem, .m3d; repeatable (one\n"
+    "                              mesh, several files); without -o nothing is\n"
+    "                              written (a dry run). Checked before meshing;\n"
+    "                              written to a temporary name and renamed:\n"
+    "                              never partial, removed on Ctrl-C / SIGTERM\n"
     "      --stage full            the mesh of the domain (the default): nodes\n"
     "                              on the surface, surface patterns, staircase\n"
     "                              reduction, invalid elements repaired\n"
@@ -53,7 +57,9 @@ static const char *usage_text =
     "      --restart FILE.oct      also write the restart file (Appendix A of\n"
     "                              the 2021 paper; .octb: our binary variant)\n"
     "      --keep-invalid          write the mesh even when elements with\n"
-    "                              J_ENS <= 0 remain (exit 5 all the same)\n"
+    "                              J_ENS < 1e-6 remain (exit 5 all the same)\n"
+    "  Options take their value as the next word, or attached: --output=x.vtu,\n"
+    "  -s5, -ox.vtu.\n"
     "\n"
     "Re-meshing (from a restart file, ours or the published program's):\n"
     "  -c, --from-restart FILE     rebuild the octree of FILE.oct / .octb (the\n"
@@ -86,10 +92,19 @@ static const char *usage_text =
     "  patterns [--json]           the transition-pattern table: classes,\n"
     "                              sub-elements per type, worst J_ENS\n"
     "\n"
-    "Exit codes: 0 success (a valid mesh), 1 internal failure, 2 bad input or\n"
-    "usage (the message names the file and line), 3 out of memory or over the\n"
-    "memory budget, 4 an output that cannot be written, 5 elements with\n"
-    "J_ENS <= 0 left after repair (not written unless --keep-invalid).\n"
+    "Exit codes:\n"
+    "  0  a valid mesh was written: non-empty, conforming, every element with\n"
+    "     J_ENS >= 1e-6 (none inverted or degenerate), its boundary on the input\n"
+    "  1  internal failure (a bug: please report it)\n"
+    "  2  bad input or usage, refused before meshing or with an empty result\n"
+    "     (the message names the file and line)\n"
+    "  3  out of memory, or over the memory budget (estimated before meshing)\n"
+    "  4  an output that cannot be written (checked before meshing)\n"
+    "  5  meshed, but the result breaks the contract of exit 0 (elements with\n"
+    "     J_ENS < 1e-6 left after repair): not written unless --keep-invalid\n"
+    "  128+N  killed by signal N (Ctrl-C: 130); no temporary file is left\n"
+    "--json prints one JSON line whatever the outcome: valid, exit_code, error,\n"
+    "warnings, outputs, and the figures of the mesh when there is one.\n"
     "\n"
     "Examples:\n"
     "  mixoct --demo -s 5 -o demo.vtu\n"
@@ -169,7 +184,54 @@ static int need_arg(int i, int argc, const char *opt) {
   return MX_OK;
 }
 
-int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
+/* The options that take an argument, long and short. */
+static const char *const with_arg[][2] = {
+    {"-i", "--input"},   {"-s", "--surface-level"}, {"-a", "--all-level"},
+    {"-b", "--regions"}, {"-o", "--output"},        {"-c", "--from-restart"},
+    {"-l", "--list"},    {"-r", "--region-surface"}, {NULL, "--threads"},
+    {NULL, "--max-memory"}, {NULL, "--restart"},    {NULL, "--stage"},
+    {NULL, "--balance"}};
+
+/* argv with the forms getopt users expect split in two: `--output=x.vtu`
+ * and `-s5` / `-ox.vtu` become `--output x.vtu`, `-s 5`, `-o x.vtu`. The
+ * strings live as long as the process (the options point into them). */
+static char **split_attached(int argc, char **argv, int *nargc) {
+  char **v = malloc((2 * (size_t)argc + 1) * sizeof *v);
+  if (!v) return NULL;
+  int n = 0;
+  for (int i = 0; i < argc; i++) {
+    const char *a = argv[i];
+    v[n++] = argv[i];
+    if (i == 0 || a[0] != '-') continue;
+    for (size_t k = 0; k < sizeof with_arg / sizeof *with_arg; k++) {
+      const char *sh = with_arg[k][0], *lg = with_arg[k][1];
+      const size_t ll = strlen(lg);
+      if (strncmp(a, lg, ll) == 0 && a[ll] == '=') {
+        char *name = strndup(a, ll);
+        if (!name) break;
+        v[n - 1] = name;
+        v[n++] = (char *)a + ll + 1;
+        break;
+      }
+      if (sh && a[1] == sh[1] && a[2] != '\0' && a[1] != '-') {
+        v[n - 1] = (char *)sh;
+        v[n++] = (char *)a + 2;
+        break;
+      }
+    }
+  }
+  v[n] = NULL;
+  *nargc = n;
+  return v;
+}
+
+int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
+  int argc = argc0;
+  char **argv = split_attached(argc0, argv0, &argc);
+  if (!argv) {
+    mx_error(NULL, 0, "out of memory");
+    return MX_ENOMEM;
+  }
   memset(o, 0, sizeof *o);
   o->req.s_level = -1;
   o->req.a_level = -1;
@@ -219,7 +281,12 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
       o->nregion_surf++;
     } else if (IS("-o", "--output")) {
       MX_CHECK(need_arg(i, argc, a));
-      o->output = argv[++i];
+      if (o->noutputs == MX_MAX_OUTPUTS) {
+        mx_error(NULL, 0, "at most %d outputs", MX_MAX_OUTPUTS);
+        return MX_EINPUT;
+      }
+      o->outputs[o->noutputs++] = argv[++i];
+      o->output = o->outputs[0];
     } else if (strcmp(a, "--threads") == 0) {
       MX_CHECK(need_arg(i, argc, a));
       char *end;
@@ -299,15 +366,56 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now) {
                       "restart file: give that file with -c FILE.oct");
     return MX_EINPUT;
   }
-  if (o->output) {
-    /* fail before meshing, not after */
-    const char *dot = strrchr(o->output, '.');
-    if (!dot || !mx_mesh_format_known(o->output)) {
-      mx_error(o->output, 0, "unknown output format \"%s\" (use .vtk, .vtu, .msh, "
-                             ".mesh, .meshb, .getfem or .m3d)",
-               dot ? dot : "");
-      return MX_EINPUT;
+  if (o->req.s_level < 0 && o->req.a_level < 0 && !o->regions_file && !o->nregion_surf &&
+      !o->restart_in) {
+    mx_error(NULL, 0, "no refinement request: the mesh would be empty; give a level on "
+                      "the surface (-s RL, e.g. -s 5), everywhere (-a RL), boxes (-b FILE.reg) "
+                      "or a region surface (-r S RL)");
+    return MX_EINPUT;
+  }
+  /* fail before meshing, not after a long run */
+  for (int k = 0; k < o->noutputs; k++) MX_CHECK(mx_check_output_path(o->outputs[k], 1));
+  if (o->restart_out) MX_CHECK(mx_check_output_path(o->restart_out, 0));
+  return MX_OK;
+}
+
+int mx_check_output_path(const char *path, int mesh) {
+  const char *dot = strrchr(path, '.');
+  const char *slash = strrchr(path, '/');
+  if (dot && slash && dot < slash) dot = NULL;
+  if (mesh && (!dot || !mx_mesh_format_known(path))) {
+    mx_error(path, 0, "unknown output format \"%s\" (use .vtk, .vtu, .msh, .mesh, .meshb, "
+                      ".getfem or .m3d)", dot ? dot : "");
+    return MX_EINPUT;
+  }
+  struct stat st;
+  if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+    mx_error(path, 0, "cannot write: is a directory");
+    return MX_EIO;
+  }
+  /* the directory it goes to (the file is written there under a temporary
+   * name, then renamed) */
+  char dir[4096];
+  if (!slash) {
+    strcpy(dir, ".");
+  } else if (slash == path) {
+    strcpy(dir, "/");
+  } else {
+    const size_t n = (size_t)(slash - path);
+    if (n >= sizeof dir) {
+      mx_error(path, 0, "cannot write: the path is too long");
+      return MX_EIO;
     }
+    memcpy(dir, path, n);
+    dir[n] = '\0';
+  }
+  if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) {
+    mx_error(path, 0, "cannot write: the directory %s does not exist", dir);
+    return MX_EIO;
+  }
+  if (access(dir, W_OK | X_OK) != 0) {
+    mx_error(path, 0, "cannot write: %s (in the directory %s)", strerror(errno), dir);
+    return MX_EIO;
   }
   return MX_OK;
 }

@@ -2,6 +2,10 @@
 
 #include <inttypes.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "kernels/quality.h"
 
 static const char *type_name[4] = {"tet", "pyramid", "prism", "hex"};
 
@@ -21,7 +25,101 @@ static void quality_json(const mx_quality_table *q, char *buf, size_t n) {
   if (w < n) snprintf(buf + w, n - w, "}}");
 }
 
-void mx_print_json(const mx_summary *s) {
+/* A JSON string: quotes, backslashes and control characters escaped. */
+static void json_string(FILE *f, const char *t) {
+  fputc('"', f);
+  for (const unsigned char *p = (const unsigned char *)(t ? t : ""); *p; p++) {
+    if (*p == '"' || *p == '\\')
+      fprintf(f, "\\%c", *p);
+    else if (*p < 0x20 || *p == 0x7f)
+      fprintf(f, "\\u%04x", *p);
+    else
+      fputc(*p, f);
+  }
+  fputc('"', f);
+}
+
+/* Non-finite numbers printed by printf (nan, -nan, inf, -inf) outside
+ * strings become null: the line stays valid JSON whatever the values. */
+static void json_finite(char *b) {
+  int in_str = 0;
+  char *w = b;
+  for (char *p = b; *p;) {
+    if (in_str) {
+      if (*p == '\\' && p[1]) {
+        *w++ = *p++;
+        *w++ = *p++;
+        continue;
+      }
+      if (*p == '"') in_str = 0;
+      *w++ = *p++;
+      continue;
+    }
+    if (*p == '"') {
+      in_str = 1;
+      *w++ = *p++;
+      continue;
+    }
+    const char *q = p + (*p == '-');
+    if (!strncmp(q, "nan", 3) || !strncmp(q, "inf", 3)) {
+      memcpy(w, "null", 4);
+      w += 4;
+      p = (char *)q + 3;
+      if (!strncmp(p, "inity", 5)) p += 5;
+      continue;
+    }
+    *w++ = *p++;
+  }
+  *w = '\0';
+}
+
+/* The outcome: valid, exit code, error, warnings, files written. */
+static void json_outcome(FILE *f, const mx_run_info *ri) {
+  fprintf(f, "\"valid\": %s, \"exit_code\": %d, \"error\": ", ri->valid ? "true" : "false",
+          ri->status);
+  if (ri->error[0])
+    json_string(f, ri->error);
+  else
+    fputs("null", f);
+  fputs(", \"warnings\": [", f);
+  for (int k = 0; k < ri->nwarnings; k++) {
+    if (k) fputs(", ", f);
+    json_string(f, ri->warnings[k]);
+  }
+  fprintf(f, "], \"warnings_dropped\": %zu, \"dry_run\": %s, \"outputs\": [",
+          ri->warnings_dropped, ri->dry_run ? "true" : "false");
+  for (int k = 0; k < ri->noutputs; k++) {
+    fputs(k ? ", {\"path\": " : "{\"path\": ", f);
+    json_string(f, ri->outputs[k]);
+    fprintf(f, ", \"bytes\": %lld}", ri->bytes[k]);
+  }
+  fputs("]", f);
+}
+
+static void print_mesh_json(FILE *out, const mx_summary *s);
+
+void mx_print_json(const mx_summary *s, const mx_run_info *ri) {
+  char *buf = NULL;
+  size_t len = 0;
+  FILE *f = open_memstream(&buf, &len);
+  if (!f) return;
+  fputs("{", f);
+  json_outcome(f, ri);
+  if (s) {
+    fprintf(f, ", \"defects\": {\"invalid_elements\": %zu}, ", s->mesh ? s->invalid : 0);
+    print_mesh_json(f, s);
+  } else {
+    fputs("}\n", f);
+  }
+  fclose(f);
+  json_finite(buf);
+  fputs(buf, stdout);
+  fflush(stdout);
+  free(buf);
+}
+
+/* The mesh's figures, the rest of the object (from '"leaves"' to '}'). */
+static void print_mesh_json(FILE *out, const mx_summary *s) {
   char nodes[32] = "null";
   if (s->nodes_counted) snprintf(nodes, sizeof nodes, "%zu", s->nodes);
   char topo[256];
@@ -46,7 +144,7 @@ void mx_print_json(const mx_summary *s) {
              s->repair_rounds, b->t_states, b->t_close, b->t_patterns, b->t_shrink,
              b->t_smooth, b->t_staircase, b->smoothed);
   }
-  printf("{\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
+  fprintf(out, "\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
          "\"nodes\": %s, \"elements\": %zu, "
          "\"by_type\": {\"hex\": %zu, \"prism\": %zu, \"pyramid\": %zu, \"tet\": %zu}, "
          "\"stage\": \"%s\", \"balance\": \"%s\", \"max_level\": %d, "
@@ -74,7 +172,6 @@ void mx_print_json(const mx_summary *s) {
          s->local ? s->patch_leaves : 0, s->local ? s->core_leaves : 0, s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->threads,
          s->mesh ? s->jens_min : 1.0,
          s->mesh ? s->invalid : 0, qual, bnd, topo);
-  fflush(stdout);
 }
 
 /* The summary printed after a run (unless --quiet or --json): what was
@@ -87,7 +184,7 @@ static void quality_summary(const mx_summary *s) {
     if (q->count[t])
       printf("    %-10s   %12zu %9.3f %9.3f %9.3f\n", type_name[t], q->count[t],
              q->min[t], q->mean[t], q->max[t]);
-  printf("    %-10s   %12zu %9.3f   (%zu invalid: J_ENS <= 0; %zu below 0.2)\n",
+  printf("    %-10s   %12zu %9.3f   (%zu invalid: J_ENS < 1e-6; %zu below 0.2)\n",
          "all", s->elements, s->jens_min, s->invalid, q->below_02);
   static const char *bin_name[MX_QBINS] = {"<0.03", "<0.2", "<0.4",
                                            "<0.6",  "<0.8", "<=1"};
@@ -106,7 +203,7 @@ static void quality_summary(const mx_summary *s) {
   printf("\n");
 }
 
-void mx_print_summary(const mx_summary *s) {
+void mx_print_summary(const mx_summary *s, const mx_run_info *ri) {
   printf("mixoct: %s; %d thread(s), %s balance, levels up to %d\n",
          s->full ? "mesh of the domain" :
          s->mesh ? "conforming mesh of the whole octree (transition stage)"
@@ -165,4 +262,13 @@ void mx_print_summary(const mx_summary *s) {
   printf("\n");
   printf("  peak memory  %12.0f MB (estimated %.0f MB before meshing)\n",
          s->peak_rss_mb, s->memory_estimate_mb);
+  for (int k = 0; k < ri->noutputs; k++) {
+    const double b = (double)ri->bytes[k];
+    printf("  written      %s (%.*f %s)\n", ri->outputs[k], b < 1e6 ? 1 : 1,
+           b < 1e6 ? b / 1e3 : b / 1e6, b < 1e6 ? "kB" : "MB");
+  }
+  if (ri->dry_run) printf("  written      nothing: a dry run (give -o FILE to write the mesh)\n");
+  if (ri->status == MX_EINVALID)
+    printf("  result       INVALID: %zu element(s) with J_ENS below %g (exit 5)\n", s->invalid,
+           MX_JENS_VALID);
 }

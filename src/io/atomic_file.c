@@ -4,6 +4,8 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
+#include <signal.h>
 #include <omp.h>
 #include <stdarg.h>
 #include <stdlib.h>
@@ -31,13 +33,54 @@ static void afile_reset(mx_afile *f) {
   memset(f, 0, sizeof *f);
 }
 
+/* ---- temporaries left by a signal ---------------------------------------- */
+
+/* The temporaries being written, so that a signal handler can remove them
+ * (mx_afile_remove_temporaries). Fixed storage: the handler must not
+ * allocate. */
+enum { TMP_SLOTS = 16, TMP_PATH = 4096 };
+static char tmp_path[TMP_SLOTS][TMP_PATH];
+static volatile sig_atomic_t tmp_used[TMP_SLOTS];
+
+static void tmp_register(const char *path) {
+  if (strlen(path) >= TMP_PATH) return;
+#pragma omp critical(mx_afile_tmp)
+  for (int k = 0; k < TMP_SLOTS; k++)
+    if (!tmp_used[k]) {
+      memcpy(tmp_path[k], path, strlen(path) + 1);
+      tmp_used[k] = 1;
+      break;
+    }
+}
+
+static void tmp_unregister(const char *path) {
+#pragma omp critical(mx_afile_tmp)
+  for (int k = 0; k < TMP_SLOTS; k++)
+    if (tmp_used[k] && strcmp(tmp_path[k], path) == 0) {
+      tmp_used[k] = 0;
+      break;
+    }
+}
+
+void mx_afile_remove_temporaries(void) {
+  for (int k = 0; k < TMP_SLOTS; k++)
+    if (tmp_used[k]) {
+      unlink(tmp_path[k]);
+      tmp_used[k] = 0;
+    }
+}
+
 /* Closes the stream, unlinks the temporary, frees everything. Does not
  * report anything: used on every failure path and by abort. */
 static void afile_discard(mx_afile *f) {
   if (f->fp) fclose(f->fp);
-  if (f->tmp) unlink(f->tmp);
+  if (f->tmp) {
+    unlink(f->tmp);
+    tmp_unregister(f->tmp);
+  }
   mx_free(f->tmp);
   mx_free(f->path);
+  mx_free(f->real);
   mx_free(f->buf);
   int failed = f->failed;
   afile_reset(f);
@@ -69,22 +112,22 @@ static int target_is_special(const char *path) {
 }
 
 static int open_in_place(mx_afile *f) {
-  f->fp = fopen(f->path, "wb");
+  f->fp = fopen(f->real, "wb");
   if (!f->fp) return afile_fail(f, errno);
   return MX_OK;
 }
 
 /* Creates the temporary exclusively: never clobbers another writer's file. */
 static int open_temporary(mx_afile *f) {
-  size_t n = strlen(f->path) + 64;
+  size_t n = strlen(f->real) + 64;
   f->tmp = mx_alloc(n);
   if (!f->tmp) return afile_fail_quiet(f, MX_EINPUT);
   long pid = (long)getpid();
   for (int k = 0; k < AFILE_TMP_TRIES; k++) {
     if (k == 0)
-      snprintf(f->tmp, n, "%s.tmp.%ld", f->path, pid);
+      snprintf(f->tmp, n, "%s.tmp.%ld", f->real, pid);
     else
-      snprintf(f->tmp, n, "%s.tmp.%ld.%d", f->path, pid, k);
+      snprintf(f->tmp, n, "%s.tmp.%ld.%d", f->real, pid, k);
     int fd = open(f->tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd < 0 && errno == EEXIST) continue;
     if (fd < 0) {
@@ -93,6 +136,7 @@ static int open_temporary(mx_afile *f) {
       f->tmp = NULL; /* nothing was created: nothing to unlink */
       return afile_fail(f, err);
     }
+    tmp_register(f->tmp);
     f->fp = fdopen(fd, "wb");
     if (!f->fp) {
       int err = errno;
@@ -106,14 +150,42 @@ static int open_temporary(mx_afile *f) {
   return afile_fail(f, EEXIST);
 }
 
+/* A symbolic link is written through: the file it names is replaced, the
+ * link stays. Returns the path to write (allocated), or NULL when out of
+ * memory. */
+static char *through_links(const char *path) {
+  struct stat st;
+  if (lstat(path, &st) != 0 || !S_ISLNK(st.st_mode)) return dup_string(path);
+  char *r = realpath(path, NULL);
+  if (r) {
+    char *d = dup_string(r);
+    free(r);
+    return d;
+  }
+  /* a dangling link: the name it holds, relative to the link's directory */
+  char target[4096];
+  const ssize_t n = readlink(path, target, sizeof target - 1);
+  if (n <= 0) return dup_string(path);
+  target[n] = '\0';
+  const char *slash = strrchr(path, '/');
+  if (target[0] == '/' || !slash) return dup_string(target);
+  const size_t dl = (size_t)(slash - path) + 1, tl = strlen(target);
+  char *d = mx_alloc(dl + tl + 1);
+  if (!d) return NULL;
+  memcpy(d, path, dl);
+  memcpy(d + dl, target, tl + 1);
+  return d;
+}
+
 int mx_afile_open(mx_afile *f, const char *path) {
   afile_reset(f);
   f->path = dup_string(path);
-  if (!f->path) {
+  f->real = f->path ? through_links(path) : NULL;
+  if (!f->path || !f->real) {
     f->failed = 1;
     return MX_EINPUT;
   }
-  if (target_is_special(path)) return open_in_place(f);
+  if (target_is_special(f->real)) return open_in_place(f);
   return open_temporary(f);
 }
 
@@ -168,7 +240,8 @@ int mx_afile_commit(mx_afile *f) {
   FILE *fp = f->fp;
   f->fp = NULL; /* closed below whatever fclose returns */
   if (fclose(fp) != 0) return afile_fail(f, errno);
-  if (f->tmp && rename(f->tmp, f->path) != 0) return afile_fail(f, errno);
+  if (f->tmp && rename(f->tmp, f->real) != 0) return afile_fail(f, errno);
+  if (f->tmp) tmp_unregister(f->tmp);
   mx_free(f->tmp);
   f->tmp = NULL;
   afile_discard(f);

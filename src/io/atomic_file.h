@@ -13,7 +13,8 @@
  * /dev/stdout, a FIFO, a device) it is written in place: renaming over it
  * would replace the device node. mx_afile_from_stream() wraps a stream the
  * caller opened (tests use it on /dev/full); commit then only flushes and
- * closes it.
+ * closes it. A symbolic link is written through: the file it names is
+ * replaced and the link stays.
  *
  * Usage:
  *   mx_afile f;
@@ -32,6 +33,7 @@
 typedef struct {
   FILE *fp;   /* NULL once closed */
   char *path; /* final name, used in messages */
+  char *real; /* the file written: path, or what a symbolic link names */
   char *tmp;  /* temporary name; NULL when writing in place or a stream */
   int failed; /* sticky: a failure was reported, every call now fails */
   char *buf;  /* scratch buffer of mx_afile_emit */
@@ -39,6 +41,9 @@ typedef struct {
 } mx_afile;
 
 int mx_afile_open(mx_afile *f, const char *path);
+/* Removes the temporaries of the files being written; async-signal-safe:
+ * for a SIGINT / SIGTERM handler (the program's). */
+void mx_afile_remove_temporaries(void);
 /* Takes ownership of fp (closed by commit/abort). name is for messages. */
 int mx_afile_from_stream(mx_afile *f, FILE *fp, const char *name);
 int mx_afile_write(mx_afile *f, const void *data, size_t bytes);

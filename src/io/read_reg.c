@@ -8,9 +8,16 @@
 #include <strings.h>
 
 #include "common.h"
+#include "morton/morton.h"
 #include "soa/regions.h"
 
 #include "io/text_scan.h"
+
+/* the finest level a request may ask (MX_MAX_LEVEL - 1), as text */
+#define MX_MAX_LEVEL_ASKED 15
+#define MX_STR2(x) #x
+#define MX_STR(x) MX_STR2(x)
+_Static_assert(MX_MAX_LEVEL_ASKED == MX_MAX_LEVEL - 1, "keep the message in step");
 
 typedef struct {
   const char *path, *p, *end; /* p: the next unread character */
@@ -55,8 +62,9 @@ static int read_level(reg_file *f, size_t region, int *level) {
   const char *e = mx_io_int(f->p, &v);
   if (!e || !mx_io_delim(e, '#'))
     return bad_token(f, region, "level", "is not an integer");
-  if (v < 0 || v > INT_MAX)
-    return bad_token(f, region, "level", "is out of range (>= 0 needed)");
+  if (v < 0 || v > MX_MAX_LEVEL - 1)
+    return bad_token(f, region, "level", "is out of range (levels are 0 to "
+                                          MX_STR(MX_MAX_LEVEL_ASKED) ", as for -s)");
   *level = (int)v;
   f->p = e;
   return MX_OK;

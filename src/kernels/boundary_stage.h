@@ -15,7 +15,7 @@ typedef struct {
   size_t removed;        /* elements with no inside node removed */
   mx_surface_stats sp;   /* surface patterns and staircase */
   size_t shrunk;         /* outside nodes moved onto the surface (line 13) */
-  size_t inverted;       /* elements with J_ENS <= 0 right after the shrink */
+  size_t inverted;       /* elements with J_ENS < 1e-6 right after the shrink */
   size_t smoothed;       /* node moves by the untangling and smoothing */
   double t_states, t_close, t_patterns, t_shrink, t_smooth, t_staircase;
 } mx_boundary_stats;

@@ -108,7 +108,7 @@ void mx_mesh_summarize(mx_mesh_out *M) {
 #pragma omp parallel for schedule(static) reduction(+ : bt[:4], invalid) reduction(min : jmin)
   for (size_t c = 0; c < M->ncells; c++) {
     bt[M->type[c]]++;
-    invalid += !(M->jens[c] > 0.0);
+    invalid += mx_jens_invalid(M->jens[c]);
     if (M->jens[c] < jmin) jmin = M->jens[c];
   }
   memcpy(M->by_type, bt, sizeof bt);

@@ -23,7 +23,7 @@ int mx_mesh_apply_node_ids(mx_mesh_out *M, uint8_t **states, const uint32_t *new
  * receives (mx_alloc) the new id of every old node, UINT32_MAX if dropped. */
 int mx_mesh_drop_unused_nodes(mx_mesh_out *M, uint8_t **states, uint32_t **newid);
 
-/* Recount by_type, invalid (J_ENS <= 0) and jens_min from M->jens. */
+/* Recount by_type, invalid (J_ENS < 1e-6) and jens_min from M->jens. */
 void mx_mesh_summarize(mx_mesh_out *M);
 
 /* Recompute J_ENS of the elements with a node flagged in `moved` (all

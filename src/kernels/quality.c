@@ -154,7 +154,7 @@ void mx_quality_tabulate(const uint8_t *type, const double *jens, size_t n,
       int b = 0;
       while (b < MX_QBINS - 1 && !(v < mx_qbin_upper[b])) b++;
       bins[b]++;
-      invalid += v <= 0.0;
+      invalid += mx_jens_invalid(v);
       below += v < 0.2;
     }
   }

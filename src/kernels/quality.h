@@ -21,6 +21,12 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/* The contract of a valid mesh (exit 0): every element's J_ENS at least
+ * this. Below it an element is inverted or degenerate (nodes collinear or
+ * coplanar): "invalid" everywhere in mixoct. */
+#define MX_JENS_VALID 1e-6
+static inline int mx_jens_invalid(double q) { return !(q >= MX_JENS_VALID); }
+
 double mx_jens_tet(const double p[4][3]);
 double mx_jens_pyramid(const double p[5][3]);
 double mx_jens_prism(const double p[6][3]);
@@ -42,7 +48,7 @@ typedef struct {
   size_t count[4];
   double min[4], max[4], mean[4];
   size_t bins[MX_QBINS]; /* < 0.03 (including <= 0), < 0.2, < 0.4, < 0.6, < 0.8, <= 1 */
-  size_t invalid;        /* J_ENS <= 0 */
+  size_t invalid;        /* J_ENS < 1e-6 */
   size_t below_02;       /* J_ENS < 0.2 */
   double min_all;
 } mx_quality_table;

@@ -395,7 +395,7 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
         /* the octant is a scaled, rotated unit cube: the pattern's J_ENS */
         const double q = mx_pattern_elem_jens[pc->first + k];
         out->jens[c] = q;
-        if (q <= 0.0) invalid++;
+        if (mx_jens_invalid(q)) invalid++;
         if (q < jmin) jmin = q;
       }
     }

@@ -37,7 +37,7 @@ typedef struct {
   size_t centre_leaves; /* leaves whose pattern uses the body centre */
   size_t by_type[4];
   double jens_min;
-  size_t invalid;   /* elements with J_ENS <= 0 */
+  size_t invalid;   /* elements with J_ENS < 1e-6 */
 } mx_mesh_out;
 #define MX_NKEY_NONE UINT64_MAX
 

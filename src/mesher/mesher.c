@@ -524,7 +524,7 @@ int mx_mesh_full(mx_mesher *m) {
 }
 
 /* Repair (the 2021 paper, section 6): the leaves holding elements with
- * J_ENS <= 0 are split once by list refinement (Algorithm 3), and the
+ * J_ENS < 1e-6 are split once by list refinement (Algorithm 3), and the
  * octree is meshed again around them (remesh_local.c), up to
  * repair_rounds times. */
 int mx_repair(mx_mesher *m) {
@@ -534,7 +534,7 @@ int mx_repair(mx_mesher *m) {
     uint32_t *octs = mx_alloc((m->M.invalid + 1) * sizeof *octs);
     if (!octs) return MX_ENOMEM;
     for (size_t c = 0; c < m->M.ncells; c++)
-      if (m->M.jens[c] <= 0.0) octs[n++] = m->leaves[m->M.leaf[c]];
+      if (mx_jens_invalid(m->M.jens[c])) octs[n++] = m->leaves[m->M.leaf[c]];
     const size_t before = m->M.invalid;
     int st = mx_refine_list(&m->B, octs, n);
     mx_free(octs);
@@ -547,13 +547,19 @@ int mx_repair(mx_mesher *m) {
 }
 
 /* Per-node flags, counts and quality of the mesh just made; MX_EINVALID
- * when elements with J_ENS <= 0 remain. */
+ * when elements with J_ENS < 1e-6 remain. */
 int mx_mesh_finish(mx_mesher *m) {
+  if (m->M.ncells == 0) {
+    mx_error(m->ndomain ? m->domain_name[0] : NULL, 0,
+             "the mesh is empty: no element lies in the domain (%zu leaves); ask for finer "
+             "levels (-s, -a, -b, -r)", m->nleaves);
+    return MX_EINPUT;
+  }
   MX_CHECK(boundary_flags(m));
   m->S.leaves = m->nleaves;
   count_mesh(m);
   if (m->M.invalid > 0) {
-    mx_error(NULL, 0, "%zu element(s) with J_ENS <= 0 remain after %d repair round(s)",
+    mx_error(NULL, 0, "%zu element(s) with J_ENS < 1e-6 remain after %d repair round(s)",
              m->M.invalid, m->S.repair_rounds);
     return MX_EINVALID;
   }
