@@ -210,5 +210,84 @@ expect_exit 2 "overlapping inputs are refused" "$MIXOCT" -i "$T/cube.off" -i "$T
 has "$T/err" "twin.off" "the refusal names the second input"
 has "$T/err" "cube.off" "the refusal names the first input"
 
+# ---- the contract of exit 0 and what a new user tries (issue 10) ----------
+json_ok() { # file, python expression on d, description
+  if python3 -c "import json,sys; d=json.loads(open(sys.argv[1]).read().strip().splitlines()[-1]); sys.exit(0 if ($2) else 1)" "$1" 2>/dev/null; then
+    ok "$3"; else bad "$3: $(tail -c 400 "$1")"; fi
+}
+expect_exit 2 "no refinement request" "$MIXOCT" -i "$T/cube.off" -o "$T/none.vtu"
+has "$T/err" "no refinement request" "no request: said so"
+[ ! -e "$T/none.vtu" ] && ok "no request: no file" || bad "no request wrote a file"
+expect_exit 2 "an empty result" "$MIXOCT" -i "$T/cube.off" -s 0 -o "$T/empty.vtu"
+has "$T/err" "the mesh is empty" "empty result: said so"
+[ ! -e "$T/empty.vtu" ] && ok "empty result: no file" || bad "an empty mesh was written"
+expect_exit 2 "--json on a refused run" "$MIXOCT" -i "$T/cube.off" --json
+json_ok "$T/out" "d['valid'] is False and d['exit_code'] == 2 and 'refinement' in d['error']" "--json of a refused run: valid false, the error"
+expect_exit 0 "attached values: -s3 --output=" "$MIXOCT" -i "$T/cube.off" -s3 "--output=$T/att.vtu" --quiet
+[ -s "$T/att.vtu" ] && ok "--output=FILE written" || bad "--output=FILE not written"
+expect_exit 0 "several -o" "$MIXOCT" -i "$T/cube.off" -s 3 -o "$T/m1.vtu" -o "$T/m2.msh" -o "$T/m3.mesh"
+for f in m1.vtu m2.msh m3.mesh; do
+  [ -s "$T/$f" ] && ok "several -o: $f written" || bad "several -o: $f missing"
+  has "$T/out" "written      $T/$f" "several -o: a line for $f"
+done
+expect_exit 0 "a dry run" "$MIXOCT" -i "$T/cube.off" -s 3
+has "$T/out" "dry run" "a run without -o says it is a dry run"
+expect_exit 0 "--json with outputs" "$MIXOCT" -i "$T/cube.off" -s 3 -o "$T/j.vtu" --json
+json_ok "$T/out" "d['valid'] is True and d['exit_code'] == 0 and d['outputs'][0]['bytes'] > 0 and d['warnings'] == []" "--json: valid, outputs with sizes"
+start=$(date +%s%N)
+expect_exit 4 "an output directory that does not exist, before meshing" "$MIXOCT" --demo -s 6 -o "$T/nodir/x.vtu" -o "$T/ok.vtu"
+elapsed=$(( ($(date +%s%N) - start) / 1000000 ))
+has "$T/err" "nodir/x.vtu" "the missing directory is named"
+[ ! -e "$T/ok.vtu" ] && ok "nothing meshed nor written when one output cannot be ($elapsed ms)" || bad "the other output was written"
+expect_exit 2 "an unknown second output format" "$MIXOCT" -i "$T/cube.off" -s 3 -o "$T/a.vtu" -o "$T/b.xyz"
+printf '\xef\xbb\xbf' >"$T/bom.off"; cat "$T/cube.off" >>"$T/bom.off"
+expect_exit 0 "a UTF-8 byte-order mark is skipped" "$MIXOCT" -i "$T/bom.off" -s 3 --quiet
+ln -s /dev/zero "$T/zero.off"
+expect_exit 2 "a device is refused" "$MIXOCT" -i "$T/zero.off" -s 3
+has "$T/err" "device" "the device refusal says why"
+printf 'OFF\n\033[2J 3 0\n' >"$T/ctl.off"
+expect_exit 2 "control characters in the input" "$MIXOCT" -i "$T/ctl.off" -s 3
+if grep -q $'\033' "$T/err"; then bad "a control character reached the terminal"; else ok "control characters escaped in the message"; fi
+has "$T/err" '\\x1b' "the escape shows as \\x1b"
+printf 'n_regions 1\n0 0 0 1 1 1 99999\n' >"$T/lvl.reg"
+expect_exit 2 "a .reg level out of range" "$MIXOCT" -i "$T/cube.off" -b "$T/lvl.reg"
+has "$T/err" "lvl.reg:2" "the .reg level error names file and line"
+mkdir -p "$T/real"; : >"$T/real/target.vtu"; ln -s real/target.vtu "$T/link.vtu"
+expect_exit 0 "a symbolic link as -o" "$MIXOCT" -i "$T/cube.off" -s 3 -o "$T/link.vtu" --quiet
+[ -L "$T/link.vtu" ] && [ -s "$T/real/target.vtu" ] && ok "written through the link, the link kept" || bad "the symbolic link was replaced"
+box_off() { # file, sx, sy, sz
+  python3 - "$@" <<'PY'
+import sys
+f, sx, sy, sz = sys.argv[1], *map(float, sys.argv[2:])
+v = [(0,0,0),(sx,0,0),(sx,sy,0),(0,sy,0),(0,0,sz),(sx,0,sz),(sx,sy,sz),(0,sy,sz)]
+t = [(0,2,1),(0,3,2),(4,5,6),(4,6,7),(0,1,5),(0,5,4),(1,2,6),(1,6,5),(2,3,7),(2,7,6),(3,0,4),(3,4,7)]
+open(f, "w").write("OFF\n8 12 0\n" + "".join("%r %r %r\n" % p for p in v) + "".join("3 %d %d %d\n" % x for x in t))
+PY
+}
+box_off "$T/beam.off" 100 1 1
+expect_exit 0 "an elongated beam (100 x 1 x 1) is meshed" "$MIXOCT" -i "$T/beam.off" -s 5 -o "$T/beam.vtu" --quiet
+expect_exit 0 "the beam's mesh checks" "$MIXOCT" check "$T/beam.vtu" --surface "$T/beam.off"
+box_off "$T/plate.off" 1 1 1e-10
+expect_exit 2 "a plate thinner than the finest octant is refused" timeout 20 "$MIXOCT" -i "$T/plate.off" -s 3
+has "$T/err" "plate.off" "the thin-plate refusal names the file"
+box_off "$T/long.off" 3e9 1 1
+expect_exit 2 "a 3e9 x 1 x 1 box is refused, not hung" timeout 20 "$MIXOCT" -i "$T/long.off" -s 3
+box_off "$T/tiny.off" 1e-110 1e-110 1e-110
+expect_exit 2 "coordinates of size 1e-110 are refused" timeout 20 "$MIXOCT" -i "$T/tiny.off" -s 3
+has "$T/err" "out of range" "tiny coordinates: said why"
+box_off "$T/huge.off" 1e160 1e160 1e160
+expect_exit 2 "coordinates of size 1e160 are refused" timeout 20 "$MIXOCT" -i "$T/huge.off" -s 3
+# SIGTERM while writing: no temporary left
+"$MIXOCT" --demo -s 7 -o "$T/sig.vtk" --ascii --quiet 2>/dev/null &
+pid=$!
+seen=no
+for _ in $(seq 1 1000); do
+  if ls "$T"/sig.vtk.tmp.* >/dev/null 2>&1; then seen=yes; break; fi
+  sleep 0.005
+done
+kill -TERM "$pid" 2>/dev/null; wait "$pid"; code=$?
+if ls "$T"/sig.vtk.tmp.* >/dev/null 2>&1; then bad "SIGTERM left a temporary file"; else ok "SIGTERM during the write (temporary seen: $seen): none left (exit $code)"; fi
+[ "$code" -eq 143 ] && ok "SIGTERM: exit 143" || ok "SIGTERM came after the end (exit $code)"
+
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]
