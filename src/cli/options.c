@@ -23,7 +23,7 @@ static const char *usage_text =
     "       mixoct check MESH [--surface FILE] [--json] [--quiet]\n"
     "       mixoct patterns [--json]\n"
     "\n"
-    "Input (OFF, MDL, STL ascii/binary, OBJ; several -i form one domain, a\n"
+    "Input (OFF, MDL, STL ascii/binary, OBJ, PLY; several -i form one domain, a\n"
     "shell inside another is a hole):\n"
     "  -i, --input FILE            a closed triangulated surface (repeatable)\n"
     "      --demo                  the built-in brain-like surface\n"

@@ -337,8 +337,9 @@ int mx_read_surface(const char *path, mx_trisoup *out) {
   if (!strcasecmp(ext, ".mdl")) return mx_read_mdl(path, out);
   if (!strcasecmp(ext, ".stl")) return mx_read_stl(path, out);
   if (!strcasecmp(ext, ".obj")) return mx_read_obj(path, out);
+  if (!strcasecmp(ext, ".ply")) return mx_read_ply(path, out);
   mx_error(path, 0,
-           "unknown surface format '%s': expected .off, .mdl, .stl or .obj",
+           "unknown surface format '%s': expected .off, .mdl, .stl, .obj or .ply",
            ext);
   return MX_EINPUT;
 }

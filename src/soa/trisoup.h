@@ -37,7 +37,7 @@ int mx_read_mdl(const char *path, mx_trisoup *out);
 int mx_read_stl(const char *path, mx_trisoup *out); /* ASCII or binary */
 int mx_read_obj(const char *path, mx_trisoup *out); /* polygons fan-split */
 int mx_read_ply(const char *path, mx_trisoup *out); /* ASCII, binary LE/BE */
-/* Dispatch on the extension (case-insensitive .off .mdl .stl .obj). */
+/* Dispatch on the extension (case-insensitive .off .mdl .stl .obj .ply). */
 int mx_read_surface(const char *path, mx_trisoup *out);
 
 /* Checks after reading (src/io/surface_check.c): degenerate triangles (zero
