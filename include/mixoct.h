@@ -81,6 +81,10 @@ typedef struct {
   double close_ratio;   /* remove-close distance, 0: 0.5 (see boundary) */
   double staircase_quality; /* 0: 0.2 (the papers) */
   int repair_rounds;   /* list refinements of invalid elements' leaves, 3 */
+  int repair_input;    /* 1: an input with no well-defined inside (open,
+                        * non-manifold, self-intersecting, crossing) is meshed
+                        * where its generalized winding number is above 1/2;
+                        * 0 (default): such an input is refused (MX_EINPUT) */
   int remesh_full;     /* 1: after a refinement, mesh the whole octree again;
                         * 0 (default): only the leaves around what was split
                         * (the rest of the mesh is kept as it was) */

@@ -130,6 +130,7 @@ class _Params(ctypes.Structure):
                 ("close_ratio", ctypes.c_double),
                 ("staircase_quality", ctypes.c_double),
                 ("repair_rounds", ctypes.c_int),
+                ("repair_input", ctypes.c_int),
                 ("remesh_full", ctypes.c_int)]
 
 

@@ -36,6 +36,7 @@ typedef struct {
   const char *restart_in;  /* -c FILE: re-mesh from a restart file */
   const char *list_in;     /* -l LIST: elements to refine */
   int keep_invalid;        /* write a mesh with invalid elements (exit 5) */
+  int repair_input;        /* --repair-input: winding-number domain */
 } mx_options;
 
 /* Parses argv; on --help/--version prints and sets *exit_now = 1. Returns

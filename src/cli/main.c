@@ -61,6 +61,7 @@ static int setup(const mx_options *o, mx_mesher **out) {
   p.stage = o->stage;
   p.balance = o->balance;
   p.max_memory_mb = o->max_memory_mb;
+  p.repair_input = o->repair_input;
   mx_mesher *m = mx_mesher_new(&p);
   if (!m) {
     mx_error(NULL, 0, "out of memory");

@@ -27,6 +27,13 @@ static const char *usage_text =
     "shell inside another is a hole):\n"
     "  -i, --input FILE            a closed triangulated surface (repeatable)\n"
     "      --demo                  the built-in brain-like surface\n"
+    "      --repair-input          mesh an input with no well-defined inside\n"
+    "                              (open, non-manifold, self-intersecting, two\n"
+    "                              inputs that cross) where its generalized\n"
+    "                              winding number is above 1/2; without it such\n"
+    "                              an input is refused (exit 2) naming the defect.\n"
+    "                              Inconsistently oriented closed surfaces are\n"
+    "                              re-oriented (a warning) either way\n"
     "\n"
     "Refinement requests (an octant takes the largest level asked; levels 0 to\n"
     "15, each one halves the octant size):\n"
@@ -316,6 +323,8 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       o->list_in = argv[++i];
     } else if (strcmp(a, "--keep-invalid") == 0) {
       o->keep_invalid = 1;
+    } else if (strcmp(a, "--repair-input") == 0) {
+      o->repair_input = 1;
     } else if (strcmp(a, "--json") == 0) {
       o->json = 1;
     } else if (strcmp(a, "--quiet") == 0) {

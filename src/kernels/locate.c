@@ -117,6 +117,7 @@ static inline int edge_side(const mx_trisoup *s, uint32_t a, uint32_t b,
 }
 
 int mx_locate(const mx_locator *L, const double p[3]) {
+  if (L->inside_fn) return L->inside_fn(L->inside_ctx, p);
   const mx_trisoup *s = L->soup;
   double f0 = (p[1] - L->lo[0]) * L->inv[0];
   double f1 = (p[2] - L->lo[1]) * L->inv[1];

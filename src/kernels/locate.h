@@ -28,6 +28,11 @@ typedef struct {
   int n[2];              /* cells along y and z */
   uint32_t *cell_off;    /* n[0]*n[1] + 1 */
   uint32_t *cell_tri;
+  /* Optional (NULL by default): decides instead of the ray parity, for an
+   * input whose inside the parity does not define (open, self-intersecting:
+   * the generalized winding number, --repair-input). */
+  int (*inside_fn)(const void *ctx, const double p[3]);
+  const void *inside_ctx;
 } mx_locator;
 
 int mx_locator_build(mx_locator *L, const mx_trisoup *soup, uint32_t t0,

@@ -378,6 +378,10 @@ int mx_update_leaves(mx_mesher *m) {
   return mx_leaves_sorted(&m->B, m->leaves, m->nleaves);
 }
 
+static int winding_inside(const void *ctx, const double p[3]) {
+  return mx_winding_number((const mx_surface_index *)ctx, p) > 0.5;
+}
+
 int mx_build_tree(mx_mesher *m) {
   mx_tree_clear(m);
   const double t0 = mx_wtime();
@@ -389,6 +393,17 @@ int mx_build_tree(mx_mesher *m) {
                            m->ndomain ? m->domain_name[0] : NULL));
   m->have_tree = 1;
   m->B.on_level = m->on_level;
+  if (m->p.repair_input) {
+    /* the domain: where the generalized winding number is above 1/2, for
+     * the octants (instead of the ray parity) and the nodes alike */
+    if (!m->have_index) {
+      MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
+      m->have_index = 1;
+    }
+    m->SI.closed = 0;
+    m->B.loc_domain.inside_fn = winding_inside;
+    m->B.loc_domain.inside_ctx = &m->SI;
+  }
   for (int l = 0; l <= MX_MAX_LEVEL; l++) {
     m->B.split_keys[l] = m->split_keys[l];
     m->B.nsplit[l] = m->nsplit[l];
