@@ -1,2 +1,1222 @@
-/* Defects of input surfaces (placeholder, being written). */
+/* Defects of input surfaces: open, non-manifold and misoriented edges,
+ * degenerate triangles, pairs of triangles that intersect; orientation.
+ * See surface_defects.h for the definitions and the method. */
 #include "kernels/surface_defects.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common.h"
+
+#define NEX MX_DEFECT_EXAMPLES
+#define LEAF 4
+#define NONE UINT32_MAX
+
+/* ==== exact signs ========================================================
+ * Semi-static filters with Shewchuk's "A" error bounds (Adaptive precision
+ * floating-point arithmetic and fast robust geometric predicates, 1997);
+ * when they do not decide, the determinant is evaluated exactly: every
+ * difference of coordinates is split into two doubles (hi + lo, exact),
+ * each product of such parts is made exact with fma (two_prod), and the
+ * terms are accumulated into a nonoverlapping expansion (grow), whose
+ * largest component has the sign of the sum. Valid without overflow or
+ * underflow (the readers refuse coordinates beyond 1e100 and below 1e-100
+ * in size). */
+
+static const double EPS = 0x1p-53;
+
+static inline void two_sum(double a, double b, double *s, double *e) {
+  double x = a + b, bv = x - a, av = x - bv;
+  *s = x;
+  *e = (a - av) + (b - bv);
+}
+
+static inline void two_prod(double a, double b, double *p, double *e) {
+  double x = a * b;
+  *p = x;
+  *e = fma(a, b, -x);
+}
+
+/* h[0..n): nonoverlapping, increasing magnitude, no zeros. Adds b exactly;
+ * returns the new length (at most n + 1). */
+static int grow(double *h, int n, double b) {
+  double q = b;
+  int k = 0;
+  for (int i = 0; i < n; i++) {
+    double s, e;
+    two_sum(q, h[i], &s, &e);
+    q = s;
+    if (e != 0.0) h[k++] = e;
+  }
+  if (q != 0.0) h[k++] = q;
+  return k;
+}
+
+static inline int grow_nz(double *h, int n, double b) {
+  return b != 0.0 ? grow(h, n, b) : n;
+}
+
+/* h += a * b * c exactly (at most 4 more components). */
+static int add_prod3(double *h, int n, double a, double b, double c) {
+  if (a == 0.0 || b == 0.0 || c == 0.0) return n;
+  double p, q, r, t;
+  two_prod(a, b, &p, &q);
+  two_prod(p, c, &r, &t);
+  n = grow_nz(h, n, t);
+  n = grow(h, n, r);
+  if (q != 0.0) {
+    two_prod(q, c, &r, &t);
+    n = grow_nz(h, n, t);
+    n = grow(h, n, r);
+  }
+  return n;
+}
+
+/* h += a * b exactly. */
+static int add_prod2(double *h, int n, double a, double b) {
+  if (a == 0.0 || b == 0.0) return n;
+  double p, q;
+  two_prod(a, b, &p, &q);
+  n = grow_nz(h, n, q);
+  return grow(h, n, p);
+}
+
+static inline int exp_sign(const double *h, int n) {
+  return n == 0 ? 0 : (h[n - 1] > 0.0 ? 1 : -1);
+}
+
+/* Sign of det[a - d; b - d; c - d], exactly. */
+static __attribute__((noinline)) int orient3d_exact(const double *a,
+                                                    const double *b,
+                                                    const double *c,
+                                                    const double *d) {
+  const double *r[3] = {a, b, c};
+  double m[3][3][2];
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++) two_sum(r[i][j], -d[j], &m[i][j][0], &m[i][j][1]);
+  static const int perm[6][4] = {{0, 1, 2, 1},  {1, 2, 0, 1},  {2, 0, 1, 1},
+                                 {0, 2, 1, -1}, {2, 1, 0, -1}, {1, 0, 2, -1}};
+  double h[6 * 8 * 4 + 1];
+  int n = 0;
+  for (int p = 0; p < 6; p++)
+    for (int u = 0; u < 2; u++) {
+      double x = m[0][perm[p][0]][u];
+      if (x == 0.0) continue;
+      if (perm[p][3] < 0) x = -x;
+      for (int v = 0; v < 2; v++) {
+        double y = m[1][perm[p][1]][v];
+        if (y == 0.0) continue;
+        for (int w = 0; w < 2; w++) n = add_prod3(h, n, x, y, m[2][perm[p][2]][w]);
+      }
+    }
+  return exp_sign(h, n);
+}
+
+/* +1, -1 or 0: the sign of det[a - d; b - d; c - d] (positive when d lies
+ * below the plane of a, b, c seen counter-clockwise from above). */
+static inline int orient3d(const double *a, const double *b, const double *c,
+                           const double *d) {
+  double adx = a[0] - d[0], bdx = b[0] - d[0], cdx = c[0] - d[0];
+  double ady = a[1] - d[1], bdy = b[1] - d[1], cdy = c[1] - d[1];
+  double adz = a[2] - d[2], bdz = b[2] - d[2], cdz = c[2] - d[2];
+  double bdxcdy = bdx * cdy, cdxbdy = cdx * bdy;
+  double cdxady = cdx * ady, adxcdy = adx * cdy;
+  double adxbdy = adx * bdy, bdxady = bdx * ady;
+  double det = adz * (bdxcdy - cdxbdy) + bdz * (cdxady - adxcdy) +
+               cdz * (adxbdy - bdxady);
+  double perm = (fabs(bdxcdy) + fabs(cdxbdy)) * fabs(adz) +
+                (fabs(cdxady) + fabs(adxcdy)) * fabs(bdz) +
+                (fabs(adxbdy) + fabs(bdxady)) * fabs(cdz);
+  double err = (7.0 + 56.0 * EPS) * EPS * perm;
+  if (det > err) return 1;
+  if (-det > err) return -1;
+  if (perm == 0.0) return 0; /* every product exactly zero */
+  return orient3d_exact(a, b, c, d);
+}
+
+static __attribute__((noinline)) int orient2d_exact(int i, int j,
+                                                    const double *a,
+                                                    const double *b,
+                                                    const double *c) {
+  double acx[2], bcx[2], acy[2], bcy[2];
+  two_sum(a[i], -c[i], &acx[0], &acx[1]);
+  two_sum(b[i], -c[i], &bcx[0], &bcx[1]);
+  two_sum(a[j], -c[j], &acy[0], &acy[1]);
+  two_sum(b[j], -c[j], &bcy[0], &bcy[1]);
+  double h[17];
+  int n = 0;
+  for (int u = 0; u < 2; u++)
+    for (int v = 0; v < 2; v++) {
+      n = add_prod2(h, n, acx[u], bcy[v]);
+      n = add_prod2(h, n, -acy[u], bcx[v]);
+    }
+  return exp_sign(h, n);
+}
+
+/* Orientation of a, b, c projected along axis k (coordinates k+1, k+2
+ * cyclically): for points of a plane whose normal has a nonzero k
+ * component, the sign of the 3-D orientation about that normal, times a
+ * fixed sign. */
+static inline int orient2d(int k, const double *a, const double *b,
+                           const double *c) {
+  int i = k == 2 ? 0 : k + 1, j = k == 0 ? 2 : k - 1;
+  double l = (a[i] - c[i]) * (b[j] - c[j]);
+  double r = (a[j] - c[j]) * (b[i] - c[i]);
+  double det = l - r;
+  double err = (3.0 + 16.0 * EPS) * EPS * (fabs(l) + fabs(r));
+  if (det > err) return 1;
+  if (-det > err) return -1;
+  if (l == 0.0 && r == 0.0) return 0;
+  return orient2d_exact(i, j, a, b, c);
+}
+
+/* ==== triangle geometry ================================================== */
+
+static inline void normal_of(const double *P, double n[3]) {
+  double u[3], v[3];
+  for (int a = 0; a < 3; a++) {
+    u[a] = P[3 + a] - P[a];
+    v[a] = P[6 + a] - P[a];
+  }
+  n[0] = u[1] * v[2] - u[2] * v[1];
+  n[1] = u[2] * v[0] - u[0] * v[2];
+  n[2] = u[0] * v[1] - u[1] * v[0];
+}
+
+/* An axis along which the triangle's projection has nonzero area (exactly),
+ * the largest normal component first; -1 if the triangle is degenerate. */
+static int drop_axis(const double *P) {
+  double n[3];
+  normal_of(P, n);
+  int o[3] = {0, 1, 2};
+  for (int i = 0; i < 3; i++)
+    for (int j = i + 1; j < 3; j++)
+      if (fabs(n[o[j]]) > fabs(n[o[i]])) {
+        int t = o[i];
+        o[i] = o[j];
+        o[j] = t;
+      }
+  for (int i = 0; i < 3; i++)
+    if (orient2d(o[i], P, P + 3, P + 6) != 0) return o[i];
+  return -1;
+}
+
+static inline int same_pt(const double *a, const double *b) {
+  return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+}
+
+static inline void lerp(const double *a, const double *b, double t, double w[3]) {
+  for (int k = 0; k < 3; k++) w[k] = a[k] + t * (b[k] - a[k]);
+}
+
+/* Lexicographic order of the coordinates (i, j) (a linear order along any
+ * line of a plane that projects one-to-one along k). */
+static inline int lex_less(int k, const double *a, const double *b) {
+  int i = k == 2 ? 0 : k + 1, j = k == 0 ? 2 : k - 1;
+  return a[i] < b[i] || (a[i] == b[i] && a[j] < b[j]);
+}
+
+/* Closed segments ab and cd of one plane (projection along k). */
+static int seg_seg_2d(int k, const double *a, const double *b, const double *c,
+                      const double *d, double w[3]) {
+  int o1 = orient2d(k, a, b, c), o2 = orient2d(k, a, b, d);
+  if (o1 * o2 > 0) return 0;
+  int o3 = orient2d(k, c, d, a), o4 = orient2d(k, c, d, b);
+  if (o3 * o4 > 0) return 0;
+  if (o1 == 0 && o2 == 0) { /* collinear: intervals along the line */
+    const double *a0 = a, *a1 = b, *c0 = c, *c1 = d;
+    if (lex_less(k, a1, a0)) a0 = b, a1 = a;
+    if (lex_less(k, c1, c0)) c0 = d, c1 = c;
+    if (lex_less(k, a1, c0) || lex_less(k, c1, a0)) return 0;
+    const double *lo = lex_less(k, a0, c0) ? c0 : a0;
+    memcpy(w, lo, 3 * sizeof *w);
+    return 1;
+  }
+  /* Crossing point, approximately: where ab meets the line cd. */
+  int i = k == 2 ? 0 : k + 1, j = k == 0 ? 2 : k - 1;
+  double ex = d[i] - c[i], ey = d[j] - c[j];
+  double da = ex * (a[j] - c[j]) - ey * (a[i] - c[i]);
+  double db = ex * (b[j] - c[j]) - ey * (b[i] - c[i]);
+  double t = da != db ? da / (da - db) : 0.0;
+  lerp(a, b, t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t, w);
+  return 1;
+}
+
+/* p in the closed triangle T (same plane, projection along k). */
+static int point_in_tri_2d(int k, const double *p, const double *T) {
+  int s0 = orient2d(k, T, T + 3, p), s1 = orient2d(k, T + 3, T + 6, p);
+  if (s0 * s1 < 0) return 0;
+  int s2 = orient2d(k, T + 6, T, p);
+  return !((s0 > 0 || s1 > 0 || s2 > 0) && (s0 < 0 || s1 < 0 || s2 < 0));
+}
+
+/* Closed segment ab against closed triangle T, all in one plane. */
+static int seg_tri_2d(int k, const double *a, const double *b, const double *T,
+                      double w[3]) {
+  if (point_in_tri_2d(k, a, T)) {
+    memcpy(w, a, 3 * sizeof *w);
+    return 1;
+  }
+  if (point_in_tri_2d(k, b, T)) {
+    memcpy(w, b, 3 * sizeof *w);
+    return 1;
+  }
+  for (int e = 0; e < 3; e++)
+    if (seg_seg_2d(k, a, b, T + 3 * e, T + 3 * ((e + 1) % 3), w)) return 1;
+  return 0;
+}
+
+/* Two closed triangles of one plane. */
+static int tri_tri_2d(int k, const double *P, const double *Q, double w[3]) {
+  for (int e = 0; e < 3; e++)
+    for (int f = 0; f < 3; f++)
+      if (seg_seg_2d(k, P + 3 * e, P + 3 * ((e + 1) % 3), Q + 3 * f,
+                     Q + 3 * ((f + 1) % 3), w))
+        return 1;
+  if (point_in_tri_2d(k, P, Q)) {
+    memcpy(w, P, 3 * sizeof *w);
+    return 1;
+  }
+  if (point_in_tri_2d(k, Q, P)) {
+    memcpy(w, Q, 3 * sizeof *w);
+    return 1;
+  }
+  return 0;
+}
+
+/* Closed segment ab against closed triangle T (kT: its projection axis),
+ * oa and ob the sides of a and b (orient3d against T), not both strictly
+ * on one side. */
+static int seg_tri_3d(const double *a, const double *b, int oa, int ob,
+                      const double *T, int kT, double w[3]) {
+  if (oa == 0 && ob == 0) return seg_tri_2d(kT, a, b, T, w);
+  int s0 = orient3d(a, b, T, T + 3);
+  int s1 = orient3d(a, b, T + 3, T + 6);
+  if (s0 * s1 < 0) return 0;
+  int s2 = orient3d(a, b, T + 6, T);
+  if ((s0 > 0 || s1 > 0 || s2 > 0) && (s0 < 0 || s1 < 0 || s2 < 0)) return 0;
+  double n[3];
+  normal_of(T, n);
+  double da = 0.0, db = 0.0;
+  for (int c = 0; c < 3; c++) {
+    da += n[c] * (a[c] - T[c]);
+    db += n[c] * (b[c] - T[c]);
+  }
+  double t = da != db ? da / (da - db) : 0.0;
+  lerp(a, b, t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t, w);
+  return 1;
+}
+
+/* The ray from v through x (x in the plane of v, c, d; projection along k)
+ * lies in the closed wedge at v spanned by c and d (angle below pi). */
+static int ray_in_wedge(int k, const double *v, const double *x,
+                        const double *c, const double *d) {
+  int s = orient2d(k, v, c, d);
+  int s1 = orient2d(k, v, c, x);
+  if (s1 != 0 && s1 != s) return 0;
+  int s2 = orient2d(k, v, d, x);
+  return s2 == 0 || s2 == -s;
+}
+
+/* Do the triangles P and Q (9 coordinates each, vertex ids pv and qv,
+ * projection axes kp and kq; neither degenerate) meet beyond the convex
+ * hull of their common vertices? w receives a point of (or next to) the
+ * intersection. */
+static int pair_meets(const double *P, const double *Q, const uint32_t *pv,
+                      const uint32_t *qv, int kp, int kq, double w[3]) {
+  int mp[3] = {-1, -1, -1}, ns = 0;
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++)
+      if (pv[i] == qv[j] || same_pt(P + 3 * i, Q + 3 * j)) {
+        mp[i] = j;
+        ns++;
+        break;
+      }
+
+  if (ns == 0) {
+    int oq[3], op[3];
+    for (int i = 0; i < 3; i++) oq[i] = orient3d(P, P + 3, P + 6, Q + 3 * i);
+    if (oq[0] == oq[1] && oq[1] == oq[2] && oq[0] != 0) return 0;
+    if (oq[0] == 0 && oq[1] == 0 && oq[2] == 0) return tri_tri_2d(kp, P, Q, w);
+    for (int i = 0; i < 3; i++) op[i] = orient3d(Q, Q + 3, Q + 6, P + 3 * i);
+    if (op[0] == op[1] && op[1] == op[2] && op[0] != 0) return 0;
+    for (int e = 0; e < 3; e++) {
+      int f = (e + 1) % 3;
+      if (oq[e] * oq[f] <= 0 &&
+          seg_tri_3d(Q + 3 * e, Q + 3 * f, oq[e], oq[f], P, kp, w))
+        return 1;
+    }
+    for (int e = 0; e < 3; e++) {
+      int f = (e + 1) % 3;
+      if (op[e] * op[f] <= 0 &&
+          seg_tri_3d(P + 3 * e, P + 3 * f, op[e], op[f], Q, kq, w))
+        return 1;
+    }
+    return 0;
+  }
+
+  if (ns == 1) {
+    int i0 = mp[0] >= 0 ? 0 : mp[1] >= 0 ? 1 : 2, j0 = mp[i0];
+    const double *v = P + 3 * i0;
+    const double *a = P + 3 * ((i0 + 1) % 3), *b = P + 3 * ((i0 + 2) % 3);
+    const double *c = Q + 3 * ((j0 + 1) % 3), *d = Q + 3 * ((j0 + 2) % 3);
+    int oc = orient3d(v, a, b, c), od = orient3d(v, a, b, d);
+    if (oc * od > 0) return 0; /* Q meets P's plane at v only */
+    int oa = orient3d(v, c, d, a), ob = orient3d(v, c, d, b);
+    if (oa * ob > 0) return 0;
+    if (oc != 0 || od != 0) {
+      /* Two planes meeting along a line L through v: T1 and T2 cut L in
+       * segments [v, w1] and [v, w2], w1 on ab (a and b included), w2 on
+       * cd; they overlap beyond v iff w1 lies in T2 or w2 in T1. */
+      return seg_tri_3d(a, b, oa, ob, Q, kq, w) ||
+             seg_tri_3d(c, d, oc, od, P, kp, w);
+    }
+    /* Coplanar: two wedges at v (angles below pi) overlap beyond v iff
+     * one of their four rays lies in the other. */
+    const double *ray = NULL;
+    if (ray_in_wedge(kp, v, a, c, d)) ray = a;
+    else if (ray_in_wedge(kp, v, b, c, d)) ray = b;
+    else if (ray_in_wedge(kp, v, c, a, b)) ray = c;
+    else if (ray_in_wedge(kp, v, d, a, b)) ray = d;
+    if (!ray) return 0;
+    lerp(v, ray, 0.05, w);
+    return 1;
+  }
+
+  if (ns == 2) {
+    int i0 = mp[0] < 0 ? 1 : 0, i1 = mp[2] < 0 ? 1 : 2;
+    int ia = 3 - i0 - i1, jb = 3 - mp[i0] - mp[i1];
+    const double *u = P + 3 * i0, *x = P + 3 * i1;
+    const double *a = P + 3 * ia, *b = Q + 3 * jb;
+    if (orient3d(P, P + 3, P + 6, b) != 0) return 0;
+    if (orient2d(kp, u, x, a) != orient2d(kp, u, x, b)) return 0;
+    double m[3], q[3];
+    for (int k = 0; k < 3; k++) {
+      m[k] = 0.5 * (u[k] + x[k]);
+      q[k] = 0.5 * (a[k] + b[k]);
+    }
+    lerp(m, q, 0.1, w);
+    return 1;
+  }
+
+  for (int k = 0; k < 3; k++) w[k] = (P[k] + P[3 + k] + P[6 + k]) / 3.0;
+  return 1; /* the same three points */
+}
+
+/* ==== examples =========================================================== */
+
+static int ex_less(const mx_defect_example *a, const mx_defect_example *b) {
+  if (a->tri != b->tri) return a->tri < b->tri;
+  if (a->other != b->other) return a->other < b->other;
+  if (a->v0 != b->v0) return a->v0 < b->v0;
+  return a->v1 < b->v1;
+}
+
+/* Keeps the NEX smallest, sorted; *n is how many are stored. */
+static void ex_add(mx_defect_example *arr, size_t *n, const mx_defect_example *e) {
+  size_t m = *n;
+  if (m == NEX && !ex_less(e, &arr[NEX - 1])) return;
+  size_t i = m < NEX ? m : NEX - 1;
+  while (i > 0 && ex_less(e, &arr[i - 1])) {
+    arr[i] = arr[i - 1];
+    i--;
+  }
+  arr[i] = *e;
+  if (m < NEX) *n = m + 1;
+}
+
+static mx_defect_example edge_example(const mx_trisoup *s, uint32_t t,
+                                      uint32_t other, uint32_t v0,
+                                      uint32_t v1) {
+  mx_defect_example e = {t, other, v0, v1, {0.5 * (s->x[v0] + s->x[v1]),
+                                            0.5 * (s->y[v0] + s->y[v1]),
+                                            0.5 * (s->z[v0] + s->z[v1])}};
+  return e;
+}
+
+/* ==== edges ============================================================== */
+
+/* The directed edges h = 3 t + k (from tri[h] to the next vertex of t),
+ * bucketed by their smaller vertex (bucket v: [v ? end[v - 1] : 0,
+ * end[v])), each bucket sorted by (larger vertex, h): entries
+ * (larger << 32) | h. Triangles that repeat a vertex are left out. */
+typedef struct {
+  size_t *end;
+  uint64_t *e;
+} edge_table;
+
+
+static int cmp_u64(const void *a, const void *b) {
+  uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+  return (x > y) - (x < y);
+}
+
+static inline int repeats(const uint32_t *t) {
+  return t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
+}
+
+static void edges_free(edge_table *E) {
+  mx_free(E->end);
+  mx_free(E->e);
+  E->end = NULL;
+  E->e = NULL;
+}
+
+static int edges_build(const mx_trisoup *s, edge_table *E) {
+  const size_t nv = s->nv, nh = 3 * s->nt;
+  E->end = mx_calloc((nv + 1) * sizeof *E->end);
+  E->e = mx_alloc((nh ? nh : 1) * sizeof *E->e);
+  if (!E->end || !E->e) {
+    edges_free(E);
+    return MX_EINPUT;
+  }
+  size_t *end = E->end;
+  for (size_t t = 0; t < s->nt; t++) {
+    const uint32_t *v = s->tri + 3 * t;
+    if (repeats(v)) continue;
+    for (int k = 0; k < 3; k++) {
+      uint32_t a = v[k], b = v[k == 2 ? 0 : k + 1];
+      end[(a < b ? a : b) + 1]++;
+    }
+  }
+  for (size_t v = 0; v < nv; v++) end[v + 1] += end[v];
+  for (size_t t = 0; t < s->nt; t++) {
+    const uint32_t *v = s->tri + 3 * t;
+    if (repeats(v)) continue;
+    for (int k = 0; k < 3; k++) {
+      uint32_t a = v[k], b = v[k == 2 ? 0 : k + 1];
+      uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
+      E->e[end[lo]++] = (uint64_t)hi << 32 | (uint32_t)(3 * t + k);
+    }
+  }
+#pragma omp parallel for schedule(dynamic, 4096) if (nv > 50000)
+  for (size_t v = 0; v < nv; v++) {
+    uint64_t *b = E->e + (v ? end[v - 1] : 0);
+    size_t m = end[v] - (v ? end[v - 1] : 0);
+    if (m > 24) {
+      qsort(b, m, sizeof *b, cmp_u64);
+      continue;
+    }
+    for (size_t i = 1; i < m; i++) {
+      uint64_t x = b[i];
+      size_t j = i;
+      for (; j > 0 && b[j - 1] > x; j--) b[j] = b[j - 1];
+      b[j] = x;
+    }
+  }
+  return MX_OK;
+}
+
+/* Runs of one edge in bucket v: [i, j). */
+static inline size_t run_end(const uint64_t *e, size_t i, size_t end) {
+  size_t j = i + 1;
+  while (j < end && (e[j] >> 32) == (e[i] >> 32)) j++;
+  return j;
+}
+
+static int indices_valid(const mx_trisoup *s) {
+  if (s->nt > ((size_t)1 << 30)) {
+    mx_error(NULL, 0, "surface check: too many triangles (%zu, at most 2^30)",
+             s->nt);
+    return MX_EINPUT;
+  }
+  for (size_t i = 0; i < 3 * s->nt; i++)
+    if (s->tri[i] >= s->nv) {
+      mx_error(NULL, 0, "surface check: triangle %zu uses vertex %u of %zu",
+               i / 3, s->tri[i], s->nv);
+      return MX_EINPUT;
+    }
+  return MX_OK;
+}
+
+typedef struct {
+  size_t cnt[3]; /* boundary, nonmanifold, misoriented */
+  size_t nex[3];
+  mx_defect_example ex[3][NEX];
+} edge_acc;
+
+static void edge_defects(const mx_trisoup *s, const edge_table *E,
+                         mx_surface_defects *r) {
+  const size_t nv = s->nv;
+  int nth = omp_get_max_threads();
+  edge_acc *acc = mx_calloc((size_t)nth * sizeof *acc);
+  edge_acc single;
+  if (!acc) {
+    nth = 1;
+    memset(&single, 0, sizeof single);
+  }
+#pragma omp parallel num_threads(nth) if (nv > 50000)
+  {
+    edge_acc *A = acc ? &acc[omp_get_thread_num()] : &single;
+#pragma omp for schedule(dynamic, 4096)
+    for (size_t v = 0; v < nv; v++) {
+      const uint64_t *e = E->e;
+      size_t i = v ? E->end[v - 1] : 0, end = E->end[v];
+      while (i < end) {
+        size_t j = run_end(e, i, end);
+        uint32_t w = (uint32_t)(e[i] >> 32);
+        uint32_t h0 = (uint32_t)e[i], t0 = h0 / 3;
+        uint32_t t1 = j - i > 1 ? (uint32_t)e[i + 1] / 3 : NONE;
+        int kind = -1;
+        if (j - i == 1)
+          kind = 0;
+        else if (j - i > 2)
+          kind = 1;
+        else if (s->tri[h0] == s->tri[(uint32_t)e[i + 1]])
+          kind = 2;
+        if (kind >= 0) {
+          A->cnt[kind]++;
+          mx_defect_example x = edge_example(s, t0, t1, (uint32_t)v, w);
+          ex_add(A->ex[kind], &A->nex[kind], &x);
+        }
+        i = j;
+      }
+    }
+  }
+  size_t nex[3] = {0, 0, 0};
+  mx_defect_example *dst[3] = {r->boundary, r->nonmanifold, r->misoriented};
+  size_t *cnt[3] = {&r->boundary_edges, &r->nonmanifold_edges,
+                    &r->misoriented_edges};
+  for (int t = 0; t < nth; t++) {
+    edge_acc *A = acc ? &acc[t] : &single;
+    for (int k = 0; k < 3; k++) {
+      *cnt[k] += A->cnt[k];
+      for (size_t x = 0; x < A->nex[k]; x++) ex_add(dst[k], &nex[k], &A->ex[k][x]);
+    }
+  }
+  mx_free(acc);
+}
+
+/* Bodies: triangles connected through shared vertices (union-find over
+ * the vertices); body[t] = the root of t's first vertex. */
+static uint32_t uf_find(uint32_t *p, uint32_t x) {
+  while (p[x] != x) {
+    p[x] = p[p[x]];
+    x = p[x];
+  }
+  return x;
+}
+
+static void bodies(const mx_trisoup *s, uint32_t *p, uint32_t *body) {
+  for (size_t v = 0; v < s->nv; v++) p[v] = (uint32_t)v;
+  for (size_t t = 0; t < s->nt; t++) {
+    uint32_t a = uf_find(p, s->tri[3 * t]);
+    for (int k = 1; k < 3; k++) {
+      uint32_t b = uf_find(p, s->tri[3 * t + k]);
+      if (a == b) continue;
+      if (a < b) p[b] = a;
+      else p[a] = b, a = b;
+    }
+  }
+  for (size_t t = 0; t < s->nt; t++) body[t] = uf_find(p, s->tri[3 * t]);
+}
+
+/* ==== broad phase ======================================================== */
+
+typedef struct {
+  double lo[3], hi[3];
+  uint32_t first, end; /* slots */
+  uint32_t right;      /* internal: right child (left: this + 1); leaf: 0 */
+  uint32_t pad_;
+} bnode;
+
+typedef struct {
+  uint32_t n;      /* slots (non-degenerate triangles) */
+  uint32_t *tid;   /* slot -> triangle */
+  uint32_t *code;  /* Morton code per slot */
+  double *tv;      /* 9 per slot */
+  double *box;     /* 6 per slot: lo, hi */
+  uint32_t *vid;   /* 3 per slot */
+  int8_t *axis;    /* per slot */
+  bnode *nodes;
+  uint32_t nn;
+} bvh;
+
+static void bvh_free(bvh *B) {
+  mx_free(B->tid);
+  mx_free(B->code);
+  mx_free(B->tv);
+  mx_free(B->box);
+  mx_free(B->vid);
+  mx_free(B->axis);
+  mx_free(B->nodes);
+  memset(B, 0, sizeof *B);
+}
+
+static inline uint32_t spread3(uint32_t x) {
+  x &= 0x3ff;
+  x = (x | x << 16) & 0x030000ff;
+  x = (x | x << 8) & 0x0300f00f;
+  x = (x | x << 4) & 0x030c30c3;
+  x = (x | x << 2) & 0x09249249;
+  return x;
+}
+
+static uint32_t split_at(const uint32_t *code, uint32_t l, uint32_t r) {
+  uint32_t x = code[l] ^ code[r - 1];
+  if (x == 0) return l + (r - l) / 2;
+  uint32_t mask = 1u << (31 - __builtin_clz(x));
+  uint32_t lo = l, hi = r - 1; /* code[lo] lacks the bit, code[hi] has it */
+  while (hi - lo > 1) {
+    uint32_t m = lo + (hi - lo) / 2;
+    if (code[m] & mask) hi = m;
+    else lo = m;
+  }
+  return hi;
+}
+
+static uint32_t build_node(bvh *B, uint32_t l, uint32_t r) {
+  uint32_t id = B->nn++;
+  bnode *nd = &B->nodes[id];
+  nd->first = l;
+  nd->end = r;
+  if (r - l <= LEAF) {
+    nd->right = 0;
+    for (int a = 0; a < 3; a++) {
+      nd->lo[a] = B->box[6 * (size_t)l + a];
+      nd->hi[a] = B->box[6 * (size_t)l + 3 + a];
+    }
+    for (uint32_t i = l + 1; i < r; i++)
+      for (int a = 0; a < 3; a++) {
+        nd->lo[a] = mx_min(nd->lo[a], B->box[6 * (size_t)i + a]);
+        nd->hi[a] = mx_max(nd->hi[a], B->box[6 * (size_t)i + 3 + a]);
+      }
+    return id;
+  }
+  uint32_t mid = split_at(B->code, l, r);
+  build_node(B, l, mid);
+  uint32_t rt = build_node(B, mid, r);
+  nd = &B->nodes[id];
+  const bnode *L = &B->nodes[id + 1], *R = &B->nodes[rt];
+  nd->right = rt;
+  for (int a = 0; a < 3; a++) {
+    nd->lo[a] = mx_min(L->lo[a], R->lo[a]);
+    nd->hi[a] = mx_max(L->hi[a], R->hi[a]);
+  }
+  return id;
+}
+
+/* Slots: the non-degenerate triangles sorted by (Morton code of the box
+ * centre, id). axis[t] per triangle (-1: degenerate) is given. */
+static int bvh_build(bvh *B, const mx_trisoup *s, const int8_t *axis_of) {
+  memset(B, 0, sizeof *B);
+  size_t n = 0;
+  for (size_t t = 0; t < s->nt; t++) n += axis_of[t] >= 0;
+  B->n = (uint32_t)n;
+  if (n == 0) return MX_OK;
+  size_t nodes_max = 2 * n;
+  uint32_t *ids = mx_alloc(n * sizeof *ids), *keys = mx_alloc(n * sizeof *keys);
+  uint32_t *ids2 = mx_alloc(n * sizeof *ids2), *keys2 = mx_alloc(n * sizeof *keys2);
+  B->tid = ids2;
+  B->code = keys2;
+  B->tv = mx_alloc(9 * n * sizeof *B->tv);
+  B->box = mx_alloc(6 * n * sizeof *B->box);
+  B->vid = mx_alloc(3 * n * sizeof *B->vid);
+  B->axis = mx_alloc(n);
+  B->nodes = mx_alloc(nodes_max * sizeof *B->nodes);
+  if (!ids || !keys || !ids2 || !keys2 || !B->tv || !B->box || !B->vid ||
+      !B->axis || !B->nodes) {
+    mx_free(ids);
+    mx_free(keys);
+    bvh_free(B);
+    return MX_EINPUT;
+  }
+  double lo[3] = {INFINITY, INFINITY, INFINITY};
+  double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  n = 0;
+  for (size_t t = 0; t < s->nt; t++) {
+    if (axis_of[t] < 0) continue;
+    ids[n++] = (uint32_t)t;
+    for (int k = 0; k < 3; k++) {
+      uint32_t v = s->tri[3 * t + k];
+      double c[3] = {s->x[v], s->y[v], s->z[v]};
+      for (int a = 0; a < 3; a++) {
+        lo[a] = mx_min(lo[a], c[a]);
+        hi[a] = mx_max(hi[a], c[a]);
+      }
+    }
+  }
+  double scale[3];
+  for (int a = 0; a < 3; a++)
+    scale[a] = hi[a] > lo[a] ? 1023.0 / (hi[a] - lo[a]) : 0.0;
+#pragma omp parallel for schedule(static) if (n > 20000)
+  for (size_t i = 0; i < n; i++) {
+    const uint32_t *v = s->tri + 3 * (size_t)ids[i];
+    const double *c[3] = {s->x, s->y, s->z};
+    uint32_t q[3];
+    for (int a = 0; a < 3; a++) {
+      double m = mx_min(c[a][v[0]], mx_min(c[a][v[1]], c[a][v[2]]));
+      double M = mx_max(c[a][v[0]], mx_max(c[a][v[1]], c[a][v[2]]));
+      double f = (0.5 * (m + M) - lo[a]) * scale[a];
+      q[a] = f <= 0.0 ? 0 : f >= 1023.0 ? 1023 : (uint32_t)f;
+    }
+    keys[i] = spread3(q[0]) << 2 | spread3(q[1]) << 1 | spread3(q[2]);
+  }
+  /* Stable LSD radix sort on the 30-bit codes, 3 passes of 10 bits; the
+   * input is in increasing id, so ties stay in increasing id. */
+  uint32_t *src_k = keys, *src_i = ids, *dst_k = keys2, *dst_i = ids2;
+  for (int pass = 0; pass < 3; pass++) {
+    size_t cnt[1025] = {0};
+    int sh = 10 * pass;
+    for (size_t i = 0; i < n; i++) cnt[((src_k[i] >> sh) & 1023) + 1]++;
+    for (int b = 0; b < 1024; b++) cnt[b + 1] += cnt[b];
+    for (size_t i = 0; i < n; i++) {
+      size_t d = cnt[(src_k[i] >> sh) & 1023]++;
+      dst_k[d] = src_k[i];
+      dst_i[d] = src_i[i];
+    }
+    uint32_t *tk = src_k, *ti = src_i;
+    src_k = dst_k, src_i = dst_i, dst_k = tk, dst_i = ti;
+  }
+  /* After 3 passes the result is in keys/ids (pass 0 -> keys2, 1 -> keys,
+   * 2 -> keys2): src_* points at it. */
+  B->tid = src_i;
+  B->code = src_k;
+  mx_free(dst_i);
+  mx_free(dst_k);
+#pragma omp parallel for schedule(static) if (n > 20000)
+  for (size_t i = 0; i < n; i++) {
+    uint32_t t = B->tid[i];
+    double *P = B->tv + 9 * i, *bx = B->box + 6 * i;
+    for (int k = 0; k < 3; k++) {
+      uint32_t v = s->tri[3 * (size_t)t + k];
+      B->vid[3 * i + k] = v;
+      P[3 * k] = s->x[v];
+      P[3 * k + 1] = s->y[v];
+      P[3 * k + 2] = s->z[v];
+    }
+    for (int a = 0; a < 3; a++) {
+      bx[a] = mx_min(P[a], mx_min(P[3 + a], P[6 + a]));
+      bx[3 + a] = mx_max(P[a], mx_max(P[3 + a], P[6 + a]));
+    }
+    B->axis[i] = axis_of[t];
+  }
+  build_node(B, 0, (uint32_t)n);
+  return MX_OK;
+}
+
+/* ==== pairs ============================================================== */
+
+typedef struct {
+  size_t inter, cross, bodies;
+  size_t nex[2];
+  mx_defect_example ex[2][NEX];
+  char pad_[64];
+} pair_acc;
+
+static inline int boxes_meet(const double *a, const double *b) {
+  return a[0] <= b[3] && b[0] <= a[3] && a[1] <= b[4] && b[1] <= a[4] &&
+         a[2] <= b[5] && b[2] <= a[5];
+}
+
+typedef struct {
+  const bvh *B;
+  const mx_trisoup *s;
+  const uint32_t *body;
+  pair_acc *acc; /* one per thread */
+} pair_ctx;
+
+/* Narrow phase on slots i < j whose boxes meet. */
+static void test_pair(const pair_ctx *c, uint32_t i, uint32_t j) {
+  const bvh *B = c->B;
+  double w[3];
+  if (!pair_meets(B->tv + 9 * (size_t)i, B->tv + 9 * (size_t)j,
+                  B->vid + 3 * (size_t)i, B->vid + 3 * (size_t)j, B->axis[i],
+                  B->axis[j], w))
+    return;
+  pair_acc *A = &c->acc[omp_get_thread_num()];
+  uint32_t ti = B->tid[i], tj = B->tid[j];
+  mx_defect_example x = {ti < tj ? ti : tj, ti < tj ? tj : ti, NONE, NONE,
+                         {w[0], w[1], w[2]}};
+  const uint16_t *sh = c->s->shell;
+  int kind = sh && sh[ti] != sh[tj];
+  if (kind) A->cross++;
+  else {
+    A->inter++;
+    if (c->body[ti] != c->body[tj]) A->bodies++;
+  }
+  ex_add(A->ex[kind], &A->nex[kind], &x);
+}
+
+static inline int nodes_meet(const bnode *a, const bnode *b) {
+  return a->lo[0] <= b->hi[0] && b->lo[0] <= a->hi[0] && a->lo[1] <= b->hi[1] &&
+         b->lo[1] <= a->hi[1] && a->lo[2] <= b->hi[2] && b->lo[2] <= a->hi[2];
+}
+
+/* Recursion levels below which the traversal spawns tasks. */
+#define TASK_DEPTH 10
+
+/* Pairs between the subtrees a and b (every slot of a before every slot
+ * of b, so the pairs come as i < j). */
+static void cross_nodes(const pair_ctx *c, uint32_t a, uint32_t b, int depth) {
+  const bnode *A = &c->B->nodes[a], *N = &c->B->nodes[b];
+  if (!nodes_meet(A, N)) return;
+  if (A->right == 0 && N->right == 0) {
+    const double *box = c->B->box;
+    for (uint32_t i = A->first; i < A->end; i++)
+      for (uint32_t j = N->first; j < N->end; j++)
+        if (boxes_meet(box + 6 * (size_t)i, box + 6 * (size_t)j)) test_pair(c, i, j);
+    return;
+  }
+  uint32_t a0 = a, a1 = a, b0 = b, b1 = b;
+  if (N->right == 0 || (A->right != 0 && A->end - A->first >= N->end - N->first))
+    a0 = a + 1, a1 = A->right;
+  else
+    b0 = b + 1, b1 = N->right;
+  if (depth < TASK_DEPTH) {
+#pragma omp task default(none) firstprivate(c, a0, b0, depth)
+    cross_nodes(c, a0, b0, depth + 1);
+    cross_nodes(c, a1, b1, depth + 1);
+  } else {
+    cross_nodes(c, a0, b0, depth + 1);
+    cross_nodes(c, a1, b1, depth + 1);
+  }
+}
+
+/* Pairs within the subtree id. */
+static void self_node(const pair_ctx *c, uint32_t id, int depth) {
+  const bnode *N = &c->B->nodes[id];
+  if (N->right == 0) {
+    const double *box = c->B->box;
+    for (uint32_t i = N->first; i < N->end; i++)
+      for (uint32_t j = i + 1; j < N->end; j++)
+        if (boxes_meet(box + 6 * (size_t)i, box + 6 * (size_t)j)) test_pair(c, i, j);
+    return;
+  }
+  uint32_t l = id + 1, r = N->right;
+  if (depth < TASK_DEPTH) {
+#pragma omp task default(none) firstprivate(c, l, depth)
+    self_node(c, l, depth + 1);
+#pragma omp task default(none) firstprivate(c, r, depth)
+    self_node(c, r, depth + 1);
+    cross_nodes(c, l, r, depth + 1);
+  } else {
+    self_node(c, l, depth + 1);
+    self_node(c, r, depth + 1);
+    cross_nodes(c, l, r, depth + 1);
+  }
+}
+
+static int pair_defects(const bvh *B, const mx_trisoup *s, const uint32_t *body,
+                        mx_surface_defects *r) {
+  if (B->n < 2) return MX_OK;
+  int nth = omp_get_max_threads();
+  pair_acc *acc = mx_calloc((size_t)nth * sizeof *acc);
+  if (!acc) return MX_EINPUT;
+  pair_ctx c = {B, s, body, acc};
+  const pair_ctx *cp = &c;
+#pragma omp parallel num_threads(nth) if (B->n > 256) default(none) shared(cp)
+#pragma omp single
+  self_node(cp, 0, 0);
+  size_t nex[2] = {0, 0};
+  for (int t = 0; t < nth; t++) {
+    pair_acc *A = &acc[t];
+    r->intersecting_pairs += A->inter;
+    r->crossing_pairs += A->cross;
+    r->intersecting_bodies += A->bodies;
+    for (size_t x = 0; x < A->nex[0]; x++) ex_add(r->intersecting, &nex[0], &A->ex[0][x]);
+    for (size_t x = 0; x < A->nex[1]; x++) ex_add(r->crossing, &nex[1], &A->ex[1][x]);
+  }
+  mx_free(acc);
+  return MX_OK;
+}
+
+/* ==== public ============================================================= */
+
+int mx_surface_defects_find(const mx_trisoup *s, mx_surface_defects *r) {
+  memset(r, 0, sizeof *r);
+  if (s->nt == 0) return MX_OK;
+  MX_CHECK(indices_valid(s));
+  const size_t nt = s->nt;
+  int8_t *axis = mx_alloc(nt);
+  uint32_t *body = mx_alloc(nt * sizeof *body);
+  uint32_t *vroot = mx_alloc((s->nv ? s->nv : 1) * sizeof *vroot);
+  edge_table E = {0};
+  if (!axis || !body || !vroot || edges_build(s, &E) != MX_OK) {
+    mx_free(axis);
+    mx_free(body);
+    mx_free(vroot);
+    return MX_EINPUT;
+  }
+  edge_defects(s, &E, r);
+  edges_free(&E);
+  bodies(s, vroot, body);
+  mx_free(vroot);
+
+#pragma omp parallel for schedule(static) if (nt > 20000)
+  for (size_t t = 0; t < nt; t++) {
+    const uint32_t *v = s->tri + 3 * t;
+    if (repeats(v)) {
+      axis[t] = -1;
+      continue;
+    }
+    double P[9];
+    for (int k = 0; k < 3; k++) {
+      P[3 * k] = s->x[v[k]];
+      P[3 * k + 1] = s->y[v[k]];
+      P[3 * k + 2] = s->z[v[k]];
+    }
+    axis[t] = (int8_t)drop_axis(P);
+  }
+  size_t nex = 0;
+  for (size_t t = 0; t < nt; t++) {
+    if (axis[t] >= 0) continue;
+    r->degenerate_triangles++;
+    if (nex == NEX) continue;
+    const uint32_t *v = s->tri + 3 * t;
+    mx_defect_example x = {(uint32_t)t, NONE, NONE, NONE,
+                           {(s->x[v[0]] + s->x[v[1]] + s->x[v[2]]) / 3.0,
+                            (s->y[v[0]] + s->y[v[1]] + s->y[v[2]]) / 3.0,
+                            (s->z[v[0]] + s->z[v[1]] + s->z[v[2]]) / 3.0}};
+    ex_add(r->degenerate, &nex, &x);
+  }
+
+  bvh B;
+  int st = bvh_build(&B, s, axis);
+  if (st == MX_OK) st = pair_defects(&B, s, body, r);
+  bvh_free(&B);
+  mx_free(axis);
+  mx_free(body);
+  return st;
+}
+
+size_t mx_surface_defects_total(const mx_surface_defects *r) {
+  return r->boundary_edges + r->nonmanifold_edges + r->misoriented_edges +
+         r->intersecting_pairs + r->crossing_pairs + r->degenerate_triangles;
+}
+
+int mx_surface_orient(mx_trisoup *s, size_t *flipped) {
+  if (flipped) *flipped = 0;
+  if (s->nt == 0) return MX_OK;
+  MX_CHECK(indices_valid(s));
+  const size_t nt = s->nt;
+  edge_table E = {0};
+  uint32_t *adj = mx_alloc(3 * nt * sizeof *adj);
+  uint32_t *comp = mx_alloc(nt * sizeof *comp);
+  uint32_t *queue = mx_alloc(nt * sizeof *queue);
+  uint8_t *flip = mx_calloc(nt);
+  int st = MX_OK;
+  if (!adj || !comp || !queue || !flip || edges_build(s, &E) != MX_OK) {
+    st = MX_EINPUT;
+    goto done;
+  }
+  /* Neighbour across each edge used by exactly two triangles. */
+  for (size_t h = 0; h < 3 * nt; h++) adj[h] = NONE;
+  for (size_t v = 0; v < s->nv; v++) {
+    size_t i = v ? E.end[v - 1] : 0, end = E.end[v];
+    while (i < end) {
+      size_t j = run_end(E.e, i, end);
+      if (j - i == 2) {
+        uint32_t h0 = (uint32_t)E.e[i], h1 = (uint32_t)E.e[i + 1];
+        adj[h0] = h1;
+        adj[h1] = h0;
+      }
+      i = j;
+    }
+  }
+  /* Flood fill: flip[u] makes u agree with the triangle it was reached
+   * from (opposite directions along the common edge). */
+  for (size_t t = 0; t < nt; t++) comp[t] = NONE;
+  uint32_t ncomp = 0;
+  for (size_t seed = 0; seed < nt; seed++) {
+    if (comp[seed] != NONE || repeats(s->tri + 3 * seed)) continue;
+    size_t qh = 0, qt = 0;
+    comp[seed] = ncomp;
+    queue[qt++] = (uint32_t)seed;
+    while (qh < qt) {
+      uint32_t t = queue[qh++];
+      for (int k = 0; k < 3; k++) {
+        uint32_t h = 3 * t + k, g = adj[h];
+        if (g == NONE) continue;
+        uint32_t u = g / 3;
+        uint8_t want = flip[t] ^ (s->tri[h] == s->tri[g]);
+        if (comp[u] == NONE) {
+          comp[u] = ncomp;
+          flip[u] = want;
+          queue[qt++] = u;
+        }
+      }
+    }
+    ncomp++;
+  }
+  /* Per piece: open?, volume, size, flips so far. */
+  uint8_t *open = mx_calloc(ncomp ? ncomp : 1);
+  double *vol = mx_calloc((ncomp ? ncomp : 1) * sizeof *vol);
+  size_t *size = mx_calloc((ncomp ? ncomp : 1) * 2 * sizeof *size);
+  uint32_t *ref = mx_alloc((ncomp ? ncomp : 1) * sizeof *ref);
+  if (!open || !vol || !size || !ref) {
+    st = MX_EINPUT;
+    goto done2;
+  }
+  for (size_t v = 0; v < s->nv; v++) {
+    size_t i = v ? E.end[v - 1] : 0, end = E.end[v];
+    while (i < end) {
+      size_t j = run_end(E.e, i, end);
+      for (size_t a = i; a < j; a++) {
+        uint32_t c = comp[(uint32_t)E.e[a] / 3], uses = 0;
+        for (size_t b = i; b < j; b++) uses += comp[(uint32_t)E.e[b] / 3] == c;
+        if (uses != 2) open[c] = 1;
+      }
+      i = j;
+    }
+  }
+  for (uint32_t c = 0; c < ncomp; c++) ref[c] = NONE;
+  for (size_t t = 0; t < nt; t++) {
+    uint32_t c = comp[t];
+    if (c == NONE) continue;
+    if (ref[c] == NONE) ref[c] = s->tri[3 * t];
+    size[2 * c]++;
+    size[2 * c + 1] += flip[t];
+    const uint32_t *v = s->tri + 3 * t;
+    double o[3] = {s->x[ref[c]], s->y[ref[c]], s->z[ref[c]]}, p[3][3];
+    for (int k = 0; k < 3; k++) {
+      p[k][0] = s->x[v[k]] - o[0];
+      p[k][1] = s->y[v[k]] - o[1];
+      p[k][2] = s->z[v[k]] - o[2];
+    }
+    double d = p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1]) -
+               p[0][1] * (p[1][0] * p[2][2] - p[1][2] * p[2][0]) +
+               p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0]);
+    vol[c] += flip[t] ? -d : d;
+  }
+  size_t nflip = 0;
+  for (size_t t = 0; t < nt; t++) {
+    uint32_t c = comp[t];
+    if (c == NONE) continue;
+    uint8_t invert = open[c] ? 2 * size[2 * c + 1] > size[2 * c] : vol[c] < 0.0;
+    if (!(flip[t] ^ invert)) continue;
+    uint32_t *v = s->tri + 3 * t, x = v[1];
+    v[1] = v[2];
+    v[2] = x;
+    nflip++;
+  }
+  if (flipped) *flipped = nflip;
+done2:
+  mx_free(open);
+  mx_free(vol);
+  mx_free(size);
+  mx_free(ref);
+done:
+  edges_free(&E);
+  mx_free(adj);
+  mx_free(comp);
+  mx_free(queue);
+  mx_free(flip);
+  return st;
+}
+
+/* ==== messages =========================================================== */
+
+typedef struct {
+  char *p;
+  size_t left;
+} outbuf;
+
+static void out(outbuf *o, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void out(outbuf *o, const char *fmt, ...) {
+  if (o->left <= 1) return;
+  va_list ap;
+  va_start(ap, fmt);
+  int k = vsnprintf(o->p, o->left, fmt, ap);
+  va_end(ap);
+  if (k < 0) return;
+  size_t m = (size_t)k < o->left - 1 ? (size_t)k : o->left - 1;
+  o->p += m;
+  o->left -= m;
+}
+
+/* Number of triangle t within its input, and that input. */
+static uint32_t local_tri(const mx_trisoup *s, uint32_t t, unsigned *input) {
+  *input = 0;
+  if (!s || !s->shell || t >= s->nt) return t;
+  uint32_t f = t;
+  uint16_t sh = s->shell[t];
+  while (f > 0 && s->shell[f - 1] == sh) f--;
+  *input = sh;
+  return t - f;
+}
+
+/* "triangle T", "triangles T and U", with "of input K" when the soup holds
+ * several inputs. */
+static void out_tris(outbuf *o, const mx_trisoup *s, uint32_t t, uint32_t u) {
+  int multi = s && s->nshells > 1;
+  unsigned it, iu;
+  uint32_t lt = local_tri(s, t, &it);
+  if (u == NONE) {
+    out(o, "triangle %u", lt);
+    if (multi) out(o, " of input %u", it);
+    return;
+  }
+  uint32_t lu = local_tri(s, u, &iu);
+  if (it == iu) {
+    out(o, "triangles %u and %u", lt, lu);
+    if (multi) out(o, " of input %u", it);
+  } else {
+    out(o, "triangle %u of input %u and triangle %u of input %u", lt, it, lu, iu);
+  }
+}
+
+#define SHOWN 3
+
+static void out_examples(outbuf *o, const mx_trisoup *s,
+                         const mx_defect_example *ex, size_t count) {
+  size_t m = count < SHOWN ? count : SHOWN;
+  out(o, ", e.g. ");
+  for (size_t i = 0; i < m; i++) {
+    if (i) out(o, "; ");
+    if (ex[i].v0 != NONE) out(o, "edge of ");
+    out_tris(o, s, ex[i].tri, ex[i].other);
+    out(o, " at (%g, %g, %g)", ex[i].p[0], ex[i].p[1], ex[i].p[2]);
+  }
+  if (count > m) out(o, "; ...");
+  out(o, "\n");
+}
+
+void mx_surface_defects_describe(const mx_surface_defects *r,
+                                 const mx_trisoup *s, char *buf, size_t n) {
+  if (n == 0) return;
+  buf[0] = '\0';
+  outbuf o = {buf, n};
+  if (mx_surface_defects_total(r) == 0) {
+    out(&o, "no defects\n");
+    return;
+  }
+  size_t c;
+  if ((c = r->boundary_edges)) {
+    out(&o, "%zu open edge%s (used by one triangle only)", c, c == 1 ? "" : "s");
+    out_examples(&o, s, r->boundary, c);
+  }
+  if ((c = r->nonmanifold_edges)) {
+    out(&o, "%zu non-manifold edge%s (used by more than two triangles)", c,
+        c == 1 ? "" : "s");
+    out_examples(&o, s, r->nonmanifold, c);
+  }
+  if ((c = r->misoriented_edges)) {
+    out(&o,
+        "%zu misoriented edge%s (used twice in the same direction: the two "
+        "triangles' normals disagree)",
+        c, c == 1 ? "" : "s");
+    out_examples(&o, s, r->misoriented, c);
+  }
+  if ((c = r->intersecting_pairs)) {
+    out(&o, "%zu pair%s of triangles of one input intersect%s (self-intersection",
+        c, c == 1 ? "" : "s", c == 1 ? "s" : "");
+    if (r->intersecting_bodies)
+      out(&o, "; %zu of them between separate bodies", r->intersecting_bodies);
+    out(&o, ")");
+    out_examples(&o, s, r->intersecting, c);
+  }
+  if ((c = r->crossing_pairs)) {
+    out(&o, "%zu pair%s of triangles of two inputs meet%s (the inputs cross or touch)",
+        c, c == 1 ? "" : "s", c == 1 ? "s" : "");
+    out_examples(&o, s, r->crossing, c);
+  }
+  if ((c = r->degenerate_triangles)) {
+    out(&o, "%zu degenerate triangle%s (zero area)", c, c == 1 ? "" : "s");
+    out_examples(&o, s, r->degenerate, c);
+  }
+}

@@ -4,9 +4,11 @@
 #include "mesher/mesher_impl.h"
 
 #include "kernels/splice.h"
+#include "kernels/surface_defects.h"
 
 #include "io/boundary_faces.h"
 #include "kernels/estimate.h"
+#include "kernels/grid.h"
 #include "kernels/mesh_edit.h"
 #include "kernels/remesh.h"
 #include "kernels/splice.h"
@@ -324,6 +326,57 @@ mx_requests mx_mesher_requests(const mx_mesher *m) {
 }
 
 /* Domain then region triangles in one soup, checked once. */
+/* The input policy (issue 10): a closed, manifold domain is oriented
+ * consistently and outward (a warning when triangles were flipped); one
+ * with no well-defined inside (open or non-manifold edges, triangles that
+ * cross, two inputs that cross) is refused naming the defects, or, with
+ * params.repair_input, meshed where its generalized winding number is above
+ * 1/2. */
+static int input_policy(mx_mesher *m) {
+  mx_trisoup *d = &m->domain;
+  mx_surface_defects r;
+  MX_CHECK(mx_surface_defects_find(d, &r));
+  const char *first = m->domain_name[0];
+  if (!r.boundary_edges && !r.nonmanifold_edges) {
+    size_t flipped = 0;
+    MX_CHECK(mx_surface_orient(d, &flipped));
+    if (flipped) {
+      mx_warning(m->ndomain == 1 ? first : NULL, 0,
+                 "%zu triangle(s) re-oriented: the surface%s inconsistently oriented or "
+                 "inside out", flipped, m->ndomain == 1 ? " was" : "s were");
+      MX_CHECK(mx_surface_defects_find(d, &r));
+    }
+    m->S.reoriented = flipped;
+  }
+  const size_t bad = r.boundary_edges + r.nonmanifold_edges + r.misoriented_edges +
+                     r.intersecting_pairs + r.crossing_pairs;
+  if (!bad) return MX_OK;
+  char what[4096];
+  mx_surface_defects_describe(&r, d, what, sizeof what);
+  /* the file of the first defect found */
+  const mx_defect_example *ex = r.boundary_edges      ? &r.boundary[0]
+                                : r.nonmanifold_edges ? &r.nonmanifold[0]
+                                : r.misoriented_edges ? &r.misoriented[0]
+                                : r.intersecting_pairs ? &r.intersecting[0]
+                                                       : &r.crossing[0];
+  const uint16_t sh = ex->tri < d->nt ? d->shell[ex->tri] : 0;
+  const char *name = sh < m->ndomain ? m->domain_name[sh] : first;
+  size_t n = strlen(what);
+  while (n && what[n - 1] == '\n') what[--n] = '\0';
+  for (char *c = what; *c; c++)
+    if (*c == '\n') *c = ';'; /* one message line */
+  if (!m->p.repair_input) {
+    mx_error(name, 0, "the input has no well-defined inside, refused: %s. With "
+                      "--repair-input (mx_params.repair_input) the domain is where the "
+                      "generalized winding number of the input is above 1/2", what);
+    return MX_EINPUT;
+  }
+  mx_warning(name, 0, "the input has no well-defined inside: %s. The domain is where its "
+                      "generalized winding number is above 1/2 (--repair-input)", what);
+  m->S.input_repaired = 1;
+  return MX_OK;
+}
+
 static int assemble_inputs(mx_mesher *m) {
   if (m->assembled) return MX_OK;
   if (m->ndomain == 0) {
@@ -332,6 +385,15 @@ static int assemble_inputs(mx_mesher *m) {
   }
   MX_CHECK(mx_trisoup_check_shells(&m->domain, (uint32_t)m->domain.nt,
                                    (const char *const *)m->domain_name));
+  {
+    /* a box the grid refuses (flat, coordinates out of range, too thin) is
+     * reported as such before the defects are looked for */
+    double lo[3], hi[3];
+    mx_grid g;
+    mx_trisoup_bbox(&m->domain, lo, hi);
+    MX_CHECK(mx_grid_build(lo, hi, m->domain_name[0], &g));
+  }
+  MX_CHECK(input_policy(m));
   MX_CHECK(mx_trisoup_append(&m->soup, &m->domain));
   /* one shell per input file, as the readers gave them */
   memcpy(m->soup.shell, m->domain.shell, m->domain.nt * sizeof *m->soup.shell);

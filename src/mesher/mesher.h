@@ -43,6 +43,8 @@ typedef struct {
   size_t remesh_splits;     /* octants split by the last re-mesh (list, balance, requests) */
   double t_restart;         /* seconds reading or writing the restart file */
   /* the last re-mesh after a refinement (remesh_local.c) */
+  size_t reoriented;        /* input triangles flipped by the input policy */
+  int input_repaired;       /* the domain is the winding number's (repair_input) */
   int local;                /* 1: every re-mesh of the call was local */
   int local_attempts;       /* patches tried (more rings when one fell short) */
   size_t patch_leaves;      /* leaves meshed again (core and context) after */
