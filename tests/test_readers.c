@@ -584,10 +584,10 @@ static void test_degenerate(void) {
   capture_begin();
   rc = mx_trisoup_check(&s, "open.off", &open);
   msg = capture_end();
+  /* counted; the mesher's input policy refuses or repairs it, naming the
+   * edges (tests/cli_test.sh, tests/test_surface_defects.c) */
   CHECK(rc == MX_OK && s.nt == 3 && open == 3);
-  CHECK(strstr(msg,
-               "surface is not closed: 3 open or non-manifold edges; "
-               "inside/outside may be wrong") != NULL);
+  CHECK(strstr(msg, "not closed") == NULL);
   mx_trisoup_free(&s);
   printf("open.off: %s", msg);
 

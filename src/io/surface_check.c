@@ -127,11 +127,8 @@ int mx_trisoup_check(mx_trisoup *s, const char *path, size_t *open_edges) {
   }
   size_t open;
   MX_CHECK(count_open_edges(s, &open));
-  if (open)
-    mx_warning(path, 0,
-               "surface is not closed: %zu open or non-manifold edges; "
-               "inside/outside may be wrong",
-               open);
+  /* an open surface is the input policy's to refuse or repair (mesher.c,
+   * kernels/surface_defects.c), with the places of its defects */
   if (open_edges) *open_edges = open;
   return MX_OK;
 }
