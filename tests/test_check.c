@@ -106,6 +106,18 @@ static mx_check_report check_tm(const tm *t, const mx_trisoup *s) {
   return r;
 }
 
+/* The same with a fixed volume tolerance (the default is chosen from the
+ * mesh: half a layer of elements, far above 5 % for these few hexahedra). */
+static mx_check_report check_tm_tol(const tm *t, const mx_trisoup *s, double vtol) {
+  mx_mesh_data d = tm_data(t);
+  mx_check_options o;
+  mx_check_defaults(&o);
+  o.volume_tol = vtol;
+  mx_check_report r;
+  CHECK(mx_check_mesh_opt(&d, s, &o, &r) == MX_OK);
+  return r;
+}
+
 /* The 8 corners of a box in VTK hexahedron order. */
 static void box_corners(tm *t, const double lo[3], const double hi[3],
                         uint32_t v[8]) {
@@ -228,6 +240,11 @@ static void expect_clean(const mx_check_report *r, double volume,
   CHECK(r->open_boundary_edges == 0 && r->quad_vs_triangles == 0);
   CHECK(r->hanging_nodes == 0 && r->unused_nodes == 0);
   CHECK(r->duplicate_nodes == 0);
+  CHECK(r->empty == 0 && r->degenerate == 0 &&
+        r->geometric_hanging_nodes == 0);
+  CHECK(r->volume_off == 0 && r->boundary_off_surface == 0);
+  for (int k = 0; k < MX_CK_ELEM_KINDS; k++) CHECK(r->elem_ids[k].n == 0);
+  for (int k = 0; k < MX_CK_NODE_KINDS; k++) CHECK(r->node_ids[k].n == 0);
   CHECK(near(r->volume, volume, 1e-14));
   CHECK(r->jens_min > 0);
   CHECK(isnan(r->surface_volume) && isnan(r->volume_error) &&
@@ -320,9 +337,18 @@ static void test_valid(void) {
   CHECK(r.nodes == 14 && r.volume == 2.0);
   tm_free(&t);
 
-  /* An empty mesh has nothing wrong and NAN qualities. */
+  /* An empty mesh is a defect (never "OK"), with NAN qualities; nodes
+   * without elements too (and the nodes are unused). */
   r = check_tm(&t, NULL);
-  CHECK(r.defects == 0 && r.elements == 0 && isnan(r.jens_min));
+  CHECK(r.defects == 1 && r.empty == 1 && r.elements == 0);
+  CHECK(isnan(r.jens_min));
+  tm_add(&t, 0, 0, 0);
+  tm_add(&t, 1, 0, 0);
+  r = check_tm(&t, NULL);
+  CHECK(r.empty == 1 && r.unused_nodes == 2 && r.defects == 3);
+  CHECK(r.node_ids[MX_CK_N_UNUSED].n == 2 &&
+        r.node_ids[MX_CK_N_UNUSED].id[1] == 1);
+  tm_free(&t);
 }
 
 /* ====================================================================== */
@@ -840,6 +866,8 @@ static void test_formats(void) {
   tm_free(&cube);
 }
 
+static void group_by_type(const tm *t, tm *g);
+
 /* Every prefix of a file, and many corrupted copies, must be read or
  * refused cleanly; whatever is read must be a valid mesh. */
 static void test_damage(void) {
@@ -847,17 +875,29 @@ static void test_damage(void) {
   awkward_mesh(&t);
   mx_mesh_data d = tm_data(&t);
   mx_mesh_view v = mx_mesh_data_view(&d);
-  const char *src[3] = {tpath("d.vtu"), tpath("d.vtk"), tpath("da.vtk")};
+  tm grouped; /* Medit's order */
+  group_by_type(&t, &grouped);
+  enum { NSRC = 7 };
+  const char *src[NSRC] = {tpath("d.vtu"),    tpath("d.vtk"),
+                           tpath("da.vtk"),   tpath("d.msh"),
+                           tpath("da.msh"),   tpath("d.meshb"),
+                           tpath("d.mesh")};
+  const tm *want[NSRC] = {&t, &t, &t, &t, &t, &grouped, &grouped};
   CHECK(mx_write_vtu(src[0], &v) == MX_OK);
   CHECK(mx_write_vtk_legacy(src[1], &v, 1) == MX_OK);
   CHECK(mx_write_vtk_legacy(src[2], &v, 0) == MX_OK);
+  CHECK(mx_write_msh(src[3], &v, 1) == MX_OK);
+  CHECK(mx_write_msh(src[4], &v, 0) == MX_OK);
+  CHECK(mx_write_medit(src[5], &v, 1) == MX_OK);
+  CHECK(mx_write_medit(src[6], &v, 0) == MX_OK);
   const char *cut = tpath("cut.bin");
   fflush(stderr);
   int saved = dup(2); /* hundreds of expected messages: silence them */
+  FILE *saved_err = fdopen(dup(saved), "w");
   FILE *null = fopen("/dev/null", "w");
   dup2(fileno(null), 2);
   size_t ok_prefix = 0, refused = 0;
-  for (int k = 0; k < 3; k++) {
+  for (int k = 0; k < NSRC; k++) {
     size_t n;
     char *b = slurp(src[k], &n);
     CHECK(b != NULL);
@@ -869,7 +909,10 @@ static void test_damage(void) {
       int st = mx_read_mesh(cut, &m);
       if (st == MX_OK) { /* only trailing bytes were lost */
         ok_prefix++;
-        CHECK(same_mesh(&t, &m));
+        if (!same_mesh(want[k], &m))
+          fprintf(saved_err, "%s: prefix of %zu bytes read as another mesh\n",
+                  src[k], len);
+        CHECK(same_mesh(want[k], &m));
         mx_mesh_data_free(&m);
       } else {
         refused++;
@@ -905,6 +948,8 @@ static void test_damage(void) {
   dup2(saved, 2);
   close(saved);
   fclose(null);
+  fclose(saved_err);
+  tm_free(&grouped);
   CHECK(refused > 0);
   printf("damaged files: %zu prefixes read whole, %zu refused\n", ok_prefix,
          refused);
@@ -1022,6 +1067,584 @@ static void test_surface(void) {
 }
 
 /* ====================================================================== */
+/* Geometric checks: hanging nodes by position, degenerate elements,     */
+/* empty meshes, the volume, extreme coordinates                          */
+/* ====================================================================== */
+
+/* The box [x0,x1]x[y0,y1]x[z0,z1] mapped by s * (x - c), as a
+ * hexahedron. */
+static void hex_s(tm *t, double s, double c, double x0, double y0,
+                  double z0, double x1, double y1, double z1) {
+  box_hex(t, s * (x0 - c), s * (y0 - c), s * (z0 - c), s * (x1 - c),
+          s * (y1 - c), s * (z1 - c));
+}
+
+static int find_shown(const mx_check_report *r, int on) {
+  for (size_t i = 0; i < r->nshown; i++)
+    if (r->hang_at[i].on == on) return (int)i;
+  return -1;
+}
+
+/* A hexahedron [0,1]^3 and, against its x = 1 face, the tetrahedra of the
+ * cone from P (on that face) over the other five faces of the box
+ * [1,2]x[0,1]x[0,1], each split into two triangles: P lies inside the
+ * hexahedron's face, no face of it is shared. */
+static void hex_and_cone(tm *t, const double P[3]) {
+  box_hex(t, 0, 0, 0, 1, 1, 1);
+  const double lo[3] = {1, 0, 0}, hi[3] = {2, 1, 1};
+  uint32_t c[8];
+  box_corners(t, lo, hi, c);
+  const uint32_t p = tm_at(t, P[0], P[1], P[2]);
+  static const int other[5][4] = {
+      {0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {2, 3, 7, 6}, {1, 2, 6, 5}};
+  for (int f = 0; f < 5; f++)
+    for (int h = 0; h < 2; h++) {
+      uint32_t v[4] = {c[other[f][0]], c[other[f][1 + h]],
+                       c[other[f][2 + h]], p};
+      double e[3][3];
+      for (int k = 0; k < 3; k++)
+        for (int x = 0; x < 3; x++)
+          e[k][x] = t->xyz[3 * v[k + 1] + (size_t)x] - t->xyz[3 * v[0] + (size_t)x];
+      const double det = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
+                         e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                         e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+      if (det < 0) {
+        const uint32_t x = v[1];
+        v[1] = v[2];
+        v[2] = x;
+      }
+      tm_cell(t, MX_TET, v);
+    }
+}
+
+static void test_geometric_hanging(void) {
+  /* 1. The box next to the hexahedron cut at z = 1/3 (not the midpoint):
+   * its two nodes at x = 1, z = 1/3 lie on two edges of hexahedron 0. At
+   * unit scale, tiny (1e-110) and huge (coordinates from -1e308 to 1e308,
+   * an extent beyond the double range) sizes. */
+  const double scales[3] = {1.0, 1e-110, 1e308}, shifts[3] = {0, 0, 1};
+  for (int k = 0; k < 3; k++) {
+    tm t = {0};
+    const double s = scales[k], o = shifts[k];
+    hex_s(&t, s, o, 0, 0, 0, 1, 1, 1);
+    hex_s(&t, s, o, 1, 0, 0, 2, 1, 1.0 / 3.0);
+    hex_s(&t, s, o, 1, 0, 1.0 / 3.0, 2, 1, 1);
+    mx_check_report r = check_tm(&t, NULL);
+    if (r.geometric_hanging_nodes != 2)
+      fprintf(stderr, "scale %g: %zu geometric hanging nodes, %zu defects\n",
+              s, r.geometric_hanging_nodes, r.defects);
+    CHECK(r.hanging_nodes == 0 && r.geometric_hanging_nodes == 2);
+    CHECK(r.defects == 2 && r.invalid == 0 && r.degenerate == 0);
+    CHECK(r.elem_ids[MX_CK_GEOM_HANGING].n == 1 &&
+          r.elem_ids[MX_CK_GEOM_HANGING].id[0] == 0);
+    CHECK(r.node_ids[MX_CK_N_GEOM_HANGING].n == 2);
+    CHECK(r.nshown == 2);
+    for (size_t i = 0; i < r.nshown && i < 2; i++) {
+      const mx_check_hang *h = &r.hang_at[i];
+      CHECK(h->on == MX_CK_ON_EDGE && h->element == 0 && h->nverts == 2);
+      CHECK(h->node == r.node_ids[MX_CK_N_GEOM_HANGING].id[i]);
+      CHECK(memcmp(h->xyz, t.xyz + 3 * h->node, sizeof h->xyz) == 0);
+      /* the edge runs along z through the node */
+      const double *a = t.xyz + 3 * h->verts[0], *b = t.xyz + 3 * h->verts[1];
+      CHECK(a[0] == h->xyz[0] && b[0] == h->xyz[0] && a[1] == h->xyz[1] &&
+            b[1] == h->xyz[1] && a[2] != b[2]);
+    }
+    tm_free(&t);
+  }
+
+  /* 2. Four hexahedra against the face, cut at y = 0.3 and z = 0.6: their
+   * middle node lies inside the face (x = 1 is face 3 of a hexahedron in
+   * soa/mesh.h), the four others on its edges. */
+  {
+    tm t = {0};
+    box_hex(&t, 0, 0, 0, 1, 1, 1);
+    const double ys[3] = {0, 0.3, 1}, zs[3] = {0, 0.6, 1};
+    for (int j = 0; j < 2; j++)
+      for (int i = 0; i < 2; i++)
+        box_hex(&t, 1, ys[j], zs[i], 2, ys[j + 1], zs[i + 1]);
+    mx_check_report r = check_tm(&t, NULL);
+    CHECK(r.hanging_nodes == 0 && r.geometric_hanging_nodes == 5);
+    CHECK(r.defects == 5);
+    const int f = find_shown(&r, MX_CK_ON_FACE);
+    CHECK(f >= 0);
+    if (f >= 0) {
+      const mx_check_hang *h = &r.hang_at[f];
+      CHECK(h->element == 0 && h->local == 3 && h->nverts == 4);
+      CHECK(h->xyz[0] == 1 && h->xyz[1] == 0.3 && h->xyz[2] == 0.6);
+    }
+    tm_free(&t);
+  }
+
+  /* 3. Split elements: tetrahedra fanned from a node P inside the face. */
+  {
+    tm t = {0};
+    const double P[3] = {1, 0.3, 0.6};
+    hex_and_cone(&t, P);
+    mx_check_report r = check_tm(&t, NULL);
+    CHECK(r.by_type[MX_TET] == 10 && r.invalid == 0);
+    CHECK(near(r.volume, 2.0, 1e-14));
+    CHECK(r.geometric_hanging_nodes == 1 && r.defects == 1);
+    CHECK(r.open_boundary_edges == 0 && r.faces_overshared == 0);
+    CHECK(r.nshown == 1 && r.hang_at[0].on == MX_CK_ON_FACE &&
+          r.hang_at[0].element == 0);
+    /* the same with P at the face centre: an exact hanging node, counted
+     * once */
+    tm_free(&t);
+    const double C[3] = {1, 0.5, 0.5};
+    hex_and_cone(&t, C);
+    r = check_tm(&t, NULL);
+    CHECK(r.hanging_nodes == 1 && r.geometric_hanging_nodes == 0);
+    CHECK(r.defects == 1);
+    tm_free(&t);
+  }
+
+  /* 4. Tolerance: off the midpoint by 5e-14 of the edge is on the edge;
+   * the box moved 1e-6 away from the face is not on it; moved 1e-12 away,
+   * its corners lie at (not exactly on) the hexahedron's vertices. */
+  {
+    tm t = {0};
+    const double zc = 0.5 * (1.0 + 1e-13);
+    box_hex(&t, 0, 0, 0, 1, 1, 1);
+    box_hex(&t, 1, 0, 0, 2, 1, zc);
+    box_hex(&t, 1, 0, zc, 2, 1, 1);
+    mx_check_report r = check_tm(&t, NULL);
+    CHECK(r.hanging_nodes == 0 && r.geometric_hanging_nodes == 2);
+    tm_free(&t);
+    box_hex(&t, 0, 0, 0, 1, 1, 1);
+    box_hex(&t, 1 + 1e-6, 0, 0, 2, 1, 1.0 / 3.0);
+    box_hex(&t, 1 + 1e-6, 0, 1.0 / 3.0, 2, 1, 1);
+    r = check_tm(&t, NULL);
+    CHECK(r.geometric_hanging_nodes == 0 && r.defects == 0);
+    tm_free(&t);
+    box_hex(&t, 0, 0, 0, 1, 1, 1);
+    box_hex(&t, 1 + 1e-12, 0, 0, 2, 1, 1.0 / 3.0);
+    box_hex(&t, 1 + 1e-12, 0, 1.0 / 3.0, 2, 1, 1);
+    r = check_tm(&t, NULL);
+    CHECK(r.geometric_hanging_nodes >= 6 && r.duplicate_nodes == 0);
+    CHECK(find_shown(&r, MX_CK_ON_VERTEX) >= 0);
+    tm_free(&t);
+  }
+
+  /* 5. A conforming graded-looking block (2x2x2 grid) with its nodes moved
+   * a little: no false positive. */
+  {
+    tm t = {0};
+    grid_hexes(&t, 3, 1.0 / 3.0, -1);
+    for (size_t i = 0; i < 3 * t.nn; i++)
+      t.xyz[i] += 0.01 * sin(7.0 * (double)i);
+    mx_check_report r = check_tm(&t, NULL);
+    CHECK(r.defects == 0 && r.geometric_hanging_nodes == 0);
+    tm_free(&t);
+  }
+}
+
+static void test_degenerate(void) {
+  tm t = {0};
+  /* A flat tetrahedron: J_ENS about 5e-16 > 0. */
+  uint32_t v[8] = {tm_add(&t, 0, 0, 0), tm_add(&t, 1, 0, 0),
+                   tm_add(&t, 0, 1, 0), tm_add(&t, 0.25, 0.25, 2e-16)};
+  tm_cell(&t, MX_TET, v);
+  mx_check_report r = check_tm(&t, NULL);
+  if (!(r.jens_min > 0 && r.jens_min < 1e-12))
+    fprintf(stderr, "flat tet: J_ENS %g\n", r.jens_min);
+  CHECK(r.jens_min > 0 && r.jens_min < 1e-12);
+  CHECK(r.degenerate == 1 && r.invalid == 0 && r.defects == 1);
+  CHECK(r.elem_ids[MX_CK_DEGENERATE].n == 1 &&
+        r.elem_ids[MX_CK_DEGENERATE].id[0] == 0);
+  CHECK(r.elem_ids[MX_CK_INVALID].n == 0);
+  /* a threshold of 0 accepts it */
+  mx_check_options o;
+  mx_check_defaults(&o);
+  CHECK(o.degenerate_below == 1e-6);
+  o.degenerate_below = 0.0;
+  mx_mesh_data d = tm_data(&t);
+  CHECK(mx_check_mesh_opt(&d, NULL, &o, &r) == MX_OK);
+  CHECK(r.degenerate == 0 && r.defects == 0);
+  tm_free(&t);
+
+  /* A hexahedron whose node 1 lies on the segment from node 0 to node 2
+   * (collinear), and one where it is off that segment by 1e-12: the first
+   * invalid (J_ENS 0), the second degenerate or invalid. */
+  for (int k = 0; k < 2; k++) {
+    box_hex(&t, 0, 0, 0, 1, 1, 1);
+    const uint32_t n1 = t.conn[1];
+    t.xyz[3 * n1] = 0.5 + (k ? 1e-12 : 0.0);
+    t.xyz[3 * n1 + 1] = 0.5 - (k ? 1e-12 : 0.0);
+    r = check_tm(&t, NULL);
+    CHECK(r.invalid + r.degenerate == 1 && r.defects == 1);
+    if (k == 0) CHECK(r.invalid == 1 && r.jens_min == 0.0);
+    tm_free(&t);
+  }
+  /* Nearly flat, but fine: a 1 x 1 x 1e-9 box (J_ENS is scale-free). */
+  box_hex(&t, 0, 0, 0, 1, 1, 1e-9);
+  r = check_tm(&t, NULL);
+  CHECK(r.defects == 0 && r.jens_min == 1.0);
+  tm_free(&t);
+}
+
+static void test_extreme_coordinates(void) {
+  /* A 3^3 grid scaled to 1e-110, 1e-300, 1e300 and across [-1e308,
+   * 1e308], plus one duplicate node: the hash of coordinates and the grids
+   * work relative to the box (no overflow, no huge allocation). */
+  const double scales[4] = {1e-110, 1e-300, 1e300, 1e308 / 1.5};
+  const double shifts[4] = {0, 0, 0, 1.5};
+  for (int k = 0; k < 4; k++) {
+    tm t = {0};
+    grid_hexes(&t, 3, 1.0, -1);
+    for (size_t i = 0; i < 3 * t.nn; i++)
+      t.xyz[i] = scales[k] * (t.xyz[i] - shifts[k]);
+    mx_check_report r = check_tm(&t, NULL);
+    if (r.defects) fprintf(stderr, "scale %g: %zu defects\n", scales[k], r.defects);
+    CHECK(r.defects == 0 && r.elements == 27 && r.jens_min == 1.0);
+    CHECK(r.faces_interior == 54 && r.faces_boundary == 54);
+    tm_add(&t, t.xyz[3 * 13], t.xyz[3 * 13 + 1], t.xyz[3 * 13 + 2]);
+    r = check_tm(&t, NULL);
+    CHECK(r.duplicate_nodes == 1 && r.unused_nodes == 1 && r.defects == 2);
+    CHECK(r.node_ids[MX_CK_N_DUPLICATE].n == 1 &&
+          r.node_ids[MX_CK_N_DUPLICATE].id[0] == t.nn - 1);
+    tm_free(&t);
+  }
+  /* Extents 2 x 1e-150 x 1e-150 (a thin box: cells along x only). */
+  tm t = {0};
+  box_hex(&t, 0, 0, 0, 1, 1e-150, 1e-150);
+  box_hex(&t, 1, 0, 0, 2, 1e-150, 1e-150);
+  mx_check_report r = check_tm(&t, NULL);
+  CHECK(r.defects == 0 && r.faces_interior == 1);
+  tm_free(&t);
+  /* Not finite: refused. */
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  t.xyz[4] = NAN;
+  mx_mesh_data d = tm_data(&t);
+  fprintf(stderr, "(an error about a coordinate that is not finite is "
+                  "expected)\n");
+  CHECK(mx_check_mesh(&d, NULL, &r) == MX_EINPUT);
+  tm_free(&t);
+}
+
+static void test_volume(void) {
+  const char *off = tpath("cube_v.off");
+  write_text(off, cube_off);
+  mx_trisoup s;
+  CHECK(mx_read_off(off, &s) == MX_OK);
+  /* 2 x 2 x 2 hexahedra squeezed to a height of 0.9: 10 % short, and the
+   * middle node of the top 0.1 away (the others lie on the cube's sides). */
+  tm t = {0};
+  grid_hexes(&t, 2, 0.5, -1);
+  for (size_t i = 0; i < t.nn; i++) t.xyz[3 * i + 2] *= 0.9;
+  mx_check_report r = check_tm_tol(&t, &s, 0.05);
+  CHECK(r.has_surface && r.surface_open_edges == 0);
+  CHECK(near(r.volume_error, -0.1, 1e-12) && r.volume_off == 1);
+  CHECK(r.boundary_off_surface == 1 && r.defects == 2);
+  CHECK(near(r.boundary_max_dist, 0.1 / sqrt(3.0), 1e-12));
+  CHECK(r.node_ids[MX_CK_N_OFF_SURFACE].n == 1);
+  if (r.node_ids[MX_CK_N_OFF_SURFACE].n == 1) {
+    const double *q = t.xyz + 3 * r.node_ids[MX_CK_N_OFF_SURFACE].id[0];
+    CHECK(q[0] == 0.5 && q[1] == 0.5 && q[2] == 0.9);
+  }
+  /* looser tolerances accept it */
+  mx_check_options o;
+  mx_check_defaults(&o);
+  CHECK(o.volume_tol == 0.0 && o.boundary_tol == 1e-6); /* 0: chosen from the mesh */
+  o.volume_tol = 0.2;
+  o.boundary_tol = 0.1;
+  mx_mesh_data d = tm_data(&t);
+  CHECK(mx_check_mesh_opt(&d, &s, &o, &r) == MX_OK);
+  CHECK(r.volume_off == 0 && r.boundary_off_surface == 0 && r.defects == 0);
+  CHECK(r.opt.volume_tol == 0.2);
+  tm_free(&t);
+  /* 1 % short: the volume passes, the distance does not. */
+  grid_hexes(&t, 2, 0.5, -1);
+  for (size_t i = 0; i < t.nn; i++) t.xyz[3 * i + 2] *= 0.99;
+  r = check_tm_tol(&t, &s, 0.05);
+  CHECK(r.volume_off == 0 && r.boundary_off_surface == 1 && r.defects == 1);
+  tm_free(&t);
+  /* 10 % too big, the other way. */
+  box_hex(&t, 0, 0, 0, 1, 1, 1.1);
+  r = check_tm_tol(&t, &s, 0.05);
+  CHECK(r.volume_off == 1 && near(r.volume_error, 0.1, 1e-12));
+  /* the default tolerance, half a layer of this one element: 0.5 x 6 x 1.1^(1/3) */
+  r = check_tm(&t, &s);
+  CHECK(r.opt.volume_tol_auto && near(r.opt.volume_tol, 3.0 * cbrt(1.1), 1e-9) && r.volume_off == 0);
+  tm_free(&t);
+  /* An open surface (one triangle less): reported, not a defect. */
+  s.nt--;
+  grid_hexes(&t, 2, 0.5, -1);
+  for (size_t i = 0; i < t.nn; i++) t.xyz[3 * i + 2] *= 0.9;
+  r = check_tm(&t, &s);
+  CHECK(r.surface_open_edges == 3 && r.volume_off == 0 &&
+        r.boundary_off_surface == 0 && r.defects == 0);
+  CHECK(r.node_ids[MX_CK_N_OFF_SURFACE].n == 0);
+  tm_free(&t);
+  mx_trisoup_free(&s);
+  /* An empty mesh with a surface: empty, and the volume is off. */
+  CHECK(mx_read_off(off, &s) == MX_OK);
+  r = check_tm(&t, &s);
+  CHECK(r.empty == 1 && r.volume_off == 1 && r.defects == 2);
+  mx_trisoup_free(&s);
+}
+
+/* Reads p with the messages captured; returns the status, *msg (free it). */
+static int read_quietly(const char *p, mx_mesh_data *m, char **msg) {
+  int st;
+  *msg = captured(mx_read_mesh, p, m, &st);
+  return st;
+}
+
+/* A file made of a text head and n raw bytes. */
+static void write_head_bytes(const char *p, const char *head,
+                             const void *bytes, size_t n) {
+  size_t hl = strlen(head);
+  char *b = malloc(hl + n + 1);
+  memcpy(b, head, hl);
+  if (n) memcpy(b + hl, bytes, n);
+  write_bytes(p, b, hl + n);
+  free(b);
+}
+
+static void test_huge_counts(void) {
+  /* Counts far beyond what the file holds are refused before anything is
+   * allocated, quickly, naming the count. */
+  static const struct {
+    const char *name, *text, *want;
+  } cases[] = {
+      {"cells.vtk",
+       "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+       "POINTS 4 double\n0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1000000000 5\n"
+       "4 0 1 2 3\nCELL_TYPES 1\n10\n",
+       "CELLS"},
+      {"cells_bin.vtk",
+       "# vtk DataFile Version 3.0\nx\nBINARY\nDATASET UNSTRUCTURED_GRID\n"
+       "CELLS 2000000000 5\n\0\0\0\4\0\0\0\0\0\0\0\1\0\0\0\2\0\0\0\3\n",
+       "CELLS"},
+      {"points.vtk",
+       "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+       "POINTS 3000000000 double\n0 0 0\n",
+       "POINTS"},
+      {"points.vtu",
+       "<VTKFile type=\"UnstructuredGrid\"><UnstructuredGrid><Piece "
+       "NumberOfPoints=\"1000000000\" NumberOfCells=\"1000000000\">"
+       "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" "
+       "format=\"ascii\">0 0 0</DataArray></Points></Piece>"
+       "</UnstructuredGrid></VTKFile>\n",
+       "Points"},
+      {"nodes.msh",
+       "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 2000000000 1 "
+       "2000000000\n3 1 0 2000000000\n1\n0 0 0\n$EndNodes\n",
+       "$Nodes"},
+      {"elements.msh",
+       "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 1 1 1\n3 1 0 1\n1\n"
+       "0 0 0\n$EndNodes\n$Elements\n1 1000000000 1 1000000000\n"
+       "3 1 4 1000000000\n1 1 1 1 1\n$EndElements\n",
+       "$Elements"},
+      {"vertices.mesh",
+       "MeshVersionFormatted 2\nDimension 3\nVertices\n2000000000\n0 0 0 0\n"
+       "End\n",
+       "Vertices"},
+      {"tets.mesh",
+       "MeshVersionFormatted 2\nDimension 3\nVertices\n1\n0 0 0 0\n"
+       "Tetrahedra\n1500000000\n1 1 1 1 0\nEnd\n",
+       "Tetrahedra"},
+  };
+  const size_t lens[] = {0, 165, 0, 0, 0, 0, 0, 0};
+  for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+    const char *p = tpath(cases[k].name);
+    if (lens[k])
+      write_bytes(p, cases[k].text, lens[k]);
+    else
+      write_text(p, cases[k].text);
+    mx_mesh_data m;
+    char *msg;
+    mx_oom_seen = 0;
+    const double t0 = mx_wtime();
+    const int st = read_quietly(p, &m, &msg);
+    const double dt = mx_wtime() - t0;
+    CHECK(st == MX_EINPUT && msg && strstr(msg, cases[k].want));
+    CHECK(!mx_oom_seen && !(msg && strstr(msg, "memory")));
+    CHECK(dt < 1.0);
+    if (st != MX_EINPUT || !msg || !strstr(msg, cases[k].want) || mx_oom_seen)
+      fprintf(stderr, "%s: status %d, %s\n", cases[k].name, st,
+              msg ? msg : "(no message)");
+    CHECK(m.nnodes == 0 && m.ncells == 0 && !m.xyz && !m.conn);
+    free(msg);
+  }
+  /* Binary MSH and Medit with huge counts. */
+  {
+    uint64_t head[4] = {1, 3000000000ull, 1, 3000000000ull};
+    const char *p = tpath("nodes_bin.msh");
+    char b[256];
+    size_t n = 0;
+    const char *h1 = "$MeshFormat\n4.1 1 8\n";
+    memcpy(b, h1, strlen(h1));
+    n += strlen(h1);
+    const int32_t one = 1;
+    memcpy(b + n, &one, 4);
+    n += 4;
+    const char *h2 = "\n$EndMeshFormat\n$Nodes\n";
+    memcpy(b + n, h2, strlen(h2));
+    n += strlen(h2);
+    memcpy(b + n, head, sizeof head);
+    n += sizeof head;
+    memset(b + n, 0, 40);
+    n += 40;
+    write_bytes(p, b, n);
+    mx_mesh_data m;
+    char *msg;
+    mx_oom_seen = 0;
+    CHECK(read_quietly(p, &m, &msg) == MX_EINPUT && !mx_oom_seen);
+    CHECK(msg && strstr(msg, "$Nodes"));
+    free(msg);
+  }
+  {
+    int32_t w[12] = {1, 2, 3, 20, 3, 4, 0, 2000000000, 0, 0, 0, 0};
+    const char *p = tpath("vertices.meshb");
+    write_head_bytes(p, "", w, sizeof w);
+    mx_mesh_data m;
+    char *msg;
+    mx_oom_seen = 0;
+    CHECK(read_quietly(p, &m, &msg) == MX_EINPUT && !mx_oom_seen);
+    CHECK(msg && strstr(msg, "2000000000 lines"));
+    free(msg);
+  }
+}
+
+/* t's cells grouped by type, tetrahedra first (Medit's blocks). */
+static void group_by_type(const tm *t, tm *g) {
+  memset(g, 0, sizeof *g);
+  for (size_t i = 0; i < t->nn; i++)
+    tm_add(g, t->xyz[3 * i], t->xyz[3 * i + 1], t->xyz[3 * i + 2]);
+  for (int ty = 0; ty < 4; ty++)
+    for (size_t c = 0; c < t->nc; c++)
+      if (t->type[c] == ty) tm_cell(g, ty, t->conn + 8 * c);
+}
+
+/* The mixed valid mesh of test_valid, with awkward coordinates of its own
+ * (bit-exact round trips) but still valid. */
+static void mixed_mesh(tm *t) {
+  memset(t, 0, sizeof *t);
+  box_hex(t, 0, 0, 0, 1, 1, 1);
+  box_prisms(t, (const double[3]){1, 0, 0}, (const double[3]){2, 1, 1});
+  box_pyramids(t, (const double[3]){2, 0, 0}, (const double[3]){3, 1, 1});
+  box_tets(t, (const double[3]){5, 0, 0}, (const double[3]){6, 1, 1});
+  for (size_t i = 0; i < 3 * t->nn; i++) t->xyz[i] = t->xyz[i] / 3.0 + 0.1;
+}
+
+static void test_msh_medit(void) {
+  tm t, g, aw, awg;
+  mixed_mesh(&t);
+  group_by_type(&t, &g);
+  awkward_mesh(&aw);
+  group_by_type(&aw, &awg);
+  for (int k = 0; k < 4; k++) {
+    const char *p = tpath(k == 0   ? "m_bin.msh"
+                          : k == 1 ? "m_ascii.msh"
+                          : k == 2 ? "m.meshb"
+                                   : "m.mesh");
+    for (int which = 0; which < 2; which++) {
+      const tm *src = which ? &aw : &t, *want = which ? &awg : &g;
+      if (k < 2) want = src; /* MSH keeps the order through the tags */
+      mx_mesh_data d = tm_data(src);
+      mx_mesh_view v = mx_mesh_data_view(&d);
+      const int st = k < 2 ? mx_write_msh(p, &v, k == 0)
+                           : mx_write_medit(p, &v, k == 2);
+      CHECK(st == MX_OK);
+      mx_mesh_data m;
+      const int rs = mx_read_mesh(p, &m);
+      CHECK(rs == MX_OK);
+      if (rs != MX_OK) continue;
+      if (!same_mesh(want, &m)) fprintf(stderr, "round trip %s %d\n", p, which);
+      CHECK(same_mesh(want, &m));
+      if (!which) { /* the valid one checks OK, with the same volume */
+        mx_check_report r;
+        CHECK(mx_check_mesh(&m, NULL, &r) == MX_OK);
+        CHECK(r.defects == 0 && near(r.volume, 4.0 / 27.0, 1e-14));
+      }
+      mx_mesh_data_free(&m);
+    }
+  }
+  /* A mesh written by mixoct's writers with a defect keeps it. */
+  {
+    tm h = {0};
+    box_hex(&h, 0, 0, 0, 1, 1, 1);
+    box_hex(&h, 1, 0, 0, 2, 1, 1.0 / 3.0);
+    box_hex(&h, 1, 0, 1.0 / 3.0, 2, 1, 1);
+    mx_mesh_data d = tm_data(&h);
+    mx_mesh_view v = mx_mesh_data_view(&d);
+    const char *p = tpath("hang.meshb");
+    CHECK(mx_write_medit(p, &v, 1) == MX_OK);
+    mx_mesh_data m;
+    CHECK(mx_read_mesh(p, &m) == MX_OK);
+    mx_check_report r;
+    CHECK(mx_check_mesh(&m, NULL, &r) == MX_OK);
+    CHECK(r.geometric_hanging_nodes == 2 && r.defects == 2);
+    mx_mesh_data_free(&m);
+    tm_free(&h);
+  }
+  /* Hand-written files: Gmsh's own style (boundary triangles, a point, a
+   * node block on a surface, sparse tags, elements out of tag order) and
+   * Medit with comments and other keywords. */
+  {
+    const char *msh =
+        "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+        "$Entities\n1 0 0 1\n1 0 0 0 0\n1 0 0 0 1 1 1 0 0\n$EndEntities\n"
+        "$Nodes\n2 4 10 40\n"
+        "0 1 0 1\n10\n0 0 0\n"
+        "2 1 1 3\n20\n30\n40\n1 0 0 0.5 0.5\n0 1 0 0.5 0.5\n0 0 1 0.5 0.5\n"
+        "$EndNodes\n"
+        "$Elements\n3 3 1 9\n"
+        "0 1 15 1\n1 10\n"
+        "2 1 2 1\n5 10 30 20\n"
+        "3 1 4 1\n9 10 20 30 40\n"
+        "$EndElements\n$NodeData\n1\n\"x\"\n$EndNodeData\n";
+    const char *p = tpath("gmsh.msh");
+    write_text(p, msh);
+    mx_mesh_data m;
+    CHECK(mx_read_mesh(p, &m) == MX_OK);
+    CHECK(m.nnodes == 4 && m.ncells == 1 && m.type && m.type[0] == MX_TET);
+    if (m.ncells == 1)
+      CHECK(m.conn[0] == 0 && m.conn[1] == 1 && m.conn[2] == 2 &&
+            m.conn[3] == 3);
+    mx_mesh_data_free(&m);
+    const char *med =
+        "# a comment\nMeshVersionFormatted 2\n\nDimension\n3\n"
+        "Vertices\n4\n0 0 0 1\n1 0 0 1\n0 1 0 1\n0 0 1 1 # the apex\n"
+        "Corners\n1\n1\nTriangles\n1\n1 3 2 7\n"
+        "Tetrahedra\n1\n1 2 3 4 0\nNormals\n1\n0 0 1\nEnd\n";
+    p = tpath("hand.mesh");
+    write_text(p, med);
+    CHECK(mx_read_mesh(p, &m) == MX_OK);
+    CHECK(m.nnodes == 4 && m.ncells == 1 && m.type && m.type[0] == MX_TET);
+    if (m.ncells == 1) {
+      mx_check_report r;
+      CHECK(mx_check_mesh(&m, NULL, &r) == MX_OK && r.defects == 0);
+    }
+    mx_mesh_data_free(&m);
+  }
+  /* Errors name the file and the place. */
+  expect_error("v2.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n",
+               ":2: error: MSH version '2.2' is not supported");
+  expect_error("o2.msh",
+               "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 1 1 1\n"
+               "3 1 0 1\n1\n0 0 0\n$EndNodes\n$Elements\n1 1 1 1\n"
+               "3 1 11 1\n1 1 1 1 1 1 1 1 1 1 1\n$EndElements\n",
+               ":12: error: $Elements block 0: element type 11");
+  expect_error("inf.mesh",
+               "MeshVersionFormatted 2\nDimension 3\nVertices\n1\n0 inf 0 0\n"
+               "End\n",
+               ":5: error: vertex: 'inf' is not a finite number");
+  expect_error("range.mesh",
+               "MeshVersionFormatted 2\nDimension 3\nVertices\n1\n0 0 0 0\n"
+               "Tetrahedra\n1\n1 2 1 1 0\nEnd\n",
+               ": error: element 0: vertex 2 out of range");
+  expect_error("noend.mesh",
+               "MeshVersionFormatted 2\nDimension 3\nVertices\n1\n0 0 0 0\n",
+               ": error: no End");
+  tm_free(&t);
+  tm_free(&g);
+  tm_free(&aw);
+  tm_free(&awg);
+}
+
+/* ====================================================================== */
 /* Determinism, the program, speed                                        */
 /* ====================================================================== */
 
@@ -1129,13 +1752,99 @@ static void test_program(void) {
            "'%s' check '%s' --json | tail -n 1 | python3 -c \"import json, "
            "sys; d = json.loads(sys.stdin.read()); "
            "assert d['defects'] == 10 and d['faces_overshared'] == 1; "
-           "assert set(d) == set('nodes elements by_type invalid jens_min "
-           "jens_mean faces_interior faces_boundary faces_overshared "
-           "faces_misoriented quad_vs_triangles open_boundary_edges nonmanifold_edges "
-           "hanging_nodes unused_nodes duplicate_nodes volume surface_volume "
-           "volume_error boundary_max_dist defects'.split())\"",
+           "assert set(d) == set('nodes elements by_type empty invalid "
+           "degenerate jens_min jens_mean faces_interior faces_boundary "
+           "faces_overshared faces_misoriented quad_vs_triangles "
+           "open_boundary_edges nonmanifold_edges hanging_nodes "
+           "geometric_hanging_nodes unused_nodes duplicate_nodes volume "
+           "surface_volume volume_error boundary_max_dist surface_open_edges "
+           "volume_off boundary_off_surface tolerances defective_elements "
+           "defective_nodes geometric_hanging_at defects'.split()); "
+           "e = d['defective_elements']; "
+           "assert e['faces_overshared'] == [0, 1, 2], e; "
+           "assert e['faces_misoriented'] == [0, 2], e; "
+           "assert e['open_boundary_edges'] == [1], e\"",
            mixoct, bad);
   CHECK(run(cmd) == 0);
+  /* tpath's buffers are reused: keep copies from here on */
+  char offp[256], outp[256], emp[256], hang[256], shortm[256];
+  snprintf(offp, sizeof offp, "%s", tpath("cube.off"));
+  snprintf(outp, sizeof outp, "%s", tpath("out.txt"));
+  snprintf(emp, sizeof emp, "%s", tpath("empty.vtu"));
+  snprintf(hang, sizeof hang, "%s", tpath("hang.msh"));
+  snprintf(shortm, sizeof shortm, "%s", tpath("short.mesh"));
+  off = offp;
+  out = outp;
+  /* Strict JSON (no NaN or Infinity) for an empty mesh: a defect, nulls. */
+  mx_mesh_data empty = {0, 0, NULL, NULL, NULL};
+  mx_mesh_view ev = mx_mesh_data_view(&empty);
+  CHECK(mx_write_vtu(emp, &ev) == MX_OK);
+  static const char strict[] =
+      "python3 -c \"import json, sys; "
+      "bad = lambda c: (_ for _ in ()).throw(ValueError(c)); "
+      "d = json.loads(sys.stdin.read().splitlines()[-1], "
+      "parse_constant=bad); ";
+  snprintf(cmd, sizeof cmd,
+           "'%s' check '%s' --surface '%s' --json > '%s'; test $? = 3 && "
+           "%s assert d['empty'] == 1 and d['volume_off'] == 1; "
+           "assert d['jens_min'] is None and d['volume'] == 0; "
+           "assert d['defects'] == 2\" < '%s'",
+           mixoct, emp, off, out, strict, out);
+  CHECK(run(cmd) == 0);
+  /* A geometric hanging node: ids and where it lies; the text names it. */
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  box_hex(&t, 1, 0, 0, 2, 1, 1.0 / 3.0);
+  box_hex(&t, 1, 0, 1.0 / 3.0, 2, 1, 1);
+  d = tm_data(&t);
+  v = mx_mesh_data_view(&d);
+  CHECK(mx_write_msh(hang, &v, 0) == MX_OK);
+  tm_free(&t);
+  snprintf(cmd, sizeof cmd,
+           "'%s' check '%s' --json > '%s'; test $? = 3 && "
+           "%s assert d['geometric_hanging_nodes'] == 2, d; "
+           "assert d['defective_elements']['geometric_hanging_nodes'] == [0]; "
+           "h = d['geometric_hanging_at']; "
+           "assert len(h) == 2 and h[0]['on'] == 'edge', h; "
+           "assert h[0]['element'] == 0 and len(h[0]['nodes_of']) == 2, h; "
+           "assert abs(h[0]['xyz'][2] - 1 / 3) < 1e-15, h\" < '%s'",
+           mixoct, hang, out, strict, out);
+  CHECK(run(cmd) == 0);
+  snprintf(cmd, sizeof cmd, "'%s' check '%s' > '%s' 2>&1", mixoct, hang,
+           out);
+  CHECK(run(cmd) == 3);
+  txt = slurp(out, &n);
+  CHECK(txt && strstr(txt, "geometric hanging nodes  2   <-- defect") &&
+        strstr(txt, " on the edge ") && strstr(txt, "2 defects"));
+  free(txt);
+  /* --volume-tol: a mesh 10 %% short of the cube. */
+  grid_hexes(&t, 2, 0.5, -1);
+  for (size_t i = 0; i < t.nn; i++) t.xyz[3 * i + 2] *= 0.9;
+  d = tm_data(&t);
+  v = mx_mesh_data_view(&d);
+  CHECK(mx_write_medit(shortm, &v, 0) == MX_OK);
+  tm_free(&t);
+  snprintf(cmd, sizeof cmd, "'%s' check '%s' --surface '%s' --volume-tol 0.05 > '%s' 2>&1",
+           mixoct, shortm, off, out);
+  CHECK(run(cmd) == 3);
+  txt = slurp(out, &n);
+  if (!txt || !strstr(txt, "volume off               1   <-- defect   "
+                           "(|volume error| > 0.05)"))
+    fprintf(stderr, "check of %s: %s\n", shortm, txt ? txt : "(nothing)");
+  CHECK(txt && strstr(txt, "volume off               1   <-- defect   "
+                           "(|volume error| > 0.05)"));
+  free(txt);
+  snprintf(cmd, sizeof cmd,
+           "'%s' check '%s' --surface '%s' --volume-tol 0.2 --dist-tol 0.1 "
+           "> '%s' 2>&1",
+           mixoct, shortm, off, out);
+  CHECK(run(cmd) == 0);
+  txt = slurp(out, &n);
+  CHECK(txt && strstr(txt, "OK, no defect") &&
+        strstr(txt, "(|volume error| > 0.2)"));
+  free(txt);
+  snprintf(cmd, sizeof cmd, "'%s' check '%s' --volume-tol x > /dev/null 2>&1",
+           mixoct, shortm);
+  CHECK(run(cmd) == 2);
 }
 
 /* Reading and checking an n^3 hexahedral grid written as VTU. */
@@ -1186,6 +1895,12 @@ int main(int argc, char **argv) {
   test_formats();
   test_damage();
   test_surface();
+  test_geometric_hanging();
+  test_degenerate();
+  test_extreme_coordinates();
+  test_volume();
+  test_huge_counts();
+  test_msh_medit();
   test_threads();
   test_program();
   if (!small_only) test_speed(100);

@@ -1,14 +1,22 @@
-/* `mixoct check MESH [--surface FILE] [--json] [--quiet]`: reads a volume
- * mesh (legacy VTK or VTU) and, optionally, the surface it should fill, runs
- * the independent checker (kernels/check.h) and reports.
+/* `mixoct check MESH [--surface FILE] [--volume-tol X] [--dist-tol X]
+ * [--threads N] [--json] [--quiet]`:
+ * reads a volume mesh (legacy VTK, VTU, Gmsh MSH 4.1, Medit .mesh/.meshb)
+ * and, optionally, the surface it should fill, runs the independent checker
+ * (kernels/check.h) and reports.
  *
- * Output: a readable report, or with --json one JSON object on the last
- * stdout line (non-finite numbers are null); --quiet prints nothing but
- * errors (and the JSON object when --json is given) and silences warnings.
+ * Output: a readable report -- one line per kind of defect with its
+ * criterion, followed for a kind that occurs by the first element or node
+ * ids (0-based) and, for geometric hanging nodes, where the first ones lie
+ * -- or with --json one JSON object on the last stdout line (non-finite
+ * numbers are null; the ids per kind in "defective_elements" and
+ * "defective_nodes"); --quiet prints nothing but errors (and the JSON object
+ * when --json is given) and silences warnings.
  * Exit codes: 0 no defect, 3 defects found, 2 bad input or usage (the
  * message names the file), 1 internal failure. */
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli/cli.h"
@@ -21,15 +29,28 @@ enum { EXIT_DEFECTS = 3, EXIT_USAGE = 2 };
 
 static void usage(FILE *f) {
   fprintf(f,
-          "usage: mixoct check MESH [--surface FILE] [--json] [--quiet]\n"
-          "  MESH            legacy VTK (.vtk, ASCII or binary) or VTU mesh\n"
-          "  --surface FILE  the closed surface the mesh should fill (.off,\n"
-          "                  .stl, .obj, .mdl): volume error and distance of\n"
-          "                  the boundary nodes to it\n"
-          "  --json          one JSON object on the last line of stdout\n"
-          "  --quiet         no report (errors only; JSON if --json)\n"
+          "usage: mixoct check MESH [--surface FILE] [--volume-tol X] "
+          "[--dist-tol X]\n"
+          "                    [--threads N] [--json] [--quiet]\n"
+          "  MESH              legacy VTK (.vtk, ASCII or binary), VTU, Gmsh\n"
+          "                    MSH 4.1 (ASCII or binary) or Medit (.mesh,\n"
+          "                    .meshb) volume mesh (recognised by content)\n"
+          "  --surface FILE    the closed surface the mesh should fill (.off,\n"
+          "                    .stl, .obj, .mdl, .ply): volume error and\n"
+          "                    distance of the boundary nodes to it\n"
+          "  --volume-tol X    largest |volume error| accepted with --surface\n"
+          "                    (relative; default: half a layer of elements\n"
+          "                    along the surface, 0.5 A h / V, 0.05 at least)\n"
+          "  --dist-tol X      largest boundary distance accepted with\n"
+          "                    --surface (relative to the surface's bounding\n"
+          "                    box diagonal, default 1e-6)\n"
+          "  --threads N       OpenMP threads (default: all)\n"
+          "  --json            one JSON object on the last line of stdout\n"
+          "  --quiet           no report (errors only; JSON if --json)\n"
           "exit: 0 no defect, 3 defects found, 2 bad input or usage\n");
 }
+
+/* ---- JSON ---------------------------------------------------------------- */
 
 static void json_num(const char *key, double v, int last) {
   if (isfinite(v))
@@ -38,38 +59,99 @@ static void json_num(const char *key, double v, int last) {
     printf("\"%s\":null%s", key, last ? "" : ",");
 }
 
+static void json_val(double v) {
+  if (isfinite(v))
+    printf("%.17g", v);
+  else
+    printf("null");
+}
+
+static void json_ids(const char *key, const mx_check_ids *l, int last) {
+  printf("\"%s\":[", key);
+  for (uint32_t i = 0; i < l->n; i++) printf(i ? ",%u" : "%u", l->id[i]);
+  printf("]%s", last ? "" : ",");
+}
+
+static const char *const on_word[4] = {"?", "vertex", "edge", "face"};
+
 static void print_json(const mx_check_report *r) {
   printf("{\"nodes\":%zu,\"elements\":%zu,", r->nodes, r->elements);
   printf("\"by_type\":{\"hex\":%zu,\"prism\":%zu,\"pyramid\":%zu,\"tet\":%zu},",
          r->by_type[MX_HEX], r->by_type[MX_PRISM], r->by_type[MX_PYRAMID],
          r->by_type[MX_TET]);
-  printf("\"invalid\":%zu,", r->invalid);
+  printf("\"empty\":%zu,\"invalid\":%zu,\"degenerate\":%zu,", r->empty,
+         r->invalid, r->degenerate);
   json_num("jens_min", r->jens_min, 0);
   json_num("jens_mean", r->jens_mean, 0);
   printf("\"faces_interior\":%zu,\"faces_boundary\":%zu,"
          "\"faces_overshared\":%zu,\"faces_misoriented\":%zu,"
          "\"quad_vs_triangles\":%zu,\"open_boundary_edges\":%zu,"
          "\"nonmanifold_edges\":%zu,"
-         "\"hanging_nodes\":%zu,\"unused_nodes\":%zu,"
-         "\"duplicate_nodes\":%zu,",
+         "\"hanging_nodes\":%zu,\"geometric_hanging_nodes\":%zu,"
+         "\"unused_nodes\":%zu,\"duplicate_nodes\":%zu,",
          r->faces_interior, r->faces_boundary, r->faces_overshared,
          r->faces_misoriented, r->quad_vs_triangles, r->open_boundary_edges,
-         r->nonmanifold_edges, r->hanging_nodes, r->unused_nodes,
-         r->duplicate_nodes);
+         r->nonmanifold_edges, r->hanging_nodes, r->geometric_hanging_nodes,
+         r->unused_nodes, r->duplicate_nodes);
   json_num("volume", r->volume, 0);
   json_num("surface_volume", r->surface_volume, 0);
   json_num("volume_error", r->volume_error, 0);
   json_num("boundary_max_dist", r->boundary_max_dist, 0);
-  printf("\"defects\":%zu}\n", r->defects);
+  if (r->has_surface)
+    printf("\"surface_open_edges\":%zu,", r->surface_open_edges);
+  else
+    printf("\"surface_open_edges\":null,");
+  printf("\"volume_off\":%zu,\"boundary_off_surface\":%zu,", r->volume_off,
+         r->boundary_off_surface);
+  printf("\"tolerances\":{");
+  json_num("degenerate_jens", r->opt.degenerate_below, 0);
+  json_num("hanging", r->opt.hang_tol, 0);
+  json_num("volume", r->opt.volume_tol, 0);
+  json_num("boundary_dist", r->opt.boundary_tol, 1);
+  printf("},\"defective_elements\":{");
+  for (int k = 0; k < MX_CK_ELEM_KINDS; k++)
+    json_ids(mx_check_elem_kind_name[k], &r->elem_ids[k],
+             k == MX_CK_ELEM_KINDS - 1);
+  printf("},\"defective_nodes\":{");
+  for (int k = 0; k < MX_CK_NODE_KINDS; k++)
+    json_ids(mx_check_node_kind_name[k], &r->node_ids[k],
+             k == MX_CK_NODE_KINDS - 1);
+  printf("},\"geometric_hanging_at\":[");
+  for (size_t i = 0; i < r->nshown; i++) {
+    const mx_check_hang *h = &r->hang_at[i];
+    printf("%s{\"node\":%u,\"xyz\":[", i ? "," : "", h->node);
+    for (int a = 0; a < 3; a++) {
+      if (a) printf(",");
+      json_val(h->xyz[a]);
+    }
+    printf("],\"element\":%u,\"on\":\"%s\",\"nodes_of\":[", h->element,
+           on_word[h->on & 3]);
+    for (int k = 0; k < h->nverts; k++)
+      printf(k ? ",%u" : "%u", h->verts[k]);
+    printf("]}");
+  }
+  printf("],\"defects\":%zu}\n", r->defects);
 }
 
-static void defect_line(const char *what, size_t n) {
-  printf("    %-22s %zu%s\n", what, n, n ? "   <-- defect" : "");
+/* ---- text ---------------------------------------------------------------- */
+
+static void defect_line(const char *what, size_t n, const char *why) {
+  printf("    %-24s %zu%s%s%s\n", what, n, n ? "   <-- defect" : "",
+         why ? "   " : "", why ? why : "");
+}
+
+static void id_line(const char *what, const mx_check_ids *l, size_t total) {
+  if (l->n == 0) return;
+  printf("      %s:", what);
+  for (uint32_t i = 0; i < l->n; i++) printf(" %u", l->id[i]);
+  if (l->n == MX_CHECK_LIST && total > l->n) printf(" ...");
+  printf("\n");
 }
 
 static void print_report(const char *mesh, const char *surf,
                          const mx_check_report *r, double t_read,
                          double t_check) {
+  char why[160];
   printf("mixoct check %s\n", mesh);
   printf("  nodes                  %zu\n", r->nodes);
   printf("  elements               %zu (hex %zu, prism %zu, pyramid %zu, "
@@ -81,25 +163,84 @@ static void print_report(const char *mesh, const char *surf,
   printf("  faces                  %zu interior, %zu boundary\n",
          r->faces_interior, r->faces_boundary);
   printf("  volume                 %.15g\n", r->volume);
+  const int closed = r->has_surface && r->surface_open_edges == 0;
   if (surf) {
     printf("  surface                %s\n", surf);
     printf("  surface volume         %.15g\n", r->surface_volume);
-    printf("  volume error           %.3e\n", r->volume_error);
+    if (closed)
+      printf("  surface open edges     0 (closed)\n");
+    else
+      printf("  surface open edges     %zu (not closed: the volume error and "
+             "distance are indicative, not defects)\n",
+             r->surface_open_edges);
+    printf("  volume error           %.3e (tolerance %.3g%s)\n", r->volume_error,
+           r->opt.volume_tol,
+           r->opt.volume_tol_auto ? ": half a layer of elements along the surface, 5% at "
+                                    "least; --volume-tol X to set it" : "");
     printf("  boundary max distance  %.3e of the surface's bounding box "
-           "diagonal\n",
-           r->boundary_max_dist);
+           "diagonal (tolerance %g)\n",
+           r->boundary_max_dist, r->opt.boundary_tol);
   }
   printf("  non-manifold edges     %zu (parts of the domain touching along an "
          "edge; not a defect)\n", r->nonmanifold_edges);
   printf("  defects\n");
-  defect_line("invalid elements", r->invalid);
-  defect_line("overshared faces", r->faces_overshared);
-  defect_line("misoriented faces", r->faces_misoriented);
-  defect_line("quad vs triangles", r->quad_vs_triangles);
-  defect_line("open boundary edges", r->open_boundary_edges);
-  defect_line("hanging nodes", r->hanging_nodes);
-  defect_line("unused nodes", r->unused_nodes);
-  defect_line("duplicate nodes", r->duplicate_nodes);
+  const mx_check_ids *E = r->elem_ids, *N = r->node_ids;
+  defect_line("empty mesh", r->empty, "(no element or no node)");
+  defect_line("invalid elements", r->invalid, "(J_ENS <= 0 or not a number)");
+  id_line("elements", &E[MX_CK_INVALID], r->invalid);
+  snprintf(why, sizeof why, "(0 < J_ENS < %g: collinear or coplanar nodes)",
+           r->opt.degenerate_below);
+  defect_line("degenerate elements", r->degenerate, why);
+  id_line("elements", &E[MX_CK_DEGENERATE], r->degenerate);
+  defect_line("overshared faces", r->faces_overshared,
+              "(used by 3 or more elements)");
+  id_line("elements", &E[MX_CK_OVERSHARED], SIZE_MAX);
+  defect_line("misoriented faces", r->faces_misoriented, NULL);
+  id_line("elements", &E[MX_CK_MISORIENTED], SIZE_MAX);
+  defect_line("quad vs triangles", r->quad_vs_triangles, NULL);
+  id_line("elements", &E[MX_CK_QUAD_TRI], SIZE_MAX);
+  defect_line("open boundary edges", r->open_boundary_edges, NULL);
+  id_line("elements", &E[MX_CK_OPEN_EDGE], SIZE_MAX);
+  defect_line("hanging nodes", r->hanging_nodes,
+              "(exactly at an edge midpoint or quad centre)");
+  id_line("nodes", &N[MX_CK_N_HANGING], r->hanging_nodes);
+  id_line("on elements", &E[MX_CK_HANGING], SIZE_MAX);
+  snprintf(why, sizeof why,
+           "(on a face, edge or vertex of another element, within %g of "
+           "its size)",
+           r->opt.hang_tol);
+  defect_line("geometric hanging nodes", r->geometric_hanging_nodes, why);
+  id_line("nodes", &N[MX_CK_N_GEOM_HANGING], r->geometric_hanging_nodes);
+  id_line("on elements", &E[MX_CK_GEOM_HANGING], SIZE_MAX);
+  for (size_t i = 0; i < r->nshown; i++) {
+    const mx_check_hang *h = &r->hang_at[i];
+    printf("      node %u at (%.17g, %.17g, %.17g) on the %s", h->node,
+           h->xyz[0], h->xyz[1], h->xyz[2], on_word[h->on & 3]);
+    for (int k = 0; k < h->nverts; k++)
+      printf("%s%u", k ? "-" : " ", h->verts[k]);
+    printf(" of element %u\n", h->element);
+  }
+  defect_line("unused nodes", r->unused_nodes, NULL);
+  id_line("nodes", &N[MX_CK_N_UNUSED], r->unused_nodes);
+  defect_line("duplicate nodes", r->duplicate_nodes,
+              "(same coordinates as a node with a smaller id)");
+  id_line("nodes", &N[MX_CK_N_DUPLICATE], r->duplicate_nodes);
+  if (surf) {
+    if (closed) {
+      snprintf(why, sizeof why, "(|volume error| > %g)", r->opt.volume_tol);
+      defect_line("volume off", r->volume_off, why);
+      snprintf(why, sizeof why,
+               "(boundary nodes farther than %g of the diagonal)",
+               r->opt.boundary_tol);
+      defect_line("boundary off the surface", r->boundary_off_surface, why);
+      id_line("nodes", &N[MX_CK_N_OFF_SURFACE], r->boundary_off_surface);
+    } else {
+      printf("    %-24s -   (the surface is not closed: not checked)\n",
+             "volume off");
+      printf("    %-24s -   (the surface is not closed: not checked)\n",
+             "boundary off the surface");
+    }
+  }
   if (r->defects)
     printf("  result                 %zu defect%s\n", r->defects,
            r->defects == 1 ? "" : "s");
@@ -109,9 +250,24 @@ static void print_report(const char *mesh, const char *surf,
          t_check);
 }
 
+/* A number option's value: finite and >= 0. */
+static int number_arg(const char *opt, const char *v, double *out) {
+  char *end;
+  const double x = v ? strtod(v, &end) : NAN;
+  if (!v || end == v || *end || !isfinite(x) || x < 0.0) {
+    mx_error(NULL, 0, "check: %s needs a number >= 0%s%s%s", opt,
+             v ? " (not '" : "", v ? v : "", v ? "')" : "");
+    return MX_EINPUT;
+  }
+  *out = x;
+  return MX_OK;
+}
+
 int mx_check_main(int argc, char **argv) {
   const char *mesh = NULL, *surf = NULL;
   int json = 0, quiet = 0;
+  mx_check_options opt;
+  mx_check_defaults(&opt);
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
     if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -129,6 +285,26 @@ int mx_check_main(int argc, char **argv) {
       surf = argv[++i];
     } else if (!strncmp(a, "--surface=", 10)) {
       surf = a + 10;
+    } else if (!strcmp(a, "--volume-tol") || !strcmp(a, "--dist-tol")) {
+      double *dst = a[2] == 'v' ? &opt.volume_tol : &opt.boundary_tol;
+      if (number_arg(a, i + 1 < argc ? argv[i + 1] : NULL, dst) != MX_OK)
+        return EXIT_USAGE;
+      i++;
+    } else if (!strncmp(a, "--volume-tol=", 13)) {
+      if (number_arg("--volume-tol", a + 13, &opt.volume_tol) != MX_OK)
+        return EXIT_USAGE;
+    } else if (!strncmp(a, "--dist-tol=", 11)) {
+      if (number_arg("--dist-tol", a + 11, &opt.boundary_tol) != MX_OK)
+        return EXIT_USAGE;
+    } else if (!strcmp(a, "--threads")) {
+      char *end = NULL;
+      const long n = i + 1 < argc ? strtol(argv[i + 1], &end, 10) : 0;
+      if (i + 1 >= argc || end == argv[i + 1] || *end || n < 1 || n > 4096) {
+        mx_error(NULL, 0, "check: --threads needs a whole number >= 1");
+        return EXIT_USAGE;
+      }
+      omp_set_num_threads((int)n);
+      i++;
     } else if (a[0] == '-' && a[1]) {
       mx_error(NULL, 0, "check: unknown option '%s'", a);
       usage(stderr);
@@ -158,7 +334,7 @@ int mx_check_main(int argc, char **argv) {
   }
   const double t1 = mx_wtime();
   mx_check_report r;
-  if (st == MX_OK) st = mx_check_mesh(&m, surf ? &s : NULL, &r);
+  if (st == MX_OK) st = mx_check_mesh_opt(&m, surf ? &s : NULL, &opt, &r);
   const double t2 = mx_wtime();
   mx_mesh_data_free(&m);
   mx_trisoup_free(&s);

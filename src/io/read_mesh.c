@@ -1,6 +1,10 @@
-/* mixoct: reading legacy VTK and VTU unstructured grids (see read_mesh.h).
+/* mixoct: reading legacy VTK and VTU unstructured grids, Gmsh MSH 4.1 and
+ * Medit .mesh / .meshb (see read_mesh.h).
  *
- * The file is mapped (or loaded) whole. Both formats are first cut into "parts" that
+ * The file is mapped (or loaded) whole. MSH and Medit are read in one pass
+ * with a cursor (text tokens, or binary values after a bounds check);
+ * every count is checked against the bytes left before anything is
+ * allocated for it. The VTK formats are first cut into "parts" that
  * point into the buffer (or into temporaries holding parsed ASCII values):
  * the points, the cells either as a count-prefixed list (legacy) or as
  * offsets + connectivity (VTU, legacy 5.x), and the cell types. One
@@ -21,6 +25,7 @@
 
 #include "common.h"
 #include "io/text_scan.h"
+#include "soa/scan.h"
 
 #define HOST_LE (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__)
 
@@ -522,6 +527,9 @@ static int leg_cell_list(legacy *L, size_t size) {
     return fail(r, L->p,
                 "CELLS: %zu values announced but the file is too short "
                 "(truncated file or wrong count)",
+                size);
+  if (nc > size / 2) /* each cell takes its count and at least one node */
+    return fail(r, L->p, "CELLS: %zu cells cannot fit in %zu values", nc,
                 size);
   L->out->conn = mx_calloc(8 * nc * sizeof(uint32_t));
   L->P.nn = rd_alloc(r, nc);
@@ -1064,6 +1072,842 @@ static int read_vtu(rd *r, mx_mesh_data *out) {
   return assemble(r, &P, out);
 }
 
+/* ---- text tokens and binary cursors (MSH, Medit) --------------------------
+ *
+ * Text: blank-separated tokens of the NUL-terminated buffer, parsed with the
+ * shared scanners; a Medit comment ('#' to the end of the line) is a blank
+ * when comments is set. Binary: a cursor p and the bytes left before end,
+ * checked before every read. */
+
+typedef struct {
+  rd *r;
+  const char *p;
+  int comments; /* '#' starts a comment (Medit) */
+  int swap;     /* binary: byte-swap */
+} cur;
+
+static const char *cur_skip(cur *c) {
+  const char *p = c->p, *end = c->r->end;
+  for (;;) {
+    p = skip_ws(p, end);
+    if (!c->comments || p >= end || *p != '#') break;
+    const char *nl = memchr(p, '\n', (size_t)(end - p));
+    p = nl ? nl + 1 : end;
+  }
+  c->p = p;
+  return p;
+}
+
+/* The next token (length in *n, 0 at the end or at a NUL byte). */
+static const char *cur_tok(cur *c, size_t *n) {
+  const char *t = cur_skip(c);
+  *n = tok_len(t, c->r->end);
+  c->p = t + *n;
+  return t;
+}
+
+static size_t cur_left(const cur *c) { return (size_t)(c->r->end - c->p); }
+
+static int cur_int(cur *c, int64_t *v, const char *what) {
+  size_t n;
+  const char *t = cur_tok(c, &n);
+  if (n == 0)
+    return fail(c->r, t, "%s: unexpected end of file (truncated file or "
+                "wrong count)", what);
+  const char *e = mx_io_int(t, v);
+  if (!e || e != t + n)
+    return fail(c->r, t, "%s: '%.*s' is not an integer", what, shown(n), t);
+  return MX_OK;
+}
+
+/* A count or tag: an integer >= 0 (>= 1 when positive). */
+static int cur_count(cur *c, uint64_t *v, int positive, const char *what) {
+  const char *at = cur_skip(c);
+  int64_t x = 0;
+  MX_CHECK(cur_int(c, &x, what));
+  if (x < positive)
+    return fail(c->r, at, "%s: %lld is out of range", what, (long long)x);
+  *v = (uint64_t)x;
+  return MX_OK;
+}
+
+static int cur_real(cur *c, double *v, const char *what) {
+  size_t n;
+  const char *t = cur_tok(c, &n);
+  if (n == 0)
+    return fail(c->r, t, "%s: unexpected end of file (truncated file or "
+                "wrong count)", what);
+  const char *e = mx_io_double(t, v);
+  if (!e || e != t + n)
+    return fail(c->r, t, "%s: '%.*s' is not a number", what, shown(n), t);
+  if (!isfinite(*v))
+    return fail(c->r, t, "%s: '%.*s' is not a finite number", what, shown(n),
+                t);
+  return MX_OK;
+}
+
+/* n bytes must be left; a message names what is short. */
+static int cur_need(cur *c, uint64_t n, const char *what) {
+  if (n > cur_left(c))
+    return fail(c->r, c->p,
+                "%s: %llu bytes needed but only %zu are left (truncated file "
+                "or wrong count)",
+                what, (unsigned long long)n, cur_left(c));
+  return MX_OK;
+}
+
+static uint64_t bin_u(cur *c, int size) { /* bounds checked by the caller */
+  const uint64_t v = load_bits((const unsigned char *)c->p, size, c->swap);
+  c->p += size;
+  return v;
+}
+
+static double bin_real(cur *c, int size) {
+  const uint64_t b = bin_u(c, size);
+  if (size == 4) {
+    const uint32_t b4 = (uint32_t)b;
+    float f;
+    memcpy(&f, &b4, 4);
+    return f;
+  }
+  double d;
+  memcpy(&d, &b, 8);
+  return d;
+}
+
+/* Grows the cells of out by n (n already checked against the file size). */
+static int grow_cells(rd *r, mx_mesh_data *out, size_t n) {
+  const size_t nc = out->ncells + n;
+  if (nc > UINT32_MAX / 6)
+    return fail(r, NULL, "more than %u volume elements", UINT32_MAX / 6);
+  uint8_t *t = mx_realloc(out->type, nc + 1);
+  if (!t) return MX_EINPUT;
+  out->type = t;
+  uint32_t *cn = mx_realloc(out->conn, (8 * nc + 1) * sizeof *cn);
+  if (!cn) return MX_EINPUT;
+  out->conn = cn;
+  memset(out->conn + 8 * out->ncells, 0, 8 * n * sizeof *cn);
+  return MX_OK;
+}
+
+/* ---- Gmsh MSH 4.1 ---------------------------------------------------------
+ *
+ * $MeshFormat "4.1 0|1 8" (binary: then the int 1 in the writer's byte
+ * order, which tells a swapped file), $Nodes and $Elements are read; every
+ * other section ($PhysicalNames, $Entities, $NodeData...) is skipped up to
+ * its $End line. Nodes come in blocks: dim tag parametric n, n tags, then n
+ * coordinate lines (x y z, + dim parametric values when parametric);
+ * elements in blocks: dim tag type n, then n lines "tag node-tags...".
+ * Binary files use size_t (the data size of the format line, 4 or 8 bytes)
+ * for counts and tags, int for dimensions, entity tags and types, doubles
+ * for coordinates. Tetrahedra (type 4), hexahedra (5), prisms (6) and
+ * pyramids (7) are kept, in the order of their tags (mixoct writes tag =
+ * index + 1); points, lines, triangles and quadrangles (boundary elements)
+ * are skipped; any other type is refused. Node orders are Gmsh's, which are
+ * mixoct's (soa/mesh.h). Node tags are mapped to indices by a direct table
+ * when they are dense, else by a sorted one. */
+
+enum { MSH_TYPES = 32 };
+/* nodes per Gmsh element type (0: unknown) */
+static const int8_t msh_type_nodes[MSH_TYPES] = {
+    0, 2, 3, 4, 4, 8, 6, 5, 3, 6, 9, 10, 27, 18, 14, 1,
+    8, 20, 15, 13, 9, 10, 12, 15, 15, 21, 4, 5, 6, 20, 35, 56};
+
+static int msh_volume_type(int64_t t) {
+  switch (t) {
+    case 4: return MX_TET;
+    case 5: return MX_HEX;
+    case 6: return MX_PRISM;
+    case 7: return MX_PYRAMID;
+    default: return -1;
+  }
+}
+
+typedef struct {
+  cur c;
+  int binary, dsize;
+  int have_nodes;
+  size_t nnodes;
+  uint64_t *ntag;   /* nnodes: tag of each node */
+  uint64_t tmin, tmax;
+  uint32_t *dense;  /* tag - tmin -> index + 1 (0: none), or NULL */
+  uint64_t *sorted; /* or: tags sorted, with */
+  uint32_t *sidx;   /* their indices */
+  uint64_t *etag;   /* per volume element */
+  mx_mesh_data *out;
+} msh;
+
+/* Where the next value starts, for messages (text: after the blanks;
+ * binary: here, blanks are data). */
+static const char *msh_at(msh *M) {
+  return M->binary ? M->c.p : cur_skip(&M->c);
+}
+
+static void msh_free(msh *M) {
+  mx_free(M->ntag);
+  mx_free(M->dense);
+  mx_free(M->sorted);
+  mx_free(M->sidx);
+  mx_free(M->etag);
+}
+
+/* A size_t (binary) or a count (text). */
+static int msh_size(msh *M, uint64_t *v, const char *what) {
+  if (!M->binary) return cur_count(&M->c, v, 0, what);
+  MX_CHECK(cur_need(&M->c, (uint64_t)M->dsize, what));
+  *v = bin_u(&M->c, M->dsize);
+  return MX_OK;
+}
+
+/* An int (binary) or an integer (text). */
+static int msh_int(msh *M, int64_t *v, const char *what) {
+  if (!M->binary) return cur_int(&M->c, v, what);
+  MX_CHECK(cur_need(&M->c, 4, what));
+  *v = (int32_t)(uint32_t)bin_u(&M->c, 4);
+  return MX_OK;
+}
+
+/* The line "$End<name>" after a section (text and binary: the binary data
+ * is followed by a newline). */
+static int msh_end(msh *M, const char *name) {
+  size_t n;
+  const char *t = cur_tok(&M->c, &n);
+  char want[64];
+  snprintf(want, sizeof want, "$End%s", name);
+  if (n != strlen(want) || memcmp(t, want, n) != 0)
+    return fail(M->c.r, t, "expected %s, found '%.*s' (wrong count?)", want,
+                shown(n), t);
+  return MX_OK;
+}
+
+static int msh_format(msh *M) {
+  rd *r = M->c.r;
+  size_t n;
+  const char *t = cur_tok(&M->c, &n);
+  if (!tok_eq(t, n, "4.1"))
+    return fail(r, t,
+                "MSH version '%.*s' is not supported (4.1 only: gmsh "
+                "-format msh41)",
+                shown(n), t);
+  int64_t ft = 0, ds = 0;
+  MX_CHECK(cur_int(&M->c, &ft, "$MeshFormat file type"));
+  MX_CHECK(cur_int(&M->c, &ds, "$MeshFormat data size"));
+  if (ft != 0 && ft != 1)
+    return fail(r, t, "$MeshFormat: file type %lld (0 ASCII, 1 binary)",
+                (long long)ft);
+  if (ds != 4 && ds != 8)
+    return fail(r, t, "$MeshFormat: data size %lld (4 or 8)", (long long)ds);
+  M->binary = ft == 1;
+  M->dsize = (int)ds;
+  if (M->binary) {
+    const char *p = M->c.p, *end = r->end;
+    while (p < end && (*p == ' ' || *p == '\r' || *p == '\t')) p++;
+    if (p >= end || *p != '\n')
+      return fail(r, p, "$MeshFormat: expected the end of the line");
+    M->c.p = p + 1;
+    r->bin_from = M->c.p;
+    MX_CHECK(cur_need(&M->c, 4, "$MeshFormat: the binary one"));
+    const uint32_t one = (uint32_t)bin_u(&M->c, 4);
+    if (one == 1)
+      M->c.swap = 0;
+    else if (one == 0x01000000u)
+      M->c.swap = 1;
+    else
+      return fail(r, M->c.p - 4,
+                  "$MeshFormat: the binary 1 reads as %u (not a binary MSH "
+                  "file?)",
+                  one);
+  }
+  return msh_end(M, "MeshFormat");
+}
+
+static int msh_nodes(msh *M) {
+  rd *r = M->c.r;
+  if (M->have_nodes) return fail(r, M->c.p, "$Nodes given twice");
+  M->have_nodes = 1;
+  uint64_t nb = 0, nn = 0, tmin = 0, tmax = 0;
+  const char *at = msh_at(M);
+  MX_CHECK(msh_size(M, &nb, "$Nodes: number of blocks"));
+  MX_CHECK(msh_size(M, &nn, "$Nodes: number of nodes"));
+  MX_CHECK(msh_size(M, &tmin, "$Nodes: smallest tag"));
+  MX_CHECK(msh_size(M, &tmax, "$Nodes: largest tag"));
+  /* a node takes at least a tag and 3 doubles (binary), "1\n0 0 0\n" */
+  const uint64_t least = M->binary ? (uint64_t)M->dsize + 24 : 8;
+  if (nn >= UINT32_MAX || nn > cur_left(&M->c) / least + 1 ||
+      nb > cur_left(&M->c) / 4 + 1)
+    return fail(r, at,
+                "$Nodes: %llu nodes in %llu blocks announced but the file "
+                "is too short (truncated file or wrong count)",
+                (unsigned long long)nn, (unsigned long long)nb);
+  M->nnodes = (size_t)nn;
+  M->out->nnodes = (size_t)nn;
+  M->out->xyz = mx_alloc((3 * (size_t)nn + 1) * sizeof(double));
+  M->ntag = mx_alloc(((size_t)nn + 1) * sizeof *M->ntag);
+  if (!M->out->xyz || !M->ntag) return MX_EINPUT;
+  size_t done = 0;
+  for (uint64_t b = 0; b < nb; b++) {
+    int64_t dim = 0, etag = 0, par = 0;
+    uint64_t n = 0;
+    at = msh_at(M);
+    MX_CHECK(msh_int(M, &dim, "$Nodes block: entity dimension"));
+    MX_CHECK(msh_int(M, &etag, "$Nodes block: entity tag"));
+    MX_CHECK(msh_int(M, &par, "$Nodes block: parametric"));
+    MX_CHECK(msh_size(M, &n, "$Nodes block: number of nodes"));
+    if (dim < 0 || dim > 3 || (par != 0 && par != 1))
+      return fail(r, at, "$Nodes block %llu: dimension %lld, parametric %lld",
+                  (unsigned long long)b, (long long)dim, (long long)par);
+    if (n > nn - done)
+      return fail(r, at, "$Nodes block %llu: %llu nodes, more than announced",
+                  (unsigned long long)b, (unsigned long long)n);
+    const int ncoord = 3 + (par ? (int)dim : 0);
+    if (M->binary)
+      MX_CHECK(cur_need(&M->c, n * ((uint64_t)M->dsize + 8 * (uint64_t)ncoord),
+                        "$Nodes block"));
+    for (uint64_t i = 0; i < n; i++) {
+      uint64_t tag = 0;
+      if (M->binary)
+        tag = bin_u(&M->c, M->dsize);
+      else
+        MX_CHECK(cur_count(&M->c, &tag, 1, "$Nodes: node tag"));
+      if (tag < tmin || tag > tmax || tag == 0)
+        return fail(r, M->c.p, "node tag %llu outside %llu..%llu",
+                    (unsigned long long)tag, (unsigned long long)tmin,
+                    (unsigned long long)tmax);
+      M->ntag[done + i] = tag;
+    }
+    for (uint64_t i = 0; i < n; i++) {
+      double *q = M->out->xyz + 3 * (done + i);
+      for (int k = 0; k < ncoord; k++) {
+        double v = 0.0;
+        const char *vat = msh_at(M);
+        if (M->binary)
+          v = bin_real(&M->c, 8);
+        else
+          MX_CHECK(cur_real(&M->c, &v, "$Nodes: coordinate"));
+        if (!isfinite(v))
+          return fail(r, vat, "node %zu: coordinate %d is not a finite "
+                      "number", done + (size_t)i, k);
+        if (k < 3) q[k] = v;
+      }
+    }
+    done += (size_t)n;
+  }
+  if (done != nn)
+    return fail(r, M->c.p, "$Nodes: %zu nodes in the blocks, %llu announced",
+                done, (unsigned long long)nn);
+  M->tmin = tmin;
+  M->tmax = tmax;
+  /* the tag map */
+  if (nn > 0 && tmax - tmin < 2 * nn + 1024) {
+    const size_t span = (size_t)(tmax - tmin) + 1;
+    M->dense = mx_calloc(span * sizeof *M->dense);
+    if (!M->dense) return MX_EINPUT;
+    for (size_t i = 0; i < nn; i++) {
+      uint32_t *d = &M->dense[M->ntag[i] - tmin];
+      if (*d)
+        return fail(r, NULL, "node tag %llu appears twice",
+                    (unsigned long long)M->ntag[i]);
+      *d = (uint32_t)i + 1;
+    }
+  } else if (nn > 0) {
+    M->sorted = mx_alloc((size_t)nn * sizeof *M->sorted);
+    M->sidx = mx_alloc((size_t)nn * sizeof *M->sidx);
+    if (!M->sorted || !M->sidx) return MX_EINPUT;
+    for (size_t i = 0; i < nn; i++) {
+      M->sorted[i] = M->ntag[i];
+      M->sidx[i] = (uint32_t)i;
+    }
+    MX_CHECK(mx_sort_u64(M->sorted, M->sidx, (size_t)nn));
+    for (size_t i = 1; i < nn; i++)
+      if (M->sorted[i] == M->sorted[i - 1])
+        return fail(r, NULL, "node tag %llu appears twice",
+                    (unsigned long long)M->sorted[i]);
+  }
+  return msh_end(M, "Nodes");
+}
+
+/* The index of node tag t, or -1. */
+static int64_t msh_node(const msh *M, uint64_t t) {
+  if (t < M->tmin || t > M->tmax || M->nnodes == 0) return -1;
+  if (M->dense) return (int64_t)M->dense[t - M->tmin] - 1;
+  size_t lo = 0, hi = M->nnodes;
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (M->sorted[mid] < t)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo < M->nnodes && M->sorted[lo] == t ? (int64_t)M->sidx[lo] : -1;
+}
+
+static int msh_elements(msh *M) {
+  rd *r = M->c.r;
+  if (!M->have_nodes)
+    return fail(r, M->c.p, "$Elements before $Nodes");
+  if (M->etag) return fail(r, M->c.p, "$Elements given twice");
+  uint64_t nb = 0, ne = 0, tmin = 0, tmax = 0;
+  const char *at = msh_at(M);
+  MX_CHECK(msh_size(M, &nb, "$Elements: number of blocks"));
+  MX_CHECK(msh_size(M, &ne, "$Elements: number of elements"));
+  MX_CHECK(msh_size(M, &tmin, "$Elements: smallest tag"));
+  MX_CHECK(msh_size(M, &tmax, "$Elements: largest tag"));
+  const uint64_t least = M->binary ? 2 * (uint64_t)M->dsize : 4;
+  if (ne > cur_left(&M->c) / least + 1 || nb > cur_left(&M->c) / 4 + 1)
+    return fail(r, at,
+                "$Elements: %llu elements in %llu blocks announced but the "
+                "file is too short (truncated file or wrong count)",
+                (unsigned long long)ne, (unsigned long long)nb);
+  M->etag = mx_alloc(sizeof *M->etag); /* grows with the cells */
+  if (!M->etag) return MX_EINPUT;
+  mx_mesh_data *out = M->out;
+  uint64_t done = 0;
+  for (uint64_t b = 0; b < nb; b++) {
+    int64_t dim = 0, etag = 0, type = 0;
+    uint64_t n = 0;
+    at = msh_at(M);
+    MX_CHECK(msh_int(M, &dim, "$Elements block: entity dimension"));
+    MX_CHECK(msh_int(M, &etag, "$Elements block: entity tag"));
+    MX_CHECK(msh_int(M, &type, "$Elements block: element type"));
+    MX_CHECK(msh_size(M, &n, "$Elements block: number of elements"));
+    if (n > ne - done)
+      return fail(r, at,
+                  "$Elements block %llu: %llu elements, more than announced",
+                  (unsigned long long)b, (unsigned long long)n);
+    const int vt = msh_volume_type(type);
+    const int k = type > 0 && type < MSH_TYPES ? msh_type_nodes[type] : 0;
+    const int skipped = type == 1 || type == 2 || type == 3 || type == 15;
+    if (k == 0 || (vt < 0 && !skipped))
+      return fail(r, at,
+                  "$Elements block %llu: element type %lld is not supported "
+                  "(linear tetrahedra 4, hexahedra 5, prisms 6, pyramids 7; "
+                  "points, lines, triangles and quadrangles are skipped)",
+                  (unsigned long long)b, (long long)type);
+    (void)dim;
+    const uint64_t line_bytes = (uint64_t)(k + 1) * (uint64_t)M->dsize;
+    if (M->binary)
+      MX_CHECK(cur_need(&M->c, n * line_bytes, "$Elements block"));
+    else if (n > cur_left(&M->c) / (2 * (uint64_t)(k + 1)) + 1)
+      return fail(r, at,
+                  "$Elements block %llu: %llu elements announced but the "
+                  "file is too short (truncated file or wrong count)",
+                  (unsigned long long)b, (unsigned long long)n);
+    const size_t c0 = out->ncells;
+    if (vt >= 0) {
+      MX_CHECK(grow_cells(r, out, (size_t)n));
+      uint64_t *et = mx_realloc(M->etag, ((size_t)(c0 + n) + 1) *
+                                             sizeof *M->etag);
+      if (!et) return MX_EINPUT;
+      M->etag = et;
+    }
+    for (uint64_t i = 0; i < n; i++) {
+      uint64_t tag = 0;
+      at = msh_at(M);
+      if (M->binary)
+        tag = bin_u(&M->c, M->dsize);
+      else
+        MX_CHECK(cur_count(&M->c, &tag, 1, "$Elements: element tag"));
+      uint32_t *row = vt >= 0 ? out->conn + 8 * (c0 + (size_t)i) : NULL;
+      for (int j = 0; j < k; j++) {
+        uint64_t t = 0;
+        const char *nat = msh_at(M);
+        if (M->binary)
+          t = bin_u(&M->c, M->dsize);
+        else
+          MX_CHECK(cur_count(&M->c, &t, 1, "$Elements: node tag"));
+        if (!row) continue;
+        const int64_t v = msh_node(M, t);
+        if (v < 0)
+          return fail(r, nat, "element %llu: node tag %llu is not a node",
+                      (unsigned long long)tag, (unsigned long long)t);
+        row[j] = (uint32_t)v;
+      }
+      if (row) {
+        out->type[c0 + (size_t)i] = (uint8_t)vt;
+        M->etag[c0 + (size_t)i] = tag;
+      }
+    }
+    if (vt >= 0) out->ncells = c0 + (size_t)n;
+    done += n;
+  }
+  if (done != ne)
+    return fail(r, M->c.p,
+                "$Elements: %llu elements in the blocks, %llu announced",
+                (unsigned long long)done, (unsigned long long)ne);
+  (void)tmin;
+  (void)tmax;
+  return msh_end(M, "Elements");
+}
+
+/* Volume elements in the order of their tags (unique). */
+static int msh_order(msh *M) {
+  mx_mesh_data *out = M->out;
+  const size_t nc = out->ncells;
+  int sorted = 1;
+  for (size_t c = 1; c < nc && sorted; c++) sorted = M->etag[c - 1] < M->etag[c];
+  if (sorted) return MX_OK;
+  uint64_t *k = mx_alloc((nc + 1) * sizeof *k);
+  uint32_t *idx = mx_alloc((nc + 1) * sizeof *idx);
+  uint8_t *t = mx_alloc(nc + 1);
+  uint32_t *cn = mx_alloc((8 * nc + 1) * sizeof *cn);
+  int st = k && idx && t && cn ? MX_OK : MX_EINPUT;
+  if (st == MX_OK) {
+    for (size_t c = 0; c < nc; c++) {
+      k[c] = M->etag[c];
+      idx[c] = (uint32_t)c;
+    }
+    st = mx_sort_u64(k, idx, nc);
+  }
+  for (size_t c = 1; st == MX_OK && c < nc; c++)
+    if (k[c] == k[c - 1])
+      st = fail(M->c.r, NULL, "element tag %llu appears twice",
+                (unsigned long long)k[c]);
+  if (st == MX_OK) {
+    for (size_t c = 0; c < nc; c++) {
+      t[c] = out->type[idx[c]];
+      memcpy(cn + 8 * c, out->conn + 8 * (size_t)idx[c], 8 * sizeof *cn);
+    }
+    mx_free(out->type);
+    mx_free(out->conn);
+    out->type = t;
+    out->conn = cn;
+    t = NULL;
+    cn = NULL;
+  }
+  mx_free(k);
+  mx_free(idx);
+  mx_free(t);
+  mx_free(cn);
+  return st;
+}
+
+static int read_msh(rd *r, const char *p, mx_mesh_data *out) {
+  msh M;
+  memset(&M, 0, sizeof M);
+  M.c.r = r;
+  M.c.p = p;
+  M.dsize = 8;
+  M.out = out;
+  int st = MX_OK, have_format = 0;
+  for (;;) {
+    size_t n;
+    const char *t = cur_tok(&M.c, &n);
+    if (n == 0) {
+      if (t < r->end)
+        st = fail(r, t, "unexpected NUL byte");
+      break;
+    }
+    if (t[0] != '$') {
+      st = fail(r, t, "expected a section ($Name), found '%.*s'", shown(n),
+                t);
+      break;
+    }
+    if (tok_eq(t, n, "$MeshFormat")) {
+      st = msh_format(&M);
+      have_format = 1;
+    } else if (!have_format) {
+      st = fail(r, t, "expected $MeshFormat first");
+    } else if (tok_eq(t, n, "$Nodes") || tok_eq(t, n, "$Elements")) {
+      if (M.binary) { /* the data starts after the end of the line */
+        const char *q = M.c.p;
+        while (q < r->end && (*q == ' ' || *q == '\t' || *q == '\r')) q++;
+        if (q >= r->end || *q != '\n') {
+          st = fail(r, q, "expected the end of the line after %.*s",
+                    shown(n), t);
+          break;
+        }
+        M.c.p = q + 1;
+      }
+      st = t[1] == 'N' ? msh_nodes(&M) : msh_elements(&M);
+    } else { /* skipped up to $End<name> at the start of a line */
+      char want[80];
+      snprintf(want, sizeof want, "\n$End%.*s", (int)(n > 60 ? 60 : n - 1),
+               t + 1);
+      const size_t wl = strlen(want);
+      const char *q = memmem(M.c.p, cur_left(&M.c), want, wl);
+      if (!q) {
+        st = fail(r, t, "no %s after %.*s", want + 1, shown(n), t);
+        break;
+      }
+      M.c.p = q + wl;
+      if (M.c.p < r->end && !is_ws(*M.c.p) && *M.c.p)
+        st = fail(r, q + 1, "expected %s", want + 1);
+    }
+    if (st != MX_OK) break;
+  }
+  if (st == MX_OK && !have_format) st = fail(r, NULL, "no $MeshFormat");
+  if (st == MX_OK && !M.have_nodes) st = fail(r, NULL, "no $Nodes section");
+  if (st == MX_OK && !M.etag) st = fail(r, NULL, "no $Elements section");
+  if (st == MX_OK) st = msh_order(&M);
+  msh_free(&M);
+  return st;
+}
+
+/* ---- Medit .mesh / .meshb -------------------------------------------------
+ *
+ * ASCII: keywords (case-insensitive) followed by their data, '#' comments.
+ * "MeshVersionFormatted v", "Dimension 3", "Vertices n" + n lines "x y z
+ * ref", "Tetrahedra", "Pyramids", "Prisms", "Hexahedra" n + n lines of
+ * 1-based vertex indices and a reference; "End". Other keywords (Triangles,
+ * Quadrilaterals, Edges, Corners, Normals...) are skipped up to the next
+ * word. Binary: int32 1 (byte order), int32 version 1..4, then blocks: int32
+ * keyword code, the next block's position (int32 up to version 2, int64
+ * from 3), for Dimension its int32 value, else the line count (int32 up to
+ * version 3, int64 in 4) and the lines: reals float32 in version 1, float64
+ * after; integers int32 up to version 3, int64 in 4. Unknown keywords are
+ * skipped through their next position; "End" (54) stops. Node orders are
+ * mixoct's (see io/write_medit.c); cells come grouped by keyword, in file
+ * order. */
+
+enum {
+  MED_DIM = 3, MED_VERT = 4, MED_TET = 8, MED_PRISM = 9, MED_HEX = 10,
+  MED_PYR = 49, MED_END = 54
+};
+
+static int medit_cell_type(int code) {
+  switch (code) {
+    case MED_TET: return MX_TET;
+    case MED_PYR: return MX_PYRAMID;
+    case MED_PRISM: return MX_PRISM;
+    case MED_HEX: return MX_HEX;
+    default: return -1;
+  }
+}
+
+/* 1-based vertex indices of the cells -> 0-based, checked. */
+static int medit_indices(rd *r, mx_mesh_data *out) {
+  for (size_t c = 0; c < out->ncells; c++) {
+    uint32_t *row = out->conn + 8 * c;
+    for (int j = 0; j < mx_cell_nodes[out->type[c]]; j++) {
+      if (row[j] == 0 || row[j] > out->nnodes)
+        return fail(r, NULL,
+                    "element %zu: vertex %u out of range (%zu vertices, "
+                    "1-based)",
+                    c, row[j], out->nnodes);
+      row[j]--;
+    }
+  }
+  return MX_OK;
+}
+
+static int medit_kw_type(const char *t, size_t n) {
+  static const struct {
+    const char *name;
+    int code;
+  } kw[] = {{"Dimension", MED_DIM}, {"Vertices", MED_VERT},
+            {"Tetrahedra", MED_TET}, {"Prisms", MED_PRISM},
+            {"Hexahedra", MED_HEX}, {"Pyramids", MED_PYR},
+            {"End", MED_END}};
+  for (size_t i = 0; i < sizeof kw / sizeof kw[0]; i++)
+    if (tok_eq(t, n, kw[i].name)) return kw[i].code;
+  return 0;
+}
+
+static int read_medit_ascii(rd *r, const char *p, mx_mesh_data *out) {
+  cur c = {r, p, 1, 0};
+  int have_vert = 0;
+  for (;;) {
+    size_t n;
+    const char *t = cur_tok(&c, &n);
+    if (n == 0) {
+      if (t < r->end) return fail(r, t, "unexpected NUL byte");
+      return fail(r, NULL, "no End (truncated file?)");
+    }
+    if (!((*t >= 'A' && *t <= 'Z') || (*t >= 'a' && *t <= 'z')))
+      return fail(r, t, "expected a keyword, found '%.*s' (wrong count?)",
+                  shown(n), t);
+    const int code = medit_kw_type(t, n);
+    if (code == MED_END) break;
+    if (tok_eq(t, n, "MeshVersionFormatted")) {
+      int64_t v = 0;
+      MX_CHECK(cur_int(&c, &v, "MeshVersionFormatted"));
+      continue;
+    }
+    if (code == MED_DIM) {
+      int64_t d = 0;
+      MX_CHECK(cur_int(&c, &d, "Dimension"));
+      if (d != 3)
+        return fail(r, t, "Dimension %lld: only 3D meshes are supported",
+                    (long long)d);
+      continue;
+    }
+    if (code == 0) { /* skipped: numbers up to the next word */
+      for (;;) {
+        const char *save = c.p;
+        const char *s = cur_tok(&c, &n);
+        if (n == 0 || (*s >= 'A' && *s <= 'Z') || (*s >= 'a' && *s <= 'z')) {
+          c.p = save;
+          break;
+        }
+      }
+      continue;
+    }
+    uint64_t cnt = 0;
+    const char *at = cur_skip(&c);
+    MX_CHECK(cur_count(&c, &cnt, 0, "line count"));
+    if (code == MED_VERT) {
+      if (have_vert) return fail(r, t, "Vertices given twice");
+      have_vert = 1;
+      if (cnt >= UINT32_MAX || cnt > cur_left(&c) / 8 + 1)
+        return fail(r, at,
+                    "Vertices: %llu announced but the file is too short "
+                    "(truncated file or wrong count)",
+                    (unsigned long long)cnt);
+      out->nnodes = (size_t)cnt;
+      out->xyz = mx_alloc((3 * (size_t)cnt + 1) * sizeof(double));
+      if (!out->xyz) return MX_EINPUT;
+      for (size_t i = 0; i < cnt; i++) {
+        for (int k = 0; k < 3; k++)
+          MX_CHECK(cur_real(&c, &out->xyz[3 * i + (size_t)k], "vertex"));
+        int64_t ref = 0;
+        MX_CHECK(cur_int(&c, &ref, "vertex reference"));
+      }
+      continue;
+    }
+    const int vt = medit_cell_type(code);
+    const int k = mx_cell_nodes[vt];
+    if (cnt > cur_left(&c) / (2 * (uint64_t)(k + 1)) + 1)
+      return fail(r, at,
+                  "%.*s: %llu announced but the file is too short (truncated "
+                  "file or wrong count)",
+                  shown(n), t, (unsigned long long)cnt);
+    const size_t c0 = out->ncells;
+    MX_CHECK(grow_cells(r, out, (size_t)cnt));
+    for (size_t i = 0; i < cnt; i++) {
+      uint32_t *row = out->conn + 8 * (c0 + i);
+      for (int j = 0; j <= k; j++) {
+        const char *vat = cur_skip(&c);
+        int64_t v = 0;
+        MX_CHECK(cur_int(&c, &v, "element"));
+        if (j == k) break; /* the reference */
+        if (v < 1 || v >= (int64_t)UINT32_MAX)
+          return fail(r, vat, "%.*s %zu: vertex %lld out of range",
+                      shown(n), t, i + 1, (long long)v);
+        row[j] = (uint32_t)v;
+      }
+      out->type[c0 + i] = (uint8_t)vt;
+    }
+    out->ncells = c0 + (size_t)cnt;
+  }
+  if (!have_vert) return fail(r, NULL, "no Vertices");
+  return medit_indices(r, out);
+}
+
+static int read_meshb(rd *r, mx_mesh_data *out) {
+  cur c = {r, r->buf, 0, 0};
+  r->bin_from = r->buf;
+  MX_CHECK(cur_need(&c, 8, "header"));
+  const uint32_t one = (uint32_t)bin_u(&c, 4);
+  c.swap = one != 1;
+  const int ver = (int)(int32_t)(uint32_t)bin_u(&c, 4);
+  if (ver < 1 || ver > 4)
+    return fail(r, r->buf + 4, "version %d (1 to 4)", ver);
+  const int pos_size = ver >= 3 ? 8 : 4, cnt_size = ver >= 4 ? 8 : 4,
+            real_size = ver == 1 ? 4 : 8, int_size = ver >= 4 ? 8 : 4;
+  int have_vert = 0;
+  const size_t len = (size_t)(r->end - r->buf);
+  for (;;) {
+    if (cur_left(&c) == 0) return fail(r, NULL, "no End (truncated file?)");
+    const char *at = c.p;
+    MX_CHECK(cur_need(&c, 4 + (uint64_t)pos_size, "keyword"));
+    const int code = (int)(int32_t)(uint32_t)bin_u(&c, 4);
+    const uint64_t next = bin_u(&c, pos_size);
+    if (code == MED_END) break;
+    const size_t here = (size_t)(c.p - r->buf);
+    if (next != 0 && (next <= here - 4 - (uint64_t)pos_size || next > len))
+      return fail(r, at, "keyword %d: next position %llu is not after it "
+                  "and inside the file",
+                  code, (unsigned long long)next);
+    if (code == MED_DIM) {
+      MX_CHECK(cur_need(&c, 4, "Dimension"));
+      const int d = (int)(int32_t)(uint32_t)bin_u(&c, 4);
+      if (d != 3)
+        return fail(r, at, "Dimension %d: only 3D meshes are supported", d);
+    } else if (code == MED_VERT || medit_cell_type(code) >= 0) {
+      MX_CHECK(cur_need(&c, (uint64_t)cnt_size, "line count"));
+      const uint64_t cnt = bin_u(&c, cnt_size);
+      const int vt = medit_cell_type(code);
+      const uint64_t line =
+          vt < 0 ? 3 * (uint64_t)real_size + (uint64_t)int_size
+                 : (uint64_t)(mx_cell_nodes[vt] + 1) * (uint64_t)int_size;
+      if (cnt > cur_left(&c) / line)
+        return fail(r, at,
+                    "keyword %d: %llu lines of %llu bytes announced but "
+                    "only %zu bytes are left (truncated file or wrong "
+                    "count)",
+                    code, (unsigned long long)cnt, (unsigned long long)line,
+                    cur_left(&c));
+      if (vt < 0) {
+        if (have_vert) return fail(r, at, "Vertices given twice");
+        have_vert = 1;
+        if (cnt >= UINT32_MAX) return fail(r, at, "too many vertices");
+        out->nnodes = (size_t)cnt;
+        out->xyz = mx_alloc((3 * (size_t)cnt + 1) * sizeof(double));
+        if (!out->xyz) return MX_EINPUT;
+        for (size_t i = 0; i < cnt; i++) {
+          for (int k = 0; k < 3; k++) {
+            const double v = bin_real(&c, real_size);
+            if (!isfinite(v))
+              return fail(r, c.p - real_size,
+                          "vertex %zu: coordinate %d is not a finite number",
+                          i + 1, k);
+            out->xyz[3 * i + (size_t)k] = v;
+          }
+          c.p += int_size; /* reference */
+        }
+      } else {
+        const int k = mx_cell_nodes[vt];
+        const size_t c0 = out->ncells;
+        MX_CHECK(grow_cells(r, out, (size_t)cnt));
+        for (size_t i = 0; i < cnt; i++) {
+          uint32_t *row = out->conn + 8 * (c0 + i);
+          for (int j = 0; j < k; j++) {
+            const uint64_t v = bin_u(&c, int_size);
+            const int64_t sv = int_size == 4 ? (int32_t)(uint32_t)v
+                                             : (int64_t)v;
+            if (sv < 1 || sv >= (int64_t)UINT32_MAX)
+              return fail(r, c.p - int_size,
+                          "element %zu: vertex %lld out of range", c0 + i,
+                          (long long)sv);
+            row[j] = (uint32_t)sv;
+          }
+          c.p += int_size; /* reference */
+          out->type[c0 + i] = (uint8_t)vt;
+        }
+        out->ncells = c0 + (size_t)cnt;
+      }
+    } else if (next == 0) {
+      return fail(r, at, "keyword %d has no next position", code);
+    }
+    if (next != 0) {
+      if (r->buf + next < c.p)
+        return fail(r, at, "keyword %d: its data runs past the next block",
+                    code);
+      c.p = r->buf + next;
+    }
+  }
+  if (!have_vert) return fail(r, NULL, "no Vertices");
+  return medit_indices(r, out);
+}
+
+/* Whether the text at p starts with "MeshVersionFormatted" (after blanks
+ * and '#' comments). */
+static int is_medit_ascii(rd *r, const char *p) {
+  cur c = {r, p, 1, 0};
+  size_t n;
+  const char *t = cur_tok(&c, &n);
+  return tok_eq(t, n, "MeshVersionFormatted");
+}
+
+static int is_meshb(const rd *r) {
+  if (r->end - r->buf < 8) return 0;
+  uint32_t a, v;
+  memcpy(&a, r->buf, 4);
+  memcpy(&v, r->buf + 4, 4);
+  if (a == 0x01000000u) v = __builtin_bswap32(v);
+  return (a == 1 || a == 0x01000000u) && v >= 1 && v <= 4;
+}
+
 /* ---- entry points -------------------------------------------------------- */
 
 void mx_mesh_data_free(mx_mesh_data *m) {
@@ -1114,18 +1958,29 @@ int mx_read_mesh(const char *path, mx_mesh_data *out) {
   const char *p = r.buf;
   if (len >= 3 && memcmp(p, "\xEF\xBB\xBF", 3) == 0) p += 3; /* UTF-8 BOM */
   p = skip_ws(p, r.end);
-  static const char magic[] = "# vtk DataFile";
-  int st;
+  static const char magic[] = "# vtk DataFile", msh_magic[] = "$MeshFormat";
+  int st, vtk = 0;
   if ((size_t)(r.end - p) >= sizeof magic - 1 &&
-      strncasecmp(p, magic, sizeof magic - 1) == 0)
+      strncasecmp(p, magic, sizeof magic - 1) == 0) {
     st = read_legacy(&r, out);
-  else if (p < r.end && *p == '<')
+    vtk = 1;
+  } else if (is_meshb(&r)) {
+    st = read_meshb(&r, out);
+  } else if (p < r.end && *p == '<') {
     st = read_vtu(&r, out);
-  else
+    vtk = 1;
+  } else if ((size_t)(r.end - p) >= sizeof msh_magic - 1 &&
+             memcmp(p, msh_magic, sizeof msh_magic - 1) == 0) {
+    st = read_msh(&r, p, out);
+  } else if (is_medit_ascii(&r, p)) {
+    st = read_medit_ascii(&r, p, out);
+  } else {
     st = fail(&r, p,
               "unknown mesh format: expected legacy VTK ('# vtk DataFile "
-              "Version') or VTK XML (.vtu)");
-  if (st == MX_OK) /* VTK wedges to our prism order (mesh.h) */
+              "Version'), VTK XML (.vtu), Gmsh MSH 4.1 ('$MeshFormat') or "
+              "Medit ('MeshVersionFormatted', or a binary .meshb)");
+  }
+  if (st == MX_OK && vtk) /* VTK wedges to our prism order (mesh.h) */
     for (size_t c = 0; c < out->ncells; c++)
       if (out->type[c] == MX_PRISM) {
         uint32_t row[8];

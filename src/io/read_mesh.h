@@ -1,5 +1,6 @@
 /* Reading back the volume meshes mixoct writes (src/io/write_vtk.c,
- * src/io/write_vtu.c), for `mixoct check` and the tests.
+ * src/io/write_vtu.c, src/io/write_msh.c, src/io/write_medit.c), for
+ * `mixoct check` and the tests.
  *
  * Accepted, recognised by content (not by extension):
  *  - legacy VTK, "# vtk DataFile Version x.y", ASCII or BINARY (big-endian),
@@ -13,12 +14,26 @@
  *    Float64 with 3 components; connectivity, offsets and types of any
  *    integer type (Int8 .. UInt64). Compressed and base64 data are refused.
  * Cell types: VTK 10 (tetra), 14 (pyramid), 13 (wedge), 12 (hexahedron);
- * any other type is an error. Node order stays VTK's (as in soa/mesh.h).
+ * any other type is an error. Node order stays VTK's (as in soa/mesh.h);
+ *  - Gmsh MSH 4.1 ("$MeshFormat" first), ASCII or binary (either byte
+ *    order, size_t of 4 or 8 bytes): $Nodes and $Elements, other sections
+ *    skipped; linear tetrahedra, hexahedra, prisms and pyramids kept in the
+ *    order of their element tags (mixoct writes tag = index + 1, so a file
+ *    of src/io/write_msh.c reads back in its order); points, lines,
+ *    triangles and quadrangles skipped; other types are an error;
+ *  - Medit .mesh (ASCII, "MeshVersionFormatted" first) and .meshb (binary,
+ *    versions 1 to 4, either byte order): Vertices, Tetrahedra, Pyramids,
+ *    Prisms, Hexahedra, other keywords skipped, "End" required; cells in
+ *    the file's order (so grouped by type), node orders as in
+ *    src/io/write_medit.c (mixoct's).
  *
- * Every problem (unreadable, truncated or inconsistent file, unsupported
- * feature, non-finite coordinate, node index out of range) prints one
- * message naming the file -- with the line in a text part, the byte offset
- * in a binary part -- and returns MX_EINPUT; *out is then empty. */
+ * Every count is checked against the bytes left in the file before
+ * anything is allocated for it, and binary values are read only after the
+ * block holding them was checked to lie in the file. Every problem
+ * (unreadable, truncated or inconsistent file, unsupported feature,
+ * non-finite coordinate, node index out of range) prints one message naming
+ * the file -- with the line in a text part, the byte offset in a binary
+ * part -- and returns MX_EINPUT; *out is then empty. */
 #ifndef MX_READ_MESH_H
 #define MX_READ_MESH_H
 

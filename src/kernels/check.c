@@ -1,7 +1,8 @@
 /* mixoct: the independent mesh checker (definitions in check.h).
  *
  * Passes, each parallel:
- *  1. elements: J_ENS, volume, counts per type, used nodes;
+ *  1. elements: J_ENS (invalid, degenerate), volume, counts per type, used
+ *     nodes;
  *  2. nodes: an open-addressing hash of the exact coordinates, cut into
  *     segments by a coarse grid for locality (lock-free insertion with
  *     compare-and-swap, the smallest id kept per point), gives the
@@ -12,8 +13,18 @@
  *     stay sorted for the triangle lookups of the quad-vs-triangles test;
  *  4. element edge midpoints and quad face centres against the hash;
  *  5. boundary faces: quads against triangles, edges sorted and counted;
- *  6. with a surface: enclosed volume and the distance of the boundary
- *     nodes to the triangles through a uniform grid of triangle boxes.
+ *  6. geometric hanging nodes: every element with a face used once goes, by
+ *     its bounding box, into the cells it meets (at most 2 per axis) of the
+ *     level of a multi-level grid whose cells are at least its size (cells
+ *     of level l have side 2^-l of the nodes' box); each node of a face
+ *     used once then looks at its own cell on every occupied level and
+ *     tests the elements whose box holds it: O(n) lookups, O(n log n) for
+ *     the sort of the cells;
+ *  7. with a surface: enclosed volume, whether it is closed, and the
+ *     distance of the boundary nodes to the triangles through a uniform
+ *     grid of triangle boxes.
+ * Coordinates enter the grids as (x/2 - lo/2) / (extent/2): finite for any
+ * finite input (extents up to 2 * DBL_MAX, down to 1e-300).
  * A face is named by its slot 6 * cell + local face, so ncells is limited to
  * (2^32 - 1) / 6. */
 #include "kernels/check.h"
@@ -27,7 +38,33 @@
 #include "soa/mesh.h"
 #include "soa/scan.h"
 
-enum { CHUNK = 16384, F_USED = 1, F_HANG = 2, F_BND = 4 };
+enum {
+  CHUNK = 16384,
+  SMALL = 16384, /* fewer items: no parallel region (its cost would dominate) */
+  /* node flags */
+  F_USED = 1,
+  F_HANG = 2,
+  F_BND = 4,
+  F_DUP = 8,
+  F_GHANG = 16,
+  F_OFF = 32,
+};
+
+const char *const mx_check_elem_kind_name[MX_CK_ELEM_KINDS] = {
+    "invalid",           "degenerate",          "faces_overshared",
+    "faces_misoriented", "quad_vs_triangles",   "open_boundary_edges",
+    "hanging_nodes",     "geometric_hanging_nodes"};
+const char *const mx_check_node_kind_name[MX_CK_NODE_KINDS] = {
+    "unused_nodes", "duplicate_nodes", "hanging_nodes",
+    "geometric_hanging_nodes", "boundary_off_surface"};
+
+void mx_check_defaults(mx_check_options *o) {
+  o->degenerate_below = 1e-6;
+  o->hang_tol = 1e-9;
+  o->volume_tol = 0.0; /* chosen from the mesh */
+  o->volume_tol_auto = 0;
+  o->boundary_tol = 1e-6;
+}
 
 static const int8_t face_tab[4][6][4] = {
     {{0, 2, 1, -1}, {0, 1, 3, -1}, {1, 2, 3, -1}, {0, 3, 2, -1}},
@@ -65,6 +102,41 @@ static inline void flag_or(uint8_t *f, uint8_t bits) {
 
 static inline uint8_t flag_get(const uint8_t *f) {
   return __atomic_load_n(f, __ATOMIC_RELAXED);
+}
+
+/* Element flags: bit MX_CK_* per element. */
+static inline void eflag(uint8_t *ef, size_t c, int kind) {
+  const uint8_t bit = (uint8_t)(1u << kind);
+  if (!(flag_get(&ef[c]) & bit)) flag_or(&ef[c], bit);
+}
+
+/* ---- unit coordinates ------------------------------------------------------
+ *
+ * u = (x/2 - lo/2) * inv with inv = 1 / (largest half extent): u is in
+ * [0, 1] for the nodes' box, finite for any finite x, and a monotonic
+ * function of x (each step is), so a point inside a box stays inside its
+ * image. ok is 0 when the box is one point, or its extent is too small to
+ * divide by (below about 1e-300). */
+typedef struct {
+  double lo2[3], inv, ext[3]; /* ext: the half extents times inv, in [0, 1] */
+  int ok;
+} ubox;
+
+static void ubox_init(ubox *U, const double lo[3], const double hi[3]) {
+  double m = 0.0;
+  for (int a = 0; a < 3; a++) {
+    U->lo2[a] = 0.5 * lo[a];
+    m = mx_max(m, 0.5 * hi[a] - 0.5 * lo[a]);
+  }
+  U->inv = 1.0 / m;
+  U->ok = m > 0.0 && isfinite(m) && isfinite(U->inv) && U->inv > 0.0;
+  if (!U->ok) U->inv = 0.0;
+  for (int a = 0; a < 3; a++)
+    U->ext[a] = U->ok ? mx_min(1.0, (0.5 * hi[a] - U->lo2[a]) * U->inv) : 0.0;
+}
+
+static inline double ucoord(const ubox *U, double x, int a) {
+  return (0.5 * x - U->lo2[a]) * U->inv;
 }
 
 /* ---- faces --------------------------------------------------------------- */
@@ -165,7 +237,10 @@ static int opposite(const mx_mesh_data *m, uint32_t s1, uint32_t s2) {
 /* ---- uniform cells ------------------------------------------------------- */
 
 /* Cubic cells over a box of extents ext: about `target` of them over the
- * dimensions wider than a cell, at most maxdim per axis. Sets h and d. */
+ * dimensions wider than a cell, at most maxdim per axis. Sets h and d.
+ * Works on the extents relative to the largest, each at least 1 / maxdim,
+ * so no product underflows (a box of extents 1 x 1e-300 x 1e-300 gets
+ * cells along its long side only). */
 static void cell_grid(const double ext[3], double target, int maxdim,
                       double *h_out, int d[3]) {
   double mext = mx_max(ext[0], mx_max(ext[1], ext[2]));
@@ -174,26 +249,30 @@ static void cell_grid(const double ext[3], double target, int maxdim,
     *h_out = mext > 0.0 ? INFINITY : 1.0;
     return;
   }
-  if (target < 1.0) target = 1.0;
+  if (!(target >= 1.0)) target = 1.0;
+  const double floor_r = 1.0 / maxdim;
+  double r[3];
+  for (int a = 0; a < 3; a++) r[a] = mx_max(ext[a] / mext, floor_r);
   double h = 0.0;
   for (int it = 0; it < 4; it++) {
     double prod = 1.0;
     int k = 0;
     for (int a = 0; a < 3; a++)
-      if (ext[a] > h) {
-        prod *= ext[a];
+      if (r[a] > h) {
+        prod *= r[a];
         k++;
       }
     if (k == 0) {
-      prod = mext;
+      prod = 1.0;
       k = 1;
     }
-    h = pow(prod / target, 1.0 / k);
+    h = mx_max(pow(prod / target, 1.0 / k), floor_r);
   }
   for (int a = 0; a < 3; a++) {
-    double n = ceil(ext[a] / h);
-    d[a] = n < 1.0 ? 1 : n > maxdim ? maxdim : (int)n;
+    const double n = ceil(ext[a] / mext / h);
+    d[a] = !(n >= 1.0) ? 1 : n > maxdim ? maxdim : (int)n;
   }
+  h *= mext;
   for (int a = 0; a < 3; a++) h = mx_max(h, ext[a] / d[a]);
   *h_out = h;
 }
@@ -211,7 +290,9 @@ static void cell_grid(const double ext[3], double target, int maxdim,
 typedef struct {
   uint64_t *slot; /* 0: empty, else fingerprint << 32 | (node + 1) */
   uint64_t *seg;  /* cells + 1: cell c owns slots [seg[c], seg[c + 1]) */
-  double lo[3], hi[3], inv_h;
+  double lo[3], hi[3]; /* the nodes' box */
+  ubox U;
+  double scale; /* cell coordinate: unit coordinate * scale */
   int d[3];
   const double *xyz;
 } chash;
@@ -250,8 +331,10 @@ static inline int64_t chash_cell(const chash *H, const double q[3]) {
   int64_t c = 0;
   for (int a = 2; a >= 0; a--) {
     if (!(q[a] >= H->lo[a] && q[a] <= H->hi[a])) return -1;
-    const double f = floor((q[a] - H->lo[a]) * H->inv_h);
-    const int i = f > (double)(H->d[a] - 1) ? H->d[a] - 1 : (int)f;
+    const double f = floor(ucoord(&H->U, q[a], a) * H->scale);
+    const int i = !(f > 0.0)                 ? 0
+                  : f > (double)(H->d[a] - 1) ? H->d[a] - 1
+                                              : (int)f;
     c = c * H->d[a] + i;
   }
   return c;
@@ -316,13 +399,15 @@ static void chash_box(chash *H, const mx_mesh_data *m) {
   H->hi[0] = hx;
   H->hi[1] = hy;
   H->hi[2] = hz;
-  double ext[3], h;
-  for (int a = 0; a < 3; a++) ext[a] = H->hi[a] - H->lo[a];
-  cell_grid(ext, (double)m->nnodes / 8.0, 2048, &h, H->d);
-  H->inv_h = 1.0 / h;
-  if (!isfinite(H->inv_h)) { /* extents beyond the double range */
+  ubox_init(&H->U, H->lo, H->hi);
+  double h = 1.0;
+  H->d[0] = H->d[1] = H->d[2] = 1;
+  if (H->U.ok) /* relative extents: cells of side h (a fraction of the box) */
+    cell_grid(H->U.ext, (double)m->nnodes / 8.0, 2048, &h, H->d);
+  H->scale = 1.0 / h;
+  if (!H->U.ok || !isfinite(H->scale)) {
     H->d[0] = H->d[1] = H->d[2] = 1;
-    H->inv_h = 0.0;
+    H->scale = 0.0;
   }
 }
 
@@ -383,13 +468,14 @@ static int chash_build(chash *H, const mx_mesh_data *m, size_t *dups) {
 }
 
 /* Flags node id as hanging when it is used and not one of the n nodes in
- * verts. */
-static inline void mark_hanging(uint8_t *flags, int64_t id,
-                                const uint32_t *verts, int n) {
-  if (id < 0 || !(flag_get(&flags[id]) & F_USED)) return;
+ * verts; returns whether it did. */
+static inline int mark_hanging(uint8_t *flags, int64_t id,
+                               const uint32_t *verts, int n) {
+  if (id < 0 || !(flag_get(&flags[id]) & F_USED)) return 0;
   for (int k = 0; k < n; k++)
-    if (verts[k] == (uint32_t)id) return;
+    if (verts[k] == (uint32_t)id) return 0;
   flag_or(&flags[id], F_HANG);
+  return 1;
 }
 
 static inline void midpoint(const double *a, const double *b, double q[3]) {
@@ -400,17 +486,38 @@ static inline void midpoint(const double *a, const double *b, double q[3]) {
 
 typedef struct {
   double vol, jsum, jmin;
-  size_t invalid, by[4];
+  size_t invalid, degenerate, by[4];
 } elem_acc;
 
-static int element_pass(const mx_mesh_data *m, uint8_t *flags,
-                        mx_check_report *r) {
+/* J_ENS is invariant under scaling: elements whose coordinates reach beyond
+ * 2^400 or stay below 2^-400 (where squares and triple products would
+ * overflow or underflow) are scaled by a power of two first, which is
+ * exact. Others are evaluated as they are, so their J_ENS is bit-identical
+ * to mx_jens's. */
+static double jens_scaled(int t, double p[8][3]) {
+  const int nn = mx_cell_nodes[t];
+  double mx = 0.0;
+  for (int j = 0; j < nn; j++)
+    for (int a = 0; a < 3; a++) mx = mx_max(mx, fabs(p[j][a]));
+  if (mx > 0x1p400 || (mx > 0.0 && mx < 0x1p-400)) {
+    int e;
+    frexp(mx, &e);
+    double q[8][3];
+    for (int j = 0; j < nn; j++)
+      for (int a = 0; a < 3; a++) q[j][a] = ldexp(p[j][a], -e);
+    return mx_jens(t, (const double(*)[3])q);
+  }
+  return mx_jens(t, (const double(*)[3])p);
+}
+
+static int element_pass(const mx_mesh_data *m, uint8_t *flags, uint8_t *ef,
+                        double degen_below, mx_check_report *r) {
   const size_t nc = m->ncells, nchunks = (nc + CHUNK - 1) / CHUNK;
   elem_acc *acc = mx_alloc((nchunks + 1) * sizeof *acc);
   if (!acc) return MX_EINPUT;
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) if (nchunks > 1)
   for (size_t k = 0; k < nchunks; k++) {
-    elem_acc a = {0.0, 0.0, INFINITY, 0, {0, 0, 0, 0}};
+    elem_acc a = {0.0, 0.0, INFINITY, 0, 0, {0, 0, 0, 0}};
     const size_t end = (k + 1) * CHUNK < nc ? (k + 1) * CHUNK : nc;
     for (size_t c = k * CHUNK; c < end; c++) {
       const int t = m->type[c], nn = mx_cell_nodes[t];
@@ -421,11 +528,17 @@ static int element_pass(const mx_mesh_data *m, uint8_t *flags,
         if (!(flag_get(&flags[row[j]]) & F_USED))
           flag_or(&flags[row[j]], F_USED);
       }
-      const double q = mx_jens(t, (const double(*)[3])p);
+      const double q = jens_scaled(t, p);
       a.vol += mx_element_volume(t, (const double(*)[3])p);
       a.jsum += q;
       if (q < a.jmin) a.jmin = q;
-      if (!(q > 0.0)) a.invalid++;
+      if (!(q > 0.0)) {
+        a.invalid++;
+        ef[c] |= 1u << MX_CK_INVALID; /* this pass alone writes ef */
+      } else if (q < degen_below) {
+        a.degenerate++;
+        ef[c] |= 1u << MX_CK_DEGENERATE;
+      }
       a.by[t]++;
     }
     acc[k] = a;
@@ -436,6 +549,7 @@ static int element_pass(const mx_mesh_data *m, uint8_t *flags,
     jsum += acc[k].jsum;
     if (acc[k].jmin < jmin) jmin = acc[k].jmin;
     r->invalid += acc[k].invalid;
+    r->degenerate += acc[k].degenerate;
     for (int t = 0; t < 4; t++) r->by_type[t] += acc[k].by[t];
   }
   mx_free(acc);
@@ -464,7 +578,7 @@ static int faces_bucket(const mx_mesh_data *m, faces *F) {
   F->end = mx_calloc((nn + 1) * sizeof *F->end);
   F->use = mx_calloc(6 * nc + 1);
   if (!F->end || !F->use) return MX_EINPUT;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nc > SMALL)
   for (size_t c = 0; c < nc; c++) {
     for (int j = 0; j < nfaces[m->type[c]]; j++) {
       uint32_t v[4];
@@ -475,7 +589,7 @@ static int faces_bucket(const mx_mesh_data *m, faces *F) {
   const uint64_t total = mx_scan_u64(F->end, nn);
   F->slot = mx_alloc((size_t)total * sizeof *F->slot + 4);
   if (!F->slot) return MX_EINPUT;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nc > SMALL)
   for (size_t c = 0; c < nc; c++) {
     for (int j = 0; j < nfaces[m->type[c]]; j++) {
       const uint32_t s = (uint32_t)(6 * c + (size_t)j);
@@ -500,10 +614,11 @@ typedef struct {
 /* Sorts every bucket, records the uses of every slot, counts, and probes
  * the centres of quad faces. */
 static int faces_match(const mx_mesh_data *m, faces *F, const chash *H,
-                       uint8_t *flags, face_counts *fc) {
+                       uint8_t *flags, uint8_t *ef, face_counts *fc) {
   size_t interior = 0, boundary = 0, over = 0, mis = 0;
   int oom = 0;
-#pragma omp parallel reduction(+ : interior, boundary, over, mis)
+#pragma omp parallel reduction(+ : interior, boundary, over, mis) \
+    if (m->nnodes > SMALL)
   {
     size_t cap = 64;
     fkey *k = mx_alloc(cap * sizeof *k);
@@ -538,9 +653,15 @@ static int faces_match(const mx_mesh_data *m, faces *F, const chash *H,
           boundary++;
         else if (g == 2) {
           interior++;
-          if (!opposite(m, k[i].slot, k[i + 1].slot)) mis++;
+          if (!opposite(m, k[i].slot, k[i + 1].slot)) {
+            mis++;
+            eflag(ef, k[i].slot / 6, MX_CK_MISORIENTED);
+            eflag(ef, k[i + 1].slot / 6, MX_CK_MISORIENTED);
+          }
         } else {
           over++;
+          for (uint64_t x = i; x < j; x++)
+            eflag(ef, k[x].slot / 6, MX_CK_OVERSHARED);
         }
         if ((k[i].hi >> 32) == 4) { /* quad: its centre */
           uint32_t fv[4] = {0, 0, 0, 0};
@@ -550,8 +671,12 @@ static int faces_match(const mx_mesh_data *m, faces *F, const chash *H,
           double q1[3], q2[3];
           midpoint(p[0], p[2], q1);
           midpoint(p[1], p[3], q2);
-          mark_hanging(flags, chash_find(H, q1), fv, 4);
-          if (!same_point(q1, q2)) mark_hanging(flags, chash_find(H, q2), fv, 4);
+          int hit = mark_hanging(flags, chash_find(H, q1), fv, 4);
+          if (!same_point(q1, q2))
+            hit |= mark_hanging(flags, chash_find(H, q2), fv, 4);
+          if (hit)
+            for (uint64_t x = i; x < j; x++)
+              eflag(ef, k[x].slot / 6, MX_CK_HANGING);
         }
         i = j;
       }
@@ -589,8 +714,8 @@ static int boundary_triangle(const mx_mesh_data *m, const faces *F,
 /* ---- pass 4: edge midpoints ---------------------------------------------- */
 
 static void edge_midpoints(const mx_mesh_data *m, const chash *H,
-                           uint8_t *flags) {
-#pragma omp parallel for schedule(dynamic, 4096)
+                           uint8_t *flags, uint8_t *ef) {
+#pragma omp parallel for schedule(dynamic, 4096) if (m->ncells > SMALL)
   for (size_t c = 0; c < m->ncells; c++) {
     const int t = m->type[c], ne = nedges[t];
     const uint32_t *row = m->conn + 8 * c;
@@ -603,17 +728,35 @@ static void edge_midpoints(const mx_mesh_data *m, const chash *H,
       live[e] = chash_probe(H, q[e], &p[e]);
       if (live[e]) __builtin_prefetch(&H->slot[p[e].base + (p[e].h & p[e].mask)]);
     }
+    int hit = 0;
     for (int e = 0; e < ne; e++)
       if (live[e])
-        mark_hanging(flags, chash_lookup(H, q[e], &p[e]), row,
-                     mx_cell_nodes[t]);
+        hit |= mark_hanging(flags, chash_lookup(H, q[e], &p[e]), row,
+                            mx_cell_nodes[t]);
+    if (hit) eflag(ef, c, MX_CK_HANGING);
   }
 }
 
 /* ---- pass 5: boundary ---------------------------------------------------- */
 
+/* The number of entries equal to key in the sorted k[0, n). */
+static size_t count_equal(const uint64_t *k, size_t n, uint64_t key) {
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (k[mid] < key)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  size_t e = lo;
+  while (e < n && k[e] == key) e++;
+  return e - lo;
+}
+
 static int boundary_pass(const mx_mesh_data *m, const faces *F,
-                         uint8_t *flags, size_t nbnd, mx_check_report *r) {
+                         uint8_t *flags, uint8_t *ef, size_t nbnd,
+                         mx_check_report *r) {
   const size_t nslots = 6 * m->ncells;
   uint32_t *bnd = mx_alloc((nbnd + 1) * sizeof *bnd);
   uint64_t *ek = mx_alloc((4 * nbnd + 1) * sizeof *ek);
@@ -626,7 +769,8 @@ static int boundary_pass(const mx_mesh_data *m, const faces *F,
   for (size_t s = 0; s < nslots; s++)
     if (F->use[s] == 1 && nb < nbnd) bnd[nb++] = (uint32_t)s;
   size_t qvt = 0;
-#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : qvt)
+#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : qvt) \
+    if (nb > SMALL)
   for (size_t i = 0; i < nb; i++) {
     uint32_t v[4];
     const int n = face_verts(m, bnd[i], v);
@@ -643,8 +787,10 @@ static int boundary_pass(const mx_mesh_data *m, const faces *F,
     if ((boundary_triangle(m, F, v[0], v[1], v[2]) &&
          boundary_triangle(m, F, v[0], v[2], v[3])) ||
         (boundary_triangle(m, F, v[0], v[1], v[3]) &&
-         boundary_triangle(m, F, v[1], v[2], v[3])))
+         boundary_triangle(m, F, v[1], v[2], v[3]))) {
       qvt++;
+      eflag(ef, bnd[i] / 6, MX_CK_QUAD_TRI);
+    }
   }
   r->quad_vs_triangles = qvt;
   int st = mx_sort_u64(ek, NULL, 4 * nb);
@@ -661,12 +807,520 @@ static int boundary_pass(const mx_mesh_data *m, const faces *F,
   }
   r->open_boundary_edges = open;
   r->nonmanifold_edges = pinched;
+  if (st == MX_OK && open) { /* the elements along the open edges */
+#pragma omp parallel for schedule(dynamic, 1024) if (nb > SMALL)
+    for (size_t i = 0; i < nb; i++) {
+      uint32_t v[4];
+      const int n = face_verts(m, bnd[i], v);
+      for (int x = 0; x < n; x++) {
+        const uint32_t a = v[x], b = v[(x + 1) % n];
+        const uint64_t key = a < b ? (uint64_t)a << 32 | b
+                                   : (uint64_t)b << 32 | a;
+        if (count_equal(ek, 4 * nb, key) % 2) {
+          eflag(ef, bnd[i] / 6, MX_CK_OPEN_EDGE);
+          break;
+        }
+      }
+    }
+  }
   mx_free(bnd);
   mx_free(ek);
   return st;
 }
 
-/* ---- pass 6: the surface ------------------------------------------------- */
+/* ---- pass 6: geometric hanging nodes --------------------------------------
+ *
+ * The elements to compare with go into a multi-level grid over the unit
+ * coordinates (cells of level l have side 2^-l): each into every cell its
+ * padded box meets on the finest level whose cells are at least as large
+ * as the box -- at most 2 per axis. A point in the box lies in one of those
+ * cells (the cell of a coordinate is a monotonic function of it), so a
+ * node looks at one cell per occupied level. Entries are sorted by cell
+ * (radix sort); a hash of the cells gives their runs. Each entry keeps the
+ * box in single precision, relative to its cell in units of the cell side
+ * (rounded outwards), for a cheap first test. */
+
+enum { GLEVELS = 21 }; /* 3 * 21 + 1 bits of key */
+
+typedef struct {
+  uint64_t key; /* 0: empty */
+  uint32_t beg, end;
+} gcell;
+
+typedef struct {
+  ubox U;
+  double tol;
+  uint32_t *elem; /* entries, sorted by cell */
+  float *box;     /* 6 per entry */
+  gcell *tab;
+  uint64_t mask;
+  uint32_t levels; /* bit l: some element at level l */
+} ggrid;
+
+static void ggrid_free(ggrid *g) {
+  mx_free(g->elem);
+  mx_free(g->box);
+  mx_free(g->tab);
+}
+
+static inline uint64_t gkey(int lev, const uint32_t c[3]) {
+  return (uint64_t)1 << (3 * lev) | (uint64_t)c[0] << (2 * lev) |
+         (uint64_t)c[1] << lev | c[2];
+}
+
+static inline uint32_t gcoord(double u, int lev) {
+  const double f = floor(u * (double)(1u << lev));
+  const double top = (double)((1u << lev) - 1);
+  if (!(f > 0.0)) return 0;
+  return f > top ? (uint32_t)top : (uint32_t)f;
+}
+
+/* The padded unit box of element c and its level and low cell. */
+static void elem_gbox(const mx_mesh_data *m, const ggrid *g, size_t c,
+                      double lo[3], double hi[3], int *lev, uint32_t cell[3]) {
+  const int nn = mx_cell_nodes[m->type[c]];
+  const uint32_t *row = m->conn + 8 * c;
+  for (int a = 0; a < 3; a++) {
+    lo[a] = INFINITY;
+    hi[a] = -INFINITY;
+  }
+  for (int j = 0; j < nn; j++) {
+    const double *p = m->xyz + 3 * (size_t)row[j];
+    for (int a = 0; a < 3; a++) {
+      const double u = ucoord(&g->U, p[a], a);
+      lo[a] = mx_min(lo[a], u);
+      hi[a] = mx_max(hi[a], u);
+    }
+  }
+  double size = 0.0;
+  for (int a = 0; a < 3; a++) size = mx_max(size, hi[a] - lo[a]);
+  /* the exact test's tolerance is tol * size (with rounding: 2x pad) */
+  const double pad = 2.0 * g->tol * size + 0x1p-60;
+  for (int a = 0; a < 3; a++) {
+    lo[a] -= pad;
+    hi[a] += pad;
+  }
+  const double span = (size + 2.0 * pad) * (1.0 + 1e-12);
+  int l = GLEVELS;
+  if (span > 0.0) {
+    int e;
+    const double f = frexp(span, &e); /* span = f 2^e, f in [0.5, 1) */
+    l = f == 0.5 ? 1 - e : -e;        /* largest l with 2^-l >= span */
+    l = l < 0 ? 0 : l > GLEVELS ? GLEVELS : l;
+  }
+  *lev = l;
+  for (int a = 0; a < 3; a++) cell[a] = gcoord(lo[a], l);
+}
+
+/* x rounded to a float below (above) it: the nearest float is within half
+ * a float ulp, less than |x| 2^-23 (+ a tiny term for x near 0). */
+static inline float f_down(double x) {
+  return (float)(x - fabs(x) * 0x1p-23 - 0x1p-100);
+}
+
+static inline float f_up(double x) {
+  return (float)(x + fabs(x) * 0x1p-23 + 0x1p-100);
+}
+
+static inline uint64_t gslot_of(uint64_t key, uint64_t mask) {
+  return mix64(key) & mask;
+}
+
+/* Files the n elements of list, each in every cell its box meets at its
+ * level (at most 2 per axis). */
+static int ggrid_build(ggrid *g, const mx_mesh_data *m, const ubox *U,
+                       double tol, const uint32_t *list, size_t n) {
+  memset(g, 0, sizeof *g);
+  g->U = *U;
+  g->tol = tol;
+  uint64_t *off = mx_alloc((n + 1) * sizeof *off);
+  double *ubx = mx_alloc((6 * n + 1) * sizeof *ubx); /* padded unit boxes */
+  uint8_t *ulev = mx_alloc(n + 1);
+  if (!off || !ubx || !ulev) {
+    mx_free(off);
+    mx_free(ubx);
+    mx_free(ulev);
+    return MX_EINPUT;
+  }
+  off[n] = 0;
+  uint32_t levels = 0;
+#pragma omp parallel for schedule(static) reduction(| : levels) \
+    if (n > SMALL)
+  for (size_t i = 0; i < n; i++) {
+    double *lo = ubx + 6 * i, *hi = lo + 3;
+    int lev;
+    uint32_t c0[3];
+    elem_gbox(m, g, list[i], lo, hi, &lev, c0);
+    uint64_t k = 1;
+    for (int a = 0; a < 3; a++) k *= gcoord(hi[a], lev) - c0[a] + 1;
+    off[i] = k;
+    ulev[i] = (uint8_t)lev;
+    levels |= 1u << lev;
+  }
+  g->levels = levels;
+  const uint64_t total = mx_scan_u64(off, n + 1);
+  if (total >= UINT32_MAX) {
+    mx_free(off);
+    mx_free(ubx);
+    mx_free(ulev);
+    mx_error(NULL, 0, "check: too many boundary elements");
+    return MX_EINPUT;
+  }
+  const size_t ne = (size_t)total;
+  uint64_t *key = mx_alloc((ne + 1) * sizeof *key);
+  uint32_t *idx = mx_alloc((ne + 1) * sizeof *idx);
+  uint32_t *eel = mx_alloc((ne + 1) * sizeof *eel);
+  float *ebox = mx_alloc((6 * ne + 1) * sizeof *ebox);
+  g->elem = mx_alloc((ne + 1) * sizeof *g->elem);
+  g->box = mx_alloc((6 * ne + 1) * sizeof *g->box);
+  int st = key && idx && eel && ebox && g->elem && g->box ? MX_OK : MX_EINPUT;
+  if (st == MX_OK) {
+#pragma omp parallel for schedule(static) if (n > SMALL)
+    for (size_t i = 0; i < n; i++) {
+      const double *lo = ubx + 6 * i, *hi = lo + 3;
+      const int lev = ulev[i];
+      uint32_t c0[3], c1[3], c[3];
+      for (int a = 0; a < 3; a++) {
+        c0[a] = gcoord(lo[a], lev);
+        c1[a] = gcoord(hi[a], lev);
+      }
+      const double sc = (double)(1u << lev);
+      size_t k = (size_t)off[i];
+      for (c[2] = c0[2]; c[2] <= c1[2]; c[2]++)
+        for (c[1] = c0[1]; c[1] <= c1[1]; c[1]++)
+          for (c[0] = c0[0]; c[0] <= c1[0]; c[0]++, k++) {
+            key[k] = gkey(lev, c);
+            idx[k] = (uint32_t)k;
+            eel[k] = list[i];
+            for (int a = 0; a < 3; a++) {
+              ebox[6 * k + (size_t)a] = f_down(lo[a] * sc - (double)c[a]);
+              ebox[6 * k + 3 + (size_t)a] = f_up(hi[a] * sc - (double)c[a]);
+            }
+          }
+    }
+    st = mx_sort_u64(key, idx, ne);
+  }
+  size_t runs = 0;
+  if (st == MX_OK) {
+    /* Boxes and elements in entry order; runs of equal keys: the cells. */
+#pragma omp parallel for schedule(static) reduction(+ : runs) \
+    if (ne > SMALL)
+    for (size_t i = 0; i < ne; i++) {
+      memcpy(g->box + 6 * i, ebox + 6 * (size_t)idx[i], 6 * sizeof *ebox);
+      g->elem[i] = eel[idx[i]];
+      runs += i == 0 || key[i] != key[i - 1];
+    }
+    uint64_t size = 16;
+    while (size < 2 * (uint64_t)runs) size *= 2;
+    g->mask = size - 1;
+    g->tab = mx_calloc((size_t)size * sizeof *g->tab);
+    if (!g->tab) st = MX_EINPUT;
+  }
+  if (st == MX_OK) {
+#pragma omp parallel for schedule(static) if (ne > SMALL)
+    for (size_t i = 0; i < ne; i++) {
+      if (i > 0 && key[i] == key[i - 1]) continue;
+      size_t j = i + 1;
+      while (j < ne && key[j] == key[i]) j++;
+      for (uint64_t h = gslot_of(key[i], g->mask);; h = (h + 1) & g->mask) {
+        uint64_t e = 0;
+        if (__atomic_compare_exchange_n(&g->tab[h].key, &e, key[i], 0,
+                                        __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE)) {
+          g->tab[h].beg = (uint32_t)i;
+          g->tab[h].end = (uint32_t)j;
+          break;
+        }
+      }
+    }
+  }
+  mx_free(off);
+  mx_free(ubx);
+  mx_free(ulev);
+  mx_free(key);
+  mx_free(idx);
+  mx_free(eel);
+  mx_free(ebox);
+  return st;
+}
+
+static inline const gcell *ggrid_find(const ggrid *g, uint64_t key) {
+  for (uint64_t h = gslot_of(key, g->mask);; h = (h + 1) & g->mask) {
+    const gcell *c = &g->tab[h];
+    if (c->key == key) return c;
+    if (c->key == 0) return NULL;
+  }
+}
+
+static inline double dist2(const double a[3], const double b[3]) {
+  const double x = a[0] - b[0], y = a[1] - b[1], z = a[2] - b[2];
+  return x * x + y * y + z * z;
+}
+
+static double point_segment_d2(const double p[3], const double a[3],
+                               const double b[3]) {
+  double d[3], ap[3];
+  for (int x = 0; x < 3; x++) {
+    d[x] = b[x] - a[x];
+    ap[x] = p[x] - a[x];
+  }
+  const double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+  double t = dd > 0.0 ? (ap[0] * d[0] + ap[1] * d[1] + ap[2] * d[2]) / dd : 0.0;
+  t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
+  double e2 = 0.0;
+  for (int x = 0; x < 3; x++) {
+    const double e = ap[x] - t * d[x];
+    e2 += e * e;
+  }
+  return e2;
+}
+
+static double point_triangle_d2(const double p[3], const double a[3],
+                                const double b[3], const double c[3]);
+
+/* Whether p is within d (d2 = d * d) of the triangle a-b-c: its box, its
+ * plane, then the exact distance. */
+static int near_triangle(const double p[3], const double *a, const double *b,
+                         const double *c, double d, double d2) {
+  for (int x = 0; x < 3; x++) {
+    const double lo = mx_min(a[x], mx_min(b[x], c[x])),
+                 hi = mx_max(a[x], mx_max(b[x], c[x]));
+    if (p[x] < lo - d || p[x] > hi + d) return 0;
+  }
+  double u[3], v[3], n[3];
+  for (int x = 0; x < 3; x++) {
+    u[x] = b[x] - a[x];
+    v[x] = c[x] - a[x];
+  }
+  n[0] = u[1] * v[2] - u[2] * v[1];
+  n[1] = u[2] * v[0] - u[0] * v[2];
+  n[2] = u[0] * v[1] - u[1] * v[0];
+  const double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+  const double h = n[0] * (p[0] - a[0]) + n[1] * (p[1] - a[1]) +
+                   n[2] * (p[2] - a[2]);
+  if (nn > 0.0 && h * h > 1.0000001 * d2 * nn) return 0;
+  return point_triangle_d2(p, a, b, c) <= d2;
+}
+
+/* Where the point p of node v lies on element c: 0 (nowhere, or v is one
+ * of its nodes, or p is exactly one of its nodes' points), else
+ * MX_CK_ON_* << 6 | local (see mx_check_hang; an edge a-b as 8 * a + b).
+ * Works in the element's own frame, scaled by a power of two to [0, 1). */
+static int on_element(const mx_mesh_data *m, size_t c, uint32_t v,
+                      const double p[3], double tol) {
+  const int t = m->type[c], nn = mx_cell_nodes[t];
+  const uint32_t *row = m->conn + 8 * c;
+  for (int j = 0; j < nn; j++)
+    if (row[j] == v) return 0;
+  const double *P[8];
+  double l2[3] = {INFINITY, INFINITY, INFINITY},
+         h2[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int j = 0; j < nn; j++) {
+    P[j] = m->xyz + 3 * (size_t)row[j];
+    if (same_point(P[j], p)) return 0; /* a duplicate node */
+    for (int a = 0; a < 3; a++) {
+      l2[a] = mx_min(l2[a], 0.5 * P[j][a]);
+      h2[a] = mx_max(h2[a], 0.5 * P[j][a]);
+    }
+  }
+  double h = 0.0;
+  for (int a = 0; a < 3; a++) h = mx_max(h, h2[a] - l2[a]);
+  if (!(h > 0.0)) return 0;
+  int ex;
+  frexp(h, &ex);
+  if (ex < -1000) return 0; /* below 1e-300: nothing to measure */
+  const double sc = ldexp(1.0, -ex);
+  double q[8][3], qp[3];
+  for (int j = 0; j < nn; j++)
+    for (int a = 0; a < 3; a++) q[j][a] = (0.5 * P[j][a] - l2[a]) * sc;
+  for (int a = 0; a < 3; a++) qp[a] = (0.5 * p[a] - l2[a]) * sc;
+  const double d = tol * h * sc, d2 = d * d;
+  for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+    const int8_t *fl = mx_cell_faces[t][f];
+    const int n = fl[3] < 0 ? 3 : 4;
+    int hit;
+    if (n == 3) {
+      hit = near_triangle(qp, q[fl[0]], q[fl[1]], q[fl[2]], d, d2);
+    } else {
+      double mid[3], lo[3], hi[3];
+      for (int a = 0; a < 3; a++) {
+        mid[a] = 0.25 * (q[fl[0]][a] + q[fl[1]][a] + q[fl[2]][a] +
+                         q[fl[3]][a]);
+        lo[a] = mx_min(mx_min(q[fl[0]][a], q[fl[1]][a]),
+                       mx_min(q[fl[2]][a], q[fl[3]][a]));
+        hi[a] = mx_max(mx_max(q[fl[0]][a], q[fl[1]][a]),
+                       mx_max(q[fl[2]][a], q[fl[3]][a]));
+      }
+      int inbox = 1;
+      for (int a = 0; a < 3; a++)
+        if (qp[a] < lo[a] - d || qp[a] > hi[a] + d) inbox = 0;
+      hit = 0;
+      for (int k = 0; inbox && !hit && k < 4; k++)
+        hit = near_triangle(qp, q[fl[k]], q[fl[(k + 1) % 4]], mid, d, d2);
+    }
+    if (!hit) continue;
+    for (int k = 0; k < n; k++)
+      if (dist2(qp, q[fl[k]]) <= d2) return MX_CK_ON_VERTEX << 6 | fl[k];
+    for (int k = 0; k < n; k++) {
+      const int a = fl[k], b = fl[(k + 1) % n];
+      if (point_segment_d2(qp, q[a], q[b]) <= d2)
+        return MX_CK_ON_EDGE << 6 | (a < b ? 8 * a + b : 8 * b + a);
+    }
+    return MX_CK_ON_FACE << 6 | f;
+  }
+  return 0;
+}
+
+/* The smallest element node v lies on (where it lies in *where), or
+ * UINT32_MAX; when ef is not NULL, flags every element it lies on. */
+static uint32_t node_query(const ggrid *g, const mx_mesh_data *m, size_t v,
+                           uint8_t *ef, int *where) {
+  const double *p = m->xyz + 3 * v;
+  double u[3];
+  for (int a = 0; a < 3; a++) u[a] = ucoord(&g->U, p[a], a);
+  uint32_t best = UINT32_MAX;
+  *where = 0;
+  /* The cells to look at, one per occupied level, their slots prefetched:
+   * the probes are independent cache misses. */
+  uint64_t keys[GLEVELS + 1];
+  uint8_t klev[GLEVELS + 1];
+  int nk = 0;
+  for (int lev = 0; lev <= GLEVELS; lev++) {
+    if (!(g->levels >> lev & 1)) continue;
+    uint32_t c0[3];
+    for (int a = 0; a < 3; a++) c0[a] = gcoord(u[a], lev);
+    keys[nk] = gkey(lev, c0);
+    klev[nk] = (uint8_t)lev;
+    __builtin_prefetch(&g->tab[gslot_of(keys[nk], g->mask)]);
+    nk++;
+  }
+  const gcell *found_c[GLEVELS + 1];
+  for (int k = 0; k < nk; k++) {
+    found_c[k] = ggrid_find(g, keys[k]);
+    if (found_c[k]) __builtin_prefetch(g->box + 6 * (size_t)found_c[k]->beg);
+  }
+  for (int k = 0; k < nk; k++) {
+    const gcell *gc = found_c[k];
+    if (!gc) continue;
+    const int lev = klev[k];
+    const double s = (double)(1u << lev);
+    double ps[3];
+    for (int a = 0; a < 3; a++) { /* the cell's coordinates from its key */
+      const uint32_t ca =
+          (uint32_t)(keys[k] >> ((2 - a) * lev)) & ((1u << lev) - 1);
+      ps[a] = u[a] * s - (double)ca;
+    }
+    for (uint32_t i = gc->beg; i < gc->end; i++) {
+      const float *b = g->box + 6 * (size_t)i;
+      if (ps[0] < b[0] || ps[0] > b[3] || ps[1] < b[1] || ps[1] > b[4] ||
+          ps[2] < b[2] || ps[2] > b[5])
+        continue;
+      const uint32_t e = g->elem[i];
+      const int w = on_element(m, e, (uint32_t)v, p, g->tol);
+      if (!w) continue;
+      if (ef) eflag(ef, e, MX_CK_GEOM_HANGING);
+      if (e < best) {
+        best = e;
+        *where = w;
+      }
+    }
+  }
+  return best;
+}
+
+/* Compares the nodes of faces used by one element (that are not exact
+ * hanging nodes) with the elements that have such a face (see check.h);
+ * flags the nodes found (F_GHANG) and the elements they lie on, counts
+ * the nodes, and tells where the first MX_CHECK_SHOWN lie. */
+static int geometric_pass(const mx_mesh_data *m, const faces *F,
+                          const ubox *U, uint8_t *flags, uint8_t *ef,
+                          double tol, mx_check_report *r) {
+  const size_t nc = m->ncells;
+  if (nc == 0 || !U->ok || !(tol >= 0.0)) return MX_OK;
+  /* the elements with a face used once, in index order */
+  const size_t nchunks = (nc + CHUNK - 1) / CHUNK;
+  uint64_t *cnt = mx_calloc((nchunks + 1) * sizeof *cnt);
+  if (!cnt) return MX_EINPUT;
+#pragma omp parallel for schedule(static) if (nchunks > 1)
+  for (size_t k = 0; k < nchunks; k++) {
+    const size_t end = (k + 1) * CHUNK < nc ? (k + 1) * CHUNK : nc;
+    uint64_t c0 = 0;
+    for (size_t c = k * CHUNK; c < end; c++)
+      for (int j = 0; j < nfaces[m->type[c]]; j++)
+        if (F->use[6 * c + (size_t)j] == 1) {
+          c0++;
+          break;
+        }
+    cnt[k] = c0;
+  }
+  const uint64_t nl = mx_scan_u64(cnt, nchunks + 1);
+  uint32_t *list = mx_alloc((nl + 1) * sizeof *list);
+  if (!list) {
+    mx_free(cnt);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static) if (nchunks > 1)
+  for (size_t k = 0; k < nchunks; k++) {
+    const size_t end = (k + 1) * CHUNK < nc ? (k + 1) * CHUNK : nc;
+    uint64_t at = cnt[k];
+    for (size_t c = k * CHUNK; c < end; c++)
+      for (int j = 0; j < nfaces[m->type[c]]; j++)
+        if (F->use[6 * c + (size_t)j] == 1) {
+          list[at++] = (uint32_t)c;
+          break;
+        }
+  }
+  mx_free(cnt);
+  ggrid g;
+  int st = ggrid_build(&g, m, U, tol, list, (size_t)nl);
+  mx_free(list);
+  if (st != MX_OK) {
+    ggrid_free(&g);
+    return st;
+  }
+  size_t found = 0;
+#pragma omp parallel for schedule(dynamic, 2048) reduction(+ : found) \
+    if (m->nnodes > SMALL)
+  for (size_t v = 0; v < m->nnodes; v++) {
+    const uint8_t fl = flag_get(&flags[v]);
+    if (!(fl & F_BND) || (fl & F_HANG)) continue;
+    int where;
+    if (node_query(&g, m, v, ef, &where) != UINT32_MAX) {
+      flag_or(&flags[v], F_GHANG);
+      found++;
+    }
+  }
+  /* Where the first ones lie (asked again: rare). */
+  for (size_t v = 0; v < m->nnodes && r->nshown < MX_CHECK_SHOWN && found;
+       v++) {
+    if (!(flags[v] & F_GHANG)) continue;
+    int where = 0;
+    const uint32_t e = node_query(&g, m, v, NULL, &where);
+    mx_check_hang *h = &r->hang_at[r->nshown++];
+    h->node = (uint32_t)v;
+    h->element = e;
+    h->on = where >> 6;
+    h->local = where & 63;
+    memcpy(h->xyz, m->xyz + 3 * v, sizeof h->xyz);
+    const uint32_t *row = m->conn + 8 * (size_t)e;
+    if (h->on == MX_CK_ON_VERTEX) {
+      h->nverts = 1;
+      h->verts[0] = row[h->local & 7];
+    } else if (h->on == MX_CK_ON_EDGE) {
+      h->nverts = 2;
+      h->verts[0] = row[h->local >> 3];
+      h->verts[1] = row[h->local & 7];
+    } else {
+      const int8_t *f = mx_cell_faces[m->type[e]][h->local];
+      h->nverts = f[3] < 0 ? 3 : 4;
+      for (int k = 0; k < h->nverts; k++) h->verts[k] = row[f[k]];
+    }
+  }
+  ggrid_free(&g);
+  r->geometric_hanging_nodes = found;
+  return MX_OK;
+}
+
+/* ---- pass 7: the surface ------------------------------------------------- */
 
 /* Squared distance from p to the triangle a-b-c: the closest point lies in
  * the Voronoi region of a vertex, of an edge, or of the face, told apart by
@@ -863,8 +1517,35 @@ static double tgrid_d2(const tgrid *g, const double p[3], uint32_t *stamp,
   }
 }
 
+/* Edges of the surface not used by exactly two of its triangles. */
+static int surface_open(const mx_trisoup *s, size_t *open) {
+  const size_t ne = 3 * s->nt;
+  uint64_t *k = mx_alloc((ne + 1) * sizeof *k);
+  if (!k) return MX_EINPUT;
+#pragma omp parallel for schedule(static) if (s->nt > 65536)
+  for (size_t t = 0; t < s->nt; t++)
+    for (int x = 0; x < 3; x++) {
+      const uint32_t a = s->tri[3 * t + (size_t)x],
+                     b = s->tri[3 * t + (size_t)(x + 1) % 3];
+      k[3 * t + (size_t)x] = a < b ? (uint64_t)a << 32 | b
+                                   : (uint64_t)b << 32 | a;
+    }
+  const int st = mx_sort_u64(k, NULL, ne);
+  size_t n = 0;
+  for (size_t i = 0; st == MX_OK && i < ne;) {
+    size_t j = i + 1;
+    while (j < ne && k[j] == k[i]) j++;
+    n += j - i != 2;
+    i = j;
+  }
+  mx_free(k);
+  *open = n;
+  return st;
+}
+
 static int surface_pass(const mx_mesh_data *m, const mx_trisoup *s,
-                        const uint8_t *flags, mx_check_report *r) {
+                        uint8_t *flags, double tol, mx_check_report *r) {
+  MX_CHECK(surface_open(s, &r->surface_open_edges));
   double lo[3], hi[3];
   mx_trisoup_bbox(s, lo, hi);
   double ctr[3], diag2 = 0.0;
@@ -876,7 +1557,7 @@ static int surface_pass(const mx_mesh_data *m, const mx_trisoup *s,
   const size_t nchunks = (s->nt + CHUNK - 1) / CHUNK;
   double *part = mx_alloc((nchunks + 1) * sizeof *part);
   if (!part) return MX_EINPUT;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nchunks > 1)
   for (size_t k = 0; k < nchunks; k++) {
     double v = 0.0;
     const size_t end = (k + 1) * CHUNK < s->nt ? (k + 1) * CHUNK : s->nt;
@@ -920,7 +1601,10 @@ static int surface_pass(const mx_mesh_data *m, const mx_trisoup *s,
     if (flags[v] & F_BND) bn[nb++] = (uint32_t)v;
   double worst = 0.0;
   int oom = 0;
-#pragma omp parallel reduction(max : worst)
+  size_t off = 0;
+  const double sdiag = sqrt(diag2);
+#pragma omp parallel reduction(max : worst) reduction(+ : off) \
+    if (nb > SMALL / 4)
   {
     uint32_t *stamp = mx_calloc(s->nt * sizeof *stamp);
     if (!stamp) {
@@ -933,13 +1617,18 @@ static int surface_pass(const mx_mesh_data *m, const mx_trisoup *s,
       const double d2 =
           tgrid_d2(&g, m->xyz + 3 * (size_t)bn[i], stamp, (uint32_t)i + 1);
       worst = mx_max(worst, d2);
+      if (!(sqrt(d2) / sdiag <= tol)) {
+        flag_or(&flags[bn[i]], F_OFF);
+        off++;
+      }
     }
     mx_free(stamp);
   }
   tgrid_free(&g);
   mx_free(bn);
   if (oom) return MX_EINPUT;
-  r->boundary_max_dist = sqrt(worst) / sqrt(diag2);
+  r->boundary_max_dist = sqrt(worst) / sdiag;
+  r->boundary_off_surface = off;
   return MX_OK;
 }
 
@@ -954,7 +1643,8 @@ static int validate(const mx_mesh_data *m) {
     return MX_EINPUT;
   }
   size_t bad = SIZE_MAX;
-#pragma omp parallel for schedule(static) reduction(min : bad)
+#pragma omp parallel for schedule(static) reduction(min : bad) \
+    if (m->ncells > SMALL)
   for (size_t c = 0; c < m->ncells; c++) {
     if (m->type[c] > MX_HEX) {
       if (c < bad) bad = c;
@@ -970,55 +1660,166 @@ static int validate(const mx_mesh_data *m) {
              bad, m->type[bad], m->nnodes);
     return MX_EINPUT;
   }
+#pragma omp parallel for schedule(static) reduction(min : bad) \
+    if (m->nnodes > 65536)
+  for (size_t i = 0; i < 3 * m->nnodes; i++)
+    if (!isfinite(m->xyz[i]) && i < bad) bad = i;
+  if (bad != SIZE_MAX) {
+    mx_error(NULL, 0, "check: node %zu has a coordinate that is not finite",
+             bad / 3);
+    return MX_EINPUT;
+  }
   return MX_OK;
 }
 
+typedef struct {
+  uint8_t *flags, *ef;
+  chash H;
+  faces F;
+} work;
+
+static void work_free(work *w) {
+  mx_free(w->flags);
+  mx_free(w->ef);
+  mx_free(w->H.slot);
+  mx_free(w->H.seg);
+  faces_free(&w->F);
+  memset(w, 0, sizeof *w);
+}
+
+/* The first MX_CHECK_LIST ids of each kind, and the first geometric
+ * hanging nodes with where they lie. */
+static void collect_lists(const mx_mesh_data *m, const work *w,
+                          mx_check_report *r) {
+  for (size_t c = 0; c < m->ncells; c++) {
+    const uint8_t f = w->ef[c];
+    if (!f) continue;
+    for (int k = 0; k < MX_CK_ELEM_KINDS; k++) {
+      mx_check_ids *l = &r->elem_ids[k];
+      if ((f >> k & 1) && l->n < MX_CHECK_LIST) l->id[l->n++] = (uint32_t)c;
+    }
+  }
+  const int closed = r->has_surface && r->surface_open_edges == 0;
+  for (size_t v = 0; v < m->nnodes; v++) {
+    const uint8_t f = w->flags[v];
+    if ((f & (F_USED | F_DUP | F_HANG | F_GHANG | F_OFF)) == F_USED) continue;
+    const int kind[MX_CK_NODE_KINDS] = {!(f & F_USED), (f & F_DUP) != 0,
+                                        (f & F_HANG) != 0, (f & F_GHANG) != 0,
+                                        closed && (f & F_OFF)};
+    for (int k = 0; k < MX_CK_NODE_KINDS; k++) {
+      mx_check_ids *l = &r->node_ids[k];
+      if (kind[k] && l->n < MX_CHECK_LIST) l->id[l->n++] = (uint32_t)v;
+    }
+  }
+}
+
 static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
-                      mx_check_report *r, uint8_t *flags, chash *H,
-                      faces *F) {
-  MX_CHECK(element_pass(m, flags, r));
+                      const mx_check_options *o, mx_check_report *r,
+                      work *w) {
+  const size_t nn = m->nnodes;
+  w->flags = mx_calloc(nn + 1);
+  w->ef = mx_calloc(m->ncells + 1);
+  if (!w->flags || !w->ef) return MX_EINPUT;
+  uint8_t *flags = w->flags;
+  MX_CHECK(element_pass(m, flags, w->ef, o->degenerate_below, r));
   size_t unused = 0;
-#pragma omp parallel for schedule(static) reduction(+ : unused)
-  for (size_t v = 0; v < m->nnodes; v++) unused += !(flags[v] & F_USED);
+#pragma omp parallel for schedule(static) reduction(+ : unused) \
+    if (nn > SMALL)
+  for (size_t v = 0; v < nn; v++) unused += !(flags[v] & F_USED);
   r->unused_nodes = unused;
+  chash *H = &w->H;
   MX_CHECK(chash_build(H, m, &r->duplicate_nodes));
-  MX_CHECK(faces_bucket(m, F));
+  if (r->duplicate_nodes) { /* which: those that are not the smallest id */
+#pragma omp parallel for schedule(static) if (nn > SMALL)
+    for (size_t v = 0; v < nn; v++)
+      if (chash_find(H, m->xyz + 3 * v) != (int64_t)v) flags[v] |= F_DUP;
+  }
+  MX_CHECK(faces_bucket(m, &w->F));
   face_counts fc;
-  MX_CHECK(faces_match(m, F, H, flags, &fc));
+  MX_CHECK(faces_match(m, &w->F, H, flags, w->ef, &fc));
   r->faces_interior = fc.interior;
   r->faces_boundary = fc.boundary;
   r->faces_overshared = fc.overshared;
   r->faces_misoriented = fc.misoriented;
-  edge_midpoints(m, H, flags);
+  edge_midpoints(m, H, flags, w->ef);
   size_t hang = 0;
-#pragma omp parallel for schedule(static) reduction(+ : hang)
-  for (size_t v = 0; v < m->nnodes; v++) hang += (flags[v] & F_HANG) != 0;
+#pragma omp parallel for schedule(static) reduction(+ : hang) \
+    if (nn > SMALL)
+  for (size_t v = 0; v < nn; v++) hang += (flags[v] & F_HANG) != 0;
   r->hanging_nodes = hang;
-  MX_CHECK(boundary_pass(m, F, flags, fc.boundary, r));
-  if (surface) MX_CHECK(surface_pass(m, surface, flags, r));
+  MX_CHECK(boundary_pass(m, &w->F, flags, w->ef, fc.boundary, r));
+  mx_free(H->slot); /* memory for the next passes */
+  mx_free(H->seg);
+  H->slot = H->seg = NULL;
+  mx_free(w->F.slot);
+  mx_free(w->F.end);
+  w->F.slot = NULL;
+  w->F.end = NULL;
+  MX_CHECK(geometric_pass(m, &w->F, &H->U, flags, w->ef, o->hang_tol, r));
+  faces_free(&w->F);
+  memset(&w->F, 0, sizeof w->F);
+  if (surface) {
+    r->has_surface = 1;
+    MX_CHECK(surface_pass(m, surface, flags, o->boundary_tol, r));
+    if (r->surface_open_edges == 0) {
+      double tol = o->volume_tol;
+      if (!(tol > 0.0)) {
+        /* a coarse mesh loses or gains up to about a layer of elements
+         * along the surface: half of one is allowed, 5% at least */
+        double area = 0.0;
+        for (size_t t = 0; t < surface->nt; t++) {
+          const uint32_t *v = surface->tri + 3 * t;
+          const double ux = surface->x[v[1]] - surface->x[v[0]],
+                       uy = surface->y[v[1]] - surface->y[v[0]],
+                       uz = surface->z[v[1]] - surface->z[v[0]];
+          const double wx = surface->x[v[2]] - surface->x[v[0]],
+                       wy = surface->y[v[2]] - surface->y[v[0]],
+                       wz = surface->z[v[2]] - surface->z[v[0]];
+          const double cx = uy * wz - uz * wy, cy = uz * wx - ux * wz, cz = ux * wy - uy * wx;
+          area += 0.5 * sqrt(cx * cx + cy * cy + cz * cz);
+        }
+        const double V = fabs(r->surface_volume);
+        const double h = m->ncells ? cbrt(fabs(r->volume) / (double)m->ncells) : 0.0;
+        tol = V > 0.0 ? fmax(0.05, 0.5 * area * h / V) : 0.05;
+        r->opt.volume_tol = tol;
+        r->opt.volume_tol_auto = 1;
+      }
+      r->volume_off = !(fabs(r->volume_error) <= tol);
+    } else { /* an open surface: indicative only */
+      r->boundary_off_surface = 0;
+    }
+  }
+  collect_lists(m, w, r);
   return MX_OK;
 }
 
-int mx_check_mesh(const mx_mesh_data *m, const mx_trisoup *surface,
-                  mx_check_report *r) {
+int mx_check_mesh_opt(const mx_mesh_data *m, const mx_trisoup *surface,
+                      const mx_check_options *opt, mx_check_report *r) {
   memset(r, 0, sizeof *r);
+  mx_check_options o;
+  mx_check_defaults(&o);
+  if (opt) o = *opt;
+  r->opt = o;
   r->surface_volume = r->volume_error = r->boundary_max_dist = NAN;
   r->jens_min = r->jens_mean = NAN;
   MX_CHECK(validate(m));
   r->nodes = m->nnodes;
   r->elements = m->ncells;
-  uint8_t *flags = mx_calloc(m->nnodes + 1);
-  chash H;
-  memset(&H, 0, sizeof H);
-  faces F = {0};
-  int st = flags ? check_body(m, surface, r, flags, &H, &F) : MX_EINPUT;
-  faces_free(&F);
-  mx_free(H.slot);
-  mx_free(H.seg);
-  mx_free(flags);
+  r->empty = m->nnodes == 0 || m->ncells == 0;
+  work w;
+  memset(&w, 0, sizeof w);
+  const int st = check_body(m, surface, &o, r, &w);
+  work_free(&w);
   if (st != MX_OK) return st;
-  r->defects = r->invalid + r->faces_overshared + r->faces_misoriented +
-               r->quad_vs_triangles + r->open_boundary_edges +
-               r->hanging_nodes + r->unused_nodes + r->duplicate_nodes;
+  r->defects = r->empty + r->invalid + r->degenerate + r->faces_overshared +
+               r->faces_misoriented + r->quad_vs_triangles +
+               r->open_boundary_edges + r->hanging_nodes +
+               r->geometric_hanging_nodes + r->unused_nodes +
+               r->duplicate_nodes + r->volume_off + r->boundary_off_surface;
   return MX_OK;
+}
+
+int mx_check_mesh(const mx_mesh_data *m, const mx_trisoup *surface,
+                  mx_check_report *r) {
+  return mx_check_mesh_opt(m, surface, NULL, r);
 }

@@ -3,8 +3,12 @@
  * octree that produced the mesh.
  *
  * Definitions (the counters marked * are defects):
+ *  empty*              1 when the mesh has no element or no node, else 0;
  *  invalid*            elements whose J_ENS (kernels/quality.h) is <= 0 or
- *                      not a number;
+ *                      not a number (inverted, or exactly flat);
+ *  degenerate*         elements with 0 < J_ENS < degenerate_below (1e-6 by
+ *                      default: nodes (nearly) collinear or coplanar); an
+ *                      element is counted in one of invalid / degenerate;
  *  jens_min/mean       over all elements (NAN without elements);
  *  faces are matched by their sorted node ids, triangles and quads apart:
  *  faces_interior      faces used by exactly two elements;
@@ -27,6 +31,24 @@
  *                      of a quad face they are not a vertex of (its centre
  *                      when the quad is a parallelogram); each node counted
  *                      once;
+ *  geometric_hanging_nodes* the other nodes that lie, within hang_tol
+ *                      (1e-9) times the element's size (the largest extent
+ *                      of its bounding box), on a face (quads: the four
+ *                      triangles from its edges to its centroid, as in
+ *                      mx_element_volume), on an edge or at a vertex of an
+ *                      element they are not a node of; nodes at exactly the
+ *                      same point as a vertex are duplicates (below), not
+ *                      this. Compared: the nodes of faces used by one
+ *                      element, with the elements that have such a face --
+ *                      a node all of whose faces are matched is surrounded
+ *                      by its own elements, and an element whose faces are
+ *                      all matched is surrounded by its neighbours, so a
+ *                      node lying on it elsewhere would mean overlapping
+ *                      elements, which this checker does not look for.
+ *                      Found through a multi-level grid of the elements'
+ *                      bounding boxes (each element in the cells of the
+ *                      level whose cells are at least its size: O(n)
+ *                      lookups);
  *  unused_nodes*       nodes no element refers to;
  *  duplicate_nodes*    nodes whose coordinates equal those of another node
  *                      (k equal nodes count k - 1);
@@ -35,20 +57,91 @@
  *                      signed tetrahedra from the centre of its bounding box,
  *                      which for a closed surface equals the sum from the
  *                      origin but loses less to cancellation), NAN without;
+ *  surface_open_edges  edges of the surface not used by exactly two of its
+ *                      triangles (0: closed);
  *  volume_error        (volume - surface_volume) / surface_volume, or NAN;
+ *  volume_off*         with a closed surface: 1 when |volume_error| >
+ *                      volume_tol (see mx_check_options) or is not a number;
  *  boundary_max_dist   the largest distance from a node of a boundary face
  *                      to the nearest surface triangle, over the diagonal of
- *                      the surface's bounding box; NAN without surface.
- *  defects = invalid + every counter marked *.
- * Sums are formed in fixed chunks, so every number is the same whatever the
- * thread count. */
+ *                      the surface's bounding box; NAN without surface;
+ *  boundary_off_surface* with a closed surface: the boundary nodes whose
+ *                      distance is more than boundary_tol (1e-6) times the
+ *                      diagonal. With an open surface (a hole) both
+ *                      measures are reported but count as no defect.
+ *  defects = the sum of every counter marked *.
+ * For each kind of defect the report lists the first MX_CHECK_LIST element
+ * ids (0-based, ascending) involved -- elements with the bad J_ENS, the
+ * elements using an overshared or misoriented face, the quad's element, the
+ * elements of the faces along an open edge, the elements on which a
+ * hanging node lies -- and the first node ids of the node defects; and the
+ * first MX_CHECK_SHOWN geometric hanging nodes with where they lie.
+ * Sums are formed in fixed chunks and lists are the smallest ids, so every
+ * number is the same whatever the thread count. */
 #ifndef MX_CHECK_MESH_H
 #define MX_CHECK_MESH_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "io/read_mesh.h"
 #include "soa/trisoup.h"
+
+enum { MX_CHECK_LIST = 20, MX_CHECK_SHOWN = 5 };
+
+/* Kinds of defective elements (bit k of the per-element flags). */
+enum {
+  MX_CK_INVALID,
+  MX_CK_DEGENERATE,
+  MX_CK_OVERSHARED,
+  MX_CK_MISORIENTED,
+  MX_CK_QUAD_TRI,
+  MX_CK_OPEN_EDGE,
+  MX_CK_HANGING,
+  MX_CK_GEOM_HANGING,
+  MX_CK_ELEM_KINDS
+};
+/* Kinds of defective nodes. */
+enum {
+  MX_CK_N_UNUSED,
+  MX_CK_N_DUPLICATE,
+  MX_CK_N_HANGING,
+  MX_CK_N_GEOM_HANGING,
+  MX_CK_N_OFF_SURFACE,
+  MX_CK_NODE_KINDS
+};
+/* Their names as in the report's counters ("invalid", "unused_nodes"...). */
+extern const char *const mx_check_elem_kind_name[MX_CK_ELEM_KINDS];
+extern const char *const mx_check_node_kind_name[MX_CK_NODE_KINDS];
+
+typedef struct {
+  uint32_t n;                   /* ids listed (<= MX_CHECK_LIST) */
+  uint32_t id[MX_CHECK_LIST];   /* ascending */
+} mx_check_ids;
+
+/* Where a geometric hanging node lies. */
+enum { MX_CK_ON_VERTEX = 1, MX_CK_ON_EDGE = 2, MX_CK_ON_FACE = 3 };
+typedef struct {
+  uint32_t node;
+  uint32_t element; /* the smallest element it lies on */
+  int on;           /* MX_CK_ON_* */
+  int local;        /* vertex: local node; edge: 8 * a + b (local nodes);
+                       face: local face (soa/mesh.h mx_cell_faces) */
+  int nverts;       /* the vertex, edge or face: its nodes */
+  uint32_t verts[4];
+  double xyz[3];
+} mx_check_hang;
+
+typedef struct {
+  double degenerate_below; /* J_ENS under this (and > 0): degenerate; 1e-6 */
+  double hang_tol;         /* geometric hanging nodes, relative; 1e-9 */
+  double volume_tol;       /* |volume_error| above: a defect; 0 (default):
+                            * chosen from the mesh, max(0.05, half a layer of
+                            * elements along the surface: 0.5 A h / V, with A
+                            * the surface's area, h = (V / elements)^(1/3)) */
+  int volume_tol_auto;     /* set by the check when it chose volume_tol */
+  double boundary_tol;     /* boundary_max_dist above: a defect; 1e-6 */
+} mx_check_options;
 
 typedef struct {
   size_t nodes, elements, by_type[4]; /* by_type indexed MX_TET .. MX_HEX */
@@ -63,11 +156,27 @@ typedef struct {
   double volume_error;
   double boundary_max_dist;
   size_t defects;
+  /* since the geometric checks */
+  size_t empty, degenerate, geometric_hanging_nodes, volume_off,
+      boundary_off_surface, surface_open_edges;
+  int has_surface;
+  mx_check_options opt; /* the tolerances used */
+  mx_check_ids elem_ids[MX_CK_ELEM_KINDS];
+  mx_check_ids node_ids[MX_CK_NODE_KINDS];
+  size_t nshown; /* entries of hang_at */
+  mx_check_hang hang_at[MX_CHECK_SHOWN];
 } mx_check_report;
 
+/* The defaults above. */
+void mx_check_defaults(mx_check_options *o);
+
 /* Fills *r. Returns MX_OK, or MX_EINPUT (message printed) for a mesh that
- * cannot be checked at all: a type out of range, a node index >= nnodes, or
- * more than 2^32 - 2 nodes or 715 million cells; also when out of memory. */
+ * cannot be checked at all: a type out of range, a node index >= nnodes, a
+ * coordinate that is not finite, or more than 2^32 - 2 nodes or 715 million
+ * cells; also when out of memory. opt NULL: the defaults. */
+int mx_check_mesh_opt(const mx_mesh_data *m, const mx_trisoup *surface,
+                      const mx_check_options *opt, mx_check_report *r);
+/* The same with the default options. */
 int mx_check_mesh(const mx_mesh_data *m, const mx_trisoup *surface,
                   mx_check_report *r);
 
