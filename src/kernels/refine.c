@@ -563,5 +563,8 @@ static int refine_levels(mx_builder *B, int balance_now) {
   return MX_OK;
 }
 
-int mx_refine_balanced(mx_builder *B) { return refine_levels(B, 1); }
+int mx_refine_balanced(mx_builder *B) {
+  MX_CHECK(refine_levels(B, 1));
+  return mx_resolve_closures(B);
+}
 int mx_refine_unbalanced(mx_builder *B) { return refine_levels(B, 0); }

@@ -29,6 +29,11 @@ int mx_raise_edge_levels(mx_builder *B, int levels);
  * neighbours: what the transition masks and the balance look up there.
  * Octants already registered are skipped (flag MX_OCT_EDGES). */
 int mx_edges_ensure(mx_builder *B, const uint32_t *list, size_t n, int with_parents);
+/* Splits (with balance) the leaves coarser than a face closure of the
+ * transition next to them (a face centre whose neighbour's children were
+ * dropped outside the domain adds edge midpoints that a coarser leaf along
+ * the edge cannot take): called after every refinement of the octree. */
+int mx_resolve_closures(mx_builder *B);
 void mx_retarget_leaves(mx_builder *B);
 int mx_refine_leaves_to_target(mx_builder *B);
 /* octs: octant indices (leaves; octants no longer leaves are skipped). */

@@ -488,6 +488,7 @@ int mx_build_tree(mx_mesher *m) {
     MX_CHECK(mx_refine_unbalanced(&m->B));
     stage(m, "balance");
     MX_CHECK(mx_balance_recursive(&m->B));
+    MX_CHECK(mx_resolve_closures(&m->B));
   }
   m->S.ph.refine += m->B.stats.t_refine;
   m->S.ph.balance += m->B.stats.t_balance;
