@@ -268,7 +268,10 @@ void mx_print_summary(const mx_summary *s, const mx_run_info *ri) {
            b < 1e6 ? b / 1e3 : b / 1e6, b < 1e6 ? "kB" : "MB");
   }
   if (ri->dry_run) printf("  written      nothing: a dry run (give -o FILE to write the mesh)\n");
-  if (ri->status == MX_EINVALID)
+  if (ri->status == MX_EINVALID && s->invalid)
     printf("  result       INVALID: %zu element(s) with J_ENS below %g (exit 5)\n", s->invalid,
            MX_JENS_VALID);
+  else if (ri->status == MX_EINVALID)
+    printf("  result       INVALID: the mesh's volume is %+.1f%% off the input's (exit 5)\n",
+           100.0 * s->volume_error);
 }

@@ -14,6 +14,7 @@
 #include "kernels/splice.h"
 #include "soa/mesh.h"
 
+#include <math.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -339,7 +340,29 @@ static int input_policy(mx_mesher *m) {
   const char *first = m->domain_name[0];
   if (!r.boundary_edges && !r.nonmanifold_edges) {
     size_t flipped = 0;
-    MX_CHECK(mx_surface_orient(d, &flipped));
+    if (r.misoriented_edges) {
+      /* each piece consistent and outward (a hole among them would need
+       * its nesting: a warning says what was flipped) */
+      MX_CHECK(mx_surface_orient(d, &flipped));
+    } else {
+      /* consistent: only a domain inside out (negative enclosed volume,
+       * holes counted by their own orientation) is turned over */
+      double vol = 0.0;
+      for (size_t t = 0; t < d->nt; t++) {
+        const uint32_t *v = d->tri + 3 * t;
+        vol += d->x[v[0]] * (d->y[v[1]] * d->z[v[2]] - d->z[v[1]] * d->y[v[2]]) -
+               d->y[v[0]] * (d->x[v[1]] * d->z[v[2]] - d->z[v[1]] * d->x[v[2]]) +
+               d->z[v[0]] * (d->x[v[1]] * d->y[v[2]] - d->y[v[1]] * d->x[v[2]]);
+      }
+      if (vol < 0.0) {
+        for (size_t t = 0; t < d->nt; t++) {
+          const uint32_t tmp = d->tri[3 * t + 1];
+          d->tri[3 * t + 1] = d->tri[3 * t + 2];
+          d->tri[3 * t + 2] = tmp;
+        }
+        flipped = d->nt;
+      }
+    }
     if (flipped) {
       mx_warning(m->ndomain == 1 ? first : NULL, 0,
                  "%zu triangle(s) re-oriented: the surface%s inconsistently oriented or "
@@ -624,6 +647,53 @@ int mx_repair(mx_mesher *m) {
   return MX_OK;
 }
 
+/* The domain volume check of the full stage: a mesh that fills much more or
+ * much less than the input encloses breaks the contract too (the levels are
+ * too coarse for thin parts of the input, or the inside flooded). The
+ * tolerance is the one of `mixoct check --surface`: half a layer of
+ * elements along the surface, 5% at least. One closed input only (with
+ * holes or several bodies the enclosed volume needs their nesting). */
+static int volume_check(mx_mesher *m) {
+  const mx_mesh_out *M = &m->M;
+  if (m->p.stage != MX_STAGE_FULL || m->ndomain != 1 || m->p.repair_input || !M->ncells)
+    return MX_OK;
+  const mx_trisoup *d = &m->domain;
+  if (d->nshells > 1) return MX_OK;
+  double vs = 0.0, area = 0.0;
+  for (size_t t = 0; t < d->nt; t++) {
+    const uint32_t *v = d->tri + 3 * t;
+    const double a[3] = {d->x[v[0]], d->y[v[0]], d->z[v[0]]};
+    const double b[3] = {d->x[v[1]], d->y[v[1]], d->z[v[1]]};
+    const double c[3] = {d->x[v[2]], d->y[v[2]], d->z[v[2]]};
+    vs += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+          a[2] * (b[0] * c[1] - b[1] * c[0]);
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const double x = u[1] * w[2] - u[2] * w[1], y = u[2] * w[0] - u[0] * w[2],
+                 z = u[0] * w[1] - u[1] * w[0];
+    area += 0.5 * sqrt(x * x + y * y + z * z);
+  }
+  vs = fabs(vs) / 6.0;
+  double vm = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : vm)
+  for (size_t c = 0; c < M->ncells; c++) {
+    double p[8][3];
+    const int nv = mx_cell_nodes[M->type[c]];
+    for (int k = 0; k < nv; k++) memcpy(p[k], M->xyz + 3 * (size_t)M->conn[8 * c + k], sizeof p[k]);
+    vm += mx_element_volume(M->type[c], (const double(*)[3])p);
+  }
+  if (!(vs > 0.0)) return MX_OK;
+  const double h = cbrt(fabs(vm) / (double)M->ncells);
+  const double tol = fmax(0.05, 0.5 * area * h / vs), err = (vm - vs) / vs;
+  m->S.volume_error = err;
+  if (fabs(err) <= tol) return MX_OK;
+  mx_error(m->domain_name[0], 0, "the mesh holds %.1f%% of the volume the input encloses "
+           "(%.4g against %.4g; tolerance %.1f%%: half a layer of elements along the "
+           "surface): the levels are too coarse for thin parts of the input; ask for finer "
+           "ones (-s, -a, -b, -r)", 100.0 * vm / vs, vm, vs, 100.0 * tol);
+  return MX_EINVALID;
+}
+
 /* Per-node flags, counts and quality of the mesh just made; MX_EINVALID
  * when elements with J_ENS < 1e-6 remain. */
 int mx_mesh_finish(mx_mesher *m) {
@@ -641,7 +711,7 @@ int mx_mesh_finish(mx_mesher *m) {
              m->M.invalid, m->S.repair_rounds);
     return MX_EINVALID;
   }
-  return MX_OK;
+  return volume_check(m);
 }
 
 /* Mesh the current octree up to params.stage. */

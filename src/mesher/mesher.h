@@ -44,6 +44,7 @@ typedef struct {
   double t_restart;         /* seconds reading or writing the restart file */
   /* the last re-mesh after a refinement (remesh_local.c) */
   size_t reoriented;        /* input triangles flipped by the input policy */
+  double volume_error;      /* (mesh - enclosed) / enclosed, one closed input */
   int input_repaired;       /* the domain is the winding number's (repair_input) */
   int local;                /* 1: every re-mesh of the call was local */
   int local_attempts;       /* patches tried (more rings when one fell short) */
