@@ -1,0 +1,230 @@
+/* libFuzzer targets for the input readers, one per format, chosen when
+ * compiling with -DFUZZ_FORMAT=NAME:
+ *   off mdl stl obj ply  mx_read_off .. mx_read_ply (src/io/read_*.c), then
+ *                        mx_trisoup_check (src/io/surface_check.c)
+ *   reg                  mx_read_reg (src/io/read_reg.c)
+ *   mesh                 mx_read_mesh (src/io/read_mesh.c), as `mixoct
+ *                        check` calls it, then mx_check_mesh on small meshes;
+ *                        -DFUZZ_EXT=vtk|vtu|msh|mesh|meshb picks the file
+ *                        name's extension (default vtk)
+ *
+ * The readers take a path: each input is written to a file of this process
+ * under $TMPDIR (/dev/shm when writable and TMPDIR is unset, else /tmp),
+ * with the format's extension, and read back. What a reader accepts must
+ * keep its promises (finite coordinates, indices in range, ...): anything
+ * else aborts, so libFuzzer keeps the input. Messages go to a handler that
+ * formats and drops them (so bad format arguments are still exercised).
+ *
+ * Build, from the source root (tools/fuzz.sh does this for every target):
+ *   clang -std=c17 -g -O1 -fsanitize=fuzzer,address,undefined -fopenmp \
+ *     -D_GNU_SOURCE -Isrc -Iinclude -DFUZZ_FORMAT=off tools/fuzz_readers.c \
+ *     SOURCES -lm -o fuzz_off
+ * where SOURCES are the .c files under src but those of src/cli (fuzz.sh
+ * compiles them once into an archive).
+ * Run (new inputs go to the first directory, the seeds are read from the
+ * second):
+ *   ./fuzz_off -max_total_time=60 -timeout=10 CORPUS_DIR tools/fuzz_seeds/off
+ */
+#include <fcntl.h>
+#include <math.h>
+#include <omp.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "common.h"
+#include "io/read_mesh.h"
+#include "kernels/check.h"
+#include "soa/mesh.h"
+#include "soa/regions.h"
+#include "soa/trisoup.h"
+
+/* FUZZ_FORMAT as a number, by token pasting: FMT_off and so on. */
+#define FMT_off 1
+#define FMT_mdl 2
+#define FMT_stl 3
+#define FMT_obj 4
+#define FMT_ply 5
+#define FMT_reg 6
+#define FMT_mesh 7
+#define FUZZ_CAT2(a, b) a##b
+#define FUZZ_CAT(a, b) FUZZ_CAT2(a, b)
+#define FUZZ_STR2(a) #a
+#define FUZZ_STR(a) FUZZ_STR2(a)
+
+#ifndef FUZZ_FORMAT
+#error "compile with -DFUZZ_FORMAT=off|mdl|stl|obj|ply|reg|mesh"
+#endif
+#define FUZZ_ID FUZZ_CAT(FMT_, FUZZ_FORMAT)
+#if FUZZ_ID < 1 || FUZZ_ID > 7
+#error "unknown FUZZ_FORMAT"
+#endif
+
+#if FUZZ_ID == FMT_mesh && defined(FUZZ_EXT)
+#define EXT FUZZ_STR(FUZZ_EXT)
+#elif FUZZ_ID == FMT_mesh
+#define EXT "vtk"
+#else
+#define EXT FUZZ_STR(FUZZ_FORMAT)
+#endif
+
+/* Reported when a reader breaks a promise; abort() makes libFuzzer keep
+ * the input as a crash. */
+#define REQUIRE(cond)                                                         \
+  do {                                                                        \
+    if (!(cond)) {                                                            \
+      fprintf(stderr, "fuzz_readers: %s:%d: broken promise: %s\n", __FILE__,  \
+              __LINE__, #cond);                                               \
+      abort();                                                                \
+    }                                                                         \
+  } while (0)
+
+static char path[512];
+
+static void remove_file(void) {
+  if (path[0]) unlink(path);
+}
+
+static void drop_message(void *user, int kind, const char *text) {
+  (void)user;
+  (void)kind;
+  /* touch the whole message: a bad %.*s shows up here under ASan */
+  volatile size_t n = strlen(text);
+  (void)n;
+}
+
+static const char *tmp_dir(void) {
+  const char *d = getenv("TMPDIR");
+  if (d && *d) return d;
+  return access("/dev/shm", W_OK) == 0 ? "/dev/shm" : "/tmp";
+}
+
+int LLVMFuzzerInitialize(int *argc, char ***argv);
+int LLVMFuzzerInitialize(int *argc, char ***argv) {
+  (void)argc;
+  (void)argv;
+  snprintf(path, sizeof path, "%s/fuzz_%s_%ld.%s", tmp_dir(),
+           FUZZ_STR(FUZZ_FORMAT), (long)getpid(), EXT);
+  atexit(remove_file);
+  mx_quiet = 1;
+  mx_msg_fn = drop_message;
+  omp_set_num_threads(1); /* targets run side by side, one core each */
+  return 0;
+}
+
+static void write_input(const uint8_t *data, size_t size) {
+  int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (fd < 0) {
+    perror(path);
+    abort();
+  }
+  for (size_t done = 0; done < size;) {
+    ssize_t w = write(fd, data + done, size - done);
+    if (w <= 0) {
+      perror(path);
+      abort();
+    }
+    done += (size_t)w;
+  }
+  close(fd);
+}
+
+#if FUZZ_ID == FMT_reg
+
+static void fuzz_file(void) {
+  mx_box_region *b;
+  size_t n;
+  if (mx_read_reg(path, &b, &n) != MX_OK) {
+    REQUIRE(b == NULL && n == 0);
+    return;
+  }
+  REQUIRE(b != NULL || n == 0);
+  for (size_t i = 0; i < n; i++) {
+    for (int d = 0; d < 3; d++) {
+      REQUIRE(isfinite(b[i].lo[d]) && isfinite(b[i].hi[d]));
+      REQUIRE(b[i].lo[d] <= b[i].hi[d]);
+    }
+    REQUIRE(b[i].level >= 0);
+  }
+  mx_free(b);
+}
+
+#elif FUZZ_ID == FMT_mesh
+
+static void fuzz_file(void) {
+  mx_mesh_data m;
+  if (mx_read_mesh(path, &m) != MX_OK) {
+    REQUIRE(m.nnodes == 0 && m.ncells == 0 && !m.xyz && !m.type && !m.conn);
+    return;
+  }
+  REQUIRE(m.nnodes == 0 || m.xyz);
+  REQUIRE(m.ncells == 0 || (m.type && m.conn));
+  for (size_t i = 0; i < 3 * m.nnodes; i++) REQUIRE(isfinite(m.xyz[i]));
+  for (size_t c = 0; c < m.ncells; c++) {
+    REQUIRE(m.type[c] <= MX_HEX);
+    const int k = mx_cell_nodes[m.type[c]];
+    for (int j = 0; j < 8; j++) {
+      const uint32_t v = m.conn[8 * c + j];
+      REQUIRE(j < k ? v < m.nnodes : v == 0);
+    }
+  }
+  if (m.nnodes + m.ncells <= 100000) { /* as `mixoct check` goes on */
+    mx_check_report r;
+    REQUIRE(mx_check_mesh(&m, NULL, &r) == MX_OK);
+    REQUIRE(r.elements == m.ncells && r.nodes == m.nnodes);
+  }
+  mx_mesh_data_free(&m);
+}
+
+#else
+
+static int read_surface(const char *p, mx_trisoup *s) {
+#if FUZZ_ID == FMT_off
+  return mx_read_off(p, s);
+#elif FUZZ_ID == FMT_mdl
+  return mx_read_mdl(p, s);
+#elif FUZZ_ID == FMT_stl
+  return mx_read_stl(p, s);
+#elif FUZZ_ID == FMT_obj
+  return mx_read_obj(p, s);
+#else
+  return mx_read_ply(p, s);
+#endif
+}
+
+static void fuzz_file(void) {
+  mx_trisoup s;
+  memset(&s, 0, sizeof s);
+  if (read_surface(path, &s) != MX_OK) {
+    mx_trisoup_free(&s); /* what callers do: must be harmless */
+    return;
+  }
+  /* the promises of soa/trisoup.h */
+  REQUIRE(s.nshells == 1);
+  REQUIRE(s.nv <= s.cap_v && s.nt <= s.cap_t);
+  REQUIRE(s.nt > 0 && s.nv > 0);
+  REQUIRE(s.nv <= UINT32_MAX);
+  for (size_t i = 0; i < s.nv; i++)
+    REQUIRE(isfinite(s.x[i]) && isfinite(s.y[i]) && isfinite(s.z[i]));
+  for (size_t i = 0; i < 3 * s.nt; i++) REQUIRE(s.tri[i] < s.nv);
+  for (size_t i = 0; i < s.nt; i++) REQUIRE(s.shell[i] == 0);
+  /* the checks after reading, as the mesher runs them */
+  size_t open_edges;
+  const int st = mx_trisoup_check(&s, path, &open_edges);
+  REQUIRE(st == MX_OK || (st == MX_EINPUT && s.nt == 0));
+  double lo[3], hi[3];
+  mx_trisoup_bbox(&s, lo, hi);
+  for (int d = 0; d < 3; d++) REQUIRE(lo[d] <= hi[d]);
+  mx_trisoup_free(&s);
+}
+
+#endif
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+  write_input(data, size);
+  fuzz_file();
+  return 0;
+}
