@@ -104,6 +104,49 @@ static inline int files_equal(const char *a, const char *b) {
 /* stderr goes to the file at path until capture_stderr_end, which restores
  * it and returns what was written (NUL-terminated in buf, cut to cap - 1
  * bytes). */
+/* Writes len bytes to path (a CHECK fails when it cannot). */
+static inline void write_bytes_file(const char *path, const void *data, size_t len) {
+  FILE *f = fopen(path, "wb");
+  CHECK(f != NULL);
+  if (!f) return;
+  CHECK(fwrite(data, 1, len, f) == len);
+  fclose(f);
+}
+
+/* Replaces 1-based line `line` of text by repl (deleted if repl is NULL);
+ * returns a malloc'd copy. */
+static inline char *text_edit_line(const char *text, int line, const char *repl) {
+  size_t n = strlen(text) + (repl ? strlen(repl) : 0) + 2;
+  char *out = malloc(n), *o = out;
+  if (!out) abort();
+  const char *p = text;
+  for (int l = 1; *p; l++) {
+    const char *nl = strchr(p, '\n');
+    size_t len = nl ? (size_t)(nl - p) + 1 : strlen(p);
+    if (l != line) {
+      memcpy(o, p, len);
+      o += len;
+    } else if (repl) {
+      o += sprintf(o, "%s\n", repl);
+    }
+    p += len;
+  }
+  *o = '\0';
+  return out;
+}
+
+/* Deletes lines [from, to] (1-based); returns a malloc'd copy. */
+static inline char *text_cut_lines(const char *text, int from, int to) {
+  char *t = strdup(text);
+  if (!t) abort();
+  for (int l = to; l >= from; l--) {
+    char *u = text_edit_line(t, l, NULL);
+    free(t);
+    t = u;
+  }
+  return t;
+}
+
 static int capture_saved_fd = -1;
 static inline void capture_stderr_begin(const char *path) {
   fflush(stderr);

@@ -31,13 +31,7 @@ static void tpath(char *buf, size_t n, const char *name) {
   snprintf(buf, n, "%s/%s", tmpdir, name);
 }
 
-static void write_bytes(const char *path, const void *data, size_t len) {
-  FILE *f = fopen(path, "wb");
-  CHECK(f != NULL);
-  if (!f) return;
-  CHECK(fwrite(data, 1, len, f) == len);
-  fclose(f);
-}
+#define write_bytes write_bytes_file
 
 static void capture_begin(void) {
   char path[128];
@@ -51,39 +45,8 @@ static const char *capture_end(void) {
   return capture_stderr_end(path, captured, sizeof captured);
 }
 
-/* Replaces 1-based line `line` of text by repl (deleted if repl is NULL);
- * returns a malloc'd copy. */
-static char *edit(const char *text, int line, const char *repl) {
-  size_t n = strlen(text) + (repl ? strlen(repl) : 0) + 2;
-  char *out = malloc(n), *o = out;
-  if (!out) abort();
-  const char *p = text;
-  for (int l = 1; *p; l++) {
-    const char *nl = strchr(p, '\n');
-    size_t len = nl ? (size_t)(nl - p) + 1 : strlen(p);
-    if (l != line) {
-      memcpy(o, p, len);
-      o += len;
-    } else if (repl) {
-      o += sprintf(o, "%s\n", repl);
-    }
-    p += len;
-  }
-  *o = '\0';
-  return out;
-}
-
-/* Deletes lines [from, to]. */
-static char *cut(const char *text, int from, int to) {
-  char *t = strdup(text);
-  if (!t) abort();
-  for (int l = to; l >= from; l--) {
-    char *u = edit(t, l, NULL);
-    free(t);
-    t = u;
-  }
-  return t;
-}
+#define edit text_edit_line
+#define cut text_cut_lines
 
 /* ---- checks ----------------------------------------------------------- */
 
