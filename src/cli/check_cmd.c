@@ -20,6 +20,7 @@
 #include <string.h>
 
 #include "cli/cli.h"
+#include "kernels/surface_defects.h"
 #include "common.h"
 #include "io/read_mesh.h"
 #include "kernels/check.h"
@@ -331,6 +332,14 @@ int mx_check_main(int argc, char **argv) {
   if (st == MX_OK && surf) {
     st = mx_read_surface(surf, &s);
     if (st == MX_OK) st = mx_trisoup_check(&s, surf, NULL);
+    /* inconsistently oriented triangles turned over (as the mesher does),
+     * so that the enclosed volume is the surface's */
+    mx_surface_defects sd;
+    if (st == MX_OK && mx_surface_defects_find(&s, &sd) == MX_OK && sd.misoriented_edges &&
+        !sd.boundary_edges && !sd.nonmanifold_edges) {
+      size_t flipped = 0;
+      st = mx_surface_orient(&s, &flipped);
+    }
   }
   const double t1 = mx_wtime();
   mx_check_report r;
