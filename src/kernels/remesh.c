@@ -37,20 +37,27 @@ int mx_raise_edge_levels(mx_builder *B, int levels) {
 
 static int build_root_map(mx_builder *B);
 
-/* The octant (key, level), or MX_NONE when the octree does not hold it. */
-static uint32_t find_octant(const mx_builder *B, uint64_t key, int level) {
+/* The deepest octant holding the level-`level` cell of key k, no deeper
+ * than that level (MX_NONE outside the octree). */
+static uint32_t covering_octant(const mx_builder *B, uint64_t key, int level) {
   const mx_octree *T = &B->oct;
   uint32_t c[3];
   mx_morton_decode(key, c);
   const int *d = B->grid.dims;
-  const size_t r = ((size_t)(c[2] >> MX_MAX_LEVEL) * (size_t)d[1] + (c[1] >> MX_MAX_LEVEL)) *
-                       (size_t)d[0] + (c[0] >> MX_MAX_LEVEL);
-  uint32_t o = B->root_of[r];
-  for (int l = 1; l <= level && o != MX_NONE; l++) {
-    if (!(T->flags[o] & MX_OCT_SPLIT)) return MX_NONE;
-    o = mx_octree_child(T, o, mx_morton_child_id(key, l));
+  uint32_t o = B->root_of[((size_t)(c[2] >> MX_MAX_LEVEL) * (size_t)d[1] +
+                           (c[1] >> MX_MAX_LEVEL)) * (size_t)d[0] + (c[0] >> MX_MAX_LEVEL)];
+  for (int l = 1; l <= level && o != MX_NONE && (T->flags[o] & MX_OCT_SPLIT); l++) {
+    const uint32_t ch = mx_octree_child(T, o, mx_morton_child_id(key, l));
+    if (ch == MX_NONE) return MX_NONE; /* a child outside the domain */
+    o = ch;
   }
   return o;
+}
+
+/* The octant (key, level), or MX_NONE when the octree does not hold it. */
+static uint32_t find_octant(const mx_builder *B, uint64_t key, int level) {
+  const uint32_t o = covering_octant(B, key, level);
+  return o != MX_NONE && B->oct.level[o] == level ? o : MX_NONE;
 }
 
 /* The face and edge neighbours: (dx, dy, dz) with one or two non-zero. */
@@ -126,22 +133,6 @@ int mx_edges_ensure(mx_builder *B, const uint32_t *list, size_t n, int with_pare
 
 /* ---- closures next to coarser leaves ---------------------------------- */
 
-/* The deepest octant holding the level-`level` cell of key k, no deeper
- * than that level (MX_NONE outside the octree). */
-static uint32_t covering_octant(const mx_builder *B, uint64_t key, int level) {
-  const mx_octree *T = &B->oct;
-  uint32_t c[3];
-  mx_morton_decode(key, c);
-  const int *d = B->grid.dims;
-  uint32_t o = B->root_of[((size_t)(c[2] >> MX_MAX_LEVEL) * (size_t)d[1] +
-                           (c[1] >> MX_MAX_LEVEL)) * (size_t)d[0] + (c[0] >> MX_MAX_LEVEL)];
-  for (int l = 1; l <= level && o != MX_NONE && (T->flags[o] & MX_OCT_SPLIT); l++) {
-    const uint32_t ch = mx_octree_child(T, o, mx_morton_child_id(key, l));
-    if (ch == MX_NONE) return MX_NONE; /* a child outside the domain */
-    o = ch;
-  }
-  return o;
-}
 
 static int build_root_map(mx_builder *B) {
   if (B->root_of) return MX_OK;

@@ -327,6 +327,27 @@ mx_requests mx_mesher_requests(const mx_mesher *m) {
 }
 
 /* Domain then region triangles in one soup, checked once. */
+/* The signed volume the triangles enclose (their orientation counts: holes
+ * oriented inward subtract); *area (may be NULL) gets their area. */
+static double enclosed_volume(const mx_trisoup *d, double *area) {
+  double vol = 0.0, ar = 0.0;
+  for (size_t t = 0; t < d->nt; t++) {
+    const uint32_t *v = d->tri + 3 * t;
+    const double a[3] = {d->x[v[0]], d->y[v[0]], d->z[v[0]]};
+    const double b[3] = {d->x[v[1]], d->y[v[1]], d->z[v[1]]};
+    const double c[3] = {d->x[v[2]], d->y[v[2]], d->z[v[2]]};
+    vol += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+           a[2] * (b[0] * c[1] - b[1] * c[0]);
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const double x = u[1] * w[2] - u[2] * w[1], y = u[2] * w[0] - u[0] * w[2],
+                 z = u[0] * w[1] - u[1] * w[0];
+    ar += 0.5 * sqrt(x * x + y * y + z * z);
+  }
+  if (area) *area = ar;
+  return vol / 6.0;
+}
+
 /* The input policy (issue 10): a closed, manifold domain is oriented
  * consistently and outward (a warning when triangles were flipped); one
  * with no well-defined inside (open or non-manifold edges, triangles that
@@ -347,14 +368,7 @@ static int input_policy(mx_mesher *m) {
     } else {
       /* consistent: only a domain inside out (negative enclosed volume,
        * holes counted by their own orientation) is turned over */
-      double vol = 0.0;
-      for (size_t t = 0; t < d->nt; t++) {
-        const uint32_t *v = d->tri + 3 * t;
-        vol += d->x[v[0]] * (d->y[v[1]] * d->z[v[2]] - d->z[v[1]] * d->y[v[2]]) -
-               d->y[v[0]] * (d->x[v[1]] * d->z[v[2]] - d->z[v[1]] * d->x[v[2]]) +
-               d->z[v[0]] * (d->x[v[1]] * d->y[v[2]] - d->y[v[1]] * d->x[v[2]]);
-      }
-      if (vol < 0.0) {
+      if (enclosed_volume(d, NULL) < 0.0) {
         for (size_t t = 0; t < d->nt; t++) {
           const uint32_t tmp = d->tri[3 * t + 1];
           d->tri[3 * t + 1] = d->tri[3 * t + 2];
@@ -659,21 +673,8 @@ static int volume_check(mx_mesher *m) {
     return MX_OK;
   const mx_trisoup *d = &m->domain;
   if (d->nshells > 1) return MX_OK;
-  double vs = 0.0, area = 0.0;
-  for (size_t t = 0; t < d->nt; t++) {
-    const uint32_t *v = d->tri + 3 * t;
-    const double a[3] = {d->x[v[0]], d->y[v[0]], d->z[v[0]]};
-    const double b[3] = {d->x[v[1]], d->y[v[1]], d->z[v[1]]};
-    const double c[3] = {d->x[v[2]], d->y[v[2]], d->z[v[2]]};
-    vs += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-          a[2] * (b[0] * c[1] - b[1] * c[0]);
-    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    const double x = u[1] * w[2] - u[2] * w[1], y = u[2] * w[0] - u[0] * w[2],
-                 z = u[0] * w[1] - u[1] * w[0];
-    area += 0.5 * sqrt(x * x + y * y + z * z);
-  }
-  vs = fabs(vs) / 6.0;
+  double area = 0.0;
+  const double vs = fabs(enclosed_volume(d, &area));
   double vm = 0.0;
 #pragma omp parallel for schedule(static) reduction(+ : vm)
   for (size_t c = 0; c < M->ncells; c++) {
