@@ -69,25 +69,7 @@ static const char *capture_end(void) {
   return capture_stderr_end(path, captured, sizeof captured);
 }
 
-/* Replaces 1-based line `line` of text by repl (deleted if NULL; repl gets
- * a newline); returns a malloc'd copy. */
-static char *edit(const char *text, long line, const char *repl) {
-  char *out = malloc(strlen(text) + (repl ? strlen(repl) : 0) + 2), *o = out;
-  const char *p = text;
-  for (long l = 1; *p; l++) {
-    const char *nl = strchr(p, '\n');
-    size_t len = nl ? (size_t)(nl - p) + 1 : strlen(p);
-    if (l != line) {
-      memcpy(o, p, len);
-      o += len;
-    } else if (repl) {
-      o += sprintf(o, "%s\n", repl);
-    }
-    p += len;
-  }
-  *o = '\0';
-  return out;
-}
+#define edit(text, line, repl) text_edit_line(text, (int)(line), repl)
 
 /* The first n lines of text (malloc'd). */
 static char *head(const char *text, long n) {
