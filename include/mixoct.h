@@ -80,7 +80,7 @@ typedef struct {
   double max_memory_mb; /* refuse runs estimated above; 0: memory available */
   double close_ratio;   /* remove-close distance, 0: 0.5 (see boundary) */
   double staircase_quality; /* 0: 0.2 (the papers) */
-  int repair_rounds;   /* list refinements of invalid elements' leaves, 3 */
+  int repair_rounds;   /* list refinements of the leaves of invalid elements and contacts, 10 */
   int repair_input;    /* 1: an input with no well-defined inside (open,
                         * non-manifold, self-intersecting, crossing) is meshed
                         * where its generalized winding number is above 1/2;
@@ -131,9 +131,11 @@ int mx_mesher_set_levels(mx_mesher *m, int surface_level, int all_level);
 /* ---- Meshing ----------------------------------------------------------- */
 
 /* Every stage up to params.stage. With MX_STAGE_FULL, elements left with
- * J_ENS < 1e-6 after the boundary stage are repaired by list refinement of
- * their leaves (up to params.repair_rounds); if some remain the call returns
- * MX_EINVALID (the mesh is still there to inspect or write). */
+ * J_ENS < 1e-6 after the boundary stage, and elements a node lies on
+ * without being one of their nodes (two parts of the boundary meeting: a
+ * non-conforming contact), are repaired by list refinement of their leaves
+ * (up to params.repair_rounds); if some remain the call returns MX_EINVALID
+ * (the mesh is still there to inspect or write). */
 int mx_mesher_mesh(mx_mesher *m);
 /* The stages one at a time, in this order. */
 int mx_mesher_build_octree(mx_mesher *m); /* grid, refine and balance */

@@ -20,7 +20,9 @@
 #include "common.h"
 #include "file_util.h"
 #include "io/read_mesh.h"
+#include "kernels/boundary.h"
 #include "kernels/check.h"
+#include "kernels/contacts.h"
 #include "soa/mesh.h"
 #include "soa/trisoup.h"
 
@@ -1117,6 +1119,58 @@ static void hex_and_cone(tm *t, const double P[3]) {
     }
 }
 
+/* The mesher's own search (kernels/contacts.h) on the meshes of the
+ * checker's test: it agrees with the checker where the nodes are surface
+ * nodes, looks at nothing else, and leaves a conforming mesh alone. */
+static size_t contacts_of(const tm *t, uint8_t state, uint8_t *eflag, mx_contacts *k) {
+  uint8_t *st = xrealloc(NULL, t->nn + 1);
+  memset(st, state, t->nn);
+  mx_mesh_out M;
+  memset(&M, 0, sizeof M);
+  M.nnodes = t->nn;
+  M.ncells = t->nc;
+  M.xyz = t->xyz;
+  M.type = t->type;
+  M.conn = t->conn;
+  CHECK(mx_find_contacts(&M, st, eflag, k) == MX_OK);
+  free(st);
+  return k->nodes;
+}
+
+static void test_contacts(void) {
+  mx_contacts k;
+  /* the box against the hexahedron cut off its midpoint: 2 nodes on its
+   * edges; the elements involved: the hexahedron and the two boxes */
+  tm t = {0};
+  box_hex(&t, 0, 0, 0, 1, 1, 1);
+  box_hex(&t, 1, 0, 0, 2, 1, 1.0 / 3.0);
+  box_hex(&t, 1, 0, 1.0 / 3.0, 2, 1, 1);
+  uint8_t ef[3];
+  CHECK(contacts_of(&t, MX_NODE_OUTSIDE, ef, &k) == 2);
+  CHECK(k.elements == 3 && ef[0] == 1 && ef[1] == 1 && ef[2] == 1);
+  CHECK(k.first_node < t.nn && k.first[0] == 1.0 && k.first[2] == 1.0 / 3.0);
+  /* inside nodes are not looked at (the lattice is conforming there) */
+  CHECK(contacts_of(&t, MX_NODE_INSIDE, ef, &k) == 0);
+  CHECK(k.elements == 0 && ef[0] == 0 && ef[1] == 0 && ef[2] == 0);
+  tm_free(&t);
+  /* a node inside the face: the tetrahedra fanned from it */
+  const double P[3] = {1, 0.3, 0.6};
+  hex_and_cone(&t, P);
+  CHECK(contacts_of(&t, MX_NODE_OUTSIDE, NULL, &k) == 1);
+  CHECK(k.first[0] == 1 && k.first[1] == 0.3 && k.first[2] == 0.6);
+  if (k.elements != 11) fprintf(stderr, "contacts: %zu elements\n", k.elements);
+  CHECK(k.elements == 11);
+  tm_free(&t);
+  /* conforming: the midpoint cut split on both sides */
+  box_hex(&t, 0, 0, 0, 1, 1, 0.5);
+  box_hex(&t, 0, 0, 0.5, 1, 1, 1);
+  box_hex(&t, 1, 0, 0, 2, 1, 0.5);
+  box_hex(&t, 1, 0, 0.5, 2, 1, 1);
+  CHECK(contacts_of(&t, MX_NODE_OUTSIDE, NULL, &k) == 0 && k.elements == 0);
+  CHECK(k.first_node == UINT32_MAX);
+  tm_free(&t);
+}
+
 static void test_geometric_hanging(void) {
   /* 1. The box next to the hexahedron cut at z = 1/3 (not the midpoint):
    * its two nodes at x = 1, z = 1/3 lie on two edges of hexahedron 0. At
@@ -1896,6 +1950,7 @@ int main(int argc, char **argv) {
   test_damage();
   test_surface();
   test_geometric_hanging();
+  test_contacts();
   test_degenerate();
   test_extreme_coordinates();
   test_volume();

@@ -106,7 +106,8 @@ void mx_print_json(const mx_summary *s, const mx_run_info *ri) {
   fputs("{", f);
   json_outcome(f, ri);
   if (s) {
-    fprintf(f, ", \"defects\": {\"invalid_elements\": %zu}, ", s->mesh ? s->invalid : 0);
+    fprintf(f, ", \"defects\": {\"invalid_elements\": %zu, \"contact_nodes\": %zu}, ",
+            s->mesh ? s->invalid : 0, s->mesh ? s->contacts.nodes : 0);
     print_mesh_json(f, s);
   } else {
     fputs("}\n", f);
@@ -152,7 +153,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s) {
          "\"located\": %zu, \"split_requested\": %zu, \"split_balance\": %zu, "
          "\"dropped\": %zu, \"centre_leaves\": %zu, \"closures\": %zu, "
          "\"phases\": {\"read\": %.6f, \"grid\": %.6f, \"refine\": %.6f, "
-         "\"balance\": %.6f, \"transition\": %.6f, \"boundary\": %.6f, "
+         "\"balance\": %.6f, \"transition\": %.6f, \"boundary\": %.6f, \"verify\": %.6f, "
          "\"quality\": %.6f, \"write\": %.6f, \"restart\": %.6f}, "
          "\"refined_listed\": %zu, \"repaired\": %zu, \"repair_rounds\": %d, "
          "\"remesh_local\": %s, \"remesh_patch_leaves\": %zu, \"remesh_core_leaves\": %zu, "
@@ -167,7 +168,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s) {
          (double)s->edge_bytes / 1048576.0, s->located, s->split_requested,
          s->split_balance, s->dropped, s->centre_leaves, s->closures, s->ph.read,
          s->ph.grid, s->ph.refine, s->ph.balance, s->ph.transition,
-         s->ph.boundary, s->ph.quality, s->ph.write, s->t_restart,
+         s->ph.boundary, s->ph.verify, s->ph.quality, s->ph.write, s->t_restart,
          s->refined_listed, s->repaired, s->repair_rounds, s->local ? "true" : "false",
          s->local ? s->patch_leaves : 0, s->local ? s->core_leaves : 0, s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->threads,
          s->mesh ? s->jens_min : 1.0,
@@ -233,8 +234,9 @@ void mx_print_summary(const mx_summary *s, const mx_run_info *ri) {
            b->located, b->moved_close, b->shrunk, b->removed, b->sp.patterned,
            b->sp.kept, b->sp.centres, b->inverted, b->smoothed, b->sp.restored);
     if (s->repair_rounds)
-      printf("               %zu invalid element(s) repaired by %d refinement round(s)\n",
-             s->repaired, s->repair_rounds);
+      printf("               %zu invalid element(s) and %zu element(s) at contacts repaired "
+             "by %d refinement round(s)\n",
+             s->repaired, s->contacts_repaired, s->repair_rounds);
     if (s->local)
       printf("  re-meshed    locally: %zu leaves meshed again, the elements of %zu of them "
              "new\n               (the boundary figures above are the patch's)\n",
@@ -248,6 +250,7 @@ void mx_print_summary(const mx_summary *s, const mx_run_info *ri) {
       {"balance", s->ph.balance, 1},
       {"transition", s->ph.transition, s->mesh},
       {"boundary", s->ph.boundary, s->full},
+      {"verify", s->ph.verify, s->full},
       {"quality", s->ph.quality, s->mesh},
       {"write", s->ph.write, s->ph.write > 0.0},
   };
@@ -271,6 +274,9 @@ void mx_print_summary(const mx_summary *s, const mx_run_info *ri) {
   if (ri->status == MX_EINVALID && s->invalid)
     printf("  result       INVALID: %zu element(s) with J_ENS below %g (exit 5)\n", s->invalid,
            MX_JENS_VALID);
+  else if (ri->status == MX_EINVALID && s->contacts.nodes)
+    printf("  result       INVALID: %zu node(s) on an element they are not a node of "
+           "(non-conforming; exit 5)\n", s->contacts.nodes);
   else if (ri->status == MX_EINVALID)
     printf("  result       INVALID: the mesh's volume is %+.1f%% off the input's (exit 5)\n",
            100.0 * s->volume_error);

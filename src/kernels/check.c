@@ -832,8 +832,8 @@ static int boundary_pass(const mx_mesh_data *m, const faces *F,
  *
  * The elements to compare with go into a multi-level grid over the unit
  * coordinates (cells of level l have side 2^-l): each into every cell its
- * padded box meets on the finest level whose cells are at least as large
- * as the box -- at most 2 per axis. A point in the box lies in one of those
+ * padded box meets on the level above the finest one whose cells are at
+ * least as large as the box -- at most 2 per axis. A point in the box lies in one of those
  * cells (the cell of a coordinate is a monotonic function of it), so a
  * node looks at one cell per occupied level. Entries are sorted by cell
  * (radix sort); a hash of the cells gives their runs. Each entry keeps the
@@ -906,6 +906,7 @@ static void elem_gbox(const mx_mesh_data *m, const ggrid *g, size_t c,
     int e;
     const double f = frexp(span, &e); /* span = f 2^e, f in [0.5, 1) */
     l = f == 0.5 ? 1 - e : -e;        /* largest l with 2^-l >= span */
+    l -= 2;
     l = l < 0 ? 0 : l > GLEVELS ? GLEVELS : l;
   }
   *lev = l;
@@ -1317,6 +1318,50 @@ static int geometric_pass(const mx_mesh_data *m, const faces *F,
   }
   ggrid_free(&g);
   r->geometric_hanging_nodes = found;
+  return MX_OK;
+}
+
+/* The geometric hanging-node search alone (see check.h). */
+int mx_check_contacts(const mx_mesh_data *m, const uint32_t *list, size_t n,
+                      const uint8_t *node_sel, double tol, uint8_t *node_hit,
+                      uint8_t *elem_hit, size_t *found) {
+  *found = 0;
+  if (n == 0 || m->nnodes == 0) return MX_OK;
+  double lo[3] = {INFINITY, INFINITY, INFINITY},
+         hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int a = 0; a < 3; a++) {
+    double l = INFINITY, h = -INFINITY;
+#pragma omp parallel for schedule(static) reduction(min : l) reduction(max : h) \
+    if (m->nnodes > SMALL)
+    for (size_t v = 0; v < m->nnodes; v++) {
+      l = mx_min(l, m->xyz[3 * v + (size_t)a]);
+      h = mx_max(h, m->xyz[3 * v + (size_t)a]);
+    }
+    lo[a] = l;
+    hi[a] = h;
+  }
+  ubox U;
+  ubox_init(&U, lo, hi);
+  if (!U.ok) return MX_OK;
+  ggrid g;
+  int st = ggrid_build(&g, m, &U, tol, list, n);
+  if (st != MX_OK) {
+    ggrid_free(&g);
+    return st;
+  }
+  size_t nf = 0;
+#pragma omp parallel for schedule(dynamic, 2048) reduction(+ : nf) \
+    if (m->nnodes > SMALL)
+  for (size_t v = 0; v < m->nnodes; v++) {
+    if (!node_sel[v]) continue;
+    int where;
+    if (node_query(&g, m, v, elem_hit, &where) != UINT32_MAX) {
+      if (node_hit) node_hit[v] = 1;
+      nf++;
+    }
+  }
+  ggrid_free(&g);
+  *found = nf;
   return MX_OK;
 }
 

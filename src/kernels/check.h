@@ -180,4 +180,15 @@ int mx_check_mesh_opt(const mx_mesh_data *m, const mx_trisoup *surface,
 int mx_check_mesh(const mx_mesh_data *m, const mx_trisoup *surface,
                   mx_check_report *r);
 
+/* The geometric hanging-node search of the check alone, for the mesher's own
+ * verification: the nodes v with node_sel[v] != 0 against the n elements of
+ * `list` (ascending ids), with the same definition and tolerance as
+ * geometric_hanging_nodes above. node_hit[v] (when not NULL) is set to 1 for
+ * each node found, elem_hit[c] (when not NULL) becomes non-zero for each
+ * element a node lies on; *found: the nodes found. Deterministic. MX_EINPUT
+ * when out of memory. */
+int mx_check_contacts(const mx_mesh_data *m, const uint32_t *list, size_t n,
+                      const uint8_t *node_sel, double tol, uint8_t *node_hit,
+                      uint8_t *elem_hit, size_t *found);
+
 #endif

@@ -23,6 +23,46 @@ static double elem_jens(const mx_mesh_out *M, uint32_t c) {
   return mx_jens(M->type[c], x);
 }
 
+/* 1 when node v lies on a face used by one element only: the mesh boundary.
+ * Every element sharing a face through v is incident to v, so the incident
+ * list [e0, e1) of `inc` is enough; a face counts as shared when another
+ * incident element has all its nodes (in a conforming mesh without
+ * overlaps, that is the same face). An inside node can lie on the boundary
+ * (a lattice node exactly on a flat part of the surface); it must stay
+ * there like a surface node. */
+static int on_mesh_boundary(const mx_mesh_out *M, const uint32_t *inc, size_t e0, size_t e1,
+                            uint32_t v) {
+  for (size_t e = e0; e < e1; e++) {
+    const uint32_t c = inc[e];
+    const int t = M->type[c];
+    const uint32_t *row = M->conn + 8 * (size_t)c;
+    for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+      const int8_t *fv = mx_cell_faces[t][f];
+      const int n = fv[3] < 0 ? 3 : 4;
+      int has = 0;
+      for (int i = 0; i < n; i++) has |= row[fv[i]] == v;
+      if (!has) continue;
+      int shared = 0;
+      for (size_t g = e0; g < e1 && !shared; g++) {
+        const uint32_t d = inc[g];
+        if (d == c) continue;
+        const uint32_t *rd = M->conn + 8 * (size_t)d;
+        const int nd = mx_cell_nodes[M->type[d]];
+        int all = 1;
+        for (int i = 0; i < n && all; i++) {
+          const uint32_t w = row[fv[i]];
+          int in = 0;
+          for (int j = 0; j < nd; j++) in |= rd[j] == w;
+          all = in;
+        }
+        shared = all;
+      }
+      if (!shared) return 1;
+    }
+  }
+  return 0;
+}
+
 /* Worst J_ENS of the elements [e0, e1) of list `inc`. */
 static double worst_of(const mx_mesh_out *M, const uint32_t *inc, size_t e0, size_t e1) {
   double w = INFINITY;
@@ -89,6 +129,19 @@ int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_inde
       qsort(inc + off[v], off[v + 1] - off[v], sizeof *inc, cmp_u32);
     }
   mx_free(cur);
+  /* Which work nodes stay on the surface: the outside ones, and the inside
+   * ones on the mesh boundary (the topology does not change below). */
+  uint8_t *onsurf = mx_alloc(nw + 1);
+  if (!onsurf) {
+    mx_free(inc); mx_free(work); mx_free(off); mx_free(mark);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(dynamic, 1024)
+  for (size_t i = 0; i < nw; i++) {
+    const uint32_t v = work[i];
+    onsurf[i] = (uint8_t)(states[v] != MX_NODE_INSIDE ||
+                          on_mesh_boundary(M, inc, off[v], off[v + 1], v));
+  }
   /* mark[v] now means "v is in the work set and its neighbourhood changed
    * since it was last looked at". */
   /* Sweeps, one node at a time in id order. */
@@ -117,10 +170,11 @@ int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_inde
       }
       if (!n) continue;
       const double x0[3] = {x[0], x[1], x[2]};
+      const int on_surface = onsurf[i];
       double best = w0, bx[3] = {x0[0], x0[1], x0[2]};
       for (size_t t = 0; t < sizeof steps / sizeof *steps; t++) {
         for (int a = 0; a < 3; a++) x[a] = x0[a] + steps[t] * (c[a] / (double)n - x0[a]);
-        if (states[v] != MX_NODE_INSIDE) { /* a boundary node stays on the surface */
+        if (on_surface) { /* a boundary node stays on the surface */
           double q[3];
           mx_closest_point(S, x, q, NULL, NULL);
           memcpy(x, q, sizeof q);
@@ -145,6 +199,7 @@ int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_inde
     nm += changed;
     if (!changed) break;
   }
+  mx_free(onsurf);
   mx_free(inc);
   mx_free(off);
   mx_free(work);

@@ -71,7 +71,7 @@ void mx_params_default(mx_params *p) {
   p->all_level = -1;
   p->stage = MX_STAGE_FULL;
   p->balance = MX_BALANCE_EDGES;
-  p->repair_rounds = 3;
+  p->repair_rounds = 10;
 }
 
 mx_mesher *mx_mesher_new(const mx_params *p) {
@@ -639,25 +639,50 @@ int mx_mesh_full(mx_mesher *m) {
 }
 
 /* Repair (the 2021 paper, section 6): the leaves holding elements with
- * J_ENS < 1e-6 are split once by list refinement (Algorithm 3), and the
- * octree is meshed again around them (remesh_local.c), up to
- * repair_rounds times. */
+ * J_ENS < 1e-6, or elements a node lies on without being one of their nodes
+ * (kernels/contacts.h: two sheets of the boundary meeting), are split once
+ * by list refinement (Algorithm 3), and the octree is meshed again around
+ * them (remesh_local.c), up to repair_rounds times. m->S.contacts holds the
+ * contacts of the final mesh. */
 int mx_repair(mx_mesher *m) {
-  for (int round = 0; m->M.invalid > 0 && round < m->p.repair_rounds; round++) {
+  uint8_t *flag = NULL;
+  for (int round = 0;; round++) {
+    mx_free(flag);
+    flag = mx_alloc(m->M.ncells + 1);
+    if (!flag) return MX_ENOMEM;
+    const double t = mx_wtime();
+    stage(m, "verify");
+    int st = mx_find_contacts(&m->M, m->states, flag, &m->S.contacts);
+    m->S.ph.verify += mx_wtime() - t;
+    if (st) {
+      mx_free(flag);
+      return st;
+    }
+    if ((m->M.invalid == 0 && m->S.contacts.nodes == 0) || round >= m->p.repair_rounds) break;
     if (m->on_round) m->on_round(round + 1);
     size_t n = 0;
-    uint32_t *octs = mx_alloc((m->M.invalid + 1) * sizeof *octs);
-    if (!octs) return MX_ENOMEM;
+    uint32_t *octs = mx_alloc((m->M.invalid + m->S.contacts.elements + 1) * sizeof *octs);
+    if (!octs) {
+      mx_free(flag);
+      return MX_ENOMEM;
+    }
     for (size_t c = 0; c < m->M.ncells; c++)
-      if (mx_jens_invalid(m->M.jens[c])) octs[n++] = m->leaves[m->M.leaf[c]];
+      if (mx_jens_invalid(m->M.jens[c]) || flag[c]) octs[n++] = m->leaves[m->M.leaf[c]];
     const size_t before = m->M.invalid;
-    int st = mx_refine_list(&m->B, octs, n);
+    m->S.contacts_repaired += m->S.contacts.elements;
+    st = mx_refine_list(&m->B, octs, n);
     mx_free(octs);
-    MX_CHECK(st);
-    m->S.repaired += before;
-    m->S.repair_rounds++;
-    MX_CHECK(mx_remesh_after_refine(m));
+    if (!st) {
+      m->S.repaired += before;
+      m->S.repair_rounds++;
+      st = mx_remesh_after_refine(m);
+    }
+    if (st) {
+      mx_free(flag);
+      return st;
+    }
   }
+  mx_free(flag);
   return MX_OK;
 }
 
@@ -710,6 +735,15 @@ int mx_mesh_finish(mx_mesher *m) {
   if (m->M.invalid > 0) {
     mx_error(NULL, 0, "%zu element(s) with J_ENS < 1e-6 remain after %d repair round(s)",
              m->M.invalid, m->S.repair_rounds);
+    return MX_EINVALID;
+  }
+  if (m->S.contacts.nodes > 0) {
+    const mx_contacts *k = &m->S.contacts;
+    mx_error(NULL, 0, "%zu node(s) lie on a face or an edge of an element they are not a "
+             "node of (two parts of the boundary meet: a non-conforming mesh) after %d "
+             "repair round(s); the first, node %u, at (%.17g, %.17g, %.17g); ask for finer "
+             "levels there (-s, -b, -r)", k->nodes, m->S.repair_rounds, k->first_node,
+             k->first[0], k->first[1], k->first[2]);
     return MX_EINVALID;
   }
   return volume_check(m);

@@ -7,6 +7,7 @@
 #include "mixoct.h"
 
 #include "kernels/boundary_stage.h"
+#include "kernels/contacts.h"
 #include "kernels/distance.h"
 #include "kernels/quality.h"
 #include "kernels/refine.h"
@@ -16,7 +17,7 @@
 #include "soa/trisoup.h"
 
 typedef struct {
-  double read, grid, refine, balance, transition, boundary, quality, write, total;
+  double read, grid, refine, balance, transition, boundary, verify, quality, write, total;
 } mx_phases;
 
 typedef struct {
@@ -38,6 +39,8 @@ typedef struct {
   int full;                 /* the boundary stage ran */
   mx_boundary_stats boundary;
   size_t repaired;          /* invalid elements found before a repair round */
+  mx_contacts contacts;     /* geometric hanging nodes of the final mesh */
+  size_t contacts_repaired; /* elements split for contacts in repair rounds */
   int repair_rounds;
   size_t refined_listed;    /* leaves split by the last list refinement */
   size_t remesh_splits;     /* octants split by the last re-mesh (list, balance, requests) */

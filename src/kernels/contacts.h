@@ -1,0 +1,32 @@
+/* The mesher's own conformity check after the boundary stage: a node of the
+ * mesh lying on a face, an edge or at a vertex of an element it is not a node
+ * of (a geometric hanging node). The lattice of the transition patterns is
+ * conforming by construction; such contacts appear only where the boundary
+ * stage moved nodes: two sheets of the surface projected onto the same
+ * place (a thin part, two features meeting, parts of the input touching).
+ * Searched with the checker's own routine (kernels/check.h,
+ * mx_check_contacts) among the elements with a surface node and their
+ * nodes, so `mixoct check` and the mesher agree on what a contact is. */
+#ifndef MX_CONTACTS_H
+#define MX_CONTACTS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "kernels/transition.h"
+
+typedef struct {
+  size_t nodes;     /* nodes lying on an element they are not a node of */
+  size_t elements;  /* elements involved: those the nodes lie on, and the
+                     * elements using such a node */
+  double first[3];  /* the position of the lowest such node */
+  uint32_t first_node;
+} mx_contacts;
+
+/* states: per node (kernels/boundary.h), MX_NODE_OUTSIDE on the surface.
+ * elem_flag (M->ncells bytes, or NULL): set to 1 for the elements involved,
+ * 0 elsewhere. Deterministic, parallel, O(elements near the surface). */
+int mx_find_contacts(const mx_mesh_out *M, const uint8_t *states, uint8_t *elem_flag,
+                     mx_contacts *out);
+
+#endif
