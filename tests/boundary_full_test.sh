@@ -55,7 +55,7 @@ run_case() {
   t1=$(now)
   if [ "$rc" -eq 5 ] && [ -n "$extra" ] && [ ! -e "$T/out.vtu" ]; then
     # a repaired input: invalid elements left is exit 5, nothing written
-    ok "$name: exit 5 (elements left invalid, nothing written): the contract kept"
+    ok "$name: exit 5 (the contract broken after repair, nothing written): the contract kept"
     return
   fi
   if [ "$rc" -ne 0 ]; then
@@ -161,7 +161,12 @@ for s in sphere cube torus shell sphere_hole; do
     fi
     extra=--repair-input
   fi
-  for k in 4 5 6; do
+  levels="4 5 6"
+  # -s 7: the repair of the hole's rim once refined round after round down
+  # to level 16, where the node hash grew until memory ran out (exit 3);
+  # now a repair that makes things worse twice stops, exit 5
+  [ "$s" = sphere_hole ] && levels="4 5 6 7"
+  for k in $levels; do
     flags=dist
     [ "$s" = sphere_hole ] && flags=
     [ "$s" = sphere ] && [ "$k" = 5 ] && flags="$flags det"

@@ -318,6 +318,13 @@ static void test_repeated(void) {
     }
     if (a.level[best] >= MX_MAX_LEVEL - 1) {
       finest = 1;
+      /* one split more is refused (the lattice of a leaf needs one level
+       * below it: a level-16 leaf once made the node hash grow until
+       * memory ran out), and the mesh stays as it was */
+      const size_t before = m->nleaves;
+      CHECK(mx_mesher_refine_elements(m, &best, 1) == MX_EINPUT);
+      CHECK(strstr(mx_mesher_last_error(m), "finest level") != NULL);
+      CHECK(m->nleaves == before && mesh_is_valid(m));
       break;
     }
     CHECK(mx_mesher_refine_elements(m, &best, 1) == MX_OK);

@@ -379,9 +379,9 @@ int mx_refine_list(mx_builder *B, const uint32_t *octs, size_t n) {
   for (size_t i = 0; i < n; i++) {
     const uint32_t o = octs[i];
     if (o >= T->n || (T->flags[o] & MX_OCT_SPLIT)) continue;
-    if (T->level[o] >= MX_MAX_LEVEL) {
+    if (T->level[o] >= MX_MAX_LEVEL - 1) { /* the lattice needs one level more */
       mx_error(NULL, 0, "cannot refine a leaf of level %d: %d is the finest level",
-               T->level[o], MX_MAX_LEVEL);
+               T->level[o], MX_MAX_LEVEL - 1);
       return MX_EINPUT;
     }
     if (T->target[o] <= T->level[o]) T->target[o] = (uint8_t)(T->level[o] + 1);

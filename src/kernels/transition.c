@@ -286,6 +286,11 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
    * slot of each (leaf, point) is kept so later passes do not hash again. */
   /* about 5 points per node in practice; a full window doubles the table */
   for (size_t cap = points / 3 + 4096; !st; cap *= 2) {
+    if (cap > 8 * points + 8192) { /* a full table at 8x the points: keys collide */
+      mx_error(NULL, 0, "internal: the node hash of %zu points does not fill", points);
+      st = MX_EINTERNAL;
+      break;
+    }
     mx_free(H.e);
     H.cap = cap;
     H.overflow = 0;

@@ -646,6 +646,8 @@ int mx_mesh_full(mx_mesher *m) {
  * contacts of the final mesh. */
 int mx_repair(mx_mesher *m) {
   uint8_t *flag = NULL;
+  size_t best = 0;
+  int worse = 0;
   for (int round = 0;; round++) {
     mx_free(flag);
     flag = mx_alloc(m->M.ncells + 1);
@@ -658,7 +660,16 @@ int mx_repair(mx_mesher *m) {
       mx_free(flag);
       return st;
     }
-    if ((m->M.invalid == 0 && m->S.contacts.nodes == 0) || round >= m->p.repair_rounds) break;
+    const size_t defects = m->M.invalid + m->S.contacts.nodes;
+    if (defects == 0 || round >= m->p.repair_rounds) break;
+    /* a repair that makes things worse twice in a row does not converge
+     * (a surface feature finer than any level, an input's hole) */
+    if (round == 0 || defects < best) {
+      best = defects;
+      worse = 0;
+    } else if (++worse >= 2) {
+      break;
+    }
     if (m->on_round) m->on_round(round + 1);
     size_t n = 0;
     uint32_t *octs = mx_alloc((m->M.invalid + m->S.contacts.elements + 1) * sizeof *octs);
@@ -666,8 +677,12 @@ int mx_repair(mx_mesher *m) {
       mx_free(flag);
       return MX_ENOMEM;
     }
-    for (size_t c = 0; c < m->M.ncells; c++)
-      if (mx_jens_invalid(m->M.jens[c]) || flag[c]) octs[n++] = m->leaves[m->M.leaf[c]];
+    for (size_t c = 0; c < m->M.ncells; c++) {
+      if (!mx_jens_invalid(m->M.jens[c]) && !flag[c]) continue;
+      const uint32_t o = m->leaves[m->M.leaf[c]];
+      if (m->B.oct.level[o] < MX_MAX_LEVEL - 1) octs[n++] = o; /* else: as fine as can be */
+    }
+    if (n == 0) break;
     const size_t before = m->M.invalid;
     m->S.contacts_repaired += m->S.contacts.elements;
     st = mx_refine_list(&m->B, octs, n);

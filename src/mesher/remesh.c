@@ -85,6 +85,14 @@ static int refine_indices(mx_mesher *m, const uint64_t *idx, size_t n, const uin
   if (lost)
     mx_warning(NULL, 0, "%zu listed element(s) lie in octants outside the domain as "
                         "this mixoct sees it: not refined", lost);
+  /* the finest level first: a refused list leaves the mesher as it was */
+  for (size_t i = 0; i < k; i++)
+    if (m->B.oct.level[octs[i]] >= MX_MAX_LEVEL - 1) {
+      mx_error(NULL, 0, "cannot refine a leaf of level %d: %d is the finest level",
+               m->B.oct.level[octs[i]], MX_MAX_LEVEL - 1);
+      mx_free(octs);
+      return MX_EINPUT;
+    }
   int st = refine_and_mesh(m, octs, k);
   mx_free(octs);
   if (st && st != MX_EINVALID) mx_mesh_clear(m);
