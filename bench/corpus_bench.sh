@@ -20,7 +20,10 @@
 #            tolerances, volume_off and boundary_off_surface)
 #   crashed  killed by a signal (139: segfault, 134: abort)
 #   timeout  more than TIMEOUT seconds
-#   other    any other exit (1 internal failure, 3 memory, 4 output),
+#   toolarge exit 3 with a message: the run's memory estimate is over
+#            what the machine has (refused before meshing)
+#   other    any other exit (1 internal failure, 3 without a message,
+#            4 output),
 #            or exit 2 / 5 without a message on stderr
 # One line per run (file, level, exit, class, nodes, elements, J_ENS min,
 # volume error, boundary distance, mesh and check seconds, and the first
@@ -74,7 +77,7 @@ defect_counts() {
 fidelity_only=0
 now() { date +%s.%N; }
 dt() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", b - a }'; }
-declare -A total=([valid]=0 [refused]=0 [invalid]=0 [broken]=0 [crashed]=0 [timeout]=0 [other]=0)
+declare -A total=([valid]=0 [refused]=0 [invalid]=0 [toolarge]=0 [broken]=0 [crashed]=0 [timeout]=0 [other]=0)
 declare -A lvl_time
 problems=()
 mesh_s=0
@@ -134,10 +137,12 @@ for f in $files; do
       ;;
     2) class=refused ;;
     5) class=invalid ;;
+    3) class=toolarge ;;
     124 | 137) class=timeout; msg="more than $TIMEOUT s" ;;
     *) if [ "$rc" -gt 128 ]; then class=crashed; else class=other; fi ;;
     esac
-    if { [ "$class" = refused ] || [ "$class" = invalid ]; } && [ -z "$msg" ]; then
+    if { [ "$class" = refused ] || [ "$class" = invalid ] || [ "$class" = toolarge ]; } &&
+      [ -z "$msg" ]; then
       class=other; msg="exit $rc without a message"
     fi
     if [ "$class" = invalid ] && [ -e "$out" ]; then
@@ -161,7 +166,7 @@ for c in "${!total[@]}"; do runs=$((runs + total[$c])); done
 
 echo
 echo "# totals: $runs runs ($nmodels models + $nbroken STL files, levels $LEVELS)"
-for c in valid refused invalid broken crashed timeout other; do
+for c in valid refused invalid toolarge broken crashed timeout other; do
   printf '#   %-8s %5d\n' "$c" "${total[$c]}"
   [ "$c" = broken ] && [ "${total[broken]}" -gt 0 ] &&
     printf '#     of which %d only over the volume / distance tolerances of check --surface\n' "$fidelity_only"
@@ -172,8 +177,8 @@ if [ ${#problems[@]} -gt 0 ]; then
   echo "# broken / crashed / timeout / other:"
   printf '#   %s\n' "${problems[@]}"
 fi
-printf '{"runs":%d,"models":%d,"stl_files":%d,"levels":[%s],"valid":%d,"refused":%d,"invalid":%d,"broken":%d,"broken_volume_distance_only":%d,"crashed":%d,"timeout":%d,"other":%d,"mixoct_seconds":%.1f,"seconds":%s}\n' \
+printf '{"runs":%d,"models":%d,"stl_files":%d,"levels":[%s],"valid":%d,"refused":%d,"invalid":%d,"toolarge":%d,"broken":%d,"broken_volume_distance_only":%d,"crashed":%d,"timeout":%d,"other":%d,"mixoct_seconds":%.1f,"seconds":%s}\n' \
   "$runs" "$nmodels" "$nbroken" "$(echo $LEVELS | tr ' ' ',')" \
-  "${total[valid]}" "${total[refused]}" "${total[invalid]}" "${total[broken]}" "$fidelity_only" \
+  "${total[valid]}" "${total[refused]}" "${total[invalid]}" "${total[toolarge]}" "${total[broken]}" "$fidelity_only" \
   "${total[crashed]}" "${total[timeout]}" "${total[other]}" "$mesh_s" "$secs"
 [ $((total[broken] + total[crashed] + total[timeout])) -eq 0 ]
