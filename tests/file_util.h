@@ -261,8 +261,8 @@ static inline void tmesh_alloc(tmesh *t, size_t nnodes, size_t ncells) {
     fprintf(stderr, "test: out of memory\n");
     exit(2);
   }
-  t->v = (mx_mesh_view){nnodes, t->xyz, ncells, t->type, t->conn,
-                        0,      NULL,   0,      NULL};
+  t->v = (mx_mesh_view){.nnodes = nnodes, .xyz = t->xyz, .ncells = ncells,
+                        .type = t->type, .conn = t->conn};
 }
 
 /* Frees the arrays and zeroes t. */

@@ -709,8 +709,7 @@ static void round_trip(const mx_mesh_view *v, const char *name) {
 static void test_mixed_round_trip(void) {
   mx_mesh_out M;
   CHECK(transition_mesh(&M, 4) == MX_OK);
-  mx_mesh_view v = {M.nnodes, M.xyz, M.ncells, M.type, M.conn,
-                    0,        NULL,  0,        NULL};
+  mx_mesh_view v = {.nnodes = M.nnodes, .xyz = M.xyz, .ncells = M.ncells, .type = M.type, .conn = M.conn, .ncell_fields = 0, .cell_fields = NULL, .npoint_fields = 0, .point_fields = NULL};
   round_trip(&v, "mixed");
   /* the elements whose centroid lies in a ball: a ragged boundary with
    * triangles and quadrilaterals (the other nodes stay, unused) */
@@ -739,7 +738,7 @@ static void test_mixed_round_trip(void) {
     memcpy(conn + 8 * kept, M.conn + 8 * c, 8 * sizeof *conn);
     kept++;
   }
-  mx_mesh_view w = {M.nnodes, M.xyz, kept, type, conn, 0, NULL, 0, NULL};
+  mx_mesh_view w = {.nnodes = M.nnodes, .xyz = M.xyz, .ncells = kept, .type = type, .conn = conn, .ncell_fields = 0, .cell_fields = NULL, .npoint_fields = 0, .point_fields = NULL};
   round_trip(&w, "ball");
   mx_boundary_faces bf;
   CHECK(mx_boundary_faces_extract(&w, &bf) == MX_OK);
@@ -823,8 +822,7 @@ static void test_threads_identical(void) {
     big.xyz[i] = big.xyz[i] * 1.2345678901 + 0.1 * sin((double)i);
   mx_mesh_out M;
   CHECK(transition_mesh(&M, 5) == MX_OK);
-  mx_mesh_view mv = {M.nnodes, M.xyz, M.ncells, M.type, M.conn,
-                     0,        NULL,  0,        NULL};
+  mx_mesh_view mv = {.nnodes = M.nnodes, .xyz = M.xyz, .ncells = M.ncells, .type = M.type, .conn = M.conn, .ncell_fields = 0, .cell_fields = NULL, .npoint_fields = 0, .point_fields = NULL};
   const mx_mesh_view *views[2] = {&big.v, &mv};
   const int saved = omp_get_max_threads();
   for (int w = 0; w < 2; w++) {

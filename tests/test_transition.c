@@ -61,7 +61,7 @@ static size_t check_case(const char *what, const mx_trisoup *s, uint32_t ntd,
   if (r.defects && getenv("MX_DUMP")) {
     char fn[128];
     snprintf(fn, sizeof fn, "/tmp/fail_%zu.vtu", A.ncells);
-    mx_mesh_view v = {A.nnodes, A.xyz, A.ncells, A.type, A.conn, 0, NULL, 0, NULL};
+    mx_mesh_view v = {.nnodes = A.nnodes, .xyz = A.xyz, .ncells = A.ncells, .type = A.type, .conn = A.conn, .ncell_fields = 0, .cell_fields = NULL, .npoint_fields = 0, .point_fields = NULL};
     mx_write_vtu(fn, &v);
   }
   CHECK(fabs(r.volume - va) <= 1e-9 * va);

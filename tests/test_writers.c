@@ -64,8 +64,9 @@ static void fmesh_view(fmesh *t) {
   t->cf[1] = (mx_field){"jens", 1, NULL, t->jens};
   t->pf[0] = (mx_field){"dist", 1, NULL, t->dist};
   t->pf[1] = (mx_field){"tag", 0, t->tag, NULL};
-  t->v = (mx_mesh_view){t->nnodes, t->xyz, t->ncells, t->type, t->conn,
-                        2,         t->cf,  2,         t->pf};
+  t->v = (mx_mesh_view){.nnodes = t->nnodes, .xyz = t->xyz, .ncells = t->ncells,
+                        .type = t->type, .conn = t->conn, .ncell_fields = 2,
+                        .cell_fields = t->cf, .npoint_fields = 2, .point_fields = t->pf};
 }
 
 static void fmesh_free(fmesh *t) {

@@ -304,6 +304,8 @@ void mx_boundary_faces_free(mx_boundary_faces *bf) {
   mx_free(bf->quad);
   mx_free(bf->tri_src);
   mx_free(bf->quad_src);
+  mx_free(bf->tri_tag);
+  mx_free(bf->quad_tag);
   memset(bf, 0, sizeof *bf);
 }
 

@@ -22,12 +22,14 @@
 
 #include "soa/mesh.h"
 
-typedef struct {
+typedef struct mx_boundary_faces {
   size_t ntri, nquad;
   uint32_t *tri;      /* 3 * ntri node indices, outward */
   uint32_t *quad;     /* 4 * nquad node indices, outward */
   uint64_t *tri_src;  /* per triangle: 8 * element + local face index */
   uint64_t *quad_src; /* per quadrilateral: the same */
+  int32_t *tri_tag;   /* per triangle: its boundary tag (1..), or NULL */
+  int32_t *quad_tag;  /* per quadrilateral: the same */
 } mx_boundary_faces;
 
 /* Fills *bf (zeroed first; free with mx_boundary_faces_free). The view must

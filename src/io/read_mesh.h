@@ -54,8 +54,7 @@ void mx_mesh_data_free(mx_mesh_data *m);
 
 /* A view for the writers (no fields). */
 static inline mx_mesh_view mx_mesh_data_view(const mx_mesh_data *m) {
-  mx_mesh_view v = {m->nnodes, m->xyz, m->ncells, m->type, m->conn,
-                    0,         NULL,   0,         NULL};
+  mx_mesh_view v = {.nnodes = m->nnodes, .xyz = m->xyz, .ncells = m->ncells, .type = m->type, .conn = m->conn, .ncell_fields = 0, .cell_fields = NULL, .npoint_fields = 0, .point_fields = NULL};
   return v;
 }
 

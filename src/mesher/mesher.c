@@ -557,7 +557,7 @@ static int boundary_flags(mx_mesher *m) {
   }
   int32_t *f = mx_alloc((M->nnodes + 1) * sizeof *f);
   if (!f) return MX_ENOMEM;
-  mx_mesh_view v = {M->nnodes, M->xyz, M->ncells, M->type, M->conn, 0, NULL, 0, NULL};
+  mx_mesh_view v = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells, .type = M->type, .conn = M->conn, .ncell_fields = 0, .cell_fields = NULL, .npoint_fields = 0, .point_fields = NULL};
   int st = mx_boundary_node_flags(&v, f);
 #pragma omp parallel for schedule(static)
   for (size_t i = 0; i < M->nnodes; i++) m->bnd[i] = (uint8_t)f[i];
@@ -875,7 +875,7 @@ static int write_mixed(const mx_mesher *m, const char *path, int ascii) {
                    {"level", 0, M->level, NULL},
                    {"jens", 1, NULL, M->jens}};
   mx_field pf[1] = {{"boundary", 0, bnd, NULL}};
-  mx_mesh_view v = {M->nnodes, M->xyz, M->ncells, M->type, M->conn, 3, f, 1, pf};
+  mx_mesh_view v = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells, .type = M->type, .conn = M->conn, .ncell_fields = 3, .cell_fields = f, .npoint_fields = 1, .point_fields = pf};
   int st = mx_write_mesh(path, &v, ascii);
   mx_free(type);
   mx_free(bnd);
@@ -893,7 +893,7 @@ static int write_octree(mx_mesher *m, const char *path, int ascii) {
   if (!type) return MX_ENOMEM;
   memset(type, MX_HEX, m->nleaves);
   mx_field level = {"level", 0, m->hex.level, NULL};
-  mx_mesh_view v = {m->hex.nnodes, m->hex.xyz, m->nleaves, type, m->hex.conn, 1, &level, 0, NULL};
+  mx_mesh_view v = {.nnodes = m->hex.nnodes, .xyz = m->hex.xyz, .ncells = m->nleaves, .type = type, .conn = m->hex.conn, .ncell_fields = 1, .cell_fields = &level, .npoint_fields = 0, .point_fields = NULL};
   int st = mx_write_mesh(path, &v, ascii);
   mx_free(type);
   return st;

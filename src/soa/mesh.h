@@ -48,6 +48,16 @@ typedef struct {
   const mx_field *cell_fields;
   int npoint_fields;
   const mx_field *point_fields;
+  /* Optional (all NULL / 0 in a plain view): the boundary faces of the mesh
+   * with a tag each (see io/boundary_tags.h): boundary tag t (1..ntags) is
+   * named tag_names[t - 1] (the input file it lies on); each cell's body
+   * tag (1..nbodies) in cell_body, body b named body_names[b - 1]. */
+  const struct mx_boundary_faces *bfaces;
+  int ntags;
+  const char *const *tag_names;
+  const int32_t *cell_body;
+  int nbodies;
+  const char *const *body_names;
 } mx_mesh_view;
 
 /* Writers (src/io/write_*.c). The file is written under a temporary name in
