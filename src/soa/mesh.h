@@ -52,6 +52,9 @@ typedef struct {
    * with a tag each (see io/boundary_tags.h): boundary tag t (1..ntags) is
    * named tag_names[t - 1] (the input file it lies on); each cell's body
    * tag (1..nbodies) in cell_body, body b named body_names[b - 1]. */
+  const uint32_t *order;  /* the cells in the order they are written (a
+                           * permutation of 0..ncells-1), or NULL: in index
+                           * order; see mx_view_cell */
   const struct mx_boundary_faces *bfaces;
   int ntags;
   const char *const *tag_names;
@@ -59,6 +62,11 @@ typedef struct {
   int nbodies;
   const char *const *body_names;
 } mx_mesh_view;
+
+/* The index of the k-th cell written. */
+static inline size_t mx_view_cell(const mx_mesh_view *m, size_t k) {
+  return m->order ? m->order[k] : k;
+}
 
 /* Writers (src/io/write_*.c). The file is written under a temporary name in
  * the same directory and renamed at the end; on any failure (permission, full
