@@ -41,8 +41,10 @@
  * correspondence stays explicit in one place.
  * Boundary faces (io/boundary_faces.h) are written oriented outward.
  *
- * References: vertices 0; elements and boundary faces 1. Medit references
- * are subdomain and boundary numbers (Mmg treats a face between elements of
+ * References: vertices 0; an element's is its body (view.cell_body, issue
+ * 11) and a boundary face's its boundary tag, the input file it lies on
+ * (view.bfaces); 1 for both in a view without them. Medit references are
+ * subdomain and boundary numbers (Mmg treats a face between elements of
  * different references as a boundary), so the octree level is not used.
  *
  * Every block is produced in parallel chunks by mx_afile_emit: the bytes do
@@ -70,7 +72,6 @@ enum {
   KW_HEXAHEDRA = 10,
   KW_PYRAMIDS = 49,
   KW_END = 54,
-  TYPE_CHUNK = 65536, /* cells per chunk when grouping them by type */
 };
 
 static const int32_t VERTEX_REF = 0, ELEMENT_REF = 1, FACE_REF = 1;
@@ -89,11 +90,21 @@ static const int type_keyword_code[4] = {KW_TETRAHEDRA, KW_PYRAMIDS, KW_PRISMS,
 
 typedef struct {
   const mx_mesh_view *m;
-  const uint32_t *cells; /* the cells of one type, in index order */
+  const uint32_t *cells; /* the cells of one type, in index order (mx_cells_by_type) */
   int type;
   const uint32_t *faces; /* boundary faces of one size */
   int face_size;
+  const int32_t *face_tag; /* their tags (the references), or NULL: 1 */
 } medit_ctx;
+
+/* References: a cell's body (1 without bodies), a face's tag (1 without). */
+static inline int32_t cell_ref(const medit_ctx *ctx, uint32_t c) {
+  return ctx->m->cell_body ? ctx->m->cell_body[c] : ELEMENT_REF;
+}
+
+static inline int32_t face_ref(const medit_ctx *ctx, size_t i) {
+  return ctx->face_tag ? ctx->face_tag[i] : FACE_REF;
+}
 
 /* ---- fill functions --------------------------------------------------------
  */
@@ -136,7 +147,7 @@ static size_t fill_cells_ascii(const void *vctx, size_t b, size_t e,
       n += mx_put_u64(out + n, (uint64_t)row[medit_order[t][j]] + 1);
       out[n++] = ' ';
     }
-    n += mx_put_i64(out + n, ELEMENT_REF);
+    n += mx_put_i64(out + n, cell_ref(ctx, ctx->cells[i]));
     out[n++] = '\n';
   }
   return n;
@@ -152,7 +163,8 @@ static size_t fill_cells_bin(const void *vctx, size_t b, size_t e, char *out) {
       const int32_t v = (int32_t)(row[medit_order[t][j]] + 1);
       memcpy(out + n, &v, 4);
     }
-    memcpy(out + n, &ELEMENT_REF, 4);
+    const int32_t ref = cell_ref(ctx, ctx->cells[i]);
+    memcpy(out + n, &ref, 4);
     n += 4;
   }
   return n;
@@ -168,7 +180,7 @@ static size_t fill_faces_ascii(const void *vctx, size_t b, size_t e,
       n += mx_put_u64(out + n, (uint64_t)ctx->faces[(size_t)k * i + j] + 1);
       out[n++] = ' ';
     }
-    n += mx_put_i64(out + n, FACE_REF);
+    n += mx_put_i64(out + n, face_ref(ctx, i));
     out[n++] = '\n';
   }
   return n;
@@ -183,56 +195,11 @@ static size_t fill_faces_bin(const void *vctx, size_t b, size_t e, char *out) {
       const int32_t v = (int32_t)(ctx->faces[(size_t)k * i + j] + 1);
       memcpy(out + n, &v, 4);
     }
-    memcpy(out + n, &FACE_REF, 4);
+    const int32_t ref = face_ref(ctx, i);
+    memcpy(out + n, &ref, 4);
     n += 4;
   }
   return n;
-}
-
-/* ---- the cells grouped by type ----------------------------------------------
- */
-
-/* cells = every cell index, those of type 0 first, then 1, 2, 3, each group
- * in index order; first[t] where group t starts, count[t] its size. */
-static int cells_by_type(const mx_mesh_view *m, uint32_t **cells_out,
-                         size_t first[4], size_t count[4]) {
-  const size_t nc = m->ncells;
-  const size_t nchunks = (nc + TYPE_CHUNK - 1) / TYPE_CHUNK;
-  size_t *at = mx_calloc((4 * nchunks + 1) * sizeof *at);
-  uint32_t *cells = mx_alloc((nc ? nc : 1) * sizeof *cells);
-  if (!at || !cells) {
-    mx_free(at);
-    mx_free(cells);
-    return MX_EINPUT;
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t k = 0; k < nchunks; k++) {
-    const size_t c1 = (k + 1) * TYPE_CHUNK < nc ? (k + 1) * TYPE_CHUNK : nc;
-    size_t cnt[4] = {0, 0, 0, 0};
-    for (size_t c = k * TYPE_CHUNK; c < c1; c++) cnt[m->type[c]]++;
-    for (int t = 0; t < 4; t++) at[4 * k + (size_t)t] = cnt[t];
-  }
-  size_t pos = 0;
-  for (int t = 0; t < 4; t++) {
-    first[t] = pos;
-    for (size_t k = 0; k < nchunks; k++) {
-      const size_t cnt = at[4 * k + (size_t)t];
-      at[4 * k + (size_t)t] = pos;
-      pos += cnt;
-    }
-    count[t] = pos - first[t];
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t k = 0; k < nchunks; k++) {
-    const size_t c1 = (k + 1) * TYPE_CHUNK < nc ? (k + 1) * TYPE_CHUNK : nc;
-    size_t p[4];
-    for (int t = 0; t < 4; t++) p[t] = at[4 * k + (size_t)t];
-    for (size_t c = k * TYPE_CHUNK; c < c1; c++)
-      cells[p[m->type[c]]++] = (uint32_t)c;
-  }
-  mx_free(at);
-  *cells_out = cells;
-  return MX_OK;
 }
 
 /* ---- file layout ------------------------------------------------------------
@@ -273,7 +240,7 @@ static int list_sections(const medit_data *d, section s[7]) {
 
 static int emit_section(mx_afile *f, const medit_data *d, const section *s,
                         int binary) {
-  medit_ctx ctx = {d->m, NULL, 0, NULL, 0};
+  medit_ctx ctx = {d->m, NULL, 0, NULL, 0, NULL};
   switch (s->code) {
     case KW_VERTICES:
       return binary ? mx_afile_emit(f, s->lines, 28, fill_vertices_bin, &ctx)
@@ -283,6 +250,7 @@ static int emit_section(mx_afile *f, const medit_data *d, const section *s,
     case KW_QUADRILATERALS:
       ctx.face_size = s->code == KW_TRIANGLES ? 3 : 4;
       ctx.faces = s->code == KW_TRIANGLES ? d->bf->tri : d->bf->quad;
+      ctx.face_tag = s->code == KW_TRIANGLES ? d->bf->tri_tag : d->bf->quad_tag;
       return binary
                  ? mx_afile_emit(f, s->lines, s->line_bytes, fill_faces_bin,
                                  &ctx)
@@ -367,14 +335,20 @@ int mx_write_medit(const char *path, const mx_mesh_view *m, int binary) {
   memset(&d, 0, sizeof d);
   d.m = m;
   mx_boundary_faces bf;
-  int st = mx_boundary_faces_extract(m, &bf);
+  memset(&bf, 0, sizeof bf);
+  int st = m->bfaces ? MX_OK : mx_boundary_faces_extract(m, &bf);
   if (st != MX_OK) {
     mx_error(path, 0, "cannot extract the boundary faces");
     return st;
   }
-  d.bf = &bf;
-  uint32_t *cells = NULL;
-  st = cells_by_type(m, &cells, d.first, d.count);
+  d.bf = m->bfaces ? m->bfaces : &bf;
+  uint32_t *cells = mx_alloc((m->ncells + 1) * sizeof *cells);
+  size_t first[5];
+  st = cells ? mx_cells_by_type(m->type, m->ncells, cells, first) : MX_EINPUT;
+  for (int t = 0; t < 4; t++) {
+    d.first[t] = first[t];
+    d.count[t] = first[t + 1] - first[t];
+  }
   d.cells = cells;
   mx_afile f;
   if (st == MX_OK)

@@ -1,11 +1,23 @@
 /* mixoct: Gmsh MSH 4.1 writer, ASCII ("4.1 0 8") or binary ("4.1 1 8").
  *
- * Layout: $MeshFormat, $PhysicalNames (one volume group, tag 1, "domain"),
- * $Entities (one volume, tag 1, with its bounding box and that physical
- * group), $Nodes (one block on the volume holding every node, tags 1..N in
- * the mesh's order), $Elements (one block per element type present, in the
- * order tet, pyramid, prism, hex; an element's tag is its index in the
- * mesh + 1, so tags match the cell order of the other formats).
+ * Layout of a plain mesh (no boundary tags in the view): $MeshFormat,
+ * $PhysicalNames (one volume group, tag 1, "domain"), $Entities (one volume,
+ * tag 1, with its bounding box and that physical group), $Nodes (one block
+ * on the volume holding every node, tags 1..N in the mesh's order),
+ * $Elements (one block per element type present, in the order tet, pyramid,
+ * prism, hex; an element's tag is its position in the written order + 1
+ * (mx_view_cell), so tags match the cell order of the other formats), then
+ * one $ElementData section per cell field (type, level, jens...).
+ *
+ * With boundary tags (issue 11: view.bfaces, view.ntags, view.cell_body):
+ * one surface entity and one physical group (dimension 2, tag t, named after
+ * the input file) per boundary tag that has faces, one volume entity and one
+ * physical group (dimension 3, tag b) per body; the volume elements in one
+ * block per (body, type), then the boundary triangles (type 2) and
+ * quadrilaterals (type 3) in one block per (tag, type), tagged after the
+ * volume elements: ncells + 1 + i for triangle i of the face list, ncells +
+ * ntri + 1 + i for quadrilateral i. $ElementData covers every element, a
+ * boundary face with the value of its element.
  *
  * Binary files use the host's byte order (the int 1 after the format line
  * lets a reader check it): counts and node/element tags are 8-byte size_t,
@@ -31,12 +43,14 @@
  * Every large section is formatted (ASCII) or packed (binary) in parallel
  * chunks by mx_afile_emit: the bytes do not depend on the thread count.
  * ASCII doubles read back exactly (see mx_put_double in io/text_num.h). */
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "common.h"
 #include "io/atomic_file.h"
+#include "io/boundary_faces.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
 
@@ -54,7 +68,10 @@ enum {
 
 typedef struct {
   const mx_mesh_view *m;
-  int type; /* element section: the mixoct type of this block */
+  int type;   /* element section: the mixoct type of this block (faces: 3, 4 nodes) */
+  int body;   /* 0: every cell; else the body (faces: the tag) of this block */
+  int binary;
+  const mx_field *fd; /* $ElementData: the field */
 } msh_ctx;
 
 /* ---- binary stores (host byte order) -------------------------------------- */
@@ -86,8 +103,13 @@ static size_t fill_coords_ascii(const void *vctx, size_t b, size_t e,
   return mx_put_xyz_lines(out, ((const msh_ctx *)vctx)->m->xyz, b, e);
 }
 
-/* ---- elements: every cell is an item, the ones of other types write
- * nothing, so a block keeps the mesh's order within its type. -------------- */
+/* ---- elements: every written position is an item, the cells of other
+ * types (or bodies) write nothing, so a block keeps the written order. ---- */
+
+static inline int in_block(const msh_ctx *ctx, size_t c) {
+  const mx_mesh_view *m = ctx->m;
+  return m->type[c] == ctx->type && (ctx->body == 0 || m->cell_body[c] == ctx->body);
+}
 
 static size_t fill_elements_bin(const void *vctx, size_t b, size_t e,
                                 char *out) {
@@ -96,13 +118,14 @@ static size_t fill_elements_bin(const void *vctx, size_t b, size_t e,
   const int t = ctx->type, nn = mx_cell_nodes[t];
   const int8_t *perm = msh_perm[t];
   size_t n = 0;
-  for (size_t c = b; c < e; c++) {
-    if (m->type[c] != t) continue;
+  for (size_t k = b; k < e; k++) {
+    const size_t c = mx_view_cell(m, k);
+    if (!in_block(ctx, c)) continue;
     const uint32_t *row = m->conn + 8 * c;
-    put_size(out + n, (uint64_t)c + 1);
+    put_size(out + n, (uint64_t)k + 1);
     n += 8;
-    for (int k = 0; k < nn; k++, n += 8)
-      put_size(out + n, (uint64_t)row[perm[k]] + 1);
+    for (int j = 0; j < nn; j++, n += 8)
+      put_size(out + n, (uint64_t)row[perm[j]] + 1);
   }
   return n;
 }
@@ -114,15 +137,71 @@ static size_t fill_elements_ascii(const void *vctx, size_t b, size_t e,
   const int t = ctx->type, nn = mx_cell_nodes[t];
   const int8_t *perm = msh_perm[t];
   size_t n = 0;
-  for (size_t c = b; c < e; c++) {
-    if (m->type[c] != t) continue;
+  for (size_t k = b; k < e; k++) {
+    const size_t c = mx_view_cell(m, k);
+    if (!in_block(ctx, c)) continue;
     const uint32_t *row = m->conn + 8 * c;
-    n += mx_put_u64(out + n, (uint64_t)c + 1);
-    for (int k = 0; k < nn; k++) {
+    n += mx_put_u64(out + n, (uint64_t)k + 1);
+    for (int j = 0; j < nn; j++) {
       out[n++] = ' ';
-      n += mx_put_u64(out + n, (uint64_t)row[perm[k]] + 1);
+      n += mx_put_u64(out + n, (uint64_t)row[perm[j]] + 1);
     }
     out[n++] = '\n';
+  }
+  return n;
+}
+
+/* Boundary faces of one tag: ctx->type 3 (triangles) or 4 (quads). */
+static size_t fill_faces(const void *vctx, size_t b, size_t e, char *out) {
+  const msh_ctx *ctx = vctx;
+  const mx_boundary_faces *bf = ctx->m->bfaces;
+  const int nv = ctx->type;
+  const uint32_t *fv = nv == 3 ? bf->tri : bf->quad;
+  const int32_t *tag = nv == 3 ? bf->tri_tag : bf->quad_tag;
+  const uint64_t first = ctx->m->ncells + 1 + (nv == 3 ? 0 : bf->ntri);
+  size_t n = 0;
+  for (size_t i = b; i < e; i++) {
+    if (tag[i] != ctx->body) continue;
+    if (ctx->binary) {
+      put_size(out + n, first + i);
+      n += 8;
+      for (int j = 0; j < nv; j++, n += 8) put_size(out + n, (uint64_t)fv[(size_t)nv * i + j] + 1);
+    } else {
+      n += mx_put_u64(out + n, first + i);
+      for (int j = 0; j < nv; j++) {
+        out[n++] = ' ';
+        n += mx_put_u64(out + n, (uint64_t)fv[(size_t)nv * i + j] + 1);
+      }
+      out[n++] = '\n';
+    }
+  }
+  return n;
+}
+
+/* $ElementData values: "tag value" lines, or tag (int) and value (double). */
+static size_t fill_data(const void *vctx, size_t b, size_t e, char *out) {
+  const msh_ctx *ctx = vctx;
+  const mx_field *fd = ctx->fd;
+  size_t n = 0;
+  const mx_mesh_view *m = ctx->m;
+  const size_t nc = m->ncells, nt = m->bfaces ? m->bfaces->ntri : 0;
+  for (size_t k = b; k < e; k++) {
+    /* a boundary face carries its element's value */
+    const size_t c = k < nc        ? mx_view_cell(m, k)
+                     : k < nc + nt ? (size_t)(m->bfaces->tri_src[k - nc] >> 3)
+                                   : (size_t)(m->bfaces->quad_src[k - nc - nt] >> 3);
+    const double v = fd->is_double ? fd->dvalues[c] : (double)fd->ivalues[c];
+    if (ctx->binary) {
+      const int32_t tag = (int32_t)(k + 1);
+      memcpy(out + n, &tag, 4);
+      memcpy(out + n + 4, &v, 8);
+      n += 12;
+    } else {
+      n += mx_put_u64(out + n, (uint64_t)k + 1);
+      out[n++] = ' ';
+      n += fd->is_double ? mx_put_double(out + n, v) : mx_put_i64(out + n, fd->ivalues[c]);
+      out[n++] = '\n';
+    }
   }
   return n;
 }
@@ -140,18 +219,6 @@ static int write_bin_size(mx_afile *f, uint64_t v) {
 static int write_bin_int(mx_afile *f, int v) {
   int32_t i = (int32_t)v;
   return write_bin(f, &i, 4);
-}
-
-static int write_header(mx_afile *f, int binary) {
-  MX_CHECK(mx_afile_printf(f, "$MeshFormat\n4.1 %d 8\n", binary ? 1 : 0));
-  if (binary) {
-    MX_CHECK(write_bin_int(f, 1));
-    MX_CHECK(mx_afile_write(f, "\n", 1));
-  }
-  return mx_afile_printf(f,
-                         "$EndMeshFormat\n$PhysicalNames\n1\n3 %d \"domain\"\n"
-                         "$EndPhysicalNames\n",
-                         PHYSICAL_TAG);
 }
 
 /* Bounding box of the nodes (min/max are exact: any order gives the same). */
@@ -177,31 +244,151 @@ static void bounding_box(const mx_mesh_view *m, double box[6]) {
   box[3] = x1, box[4] = y1, box[5] = z1;
 }
 
-/* One volume (dim 3, tag ENTITY_TAG) in physical group PHYSICAL_TAG, with no
- * bounding surfaces; no points, curves or surfaces. */
-static int write_entities(mx_afile *f, const mx_mesh_view *m, int binary) {
+/* What the tagged layout needs: the tags and bodies present, counts per
+ * block, boxes (a body's box is its boundary faces' box). */
+typedef struct {
+  int tagged, ntags, nbodies;
+  size_t *ntri, *nquad;   /* per tag 0..ntags */
+  size_t *ncell;          /* per body 0..nbodies, 4 types each */
+  double *tbox, *bbox;    /* 6 per tag / body */
+} msh_layout;
+
+static void layout_free(msh_layout *L) {
+  mx_free(L->ntri);
+  mx_free(L->nquad);
+  mx_free(L->ncell);
+  mx_free(L->tbox);
+  mx_free(L->bbox);
+}
+
+static void box_add(double *box, const double *p) {
+  for (int a = 0; a < 3; a++) {
+    box[a] = p[a] < box[a] ? p[a] : box[a];
+    box[3 + a] = p[a] > box[3 + a] ? p[a] : box[3 + a];
+  }
+}
+
+static void faces_into(const mx_mesh_view *m, msh_layout *L, const uint32_t *fv,
+                       const int32_t *tag, size_t n, int nv, size_t *cnt) {
+  for (size_t i = 0; i < n; i++) {
+    const int t = tag[i] >= 1 && tag[i] <= L->ntags ? tag[i] : 0;
+    if (!t) continue;
+    cnt[t]++;
+    for (int j = 0; j < nv; j++) box_add(L->tbox + 6 * t, m->xyz + 3 * (size_t)fv[(size_t)nv * i + j]);
+  }
+}
+
+static int layout_build(const mx_mesh_view *m, msh_layout *L) {
+  memset(L, 0, sizeof *L);
+  const mx_boundary_faces *bf = m->bfaces;
+  L->tagged = bf && bf->tri_tag && bf->quad_tag && m->ntags > 0 && m->cell_body && m->nbodies > 0;
+  if (!L->tagged) return MX_OK;
+  L->ntags = m->ntags;
+  L->nbodies = m->nbodies;
+  const size_t nt = (size_t)L->ntags + 1, nb = (size_t)L->nbodies + 1;
+  L->ntri = mx_calloc(nt * sizeof *L->ntri);
+  L->nquad = mx_calloc(nt * sizeof *L->nquad);
+  L->ncell = mx_calloc(4 * nb * sizeof *L->ncell);
+  L->tbox = mx_alloc(6 * nt * sizeof *L->tbox);
+  L->bbox = mx_alloc(6 * nb * sizeof *L->bbox);
+  if (!L->ntri || !L->nquad || !L->ncell || !L->tbox || !L->bbox) {
+    layout_free(L);
+    return MX_EINPUT;
+  }
+  for (size_t i = 0; i < nt; i++)
+    for (int a = 0; a < 3; a++) L->tbox[6 * i + a] = INFINITY, L->tbox[6 * i + 3 + a] = -INFINITY;
+  for (size_t i = 0; i < nb; i++)
+    for (int a = 0; a < 3; a++) L->bbox[6 * i + a] = INFINITY, L->bbox[6 * i + 3 + a] = -INFINITY;
+  faces_into(m, L, bf->tri, bf->tri_tag, bf->ntri, 3, L->ntri);
+  faces_into(m, L, bf->quad, bf->quad_tag, bf->nquad, 4, L->nquad);
+  /* bodies' boxes from their boundary faces */
+  for (size_t i = 0; i < bf->ntri; i++) {
+    const int32_t b = m->cell_body[bf->tri_src[i] >> 3];
+    if (b >= 1 && b <= L->nbodies)
+      for (int j = 0; j < 3; j++) box_add(L->bbox + 6 * b, m->xyz + 3 * (size_t)bf->tri[3 * i + j]);
+  }
+  for (size_t i = 0; i < bf->nquad; i++) {
+    const int32_t b = m->cell_body[bf->quad_src[i] >> 3];
+    if (b >= 1 && b <= L->nbodies)
+      for (int j = 0; j < 4; j++) box_add(L->bbox + 6 * b, m->xyz + 3 * (size_t)bf->quad[4 * i + j]);
+  }
+  size_t *cnt = L->ncell;
+  const size_t n4 = 4 * nb;
+#pragma omp parallel for schedule(static) reduction(+ : cnt[:n4]) if (m->ncells > 65536)
+  for (size_t c = 0; c < m->ncells; c++) {
+    const int32_t b = m->cell_body[c];
+    if (b >= 1 && b <= L->nbodies) cnt[4 * (size_t)b + (m->type[c] & 3)]++;
+  }
+  return MX_OK;
+}
+
+static int write_header(mx_afile *f, const mx_mesh_view *m, const msh_layout *L, int binary) {
+  MX_CHECK(mx_afile_printf(f, "$MeshFormat\n4.1 %d 8\n", binary ? 1 : 0));
+  if (binary) {
+    MX_CHECK(write_bin_int(f, 1));
+    MX_CHECK(mx_afile_write(f, "\n", 1));
+  }
+  MX_CHECK(mx_afile_printf(f, "$EndMeshFormat\n$PhysicalNames\n"));
+  if (!L->tagged)
+    return mx_afile_printf(f, "1\n3 %d \"domain\"\n$EndPhysicalNames\n", PHYSICAL_TAG);
+  int n = L->nbodies;
+  for (int t = 1; t <= L->ntags; t++) n += L->ntri[t] + L->nquad[t] > 0;
+  MX_CHECK(mx_afile_printf(f, "%d\n", n));
+  for (int t = 1; t <= L->ntags; t++)
+    if (L->ntri[t] + L->nquad[t] > 0)
+      MX_CHECK(mx_afile_printf(f, "2 %d \"%s\"\n", t, m->tag_names[t - 1]));
+  for (int b = 1; b <= L->nbodies; b++)
+    MX_CHECK(mx_afile_printf(f, "3 %d \"%s\"\n", b, m->body_names[b - 1]));
+  return mx_afile_printf(f, "$EndPhysicalNames\n");
+}
+
+/* One entity line: tag, box, one physical tag, no bounding entities. */
+static int write_entity(mx_afile *f, int tag, const double box[6], int phys, int binary) {
+  if (binary) {
+    MX_CHECK(write_bin_int(f, tag));
+    MX_CHECK(write_bin(f, box, 6 * sizeof *box));
+    MX_CHECK(write_bin_size(f, 1));
+    MX_CHECK(write_bin_int(f, phys));
+    return write_bin_size(f, 0);
+  }
+  char line[6 * (MX_DOUBLE_CHARS + 1) + 64];
+  size_t n = (size_t)snprintf(line, sizeof line, "%d", tag);
+  for (int k = 0; k < 6; k++) {
+    line[n++] = ' ';
+    n += mx_put_double(line + n, box[k]);
+  }
+  n += (size_t)snprintf(line + n, sizeof line - n, " 1 %d 0\n", phys);
+  return mx_afile_write(f, line, n);
+}
+
+/* Plain: one volume (dim 3, tag ENTITY_TAG) in physical group PHYSICAL_TAG.
+ * Tagged: a surface per boundary tag with faces, a volume per body. */
+static int write_entities(mx_afile *f, const mx_mesh_view *m, const msh_layout *L, int binary) {
   double box[6];
   bounding_box(m, box);
+  size_t nsurf = 0, nvol = 1;
+  if (L->tagged) {
+    for (int t = 1; t <= L->ntags; t++) nsurf += L->ntri[t] + L->nquad[t] > 0;
+    nvol = (size_t)L->nbodies;
+  }
   MX_CHECK(mx_afile_printf(f, "$Entities\n"));
   if (binary) {
-    for (int k = 0; k < 3; k++) MX_CHECK(write_bin_size(f, 0));
-    MX_CHECK(write_bin_size(f, 1));
-    MX_CHECK(write_bin_int(f, ENTITY_TAG));
-    MX_CHECK(write_bin(f, box, sizeof box));
-    MX_CHECK(write_bin_size(f, 1));
-    MX_CHECK(write_bin_int(f, PHYSICAL_TAG));
-    MX_CHECK(write_bin_size(f, 0));
-    MX_CHECK(mx_afile_write(f, "\n", 1));
+    const uint64_t head[4] = {0, 0, nsurf, nvol};
+    MX_CHECK(write_bin(f, head, sizeof head));
   } else {
-    char line[6 * (MX_DOUBLE_CHARS + 1) + 64];
-    size_t n = (size_t)snprintf(line, sizeof line, "0 0 0 1\n%d", ENTITY_TAG);
-    for (int k = 0; k < 6; k++) {
-      line[n++] = ' ';
-      n += mx_put_double(line + n, box[k]);
-    }
-    n += (size_t)snprintf(line + n, sizeof line - n, " 1 %d 0\n", PHYSICAL_TAG);
-    MX_CHECK(mx_afile_write(f, line, n));
+    MX_CHECK(mx_afile_printf(f, "0 0 %zu %zu\n", nsurf, nvol));
   }
+  if (!L->tagged) {
+    MX_CHECK(write_entity(f, ENTITY_TAG, box, PHYSICAL_TAG, binary));
+  } else {
+    for (int t = 1; t <= L->ntags; t++)
+      if (L->ntri[t] + L->nquad[t] > 0) MX_CHECK(write_entity(f, t, L->tbox + 6 * t, t, binary));
+    for (int b = 1; b <= L->nbodies; b++) {
+      const double *bb = L->bbox + 6 * b;
+      MX_CHECK(write_entity(f, b, bb[0] <= bb[3] ? bb : box, b, binary));
+    }
+  }
+  if (binary) MX_CHECK(mx_afile_write(f, "\n", 1));
   return mx_afile_printf(f, "$EndEntities\n");
 }
 
@@ -209,7 +396,7 @@ static int write_nodes(mx_afile *f, const mx_mesh_view *m, int binary) {
   const size_t nn = m->nnodes;
   const size_t nblocks = nn > 0;
   const size_t tag_min = nn > 0, tag_max = nn;
-  msh_ctx ctx = {m, 0};
+  msh_ctx ctx = {m, 0, 0, binary, NULL};
   MX_CHECK(mx_afile_printf(f, "$Nodes\n"));
   if (binary) {
     const uint64_t head[4] = {nblocks, nn, tag_min, tag_max};
@@ -252,46 +439,101 @@ static void count_types(const mx_mesh_view *m, size_t count[4]) {
   count[0] = c0, count[1] = c1, count[2] = c2, count[3] = c3;
 }
 
-static int write_elements(mx_afile *f, const mx_mesh_view *m, int binary) {
+/* One block header: entity dimension and tag, element type, count. */
+static int block_head(mx_afile *f, int dim, int tag, int type, size_t count, int binary) {
+  if (!binary) return mx_afile_printf(f, "%d %d %d %zu\n", dim, tag, type, count);
+  MX_CHECK(write_bin_int(f, dim));
+  MX_CHECK(write_bin_int(f, tag));
+  MX_CHECK(write_bin_int(f, type));
+  return write_bin_size(f, count);
+}
+
+static int cell_block(mx_afile *f, const mx_mesh_view *m, int entity, int body, int t,
+                      size_t count, int binary) {
+  msh_ctx ctx = {m, t, body, binary, NULL};
+  const size_t per_cell = (size_t)mx_cell_nodes[t] + 1;
+  MX_CHECK(block_head(f, 3, entity, msh_type[t], count, binary));
+  if (binary) return mx_afile_emit(f, m->ncells, 8 * per_cell, fill_elements_bin, &ctx);
+  return mx_afile_emit(f, m->ncells, (MX_U64_CHARS + 1) * per_cell, fill_elements_ascii, &ctx);
+}
+
+static int face_block(mx_afile *f, const mx_mesh_view *m, int tag, int nv, size_t count,
+                      int binary) {
+  msh_ctx ctx = {m, nv, tag, binary, NULL};
+  const size_t n = nv == 3 ? m->bfaces->ntri : m->bfaces->nquad;
+  MX_CHECK(block_head(f, 2, tag, nv == 3 ? 2 : 3, count, binary));
+  return mx_afile_emit(f, n, (MX_U64_CHARS + 1) * (size_t)(nv + 1), fill_faces, &ctx);
+}
+
+static int write_elements(mx_afile *f, const mx_mesh_view *m, const msh_layout *L,
+                          int binary) {
   size_t count[4];
   count_types(m, count);
-  size_t nblocks = 0;
-  for (int t = 0; t < 4; t++) nblocks += count[t] > 0;
-  const size_t ne = m->ncells, tag_min = ne > 0, tag_max = ne;
+  size_t nblocks = 0, ne = m->ncells;
+  if (!L->tagged) {
+    for (int t = 0; t < 4; t++) nblocks += count[t] > 0;
+  } else {
+    for (int b = 1; b <= L->nbodies; b++)
+      for (int t = 0; t < 4; t++) nblocks += L->ncell[4 * b + t] > 0;
+    for (int t = 1; t <= L->ntags; t++) {
+      nblocks += (L->ntri[t] > 0) + (L->nquad[t] > 0);
+      ne += L->ntri[t] + L->nquad[t];
+    }
+  }
+  const size_t tag_min = ne > 0,
+               tag_max = L->tagged ? m->ncells + m->bfaces->ntri + m->bfaces->nquad : ne;
   MX_CHECK(mx_afile_printf(f, "$Elements\n"));
   if (binary) {
     const uint64_t head[4] = {nblocks, ne, tag_min, tag_max};
     MX_CHECK(write_bin(f, head, sizeof head));
   } else {
-    MX_CHECK(mx_afile_printf(f, "%zu %zu %zu %zu\n", nblocks, ne, tag_min,
-                             tag_max));
+    MX_CHECK(mx_afile_printf(f, "%zu %zu %zu %zu\n", nblocks, ne, tag_min, tag_max));
   }
-  for (int t = 0; t < 4; t++) {
-    if (count[t] == 0) continue;
-    msh_ctx ctx = {m, t};
-    size_t per_cell = (size_t)mx_cell_nodes[t] + 1;
-    if (binary) {
-      MX_CHECK(write_bin_int(f, 3));
-      MX_CHECK(write_bin_int(f, ENTITY_TAG));
-      MX_CHECK(write_bin_int(f, msh_type[t]));
-      MX_CHECK(write_bin_size(f, count[t]));
-      MX_CHECK(mx_afile_emit(f, ne, 8 * per_cell, fill_elements_bin, &ctx));
-    } else {
-      MX_CHECK(mx_afile_printf(f, "3 %d %d %zu\n", ENTITY_TAG, msh_type[t],
-                               count[t]));
-      MX_CHECK(mx_afile_emit(f, ne, (MX_U64_CHARS + 1) * per_cell,
-                             fill_elements_ascii, &ctx));
+  if (!L->tagged) {
+    for (int t = 0; t < 4; t++)
+      if (count[t]) MX_CHECK(cell_block(f, m, ENTITY_TAG, 0, t, count[t], binary));
+  } else {
+    for (int b = 1; b <= L->nbodies; b++)
+      for (int t = 0; t < 4; t++)
+        if (L->ncell[4 * b + t]) MX_CHECK(cell_block(f, m, b, b, t, L->ncell[4 * b + t], binary));
+    for (int t = 1; t <= L->ntags; t++) {
+      if (L->ntri[t]) MX_CHECK(face_block(f, m, t, 3, L->ntri[t], binary));
+      if (L->nquad[t]) MX_CHECK(face_block(f, m, t, 4, L->nquad[t], binary));
     }
   }
   if (binary) MX_CHECK(mx_afile_write(f, "\n", 1));
   return mx_afile_printf(f, "$EndElements\n");
 }
 
+/* One $ElementData section per cell field: the field's name, time 0, step
+ * 0, one component; every element, a boundary face with its element's
+ * value (readers such as meshio want data on every block). */
+static int write_element_data(mx_afile *f, const mx_mesh_view *m, const msh_layout *L,
+                              int binary) {
+  const size_t ne = m->ncells + (L->tagged ? m->bfaces->ntri + m->bfaces->nquad : 0);
+  for (int i = 0; i < m->ncell_fields; i++) {
+    const mx_field *fd = &m->cell_fields[i];
+    msh_ctx ctx = {m, 0, 0, binary, fd};
+    MX_CHECK(mx_afile_printf(f, "$ElementData\n1\n\"%s\"\n1\n0\n3\n0\n1\n%zu\n", fd->name,
+                             ne));
+    MX_CHECK(mx_afile_emit(f, ne, binary ? 12 : MX_U64_CHARS + MX_DOUBLE_CHARS + 2,
+                           fill_data, &ctx));
+    if (binary) MX_CHECK(mx_afile_write(f, "\n", 1));
+    MX_CHECK(mx_afile_printf(f, "$EndElementData\n"));
+  }
+  return MX_OK;
+}
+
 static int write_body(mx_afile *f, const mx_mesh_view *m, int binary) {
-  MX_CHECK(write_header(f, binary));
-  MX_CHECK(write_entities(f, m, binary));
-  MX_CHECK(write_nodes(f, m, binary));
-  return write_elements(f, m, binary);
+  msh_layout L;
+  MX_CHECK(layout_build(m, &L));
+  int st = write_header(f, m, &L, binary);
+  if (!st) st = write_entities(f, m, &L, binary);
+  if (!st) st = write_nodes(f, m, binary);
+  if (!st) st = write_elements(f, m, &L, binary);
+  if (!st) st = write_element_data(f, m, &L, binary);
+  layout_free(&L);
+  return st;
 }
 
 int mx_write_msh(const char *path, const mx_mesh_view *m, int binary) {

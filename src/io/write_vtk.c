@@ -19,7 +19,10 @@ enum { NAME_MAX_BYTES = 1024 };
 typedef struct {
   const mx_mesh_view *m;
   const mx_field *fd;
+  const uint32_t *order; /* fields: the written order of the cells, or NULL */
 } vtk_ctx;
+
+static inline size_t item(const vtk_ctx *c, size_t k) { return c->order ? c->order[k] : k; }
 
 /* ---- big-endian stores --------------------------------------------------- */
 
@@ -63,7 +66,8 @@ static size_t fill_points_ascii(const void *vctx, size_t b, size_t e,
 static size_t fill_cells_bin(const void *vctx, size_t b, size_t e, char *out) {
   const mx_mesh_view *m = ((const vtk_ctx *)vctx)->m;
   size_t n = 0;
-  for (size_t c = b; c < e; c++) {
+  for (size_t k = b; k < e; k++) {
+    const size_t c = mx_view_cell(m, k);
     int nn = mx_cell_nodes[m->type[c]];
     const uint32_t *row = m->conn + 8 * c;
     put_be32(out + n, (uint32_t)nn);
@@ -78,7 +82,8 @@ static size_t fill_cells_ascii(const void *vctx, size_t b, size_t e,
                                char *out) {
   const mx_mesh_view *m = ((const vtk_ctx *)vctx)->m;
   size_t n = 0;
-  for (size_t c = b; c < e; c++) {
+  for (size_t k = b; k < e; k++) {
+    const size_t c = mx_view_cell(m, k);
     int nn = mx_cell_nodes[m->type[c]];
     const uint32_t *row = m->conn + 8 * c;
     out[n++] = (char)('0' + nn);
@@ -94,8 +99,8 @@ static size_t fill_cells_ascii(const void *vctx, size_t b, size_t e,
 
 static size_t fill_types_bin(const void *vctx, size_t b, size_t e, char *out) {
   const mx_mesh_view *m = ((const vtk_ctx *)vctx)->m;
-  for (size_t c = b; c < e; c++) {
-    put_be32(out + 4 * (c - b), (uint32_t)mx_vtk_cell_type[m->type[c]]);
+  for (size_t k = b; k < e; k++) {
+    put_be32(out + 4 * (k - b), (uint32_t)mx_vtk_cell_type[m->type[mx_view_cell(m, k)]]);
   }
   return 4 * (e - b);
 }
@@ -104,8 +109,8 @@ static size_t fill_types_ascii(const void *vctx, size_t b, size_t e,
                                char *out) {
   const mx_mesh_view *m = ((const vtk_ctx *)vctx)->m;
   size_t n = 0;
-  for (size_t c = b; c < e; c++) {
-    n += mx_put_u64(out + n, (uint64_t)mx_vtk_cell_type[m->type[c]]);
+  for (size_t k = b; k < e; k++) {
+    n += mx_put_u64(out + n, (uint64_t)mx_vtk_cell_type[m->type[mx_view_cell(m, k)]]);
     out[n++] = '\n';
   }
   return n;
@@ -114,27 +119,29 @@ static size_t fill_types_ascii(const void *vctx, size_t b, size_t e,
 /* ---- fields -------------------------------------------------------------- */
 
 static size_t fill_field_bin(const void *vctx, size_t b, size_t e, char *out) {
-  const mx_field *fd = ((const vtk_ctx *)vctx)->fd;
+  const vtk_ctx *c = vctx;
+  const mx_field *fd = c->fd;
   size_t n = 0;
   if (fd->is_double) {
     for (size_t i = b; i < e; i++, n += 8)
-      put_be_double(out + n, fd->dvalues[i]);
+      put_be_double(out + n, fd->dvalues[item(c, i)]);
   } else {
     for (size_t i = b; i < e; i++, n += 4)
-      put_be32(out + n, (uint32_t)fd->ivalues[i]);
+      put_be32(out + n, (uint32_t)fd->ivalues[item(c, i)]);
   }
   return n;
 }
 
 static size_t fill_field_ascii(const void *vctx, size_t b, size_t e,
                                char *out) {
-  const mx_field *fd = ((const vtk_ctx *)vctx)->fd;
+  const vtk_ctx *c = vctx;
+  const mx_field *fd = c->fd;
   size_t n = 0;
   for (size_t i = b; i < e; i++) {
     if (fd->is_double)
-      n += mx_put_double(out + n, fd->dvalues[i]);
+      n += mx_put_double(out + n, fd->dvalues[item(c, i)]);
     else
-      n += mx_put_i64(out + n, fd->ivalues[i]);
+      n += mx_put_i64(out + n, fd->ivalues[item(c, i)]);
     out[n++] = '\n';
   }
   return n;
@@ -199,12 +206,12 @@ static int write_cells(mx_afile *f, const vtk_ctx *ctx, int binary) {
 }
 
 static int write_field(mx_afile *f, const mx_mesh_view *m, const mx_field *fd,
-                       size_t count, int binary) {
+                       size_t count, const uint32_t *order, int binary) {
   char name[NAME_MAX_BYTES];
   encode_name(fd->name, name, sizeof name);
   MX_CHECK(mx_afile_printf(f, "SCALARS %s %s 1\nLOOKUP_TABLE default\n", name,
                            fd->is_double ? "double" : "int"));
-  vtk_ctx ctx = {m, fd};
+  vtk_ctx ctx = {m, fd, order};
   size_t width = fd->is_double ? 8 : 4;
   if (binary)
     MX_CHECK(mx_afile_emit(f, count, width, fill_field_bin, &ctx));
@@ -215,17 +222,17 @@ static int write_field(mx_afile *f, const mx_mesh_view *m, const mx_field *fd,
 
 static int write_fields(mx_afile *f, const mx_mesh_view *m, const char *kind,
                         int nfields, const mx_field *fields, size_t count,
-                        int binary) {
+                        const uint32_t *order, int binary) {
   if (nfields == 0) return MX_OK;
   MX_CHECK(mx_afile_printf(f, "%s %zu\n", kind, count));
   for (int i = 0; i < nfields; i++) {
-    MX_CHECK(write_field(f, m, &fields[i], count, binary));
+    MX_CHECK(write_field(f, m, &fields[i], count, order, binary));
   }
   return MX_OK;
 }
 
 static int write_body(mx_afile *f, const mx_mesh_view *m, int binary) {
-  vtk_ctx ctx = {m, NULL};
+  vtk_ctx ctx = {m, NULL, NULL};
   MX_CHECK(mx_afile_printf(f,
                            "# vtk DataFile Version 3.0\nmixoct mesh\n%s\n"
                            "DATASET UNSTRUCTURED_GRID\n",
@@ -233,9 +240,9 @@ static int write_body(mx_afile *f, const mx_mesh_view *m, int binary) {
   MX_CHECK(write_points(f, &ctx, binary));
   MX_CHECK(write_cells(f, &ctx, binary));
   MX_CHECK(write_fields(f, m, "CELL_DATA", m->ncell_fields, m->cell_fields,
-                        m->ncells, binary));
+                        m->ncells, m->order, binary));
   MX_CHECK(write_fields(f, m, "POINT_DATA", m->npoint_fields, m->point_fields,
-                        m->nnodes, binary));
+                        m->nnodes, NULL, binary));
   return MX_OK;
 }
 

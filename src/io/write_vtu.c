@@ -25,7 +25,12 @@ typedef struct {
   const mx_field *fd;
   const uint64_t *block_start; /* nodes before cell k*OFFSET_BLOCK */
   int wide;                    /* Int64 connectivity and offsets, else Int32 */
+  const uint32_t *order;       /* cell fields: the written order, or NULL */
 } vtu_ctx;
+
+/* The value index of the k-th item of a block (cell fields follow the
+ * written order of the cells). */
+static inline size_t item(const vtu_ctx *c, size_t k) { return c->order ? c->order[k] : k; }
 
 /* ---- little-endian stores ------------------------------------------------ */
 
@@ -211,7 +216,8 @@ static size_t fill_conn(const void *vctx, size_t b, size_t e, char *out) {
   const vtu_ctx *ctx = vctx;
   const mx_mesh_view *m = ctx->m;
   size_t n = 0;
-  for (size_t c = b; c < e; c++) {
+  for (size_t k = b; k < e; k++) {
+    const size_t c = mx_view_cell(m, k);
     const uint32_t *row = m->conn + 8 * c;
     int nn = mx_cell_nodes[m->type[c]];
     const int8_t *ord = mx_vtk_order[m->type[c]];
@@ -228,10 +234,10 @@ static size_t fill_offsets(const void *vctx, size_t b, size_t e, char *out) {
   const mx_mesh_view *m = ctx->m;
   size_t first = b / OFFSET_BLOCK * OFFSET_BLOCK;
   uint64_t end = ctx->block_start[b / OFFSET_BLOCK];
-  for (size_t c = first; c < b; c++) end += (uint64_t)mx_cell_nodes[m->type[c]];
+  for (size_t k = first; k < b; k++) end += (uint64_t)mx_cell_nodes[m->type[mx_view_cell(m, k)]];
   size_t n = 0;
-  for (size_t c = b; c < e; c++) {
-    end += (uint64_t)mx_cell_nodes[m->type[c]];
+  for (size_t k = b; k < e; k++) {
+    end += (uint64_t)mx_cell_nodes[m->type[mx_view_cell(m, k)]];
     if (ctx->wide) {
       put_le64(out + n, end);
       n += 8;
@@ -245,8 +251,8 @@ static size_t fill_offsets(const void *vctx, size_t b, size_t e, char *out) {
 
 static size_t fill_types(const void *vctx, size_t b, size_t e, char *out) {
   const mx_mesh_view *m = ((const vtu_ctx *)vctx)->m;
-  for (size_t c = b; c < e; c++)
-    out[c - b] = (char)mx_vtk_cell_type[m->type[c]];
+  for (size_t k = b; k < e; k++)
+    out[k - b] = (char)mx_vtk_cell_type[m->type[mx_view_cell(m, k)]];
   return e - b;
 }
 
@@ -264,37 +270,62 @@ static int write_double_block(mx_afile *f, const double *v, size_t count) {
   return mx_afile_write(f, v, 8 * count);
 #else
   mx_field fd = {"", 1, NULL, v};
-  vtu_ctx ctx = {NULL, &fd, NULL};
+  vtu_ctx ctx = {NULL, &fd, NULL, 0, NULL};
   return mx_afile_emit(f, count, 8, fill_doubles, &ctx);
 #endif
 }
 
 static size_t fill_u8(const void *vctx, size_t b, size_t e, char *out) {
-  const int32_t *v = ((const vtu_ctx *)vctx)->fd->ivalues;
-  for (size_t i = b; i < e; i++) out[i - b] = (char)(uint8_t)v[i];
+  const vtu_ctx *c = vctx;
+  const int32_t *v = c->fd->ivalues;
+  for (size_t i = b; i < e; i++) out[i - b] = (char)(uint8_t)v[item(c, i)];
   return e - b;
 }
 
-static int write_field_block(mx_afile *f, const mx_field *fd, size_t count) {
+/* Fields in the written order of the cells: gathered. */
+static size_t fill_doubles_gather(const void *vctx, size_t b, size_t e, char *out) {
+  const vtu_ctx *c = vctx;
+  size_t n = 0;
+  for (size_t i = b; i < e; i++, n += 8) put_le_double(out + n, c->fd->dvalues[item(c, i)]);
+  return n;
+}
+
+static size_t fill_ints_gather(const void *vctx, size_t b, size_t e, char *out) {
+  const vtu_ctx *c = vctx;
+  size_t n = 0;
+  for (size_t i = b; i < e; i++, n += 4) put_le32(out + n, (uint32_t)c->fd->ivalues[item(c, i)]);
+  return n;
+}
+
+static int write_field_block(mx_afile *f, const mx_field *fd, size_t count,
+                             const uint32_t *order) {
+  vtu_ctx gctx = {NULL, fd, NULL, 0, order};
+  if (fd->is_double && order) {
+    MX_CHECK(write_count(f, 8 * (uint64_t)count));
+    return mx_afile_emit(f, count, 8, fill_doubles_gather, &gctx);
+  }
   if (fd->is_double) return write_double_block(f, fd->dvalues, count);
   if (fits_u8(fd, count)) {
     MX_CHECK(write_count(f, (uint64_t)count));
-    vtu_ctx ctx = {NULL, fd, NULL, 0};
-    return mx_afile_emit(f, count, 1, fill_u8, &ctx);
+    return mx_afile_emit(f, count, 1, fill_u8, &gctx);
+  }
+  if (order) {
+    MX_CHECK(write_count(f, 4 * (uint64_t)count));
+    return mx_afile_emit(f, count, 4, fill_ints_gather, &gctx);
   }
   MX_CHECK(write_count(f, 4 * (uint64_t)count));
 #if VTU_HOST_LE
   return mx_afile_write(f, fd->ivalues, 4 * count);
 #else
-  vtu_ctx ctx = {NULL, fd, NULL};
+  vtu_ctx ctx = {NULL, fd, NULL, 0, NULL};
   return mx_afile_emit(f, count, 4, fill_ints, &ctx);
 #endif
 }
 
 static int write_fields(mx_afile *f, int nfields, const mx_field *fields,
-                        size_t count) {
+                        size_t count, const uint32_t *order) {
   for (int i = 0; i < nfields; i++) {
-    MX_CHECK(write_field_block(f, &fields[i], count));
+    MX_CHECK(write_field_block(f, &fields[i], count, order));
   }
   return MX_OK;
 }
@@ -309,7 +340,7 @@ static uint64_t *offset_block_starts(const mx_mesh_view *m) {
     size_t lo = k * OFFSET_BLOCK, hi = lo + OFFSET_BLOCK;
     if (hi > m->ncells) hi = m->ncells;
     uint64_t sum = 0;
-    for (size_t c = lo; c < hi; c++) sum += (uint64_t)mx_cell_nodes[m->type[c]];
+    for (size_t c = lo; c < hi; c++) sum += (uint64_t)mx_cell_nodes[m->type[mx_view_cell(m, c)]];
     start[k] = sum;
   }
   mx_scan_u64(start, nblocks);
@@ -321,7 +352,7 @@ static int write_cell_blocks(mx_afile *f, const mx_mesh_view *m, size_t nconn) {
   if (!block_start) return MX_EINPUT;
   const int wide = needs_wide(m, nconn);
   const uint64_t isz = wide ? 8 : 4;
-  vtu_ctx ctx = {m, NULL, block_start, wide};
+  vtu_ctx ctx = {m, NULL, block_start, wide, NULL};
   int st = write_count(f, isz * (uint64_t)nconn);
   if (st == MX_OK) st = mx_afile_emit(f, m->ncells, 64, fill_conn, &ctx);
   if (st == MX_OK) st = write_count(f, isz * (uint64_t)m->ncells);
@@ -339,8 +370,8 @@ static int write_body(mx_afile *f, const mx_mesh_view *m) {
   int st = head.failed ? MX_EINPUT : mx_afile_write(f, head.s, head.len);
   mx_free(head.s);
   MX_CHECK(st);
-  MX_CHECK(write_fields(f, m->npoint_fields, m->point_fields, m->nnodes));
-  MX_CHECK(write_fields(f, m->ncell_fields, m->cell_fields, m->ncells));
+  MX_CHECK(write_fields(f, m->npoint_fields, m->point_fields, m->nnodes, NULL));
+  MX_CHECK(write_fields(f, m->ncell_fields, m->cell_fields, m->ncells, m->order));
   MX_CHECK(write_double_block(f, m->xyz, 3 * m->nnodes));
   MX_CHECK(write_cell_blocks(f, m, nconn));
   static const char tail[] = "\n  </AppendedData>\n</VTKFile>\n";

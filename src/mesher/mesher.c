@@ -858,30 +858,6 @@ int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a) {
   return MX_OK;
 }
 
-static int write_mixed(const mx_mesher *m, const char *path, int ascii) {
-  const mx_mesh_out *M = &m->M;
-  int32_t *type = mx_alloc((M->ncells + 1) * sizeof *type);
-  int32_t *bnd = mx_alloc((M->nnodes + 1) * sizeof *bnd);
-  if (!type || !bnd) {
-    mx_free(type);
-    mx_free(bnd);
-    return MX_ENOMEM;
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < M->ncells; i++) type[i] = M->type[i];
-#pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < M->nnodes; i++) bnd[i] = m->bnd[i];
-  mx_field f[3] = {{"type", 0, type, NULL},
-                   {"level", 0, M->level, NULL},
-                   {"jens", 1, NULL, M->jens}};
-  mx_field pf[1] = {{"boundary", 0, bnd, NULL}};
-  mx_mesh_view v = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells, .type = M->type, .conn = M->conn, .ncell_fields = 3, .cell_fields = f, .npoint_fields = 1, .point_fields = pf};
-  int st = mx_write_mesh(path, &v, ascii);
-  mx_free(type);
-  mx_free(bnd);
-  return st;
-}
-
 static int write_octree(mx_mesher *m, const char *path, int ascii) {
   if (!m->have_hex) {
     MX_CHECK(mx_leaf_hex_mesh(&m->B, m->leaves, m->nleaves, &m->hex));
@@ -916,7 +892,7 @@ int mx_mesher_write(const mx_mesher *cm, const char *path, int ascii) {
     st = MX_EINPUT;
   } else {
     stage(m, "write");
-    st = write_mixed(m, path, ascii);
+    st = mx_write_mixed(m, path, ascii);
   }
   m->S.ph.write += mx_wtime() - t;
   return mx_call_end(m, &c, st);

@@ -35,6 +35,9 @@ int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold);
 int mx_remesh_after_refine(mx_mesher *m);
 int mx_build_tree(mx_mesher *m);    /* grid, refine, balance, leaves */
 mx_requests mx_mesher_requests(const mx_mesher *m);
+/* Write the mixed mesh (src/mesher/output.c): written order, boundary tags
+ * and bodies, fields. */
+int mx_write_mixed(mx_mesher *m, const char *path, int ascii);
 /* The octree's figures (leaves, hash, octants, edges, splits) into m->S. */
 void mx_fill_tree_stats(mx_mesher *m);
 

@@ -63,6 +63,11 @@ typedef struct {
   const char *const *body_names;
 } mx_mesh_view;
 
+/* The written order of n cells (src/io/cell_order.c): grouped by type (tetrahedra,
+ * pyramids, prisms, hexahedra), in index order within a type. first (may be NULL):
+ * where each type starts in order, first[4] = n. MX_OK or MX_EINPUT (memory). */
+int mx_cells_by_type(const uint8_t *type, size_t n, uint32_t *order, size_t first[5]);
+
 /* The index of the k-th cell written. */
 static inline size_t mx_view_cell(const mx_mesh_view *m, size_t k) {
   return m->order ? m->order[k] : k;
@@ -83,6 +88,7 @@ int mx_write_medit(const char *path, const mx_mesh_view *m, int binary);
  * src/io/write_m3d.c). */
 int mx_write_getfem(const char *path, const mx_mesh_view *m);
 int mx_write_m3d(const char *path, const mx_mesh_view *m);
+int mx_write_mvm(const char *path, const mx_mesh_view *m);
 /* Dispatch on the extension: .vtk (legacy), .vtu, .msh, .mesh, .meshb,
  * .getfem, .m3d; ascii selects the ASCII variant where a format has both
  * (.vtk, .msh). */
