@@ -174,8 +174,10 @@ int mx_mesher_save_restart(const mx_mesher *m, const char *path);
  * or mx_mesher_mesh next. The domain surfaces must have been added (the same
  * ones: a file whose octants do not lie on their grid is MX_EINPUT). Until
  * the next mesh, element indices refer to the mesh that was written with the
- * restart file (its per-octant element counts), of which there are
- * mx_mesher_restart_elements (0 when the file has no counts). */
+ * restart file, of which there are mx_mesher_restart_elements (0 when the
+ * file has no counts): in the files' order (mx_mesher_written_order) for a
+ * file mixoct wrote (marked so; its mesh is made again first when the file
+ * does not hold it), octant by octant for the published program's. */
 int mx_mesher_load_restart(mx_mesher *m, const char *path);
 size_t mx_mesher_restart_elements(const mx_mesher *m);
 /* Read a list of element indices (the published format: indices separated
@@ -207,6 +209,14 @@ typedef struct {
  * mixed mesh (none yet, or params.stage == MX_STAGE_OCTREE, whose leaves
  * only mx_mesher_write writes, as hexahedra). */
 int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a);
+
+/* The order the mesh files list the elements in: grouped by type
+ * (tetrahedra, pyramids, prisms, hexahedra), the mesher's order within a
+ * type, so readers see at most four blocks. order (nelements entries of
+ * mx_mesh_arrays) receives, for each position k of the files, the index of
+ * that element in the arrays. Element lists read with a restart file refer
+ * to the files' order; mx_mesher_refine_elements takes the arrays'. */
+int mx_mesher_written_order(const mx_mesher *m, uint32_t *order);
 
 /* Write the current mesh; format by extension: .vtk .vtu .msh .mesh .meshb
  * .getfem .m3d; ascii: the ASCII variant of .vtk / .msh. Written under a

@@ -35,6 +35,7 @@ enum {
   BIN_TRANSFORM = 1u,
   BIN_NSUB = 2u,
   BIN_MESH = 4u,   /* a mesh section: 16 more header bytes (nodes, elements) */
+  BIN_BYTYPE = 8u, /* element lists refer to the elements grouped by type */
   TOK_SHOW = 40, /* at most this many characters of a token in messages */
 };
 static const uint8_t bin_magic[8] = {0x89, 'M', 'X', 'O', 'C', 'T', '\r', '\n'};
@@ -909,7 +910,7 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
              BIN_VERSION);
     return MX_EINPUT;
   }
-  if (flags & ~(uint32_t)(BIN_TRANSFORM | BIN_NSUB | BIN_MESH)) {
+  if (flags & ~(uint32_t)(BIN_TRANSFORM | BIN_NSUB | BIN_MESH | BIN_BYTYPE)) {
     mx_error(name, 0, "corrupted: unknown flags 0x%x", flags);
     return MX_EINPUT;
   }
@@ -960,6 +961,7 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
   }
   r->nv = (size_t)nv, r->ne = (size_t)ne, r->no = (size_t)no;
   r->has_transform = (flags & BIN_TRANSFORM) != 0;
+  r->by_type = (flags & BIN_BYTYPE) != 0;
   uint32_t *count = mx_alloc(4 * no);
   int st = count ? alloc_arrays(r, r->nv, r->ne, r->no, flags & BIN_NSUB)
                  : MX_EINPUT;
@@ -1018,6 +1020,17 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
 
 /* ---- reading: entry points ----------------------------------------------- */
 
+/* Whether one of the last lines of the text starts with MX_RESTART_BY_TYPE
+ * (the writer puts it last). */
+static int text_by_type(const char *buf, size_t len) {
+  static const char mark[] = MX_RESTART_BY_TYPE;
+  const size_t k = sizeof mark - 1;
+  for (size_t i = len > 4 * k ? len - 4 * k : 0; i + k <= len; i++)
+    if ((i == 0 || buf[i - 1] == '\n') && buf[i] == '#' && memcmp(buf + i, mark, k) == 0)
+      return 1;
+  return 0;
+}
+
 int mx_restart_parse(const char *name, const uint8_t *buf, size_t len,
                      mx_restart *r) {
   memset(r, 0, sizeof *r);
@@ -1030,6 +1043,7 @@ int mx_restart_parse(const char *name, const uint8_t *buf, size_t len,
     st = bin_parse(name, buf, len, r);
   else
     st = text_parse(name, (const char *)buf, len, r);
+  if (st == MX_OK && buf[0] != bin_magic[0]) r->by_type = text_by_type((const char *)buf, len);
   if (st != MX_OK) mx_restart_free(r);
   return st;
 }
@@ -1132,6 +1146,7 @@ static int text_body(mx_afile *f, const mx_restart *r) {
     MX_CHECK(mx_afile_emit(f, r->no, 11, fill_nsub, r));
     MX_CHECK(mx_afile_write(f, "\n", 1));
   }
+  if (r->by_type) MX_CHECK(mx_afile_printf(f, "%s\n", MX_RESTART_BY_TYPE));
   return MX_OK;
 }
 
@@ -1175,6 +1190,7 @@ static int bin_body(bin_out *o, const mx_restart *r, const uint32_t *count) {
   if (r->has_transform) flags |= BIN_TRANSFORM;
   if (r->nsub) flags |= BIN_NSUB;
   if (r->has_mesh) flags |= BIN_MESH;
+  if (r->by_type) flags |= BIN_BYTYPE;
   memcpy(head, bin_magic, 8);
   memcpy(head + 8, &version, 4);
   memcpy(head + 12, &flags, 4);

@@ -57,7 +57,8 @@
  *   then the sections, each zero-padded to a multiple of 8 bytes:
  *   xyz f64[3 nv], edge u32[3 ne], oct_node u32[8 no], oct_level u8[no],
  *   per-octant face counts u32[no], oct_tri u32[ntri],
- *   transform f64[6] (flag bit 0), nsub u32[no] (flag bit 1),
+ *   transform f64[6] (flag bit 0), nsub u32[no] (flag bit 1), the mesh
+ *   (flag bit 2, see below), flag bit 3: by_type,
  *   and last a u64 checksum of every byte before it (4-lane multiply-xorshift
  *   over 8-byte words: any change confined to one word is always detected).
  * The reader checks the magic, version and flags, then the file size
@@ -75,6 +76,7 @@
 #include <stdint.h>
 
 enum { MX_RESTART_MAX_LEVEL = 16 };
+#define MX_RESTART_BY_TYPE "# mixoct: element indices grouped by type"
 
 typedef struct {
   size_t nv, ne, no;     /* header: nodes, edges, octants */
@@ -87,6 +89,12 @@ typedef struct {
   int has_transform;     /* the "Geometric Transform" section is present */
   double transform[6];   /* its two lines */
   uint32_t *nsub;        /* no: mesh elements per octant; NULL if absent */
+  int by_type;           /* the mesh written with this file numbers its
+                          * elements grouped by type (mixoct's written order,
+                          * io/cell_order.c), so element lists refer to that
+                          * order; 0: octant by octant (the published
+                          * program's). Text: the last line is the comment
+                          * MX_RESTART_BY_TYPE; binary: flag bit 3. */
   /* Binary variant only, optional: the mesh written with the file (the
    * full stage: element -> octant, node lattice keys and states), so that
    * a re-mesh from the file is local (mesher/remesh_local.c). Elements are

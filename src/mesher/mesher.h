@@ -88,6 +88,8 @@ struct mx_mesher {
   /* restart read, not meshed yet: element of the file's mesh -> leaf */
   uint32_t *file_leaf;
   size_t file_nelem;
+  int file_by_type;         /* its element lists number the elements grouped
+                             * by type (a mixoct file, mx_restart.by_type) */
 
   int have_index;
   mx_surface_index SI;

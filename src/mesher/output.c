@@ -121,3 +121,11 @@ int mx_write_mixed(mx_mesher *m, const char *path, int ascii) {
   mx_free(bnd);
   return st;
 }
+
+int mx_mesher_written_order(const mx_mesher *m, uint32_t *order) {
+  if (m->mesh_stage < MX_STAGE_TRANSITION) {
+    mx_error(NULL, 0, "no mixed mesh: mesh first");
+    return MX_EINPUT;
+  }
+  return mx_cells_by_type(m->M.type, m->M.ncells, order, NULL);
+}

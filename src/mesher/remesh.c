@@ -5,6 +5,7 @@
 #include "mesher/mesher_impl.h"
 
 #include "kernels/remesh.h"
+#include "soa/mesh.h"
 
 #include <string.h>
 
@@ -99,13 +100,56 @@ static int refine_indices(mx_mesher *m, const uint64_t *idx, size_t n, const uin
   return st;
 }
 
+/* A mixoct restart file's element lists number the elements as mixoct
+ * wrote its mesh: grouped by type (io/cell_order.c). The file's mesh (the
+ * .octb's, or the octree meshed again: the same, it is deterministic) gives
+ * each of them its leaf; *map (mx_alloc) receives them. The per-leaf counts
+ * must be the file's. */
+static int by_type_map(mx_mesher *m, uint32_t **map) {
+  *map = NULL;
+  if (m->mesh_stage != MX_STAGE_FULL) MX_CHECK(mx_mesh_stages(m));
+  const mx_mesh_out *M = &m->M;
+  const size_t n = M->ncells;
+  uint32_t *order = mx_alloc((n + 1) * sizeof *order);
+  uint32_t *cnt = mx_calloc((m->nleaves + 1) * sizeof *cnt);
+  int st = order && cnt ? mx_cells_by_type(M->type, n, order, NULL) : MX_ENOMEM;
+  size_t bad = n != m->file_nelem;
+  for (size_t k = 0; !st && !bad && k < n; k++) {
+    const uint32_t l = m->file_leaf[k];
+    if (l < m->nleaves) cnt[l]++;
+  }
+  for (size_t c = 0; !st && !bad && c < n; c++) bad += cnt[M->leaf[c]]-- == 0;
+  if (!st && bad) {
+    mx_error(NULL, 0, "the restart file's mesh cannot be made again (%zu elements "
+                      "against the file's %zu): its element list cannot be mapped", n,
+             m->file_nelem);
+    st = MX_EINPUT;
+  }
+  if (!st) {
+#pragma omp parallel for schedule(static)
+    for (size_t k = 0; k < n; k++) order[k] = M->leaf[order[k]];
+    *map = order;
+    order = NULL;
+  }
+  mx_free(order);
+  mx_free(cnt);
+  return st;
+}
+
 int mx_mesher_refine_elements(mx_mesher *m, const uint64_t *elements, size_t n) {
   mx_call c;
   mx_call_begin(m, &c);
   int st = need_tree(m);
   /* the element -> leaf map of the mesh written with the restart file just
    * read, or of the current mesh */
-  if (!st && m->file_leaf) {
+  if (!st && m->file_leaf && m->file_by_type) {
+    uint32_t *map = NULL;
+    st = by_type_map(m, &map);
+    if (!st)
+      st = refine_indices(m, elements, n, map, m->file_nelem, "element",
+                          "elements in the restart file's mesh");
+    mx_free(map);
+  } else if (!st && m->file_leaf) {
     st = refine_indices(m, elements, n, m->file_leaf, m->file_nelem, "element",
                         "elements in the restart file's mesh");
   } else if (!st && m->mesh_stage >= MX_STAGE_TRANSITION) {

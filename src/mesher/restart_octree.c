@@ -206,6 +206,7 @@ static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r
     r->nsub = mx_calloc((no + 1) * sizeof *r->nsub);
     if (!r->nsub) st = MX_ENOMEM;
     for (size_t c = 0; !st && c < m->M.ncells; c++) r->nsub[m->M.leaf[c]]++;
+    r->by_type = 1; /* our meshes are written grouped by type (io/cell_order.c) */
   }
   mx_free(vkey);
   return st;
@@ -476,6 +477,7 @@ static int load_restart(mx_mesher *m, const char *path) {
                           "mixoct sees it; their elements cannot be refined", lost);
   }
   mx_free(lkeys);
+  m->file_by_type = r.by_type;
   if (!st && r.has_mesh) st = adopt_mesh(m, &r, key);
   mx_free(key);
   mx_free(perm);
