@@ -210,16 +210,24 @@ typedef struct {
  * only mx_mesher_write writes, as hexahedra). */
 int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a);
 
-/* The order the mesh files list the elements in: grouped by type
- * (tetrahedra, pyramids, prisms, hexahedra), the mesher's order within a
- * type, so readers see at most four blocks. order (nelements entries of
+/* The boundary faces of a full-stage mesh as a surface VTU of their own
+ * (`--boundary FILE.vtu`): triangles and quadrilaterals with the cell
+ * fields surface_tag (the input file each lies on, 1 for the first -i) and
+ * body, and the point field node (the index in the volume mesh). */
+int mx_mesher_write_boundary(const mx_mesher *m, const char *path);
+
+/* The order the mesh files list the elements in: grouped by body (the
+ * parts of the mesh connected through nodes, in the order of their first
+ * node), then by type (tetrahedra, pyramids, prisms, hexahedra), the
+ * mesher's order within a group, so readers see at most four blocks a
+ * body. order (nelements entries of
  * mx_mesh_arrays) receives, for each position k of the files, the index of
  * that element in the arrays. Element lists read with a restart file refer
  * to the files' order; mx_mesher_refine_elements takes the arrays'. */
 int mx_mesher_written_order(const mx_mesher *m, uint32_t *order);
 
 /* Write the current mesh; format by extension: .vtk .vtu .msh .mesh .meshb
- * .getfem .m3d; ascii: the ASCII variant of .vtk / .msh. Written under a
+ * .getfem .m3d .mvm; ascii: the ASCII variant of .vtk / .msh. Written under a
  * temporary name and renamed. */
 int mx_mesher_write(const mx_mesher *m, const char *path, int ascii);
 

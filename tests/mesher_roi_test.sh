@@ -32,10 +32,13 @@ check_mesh() { # file, description
   if "$MIXOCT" check "$1" >"$T/check" 2>&1; then ok "$2: mixoct check clean"; else bad "$2: mixoct check"; cat "$T/check"; fi
 }
 
-# Compares NAME.getfem and NAME.m3d with NAME.vtk: same points (bit for
-# bit), same elements; M3D rows are VTK's; GetFEM rows are VTK's in GetFEM's
-# node order, with a positive Jacobian at each element's centre under
-# GetFEM's shape functions, and a total volume that matches mixoct check's.
+# Compares NAME.getfem, NAME.m3d and NAME.mvm (when there) with NAME.vtk:
+# same points (bit for bit in GetFEM, to the 9 digits of "%+1.8E" in M3D and
+# MVM), same elements; M3D and MVM rows are ours (VTK's but for the prism,
+# Gmsh's: REFERENCE.md, "Published output layouts"); GetFEM rows are VTK's
+# in GetFEM's node order, with a positive Jacobian at each element's centre
+# under GetFEM's shape functions, and a total volume that matches mixoct
+# check's.
 compare_formats() { # name, volume from mixoct check
   python3 - "$1" "$2" <<'EOF'
 import sys
@@ -79,18 +82,35 @@ def read_getfem(path):
     assert tok[i:] == ["END", "MESH", "STRUCTURE", "DESCRIPTION"]
     return xyz, cells
 
+letters = {"T": 4, "P": 5, "R": 6, "H": 8}
+def read_letter_cells(tok, i, m, tail):
+    cells = []
+    for _ in range(m):
+        k = letters[tok[i]]; cells.append([int(t) for t in tok[i + 1:i + 1 + k]]); i += 1 + k
+        if tail:
+            assert tok[i:i + 3] == ["1000.0", "0.45", "1.0"]; i += 3
+    assert i == len(tok)
+    return cells
+
 def read_m3d(path):
     tok = open(path).read().split()
-    assert tok[:2] == ["[Nodes,", "ARRAY1<POINT3D>]"]
+    assert tok[:2] == ["[Nodes,", "ARRAY1<STRING>]"]
     n = int(tok[2]); i = 3
-    xyz = [tuple(float(t) for t in tok[i + 3 * k:i + 3 * k + 3]) for k in range(n)]
-    i += 3 * n
+    assert all(tok[i + 4 * k] == "1" for k in range(n))
+    xyz = [tuple(float(t) for t in tok[i + 4 * k + 1:i + 4 * k + 4]) for k in range(n)]
+    i += 4 * n
     assert tok[i:i + 2] == ["[Elements,", "ARRAY1<STRING>]"]
-    m = int(tok[i + 2]); i += 3; cells = []
-    for _ in range(m):
-        k = int(tok[i]); cells.append([int(t) for t in tok[i + 1:i + 1 + k]]); i += 1 + k
-    assert i == len(tok)
-    return xyz, cells
+    return xyz, read_letter_cells(tok, i + 3, int(tok[i + 2]), True)
+
+def read_mvm(path):
+    tok = open(path).read().split()
+    assert tok[0] == "MIXED"
+    n, m = int(tok[1]), int(tok[2]); i = 3
+    xyz = [tuple(float(t) for t in tok[i + 3 * k:i + 3 * k + 3]) for k in range(n)]
+    return xyz, read_letter_cells(tok, i + 3 * n, m, False)
+
+def close(a, b):
+    return len(a) == len(b) and all(abs(x - y) <= 1e-8 * abs(y) for p, q in zip(a, b) for x, y in zip(p, q))
 
 # GetFEM shape functions (documented reference elements) and their gradients.
 def shape(k, x, y, z):
@@ -132,10 +152,13 @@ for g, v in zip(gcells, vcells):
 if not worst > 0: bad("getfem: an element has J <= 0 at its centre (%g)" % worst)
 if abs(volume - want_volume) > 0.01 * want_volume:
     bad("getfem volume %g, mixoct check %g" % (volume, want_volume))
-mxyz, mcells = read_m3d(name + ".m3d")
-if mxyz != vxyz: bad("m3d nodes differ from vtk")
 ours = [[v[j] for j in [0, 2, 1, 3, 5, 4]] if len(v) == 6 else v for v in vcells]
-if mcells != ours: bad("m3d elements differ from vtk cells")
+import os
+for ext, reader in ((".m3d", read_m3d), (".mvm", read_mvm)):
+    if ext == ".mvm" and not os.path.exists(name + ext): continue
+    mxyz, mcells = reader(name + ext)
+    if not close(mxyz, vxyz): bad(ext + " nodes differ from vtk")
+    if mcells != ours: bad(ext + " elements differ from vtk cells")
 print("%s: %d nodes, %d elements; getfem volume %.6g (check %.6g), min J %.3g" %
       (name, len(vxyz), len(vcells), volume, want_volume, worst))
 sys.exit(1 if fails else 0)
@@ -147,6 +170,7 @@ volume_of() { "$MIXOCT" check "$1" --json 2>/dev/null | tail -1 | python3 -c 'im
 expect_exit 0 "-h" "$ROI" -h
 has "$T/out" "-u NAME" "help lists -u"
 has "$T/out" "NAME.getfem" "help names the GetFEM file"
+has "$T/out" "NAME.mvm" "help names the MVM file (-i)"
 expect_exit 2 "-c with a missing restart file" "$ROI" -o "$S/cortex.off" -c "$T/in.oct" -u x -v
 has "$T/err" "in.oct" "-c names its file"
 expect_exit 2 "-l without -c" "$ROI" -o "$S/cortex.off" -l "$T/list.txt" -s 4 -u x -v
@@ -195,11 +219,12 @@ check_mesh out.vtk "cortex -s 4"
 if head -3 out.vtk | grep -qx ASCII; then ok "out.vtk is ASCII legacy VTK"; else bad "out.vtk is not ASCII"; fi
 [ -z "$(ls "$T" | grep '\.tmp\.')" ] && ok "no temporaries left" || bad "temporaries left: $(ls "$T")"
 
-# All three formats of one mesh from an MDL surface.
-expect_exit 0 "-d femur.mdl -s 4 -u f -v -g -m" "$ROI" -d "$S/femur.mdl" -s 4 -u f -v -g -m
-exists f.vtk; exists f.getfem; exists f.m3d
+# All four formats of one mesh from an MDL surface.
+expect_exit 0 "-d femur.mdl -s 4 -u f -v -g -m -i" "$ROI" -d "$S/femur.mdl" -s 4 -u f -v -g -m -i
+exists f.vtk; exists f.getfem; exists f.m3d; exists f.mvm
 check_mesh f.vtk "femur -s 4"
-if compare_formats f "$(volume_of f.vtk)"; then ok "femur: .getfem and .m3d match .vtk"; else bad "femur: formats differ"; fi
+check_mesh f.mvm "femur -s 4 (.mvm)"
+if compare_formats f "$(volume_of f.vtk)"; then ok "femur: .getfem, .m3d and .mvm match .vtk"; else bad "femur: formats differ"; fi
 
 # The same mesh as mixoct -i ... -o gives (the front only translates).
 "$MIXOCT" -i "$S/femur.mdl" -s 4 -o direct.vtk --ascii --quiet
@@ -211,9 +236,11 @@ expect_exit 0 "-u sub/g -g" "$ROI" -o "$S/cortex.off" -s 4 -u sub/g -g
 exists sub/g.getfem; absent sub/g.vtk "-g alone writes no VTK"
 expect_exit 0 "-u sub/m -m" "$ROI" -o "$S/cortex.off" -s 4 -u sub/m -m
 exists sub/m.m3d
-expect_exit 0 "-u sub/c -v -g -m (cortex)" "$ROI" -o "$S/cortex.off" -s 4 -u sub/c -m -g -v
-if compare_formats sub/c "$(volume_of sub/c.vtk)"; then ok "cortex: .getfem and .m3d match .vtk"; else bad "cortex: formats differ"; fi
-if cmp -s sub/g.getfem sub/c.getfem && cmp -s sub/m.m3d sub/c.m3d && cmp -s out.vtk sub/c.vtk; then
+expect_exit 0 "-u sub/i -i" "$ROI" -o "$S/cortex.off" -s 4 -u sub/i -i
+exists sub/i.mvm; absent sub/i.m3d "-i alone writes no M3D"
+expect_exit 0 "-u sub/c -v -g -m -i (cortex)" "$ROI" -o "$S/cortex.off" -s 4 -u sub/c -m -g -v -i
+if compare_formats sub/c "$(volume_of sub/c.vtk)"; then ok "cortex: .getfem, .m3d and .mvm match .vtk"; else bad "cortex: formats differ"; fi
+if cmp -s sub/g.getfem sub/c.getfem && cmp -s sub/m.m3d sub/c.m3d && cmp -s sub/i.mvm sub/c.mvm && cmp -s out.vtk sub/c.vtk; then
   ok "one format at a time gives the same files"; else bad "files depend on the other format flags"; fi
 
 # Box regions with a surface level, as in the ROI jobs.

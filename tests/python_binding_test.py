@@ -280,12 +280,20 @@ def restart_then_list():
     m = demo(3)
     m.save_restart(path)
     sel = np.flatnonzero(m.level == m.level.max())[[0, 3, 9]]
+    # the list numbers the elements as the files do: position k of the
+    # files is element order[k] of the arrays
+    order = m.written_order()
+    assert sorted(order.tolist()) == list(range(m.nelements))
+    assert (np.diff(m.types[order].astype(int)) >= 0).all()  # grouped by type
+    inv = np.empty_like(order)
+    inv[order] = np.arange(order.size, dtype=order.dtype)
+    filesel = inv[sel]
     with open(lst, "w") as f:
-        f.write("elements\n%s\n" % " ".join(str(i) for i in sel))
+        f.write("elements\n%s\n" % " ".join(str(i) for i in filesel))
     m.refine_elements(sel)
     want = (m.nelements, m.nleaves, m.stats()["leaves_hash"])
     m.close()
-    for elements in (lst, sel, list(sel)):
+    for elements in (lst, filesel, list(filesel)):
         r = mixoct.Mesher(surface_level=3)
         r.add_demo_surface()
         r.load_restart(path, elements=elements)

@@ -4,8 +4,9 @@
 #   tools/fuzz.sh [SECONDS_PER_TARGET] [TARGET ...]
 #
 # Targets (all by default): off mdl stl obj ply reg (tools/fuzz_readers.c),
-# mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb (mx_read_mesh of `mixoct
-# check`, the input written under that extension; tools/fuzz_readers.c)
+# mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d
+# mesh_mvm (mx_read_mesh of `mixoct check`, the input written under that
+# extension; tools/fuzz_readers.c)
 # and restart (tools/fuzz_restart.c). Each runs SECONDS_PER_TARGET seconds
 # (default 60) from its seeds tools/fuzz_seeds/TARGET plus a corpus kept
 # outside the tree, up to FUZZ_JOBS targets at a time (default: nproc). One
@@ -29,7 +30,7 @@ set -u
 export LC_ALL=C
 
 root=$(cd "$(dirname "$0")/.." && pwd)
-all_targets="off mdl stl obj ply reg mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb restart"
+all_targets="off mdl stl obj ply reg mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d mesh_mvm restart"
 
 secs=60
 case ${1:-} in

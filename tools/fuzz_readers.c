@@ -5,8 +5,8 @@
  *   reg                  mx_read_reg (src/io/read_reg.c)
  *   mesh                 mx_read_mesh (src/io/read_mesh.c), as `mixoct
  *                        check` calls it, then mx_check_mesh on small meshes;
- *                        -DFUZZ_EXT=vtk|vtu|msh|mesh|meshb picks the file
- *                        name's extension (default vtk)
+ *                        -DFUZZ_EXT=vtk|vtu|msh|mesh|meshb|getfem|m3d|mvm
+ *                        picks the file name's extension (default vtk)
  *
  * The readers take a path: each input is written to a file of this process
  * under $TMPDIR (/dev/shm when writable and TMPDIR is unset, else /tmp),

@@ -233,6 +233,7 @@ def _declare(lib):
         "mx_free_array": (None, [P]),
         "mx_mesher_mesh_arrays": (I, [P, ctypes.POINTER(_MeshArrays)]),
         "mx_mesher_write": (I, [P, S, I]),
+        "mx_mesher_written_order": (I, [P, ctypes.POINTER(ctypes.c_uint32)]),
         "mx_mesher_stats": (None, [P, ctypes.POINTER(_Stats)]),
     }
     missing = []
@@ -628,7 +629,10 @@ class Mesher:
         elements: indices (array-like) or the path of an element list (the
         published format) of elements of the mesh that was written with the
         restart file, to refine at once (the -c / -l workflow of the
-        published mesher)."""
+        published mesher). They number the elements as the mesh files list
+        them: for a file mixoct wrote, grouped by body and type (element k
+        of the files is element written_order()[k] of the arrays); for the
+        published program's, its own order."""
         self._call("mx_mesher_load_restart", _fspath(path), changes_mesh=True)
         if isinstance(elements, (str, bytes, os.PathLike)):
             # the element count of the file's mesh is not in the C API: the
@@ -642,6 +646,16 @@ class Mesher:
         return self.refine_elements([] if elements is None else elements,
                                     allow_invalid)
 
+    def written_order(self):
+        """For each position k of the mesh files (grouped by body, then type:
+        at most four blocks a body), the index of that element in the arrays
+        (level, type, ... and refine_elements)."""
+        n = self.nelements
+        order = np.empty(n, dtype=np.uint32)
+        self._call("mx_mesher_written_order",
+                   order.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)))
+        return order
+
     def _has_mesh(self):
         a = _MeshArrays()
         ok = self._lib.mx_mesher_mesh_arrays(self._ptr, ctypes.byref(a)) == OK
@@ -652,7 +666,7 @@ class Mesher:
 
     def write(self, path, ascii=False):
         """Write the mesh; format by extension (.vtk .vtu .msh .mesh .meshb
-        .getfem .m3d); ascii: the ASCII variant of .vtk / .msh."""
+        .getfem .m3d .mvm); ascii: the ASCII variant of .vtk / .msh."""
         self._call("mx_mesher_write", _fspath(path), 1 if ascii else 0)
 
     def stats(self):

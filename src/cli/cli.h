@@ -33,6 +33,7 @@ typedef struct {
   int balance;
   double max_memory_mb; /* 0: the memory available */
   const char *restart_out; /* --restart FILE: write the restart file */
+  const char *boundary_out; /* --boundary FILE.vtu: the tagged boundary faces */
   const char *restart_in;  /* -c FILE: re-mesh from a restart file */
   const char *list_in;     /* -l LIST: elements to refine */
   int keep_invalid;        /* write a mesh with invalid elements (exit 5) */
@@ -70,8 +71,8 @@ typedef struct {
   int status;                          /* the exit code */
   int valid;                           /* exit 0's promise: a valid mesh */
   int noutputs;
-  const char *outputs[MX_MAX_OUTPUTS + 1]; /* written, the restart file last */
-  long long bytes[MX_MAX_OUTPUTS + 1];
+  const char *outputs[MX_MAX_OUTPUTS + 2]; /* written: meshes, boundary, restart */
+  long long bytes[MX_MAX_OUTPUTS + 2];
   int dry_run;                         /* no -o */
   int nwarnings;
   size_t warnings_dropped;             /* beyond MX_MAX_WARNINGS */

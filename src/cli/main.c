@@ -95,11 +95,15 @@ static int write_outputs(const mx_options *o, mx_mesher *m) {
     MX_CHECK(mx_mesher_write(m, o->outputs[k], o->ascii));
     written(o->outputs[k]);
   }
+  if (o->boundary_out) {
+    MX_CHECK(mx_mesher_write_boundary(m, o->boundary_out));
+    written(o->boundary_out);
+  }
   if (o->restart_out) {
     MX_CHECK(mx_mesher_save_restart(m, o->restart_out));
     written(o->restart_out);
   }
-  run_info.dry_run = o->noutputs == 0 && !o->restart_out;
+  run_info.dry_run = o->noutputs == 0 && !o->restart_out && !o->boundary_out;
   return MX_OK;
 }
 

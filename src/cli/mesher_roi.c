@@ -13,18 +13,20 @@
  *   -v               write outname.vtk     (legacy VTK, ASCII)
  *   -g               write outname.getfem  (GetFEM mesh file)
  *   -m               write outname.m3d     (M3D, see src/io/write_m3d.c)
+ *   -i               write outname.mvm     (MVM, see src/io/write_m3d.c)
  *   -c in.oct        restart from an octree file (ours or the published one's)
  *   -l list.txt      elements of the mesh written with in.oct to refine
  *   with -u NAME, NAME.oct (the restart file) is written too, as the
  *   published mesher does
  *
- * Output names. "-u out -v" writes out.vtk, as the published mesher does
- * (REFERENCE.md: its runs `mesher_roi -o cortex.off -s RL -u out -v` produce
- * legacy VTK ASCII). No documentation of the names it gives its GetFEM and
- * M3D files was found; mixoct writes out.getfem and out.m3d (".getfem"
- * rather than GetFEM's customary ".mesh", which mixoct reserves for Medit).
- * -v, -g and -m may be combined: the mesh is built once and written to each
- * file. Format flags without -u, or -u without a format flag, are usage
+ * Output names. "-u out -v" writes out.vtk, "-u out -m" out.m3d and
+ * "-u out -i" out.mvm, as the published mesher does (REFERENCE.md: its runs
+ * `mesher_roi -o cortex.off -s RL -u out -v` produce legacy VTK ASCII; its
+ * M3D and MVM layouts are in "Published output layouts"). No documentation
+ * of the name it gives its GetFEM file was found; mixoct writes out.getfem
+ * (rather than GetFEM's customary ".mesh", which mixoct reserves for Medit).
+ * -v, -g, -m and -i may be combined: the mesh is built once and written to
+ * each file. Format flags without -u, or -u without a format flag, are usage
  * errors (exit 2); with neither, the run is a dry run that meshes and
  * reports, like mixoct without -o. -d and -o may be repeated and mixed:
  * several surfaces form one domain, as with mixoct's -i.
@@ -40,7 +42,7 @@
 #include "common.h"
 
 static const char *roi_usage =
-    "usage: mesher_roi (-d in.mdl | -o in.off) [requests] [-u outname -v|-g|-m]\n"
+    "usage: mesher_roi (-d in.mdl | -o in.off) [requests] [-u outname -v|-g|-m|-i]\n"
     "\n"
     "The published mixed-element mesher's command line, run by mixoct.\n"
     "\n"
@@ -59,6 +61,7 @@ static const char *roi_usage =
     "  -v                 NAME.vtk     legacy VTK, ASCII\n"
     "  -g                 NAME.getfem  GetFEM mesh file\n"
     "  -m                 NAME.m3d     M3D\n"
+    "  -i                 NAME.mvm     MVM\n"
     "\n"
     "  (with -u NAME, the restart file NAME.oct is written too)\n"
     "\n"
@@ -72,6 +75,20 @@ static const char *roi_usage =
     "\n"
     "Example:\n"
     "  mesher_roi -o cortex.off -s 6 -u cortex6 -v -g\n";
+
+/* The output format flags and the extension each one writes. */
+enum { NFMT = 4 };
+static const struct {
+  const char *flag, *ext;
+} formats[NFMT] = {{"-v", ".vtk"}, {"-g", ".getfem"}, {"-m", ".m3d"},
+                   {"-i", ".mvm"}};
+
+/* The index of the format flag a in formats[], or -1. */
+static int format_flag(const char *a) {
+  for (int f = 0; f < NFMT; f++)
+    if (!strcmp(a, formats[f].flag)) return f;
+  return -1;
+}
 
 /* mixoct long options passed through, with their argument counts. */
 static const struct {
@@ -91,10 +108,10 @@ static int need(int i, int argc, int n, const char *opt) {
 }
 
 /* Translates argv into mixoct's argv (margv, room for argc + 1 entries) and
- * the output flags. Returns MX_OK, or MX_EINPUT with a message printed;
- * *exit_now is set after -h. */
+ * the output flags (want[f]: formats[f] asked). Returns MX_OK, or MX_EINPUT
+ * with a message printed; *exit_now is set after -h. */
 static int translate(int argc, char **argv, char **margv, int *margc, const char **outname,
-                     int *fmt_vtk, int *fmt_getfem, int *fmt_m3d, int *exit_now) {
+                     int want[NFMT], int *exit_now) {
   int n = 0, ninputs = 0;
   margv[n++] = "mixoct";
   for (int i = 1; i < argc; i++) {
@@ -128,12 +145,8 @@ static int translate(int argc, char **argv, char **margv, int *margc, const char
         mx_error(NULL, 0, "mesher_roi: -u wants a non-empty name");
         return MX_EINPUT;
       }
-    } else if (!strcmp(a, "-v")) {
-      *fmt_vtk = 1;
-    } else if (!strcmp(a, "-g")) {
-      *fmt_getfem = 1;
-    } else if (!strcmp(a, "-m")) {
-      *fmt_m3d = 1;
+    } else if (format_flag(a) >= 0) {
+      want[format_flag(a)] = 1;
     } else {
       size_t k = 0, np = sizeof passthrough / sizeof *passthrough;
       while (k < np && strcmp(a, passthrough[k].name) != 0) k++;
@@ -153,14 +166,15 @@ static int translate(int argc, char **argv, char **margv, int *margc, const char
                       "(see mesher_roi -h)");
     return MX_EINPUT;
   }
-  const int nfmt = *fmt_vtk + *fmt_getfem + *fmt_m3d;
+  int nfmt = 0;
+  for (int f = 0; f < NFMT; f++) nfmt += want[f];
   if (nfmt > 0 && !*outname) {
-    mx_error(NULL, 0, "mesher_roi: -v, -g and -m need the output name: add -u NAME");
+    mx_error(NULL, 0, "mesher_roi: -v, -g, -m and -i need the output name: add -u NAME");
     return MX_EINPUT;
   }
   if (nfmt == 0 && *outname) {
     mx_error(NULL, 0, "mesher_roi: -u %s names no format: add -v (VTK), -g "
-                      "(GetFEM) and/or -m (M3D)", *outname);
+                      "(GetFEM), -m (M3D) and/or -i (MVM)", *outname);
     return MX_EINPUT;
   }
   margv[n] = NULL;
@@ -174,9 +188,9 @@ int mx_mesher_roi_main(int argc, char **argv) {
     mx_error(NULL, 0, "out of memory");
     return MX_EINPUT;
   }
-  int margc = 0, vtk = 0, getfem = 0, m3d = 0, exit_now = 0;
+  int margc = 0, want[NFMT] = {0}, exit_now = 0;
   const char *outname = NULL;
-  int st = translate(argc, argv, margv, &margc, &outname, &vtk, &getfem, &m3d, &exit_now);
+  int st = translate(argc, argv, margv, &margc, &outname, want, &exit_now);
   if (st || exit_now) {
     free(margv);
     return st ? MX_EINPUT : 0;
@@ -189,19 +203,17 @@ int mx_mesher_roi_main(int argc, char **argv) {
 
   /* outputs[0] is also o.output, so everything that asks whether the run
    * writes a file sees it; mx_run writes each of outputs[]. */
-  const char *ext[3] = {".vtk", ".getfem", ".m3d"};
-  const int want[3] = {vtk, getfem, m3d};
-  char *names[3] = {NULL, NULL, NULL}, *oct = NULL;
-  for (int f = 0; f < 3; f++) {
+  char *names[NFMT] = {NULL}, *oct = NULL;
+  for (int f = 0; f < NFMT; f++) {
     if (!want[f]) continue;
-    const size_t len = strlen(outname) + strlen(ext[f]) + 1;
+    const size_t len = strlen(outname) + strlen(formats[f].ext) + 1;
     names[f] = malloc(len);
     if (!names[f]) {
       mx_error(NULL, 0, "out of memory");
       st = MX_EINPUT;
       break;
     }
-    snprintf(names[f], len, "%s%s", outname, ext[f]);
+    snprintf(names[f], len, "%s%s", outname, formats[f].ext);
     o.outputs[o.noutputs++] = names[f];
   }
   if (o.noutputs > 0) o.output = o.outputs[0];
@@ -222,7 +234,7 @@ int mx_mesher_roi_main(int argc, char **argv) {
     if (o.threads > 0) omp_set_num_threads(o.threads);
     st = mx_run(&o);
   }
-  for (int f = 0; f < 3; f++) free(names[f]);
+  for (int f = 0; f < NFMT; f++) free(names[f]);
   free(oct);
   return st == MX_OK ? 0 : st;
 }

@@ -44,9 +44,9 @@ static const char *usage_text =
     "\n"
     "Output:\n"
     "  -o, --output OUT            .vtk (legacy), .vtu, .msh (Gmsh 4.1), .mesh /\n"
-    "                              .meshb (Medit), .getfem, .m3d; repeatable (one\n"
-    "                              mesh, several files); without -o nothing is\n"
-    "                              written (a dry run). Checked before meshing;\n"
+    "                              .meshb (Medit), .getfem, .m3d, .mvm; repeatable\n"
+    "                              (one mesh, several files); without -o nothing\n"
+    "                              is written (a dry run). Checked before meshing;\n"
     "                              written to a temporary name and renamed:\n"
     "                              never partial, removed on Ctrl-C / SIGTERM\n"
     "      --stage full            the mesh of the domain (the default): nodes\n"
@@ -63,6 +63,9 @@ static const char *usage_text =
     "      --quiet                 no summary, no warnings, no progress line\n"
     "      --restart FILE.oct      also write the restart file (Appendix A of\n"
     "                              the 2021 paper; .octb: our binary variant)\n"
+    "      --boundary FILE.vtu     also write the boundary faces, tagged by the\n"
+    "                              input file they lie on (cell field\n"
+    "                              surface_tag: 1 for the first -i)\n"
     "      --keep-invalid          write the mesh even when it breaks the\n"
     "                              contract of exit 0 (exit 5 all the same)\n"
     "  Options take their value as the next word, or attached: --output=x.vtu,\n"
@@ -199,7 +202,7 @@ static const char *const with_arg[][2] = {
     {"-b", "--regions"}, {"-o", "--output"},        {"-c", "--from-restart"},
     {"-l", "--list"},    {"-r", "--region-surface"}, {NULL, "--threads"},
     {NULL, "--max-memory"}, {NULL, "--restart"},    {NULL, "--stage"},
-    {NULL, "--balance"}};
+    {NULL, "--balance"}, {NULL, "--boundary"}};
 
 /* argv with the forms getopt users expect split in two: `--output=x.vtu`
  * and `-s5` / `-ox.vtu` become `--output x.vtu`, `-s 5`, `-o x.vtu`. The
@@ -317,6 +320,9 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
     } else if (strcmp(a, "--restart") == 0) {
       MX_CHECK(need_arg(i, argc, a));
       o->restart_out = argv[++i];
+    } else if (strcmp(a, "--boundary") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      o->boundary_out = argv[++i];
     } else if (IS("-c", "--from-restart")) {
       MX_CHECK(need_arg(i, argc, a));
       o->restart_in = argv[++i];
@@ -387,6 +393,19 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
   /* fail before meshing, not after a long run */
   for (int k = 0; k < o->noutputs; k++) MX_CHECK(mx_check_output_path(o->outputs[k], 1));
   if (o->restart_out) MX_CHECK(mx_check_output_path(o->restart_out, 0));
+  if (o->boundary_out) {
+    const char *dot = strrchr(o->boundary_out, '.');
+    if (!dot || strcasecmp(dot, ".vtu") != 0) {
+      mx_error(o->boundary_out, 0, "--boundary writes a .vtu file (the boundary faces with "
+                                   "their surface_tag)");
+      return MX_EINPUT;
+    }
+    if (o->stage != MX_STAGE_FULL) {
+      mx_error(NULL, 0, "--boundary needs the full stage (the boundary on the input)");
+      return MX_EINPUT;
+    }
+    MX_CHECK(mx_check_output_path(o->boundary_out, 1));
+  }
   return MX_OK;
 }
 
@@ -396,7 +415,7 @@ int mx_check_output_path(const char *path, int mesh) {
   if (dot && slash && dot < slash) dot = NULL;
   if (mesh && (!dot || !mx_mesh_format_known(path))) {
     mx_error(path, 0, "unknown output format \"%s\" (use .vtk, .vtu, .msh, .mesh, .meshb, "
-                      ".getfem or .m3d)", dot ? dot : "");
+                      ".getfem, .m3d or .mvm)", dot ? dot : "");
     return MX_EINPUT;
   }
   struct stat st;

@@ -1,10 +1,11 @@
-/* mixoct: reading legacy VTK and VTU unstructured grids, Gmsh MSH 4.1 and
- * Medit .mesh / .meshb (see read_mesh.h).
+/* mixoct: reading legacy VTK and VTU unstructured grids, Gmsh MSH 4.1,
+ * Medit .mesh / .meshb, and the M3D, MVM and GetFEM text files (see
+ * read_mesh.h).
  *
- * The file is mapped (or loaded) whole. MSH and Medit are read in one pass
- * with a cursor (text tokens, or binary values after a bounds check);
- * every count is checked against the bytes left before anything is
- * allocated for it. The VTK formats are first cut into "parts" that
+ * The file is mapped (or loaded) whole. MSH, Medit, M3D, MVM and GetFEM
+ * are read in one pass with a cursor (text tokens, or binary values after a
+ * bounds check); every count is checked against the bytes left before
+ * anything is allocated for it. The VTK formats are first cut into "parts" that
  * point into the buffer (or into temporaries holding parsed ASCII values):
  * the points, the cells either as a count-prefixed list (legacy) or as
  * offsets + connectivity (VTU, legacy 5.x), and the cell types. One
@@ -1908,6 +1909,374 @@ static int is_meshb(const rd *r) {
   return (a == 1 || a == 0x01000000u) && v >= 1 && v <= 4;
 }
 
+/* ---- M3D, MVM and GetFEM --------------------------------------------------
+ *
+ * Text tokens through the cursor (no comments), in the layouts the writers
+ * write (io/write_m3d.c, io/write_getfem.c):
+ *  - M3D, the published mesher's (REFERENCE.md, "Published output
+ *    layouts"): "[Nodes, ARRAY1<STRING>]" N, N lines "1 x y z" (the leading
+ *    integer is not used), "[Elements, ARRAY1<STRING>]" M, M lines
+ *    "L i0 i1 ... a b c": L is T, P, R or H (4, 5, 6, 8 nodes), a b c three
+ *    numbers (not used). mixoct's older layout is read too:
+ *    "[Nodes, ARRAY1<POINT3D>]" N, N lines "x y z", "[Elements,
+ *    ARRAY1<STRING>]" M, M lines "k i0 ..." with k the node count;
+ *  - MVM: "MIXED" N M, N lines "x y z", M lines "L i0 i1 ...";
+ *  - GetFEM: '%' comment lines, "BEGIN POINTS LIST", lines "POINT i x y z"
+ *    with i = 0, 1, 2, ... in order ("POINT COUNT n" lines skipped), "END
+ *    POINTS LIST", "BEGIN MESH STRUCTURE DESCRIPTION", lines "CONVEX i 'GT'
+ *    n0 n1 ..." with i = 0, 1, 2, ... and GetFEM's geometric transformation
+ *    ("CONVEX COUNT n" skipped), "END MESH STRUCTURE DESCRIPTION"; what
+ *    follows (regions) is ignored.
+ * Indices are 0-based and checked against the nodes read before them. Node
+ * orders are mixoct's (prisms in Gmsh's order) but for GetFEM's pyramid and
+ * hexahedron, which are reordered as io/write_getfem.c describes. Counts are
+ * checked against the bytes left before anything is allocated; GetFEM's
+ * items are not counted up front: its arrays grow with what was read. */
+
+/* The next tokens must be the blank-separated words of `words`. */
+static int cur_words(cur *c, const char *words, const char *what) {
+  for (const char *w = words; *w;) {
+    const size_t wl = strcspn(w, " ");
+    size_t n;
+    const char *t = cur_tok(c, &n);
+    if (n == 0)
+      return fail(c->r, t, "%s: expected '%s', found the end of the file "
+                  "(truncated file?)", what, words);
+    if (n != wl || strncasecmp(t, w, n) != 0)
+      return fail(c->r, t, "%s: expected '%s', found '%.*s'", what, words,
+                  shown(n), t);
+    w += wl;
+    while (*w == ' ') w++;
+  }
+  return MX_OK;
+}
+
+/* Nothing but blanks may follow the last element. */
+static int cur_at_end(cur *c) {
+  size_t n;
+  const char *t = cur_tok(c, &n);
+  if (n > 0)
+    return fail(c->r, t, "unexpected '%.*s' after the last element (wrong "
+                "count?)", shown(n), t);
+  if (t < c->r->end) return fail(c->r, t, "unexpected NUL byte");
+  return MX_OK;
+}
+
+/* A count of items of at least `tokens` tokens each: they must fit in the
+ * bytes left (a token and a blank take two bytes at least). */
+static int cur_item_count(cur *c, uint64_t *cnt, unsigned tokens,
+                          const char *what) {
+  const char *at = cur_skip(c);
+  MX_CHECK(cur_count(c, cnt, 0, what));
+  if (*cnt > cur_left(c) / (2 * (uint64_t)tokens) + 1)
+    return fail(c->r, at,
+                "%s: %llu announced but the file is too short (truncated "
+                "file or wrong count)",
+                what, (unsigned long long)*cnt);
+  return MX_OK;
+}
+
+/* n nodes, "x y z" each, after an unused integer when `numbered`. */
+static int cur_nodes(cur *c, mx_mesh_data *out, uint64_t n, int numbered) {
+  if (n >= UINT32_MAX)
+    return fail(c->r, NULL, "%llu nodes: at most %u are supported",
+                (unsigned long long)n, UINT32_MAX - 1);
+  out->xyz = mx_alloc((3 * (size_t)n + 1) * sizeof(double));
+  if (!out->xyz) return MX_EINPUT;
+  out->nnodes = (size_t)n;
+  for (size_t i = 0; i < n; i++) {
+    int64_t one = 0;
+    if (numbered) MX_CHECK(cur_int(c, &one, "node"));
+    for (int d = 0; d < 3; d++)
+      MX_CHECK(cur_real(c, &out->xyz[3 * i + (size_t)d], "node coordinate"));
+  }
+  return MX_OK;
+}
+
+/* The type named by an element line's letter, -1 if none. */
+static int letter_type(const char *t, size_t n) {
+  if (n != 1) return -1;
+  switch (*t) {
+    case 'T': case 't': return MX_TET;
+    case 'P': case 'p': return MX_PYRAMID;
+    case 'R': case 'r': return MX_PRISM;
+    case 'H': case 'h': return MX_HEX;
+    default: return -1;
+  }
+}
+
+/* The type with k nodes (mixoct's older M3D), -1 if none. */
+static int node_count_type(int64_t k) {
+  switch (k) {
+    case 4: return MX_TET;
+    case 5: return MX_PYRAMID;
+    case 6: return MX_PRISM;
+    case 8: return MX_HEX;
+    default: return -1;
+  }
+}
+
+/* The type word opening element line `cell`: a letter, or a node count
+ * when counts is set. */
+static int cur_cell_type(cur *c, int counts, size_t cell, int *type) {
+  size_t n;
+  const char *t = cur_tok(c, &n);
+  if (n == 0)
+    return fail(c->r, t, "element %zu: unexpected end of file (truncated "
+                "file or wrong count)", cell);
+  int64_t k = 0;
+  const char *e = counts ? mx_io_int(t, &k) : NULL;
+  *type = counts ? (e == t + n ? node_count_type(k) : -1) : letter_type(t, n);
+  if (*type >= 0) return MX_OK;
+  if (counts)
+    return fail(c->r, t, "element %zu: '%.*s' is not a node count (4, 5, 6 "
+                "or 8)", cell, shown(n), t);
+  return fail(c->r, t, "element %zu: '%.*s' is not an element type (T, P, "
+              "R or H)", cell, shown(n), t);
+}
+
+/* The node indices of cell `cell` of the given type, the j-th read into
+ * slot perm[j] of its row (perm NULL: slot j). */
+static int cur_cell_nodes(cur *c, mx_mesh_data *out, size_t cell, int type,
+                          const int8_t *perm) {
+  uint32_t *row = out->conn + 8 * cell;
+  memset(row, 0, 8 * sizeof *row);
+  for (int j = 0; j < mx_cell_nodes[type]; j++) {
+    const char *at = cur_skip(c);
+    int64_t v = 0;
+    MX_CHECK(cur_int(c, &v, "element node"));
+    if (v < 0 || (uint64_t)v >= out->nnodes)
+      return fail(c->r, at,
+                  "element %zu: node %lld out of range (%zu nodes, 0-based)",
+                  cell, (long long)v, out->nnodes);
+    row[perm ? perm[j] : j] = (uint32_t)v;
+  }
+  out->type[cell] = (uint8_t)type;
+  return MX_OK;
+}
+
+/* M element lines "L i0 ..." (or "k i0 ..." when counts), followed by three
+ * numbers when `tail`. */
+static int cur_cells(cur *c, mx_mesh_data *out, uint64_t m, int counts,
+                     int tail) {
+  MX_CHECK(grow_cells(c->r, out, (size_t)m));
+  for (size_t i = 0; i < m; i++) {
+    int type = 0;
+    MX_CHECK(cur_cell_type(c, counts, i, &type));
+    MX_CHECK(cur_cell_nodes(c, out, i, type, NULL));
+    for (int k = 0; k < 3 * tail; k++) {
+      double v;
+      MX_CHECK(cur_real(c, &v, "element value"));
+    }
+    out->ncells = i + 1;
+  }
+  return MX_OK;
+}
+
+static int read_m3d(rd *r, const char *p, mx_mesh_data *out) {
+  cur c = {r, p, 0, 0};
+  MX_CHECK(cur_words(&c, "[Nodes,", "M3D"));
+  size_t n;
+  const char *t = cur_tok(&c, &n);
+  const int older = tok_eq(t, n, "ARRAY1<POINT3D>]");
+  if (!older && !tok_eq(t, n, "ARRAY1<STRING>]"))
+    return fail(r, t, "M3D: expected 'ARRAY1<STRING>]' after '[Nodes,', "
+                "found '%.*s'", shown(n), t);
+  uint64_t nn = 0, nc = 0;
+  MX_CHECK(cur_item_count(&c, &nn, older ? 3 : 4, "node count"));
+  MX_CHECK(cur_nodes(&c, out, nn, !older));
+  MX_CHECK(cur_words(&c, "[Elements, ARRAY1<STRING>]", "M3D"));
+  MX_CHECK(cur_item_count(&c, &nc, older ? 5 : 8, "element count"));
+  MX_CHECK(cur_cells(&c, out, nc, older, !older));
+  return cur_at_end(&c);
+}
+
+static int read_mvm(rd *r, const char *p, mx_mesh_data *out) {
+  cur c = {r, p, 0, 0};
+  MX_CHECK(cur_words(&c, "MIXED", "MVM"));
+  uint64_t nn = 0, nc = 0;
+  MX_CHECK(cur_item_count(&c, &nn, 3, "node count"));
+  MX_CHECK(cur_item_count(&c, &nc, 5, "element count"));
+  MX_CHECK(cur_nodes(&c, out, nn, 0));
+  MX_CHECK(cur_cells(&c, out, nc, 0, 0));
+  return cur_at_end(&c);
+}
+
+/* GetFEM's node j of each type is slot getfem_slot[t][j] of our row (the
+ * table of io/write_getfem.c; its permutations are their own inverses). */
+static const int8_t getfem_slot[4][8] = {{0, 1, 2, 3, 0, 0, 0, 0},
+                                         {0, 1, 3, 2, 4, 0, 0, 0},
+                                         {0, 1, 2, 3, 4, 5, 0, 0},
+                                         {0, 1, 3, 2, 4, 5, 7, 6}};
+
+static int getfem_type(const char *t, size_t n) {
+  static const char *const name[4] = {"'GT_PK(3,1)'", "'GT_PYRAMID(1)'",
+                                      "'GT_PRISM(3,1)'", "'GT_QK(3,1)'"};
+  for (int k = 0; k < 4; k++)
+    if (tok_eq(t, n, name[k])) return k;
+  return -1;
+}
+
+/* Past blank lines and '%' comment lines. */
+static const char *skip_percent_lines(const rd *r, const char *p) {
+  for (;;) {
+    p = skip_ws(p, r->end);
+    if (p >= r->end || *p != '%') return p;
+    const char *nl = memchr(p, '\n', (size_t)(r->end - p));
+    p = nl ? nl + 1 : r->end;
+  }
+}
+
+/* Reads "KW i" at the start of a GetFEM item line, the keyword already
+ * read: *item is 1 for the item numbered `want`, 0 for a "KW COUNT n" line
+ * (skipped). */
+static int getfem_item(cur *c, const char *kw, size_t want, int *item) {
+  const char *save = c->p;
+  size_t n;
+  const char *t = cur_tok(c, &n);
+  if (tok_eq(t, n, "COUNT")) {
+    int64_t v = 0;
+    *item = 0;
+    return cur_int(c, &v, kw);
+  }
+  c->p = save;
+  const char *at = cur_skip(c);
+  int64_t i = 0;
+  MX_CHECK(cur_int(c, &i, kw));
+  if (i < 0 || (uint64_t)i != want)
+    return fail(c->r, at, "%s %lld: expected %s %zu (numbered 0, 1, 2, ... "
+                "in order)", kw, (long long)i, kw, want);
+  *item = 1;
+  return MX_OK;
+}
+
+/* The next GetFEM line keyword: 1 for kw, 0 for END (then `end_words`
+ * must follow). */
+static int getfem_next(cur *c, const char *kw, const char *end_words,
+                       int *more) {
+  size_t n;
+  const char *t = cur_tok(c, &n);
+  if (tok_eq(t, n, "END")) {
+    *more = 0;
+    return cur_words(c, end_words, "GetFEM");
+  }
+  if (!tok_eq(t, n, kw)) {
+    if (n == 0)
+      return fail(c->r, t, "GetFEM: expected %s or END %s, found the end of "
+                  "the file (truncated file?)", kw, end_words);
+    return fail(c->r, t, "GetFEM: expected %s or END %s, found '%.*s'", kw,
+                end_words, shown(n), t);
+  }
+  *more = 1;
+  return MX_OK;
+}
+
+/* Room for one more node (capacity *cap, doubled). */
+static int reserve_node(rd *r, mx_mesh_data *out, size_t *cap) {
+  if (out->nnodes < *cap) return MX_OK;
+  if (out->nnodes >= UINT32_MAX - 1)
+    return fail(r, NULL, "more than %u points", UINT32_MAX - 1);
+  const size_t nc = *cap ? 2 * *cap : 1024;
+  double *x = mx_realloc(out->xyz, 3 * nc * sizeof *x);
+  if (!x) return MX_EINPUT;
+  out->xyz = x;
+  *cap = nc;
+  return MX_OK;
+}
+
+/* Room for one more cell (capacity *cap, doubled). */
+static int reserve_cell(rd *r, mx_mesh_data *out, size_t *cap) {
+  if (out->ncells < *cap) return MX_OK;
+  if (out->ncells >= UINT32_MAX / 6)
+    return fail(r, NULL, "more than %u volume elements", UINT32_MAX / 6);
+  const size_t nc = *cap ? 2 * *cap : 1024;
+  uint8_t *t = mx_realloc(out->type, nc);
+  if (!t) return MX_EINPUT;
+  out->type = t;
+  uint32_t *cn = mx_realloc(out->conn, 8 * nc * sizeof *cn);
+  if (!cn) return MX_EINPUT;
+  out->conn = cn;
+  *cap = nc;
+  return MX_OK;
+}
+
+static int getfem_points(cur *c, mx_mesh_data *out) {
+  size_t cap = 0;
+  for (;;) {
+    int more = 0, item = 0;
+    MX_CHECK(getfem_next(c, "POINT", "POINTS LIST", &more));
+    if (!more) return MX_OK;
+    MX_CHECK(getfem_item(c, "POINT", out->nnodes, &item));
+    if (!item) continue;
+    MX_CHECK(reserve_node(c->r, out, &cap));
+    double *p = out->xyz + 3 * out->nnodes;
+    for (int d = 0; d < 3; d++)
+      MX_CHECK(cur_real(c, &p[d], "point coordinate"));
+    out->nnodes++;
+  }
+}
+
+static int getfem_convexes(cur *c, mx_mesh_data *out) {
+  size_t cap = 0;
+  for (;;) {
+    int more = 0, item = 0;
+    MX_CHECK(getfem_next(c, "CONVEX", "MESH STRUCTURE DESCRIPTION", &more));
+    if (!more) return MX_OK;
+    MX_CHECK(getfem_item(c, "CONVEX", out->ncells, &item));
+    if (!item) continue;
+    size_t n;
+    const char *t = cur_tok(c, &n);
+    const int type = getfem_type(t, n);
+    if (n == 0)
+      return fail(c->r, t, "convex %zu: unexpected end of file (truncated "
+                  "file?)", out->ncells);
+    if (type < 0)
+      return fail(c->r, t, "convex %zu: %.*s is not a geometric "
+                  "transformation mixoct reads ('GT_PK(3,1)', "
+                  "'GT_PYRAMID(1)', 'GT_PRISM(3,1)', 'GT_QK(3,1)')",
+                  out->ncells, shown(n), t);
+    MX_CHECK(reserve_cell(c->r, out, &cap));
+    MX_CHECK(cur_cell_nodes(c, out, out->ncells, type, getfem_slot[type]));
+    out->ncells++;
+  }
+}
+
+static int read_getfem(rd *r, const char *p, mx_mesh_data *out) {
+  cur c = {r, skip_percent_lines(r, p), 0, 0};
+  MX_CHECK(cur_words(&c, "BEGIN POINTS LIST", "GetFEM"));
+  MX_CHECK(getfem_points(&c, out));
+  MX_CHECK(cur_words(&c, "BEGIN MESH STRUCTURE DESCRIPTION", "GetFEM"));
+  return getfem_convexes(&c, out);
+}
+
+/* Whether the first token at p (after blank lines, and '%' comment lines
+ * when percent is set) is word. */
+static int first_word_is(const rd *r, const char *p, int percent,
+                         const char *word) {
+  const char *t = percent ? skip_percent_lines(r, p) : skip_ws(p, r->end);
+  return tok_eq(t, tok_len(t, r->end), word);
+}
+
+/* Whether the last path component ends with ext. */
+static int has_extension(const char *path, const char *ext) {
+  const size_t n = strlen(path), e = strlen(ext);
+  return n > e && strcasecmp(path + n - e, ext) == 0;
+}
+
+/* The reader of the M3D, MVM and GetFEM files: chosen by content, else
+ * by the extension (for a message in that format's terms). NULL if none. */
+typedef int (*text_reader)(rd *, const char *, mx_mesh_data *);
+static text_reader published_reader(const rd *r, const char *p) {
+  if (first_word_is(r, p, 0, "[Nodes,")) return read_m3d;
+  if (first_word_is(r, p, 0, "MIXED")) return read_mvm;
+  if ((p < r->end && *p == '%') || first_word_is(r, p, 1, "BEGIN"))
+    return read_getfem;
+  if (has_extension(r->path, ".m3d")) return read_m3d;
+  if (has_extension(r->path, ".mvm")) return read_mvm;
+  if (has_extension(r->path, ".getfem")) return read_getfem;
+  return NULL;
+}
+
 /* ---- entry points -------------------------------------------------------- */
 
 void mx_mesh_data_free(mx_mesh_data *m) {
@@ -1974,11 +2343,14 @@ int mx_read_mesh(const char *path, mx_mesh_data *out) {
     st = read_msh(&r, p, out);
   } else if (is_medit_ascii(&r, p)) {
     st = read_medit_ascii(&r, p, out);
+  } else if (published_reader(&r, p)) {
+    st = published_reader(&r, p)(&r, p, out);
   } else {
     st = fail(&r, p,
               "unknown mesh format: expected legacy VTK ('# vtk DataFile "
-              "Version'), VTK XML (.vtu), Gmsh MSH 4.1 ('$MeshFormat') or "
-              "Medit ('MeshVersionFormatted', or a binary .meshb)");
+              "Version'), VTK XML (.vtu), Gmsh MSH 4.1 ('$MeshFormat'), "
+              "Medit ('MeshVersionFormatted', or a binary .meshb), M3D "
+              "('[Nodes,'), MVM ('MIXED') or GetFEM ('BEGIN POINTS LIST')");
   }
   if (st == MX_OK && vtk) /* VTK wedges to our prism order (mesh.h) */
     for (size_t c = 0; c < out->ncells; c++)

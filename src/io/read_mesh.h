@@ -1,6 +1,7 @@
 /* Reading back the volume meshes mixoct writes (src/io/write_vtk.c,
- * src/io/write_vtu.c, src/io/write_msh.c, src/io/write_medit.c), for
- * `mixoct check` and the tests.
+ * src/io/write_vtu.c, src/io/write_msh.c, src/io/write_medit.c,
+ * src/io/write_m3d.c, src/io/write_getfem.c), for `mixoct check` and the
+ * tests.
  *
  * Accepted, recognised by content (not by extension):
  *  - legacy VTK, "# vtk DataFile Version x.y", ASCII or BINARY (big-endian),
@@ -25,7 +26,14 @@
  *    versions 1 to 4, either byte order): Vertices, Tetrahedra, Pyramids,
  *    Prisms, Hexahedra, other keywords skipped, "End" required; cells in
  *    the file's order (so grouped by type), node orders as in
- *    src/io/write_medit.c (mixoct's).
+ *    src/io/write_medit.c (mixoct's);
+ *  - M3D ("[Nodes," first: the published mesher's layout, REFERENCE.md,
+ *    and mixoct's older one), MVM ("MIXED" first) and GetFEM ('%' comment
+ *    lines or "BEGIN POINTS LIST" first), as src/io/write_m3d.c and
+ *    src/io/write_getfem.c write them; a file whose content names no
+ *    format is read as the one its extension (.m3d, .mvm, .getfem) names.
+ *    Node orders as in soa/mesh.h (prisms in Gmsh's order); GetFEM's
+ *    pyramids and hexahedra are reordered to it.
  *
  * Every count is checked against the bytes left in the file before
  * anything is allocated for it, and binary values are read only after the

@@ -115,17 +115,18 @@ static size_t fill_points(const void *vctx, size_t b, size_t e, char *out) {
 static size_t fill_convexes(const void *vctx, size_t b, size_t e, char *out) {
   const mx_mesh_view *m = vctx;
   size_t n = 0;
-  for (size_t c = b; c < e; c++) {
+  for (size_t k = b; k < e; k++) {
+    const size_t c = mx_view_cell(m, k); /* the k-th convex written */
     const int t = m->type[c];
     const uint32_t *row = m->conn + 8 * c;
     n += put_str(out + n, "  CONVEX ");
-    n += mx_put_u64(out + n, c);
+    n += mx_put_u64(out + n, k);
     n += put_str(out + n, "    ");
     n += put_str(out + n, getfem_geotrans[t]);
     n += put_str(out + n, "     ");
-    for (int k = 0; k < mx_cell_nodes[t]; k++) {
+    for (int j = 0; j < mx_cell_nodes[t]; j++) {
       out[n++] = ' ';
-      n += mx_put_u64(out + n, row[getfem_order[t][k]]);
+      n += mx_put_u64(out + n, row[getfem_order[t][j]]);
     }
     out[n++] = '\n';
   }

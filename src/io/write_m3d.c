@@ -1,78 +1,183 @@
-/* mixoct: M3D writer, for job scripts written for the published mixed-element
- * mesher (`mesher_roi -m`).
+/* mixoct: the published mixed-element mesher's M3D and MVM files
+ * (`mesher_roi -m` and `mesher_roi -i`), in the layouts that program
+ * writes (REFERENCE.md, "Published output layouts (3D program), as it
+ * writes them").
  *
- * NOT A DOCUMENTED FORMAT. No description of the published mesher's M3D
- * files could be found (searched: this project's DESIGN.md and REFERENCE.md,
- * the 2015 and 2021 papers, public documentation pages and issue trackers),
- * and the published mesher's sources are GPL and not read here. What follows is
- * mixoct's own layout, a labelled guess: it reuses the section syntax of the
- * MDL surfaces the same mesher reads (REFERENCE.md: a "[Name, TYPE]" header,
- * the item count on the next line, then one item a line), so a reader of
- * one can read the other. Files from the published mesher may differ; do not
- * rely on byte compatibility with them.
+ * M3D (NAME.m3d):
  *
- *   [Nodes, ARRAY1<POINT3D>]
- *   <n>
- *   x y z                        (n lines; the node of line k is node k)
+ *   [Nodes, ARRAY1<STRING>]
+ *   N
+ *   <blank line>
+ *   1 x y z                          (N lines)
  *   <blank line>
  *   [Elements, ARRAY1<STRING>]
- *   <m>
- *   <k> i0 ... i(k-1)            (m lines)
+ *   M
+ *   <blank line>
+ *   L i0 i1 ... 1000.0 0.45 1.0      (M lines)
  *
- * k is the element's node count and names its type: 4 tetrahedron,
- * 5 pyramid, 6 prism, 8 hexahedron. Indices are 0-based. Node order is
- * VTK's (the order of src/soa/mesh.h, unchanged): the tetrahedron's 0 1 2
- * counter-clockwise seen from 3, the pyramid's base 0 1 2 3 counter-
- * clockwise seen from the apex 4, the prism's 0 1 2 counter-clockwise seen
- * from 3 4 5 (3 4 5 above 0 1 2), the hexahedron's 0 1 2 3 counter-clockwise
- * seen from 4 5 6 7 (4 5 6 7 above 0 1 2 3); the volume of a valid element is
- * positive in that convention. Cell fields are not written.
+ * MVM (NAME.mvm):
  *
- * Doubles are ASCII, 15 significant digits when that reads back to the same
- * double, else 17 (always exact; mx_put_double of io/text_num.h, laid out
- * like "%g"). Nodes and elements are produced in chunks filled in parallel
- * by mx_afile_emit, so the file is the same byte for byte whatever the
- * number of threads. */
+ *   MIXED
+ *   N M
+ *   <blank line>
+ *   x y z                            (N lines)
+ *   L i0 i1 ...                      (M lines)
+ *
+ * L names the element's type: T tetrahedron (4 nodes), P pyramid (5),
+ * R prism (6), H hexahedron (8). The trailing "1000.0 0.45 1.0" of an M3D
+ * element line is the same on every line. Indices are 0-based: the node of
+ * the k-th node line is node k. Reals are printed as "%+1.8E" (a sign, 9
+ * significant digits, "E" and a signed exponent of at least two digits;
+ * the decimal point is '.' whatever the locale).
+ *
+ * Node order inside an element is the published program's: tetrahedron,
+ * pyramid and hexahedron as VTK orders them, the prism as Gmsh orders it.
+ * That is mixoct's own order (src/soa/mesh.h), so rows are written as they
+ * are stored. The k-th element line is cell mx_view_cell(m, k). Cell and
+ * point fields are not written: the formats have no place for them.
+ *
+ * Nodes and elements are produced in chunks filled in parallel by
+ * mx_afile_emit, so a file is the same byte for byte whatever the number of
+ * threads. */
+#include <math.h>
 #include <stdint.h>
+#include <stdio.h>
+#include <string.h>
 
 #include "common.h"
 #include "io/atomic_file.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
 
-enum { ELEMENT_LINE_MAX = 2 + 8 * (1 + MX_U64_CHARS) }; /* k, 8 indices, \n */
+/* The letter of each type, MX_TET .. MX_HEX. */
+static const char cell_letter[4] = {'T', 'P', 'R', 'H'};
 
-static size_t fill_nodes(const void *vctx, size_t b, size_t e, char *out) {
-  return mx_put_xyz_lines(out, ((const mx_mesh_view *)vctx)->xyz, b, e);
+/* The numbers closing every M3D element line. */
+static const char m3d_tail[] = " 1000.0 0.45 1.0";
+
+enum {
+  SCI_CHARS = 16, /* "+d.ddddddddE+ddd" */
+  /* "1 ", three reals after a blank but the first, '\n' */
+  M3D_NODE_MAX = 2 + 3 * (SCI_CHARS + 1) + 1,
+  MVM_NODE_MAX = 3 * (SCI_CHARS + 1) + 1,
+  /* the letter, 8 indices after a blank each, the tail, '\n' */
+  MVM_CELL_MAX = 1 + 8 * (1 + MX_U64_CHARS) + 1,
+  M3D_CELL_MAX = MVM_CELL_MAX + (int)sizeof m3d_tail,
+};
+
+/* ---- text ---------------------------------------------------------------- */
+
+/* x as "%+1.8E" with '.' as the decimal point (snprintf follows the
+ * locale's); returns the bytes written, at most SCI_CHARS. */
+static size_t put_sci(char *out, double x) {
+  char buf[64];
+  const int len = snprintf(buf, sizeof buf, "%+1.8E", x);
+  if (len <= 0) return 0;
+  if (!isfinite(x)) { /* "+INF", "-NAN": no decimal point */
+    memcpy(out, buf, (size_t)len);
+    return (size_t)len;
+  }
+  size_t n = 0, i = 0;
+  out[n++] = buf[i++]; /* sign */
+  out[n++] = buf[i++]; /* first digit */
+  out[n++] = '.';
+  while (buf[i] && (buf[i] < '0' || buf[i] > '9')) i++; /* the radix */
+  while (buf[i] && n < SCI_CHARS) out[n++] = buf[i++];
+  return n;
 }
 
-static size_t fill_elements(const void *vctx, size_t b, size_t e, char *out) {
+static size_t put_xyz(char *out, const double *p) {
+  size_t n = put_sci(out, p[0]);
+  for (int d = 1; d < 3; d++) {
+    out[n++] = ' ';
+    n += put_sci(out + n, p[d]);
+  }
+  out[n++] = '\n';
+  return n;
+}
+
+/* "L i0 i1 ..." of the k-th cell written, without a line end. */
+static size_t put_cell(char *out, const mx_mesh_view *m, size_t k) {
+  const size_t c = mx_view_cell(m, k);
+  const int t = m->type[c];
+  const uint32_t *row = m->conn + 8 * c;
+  size_t n = 0;
+  out[n++] = cell_letter[t];
+  for (int j = 0; j < mx_cell_nodes[t]; j++) {
+    out[n++] = ' ';
+    n += mx_put_u64(out + n, row[j]);
+  }
+  return n;
+}
+
+/* ---- fill functions (mx_afile_emit) --------------------------------------- */
+
+static size_t fill_m3d_nodes(const void *vctx, size_t b, size_t e, char *out) {
   const mx_mesh_view *m = vctx;
   size_t n = 0;
-  for (size_t c = b; c < e; c++) {
-    const int k = mx_cell_nodes[m->type[c]];
-    const uint32_t *row = m->conn + 8 * c;
-    out[n++] = (char)('0' + k);
-    for (int j = 0; j < k; j++) {
-      out[n++] = ' ';
-      n += mx_put_u64(out + n, row[j]);
-    }
+  for (size_t i = b; i < e; i++) {
+    out[n++] = '1';
+    out[n++] = ' ';
+    n += put_xyz(out + n, m->xyz + 3 * i);
+  }
+  return n;
+}
+
+static size_t fill_m3d_cells(const void *vctx, size_t b, size_t e, char *out) {
+  const mx_mesh_view *m = vctx;
+  size_t n = 0;
+  for (size_t k = b; k < e; k++) {
+    n += put_cell(out + n, m, k);
+    memcpy(out + n, m3d_tail, sizeof m3d_tail - 1);
+    n += sizeof m3d_tail - 1;
     out[n++] = '\n';
   }
   return n;
 }
 
-static int write_body(mx_afile *f, const mx_mesh_view *m) {
-  MX_CHECK(mx_afile_printf(f, "[Nodes, ARRAY1<POINT3D>]\n%zu\n", m->nnodes));
-  MX_CHECK(mx_afile_emit(f, m->nnodes, MX_XYZ_LINE_MAX, fill_nodes, m));
-  MX_CHECK(mx_afile_printf(f, "\n[Elements, ARRAY1<STRING>]\n%zu\n",
+static size_t fill_mvm_nodes(const void *vctx, size_t b, size_t e, char *out) {
+  const mx_mesh_view *m = vctx;
+  size_t n = 0;
+  for (size_t i = b; i < e; i++) n += put_xyz(out + n, m->xyz + 3 * i);
+  return n;
+}
+
+static size_t fill_mvm_cells(const void *vctx, size_t b, size_t e, char *out) {
+  const mx_mesh_view *m = vctx;
+  size_t n = 0;
+  for (size_t k = b; k < e; k++) {
+    n += put_cell(out + n, m, k);
+    out[n++] = '\n';
+  }
+  return n;
+}
+
+/* ---- files ----------------------------------------------------------------- */
+
+static int write_m3d_body(mx_afile *f, const mx_mesh_view *m) {
+  MX_CHECK(mx_afile_printf(f, "[Nodes, ARRAY1<STRING>]\n%zu\n\n", m->nnodes));
+  MX_CHECK(mx_afile_emit(f, m->nnodes, M3D_NODE_MAX, fill_m3d_nodes, m));
+  MX_CHECK(mx_afile_printf(f, "\n[Elements, ARRAY1<STRING>]\n%zu\n\n",
                            m->ncells));
-  return mx_afile_emit(f, m->ncells, ELEMENT_LINE_MAX, fill_elements, m);
+  return mx_afile_emit(f, m->ncells, M3D_CELL_MAX, fill_m3d_cells, m);
+}
+
+static int write_mvm_body(mx_afile *f, const mx_mesh_view *m) {
+  MX_CHECK(mx_afile_printf(f, "MIXED\n%zu %zu\n\n", m->nnodes, m->ncells));
+  MX_CHECK(mx_afile_emit(f, m->nnodes, MVM_NODE_MAX, fill_mvm_nodes, m));
+  return mx_afile_emit(f, m->ncells, MVM_CELL_MAX, fill_mvm_cells, m);
 }
 
 int mx_write_m3d(const char *path, const mx_mesh_view *m) {
   MX_CHECK(mx_mesh_view_check(path, m));
   mx_afile f;
   MX_CHECK(mx_afile_open(&f, path));
-  return mx_afile_finish(&f, write_body(&f, m));
+  return mx_afile_finish(&f, write_m3d_body(&f, m));
+}
+
+int mx_write_mvm(const char *path, const mx_mesh_view *m) {
+  MX_CHECK(mx_mesh_view_check(path, m));
+  mx_afile f;
+  MX_CHECK(mx_afile_open(&f, path));
+  return mx_afile_finish(&f, write_mvm_body(&f, m));
 }

@@ -25,15 +25,16 @@ int mx_write_mesh(const char *path, const mx_mesh_view *m, int ascii) {
   if (strcasecmp(ext, ".meshb") == 0) return mx_write_medit(path, m, 1);
   if (strcasecmp(ext, ".getfem") == 0) return mx_write_getfem(path, m);
   if (strcasecmp(ext, ".m3d") == 0) return mx_write_m3d(path, m);
+  if (strcasecmp(ext, ".mvm") == 0) return mx_write_mvm(path, m);
   mx_error(path, 0,
            "unknown output format \"%s\" (use .vtk, .vtu, .msh, .mesh, .meshb, "
-           ".getfem or .m3d)",
+           ".getfem, .m3d or .mvm)",
            ext);
   return MX_EINPUT;
 }
 
 int mx_mesh_format_known(const char *path) {
-  static const char *known[] = {".vtk", ".vtu", ".msh", ".mesh", ".meshb", ".getfem", ".m3d"};
+  static const char *known[] = {".vtk", ".vtu", ".msh", ".mesh", ".meshb", ".getfem", ".m3d", ".mvm"};
   const char *ext = path_extension(path);
   for (size_t i = 0; i < sizeof known / sizeof *known; i++)
     if (strcasecmp(ext, known[i]) == 0) return 1;

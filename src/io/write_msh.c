@@ -13,10 +13,11 @@
  * one surface entity and one physical group (dimension 2, tag t, named after
  * the input file) per boundary tag that has faces, one volume entity and one
  * physical group (dimension 3, tag b) per body; the volume elements in one
- * block per (body, type), then the boundary triangles (type 2) and
- * quadrilaterals (type 3) in one block per (tag, type), tagged after the
- * volume elements: ncells + 1 + i for triangle i of the face list, ncells +
- * ntri + 1 + i for quadrilateral i. $ElementData covers every element, a
+ * block per (body, type) (the written order groups them so), then the
+ * boundary triangles (type 2) and quadrilaterals (type 3) in one block per
+ * (tag, type), the face lists being sorted by tag. Element tags are the
+ * elements' positions in the file, 1 to N (volume elements: their written
+ * position; meshio wants them rising through the file). $ElementData covers every element, a
  * boundary face with the value of its element.
  *
  * Binary files use the host's byte order (the int 1 after the format line
@@ -66,12 +67,25 @@ enum {
   PHYSICAL_TAG = 1,
 };
 
+/* What the tagged layout needs: the tags and bodies present, counts per
+ * block, boxes (a body's box is its boundary faces' box). */
+typedef struct msh_layout {
+  int tagged, ntags, nbodies;
+  size_t *ntri, *nquad;   /* per tag 0..ntags */
+  size_t *tri0, *quad0;   /* where each tag's run starts in the face lists */
+  uint64_t *tag0;         /* the element tag before each tag's first face */
+  size_t *ncell;          /* per body 0..nbodies, 4 types each */
+  double *tbox, *bbox;    /* 6 per tag / body */
+} msh_layout;
+
 typedef struct {
   const mx_mesh_view *m;
+  const msh_layout *L;
   int type;   /* element section: the mixoct type of this block (faces: 3, 4 nodes) */
   int body;   /* 0: every cell; else the body (faces: the tag) of this block */
   int binary;
   const mx_field *fd; /* $ElementData: the field */
+  size_t base;        /* faces: the first of the block's run in its list */
 } msh_ctx;
 
 /* ---- binary stores (host byte order) -------------------------------------- */
@@ -106,6 +120,24 @@ static size_t fill_coords_ascii(const void *vctx, size_t b, size_t e,
 /* ---- elements: every written position is an item, the cells of other
  * types (or bodies) write nothing, so a block keeps the written order. ---- */
 
+/* A $ElementData line: the element's tag and the field's value at cell c
+ * (a boundary face carries its element's value). */
+static size_t data_line(const msh_ctx *ctx, uint64_t tag, size_t c, char *out) {
+  const mx_field *fd = ctx->fd;
+  const double v = fd->is_double ? fd->dvalues[c] : (double)fd->ivalues[c];
+  if (ctx->binary) {
+    const int32_t t = (int32_t)tag;
+    memcpy(out, &t, 4);
+    memcpy(out + 4, &v, 8);
+    return 12;
+  }
+  size_t n = mx_put_u64(out, tag);
+  out[n++] = ' ';
+  n += fd->is_double ? mx_put_double(out + n, v) : mx_put_i64(out + n, fd->ivalues[c]);
+  out[n++] = '\n';
+  return n;
+}
+
 static inline int in_block(const msh_ctx *ctx, size_t c) {
   const mx_mesh_view *m = ctx->m;
   return m->type[c] == ctx->type && (ctx->body == 0 || m->cell_body[c] == ctx->body);
@@ -121,6 +153,10 @@ static size_t fill_elements_bin(const void *vctx, size_t b, size_t e,
   for (size_t k = b; k < e; k++) {
     const size_t c = mx_view_cell(m, k);
     if (!in_block(ctx, c)) continue;
+    if (ctx->fd) {
+      n += data_line(ctx, (uint64_t)k + 1, c, out + n);
+      continue;
+    }
     const uint32_t *row = m->conn + 8 * c;
     put_size(out + n, (uint64_t)k + 1);
     n += 8;
@@ -140,6 +176,10 @@ static size_t fill_elements_ascii(const void *vctx, size_t b, size_t e,
   for (size_t k = b; k < e; k++) {
     const size_t c = mx_view_cell(m, k);
     if (!in_block(ctx, c)) continue;
+    if (ctx->fd) {
+      n += data_line(ctx, (uint64_t)k + 1, c, out + n);
+      continue;
+    }
     const uint32_t *row = m->conn + 8 * c;
     n += mx_put_u64(out + n, (uint64_t)k + 1);
     for (int j = 0; j < nn; j++) {
@@ -158,48 +198,29 @@ static size_t fill_faces(const void *vctx, size_t b, size_t e, char *out) {
   const int nv = ctx->type;
   const uint32_t *fv = nv == 3 ? bf->tri : bf->quad;
   const int32_t *tag = nv == 3 ? bf->tri_tag : bf->quad_tag;
-  const uint64_t first = ctx->m->ncells + 1 + (nv == 3 ? 0 : bf->ntri);
+  const msh_layout *L = ctx->L;
+  const size_t t = (size_t)ctx->body;
+  const uint64_t first = L->tag0[t] + 1 + (nv == 3 ? 0 : L->ntri[t]);
+  const size_t i0 = nv == 3 ? L->tri0[t] : L->quad0[t];
   size_t n = 0;
-  for (size_t i = b; i < e; i++) {
+  const uint64_t *src = nv == 3 ? bf->tri_src : bf->quad_src;
+  for (size_t item = b; item < e; item++) {
+    const size_t i = ctx->base + item; /* in the tag's run of the list */
     if (tag[i] != ctx->body) continue;
+    if (ctx->fd) {
+      n += data_line(ctx, first + (i - i0), (size_t)(src[i] >> 3), out + n);
+      continue;
+    }
     if (ctx->binary) {
-      put_size(out + n, first + i);
+      put_size(out + n, first + (i - i0));
       n += 8;
       for (int j = 0; j < nv; j++, n += 8) put_size(out + n, (uint64_t)fv[(size_t)nv * i + j] + 1);
     } else {
-      n += mx_put_u64(out + n, first + i);
+      n += mx_put_u64(out + n, first + (i - i0));
       for (int j = 0; j < nv; j++) {
         out[n++] = ' ';
         n += mx_put_u64(out + n, (uint64_t)fv[(size_t)nv * i + j] + 1);
       }
-      out[n++] = '\n';
-    }
-  }
-  return n;
-}
-
-/* $ElementData values: "tag value" lines, or tag (int) and value (double). */
-static size_t fill_data(const void *vctx, size_t b, size_t e, char *out) {
-  const msh_ctx *ctx = vctx;
-  const mx_field *fd = ctx->fd;
-  size_t n = 0;
-  const mx_mesh_view *m = ctx->m;
-  const size_t nc = m->ncells, nt = m->bfaces ? m->bfaces->ntri : 0;
-  for (size_t k = b; k < e; k++) {
-    /* a boundary face carries its element's value */
-    const size_t c = k < nc        ? mx_view_cell(m, k)
-                     : k < nc + nt ? (size_t)(m->bfaces->tri_src[k - nc] >> 3)
-                                   : (size_t)(m->bfaces->quad_src[k - nc - nt] >> 3);
-    const double v = fd->is_double ? fd->dvalues[c] : (double)fd->ivalues[c];
-    if (ctx->binary) {
-      const int32_t tag = (int32_t)(k + 1);
-      memcpy(out + n, &tag, 4);
-      memcpy(out + n + 4, &v, 8);
-      n += 12;
-    } else {
-      n += mx_put_u64(out + n, (uint64_t)k + 1);
-      out[n++] = ' ';
-      n += fd->is_double ? mx_put_double(out + n, v) : mx_put_i64(out + n, fd->ivalues[c]);
       out[n++] = '\n';
     }
   }
@@ -244,18 +265,13 @@ static void bounding_box(const mx_mesh_view *m, double box[6]) {
   box[3] = x1, box[4] = y1, box[5] = z1;
 }
 
-/* What the tagged layout needs: the tags and bodies present, counts per
- * block, boxes (a body's box is its boundary faces' box). */
-typedef struct {
-  int tagged, ntags, nbodies;
-  size_t *ntri, *nquad;   /* per tag 0..ntags */
-  size_t *ncell;          /* per body 0..nbodies, 4 types each */
-  double *tbox, *bbox;    /* 6 per tag / body */
-} msh_layout;
 
 static void layout_free(msh_layout *L) {
   mx_free(L->ntri);
   mx_free(L->nquad);
+  mx_free(L->tri0);
+  mx_free(L->quad0);
+  mx_free(L->tag0);
   mx_free(L->ncell);
   mx_free(L->tbox);
   mx_free(L->bbox);
@@ -311,6 +327,25 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
     const int32_t b = m->cell_body[bf->quad_src[i] >> 3];
     if (b >= 1 && b <= L->nbodies)
       for (int j = 0; j < 4; j++) box_add(L->bbox + 6 * b, m->xyz + 3 * (size_t)bf->quad[4 * i + j]);
+  }
+  /* the face lists are sorted by tag (kernels/boundary_tags.h): element
+   * tags follow the file, triangles then quadrilaterals of each tag */
+  L->tri0 = mx_alloc((nt + 1) * sizeof *L->tri0);
+  L->quad0 = mx_alloc((nt + 1) * sizeof *L->quad0);
+  L->tag0 = mx_alloc((nt + 1) * sizeof *L->tag0);
+  if (!L->tri0 || !L->quad0 || !L->tag0) {
+    layout_free(L);
+    return MX_EINPUT;
+  }
+  size_t a = 0, b = 0;
+  uint64_t e = m->ncells;
+  for (size_t t = 0; t < nt; t++) {
+    L->tri0[t] = a;
+    L->quad0[t] = b;
+    L->tag0[t] = e;
+    a += L->ntri[t];
+    b += L->nquad[t];
+    e += L->ntri[t] + L->nquad[t];
   }
   size_t *cnt = L->ncell;
   const size_t n4 = 4 * nb;
@@ -396,7 +431,7 @@ static int write_nodes(mx_afile *f, const mx_mesh_view *m, int binary) {
   const size_t nn = m->nnodes;
   const size_t nblocks = nn > 0;
   const size_t tag_min = nn > 0, tag_max = nn;
-  msh_ctx ctx = {m, 0, 0, binary, NULL};
+  msh_ctx ctx = {m, NULL, 0, 0, binary, NULL, 0};
   MX_CHECK(mx_afile_printf(f, "$Nodes\n"));
   if (binary) {
     const uint64_t head[4] = {nblocks, nn, tag_min, tag_max};
@@ -448,21 +483,49 @@ static int block_head(mx_afile *f, int dim, int tag, int type, size_t count, int
   return write_bin_size(f, count);
 }
 
+/* A block of volume elements, or with fd its $ElementData lines (in the
+ * same order: readers such as meshio take the values in file order). */
 static int cell_block(mx_afile *f, const mx_mesh_view *m, int entity, int body, int t,
-                      size_t count, int binary) {
-  msh_ctx ctx = {m, t, body, binary, NULL};
+                      size_t count, int binary, const mx_field *fd) {
+  msh_ctx ctx = {m, NULL, t, body, binary, fd, 0};
   const size_t per_cell = (size_t)mx_cell_nodes[t] + 1;
-  MX_CHECK(block_head(f, 3, entity, msh_type[t], count, binary));
-  if (binary) return mx_afile_emit(f, m->ncells, 8 * per_cell, fill_elements_bin, &ctx);
-  return mx_afile_emit(f, m->ncells, (MX_U64_CHARS + 1) * per_cell, fill_elements_ascii, &ctx);
+  const size_t data_max = MX_U64_CHARS + MX_DOUBLE_CHARS + 2;
+  if (!fd) MX_CHECK(block_head(f, 3, entity, msh_type[t], count, binary));
+  if (binary) return mx_afile_emit(f, m->ncells, fd ? 12 : 8 * per_cell, fill_elements_bin, &ctx);
+  return mx_afile_emit(f, m->ncells, fd ? data_max : (MX_U64_CHARS + 1) * per_cell,
+                       fill_elements_ascii, &ctx);
 }
 
-static int face_block(mx_afile *f, const mx_mesh_view *m, int tag, int nv, size_t count,
-                      int binary) {
-  msh_ctx ctx = {m, nv, tag, binary, NULL};
-  const size_t n = nv == 3 ? m->bfaces->ntri : m->bfaces->nquad;
-  MX_CHECK(block_head(f, 2, tag, nv == 3 ? 2 : 3, count, binary));
-  return mx_afile_emit(f, n, (MX_U64_CHARS + 1) * (size_t)(nv + 1), fill_faces, &ctx);
+static int face_block(mx_afile *f, const mx_mesh_view *m, const msh_layout *L, int tag, int nv,
+                      size_t count, int binary, const mx_field *fd) {
+  msh_ctx ctx = {m, L, nv, tag, binary, fd, 0};
+  /* the tag's run of the sorted list */
+  const size_t b = nv == 3 ? L->tri0[tag] : L->quad0[tag];
+  if (!fd) MX_CHECK(block_head(f, 2, tag, nv == 3 ? 2 : 3, count, binary));
+  ctx.base = b;
+  return mx_afile_emit(f, count,
+                       fd ? MX_U64_CHARS + MX_DOUBLE_CHARS + 2
+                          : (MX_U64_CHARS + 1) * (size_t)(nv + 1),
+                       fill_faces, &ctx);
+}
+
+/* Every block in file order: elements (fd NULL) or one field's values. */
+static int all_blocks(mx_afile *f, const mx_mesh_view *m, const msh_layout *L,
+                      const size_t count[4], int binary, const mx_field *fd) {
+  if (!L->tagged) {
+    for (int t = 0; t < 4; t++)
+      if (count[t]) MX_CHECK(cell_block(f, m, ENTITY_TAG, 0, t, count[t], binary, fd));
+    return MX_OK;
+  }
+  for (int b = 1; b <= L->nbodies; b++)
+    for (int t = 0; t < 4; t++)
+      if (L->ncell[4 * b + t])
+        MX_CHECK(cell_block(f, m, b, b, t, L->ncell[4 * b + t], binary, fd));
+  for (int t = 1; t <= L->ntags; t++) {
+    if (L->ntri[t]) MX_CHECK(face_block(f, m, L, t, 3, L->ntri[t], binary, fd));
+    if (L->nquad[t]) MX_CHECK(face_block(f, m, L, t, 4, L->nquad[t], binary, fd));
+  }
+  return MX_OK;
 }
 
 static int write_elements(mx_afile *f, const mx_mesh_view *m, const msh_layout *L,
@@ -489,35 +552,26 @@ static int write_elements(mx_afile *f, const mx_mesh_view *m, const msh_layout *
   } else {
     MX_CHECK(mx_afile_printf(f, "%zu %zu %zu %zu\n", nblocks, ne, tag_min, tag_max));
   }
-  if (!L->tagged) {
-    for (int t = 0; t < 4; t++)
-      if (count[t]) MX_CHECK(cell_block(f, m, ENTITY_TAG, 0, t, count[t], binary));
-  } else {
-    for (int b = 1; b <= L->nbodies; b++)
-      for (int t = 0; t < 4; t++)
-        if (L->ncell[4 * b + t]) MX_CHECK(cell_block(f, m, b, b, t, L->ncell[4 * b + t], binary));
-    for (int t = 1; t <= L->ntags; t++) {
-      if (L->ntri[t]) MX_CHECK(face_block(f, m, t, 3, L->ntri[t], binary));
-      if (L->nquad[t]) MX_CHECK(face_block(f, m, t, 4, L->nquad[t], binary));
-    }
-  }
+  MX_CHECK(all_blocks(f, m, L, count, binary, NULL));
   if (binary) MX_CHECK(mx_afile_write(f, "\n", 1));
   return mx_afile_printf(f, "$EndElements\n");
 }
 
 /* One $ElementData section per cell field: the field's name, time 0, step
  * 0, one component; every element, a boundary face with its element's
- * value (readers such as meshio want data on every block). */
+ * value (readers such as meshio want data on every block), lines in the
+ * order of the elements in the file (meshio takes them in that order,
+ * Gmsh by tag). */
 static int write_element_data(mx_afile *f, const mx_mesh_view *m, const msh_layout *L,
                               int binary) {
   const size_t ne = m->ncells + (L->tagged ? m->bfaces->ntri + m->bfaces->nquad : 0);
+  size_t count[4];
+  count_types(m, count);
   for (int i = 0; i < m->ncell_fields; i++) {
     const mx_field *fd = &m->cell_fields[i];
-    msh_ctx ctx = {m, 0, 0, binary, fd};
     MX_CHECK(mx_afile_printf(f, "$ElementData\n1\n\"%s\"\n1\n0\n3\n0\n1\n%zu\n", fd->name,
                              ne));
-    MX_CHECK(mx_afile_emit(f, ne, binary ? 12 : MX_U64_CHARS + MX_DOUBLE_CHARS + 2,
-                           fill_data, &ctx));
+    MX_CHECK(all_blocks(f, m, L, count, binary, fd));
     if (binary) MX_CHECK(mx_afile_write(f, "\n", 1));
     MX_CHECK(mx_afile_printf(f, "$EndElementData\n"));
   }

@@ -40,33 +40,32 @@ static int32_t face_tag(const mx_mesh_view *v, const mx_tag_inputs *in, const ui
   return s + 1;
 }
 
-/* Union-find over nodes, linking the larger root under the smaller, so the
- * root of every set is its smallest node whatever the thread count. */
-static uint32_t uf_find(uint32_t *p, uint32_t a) {
-  for (;;) {
-    const uint32_t q = __atomic_load_n(&p[a], __ATOMIC_RELAXED);
-    if (q == a) return a;
-    const uint32_t r = __atomic_load_n(&p[q], __ATOMIC_RELAXED);
-    if (r != q) __atomic_compare_exchange_n(&p[a], &(uint32_t){q}, r, 0, __ATOMIC_RELAXED,
-                                            __ATOMIC_RELAXED);
-    a = q;
-  }
-}
-
-static void uf_union(uint32_t *p, uint32_t a, uint32_t b) {
-  for (;;) {
-    a = uf_find(p, a);
-    b = uf_find(p, b);
-    if (a == b) return;
-    if (a < b) {
-      const uint32_t t = a;
-      a = b;
-      b = t;
+/* The faces of one list (nv nodes each) stably sorted by tag (counting
+ * sort; tags 1..maxtag): a tag's faces become one run. */
+static int sort_list(uint32_t *fv, uint64_t *src, int32_t *tag, size_t n, int nv, int maxtag) {
+  size_t *start = mx_calloc(((size_t)maxtag + 2) * sizeof *start);
+  uint32_t *f2 = mx_alloc((nv * n + 1) * sizeof *f2);
+  uint64_t *s2 = mx_alloc((n + 1) * sizeof *s2);
+  int32_t *t2 = mx_alloc((n + 1) * sizeof *t2);
+  int st = start && f2 && s2 && t2 ? MX_OK : MX_EINPUT;
+  if (!st) {
+    for (size_t i = 0; i < n; i++) start[tag[i] + 1]++;
+    for (int t = 1; t <= maxtag + 1; t++) start[t] += start[t - 1];
+    for (size_t i = 0; i < n; i++) {
+      const size_t j = start[tag[i]]++;
+      memcpy(f2 + (size_t)nv * j, fv + (size_t)nv * i, (size_t)nv * sizeof *fv);
+      s2[j] = src[i];
+      t2[j] = tag[i];
     }
-    uint32_t expect = a;
-    if (__atomic_compare_exchange_n(&p[a], &expect, b, 0, __ATOMIC_ACQ_REL, __ATOMIC_RELAXED))
-      return;
+    memcpy(fv, f2, (size_t)nv * n * sizeof *fv);
+    memcpy(src, s2, n * sizeof *src);
+    memcpy(tag, t2, n * sizeof *tag);
   }
+  mx_free(start);
+  mx_free(f2);
+  mx_free(s2);
+  mx_free(t2);
+  return st;
 }
 
 int mx_boundary_tags(const mx_mesh_view *v, const mx_tag_inputs *in, mx_boundary_faces *bf,
@@ -74,14 +73,9 @@ int mx_boundary_tags(const mx_mesh_view *v, const mx_tag_inputs *in, mx_boundary
   *nbodies = 0;
   *body_tag = NULL;
   *off_input = 0;
-  const size_t nn = v->nnodes, nc = v->ncells;
   bf->tri_tag = mx_alloc((bf->ntri + 1) * sizeof *bf->tri_tag);
   bf->quad_tag = mx_alloc((bf->nquad + 1) * sizeof *bf->quad_tag);
-  uint32_t *root = mx_alloc((nn + 1) * sizeof *root);
-  if (!bf->tri_tag || !bf->quad_tag || !root) {
-    mx_free(root);
-    return MX_EINPUT;
-  }
+  if (!bf->tri_tag || !bf->quad_tag) return MX_EINPUT;
   double lo[3], hi[3];
   mx_trisoup_bbox(in->soup, lo, hi);
   const double off_tol =
@@ -100,69 +94,27 @@ int mx_boundary_tags(const mx_mesh_view *v, const mx_tag_inputs *in, mx_boundary
     off += bf->quad_tag[i] == in->nshells + 1;
   }
   *off_input = off;
-  /* bodies: the components of the element-node graph */
-#pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < nn; i++) root[i] = (uint32_t)i;
-#pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < nc; c++) {
-    const uint32_t *row = v->conn + 8 * c;
-    for (int k = 1; k < mx_cell_nodes[v->type[c]]; k++) uf_union(root, row[0], row[k]);
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < nn; i++) root[i] = uf_find(root, (uint32_t)i);
-  /* each root's smallest boundary tag (kept in cell_body's place first:
-   * per root node, through a node array) */
-  int32_t *mint = mx_alloc((nn + 1) * sizeof *mint);
-  if (!mint) {
-    mx_free(root);
-    return MX_EINPUT;
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < nn; i++) mint[i] = INT32_MAX;
-  for (size_t i = 0; i < bf->ntri; i++) {
-    const uint32_t r = root[bf->tri[3 * i]];
-    if (bf->tri_tag[i] < mint[r]) mint[r] = bf->tri_tag[i];
-  }
-  for (size_t i = 0; i < bf->nquad; i++) {
-    const uint32_t r = root[bf->quad[4 * i]];
-    if (bf->quad_tag[i] < mint[r]) mint[r] = bf->quad_tag[i];
-  }
-  /* number the bodies: roots in order of (smallest tag, root id) */
-  size_t nroots = 0;
-  for (size_t i = 0; i < nn; i++) nroots += root[i] == i && mint[i] != INT32_MAX;
-  uint64_t *key = mx_alloc((nroots + 1) * sizeof *key);
-  if (!key) {
-    mx_free(mint);
-    mx_free(root);
-    return MX_EINPUT;
-  }
-  size_t k = 0;
-  for (size_t i = 0; i < nn; i++)
-    if (root[i] == i && mint[i] != INT32_MAX) key[k++] = (uint64_t)mint[i] << 32 | i;
-  for (size_t i = 1; i < k; i++) /* few bodies: insertion sort */
-    for (size_t j = i; j > 0 && key[j - 1] > key[j]; j--) {
-      const uint64_t t = key[j];
-      key[j] = key[j - 1];
-      key[j - 1] = t;
+  MX_CHECK(sort_list(bf->tri, bf->tri_src, bf->tri_tag, bf->ntri, 3, in->nshells + 1));
+  MX_CHECK(sort_list(bf->quad, bf->quad_src, bf->quad_tag, bf->nquad, 4, in->nshells + 1));
+  /* bodies (io/cell_order.c), each with its smallest boundary tag */
+  int nb = 0;
+  int st = mx_cell_bodies(v, cell_body, &nb);
+  int32_t *bt = st ? NULL : mx_alloc(((size_t)nb + 1) * sizeof *bt);
+  if (!st && !bt) st = MX_EINPUT;
+  if (!st) {
+    for (int b = 0; b < nb; b++) bt[b] = INT32_MAX;
+    for (size_t i = 0; i < bf->ntri; i++) {
+      const int32_t b = cell_body[bf->tri_src[i] >> 3] - 1;
+      if (b >= 0 && bf->tri_tag[i] < bt[b]) bt[b] = bf->tri_tag[i];
     }
-  int32_t *bt = mx_alloc((k + 1) * sizeof *bt);
-  if (!bt) {
-    mx_free(key);
-    mx_free(mint);
-    mx_free(root);
-    return MX_EINPUT;
+    for (size_t i = 0; i < bf->nquad; i++) {
+      const int32_t b = cell_body[bf->quad_src[i] >> 3] - 1;
+      if (b >= 0 && bf->quad_tag[i] < bt[b]) bt[b] = bf->quad_tag[i];
+    }
+    *body_tag = bt;
+    *nbodies = nb;
   }
-  for (size_t b = 0; b < k; b++) bt[b] = (int32_t)(key[b] >> 32);
-  *body_tag = bt;
-  for (size_t i = 0; i < nn; i++) mint[i] = 0;
-  for (size_t b = 0; b < k; b++) mint[(uint32_t)key[b]] = (int32_t)(b + 1);
-#pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < nc; c++) cell_body[c] = mint[root[v->conn[8 * c]]];
-  *nbodies = (int)k;
-  mx_free(key);
-  mx_free(mint);
-  mx_free(root);
-  return MX_OK;
+  return st;
 }
 
 void mx_boundary_node_tags(const mx_boundary_faces *bf, size_t nnodes, int32_t *tag) {

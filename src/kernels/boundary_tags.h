@@ -36,7 +36,8 @@ typedef struct {
 } mx_tag_inputs;
 
 /* bf: the boundary faces of v (mx_boundary_faces_extract); their tri_tag
- * and quad_tag are allocated and filled. cell_body: v->ncells values.
+ * and quad_tag are allocated and filled, and each list is reordered by tag
+ * (stably: a tag's faces keep their order). cell_body: v->ncells values.
  * *nbodies: the number of bodies; *body_tag (allocated, mx_free): the
  * smallest boundary tag of each body (body b at [b - 1]); *off_input:
  * faces on no input. */

@@ -883,7 +883,7 @@ int mx_mesher_write(const mx_mesher *cm, const char *path, int ascii) {
   int st = MX_OK;
   if (!path || !mx_mesh_format_known(path)) {
     mx_error(path, 0, "unknown output format (use .vtk .vtu .msh .mesh .meshb "
-                      ".getfem .m3d)");
+                      ".getfem .m3d .mvm)");
     st = MX_EINPUT;
   } else if (m->mesh_stage == MX_STAGE_OCTREE) {
     st = write_octree(m, path, ascii);

@@ -38,6 +38,8 @@ mx_requests mx_mesher_requests(const mx_mesher *m);
 /* Write the mixed mesh (src/mesher/output.c): written order, boundary tags
  * and bodies, fields. */
 int mx_write_mixed(mx_mesher *m, const char *path, int ascii);
+/* The order the mesh files list the cells in (src/mesher/output.c). */
+int mx_written_order(const mx_mesher *m, uint32_t *order);
 /* The octree's figures (leaves, hash, octants, edges, splits) into m->S. */
 void mx_fill_tree_stats(mx_mesher *m);
 

@@ -76,50 +76,93 @@ static int make_tags(mx_mesher *m, const mx_mesh_view *v, tags *T) {
   return MX_OK;
 }
 
-int mx_write_mixed(mx_mesher *m, const char *path, int ascii) {
-  const mx_mesh_out *M = &m->M;
-  int32_t *type = mx_alloc((M->ncells + 1) * sizeof *type);
-  int32_t *bnd = mx_alloc((M->nnodes + 1) * sizeof *bnd);
-  uint32_t *order = mx_alloc((M->ncells + 1) * sizeof *order);
+/* The view the writers get, and what it points to. */
+typedef struct {
+  int32_t *type, *bnd;
+  uint32_t *order;
   tags T;
-  memset(&T, 0, sizeof T);
-  int st = type && bnd && order ? MX_OK : MX_ENOMEM;
-  if (!st) st = mx_cells_by_type(M->type, M->ncells, order, NULL);
-  if (!st) {
+  mx_field f[4], pf[2];
+  mx_mesh_view v;
+  int tagged;
+} prepared;
+
+static void release(prepared *P) {
+  tags_free(&P->T);
+  mx_free(P->order);
+  mx_free(P->type);
+  mx_free(P->bnd);
+}
+
+static int prepare(mx_mesher *m, prepared *P) {
+  memset(P, 0, sizeof *P);
+  const mx_mesh_out *M = &m->M;
+  P->type = mx_alloc((M->ncells + 1) * sizeof *P->type);
+  P->bnd = mx_alloc((M->nnodes + 1) * sizeof *P->bnd);
+  P->order = mx_alloc((M->ncells + 1) * sizeof *P->order);
+  if (!P->type || !P->bnd || !P->order) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < M->ncells; i++) type[i] = M->type[i];
+  for (size_t i = 0; i < M->ncells; i++) P->type[i] = M->type[i];
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < M->nnodes; i++) bnd[i] = m->bnd[i];
-  }
-  mx_field f[4] = {{"type", 0, type, NULL},
-                   {"level", 0, M->level, NULL},
-                   {"jens", 1, NULL, M->jens},
-                   {"body", 0, NULL, NULL}};
-  mx_field pf[2] = {{"boundary", 0, bnd, NULL}, {"surface_tag", 0, NULL, NULL}};
-  mx_mesh_view v = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
-                    .type = M->type, .conn = M->conn, .ncell_fields = 3,
-                    .cell_fields = f, .npoint_fields = 1, .point_fields = pf};
-  const int tagged = m->mesh_stage == MX_STAGE_FULL && m->ndomain > 0;
-  if (!st && tagged) st = make_tags(m, &v, &T);
-  if (!st && tagged) {
-    f[3].ivalues = T.cell_body;
-    pf[1].ivalues = T.node_tag;
-    v.ncell_fields = 4;
-    v.npoint_fields = 2;
-    v.bfaces = &T.bf;
-    v.ntags = T.ntags;
-    v.tag_names = T.tag_names;
-    v.cell_body = T.cell_body;
-    v.nbodies = T.nbodies;
-    v.body_names = T.body_names;
-  }
-  v.order = order;
-  if (!st) st = mx_write_mesh(path, &v, ascii);
-  tags_free(&T);
-  mx_free(order);
-  mx_free(type);
-  mx_free(bnd);
+  for (size_t i = 0; i < M->nnodes; i++) P->bnd[i] = m->bnd[i];
+  P->f[0] = (mx_field){"type", 0, P->type, NULL};
+  P->f[1] = (mx_field){"level", 0, M->level, NULL};
+  P->f[2] = (mx_field){"jens", 1, NULL, M->jens};
+  P->pf[0] = (mx_field){"boundary", 0, P->bnd, NULL};
+  P->v = (mx_mesh_view){.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
+                        .type = M->type, .conn = M->conn, .ncell_fields = 3,
+                        .cell_fields = P->f, .npoint_fields = 1, .point_fields = P->pf,
+                        .order = P->order};
+  P->tagged = m->mesh_stage == MX_STAGE_FULL && m->ndomain > 0;
+  if (!P->tagged) return mx_cells_by_type(M->type, M->ncells, P->order, NULL);
+  MX_CHECK(make_tags(m, &P->v, &P->T));
+  MX_CHECK(mx_cells_in_order(M->type, P->T.cell_body, P->T.nbodies, M->ncells, P->order));
+  P->f[3] = (mx_field){"body", 0, P->T.cell_body, NULL};
+  P->pf[1] = (mx_field){"surface_tag", 0, P->T.node_tag, NULL};
+  P->v.ncell_fields = 4;
+  P->v.npoint_fields = 2;
+  P->v.bfaces = &P->T.bf;
+  P->v.ntags = P->T.ntags;
+  P->v.tag_names = P->T.tag_names;
+  P->v.cell_body = P->T.cell_body;
+  P->v.nbodies = P->T.nbodies;
+  P->v.body_names = P->T.body_names;
+  return MX_OK;
+}
+
+int mx_write_mixed(mx_mesher *m, const char *path, int ascii) {
+  prepared P;
+  int st = prepare(m, &P);
+  if (!st) st = mx_write_mesh(path, &P.v, ascii);
+  release(&P);
   return st;
+}
+
+int mx_mesher_write_boundary(const mx_mesher *cm, const char *path) {
+  mx_mesher *m = (mx_mesher *)cm; /* the surface index may be built */
+  mx_call c;
+  mx_call_begin(m, &c);
+  const double t = mx_wtime();
+  int st = MX_OK;
+  if (m->mesh_stage != MX_STAGE_FULL) {
+    mx_error(path, 0, "the boundary faces are written for a full-stage mesh only");
+    st = MX_EINPUT;
+  }
+  prepared P;
+  memset(&P, 0, sizeof P);
+  if (!st) st = prepare(m, &P);
+  if (!st) st = mx_write_boundary_vtu(path, &P.v);
+  release(&P);
+  m->S.ph.write += mx_wtime() - t;
+  return mx_call_end(m, &c, st);
+}
+
+int mx_written_order(const mx_mesher *m, uint32_t *order) {
+  const mx_mesh_out *M = &m->M;
+  if (m->mesh_stage != MX_STAGE_FULL || m->ndomain == 0)
+    return mx_cells_by_type(M->type, M->ncells, order, NULL);
+  const mx_mesh_view v = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
+                          .type = M->type, .conn = M->conn};
+  return mx_cells_written_order(&v, order);
 }
 
 int mx_mesher_written_order(const mx_mesher *m, uint32_t *order) {
@@ -127,5 +170,5 @@ int mx_mesher_written_order(const mx_mesher *m, uint32_t *order) {
     mx_error(NULL, 0, "no mixed mesh: mesh first");
     return MX_EINPUT;
   }
-  return mx_cells_by_type(m->M.type, m->M.ncells, order, NULL);
+  return mx_written_order(m, order);
 }

@@ -101,7 +101,7 @@ static int refine_indices(mx_mesher *m, const uint64_t *idx, size_t n, const uin
 }
 
 /* A mixoct restart file's element lists number the elements as mixoct
- * wrote its mesh: grouped by type (io/cell_order.c). The file's mesh (the
+ * wrote its mesh: grouped by body and type (io/cell_order.c). The file's mesh (the
  * .octb's, or the octree meshed again: the same, it is deterministic) gives
  * each of them its leaf; *map (mx_alloc) receives them. The per-leaf counts
  * must be the file's. */
@@ -112,7 +112,7 @@ static int by_type_map(mx_mesher *m, uint32_t **map) {
   const size_t n = M->ncells;
   uint32_t *order = mx_alloc((n + 1) * sizeof *order);
   uint32_t *cnt = mx_calloc((m->nleaves + 1) * sizeof *cnt);
-  int st = order && cnt ? mx_cells_by_type(M->type, n, order, NULL) : MX_ENOMEM;
+  int st = order && cnt ? mx_written_order(m, order) : MX_ENOMEM;
   size_t bad = n != m->file_nelem;
   for (size_t k = 0; !st && !bad && k < n; k++) {
     const uint32_t l = m->file_leaf[k];

@@ -63,10 +63,20 @@ typedef struct {
   const char *const *body_names;
 } mx_mesh_view;
 
-/* The written order of n cells (src/io/cell_order.c): grouped by type (tetrahedra,
- * pyramids, prisms, hexahedra), in index order within a type. first (may be NULL):
- * where each type starts in order, first[4] = n. MX_OK or MX_EINPUT (memory). */
+/* The order cells are written in (src/io/cell_order.c). Bodies: the parts
+ * of the mesh connected through nodes, numbered 1.. by their smallest node
+ * (cell_body: ncells values). mx_cells_in_order: the cells grouped by body
+ * (body NULL: one), then by type (tetrahedra, pyramids, prisms,
+ * hexahedra), in index order within a group. mx_cells_by_type: by type
+ * alone, first (may be NULL) receiving where each type starts, first[4] =
+ * n. mx_cells_written_order: the bodies, then mx_cells_in_order, the order
+ * every mesh file of mixoct lists its cells in. MX_OK or MX_EINPUT
+ * (memory). */
+int mx_cell_bodies(const mx_mesh_view *v, int32_t *cell_body, int *nbodies);
+int mx_cells_in_order(const uint8_t *type, const int32_t *body, int nbodies, size_t n,
+                      uint32_t *order);
 int mx_cells_by_type(const uint8_t *type, size_t n, uint32_t *order, size_t first[5]);
+int mx_cells_written_order(const mx_mesh_view *v, uint32_t *order);
 
 /* The index of the k-th cell written. */
 static inline size_t mx_view_cell(const mx_mesh_view *m, size_t k) {
@@ -89,6 +99,9 @@ int mx_write_medit(const char *path, const mx_mesh_view *m, int binary);
 int mx_write_getfem(const char *path, const mx_mesh_view *m);
 int mx_write_m3d(const char *path, const mx_mesh_view *m);
 int mx_write_mvm(const char *path, const mx_mesh_view *m);
+/* The boundary faces of the view (view.bfaces, with their tags) as a
+ * surface VTU of their own (src/io/write_boundary.c). */
+int mx_write_boundary_vtu(const char *path, const mx_mesh_view *m);
 /* Dispatch on the extension: .vtk (legacy), .vtu, .msh, .mesh, .meshb,
  * .getfem, .m3d; ascii selects the ASCII variant where a format has both
  * (.vtk, .msh). */
