@@ -24,7 +24,18 @@
  *   END MESH STRUCTURE DESCRIPTION
  *
  * Points and convexes are numbered from 0 in the mesh's order; a convex
- * lists its points' numbers. Lines starting with '%' before BEGIN POINTS
+ * lists its points' numbers.
+ *
+ * Boundary tags (issue 11: view.bfaces with tags) follow as GetFEM regions,
+ * one per tag t, the faces as "convex/face" pairs in GetFEM's own face
+ * numbering (read off GetFEM's Mesh.pid_in_faces for each geometric
+ * transformation; tests/test_getfem_m3d.c and the GetFEM solve of the
+ * tests check it with GetFEM itself):
+ *
+ *   BEGIN REGION t
+ *   12/3
+ *   ...
+ *   END REGION t Lines starting with '%' before BEGIN POINTS
  * LIST are comments (GetFEM's reader skips to that line). The "POINT COUNT"
  * and "CONVEX COUNT" lines newer GetFEM versions write are left out, so
  * older readers accept the file too; the counts are in the comment line.
@@ -65,6 +76,7 @@
 
 #include "common.h"
 #include "io/atomic_file.h"
+#include "io/boundary_faces.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
 
@@ -74,6 +86,11 @@ static const int8_t getfem_order[4][8] = {
     {0, 1, 3, 2, 4, -1, -1, -1},
     {0, 1, 2, 3, 4, 5, -1, -1},
     {0, 1, 3, 2, 4, 5, 7, 6}};
+
+/* GetFEM's face number of mixoct's local face f (soa/mesh.h mx_cell_faces)
+ * of each type. */
+static const int8_t getfem_face[4][6] = {
+    {3, 2, 0, 1, -1, -1}, {0, 1, 2, 3, 4, -1}, {4, 3, 2, 0, 1, -1}, {5, 4, 3, 0, 2, 1}};
 
 static const char *const getfem_geotrans[4] = {
     "'GT_PK(3,1)'", "'GT_PYRAMID(1)'", "'GT_PRISM(3,1)'", "'GT_QK(3,1)'"};
@@ -133,6 +150,57 @@ static size_t fill_convexes(const void *vctx, size_t b, size_t e, char *out) {
   return n;
 }
 
+/* ---- regions ---------------------------------------------------------------- */
+
+typedef struct {
+  const mx_mesh_view *m;
+  const uint32_t *cv;    /* cell -> convex number (its written position) */
+  const uint64_t *src;   /* the face list's 8 * cell + local face */
+} region_ctx;
+
+static size_t fill_region(const void *vctx, size_t b, size_t e, char *out) {
+  const region_ctx *c = vctx;
+  size_t n = 0;
+  for (size_t i = b; i < e; i++) {
+    const size_t cell = (size_t)(c->src[i] >> 3);
+    n += mx_put_u64(out + n, c->cv[cell]);
+    out[n++] = '/';
+    n += mx_put_u64(out + n, (uint64_t)getfem_face[c->m->type[cell]][c->src[i] & 7]);
+    out[n++] = '\n';
+  }
+  return n;
+}
+
+/* The faces of one list with tag t: a run (the lists are sorted by tag). */
+static int region_run(mx_afile *f, region_ctx *c, const uint64_t *src, const int32_t *tag,
+                      size_t n, int32_t t) {
+  size_t b = 0;
+  while (b < n && tag[b] != t) b++;
+  size_t e = b;
+  while (e < n && tag[e] == t) e++;
+  c->src = src + b;
+  return mx_afile_emit(f, e - b, 2 * MX_U64_CHARS + 2, fill_region, c);
+}
+
+static int write_regions(mx_afile *f, const mx_mesh_view *m) {
+  const struct mx_boundary_faces *bf = m->bfaces;
+  if (!bf || !bf->tri_tag || !bf->quad_tag || m->ntags <= 0) return MX_OK;
+  uint32_t *cv = mx_alloc((m->ncells + 1) * sizeof *cv);
+  if (!cv) return MX_EINPUT;
+#pragma omp parallel for schedule(static)
+  for (size_t k = 0; k < m->ncells; k++) cv[mx_view_cell(m, k)] = (uint32_t)k;
+  region_ctx c = {m, cv, NULL};
+  int st = MX_OK;
+  for (int32_t t = 1; !st && t <= m->ntags; t++) {
+    st = mx_afile_printf(f, "BEGIN REGION %d\n", t);
+    if (!st) st = region_run(f, &c, bf->tri_src, bf->tri_tag, bf->ntri, t);
+    if (!st) st = region_run(f, &c, bf->quad_src, bf->quad_tag, bf->nquad, t);
+    if (!st) st = mx_afile_printf(f, "END REGION %d\n", t);
+  }
+  mx_free(cv);
+  return st;
+}
+
 /* ---- file ----------------------------------------------------------------- */
 
 static int write_body(mx_afile *f, const mx_mesh_view *m) {
@@ -145,7 +213,8 @@ static int write_body(mx_afile *f, const mx_mesh_view *m) {
   MX_CHECK(mx_afile_printf(f, "\nEND POINTS LIST\n\n\n\n"
                               "BEGIN MESH STRUCTURE DESCRIPTION\n\n"));
   MX_CHECK(mx_afile_emit(f, m->ncells, CONVEX_LINE_MAX, fill_convexes, m));
-  return mx_afile_printf(f, "\nEND MESH STRUCTURE DESCRIPTION\n");
+  MX_CHECK(mx_afile_printf(f, "\nEND MESH STRUCTURE DESCRIPTION\n"));
+  return write_regions(f, m);
 }
 
 int mx_write_getfem(const char *path, const mx_mesh_view *m) {
