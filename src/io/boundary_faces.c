@@ -43,6 +43,16 @@ static inline int face_nodes(const mx_mesh_view *m, size_t c, int f,
   return n;
 }
 
+/* 1 when every node of face f of element c is in the mask (no mask: 1). */
+static inline int face_kept(const mx_mesh_view *m, const uint8_t *mask, size_t c, int f) {
+  if (!mask) return 1;
+  uint32_t v[4];
+  const int n = face_nodes(m, c, f, v);
+  for (int j = 0; j < n; j++)
+    if (!mask[v[j]]) return 0;
+  return 1;
+}
+
 static inline uint32_t face_min_node(const mx_mesh_view *m, size_t c, int f) {
   uint32_t v[4];
   const int n = face_nodes(m, c, f, v);
@@ -129,7 +139,7 @@ static int too_large(const mx_mesh_view *m) {
 
 /* On return (MX_OK) *list_out holds all face slots, node v's being
  * list[end[v-1] .. end[v]) (end[-1] = 0); *end_out has nnodes entries. */
-static int file_faces(const mx_mesh_view *m, uint64_t **end_out,
+static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint64_t **end_out,
                       uint32_t **list_out, size_t *nfaces) {
   const size_t nn = m->nnodes, nc = m->ncells;
   uint64_t *pos = mx_calloc((nn + 1) * sizeof *pos);
@@ -138,6 +148,7 @@ static int file_faces(const mx_mesh_view *m, uint64_t **end_out,
   for (size_t c = 0; c < nc; c++) {
     const unsigned t = m->type[c];
     for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+      if (!face_kept(m, mask, c, f)) continue;
       const uint32_t v = face_min_node(m, c, f);
 #pragma omp atomic update
       pos[v]++;
@@ -154,6 +165,7 @@ static int file_faces(const mx_mesh_view *m, uint64_t **end_out,
   for (size_t c = 0; c < nc; c++) {
     const unsigned t = m->type[c];
     for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+      if (!face_kept(m, mask, c, f)) continue;
       const uint32_t v = face_min_node(m, c, f);
       uint64_t at;
 #pragma omp atomic capture
@@ -310,14 +322,21 @@ void mx_boundary_faces_free(mx_boundary_faces *bf) {
 }
 
 int mx_boundary_faces_extract(const mx_mesh_view *m, mx_boundary_faces *bf) {
+  return mx_boundary_faces_extract_masked(m, NULL, bf);
+}
+
+int mx_boundary_faces_extract_masked(const mx_mesh_view *m, const uint8_t *mask,
+                                     mx_boundary_faces *bf) {
   memset(bf, 0, sizeof *bf);
   if (m->ncells == 0) return MX_OK;
   if (too_large(m)) return MX_EINPUT;
   uint64_t *end = NULL;
   uint32_t *list = NULL;
   size_t nfaces = 0;
-  MX_CHECK(file_faces(m, &end, &list, &nfaces));
-  uint8_t *mult = mx_alloc(m->ncells * SLOTS * sizeof *mult);
+  MX_CHECK(file_faces(m, mask, &end, &list, &nfaces));
+  /* faces left out keep multiplicity 0: not boundary faces */
+  uint8_t *mult = mask ? mx_calloc(m->ncells * SLOTS * sizeof *mult)
+                       : mx_alloc(m->ncells * SLOTS * sizeof *mult);
   int st = mult ? count_uses(m, end, list, mult) : MX_EINPUT;
   mx_free(end);
   mx_free(list);

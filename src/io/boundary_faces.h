@@ -37,6 +37,12 @@ typedef struct mx_boundary_faces {
  * mx_mesh_view_check); cells are limited to 2^32 / 6. Returns MX_OK, or
  * MX_EINPUT with a message when memory runs out or the mesh is too large. */
 int mx_boundary_faces_extract(const mx_mesh_view *m, mx_boundary_faces *bf);
+/* The same among the faces whose nodes all have mask[node] != 0: the others
+ * are taken as interior (the caller knows no boundary face has such a node:
+ * the mesher's nodes far from the surface). Less work when the mask is
+ * sparse. */
+int mx_boundary_faces_extract_masked(const mx_mesh_view *m, const uint8_t *mask,
+                                     mx_boundary_faces *bf);
 void mx_boundary_faces_free(mx_boundary_faces *bf);
 
 /* flags[i] = 1 when node i lies on a boundary face, 0 otherwise (nnodes

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "kernels/boundary.h"
 #include "kernels/boundary_tags.h"
 #include "mesher/mesher_impl.h"
 #include "soa/mesh.h"
@@ -45,7 +46,24 @@ static void tags_free(tags *T) {
 static int make_tags(mx_mesher *m, const mx_mesh_view *v, tags *T) {
   memset(T, 0, sizeof *T);
   const mx_mesh_out *M = &m->M;
-  MX_CHECK(mx_boundary_faces_extract(v, &T->bf));
+  /* The boundary faces lie on the surface: their nodes are outside nodes
+   * (projected) or lattice nodes on the surface, which belong to leaves
+   * meeting the input (a leaf meeting none has its closed box inside the
+   * domain). Only faces with all nodes such are matched. */
+  uint8_t *near = mx_calloc(M->nnodes + 1);
+  if (!near) return MX_ENOMEM;
+  const mx_octree *O = &m->B.oct;
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++) {
+    const uint32_t *row = M->conn + 8 * c;
+    const int meets = O->tri_cnt[m->leaves[M->leaf[c]]] > 0;
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+      if (meets || (m->states && m->states[row[k]] == MX_NODE_OUTSIDE))
+        __atomic_store_n(&near[row[k]], 1, __ATOMIC_RELAXED);
+  }
+  int st = mx_boundary_faces_extract_masked(v, near, &T->bf);
+  mx_free(near);
+  MX_CHECK(st);
   T->cell_body = mx_alloc((M->ncells + 1) * sizeof *T->cell_body);
   T->node_tag = mx_alloc((M->nnodes + 1) * sizeof *T->node_tag);
   if (!T->cell_body || !T->node_tag) return MX_ENOMEM;
