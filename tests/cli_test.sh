@@ -277,6 +277,19 @@ expect_exit 2 "coordinates of size 1e-110 are refused" timeout 20 "$MIXOCT" -i "
 has "$T/err" "out of range" "tiny coordinates: said why"
 box_off "$T/huge.off" 1e160 1e160 1e160
 expect_exit 2 "coordinates of size 1e160 are refused" timeout 20 "$MIXOCT" -i "$T/huge.off" -s 3
+# --boundary: the tagged boundary faces in a .vtu of their own, asked before meshing
+expect_exit 0 "--boundary writes the boundary faces" "$MIXOCT" --demo -s 3 -o "$T/bd.msh" --boundary "$T/bd_faces.vtu" --quiet
+if [ -s "$T/bd_faces.vtu" ] && grep -q 'Name="surface_tag"' "$T/bd_faces.vtu" &&
+   grep -q 'NumberOfCells="[1-9]' "$T/bd_faces.vtu"; then
+  ok "the boundary file has faces and a surface_tag field"
+else
+  bad "the boundary file: $(head -c 300 "$T/bd_faces.vtu" 2>&1)"
+fi
+if grep -aq '^2 1 "demo"' "$T/bd.msh"; then ok "the .msh names the boundary tag after the input"; else bad "no physical group \"demo\" in the .msh"; fi
+expect_exit 2 "--boundary wants .vtu" "$MIXOCT" --demo -s 3 --boundary "$T/bd.msh"
+expect_exit 2 "--boundary needs the full stage" "$MIXOCT" --demo -s 3 --stage transition --boundary "$T/bd2.vtu"
+[ -e "$T/bd2.vtu" ] && bad "a refused --boundary wrote a file" || ok "a refused --boundary writes nothing"
+expect_exit 4 "--boundary into a missing directory fails before meshing" "$MIXOCT" --demo -s 3 --boundary "$T/no/dir/b.vtu"
 # SIGTERM while writing: no temporary left
 "$MIXOCT" --demo -s 7 -o "$T/sig.vtk" --ascii --quiet 2>/dev/null &
 pid=$!
