@@ -79,7 +79,13 @@ def read_getfem(path):
         assert int(tok[i + 1]) == len(cells)
         k = nodes[tok[i + 2]]
         cells.append([int(t) for t in tok[i + 3:i + 3 + k]]); i += 3 + k
-    assert tok[i:] == ["END", "MESH", "STRUCTURE", "DESCRIPTION"]
+    assert tok[i:i + 4] == ["END", "MESH", "STRUCTURE", "DESCRIPTION"]; i += 4
+    # then the boundary tags as regions: BEGIN REGION t, cv/f pairs, END REGION t
+    while i < len(tok):
+        assert tok[i:i + 2] == ["BEGIN", "REGION"]; t = tok[i + 2]; i += 3
+        while tok[i] != "END":
+            cv, f = tok[i].split("/"); assert 0 <= int(cv) < len(cells); i += 1
+        assert tok[i:i + 3] == ["END", "REGION", t]; i += 3
     return xyz, cells
 
 letters = {"T": 4, "P": 5, "R": 6, "H": 8}

@@ -142,7 +142,8 @@ int main(void) {
         on1 += fabs(mx_signed_distance(&S, b.M.xyz + 3 * v, NULL)) <= 1e-9 * diag;
       /* still conforming: removing whole elements and moving nodes keeps the
        * faces matched, nothing unused */
-      mx_mesh_data m = {b.M.nnodes, b.M.ncells, b.M.xyz, b.M.type, b.M.conn};
+      mx_mesh_data m = {.nnodes = b.M.nnodes, .ncells = b.M.ncells, .xyz = b.M.xyz,
+                        .type = b.M.type, .conn = b.M.conn};
       mx_check_report r;
       CHECK(mx_check_mesh(&m, NULL, &r) == MX_OK);
       printf("remove close (%d thread%s): %zu -> %zu nodes, %zu -> %zu elements, %zu moved, "

@@ -96,7 +96,8 @@ static void tm_free(tm *t) {
 }
 
 static mx_mesh_data tm_data(const tm *t) {
-  mx_mesh_data d = {t->nn, t->nc, t->xyz, t->type, t->conn};
+  mx_mesh_data d = {.nnodes = t->nn, .ncells = t->nc, .xyz = t->xyz, .type = t->type,
+                    .conn = t->conn};
   return d;
 }
 
@@ -586,7 +587,7 @@ static void test_round_trips(void) {
   free(pf);
   tm_free(&t);
   /* An empty mesh round-trips too. */
-  mx_mesh_data empty = {0, 0, NULL, NULL, NULL};
+  mx_mesh_data empty = {.nnodes = 0};
   mx_mesh_view ev = mx_mesh_data_view(&empty);
   for (int k = 0; k < 3; k++) {
     const char *p = tpath(k == 0 ? "e.vtu" : k == 1 ? "e.vtk" : "ea.vtk");
@@ -1657,6 +1658,12 @@ static void test_msh_medit(void) {
     if (m.ncells == 1)
       CHECK(m.conn[0] == 0 && m.conn[1] == 1 && m.conn[2] == 2 &&
             m.conn[3] == 3);
+    /* the triangle is a tagged face; no surface in $Entities: its tag is
+     * its entity's */
+    CHECK(m.nfaces == 1 && m.face_nn[0] == 3 && m.face_tag[0] == 1);
+    if (m.nfaces == 1)
+      CHECK(m.face_conn[0] == 0 && m.face_conn[1] == 2 &&
+            m.face_conn[2] == 1 && m.face_conn[3] == 0);
     mx_mesh_data_free(&m);
     const char *med =
         "# a comment\nMeshVersionFormatted 2\n\nDimension\n3\n"
@@ -1667,9 +1674,14 @@ static void test_msh_medit(void) {
     write_text(p, med);
     CHECK(mx_read_mesh(p, &m) == MX_OK);
     CHECK(m.nnodes == 4 && m.ncells == 1 && m.type && m.type[0] == MX_TET);
-    if (m.ncells == 1) {
+    CHECK(m.nfaces == 1 && m.face_tag && m.face_tag[0] == 7);
+    if (m.ncells == 1) { /* one boundary face of four is tagged */
       mx_check_report r;
-      CHECK(mx_check_mesh(&m, NULL, &r) == MX_OK && r.defects == 0);
+      CHECK(mx_check_mesh(&m, NULL, &r) == MX_OK);
+      CHECK(r.has_tagged_faces && r.tagged_faces == 1);
+      CHECK(r.tagged_not_boundary == 0 && r.boundary_untagged == 3);
+      CHECK(r.defects == 3 && r.untagged_ids.n == 1 &&
+            r.untagged_ids.id[0] == 0);
     }
     mx_mesh_data_free(&m);
   }
@@ -1813,7 +1825,10 @@ static void test_program(void) {
            "geometric_hanging_nodes unused_nodes duplicate_nodes volume "
            "surface_volume volume_error boundary_max_dist surface_open_edges "
            "volume_off boundary_off_surface tolerances defective_elements "
-           "defective_nodes geometric_hanging_at defects'.split()); "
+           "defective_nodes geometric_hanging_at tagged_not_boundary "
+           "boundary_untagged tagged_faces boundary_tags boundary_node_tags "
+           "defective_faces defects'.split()); "
+           "assert d['boundary_tags'] == [] and d['tagged_faces'] == 0; "
            "e = d['defective_elements']; "
            "assert e['faces_overshared'] == [0, 1, 2], e; "
            "assert e['faces_misoriented'] == [0, 2], e; "
@@ -1830,7 +1845,7 @@ static void test_program(void) {
   off = offp;
   out = outp;
   /* Strict JSON (no NaN or Infinity) for an empty mesh: a defect, nulls. */
-  mx_mesh_data empty = {0, 0, NULL, NULL, NULL};
+  mx_mesh_data empty = {.nnodes = 0};
   mx_mesh_view ev = mx_mesh_data_view(&empty);
   CHECK(mx_write_vtu(emp, &ev) == MX_OK);
   static const char strict[] =
@@ -1901,6 +1916,433 @@ static void test_program(void) {
   CHECK(run(cmd) == 2);
 }
 
+/* ====================================================================== */
+/* Boundary tags (issue 11): the readers' tagged faces and node tags, the */
+/* checker's tag counts and defects, `mixoct check` on mixoct's files     */
+/* ====================================================================== */
+
+/* Two unit cubes side by side (x from 0 to 2) as hexahedra, with Medit
+ * Quadrilaterals for all their boundary faces but the one at x = 2, and for
+ * the face they share at x = 1 (the 10th, index 9): a tagged face that is
+ * interior and an untagged boundary face (of element 1). Tag 1 on the first
+ * cube's faces, 2 on the second's. */
+static const char bad_tags_mesh[] =
+    "MeshVersionFormatted 2\nDimension 3\nVertices\n12\n"
+    "0 0 0 0\n1 0 0 0\n2 0 0 0\n0 1 0 0\n1 1 0 0\n2 1 0 0\n"
+    "0 0 1 0\n1 0 1 0\n2 0 1 0\n0 1 1 0\n1 1 1 0\n2 1 1 0\n"
+    "Hexahedra\n2\n1 2 5 4 7 8 11 10 1\n2 3 6 5 8 9 12 11 1\n"
+    "Quadrilaterals\n10\n"
+    "1 4 10 7 1\n1 2 8 7 1\n4 5 11 10 1\n1 2 5 4 1\n7 8 11 10 1\n"
+    "2 3 9 8 2\n5 6 12 11 2\n2 3 6 5 2\n8 9 12 11 2\n2 5 11 8 2\n"
+    "End\n";
+
+/* A tetrahedron in MSH 4.1 with three of its faces on surface entity 5
+ * (physical tag 7, a name with quotes, a backslash, an e-acute and a byte
+ * that is not UTF-8) and one on entity 6 (no physical tag: tag 6). */
+static const char tagged_msh[] =
+    "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+    "$PhysicalNames\n3\n2 7 \"outer \"q\" \\ \xc3\xa9\xff\"\n2 8 \"unused\"\n"
+    "3 1 \"volume 1\"\n$EndPhysicalNames\n"
+    "$Entities\n0 0 2 1\n5 0 0 0 1 1 1 1 7 0\n6 0 0 0 1 1 1 0 0\n"
+    "1 0 0 0 1 1 1 1 1 2 5 -6\n$EndEntities\n"
+    "$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+    "$EndNodes\n"
+    "$Elements\n3 5 1 5\n3 1 4 1\n1 1 2 3 4\n"
+    "2 5 2 3\n2 1 3 2\n3 1 2 4\n4 2 3 4\n2 6 2 1\n5 1 4 3\n$EndElements\n";
+
+/* Legacy VTK: attributes to step over, then the point field surface_tag. */
+static const char tagged_vtk[] =
+    "# vtk DataFile Version 3.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+    "POINTS 4 double\n0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n4 0 1 2 3\n"
+    "CELL_TYPES 1\n10\nCELL_DATA 1\nSCALARS body int 1\n"
+    "LOOKUP_TABLE default\n1\nVECTORS v float\n1 2 3\nPOINT_DATA 4\n"
+    "FIELD FieldData 1\nx 2 4 float\n0 0 0 0 0 0 0 0\n"
+    "SCALARS surface_tag int\nLOOKUP_TABLE default\n3 0 3 -2\n";
+
+/* A GetFEM tetrahedron followed by `regions`. */
+static char *getfem_tet(const char *regions) {
+  static char buf[1024];
+  snprintf(buf, sizeof buf,
+           "BEGIN POINTS LIST\nPOINT 0 0 0 0\nPOINT 1 1 0 0\nPOINT 2 0 1 0\n"
+           "POINT 3 0 0 1\nEND POINTS LIST\nBEGIN MESH STRUCTURE DESCRIPTION\n"
+           "CONVEX 0 'GT_PK(3,1)' 0 1 2 3\nEND MESH STRUCTURE DESCRIPTION\n%s",
+           regions);
+  return buf;
+}
+
+/* The checked tags of a mesh file (MX_OK or the reader's status). */
+static int check_file_tags(const char *p, mx_check_report *r,
+                           mx_check_tags *t) {
+  mx_mesh_data m;
+  memset(t, 0, sizeof *t);
+  int st = mx_read_mesh(p, &m);
+  if (st == MX_OK) st = mx_check_mesh_tags(&m, NULL, NULL, r, t);
+  mx_mesh_data_free(&m);
+  return st;
+}
+
+static void test_tag_readers(void) {
+  /* MSH: faces of dimension 2 with their entities' physical tags, names. */
+  const char *p = tpath("tagged.msh");
+  write_text(p, tagged_msh);
+  mx_mesh_data m;
+  CHECK(mx_read_mesh(p, &m) == MX_OK);
+  CHECK(m.ncells == 1 && m.nfaces == 4);
+  if (m.nfaces == 4) {
+    static const uint32_t want[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+    for (int f = 0; f < 4; f++) {
+      CHECK(m.face_nn[f] == 3 && m.face_tag[f] == (f < 3 ? 7 : 6));
+      CHECK(m.face_conn[4 * f + 3] == 0);
+      for (int j = 0; j < 3; j++) CHECK(m.face_conn[4 * f + j] == want[f][j]);
+    }
+  }
+  CHECK(m.nnames == 2 && m.name_tag && m.name_tag[0] == 7 && m.name_tag[1] == 8);
+  if (m.nnames == 2) {
+    CHECK(strcmp(m.name[0], "outer \"q\" \\ \xc3\xa9\xff") == 0);
+    CHECK(strcmp(m.name[1], "unused") == 0);
+  }
+  mx_check_report r;
+  mx_check_tags t;
+  CHECK(mx_check_mesh_tags(&m, NULL, NULL, &r, &t) == MX_OK);
+  CHECK(r.defects == 0 && r.tagged_faces == 4 && r.faces_boundary == 4);
+  CHECK(t.nface_tags == 2 && t.nnode_tags == 0);
+  if (t.nface_tags == 2) {
+    const mx_check_tag *a = &t.face_tags[0], *b = &t.face_tags[1];
+    CHECK(a->tag == 6 && a->name == NULL && a->triangles == 1 && a->quads == 0);
+    CHECK(a->open_edges == 3 && a->not_boundary == 0);
+    CHECK(b->tag == 7 && b->name && strcmp(b->name, m.name[0]) == 0);
+    CHECK(b->triangles == 3 && b->open_edges == 3);
+  }
+  mx_check_tags_free(&t);
+  mx_mesh_data_free(&m);
+  /* The same mesh without $Entities: the entity tags are the tags. */
+  {
+    char *txt = strdup(tagged_msh);
+    char *a = strstr(txt, "$Entities"), *b = strstr(txt, "$Nodes");
+    memmove(a, b, strlen(b) + 1);
+    p = tpath("noent.msh");
+    write_text(p, txt);
+    free(txt);
+    CHECK(mx_read_mesh(p, &m) == MX_OK);
+    CHECK(m.nfaces == 4 && m.face_tag[0] == 5 && m.face_tag[3] == 6);
+    mx_mesh_data_free(&m);
+  }
+  /* Medit: an interior tagged face and an untagged boundary face. */
+  p = tpath("badtags.mesh");
+  write_text(p, bad_tags_mesh);
+  CHECK(check_file_tags(p, &r, &t) == MX_OK);
+  CHECK(r.faces_boundary == 10 && r.tagged_faces == 10);
+  CHECK(r.tagged_not_boundary == 1 && r.boundary_untagged == 1);
+  CHECK(r.defects == 2);
+  CHECK(r.not_boundary_ids.n == 1 && r.not_boundary_ids.id[0] == 9);
+  CHECK(r.untagged_ids.n == 1 && r.untagged_ids.id[0] == 1);
+  CHECK(t.nface_tags == 2);
+  if (t.nface_tags == 2) {
+    CHECK(t.face_tags[0].tag == 1 && t.face_tags[0].quads == 5);
+    CHECK(t.face_tags[0].open_edges == 4 && t.face_tags[0].not_boundary == 0);
+    CHECK(t.face_tags[1].tag == 2 && t.face_tags[1].quads == 5);
+    CHECK(t.face_tags[1].open_edges == 4 && t.face_tags[1].not_boundary == 1);
+  }
+  mx_check_tags_free(&t);
+  /* GetFEM regions: "cv/f" is a face in GetFEM's numbering, "cv" a whole
+   * convex (skipped); faces of a hexahedron where the writer's table puts
+   * them (GetFEM face 2k: coordinate k = 1, 2k + 1: coordinate k = 0). */
+  {
+    tm h = {0};
+    box_hex(&h, 0, 0, 0, 1, 1, 1);
+    mx_mesh_data d = tm_data(&h);
+    mx_mesh_view v = mx_mesh_data_view(&d);
+    p = tpath("regions.getfem");
+    CHECK(mx_write_getfem(p, &v) == MX_OK);
+    FILE *f = fopen(p, "a");
+    fputs("BEGIN REGION 3\n 0/0 0/1 0 0/2\n0/3\nEND REGION 3\n"
+          "BEGIN BOUNDARY 5\n0/4 0/5\nEND BOUNDARY 5\n",
+          f);
+    fclose(f);
+    CHECK(mx_read_mesh(p, &m) == MX_OK);
+    CHECK(m.nfaces == 6);
+    for (size_t k = 0; k < m.nfaces && m.nfaces == 6; k++) {
+      CHECK(m.face_nn[k] == 4 && m.face_tag[k] == (k < 4 ? 3 : 5));
+      const int axis = (int)k / 2;
+      const double at = k % 2 ? 0.0 : 1.0;
+      for (int j = 0; j < 4; j++)
+        CHECK(m.xyz[3 * m.face_conn[4 * k + j] + axis] == at);
+    }
+    mx_mesh_data_free(&m);
+    tm_free(&h);
+  }
+  p = tpath("tet.getfem");
+  write_text(p, getfem_tet("BEGIN REGION 0\n0/0 0/1 0/2 0/3\nEND REGION 0\n"
+                           "% what follows the regions is ignored\n"));
+  CHECK(check_file_tags(p, &r, &t) == MX_OK);
+  CHECK(r.defects == 0 && r.tagged_faces == 4 && t.nface_tags == 1);
+  if (t.nface_tags == 1)
+    CHECK(t.face_tags[0].tag == 0 && t.face_tags[0].triangles == 4 &&
+          t.face_tags[0].open_edges == 0);
+  mx_check_tags_free(&t);
+  /* VTK: the point field surface_tag after other attributes. */
+  p = tpath("tagged.vtk");
+  write_text(p, tagged_vtk);
+  CHECK(mx_read_mesh(p, &m) == MX_OK);
+  CHECK(m.node_tag && m.nfaces == 0);
+  if (m.node_tag)
+    CHECK(m.node_tag[0] == 3 && m.node_tag[1] == 0 && m.node_tag[2] == 3 &&
+          m.node_tag[3] == -2);
+  CHECK(mx_check_mesh_tags(&m, NULL, NULL, &r, &t) == MX_OK);
+  CHECK(r.has_node_tags && !r.has_tagged_faces && r.defects == 0);
+  CHECK(t.nnode_tags == 2 && t.nface_tags == 0);
+  if (t.nnode_tags == 2)
+    CHECK(t.node_tags[0].tag == -2 && t.node_tags[0].nodes == 1 &&
+          t.node_tags[1].tag == 3 && t.node_tags[1].nodes == 2);
+  mx_check_tags_free(&t);
+  mx_mesh_data_free(&m);
+  /* Errors name the file and the place. */
+  expect_error("face.getfem", getfem_tet("BEGIN REGION 3\n0/4\nEND REGION 3\n"),
+               ":11: error: region 3: convex 0 ('GT_PK(3,1)') has no face 4");
+  expect_error("cv.getfem", getfem_tet("BEGIN REGION 3\n1/0\nEND REGION 3\n"),
+               ":11: error: region 3: convex 1 out of range");
+  expect_error("noend.getfem", getfem_tet("BEGIN REGION 3\n0/1\n"),
+               ":12: error: region 3: no END REGION");
+  expect_error("tri.mesh",
+               "MeshVersionFormatted 2\nDimension 3\nVertices\n1\n0 0 0 0\n"
+               "Triangles\n1\n1 1 9 3\nEnd\n",
+               ": error: triangle 0: vertex 9 out of range (1 vertices");
+  expect_error("ref.mesh",
+               "MeshVersionFormatted 2\nDimension 3\nVertices\n1\n0 0 0 0\n"
+               "Triangles\n1\n1 1 1 3000000000\nEnd\n",
+               ":8: error: reference 3000000000 is out of range");
+  expect_error("face.msh",
+               "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 1 1 1\n"
+               "3 1 0 1\n1\n0 0 0\n$EndNodes\n$Elements\n1 1 1 1\n"
+               "2 1 2 1\n1 1 1 9\n$EndElements\n",
+               ":13: error: element 1: node tag 9 is not a node");
+  expect_error("name.msh",
+               "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n"
+               "2 1 name\n$EndPhysicalNames\n",
+               ":6: error: $PhysicalNames: name 0 is not in double quotes");
+  expect_error("tag.vtk",
+               "# vtk DataFile Version 3.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+               "POINTS 1 double\n0 0 0\nCELLS 0 0\nCELL_TYPES 0\nPOINT_DATA 1\n"
+               "SCALARS surface_tag int 1\nLOOKUP_TABLE default\n\n",
+               ":13: error: surface_tag: expected 1 values, found 0");
+}
+
+/* A sphere as OFF: the octahedron's faces cut into n x n triangles each,
+ * their lattice points pushed onto the sphere of radius r about c; outward
+ * oriented, or inward. */
+static void write_sphere(const char *path, double r, const double c[3], int n,
+                         int inward) {
+  const int w = 2 * n + 1;
+  int *id = malloc((size_t)w * w * w * sizeof *id);
+  double *xyz = malloc((size_t)w * w * w * 3 * sizeof *xyz);
+  int *tri = malloc((size_t)8 * n * n * 3 * sizeof *tri);
+  for (int i = 0; i < w * w * w; i++) id[i] = -1;
+  int nv = 0, nt = 0;
+  for (int s = 0; s < 8; s++) {
+    const int sx = s & 1 ? -1 : 1, sy = s & 2 ? -1 : 1, sz = s & 4 ? -1 : 1;
+    const int flip = (sx * sy * sz < 0) != (inward != 0);
+    int at[64][64];
+    for (int i = 0; i <= n; i++)
+      for (int j = 0; i + j <= n; j++) {
+        const int L[3] = {sx * (n - i - j), sy * i, sz * j};
+        int *slot = &id[((L[0] + n) * w + L[1] + n) * w + L[2] + n];
+        if (*slot < 0) {
+          const double len = sqrt((double)(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]));
+          for (int a = 0; a < 3; a++) xyz[3 * nv + a] = c[a] + r * L[a] / len;
+          *slot = nv++;
+        }
+        at[i][j] = *slot;
+      }
+    for (int i = 0; i < n; i++)
+      for (int j = 0; i + j < n; j++) {
+        const int t1[3] = {at[i][j], at[i + 1][j], at[i][j + 1]};
+        for (int k = 0; k < 3; k++) tri[3 * nt + k] = t1[flip && k ? 3 - k : k];
+        nt++;
+        if (i + j < n - 1) {
+          const int t2[3] = {at[i + 1][j], at[i + 1][j + 1], at[i][j + 1]};
+          for (int k = 0; k < 3; k++) tri[3 * nt + k] = t2[flip && k ? 3 - k : k];
+          nt++;
+        }
+      }
+  }
+  FILE *f = fopen(path, "w");
+  fprintf(f, "OFF\n%d %d 0\n", nv, nt);
+  for (int i = 0; i < nv; i++)
+    fprintf(f, "%.17g %.17g %.17g\n", xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+  for (int i = 0; i < nt; i++)
+    fprintf(f, "3 %d %d %d\n", tri[3 * i], tri[3 * i + 1], tri[3 * i + 2]);
+  fclose(f);
+  free(id);
+  free(xyz);
+  free(tri);
+}
+
+/* `mixoct check --json` on mixoct's own files, parsed by python3: every
+ * file of argv[3:] ("-" before the files that carry node tags) must report
+ * the tags 1..n with the same counts, closed, no tag defect, and as many
+ * tagged faces as boundary faces; argv[2]: the tag names expected in MSH
+ * files (comma-separated). Prints one line per tag. */
+static const char tags_py[] =
+    "import json, subprocess, sys\n"
+    "mixoct, names, files = sys.argv[1], sys.argv[2].split(','), sys.argv[3:]\n"
+    "def check(path):\n"
+    "    p = subprocess.run([mixoct, 'check', path, '--json'], capture_output=True)\n"
+    "    assert p.returncode == 0, (path, p.returncode, p.stderr)\n"
+    "    return json.loads(p.stdout.decode().splitlines()[-1])\n"
+    "faces = nodes = None\n"
+    "node_files = False\n"
+    "for f in files:\n"
+    "    if f == '-':\n"
+    "        node_files = True\n"
+    "        continue\n"
+    "    d = check(f)\n"
+    "    assert d['defects'] == 0 and d['tagged_not_boundary'] == 0, (f, d)\n"
+    "    assert d['boundary_untagged'] == 0, (f, d)\n"
+    "    if node_files:\n"
+    "        assert d['boundary_tags'] == [] and d['tagged_faces'] == 0, f\n"
+    "        got = [(t['tag'], t['nodes']) for t in d['boundary_node_tags']]\n"
+    "        assert [t for t, n in got] == list(range(1, len(names) + 1)), (f, got)\n"
+    "        assert nodes is None or got == nodes, (f, got, nodes)\n"
+    "        nodes = got\n"
+    "        print('%s: node tags %s' % (f.split('/')[-1], got))\n"
+    "        continue\n"
+    "    tags = d['boundary_tags']\n"
+    "    got = [(t['tag'], t['triangles'], t['quads']) for t in tags]\n"
+    "    assert [t[0] for t in got] == list(range(1, len(names) + 1)), (f, got)\n"
+    "    assert all(t['open_edges'] == 0 and t['not_boundary'] == 0 for t in tags), (f, tags)\n"
+    "    assert sum(t[1] + t[2] for t in got) == d['tagged_faces'] == d['faces_boundary'], (f, d)\n"
+    "    want = names if f.endswith('.msh') else [None] * len(names)\n"
+    "    assert [t['name'] for t in tags] == want, (f, tags)\n"
+    "    assert faces is None or got == faces, (f, got, faces)\n"
+    "    faces = got\n"
+    "    for t in tags:\n"
+    "        print('%s: tag %d %s: %d triangles, %d quads, open edges %d' % (f.split('/')[-1], t['tag'], t['name'], t['triangles'], t['quads'], t['open_edges']))\n";
+
+/* The bad file and the MSH names through `mixoct check --json`. */
+static const char bad_py[] =
+    "import json, subprocess, sys\n"
+    "mixoct, bad, named = sys.argv[1:4]\n"
+    "p = subprocess.run([mixoct, 'check', bad, '--json'], capture_output=True)\n"
+    "assert p.returncode == 3, p\n"
+    "d = json.loads(p.stdout.decode().splitlines()[-1])\n"
+    "assert d['tagged_not_boundary'] == 1 and d['boundary_untagged'] == 1, d\n"
+    "assert d['defects'] == 2 and d['tagged_faces'] == 10, d\n"
+    "assert d['defective_faces'] == {'tagged_not_boundary': [9]}, d\n"
+    "assert d['defective_elements']['boundary_untagged'] == [1], d\n"
+    "assert [(t['tag'], t['quads'], t['open_edges'], t['not_boundary']) for t in "
+    "d['boundary_tags']] == [(1, 5, 4, 0), (2, 5, 4, 1)], d\n"
+    "p = subprocess.run([mixoct, 'check', named, '--json'], capture_output=True)\n"
+    "assert p.returncode == 0, p\n"
+    "d = json.loads(p.stdout.decode('utf-8'), parse_constant=lambda c: 1 / 0)\n"
+    "assert [t['name'] for t in d['boundary_tags']] == [None, 'outer \"q\" \\\\ \\u00e9\\ufffd'], d\n";
+
+/* Meshes of one input and of three (a hollow ball: a sphere with a smaller
+ * one inside it, inward; and a sphere beside them), written by mixoct in
+ * every format with boundary tags, read back and checked: the same tags
+ * with the same counts everywhere, every tag closed, every tagged face a
+ * boundary face and every boundary face tagged. */
+static void test_tags_program(void) {
+  if (access(mixoct, X_OK) != 0) {
+    fprintf(stderr, "%s not found: tag program tests skipped\n", mixoct);
+    CHECK(0);
+    return;
+  }
+  char sph[256], in[256], far[256];
+  snprintf(sph, sizeof sph, "%s", tpath("ball.off"));
+  snprintf(in, sizeof in, "%s", tpath("cavity.off"));
+  snprintf(far, sizeof far, "%s", tpath("beside.off"));
+  const double c[3] = {0.013, 0.021, -0.017}, c2[3] = {3.013, 0.021, -0.017};
+  write_sphere(sph, 1.0, c, 8, 0);
+  write_sphere(in, 0.5, c, 6, 1);
+  write_sphere(far, 1.0, c2, 8, 0);
+  static const char *const face_ext[] = {"msh", "mesh", "meshb", "getfem"};
+  char cmd[8192];
+  for (int three = 0; three < 2; three++) {
+    char base[256], files[4096] = "", nfiles[1024] = "";
+    snprintf(base, sizeof base, "%s", tpath(three ? "three" : "one"));
+    int n = snprintf(cmd, sizeof cmd, "'%s' -i '%s'", mixoct, sph);
+    if (three) n += snprintf(cmd + n, sizeof cmd - (size_t)n, " -i '%s' -i '%s'", in, far);
+    n += snprintf(cmd + n, sizeof cmd - (size_t)n, " -s 4 --quiet");
+    const int n0 = n;
+    for (int k = 0; k < 4; k++) {
+      n += snprintf(cmd + n, sizeof cmd - (size_t)n, " -o '%s.%s'", base, face_ext[k]);
+      snprintf(files + strlen(files), sizeof files - strlen(files), " '%s.%s'", base,
+               face_ext[k]);
+    }
+    n += snprintf(cmd + n, sizeof cmd - (size_t)n, " -o '%s.vtu' -o '%s.vtk'", base, base);
+    snprintf(nfiles, sizeof nfiles, " '%s.vtu' '%s.vtk' '%s_a.vtk'", base, base, base);
+    CHECK(run(cmd) == 0);
+    snprintf(cmd + n0, sizeof cmd - (size_t)n0, " --ascii -o '%s_a.msh' -o '%s_a.vtk'", base,
+             base);
+    CHECK(run(cmd) == 0);
+    snprintf(files + strlen(files), sizeof files - strlen(files), " '%s_a.msh'", base);
+    /* Read back here: the same counts in every format. */
+    const int ntags = three ? 3 : 1;
+    size_t want[4][2] = {{0}};
+    const char *names[3] = {"ball.off", "cavity.off", "beside.off"};
+    for (int k = 0; k < 5; k++) {
+      char p[300];
+      snprintf(p, sizeof p, "%s%s.%s", base, k == 4 ? "_a" : "", k == 4 ? "msh" : face_ext[k]);
+      mx_check_report r;
+      mx_check_tags t;
+      CHECK(check_file_tags(p, &r, &t) == MX_OK);
+      CHECK(r.defects == 0 && r.tagged_not_boundary == 0 && r.boundary_untagged == 0);
+      CHECK(r.tagged_faces == r.faces_boundary && r.faces_boundary > 0);
+      CHECK(t.nface_tags == (size_t)ntags);
+      size_t sum = 0;
+      for (size_t i = 0; i < t.nface_tags && t.nface_tags == (size_t)ntags; i++) {
+        const mx_check_tag *g = &t.face_tags[i];
+        CHECK(g->tag == (int32_t)i + 1 && g->open_edges == 0 && g->not_boundary == 0);
+        CHECK(g->triangles + g->quads > 0);
+        if (k == 0) {
+          want[i][0] = g->triangles;
+          want[i][1] = g->quads;
+        }
+        CHECK(g->triangles == want[i][0] && g->quads == want[i][1]);
+        if (k == 0 || k == 4)
+          CHECK(g->name && strcmp(g->name, names[i]) == 0);
+        else
+          CHECK(g->name == NULL);
+        sum += g->triangles + g->quads;
+      }
+      CHECK(sum == r.faces_boundary);
+      mx_check_tags_free(&t);
+    }
+    if (run("python3 -c pass") != 0) {
+      fprintf(stderr, "python3 not found: tags in JSON not checked\n");
+      continue;
+    }
+    const char *py = tpath("tags.py");
+    write_text(py, tags_py);
+    snprintf(cmd, sizeof cmd, "python3 '%s' '%s' '%s' %s -%s", py, mixoct,
+             three ? "ball.off,cavity.off,beside.off" : "ball.off", files, nfiles);
+    CHECK(run(cmd) == 0);
+  }
+  if (run("python3 -c pass") != 0) return;
+  char bad[256], named[256], py[256];
+  snprintf(bad, sizeof bad, "%s", tpath("badtags.mesh"));
+  snprintf(named, sizeof named, "%s", tpath("named.msh"));
+  snprintf(py, sizeof py, "%s", tpath("bad.py"));
+  write_text(bad, bad_tags_mesh);
+  write_text(named, tagged_msh);
+  write_text(py, bad_py);
+  snprintf(cmd, sizeof cmd, "python3 '%s' '%s' '%s' '%s'", py, mixoct, bad, named);
+  CHECK(run(cmd) == 0);
+  /* The text report names the defects. */
+  const char *out = tpath("tags.txt");
+  snprintf(cmd, sizeof cmd, "'%s' check '%s' > '%s' 2>&1", mixoct, bad, out);
+  CHECK(run(cmd) == 3);
+  size_t len;
+  char *txt = slurp(out, &len);
+  CHECK(txt && strstr(txt, "boundary tags          2 tags, 10 faces (0 triangles, 10 "
+                           "quadrilaterals)") &&
+        strstr(txt, "    tag 2: 0 triangles, 5 quadrilaterals, 4 open edges (not "
+                    "closed), 1 not on the boundary") &&
+        strstr(txt, "tagged not boundary      1   <-- defect") &&
+        strstr(txt, "boundary untagged        1   <-- defect"));
+  free(txt);
+}
+
 /* Reading and checking an n^3 hexahedral grid written as VTU. */
 static void test_speed(size_t n) {
   tm t = {0};
@@ -1956,8 +2398,14 @@ int main(int argc, char **argv) {
   test_volume();
   test_huge_counts();
   test_msh_medit();
+  double t0 = mx_wtime();
+  test_tag_readers();
+  const double t_tags = mx_wtime() - t0;
   test_threads();
   test_program();
+  t0 = mx_wtime();
+  test_tags_program();
+  printf("boundary tags: readers %.2f s, program %.2f s\n", t_tags, mx_wtime() - t0);
   if (!small_only) test_speed(100);
   char cmd[128];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);

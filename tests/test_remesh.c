@@ -72,8 +72,8 @@ static size_t s_elements(const mx_mesher *m) {
 static int mesh_is_valid(const mx_mesher *m) {
   mx_mesh_arrays a;
   if (mx_mesher_mesh_arrays(m, &a)) return 0;
-  mx_mesh_data d = {a.nnodes, a.nelements, (double *)a.xyz, (uint8_t *)a.type,
-                    (uint32_t *)a.conn};
+  mx_mesh_data d = {.nnodes = a.nnodes, .ncells = a.nelements, .xyz = (double *)a.xyz,
+                    .type = (uint8_t *)a.type, .conn = (uint32_t *)a.conn};
   mx_check_report r;
   if (mx_check_mesh(&d, NULL, &r) != MX_OK) return 0;
   if (r.defects)

@@ -49,7 +49,8 @@ static size_t check_case(const char *what, const mx_trisoup *s, uint32_t ntd,
     CHECK(memcmp(A.conn, C.conn, 8 * A.ncells * sizeof *A.conn) == 0);
     CHECK(memcmp(A.type, C.type, A.ncells) == 0);
   }
-  mx_mesh_data m = {A.nnodes, A.ncells, A.xyz, A.type, A.conn};
+  mx_mesh_data m = {.nnodes = A.nnodes, .ncells = A.ncells, .xyz = A.xyz, .type = A.type,
+                    .conn = A.conn};
   mx_check_report r;
   CHECK(mx_check_mesh(&m, NULL, &r) == MX_OK);
   printf("%-28s %8zu elements, %7zu nodes: defects %zu (open edges %zu, "

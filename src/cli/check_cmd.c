@@ -11,6 +11,16 @@
  * numbers are null; the ids per kind in "defective_elements" and
  * "defective_nodes"); --quiet prints nothing but errors (and the JSON object
  * when --json is given) and silences warnings.
+ * Boundary tags (kernels/check.h), when the mesh has them: a "boundary
+ * tags" block (per tag: name, triangles, quadrilaterals, whether its faces
+ * close up) and the two tag defects; in JSON the counters
+ * "tagged_not_boundary" and "boundary_untagged" with the other defects,
+ * and after the tolerances "tagged_faces", "boundary_tags" (objects "tag",
+ * "name" (null when unnamed), "triangles", "quads", "open_edges",
+ * "not_boundary"), "boundary_node_tags" (objects "tag", "name", "nodes":
+ * the point field surface_tag of VTK files; tag 0, inside, is left out),
+ * and "defective_faces" ("tagged_not_boundary": indices in the file's
+ * list of tagged faces); every array empty without tags.
  * Exit codes: 0 no defect, 3 defects found, 2 bad input or usage (the
  * message names the file), 1 internal failure. */
 #include <math.h>
@@ -74,9 +84,76 @@ static void json_ids(const char *key, const mx_check_ids *l, int last) {
   printf("]%s", last ? "" : ",");
 }
 
+/* A JSON string: quotes, backslashes and control characters escaped,
+ * bytes that are not UTF-8 replaced by U+FFFD; null for NULL. */
+static void json_str(const char *s) {
+  if (!s) {
+    printf("null");
+    return;
+  }
+  putchar('"');
+  const unsigned char *p = (const unsigned char *)s;
+  while (*p) {
+    const unsigned c = *p;
+    if (c == '"' || c == '\\') {
+      printf("\\%c", c);
+      p++;
+      continue;
+    }
+    if (c < 0x20) {
+      printf("\\u%04x", c);
+      p++;
+      continue;
+    }
+    if (c < 0x80) {
+      putchar((int)c);
+      p++;
+      continue;
+    }
+    /* a UTF-8 sequence: its length from the lead byte, continuation bytes
+     * 10xxxxxx, no overlong form, no surrogate, at most U+10FFFF */
+    const int n = c >= 0xC2 && c <= 0xDF ? 2 : c >= 0xE0 && c <= 0xEF ? 3
+                  : c >= 0xF0 && c <= 0xF4 ? 4 : 0;
+    int ok = n > 0;
+    for (int k = 1; ok && k < n; k++) ok = (p[k] & 0xC0) == 0x80;
+    if (ok && n == 3)
+      ok = !(c == 0xE0 && p[1] < 0xA0) && !(c == 0xED && p[1] >= 0xA0);
+    if (ok && n == 4)
+      ok = !(c == 0xF0 && p[1] < 0x90) && !(c == 0xF4 && p[1] >= 0x90);
+    if (!ok) {
+      printf("\\ufffd");
+      p++;
+      continue;
+    }
+    fwrite(p, 1, (size_t)n, stdout);
+    p += n;
+  }
+  putchar('"');
+}
+
 static const char *const on_word[4] = {"?", "vertex", "edge", "face"};
 
-static void print_json(const mx_check_report *r) {
+static void json_tags(const mx_check_tags *t) {
+  printf("\"boundary_tags\":[");
+  for (size_t i = 0; i < t->nface_tags; i++) {
+    const mx_check_tag *g = &t->face_tags[i];
+    printf("%s{\"tag\":%d,\"name\":", i ? "," : "", g->tag);
+    json_str(g->name);
+    printf(",\"triangles\":%zu,\"quads\":%zu,\"open_edges\":%zu,"
+           "\"not_boundary\":%zu}",
+           g->triangles, g->quads, g->open_edges, g->not_boundary);
+  }
+  printf("],\"boundary_node_tags\":[");
+  for (size_t i = 0; i < t->nnode_tags; i++) {
+    const mx_check_tag *g = &t->node_tags[i];
+    printf("%s{\"tag\":%d,\"name\":", i ? "," : "", g->tag);
+    json_str(g->name);
+    printf(",\"nodes\":%zu}", g->nodes);
+  }
+  printf("],");
+}
+
+static void print_json(const mx_check_report *r, const mx_check_tags *t) {
   printf("{\"nodes\":%zu,\"elements\":%zu,", r->nodes, r->elements);
   printf("\"by_type\":{\"hex\":%zu,\"prism\":%zu,\"pyramid\":%zu,\"tet\":%zu},",
          r->by_type[MX_HEX], r->by_type[MX_PRISM], r->by_type[MX_PYRAMID],
@@ -105,6 +182,8 @@ static void print_json(const mx_check_report *r) {
     printf("\"surface_open_edges\":null,");
   printf("\"volume_off\":%zu,\"boundary_off_surface\":%zu,", r->volume_off,
          r->boundary_off_surface);
+  printf("\"tagged_not_boundary\":%zu,\"boundary_untagged\":%zu,",
+         r->tagged_not_boundary, r->boundary_untagged);
   printf("\"tolerances\":{");
   json_num("degenerate_jens", r->opt.degenerate_below, 0);
   json_num("hanging", r->opt.hang_tol, 0);
@@ -112,8 +191,8 @@ static void print_json(const mx_check_report *r) {
   json_num("boundary_dist", r->opt.boundary_tol, 1);
   printf("},\"defective_elements\":{");
   for (int k = 0; k < MX_CK_ELEM_KINDS; k++)
-    json_ids(mx_check_elem_kind_name[k], &r->elem_ids[k],
-             k == MX_CK_ELEM_KINDS - 1);
+    json_ids(mx_check_elem_kind_name[k], &r->elem_ids[k], 0);
+  json_ids("boundary_untagged", &r->untagged_ids, 1);
   printf("},\"defective_nodes\":{");
   for (int k = 0; k < MX_CK_NODE_KINDS; k++)
     json_ids(mx_check_node_kind_name[k], &r->node_ids[k],
@@ -132,7 +211,11 @@ static void print_json(const mx_check_report *r) {
       printf(k ? ",%u" : "%u", h->verts[k]);
     printf("]}");
   }
-  printf("],\"defects\":%zu}\n", r->defects);
+  printf("],\"tagged_faces\":%zu,", r->tagged_faces);
+  json_tags(t);
+  printf("\"defective_faces\":{");
+  json_ids("tagged_not_boundary", &r->not_boundary_ids, 1);
+  printf("},\"defects\":%zu}\n", r->defects);
 }
 
 /* ---- text ---------------------------------------------------------------- */
@@ -150,9 +233,56 @@ static void id_line(const char *what, const mx_check_ids *l, size_t total) {
   printf("\n");
 }
 
+/* A name for the text report: in quotes, control characters as '?'. */
+static void text_name(const char *s) {
+  if (!s) return;
+  printf(" \"");
+  for (; *s; s++) putchar((unsigned char)*s < 0x20 ? '?' : *s);
+  printf("\"");
+}
+
+/* The "boundary tags" block. */
+static void print_tags(const mx_check_report *r, const mx_check_tags *t) {
+  if (r->has_tagged_faces) {
+    size_t tri = 0, quad = 0;
+    for (size_t i = 0; i < t->nface_tags; i++) {
+      tri += t->face_tags[i].triangles;
+      quad += t->face_tags[i].quads;
+    }
+    printf("  boundary tags          %zu tag%s, %zu faces (%zu triangles, %zu "
+           "quadrilaterals)\n",
+           t->nface_tags, t->nface_tags == 1 ? "" : "s", r->tagged_faces, tri,
+           quad);
+    for (size_t i = 0; i < t->nface_tags; i++) {
+      const mx_check_tag *g = &t->face_tags[i];
+      printf("    tag %d", g->tag);
+      text_name(g->name);
+      printf(": %zu triangles, %zu quadrilaterals, ", g->triangles, g->quads);
+      if (g->open_edges)
+        printf("%zu open edge%s (not closed)", g->open_edges,
+               g->open_edges == 1 ? "" : "s");
+      else
+        printf("closed");
+      if (g->not_boundary)
+        printf(", %zu not on the boundary", g->not_boundary);
+      printf("\n");
+    }
+  }
+  if (r->has_node_tags) {
+    printf("  boundary tags on nodes %zu tag%s (point field surface_tag; "
+           "0, inside, not listed)\n",
+           t->nnode_tags, t->nnode_tags == 1 ? "" : "s");
+    for (size_t i = 0; i < t->nnode_tags; i++) {
+      printf("    tag %d", t->node_tags[i].tag);
+      text_name(t->node_tags[i].name);
+      printf(": %zu nodes\n", t->node_tags[i].nodes);
+    }
+  }
+}
+
 static void print_report(const char *mesh, const char *surf,
-                         const mx_check_report *r, double t_read,
-                         double t_check) {
+                         const mx_check_report *r, const mx_check_tags *t,
+                         double t_read, double t_check) {
   char why[160];
   printf("mixoct check %s\n", mesh);
   printf("  nodes                  %zu\n", r->nodes);
@@ -185,6 +315,7 @@ static void print_report(const char *mesh, const char *surf,
   }
   printf("  non-manifold edges     %zu (parts of the domain touching along an "
          "edge; not a defect)\n", r->nonmanifold_edges);
+  print_tags(r, t);
   printf("  defects\n");
   const mx_check_ids *E = r->elem_ids, *N = r->node_ids;
   defect_line("empty mesh", r->empty, "(no element or no node)");
@@ -242,6 +373,14 @@ static void print_report(const char *mesh, const char *surf,
       printf("    %-24s -   (the surface is not closed: not checked)\n",
              "boundary off the surface");
     }
+  }
+  if (r->has_tagged_faces) {
+    defect_line("tagged not boundary", r->tagged_not_boundary,
+                "(tagged faces that are not boundary faces)");
+    id_line("tagged faces", &r->not_boundary_ids, r->tagged_not_boundary);
+    defect_line("boundary untagged", r->boundary_untagged,
+                "(boundary faces no tagged face names)");
+    id_line("elements", &r->untagged_ids, SIZE_MAX);
   }
   if (r->defects)
     printf("  result                 %zu defect%s\n", r->defects,
@@ -344,15 +483,22 @@ int mx_check_main(int argc, char **argv) {
   }
   const double t1 = mx_wtime();
   mx_check_report r;
-  if (st == MX_OK) st = mx_check_mesh_opt(&m, surf ? &s : NULL, &opt, &r);
+  mx_check_tags tags;
+  memset(&tags, 0, sizeof tags);
+  if (st == MX_OK)
+    st = mx_check_mesh_tags(&m, surf ? &s : NULL, &opt, &r, &tags);
   const double t2 = mx_wtime();
   mx_mesh_data_free(&m);
   mx_trisoup_free(&s);
-  if (st != MX_OK) return st == MX_EINPUT ? EXIT_USAGE : 1;
+  if (st != MX_OK) {
+    mx_check_tags_free(&tags);
+    return st == MX_EINPUT ? EXIT_USAGE : 1;
+  }
   if (json)
-    print_json(&r);
+    print_json(&r, &tags);
   else if (!quiet)
-    print_report(mesh, surf, &r, t1 - t0, t2 - t1);
+    print_report(mesh, surf, &r, &tags, t1 - t0, t2 - t1);
   fflush(stdout);
+  mx_check_tags_free(&tags);
   return r.defects ? EXIT_DEFECTS : 0;
 }

@@ -18,6 +18,7 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 #include <sys/mman.h>
@@ -25,6 +26,7 @@
 #include <unistd.h>
 
 #include "common.h"
+#include "io/getfem_tables.h"
 #include "io/text_scan.h"
 #include "soa/scan.h"
 
@@ -401,6 +403,22 @@ static int assemble(rd *r, parts *P, mx_mesh_data *out) {
   return MX_OK;
 }
 
+/* The point field surface_tag from its raw values (one per node). */
+static int node_tags_from(rd *r, const rawarr *a, mx_mesh_data *out) {
+  const size_t n = out->nnodes;
+  out->node_tag = mx_alloc((n + 1) * sizeof *out->node_tag);
+  if (!out->node_tag) return MX_EINPUT;
+  for (size_t i = 0; i < n; i++) {
+    const int64_t v = raw_int(a, i);
+    if (v < INT32_MIN || v > INT32_MAX || (a->t == T_U64 && v < 0))
+      return fail(r, arr_at(r, a, i),
+                  "surface_tag: value %zu is out of range (32-bit integers)",
+                  i);
+    out->node_tag[i] = (int32_t)v;
+  }
+  return MX_OK;
+}
+
 /* ---- legacy VTK ---------------------------------------------------------- */
 
 typedef struct {
@@ -409,6 +427,8 @@ typedef struct {
   const char *p;
   parts P;
   int have_points, have_cells, have_types;
+  int have_node_tags;
+  rawarr node_tags; /* the point field surface_tag */
   mx_mesh_data *out;
 } legacy;
 
@@ -421,18 +441,25 @@ static const char *leg_token(legacy *L, size_t *n) {
   return t;
 }
 
-static int leg_count(legacy *L, size_t *v, const char *what) {
+/* A count token: 1 and *v, or 0 (nothing printed) when it is not one. */
+static int leg_count_q(legacy *L, size_t *v) {
   size_t n;
   const char *t = leg_token(L, &n);
-  if (n == 0) return fail(L->r, t, "%s: missing count", what);
   size_t x = 0;
   for (size_t i = 0; i < n; i++) {
-    if (t[i] < '0' || t[i] > '9' || x > ((size_t)1 << 50))
-      return fail(L->r, t, "%s: bad count '%.*s'", what, shown(n), t);
+    if (t[i] < '0' || t[i] > '9' || x > ((size_t)1 << 50)) return 0;
     x = 10 * x + (size_t)(t[i] - '0');
   }
   *v = x;
-  return MX_OK;
+  return n > 0;
+}
+
+static int leg_count(legacy *L, size_t *v, const char *what) {
+  const char *t = skip_ws(L->p, L->r->end);
+  if (leg_count_q(L, v)) return MX_OK;
+  const size_t n = tok_len(t, L->r->end);
+  if (n == 0) return fail(L->r, t, "%s: missing count", what);
+  return fail(L->r, t, "%s: bad count '%.*s'", what, shown(n), t);
 }
 
 /* Binary data starts after the newline that ends the section header. */
@@ -678,6 +705,124 @@ static int leg_skip_field(legacy *L) {
   return MX_OK;
 }
 
+/* ---- legacy attributes: only the point field surface_tag is read ---------- */
+
+/* Steps over n values of type t (binary: after the end of the header
+ * line); 0, nothing printed, when they are not all there. */
+static int leg_skip_values(legacy *L, size_t n, vtype t) {
+  const char *p = L->p, *end = L->r->end;
+  if (!L->binary) {
+    for (size_t k = 0; k < n; k++) {
+      size_t tl;
+      leg_token(L, &tl);
+      if (tl == 0) return 0;
+    }
+    return 1;
+  }
+  while (p < end && (*p == ' ' || *p == '\t' || *p == '\r')) p++;
+  if (p >= end || *p != '\n') return 0;
+  p++;
+  if (n > (size_t)(end - p) / (size_t)vsize[t]) return 0;
+  L->p = p + n * (size_t)vsize[t];
+  return 1;
+}
+
+/* The values of surface_tag: n integers of type t for the points. */
+static int leg_node_tags(legacy *L, const char *at, size_t n, vtype t) {
+  if (L->have_node_tags) return fail(L->r, at, "surface_tag given twice");
+  if (n != L->P.nnodes)
+    return fail(L->r, at, "surface_tag: %zu values for %zu points", n,
+                L->P.nnodes);
+  L->have_node_tags = 1;
+  return leg_array(L, n, t, &L->node_tags, "surface_tag");
+}
+
+/* Whether the attribute `name` of type t with ncomp components is the
+ * point field surface_tag. */
+static int is_surface_tag(int point, const char *name, size_t nl, vtype t,
+                          size_t ncomp) {
+  return point && ncomp == 1 && t != T_NONE && !is_float(t) &&
+         tok_eq(name, nl, "surface_tag");
+}
+
+/* The attribute sections from the keyword t on (CELL_DATA n or POINT_DATA
+ * n, then SCALARS, VECTORS, NORMALS, FIELD, METADATA): skipped but for
+ * surface_tag. Any other keyword, or a malformed header, ends them
+ * silently (they used to be ignored whole); surface_tag itself must be
+ * well formed. */
+static int leg_attributes(legacy *L, const char *t, size_t tl) {
+  int point = 0;
+  size_t count = 0;
+  for (;; t = leg_token(L, &tl)) {
+    if (tok_eq(t, tl, "CELL_DATA") || tok_eq(t, tl, "POINT_DATA")) {
+      point = tok_eq(t, tl, "POINT_DATA");
+      if (!leg_count_q(L, &count)) return MX_OK;
+    } else if (tok_eq(t, tl, "SCALARS")) {
+      size_t nl, yl, k = 1, ncomp = 1;
+      const char *name = leg_token(L, &nl);
+      const char *ty = leg_token(L, &yl);
+      const vtype vt = legacy_type(ty, yl);
+      if (vt == T_NONE) return MX_OK;
+      const char *save = L->p, *q = L->p; /* a count on the same line */
+      while (q < L->r->end && (*q == ' ' || *q == '\t')) q++;
+      if (q < L->r->end && *q >= '0' && *q <= '9' && leg_count_q(L, &k) &&
+          k >= 1 && k <= 4)
+        ncomp = k;
+      else
+        L->p = save;
+      save = L->p;
+      const char *lt = leg_token(L, &k);
+      if (tok_eq(lt, k, "LOOKUP_TABLE"))
+        leg_token(L, &k);
+      else
+        L->p = save;
+      if (is_surface_tag(point, name, nl, vt, ncomp)) {
+        MX_CHECK(leg_node_tags(L, name, count, vt));
+      } else if (count > SIZE_MAX / 16 / ncomp ||
+                 !leg_skip_values(L, count * ncomp, vt)) {
+        return MX_OK;
+      }
+    } else if (tok_eq(t, tl, "VECTORS") || tok_eq(t, tl, "NORMALS")) {
+      size_t nl, yl;
+      leg_token(L, &nl);
+      const char *ty = leg_token(L, &yl);
+      const vtype vt = legacy_type(ty, yl);
+      if (vt == T_NONE || count > SIZE_MAX / 16 ||
+          !leg_skip_values(L, 3 * count, vt))
+        return MX_OK;
+    } else if (tok_eq(t, tl, "FIELD")) {
+      size_t nl, narr;
+      leg_token(L, &nl); /* the field's name */
+      if (!leg_count_q(L, &narr)) return MX_OK;
+      for (size_t i = 0; i < narr; i++) {
+        size_t nc, nt, yl;
+        const char *name = leg_token(L, &nl);
+        if (tok_eq(name, nl, "NULL_ARRAY")) continue;
+        if (!leg_count_q(L, &nc) || !leg_count_q(L, &nt)) return MX_OK;
+        const char *ty = leg_token(L, &yl);
+        const vtype vt = legacy_type(ty, yl);
+        if (vt == T_NONE) return MX_OK;
+        if (is_surface_tag(point, name, nl, vt, nc)) {
+          MX_CHECK(leg_node_tags(L, name, nt, vt));
+        } else if ((nt && nc > SIZE_MAX / 16 / nt) ||
+                   !leg_skip_values(L, nc * nt, vt)) {
+          return MX_OK;
+        }
+        const char *save = L->p;
+        const char *kwd = leg_token(L, &nl);
+        if (tok_eq(kwd, nl, "METADATA"))
+          leg_skip_metadata(L);
+        else
+          L->p = save;
+      }
+    } else if (tok_eq(t, tl, "METADATA")) {
+      leg_skip_metadata(L);
+    } else {
+      return MX_OK; /* the end, or an attribute not read */
+    }
+  }
+}
+
 static int read_legacy(rd *r, mx_mesh_data *out) {
   legacy L;
   memset(&L, 0, sizeof L);
@@ -733,7 +878,8 @@ static int read_legacy(rd *r, mx_mesh_data *out) {
     } else if (tok_eq(t, tl, "METADATA")) {
       leg_skip_metadata(&L);
     } else if (tok_eq(t, tl, "CELL_DATA") || tok_eq(t, tl, "POINT_DATA")) {
-      break; /* attributes: not needed */
+      MX_CHECK(leg_attributes(&L, t, tl));
+      break;
     } else {
       return fail(r, t, "unexpected '%.*s' (expected POINTS, CELLS or "
                   "CELL_TYPES)", shown(tl), t);
@@ -742,7 +888,8 @@ static int read_legacy(rd *r, mx_mesh_data *out) {
   if (!L.have_points) return fail(r, NULL, "no POINTS section");
   if (!L.have_cells) return fail(r, NULL, "no CELLS section");
   if (!L.have_types) return fail(r, NULL, "no CELL_TYPES section");
-  return assemble(r, &L.P, out);
+  MX_CHECK(assemble(r, &L.P, out));
+  return L.have_node_tags ? node_tags_from(r, &L.node_tags, out) : MX_OK;
 }
 
 /* ---- VTU ----------------------------------------------------------------- */
@@ -959,9 +1106,9 @@ static int resolve(rd *r, const xarr *x, const vtu_layout *lay, size_t want,
 
 static int read_vtu(rd *r, mx_mesh_data *out) {
   const char *p = r->buf, *end = r->end;
-  int seen = 0, pieces = 0, in_points = 0, in_cells = 0;
+  int seen = 0, pieces = 0, in_points = 0, in_cells = 0, in_pdata = 0;
   vtu_layout lay = {0, 4, NULL};
-  xarr pts = {0}, con = {0}, offs = {0}, typ = {0};
+  xarr pts = {0}, con = {0}, offs = {0}, typ = {0}, ntag = {0};
   uint64_t npts = 0, ncells = 0;
   const char *piece_tag = NULL;
   for (;;) {
@@ -1004,9 +1151,15 @@ static int read_vtu(rd *r, mx_mesh_data *out) {
       in_points = !t.closing && !t.selfclose;
     } else if (tag_is(&t, "Cells")) {
       in_cells = !t.closing && !t.selfclose;
+    } else if (tag_is(&t, "PointData")) {
+      in_pdata = !t.closing && !t.selfclose;
     } else if (tag_is(&t, "DataArray") && !t.closing) {
       xarr *x = NULL;
-      if (in_points && !pts.present)
+      if (in_pdata && attr_eq(&t, "Name", "surface_tag")) {
+        if (ntag.present)
+          return fail(r, t.start, "surface_tag given twice");
+        x = &ntag;
+      } else if (in_points && !pts.present)
         x = &pts;
       else if (in_cells && attr_eq(&t, "Name", "connectivity"))
         x = &con;
@@ -1070,7 +1223,12 @@ static int read_vtu(rd *r, mx_mesh_data *out) {
     }
     MX_CHECK(resolve(r, &con, &lay, want, &P.cn, "connectivity"));
   }
-  return assemble(r, &P, out);
+  rawarr tags;
+  const int with_tags = ntag.present && !is_float(ntag.t) && ntag.ncomp == 1;
+  if (with_tags)
+    MX_CHECK(resolve(r, &ntag, &lay, P.nnodes, &tags, "surface_tag"));
+  MX_CHECK(assemble(r, &P, out));
+  return with_tags ? node_tags_from(r, &tags, out) : MX_OK;
 }
 
 /* ---- text tokens and binary cursors (MSH, Medit) --------------------------
@@ -1191,20 +1349,133 @@ static int grow_cells(rd *r, mx_mesh_data *out, size_t n) {
   return MX_OK;
 }
 
+/* ---- tagged faces and tag names ------------------------------------------ */
+
+/* Room for n more tagged faces in out (capacity *cap, at least doubled; n
+ * already checked against the file size). */
+static int face_room(rd *r, mx_mesh_data *out, size_t *cap, size_t n) {
+  if (n <= *cap - out->nfaces) return MX_OK;
+  const size_t most = UINT32_MAX / 6;
+  if (n > most - out->nfaces)
+    return fail(r, NULL, "more than %zu boundary faces", most);
+  size_t nc = *cap ? 2 * *cap : 1024;
+  if (nc < out->nfaces + n) nc = out->nfaces + n;
+  if (nc > most) nc = most;
+  uint8_t *nn = mx_realloc(out->face_nn, nc);
+  if (!nn) return MX_EINPUT;
+  out->face_nn = nn;
+  uint32_t *cn = mx_realloc(out->face_conn, 4 * nc * sizeof *cn);
+  if (!cn) return MX_EINPUT;
+  out->face_conn = cn;
+  int32_t *tg = mx_realloc(out->face_tag, nc * sizeof *tg);
+  if (!tg) return MX_EINPUT;
+  out->face_tag = tg;
+  *cap = nc;
+  return MX_OK;
+}
+
+/* Appends a face (room made by face_room). */
+static void add_face(mx_mesh_data *out, int nn, const uint32_t v[4],
+                     int32_t tag) {
+  const size_t f = out->nfaces++;
+  out->face_nn[f] = (uint8_t)nn;
+  for (int j = 0; j < 4; j++) out->face_conn[4 * f + (size_t)j] = j < nn ? v[j] : 0;
+  out->face_tag[f] = tag;
+}
+
+/* A tag read as a 64-bit integer must fit an int32. */
+static int tag_range(rd *r, const char *at, int64_t v, const char *what) {
+  if (v < INT32_MIN || v > INT32_MAX)
+    return fail(r, at, "%s %lld is out of range (32-bit integers)", what,
+                (long long)v);
+  return MX_OK;
+}
+
+/* Appends the name s[0, n) of tag (capacity *cap, doubled). */
+static int add_name(mx_mesh_data *out, size_t *cap, int32_t tag,
+                    const char *s, size_t n) {
+  if (out->nnames == *cap) {
+    const size_t nc = *cap ? 2 * *cap : 16;
+    int32_t *t = mx_realloc(out->name_tag, nc * sizeof *t);
+    if (!t) return MX_EINPUT;
+    out->name_tag = t;
+    char **nm = mx_realloc(out->name, nc * sizeof *nm);
+    if (!nm) return MX_EINPUT;
+    out->name = nm;
+    *cap = nc;
+  }
+  char *c = mx_alloc(n + 1);
+  if (!c) return MX_EINPUT;
+  memcpy(c, s, n);
+  c[n] = '\0';
+  out->name_tag[out->nnames] = tag;
+  out->name[out->nnames++] = c;
+  return MX_OK;
+}
+
+/* The names sorted by tag, each tag once (the last name given to it). */
+static int sort_names(mx_mesh_data *out) {
+  const size_t n = out->nnames;
+  if (n < 2) return MX_OK;
+  uint64_t *k = mx_alloc(n * sizeof *k);
+  int32_t *t = mx_alloc(n * sizeof *t);
+  char **nm = mx_alloc(n * sizeof *nm);
+  if (!k || !t || !nm) {
+    mx_free(k);
+    mx_free(t);
+    mx_free(nm);
+    return MX_EINPUT;
+  }
+  for (size_t i = 0; i < n; i++)
+    k[i] = (uint64_t)((uint32_t)out->name_tag[i] ^ 0x80000000u) << 32 | i;
+  int st = mx_sort_u64(k, NULL, n);
+  size_t m = 0;
+  for (size_t i = 0; st == MX_OK && i < n; i++) {
+    const size_t at = (size_t)(uint32_t)k[i];
+    if (i + 1 < n && k[i + 1] >> 32 == k[i] >> 32) { /* named again later */
+      mx_free(out->name[at]);
+      out->name[at] = NULL;
+      continue;
+    }
+    t[m] = out->name_tag[at];
+    nm[m++] = out->name[at];
+  }
+  if (st != MX_OK) {
+    mx_free(k);
+    mx_free(t);
+    mx_free(nm);
+    return st;
+  }
+  mx_free(k);
+  mx_free(out->name_tag);
+  mx_free(out->name);
+  out->name_tag = t;
+  out->name = nm;
+  out->nnames = m;
+  return MX_OK;
+}
+
 /* ---- Gmsh MSH 4.1 ---------------------------------------------------------
  *
  * $MeshFormat "4.1 0|1 8" (binary: then the int 1 in the writer's byte
- * order, which tells a swapped file), $Nodes and $Elements are read; every
- * other section ($PhysicalNames, $Entities, $NodeData...) is skipped up to
- * its $End line. Nodes come in blocks: dim tag parametric n, n tags, then n
+ * order, which tells a swapped file), $Nodes, $Elements, $Entities and
+ * $PhysicalNames are read; every other section ($NodeData...) is skipped up
+ * to its $End line. $Entities: four counts (points, curves, surfaces,
+ * volumes), then per entity its tag, its coordinates (points 3, others a
+ * box of 6), a count and that many physical tags, and for all but points a
+ * count and that many bounding entities (binary: counts size_t, tags int,
+ * coordinates double). $PhysicalNames (ASCII in both variants): a count,
+ * then lines "dim tag \"name\"". Nodes come in blocks: dim tag parametric n, n tags, then n
  * coordinate lines (x y z, + dim parametric values when parametric);
  * elements in blocks: dim tag type n, then n lines "tag node-tags...".
  * Binary files use size_t (the data size of the format line, 4 or 8 bytes)
  * for counts and tags, int for dimensions, entity tags and types, doubles
  * for coordinates. Tetrahedra (type 4), hexahedra (5), prisms (6) and
  * pyramids (7) are kept, in the order of their tags (mixoct writes tag =
- * index + 1); points, lines, triangles and quadrangles (boundary elements)
- * are skipped; any other type is refused. Node orders are Gmsh's, which are
+ * index + 1); triangles (2) and quadrangles (3) of blocks of dimension 2
+ * are the tagged faces, their tag their entity's (read_mesh.h), in file
+ * order; points, lines and other triangles and quadrangles are skipped;
+ * any other type is refused. Node orders are Gmsh's, which are
  * mixoct's (soa/mesh.h). Node tags are mapped to indices by a direct table
  * when they are dense, else by a sorted one. */
 
@@ -1235,6 +1506,10 @@ typedef struct {
   uint64_t *sorted; /* or: tags sorted, with */
   uint32_t *sidx;   /* their indices */
   uint64_t *etag;   /* per volume element */
+  int have_entities;
+  size_t nsurf;
+  int64_t *surf;    /* $Entities: per surface, its tag and its face tag */
+  size_t fcap, ncap; /* capacities of out's faces and names */
   mx_mesh_data *out;
 } msh;
 
@@ -1250,6 +1525,7 @@ static void msh_free(msh *M) {
   mx_free(M->sorted);
   mx_free(M->sidx);
   mx_free(M->etag);
+  mx_free(M->surf);
 }
 
 /* A size_t (binary) or a count (text). */
@@ -1442,6 +1718,131 @@ static int64_t msh_node(const msh *M, uint64_t t) {
   return lo < M->nnodes && M->sorted[lo] == t ? (int64_t)M->sidx[lo] : -1;
 }
 
+/* A double of $Entities (binary: no check of its value, it is not used). */
+static int msh_real(msh *M, const char *what) {
+  if (!M->binary) {
+    double v;
+    return cur_real(&M->c, &v, what);
+  }
+  MX_CHECK(cur_need(&M->c, 8, what));
+  M->c.p += 8;
+  return MX_OK;
+}
+
+static int surf_cmp(const void *a, const void *b) {
+  const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+  return (x > y) - (x < y);
+}
+
+static int msh_entities(msh *M) {
+  rd *r = M->c.r;
+  if (M->have_entities) return fail(r, M->c.p, "$Entities given twice");
+  M->have_entities = 1;
+  uint64_t n[4] = {0, 0, 0, 0};
+  const char *at = msh_at(M);
+  for (int d = 0; d < 4; d++)
+    MX_CHECK(msh_size(M, &n[d], "$Entities: number of entities"));
+  /* an entity takes at least a tag, 3 doubles and a count */
+  const uint64_t least = M->binary ? 4 + 24 + (uint64_t)M->dsize : 8;
+  for (int d = 0; d < 4; d++)
+    if (n[d] > cur_left(&M->c) / least + 1)
+      return fail(r, at,
+                  "$Entities: %llu entities of dimension %d announced but "
+                  "the file is too short (truncated file or wrong count)",
+                  (unsigned long long)n[d], d);
+  M->surf = mx_alloc((2 * (size_t)n[2] + 1) * sizeof *M->surf);
+  if (!M->surf) return MX_EINPUT;
+  for (int d = 0; d < 4; d++)
+    for (uint64_t i = 0; i < n[d]; i++) {
+      int64_t tag = 0, first = 0;
+      uint64_t np = 0, nb = 0;
+      at = msh_at(M);
+      MX_CHECK(msh_int(M, &tag, "$Entities: entity tag"));
+      for (int k = 0; k < (d ? 6 : 3); k++)
+        MX_CHECK(msh_real(M, "$Entities: coordinate"));
+      const char *pat = msh_at(M);
+      MX_CHECK(msh_size(M, &np, "$Entities: number of physical tags"));
+      if (np > cur_left(&M->c) / 2 + 1)
+        return fail(r, pat, "$Entities: %llu physical tags announced but the "
+                    "file is too short", (unsigned long long)np);
+      for (uint64_t j = 0; j < np; j++) {
+        int64_t ph = 0;
+        MX_CHECK(msh_int(M, &ph, "$Entities: physical tag"));
+        if (j == 0) first = ph;
+      }
+      if (d > 0) {
+        pat = msh_at(M);
+        MX_CHECK(msh_size(M, &nb, "$Entities: number of bounding entities"));
+        if (nb > cur_left(&M->c) / 2 + 1)
+          return fail(r, pat, "$Entities: %llu bounding entities announced "
+                      "but the file is too short", (unsigned long long)nb);
+        for (uint64_t j = 0; j < nb; j++) {
+          int64_t b = 0;
+          MX_CHECK(msh_int(M, &b, "$Entities: bounding entity"));
+        }
+      }
+      if (d == 2) {
+        const int64_t face_tag = np ? first : tag;
+        MX_CHECK(tag_range(r, at, face_tag, "$Entities: surface tag"));
+        M->surf[2 * i] = tag;
+        M->surf[2 * i + 1] = face_tag;
+      }
+    }
+  M->nsurf = (size_t)n[2];
+  qsort(M->surf, M->nsurf, 2 * sizeof *M->surf, surf_cmp);
+  return msh_end(M, "Entities");
+}
+
+/* $PhysicalNames: the names of dimension 2 (boundary tags) are kept. */
+static int msh_names(msh *M) {
+  rd *r = M->c.r;
+  uint64_t n = 0;
+  const char *at = cur_skip(&M->c);
+  MX_CHECK(cur_count(&M->c, &n, 0, "$PhysicalNames: number of names"));
+  if (n > cur_left(&M->c) / 8 + 1)
+    return fail(r, at, "$PhysicalNames: %llu names announced but the file "
+                "is too short (truncated file or wrong count)",
+                (unsigned long long)n);
+  for (uint64_t i = 0; i < n; i++) {
+    int64_t dim = 0, tag = 0;
+    at = cur_skip(&M->c);
+    MX_CHECK(cur_int(&M->c, &dim, "$PhysicalNames: dimension"));
+    MX_CHECK(cur_int(&M->c, &tag, "$PhysicalNames: physical tag"));
+    const char *p = M->c.p, *end = r->end;
+    const char *nl = memchr(p, '\n', (size_t)(end - p));
+    if (!nl) nl = end;
+    const char *q1 = memchr(p, '"', (size_t)(nl - p));
+    const char *q2 = q1 ? memrchr(q1 + 1, '"', (size_t)(nl - q1 - 1)) : NULL;
+    if (!q2)
+      return fail(r, at, "$PhysicalNames: name %llu is not in double quotes",
+                  (unsigned long long)i);
+    M->c.p = nl;
+    if (dim != 2) continue;
+    MX_CHECK(tag_range(r, at, tag, "$PhysicalNames: physical tag"));
+    MX_CHECK(add_name(M->out, &M->ncap, (int32_t)tag, q1 + 1,
+                      (size_t)(q2 - q1 - 1)));
+  }
+  return msh_end(M, "PhysicalNames");
+}
+
+/* The faces' entity tags to their entities' physical tags. */
+static void msh_face_tags(msh *M) {
+  mx_mesh_data *out = M->out;
+  for (size_t f = 0; f < out->nfaces && M->nsurf; f++) {
+    const int64_t e = out->face_tag[f];
+    size_t lo = 0, hi = M->nsurf;
+    while (lo < hi) {
+      const size_t mid = lo + (hi - lo) / 2;
+      if (M->surf[2 * mid] < e)
+        lo = mid + 1;
+      else
+        hi = mid;
+    }
+    if (lo < M->nsurf && M->surf[2 * lo] == e)
+      out->face_tag[f] = (int32_t)M->surf[2 * lo + 1];
+  }
+}
+
 static int msh_elements(msh *M) {
   rd *r = M->c.r;
   if (!M->have_nodes)
@@ -1478,13 +1879,14 @@ static int msh_elements(msh *M) {
     const int vt = msh_volume_type(type);
     const int k = type > 0 && type < MSH_TYPES ? msh_type_nodes[type] : 0;
     const int skipped = type == 1 || type == 2 || type == 3 || type == 15;
+    const int face = dim == 2 && (type == 2 || type == 3);
     if (k == 0 || (vt < 0 && !skipped))
       return fail(r, at,
                   "$Elements block %llu: element type %lld is not supported "
                   "(linear tetrahedra 4, hexahedra 5, prisms 6, pyramids 7; "
                   "points, lines, triangles and quadrangles are skipped)",
                   (unsigned long long)b, (long long)type);
-    (void)dim;
+    if (face) MX_CHECK(tag_range(r, at, etag, "$Elements block: entity tag"));
     const uint64_t line_bytes = (uint64_t)(k + 1) * (uint64_t)M->dsize;
     if (M->binary)
       MX_CHECK(cur_need(&M->c, n * line_bytes, "$Elements block"));
@@ -1501,6 +1903,7 @@ static int msh_elements(msh *M) {
       if (!et) return MX_EINPUT;
       M->etag = et;
     }
+    if (face) MX_CHECK(face_room(r, out, &M->fcap, (size_t)n));
     for (uint64_t i = 0; i < n; i++) {
       uint64_t tag = 0;
       at = msh_at(M);
@@ -1508,7 +1911,10 @@ static int msh_elements(msh *M) {
         tag = bin_u(&M->c, M->dsize);
       else
         MX_CHECK(cur_count(&M->c, &tag, 1, "$Elements: element tag"));
-      uint32_t *row = vt >= 0 ? out->conn + 8 * (c0 + (size_t)i) : NULL;
+      uint32_t fv[4] = {0, 0, 0, 0};
+      uint32_t *row = vt >= 0 ? out->conn + 8 * (c0 + (size_t)i)
+                      : face  ? fv
+                              : NULL;
       for (int j = 0; j < k; j++) {
         uint64_t t = 0;
         const char *nat = msh_at(M);
@@ -1523,7 +1929,9 @@ static int msh_elements(msh *M) {
                       (unsigned long long)tag, (unsigned long long)t);
         row[j] = (uint32_t)v;
       }
-      if (row) {
+      if (face) /* the entity tag for now (msh_face_tags) */
+        add_face(out, k, fv, (int32_t)etag);
+      else if (row) {
         out->type[c0 + (size_t)i] = (uint8_t)vt;
         M->etag[c0 + (size_t)i] = tag;
       }
@@ -1608,7 +2016,10 @@ static int read_msh(rd *r, const char *p, mx_mesh_data *out) {
       have_format = 1;
     } else if (!have_format) {
       st = fail(r, t, "expected $MeshFormat first");
-    } else if (tok_eq(t, n, "$Nodes") || tok_eq(t, n, "$Elements")) {
+    } else if (tok_eq(t, n, "$PhysicalNames")) {
+      st = msh_names(&M);
+    } else if (tok_eq(t, n, "$Nodes") || tok_eq(t, n, "$Elements") ||
+               tok_eq(t, n, "$Entities")) {
       if (M.binary) { /* the data starts after the end of the line */
         const char *q = M.c.p;
         while (q < r->end && (*q == ' ' || *q == '\t' || *q == '\r')) q++;
@@ -1619,7 +2030,9 @@ static int read_msh(rd *r, const char *p, mx_mesh_data *out) {
         }
         M.c.p = q + 1;
       }
-      st = t[1] == 'N' ? msh_nodes(&M) : msh_elements(&M);
+      st = tok_eq(t, n, "$Nodes")      ? msh_nodes(&M)
+           : tok_eq(t, n, "$Elements") ? msh_elements(&M)
+                                       : msh_entities(&M);
     } else { /* skipped up to $End<name> at the start of a line */
       char want[80];
       snprintf(want, sizeof want, "\n$End%.*s", (int)(n > 60 ? 60 : n - 1),
@@ -1640,6 +2053,8 @@ static int read_msh(rd *r, const char *p, mx_mesh_data *out) {
   if (st == MX_OK && !M.have_nodes) st = fail(r, NULL, "no $Nodes section");
   if (st == MX_OK && !M.etag) st = fail(r, NULL, "no $Elements section");
   if (st == MX_OK) st = msh_order(&M);
+  if (st == MX_OK) msh_face_tags(&M);
+  if (st == MX_OK) st = sort_names(out);
   msh_free(&M);
   return st;
 }
@@ -1649,9 +2064,9 @@ static int read_msh(rd *r, const char *p, mx_mesh_data *out) {
  * ASCII: keywords (case-insensitive) followed by their data, '#' comments.
  * "MeshVersionFormatted v", "Dimension 3", "Vertices n" + n lines "x y z
  * ref", "Tetrahedra", "Pyramids", "Prisms", "Hexahedra" n + n lines of
- * 1-based vertex indices and a reference; "End". Other keywords (Triangles,
- * Quadrilaterals, Edges, Corners, Normals...) are skipped up to the next
- * word. Binary: int32 1 (byte order), int32 version 1..4, then blocks: int32
+ * 1-based vertex indices and a reference; "Triangles", "Quadrilaterals" the
+ * same, kept as the tagged faces (tag: the reference); "End". Other
+ * keywords (Edges, Corners, Normals...) are skipped up to the next word. Binary: int32 1 (byte order), int32 version 1..4, then blocks: int32
  * keyword code, the next block's position (int32 up to version 2, int64
  * from 3), for Dimension its int32 value, else the line count (int32 up to
  * version 3, int64 in 4) and the lines: reals float32 in version 1, float64
@@ -1661,9 +2076,14 @@ static int read_msh(rd *r, const char *p, mx_mesh_data *out) {
  * order. */
 
 enum {
-  MED_DIM = 3, MED_VERT = 4, MED_TET = 8, MED_PRISM = 9, MED_HEX = 10,
-  MED_PYR = 49, MED_END = 54
+  MED_DIM = 3, MED_VERT = 4, MED_TRI = 6, MED_QUAD = 7, MED_TET = 8,
+  MED_PRISM = 9, MED_HEX = 10, MED_PYR = 49, MED_END = 54
 };
+
+/* The node count of a face keyword, 0 for others. */
+static int medit_face_nodes(int code) {
+  return code == MED_TRI ? 3 : code == MED_QUAD ? 4 : 0;
+}
 
 static int medit_cell_type(int code) {
   switch (code) {
@@ -1675,7 +2095,7 @@ static int medit_cell_type(int code) {
   }
 }
 
-/* 1-based vertex indices of the cells -> 0-based, checked. */
+/* 1-based vertex indices of the cells and faces -> 0-based, checked. */
 static int medit_indices(rd *r, mx_mesh_data *out) {
   for (size_t c = 0; c < out->ncells; c++) {
     uint32_t *row = out->conn + 8 * c;
@@ -1685,6 +2105,17 @@ static int medit_indices(rd *r, mx_mesh_data *out) {
                     "element %zu: vertex %u out of range (%zu vertices, "
                     "1-based)",
                     c, row[j], out->nnodes);
+      row[j]--;
+    }
+  }
+  for (size_t f = 0; f < out->nfaces; f++) {
+    uint32_t *row = out->face_conn + 4 * f;
+    for (int j = 0; j < out->face_nn[f]; j++) {
+      if (row[j] == 0 || row[j] > out->nnodes)
+        return fail(r, NULL,
+                    "%s %zu: vertex %u out of range (%zu vertices, 1-based)",
+                    out->face_nn[f] == 3 ? "triangle" : "quadrilateral", f,
+                    row[j], out->nnodes);
       row[j]--;
     }
   }
@@ -1698,6 +2129,7 @@ static int medit_kw_type(const char *t, size_t n) {
   } kw[] = {{"Dimension", MED_DIM}, {"Vertices", MED_VERT},
             {"Tetrahedra", MED_TET}, {"Prisms", MED_PRISM},
             {"Hexahedra", MED_HEX}, {"Pyramids", MED_PYR},
+            {"Triangles", MED_TRI}, {"Quadrilaterals", MED_QUAD},
             {"End", MED_END}};
   for (size_t i = 0; i < sizeof kw / sizeof kw[0]; i++)
     if (tok_eq(t, n, kw[i].name)) return kw[i].code;
@@ -1707,6 +2139,7 @@ static int medit_kw_type(const char *t, size_t n) {
 static int read_medit_ascii(rd *r, const char *p, mx_mesh_data *out) {
   cur c = {r, p, 1, 0};
   int have_vert = 0;
+  size_t fcap = 0;
   for (;;) {
     size_t n;
     const char *t = cur_tok(&c, &n);
@@ -1765,6 +2198,35 @@ static int read_medit_ascii(rd *r, const char *p, mx_mesh_data *out) {
       }
       continue;
     }
+    if (medit_face_nodes(code)) {
+      const int k = medit_face_nodes(code);
+      if (cnt > cur_left(&c) / (2 * (uint64_t)(k + 1)) + 1)
+        return fail(r, at,
+                    "%.*s: %llu announced but the file is too short "
+                    "(truncated file or wrong count)",
+                    shown(n), t, (unsigned long long)cnt);
+      MX_CHECK(face_room(r, out, &fcap, (size_t)cnt));
+      for (size_t i = 0; i < cnt; i++) {
+        uint32_t v[4] = {0, 0, 0, 0};
+        int64_t ref = 0;
+        for (int j = 0; j <= k; j++) {
+          const char *vat = cur_skip(&c);
+          int64_t x = 0;
+          MX_CHECK(cur_int(&c, &x, "face"));
+          if (j == k) {
+            MX_CHECK(tag_range(r, vat, x, "reference"));
+            ref = x;
+          } else if (x < 1 || x >= (int64_t)UINT32_MAX) {
+            return fail(r, vat, "%.*s %zu: vertex %lld out of range",
+                        shown(n), t, i + 1, (long long)x);
+          } else {
+            v[j] = (uint32_t)x;
+          }
+        }
+        add_face(out, k, v, (int32_t)ref);
+      }
+      continue;
+    }
     const int vt = medit_cell_type(code);
     const int k = mx_cell_nodes[vt];
     if (cnt > cur_left(&c) / (2 * (uint64_t)(k + 1)) + 1)
@@ -1806,6 +2268,7 @@ static int read_meshb(rd *r, mx_mesh_data *out) {
   const int pos_size = ver >= 3 ? 8 : 4, cnt_size = ver >= 4 ? 8 : 4,
             real_size = ver == 1 ? 4 : 8, int_size = ver >= 4 ? 8 : 4;
   int have_vert = 0;
+  size_t fcap = 0;
   const size_t len = (size_t)(r->end - r->buf);
   for (;;) {
     if (cur_left(&c) == 0) return fail(r, NULL, "no End (truncated file?)");
@@ -1824,13 +2287,15 @@ static int read_meshb(rd *r, mx_mesh_data *out) {
       const int d = (int)(int32_t)(uint32_t)bin_u(&c, 4);
       if (d != 3)
         return fail(r, at, "Dimension %d: only 3D meshes are supported", d);
-    } else if (code == MED_VERT || medit_cell_type(code) >= 0) {
+    } else if (code == MED_VERT || medit_cell_type(code) >= 0 ||
+               medit_face_nodes(code)) {
       MX_CHECK(cur_need(&c, (uint64_t)cnt_size, "line count"));
       const uint64_t cnt = bin_u(&c, cnt_size);
-      const int vt = medit_cell_type(code);
+      const int vt = medit_cell_type(code), fk = medit_face_nodes(code);
       const uint64_t line =
-          vt < 0 ? 3 * (uint64_t)real_size + (uint64_t)int_size
-                 : (uint64_t)(mx_cell_nodes[vt] + 1) * (uint64_t)int_size;
+          fk     ? (uint64_t)(fk + 1) * (uint64_t)int_size
+          : vt < 0 ? 3 * (uint64_t)real_size + (uint64_t)int_size
+                   : (uint64_t)(mx_cell_nodes[vt] + 1) * (uint64_t)int_size;
       if (cnt > cur_left(&c) / line)
         return fail(r, at,
                     "keyword %d: %llu lines of %llu bytes announced but "
@@ -1838,7 +2303,28 @@ static int read_meshb(rd *r, mx_mesh_data *out) {
                     "count)",
                     code, (unsigned long long)cnt, (unsigned long long)line,
                     cur_left(&c));
-      if (vt < 0) {
+      if (fk) {
+        MX_CHECK(face_room(r, out, &fcap, (size_t)cnt));
+        for (size_t i = 0; i < cnt; i++) {
+          uint32_t v[4] = {0, 0, 0, 0};
+          for (int j = 0; j <= fk; j++) {
+            const uint64_t u = bin_u(&c, int_size);
+            const int64_t sv = int_size == 4 ? (int32_t)(uint32_t)u
+                                             : (int64_t)u;
+            if (j == fk) {
+              MX_CHECK(tag_range(r, c.p - int_size, sv, "reference"));
+              add_face(out, fk, v, (int32_t)sv);
+            } else if (sv < 1 || sv >= (int64_t)UINT32_MAX) {
+              return fail(r, c.p - int_size,
+                          "%s %zu: vertex %lld out of range",
+                          fk == 3 ? "triangle" : "quadrilateral",
+                          out->nfaces, (long long)sv);
+            } else {
+              v[j] = (uint32_t)sv;
+            }
+          }
+        }
+      } else if (vt < 0) {
         if (have_vert) return fail(r, at, "Vertices given twice");
         have_vert = 1;
         if (cnt >= UINT32_MAX) return fail(r, at, "too many vertices");
@@ -1925,8 +2411,9 @@ static int is_meshb(const rd *r) {
  *    with i = 0, 1, 2, ... in order ("POINT COUNT n" lines skipped), "END
  *    POINTS LIST", "BEGIN MESH STRUCTURE DESCRIPTION", lines "CONVEX i 'GT'
  *    n0 n1 ..." with i = 0, 1, 2, ... and GetFEM's geometric transformation
- *    ("CONVEX COUNT n" skipped), "END MESH STRUCTURE DESCRIPTION"; what
- *    follows (regions) is ignored.
+ *    ("CONVEX COUNT n" skipped), "END MESH STRUCTURE DESCRIPTION", then
+ *    the regions (read_mesh.h: their faces are the tagged faces); what
+ *    follows them is ignored.
  * Indices are 0-based and checked against the nodes read before them. Node
  * orders are mixoct's (prisms in Gmsh's order) but for GetFEM's pyramid and
  * hexahedron, which are reordered as io/write_getfem.c describes. Counts are
@@ -2102,18 +2589,11 @@ static int read_mvm(rd *r, const char *p, mx_mesh_data *out) {
   return cur_at_end(&c);
 }
 
-/* GetFEM's node j of each type is slot getfem_slot[t][j] of our row (the
- * table of io/write_getfem.c; its permutations are their own inverses). */
-static const int8_t getfem_slot[4][8] = {{0, 1, 2, 3, 0, 0, 0, 0},
-                                         {0, 1, 3, 2, 4, 0, 0, 0},
-                                         {0, 1, 2, 3, 4, 5, 0, 0},
-                                         {0, 1, 3, 2, 4, 5, 7, 6}};
-
+/* GetFEM's node j of each type is slot mx_getfem_node[t][j] of our row
+ * (io/getfem_tables.h: the permutations are their own inverses). */
 static int getfem_type(const char *t, size_t n) {
-  static const char *const name[4] = {"'GT_PK(3,1)'", "'GT_PYRAMID(1)'",
-                                      "'GT_PRISM(3,1)'", "'GT_QK(3,1)'"};
   for (int k = 0; k < 4; k++)
-    if (tok_eq(t, n, name[k])) return k;
+    if (tok_eq(t, n, mx_getfem_geotrans[k])) return k;
   return -1;
 }
 
@@ -2236,9 +2716,78 @@ static int getfem_convexes(cur *c, mx_mesh_data *out) {
                   "'GT_PYRAMID(1)', 'GT_PRISM(3,1)', 'GT_QK(3,1)')",
                   out->ncells, shown(n), t);
     MX_CHECK(reserve_cell(c->r, out, &cap));
-    MX_CHECK(cur_cell_nodes(c, out, out->ncells, type, getfem_slot[type]));
+    MX_CHECK(cur_cell_nodes(c, out, out->ncells, type, mx_getfem_node[type]));
     out->ncells++;
   }
+}
+
+/* One item of a region: "cv/f" (a face: added with tag t) or "cv" (a
+ * whole convex: skipped). */
+static int getfem_region_item(cur *c, const char *it, size_t n, int32_t t,
+                              mx_mesh_data *out, size_t *cap) {
+  int64_t cv = 0, g = -1;
+  const char *e = mx_io_int(it, &cv);
+  const char *slash = e && e < it + n && *e == '/' ? e : NULL;
+  if (slash) e = mx_io_int(slash + 1, &g);
+  if (!e || e != it + n)
+    return fail(c->r, it, "region %d: '%.*s' is not a convex number or "
+                "convex/face", t, shown(n), it);
+  if (cv < 0 || (uint64_t)cv >= out->ncells)
+    return fail(c->r, it, "region %d: convex %lld out of range (%zu "
+                "convexes, 0-based)", t, (long long)cv, out->ncells);
+  if (!slash) return MX_OK;
+  const int type = out->type[cv];
+  const int f = g >= 0 ? mx_getfem_local_face(type, g) : -1;
+  if (f < 0)
+    return fail(c->r, it, "region %d: convex %lld (%s) has no face %lld",
+                t, (long long)cv, mx_getfem_geotrans[type], (long long)g);
+  MX_CHECK(face_room(c->r, out, cap, 1));
+  const int8_t *fl = mx_cell_faces[type][f];
+  const int k = fl[3] < 0 ? 3 : 4;
+  uint32_t v[4] = {0, 0, 0, 0};
+  for (int j = 0; j < k; j++) v[j] = out->conn[8 * (size_t)cv + (size_t)fl[j]];
+  add_face(out, k, v, t);
+  return MX_OK;
+}
+
+/* The regions after the convexes: "BEGIN REGION t", items, "END REGION t"
+ * (BOUNDARY for REGION, as older GetFEM wrote). Anything else ends them. */
+static int getfem_regions(cur *c, mx_mesh_data *out) {
+  size_t cap = 0;
+  for (;;) {
+    const char *save = c->p;
+    size_t n;
+    const char *t = cur_tok(c, &n);
+    if (!tok_eq(t, n, "BEGIN")) break;
+    const char *w = cur_tok(c, &n);
+    const int region = tok_eq(w, n, "REGION");
+    if (!region && !tok_eq(w, n, "BOUNDARY")) {
+      c->p = save;
+      break;
+    }
+    const char *at = cur_skip(c);
+    int64_t num = 0;
+    MX_CHECK(cur_int(c, &num, "GetFEM region number"));
+    if (num < 0 || num > INT32_MAX)
+      return fail(c->r, at, "region number %lld is out of range (0 to %d)",
+                  (long long)num, INT32_MAX);
+    for (;;) {
+      const char *it = cur_tok(c, &n);
+      if (n == 0)
+        return fail(c->r, it, "region %lld: no END %s (truncated file?)",
+                    (long long)num, region ? "REGION" : "BOUNDARY");
+      if (tok_eq(it, n, "END")) break;
+      MX_CHECK(getfem_region_item(c, it, n, (int32_t)num, out, &cap));
+    }
+    MX_CHECK(cur_words(c, region ? "REGION" : "BOUNDARY", "GetFEM"));
+    at = cur_skip(c);
+    int64_t again = 0;
+    MX_CHECK(cur_int(c, &again, "GetFEM region number"));
+    if (again != num)
+      return fail(c->r, at, "END REGION %lld closes region %lld",
+                  (long long)again, (long long)num);
+  }
+  return MX_OK;
 }
 
 static int read_getfem(rd *r, const char *p, mx_mesh_data *out) {
@@ -2246,7 +2795,8 @@ static int read_getfem(rd *r, const char *p, mx_mesh_data *out) {
   MX_CHECK(cur_words(&c, "BEGIN POINTS LIST", "GetFEM"));
   MX_CHECK(getfem_points(&c, out));
   MX_CHECK(cur_words(&c, "BEGIN MESH STRUCTURE DESCRIPTION", "GetFEM"));
-  return getfem_convexes(&c, out);
+  MX_CHECK(getfem_convexes(&c, out));
+  return getfem_regions(&c, out);
 }
 
 /* Whether the first token at p (after blank lines, and '%' comment lines
@@ -2284,6 +2834,13 @@ void mx_mesh_data_free(mx_mesh_data *m) {
   mx_free(m->xyz);
   mx_free(m->type);
   mx_free(m->conn);
+  mx_free(m->face_nn);
+  mx_free(m->face_conn);
+  mx_free(m->face_tag);
+  for (size_t i = 0; m->name && i < m->nnames; i++) mx_free(m->name[i]);
+  mx_free(m->name_tag);
+  mx_free(m->name);
+  mx_free(m->node_tag);
   memset(m, 0, sizeof *m);
 }
 

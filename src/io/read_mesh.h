@@ -8,7 +8,7 @@
  *    DATASET UNSTRUCTURED_GRID: POINTS float|double, CELLS as the classic
  *    count-prefixed list or, from version 5, as OFFSETS + CONNECTIVITY
  *    (vtktypeint32/int64), CELL_TYPES; FIELD and METADATA blocks are
- *    skipped; CELL_DATA / POINT_DATA and what follows are ignored;
+ *    skipped; of CELL_DATA / POINT_DATA only surface_tag is read (below);
  *  - VTK XML UnstructuredGrid (.vtu), one Piece, byte_order Little- or
  *    BigEndian, header_type UInt32 or UInt64, arrays format="appended" with
  *    <AppendedData encoding="raw"> or format="ascii"; points Float32 or
@@ -20,11 +20,14 @@
  *    order, size_t of 4 or 8 bytes): $Nodes and $Elements, other sections
  *    skipped; linear tetrahedra, hexahedra, prisms and pyramids kept in the
  *    order of their element tags (mixoct writes tag = index + 1, so a file
- *    of src/io/write_msh.c reads back in its order); points, lines,
- *    triangles and quadrangles skipped; other types are an error;
+ *    of src/io/write_msh.c reads back in its order); triangles and
+ *    quadrangles of dimension 2 are the tagged faces (below); points,
+ *    lines and other triangles and quadrangles are skipped; other types
+ *    are an error;
  *  - Medit .mesh (ASCII, "MeshVersionFormatted" first) and .meshb (binary,
  *    versions 1 to 4, either byte order): Vertices, Tetrahedra, Pyramids,
- *    Prisms, Hexahedra, other keywords skipped, "End" required; cells in
+ *    Prisms, Hexahedra, Triangles and Quadrilaterals (the tagged faces,
+ *    below), other keywords skipped, "End" required; cells in
  *    the file's order (so grouped by type), node orders as in
  *    src/io/write_medit.c (mixoct's);
  *  - M3D ("[Nodes," first: the published mesher's layout, REFERENCE.md,
@@ -34,6 +37,25 @@
  *    format is read as the one its extension (.m3d, .mvm, .getfem) names.
  *    Node orders as in soa/mesh.h (prisms in Gmsh's order); GetFEM's
  *    pyramids and hexahedra are reordered to it.
+ *
+ * Boundary tags (the tagged boundary faces of mixoct's full-stage files,
+ * see io/write_msh.c, io/write_medit.c, io/write_getfem.c):
+ *  - MSH: the triangles (type 2) and quadrangles (3) of blocks of
+ *    dimension 2; a face's tag is the first physical tag of its surface
+ *    entity in $Entities (the entity tag when the entity has none or the
+ *    file has no $Entities); names from $PhysicalNames of dimension 2 (the
+ *    text between the first and the last '"' of the line);
+ *  - Medit: Triangles and Quadrilaterals, the tag being the reference;
+ *  - GetFEM: after END MESH STRUCTURE DESCRIPTION, "BEGIN REGION t" (or
+ *    BOUNDARY, GetFEM's older word), blank-separated items "cv/f" (face f of
+ *    convex cv, GetFEM's face numbering: io/getfem_tables.h) or "cv" (a
+ *    whole convex, not a face: skipped), "END REGION t"; anything else
+ *    after the convexes ends the reading, as before regions were read;
+ *  - VTK, VTU: no faces; an integer point field named surface_tag (legacy:
+ *    SCALARS in POINT_DATA; VTU: a DataArray of <PointData>) is returned as
+ *    node_tag. Other attributes are skipped; an attribute the legacy reader
+ *    does not know ends the attributes (its values are not read).
+ * M3D and MVM files have none.
  *
  * Every count is checked against the bytes left in the file before
  * anything is allocated for it, and binary values are read only after the
@@ -55,9 +77,24 @@ typedef struct {
   double *xyz;    /* 3*nnodes, interleaved */
   uint8_t *type;  /* ncells, MX_TET .. MX_HEX */
   uint32_t *conn; /* 8 per cell; entries past the type's node count are 0 */
+  /* Tagged boundary faces, when the file has them (else 0 and NULL; see
+   * "Boundary tags" above), in the file's order: */
+  size_t nfaces;
+  uint8_t *face_nn;    /* nfaces: 3 (triangle) or 4 (quadrilateral) */
+  uint32_t *face_conn; /* 4 per face, 0-based; a triangle's 4th entry is 0 */
+  int32_t *face_tag;   /* nfaces */
+  /* Names of boundary tags, when the file has them (else 0 and NULL): tag
+   * name_tag[i] is named name[i] (NUL-terminated); tags are unique. */
+  size_t nnames;
+  int32_t *name_tag;
+  char **name;
+  /* The point field surface_tag of a VTK or VTU file (nnodes values), or
+   * NULL. */
+  int32_t *node_tag;
 } mx_mesh_data;
 
 int mx_read_mesh(const char *path, mx_mesh_data *out);
+/* Frees every array (the new fields too) and zeroes *m. */
 void mx_mesh_data_free(mx_mesh_data *m);
 
 /* A view for the writers (no fields). */

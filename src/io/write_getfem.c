@@ -77,23 +77,13 @@
 #include "common.h"
 #include "io/atomic_file.h"
 #include "io/boundary_faces.h"
+#include "io/getfem_tables.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
 
-/* GetFEM's node k of each type is mixoct's (VTK's) node getfem_order[t][k]. */
-static const int8_t getfem_order[4][8] = {
-    {0, 1, 2, 3, -1, -1, -1, -1},
-    {0, 1, 3, 2, 4, -1, -1, -1},
-    {0, 1, 2, 3, 4, 5, -1, -1},
-    {0, 1, 3, 2, 4, 5, 7, 6}};
-
-/* GetFEM's face number of mixoct's local face f (soa/mesh.h mx_cell_faces)
- * of each type. */
-static const int8_t getfem_face[4][6] = {
-    {3, 2, 0, 1, -1, -1}, {0, 1, 2, 3, 4, -1}, {4, 3, 2, 0, 1, -1}, {5, 4, 3, 0, 2, 1}};
-
-static const char *const getfem_geotrans[4] = {
-    "'GT_PK(3,1)'", "'GT_PYRAMID(1)'", "'GT_PRISM(3,1)'", "'GT_QK(3,1)'"};
+/* GetFEM's node order, face numbers and geometric transformations
+ * (mx_getfem_node, mx_getfem_face, mx_getfem_geotrans): io/getfem_tables.h,
+ * shared with the reader. */
 
 enum {
   /* "  POINT  ", the index, 3 doubles after 2 blanks each, '\n' */
@@ -139,11 +129,11 @@ static size_t fill_convexes(const void *vctx, size_t b, size_t e, char *out) {
     n += put_str(out + n, "  CONVEX ");
     n += mx_put_u64(out + n, k);
     n += put_str(out + n, "    ");
-    n += put_str(out + n, getfem_geotrans[t]);
+    n += put_str(out + n, mx_getfem_geotrans[t]);
     n += put_str(out + n, "     ");
     for (int j = 0; j < mx_cell_nodes[t]; j++) {
       out[n++] = ' ';
-      n += mx_put_u64(out + n, row[getfem_order[t][j]]);
+      n += mx_put_u64(out + n, row[mx_getfem_node[t][j]]);
     }
     out[n++] = '\n';
   }
@@ -165,7 +155,7 @@ static size_t fill_region(const void *vctx, size_t b, size_t e, char *out) {
     const size_t cell = (size_t)(c->src[i] >> 3);
     n += mx_put_u64(out + n, c->cv[cell]);
     out[n++] = '/';
-    n += mx_put_u64(out + n, (uint64_t)getfem_face[c->m->type[cell]][c->src[i] & 7]);
+    n += mx_put_u64(out + n, (uint64_t)mx_getfem_face[c->m->type[cell]][c->src[i] & 7]);
     out[n++] = '\n';
   }
   return n;

@@ -13,6 +13,8 @@
  *     stay sorted for the triangle lookups of the quad-vs-triangles test;
  *  4. element edge midpoints and quad face centres against the hash;
  *  5. boundary faces: quads against triangles, edges sorted and counted;
+ *     the tagged faces looked up in the buckets (the tags' counts: faces
+ *     sorted by tag, each tag's edges sorted and counted);
  *  6. geometric hanging nodes: every element with a face used once goes, by
  *     its bounding box, into the cells it meets (at most 2 per axis) of the
  *     level of a multi-level grid whose cells are at least its size (cells
@@ -691,12 +693,11 @@ static int faces_match(const mx_mesh_data *m, faces *F, const chash *H,
   return MX_OK;
 }
 
-/* Whether the triangle a-b-c is a face used by exactly one element. */
-static int boundary_triangle(const mx_mesh_data *m, const faces *F,
-                             uint32_t a, uint32_t b, uint32_t c) {
-  uint32_t v[4] = {a, b, c, 0};
-  sort4(v, 3);
-  const fkey want = key_of(3, v, 0);
+/* The first slot (in its sorted bucket) of a face with the sorted nodes v
+ * (n of them), or -1. */
+static int64_t find_slot(const mx_mesh_data *m, const faces *F,
+                         const uint32_t *v, int n) {
+  const fkey want = key_of((uint32_t)n, v, 0);
   uint64_t lo = bucket_begin(F, v[0]), hi = F->end[v[0]];
   while (lo < hi) { /* first entry not below want */
     const uint64_t mid = lo + (hi - lo) / 2;
@@ -706,9 +707,18 @@ static int boundary_triangle(const mx_mesh_data *m, const faces *F,
     else
       hi = mid;
   }
-  if (lo == F->end[v[0]]) return 0;
+  if (lo == F->end[v[0]]) return -1;
   const fkey k = slot_key(m, F->slot[lo]);
-  return key_cmp(&k, &want) == 0 && F->use[F->slot[lo]] == 1;
+  return key_cmp(&k, &want) == 0 ? (int64_t)F->slot[lo] : -1;
+}
+
+/* Whether the triangle a-b-c is a face used by exactly one element. */
+static int boundary_triangle(const mx_mesh_data *m, const faces *F,
+                             uint32_t a, uint32_t b, uint32_t c) {
+  uint32_t v[4] = {a, b, c, 0};
+  sort4(v, 3);
+  const int64_t s = find_slot(m, F, v, 3);
+  return s >= 0 && F->use[s] == 1;
 }
 
 /* ---- pass 4: edge midpoints ---------------------------------------------- */
@@ -825,6 +835,248 @@ static int boundary_pass(const mx_mesh_data *m, const faces *F,
   }
   mx_free(bnd);
   mx_free(ek);
+  return st;
+}
+
+/* ---- pass 5b: boundary tags ----------------------------------------------- */
+
+/* A sort key of tag t ordering tags as signed integers, with v below. */
+static inline uint64_t tag_key(int32_t t, uint32_t v) {
+  return (uint64_t)((uint32_t)t ^ 0x80000000u) << 32 | v;
+}
+
+static inline int32_t key_tag(uint64_t k) {
+  return (int32_t)((uint32_t)(k >> 32) ^ 0x80000000u);
+}
+
+/* The names of m sorted by tag (keys as tag_key(tag, index)), or NULL. */
+static int sorted_names(const mx_mesh_data *m, uint64_t **out) {
+  *out = NULL;
+  if (!m->nnames || !m->name || !m->name_tag || m->nnames >= UINT32_MAX)
+    return MX_OK;
+  uint64_t *k = mx_alloc(m->nnames * sizeof *k);
+  if (!k) return MX_EINPUT;
+  for (size_t i = 0; i < m->nnames; i++) k[i] = tag_key(m->name_tag[i], (uint32_t)i);
+  const int st = mx_sort_u64(k, NULL, m->nnames);
+  if (st != MX_OK) {
+    mx_free(k);
+    return st;
+  }
+  *out = k;
+  return MX_OK;
+}
+
+/* The name of tag t (its first in the file), or NULL. */
+static const char *tag_name(const mx_mesh_data *m, const uint64_t *k,
+                            int32_t t) {
+  if (!k) return NULL;
+  size_t lo = 0, hi = m->nnames;
+  const uint64_t want = tag_key(t, 0);
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (k[mid] < want)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  if (lo == m->nnames || key_tag(k[lo]) != t) return NULL;
+  return m->name[(uint32_t)k[lo]];
+}
+
+/* Copies the names of the listed tags into tags->names. */
+static int keep_names(mx_check_tag *list, size_t n, mx_check_tags *tags) {
+  size_t total = 1;
+  for (size_t i = 0; i < n; i++)
+    if (list[i].name) total += strlen(list[i].name) + 1;
+  char *buf = mx_alloc(total);
+  if (!buf) return MX_EINPUT;
+  size_t at = 0;
+  for (size_t i = 0; i < n; i++) {
+    if (!list[i].name) continue;
+    const size_t l = strlen(list[i].name) + 1;
+    memcpy(buf + at, list[i].name, l);
+    list[i].name = buf + at;
+    at += l;
+  }
+  tags->names = buf;
+  return MX_OK;
+}
+
+/* The tags of the tagged faces, with their counts: faces sorted by tag,
+ * then per tag its edges sorted and counted. bad[i]: face i is not a
+ * boundary face. */
+static int face_tag_list(const mx_mesh_data *m, const uint8_t *bad,
+                         const uint64_t *names, mx_check_tag **out,
+                         size_t *nout) {
+  const size_t nf = m->nfaces;
+  uint64_t *k = mx_alloc((nf + 1) * sizeof *k);
+  uint64_t *ek = mx_alloc((4 * nf + 1) * sizeof *ek);
+  if (!k || !ek) {
+    mx_free(k);
+    mx_free(ek);
+    return MX_EINPUT;
+  }
+  for (size_t i = 0; i < nf; i++) k[i] = tag_key(m->face_tag[i], (uint32_t)i);
+  int st = mx_sort_u64(k, NULL, nf);
+  size_t nt = 0;
+  for (size_t i = 0; st == MX_OK && i < nf; i++)
+    nt += i == 0 || key_tag(k[i]) != key_tag(k[i - 1]);
+  mx_check_tag *list = st == MX_OK ? mx_calloc((nt + 1) * sizeof *list) : NULL;
+  if (st == MX_OK && !list) st = MX_EINPUT;
+  size_t t = 0;
+  for (size_t a = 0; st == MX_OK && a < nf; t++) {
+    size_t b = a + 1;
+    while (b < nf && key_tag(k[b]) == key_tag(k[a])) b++;
+    mx_check_tag *g = &list[t];
+    g->tag = key_tag(k[a]);
+    g->name = tag_name(m, names, g->tag);
+    size_t ne = 0;
+    for (size_t x = a; x < b; x++) {
+      const size_t f = (uint32_t)k[x];
+      const int n = m->face_nn[f];
+      const uint32_t *v = m->face_conn + 4 * f;
+      g->triangles += n == 3;
+      g->quads += n == 4;
+      g->not_boundary += bad[f];
+      for (int j = 0; j < n; j++) {
+        const uint32_t p = v[j], q = v[(j + 1) % n];
+        ek[ne++] = p < q ? (uint64_t)p << 32 | q : (uint64_t)q << 32 | p;
+      }
+    }
+    st = mx_sort_u64(ek, NULL, ne);
+    for (size_t i = 0; st == MX_OK && i < ne;) {
+      size_t j = i + 1;
+      while (j < ne && ek[j] == ek[i]) j++;
+      g->open_edges += (j - i) % 2;
+      i = j;
+    }
+    a = b;
+  }
+  mx_free(k);
+  mx_free(ek);
+  if (st != MX_OK) {
+    mx_free(list);
+    return st;
+  }
+  *out = list;
+  *nout = nt;
+  return MX_OK;
+}
+
+/* The values of the node tags but 0, with their node counts. */
+static int node_tag_list(const mx_mesh_data *m, const uint64_t *names,
+                         mx_check_tag **out, size_t *nout) {
+  const size_t nn = m->nnodes;
+  uint64_t *k = mx_alloc((nn + 1) * sizeof *k);
+  if (!k) return MX_EINPUT;
+#pragma omp parallel for schedule(static) if (nn > SMALL)
+  for (size_t i = 0; i < nn; i++) k[i] = tag_key(m->node_tag[i], 0);
+  int st = mx_sort_u64(k, NULL, nn);
+  size_t nt = 0;
+  for (size_t i = 0; st == MX_OK && i < nn; i++)
+    nt += (i == 0 || k[i] != k[i - 1]) && key_tag(k[i]) != 0;
+  mx_check_tag *list = st == MX_OK ? mx_calloc((nt + 1) * sizeof *list) : NULL;
+  if (st == MX_OK && !list) st = MX_EINPUT;
+  size_t t = 0;
+  for (size_t a = 0; st == MX_OK && a < nn;) {
+    size_t b = a + 1;
+    while (b < nn && k[b] == k[a]) b++;
+    if (key_tag(k[a]) != 0) {
+      list[t].tag = key_tag(k[a]);
+      list[t].name = tag_name(m, names, list[t].tag);
+      list[t++].nodes = b - a;
+    }
+    a = b;
+  }
+  mx_free(k);
+  if (st != MX_OK) {
+    mx_free(list);
+    return st;
+  }
+  *out = list;
+  *nout = nt;
+  return MX_OK;
+}
+
+/* Matches every tagged face with the faces of the elements (the buckets of
+ * faces_match): the tagged faces that are not boundary faces, the boundary
+ * faces no tagged face names; then, when tags is not NULL, the per-tag
+ * lists. */
+static int tag_pass(const mx_mesh_data *m, const faces *F,
+                    mx_check_report *r, mx_check_tags *tags) {
+  const size_t nf = m->nfaces, nslots = 6 * m->ncells;
+  r->has_node_tags = m->node_tag != NULL;
+  r->has_tagged_faces = nf > 0;
+  r->tagged_faces = nf;
+  if (!nf && !(tags && m->node_tag)) return MX_OK;
+  uint8_t *named = mx_calloc(nslots + 1); /* boundary slot named by a face */
+  uint8_t *bad = mx_alloc(nf + 1);       /* tagged face not a boundary face */
+  if (!named || !bad) {
+    mx_free(named);
+    mx_free(bad);
+    return MX_EINPUT;
+  }
+  size_t nb = 0;
+#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : nb) \
+    if (nf > SMALL)
+  for (size_t i = 0; i < nf; i++) {
+    uint32_t v[4];
+    const int n = m->face_nn[i];
+    memcpy(v, m->face_conn + 4 * i, sizeof v);
+    sort4(v, n);
+    const int64_t s = find_slot(m, F, v, n);
+    const int ok = s >= 0 && F->use[s] == 1;
+    bad[i] = (uint8_t)!ok;
+    nb += !ok;
+    if (ok) __atomic_store_n(&named[s], 1, __ATOMIC_RELAXED);
+  }
+  r->tagged_not_boundary = nb;
+  size_t un = 0;
+  if (nf) {
+#pragma omp parallel for schedule(static) reduction(+ : un) \
+    if (nslots > SMALL)
+    for (size_t s = 0; s < nslots; s++) un += F->use[s] == 1 && !named[s];
+  }
+  r->boundary_untagged = un;
+  mx_check_ids *l = &r->not_boundary_ids;
+  for (size_t i = 0; i < nf && nb && l->n < MX_CHECK_LIST; i++)
+    if (bad[i]) l->id[l->n++] = (uint32_t)i;
+  l = &r->untagged_ids;
+  for (size_t s = 0; s < nslots && un && l->n < MX_CHECK_LIST; s++)
+    if (F->use[s] == 1 && !named[s] &&
+        (l->n == 0 || l->id[l->n - 1] != (uint32_t)(s / 6)))
+      l->id[l->n++] = (uint32_t)(s / 6);
+  mx_free(named);
+  int st = MX_OK;
+  if (tags) {
+    uint64_t *names = NULL;
+    st = sorted_names(m, &names);
+    if (st == MX_OK && nf)
+      st = face_tag_list(m, bad, names, &tags->face_tags, &tags->nface_tags);
+    if (st == MX_OK && m->node_tag)
+      st = node_tag_list(m, names, &tags->node_tags, &tags->nnode_tags);
+    mx_free(names);
+    mx_check_tag *all = NULL;
+    const size_t n = tags->nface_tags + tags->nnode_tags;
+    if (st == MX_OK && n) { /* both lists' names in one buffer */
+      all = mx_alloc(n * sizeof *all);
+      if (!all) st = MX_EINPUT;
+    }
+    if (all) {
+      if (tags->nface_tags)
+        memcpy(all, tags->face_tags, tags->nface_tags * sizeof *all);
+      if (tags->nnode_tags)
+        memcpy(all + tags->nface_tags, tags->node_tags,
+               tags->nnode_tags * sizeof *all);
+      st = keep_names(all, n, tags);
+      for (size_t i = 0; st == MX_OK && i < tags->nface_tags; i++)
+        tags->face_tags[i].name = all[i].name;
+      for (size_t i = 0; st == MX_OK && i < tags->nnode_tags; i++)
+        tags->node_tags[i].name = all[tags->nface_tags + i].name;
+      mx_free(all);
+    }
+  }
+  mx_free(bad);
   return st;
 }
 
@@ -1714,6 +1966,30 @@ static int validate(const mx_mesh_data *m) {
              bad / 3);
     return MX_EINPUT;
   }
+  if (m->nfaces && (!m->face_nn || !m->face_conn || !m->face_tag ||
+                    m->nfaces >= UINT32_MAX)) {
+    mx_error(NULL, 0, "check: %zu tagged faces without their arrays, or too "
+             "many", m->nfaces);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static) reduction(min : bad) \
+    if (m->nfaces > SMALL)
+  for (size_t f = 0; f < m->nfaces; f++) {
+    const int n = m->face_nn[f];
+    if (n != 3 && n != 4) {
+      if (f < bad) bad = f;
+      continue;
+    }
+    for (int j = 0; j < n; j++)
+      if (m->face_conn[4 * f + (size_t)j] >= m->nnodes && f < bad) bad = f;
+  }
+  if (bad != SIZE_MAX) {
+    mx_error(NULL, 0,
+             "check: tagged face %zu has %d nodes (3 or 4) or a node index "
+             "out of range (%zu nodes)",
+             bad, m->face_nn[bad], m->nnodes);
+    return MX_EINPUT;
+  }
   return MX_OK;
 }
 
@@ -1760,7 +2036,7 @@ static void collect_lists(const mx_mesh_data *m, const work *w,
 
 static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
                       const mx_check_options *o, mx_check_report *r,
-                      work *w) {
+                      mx_check_tags *tags, work *w) {
   const size_t nn = m->nnodes;
   w->flags = mx_calloc(nn + 1);
   w->ef = mx_calloc(m->ncells + 1);
@@ -1793,6 +2069,7 @@ static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
   for (size_t v = 0; v < nn; v++) hang += (flags[v] & F_HANG) != 0;
   r->hanging_nodes = hang;
   MX_CHECK(boundary_pass(m, &w->F, flags, w->ef, fc.boundary, r));
+  MX_CHECK(tag_pass(m, &w->F, r, tags));
   mx_free(H->slot); /* memory for the next passes */
   mx_free(H->seg);
   H->slot = H->seg = NULL;
@@ -1838,9 +2115,19 @@ static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
   return MX_OK;
 }
 
-int mx_check_mesh_opt(const mx_mesh_data *m, const mx_trisoup *surface,
-                      const mx_check_options *opt, mx_check_report *r) {
+void mx_check_tags_free(mx_check_tags *tags) {
+  if (!tags) return;
+  mx_free(tags->face_tags);
+  mx_free(tags->node_tags);
+  mx_free(tags->names);
+  memset(tags, 0, sizeof *tags);
+}
+
+int mx_check_mesh_tags(const mx_mesh_data *m, const mx_trisoup *surface,
+                       const mx_check_options *opt, mx_check_report *r,
+                       mx_check_tags *tags) {
   memset(r, 0, sizeof *r);
+  if (tags) memset(tags, 0, sizeof *tags);
   mx_check_options o;
   mx_check_defaults(&o);
   if (opt) o = *opt;
@@ -1853,15 +2140,21 @@ int mx_check_mesh_opt(const mx_mesh_data *m, const mx_trisoup *surface,
   r->empty = m->nnodes == 0 || m->ncells == 0;
   work w;
   memset(&w, 0, sizeof w);
-  const int st = check_body(m, surface, &o, r, &w);
+  const int st = check_body(m, surface, &o, r, tags, &w);
   work_free(&w);
   if (st != MX_OK) return st;
   r->defects = r->empty + r->invalid + r->degenerate + r->faces_overshared +
                r->faces_misoriented + r->quad_vs_triangles +
                r->open_boundary_edges + r->hanging_nodes +
                r->geometric_hanging_nodes + r->unused_nodes +
-               r->duplicate_nodes + r->volume_off + r->boundary_off_surface;
+               r->duplicate_nodes + r->volume_off + r->boundary_off_surface +
+               r->tagged_not_boundary + r->boundary_untagged;
   return MX_OK;
+}
+
+int mx_check_mesh_opt(const mx_mesh_data *m, const mx_trisoup *surface,
+                      const mx_check_options *opt, mx_check_report *r) {
+  return mx_check_mesh_tags(m, surface, opt, r, NULL);
 }
 
 int mx_check_mesh(const mx_mesh_data *m, const mx_trisoup *surface,

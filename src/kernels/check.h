@@ -69,13 +69,28 @@
  *                      distance is more than boundary_tol (1e-6) times the
  *                      diagonal. With an open surface (a hole) both
  *                      measures are reported but count as no defect.
+ * Boundary tags (io/read_mesh.h: the tagged faces of MSH, Medit and GetFEM
+ * files, the point field surface_tag of VTK files), when the mesh has them:
+ *  tagged_faces        faces in the mesh's list of tagged faces;
+ *  tagged_not_boundary* tagged faces that are not boundary faces (not used
+ *                      by exactly one element: interior, overshared, or no
+ *                      face of any element);
+ *  boundary_untagged*  boundary faces that no tagged face names; counted
+ *                      only when the mesh has tagged faces at all;
+ *  per tag (mx_check_tags, from mx_check_mesh_tags): its name when the file
+ *  gives one, its triangles and quadrilaterals, its open edges (edges used
+ *  an odd number of times by the tag's faces: 0 when they close up; not a
+ *  defect, an input with a hole has an open boundary) and its faces that
+ *  are not boundary faces; for node tags, the nodes with each value but 0.
  *  defects = the sum of every counter marked *.
  * For each kind of defect the report lists the first MX_CHECK_LIST element
  * ids (0-based, ascending) involved -- elements with the bad J_ENS, the
  * elements using an overshared or misoriented face, the quad's element, the
  * elements of the faces along an open edge, the elements on which a
- * hanging node lies -- and the first node ids of the node defects; and the
- * first MX_CHECK_SHOWN geometric hanging nodes with where they lie.
+ * hanging node lies, the elements with an untagged boundary face -- and the
+ * first node ids of the node defects, the first tagged faces (their index
+ * in the mesh's list) that are not boundary faces; and the first
+ * MX_CHECK_SHOWN geometric hanging nodes with where they lie.
  * Sums are formed in fixed chunks and lists are the smallest ids, so every
  * number is the same whatever the thread count. */
 #ifndef MX_CHECK_MESH_H
@@ -165,7 +180,27 @@ typedef struct {
   mx_check_ids node_ids[MX_CK_NODE_KINDS];
   size_t nshown; /* entries of hang_at */
   mx_check_hang hang_at[MX_CHECK_SHOWN];
+  /* boundary tags */
+  int has_tagged_faces, has_node_tags;
+  size_t tagged_faces, tagged_not_boundary, boundary_untagged;
+  mx_check_ids untagged_ids;     /* elements with an untagged boundary face */
+  mx_check_ids not_boundary_ids; /* tagged faces that are not boundary faces */
 } mx_check_report;
+
+/* One boundary tag of the mesh (check.h's definitions above). */
+typedef struct {
+  int32_t tag;
+  const char *name; /* NULL when the file names none; in mx_check_tags */
+  size_t triangles, quads, open_edges, not_boundary; /* tagged faces */
+  size_t nodes;                                      /* node tags */
+} mx_check_tag;
+
+/* The tags of the tagged faces and of the node tags, each ascending. */
+typedef struct {
+  size_t nface_tags, nnode_tags;
+  mx_check_tag *face_tags, *node_tags;
+  char *names; /* where the names are kept */
+} mx_check_tags;
 
 /* The defaults above. */
 void mx_check_defaults(mx_check_options *o);
@@ -179,6 +214,13 @@ int mx_check_mesh_opt(const mx_mesh_data *m, const mx_trisoup *surface,
 /* The same with the default options. */
 int mx_check_mesh(const mx_mesh_data *m, const mx_trisoup *surface,
                   mx_check_report *r);
+/* mx_check_mesh_opt, and the boundary tags one by one into *tags (zeroed
+ * first; tags NULL: not collected). Free with mx_check_tags_free (also
+ * after a failure). */
+int mx_check_mesh_tags(const mx_mesh_data *m, const mx_trisoup *surface,
+                       const mx_check_options *opt, mx_check_report *r,
+                       mx_check_tags *tags);
+void mx_check_tags_free(mx_check_tags *tags);
 
 /* The geometric hanging-node search of the check alone, for the mesher's own
  * verification: the nodes v with node_sel[v] != 0 against the n elements of

@@ -79,7 +79,8 @@ int mx_find_contacts(const mx_mesh_out *M, const uint8_t *states, uint8_t *elem_
   for (size_t v = 0; v < nn; v++) sel[v] = states[v] == MX_NODE_OUTSIDE;
   mx_check_options o;
   mx_check_defaults(&o);
-  const mx_mesh_data md = {nn, nc, M->xyz, M->type, M->conn};
+  const mx_mesh_data md = {.nnodes = nn, .ncells = nc, .xyz = M->xyz, .type = M->type,
+                           .conn = M->conn};
   uint8_t *ehit = elem_flag ? elem_flag : mx_calloc(nc + 1);
   size_t found = 0;
   int st = ehit ? mx_check_contacts(&md, list, (size_t)nl, sel, o.hang_tol, hit, ehit, &found)
