@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# What the files a solver can use directly cost (issue 11): the cortex at a
+# level, written as binary .vtu and binary .msh, by a baseline mixoct (an
+# older build, e.g. without tagged boundaries and grouped blocks) and by the
+# current one, in the same run, alternating, REPEAT times each; the write
+# phase seconds from --json (phases.write), their medians and the ratio
+# current / baseline; then meshio reading the current .vtu (blocks, seconds).
+#
+#   bench/write_bench.sh BASELINE_MIXOCT MIXOCT [LEVEL] [REPEAT]
+#
+# LEVEL defaults to 9, REPEAT to 3. Needs ../shared/data (or MIXOCT_DATA)
+# and, for the meshio line, /usr/bin/python3 with meshio (python3-meshio).
+# Files go to a temporary directory, removed at the end.
+set -u
+export LC_ALL=C
+OLD=${1:?usage: write_bench.sh BASELINE_MIXOCT MIXOCT [LEVEL] [REPEAT]}
+NEW=${2:?usage: write_bench.sh BASELINE_MIXOCT MIXOCT [LEVEL] [REPEAT]}
+LEVEL=${3:-9}
+REPEAT=${4:-3}
+here=$(cd "$(dirname "$0")" && pwd)
+DATA=${MIXOCT_DATA:-$here/../../shared/data}
+SURF=$DATA/surfaces/cortex.off
+[ -f "$SURF" ] || { echo "write_bench: $SURF not found (set MIXOCT_DATA)"; exit 2; }
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+
+# one run: prints "total write" seconds from the JSON line
+run() { # binary, output file
+  "$1" -i "$SURF" -s "$LEVEL" -o "$2" --json 2>/dev/null | tail -1 |
+    python3 -c 'import json,sys; d=json.loads(sys.stdin.read()); print(d["total_s"], d["phases"]["write"], d["elements"])'
+}
+median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
+
+echo "# cortex -s $LEVEL, $REPEAT runs each, alternating; seconds (median)"
+for fmt in vtu msh; do
+  : >"$T/old_$fmt"; : >"$T/new_$fmt"
+  for _ in $(seq 1 "$REPEAT"); do
+    run "$OLD" "$T/old.$fmt" >>"$T/old_$fmt"
+    run "$NEW" "$T/new.$fmt" >>"$T/new_$fmt"
+  done
+  ow=$(awk '{print $2}' "$T/old_$fmt" | median); nw=$(awk '{print $2}' "$T/new_$fmt" | median)
+  ot=$(awk '{print $1}' "$T/old_$fmt" | median); nt=$(awk '{print $1}' "$T/new_$fmt" | median)
+  osz=$(stat -c %s "$T/old.$fmt"); nsz=$(stat -c %s "$T/new.$fmt")
+  printf '%-4s write: baseline %.3f s, current %.3f s (x%.2f); run: %.3f s -> %.3f s (x%.2f); file %.1f MB -> %.1f MB\n' \
+    "$fmt" "$ow" "$nw" "$(awk -v a="$nw" -v b="$ow" 'BEGIN{print a/b}')" "$ot" "$nt" \
+    "$(awk -v a="$nt" -v b="$ot" 'BEGIN{print a/b}')" "$(awk -v s="$osz" 'BEGIN{print s/1e6}')" \
+    "$(awk -v s="$nsz" 'BEGIN{print s/1e6}')"
+done
+if /usr/bin/python3 -c 'import meshio' 2>/dev/null; then
+  for who in old new; do
+    /usr/bin/python3 - "$T/$who.vtu" "$who" <<'PY'
+import sys, time, meshio
+t = time.perf_counter(); m = meshio.read(sys.argv[1]); dt = time.perf_counter() - t
+print("meshio %-8s .vtu: %d cells in %d blocks, read in %.2f s" % (
+    "baseline" if sys.argv[2] == "old" else "current", sum(len(c.data) for c in m.cells), len(m.cells), dt))
+PY
+  done
+else
+  echo "meshio: not installed (python3-meshio)"
+fi
