@@ -90,7 +90,7 @@ static const int type_keyword_code[4] = {KW_TETRAHEDRA, KW_PYRAMIDS, KW_PRISMS,
 
 typedef struct {
   const mx_mesh_view *m;
-  const uint32_t *cells; /* the cells of one type, in index order (mx_cells_by_type) */
+  const uint32_t *cells; /* the cells of one type, in written order (cells_by_type) */
   int type;
   const uint32_t *faces; /* boundary faces of one size */
   int face_size;
@@ -200,6 +200,32 @@ static size_t fill_faces_bin(const void *vctx, size_t b, size_t e, char *out) {
     n += 4;
   }
   return n;
+}
+
+/* The cells grouped by type (Medit has a section per type), each type's in
+ * the view's written order (mx_view_cell), so the files of every format
+ * list the cells of a type in the same order. */
+static int cells_by_type(const mx_mesh_view *m, uint32_t **cells_out, size_t first[5]) {
+  const size_t n = m->ncells;
+  uint32_t *cells = mx_alloc((n + 1) * sizeof *cells);
+  uint8_t *wtype = m->order ? mx_alloc(n + 1) : NULL;
+  int st = cells && (wtype || !m->order) ? MX_OK : MX_EINPUT;
+  if (!st && m->order) {
+#pragma omp parallel for schedule(static)
+    for (size_t k = 0; k < n; k++) wtype[k] = m->type[m->order[k]];
+  }
+  if (!st) st = mx_cells_by_type(m->order ? wtype : m->type, n, cells, first);
+  if (!st && m->order) {
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; i++) cells[i] = m->order[cells[i]];
+  }
+  mx_free(wtype);
+  if (st) {
+    mx_free(cells);
+    cells = NULL;
+  }
+  *cells_out = cells;
+  return st;
 }
 
 /* ---- file layout ------------------------------------------------------------
@@ -342,9 +368,9 @@ int mx_write_medit(const char *path, const mx_mesh_view *m, int binary) {
     return st;
   }
   d.bf = m->bfaces ? m->bfaces : &bf;
-  uint32_t *cells = mx_alloc((m->ncells + 1) * sizeof *cells);
-  size_t first[5];
-  st = cells ? mx_cells_by_type(m->type, m->ncells, cells, first) : MX_EINPUT;
+  uint32_t *cells = NULL;
+  size_t first[5] = {0, 0, 0, 0, 0};
+  st = cells_by_type(m, &cells, first);
   for (int t = 0; t < 4; t++) {
     d.first[t] = first[t];
     d.count[t] = first[t + 1] - first[t];
