@@ -125,6 +125,22 @@ double mx_wtime(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+void mx_mem_mark(const char *label) {
+  static int on = -1;
+  if (on < 0) on = getenv("MX_MEMTRACE") != NULL;
+  if (!on) return;
+  long pages = 0, rss = 0;
+  FILE *f = fopen("/proc/self/statm", "r");
+  if (f) {
+    if (fscanf(f, "%ld %ld", &pages, &rss) != 2) rss = 0;
+    fclose(f);
+  }
+  static double t0 = 0.0;
+  if (t0 == 0.0) t0 = mx_wtime();
+  fprintf(stderr, "mem %-24s rss %8.1f MB  peak %8.1f MB  t %7.3f s\n", label,
+          (double)rss * 4096.0 / 1048576.0, mx_peak_rss_mb(), mx_wtime() - t0);
+}
+
 double mx_peak_rss_mb(void) {
   struct rusage ru;
   if (getrusage(RUSAGE_SELF, &ru) != 0) return 0.0;

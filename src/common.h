@@ -51,5 +51,9 @@ static inline double mx_max(double a, double b) { return a > b ? a : b; }
 
 double mx_wtime(void);        /* wall clock seconds */
 double mx_peak_rss_mb(void);  /* peak resident set size of this process */
+/* With MX_MEMTRACE set in the environment: one stderr line with the
+ * current and peak resident set and the wall clock, labelled (a debugging
+ * aid for the memory budget; nothing otherwise). */
+void mx_mem_mark(const char *label);
 
 #endif

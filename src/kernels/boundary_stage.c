@@ -19,10 +19,12 @@ int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
   double t = mx_wtime();
   int st = mx_node_states(B, leaves, M, S, states, &stats->located);
   double t1 = mx_wtime();
+  mx_mem_mark("b.states");
   stats->t_states = t1 - t;
   if (!st)
     st = mx_move_close_nodes(M, states, S, close_ratio, &stats->moved_close, &moved);
   t = mx_wtime();
+  mx_mem_mark("b.close");
   stats->t_close = t - t1;
   mx_optional opt;
   memset(&opt, 0, sizeof opt);
@@ -30,15 +32,18 @@ int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
   mx_free(moved);
   stats->removed = stats->sp.removed;
   t1 = mx_wtime();
+  mx_mem_mark("b.patterns");
   stats->t_patterns = t1 - t;
   if (!st) st = mx_shrink_to_boundary(B, leaves, M, states, &stats->shrunk);
   t = mx_wtime();
+  mx_mem_mark("b.shrink");
   stats->t_shrink = t - t1;
   t1 = t;
   if (!st) stats->inverted = M->invalid; /* counted by the shrink */
   /* untangle what the shrink inverted, and lift the worst elements */
   if (!st) st = mx_smooth_nodes(M, states, S, staircase_q, 20, &stats->smoothed);
   t = mx_wtime();
+  mx_mem_mark("b.smooth");
   stats->t_smooth = t - t1;
   if (!st && staircase_q < 1.0) st = mx_staircase(M, &opt, staircase_q, &stats->sp);
   stats->t_staircase = mx_wtime() - t;

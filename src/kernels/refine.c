@@ -277,6 +277,7 @@ int mx_split_octants(mx_builder *B, const uint32_t *list, size_t n,
   if (n == 0) return MX_OK;
   mx_octree *T = &B->oct;
   const int l = T->level[list[0]];
+  if (B->use_edges) MX_CHECK(mx_edges_restore(B));
   /* below the levels whose edge infos are complete: those of these octants
    * and their neighbours (transition masks), and of their parents and the
    * parents' neighbours (the balance looks for leaves there) */

@@ -53,6 +53,11 @@ typedef struct {
    * there and their face and edge neighbours (flag MX_OCT_EDGES). The
    * deepest such level, -1 for none. */
   int edge_lazy_top;
+  /* The edge infos were freed after the transition masks (mx_edges_release,
+   * kernels/remesh.h) and are rebuilt when a split needs them; the counts
+   * they had are kept for the summary. */
+  int edges_released;
+  size_t released_edges, released_edge_bytes;
   uint32_t *root_of;          /* root octant of each root cube (lazy) */
   mx_refine_stats stats;
   /* Optional (NULL by default): octants that must be split whatever the

@@ -8,29 +8,61 @@
 #include <omp.h>
 #include <string.h>
 
+void mx_edges_release(mx_builder *B) {
+  if (!B->use_edges || B->edges_released) return;
+  B->released_edges = mx_edges_total(&B->edges);
+  B->released_edge_bytes = mx_edges_bytes(&B->edges);
+  mx_edges_free(&B->edges);
+  mx_free(B->scratch_mask);
+  mx_free(B->scratch_info);
+  mx_free(B->scratch_off);
+  B->scratch_mask = NULL;
+  B->scratch_info = NULL;
+  B->scratch_off = NULL;
+  B->scratch_mask_cap = B->scratch_info_cap = B->scratch_off_cap = 0;
+  B->edges_released = 1;
+}
+
+/* Register every octant of `level` that passes the filter (flag bits that
+ * must be set, 0: all). */
+static int register_level(mx_builder *B, int level, uint8_t need) {
+  const mx_octree *T = &B->oct;
+  size_t n = 0;
+#pragma omp parallel for schedule(static) reduction(+ : n)
+  for (size_t o = 0; o < T->n; o++) n += T->level[o] == level && (T->flags[o] & need) == need;
+  if (n == 0) return MX_OK;
+  MX_CHECK(mx_edges_reserve(&B->edges, level, 4 * n + 16));
+  size_t created[3] = {0, 0, 0};
+#pragma omp parallel
+  {
+    size_t mine[3] = {0, 0, 0};
+#pragma omp for schedule(static)
+    for (size_t o = 0; o < T->n; o++)
+      if (T->level[o] == level && (T->flags[o] & need) == need)
+        mx_edges_register(&B->edges, (uint32_t)o, T->key[o], level, mine);
+#pragma omp critical
+    for (int a = 0; a < 3; a++) created[a] += mine[a];
+  }
+  mx_edges_add_count(&B->edges, level, created);
+  return MX_OK;
+}
+
+int mx_edges_restore(mx_builder *B) {
+  if (!B->edges_released) return MX_OK;
+  B->edges_released = 0;
+  const int top = B->edge_levels < MX_MAX_LEVEL - 1 ? B->edge_levels : MX_MAX_LEVEL - 1;
+  for (int l = 0; l <= top; l++) MX_CHECK(register_level(B, l, 0));
+  for (int l = top + 1; l <= B->edge_lazy_top; l++)
+    MX_CHECK(register_level(B, l, (uint8_t)MX_OCT_EDGES));
+  return MX_OK;
+}
+
 int mx_raise_edge_levels(mx_builder *B, int levels) {
   if (!B->use_edges) return MX_OK;
+  MX_CHECK(mx_edges_restore(B));
   if (levels > MX_MAX_LEVEL - 1) levels = MX_MAX_LEVEL - 1;
-  const mx_octree *T = &B->oct;
-  for (int l = B->edge_levels + 1; l <= levels; l++) {
-    if (l < 0) continue;
-    size_t n = 0;
-#pragma omp parallel for schedule(static) reduction(+ : n)
-    for (size_t o = 0; o < T->n; o++) n += T->level[o] == l;
-    MX_CHECK(mx_edges_reserve(&B->edges, l, 4 * n + 16));
-    size_t created[3] = {0, 0, 0};
-#pragma omp parallel
-    {
-      size_t mine[3] = {0, 0, 0};
-#pragma omp for schedule(static)
-      for (size_t o = 0; o < T->n; o++)
-        if (T->level[o] == l)
-          mx_edges_register(&B->edges, (uint32_t)o, T->key[o], l, mine);
-#pragma omp critical
-      for (int a = 0; a < 3; a++) created[a] += mine[a];
-    }
-    mx_edges_add_count(&B->edges, l, created);
-  }
+  for (int l = B->edge_levels + 1; l <= levels; l++)
+    if (l >= 0) MX_CHECK(register_level(B, l, 0));
   if (levels > B->edge_levels) B->edge_levels = levels;
   return MX_OK;
 }
@@ -69,6 +101,7 @@ static const int8_t near18[18][3] = {
 int mx_edges_ensure(mx_builder *B, const uint32_t *list, size_t n, int with_parents) {
   mx_octree *T = &B->oct;
   if (!B->use_edges || n == 0) return MX_OK;
+  MX_CHECK(mx_edges_restore(B));
   MX_CHECK(build_root_map(B));
   /* up to 19 octants around each listed octant and each parent, taken once
    * (the flag, set atomically, says who registers) */
@@ -168,6 +201,7 @@ static int kept_on_edge(const mx_octree *T, uint32_t x, int p, int sp, int q, in
  * coarser leaves are split here, with balance, until none is left. */
 int mx_resolve_closures(mx_builder *B) {
   mx_octree *T = &B->oct;
+  MX_CHECK(mx_edges_restore(B));
   MX_CHECK(build_root_map(B));
   const int top = mx_edge_top(B);
   for (int round = 0; round < 64; round++) {

@@ -23,6 +23,14 @@
 #include "kernels/refine.h"
 
 int mx_raise_edge_levels(mx_builder *B, int levels);
+/* Memory between meshings: once the transition masks are known, nothing
+ * reads the edge infos until the octree is split again, so
+ * mx_edges_release frees them (and the split scratch), and
+ * mx_edges_restore, called by every step that splits or looks edges up,
+ * registers again the same octants (every octant of levels <= edge_levels,
+ * and those flagged MX_OCT_EDGES deeper). MX_OK or MX_EINPUT (memory). */
+void mx_edges_release(mx_builder *B);
+int mx_edges_restore(mx_builder *B);
 /* Edge infos, at levels deeper than edge_levels, for the octants list[0..n)
  * (one level; about to be split) and their face and edge neighbours of the
  * same level, and with_parents, for their parents and the parents'

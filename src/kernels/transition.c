@@ -213,25 +213,17 @@ void mx_mesh_out_free(mx_mesh_out *m) {
   memset(m, 0, sizeof *m);
 }
 
-int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
-                  mx_mesh_out *out) {
-  memset(out, 0, sizeof *out);
-  MX_CHECK(mx_patterns_init());
+int mx_transition_masks(const mx_builder *B, const uint32_t *leaves, size_t n,
+                        mx_leaf_masks *lm) {
+  memset(lm, 0, sizeof *lm);
+  if (B->edges_released) {
+    mx_error(NULL, 0, "internal: transition masks without edge infos");
+    return MX_EINTERNAL;
+  }
   const mx_octree *T = &B->oct;
   uint32_t *mask = mx_alloc((n + 1) * sizeof *mask);
-  mx_pattern_ref *ref = mx_alloc((n + 1) * sizeof *ref);
-  uint64_t *noff = mx_alloc((n + 1) * sizeof *noff);
-  uint64_t *eoff = mx_alloc((n + 1) * sizeof *eoff);
-  node_hash H = {NULL, 0, 0, 0};
-  {
-    /* nodes lie on the lattice of midpoints of the finest leaves */
-    int top = 0;
-    for (size_t i = 0; i < n; i++)
-      if (T->level[leaves[i]] > top) top = T->level[leaves[i]];
-    H.shift = 3 * (MX_MAX_LEVEL - top - 1);
-  }
-  int st = (!mask || !ref || !noff || !eoff) ? MX_EINPUT : MX_OK;
-  size_t closures = 0, centres = 0, bad = 0, points = 0;
+  int st = !mask ? MX_EINPUT : MX_OK;
+  size_t closures = 0;
   uint32_t *cbits = mx_alloc((n + 1) * sizeof *cbits);
   if (!cbits) st = MX_EINPUT;
   if (!st) {
@@ -248,6 +240,44 @@ int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
   }
   if (!st && closures) st = propagate_closures(B, leaves, n, mask, cbits);
   mx_free(cbits);
+  if (st) {
+    mx_free(mask);
+    return st;
+  }
+  lm->mask = mask;
+  lm->closures = closures;
+  return MX_OK;
+}
+
+int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
+                  mx_mesh_out *out) {
+  mx_leaf_masks lm;
+  memset(out, 0, sizeof *out);
+  MX_CHECK(mx_transition_masks(B, leaves, n, &lm));
+  return mx_transition_build(B, leaves, n, &lm, out);
+}
+
+int mx_transition_build(const mx_builder *B, const uint32_t *leaves, size_t n,
+                        mx_leaf_masks *lm, mx_mesh_out *out) {
+  memset(out, 0, sizeof *out);
+  uint32_t *mask = lm->mask;
+  const size_t closures = lm->closures;
+  lm->mask = NULL;
+  int st = mx_patterns_init();
+  const mx_octree *T = &B->oct;
+  mx_pattern_ref *ref = mx_alloc((n + 1) * sizeof *ref);
+  uint64_t *noff = mx_alloc((n + 1) * sizeof *noff);
+  uint64_t *eoff = mx_alloc((n + 1) * sizeof *eoff);
+  node_hash H = {NULL, 0, 0, 0};
+  {
+    /* nodes lie on the lattice of midpoints of the finest leaves */
+    int top = 0;
+    for (size_t i = 0; i < n; i++)
+      if (T->level[leaves[i]] > top) top = T->level[leaves[i]];
+    H.shift = 3 * (MX_MAX_LEVEL - top - 1);
+  }
+  if (!st && (!mask || !ref || !noff || !eoff)) st = MX_EINPUT;
+  size_t centres = 0, bad = 0, points = 0;
   if (!st) {
 #pragma omp parallel for schedule(static) reduction(+ : centres, bad, points)
     for (size_t i = 0; i < n; i++) {

@@ -44,6 +44,17 @@ typedef struct {
 /* leaves: the balanced leaves, in Morton order (mx_leaves_sorted). */
 int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
                   mx_mesh_out *out);
+/* The same in two steps, so that the caller can free the edge infos in
+ * between (only step 1 reads them): the masks (with the closures), then
+ * everything else; mx_transition_build takes over lm->mask (freed). */
+typedef struct {
+  uint32_t *mask;
+  size_t closures;
+} mx_leaf_masks;
+int mx_transition_masks(const mx_builder *B, const uint32_t *leaves, size_t n,
+                        mx_leaf_masks *lm);
+int mx_transition_build(const mx_builder *B, const uint32_t *leaves, size_t n,
+                        mx_leaf_masks *lm, mx_mesh_out *out);
 void mx_mesh_out_free(mx_mesh_out *m);
 
 #endif

@@ -448,6 +448,7 @@ static int assemble_inputs(mx_mesher *m) {
 /* ---- stages ------------------------------------------------------------ */
 
 static void stage(const mx_mesher *m, const char *name) {
+  mx_mem_mark(name);
   if (m->on_stage) m->on_stage(name);
 }
 
@@ -593,7 +594,13 @@ static int transition(mx_mesher *m) {
   mx_mesh_clear(m);
   const double t = mx_wtime();
   stage(m, "transition");
-  MX_CHECK(mx_transition(&m->B, m->leaves, m->nleaves, &m->M));
+  MX_CHECK(mx_edges_restore(&m->B));
+  mx_leaf_masks lm;
+  MX_CHECK(mx_transition_masks(&m->B, m->leaves, m->nleaves, &lm));
+  /* nothing reads the edge infos again until the octree is split: their
+   * memory goes to the mesh (rebuilt by the next split, kernels/remesh.h) */
+  mx_edges_release(&m->B);
+  MX_CHECK(mx_transition_build(&m->B, m->leaves, m->nleaves, &lm, &m->M));
   m->mesh_stage = MX_STAGE_TRANSITION;
   m->S.ph.transition += mx_wtime() - t;
   return MX_OK;
@@ -803,8 +810,9 @@ void mx_fill_tree_stats(mx_mesher *m) {
   S->leaves = m->nleaves;
   S->leaves_hash = mx_leaves_hash(&m->B, m->leaves, m->nleaves);
   S->octants = m->B.oct.n;
-  S->edges = mx_edges_total(&m->B.edges);
-  S->edge_bytes = mx_edges_bytes(&m->B.edges);
+  S->edges = m->B.edges_released ? m->B.released_edges : mx_edges_total(&m->B.edges);
+  S->edge_bytes =
+      m->B.edges_released ? m->B.released_edge_bytes : mx_edges_bytes(&m->B.edges);
   S->located = m->B.stats.located;
   S->split_requested = m->B.stats.split_requested;
   S->split_balance = m->B.stats.split_balance;

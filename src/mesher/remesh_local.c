@@ -28,6 +28,7 @@
 #include <string.h>
 
 #include "kernels/mesh_edit.h"
+#include "kernels/remesh.h"
 #include "kernels/splice.h"
 
 /* (core, patch) rings of the attempts. With 3 and 6 the cortex re-meshes of
@@ -125,7 +126,8 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
     mx_boundary_stats bs;
     memset(&bs, 0, sizeof bs);
     const double t1 = mx_wtime();
-    st = mx_transition(&m->B, P, np, &Mp);
+    st = mx_edges_restore(&m->B);
+    if (!st) st = mx_transition(&m->B, P, np, &Mp);
     const double t2 = mx_wtime();
     m->S.ph.transition += t2 - t1;
     if (!st) {
