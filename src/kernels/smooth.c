@@ -70,6 +70,143 @@ static double worst_of(const mx_mesh_out *M, const uint32_t *inc, size_t e0, siz
   return w;
 }
 
+/* Colours of the work nodes such that two nodes of one element never share
+ * a colour (Jones-Plassmann: in each round, every uncoloured node whose
+ * priority beats its uncoloured neighbours takes the smallest colour its
+ * neighbours lack; the priorities are a hash of the node id, so the colours
+ * do not depend on the threads). widx: work index of each node, UINT32_MAX
+ * outside the work set. Returns the number of colours, or -1 (memory, or
+ * more than MAX_COLOURS). */
+enum { MAX_COLOURS = 256 };
+
+static uint32_t node_priority(uint32_t v) {
+  uint32_t h = v * 0x9E3779B1u;
+  h ^= h >> 15;
+  h *= 0x85EBCA77u;
+  h ^= h >> 13;
+  return h;
+}
+
+/* 1 when work node i goes before work node j */
+static int before(const uint32_t *work, size_t i, size_t j) {
+  const uint32_t pi = node_priority(work[i]), pj = node_priority(work[j]);
+  return pi != pj ? pi > pj : i < j;
+}
+
+static int colour_work(const mx_mesh_out *M, const uint32_t *inc, const uint64_t *off,
+                       const uint32_t *work, size_t nw, const uint32_t *widx,
+                       int16_t *colour) {
+  uint8_t *pick = mx_alloc(nw + 1);
+  if (!pick) return -1;
+#pragma omp parallel for schedule(static)
+  for (size_t i = 0; i < nw; i++) colour[i] = -1;
+  size_t left = nw;
+  int ncol = 0, overflow = 0;
+  while (left && !overflow) {
+#pragma omp parallel for schedule(dynamic, 256)
+    for (size_t i = 0; i < nw; i++) {
+      pick[i] = 0;
+      if (colour[i] >= 0) continue;
+      const uint32_t v = work[i];
+      int best = 1;
+      for (uint64_t e = off[v]; e < off[v + 1] && best; e++) {
+        const uint32_t *row = M->conn + 8 * (size_t)inc[e];
+        for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++) {
+          const uint32_t j = widx[row[k]];
+          if (j == UINT32_MAX || j == i || colour[j] >= 0) continue;
+          if (before(work, j, i)) {
+            best = 0;
+            break;
+          }
+        }
+      }
+      pick[i] = (uint8_t)best;
+    }
+    size_t got = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : got) reduction(| : overflow)
+    for (size_t i = 0; i < nw; i++) {
+      if (!pick[i]) continue;
+      uint64_t used[MAX_COLOURS / 64] = {0, 0, 0, 0};
+      const uint32_t v = work[i];
+      for (uint64_t e = off[v]; e < off[v + 1]; e++) {
+        const uint32_t *row = M->conn + 8 * (size_t)inc[e];
+        for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++) {
+          const uint32_t j = widx[row[k]];
+          if (j == UINT32_MAX || j == i) continue;
+          const int cj = colour[j];
+          if (cj >= 0) used[cj / 64] |= 1ull << (cj % 64);
+        }
+      }
+      int c = 0;
+      while (c < MAX_COLOURS && ((used[c / 64] >> (c % 64)) & 1)) c++;
+      if (c == MAX_COLOURS) {
+        overflow = 1;
+        c = 0;
+      }
+      colour[i] = (int16_t)c;
+      got++;
+    }
+    left -= got;
+  }
+  mx_free(pick);
+  if (overflow) return -1;
+  for (size_t i = 0; i < nw; i++)
+    if (colour[i] + 1 > ncol) ncol = colour[i] + 1;
+  return ncol;
+}
+
+/* One move of work node v (index i): the best of a few points between its
+ * position and the centroid of its neighbours, kept when it raises the worst
+ * J_ENS of its elements; then their J_ENS and the marks of their nodes.
+ * Touches only v's position and v's elements: nodes of one colour move at
+ * once. Returns 1 when v moved. */
+static int move_node(mx_mesh_out *M, const mx_surface_index *S, const uint32_t *inc,
+                     const uint64_t *off, uint8_t *mark, uint32_t v, int on_surface,
+                     double q_target) {
+  static const double steps[] = {1.0, 0.5, 0.25, 0.125};
+  const size_t e0 = off[v], e1 = off[v + 1];
+  double *x = M->xyz + 3 * (size_t)v;
+  const double w0 = worst_of(M, inc, e0, e1);
+  if (w0 >= q_target) return 0;
+  /* centroid of the other nodes of the incident elements */
+  double c[3] = {0.0, 0.0, 0.0};
+  size_t n = 0;
+  for (size_t e = e0; e < e1; e++) {
+    const uint32_t *cv = M->conn + 8 * (size_t)inc[e];
+    for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++) {
+      if (cv[k] == v) continue;
+      for (int a = 0; a < 3; a++) c[a] += M->xyz[3 * (size_t)cv[k] + a];
+      n++;
+    }
+  }
+  if (!n) return 0;
+  const double x0[3] = {x[0], x[1], x[2]};
+  double best = w0, bx[3] = {x0[0], x0[1], x0[2]};
+  for (size_t t = 0; t < sizeof steps / sizeof *steps; t++) {
+    for (int a = 0; a < 3; a++) x[a] = x0[a] + steps[t] * (c[a] / (double)n - x0[a]);
+    if (on_surface) { /* a boundary node stays on the surface */
+      double q[3];
+      mx_closest_point(S, x, q, NULL, NULL);
+      memcpy(x, q, sizeof q);
+    }
+    const double w = worst_of(M, inc, e0, e1);
+    if (w > best + 1e-12) {
+      best = w;
+      memcpy(bx, x, sizeof bx);
+    }
+  }
+  memcpy(x, bx, sizeof bx);
+  if (!(best > w0)) return 0;
+  for (size_t e = e0; e < e1; e++) {
+    M->jens[inc[e]] = elem_jens(M, inc[e]);
+    const uint32_t *cv = M->conn + 8 * (size_t)inc[e];
+    for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++)
+      if (off[cv[k] + 1] > off[cv[k]]) /* in the work set */
+        __atomic_store_n(&mark[cv[k]], 1, __ATOMIC_RELAXED);
+  }
+  return 1;
+}
+
 int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S,
                     double q_target, int sweeps, size_t *moved) {
   const size_t nn = M->nnodes, nc = M->ncells;
@@ -109,6 +246,7 @@ int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_inde
   uint32_t *inc = mx_alloc((total + 1) * sizeof *inc);
   uint64_t *cur = mx_alloc((nn + 1) * sizeof *cur);
   size_t nw = 0;
+#pragma omp parallel for schedule(static) reduction(+ : nw)
   for (size_t v = 0; v < nn; v++) nw += mark[v];
   uint32_t *work = mx_alloc((nw + 1) * sizeof *work);
   if (!inc || !cur || !work) {
@@ -122,12 +260,35 @@ int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_inde
       const uint32_t v = M->conn[8 * c + k];
       if (mark[v]) inc[__atomic_fetch_add(&cur[v], 1, __ATOMIC_RELAXED)] = (uint32_t)c;
     }
-  nw = 0;
-  for (size_t v = 0; v < nn; v++)
-    if (mark[v]) {
-      work[nw++] = (uint32_t)v;
-      qsort(inc + off[v], off[v + 1] - off[v], sizeof *inc, cmp_u32);
+  /* the work set in id order: counted per block, prefix-summed, filled */
+  {
+    enum { WB = 1 << 16 };
+    const size_t nb = (nn + WB - 1) / WB;
+    uint64_t *boff = mx_alloc((nb + 1) * sizeof *boff);
+    if (!boff) {
+      mx_free(inc); mx_free(cur); mx_free(work); mx_free(off); mx_free(mark);
+      return MX_EINPUT;
     }
+#pragma omp parallel for schedule(static)
+    for (size_t b = 0; b < nb; b++) {
+      uint64_t k = 0;
+      for (size_t v = b * WB; v < nn && v < (b + 1) * WB; v++) k += mark[v];
+      boff[b] = k;
+    }
+    mx_scan_u64(boff, nb);
+#pragma omp parallel for schedule(static)
+    for (size_t b = 0; b < nb; b++) {
+      uint64_t k = boff[b];
+      for (size_t v = b * WB; v < nn && v < (b + 1) * WB; v++)
+        if (mark[v]) work[k++] = (uint32_t)v;
+    }
+    mx_free(boff);
+  }
+#pragma omp parallel for schedule(dynamic, 256)
+  for (size_t i = 0; i < nw; i++) {
+    const uint32_t v = work[i];
+    qsort(inc + off[v], off[v + 1] - off[v], sizeof *inc, cmp_u32);
+  }
   mx_free(cur);
   /* Which work nodes stay on the surface: the outside ones, and the inside
    * ones on the mesh boundary (the topology does not change below). */
@@ -142,63 +303,57 @@ int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_inde
     onsurf[i] = (uint8_t)(states[v] != MX_NODE_INSIDE ||
                           on_mesh_boundary(M, inc, off[v], off[v + 1], v));
   }
+  /* Colours (kernels of the sweep run one colour at a time, its nodes in
+   * parallel: no two of them share an element), and the work nodes grouped
+   * by colour, in id order within one. */
+  uint32_t *widx = mx_alloc((nn + 1) * sizeof *widx);
+  int16_t *colour = mx_alloc((nw + 1) * sizeof *colour);
+  uint32_t *byc = mx_alloc((nw + 1) * sizeof *byc);
+  size_t cstart[MAX_COLOURS + 1];
+  int ncol = -1;
+  if (widx && colour && byc) {
+#pragma omp parallel for schedule(static)
+    for (size_t v = 0; v < nn; v++) widx[v] = UINT32_MAX;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < nw; i++) widx[work[i]] = (uint32_t)i;
+    ncol = colour_work(M, inc, off, work, nw, widx, colour);
+  }
+  mx_free(widx);
+  if (ncol < 0) {
+    mx_free(colour); mx_free(byc); mx_free(onsurf);
+    mx_free(inc); mx_free(work); mx_free(off); mx_free(mark);
+    mx_error(NULL, 0, "out of memory, or more than %d colours, in the untangling",
+             MAX_COLOURS);
+    return MX_EINPUT;
+  }
+  memset(cstart, 0, sizeof cstart);
+  for (size_t i = 0; i < nw; i++) cstart[colour[i] + 1]++;
+  for (int c = 0; c < ncol; c++) cstart[c + 1] += cstart[c];
+  {
+    size_t fill[MAX_COLOURS];
+    memcpy(fill, cstart, sizeof fill);
+    for (size_t i = 0; i < nw; i++) byc[fill[colour[i]]++] = (uint32_t)i;
+  }
+  mx_free(colour);
   /* mark[v] now means "v is in the work set and its neighbourhood changed
    * since it was last looked at". */
-  /* Sweeps, one node at a time in id order. */
-  static const double steps[] = {1.0, 0.5, 0.25, 0.125};
   size_t nm = 0;
   for (int s = 0; s < sweeps; s++) {
     size_t changed = 0;
-    for (size_t i = 0; i < nw; i++) {
-      const uint32_t v = work[i];
-      if (!mark[v]) continue;
-      mark[v] = 0;
-      const size_t e0 = off[v], e1 = off[v + 1];
-      double *x = M->xyz + 3 * (size_t)v;
-      const double w0 = worst_of(M, inc, e0, e1);
-      if (w0 >= q_target) continue;
-      /* centroid of the other nodes of the incident elements */
-      double c[3] = {0.0, 0.0, 0.0};
-      size_t n = 0;
-      for (size_t e = e0; e < e1; e++) {
-        const uint32_t *cv = M->conn + 8 * (size_t)inc[e];
-        for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++) {
-          if (cv[k] == v) continue;
-          for (int a = 0; a < 3; a++) c[a] += M->xyz[3 * (size_t)cv[k] + a];
-          n++;
-        }
-      }
-      if (!n) continue;
-      const double x0[3] = {x[0], x[1], x[2]};
-      const int on_surface = onsurf[i];
-      double best = w0, bx[3] = {x0[0], x0[1], x0[2]};
-      for (size_t t = 0; t < sizeof steps / sizeof *steps; t++) {
-        for (int a = 0; a < 3; a++) x[a] = x0[a] + steps[t] * (c[a] / (double)n - x0[a]);
-        if (on_surface) { /* a boundary node stays on the surface */
-          double q[3];
-          mx_closest_point(S, x, q, NULL, NULL);
-          memcpy(x, q, sizeof q);
-        }
-        const double w = worst_of(M, inc, e0, e1);
-        if (w > best + 1e-12) {
-          best = w;
-          memcpy(bx, x, sizeof bx);
-        }
-      }
-      memcpy(x, bx, sizeof bx);
-      if (best > w0) {
-        changed++;
-        for (size_t e = e0; e < e1; e++) {
-          M->jens[inc[e]] = elem_jens(M, inc[e]);
-          const uint32_t *cv = M->conn + 8 * (size_t)inc[e];
-          for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++)
-            if (off[cv[k] + 1] > off[cv[k]]) mark[cv[k]] = 1; /* in the work set */
-        }
+    for (int c = 0; c < ncol; c++) {
+#pragma omp parallel for schedule(dynamic, 32) reduction(+ : changed)
+      for (size_t k = cstart[c]; k < cstart[c + 1]; k++) {
+        const size_t i = byc[k];
+        const uint32_t v = work[i];
+        if (!__atomic_load_n(&mark[v], __ATOMIC_RELAXED)) continue;
+        mark[v] = 0;
+        changed += (size_t)move_node(M, S, inc, off, mark, v, onsurf[i], q_target);
       }
     }
     nm += changed;
     if (!changed) break;
   }
+  mx_free(byc);
   mx_free(onsurf);
   mx_free(inc);
   mx_free(off);

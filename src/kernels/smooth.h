@@ -15,8 +15,11 @@
 #include "kernels/transition.h"
 
 /* q_target: elements below it are worked on; sweeps: passes over the work
- * set. Serial over a sorted work set: deterministic. *moved: node moves
- * accepted. */
+ * set. The work nodes are coloured so that no two nodes of one element
+ * share a colour (priorities hashed from the node ids); a sweep takes the
+ * colours in turn and the nodes of one colour in parallel (their moves touch
+ * disjoint elements): deterministic, whatever the threads. *moved: node
+ * moves accepted. */
 int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S,
                     double q_target, int sweeps, size_t *moved);
 

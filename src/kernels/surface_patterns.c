@@ -46,49 +46,65 @@ static int sub_kept(const mx_surface_case *sc, const mx_pattern_elem *e, int *ce
   return kept;
 }
 
+/* What element c becomes: *kept sub-elements (1 for an element left as it
+ * is, 0 for one removed), *optional dropped ones, *centre 1 when the kept
+ * ones use the element centre; returns the case (NULL: as it is, &gone:
+ * removed). */
+static const mx_surface_case *element_counts(const mx_mesh_out *M, const uint8_t *states,
+                                             size_t c, uint32_t *kept, uint32_t *optional,
+                                             uint32_t *centre) {
+  const mx_surface_case *sc = case_of(M, states, c);
+  *kept = sc ? 0 : 1;
+  *optional = *centre = 0;
+  if (!sc || sc == &gone) return sc;
+  for (int i = 0; i < sc->count; i++) {
+    int uc;
+    if (sub_kept(sc, &mx_surface_elems[sc->first + i], &uc)) {
+      (*kept)++;
+      *centre |= (uint32_t)uc;
+    } else {
+      *optional += (uint32_t)!uc;
+    }
+  }
+  return sc;
+}
+
+/* Elements are counted and filled by blocks: the counts are kept per block
+ * only (a few KB, not three words per element), and the fill walks each
+ * block again from its block's offsets. */
+enum { SP_BLOCK = 2048 };
+
 int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *moved,
                         mx_optional *opt, mx_surface_stats *stats) {
   const size_t nc = M->ncells, nn = M->nnodes;
   const uint8_t *states = *states_io;
   memset(opt, 0, sizeof *opt);
-  /* 1. Count kept and optional sub-elements and centres per element. */
-  uint64_t *nout = mx_alloc((nc + 1) * sizeof *nout);
-  uint64_t *nopt = mx_alloc((nc + 1) * sizeof *nopt);
-  uint64_t *ncen = mx_alloc((nc + 1) * sizeof *ncen);
-  int16_t *cs = mx_alloc((nc + 1) * sizeof *cs); /* case per element: -1 as is, -2 gone */
-  if (!nout || !nopt || !ncen || !cs) {
-    mx_free(nout); mx_free(nopt); mx_free(ncen); mx_free(cs);
-    return MX_EINPUT;
-  }
+  /* 1. Count kept and optional sub-elements and centres per block. */
+  const size_t nb = (nc + SP_BLOCK - 1) / SP_BLOCK;
+  uint64_t *bout = mx_alloc((3 * nb + 3) * sizeof *bout);
+  if (!bout) return MX_EINPUT;
+  uint64_t *bopt = bout + nb + 1, *bcen = bopt + nb + 1;
   size_t patterned = 0, removed = 0;
 #pragma omp parallel for schedule(static) reduction(+ : patterned, removed)
-  for (size_t c = 0; c < nc; c++) {
-    const mx_surface_case *sc = case_of(M, states, c);
-    cs[c] = (int16_t)(!sc ? -1 : sc == &gone ? -2 : (int)(sc - mx_surface_cases));
-    if (!sc || sc == &gone) {
-      nout[c] = sc ? 0 : 1;
-      removed += sc != NULL;
-      nopt[c] = ncen[c] = 0;
-      continue;
-    }
-    patterned++;
+  for (size_t b = 0; b < nb; b++) {
+    const size_t end = (b + 1) * SP_BLOCK < nc ? (b + 1) * SP_BLOCK : nc;
     uint64_t k = 0, o = 0, cen = 0;
-    for (int i = 0; i < sc->count; i++) {
-      int uc;
-      if (sub_kept(sc, &mx_surface_elems[sc->first + i], &uc)) {
-        k++;
-        cen |= (uint64_t)uc;
-      } else {
-        o += !uc;
-      }
+    for (size_t c = b * SP_BLOCK; c < end; c++) {
+      uint32_t kc, oc, cc;
+      const mx_surface_case *sc = element_counts(M, states, c, &kc, &oc, &cc);
+      removed += sc == &gone;
+      patterned += sc && sc != &gone;
+      k += kc;
+      o += oc;
+      cen += cc;
     }
-    nout[c] = k;
-    nopt[c] = o;
-    ncen[c] = cen;
+    bout[b] = k;
+    bopt[b] = o;
+    bcen[b] = cen;
   }
-  const uint64_t total = mx_scan_u64(nout, nc);
-  const uint64_t total_opt = mx_scan_u64(nopt, nc);
-  const uint64_t total_cen = mx_scan_u64(ncen, nc);
+  const uint64_t total = mx_scan_u64(bout, nb);
+  const uint64_t total_opt = mx_scan_u64(bopt, nb);
+  const uint64_t total_cen = mx_scan_u64(bcen, nb);
   /* 2. Fill. */
   uint8_t *type = mx_alloc(total + 1);
   uint32_t *conn = mx_alloc((8 * total + 1) * sizeof *conn);
@@ -110,77 +126,77 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *move
       !opt->type ||
       !opt->conn || !opt->leaf || !opt->level) {
     mx_free(type); mx_free(conn); mx_free(level); mx_free(leaf); mx_free(jens);
-    mx_free(nout); mx_free(nopt); mx_free(ncen); mx_free(cs);
+    mx_free(bout);
     mx_optional_free(opt);
     return MX_EINPUT;
   }
+  states = st2;
 #pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < nc; c++) {
-    if (cs[c] == -2) continue;
-    const mx_surface_case *sc = cs[c] < 0 ? NULL : &mx_surface_cases[cs[c]];
-    const uint32_t *v = M->conn + 8 * c;
-    uint64_t w = nout[c];
-    if (!sc) {
-      type[w] = M->type[c];
-      memcpy(conn + 8 * w, v, 8 * sizeof *conn);
-      level[w] = M->level[c];
-      leaf[w] = M->leaf[c];
-      int mv = 0;
-      for (int k = 0; moved && k < mx_cell_nodes[M->type[c]]; k++) mv |= moved[v[k]];
-      if (mv) {
-        double x[8][3];
-        for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
-          memcpy(x[k], xyz + 3 * (size_t)v[k], sizeof x[k]);
-        jens[w] = mx_jens(M->type[c], x);
-      } else {
-        jens[w] = M->jens[c];
-      }
-      continue;
-    }
-    const int nv = mx_cell_nodes[M->type[c]];
-    uint32_t centre = UINT32_MAX;
-    int need = 0;
-    for (int i = 0; i < sc->count; i++) {
-      int uc;
-      need |= sub_kept(sc, &mx_surface_elems[sc->first + i], &uc) && uc;
-    }
-    if (need) {
-      centre = (uint32_t)(nn + ncen[c]);
-      double p[3] = {0.0, 0.0, 0.0};
-      for (int k = 0; k < nv; k++)
-        for (int a = 0; a < 3; a++) p[a] += M->xyz[3 * (size_t)v[k] + a];
-      for (int a = 0; a < 3; a++) xyz[3 * (size_t)centre + a] = p[a] / nv;
-      st2[centre] = sc->centre == 1 ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
-      if (nkey) nkey[centre] = MX_NKEY_NONE;
-    }
-    uint64_t o = nopt[c];
-    for (int i = 0; i < sc->count; i++) {
-      const mx_pattern_elem *e = &mx_surface_elems[sc->first + i];
-      int uc;
-      const int kept = sub_kept(sc, e, &uc);
-      if (!kept && uc) continue;
-      const int ne = mx_cell_nodes[e->type];
-      uint32_t g[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-      for (int k = 0; k < ne; k++) g[k] = e->v[k] == MX_SURFACE_CENTRE ? centre : v[e->v[k]];
-      if (kept) {
-        type[w] = e->type;
-        memcpy(conn + 8 * w, g, sizeof g);
+  for (size_t b = 0; b < nb; b++) {
+    const size_t end = (b + 1) * SP_BLOCK < nc ? (b + 1) * SP_BLOCK : nc;
+    uint64_t w = bout[b], o = bopt[b], cnext = bcen[b];
+    for (size_t c = b * SP_BLOCK; c < end; c++) {
+      uint32_t kc, oc, need;
+      const mx_surface_case *sc = element_counts(M, states, c, &kc, &oc, &need);
+      if (sc == &gone) continue;
+      const uint32_t *v = M->conn + 8 * c;
+      if (!sc) {
+        type[w] = M->type[c];
+        memcpy(conn + 8 * w, v, 8 * sizeof *conn);
         level[w] = M->level[c];
         leaf[w] = M->leaf[c];
-        double x[8][3];
-        for (int k = 0; k < ne; k++) memcpy(x[k], xyz + 3 * (size_t)g[k], sizeof x[k]);
-        jens[w] = mx_jens(e->type, x);
+        int mv = 0;
+        for (int k = 0; moved && k < mx_cell_nodes[M->type[c]]; k++) mv |= moved[v[k]];
+        if (mv) {
+          double x[8][3];
+          for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+            memcpy(x[k], xyz + 3 * (size_t)v[k], sizeof x[k]);
+          jens[w] = mx_jens(M->type[c], x);
+        } else {
+          jens[w] = M->jens[c];
+        }
         w++;
-      } else {
-        opt->type[o] = e->type;
-        memcpy(opt->conn + 8 * o, g, sizeof g);
-        opt->leaf[o] = M->leaf[c];
-        opt->level[o] = M->level[c];
-        o++;
+        continue;
+      }
+      const int nv = mx_cell_nodes[M->type[c]];
+      uint32_t centre = UINT32_MAX;
+      if (need) {
+        centre = (uint32_t)(nn + cnext++);
+        double p[3] = {0.0, 0.0, 0.0};
+        for (int k = 0; k < nv; k++)
+          for (int a = 0; a < 3; a++) p[a] += xyz[3 * (size_t)v[k] + a];
+        for (int a = 0; a < 3; a++) xyz[3 * (size_t)centre + a] = p[a] / nv;
+        st2[centre] = sc->centre == 1 ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
+        if (nkey) nkey[centre] = MX_NKEY_NONE;
+      }
+      for (int i = 0; i < sc->count; i++) {
+        const mx_pattern_elem *e = &mx_surface_elems[sc->first + i];
+        int uc;
+        const int kept = sub_kept(sc, e, &uc);
+        if (!kept && uc) continue;
+        const int ne = mx_cell_nodes[e->type];
+        uint32_t g[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+        for (int k = 0; k < ne; k++) g[k] = e->v[k] == MX_SURFACE_CENTRE ? centre : v[e->v[k]];
+        if (kept) {
+          type[w] = e->type;
+          memcpy(conn + 8 * w, g, sizeof g);
+          level[w] = M->level[c];
+          leaf[w] = M->leaf[c];
+          double x[8][3];
+          for (int k = 0; k < ne; k++) memcpy(x[k], xyz + 3 * (size_t)g[k], sizeof x[k]);
+          jens[w] = mx_jens(e->type, x);
+          w++;
+        } else {
+          opt->type[o] = e->type;
+          memcpy(opt->conn + 8 * o, g, sizeof g);
+          opt->leaf[o] = M->leaf[c];
+          opt->level[o] = M->level[c];
+          o++;
+        }
       }
     }
   }
-  mx_free(nout); mx_free(nopt); mx_free(ncen); mx_free(cs);
+  mx_free(bout);
   mx_free(M->type); mx_free(M->conn); mx_free(M->level); mx_free(M->leaf); mx_free(M->jens);
   M->type = type; M->conn = conn; M->level = level; M->leaf = leaf; M->jens = jens;
   M->ncells = total;
