@@ -8,24 +8,41 @@
 static const double K_TET = 0.70710678118654752440;
 static const double K_PRISM = 0.86602540378443864676;
 
-/* J_S at node i with neighbours a, b, c: (d_a x d_b) . d_c, unit vectors. */
-static double js(const double (*p)[3], int i, int a, int b, int c) {
-  double d[3][3];
-  const int n[3] = {a, b, c};
-  for (int k = 0; k < 3; k++) {
-    double l = 0.0;
-    for (int x = 0; x < 3; x++) {
-      d[k][x] = p[n[k]][x] - p[i][x];
-      l += d[k][x] * d[k][x];
-    }
-    l = sqrt(l);
-    if (!(l > 0.0)) return -1.0; /* a collapsed edge: invalid */
-    for (int x = 0; x < 3; x++) d[k][x] /= l;
+/* Unit edge vectors of an element, each edge normalized once: u[i][j] is
+ * the unit vector from node i to node j, ok[i][j] 0 for a collapsed edge.
+ * u[j][i] = -u[i][j] holds exactly in floating point (a - b = -(b - a), the
+ * same sum of squares, (-d) / l = -(d / l)), so the values are those of
+ * normalizing from each end. */
+typedef struct {
+  double u[8][8][3];
+  uint8_t ok[8][8];
+} unit_edges;
+
+static void add_edge(unit_edges *E, const double (*p)[3], int i, int j) {
+  double d[3], l = 0.0;
+  for (int x = 0; x < 3; x++) {
+    d[x] = p[j][x] - p[i][x];
+    l += d[x] * d[x];
   }
-  const double cx = d[0][1] * d[1][2] - d[0][2] * d[1][1];
-  const double cy = d[0][2] * d[1][0] - d[0][0] * d[1][2];
-  const double cz = d[0][0] * d[1][1] - d[0][1] * d[1][0];
-  return cx * d[2][0] + cy * d[2][1] + cz * d[2][2];
+  l = sqrt(l);
+  const int ok = l > 0.0;
+  E->ok[i][j] = E->ok[j][i] = (uint8_t)ok;
+  if (!ok) return;
+  for (int x = 0; x < 3; x++) {
+    E->u[i][j][x] = d[x] / l;
+    E->u[j][i][x] = -E->u[i][j][x];
+  }
+}
+
+/* J_S at node i with neighbours a, b, c: (d_a x d_b) . d_c, unit vectors;
+ * -1 when an edge is collapsed (invalid). */
+static double js(const unit_edges *E, int i, int a, int b, int c) {
+  if (!E->ok[i][a] || !E->ok[i][b] || !E->ok[i][c]) return -1.0;
+  const double *d0 = E->u[i][a], *d1 = E->u[i][b], *d2 = E->u[i][c];
+  const double cx = d0[1] * d1[2] - d0[2] * d1[1];
+  const double cy = d0[2] * d1[0] - d0[0] * d1[2];
+  const double cz = d0[0] * d1[1] - d0[1] * d1[0];
+  return cx * d2[0] + cy * d2[1] + cz * d2[2];
 }
 
 static double ens(double j, double k) {
@@ -48,21 +65,33 @@ static double combine(const double *q, int n) {
   return any_neg ? neg : mn;
 }
 
+/* The corners' neighbour triples and the element's edges, per type. */
+static void corners(const double (*p)[3], const int (*nb)[3], int n, const int (*edges)[2],
+                    int ne, double k, double *q, unit_edges *E) {
+  for (int e = 0; e < ne; e++) add_edge(E, p, edges[e][0], edges[e][1]);
+  for (int i = 0; i < n; i++) q[i] = ens(js(E, i, nb[i][0], nb[i][1], nb[i][2]), k);
+}
+
 double mx_jens_tet(const double p[4][3]) {
   static const int nb[4][3] = {{1, 2, 3}, {2, 0, 3}, {0, 1, 3}, {2, 1, 0}};
+  static const int ed[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
   double q[4];
-  for (int i = 0; i < 4; i++) q[i] = ens(js(p, i, nb[i][0], nb[i][1], nb[i][2]), K_TET);
+  unit_edges E;
+  corners(p, nb, 4, ed, 6, K_TET, q, &E);
   return combine(q, 4);
 }
 
 double mx_jens_pyramid(const double p[5][3]) {
   static const int nb[4][3] = {{1, 3, 4}, {2, 0, 4}, {3, 1, 4}, {0, 2, 4}};
+  static const int ed[8][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0},
+                               {0, 4}, {1, 4}, {2, 4}, {3, 4}};
   double q[5];
-  for (int i = 0; i < 4; i++) q[i] = ens(js(p, i, nb[i][0], nb[i][1], nb[i][2]), K_TET);
+  unit_edges E;
+  corners(p, nb, 4, ed, 8, K_TET, q, &E);
   /* Apex: the four tetrahedra of consecutive base nodes. */
   double best_pos = INFINITY, best_neg = -INFINITY;
   for (int i = 0; i < 4; i++) {
-    double j = js(p, 4, (i + 2) % 4, (i + 1) % 4, i);
+    double j = js(&E, 4, (i + 2) % 4, (i + 1) % 4, i);
     if (j > 0.0) {
       if (j < best_pos) best_pos = j;
     } else if (j > best_neg) {
@@ -76,16 +105,22 @@ double mx_jens_pyramid(const double p[5][3]) {
 double mx_jens_prism(const double p[6][3]) {
   static const int nb[6][3] = {{1, 2, 3}, {2, 0, 4}, {0, 1, 5},
                                {5, 4, 0}, {3, 5, 1}, {4, 3, 2}};
+  static const int ed[9][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5},
+                               {5, 3}, {0, 3}, {1, 4}, {2, 5}};
   double q[6];
-  for (int i = 0; i < 6; i++) q[i] = ens(js(p, i, nb[i][0], nb[i][1], nb[i][2]), K_PRISM);
+  unit_edges E;
+  corners(p, nb, 6, ed, 9, K_PRISM, q, &E);
   return combine(q, 6);
 }
 
 double mx_jens_hex(const double p[8][3]) {
   static const int nb[8][3] = {{1, 3, 4}, {2, 0, 5}, {3, 1, 6}, {0, 2, 7},
                                {7, 5, 0}, {4, 6, 1}, {5, 7, 2}, {6, 4, 3}};
+  static const int ed[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
+                                {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
   double q[8];
-  for (int i = 0; i < 8; i++) q[i] = ens(js(p, i, nb[i][0], nb[i][1], nb[i][2]), 1.0);
+  unit_edges E;
+  corners(p, nb, 8, ed, 12, 1.0, q, &E);
   return combine(q, 8);
 }
 
