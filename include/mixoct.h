@@ -196,9 +196,10 @@ typedef struct {
   const double *xyz;      /* 3 * nnodes, interleaved x y z */
   const uint8_t *type;    /* nelements, MX_TET .. MX_HEX */
   const uint32_t *conn;   /* 8 * nelements, rows padded with UINT32_MAX */
-  const double *jens;     /* J_ENS of each element */
+  const float *jens;      /* J_ENS of each element (computed in double,
+                           * kept in float) */
   const uint32_t *leaf;   /* the leaf (0 .. nleaves-1) each element is in */
-  const int32_t *level;   /* that leaf's level */
+  const uint8_t *level;   /* that leaf's level */
   const uint8_t *boundary;/* per node: 1 on the domain boundary */
   size_t by_type[4];
   double jens_min;

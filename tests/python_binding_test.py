@@ -72,9 +72,9 @@ def shapes_and_counts():
     assert M.nodes.shape == (n, 3) and M.nodes.dtype == np.float64
     assert M.conn.shape == (e, 8) and M.conn.dtype == np.uint32
     assert M.types.shape == (e,) and M.types.dtype == np.uint8
-    assert M.jens.shape == (e,) and M.jens.dtype == np.float64
+    assert M.jens.shape == (e,) and M.jens.dtype == np.float32
     assert M.leaf.shape == (e,) and M.leaf.dtype == np.uint32
-    assert M.level.shape == (e,) and M.level.dtype == np.int32
+    assert M.level.shape == (e,) and M.level.dtype == np.uint8
     assert M.boundary.shape == (n,) and M.boundary.dtype == np.uint8
     st = M.stats()
     assert st["nodes"] == n and st["elements"] == e, (st, n, e)

@@ -141,9 +141,9 @@ class _MeshArrays(ctypes.Structure):
                 ("xyz", ctypes.POINTER(ctypes.c_double)),
                 ("type", ctypes.POINTER(ctypes.c_uint8)),
                 ("conn", ctypes.POINTER(ctypes.c_uint32)),
-                ("jens", ctypes.POINTER(ctypes.c_double)),
+                ("jens", ctypes.POINTER(ctypes.c_float)),
                 ("leaf", ctypes.POINTER(ctypes.c_uint32)),
-                ("level", ctypes.POINTER(ctypes.c_int32)),
+                ("level", ctypes.POINTER(ctypes.c_uint8)),
                 ("boundary", ctypes.POINTER(ctypes.c_uint8)),
                 ("by_type", ctypes.c_size_t * 4),
                 ("jens_min", ctypes.c_double),
@@ -696,9 +696,9 @@ class Mesher:
             "nodes": _view(a.xyz, 3 * n, np.float64, (n, 3), owner),
             "types": _view(a.type, e, np.uint8, (e,), owner),
             "conn": _view(a.conn, 8 * e, np.uint32, (e, 8), owner),
-            "jens": _view(a.jens, e, np.float64, (e,), owner),
+            "jens": _view(a.jens, e, np.float32, (e,), owner),
             "leaf": _view(a.leaf, e, np.uint32, (e,), owner),
-            "level": _view(a.level, e, np.int32, (e,), owner),
+            "level": _view(a.level, e, np.uint8, (e,), owner),
             "boundary": _view(a.boundary, n, np.uint8, (n,), owner),
             "counts": {TYPE_NAMES[t]: int(a.by_type[t]) for t in range(4)},
             "nleaves": int(a.nleaves),
@@ -717,11 +717,11 @@ class Mesher:
     types = property(lambda self: self._get_views()["types"],
                      doc="(nelements,) uint8: TET 0, PYRAMID 1, PRISM 2, HEX 3")
     jens = property(lambda self: self._get_views()["jens"],
-                    doc="(nelements,) float64 J_ENS of each element")
+                    doc="(nelements,) float32 J_ENS of each element")
     leaf = property(lambda self: self._get_views()["leaf"],
                     doc="(nelements,) uint32 octree leaf of each element")
     level = property(lambda self: self._get_views()["level"],
-                     doc="(nelements,) int32 level of that leaf")
+                     doc="(nelements,) uint8 level of that leaf")
     boundary = property(lambda self: self._get_views()["boundary"],
                         doc="(nnodes,) uint8, 1 on the domain boundary")
 

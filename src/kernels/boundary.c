@@ -286,7 +286,7 @@ int mx_shrink_to_boundary(const mx_builder *B, const uint32_t *leaves,
       out |= states[v] == MX_NODE_OUTSIDE;
       memcpy(x[k], M->xyz + 3 * (size_t)v, sizeof x[k]);
     }
-    if (out) M->jens[c] = mx_jens(M->type[c], x);
+    if (out) M->jens[c] = (float)mx_jens(M->type[c], x);
     invalid += mx_jens_invalid(M->jens[c]);
     if (M->jens[c] < jmin) jmin = M->jens[c];
   }

@@ -17,9 +17,9 @@ int mx_mesh_keep_cells(mx_mesh_out *M, const uint8_t *keep) {
   const uint64_t nk = mx_scan_u64(dst, nc);
   uint8_t *type = mx_alloc(nk + 1);
   uint32_t *conn = mx_alloc((8 * nk + 1) * sizeof *conn);
-  int32_t *level = mx_alloc((nk + 1) * sizeof *level);
+  uint8_t *level = mx_alloc((nk + 1) * sizeof *level);
   uint32_t *leaf = mx_alloc((nk + 1) * sizeof *leaf);
-  double *jens = mx_alloc((nk + 1) * sizeof *jens);
+  float *jens = mx_alloc((nk + 1) * sizeof *jens);
   if (!type || !conn || !level || !leaf || !jens) {
     mx_free(type); mx_free(conn); mx_free(level); mx_free(leaf); mx_free(jens);
     mx_free(dst);
@@ -126,7 +126,7 @@ void mx_mesh_update_jens(mx_mesh_out *M, const uint8_t *moved) {
     double x[8][3];
     for (int k = 0; k < nv; k++)
       memcpy(x[k], M->xyz + 3 * (size_t)M->conn[8 * c + k], sizeof x[k]);
-    M->jens[c] = mx_jens(M->type[c], x);
+    M->jens[c] = (float)mx_jens(M->type[c], x);
   }
 }
 
@@ -140,9 +140,9 @@ int mx_mesh_sort_by_leaf(mx_mesh_out *M, size_t nleaves) {
   uint32_t *perm = mx_alloc((n + 1) * sizeof *perm);
   uint8_t *type = mx_alloc(n + 1);
   uint32_t *conn = mx_alloc((8 * n + 1) * sizeof *conn);
-  int32_t *level = mx_alloc((n + 1) * sizeof *level);
+  uint8_t *level = mx_alloc((n + 1) * sizeof *level);
   uint32_t *leaf = mx_alloc((n + 1) * sizeof *leaf);
-  double *jens = mx_alloc((n + 1) * sizeof *jens);
+  float *jens = mx_alloc((n + 1) * sizeof *jens);
   if (!start || !perm || !type || !conn || !level || !leaf || !jens) {
     mx_free(start); mx_free(perm); mx_free(type); mx_free(conn);
     mx_free(level); mx_free(leaf); mx_free(jens);

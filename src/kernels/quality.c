@@ -157,7 +157,7 @@ double mx_element_volume(int type, const double (*p)[3]) {
   return v / 6.0;
 }
 
-void mx_quality_tabulate(const uint8_t *type, const double *jens, size_t n,
+void mx_quality_tabulate(const uint8_t *type, const float *jens, size_t n,
                          mx_quality_table *q) {
   const size_t chunk = 65536, nch = (n + chunk - 1) / chunk;
   for (int t = 0; t < 4; t++) {

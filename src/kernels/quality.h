@@ -53,7 +53,7 @@ typedef struct {
   double min_all;
 } mx_quality_table;
 
-void mx_quality_tabulate(const uint8_t *type, const double *jens, size_t n,
+void mx_quality_tabulate(const uint8_t *type, const float *jens, size_t n,
                          mx_quality_table *q);
 
 #endif

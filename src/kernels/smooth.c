@@ -73,33 +73,55 @@ static double worst_of(const mx_mesh_out *M, const uint32_t *inc, size_t e0, siz
 /* Colours of the work nodes such that two nodes of one element never share
  * a colour (Jones-Plassmann: in each round, every uncoloured node whose
  * priority beats its uncoloured neighbours takes the smallest colour its
- * neighbours lack; the priorities are a hash of the node id, so the colours
- * do not depend on the threads). widx: work index of each node, UINT32_MAX
+ * neighbours lack; the priorities are a hash of the node's lattice key, so
+ * the colours depend neither on the threads nor on the numbering). widx: work index of each node, UINT32_MAX
  * outside the work set. Returns the number of colours, or -1 (memory, or
  * more than MAX_COLOURS). */
 enum { MAX_COLOURS = 256 };
 
-static uint32_t node_priority(uint32_t v) {
-  uint32_t h = v * 0x9E3779B1u;
-  h ^= h >> 15;
-  h *= 0x85EBCA77u;
-  h ^= h >> 13;
+static uint64_t mix64(uint64_t h) {
+  h ^= h >> 33;
+  h *= 0xFF51AFD7ED558CCDull;
+  h ^= h >> 33;
+  h *= 0xC4CEB9FE1A85EC53ull;
+  h ^= h >> 33;
+  return h;
+}
+
+/* The priority of node v: a hash of what the node is (its lattice key, or
+ * its position for a node off the lattice), not of its number, so that a
+ * local re-mesh, whose patch numbers its nodes its own way, colours the same
+ * nodes alike. */
+static uint64_t node_priority(const mx_mesh_out *M, uint32_t v) {
+  if (M->nkey && M->nkey[v] != MX_NKEY_NONE) return mix64(M->nkey[v]);
+  uint64_t h = 0x9E3779B97F4A7C15ull, b;
+  for (int a = 0; a < 3; a++) {
+    memcpy(&b, M->xyz + 3 * (size_t)v + a, sizeof b);
+    h = mix64(h ^ b);
+  }
   return h;
 }
 
 /* 1 when work node i goes before work node j */
-static int before(const uint32_t *work, size_t i, size_t j) {
-  const uint32_t pi = node_priority(work[i]), pj = node_priority(work[j]);
-  return pi != pj ? pi > pj : i < j;
+static int before(const uint64_t *prio, size_t i, size_t j) {
+  return prio[i] != prio[j] ? prio[i] > prio[j] : i < j;
 }
 
 static int colour_work(const mx_mesh_out *M, const uint32_t *inc, const uint64_t *off,
                        const uint32_t *work, size_t nw, const uint32_t *widx,
                        int16_t *colour) {
   uint8_t *pick = mx_alloc(nw + 1);
-  if (!pick) return -1;
+  uint64_t *prio = mx_alloc((nw + 1) * sizeof *prio);
+  if (!pick || !prio) {
+    mx_free(pick);
+    mx_free(prio);
+    return -1;
+  }
 #pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < nw; i++) colour[i] = -1;
+  for (size_t i = 0; i < nw; i++) {
+    colour[i] = -1;
+    prio[i] = node_priority(M, work[i]);
+  }
   size_t left = nw;
   int ncol = 0, overflow = 0;
   while (left && !overflow) {
@@ -114,7 +136,7 @@ static int colour_work(const mx_mesh_out *M, const uint32_t *inc, const uint64_t
         for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++) {
           const uint32_t j = widx[row[k]];
           if (j == UINT32_MAX || j == i || colour[j] >= 0) continue;
-          if (before(work, j, i)) {
+          if (before(prio, j, i)) {
             best = 0;
             break;
           }
@@ -149,6 +171,7 @@ static int colour_work(const mx_mesh_out *M, const uint32_t *inc, const uint64_t
     left -= got;
   }
   mx_free(pick);
+  mx_free(prio);
   if (overflow) return -1;
   for (size_t i = 0; i < nw; i++)
     if (colour[i] + 1 > ncol) ncol = colour[i] + 1;
@@ -198,7 +221,7 @@ static int move_node(mx_mesh_out *M, const mx_surface_index *S, const uint32_t *
   memcpy(x, bx, sizeof bx);
   if (!(best > w0)) return 0;
   for (size_t e = e0; e < e1; e++) {
-    M->jens[inc[e]] = elem_jens(M, inc[e]);
+    M->jens[inc[e]] = (float)elem_jens(M, inc[e]);
     const uint32_t *cv = M->conn + 8 * (size_t)inc[e];
     for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++)
       if (off[cv[k] + 1] > off[cv[k]]) /* in the work set */

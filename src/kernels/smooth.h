@@ -16,7 +16,7 @@
 
 /* q_target: elements below it are worked on; sweeps: passes over the work
  * set. The work nodes are coloured so that no two nodes of one element
- * share a colour (priorities hashed from the node ids); a sweep takes the
+ * share a colour (priorities hashed from the nodes' lattice keys); a sweep takes the
  * colours in turn and the nodes of one colour in parallel (their moves touch
  * disjoint elements): deterministic, whatever the threads. *moved: node
  * moves accepted. */

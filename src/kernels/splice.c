@@ -346,7 +346,7 @@ int mx_mesh_splice(const mx_mesh_out *O, const uint8_t *ostates, size_t nold_lea
                                             : P->xyz + 3 * (size_t)(v - O->nnodes);
             memcpy(x[k], p, sizeof x[k]);
           }
-          out->jens[w] = mx_jens(S->type[c], x);
+          out->jens[w] = (float)mx_jens(S->type[c], x);
         }
       }
       if (patch)

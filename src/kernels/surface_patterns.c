@@ -108,9 +108,9 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *move
   /* 2. Fill. */
   uint8_t *type = mx_alloc(total + 1);
   uint32_t *conn = mx_alloc((8 * total + 1) * sizeof *conn);
-  int32_t *level = mx_alloc((total + 1) * sizeof *level);
+  uint8_t *level = mx_alloc((total + 1) * sizeof *level);
   uint32_t *leaf = mx_alloc((total + 1) * sizeof *leaf);
-  double *jens = mx_alloc((total + 1) * sizeof *jens);
+  float *jens = mx_alloc((total + 1) * sizeof *jens);
   double *xyz = mx_realloc(M->xyz, (3 * (nn + total_cen) + 3) * sizeof *xyz);
   uint8_t *st2 = xyz ? mx_realloc(*states_io, nn + total_cen + 1) : NULL;
   uint64_t *nkey = M->nkey && st2 ? mx_realloc(M->nkey, (nn + total_cen + 1) * sizeof *nkey)
@@ -151,7 +151,7 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *move
           double x[8][3];
           for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
             memcpy(x[k], xyz + 3 * (size_t)v[k], sizeof x[k]);
-          jens[w] = mx_jens(M->type[c], x);
+          jens[w] = (float)mx_jens(M->type[c], x);
         } else {
           jens[w] = M->jens[c];
         }
@@ -184,7 +184,7 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *move
           leaf[w] = M->leaf[c];
           double x[8][3];
           for (int k = 0; k < ne; k++) memcpy(x[k], xyz + 3 * (size_t)g[k], sizeof x[k]);
-          jens[w] = mx_jens(e->type, x);
+          jens[w] = (float)mx_jens(e->type, x);
           w++;
         } else {
           opt->type[o] = e->type;
@@ -261,11 +261,11 @@ int mx_staircase(mx_mesh_out *M, const mx_optional *opt, double q_min,
   if (type) M->type = type;
   uint32_t *conn = type ? mx_realloc(M->conn, (8 * nt + 1) * sizeof *conn) : NULL;
   if (conn) M->conn = conn;
-  int32_t *level = conn ? mx_realloc(M->level, (nt + 1) * sizeof *level) : NULL;
+  uint8_t *level = conn ? mx_realloc(M->level, (nt + 1) * sizeof *level) : NULL;
   if (level) M->level = level;
   uint32_t *leaf = level ? mx_realloc(M->leaf, (nt + 1) * sizeof *leaf) : NULL;
   if (leaf) M->leaf = leaf;
-  double *jens = leaf ? mx_realloc(M->jens, (nt + 1) * sizeof *jens) : NULL;
+  float *jens = leaf ? mx_realloc(M->jens, (nt + 1) * sizeof *jens) : NULL;
   if (jens) M->jens = jens;
   if (!jens) {
     mx_free(ok);
@@ -279,7 +279,7 @@ int mx_staircase(mx_mesh_out *M, const mx_optional *opt, double q_min,
     memcpy(M->conn + 8 * w, opt->conn + 8 * i, 8 * sizeof *M->conn);
     M->level[w] = opt->level[i];
     M->leaf[w] = opt->leaf[i];
-    M->jens[w] = q[i];
+    M->jens[w] = (float)q[i];
     w++;
   }
   M->ncells = nt;

@@ -28,7 +28,7 @@ typedef struct {
   uint8_t *type;
   uint32_t *conn;   /* 8 per element */
   uint32_t *leaf;
-  int32_t *level;
+  uint8_t *level;
 } mx_optional;
 
 typedef struct {

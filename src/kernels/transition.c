@@ -429,7 +429,7 @@ int mx_transition_build(const mx_builder *B, const uint32_t *leaves, size_t n,
         out->leaf[c] = (uint32_t)i;
         /* the octant is a scaled, rotated unit cube: the pattern's J_ENS */
         const double q = mx_pattern_elem_jens[pc->first + k];
-        out->jens[c] = q;
+        out->jens[c] = (float)q;
         if (mx_jens_invalid(q)) invalid++;
         if (q < jmin) jmin = q;
       }

@@ -27,9 +27,10 @@ typedef struct {
   double *xyz;      /* 3 * nnodes */
   uint8_t *type;    /* ncells */
   uint32_t *conn;   /* 8 * ncells, VTK order */
-  int32_t *level;   /* level of the leaf each element comes from */
+  uint8_t *level;   /* level of the leaf each element comes from */
   uint32_t *leaf;   /* index (in the leaves list) of that leaf */
-  double *jens;     /* J_ENS of each element */
+  float *jens;      /* J_ENS of each element (computed in double, kept in
+                     * float: 4 bytes instead of 8 for every element) */
   uint64_t *nkey;   /* per node: its lattice key (mx_lattice_key), or
                      * MX_NKEY_NONE for a node off the lattice (an element
                      * centre of the surface patterns); kept by every edit */

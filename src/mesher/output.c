@@ -96,7 +96,8 @@ static int make_tags(mx_mesher *m, const mx_mesh_view *v, tags *T) {
 
 /* The view the writers get, and what it points to. */
 typedef struct {
-  int32_t *type, *bnd;
+  int32_t *type, *bnd, *level;
+  double *jens;
   uint32_t *order;
   tags T;
   mx_field f[4], pf[2];
@@ -108,6 +109,8 @@ static void release(prepared *P) {
   tags_free(&P->T);
   mx_free(P->order);
   mx_free(P->type);
+  mx_free(P->level);
+  mx_free(P->jens);
   mx_free(P->bnd);
 }
 
@@ -117,14 +120,22 @@ static int prepare(mx_mesher *m, prepared *P) {
   P->type = mx_alloc((M->ncells + 1) * sizeof *P->type);
   P->bnd = mx_alloc((M->nnodes + 1) * sizeof *P->bnd);
   P->order = mx_alloc((M->ncells + 1) * sizeof *P->order);
-  if (!P->type || !P->bnd || !P->order) return MX_ENOMEM;
+  P->level = mx_alloc((M->ncells + 1) * sizeof *P->level);
+  P->jens = mx_alloc((M->ncells + 1) * sizeof *P->jens);
+  if (!P->type || !P->bnd || !P->order || !P->level || !P->jens) return MX_ENOMEM;
+  /* the writers' fields are int32 or double; the mesh keeps 8-bit levels
+   * and float J_ENS */
 #pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < M->ncells; i++) P->type[i] = M->type[i];
+  for (size_t i = 0; i < M->ncells; i++) {
+    P->type[i] = M->type[i];
+    P->level[i] = M->level[i];
+    P->jens[i] = M->jens[i];
+  }
 #pragma omp parallel for schedule(static)
   for (size_t i = 0; i < M->nnodes; i++) P->bnd[i] = m->bnd[i];
   P->f[0] = (mx_field){"type", 0, P->type, NULL};
-  P->f[1] = (mx_field){"level", 0, M->level, NULL};
-  P->f[2] = (mx_field){"jens", 1, NULL, M->jens};
+  P->f[1] = (mx_field){"level", 0, P->level, NULL};
+  P->f[2] = (mx_field){"jens", 1, NULL, P->jens};
   P->pf[0] = (mx_field){"boundary", 0, P->bnd, NULL};
   P->v = (mx_mesh_view){.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
                         .type = M->type, .conn = M->conn, .ncell_fields = 3,

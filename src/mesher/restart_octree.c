@@ -242,10 +242,16 @@ int mx_mesher_save_restart(const mx_mesher *cm, const char *path) {
     r.mesh_type = m->M.type;
     r.mesh_conn = m->M.conn;
     r.mesh_leaf = m->M.leaf;
-    r.mesh_jens = m->M.jens;
+    /* the file keeps J_ENS in double (the mesh holds float) */
+    r.mesh_jens = mx_alloc((m->M.ncells + 1) * sizeof *r.mesh_jens);
+    if (!r.mesh_jens) st = MX_ENOMEM;
+    else {
+#pragma omp parallel for schedule(static)
+      for (size_t c = 0; c < m->M.ncells; c++) r.mesh_jens[c] = m->M.jens[c];
+    }
   }
   if (!st) st = binary ? mx_restart_write_binary(path, &r) : mx_restart_write_text(path, &r);
-  r.mesh_xyz = r.mesh_jens = NULL; /* the mesher's */
+  r.mesh_xyz = NULL; /* the mesher's */
   r.mesh_nkey = NULL;
   r.mesh_state = r.mesh_type = NULL;
   r.mesh_conn = r.mesh_leaf = NULL;
@@ -344,7 +350,16 @@ static int adopt_mesh(mx_mesher *m, mx_restart *r, const uint64_t *key) {
   mx_mesh_out *M = &m->M;
   memset(M, 0, sizeof *M);
   M->level = mx_alloc((r->mesh_nc + 1) * sizeof *M->level);
-  if (!M->level) return MX_ENOMEM;
+  M->jens = mx_alloc((r->mesh_nc + 1) * sizeof *M->jens);
+  if (!M->level || !M->jens) {
+    mx_free(M->level);
+    mx_free(M->jens);
+    M->level = NULL;
+    M->jens = NULL;
+    return MX_ENOMEM;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < r->mesh_nc; c++) M->jens[c] = (float)r->mesh_jens[c];
   M->nnodes = r->mesh_nn;
   M->ncells = r->mesh_nc;
   M->xyz = r->mesh_xyz;
@@ -352,9 +367,8 @@ static int adopt_mesh(mx_mesher *m, mx_restart *r, const uint64_t *key) {
   M->type = r->mesh_type;
   M->conn = r->mesh_conn;
   M->leaf = r->mesh_leaf;
-  M->jens = r->mesh_jens;
   m->states = r->mesh_state;
-  r->mesh_xyz = r->mesh_jens = NULL; /* the mesher's now */
+  r->mesh_xyz = NULL; /* the mesher's now */
   r->mesh_nkey = NULL;
   r->mesh_state = r->mesh_type = NULL;
   r->mesh_conn = r->mesh_leaf = NULL;
