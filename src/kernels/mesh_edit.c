@@ -1,6 +1,7 @@
 #include "kernels/mesh_edit.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "common.h"
@@ -130,12 +131,73 @@ void mx_mesh_update_jens(mx_mesh_out *M, const uint8_t *moved) {
   }
 }
 
+static int cmp_u64(const void *a, const void *b) {
+  const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+  return (x > y) - (x < y);
+}
+
+/* When the elements are in leaf order but for a short tail (the staircase
+ * appends the few elements it restores), the tail is sorted apart and merged
+ * in place from the back: no second copy of the mesh. Returns MX_OK, or 1
+ * when the general sort is needed. */
+static int merge_short_tail(mx_mesh_out *M, size_t p) {
+  const size_t n = M->ncells, k = n - p;
+  if (k > 4096 || k > n / 16) return 1;
+  uint64_t *ord = mx_alloc((k + 1) * sizeof *ord); /* leaf << 32 | element */
+  uint8_t *type = mx_alloc(k + 1), *level = mx_alloc(k + 1);
+  uint32_t *conn = mx_alloc((8 * k + 1) * sizeof *conn), *leaf = mx_alloc((k + 1) * sizeof *leaf);
+  float *jens = mx_alloc((k + 1) * sizeof *jens);
+  int st = ord && type && level && conn && leaf && jens ? MX_OK : MX_EINPUT;
+  if (!st) {
+    /* the tail in (leaf, index) order: stable by leaf */
+    for (size_t i = 0; i < k; i++) ord[i] = (uint64_t)M->leaf[p + i] << 32 | (p + i);
+    qsort(ord, k, sizeof *ord, cmp_u64);
+    for (size_t i = 0; i < k; i++) {
+      const size_t c = (size_t)(ord[i] & 0xffffffffu);
+      type[i] = M->type[c];
+      level[i] = M->level[c];
+      leaf[i] = M->leaf[c];
+      jens[i] = M->jens[c];
+      memcpy(conn + 8 * i, M->conn + 8 * c, 8 * sizeof *conn);
+    }
+    /* from the back: the larger leaf goes last, a tail element after the
+     * prefix's elements of the same leaf (what a stable sort gives) */
+    size_t a = p, t = k, w = n;
+    while (t > 0) {
+      w--;
+      if (a > 0 && M->leaf[a - 1] > leaf[t - 1]) {
+        a--;
+        M->type[w] = M->type[a];
+        M->level[w] = M->level[a];
+        M->leaf[w] = M->leaf[a];
+        M->jens[w] = M->jens[a];
+        memmove(M->conn + 8 * w, M->conn + 8 * a, 8 * sizeof *M->conn);
+      } else {
+        t--;
+        M->type[w] = type[t];
+        M->level[w] = level[t];
+        M->leaf[w] = leaf[t];
+        M->jens[w] = jens[t];
+        memcpy(M->conn + 8 * w, conn + 8 * t, 8 * sizeof *conn);
+      }
+    }
+  }
+  mx_free(ord); mx_free(type); mx_free(level); mx_free(conn); mx_free(leaf); mx_free(jens);
+  return st;
+}
+
 int mx_mesh_sort_by_leaf(mx_mesh_out *M, size_t nleaves) {
   const size_t n = M->ncells;
-  size_t bad = 0;
-#pragma omp parallel for schedule(static) reduction(+ : bad)
-  for (size_t c = 1; c < n; c++) bad += M->leaf[c] < M->leaf[c - 1];
+  size_t bad = 0, first = n;
+#pragma omp parallel for schedule(static) reduction(+ : bad) reduction(min : first)
+  for (size_t c = 1; c < n; c++)
+    if (M->leaf[c] < M->leaf[c - 1]) {
+      bad++;
+      if (c < first) first = c;
+    }
   if (bad == 0) return MX_OK;
+  const int merged = merge_short_tail(M, first);
+  if (merged != 1) return merged;
   uint64_t *start = mx_calloc((nleaves + 1) * sizeof *start);
   uint32_t *perm = mx_alloc((n + 1) * sizeof *perm);
   uint8_t *type = mx_alloc(n + 1);
