@@ -12,7 +12,8 @@
  *    restart file (read .octb, refine, mesh), against the initial run.
  *
  * usage: mixoct-remesh-bench [--data DIR] [--level L] [--repeat N] [--out DIR]
- * The heap is set up as the mixoct program sets it (MX_NO_MALLOPT=1: not).
+ * The heap is set up as the mixoct program sets it (src/cli/main.c; MX_HEAP
+ * = heap or default as there).
  * Times are the median of N runs (default 3), in seconds; the last line is
  * one JSON object. */
 #include "mixoct.h"
@@ -112,11 +113,17 @@ static void write_list(const char *path, const uint64_t *l, size_t n) {
 }
 
 int main(int argc, char **argv) {
-  if (!getenv("MX_NO_MALLOPT")) {
-    /* as the mixoct program does (src/cli/main.c): freed arrays stay in the
-     * heap and are reused, instead of being mapped and faulted in again */
-    mallopt(M_MMAP_MAX, 0);
-    mallopt(M_TRIM_THRESHOLD, INT_MAX);
+  {
+    /* as the mixoct program does (src/cli/main.c): arrays of 4 MB and more
+     * mapped on their own */
+    const char *heap = getenv("MX_HEAP");
+    if (heap && strcmp(heap, "heap") == 0) {
+      mallopt(M_MMAP_MAX, 0);
+      mallopt(M_TRIM_THRESHOLD, INT_MAX);
+    } else if (!heap || strcmp(heap, "default") != 0) {
+      mallopt(M_MMAP_THRESHOLD, 4 << 20);
+      mallopt(M_TRIM_THRESHOLD, 64 << 20);
+    }
   }
   const char *data = "../shared/data", *out = "/tmp";
   int level = 8, repeat = 3;

@@ -1,5 +1,6 @@
 #include "common.h"
 
+#include <malloc.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -137,8 +138,10 @@ void mx_mem_mark(const char *label) {
   }
   static double t0 = 0.0;
   if (t0 == 0.0) t0 = mx_wtime();
-  fprintf(stderr, "mem %-24s rss %8.1f MB  peak %8.1f MB  t %7.3f s\n", label,
-          (double)rss * 4096.0 / 1048576.0, mx_peak_rss_mb(), mx_wtime() - t0);
+  const struct mallinfo2 mi = mallinfo2();
+  fprintf(stderr, "mem %-24s rss %8.1f MB  peak %8.1f MB  in use %8.1f MB  t %7.3f s\n",
+          label, (double)rss * 4096.0 / 1048576.0, mx_peak_rss_mb(),
+          (double)(mi.uordblks + mi.hblkhd) / 1048576.0, mx_wtime() - t0);
 }
 
 double mx_peak_rss_mb(void) {
