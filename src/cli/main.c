@@ -172,8 +172,8 @@ int main(int argc, char **argv) {
     mallopt(M_MMAP_MAX, 0);
     mallopt(M_TRIM_THRESHOLD, INT_MAX);
   } else if (!heap || strcmp(heap, "default") != 0) {
-    mallopt(M_MMAP_THRESHOLD, 4 << 20);
-    mallopt(M_TRIM_THRESHOLD, 64 << 20);
+    mallopt(M_MMAP_THRESHOLD, 1 << 20);
+    mallopt(M_TRIM_THRESHOLD, 8 << 20);
   }
   const char *base = strrchr(argv[0], '/');
   if (strcmp(base ? base + 1 : argv[0], "mesher_roi") == 0)

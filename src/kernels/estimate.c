@@ -55,11 +55,15 @@ double mx_estimate_bytes(const mx_trisoup *soup, uint32_t nt_domain,
     const double h = ldexp(g->side, -req->rlevel[r]);
     leaves += fmin(bbox_volume(soup, region_t0[r], region_t0[r + 1]), vol) / (h * h * h);
   }
-  /* bytes per leaf at the peak, measured on the cortex at -s 9 with some
-   * margin: octree 463 MB, transition 1,247 MB, full 1,754 MB for 3.05M
-   * leaves */
-  const double per_leaf = stage == 0 ? 200.0 : stage == 1 ? 500.0 : 620.0;
-  return 32e6 + leaves * per_leaf + 600.0 * (double)soup->nt;
+  /* bytes per leaf at the peak (mx_estimate_bytes_leaves), on this
+   * estimate of the leaves */
+  return mx_estimate_bytes_leaves((size_t)leaves, soup->nt, stage);
+}
+
+double mx_estimate_bytes_leaves(size_t leaves, size_t triangles, int stage) {
+  const double l = (double)leaves, base = 6.6e6 + 600.0 * (double)triangles;
+  if (stage == 0) return base + 240.0 * l;
+  return base + 310.0 * l + 96.0 * (l < 2e5 ? l : 2e5);
 }
 
 /* The limit of the memory cgroup this process runs in (a batch job's

@@ -15,7 +15,10 @@
 #include "kernels/requests.h"
 #include "soa/trisoup.h"
 
-/* Estimated peak bytes of a run; stage 0: octree, 1: transition, 2: full. */
+/* Estimated peak bytes of a run; stage 0: octree, 1: transition, 2: full.
+ * The leaves estimated from the area are 1.1 to 1.4 times the leaves the
+ * octree ends with on the shared surfaces, so this one errs on the safe
+ * side: it refuses a run before anything is built. */
 double mx_estimate_bytes(const mx_trisoup *soup, uint32_t nt_domain,
                          const uint32_t *region_t0, const mx_requests *req,
                          const mx_grid *g, int stage);
@@ -23,5 +26,13 @@ double mx_estimate_bytes(const mx_trisoup *soup, uint32_t nt_domain,
  * /proc/meminfo, or less when a memory cgroup (a batch job's --mem) leaves
  * less room; 0 when unknown. */
 double mx_available_bytes(void);
+
+/* The peak of a run from the leaves of its balanced octree: 6.6 MB + 600 B
+ * per input triangle + 310 B per leaf + 96 B per leaf for the first 200,000
+ * leaves (small runs keep more of what they free in the heap), full stage;
+ * fitted on the shared surfaces at -s 4 to 10 (issue 12; the cortex: within
+ * 10% from -s 5 to -s 10). Stage 0 (the leaves as hexahedra): 240 B per
+ * leaf; stage 1: the full stage's. */
+double mx_estimate_bytes_leaves(size_t leaves, size_t triangles, int stage);
 
 #endif

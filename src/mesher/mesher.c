@@ -457,13 +457,31 @@ static void stage(const mx_mesher *m, const char *name) {
 static int check_memory(mx_mesher *m, const mx_requests *req) {
   const double need = mx_estimate_bytes(&m->soup, m->nt_domain, m->region_t0, req,
                                         &m->B.grid, m->p.stage);
-  m->S.memory_estimate_mb = need / 1048576.0;
+  m->S.memory_estimate_mb = m->S.memory_prior_mb = need / 1048576.0;
   const double avail = mx_available_bytes();
   const double limit = m->p.max_memory_mb > 0 ? m->p.max_memory_mb * 1048576.0 : avail;
   if (limit > 0.0 && need > limit) {
     mx_error(NULL, 0, "this run needs about %.0f MB (estimated from the surface "
                       "and the requested levels) but %s %.0f MB: lower the "
                       "levels or raise --max-memory", need / 1048576.0,
+             m->p.max_memory_mb > 0 ? "--max-memory allows" : "the machine has",
+             limit / 1048576.0);
+    return MX_ENOMEM;
+  }
+  return MX_OK;
+}
+
+/* The same check once the octree is built, from its leaves (a closer
+ * estimate: kernels/estimate.h), before the mesh is. */
+static int check_memory_leaves(mx_mesher *m) {
+  const double need = mx_estimate_bytes_leaves(m->nleaves, m->soup.nt, m->p.stage);
+  m->S.memory_estimate_mb = need / 1048576.0;
+  const double avail = mx_available_bytes() + mx_peak_rss_mb() * 1048576.0;
+  const double limit = m->p.max_memory_mb > 0 ? m->p.max_memory_mb * 1048576.0 : avail;
+  if (limit > 0.0 && need > limit) {
+    mx_error(NULL, 0, "this run needs about %.0f MB (estimated from the %zu leaves of "
+                      "its octree) but %s %.0f MB: lower the levels or raise "
+                      "--max-memory", need / 1048576.0, m->nleaves,
              m->p.max_memory_mb > 0 ? "--max-memory allows" : "the machine has",
              limit / 1048576.0);
     return MX_ENOMEM;
@@ -531,7 +549,8 @@ int mx_build_tree(mx_mesher *m) {
   m->S.ph.refine += m->B.stats.t_refine;
   m->S.ph.balance += m->B.stats.t_balance;
   m->S.max_level = mx_max_requested_level(&req);
-  return mx_update_leaves(m);
+  MX_CHECK(mx_update_leaves(m));
+  return check_memory_leaves(m);
 }
 
 int mx_mesher_build_octree(mx_mesher *m) {
@@ -868,6 +887,7 @@ int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a) {
 
 static int write_octree(mx_mesher *m, const char *path, int ascii) {
   if (!m->have_hex) {
+    mx_edges_release(&m->B); /* not read by the hexahedra; rebuilt by a split */
     MX_CHECK(mx_leaf_hex_mesh(&m->B, m->leaves, m->nleaves, &m->hex));
     m->have_hex = 1;
   }

@@ -33,7 +33,8 @@ typedef struct {
   size_t elements, by_type[4], invalid, closures, centre_leaves;
   double jens_min;
   mx_quality_table quality;
-  double memory_estimate_mb;
+  double memory_estimate_mb; /* from the octree's leaves once known */
+  double memory_prior_mb;    /* from the surface area, before refining */
   mx_phases ph;
   double peak_rss_mb;
   int full;                 /* the boundary stage ran */
