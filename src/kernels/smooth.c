@@ -364,7 +364,10 @@ int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_inde
   for (int s = 0; s < sweeps; s++) {
     size_t changed = 0;
     for (int c = 0; c < ncol; c++) {
-#pragma omp parallel for schedule(dynamic, 32) reduction(+ : changed)
+      /* a small colour on one thread: no fork and barrier for a few nodes
+       * (the same result: its nodes do not interact) */
+#pragma omp parallel for schedule(dynamic, 32) reduction(+ : changed) \
+    if (cstart[c + 1] - cstart[c] >= 4096)
       for (size_t k = cstart[c]; k < cstart[c + 1]; k++) {
         const size_t i = byc[k];
         const uint32_t v = work[i];
