@@ -306,43 +306,65 @@ int mx_shrink_to_boundary(const mx_builder *B, const uint32_t *leaves,
     mx_free(run); mx_free(best); mx_free(btri);
     return MX_EINPUT;
   }
-  size_t nr = 0;
-  for (size_t c = 0; c < nc; c++)
-    if (c == 0 || M->leaf[c] != M->leaf[c - 1]) run[nr++] = c;
+  /* the runs' starts: counted per block, prefix-summed, filled */
+  enum { RB = 1 << 16 };
+  const size_t nbk = (nc + RB - 1) / RB;
+  uint64_t *boff = mx_alloc((nbk + 1) * sizeof *boff);
+  if (!boff) {
+    mx_free(run); mx_free(best); mx_free(btri);
+    return MX_EINPUT;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t b = 0; b < nbk; b++) {
+    uint64_t k = 0;
+    for (size_t c = b * RB; c < nc && c < (b + 1) * RB; c++)
+      k += c == 0 || M->leaf[c] != M->leaf[c - 1];
+    boff[b] = k;
+  }
+  const size_t nr = (size_t)mx_scan_u64(boff, nbk);
+#pragma omp parallel for schedule(static)
+  for (size_t b = 0; b < nbk; b++) {
+    uint64_t k = boff[b];
+    for (size_t c = b * RB; c < nc && c < (b + 1) * RB; c++)
+      if (c == 0 || M->leaf[c] != M->leaf[c - 1]) run[k++] = c;
+  }
+  mx_free(boff);
   run[nr] = nc;
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < nn; v++) {
     best[v] = UINT64_MAX;
     btri[v] = UINT32_MAX;
   }
-  /* Two passes over (leaf, outside node): the least distance, then among
-   * the triangles reaching it the lowest id. */
-  for (int pass = 0; pass < 2; pass++) {
+  /* One pass over (leaf, outside node): the least (distance, triangle id),
+   * compared and stored under a per-node spin lock (a node is shared by a
+   * few leaves: the locks are hardly ever contended). */
+  uint8_t *lock = mx_calloc(nn + 1);
+  if (!lock) {
+    mx_free(run); mx_free(best); mx_free(btri);
+    return MX_EINPUT;
+  }
 #pragma omp parallel for schedule(dynamic, 256)
-    for (size_t r = 0; r < nr; r++) {
-      const uint32_t o = leaves[M->leaf[run[r]]];
-      if (!B->oct.tri_cnt[o]) continue;
-      uint32_t vs[64];
-      const int k = leaf_outside_nodes(M, run[r], run[r + 1], states, vs);
-      for (int j = 0; j < k; j++) {
-        uint32_t t;
-        const double d2 = leaf_closest(B, o, M->xyz + 3 * (size_t)vs[j], &t);
-        if (t == UINT32_MAX) continue;
-        if (pass == 0) {
-          uint64_t cur = __atomic_load_n(&best[vs[j]], __ATOMIC_RELAXED);
-          const uint64_t mine = dbits(d2);
-          while (mine < cur && !__atomic_compare_exchange_n(&best[vs[j]], &cur, mine, 1,
-                                                             __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
-          }
-        } else if (dbits(d2) == best[vs[j]]) {
-          uint32_t cur = __atomic_load_n(&btri[vs[j]], __ATOMIC_RELAXED);
-          while (t < cur && !__atomic_compare_exchange_n(&btri[vs[j]], &cur, t, 1,
-                                                         __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
-          }
-        }
+  for (size_t r = 0; r < nr; r++) {
+    const uint32_t o = leaves[M->leaf[run[r]]];
+    if (!B->oct.tri_cnt[o]) continue;
+    uint32_t vs[64];
+    const int k = leaf_outside_nodes(M, run[r], run[r + 1], states, vs);
+    for (int j = 0; j < k; j++) {
+      uint32_t t;
+      const double d2 = leaf_closest(B, o, M->xyz + 3 * (size_t)vs[j], &t);
+      if (t == UINT32_MAX) continue;
+      const uint64_t mine = dbits(d2);
+      const uint32_t v = vs[j];
+      while (__atomic_test_and_set(&lock[v], __ATOMIC_ACQUIRE)) {
       }
+      if (mine < best[v] || (mine == best[v] && t < btri[v])) {
+        best[v] = mine;
+        btri[v] = t;
+      }
+      __atomic_clear(&lock[v], __ATOMIC_RELEASE);
     }
   }
+  mx_free(lock);
   size_t nm = 0;
 #pragma omp parallel for schedule(static) reduction(+ : nm)
   for (size_t v = 0; v < nn; v++) {

@@ -434,6 +434,7 @@ int mx_transition_build(const mx_builder *B, const uint32_t *leaves, size_t n,
         if (q < jmin) jmin = q;
       }
     }
+#pragma omp parallel for schedule(static) reduction(+ : bt[:4])
     for (size_t c = 0; c < out->ncells; c++) bt[out->type[c]]++;
     memcpy(out->by_type, bt, sizeof bt);
     out->invalid = invalid;
