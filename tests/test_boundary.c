@@ -51,7 +51,7 @@ int main(void) {
     CHECK(mx_surface_index_build(&S, &cube, 0, (uint32_t)cube.nt) == MX_OK);
     uint8_t *st = mx_alloc(b.M.nnodes + 1);
     size_t q = 0;
-    CHECK(mx_node_states(&b.B, b.leaves, &b.M, &S, st, &q, NULL) == MX_OK);
+    CHECK(mx_node_states(&b.B, b.leaves, &b.M, &S, st, &q) == MX_OK);
     size_t wrong = 0, inside = 0;
     for (size_t v = 0; v < b.M.nnodes; v++) {
       const double *p = b.M.xyz + 3 * v;
@@ -82,7 +82,7 @@ int main(void) {
     uint8_t *st = mx_alloc(b.M.nnodes + 1);
     size_t q = 0;
     double t = mx_wtime();
-    CHECK(mx_node_states(&b.B, b.leaves, &b.M, &S, st, &q, NULL) == MX_OK);
+    CHECK(mx_node_states(&b.B, b.leaves, &b.M, &S, st, &q) == MX_OK);
     t = mx_wtime() - t;
     size_t wrong = 0, checked = 0, inside = 0;
     for (size_t v = 0; v < b.M.nnodes; v++) {
@@ -124,7 +124,7 @@ int main(void) {
       CHECK(build(&s, 5, &b) == MX_OK);
       uint8_t *st = mx_alloc(b.M.nnodes + 1);
       size_t q = 0, moved = 0, removed = 0;
-      CHECK(mx_node_states(&b.B, b.leaves, &b.M, &S, st, &q, NULL) == MX_OK);
+      CHECK(mx_node_states(&b.B, b.leaves, &b.M, &S, st, &q) == MX_OK);
       size_t on0 = 0;
       for (size_t v = 0; v < b.M.nnodes; v++)
         on0 += fabs(mx_signed_distance(&S, b.M.xyz + 3 * v, NULL)) <= 1e-9 * diag;

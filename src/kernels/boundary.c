@@ -9,16 +9,9 @@
 #include <math.h>
 #include <string.h>
 
-void mx_node_closest_free(mx_node_closest *C) {
-  mx_free(C->idx);
-  mx_free(C->q);
-  mx_free(C->d);
-  memset(C, 0, sizeof *C);
-}
-
 int mx_node_states(const mx_builder *B, const uint32_t *leaves,
                    const mx_mesh_out *M, const mx_surface_index *S,
-                   uint8_t *states, size_t *queries, mx_node_closest *C) {
+                   uint8_t *states, size_t *queries) {
   const mx_octree *T = &B->oct;
   enum { UNKNOWN = 2 };
 #pragma omp parallel for schedule(static)
@@ -33,78 +26,14 @@ int mx_node_states(const mx_builder *B, const uint32_t *leaves,
       __atomic_store_n(&states[M->conn[8 * c + k]], (uint8_t)MX_NODE_INSIDE,
                        __ATOMIC_RELAXED);
   }
-  if (!C) {
-    size_t q = 0;
+  size_t q = 0;
 #pragma omp parallel for schedule(dynamic, 4096) reduction(+ : q)
-    for (size_t v = 0; v < M->nnodes; v++) {
-      if (states[v] != UNKNOWN) continue;
-      states[v] = mx_inside(S, M->xyz + 3 * v) ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
-      q++;
-    }
-    *queries = q;
-    return MX_OK;
+  for (size_t v = 0; v < M->nnodes; v++) {
+    if (states[v] != UNKNOWN) continue;
+    states[v] = mx_inside(S, M->xyz + 3 * v) ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
+    q++;
   }
-  /* The nodes to locate, numbered in node order (blocks counted, prefix-
-   * summed, filled), then located with their closest points kept. */
-  memset(C, 0, sizeof *C);
-  const size_t nn = M->nnodes;
-  enum { NB = 1 << 15 };
-  const size_t nb = (nn + NB - 1) / NB;
-  uint64_t *boff = mx_alloc((nb + 1) * sizeof *boff);
-  C->idx = mx_alloc((nn + 1) * sizeof *C->idx);
-  if (!boff || !C->idx) {
-    mx_free(boff);
-    mx_node_closest_free(C);
-    return MX_EINPUT;
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t b = 0; b < nb; b++) {
-    uint64_t k = 0;
-    for (size_t v = b * NB; v < nn && v < (b + 1) * NB; v++) k += states[v] == UNKNOWN;
-    boff[b] = k;
-  }
-  const size_t nloc = mx_scan_u64(boff, nb);
-  uint32_t *loc = mx_alloc((nloc + 1) * sizeof *loc);
-  C->q = mx_alloc((3 * nloc + 3) * sizeof *C->q);
-  C->d = mx_alloc((nloc + 1) * sizeof *C->d);
-  if (!loc || !C->q || !C->d) {
-    mx_free(boff);
-    mx_free(loc);
-    mx_node_closest_free(C);
-    return MX_EINPUT;
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t b = 0; b < nb; b++) {
-    uint64_t k = boff[b];
-    for (size_t v = b * NB; v < nn && v < (b + 1) * NB; v++) {
-      if (states[v] == UNKNOWN) {
-        C->idx[v] = (uint32_t)k;
-        loc[k++] = (uint32_t)v;
-      } else {
-        C->idx[v] = UINT32_MAX;
-      }
-    }
-  }
-  mx_free(boff);
-  C->n = nloc;
-  /* in node order, that is the leaves' Morton order: consecutive queries
-   * walk the same BVH nodes */
-#pragma omp parallel for schedule(dynamic, 1024)
-  for (size_t k = 0; k < nloc; k++) {
-    const double *p = M->xyz + 3 * (size_t)loc[k];
-    int in;
-    if (S->closed) {
-      const double d = mx_signed_distance(S, p, C->q + 3 * k);
-      in = d <= 0.0;
-      C->d[k] = fabs(d);
-    } else {
-      in = mx_winding_number(S, p) > 0.5;
-      C->d[k] = INFINITY;
-    }
-    states[loc[k]] = in ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
-  }
-  mx_free(loc);
-  *queries = nloc;
+  *queries = q;
   return MX_OK;
 }
 
@@ -119,8 +48,7 @@ static const int nedges_of[4] = {6, 8, 9, 12};
 
 
 int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index *S,
-                        double ratio, size_t *moved, uint8_t **moved_flags,
-                        const mx_node_closest *C) {
+                        double ratio, size_t *moved, uint8_t **moved_flags) {
   const size_t nn = M->nnodes, nc = M->ncells;
   /* Candidates: inside nodes of surface elements. */
   uint8_t *cand = mx_calloc(nn + 1);
@@ -195,14 +123,7 @@ int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index 
       continue;
     }
     const double avg = (double)len[v] * unit / cnt[v];
-    const uint32_t k = C ? C->idx[v] : UINT32_MAX;
-    double d;
-    if (k != UINT32_MAX && C->d[k] != INFINITY) {
-      d = C->d[k];
-      memcpy(target + 3 * v, C->q + 3 * (size_t)k, 3 * sizeof(double));
-    } else {
-      d = mx_closest_point_within(S, M->xyz + 3 * v, ratio * avg, target + 3 * v);
-    }
+    const double d = mx_closest_point_within(S, M->xyz + 3 * v, ratio * avg, target + 3 * v);
     if (d < ratio * avg) {
       cand[v] = 2;
       nmoved++;
@@ -233,7 +154,7 @@ int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states_io,
                                 const mx_surface_index *S, double ratio,
                                 size_t *moved, size_t *removed) {
   const size_t nc = M->ncells;
-  MX_CHECK(mx_move_close_nodes(M, *states_io, S, ratio, moved, NULL, NULL));
+  MX_CHECK(mx_move_close_nodes(M, *states_io, S, ratio, moved, NULL));
   const uint8_t *states = *states_io;
   /* Remove the elements left with no inside node, then the nodes no
    * element uses. */

@@ -23,21 +23,9 @@ enum { MX_NODE_OUTSIDE = 0, MX_NODE_INSIDE = 1 };
  * the domain (angle-weighted pseudonormals, or the generalized winding number
  * for a surface that is not closed). *queries receives the number of
  * located nodes. */
-/* The closest surface points found while locating (a closed surface: the
- * signed distance's), shared with the next step: idx[v] is node v's entry
- * (UINT32_MAX: none), q[3 * k] its closest point, d[k] its distance
- * (INFINITY: not known, e.g. a winding-number query). */
-typedef struct {
-  uint32_t *idx;
-  double *q, *d;
-  size_t n;
-} mx_node_closest;
-void mx_node_closest_free(mx_node_closest *C);
-
-/* C (may be NULL) receives the closest points of the located nodes. */
 int mx_node_states(const mx_builder *B, const uint32_t *leaves,
                    const mx_mesh_out *M, const mx_surface_index *S,
-                   uint8_t *states, size_t *queries, mx_node_closest *C);
+                   uint8_t *states, size_t *queries);
 
 /* Line 11 of Algorithm 1 (2015 paper), "remove close to boundary": every
  * inside node of a surface element (one with inside and outside nodes) whose
@@ -57,11 +45,8 @@ int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states,
  * with no inside node in the same pass. With moved_flags NULL, J_ENS is
  * recomputed here; otherwise *moved_flags receives (mx_alloc) one byte per
  * node, 1 where it moved, and the caller recomputes. */
-/* C (may be NULL): the closest points of mx_node_states, used instead of a
- * query where known (the same point: a node is at its position of then). */
 int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index *S,
-                        double ratio, size_t *moved, uint8_t **moved_flags,
-                        const mx_node_closest *C);
+                        double ratio, size_t *moved, uint8_t **moved_flags);
 
 /* Line 13 of Algorithm 1, "shrink outside nodes": every outside node moves
  * to its closest point among the domain triangles met by the leaves whose

@@ -17,14 +17,12 @@ int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
   if (!states) return MX_EINPUT;
   uint8_t *moved = NULL;
   double t = mx_wtime();
-  mx_node_closest C;
-  int st = mx_node_states(B, leaves, M, S, states, &stats->located, &C);
+  int st = mx_node_states(B, leaves, M, S, states, &stats->located);
   double t1 = mx_wtime();
   mx_mem_mark("b.states");
   stats->t_states = t1 - t;
   if (!st)
-    st = mx_move_close_nodes(M, states, S, close_ratio, &stats->moved_close, &moved, &C);
-  mx_node_closest_free(&C);
+    st = mx_move_close_nodes(M, states, S, close_ratio, &stats->moved_close, &moved);
   t = mx_wtime();
   mx_mem_mark("b.close");
   stats->t_close = t - t1;
