@@ -106,9 +106,6 @@
 #define STATE FSZ(mx_mesher, states)        /* per node state (mesher.h) */
 #define PATREF ((double)sizeof(mx_pattern_ref)) /* class + rotation per leaf */
 #define EDGE_ENTRY ((double)sizeof(mx_edge)) /* one edge info (soa/edges.h) */
-/* closest points of the located nodes (kernels/boundary.h) */
-#define CL_Q (3.0 * FSZ(mx_node_closest, q))
-#define CL_D FSZ(mx_node_closest, d)
 /* Private to their .c files (not visible by sizeof): */
 #define NODE_ENTRY 16.0 /* transition.c node_entry: kw 8 + owner 4 + id 4 */
 #define SPLIT_INFO 64.0 /* refine.c split_info: 2 + 8 + 8 + 8 + 32 + 4 = 62, padded */
@@ -151,7 +148,7 @@ enum {
   K_ELEM_TI,    /* of which in leaves meeting no triangle (all nodes inside) */
   K_LOCATE_B,   /* nodes located with the surface index (JSON boundary.located) */
   K_CAND,       /* close-to-boundary candidates */
-  K_CAND_Q,     /* of which not located by the states: closest-point queries */
+  K_CAND_Q,     /* closest-point queries (every candidate) */
   K_MOVED_C,    /* nodes moved close (JSON boundary.moved_close) */
   K_PATTERNED,  /* elements replaced by a surface pattern (JSON) */
   K_SUB,        /* elements after the patterns (JSON boundary.sub_elements) */
@@ -267,28 +264,27 @@ static const term MODEL[] = {
      "per element: type + conn[8] + level + leaf + jens written; type read (by-type count)"},
 
     /* boundary stage (kernels/boundary_stage.c), step by step */
-    {"b.states", K_NODE_T, 2 * STATE, 2 * STATE + IDX, 0,
-     "mx_node_states per node: states initialised, scattered (inside), read by the count "
-     "and fill passes of the located list; closest-point index idx written"},
+    {"b.states", K_NODE_T, STATE, 2 * STATE, 0,
+     "mx_node_states per node: states initialised, scattered (inside), read by the "
+     "locate pass"},
     {"b.states", K_ELEM_T, M_LEAF + M_TYPE + IDX + O_FLAGS, 0, 0,
      "per element: leaf, type, leaves + the leaf's flags read"},
     {"b.states", K_ELEM_TI, M_CONN, 0, 0,
      "per element of a leaf meeting no triangle: conn read (its nodes inside)"},
-    {"b.states", K_LOCATE_B, IDX + M_XYZ, IDX + CL_Q + CL_D + STATE, 0,
-     "per located node: loc list written + read, xyz read; its closest point q, distance "
-     "d and state written"},
+    {"b.states", K_LOCATE_B, M_XYZ, STATE, 0,
+     "per located node: xyz read, state written (a signed-distance query)"},
 
-    {"b.close", K_NODE_T, 2 * STATE + 2 * M_XYZ + 3 + IDX + U64 + 1, 1 + U64 + IDX + 2, 0,
+    {"b.close", K_NODE_T, 2 * STATE + 2 * M_XYZ + 3 + U64 + 1, 1 + U64 + IDX + 2, 0,
      "mx_move_close_nodes per node: cand + len + cnt zeroed; states, cand, xyz gathered "
      "(2 passes); bounding box reads xyz; decide/move/final passes read cand x3, cnt, len, "
      "write cand x2"},
     {"b.close", K_ELEM_T, 2 * (M_TYPE + M_CONN), 0, 0,
      "per element: type + conn read (candidates pass, edge-length pass)"},
-    {"b.close", K_CAND, U64 + IDX + U64 + IDX + CL_D + CL_Q, U64 + IDX + M_XYZ, 0,
-     "per candidate: len + cnt atomic adds; len, idx, the located d + q read at the "
-     "decision; target written"},
+    {"b.close", K_CAND, U64 + IDX + U64 + IDX, U64 + IDX + M_XYZ, 0,
+     "per candidate: len + cnt atomic adds; len + cnt read at the decision; target "
+     "written"},
     {"b.close", K_CAND_Q, M_XYZ, 0, 0,
-     "per candidate not located by the states (a query): xyz read"},
+     "per candidate (each a closest-point query): xyz read"},
     {"b.close", K_MOVED_C, M_XYZ, M_XYZ + STATE, 0,
      "per node moved: target read, xyz + state written"},
 
@@ -713,7 +709,6 @@ static int probe(const char *input, int level, int threads, double *K, double fi
 #pragma omp parallel for schedule(dynamic, 4096)
       for (size_t v = 0; v < M->nnodes; v++)
         states[v] = set[v] || mx_inside(&SI, M->xyz + 3 * v) ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
-      const int closed = SI.closed;
       mx_surface_index_free(&SI);
       for (size_t c = 0; c < M->ncells; c++) {
         const int nv = mx_cell_nodes[M->type[c]];
@@ -726,7 +721,7 @@ static int probe(const char *input, int level, int threads, double *K, double fi
       for (size_t v = 0; v < M->nnodes; v++) {
         final[2] += !set[v];
         K[K_CAND] += cand[v];
-        K[K_CAND_Q] += cand[v] && (set[v] || !closed);
+        K[K_CAND_Q] += cand[v] != 0;
       }
     }
     free(set);
