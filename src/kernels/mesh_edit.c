@@ -1,6 +1,7 @@
 #include "kernels/mesh_edit.h"
 
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -160,27 +161,85 @@ static int merge_short_tail(mx_mesh_out *M, size_t p) {
       jens[i] = M->jens[c];
       memcpy(conn + 8 * i, M->conn + 8 * c, 8 * sizeof *conn);
     }
-    /* from the back: the larger leaf goes last, a tail element after the
-     * prefix's elements of the same leaf (what a stable sort gives) */
-    size_t a = p, t = k, w = n;
-    while (t > 0) {
-      w--;
-      if (a > 0 && M->leaf[a - 1] > leaf[t - 1]) {
-        a--;
-        M->type[w] = M->type[a];
-        M->level[w] = M->level[a];
-        M->leaf[w] = M->leaf[a];
-        M->jens[w] = M->jens[a];
-        memmove(M->conn + 8 * w, M->conn + 8 * a, 8 * sizeof *M->conn);
-      } else {
-        t--;
+    /* ins[t]: the prefix elements before tail element t (those of a leaf
+     * up to its own: after the prefix's elements of the same leaf, as a
+     * stable sort puts it); prefix element i moves right by the number of
+     * tail elements with ins <= i, tail element t goes to ins[t] + t. */
+    for (size_t t = 0; t < k; t++) {
+      size_t lo = 0, hi = p;
+      while (lo < hi) {
+        const size_t mid = lo + (hi - lo) / 2;
+        if (M->leaf[mid] <= leaf[t]) lo = mid + 1;
+        else hi = mid;
+      }
+      ord[t] = lo; /* reused: ins */
+    }
+    const uint64_t *ins = ord;
+    /* The prefix moves in parallel chunks, each from its back: a chunk
+     * writes at most k places past its end, into the next chunk's first k
+     * elements, which that chunk saved before anyone wrote. */
+    const size_t nch = 4 * (size_t)omp_get_max_threads();
+    const size_t csz = (p + nch - 1) / nch;
+    const size_t save = k < csz ? k : csz;
+    uint8_t *st8 = mx_alloc(2 * nch * save + 1);
+    uint32_t *s32 = mx_alloc((9 * nch * save + 1) * sizeof *s32);
+    float *sf = mx_alloc((nch * save + 1) * sizeof *sf);
+    if (!st8 || !s32 || !sf) st = MX_EINPUT;
+    if (!st && p > 0) {
+#pragma omp parallel
+      {
+#pragma omp for schedule(static, 1)
+        for (size_t c = 0; c < nch; c++) {
+          const size_t cs = c * csz, ce = cs + csz < p ? cs + csz : p;
+          for (size_t i = cs; i < ce && i < cs + save; i++) {
+            const size_t b = c * save + (i - cs);
+            st8[2 * b] = M->type[i];
+            st8[2 * b + 1] = M->level[i];
+            s32[9 * b] = M->leaf[i];
+            memcpy(s32 + 9 * b + 1, M->conn + 8 * i, 8 * sizeof *s32);
+            sf[b] = M->jens[i];
+          }
+        }
+#pragma omp for schedule(static, 1)
+        for (size_t c = 0; c < nch; c++) {
+          const size_t cs = c * csz, ce = cs + csz < p ? cs + csz : p;
+          if (cs >= ce) continue;
+          size_t j = 0; /* tail elements with ins <= ce - 1 */
+          while (j < k && ins[j] <= ce - 1) j++;
+          for (size_t i = ce; i-- > cs && j > 0;) {
+            while (j > 0 && ins[j - 1] > i) j--;
+            if (j == 0) break;
+            const size_t w = i + j;
+            if (i < cs + save) {
+              const size_t b = c * save + (i - cs);
+              M->type[w] = st8[2 * b];
+              M->level[w] = st8[2 * b + 1];
+              M->leaf[w] = s32[9 * b];
+              memcpy(M->conn + 8 * w, s32 + 9 * b + 1, 8 * sizeof *M->conn);
+              M->jens[w] = sf[b];
+            } else {
+              M->type[w] = M->type[i];
+              M->level[w] = M->level[i];
+              M->leaf[w] = M->leaf[i];
+              memcpy(M->conn + 8 * w, M->conn + 8 * i, 8 * sizeof *M->conn);
+              M->jens[w] = M->jens[i];
+            }
+          }
+        }
+      }
+    }
+    if (!st)
+      for (size_t t = 0; t < k; t++) {
+        const size_t w = ins[t] + t;
         M->type[w] = type[t];
         M->level[w] = level[t];
         M->leaf[w] = leaf[t];
         M->jens[w] = jens[t];
         memcpy(M->conn + 8 * w, conn + 8 * t, 8 * sizeof *conn);
       }
-    }
+    mx_free(st8);
+    mx_free(s32);
+    mx_free(sf);
   }
   mx_free(ord); mx_free(type); mx_free(level); mx_free(conn); mx_free(leaf); mx_free(jens);
   return st;
