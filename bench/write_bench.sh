@@ -4,7 +4,13 @@
 # older build, e.g. without tagged boundaries and grouped blocks) and by the
 # current one, in the same run, alternating, REPEAT times each; the write
 # phase seconds from --json (phases.write), their medians and the ratio
-# current / baseline; then meshio reading the current .vtu (blocks, seconds).
+# current / baseline; then each format's write speed (file bytes /
+# phases.write, MB/s) against a plain sequential write of as many bytes to
+# the same directory (dd, 8 MiB blocks, to a new file and fsync'ed, as the
+# writers' files are: what the disk and page cache give), as the ratio
+# writer / plain; then meshio reading the current .vtu (blocks, seconds).
+# phases.write also holds the preparation of the view (boundary faces,
+# bodies, written order), so the ratio is a lower bound for the writer.
 #
 #   bench/write_bench.sh BASELINE_MIXOCT MIXOCT [LEVEL] [REPEAT]
 #
@@ -30,13 +36,26 @@ run() { # binary, output file
     python3 -c 'import json,sys; d=json.loads(sys.stdin.read()); print(d["total_s"], d["phases"]["write"], d["elements"])'
 }
 median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
+# a plain write of BYTES (rounded up to 8 MiB blocks) to a new file in $T,
+# fsync'ed: prints "seconds bytes"
+plain() {
+  local n=$(( ($1 + 8388607) / 8388608 ))
+  rm -f "$T/plain"
+  local t0 t1
+  t0=$(date +%s.%N)
+  dd if=/dev/zero of="$T/plain" bs=8M count="$n" conv=fsync status=none
+  t1=$(date +%s.%N)
+  rm -f "$T/plain"
+  echo "$(awk -v a="$t0" -v b="$t1" 'BEGIN{print b - a}') $(( n * 8388608 ))"
+}
 
 echo "# cortex -s $LEVEL, $REPEAT runs each, alternating; seconds (median)"
 for fmt in vtu msh; do
-  : >"$T/old_$fmt"; : >"$T/new_$fmt"
+  : >"$T/old_$fmt"; : >"$T/new_$fmt"; : >"$T/plain_$fmt"
   for _ in $(seq 1 "$REPEAT"); do
     run "$OLD" "$T/old.$fmt" >>"$T/old_$fmt"
     run "$NEW" "$T/new.$fmt" >>"$T/new_$fmt"
+    plain "$(stat -c %s "$T/new.$fmt")" >>"$T/plain_$fmt"
   done
   ow=$(awk '{print $2}' "$T/old_$fmt" | median); nw=$(awk '{print $2}' "$T/new_$fmt" | median)
   ot=$(awk '{print $1}' "$T/old_$fmt" | median); nt=$(awk '{print $1}' "$T/new_$fmt" | median)
@@ -45,6 +64,14 @@ for fmt in vtu msh; do
     "$fmt" "$ow" "$nw" "$(awk -v a="$nw" -v b="$ow" 'BEGIN{print a/b}')" "$ot" "$nt" \
     "$(awk -v a="$nt" -v b="$ot" 'BEGIN{print a/b}')" "$(awk -v s="$osz" 'BEGIN{print s/1e6}')" \
     "$(awk -v s="$nsz" 'BEGIN{print s/1e6}')"
+  # speeds: file bytes / write seconds of each run, medians
+  osp=$(awk -v s="$osz" '{print ($2 > 0 ? s / $2 / 1e6 : 0)}' "$T/old_$fmt" | median)
+  nsp=$(awk -v s="$nsz" '{print ($2 > 0 ? s / $2 / 1e6 : 0)}' "$T/new_$fmt" | median)
+  psp=$(awk '{print ($1 > 0 ? $2 / $1 / 1e6 : 0)}' "$T/plain_$fmt" | median)
+  ps=$(awk '{print $1}' "$T/plain_$fmt" | median)
+  printf '%-4s speed: baseline %.0f MB/s, current %.0f MB/s; plain write %.0f MB/s (%.3f s); writer/plain: baseline %.2f, current %.2f\n' \
+    "$fmt" "$osp" "$nsp" "$psp" "$ps" "$(awk -v a="$osp" -v b="$psp" 'BEGIN{print (b > 0 ? a / b : 0)}')" \
+    "$(awk -v a="$nsp" -v b="$psp" 'BEGIN{print (b > 0 ? a / b : 0)}')"
 done
 if /usr/bin/python3 -c 'import meshio' 2>/dev/null; then
   for who in old new; do

@@ -14,9 +14,9 @@
 #include <unistd.h>
 
 #include "common.h"
+#include "io/chunk_out.h"
 
 enum {
-  AFILE_CHUNK = 8 << 20, /* bytes of one chunk of mx_afile_emit */
   AFILE_PAR_MIN = 4096,  /* fewer items than this: one thread */
   AFILE_MAX_PARTS = 256,
   AFILE_TMP_TRIES = 1000,
@@ -73,6 +73,7 @@ void mx_afile_remove_temporaries(void) {
 /* Closes the stream, unlinks the temporary, frees everything. Does not
  * report anything: used on every failure path and by abort. */
 static void afile_discard(mx_afile *f) {
+  mx_chunk_out_free(f->out); /* the writer thread stops before the close */
   if (f->fp) fclose(f->fp);
   if (f->tmp) {
     unlink(f->tmp);
@@ -81,7 +82,6 @@ static void afile_discard(mx_afile *f) {
   mx_free(f->tmp);
   mx_free(f->path);
   mx_free(f->real);
-  mx_free(f->buf);
   int failed = f->failed;
   afile_reset(f);
   f->failed = failed;
@@ -111,10 +111,17 @@ static int target_is_special(const char *path) {
   return !S_ISREG(st.st_mode);
 }
 
+/* The double-buffered stream to the open f->fp. */
+static int attach_stream(mx_afile *f) {
+  f->out = mx_chunk_out_new(fileno(f->fp));
+  if (!f->out) return afile_fail_quiet(f, MX_EINPUT);
+  return MX_OK;
+}
+
 static int open_in_place(mx_afile *f) {
   f->fp = fopen(f->real, "wb");
   if (!f->fp) return afile_fail(f, errno);
-  return MX_OK;
+  return attach_stream(f);
 }
 
 /* Creates the temporary exclusively: never clobbers another writer's file. */
@@ -143,7 +150,7 @@ static int open_temporary(mx_afile *f) {
       close(fd);
       return afile_fail(f, err);
     }
-    return MX_OK;
+    return attach_stream(f);
   }
   mx_free(f->tmp);
   f->tmp = NULL;
@@ -199,14 +206,17 @@ int mx_afile_from_stream(mx_afile *f, FILE *fp, const char *name) {
   }
   f->fp = fp;
   if (!fp) return afile_fail(f, EBADF);
-  return MX_OK;
+  /* from here on the descriptor is written directly: what the caller left
+   * in the stream's buffer goes first */
+  if (fflush(fp) != 0) return afile_fail(f, errno);
+  return attach_stream(f);
 }
 
 int mx_afile_write(mx_afile *f, const void *data, size_t bytes) {
   if (f->failed || !f->fp) return MX_EIO;
   if (bytes == 0) return MX_OK;
-  errno = 0;
-  if (fwrite(data, 1, bytes, f->fp) != bytes) return afile_fail(f, errno);
+  const int err = mx_chunk_out_put(f->out, data, bytes);
+  if (err) return afile_fail(f, err);
   return MX_OK;
 }
 
@@ -233,6 +243,10 @@ int mx_afile_commit(mx_afile *f) {
     afile_discard(f);
     return MX_EIO;
   }
+  const int err = mx_chunk_out_flush(f->out);
+  if (err) return afile_fail(f, err);
+  mx_chunk_out_free(f->out); /* everything is written: the thread ends */
+  f->out = NULL;
   errno = 0;
   if (fflush(f->fp) != 0) return afile_fail(f, errno);
   if (fsync(fileno(f->fp)) != 0 && !sync_ignorable(errno))
@@ -260,55 +274,36 @@ int mx_afile_finish(mx_afile *f, int status) {
 
 /* ---- chunked parallel emission ------------------------------------------- */
 
-static int emit_reserve(mx_afile *f, size_t bytes) {
-  if (f->buf_cap >= bytes) return MX_OK;
-  mx_free(f->buf);
-  f->buf_cap = 0;
-  f->buf = mx_alloc(bytes);
-  if (!f->buf) return afile_fail_quiet(f, MX_EINPUT);
-  f->buf_cap = bytes;
-  return MX_OK;
-}
-
-/* Writes the filled parts in order, merging a part with the next one when
- * it filled its whole room (fixed-size items): one fwrite per chunk then. */
-static int emit_flush_parts(mx_afile *f, const char *buf, size_t nparts,
-                            const size_t *room, const size_t *used) {
-  size_t run_start = 0, run_len = 0, pos = 0;
-  for (size_t p = 0; p < nparts; p++) {
-    if (run_len == 0) run_start = pos;
-    run_len += used[p];
-    int contiguous = used[p] == room[p] && p + 1 < nparts;
-    if (!contiguous) {
-      MX_CHECK(mx_afile_write(f, buf + run_start, run_len));
-      run_len = 0;
-    }
-    pos += room[p];
-  }
-  return MX_OK;
-}
-
-static int emit_chunk(mx_afile *f, size_t begin, size_t count,
-                      size_t max_item_bytes, mx_afile_fill_fn fill,
-                      const void *ctx) {
-  size_t room[AFILE_MAX_PARTS], used[AFILE_MAX_PARTS];
+/* Fills count items from begin into dst (room for count * max_item_bytes
+ * bytes), split among the threads; each part starts at its item's worst-case
+ * place, then the parts are closed up in order (nothing moves when every
+ * item took its whole room, as fixed-size binary items do). Returns the
+ * bytes filled. */
+static size_t emit_run(char *dst, size_t begin, size_t count, size_t max_item_bytes,
+                       mx_afile_fill_fn fill, const void *ctx, int writer_busy) {
+  size_t used[AFILE_MAX_PARTS];
   size_t nparts = 1;
   if (count >= AFILE_PAR_MIN) {
-    int t = omp_get_max_threads();
+    /* a core for the writer thread while it writes: with as many fillers
+     * as cores, the barrier of each run would wait for the one sharing its
+     * core with the writer */
+    int t = omp_get_max_threads() - (writer_busy ? 1 : 0);
     nparts = t < 1 ? 1 : (size_t)t;
     if (nparts > AFILE_MAX_PARTS) nparts = AFILE_MAX_PARTS;
-  }
-  char *buf = f->buf;
-  for (size_t p = 0; p < nparts; p++) {
-    room[p] = (count * (p + 1) / nparts - count * p / nparts) * max_item_bytes;
   }
 #pragma omp parallel for num_threads((int)nparts) \
     schedule(static, 1) if (nparts > 1)
   for (size_t p = 0; p < nparts; p++) {
     size_t lo = count * p / nparts, hi = count * (p + 1) / nparts;
-    used[p] = fill(ctx, begin + lo, begin + hi, buf + lo * max_item_bytes);
+    used[p] = fill(ctx, begin + lo, begin + hi, dst + lo * max_item_bytes);
   }
-  return emit_flush_parts(f, buf, nparts, room, used);
+  size_t pos = used[0];
+  for (size_t p = 1; p < nparts; p++) {
+    const char *src = dst + count * p / nparts * max_item_bytes;
+    if (src != dst + pos && used[p]) memmove(dst + pos, src, used[p]);
+    pos += used[p];
+  }
+  return pos;
 }
 
 int mx_afile_emit(mx_afile *f, size_t nitems, size_t max_item_bytes,
@@ -316,13 +311,28 @@ int mx_afile_emit(mx_afile *f, size_t nitems, size_t max_item_bytes,
   if (f->failed || !f->fp) return MX_EINPUT;
   if (nitems == 0) return MX_OK;
   if (max_item_bytes == 0) max_item_bytes = 1;
-  size_t chunk_items = AFILE_CHUNK / max_item_bytes;
-  if (chunk_items == 0) chunk_items = 1;
-  if (chunk_items > nitems) chunk_items = nitems;
-  MX_CHECK(emit_reserve(f, chunk_items * max_item_bytes));
-  for (size_t begin = 0; begin < nitems; begin += chunk_items) {
-    size_t count = nitems - begin < chunk_items ? nitems - begin : chunk_items;
-    MX_CHECK(emit_chunk(f, begin, count, max_item_bytes, fill, ctx));
+  const size_t cap = mx_chunk_out_capacity(f->out);
+  if (max_item_bytes > cap) {
+    mx_error(f->path, 0, "internal error: items of %zu bytes do not fit a chunk",
+             max_item_bytes);
+    return afile_fail_quiet(f, MX_EINTERNAL);
+  }
+  /* Runs fill the free room of the current chunk; a chunk with less than
+   * a quarter free (and not enough for what is left) is handed over first,
+   * so that runs stay long enough to split among the threads. */
+  for (size_t begin = 0; begin < nitems;) {
+    const size_t left = nitems - begin;
+    size_t want = cap / 4;
+    if (left <= want / max_item_bytes) want = left * max_item_bytes;
+    if (want < max_item_bytes) want = max_item_bytes;
+    size_t avail = 0;
+    char *dst = mx_chunk_out_room(f->out, want, &avail);
+    if (!dst) return afile_fail(f, mx_chunk_out_error(f->out));
+    size_t count = avail / max_item_bytes;
+    if (count > left) count = left;
+    const int busy = mx_chunk_out_busy(f->out);
+    mx_chunk_out_commit(f->out, emit_run(dst, begin, count, max_item_bytes, fill, ctx, busy));
+    begin += count;
   }
   return MX_OK;
 }

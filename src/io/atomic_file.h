@@ -21,7 +21,15 @@
  *   MX_CHECK(mx_afile_open(&f, path));
  *   int st = mx_afile_write(&f, buf, n);              (repeat)
  *   if (st == MX_OK) st = mx_afile_commit(&f); else mx_afile_abort(&f);
- * abort is always safe (idempotent, also after a failed write or commit). */
+ * abort is always safe (idempotent, also after a failed write or commit).
+ *
+ * The bytes go through a double-buffered stream (io/chunk_out.h): they are
+ * collected in 8 MiB chunks and a background thread writes one chunk while
+ * the caller formats the next. A write failure found by that thread (full
+ * disk, file size limit, I/O error) is reported like any other, by the next
+ * call that hands a chunk over or at the latest by commit, which returns
+ * MX_EIO: the file is still never left partial or under its temporary
+ * name. */
 #ifndef MX_ATOMIC_FILE_H
 #define MX_ATOMIC_FILE_H
 
@@ -30,14 +38,15 @@
 
 #include "soa/mesh.h"
 
+struct mx_chunk_out;
+
 typedef struct {
-  FILE *fp;   /* NULL once closed */
+  FILE *fp;   /* NULL once closed; written through its descriptor only */
   char *path; /* final name, used in messages */
   char *real; /* the file written: path, or what a symbolic link names */
   char *tmp;  /* temporary name; NULL when writing in place or a stream */
   int failed; /* sticky: a failure was reported, every call now fails */
-  char *buf;  /* scratch buffer of mx_afile_emit */
-  size_t buf_cap;
+  struct mx_chunk_out *out; /* the double-buffered stream to fp */
 } mx_afile;
 
 int mx_afile_open(mx_afile *f, const char *path);
@@ -59,9 +68,12 @@ int mx_afile_finish(mx_afile *f, int status);
 /* Chunked, parallel writing of a sequence of nitems items. fill() writes
  * the items [begin, end) to out, which has room for
  * (end - begin) * max_item_bytes bytes, and returns the number of bytes it
- * wrote. Items are cut into chunks of a few MiB, each chunk is split among
- * the OpenMP threads and the parts are written in order, so the bytes do not
- * depend on the number of threads. fill() must be thread-safe. */
+ * wrote; fill(b, e) must give the bytes of fill(b, m) then fill(m, e).
+ * Items are cut into runs that fit the free room of the stream's current
+ * chunk, each run is split among the OpenMP threads, formatted in place and
+ * the parts closed up in order, so the bytes do not depend on the number of
+ * threads nor on the chunk size. fill() must be thread-safe. max_item_bytes
+ * must not pass the chunk size (MX_EINTERNAL). */
 typedef size_t (*mx_afile_fill_fn)(const void *ctx, size_t begin, size_t end,
                                    char *out);
 int mx_afile_emit(mx_afile *f, size_t nitems, size_t max_item_bytes,

@@ -76,6 +76,10 @@ typedef struct msh_layout {
   uint64_t *tag0;         /* the element tag before each tag's first face */
   size_t *ncell;          /* per body 0..nbodies, 4 types each */
   double *tbox, *bbox;    /* 6 per tag / body */
+  /* written positions [klo, khi) holding each block's cells, per body
+   * 0..nbodies (plain layout: 0 only), 4 types each: a block scans only
+   * those (the whole of them when the written order groups the blocks) */
+  size_t *klo, *khi;
 } msh_layout;
 
 typedef struct {
@@ -85,7 +89,8 @@ typedef struct {
   int body;   /* 0: every cell; else the body (faces: the tag) of this block */
   int binary;
   const mx_field *fd; /* $ElementData: the field */
-  size_t base;        /* faces: the first of the block's run in its list */
+  size_t base;        /* faces: the first of the block's run in its list;
+                         cells: the written position of item 0 */
 } msh_ctx;
 
 /* ---- binary stores (host byte order) -------------------------------------- */
@@ -150,7 +155,7 @@ static size_t fill_elements_bin(const void *vctx, size_t b, size_t e,
   const int t = ctx->type, nn = mx_cell_nodes[t];
   const int8_t *perm = msh_perm[t];
   size_t n = 0;
-  for (size_t k = b; k < e; k++) {
+  for (size_t k = ctx->base + b; k < ctx->base + e; k++) {
     const size_t c = mx_view_cell(m, k);
     if (!in_block(ctx, c)) continue;
     if (ctx->fd) {
@@ -173,7 +178,7 @@ static size_t fill_elements_ascii(const void *vctx, size_t b, size_t e,
   const int t = ctx->type, nn = mx_cell_nodes[t];
   const int8_t *perm = msh_perm[t];
   size_t n = 0;
-  for (size_t k = b; k < e; k++) {
+  for (size_t k = ctx->base + b; k < ctx->base + e; k++) {
     const size_t c = mx_view_cell(m, k);
     if (!in_block(ctx, c)) continue;
     if (ctx->fd) {
@@ -275,6 +280,8 @@ static void layout_free(msh_layout *L) {
   mx_free(L->ncell);
   mx_free(L->tbox);
   mx_free(L->bbox);
+  mx_free(L->klo);
+  mx_free(L->khi);
 }
 
 static void box_add(double *box, const double *p) {
@@ -294,11 +301,39 @@ static void faces_into(const mx_mesh_view *m, msh_layout *L, const uint32_t *fv,
   }
 }
 
+/* The written positions of each block's cells: one pass over the cells. */
+static int block_ranges(const mx_mesh_view *m, msh_layout *L) {
+  const size_t nb = (size_t)L->nbodies + 1, n4 = 4 * nb;
+  size_t *lo = mx_alloc(n4 * sizeof *lo), *hi = mx_alloc(n4 * sizeof *hi);
+  L->klo = lo;
+  L->khi = hi;
+  if (!lo || !hi) return MX_EINPUT;
+  for (size_t i = 0; i < n4; i++) lo[i] = SIZE_MAX, hi[i] = 0;
+  const int tagged = L->tagged;
+#pragma omp parallel for schedule(static) reduction(min : lo[:n4]) reduction(max : hi[:n4]) \
+    if (m->ncells > 65536)
+  for (size_t k = 0; k < m->ncells; k++) {
+    const size_t c = mx_view_cell(m, k);
+    const int32_t b = tagged ? m->cell_body[c] : 0;
+    if (b < 0 || (size_t)b >= nb) continue;
+    const size_t i = 4 * (size_t)b + (m->type[c] & 3);
+    lo[i] = k < lo[i] ? k : lo[i];
+    hi[i] = k + 1 > hi[i] ? k + 1 : hi[i];
+  }
+  for (size_t i = 0; i < n4; i++)
+    if (lo[i] > hi[i]) lo[i] = hi[i] = 0; /* no cell */
+  return MX_OK;
+}
+
 static int layout_build(const mx_mesh_view *m, msh_layout *L) {
   memset(L, 0, sizeof *L);
   const mx_boundary_faces *bf = m->bfaces;
   L->tagged = bf && bf->tri_tag && bf->quad_tag && m->ntags > 0 && m->cell_body && m->nbodies > 0;
-  if (!L->tagged) return MX_OK;
+  if (!L->tagged) {
+    if (block_ranges(m, L) == MX_OK) return MX_OK;
+    layout_free(L);
+    return MX_EINPUT;
+  }
   L->ntags = m->ntags;
   L->nbodies = m->nbodies;
   const size_t nt = (size_t)L->ntags + 1, nb = (size_t)L->nbodies + 1;
@@ -354,7 +389,9 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
     const int32_t b = m->cell_body[c];
     if (b >= 1 && b <= L->nbodies) cnt[4 * (size_t)b + (m->type[c] & 3)]++;
   }
-  return MX_OK;
+  if (block_ranges(m, L) == MX_OK) return MX_OK;
+  layout_free(L);
+  return MX_EINPUT;
 }
 
 static int write_header(mx_afile *f, const mx_mesh_view *m, const msh_layout *L, int binary) {
@@ -485,14 +522,16 @@ static int block_head(mx_afile *f, int dim, int tag, int type, size_t count, int
 
 /* A block of volume elements, or with fd its $ElementData lines (in the
  * same order: readers such as meshio take the values in file order). */
-static int cell_block(mx_afile *f, const mx_mesh_view *m, int entity, int body, int t,
-                      size_t count, int binary, const mx_field *fd) {
-  msh_ctx ctx = {m, NULL, t, body, binary, fd, 0};
+static int cell_block(mx_afile *f, const mx_mesh_view *m, const msh_layout *L, int entity,
+                      int body, int t, size_t count, int binary, const mx_field *fd) {
+  const size_t r = 4 * (size_t)body + (size_t)t; /* its written positions */
+  msh_ctx ctx = {m, NULL, t, body, binary, fd, L->klo[r]};
+  const size_t nitems = L->khi[r] - L->klo[r];
   const size_t per_cell = (size_t)mx_cell_nodes[t] + 1;
   const size_t data_max = MX_U64_CHARS + MX_DOUBLE_CHARS + 2;
   if (!fd) MX_CHECK(block_head(f, 3, entity, msh_type[t], count, binary));
-  if (binary) return mx_afile_emit(f, m->ncells, fd ? 12 : 8 * per_cell, fill_elements_bin, &ctx);
-  return mx_afile_emit(f, m->ncells, fd ? data_max : (MX_U64_CHARS + 1) * per_cell,
+  if (binary) return mx_afile_emit(f, nitems, fd ? 12 : 8 * per_cell, fill_elements_bin, &ctx);
+  return mx_afile_emit(f, nitems, fd ? data_max : (MX_U64_CHARS + 1) * per_cell,
                        fill_elements_ascii, &ctx);
 }
 
@@ -514,13 +553,13 @@ static int all_blocks(mx_afile *f, const mx_mesh_view *m, const msh_layout *L,
                       const size_t count[4], int binary, const mx_field *fd) {
   if (!L->tagged) {
     for (int t = 0; t < 4; t++)
-      if (count[t]) MX_CHECK(cell_block(f, m, ENTITY_TAG, 0, t, count[t], binary, fd));
+      if (count[t]) MX_CHECK(cell_block(f, m, L, ENTITY_TAG, 0, t, count[t], binary, fd));
     return MX_OK;
   }
   for (int b = 1; b <= L->nbodies; b++)
     for (int t = 0; t < 4; t++)
       if (L->ncell[4 * b + t])
-        MX_CHECK(cell_block(f, m, b, b, t, L->ncell[4 * b + t], binary, fd));
+        MX_CHECK(cell_block(f, m, L, b, b, t, L->ncell[4 * b + t], binary, fd));
   for (int t = 1; t <= L->ntags; t++) {
     if (L->ntri[t]) MX_CHECK(face_block(f, m, L, t, 3, L->ntri[t], binary, fd));
     if (L->nquad[t]) MX_CHECK(face_block(f, m, L, t, 4, L->nquad[t], binary, fd));

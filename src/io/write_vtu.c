@@ -4,8 +4,10 @@
  * Every DataArray is format="appended"; the blocks follow "_" in
  * <AppendedData encoding="raw">, each preceded by its byte count as a
  * UInt64, in the order their DataArray elements appear. On a little-endian
- * host coordinates and fields are written straight from the mesh arrays;
- * connectivity, offsets and types are converted in parallel chunks. */
+ * host coordinates and fields are copied straight from the mesh arrays into
+ * the output chunks; connectivity, offsets and types are converted in
+ * parallel in place in them (io/atomic_file.h: a background thread writes
+ * one chunk while the next is filled). */
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
