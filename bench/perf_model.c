@@ -305,15 +305,17 @@ static const term MODEL[] = {
     {"b.patterns", K_CENTRE, 0, M_XYZ + STATE + M_NKEY, 0,
      "per centre: xyz, state, nkey written"},
 
-    {"b.shrink", K_SUB, M_LEAF + 2 * (M_TYPE + M_CONN) + M_TYPE + M_CONN + M_JENS, M_JENS, 0,
-     "mx_shrink_to_boundary per element: leaf read (serial run scan), type + conn read by "
-     "the 2 passes over leaves and the J_ENS pass; jens read + written"},
-    {"b.shrink", K_LEAF, 2 * U64 + 2 * (IDX + O_TRICNT), U64, 0,
-     "per leaf: run start written, read by 2 passes; leaves + tri_cnt read x2"},
-    {"b.shrink", K_NODE, 3 * STATE + IDX + M_XYZ, U64 + IDX, 0,
-     "per node: best + btri initialised; states gathered x3; btri read; xyz gathered"},
-    {"b.shrink", K_SHR_PAIR, 2 * M_XYZ + 2 * U64 + IDX, U64 + IDX, 0,
-     "per (leaf, outside node) pair: xyz read x2; best CAS, then best read, btri CAS"},
+    {"b.shrink", K_SUB, 2 * M_LEAF + (M_TYPE + M_CONN) + M_TYPE + M_CONN + M_JENS, M_JENS, 0,
+     "mx_shrink_to_boundary per element: leaf read (run count + fill), type + conn read by "
+     "the pass over leaves and the J_ENS pass; jens read + written"},
+    {"b.shrink", K_LEAF, U64 + IDX + O_TRICNT, U64, 0,
+     "per leaf: run start written, read once; leaves + tri_cnt read"},
+    {"b.shrink", K_NODE, 2 * STATE + IDX + M_XYZ, U64 + IDX + 1, 0,
+     "per node: best + btri + lock initialised; states gathered x2; btri read; xyz "
+     "gathered"},
+    {"b.shrink", K_SHR_PAIR, M_XYZ + U64 + IDX + 1, U64 + IDX + 1, 0,
+     "per (leaf, outside node) pair: xyz read; under the node's lock best + btri read "
+     "and written"},
     {"b.shrink", K_SHRUNK, M_XYZ, M_XYZ, 0, "per node moved: xyz read + written"},
 
     {"b.smooth", K_ELEM, M_JENS + 2 * (M_TYPE + M_CONN) + M_TYPE + M_JENS, 0, 0,
@@ -417,7 +419,7 @@ static const row_def ROWS[] = {
     {"b.states", "states", 1, K_NODE_T, "nodes", K_LOCATE_B, "signed-distance queries", 0},
     {"b.close", "close", 1, K_NODE_T, "nodes", K_CAND_Q, "closest-point queries", 0},
     {"b.patterns", "patterns", 1, K_ELEM_T, "elements", K_PATTERNED, "tessellations", 0},
-    {"b.shrink", "shrink", 1, K_NODE, "nodes", K_SHR_TEST, "pt-tri distances x2", 0},
+    {"b.shrink", "shrink", 1, K_NODE, "nodes", K_SHR_TEST, "pt-tri distances", 0},
     {"b.smooth", "smooth", 1, K_ELEM, "elements", K_SMOOTHED, "node moves", 0},
     {"b.staircase", "staircase", 1, K_OPT, "optional", K_OPT, "J_ENS evaluations", 0},
     {"b.rest", NULL, 1, K_ELEM, "elements", -1, NULL, 0},
