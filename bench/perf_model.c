@@ -62,6 +62,7 @@
 
 #include "mixoct.h"
 #include "kernels/boundary.h"
+#include "kernels/contacts.h"
 #include "kernels/distance.h"
 #include "kernels/surface_patterns.h"
 #include "kernels/transition.h"
@@ -611,23 +612,6 @@ static int add_distinct(uint32_t *out, int k, int cap, uint32_t v) {
   return k;
 }
 
-/* contacts.c surface_face: a face of element c with outside nodes only. */
-static int surface_face(const mx_mesh_out *M, const uint8_t *states, size_t c) {
-  const int t = M->type[c];
-  const uint32_t *row = M->conn + 8 * c;
-  uint32_t out = 0;
-  for (int j = 0; j < mx_cell_nodes[t]; j++)
-    out |= (uint32_t)(states[row[j]] == MX_NODE_OUTSIDE) << j;
-  if (__builtin_popcount(out) < 3) return 0;
-  for (int f = 0; f < mx_cell_nfaces[t]; f++) {
-    const int8_t *fv = mx_cell_faces[t][f];
-    uint32_t need = 0;
-    for (int k = 0; k < 4 && fv[k] >= 0; k++) need |= 1u << fv[k];
-    if ((out & need) == need) return 1;
-  }
-  return 0;
-}
-
 static int probe(const char *input, int level, int threads, double *K, double final[3]) {
   mx_params p;
   mx_params_default(&p);
@@ -766,7 +750,7 @@ static int probe(const char *input, int level, int threads, double *K, double fi
     }
     uint32_t levels = 0;
     for (size_t c = 0; c < M->ncells; c++)
-      if (surface_face(M, S, c)) {
+      if (mx_surface_face(M, S, c)) {
         K[K_SURF_ELEM] += 1;
         levels |= 1u << (M->level[c] & 31);
       }

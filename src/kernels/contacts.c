@@ -16,7 +16,7 @@ enum { CHUNK = 16384 };
  * surface are interior, and those the lattice puts exactly on a flat part
  * of the surface were never moved, so the transition patterns' conformity
  * holds for them). */
-static int surface_face(const mx_mesh_out *M, const uint8_t *states, size_t c) {
+int mx_surface_face(const mx_mesh_out *M, const uint8_t *states, size_t c) {
   const int t = M->type[c];
   const uint32_t *row = M->conn + 8 * c;
   uint32_t out = 0;
@@ -53,7 +53,7 @@ int mx_find_contacts(const mx_mesh_out *M, const uint8_t *states, uint8_t *elem_
     const size_t end = (k + 1) * CHUNK < nc ? (k + 1) * CHUNK : nc;
     uint64_t n = 0;
     for (size_t c = k * CHUNK; c < end; c++) {
-      n += (uint64_t)surface_face(M, states, c);
+      n += (uint64_t)mx_surface_face(M, states, c);
     }
     cnt[k] = n;
   }
@@ -70,7 +70,7 @@ int mx_find_contacts(const mx_mesh_out *M, const uint8_t *states, uint8_t *elem_
     const size_t end = (k + 1) * CHUNK < nc ? (k + 1) * CHUNK : nc;
     uint64_t at = cnt[k];
     for (size_t c = k * CHUNK; c < end; c++) {
-      if (surface_face(M, states, c)) list[at++] = (uint32_t)c;
+      if (mx_surface_face(M, states, c)) list[at++] = (uint32_t)c;
     }
   }
   mx_free(cnt);

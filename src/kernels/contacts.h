@@ -28,5 +28,8 @@ typedef struct {
  * 0 elsewhere. Deterministic, parallel, O(elements near the surface). */
 int mx_find_contacts(const mx_mesh_out *M, const uint8_t *states, uint8_t *elem_flag,
                      mx_contacts *out);
+/* 1 when a face of element c has surface (outside) nodes only: the
+ * elements the search looks at. */
+int mx_surface_face(const mx_mesh_out *M, const uint8_t *states, size_t c);
 
 #endif
