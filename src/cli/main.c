@@ -163,8 +163,8 @@ int main(int argc, char **argv) {
     return mx_patterns_main(argc - 1, argv + 1);
   int remesh = argc >= 2 && strcmp(argv[1], "remesh") == 0;
   /* Arrays of 4 MB and more are mapped on their own and unmapped when
-   * freed, so the peak is what is alive: cortex -s 9 peaks at 0.99 GB,
-   * against 1.29 GB with every array in the heap and kept there
+   * freed, so the peak is what is alive: cortex -s 9 peaks at 988 MiB,
+   * against 1,262 MiB with every array in the heap and kept there
    * (MX_HEAP=heap: freed holes the next, larger arrays cannot use), with
    * no more kernel time (measured: sys 1.2-1.3 s against 1.3-2.3 s). */
   const char *heap = getenv("MX_HEAP");
