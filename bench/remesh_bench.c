@@ -114,15 +114,15 @@ static void write_list(const char *path, const uint64_t *l, size_t n) {
 
 int main(int argc, char **argv) {
   {
-    /* as the mixoct program does (src/cli/main.c): arrays of 4 MB and more
+    /* as the mixoct program does (src/cli/main.c): arrays of 1 MB and more
      * mapped on their own */
     const char *heap = getenv("MX_HEAP");
     if (heap && strcmp(heap, "heap") == 0) {
       mallopt(M_MMAP_MAX, 0);
       mallopt(M_TRIM_THRESHOLD, INT_MAX);
     } else if (!heap || strcmp(heap, "default") != 0) {
-      mallopt(M_MMAP_THRESHOLD, 4 << 20);
-      mallopt(M_TRIM_THRESHOLD, 64 << 20);
+      mallopt(M_MMAP_THRESHOLD, 1 << 20);
+      mallopt(M_TRIM_THRESHOLD, 8 << 20);
     }
   }
   const char *data = "../shared/data", *out = "/tmp";

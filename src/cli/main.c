@@ -162,7 +162,7 @@ int main(int argc, char **argv) {
   if (argc >= 2 && strcmp(argv[1], "patterns") == 0)
     return mx_patterns_main(argc - 1, argv + 1);
   int remesh = argc >= 2 && strcmp(argv[1], "remesh") == 0;
-  /* Arrays of 4 MB and more are mapped on their own and unmapped when
+  /* Arrays of 1 MB and more are mapped on their own and unmapped when
    * freed, so the peak is what is alive: cortex -s 9 peaks at 988 MiB,
    * against 1,262 MiB with every array in the heap and kept there
    * (MX_HEAP=heap: freed holes the next, larger arrays cannot use), with
