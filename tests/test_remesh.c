@@ -221,8 +221,11 @@ static void test_local_vs_full(void) {
   mx_params_default(&p);
   p.surface_level = 5;
   mx_mesher *loc = mx_mesher_new(&p);
-  p.threads = 1; /* and the same local re-mesh on one thread */
+  p.threads = 1; /* and the same local re-mesh on one thread, with the edge
+                   * infos freed after each transition and rebuilt by the
+                   * splits (as the program runs) */
   mx_mesher *one = mx_mesher_new(&p);
+  one->release_edges = 1;
   p.threads = 0;
   p.remesh_full = 1;
   mx_mesher *full = mx_mesher_new(&p);

@@ -71,6 +71,7 @@ static int setup(const mx_options *o, mx_mesher **out) {
   mx_mesher_set_message_handler(m, on_message, &run_info);
   m->on_stage = on_stage;
   m->on_round = on_round;
+  m->release_edges = 1; /* one run: the edge infos' memory goes to the mesh */
   m->on_level = mx_progress_on_level;
   mx_progress_stage("read");
   if (o->demo) MX_CHECK(mx_mesher_add_demo_surface(m));

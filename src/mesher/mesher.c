@@ -474,7 +474,8 @@ static int check_memory(mx_mesher *m, const mx_requests *req) {
 /* The same check once the octree is built, from its leaves (a closer
  * estimate: kernels/estimate.h), before the mesh is. */
 static int check_memory_leaves(mx_mesher *m) {
-  const double need = mx_estimate_bytes_leaves(m->nleaves, m->soup.nt, m->p.stage);
+  double need = mx_estimate_bytes_leaves(m->nleaves, m->soup.nt, m->p.stage);
+  if (!m->release_edges) need += 90.0 * (double)m->nleaves; /* the edge infos kept */
   m->S.memory_estimate_mb = need / 1048576.0;
   const double avail = mx_available_bytes() + mx_peak_rss_mb() * 1048576.0;
   const double limit = m->p.max_memory_mb > 0 ? m->p.max_memory_mb * 1048576.0 : avail;
@@ -618,7 +619,7 @@ static int transition(mx_mesher *m) {
   MX_CHECK(mx_transition_masks(&m->B, m->leaves, m->nleaves, &lm));
   /* nothing reads the edge infos again until the octree is split: their
    * memory goes to the mesh (rebuilt by the next split, kernels/remesh.h) */
-  mx_edges_release(&m->B);
+  if (m->release_edges) mx_edges_release(&m->B);
   MX_CHECK(mx_transition_build(&m->B, m->leaves, m->nleaves, &lm, &m->M));
   m->mesh_stage = MX_STAGE_TRANSITION;
   m->S.ph.transition += mx_wtime() - t;
@@ -887,7 +888,7 @@ int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a) {
 
 static int write_octree(mx_mesher *m, const char *path, int ascii) {
   if (!m->have_hex) {
-    mx_edges_release(&m->B); /* not read by the hexahedra; rebuilt by a split */
+    if (m->release_edges) mx_edges_release(&m->B); /* not read by the hexahedra */
     MX_CHECK(mx_leaf_hex_mesh(&m->B, m->leaves, m->nleaves, &m->hex));
     m->have_hex = 1;
   }

@@ -104,6 +104,11 @@ struct mx_mesher {
   int have_hex;
 
   mx_summary S;
+  /* 1: free the edge infos once the transition has read them (the program:
+   * one mesh, its memory to the mesh; a split rebuilds them). 0 (the
+   * library's default): keep them for the refinements of a re-meshing loop
+   * (about 90 B per leaf). */
+  int release_edges;
   /* hooks for the program's progress line (NULL: none) */
   void (*on_stage)(const char *name);
   void (*on_round)(int round);
