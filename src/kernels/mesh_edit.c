@@ -137,111 +137,90 @@ static int cmp_u64(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
+/* Element c of src becomes element w of dst (the per-element arrays). */
+static inline void cell_copy(mx_mesh_out *dst, size_t w, const mx_mesh_out *src, size_t c) {
+  dst->type[w] = src->type[c];
+  dst->level[w] = src->level[c];
+  dst->leaf[w] = src->leaf[c];
+  dst->jens[w] = src->jens[c];
+  memcpy(dst->conn + 8 * w, src->conn + 8 * c, 8 * sizeof *dst->conn);
+}
+
+/* Per-element arrays for n elements, to hold elements aside. */
+static int cells_alloc(mx_mesh_out *B, size_t n) {
+  memset(B, 0, sizeof *B);
+  B->type = mx_alloc(n + 1);
+  B->level = mx_alloc(n + 1);
+  B->leaf = mx_alloc((n + 1) * sizeof *B->leaf);
+  B->jens = mx_alloc((n + 1) * sizeof *B->jens);
+  B->conn = mx_alloc((8 * n + 1) * sizeof *B->conn);
+  return B->type && B->level && B->leaf && B->jens && B->conn ? MX_OK : MX_EINPUT;
+}
+
 /* When the elements are in leaf order but for a short tail (the staircase
  * appends the few elements it restores), the tail is sorted apart and merged
- * in place from the back: no second copy of the mesh. Returns MX_OK, or 1
- * when the general sort is needed. */
+ * in place: no second copy of the mesh. Returns MX_OK, or 1 when the general
+ * sort is needed. */
 static int merge_short_tail(mx_mesh_out *M, size_t p) {
   const size_t n = M->ncells, k = n - p;
   if (k > 4096 || k > n / 16) return 1;
-  uint64_t *ord = mx_alloc((k + 1) * sizeof *ord); /* leaf << 32 | element */
-  uint8_t *type = mx_alloc(k + 1), *level = mx_alloc(k + 1);
-  uint32_t *conn = mx_alloc((8 * k + 1) * sizeof *conn), *leaf = mx_alloc((k + 1) * sizeof *leaf);
-  float *jens = mx_alloc((k + 1) * sizeof *jens);
-  int st = ord && type && level && conn && leaf && jens ? MX_OK : MX_EINPUT;
+  /* The prefix moves in parallel chunks, each from its back: a chunk
+   * writes at most k places past its end, into the next chunk's first k
+   * elements, which that chunk saved before anyone wrote. */
+  const size_t nch = 4 * (size_t)omp_get_max_threads();
+  const size_t csz = (p + nch - 1) / nch;
+  const size_t save = k < csz ? k : csz;
+  uint64_t *ord = mx_alloc((k + 1) * sizeof *ord); /* leaf << 32 | element, then ins */
+  mx_mesh_out tail, saved;
+  memset(&saved, 0, sizeof saved);
+  int st = cells_alloc(&tail, k);
+  if (!st) st = cells_alloc(&saved, nch * save);
+  if (!st && !ord) st = MX_EINPUT;
   if (!st) {
     /* the tail in (leaf, index) order: stable by leaf */
     for (size_t i = 0; i < k; i++) ord[i] = (uint64_t)M->leaf[p + i] << 32 | (p + i);
     qsort(ord, k, sizeof *ord, cmp_u64);
-    for (size_t i = 0; i < k; i++) {
-      const size_t c = (size_t)(ord[i] & 0xffffffffu);
-      type[i] = M->type[c];
-      level[i] = M->level[c];
-      leaf[i] = M->leaf[c];
-      jens[i] = M->jens[c];
-      memcpy(conn + 8 * i, M->conn + 8 * c, 8 * sizeof *conn);
-    }
+    for (size_t i = 0; i < k; i++) cell_copy(&tail, i, M, (size_t)(ord[i] & 0xffffffffu));
     /* ins[t]: the prefix elements before tail element t (those of a leaf
      * up to its own: after the prefix's elements of the same leaf, as a
      * stable sort puts it); prefix element i moves right by the number of
      * tail elements with ins <= i, tail element t goes to ins[t] + t. */
+    uint64_t *ins = ord;
     for (size_t t = 0; t < k; t++) {
       size_t lo = 0, hi = p;
       while (lo < hi) {
         const size_t mid = lo + (hi - lo) / 2;
-        if (M->leaf[mid] <= leaf[t]) lo = mid + 1;
+        if (M->leaf[mid] <= tail.leaf[t]) lo = mid + 1;
         else hi = mid;
       }
-      ord[t] = lo; /* reused: ins */
+      ins[t] = lo;
     }
-    const uint64_t *ins = ord;
-    /* The prefix moves in parallel chunks, each from its back: a chunk
-     * writes at most k places past its end, into the next chunk's first k
-     * elements, which that chunk saved before anyone wrote. */
-    const size_t nch = 4 * (size_t)omp_get_max_threads();
-    const size_t csz = (p + nch - 1) / nch;
-    const size_t save = k < csz ? k : csz;
-    uint8_t *st8 = mx_alloc(2 * nch * save + 1);
-    uint32_t *s32 = mx_alloc((9 * nch * save + 1) * sizeof *s32);
-    float *sf = mx_alloc((nch * save + 1) * sizeof *sf);
-    if (!st8 || !s32 || !sf) st = MX_EINPUT;
-    if (!st && p > 0) {
 #pragma omp parallel
-      {
+    {
 #pragma omp for schedule(static, 1)
-        for (size_t c = 0; c < nch; c++) {
-          const size_t cs = c * csz, ce = cs + csz < p ? cs + csz : p;
-          for (size_t i = cs; i < ce && i < cs + save; i++) {
-            const size_t b = c * save + (i - cs);
-            st8[2 * b] = M->type[i];
-            st8[2 * b + 1] = M->level[i];
-            s32[9 * b] = M->leaf[i];
-            memcpy(s32 + 9 * b + 1, M->conn + 8 * i, 8 * sizeof *s32);
-            sf[b] = M->jens[i];
-          }
-        }
+      for (size_t c = 0; c < nch; c++) {
+        const size_t cs = c * csz, ce = cs + csz < p ? cs + csz : p;
+        for (size_t i = cs; i < ce && i < cs + save; i++) cell_copy(&saved, c * save + (i - cs), M, i);
+      }
 #pragma omp for schedule(static, 1)
-        for (size_t c = 0; c < nch; c++) {
-          const size_t cs = c * csz, ce = cs + csz < p ? cs + csz : p;
-          if (cs >= ce) continue;
-          size_t j = 0; /* tail elements with ins <= ce - 1 */
-          while (j < k && ins[j] <= ce - 1) j++;
-          for (size_t i = ce; i-- > cs && j > 0;) {
-            while (j > 0 && ins[j - 1] > i) j--;
-            if (j == 0) break;
-            const size_t w = i + j;
-            if (i < cs + save) {
-              const size_t b = c * save + (i - cs);
-              M->type[w] = st8[2 * b];
-              M->level[w] = st8[2 * b + 1];
-              M->leaf[w] = s32[9 * b];
-              memcpy(M->conn + 8 * w, s32 + 9 * b + 1, 8 * sizeof *M->conn);
-              M->jens[w] = sf[b];
-            } else {
-              M->type[w] = M->type[i];
-              M->level[w] = M->level[i];
-              M->leaf[w] = M->leaf[i];
-              memcpy(M->conn + 8 * w, M->conn + 8 * i, 8 * sizeof *M->conn);
-              M->jens[w] = M->jens[i];
-            }
-          }
+      for (size_t c = 0; c < nch; c++) {
+        const size_t cs = c * csz, ce = cs + csz < p ? cs + csz : p;
+        if (cs >= ce) continue;
+        size_t j = 0; /* tail elements with ins <= i */
+        while (j < k && ins[j] <= ce - 1) j++;
+        for (size_t i = ce; i-- > cs;) {
+          while (j > 0 && ins[j - 1] > i) j--;
+          if (j == 0) break; /* this element and those before it stay */
+          if (i < cs + save) cell_copy(M, i + j, &saved, c * save + (i - cs));
+          else cell_copy(M, i + j, M, i);
         }
       }
     }
-    if (!st)
-      for (size_t t = 0; t < k; t++) {
-        const size_t w = ins[t] + t;
-        M->type[w] = type[t];
-        M->level[w] = level[t];
-        M->leaf[w] = leaf[t];
-        M->jens[w] = jens[t];
-        memcpy(M->conn + 8 * w, conn + 8 * t, 8 * sizeof *conn);
-      }
-    mx_free(st8);
-    mx_free(s32);
-    mx_free(sf);
+    for (size_t t = 0; t < k; t++) cell_copy(M, ins[t] + t, &tail, t);
   }
-  mx_free(ord); mx_free(type); mx_free(level); mx_free(conn); mx_free(leaf); mx_free(jens);
+  mx_free(ord);
+  mx_mesh_out_free(&tail);
+  mx_mesh_out_free(&saved);
   return st;
 }
 
