@@ -18,8 +18,6 @@
  * one JSON object. */
 #include "mixoct.h"
 
-#include <limits.h>
-#include <malloc.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -113,18 +111,7 @@ static void write_list(const char *path, const uint64_t *l, size_t n) {
 }
 
 int main(int argc, char **argv) {
-  {
-    /* as the mixoct program does (src/cli/main.c): arrays of 1 MB and more
-     * mapped on their own */
-    const char *heap = getenv("MX_HEAP");
-    if (heap && strcmp(heap, "heap") == 0) {
-      mallopt(M_MMAP_MAX, 0);
-      mallopt(M_TRIM_THRESHOLD, INT_MAX);
-    } else if (!heap || strcmp(heap, "default") != 0) {
-      mallopt(M_MMAP_THRESHOLD, 1 << 20);
-      mallopt(M_TRIM_THRESHOLD, 8 << 20);
-    }
-  }
+  mx_heap_setup(); /* as the mixoct program does */
   const char *data = "../shared/data", *out = "/tmp";
   int level = 8, repeat = 3;
   for (int i = 1; i < argc; i++) {

@@ -67,6 +67,13 @@ enum {
 };
 enum { MX_BALANCE_EDGES = 0, MX_BALANCE_RECURSIVE = 1 };
 
+/* The heap as the mixoct program sets it (call once, before meshing; the
+ * library does not call it): arrays of 1 MB and more mapped on their own and
+ * given back when freed, so the peak is what is alive. The environment
+ * variable MX_HEAP=heap keeps every freed array in the heap instead,
+ * MX_HEAP=default leaves the C library's settings. */
+void mx_heap_setup(void);
+
 /* Message levels given to the handler. */
 enum { MX_MSG_ERROR = 0, MX_MSG_WARNING = 1 };
 typedef void (*mx_message_fn)(void *user, int level, const char *text);

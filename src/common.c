@@ -1,5 +1,6 @@
 #include "common.h"
 
+#include <limits.h>
 #include <malloc.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -74,6 +75,21 @@ void mx_warning(const char *file, long line, const char *fmt, ...) {
   va_start(ap, fmt);
   vreport("warning: ", file, line, fmt, ap);
   va_end(ap);
+}
+
+/* cortex -s 9 peaks at 988 MiB this way against 1,262 MiB with every array
+ * in the heap and kept there (freed holes the next, larger arrays cannot
+ * use), with no more kernel time (measured: sys 1.2-1.3 s against 1.3-2.3 s;
+ * issue 12). */
+void mx_heap_setup(void) {
+  const char *heap = getenv("MX_HEAP");
+  if (heap && strcmp(heap, "heap") == 0) {
+    mallopt(M_MMAP_MAX, 0);
+    mallopt(M_TRIM_THRESHOLD, INT_MAX);
+  } else if (!heap || strcmp(heap, "default") != 0) {
+    mallopt(M_MMAP_THRESHOLD, 1 << 20);
+    mallopt(M_TRIM_THRESHOLD, 8 << 20);
+  }
 }
 
 void *mx_alloc(size_t bytes) {

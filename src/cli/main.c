@@ -10,10 +10,8 @@
 #include "io/atomic_file.h"
 #include "mixoct.h"
 
-#include <limits.h>
 #include <signal.h>
 #include <sys/stat.h>
-#include <malloc.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -163,19 +161,7 @@ int main(int argc, char **argv) {
   if (argc >= 2 && strcmp(argv[1], "patterns") == 0)
     return mx_patterns_main(argc - 1, argv + 1);
   int remesh = argc >= 2 && strcmp(argv[1], "remesh") == 0;
-  /* Arrays of 1 MB and more are mapped on their own and unmapped when
-   * freed, so the peak is what is alive: cortex -s 9 peaks at 988 MiB,
-   * against 1,262 MiB with every array in the heap and kept there
-   * (MX_HEAP=heap: freed holes the next, larger arrays cannot use), with
-   * no more kernel time (measured: sys 1.2-1.3 s against 1.3-2.3 s). */
-  const char *heap = getenv("MX_HEAP");
-  if (heap && strcmp(heap, "heap") == 0) {
-    mallopt(M_MMAP_MAX, 0);
-    mallopt(M_TRIM_THRESHOLD, INT_MAX);
-  } else if (!heap || strcmp(heap, "default") != 0) {
-    mallopt(M_MMAP_THRESHOLD, 1 << 20);
-    mallopt(M_TRIM_THRESHOLD, 8 << 20);
-  }
+  mx_heap_setup(); /* large arrays mapped on their own (mixoct.h) */
   const char *base = strrchr(argv[0], '/');
   if (strcmp(base ? base + 1 : argv[0], "mesher_roi") == 0)
     return mx_mesher_roi_main(argc, argv);
