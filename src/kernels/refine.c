@@ -320,12 +320,12 @@ int mx_split_octants(mx_builder *B, const uint32_t *list, size_t n,
   const size_t n0 = T->n, t0 = T->tri_n;
   if (n0 + nchild >= (size_t)MX_NONE) {
     mx_error(NULL, 0, "too many octants (more than 2^32)");
-    free(toff);
+    mx_free(toff);
     return MX_EINPUT;
   }
   int st = mx_octree_reserve(T, n0 + nchild, t0 + ntris);
   if (st) {
-    free(toff);
+    mx_free(toff);
     return st;
   }
   const uint8_t sflag = (uint8_t)(MX_OCT_SPLIT | (for_balance ? MX_OCT_BALANCE : 0));
@@ -359,7 +359,7 @@ int mx_split_octants(mx_builder *B, const uint32_t *list, size_t n,
     T->kept[o] = si->kept;
     T->flags[o] |= sflag;
   }
-  free(toff);
+  mx_free(toff);
   T->n = n0 + nchild;
   T->tri_n = t0 + ntris;
   if (for_balance)

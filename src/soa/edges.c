@@ -20,7 +20,7 @@ static inline size_t edge_hash(uint64_t key, size_t cap) {
 
 void mx_edges_free(mx_edges *E) {
   for (int l = 0; l <= MX_MAX_LEVEL; l++)
-    for (int a = 0; a < 3; a++) free(E->t[l][a].e);
+    for (int a = 0; a < 3; a++) mx_free(E->t[l][a].e);
   memset(E, 0, sizeof *E);
 }
 
@@ -53,7 +53,7 @@ static int table_grow(mx_edge_table *T, size_t need) {
 #pragma omp parallel for schedule(static)
   for (size_t i = 0; i < T->cap; i++)
     if (T->e[i].kw) put_concurrent(&nt, &T->e[i]);
-  free(T->e);
+  mx_free(T->e);
   *T = nt;
   return MX_OK;
 }

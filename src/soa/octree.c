@@ -6,9 +6,9 @@
 #include <string.h>
 
 void mx_octree_free(mx_octree *t) {
-  free(t->key); free(t->level); free(t->flags); free(t->target);
-  free(t->kept); free(t->rmeet); free(t->rin); free(t->parent);
-  free(t->child0); free(t->tri_off); free(t->tri_cnt); free(t->tri_pool);
+  mx_free(t->key); mx_free(t->level); mx_free(t->flags); mx_free(t->target);
+  mx_free(t->kept); mx_free(t->rmeet); mx_free(t->rin); mx_free(t->parent);
+  mx_free(t->child0); mx_free(t->tri_off); mx_free(t->tri_cnt); mx_free(t->tri_pool);
   memset(t, 0, sizeof *t);
 }
 
