@@ -4,6 +4,7 @@
 #include <malloc.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <sys/mman.h>
 #include <string.h>
@@ -135,6 +136,17 @@ void *mx_realloc(void *p, size_t bytes) {
 }
 
 void mx_free(void *p) { free(p); }
+
+void mx_release_range(void *p, size_t from, size_t to) {
+  const uintptr_t page = 4096;
+  /* from the page holding byte `from` (the bytes before it are dead too),
+   * never before p's first whole page (the allocator's header) */
+  uintptr_t a = ((uintptr_t)p + from) & ~(page - 1);
+  const uintptr_t first = ((uintptr_t)p + page - 1) & ~(page - 1);
+  if (a < first) a = first;
+  const uintptr_t b = ((uintptr_t)p + to) & ~(page - 1);
+  if (b > a) madvise((void *)a, b - a, MADV_DONTNEED);
+}
 
 double mx_wtime(void) {
   struct timespec ts;

@@ -43,6 +43,12 @@ void *mx_alloc(size_t bytes);
 void *mx_calloc(size_t bytes);
 void *mx_realloc(void *p, size_t bytes);
 void mx_free(void *p);
+/* Bytes [0, to) of array p are no longer read: the whole pages among them,
+ * from the one holding byte `from` (those before were given earlier), go
+ * back to the system (they read as zeros after). A pass that copies an
+ * array into a new one releases the old one's pages as it goes, so the two
+ * are not both resident. */
+void mx_release_range(void *p, size_t from, size_t to);
 
 /* min/max of doubles that compile to one instruction (no NaN handling:
  * inputs are checked finite when read). */

@@ -12,10 +12,12 @@
  * reads only the four states) and it is invariant under the face's
  * rotations and reflection. */
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "check.h"
+#include "common.h"
 #include "kernels/quality.h"
 #include "kernels/surface_patterns.h"
 #include "patterns/surface_table.h"
@@ -167,7 +169,33 @@ static void check_case(int t, unsigned m) {
   }
 }
 
+/* mx_release_range, which the fill uses to give back the elements it has
+ * read: whole pages before `to` read zero after, the bytes of a page that
+ * straddles `to` and everything after are kept, and so is the first partial
+ * page (where the allocator keeps its header). */
+static void check_release(size_t bytes, size_t to) {
+  unsigned char *p = mx_alloc(bytes);
+  CHECK(p != NULL);
+  memset(p, 0xA5, bytes);
+  mx_release_range(p, 0, to / 2);
+  mx_release_range(p, to / 2, to); /* the second call from where the first stopped */
+  const uintptr_t first = ((uintptr_t)p + 4095) & ~(uintptr_t)4095;
+  const uintptr_t last = ((uintptr_t)p + to) & ~(uintptr_t)4095;
+  size_t zeros = 0;
+  for (size_t i = 0; i < bytes; i++) {
+    const uintptr_t a = (uintptr_t)p + i;
+    const int gone = a >= first && a < last;
+    CHECK(p[i] == (gone ? 0 : 0xA5));
+    zeros += gone;
+  }
+  CHECK(to < 3 * 4096 || zeros > 0);
+  mx_free(p); /* the allocator's header survived */
+}
+
 int main(void) {
+  check_release(100000, 70001);
+  check_release(20u << 20, (13u << 20) + 123);
+  check_release(5000, 4000);
   int cases = 0;
   for (int t = MX_PYRAMID; t <= MX_HEX; t++)
     for (unsigned m = 0; m < (1u << mx_cell_nodes[t]); m++, cases++) check_case(t, m);

@@ -72,7 +72,16 @@ static const mx_surface_case *element_counts(const mx_mesh_out *M, const uint8_t
 /* Elements are counted and filled by blocks: the counts are kept per block
  * only (a few KB, not three words per element), and the fill walks each
  * block again from its block's offsets. */
-enum { SP_BLOCK = 2048 };
+enum { SP_BLOCK = 2048, SP_WINDOW = 128 };
+
+/* Elements [from, to) of M are read for good: their pages go. */
+static void release_cells(const mx_mesh_out *M, size_t from, size_t to) {
+  mx_release_range(M->type, from, to);
+  mx_release_range(M->level, from, to);
+  mx_release_range(M->conn, 8 * from * sizeof *M->conn, 8 * to * sizeof *M->conn);
+  mx_release_range(M->leaf, from * sizeof *M->leaf, to * sizeof *M->leaf);
+  mx_release_range(M->jens, from * sizeof *M->jens, to * sizeof *M->jens);
+}
 
 int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *moved,
                         mx_optional *opt, mx_surface_stats *stats) {
@@ -131,8 +140,14 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *move
     return MX_EINPUT;
   }
   states = st2;
-#pragma omp parallel for schedule(static)
-  for (size_t b = 0; b < nb; b++) {
+  /* By windows of blocks: the elements read go back to the system at each
+   * window's end, so the old and new element arrays are not both whole in
+   * memory (the stage's peak otherwise). */
+  size_t released = 0;
+  for (size_t w0 = 0; w0 < nb; w0 += SP_WINDOW) {
+  const size_t w1 = w0 + SP_WINDOW < nb ? w0 + SP_WINDOW : nb;
+#pragma omp parallel for schedule(dynamic, 4)
+  for (size_t b = w0; b < w1; b++) {
     const size_t end = (b + 1) * SP_BLOCK < nc ? (b + 1) * SP_BLOCK : nc;
     uint64_t w = bout[b], o = bopt[b], cnext = bcen[b];
     for (size_t c = b * SP_BLOCK; c < end; c++) {
@@ -195,6 +210,10 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *move
         }
       }
     }
+  }
+  const size_t done = w1 * SP_BLOCK < nc ? w1 * SP_BLOCK : nc;
+  release_cells(M, released, done);
+  released = done;
   }
   mx_free(bout);
   mx_free(M->type); mx_free(M->conn); mx_free(M->level); mx_free(M->leaf); mx_free(M->jens);

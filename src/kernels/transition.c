@@ -374,15 +374,8 @@ int mx_transition_build(const mx_builder *B, const uint32_t *leaves, size_t n,
     out->nnodes = mx_scan_u64(noff, n);
     out->ncells = mx_scan_u64(eoff, n);
     out->xyz = mx_alloc((3 * out->nnodes + 1) * sizeof *out->xyz);
-    out->type = mx_alloc(out->ncells + 1);
-    out->conn = mx_alloc((8 * out->ncells + 1) * sizeof *out->conn);
-    out->level = mx_alloc((out->ncells + 1) * sizeof *out->level);
-    out->leaf = mx_alloc((out->ncells + 1) * sizeof *out->leaf);
-    out->jens = mx_alloc((out->ncells + 1) * sizeof *out->jens);
     out->nkey = mx_alloc((out->nnodes + 1) * sizeof *out->nkey);
-    if (!out->xyz || !out->type || !out->conn || !out->level || !out->leaf || !out->jens ||
-        !out->nkey)
-      st = MX_EINPUT;
+    if (!out->xyz || !out->nkey) st = MX_EINPUT;
   }
   /* Number the nodes: owners in leaf order, points in lattice order. */
   if (!st) {
@@ -404,6 +397,27 @@ int mx_transition_build(const mx_builder *B, const uint32_t *leaves, size_t n,
         id++;
       }
     }
+    /* Each (leaf, point) slot becomes the point's node id, and the hash
+     * goes before the element arrays come (it sets the stage's peak). */
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; i++) {
+      uint32_t *s = slot + poff[i];
+      const int k = __builtin_popcount(mask[i]);
+      for (int j = 0; j < k; j++) {
+        nh_prefetch(&H, slot, poff[i] + (uint64_t)j, npts);
+        s[j] = H.e[s[j]].id;
+      }
+    }
+    mx_free(H.e);
+    H.e = NULL;
+    out->type = mx_alloc(out->ncells + 1);
+    out->conn = mx_alloc((8 * out->ncells + 1) * sizeof *out->conn);
+    out->level = mx_alloc((out->ncells + 1) * sizeof *out->level);
+    out->leaf = mx_alloc((out->ncells + 1) * sizeof *out->leaf);
+    out->jens = mx_alloc((out->ncells + 1) * sizeof *out->jens);
+    if (!out->type || !out->conn || !out->level || !out->leaf || !out->jens) st = MX_EINPUT;
+  }
+  if (!st) {
     /* Elements. */
     size_t bt[4] = {0, 0, 0, 0}, invalid = 0;
     double jmin = INFINITY;
@@ -415,10 +429,7 @@ int mx_transition_build(const mx_builder *B, const uint32_t *leaves, size_t n,
       uint32_t id27[27] = {0}; /* patterns use mask points only (tested) */
       const uint32_t *s = slot + poff[i];
       int j = 0;
-      for (uint32_t m = mask[i]; m; m &= m - 1, j++) {
-        nh_prefetch(&H, slot, poff[i] + (uint64_t)j, npts);
-        id27[__builtin_ctz(m)] = H.e[s[j]].id;
-      }
+      for (uint32_t m = mask[i]; m; m &= m - 1, j++) id27[__builtin_ctz(m)] = s[j];
       for (int k = 0; k < pc->count; k++) {
         const mx_pattern_elem *pe = &mx_pattern_elems[pc->first + k];
         const size_t c = eoff[i] + (size_t)k;
