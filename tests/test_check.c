@@ -558,7 +558,8 @@ static void test_round_trips(void) {
   int32_t *cf = calloc(t.nc, sizeof *cf);
   double *pf = calloc(t.nn, sizeof *pf);
   for (size_t i = 0; i < t.nn; i++) pf[i] = (double)i / 7.0;
-  mx_field cfield = {"cell id", 0, cf, NULL}, pfield = {"p", 1, NULL, pf};
+  mx_field cfield = {.name = "cell id", .ivalues = cf},
+           pfield = {.name = "p", .is_double = 1, .dvalues = pf};
   mx_mesh_data d = tm_data(&t);
   mx_mesh_view v = mx_mesh_data_view(&d);
   mx_mesh_view vf = v;

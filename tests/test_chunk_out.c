@@ -293,10 +293,10 @@ static void cmesh_make(cmesh *t, size_t n, int by_type) {
         t->jens[c] = 1.0 / (double)(c + 3);
       }
   if (by_type) mx_cells_by_type(t->type, t->ncells, t->order, NULL);
-  t->cf[0] = (mx_field){"level", 0, t->level, NULL};
-  t->cf[1] = (mx_field){"jens", 1, NULL, t->jens};
-  t->pf[0] = (mx_field){"dist", 1, NULL, t->dist};
-  t->pf[1] = (mx_field){"tag", 0, t->tag, NULL};
+  t->cf[0] = (mx_field){.name = "level", .ivalues = t->level};
+  t->cf[1] = (mx_field){.name = "jens", .is_double = 1, .dvalues = t->jens};
+  t->pf[0] = (mx_field){.name = "dist", .is_double = 1, .dvalues = t->dist};
+  t->pf[1] = (mx_field){.name = "tag", .ivalues = t->tag};
   t->v = (mx_mesh_view){.nnodes = t->nnodes, .xyz = t->xyz, .ncells = t->ncells,
                         .type = t->type, .conn = t->conn, .ncell_fields = 2,
                         .cell_fields = t->cf, .npoint_fields = 2, .point_fields = t->pf,

@@ -60,10 +60,10 @@ static void fmesh_alloc(fmesh *t, size_t nnodes, size_t ncells) {
 }
 
 static void fmesh_view(fmesh *t) {
-  t->cf[0] = (mx_field){"level", 0, t->level, NULL};
-  t->cf[1] = (mx_field){"jens", 1, NULL, t->jens};
-  t->pf[0] = (mx_field){"dist", 1, NULL, t->dist};
-  t->pf[1] = (mx_field){"tag", 0, t->tag, NULL};
+  t->cf[0] = (mx_field){.name = "level", .is_double = 0, .ivalues = t->level};
+  t->cf[1] = (mx_field){.name = "jens", .is_double = 1, .dvalues = t->jens};
+  t->pf[0] = (mx_field){.name = "dist", .is_double = 1, .dvalues = t->dist};
+  t->pf[1] = (mx_field){.name = "tag", .is_double = 0, .ivalues = t->tag};
   t->v = (mx_mesh_view){.nnodes = t->nnodes, .xyz = t->xyz, .ncells = t->ncells,
                         .type = t->type, .conn = t->conn, .ncell_fields = 2,
                         .cell_fields = t->cf, .npoint_fields = 2, .point_fields = t->pf};
@@ -245,8 +245,8 @@ static int compare_field(const rmesh *r, const mx_field *fd, size_t count,
   const rfield *f = rmesh_find(r, fd->name, on_points);
   if (!f || f->is_double != fd->is_double || f->n != count) return 0;
   for (size_t i = 0; i < count; i++) {
-    if (fd->is_double && !same_bits(f->d[i], fd->dvalues[i])) return 0;
-    if (!fd->is_double && f->i[i] != fd->ivalues[i]) return 0;
+    if (fd->is_double && !same_bits(f->d[i], mx_field_double(fd, i))) return 0;
+    if (!fd->is_double && f->i[i] != mx_field_int(fd, i)) return 0;
   }
   return 1;
 }
@@ -915,6 +915,208 @@ static void test_temp_names(void) {
 }
 
 /* ====================================================================== */
+/* Narrow field sources                                                   */
+/* ====================================================================== */
+
+/* The same values held two ways: int32/double arrays (wide) and the
+ * mesher's kinds, uint8_t/float (narrow). Every field appears in both views
+ * with the same name and written kind; "big" (values beyond 255, Int32 in
+ * a VTU) is int32 in both. */
+typedef struct {
+  uint8_t *u8cell, *u8level, *u8bnd;
+  float *fjens, *fdist;
+  int32_t *icell, *ilevel, *ibnd, *big;
+  double *djens, *ddist;
+  mx_field wcf[4], ncf[4], wpf[2], npf[2];
+  mx_mesh_view wide, narrow;
+} nmesh;
+
+/* A finite float of random bits (subnormals, -0 included) or a small
+ * decimal-looking one. */
+static float rng_float(void) {
+  if (rng_next() % 3 == 0) return (float)((double)(int64_t)(rng_next() % 20001) / 1000.0 - 10.0);
+  float x;
+  do {
+    const uint32_t b = (uint32_t)rng_next();
+    memcpy(&x, &b, 4);
+  } while (!isfinite(x));
+  return x;
+}
+
+static void nmesh_make(nmesh *n, const fmesh *t) {
+  memset(n, 0, sizeof *n);
+  const size_t nc = t->ncells + 1, np = t->nnodes + 1;
+  n->u8cell = calloc(nc, 1);
+  n->u8level = calloc(nc, 1);
+  n->u8bnd = calloc(np, 1);
+  n->fjens = calloc(nc, sizeof(float));
+  n->fdist = calloc(np, sizeof(float));
+  n->icell = calloc(nc, sizeof(int32_t));
+  n->ilevel = calloc(nc, sizeof(int32_t));
+  n->ibnd = calloc(np, sizeof(int32_t));
+  n->big = calloc(nc, sizeof(int32_t));
+  n->djens = calloc(nc, sizeof(double));
+  n->ddist = calloc(np, sizeof(double));
+  if (!n->u8cell || !n->u8level || !n->u8bnd || !n->fjens || !n->fdist || !n->icell ||
+      !n->ilevel || !n->ibnd || !n->big || !n->djens || !n->ddist) {
+    fprintf(stderr, "test: out of memory\n");
+    exit(2);
+  }
+  for (size_t c = 0; c < t->ncells; c++) {
+    n->u8cell[c] = t->type[c];
+    n->u8level[c] = (uint8_t)(c < 4 ? 255 - c : rng_next()); /* 255 .. 0 */
+    n->fjens[c] = c == 0 ? -0.0f : c == 1 ? 1e-45f : c == 2 ? 3.4028235e38f : rng_float();
+    n->big[c] = (int32_t)(uint32_t)rng_next();
+  }
+  for (size_t i = 0; i < t->nnodes; i++) {
+    n->u8bnd[i] = (uint8_t)(rng_next() % 2);
+    n->fdist[i] = rng_float();
+  }
+  /* the copies the mesher made before: the same values, wider */
+  for (size_t c = 0; c < t->ncells; c++) {
+    n->icell[c] = n->u8cell[c];
+    n->ilevel[c] = n->u8level[c];
+    n->djens[c] = n->fjens[c];
+  }
+  for (size_t i = 0; i < t->nnodes; i++) {
+    n->ibnd[i] = n->u8bnd[i];
+    n->ddist[i] = n->fdist[i];
+  }
+  n->wcf[0] = (mx_field){.name = "type", .is_double = 0, .ivalues = n->icell};
+  n->wcf[1] = (mx_field){.name = "level", .is_double = 0, .ivalues = n->ilevel};
+  n->wcf[2] = (mx_field){.name = "jens", .is_double = 1, .dvalues = n->djens};
+  n->wcf[3] = (mx_field){.name = "big", .is_double = 0, .ivalues = n->big};
+  n->ncf[0] = (mx_field){.name = "type", .is_double = 0, .u8values = n->u8cell};
+  n->ncf[1] = (mx_field){.name = "level", .is_double = 0, .u8values = n->u8level};
+  n->ncf[2] = (mx_field){.name = "jens", .is_double = 1, .fvalues = n->fjens};
+  n->ncf[3] = n->wcf[3];
+  n->wpf[0] = (mx_field){.name = "boundary", .is_double = 0, .ivalues = n->ibnd};
+  n->wpf[1] = (mx_field){.name = "dist", .is_double = 1, .dvalues = n->ddist};
+  n->npf[0] = (mx_field){.name = "boundary", .is_double = 0, .u8values = n->u8bnd};
+  n->npf[1] = (mx_field){.name = "dist", .is_double = 1, .fvalues = n->fdist};
+  n->wide = t->v;
+  n->wide.ncell_fields = 4;
+  n->wide.cell_fields = n->wcf;
+  n->wide.npoint_fields = 2;
+  n->wide.point_fields = n->wpf;
+  n->narrow = n->wide;
+  n->narrow.cell_fields = n->ncf;
+  n->narrow.point_fields = n->npf;
+}
+
+static void nmesh_free(nmesh *n) {
+  free(n->u8cell);
+  free(n->u8level);
+  free(n->u8bnd);
+  free(n->fjens);
+  free(n->fdist);
+  free(n->icell);
+  free(n->ilevel);
+  free(n->ibnd);
+  free(n->big);
+  free(n->djens);
+  free(n->ddist);
+  memset(n, 0, sizeof *n);
+}
+
+/* Every format the dispatcher knows, each variant: the file written from
+ * the wide view and from the narrow one must be the same bytes. */
+static void narrow_same_bytes(const nmesh *n, const char *tag) {
+  static const struct {
+    const char *suffix;
+    int ascii;
+  } kinds[] = {{"_bin.vtk", 0}, {"_ascii.vtk", 1}, {".vtu", 0},  {"_bin.msh", 0},
+               {"_ascii.msh", 1}, {".mesh", 0},    {".meshb", 0}, {".getfem", 0},
+               {".m3d", 0},       {".mvm", 0}};
+  for (size_t k = 0; k < sizeof kinds / sizeof *kinds; k++) {
+    char a[512], b[512], name[128];
+    snprintf(name, sizeof name, "narrow_%s_w%s", tag, kinds[k].suffix);
+    path_in(a, sizeof a, name);
+    snprintf(name, sizeof name, "narrow_%s_n%s", tag, kinds[k].suffix);
+    path_in(b, sizeof b, name);
+    const int sa = mx_write_mesh(a, &n->wide, kinds[k].ascii);
+    const int sb = mx_write_mesh(b, &n->narrow, kinds[k].ascii);
+    CHECK(sa == MX_OK && sb == MX_OK);
+    const int same = files_equal(a, b);
+    CHECK(same);
+    if (!same) fprintf(stderr, "narrow sources: %s and %s differ\n", a, b);
+    unlink(a);
+    unlink(b);
+  }
+}
+
+static void test_narrow_sources(void) {
+  fmesh t;
+  small_mesh(&t);
+  nmesh n;
+  nmesh_make(&n, &t);
+  /* the narrow view reads back as the wide one (VTU: UInt8, Float64) */
+  rmesh r;
+  char path[512];
+  path_in(path, sizeof path, "narrow_rt.vtu");
+  CHECK(mx_write_vtu(path, &n.narrow) == MX_OK);
+  CHECK(read_vtu(path, &r) && compare_mesh(&r, &n.wide) && compare_mesh(&r, &n.narrow));
+  rmesh_free(&r);
+  size_t len;
+  char *buf = slurp(path, &len);
+  CHECK(buf && strstr(buf, "<DataArray type=\"UInt8\" Name=\"level\"") &&
+        strstr(buf, "<DataArray type=\"Float64\" Name=\"jens\"") &&
+        strstr(buf, "<DataArray type=\"Int32\" Name=\"big\"") &&
+        strstr(buf, "<DataArray type=\"UInt8\" Name=\"boundary\"") &&
+        strstr(buf, "<DataArray type=\"Float64\" Name=\"dist\""));
+  free(buf);
+  unlink(path);
+  path_in(path, sizeof path, "narrow_rt.vtk");
+  CHECK(mx_write_vtk_legacy(path, &n.narrow, 0) == MX_OK);
+  CHECK(read_legacy(path, &r, 0) && compare_mesh(&r, &n.wide));
+  rmesh_free(&r);
+  unlink(path);
+  narrow_same_bytes(&n, "small");
+  nmesh_free(&n);
+  fmesh_free(&t);
+  /* a mixed grid, cells in index order, then in a shuffled written order
+   * (the fields gathered), with 1 and 3 threads */
+  grid_mesh(&t, 14, 1);
+  nmesh_make(&n, &t);
+  narrow_same_bytes(&n, "grid");
+  uint32_t *order = malloc((t.ncells + 1) * sizeof *order);
+  CHECK(order != NULL);
+  if (order) {
+    for (size_t c = 0; c < t.ncells; c++) order[c] = (uint32_t)c;
+    for (size_t c = t.ncells; c > 1; c--) {
+      const size_t j = (size_t)(rng_next() % c);
+      const uint32_t x = order[c - 1];
+      order[c - 1] = order[j];
+      order[j] = x;
+    }
+    n.wide.order = n.narrow.order = order;
+    narrow_same_bytes(&n, "shuffled");
+    const int saved = omp_get_max_threads();
+    omp_set_num_threads(saved > 1 ? 1 : 3);
+    narrow_same_bytes(&n, "threads");
+    omp_set_num_threads(saved);
+    free(order);
+  }
+  /* a field must have one source of values */
+  nmesh_free(&n);
+  fmesh_free(&t);
+  small_mesh(&t);
+  nmesh_make(&n, &t);
+  n.ncf[1].ivalues = n.ilevel; /* and u8values */
+  fprintf(stderr, "(expected errors follow)\n");
+  path_in(path, sizeof path, "narrow_two.vtu");
+  CHECK(mx_write_vtu(path, &n.narrow) == MX_EINTERNAL);
+  n.ncf[1].ivalues = NULL;
+  n.ncf[1].u8values = NULL;
+  CHECK(mx_write_vtu(path, &n.narrow) == MX_EINTERNAL);
+  CHECK(!exists(path));
+  nmesh_free(&n);
+  fmesh_free(&t);
+  printf("narrow field sources (uint8, float): the same bytes as int32/double copies in every "
+         "format\n");
+}
+
+/* ====================================================================== */
 /* Thread-count invariance and speed                                      */
 /* ====================================================================== */
 
@@ -1066,12 +1268,12 @@ static void expected_result(const mx_mesh_view *m, char *out, size_t cap) {
     typesum += mx_vtk_cell_type[m->type[c]];
     for (int j = 0; j < mx_cell_nodes[m->type[c]]; j++)
       cs += (long long)(j + 1) * m->conn[8 * c + (size_t)mx_vtk_order[m->type[c]][j]];
-    levelsum += m->cell_fields[0].ivalues[c];
-    js += m->cell_fields[1].dvalues[c];
+    levelsum += mx_field_int(&m->cell_fields[0], c);
+    js += mx_field_double(&m->cell_fields[1], c);
   }
   for (size_t i = 0; i < m->nnodes; i++) {
-    ds += m->point_fields[0].dvalues[i];
-    tagsum += m->point_fields[1].ivalues[i];
+    ds += mx_field_double(&m->point_fields[0], i);
+    tagsum += mx_field_int(&m->point_fields[1], i);
   }
   snprintf(out, cap, "%zu %zu %lld %lld %lld %.17g %.17g %lld", m->nnodes,
            m->ncells, typesum, cs, levelsum, js, ds, tagsum);
@@ -1172,6 +1374,7 @@ int main(int argc, char **argv) {
   test_full_disk();
   test_size_limit();
   test_temp_names();
+  test_narrow_sources();
   if (!small_only) {
     test_external();
     test_thread_invariance();

@@ -83,11 +83,17 @@ static int check_fields(const char *path, int n, const mx_field *fields,
   }
   for (int i = 0; i < n; i++) {
     const mx_field *fd = &fields[i];
-    const void *values =
-        fd->is_double ? (const void *)fd->dvalues : (const void *)fd->ivalues;
-    if (!fd->name || !fd->name[0] || (count > 0 && !values)) {
+    /* the source of the values: exactly one array of the written kind */
+    const void *wide = fd->is_double ? (const void *)fd->dvalues : (const void *)fd->ivalues;
+    const void *narrow =
+        fd->is_double ? (const void *)fd->fvalues : (const void *)fd->u8values;
+    if (!fd->name || !fd->name[0] || (count > 0 && !wide && !narrow)) {
       mx_error(path, 0, "internal error: %s field %d has no name or values",
                where, i);
+      return MX_EINTERNAL;
+    }
+    if (wide && narrow) {
+      mx_error(path, 0, "internal error: %s field %d has two sources of values", where, i);
       return MX_EINTERNAL;
     }
   }

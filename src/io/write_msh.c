@@ -129,7 +129,7 @@ static size_t fill_coords_ascii(const void *vctx, size_t b, size_t e,
  * (a boundary face carries its element's value). */
 static size_t data_line(const msh_ctx *ctx, uint64_t tag, size_t c, char *out) {
   const mx_field *fd = ctx->fd;
-  const double v = fd->is_double ? fd->dvalues[c] : (double)fd->ivalues[c];
+  const double v = fd->is_double ? mx_field_double(fd, c) : (double)mx_field_int(fd, c);
   if (ctx->binary) {
     const int32_t t = (int32_t)tag;
     memcpy(out, &t, 4);
@@ -138,7 +138,7 @@ static size_t data_line(const msh_ctx *ctx, uint64_t tag, size_t c, char *out) {
   }
   size_t n = mx_put_u64(out, tag);
   out[n++] = ' ';
-  n += fd->is_double ? mx_put_double(out + n, v) : mx_put_i64(out + n, fd->ivalues[c]);
+  n += fd->is_double ? mx_put_double(out + n, v) : mx_put_i64(out + n, mx_field_int(fd, c));
   out[n++] = '\n';
   return n;
 }

@@ -118,16 +118,24 @@ static size_t fill_types_ascii(const void *vctx, size_t b, size_t e,
 
 /* ---- fields -------------------------------------------------------------- */
 
+/* Values are converted from the field's source (int32 or uint8, double or
+ * float) as they are written: "int" and "double" whatever the source. */
 static size_t fill_field_bin(const void *vctx, size_t b, size_t e, char *out) {
   const vtk_ctx *c = vctx;
   const mx_field *fd = c->fd;
   size_t n = 0;
-  if (fd->is_double) {
+  if (fd->is_double && fd->dvalues) {
     for (size_t i = b; i < e; i++, n += 8)
       put_be_double(out + n, fd->dvalues[item(c, i)]);
-  } else {
+  } else if (fd->is_double) {
+    for (size_t i = b; i < e; i++, n += 8)
+      put_be_double(out + n, (double)fd->fvalues[item(c, i)]);
+  } else if (fd->ivalues) {
     for (size_t i = b; i < e; i++, n += 4)
       put_be32(out + n, (uint32_t)fd->ivalues[item(c, i)]);
+  } else {
+    for (size_t i = b; i < e; i++, n += 4)
+      put_be32(out + n, (uint32_t)fd->u8values[item(c, i)]);
   }
   return n;
 }
@@ -139,9 +147,9 @@ static size_t fill_field_ascii(const void *vctx, size_t b, size_t e,
   size_t n = 0;
   for (size_t i = b; i < e; i++) {
     if (fd->is_double)
-      n += mx_put_double(out + n, fd->dvalues[item(c, i)]);
+      n += mx_put_double(out + n, mx_field_double(fd, item(c, i)));
     else
-      n += mx_put_i64(out + n, fd->ivalues[item(c, i)]);
+      n += mx_put_i64(out + n, mx_field_int(fd, item(c, i)));
     out[n++] = '\n';
   }
   return n;

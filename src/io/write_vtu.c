@@ -142,9 +142,11 @@ static void xml_array(strbuf *b, const char *type, const char *name, int ncomp,
 }
 
 /* An integer field whose values all lie in 0..255 is written as UInt8
- * (element types, levels, boundary flags: a quarter of the bytes). */
+ * (element types, levels, boundary flags: a quarter of the bytes); one read
+ * from 8-bit values always is, as its int32 copy would be. */
 static int fits_u8(const mx_field *fd, size_t count) {
   if (fd->is_double) return 0;
+  if (!fd->ivalues) return 1;
   size_t out = 0;
 #pragma omp parallel for reduction(+ : out) schedule(static) if (count > 65536)
   for (size_t i = 0; i < count; i++) out += (uint32_t)fd->ivalues[i] > 255u;
@@ -203,13 +205,6 @@ static size_t fill_doubles(const void *vctx, size_t b, size_t e, char *out) {
   const double *v = ((const vtu_ctx *)vctx)->fd->dvalues;
   size_t n = 0;
   for (size_t i = b; i < e; i++, n += 8) put_le_double(out + n, v[i]);
-  return n;
-}
-
-static size_t fill_ints(const void *vctx, size_t b, size_t e, char *out) {
-  const int32_t *v = ((const vtu_ctx *)vctx)->fd->ivalues;
-  size_t n = 0;
-  for (size_t i = b; i < e; i++, n += 4) put_le32(out + n, (uint32_t)v[i]);
   return n;
 }
 #endif
@@ -279,49 +274,61 @@ static int write_double_block(mx_afile *f, const double *v, size_t count) {
 
 static size_t fill_u8(const void *vctx, size_t b, size_t e, char *out) {
   const vtu_ctx *c = vctx;
+  if (c->fd->u8values) {
+    const uint8_t *v = c->fd->u8values;
+    if (!c->order) {
+      memcpy(out, v + b, e - b);
+    } else {
+      for (size_t i = b; i < e; i++) out[i - b] = (char)v[c->order[i]];
+    }
+    return e - b;
+  }
   const int32_t *v = c->fd->ivalues;
   for (size_t i = b; i < e; i++) out[i - b] = (char)(uint8_t)v[item(c, i)];
   return e - b;
 }
 
-/* Fields in the written order of the cells: gathered. */
+/* Fields in the written order of the cells (gathered), or read from a
+ * narrower source (converted): item by item. */
 static size_t fill_doubles_gather(const void *vctx, size_t b, size_t e, char *out) {
   const vtu_ctx *c = vctx;
+  const mx_field *fd = c->fd;
   size_t n = 0;
-  for (size_t i = b; i < e; i++, n += 8) put_le_double(out + n, c->fd->dvalues[item(c, i)]);
+  if (fd->dvalues) {
+    for (size_t i = b; i < e; i++, n += 8) put_le_double(out + n, fd->dvalues[item(c, i)]);
+  } else {
+    for (size_t i = b; i < e; i++, n += 8)
+      put_le_double(out + n, (double)fd->fvalues[item(c, i)]);
+  }
   return n;
 }
 
 static size_t fill_ints_gather(const void *vctx, size_t b, size_t e, char *out) {
   const vtu_ctx *c = vctx;
   size_t n = 0;
-  for (size_t i = b; i < e; i++, n += 4) put_le32(out + n, (uint32_t)c->fd->ivalues[item(c, i)]);
+  for (size_t i = b; i < e; i++, n += 4) put_le32(out + n, (uint32_t)mx_field_int(c->fd, item(c, i)));
   return n;
 }
 
+/* Float64, UInt8 or Int32, as xml_fields declared it. Only an int32 or
+ * double source in index order is copied straight from memory. */
 static int write_field_block(mx_afile *f, const mx_field *fd, size_t count,
                              const uint32_t *order) {
   vtu_ctx gctx = {NULL, fd, NULL, 0, order};
-  if (fd->is_double && order) {
+  if (fd->is_double && fd->dvalues && !order) return write_double_block(f, fd->dvalues, count);
+  if (fd->is_double) {
     MX_CHECK(write_count(f, 8 * (uint64_t)count));
     return mx_afile_emit(f, count, 8, fill_doubles_gather, &gctx);
   }
-  if (fd->is_double) return write_double_block(f, fd->dvalues, count);
   if (fits_u8(fd, count)) {
     MX_CHECK(write_count(f, (uint64_t)count));
     return mx_afile_emit(f, count, 1, fill_u8, &gctx);
   }
-  if (order) {
-    MX_CHECK(write_count(f, 4 * (uint64_t)count));
-    return mx_afile_emit(f, count, 4, fill_ints_gather, &gctx);
-  }
   MX_CHECK(write_count(f, 4 * (uint64_t)count));
 #if VTU_HOST_LE
-  return mx_afile_write(f, fd->ivalues, 4 * count);
-#else
-  vtu_ctx ctx = {NULL, fd, NULL, 0, NULL};
-  return mx_afile_emit(f, count, 4, fill_ints, &ctx);
+  if (!order) return mx_afile_write(f, fd->ivalues, 4 * count);
 #endif
+  return mx_afile_emit(f, count, 4, fill_ints_gather, &gctx);
 }
 
 static int write_fields(mx_afile *f, int nfields, const mx_field *fields,

@@ -96,8 +96,6 @@ static int make_tags(mx_mesher *m, const mx_mesh_view *v, tags *T) {
 
 /* The view the writers get, and what it points to. */
 typedef struct {
-  int32_t *type, *bnd, *level;
-  double *jens;
   uint32_t *order;
   tags T;
   mx_field f[4], pf[2];
@@ -108,35 +106,20 @@ typedef struct {
 static void release(prepared *P) {
   tags_free(&P->T);
   mx_free(P->order);
-  mx_free(P->type);
-  mx_free(P->level);
-  mx_free(P->jens);
-  mx_free(P->bnd);
 }
 
 static int prepare(mx_mesher *m, prepared *P) {
   memset(P, 0, sizeof *P);
   const mx_mesh_out *M = &m->M;
-  P->type = mx_alloc((M->ncells + 1) * sizeof *P->type);
-  P->bnd = mx_alloc((M->nnodes + 1) * sizeof *P->bnd);
   P->order = mx_alloc((M->ncells + 1) * sizeof *P->order);
-  P->level = mx_alloc((M->ncells + 1) * sizeof *P->level);
-  P->jens = mx_alloc((M->ncells + 1) * sizeof *P->jens);
-  if (!P->type || !P->bnd || !P->order || !P->level || !P->jens) return MX_ENOMEM;
-  /* the writers' fields are int32 or double; the mesh keeps 8-bit levels
-   * and float J_ENS */
-#pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < M->ncells; i++) {
-    P->type[i] = M->type[i];
-    P->level[i] = M->level[i];
-    P->jens[i] = M->jens[i];
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < M->nnodes; i++) P->bnd[i] = m->bnd[i];
-  P->f[0] = (mx_field){"type", 0, P->type, NULL};
-  P->f[1] = (mx_field){"level", 0, P->level, NULL};
-  P->f[2] = (mx_field){"jens", 1, NULL, P->jens};
-  P->pf[0] = (mx_field){"boundary", 0, P->bnd, NULL};
+  if (!P->order) return MX_ENOMEM;
+  /* The fields read the mesh's own arrays: 8-bit types, levels and
+   * boundary flags, written as int32 (UInt8 in a VTU), float J_ENS written
+   * as double; the writers convert value by value. */
+  P->f[0] = (mx_field){.name = "type", .is_double = 0, .u8values = M->type};
+  P->f[1] = (mx_field){.name = "level", .is_double = 0, .u8values = M->level};
+  P->f[2] = (mx_field){.name = "jens", .is_double = 1, .fvalues = M->jens};
+  P->pf[0] = (mx_field){.name = "boundary", .is_double = 0, .u8values = m->bnd};
   P->v = (mx_mesh_view){.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
                         .type = M->type, .conn = M->conn, .ncell_fields = 3,
                         .cell_fields = P->f, .npoint_fields = 1, .point_fields = P->pf,
@@ -145,8 +128,8 @@ static int prepare(mx_mesher *m, prepared *P) {
   if (!P->tagged) return mx_cells_by_type(M->type, M->ncells, P->order, NULL);
   MX_CHECK(make_tags(m, &P->v, &P->T));
   MX_CHECK(mx_cells_in_order(M->type, P->T.cell_body, P->T.nbodies, M->ncells, P->order));
-  P->f[3] = (mx_field){"body", 0, P->T.cell_body, NULL};
-  P->pf[1] = (mx_field){"surface_tag", 0, P->T.node_tag, NULL};
+  P->f[3] = (mx_field){.name = "body", .is_double = 0, .ivalues = P->T.cell_body};
+  P->pf[1] = (mx_field){.name = "surface_tag", .is_double = 0, .ivalues = P->T.node_tag};
   P->v.ncell_fields = 4;
   P->v.npoint_fields = 2;
   P->v.bfaces = &P->T.bf;

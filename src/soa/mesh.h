@@ -31,12 +31,36 @@ static const int8_t mx_cell_faces[4][6][4] = {
     {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6},
      {3, 0, 4, 7}}};
 
+/* A cell or point field. is_double says how it is written: 0 as int32
+ * (legacy VTK "int", VTU Int32 or UInt8 when every value fits, ...), 1 as
+ * double. The values are read from one source array, which may be narrower
+ * than the written type (the mesh's own 8-bit types and levels, its float
+ * J_ENS): an int field has exactly one of ivalues / u8values, a double
+ * field exactly one of dvalues / fvalues (the others NULL). Writers convert
+ * value by value while formatting (mx_field_int, mx_field_double), so the
+ * bytes of a file do not depend on the source kind. The narrow sources come
+ * last: positional initialisers {name, is_double, ivalues, dvalues} leave
+ * them NULL (-Wextra warns of the missing members there: designated
+ * initialisers, {.name = ..., .u8values = ...}, do not). */
 typedef struct {
   const char *name;
-  int is_double;       /* 0: int32 values, 1: double values */
+  int is_double;            /* 0: written as int32, 1: as double */
   const int32_t *ivalues;
   const double *dvalues;
+  const uint8_t *u8values;  /* int field from 8-bit values */
+  const float *fvalues;     /* double field from float values */
 } mx_field;
+
+/* Value i of an int field (is_double 0). */
+static inline int32_t mx_field_int(const mx_field *f, size_t i) {
+  return f->ivalues ? f->ivalues[i] : (int32_t)f->u8values[i];
+}
+
+/* Value i of a double field (is_double 1): a float source gives the double
+ * of the float, exactly. */
+static inline double mx_field_double(const mx_field *f, size_t i) {
+  return f->dvalues ? f->dvalues[i] : (double)f->fvalues[i];
+}
 
 typedef struct {
   size_t nnodes;
