@@ -897,7 +897,7 @@ static int write_octree(mx_mesher *m, const char *path, int ascii) {
   uint8_t *type = mx_alloc(m->nleaves + 1);
   if (!type) return MX_ENOMEM;
   memset(type, MX_HEX, m->nleaves);
-  mx_field level = {"level", 0, m->hex.level, NULL};
+  mx_field level = {.name = "level", .ivalues = m->hex.level};
   mx_mesh_view v = {.nnodes = m->hex.nnodes, .xyz = m->hex.xyz, .ncells = m->nleaves, .type = type, .conn = m->hex.conn, .ncell_fields = 1, .cell_fields = &level, .npoint_fields = 0, .point_fields = NULL};
   int st = mx_write_mesh(path, &v, ascii);
   mx_free(type);
