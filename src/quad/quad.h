@@ -1,0 +1,266 @@
+/* The 2D mixed quadtree mesher (Jaillet & Lobos 2021, sections 3, 4 and
+ * 6.1-6.3): closed polylines in, quadrilaterals and triangles out.
+ *
+ * The data flow, one file per step (src/quad/):
+ *
+ *   .poly/.off/.mdl --read (io/read_poly.c)--> mx_poly, checked (poly.c)
+ *     --grid + refine + balance (qtree.c, qrefine.c, qedges.c)--> mx_qtree
+ *     --transition (qtransition.c)--> mx_qmesh (conforming, whole grid)
+ *     --boundary, Algorithm 2 (qboundary.c)--> mx_qmesh of the domain
+ *     --quality (qquality.c), write (io/write_qmesh.c), check (qcheck.c)
+ *
+ * The same machinery as 3D where the idea is the same: Morton keys on a
+ * finest lattice (x in bit 0, y in bit 1), a level-synchronous refinement
+ * with a `candidates` list, balance kept while refining through edge infos
+ * (2 quadrants per edge, section 3.2), a recursive balance after refinement
+ * as the baseline (both give the same leaves), transition patterns looked
+ * up by a mask, nodes numbered in Morton order of their first leaf (output
+ * identical for any thread count). Library errors are MX_* status codes;
+ * messages go through mx_error / mx_warning (common.h). */
+#ifndef MX_QUAD_H
+#define MX_QUAD_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define MX_QMAX_LEVEL 20 /* finest level: 2^20 lattice units per root side */
+
+/* ---- polylines (poly.c, io/read_poly.c) --------------------------------- */
+
+/* A set of polylines. For a domain every polyline is closed and oriented so
+ * that the domain lies on the left of each segment (outer boundaries
+ * counter-clockwise, holes clockwise: the outward normal is on the right).
+ * A drawing's polylines may be open (they only drive refinement). */
+typedef struct {
+  size_t nv, ns;
+  double *xy;        /* 2 per vertex */
+  uint32_t *seg;     /* 2 per segment: from, to (vertex indices) */
+  uint32_t *line;    /* per segment: the line of the input that defined it (messages) */
+  size_t nholes;
+  double *holes;     /* 2 per hole point (.poly); informative once oriented */
+  size_t nloops;     /* closed polylines found by mx_poly_check_domain */
+  char *path;        /* the file it came from (messages) */
+} mx_poly;
+
+void mx_poly_free(mx_poly *P);
+
+/* Readers: .poly (Triangle's format: vertices, segments, holes; '#'
+ * comments; indices from the first vertex number, 0 or 1), .off (each face a
+ * closed polygon, z ignored, must be 0), and 2D .mdl. Bad input: MX_EINPUT
+ * with a message naming the file and line. By extension: mx_read_poly_any. */
+int mx_read_poly(const char *path, mx_poly *P);
+int mx_read_poly_off(const char *path, mx_poly *P);
+int mx_read_poly_mdl(const char *path, mx_poly *P);
+int mx_read_poly_any(const char *path, mx_poly *P);
+
+/* A domain's checks: every vertex of a segment starts exactly one segment
+ * and ends exactly one (closed polylines; a segment given backwards in a
+ * loop is turned around), no zero-length segment, no two segments crossing
+ * or overlapping (MX_EINPUT naming both segments' lines). Orientation from
+ * nesting: a loop inside an even number of others is an outer boundary
+ * (made counter-clockwise), else a hole (made clockwise); turning one is
+ * reported as a warning. Sets nloops. */
+int mx_poly_check_domain(mx_poly *P);
+
+/* Point location against a checked domain: a uniform grid of segments
+ * (about 4 segments per cell) answering inside/outside by crossings along
+ * +x and the closest point on the polylines. */
+typedef struct {
+  const mx_poly *P;
+  double lo[2], h;   /* grid origin and cell side */
+  uint32_t nx, ny;
+  uint32_t *off;     /* nx*ny+1 CSR offsets into ids */
+  uint32_t *ids;     /* segment ids per cell */
+} mx_poly_index;
+
+int mx_poly_index_build(const mx_poly *P, mx_poly_index *I);
+void mx_poly_index_free(mx_poly_index *I);
+/* 1 strictly inside, 0 outside; a point on a segment (within 1e-12 of the
+ * domain's size) counts as on the boundary: returns 2. */
+int mx_poly_inside(const mx_poly_index *I, const double p[2]);
+/* The closest point of the polylines to p (q), its segment, and the squared
+ * distance; searches no farther than rmax (INFINITY: anywhere). Returns
+ * UINT32_MAX as the segment when nothing lies within rmax. */
+uint32_t mx_poly_closest(const mx_poly_index *I, const double p[2], double rmax, double q[2],
+                         double *d2);
+/* Features (section 4.1): vertices where the polyline turns by an angle
+ * outside ]175, 185[ degrees. Writes their vertex ids to *out (allocated). */
+int mx_poly_features(const mx_poly *P, uint32_t **out, size_t *n);
+
+/* ---- requests (qrefine.c) ------------------------------------------------ */
+
+typedef struct {
+  double lo[2], hi[2];
+  int level;
+} mx_qbox;
+
+/* The functions of the "function" refinement: a quadrant is refined to the
+ * level when the function's zero set crosses it (the signs at its corners
+ * and centre differ, or the zero set is closer than half its diagonal). */
+enum { MX_QFUN_CIRCLE = 1, MX_QFUN_LINE = 2, MX_QFUN_SINE = 3 };
+typedef struct {
+  int kind;
+  double a[4]; /* circle: cx cy r; line: px py nx ny; sine: amp freq phase y0 */
+  int level;
+} mx_qfun;
+
+typedef struct {
+  int s_level;             /* quadrants meeting the domain's polylines; 0 none */
+  int a_level;             /* every quadrant of the domain; 0 none */
+  size_t nboxes;
+  const mx_qbox *boxes;
+  size_t nregions;         /* region polylines: quadrants inside or crossing */
+  const mx_poly *regions;
+  const int *region_level;
+  size_t ndrawings;        /* drawings: quadrants their segments cross */
+  const mx_poly *drawings;
+  const int *drawing_level;
+  size_t nfuns;
+  const mx_qfun *funs;
+} mx_qrequests;
+
+/* ---- the quadtree (qtree.c, qedges.c, qrefine.c) ------------------------- */
+
+enum {
+  MX_Q_SPLIT = 1,   /* not a leaf any more */
+  MX_Q_BOUND = 2,   /* meets a segment of the domain */
+  MX_Q_OUT = 4,     /* a leaf wholly outside the domain (not meshed) */
+  MX_Q_QUEUED = 8,  /* on the to_balance list */
+};
+
+/* Root squares of side `side` on a grid dims[0] x dims[1] from origin,
+ * covering the domain's bounding box (the longest side is one root; the
+ * other axis gets as many roots as it needs). A lattice unit is
+ * side / 2^MX_QMAX_LEVEL. */
+typedef struct {
+  double origin[2], side, unit;
+  uint32_t dims[2];
+} mx_qgrid;
+
+/* Quadrants: every quadrant ever made keeps its index; a split one keeps its
+ * slot and its 4 children are contiguous from child0 (child c: bit 0 = +x,
+ * bit 1 = +y). */
+typedef struct {
+  size_t n, cap;
+  uint64_t *key;      /* 2D Morton key of the anchor on the finest lattice */
+  uint8_t *level;
+  uint8_t *flags;     /* MX_Q_* */
+  uint8_t *target;    /* the level the requests ask for */
+  uint32_t *parent;   /* UINT32_MAX for roots */
+  uint32_t *child0;   /* UINT32_MAX while a leaf */
+  uint32_t *seg_off;  /* CSR slice of seg_pool: the domain segments it meets */
+  uint32_t *seg_cnt;
+  uint32_t *seg_pool;
+  size_t seg_n, seg_cap;
+  mx_qgrid grid;
+} mx_qtree;
+
+enum { MX_QBALANCE_EDGES = 0, MX_QBALANCE_RECURSIVE = 1 };
+
+typedef struct {
+  size_t splits, balance_splits, leaves, edges;
+  double t_refine, t_balance;
+} mx_qstats;
+
+/* Algorithm 1: the grid, then level by level the candidates the requests
+ * want split, split, and (MX_QBALANCE_EDGES) the neighbours made unbalanced
+ * found through the edge infos and split before the next level; or
+ * (MX_QBALANCE_RECURSIVE) all levels first, then a recursive neighbour
+ * search until no two edge-adjacent leaves differ by more than one level.
+ * Leaves wholly outside the domain are flagged MX_Q_OUT. */
+int mx_qtree_build(const mx_poly *domain, const mx_poly_index *I, const mx_qrequests *req,
+                   int balance, mx_qtree *T, mx_qstats *stats);
+void mx_qtree_free(mx_qtree *T);
+/* The leaves not MX_Q_OUT, in Morton order (allocated). */
+int mx_qtree_leaves(const mx_qtree *T, uint32_t **leaves, size_t *n);
+/* Independent check: no two edge-adjacent leaves differ by more than one
+ * level (a sort of the leaves' edges, not the edge infos). Returns the
+ * number of unbalanced pairs. */
+size_t mx_qtree_unbalanced(const mx_qtree *T);
+
+/* ---- meshes (qtransition.c, qboundary.c) --------------------------------- */
+
+enum { MX_QTRI = 0, MX_QQUAD = 1 };
+#define MX_QNKEY_NONE UINT64_MAX
+
+/* A 2D mixed mesh: counter-clockwise triangles and quadrilaterals. */
+typedef struct {
+  size_t nnodes, ncells;
+  double *xy;        /* 2 per node */
+  uint64_t *nkey;    /* lattice key per node (2D Morton on the finest lattice), or MX_QNKEY_NONE */
+  uint8_t *type;     /* MX_QTRI / MX_QQUAD */
+  uint32_t *conn;    /* 4 per cell; a triangle's 4th is UINT32_MAX */
+  uint32_t *leaf;    /* position in the leaves array of the quadrant it came from */
+  uint8_t *level;
+} mx_qmesh;
+
+void mx_qmesh_free(mx_qmesh *M);
+
+/* Transition patterns (Fig. 4): a leaf's mask has bit e set when the
+ * midpoint of its edge e (0 bottom, 1 right, 2 top, 3 left) is a node of a
+ * finer neighbour. 0: one quad; one mid-node: 3 triangles; two on opposite
+ * edges: 2 quads; two on adjacent edges: 1 quad and 2 triangles; three: 1
+ * quad and 3 triangles; four: 4 quads around a centre node. Every node is
+ * numbered by the first leaf (Morton order) that uses it. */
+int mx_qtransition(const mx_qtree *T, const uint32_t *leaves, size_t n, mx_qmesh *M);
+
+/* Algorithm 2, steps 3-5, on the transition mesh: features (the closest
+ * node of the leaf holding a feature moves onto it), projection of inside
+ * nodes closer than close_ratio (0.3) of the shortest diagonal of the leaves
+ * sharing them, removal of elements with no inside node, shrink of the
+ * outside nodes onto the polylines, surface patterns by inside
+ * configuration and node angles (Fig. 8: < 150 degrees counts as inside,
+ * ]175, 185[ as flat). Features end as mesh vertices; no element is left
+ * with a non-positive Jacobian (MX_EINVALID otherwise, naming where). */
+typedef struct {
+  size_t features, moved_close, removed, shrunk, patterned, inverted;
+} mx_qboundary_stats;
+
+int mx_qboundary(const mx_poly *P, const mx_poly_index *I, const mx_qtree *T,
+                 const uint32_t *leaves, double close_ratio, mx_qmesh *M,
+                 mx_qboundary_stats *stats);
+
+/* ---- quality (qquality.c) ------------------------------------------------ */
+
+/* Scaled Jacobian of a cell: quad, the least over its corners of
+ * cross(e1, e2) / (|e1| |e2|); triangle, the same at its corners divided by
+ * sin(60 degrees) (an equilateral triangle is 1). Negative: inverted. */
+double mx_qcell_sj(const mx_qmesh *M, size_t c);
+/* The smallest interior angle of a cell, in degrees. */
+double mx_qcell_min_angle(const mx_qmesh *M, size_t c);
+
+#define MX_QBINS 6
+typedef struct {
+  size_t count[2];          /* triangles, quads */
+  double min[2], mean[2], max[2]; /* scaled Jacobian per type */
+  double min_angle;         /* over all cells, degrees */
+  size_t bins[MX_QBINS];    /* scaled Jacobian <0.03 <0.2 <0.4 <0.6 <0.8 <=1 */
+  size_t invalid;           /* scaled Jacobian <= 0 */
+  double area;              /* sum of the cells' areas */
+} mx_qquality;
+
+void mx_qquality_measure(const mx_qmesh *M, mx_qquality *q);
+
+/* ---- output and checks (io/write_qmesh.c, qcheck.c) ---------------------- */
+
+/* By extension: .vtu (binary), .vtk (legacy), .msh (Gmsh 4.1: the cells,
+ * and the boundary edges as lines in a physical group "boundary"), .off,
+ * .getfem, .m3d. Written to a temporary name and renamed (io/atomic_file.h).
+ * Cell fields: type, level, sj (scaled Jacobian). */
+int mx_write_qmesh(const char *path, const mx_qmesh *M, int ascii);
+int mx_qmesh_format_known(const char *path);
+
+/* Independent checks of a 2D mesh: conformity (every edge used by one or two
+ * cells, twice in opposite directions; no node lying inside another cell's
+ * edge), orientation (every cell counter-clockwise, scaled Jacobian > 0),
+ * when a domain is given: boundary edges on its polylines (within tol of the
+ * domain's size), features as vertices, and the area against the polygons'
+ * (relative difference). */
+typedef struct {
+  size_t bad_edges, hanging, inverted, off_boundary, missing_features;
+  double area, domain_area, area_error;
+} mx_qcheck_report;
+
+int mx_qmesh_check(const mx_qmesh *M, const mx_poly *domain, double tol, mx_qcheck_report *r);
+
+#endif
