@@ -3,7 +3,8 @@
 #
 #   tools/fuzz.sh [SECONDS_PER_TARGET] [TARGET ...]
 #
-# Targets (all by default): off mdl stl obj ply reg (tools/fuzz_readers.c),
+# Targets (all by default): off mdl stl obj ply reg poly (tools/fuzz_readers.c;
+# poly: the 2D readers .poly/.off/.mdl and the domain check),
 # mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d
 # mesh_mvm (mx_read_mesh of `mixoct check`, the input written under that
 # extension; tools/fuzz_readers.c)
@@ -30,7 +31,7 @@ set -u
 export LC_ALL=C
 
 root=$(cd "$(dirname "$0")/.." && pwd)
-all_targets="off mdl stl obj ply reg mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d mesh_mvm restart"
+all_targets="off mdl stl obj ply reg poly mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d mesh_mvm restart"
 
 secs=60
 case ${1:-} in
@@ -147,7 +148,7 @@ link_all() {
 # First the sources of the readers and of their checks; every source but
 # the command line (src/cli) when a fuzzer needs more (remembered).
 core_srcs=$(cd "$root" && ls src/*.c src/soa/*.c src/io/*.c src/morton/*.c \
-              src/kernels/check.c src/kernels/quality.c 2>/dev/null)
+              src/kernels/check.c src/kernels/quality.c src/quad/poly.c 2>/dev/null)
 all_srcs=$(cd "$root" && ls src/*.c src/*/*.c | grep -v '^src/cli/')
 if [ "$(cat "$build/libset" 2>/dev/null)" != all ]; then
   build_lib "$core_srcs"

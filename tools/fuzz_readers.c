@@ -7,6 +7,11 @@
  *                        check` calls it, then mx_check_mesh on small meshes;
  *                        -DFUZZ_EXT=vtk|vtu|msh|mesh|meshb|getfem|m3d|mvm
  *                        picks the file name's extension (default vtk)
+ *   poly                 the 2D readers mx_read_poly, mx_read_poly_off and
+ *                        mx_read_poly_mdl (src/io/read_poly.c) on the same
+ *                        bytes, then what the 2D mesher does with a poly
+ *                        read: mx_poly_check_domain, the point-location
+ *                        index, features (src/quad/poly.c)
  *
  * The readers take a path: each input is written to a file of this process
  * under $TMPDIR (/dev/shm when writable and TMPDIR is unset, else /tmp),
@@ -37,6 +42,7 @@
 #include "common.h"
 #include "io/read_mesh.h"
 #include "kernels/check.h"
+#include "quad/quad.h"
 #include "soa/mesh.h"
 #include "soa/regions.h"
 #include "soa/trisoup.h"
@@ -49,16 +55,17 @@
 #define FMT_ply 5
 #define FMT_reg 6
 #define FMT_mesh 7
+#define FMT_poly 8
 #define FUZZ_CAT2(a, b) a##b
 #define FUZZ_CAT(a, b) FUZZ_CAT2(a, b)
 #define FUZZ_STR2(a) #a
 #define FUZZ_STR(a) FUZZ_STR2(a)
 
 #ifndef FUZZ_FORMAT
-#error "compile with -DFUZZ_FORMAT=off|mdl|stl|obj|ply|reg|mesh"
+#error "compile with -DFUZZ_FORMAT=off|mdl|stl|obj|ply|reg|mesh|poly"
 #endif
 #define FUZZ_ID FUZZ_CAT(FMT_, FUZZ_FORMAT)
-#if FUZZ_ID < 1 || FUZZ_ID > 7
+#if FUZZ_ID < 1 || FUZZ_ID > 8
 #error "unknown FUZZ_FORMAT"
 #endif
 
@@ -149,6 +156,58 @@ static void fuzz_file(void) {
     REQUIRE(b[i].level >= 0);
   }
   mx_free(b);
+}
+
+#elif FUZZ_ID == FMT_poly
+
+/* The promises of quad.h's mx_poly after a read. */
+static void poly_promises(const mx_poly *P) {
+  REQUIRE(P->nv > 0 && P->ns > 0 && P->xy && P->seg && P->line && P->path);
+  for (size_t i = 0; i < 2 * P->nv; i++) REQUIRE(isfinite(P->xy[i]));
+  for (size_t i = 0; i < 2 * P->ns; i++) REQUIRE(P->seg[i] < P->nv);
+  for (size_t s = 0; s < P->ns; s++) REQUIRE(P->line[s] > 0);
+  for (size_t i = 0; i < 2 * P->nholes; i++) REQUIRE(isfinite(P->holes[i]));
+}
+
+/* A checked domain: consistent loops; the index answers without crashing
+ * and finds, from every vertex, a segment at distance 0 (it is on one). */
+static void poly_use(mx_poly *P) {
+  const int st = mx_poly_check_domain(P);
+  REQUIRE(st == MX_OK || st == MX_EINPUT);
+  uint32_t *feat = NULL;
+  size_t nf = 0;
+  REQUIRE(mx_poly_features(P, &feat, &nf) == MX_OK && nf <= P->nv);
+  for (size_t i = 0; i < nf; i++) REQUIRE(feat[i] < P->nv && (i == 0 || feat[i - 1] < feat[i]));
+  mx_free(feat);
+  if (st != MX_OK) return;
+  REQUIRE(P->nloops >= 1 && P->nloops <= P->ns / 2);
+  mx_poly_index I;
+  REQUIRE(mx_poly_index_build(P, &I) == MX_OK);
+  for (size_t s = 0; s < P->ns && s < 64; s++) {
+    const double *v = P->xy + 2 * (size_t)P->seg[2 * s];
+    double q[2], d2;
+    REQUIRE(mx_poly_closest(&I, v, INFINITY, q, &d2) != UINT32_MAX && d2 == 0.0);
+    REQUIRE(mx_poly_inside(&I, v) == 2);
+    const double off[2] = {v[0] + 0.25, v[1] - 0.125};
+    const int in = mx_poly_inside(&I, off);
+    REQUIRE(in >= 0 && in <= 2);
+  }
+  mx_poly_index_free(&I);
+}
+
+static void fuzz_file(void) {
+  int (*const readers[3])(const char *, mx_poly *) = {mx_read_poly, mx_read_poly_off,
+                                                      mx_read_poly_mdl};
+  for (int r = 0; r < 3; r++) {
+    mx_poly P;
+    if (readers[r](path, &P) != MX_OK) {
+      REQUIRE(P.nv == 0 && P.ns == 0 && !P.xy && !P.seg && !P.line && !P.path);
+      continue;
+    }
+    poly_promises(&P);
+    poly_use(&P);
+    mx_poly_free(&P);
+  }
 }
 
 #elif FUZZ_ID == FMT_mesh

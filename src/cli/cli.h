@@ -58,6 +58,9 @@ int mx_run(const mx_options *o);
 /* The program invoked as `mesher_roi`: the published mesher's flags
  * (src/cli/mesher_roi.c). Returns the exit code. */
 int mx_mesher_roi_main(int argc, char **argv);
+/* The program invoked as `mesher2d`: the 2D mixed quadtree mesher
+ * (src/cli/mesher2d.c, src/quad/quad.h). Returns the exit code. */
+int mx_mesher2d_main(int argc, char **argv);
 
 /* `mixoct check MESH [--surface FILE] [--json]` (src/cli/check_cmd.c). */
 int mx_check_main(int argc, char **argv);

@@ -165,6 +165,8 @@ int main(int argc, char **argv) {
   const char *base = strrchr(argv[0], '/');
   if (strcmp(base ? base + 1 : argv[0], "mesher_roi") == 0)
     return mx_mesher_roi_main(argc, argv);
+  if (strcmp(base ? base + 1 : argv[0], "mesher2d") == 0)
+    return mx_mesher2d_main(argc, argv);
   mx_options o;
   int exit_now = 0;
   int st = remesh ? mx_parse_options(argc - 1, argv + 1, &o, &exit_now)

@@ -64,13 +64,17 @@ int mx_poly_check_domain(mx_poly *P);
 
 /* Point location against a checked domain: a uniform grid of segments
  * (about 4 segments per cell) answering inside/outside by crossings along
- * +x and the closest point on the polylines. */
+ * x (the row walked toward its nearer end: the same parity for closed
+ * loops) and the closest point on the polylines. Read-only once built:
+ * queries may run in parallel. */
 typedef struct {
   const mx_poly *P;
   double lo[2], h;   /* grid origin and cell side */
   uint32_t nx, ny;
   uint32_t *off;     /* nx*ny+1 CSR offsets into ids */
   uint32_t *ids;     /* segment ids per cell */
+  double eps;        /* 1e-12 of the domain's diameter: "on a segment" */
+  double margin;     /* a segment is listed in every cell this close to it */
 } mx_poly_index;
 
 int mx_poly_index_build(const mx_poly *P, mx_poly_index *I);
@@ -80,11 +84,14 @@ void mx_poly_index_free(mx_poly_index *I);
 int mx_poly_inside(const mx_poly_index *I, const double p[2]);
 /* The closest point of the polylines to p (q), its segment, and the squared
  * distance; searches no farther than rmax (INFINITY: anywhere). Returns
- * UINT32_MAX as the segment when nothing lies within rmax. */
+ * UINT32_MAX as the segment when nothing lies within rmax (then *d2 is
+ * INFINITY and q is not written). Equally close segments: the lowest id. */
 uint32_t mx_poly_closest(const mx_poly_index *I, const double p[2], double rmax, double q[2],
                          double *d2);
 /* Features (section 4.1): vertices where the polyline turns by an angle
- * outside ]175, 185[ degrees. Writes their vertex ids to *out (allocated). */
+ * outside ]175, 185[ degrees, and vertices where more than two segments
+ * meet (a drawing's junctions); an open polyline's ends are not. Writes
+ * their vertex ids, ascending, to *out (allocated, mx_free). */
 int mx_poly_features(const mx_poly *P, uint32_t **out, size_t *n);
 
 /* ---- requests (qrefine.c) ------------------------------------------------ */
@@ -178,6 +185,78 @@ int mx_qtree_leaves(const mx_qtree *T, uint32_t **leaves, size_t *n);
  * number of unbalanced pairs. */
 size_t mx_qtree_unbalanced(const mx_qtree *T);
 
+/* Internal to the quadtree steps (qtree.c, qedges.c, qrefine.c,
+ * qbalance_recursive.c, qtransition.c), declared here because those files
+ * share them; other callers use the functions above. */
+
+/* 2D Morton key of a lattice point (x in bit 0, y in bit 1) and back. */
+static inline uint64_t mx_qspread(uint32_t v) {
+  uint64_t x = v;
+  x = (x | (x << 16)) & 0x0000FFFF0000FFFFULL;
+  x = (x | (x << 8)) & 0x00FF00FF00FF00FFULL;
+  x = (x | (x << 4)) & 0x0F0F0F0F0F0F0F0FULL;
+  x = (x | (x << 2)) & 0x3333333333333333ULL;
+  x = (x | (x << 1)) & 0x5555555555555555ULL;
+  return x;
+}
+static inline uint32_t mx_qcompact(uint64_t x) {
+  x &= 0x5555555555555555ULL;
+  x = (x | (x >> 1)) & 0x3333333333333333ULL;
+  x = (x | (x >> 2)) & 0x0F0F0F0F0F0F0F0FULL;
+  x = (x | (x >> 4)) & 0x00FF00FF00FF00FFULL;
+  x = (x | (x >> 8)) & 0x0000FFFF0000FFFFULL;
+  x = (x | (x >> 16)) & 0x00000000FFFFFFFFULL;
+  return (uint32_t)x;
+}
+/* Both coordinates at once: the perfect shuffle of (y << 32 | x) and its
+ * inverse (Hacker's Delight, 7-2), half the work of two spreads. */
+static inline uint64_t mx_qkey(uint32_t x, uint32_t y) {
+  uint64_t k = (uint64_t)y << 32 | x, t;
+  t = (k ^ (k >> 16)) & 0x00000000FFFF0000ULL, k ^= t ^ (t << 16);
+  t = (k ^ (k >> 8)) & 0x0000FF000000FF00ULL, k ^= t ^ (t << 8);
+  t = (k ^ (k >> 4)) & 0x00F000F000F000F0ULL, k ^= t ^ (t << 4);
+  t = (k ^ (k >> 2)) & 0x0C0C0C0C0C0C0C0CULL, k ^= t ^ (t << 2);
+  t = (k ^ (k >> 1)) & 0x2222222222222222ULL, k ^= t ^ (t << 1);
+  return k;
+}
+static inline void mx_qkey_xy(uint64_t key, uint32_t *x, uint32_t *y) {
+  uint64_t k = key, t;
+  t = (k ^ (k >> 1)) & 0x2222222222222222ULL, k ^= t ^ (t << 1);
+  t = (k ^ (k >> 2)) & 0x0C0C0C0C0C0C0C0CULL, k ^= t ^ (t << 2);
+  t = (k ^ (k >> 4)) & 0x00F000F000F000F0ULL, k ^= t ^ (t << 4);
+  t = (k ^ (k >> 8)) & 0x0000FF000000FF00ULL, k ^= t ^ (t << 8);
+  t = (k ^ (k >> 16)) & 0x00000000FFFF0000ULL, k ^= t ^ (t << 16);
+  *x = (uint32_t)k;
+  *y = (uint32_t)(k >> 32);
+}
+/* Side of a quadrant of this level, in lattice units. */
+static inline uint32_t mx_qsize(int level) { return 1u << (MX_QMAX_LEVEL - level); }
+
+/* qtree.c: the root grid covering the box [lo, hi] (name: for messages). */
+int mx_qgrid_build(const double lo[2], const double hi[2], const char *name, mx_qgrid *g);
+
+/* qedges.c: the edge infos of section 3.2 (opaque). Edges of levels up to
+ * `top` are kept: a quadrant of level l split needs those of level l-1. */
+typedef struct mx_qedges mx_qedges;
+int mx_qedges_new(int top, mx_qedges **E);
+void mx_qedges_free(mx_qedges *E);
+size_t mx_qedges_count(const mx_qedges *E);
+/* Register the roots (quadrants 0..nroots-1) in their level-0 edges. */
+int mx_qedges_add_roots(mx_qedges *E, const mx_qtree *T, size_t nroots);
+/* Register the children of the just split quadrants `split` (all of one
+ * level) in their edges. */
+int mx_qedges_add_children(mx_qedges *E, const mx_qtree *T, const uint32_t *split, size_t n);
+/* The leaves made unbalanced by the splits of `split` (all of one level l):
+ * the leaves of level l-1 across their parents' edges, not MX_Q_OUT, not
+ * already queued; flagged MX_Q_QUEUED, sorted by key (allocated). */
+int mx_qedges_unbalanced(const mx_qedges *E, mx_qtree *T, const uint32_t *split, size_t n,
+                         uint32_t **out, size_t *nout);
+
+/* qbalance_recursive.c: the leaves (not MX_Q_OUT) that the classic
+ * neighbour search (descending from the roots 0..nroots-1) finds next to a
+ * split quadrant one level finer than them, by index (allocated). */
+int mx_qbalance_find(const mx_qtree *T, size_t nroots, uint32_t **out, size_t *n);
+
 /* ---- meshes (qtransition.c, qboundary.c) --------------------------------- */
 
 enum { MX_QTRI = 0, MX_QQUAD = 1 };
@@ -201,7 +280,9 @@ void mx_qmesh_free(mx_qmesh *M);
  * finer neighbour. 0: one quad; one mid-node: 3 triangles; two on opposite
  * edges: 2 quads; two on adjacent edges: 1 quad and 2 triangles; three: 1
  * quad and 3 triangles; four: 4 quads around a centre node. Every node is
- * numbered by the first leaf (Morton order) that uses it. */
+ * numbered by the first leaf (Morton order) that uses it. `leaves` must be
+ * in Morton order, as mx_qtree_leaves gives them (the node ownership relies
+ * on it); cell `leaf` fields are positions in it. */
 int mx_qtransition(const mx_qtree *T, const uint32_t *leaves, size_t n, mx_qmesh *M);
 
 /* Algorithm 2, steps 3-5, on the transition mesh: features (the closest
@@ -228,6 +309,12 @@ int mx_qboundary(const mx_poly *P, const mx_poly_index *I, const mx_qtree *T,
 double mx_qcell_sj(const mx_qmesh *M, size_t c);
 /* The smallest interior angle of a cell, in degrees. */
 double mx_qcell_min_angle(const mx_qmesh *M, size_t c);
+/* The same measures on a polygon given by node ids v[0..nv) (nv 3 or 4) into
+ * xy: the boundary step rates cells it has not written yet (a quad split
+ * along a diagonal, a node dropped). mx_qangle_at: the interior angle at
+ * corner k in [0, 360) degrees (over 180: reflex or inverted). */
+double mx_qsj_nodes(const double *xy, const uint32_t *v, int nv);
+double mx_qangle_at(const double *xy, const uint32_t *v, int nv, int k);
 
 #define MX_QBINS 6
 typedef struct {
@@ -259,6 +346,12 @@ int mx_qmesh_format_known(const char *path);
 typedef struct {
   size_t bad_edges, hanging, inverted, off_boundary, missing_features;
   double area, domain_area, area_error;
+  /* Added for mesher2d (the topology: a mesh that lost a thin part of the
+   * domain, or split it, has another Euler characteristic): the distinct
+   * edges, those used by one cell, V - E + F over the nodes used, and with
+   * a domain its outer loops minus its holes (by orientation). */
+  size_t edges, boundary_edges;
+  long euler, domain_euler;
 } mx_qcheck_report;
 
 int mx_qmesh_check(const mx_qmesh *M, const mx_poly *domain, double tol, mx_qcheck_report *r);
