@@ -58,6 +58,7 @@ typedef struct {
   uint8_t *ghost;    /* per cell: gone at the removal (its nodes may stay in others) */
   uint64_t *off;     /* node -> alive cells (CSR, cells ascending) */
   uint32_t *ids;
+  size_t ids_cap;    /* entries ids holds room for */
   double tol;        /* "on the polylines": 1e-12 of the domain's size */
   size_t nfeat;      /* feature nodes, ascending, with the direction into the domain */
   uint64_t *fnode;   /*   that halves the domain's angle there, and their */
@@ -73,23 +74,33 @@ static double leaf_side(const qb *B, size_t c) { return ldexp(B->g->side, -B->M-
 
 /* ---- node -> cells ------------------------------------------------------- */
 
+/* off and ids are kept between builds: the alive cells only lose corners,
+ * so the first build's room suffices, and their pages are touched once. */
 static int build_node_cells(qb *B) {
   const mx_qmesh *M = B->M;
-  mx_free(B->off);
-  mx_free(B->ids);
-  B->ids = NULL;
-  uint64_t *off = B->off = mx_calloc((B->n + 1) * sizeof *off);
-  uint64_t *cur = mx_alloc(B->n * sizeof *cur + 1);
-  if (!off || !cur) return mx_free(cur), MX_ENOMEM;
+  if (!B->off) B->off = mx_alloc((B->n + 1) * sizeof *B->off);
+  uint64_t *off = B->off;
+  if (!off) return MX_ENOMEM;
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v <= B->n; v++) off[v] = 0;
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < B->m; c++)
     if (B->alive[c])
       for (int k = 0; k < nv_of(B, c); k++)
         __atomic_fetch_add(&off[M->conn[4 * c + k]], 1, __ATOMIC_RELAXED);
   const uint64_t tot = mx_scan_u64(off, B->n + 1);
-  uint32_t *ids = B->ids = mx_alloc(tot * sizeof *ids + 1);
-  if (!ids) return mx_free(cur), MX_ENOMEM;
-  memcpy(cur, off, B->n * sizeof *cur);
+  if (!B->ids || tot > B->ids_cap) {
+    mx_free(B->ids);
+    B->ids_cap = 0;
+    if (!(B->ids = mx_alloc(tot * sizeof *B->ids + 1))) return MX_ENOMEM;
+    B->ids_cap = tot;
+  }
+  uint32_t *ids = B->ids;
+  /* not kept: it would add to the peak of the later steps */
+  uint64_t *cur = mx_alloc(B->n * sizeof *cur + 1);
+  if (!cur) return MX_ENOMEM;
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < B->n; v++) cur[v] = off[v];
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < B->m; c++)
     if (B->alive[c])
@@ -123,6 +134,26 @@ static double cell_sj(const qb *B, size_t c) {
   const uint32_t *v = B->M->conn + 4 * c;
   if (B->split[c]) return split_sj(B->M->xy, v, B->split[c] - 1);
   return mx_qsj_nodes(B->M->xy, v, nv_of(B, c));
+}
+
+/* Sufficient for a scaled Jacobian > SJ_OK, without the square roots: every
+ * corner's sine is over 2 SJ_OK (squared, well clear of the roundings). */
+static int clearly_valid(const double *xy, const uint32_t *v, int nv) {
+  for (int k = 0; k < nv; k++) {
+    const double *p = xy + 2 * (size_t)v[k];
+    const double *a = xy + 2 * (size_t)v[(k + 1) % nv], *b = xy + 2 * (size_t)v[(k + nv - 1) % nv];
+    const double e1[2] = {a[0] - p[0], a[1] - p[1]}, e2[2] = {b[0] - p[0], b[1] - p[1]};
+    const double x = e1[0] * e2[1] - e1[1] * e2[0];
+    const double l2 = (e1[0] * e1[0] + e1[1] * e1[1]) * (e2[0] * e2[0] + e2[1] * e2[1]);
+    if (!(x > 0 && x * x > 4 * SJ_OK * SJ_OK * l2)) return 0;
+  }
+  return 1;
+}
+
+/* cell_sj(B, c) > SJ_OK, the common case decided cheaply. */
+static int cell_ok(const qb *B, size_t c) {
+  if (!B->split[c] && clearly_valid(B->M->xy, B->M->conn + 4 * c, nv_of(B, c))) return 1;
+  return cell_sj(B, c) > SJ_OK;
 }
 
 static void centroid(const qb *B, size_t c, double p[2]) {
@@ -200,7 +231,7 @@ static int repair(qb *B, uint8_t undo, int before_removal, size_t *undone) {
     size_t fixed = 0, marked = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : fixed, marked)
     for (size_t c = 0; c < B->m; c++) {
-      if (!stays(B, c, before_removal) || cell_sj(B, c) > SJ_OK) continue;
+      if (!stays(B, c, before_removal) || cell_ok(B, c)) continue;
       if (B->M->type[c] == MX_QQUAD && (B->split[c] = (uint8_t)best_split(B, c))) {
         fixed++;
         continue;
@@ -349,23 +380,33 @@ static size_t lower_bound(const uint64_t *key, size_t m, uint64_t k) {
   return lo;
 }
 
-/* The leaf holding f: looked up level by level; a point on a leaf's left or
- * bottom side may belong to the leaf across, hence the nudged tries. */
-static uint32_t feature_node(const qb *B, const uint64_t *key, const uint32_t *cid,
-                             const double f[2]) {
+/* The keys of the leaves that may hold f, in the order they are tried:
+ * level by level; a point on a leaf's left or bottom side may belong to the
+ * leaf across, hence the nudged tries. UINT64_MAX for a try off the grid. */
+#define FEATURE_TRIES (4 * (MX_QMAX_LEVEL + 1))
+static void feature_keys(const qb *B, const double f[2], uint64_t *k) {
   const double lim = ldexp(1.0, 29);
   for (int t = 0; t < 4; t++)
     for (int l = 0; l <= MX_QMAX_LEVEL; l++) {
       const double s = ldexp(B->g->side, -l), e = 1e-6 * s;
       const double x = floor((f[0] - (t & 1 ? e : 0) - B->g->origin[0]) / s);
       const double y = floor((f[1] - (t & 2 ? e : 0) - B->g->origin[1]) / s);
-      if (x < 0 || y < 0 || x >= lim || y >= lim) continue;
-      const uint64_t k = leaf_key(l, (uint64_t)x, (uint64_t)y);
-      const size_t lo = lower_bound(key, B->m, k);
-      if (lo == B->m || key[lo] != k) continue;
-      const size_t hi = lower_bound(key, B->m, k + 1);
-      return feature_target(B, cid, lo, hi, f);
+      const int off = x < 0 || y < 0 || x >= lim || y >= lim;
+      k[t * (MX_QMAX_LEVEL + 1) + l] = off ? UINT64_MAX : leaf_key(l, (uint64_t)x, (uint64_t)y);
     }
+}
+
+/* The node taking feature f, from the sorted cells of the candidate leaves. */
+static uint32_t feature_node(const qb *B, const uint64_t *key, const uint32_t *cid, size_t m,
+                             const double f[2]) {
+  uint64_t k[FEATURE_TRIES];
+  feature_keys(B, f, k);
+  for (int t = 0; t < FEATURE_TRIES; t++) {
+    if (k[t] == UINT64_MAX) continue;
+    const size_t lo = lower_bound(key, m, k[t]);
+    if (lo == m || key[lo] != k[t]) continue;
+    return feature_target(B, cid, lo, lower_bound(key, m, k[t] + 1), f);
+  }
   return UINT32_MAX;
 }
 
@@ -431,25 +472,55 @@ static int take_features(qb *B, const uint32_t *fv, size_t nfeat, const uint32_t
   return MX_OK;
 }
 
+/* Whether k is one of the sorted candidate keys cand[0, nc). */
+static int is_candidate(const uint64_t *cand, size_t nc, uint64_t k) {
+  const size_t i = lower_bound(cand, nc, k);
+  return i < nc && cand[i] == k;
+}
+
+/* The cells of the leaves that may hold a feature, sorted by leaf key: only
+ * those are ever looked up, so the other cells need not be sorted. */
+static int candidate_cells(const qb *B, const uint32_t *fv, size_t nfeat, uint64_t **key,
+                           uint32_t **cid, size_t *m) {
+  const size_t nc = nfeat * FEATURE_TRIES;
+  uint64_t *cand = mx_alloc(nc * sizeof *cand + 1);
+  uint32_t *cidx = mx_alloc(nc * sizeof *cidx + 1);
+  uint64_t *pos = mx_alloc((B->m + 1) * sizeof *pos);
+  if (!cand || !cidx || !pos) return mx_free(cand), mx_free(cidx), mx_free(pos), MX_ENOMEM;
+  for (size_t i = 0; i < nfeat; i++) feature_keys(B, B->P->xy + 2 * (size_t)fv[i], cand + i * FEATURE_TRIES);
+  int st = mx_sort_u64(cand, cidx, nc) == MX_OK ? MX_OK : MX_ENOMEM;
+  mx_free(cidx);
+  if (st == MX_OK) {
+#pragma omp parallel for schedule(static)
+    for (size_t c = 0; c < B->m; c++) pos[c] = is_candidate(cand, nc, cell_leaf_key(B, c));
+    pos[B->m] = 0;
+    *m = mx_scan_u64(pos, B->m + 1);
+    *key = mx_alloc(*m * sizeof **key + 1);
+    *cid = mx_alloc(*m * sizeof **cid + 1);
+    st = *key && *cid ? MX_OK : MX_ENOMEM;
+  }
+  if (st == MX_OK) {
+#pragma omp parallel for schedule(static)
+    for (size_t c = 0; c < B->m; c++)
+      if (pos[c + 1] > pos[c]) (*key)[pos[c]] = cell_leaf_key(B, c), (*cid)[pos[c]] = (uint32_t)c;
+    st = mx_sort_u64(*key, *cid, *m) == MX_OK ? MX_OK : MX_ENOMEM;
+  }
+  mx_free(cand), mx_free(pos);
+  return st;
+}
+
 static int features(qb *B) {
   uint32_t *fv = NULL, *cid = NULL, *pick = NULL;
   uint64_t *key = NULL;
-  size_t nfeat = 0;
+  size_t nfeat = 0, m = 0;
   int st = mx_poly_features(B->P, &fv, &nfeat);
   if (st != MX_OK || nfeat == 0) return mx_free(fv), st;
-  key = mx_alloc(B->m * sizeof *key + 1);
-  cid = mx_alloc(B->m * sizeof *cid + 1);
   pick = mx_alloc(nfeat * sizeof *pick);
-  st = key && cid && pick ? MX_OK : MX_ENOMEM;
-  if (st == MX_OK) {
-#pragma omp parallel for schedule(static)
-    for (size_t c = 0; c < B->m; c++) key[c] = cell_leaf_key(B, c), cid[c] = (uint32_t)c;
-    st = mx_sort_u64(key, cid, B->m) == MX_OK ? MX_OK : MX_ENOMEM;
-  }
+  st = pick ? candidate_cells(B, fv, nfeat, &key, &cid, &m) : MX_ENOMEM;
   if (st == MX_OK) {
 #pragma omp parallel for schedule(dynamic, 16)
     for (size_t i = 0; i < nfeat; i++)
-      pick[i] = feature_node(B, key, cid, B->P->xy + 2 * (size_t)fv[i]);
+      pick[i] = feature_node(B, key, cid, m, B->P->xy + 2 * (size_t)fv[i]);
     st = take_features(B, fv, nfeat, pick);
   }
   if (st == MX_OK) st = feature_dirs(B, fv, pick, nfeat);
@@ -696,7 +767,7 @@ static int fold_round(qb *B, uint32_t *want, uint8_t *go, int count, size_t *don
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : fixed)
   for (size_t c = 0; c < B->m; c++) {
     uint32_t s = 0, t = 0;
-    if (!B->alive[c] || cell_sj(B, c) > SJ_OK) continue;
+    if (!B->alive[c] || cell_ok(B, c)) continue;
     if (B->M->type[c] == MX_QQUAD && (B->split[c] = (uint8_t)best_split(B, c))) fixed++;
     else if (fold_edge(B, c, &s, &t)) atomic_min_u32(&want[s], t);
   }
@@ -849,7 +920,8 @@ static void node_angles(const qb *B, double *theta) {
 #pragma omp parallel for schedule(dynamic, 1024)
   for (size_t v = 0; v < B->n; v++) {
     double a = 0;
-    for (uint64_t i = B->off[v]; i < B->off[v + 1]; i++) {
+    /* only read for the nodes not inside (quad_pattern) */
+    for (uint64_t i = B->off[v]; i < (B->nf[v] & N_IN ? B->off[v] : B->off[v + 1]); i++) {
       const size_t c = B->ids[i];
       a += mx_qangle_at(B->M->xy, B->M->conn + 4 * c, nv_of(B, c), corner_of(B, c, (uint32_t)v));
     }
@@ -895,6 +967,15 @@ static int droppable(const qb *B, const uint32_t *v, int k) {
   return folded_angle(B->M->xy, t, 1) < 180.0 - FLAT_LO;
 }
 
+/* Whether corner k of quad v may be over 90 degrees: a corner with both its
+ * cross and dot products >= 0 is within [0, 90], under any bound used on it. */
+static int obtuse_or_reflex(const double *xy, const uint32_t *v, int k) {
+  const double *p = xy + 2 * (size_t)v[k];
+  const double *a = xy + 2 * (size_t)v[(k + 1) & 3], *b = xy + 2 * (size_t)v[(k + 3) & 3];
+  const double e1[2] = {a[0] - p[0], a[1] - p[1]}, e2[2] = {b[0] - p[0], b[1] - p[1]};
+  return !(e1[0] * e2[1] - e1[1] * e2[0] >= 0 && e1[0] * e2[0] + e1[1] * e2[1] >= 0);
+}
+
 /* A quad (Fig. 8): a node counts as inside when it is, or when the mesh's
  * angle there is < 150 degrees. The quad changes when an outside corner is
  * >= 150 degrees, any corner >= 175, or a corner can be dropped: then a
@@ -907,7 +988,7 @@ static int quad_pattern(qb *B, size_t c, const double *theta) {
   int drop = -1, wide = -1;
   double dsj = SJ_OK, wa = 0;
   for (int k = 0; k < 4; k++) {
-    const double a = mx_qangle_at(xy, v, 4, k);
+    const double a = obtuse_or_reflex(xy, v, k) ? mx_qangle_at(xy, v, 4, k) : 0.0;
     const int in = (B->nf[v[k]] & N_IN) || theta[v[k]] < INSIDE_ANGLE;
     if (droppable(B, v, k)) {
       const uint32_t t[3] = {v[(k + 1) & 3], v[(k + 2) & 3], v[(k + 3) & 3]};
@@ -983,7 +1064,7 @@ static int first_invalid(const qb *B) {
   size_t bad = SIZE_MAX;
 #pragma omp parallel for schedule(static) reduction(min : bad)
   for (size_t c = 0; c < B->m; c++)
-    if (B->alive[c] && !(cell_sj(B, c) > SJ_OK) && c < bad) bad = c;
+    if (B->alive[c] && !cell_ok(B, c) && c < bad) bad = c;
   if (bad == SIZE_MAX) return MX_OK;
   double p[2];
   centroid(B, bad, p);
