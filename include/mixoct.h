@@ -259,6 +259,111 @@ typedef struct {
 } mx_stats;
 void mx_mesher_stats(const mx_mesher *m, mx_stats *s);
 
+
+/* ---- 2D: the mixed quadtree mesher (the `mesher2d` program) ------------
+ *
+ * Closed polylines (.poly, .off, 2D .mdl) in; counter-clockwise triangles
+ * and quadrilaterals out (Jaillet & Lobos 2021, sections 3, 4 and 6):
+ *
+ *   mx_params2d p;  mx_params2d_default(&p);  p.surface_level = 8;
+ *   mx_mesher2d *m = mx_mesher2d_new(&p);
+ *   mx_mesher2d_set_domain(m, "a.poly");
+ *   mx_mesher2d_mesh(m);         // refine + balance, transition, boundary, check
+ *   mx_mesher2d_write(m, "a.vtu", 0);
+ *   mx_mesher2d_save_restart(m, "a.oct");
+ *   uint64_t bad[] = {7};
+ *   mx_mesher2d_refine_elements(m, bad, 1);   // Algorithm 3, then re-mesh
+ *   mx_mesher2d_free(m);
+ *
+ * The same conventions as the 3D mesher: status codes, messages through the
+ * handler (stderr "mesher2d: ..." by default), mx_mesher2d_last_error.
+ * Every mesh is checked by an independent routine (conformity, orientation,
+ * boundary on the polylines, features as vertices, area, topology): a mesh
+ * that fails it makes the call return MX_EINVALID (the mesh is kept, and
+ * mx_mesher2d_write still writes it when asked). */
+typedef struct {
+  int surface_level;   /* -s: quadrants meeting the polylines; 0 none */
+  int all_level;       /* -a: every quadrant of the domain; 0 none */
+  int balance;         /* MX_BALANCE_EDGES (default) or MX_BALANCE_RECURSIVE */
+  int threads;         /* 0: the OpenMP default */
+  double close_ratio;  /* projection of close inside nodes, 0: 0.3 */
+  double max_memory_mb; /* refuse runs estimated above; 0: memory available */
+  int feature_levels;  /* 1 (default): quadrants holding a feature are refined
+                        * until features keep apart (each feature's quadrant
+                        * at most half its distance to the nearest other);
+                        * 0: not (two features may then claim one
+                        * node: MX_EINPUT) */
+} mx_params2d;
+
+void mx_params2d_default(mx_params2d *p);
+
+typedef struct mx_mesher2d mx_mesher2d;
+mx_mesher2d *mx_mesher2d_new(const mx_params2d *p);
+void mx_mesher2d_free(mx_mesher2d *m);
+void mx_mesher2d_set_message_handler(mx_mesher2d *m, mx_message_fn fn, void *user);
+const char *mx_mesher2d_last_error(const mx_mesher2d *m);
+
+/* The domain (once): a file, or arrays (xy: 2 per vertex; seg: 2 vertex
+ * indices per segment). Checked: closed, not self-intersecting; loops are
+ * oriented by nesting (outer counter-clockwise, holes clockwise). */
+int mx_mesher2d_set_domain(mx_mesher2d *m, const char *path);
+int mx_mesher2d_set_domain_arrays(mx_mesher2d *m, const char *name, size_t nv,
+                                  const double *xy, size_t ns, const uint32_t *seg);
+/* Requests (a quadrant takes the highest level asked; levels 0 to 27). */
+int mx_mesher2d_set_levels(mx_mesher2d *m, int surface_level, int all_level);
+int mx_mesher2d_add_box(mx_mesher2d *m, const double lo[2], const double hi[2], int level);
+int mx_mesher2d_read_boxes(mx_mesher2d *m, const char *path);
+int mx_mesher2d_add_region(mx_mesher2d *m, const char *path, int level);
+int mx_mesher2d_add_drawing(mx_mesher2d *m, const char *path, int level);
+/* name: "circle" (cx cy r), "line" (px py nx ny) or "sine" (amp freq phase
+ * y0: y = y0 + amp sin(freq x + phase)); nargs must match. */
+int mx_mesher2d_add_function(mx_mesher2d *m, const char *name, const double *args,
+                             size_t nargs, int level);
+
+/* Mesh from the requests (and the quadtree of a loaded restart file). */
+int mx_mesher2d_mesh(mx_mesher2d *m);
+/* Re-meshing (section 4.2, Algorithm 3): each quadrant holding one of the
+ * listed elements is split once (a quadrant listed twice, once), balance is
+ * restored through the edge infos, and the mesh is made again. Indices
+ * refer to the current mesh, or, before the first mesh after
+ * mx_mesher2d_load_restart, to the mesh written with that restart file. */
+int mx_mesher2d_refine_elements(mx_mesher2d *m, const uint64_t *elements, size_t n);
+/* Keep the current quadtree and apply the current requests (after
+ * set_levels, add_box, ...), then mesh again. */
+int mx_mesher2d_refine(mx_mesher2d *m);
+/* The restart file, Appendix A in its quadtree form (text): nodes "x y",
+ * edges "a b mid", quadrants "4 n0 n1 n2 n3 level" and their segments, the
+ * elements of each quadrant. Loading needs the domain set first (the file's
+ * quadrants must lie on that domain's quadtree). */
+int mx_mesher2d_save_restart(const mx_mesher2d *m, const char *path);
+int mx_mesher2d_load_restart(mx_mesher2d *m, const char *path);
+size_t mx_mesher2d_restart_elements(const mx_mesher2d *m);
+
+/* Format by extension: .vtu .vtk .msh .off .getfem .m3d (ascii: the ASCII
+ * .vtk / .msh). Written under a temporary name and renamed. */
+int mx_mesher2d_write(const mx_mesher2d *m, const char *path, int ascii);
+
+typedef struct {
+  size_t nnodes, ncells, nleaves;
+  const double *xy;       /* 2 * nnodes */
+  const uint8_t *type;    /* 0 triangle, 1 quadrilateral */
+  const uint32_t *conn;   /* 4 * ncells, a triangle's 4th is UINT32_MAX */
+  const uint32_t *leaf;   /* the quadrant (0 .. nleaves-1) of each cell */
+  const uint8_t *level;   /* its level */
+} mx_mesh2d_arrays;
+int mx_mesher2d_mesh_arrays(const mx_mesher2d *m, mx_mesh2d_arrays *a);
+
+typedef struct {
+  size_t leaves, quadrants, nodes, cells, tris, quads, invalid;
+  size_t refined_listed;  /* quadrants split by the last list refinement */
+  size_t split_balance;   /* quadrants split for balance (last build) */
+  int valid;              /* the last mesh passed the independent check */
+  double sj_min, min_angle;
+  double t_read, t_refine, t_balance, t_transition, t_boundary, t_quality,
+      t_check, t_restart; /* seconds, last run */
+} mx_stats2d;
+void mx_mesher2d_stats(const mx_mesher2d *m, mx_stats2d *s);
+
 #ifdef __cplusplus
 }
 #endif

@@ -38,14 +38,18 @@ expect_exit 2 "no input" "$M2" -a 3
 expect_exit 2 "no request" "$M2" -p "$PL/unit_square.poly"
 expect_exit 2 "unknown option" "$M2" -p "$PL/unit_square.poly" -a 3 --frobnicate
 expect_exit 2 "bad level" "$M2" -p "$PL/unit_square.poly" -a x
-expect_exit 2 "level too high" "$M2" -p "$PL/unit_square.poly" -s 20
+expect_exit 2 "level too high" "$M2" -p "$PL/unit_square.poly" -s 28
 expect_exit 2 "format flag without -u" "$M2" -p "$PL/unit_square.poly" -a 3 -v
 expect_exit 2 "-u without a format" "$M2" -p "$PL/unit_square.poly" -a 3 -u out
 expect_exit 2 "bad function" "$M2" -p "$PL/unit_square.poly" -f ellipse 1 2 3 4
 expect_exit 2 "function short of arguments" "$M2" -p "$PL/unit_square.poly" -f circle 0.5 0.5
-expect_exit 2 "restart not supported" "$M2" -p "$PL/unit_square.poly" -a 3 -c x.oct
-has "$T/err" "not yet supported" "restart: says so"
-expect_exit 2 "list not supported" "$M2" -p "$PL/unit_square.poly" -a 3 -l list.txt
+expect_exit 2 "missing restart file" "$M2" -p "$PL/unit_square.poly" -a 3 -c x.oct
+has "$T/err" "x.oct" "missing restart file is named"
+expect_exit 2 "a list without a restart file" "$M2" -p "$PL/unit_square.poly" -a 3 -l list.txt
+has "$T/err" "add -c" "a list without -c: says what to add"
+DATA3=$(dirname "$PL")/remesh/c5.oct
+expect_exit 2 "a 3D restart file" "$M2" -p "$PL/unit_square.poly" -c "$DATA3"
+has "$T/err" "octree restart file" "a 3D restart file: says so"
 expect_exit 2 "unknown output format" "$M2" -p "$PL/unit_square.poly" -a 3 -O out.stl
 expect_exit 4 "output in a missing directory" "$M2" -p "$PL/unit_square.poly" -a 3 -O "$T/nodir/x.vtu"
 has "$T/err" "nodir" "unwritable output is named"
@@ -188,6 +192,33 @@ if "$M2" -p "$PL/a.poly" -s 7 -r "$PL/a_reg1.poly" 9 -u reg -o -x --json >reg.js
 else
   bad "-r region: $(cat "$T/err") ${msg:-}"
 fi
+
+# ---- re-meshing (-c, -l; section 4.2): the box with a hole at -s 3 ------------
+# 60 leaves of level 3, one cell each (test_qremesh.c derives the counts);
+# NAME.oct written beside the mesh; -c alone gives the same files back; -l
+# splits the listed elements' quadrants once (63 leaves for one corner
+# quadrant: its 4 children all meet the domain, no balance split).
+"$M2" -p "$PL/box.poly" -s 3 -u box3 -o --json >box3.json 2>"$T/err"
+if [ -s box3.oct ] && [ "$(head -1 box3.oct)" = "80 140 60" ]; then ok "NAME.oct written (80 nodes, 140 edges, 60 quadrants)"
+else bad "NAME.oct: $(head -1 box3.oct 2>&1) $(cat "$T/err")"; fi
+"$M2" -p "$PL/box.poly" -c box3.oct -u again -o >/dev/null 2>"$T/err"
+if cmp -s box3.off again.off && cmp -s box3.oct again.oct; then ok "-c alone: the same mesh and restart file"
+else bad "-c alone changed the mesh: $(cat "$T/err")"; fi
+echo "0 0 # the first element, twice" >list.txt
+"$M2" -p "$PL/box.poly" -c box3.oct -l list.txt -u box3r -o --json >box3r.json 2>"$T/err"
+leaves=$(tail -n 1 box3r.json | python3 -c 'import json,sys; d=json.load(sys.stdin); print(d["leaves"], d["refined_listed"], d["balance_splits"], d["exit_code"])')
+if [ "$leaves" = "63 1 0 0" ]; then ok "-l: one quadrant split once (63 leaves)"; else bad "-l: leaves/listed/balance/exit $leaves $(cat "$T/err")"; fi
+echo "60" >far.txt
+expect_exit 2 "-l: an element beyond the mesh" "$M2" -p "$PL/box.poly" -c box3.oct -l far.txt -u far -o
+has "$T/err" "far.txt:1" "-l: the bad index is named with file and line"
+absent far.off "-l: nothing written on a bad list"
+expect_exit 2 "-c: a restart file of another domain" "$M2" -p "$PL/a.poly" -c box3.oct -u other -o
+has "$T/err" "another domain" "-c: another domain: says so"
+"$M2" -p "$PL/box.poly" -s 3 -u nors -o --no-restart >/dev/null 2>&1
+absent nors.oct "--no-restart: no NAME.oct"
+cp box3.oct loop.oct
+for i in 1 2 3; do "$M2" -p "$PL/box.poly" -c loop.oct -l list.txt -u loop -o --quiet || bad "loop $i"; done
+if [ "$(sed -n 1p loop.oct | awk '{print $3}')" -gt 60 ]; then ok "-c/-l in a loop rewriting its own restart file"; else bad "loop: $(head -1 loop.oct)"; fi
 
 if [ "$fails" -eq 0 ]; then echo "all mesher2d tests passed"; exit 0; fi
 echo "$fails failure(s)"

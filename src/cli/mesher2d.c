@@ -1,11 +1,9 @@
 /* mixoct invoked as `mesher2d` (a link installed beside mixoct): the 2D
- * mixed quadtree mesher of Jaillet & Lobos 2021 (src/quad/quad.h) with the
- * published 2D program's flags and mixoct's conventions (exit codes, --json,
- * files written whole or not at all).
- *
- *   read -> mx_poly_check_domain -> mx_poly_index_build -> mx_qtree_build
- *   -> mx_qtree_leaves -> mx_qtransition -> mx_qboundary (0.3)
- *   -> mx_qquality_measure -> mx_qmesh_check -> writers
+ * mixed quadtree mesher of Jaillet & Lobos 2021 with the published 2D
+ * program's flags and mixoct's conventions (exit codes, --json, files
+ * written whole or not at all). A thin front over the library's 2D mesher
+ * (include/mixoct.h, mx_mesher2d_*; src/mesher/mesher2d.c): options in,
+ * library calls, the report out.
  *
  * The mesh is written only when the independent check passes (conforming,
  * no inverted cell, boundary on the polylines, features as vertices, area
@@ -25,8 +23,7 @@
 #include "cli/cli.h"
 #include "common.h"
 #include "io/atomic_file.h"
-#include "io/text_scan.h"
-#include "quad/quad.h"
+#include "mesher/mesher2d.h"
 
 #ifndef MX_VERSION
 #define MX_VERSION "0.1.0"
@@ -79,14 +76,22 @@ static const char *usage2d =
     "                     all the same)\n"
     "  -h, --help         this text\n"
     "      --version      the version\n"
-    "  -c FILE, -l FILE   re-meshing: not yet supported in 2D (exit 2)\n"
+    "\n"
+    "Re-meshing (section 4.2 of the 2021 paper):\n"
+    "  -c FILE.oct        start from the quadtree of this restart file (written\n"
+    "                     as NAME.oct by every run with -u NAME)\n"
+    "  -l FILE            split once each quadrant holding one of the elements\n"
+    "                     listed (indices of the mesh written with the restart\n"
+    "                     file), balance kept; with -c\n"
+    "      --no-restart   do not write NAME.oct\n"
     "\n"
     "Exit codes: 0 a valid conforming mesh (written when asked), 1 internal\n"
     "failure, 2 bad input or usage, 3 out of memory, 4 output not writable,\n"
     "5 the mesh fails the check (not written).\n"
     "\n"
-    "Example:\n"
-    "  mesher2d -p a.poly -s 8 -u a8 -v -x --json\n";
+    "Examples:\n"
+    "  mesher2d -p a.poly -s 8 -u a8 -v -x --json\n"
+    "  mesher2d -p a.poly -c a8.oct -l bad.txt -u a8r -v\n";
 
 enum { MAXREQ = 32, MAXOUT = 16, NFMT = 5 };
 static const struct {
@@ -102,7 +107,10 @@ static const struct {
 #define AREA_TOL_MAX 0.25 /* beyond: the domain is not represented at all */
 
 typedef struct {
-  const char *domain, *outname, *boxes_file;
+  const char *domain, *outname, *boxes_file, *restart_in, *list;
+  int no_restart;
+  const char *fun_name[MAXREQ];
+  size_t fun_nargs[MAXREQ];
   int want[NFMT];
   const char *extra[MAXOUT];
   int nextra;
@@ -116,31 +124,19 @@ typedef struct {
   int keep_invalid; /* write a mesh that fails the check (exit 5 all the same) */
 } m2_options;
 
-enum { PH_READ, PH_REFINE, PH_BALANCE, PH_TRANSITION, PH_BOUNDARY, PH_QUALITY, PH_CHECK,
-       PH_WRITE, NPH };
-static const char *const phase_name[NPH] = {"read",     "refine",  "balance", "transition",
+static const char *const phase_name[M2_NPH] = {"read",     "refine",  "balance", "transition",
                                             "boundary", "quality", "check",   "write"};
 
 typedef struct {
-  mx_poly domain, regions[MAXREQ], drawings[MAXREQ];
-  mx_poly_index index;
-  mx_qbox *boxes;
-  size_t nboxes;
-  mx_qtree T;
-  mx_qstats qs;
-  uint32_t *leaves;
-  size_t nleaves;
-  mx_qmesh M;
-  mx_qboundary_stats bs;
-  mx_qquality q;
-  mx_qcheck_report cr;
-  double area_tol;
-  int meshed, checked; /* how far it got */
-  double t[NPH], total;
+  mx_mesher2d *m;
+  double total;
   const char *outputs[MAXOUT + NFMT];
-  char *owned[NFMT];
+  char *owned[NFMT + 1];
+  const char *restart_out;
+  int restart_written;
   long long bytes[MAXOUT + NFMT];
   int noutputs, nwritten;
+  size_t listed;
   char error[1024];
   int nwarnings, quiet, status;
 } m2_run;
@@ -215,6 +211,8 @@ static int parse_fun(int argc, char **argv, int *i, m2_options *o) {
   while (k < 3 && strcmp(name, kinds[k].name) != 0) k++;
   if (k == 3) return usage_error("-f wants circle, line or sine, got '%s'", name);
   if (o->nfuns == MAXREQ) return usage_error("too many -f functions", NULL);
+  o->fun_name[o->nfuns] = kinds[k].name;
+  o->fun_nargs[o->nfuns] = (size_t)kinds[k].nargs;
   mx_qfun *f = &o->funs[o->nfuns++];
   memset(f, 0, sizeof *f);
   f->kind = kinds[k].kind;
@@ -281,8 +279,12 @@ static int parse_one(int argc, char **argv, int *i, m2_options *o, int *exit_now
     if (o->nextra == MAXOUT) return usage_error("too many -O outputs", NULL);
     o->extra[o->nextra++] = argv[++*i];
   } else if (!strcmp(a, "-c") || !strcmp(a, "-l")) {
-    mx_error(NULL, 0, "%s: re-meshing from a restart file is not yet supported in 2D", a);
-    return MX_EINPUT;
+    MX_CHECK(need(*i, argc, 1, a));
+    const char **slot = a[1] == 'c' ? &o->restart_in : &o->list;
+    if (*slot) return usage_error("%s given twice", a);
+    *slot = argv[++*i];
+  } else if (!strcmp(a, "--no-restart")) {
+    o->no_restart = 1;
   } else if (!strcmp(a, "--threads")) {
     MX_CHECK(need(*i, argc, 1, a));
     char *end;
@@ -331,7 +333,10 @@ static int parse_options(int argc, char **argv, m2_options *o, int *exit_now) {
     return usage_error("-v, -x, -o, -g and -m need the output name: add -u NAME", NULL);
   if (!nfmt && o->outname)
     return usage_error("-u %s names no format: add -v, -x, -o, -g and/or -m", o->outname);
-  if (!o->s_level && !o->a_level && !o->boxes_file && !o->nregions && !o->ndrawings && !o->nfuns)
+  if (o->list && !o->restart_in)
+    return usage_error("-l lists elements of the mesh of a restart file: add -c FILE.oct", NULL);
+  if (!o->restart_in && !o->s_level && !o->a_level && !o->boxes_file && !o->nregions &&
+      !o->ndrawings && !o->nfuns)
     return usage_error("no refinement request: the mesh would be one quadrant; give -s RL, "
                        "-a RL, -b FILE, -r FILE RL, -w FILE RL or -f NAME ARGS RL%s", NULL);
   return MX_OK;
@@ -351,6 +356,14 @@ static int output_list(const m2_options *o, m2_run *r) {
     r->outputs[r->noutputs++] = r->owned[f];
   }
   for (int k = 0; k < o->nextra; k++) r->outputs[r->noutputs++] = o->extra[k];
+  if (o->outname && !o->no_restart) { /* NAME.oct, as the published program */
+    const size_t len = strlen(o->outname) + 5;
+    r->owned[NFMT] = malloc(len);
+    if (!r->owned[NFMT]) return MX_ENOMEM;
+    snprintf(r->owned[NFMT], len, "%s.oct", o->outname);
+    r->restart_out = r->owned[NFMT];
+    MX_CHECK(mx_check_output_path(r->restart_out, 0));
+  }
   for (int k = 0; k < r->noutputs; k++) {
     if (!mx_qmesh_format_known(r->outputs[k])) {
       mx_error(r->outputs[k], 0, "unknown 2D output format (use .vtu, .vtk, .msh, .off, "
@@ -372,7 +385,8 @@ static int same_file(const char *a, const char *b) {
 
 static int outputs_spare_inputs(const m2_options *o, const m2_run *r) {
   for (int k = 0; k < r->noutputs; k++) {
-    int clash = same_file(r->outputs[k], o->domain) || same_file(r->outputs[k], o->boxes_file);
+    int clash = same_file(r->outputs[k], o->domain) || same_file(r->outputs[k], o->boxes_file) ||
+                same_file(r->outputs[k], o->restart_in) || same_file(r->outputs[k], o->list);
     for (int i = 0; i < o->nregions; i++) clash |= same_file(r->outputs[k], o->region_path[i]);
     for (int i = 0; i < o->ndrawings; i++) clash |= same_file(r->outputs[k], o->drawing_path[i]);
     if (clash) {
@@ -380,229 +394,78 @@ static int outputs_spare_inputs(const m2_options *o, const m2_run *r) {
       return MX_EINPUT;
     }
   }
+  /* the restart file may replace the one read (read whole before, written
+   * under a temporary name): the re-meshing loop of the paper */
+  if (r->restart_out && (same_file(r->restart_out, o->domain) ||
+                         same_file(r->restart_out, o->boxes_file))) {
+    mx_error(r->restart_out, 0, "the restart file would replace an input file: choose another "
+                                "name");
+    return MX_EINPUT;
+  }
   return MX_OK;
 }
 
-/* ---- the boxes file (.reg2) ----------------------------------------------- */
+/* ---- the pipeline, as library calls (src/mesher/mesher2d.c) ------------------ */
 
-typedef struct {
-  const char *path, *p, *end;
-  long line;
-} scan;
-
-static int scan_token(scan *s, const char *what, size_t box) {
-  s->p = mx_io_content(s->p, s->end, &s->line, '#');
-  if (s->p < s->end) return MX_OK;
-  mx_error(s->path, s->line, "unexpected end of file: box %zu has no %s (truncated file or "
-                             "wrong n_regions)", box + 1, what);
-  return MX_EINPUT;
-}
-
-static int scan_number(scan *s, const char *what, size_t box, double *v) {
-  MX_CHECK(scan_token(s, what, box));
-  const char *e = mx_io_double(s->p, v);
-  if (!e || !mx_io_delim(e, '#') || !isfinite(*v)) {
-    mx_error(s->path, s->line, "box %zu: %s: '%.*s' is not a finite number", box + 1, what,
-             mx_io_toklen(s->p, '#'), s->p);
-    return MX_EINPUT;
-  }
-  s->p = e;
-  return MX_OK;
-}
-
-static int read_box(scan *s, size_t i, mx_qbox *b) {
-  static const char *what[5] = {"xmin", "ymin", "xmax", "ymax", "level"};
-  double v[5];
-  for (int k = 0; k < 5; k++) MX_CHECK(scan_number(s, what[k], i, &v[k]));
-  if (v[0] > v[2] || v[1] > v[3]) {
-    mx_error(s->path, s->line, "box %zu: min corner above max corner", i + 1);
-    return MX_EINPUT;
-  }
-  if (v[4] != floor(v[4]) || v[4] < 0 || v[4] > MX_QMAX_LEVEL - 1) {
-    mx_error(s->path, s->line, "box %zu: level %g is not an integer between 0 and %d", i + 1,
-             v[4], MX_QMAX_LEVEL - 1);
-    return MX_EINPUT;
-  }
-  *b = (mx_qbox){{v[0], v[1]}, {v[2], v[3]}, (int)v[4]};
-  return MX_OK;
-}
-
-static int parse_boxes(scan *s, mx_qbox **boxes, size_t *n) {
-  s->p = mx_io_content(s->p, s->end, &s->line, '#');
-  const int tl = s->p < s->end ? mx_io_toklen(s->p, '#') : 0;
-  if (tl != 9 || strncasecmp(s->p, "n_regions", 9) != 0) {
-    mx_error(s->path, s->line, "expected 'n_regions N', found '%.*s'", tl, s->p);
-    return MX_EINPUT;
-  }
-  s->p = mx_io_content(s->p + 9, s->end, &s->line, '#');
-  int64_t count;
-  const char *e = s->p < s->end ? mx_io_int(s->p, &count) : NULL;
-  /* a box takes at least 10 bytes: a bogus count allocates nothing */
-  if (!e || !mx_io_delim(e, '#') || count < 0 || count > (s->end - s->p) / 10 + 1) {
-    mx_error(s->path, s->line, "expected a box count after 'n_regions'");
-    return MX_EINPUT;
-  }
-  s->p = e;
-  *boxes = mx_alloc(((size_t)count + 1) * sizeof **boxes);
-  if (!*boxes) return MX_ENOMEM;
-  *n = (size_t)count;
-  for (size_t i = 0; i < *n; i++) MX_CHECK(read_box(s, i, &(*boxes)[i]));
-  s->p = mx_io_content(s->p, s->end, &s->line, '#');
-  if (s->p == s->end) return MX_OK;
-  mx_error(s->path, s->line, "more data than the %zu boxes declared by n_regions: '%.*s'", *n,
-           mx_io_toklen(s->p, '#'), s->p);
-  return MX_EINPUT;
-}
-
-static int read_boxes(const char *path, mx_qbox **boxes, size_t *n) {
-  char *buf;
-  size_t len;
-  *boxes = NULL;
-  *n = 0;
-  MX_CHECK(mx_io_load(path, &buf, &len));
-  scan s = {path, buf, buf + len, 1};
-  const int st = parse_boxes(&s, boxes, n);
-  mx_free(buf);
-  return st;
-}
-
-/* ---- the pipeline ----------------------------------------------------------- */
-
-static int read_inputs(const m2_options *o, m2_run *r) {
-  if (o->boxes_file) MX_CHECK(read_boxes(o->boxes_file, &r->boxes, &r->nboxes));
-  MX_CHECK(mx_read_poly_any(o->domain, &r->domain));
-  MX_CHECK(mx_poly_check_domain(&r->domain));
-  MX_CHECK(mx_poly_index_build(&r->domain, &r->index));
-  for (int k = 0; k < o->nregions; k++) {
-    MX_CHECK(mx_read_poly_any(o->region_path[k], &r->regions[k]));
-    MX_CHECK(mx_poly_check_domain(&r->regions[k])); /* closed, oriented */
-  }
+static int add_requests(const m2_options *o, mx_mesher2d *m) {
+  MX_CHECK(mx_mesher2d_set_levels(m, o->s_level, o->a_level));
+  if (o->boxes_file) MX_CHECK(mx_mesher2d_read_boxes(m, o->boxes_file));
+  for (int k = 0; k < o->nregions; k++)
+    MX_CHECK(mx_mesher2d_add_region(m, o->region_path[k], o->region_level[k]));
   for (int k = 0; k < o->ndrawings; k++)
-    MX_CHECK(mx_read_poly_any(o->drawing_path[k], &r->drawings[k]));
+    MX_CHECK(mx_mesher2d_add_drawing(m, o->drawing_path[k], o->drawing_level[k]));
+  for (int k = 0; k < o->nfuns; k++)
+    MX_CHECK(mx_mesher2d_add_function(m, o->fun_name[k], o->funs[k].a, o->fun_nargs[k],
+                                      o->funs[k].level));
   return MX_OK;
 }
 
-/* A status from a stage that gave no message of its own. */
-static int stage_status(int st, const char *stage, const m2_run *r) {
-  if (st == MX_EINTERNAL && !r->error[0])
-    mx_error(NULL, 0, "internal failure in the %s stage", stage);
+/* -c FILE [-l LIST]: the quadtree of the restart file, the listed elements'
+ * quadrants split once (Algorithm 3), the requests on top. */
+static int remesh(const m2_options *o, mx_mesher2d *m, m2_run *r) {
+  MX_CHECK(mx_mesher2d_load_restart(m, o->restart_in));
+  if (!o->list) return mx_mesher2d_mesh(m);
+  uint64_t *list = NULL;
+  size_t n = 0;
+  int st = mx_read_element_list(o->list, mx_mesher2d_restart_elements(m), &list, &n);
+  if (!st) {
+    r->listed = n;
+    st = mx_mesher2d_refine_elements(m, list, n);
+  }
+  mx_free_array(list);
   return st;
-}
-
-static int mesh_domain(const m2_options *o, m2_run *r) {
-  const mx_qrequests req = {o->s_level, o->a_level, r->nboxes, r->boxes,
-                            (size_t)o->nregions, r->regions, o->region_level,
-                            (size_t)o->ndrawings, r->drawings, o->drawing_level,
-                            (size_t)o->nfuns, o->funs};
-  double t = mx_wtime();
-  int st = mx_qtree_build(&r->domain, &r->index, &req, o->balance, &r->T, &r->qs);
-  if (!st) st = mx_qtree_leaves(&r->T, &r->leaves, &r->nleaves);
-  const double wall = mx_wtime() - t;
-  /* the builder's own split of its time, when it gives one */
-  r->t[PH_BALANCE] = r->qs.t_balance;
-  r->t[PH_REFINE] = r->qs.t_refine > 0 ? wall - r->qs.t_balance : wall;
-  MX_CHECK(stage_status(st, "refine", r));
-  t = mx_wtime();
-  st = mx_qtransition(&r->T, r->leaves, r->nleaves, &r->M);
-  r->t[PH_TRANSITION] = mx_wtime() - t;
-  MX_CHECK(stage_status(st, "transition", r));
-  t = mx_wtime();
-  st = mx_qboundary(&r->domain, &r->index, &r->T, r->leaves, 0.3, &r->M, &r->bs);
-  r->t[PH_BOUNDARY] = mx_wtime() - t;
-  MX_CHECK(stage_status(st, "boundary", r));
-  r->meshed = 1;
-  t = mx_wtime();
-  mx_qquality_measure(&r->M, &r->q);
-  r->t[PH_QUALITY] = mx_wtime() - t;
-  return MX_OK;
-}
-
-static double perimeter(const mx_poly *P) {
-  double l = 0.0;
-  for (size_t s = 0; s < P->ns; s++) {
-    const double *a = P->xy + 2 * (size_t)P->seg[2 * s], *b = P->xy + 2 * (size_t)P->seg[2 * s + 1];
-    l += hypot(b[0] - a[0], b[1] - a[1]);
-  }
-  return l;
-}
-
-/* The independent check; MX_EINVALID naming what failed. */
-static int check_mesh(m2_run *r) {
-  const char *name = r->domain.path ? r->domain.path : NULL;
-  if (r->M.ncells == 0) {
-    mx_error(name, 0, "the mesh is empty: no cell lies in the domain; ask for finer levels");
-    return MX_EINPUT;
-  }
-  const double t = mx_wtime();
-  int st = mx_qmesh_check(&r->M, &r->domain, CHECK_TOL, &r->cr);
-  r->t[PH_CHECK] = mx_wtime() - t;
-  MX_CHECK(stage_status(st, "check", r));
-  r->checked = 1;
-  const mx_qcheck_report *c = &r->cr;
-  const double h = sqrt(fabs(c->area) / (double)r->M.ncells);
-  r->area_tol = fmax(AREA_TOL, 0.5 * perimeter(&r->domain) * h / fabs(c->domain_area));
-  r->area_tol = fmin(r->area_tol, AREA_TOL_MAX);
-  if (c->bad_edges || c->hanging || c->inverted || r->q.invalid) {
-    mx_error(name, 0, "the mesh is not valid: %zu bad edge(s), %zu hanging node(s), %zu "
-             "inverted cell(s) (%zu with scaled Jacobian <= 0); not written", c->bad_edges,
-             c->hanging, c->inverted, r->q.invalid);
-    return MX_EINVALID;
-  }
-  if (c->off_boundary || c->missing_features) {
-    mx_error(name, 0, "the mesh's boundary is off the polylines: %zu boundary node(s) off, "
-             "%zu feature(s) not a vertex; not written", c->off_boundary, c->missing_features);
-    return MX_EINVALID;
-  }
-  if (c->euler != c->domain_euler) {
-    mx_error(name, 0, "the mesh's topology differs from the domain's: %ld component(s) minus "
-             "hole(s) against %ld: the levels are too coarse for thin parts of the domain; "
-             "not written", c->euler, c->domain_euler);
-    return MX_EINVALID;
-  }
-  if (!(c->area_error <= r->area_tol)) {
-    mx_error(name, 0, "the mesh covers %.4g against the domain's %.4g (%.1f%% off; tolerance "
-             "%.1f%%): the levels are too coarse for thin parts of the domain; not written",
-             c->area, c->domain_area, 100.0 * c->area_error, 100.0 * r->area_tol);
-    return MX_EINVALID;
-  }
-  return MX_OK;
 }
 
 static int write_outputs(const m2_options *o, m2_run *r) {
-  const double t = mx_wtime();
   for (int k = 0; k < r->noutputs; k++) {
-    MX_CHECK(mx_write_qmesh(r->outputs[k], &r->M, o->ascii));
+    MX_CHECK(mx_mesher2d_write(r->m, r->outputs[k], o->ascii));
     struct stat st;
     r->bytes[k] = stat(r->outputs[k], &st) == 0 ? (long long)st.st_size : -1;
     r->nwritten = k + 1;
   }
-  r->t[PH_WRITE] = mx_wtime() - t;
+  if (r->restart_out) {
+    MX_CHECK(mx_mesher2d_save_restart(r->m, r->restart_out));
+    r->restart_written = 1;
+  }
   return MX_OK;
 }
 
 static int pipeline(const m2_options *o, m2_run *r) {
-  const double t = mx_wtime();
-  int st = read_inputs(o, r);
-  r->t[PH_READ] = mx_wtime() - t;
-  if (!st) st = mesh_domain(o, r);
-  if (!st) st = check_mesh(r);
-  if (!st || (st == MX_EINVALID && o->keep_invalid && r->checked)) {
+  mx_params2d p;
+  mx_params2d_default(&p);
+  p.balance = o->balance == MX_QBALANCE_RECURSIVE ? MX_BALANCE_RECURSIVE : MX_BALANCE_EDGES;
+  p.threads = o->threads;
+  mx_mesher2d *m = r->m = mx_mesher2d_new(&p);
+  if (!m) return MX_ENOMEM;
+  mx_mesher2d_set_message_handler(m, on_message, r);
+  int st = mx_mesher2d_set_domain(m, o->domain);
+  if (!st) st = add_requests(o, m);
+  if (!st) st = o->restart_in ? remesh(o, m, r) : mx_mesher2d_mesh(m);
+  if (!st || (st == MX_EINVALID && o->keep_invalid && m->checked)) {
     const int wst = write_outputs(o, r);
     if (wst) st = wst;
   }
-  return mx_status_refine(st);
-}
-
-static void run_free(m2_run *r, const m2_options *o) {
-  mx_qmesh_free(&r->M);
-  mx_free(r->leaves);
-  mx_qtree_free(&r->T);
-  mx_poly_index_free(&r->index);
-  mx_poly_free(&r->domain);
-  for (int k = 0; k < o->nregions; k++) mx_poly_free(&r->regions[k]);
-  for (int k = 0; k < o->ndrawings; k++) mx_poly_free(&r->drawings[k]);
-  mx_free(r->boxes);
-  for (int f = 0; f < NFMT; f++) free(r->owned[f]);
+  return st;
 }
 
 /* ---- report ------------------------------------------------------------------ */
@@ -624,12 +487,13 @@ static void json_num(FILE *f, const char *key, double v) {
 }
 
 static void json_mesh(FILE *f, const m2_options *o, const m2_run *r) {
-  const mx_qquality *q = &r->q;
+  const mx_mesher2d *m = r->m;
+  const mx_qquality *q = &m->q;
   fprintf(f, ", \"nodes\": %zu, \"elements\": %zu, \"by_type\": {\"tri\": %zu, \"quad\": %zu}, "
           "\"leaves\": %zu, \"quadrants\": %zu, \"splits\": %zu, \"balance_splits\": %zu, "
           "\"edges\": %zu, \"balance\": \"%s\", ",
-          r->M.nnodes, r->M.ncells, q->count[0], q->count[1], r->nleaves, r->T.n, r->qs.splits,
-          r->qs.balance_splits, r->qs.edges, o->balance ? "recursive" : "edges");
+          r->m->M.nnodes, r->m->M.ncells, q->count[0], q->count[1], r->m->nleaves, r->m->T.n, r->m->qs.splits,
+          r->m->qs.balance_splits, r->m->qs.edges, o->balance ? "recursive" : "edges");
   json_num(f, "sj_min", fmin(q->count[0] ? q->min[0] : 1, q->count[1] ? q->min[1] : 1));
   fputs(", ", f);
   json_num(f, "min_angle", q->min_angle);
@@ -643,21 +507,21 @@ static void json_mesh(FILE *f, const m2_options *o, const m2_run *r) {
     json_num(f, "mean", q->count[t] ? q->mean[t] : 0), fputs(", ", f);
     json_num(f, "max", q->count[t] ? q->max[t] : 0), fputs("}", f);
   }
-  const mx_qboundary_stats *b = &r->bs;
+  const mx_qboundary_stats *b = &r->m->bs;
   fprintf(f, "}, \"boundary\": {\"features\": %zu, \"moved_close\": %zu, \"removed\": %zu, "
           "\"shrunk\": %zu, \"patterned\": %zu, \"inverted\": %zu}",
           b->features, b->moved_close, b->removed, b->shrunk, b->patterned, b->inverted);
 }
 
 static void json_check(FILE *f, const m2_run *r) {
-  const mx_qcheck_report *c = &r->cr;
+  const mx_qcheck_report *c = &r->m->cr;
   fprintf(f, ", \"check\": {\"bad_edges\": %zu, \"hanging\": %zu, \"inverted\": %zu, "
           "\"off_boundary\": %zu, \"missing_features\": %zu, ",
           c->bad_edges, c->hanging, c->inverted, c->off_boundary, c->missing_features);
   json_num(f, "area", c->area), fputs(", ", f);
   json_num(f, "domain_area", c->domain_area), fputs(", ", f);
   json_num(f, "area_error", c->area_error), fputs(", ", f);
-  json_num(f, "area_tolerance", r->area_tol);
+  json_num(f, "area_tolerance", r->m->area_tol);
   fprintf(f, ", \"edges\": %zu, \"boundary_edges\": %zu, \"euler\": %ld, \"domain_euler\": %ld}",
           c->edges, c->boundary_edges, c->euler, c->domain_euler);
 }
@@ -675,17 +539,28 @@ static void print_json(const m2_options *o, const m2_run *r) {
     fprintf(f, ", \"bytes\": %lld}", r->bytes[k]);
   }
   fputs("]", f);
-  if (r->meshed) json_mesh(f, o, r);
-  if (r->checked) json_check(f, r);
+  if (r->restart_written) {
+    fputs(", \"restart\": ", f);
+    json_string(f, r->restart_out);
+  }
+  if (r->m && r->m->meshed) {
+    json_mesh(f, o, r);
+    fprintf(f, ", \"refined_listed\": %zu, \"listed\": %zu, \"feature_boxes\": %zu, "
+            "\"memory_estimate_mb\": %.1f", r->m->refined_listed, r->listed,
+            r->m->feature_boxes, r->m->estimate_mb);
+  }
+  if (r->m && r->m->checked) json_check(f, r);
   fputs(", \"phases\": {", f);
-  for (int p = 0; p < NPH; p++) fprintf(f, "%s\"%s\": %.6f", p ? ", " : "", phase_name[p], r->t[p]);
+  for (int p = 0; p < M2_NPH; p++)
+    fprintf(f, "%s\"%s\": %.6f", p ? ", " : "", phase_name[p], r->m ? r->m->t[p] : 0.0);
   fprintf(f, "}, \"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"threads\": %d}\n", r->total,
           mx_peak_rss_mb(), omp_get_max_threads());
   fflush(f);
 }
 
 static void print_quality(const m2_run *r) {
-  const mx_qquality *q = &r->q;
+  const mx_mesher2d *m = r->m;
+  const mx_qquality *q = &m->q;
   static const char *tname[2] = {"tri", "quad"};
   printf("  scaled J     %12s %9s %9s %9s\n", "count", "min", "mean", "max");
   for (int t = 1; t >= 0; t--)
@@ -704,26 +579,31 @@ static void print_quality(const m2_run *r) {
 
 static void print_summary(const m2_options *o, const m2_run *r) {
   printf("mesher2d: %s; %d thread(s), %s balance\n",
-         r->domain.path ? r->domain.path : o->domain, omp_get_max_threads(),
+         o->domain, omp_get_max_threads(),
          o->balance ? "recursive" : "edges");
-  if (r->meshed) {
+  const int meshed = r->m && r->m->meshed;
+  if (meshed) {
     printf("  quadtree     %12zu leaves (%zu quadrants, %zu splits, %zu for balance)\n",
-           r->nleaves, r->T.n, r->qs.splits, r->qs.balance_splits);
-    printf("  nodes        %12zu\n  cells        %12zu (quad %zu, tri %zu)\n", r->M.nnodes,
-           r->M.ncells, r->q.count[1], r->q.count[0]);
+           r->m->nleaves, r->m->T.n, r->m->qs.splits, r->m->qs.balance_splits);
+    printf("  nodes        %12zu\n  cells        %12zu (quad %zu, tri %zu)\n", r->m->M.nnodes,
+           r->m->M.ncells, r->m->q.count[1], r->m->q.count[0]);
     print_quality(r);
     printf("  boundary     %zu features, %zu moved close, %zu removed, %zu shrunk, %zu patterned\n",
-           r->bs.features, r->bs.moved_close, r->bs.removed, r->bs.shrunk, r->bs.patterned);
+           r->m->bs.features, r->m->bs.moved_close, r->m->bs.removed, r->m->bs.shrunk, r->m->bs.patterned);
   }
-  if (r->checked)
+  if (meshed && r->listed)
+    printf("  re-meshed    %zu element(s) listed: %zu quadrant(s) split once\n", r->listed,
+           r->m->refined_listed);
+  if (r->m && r->m->checked)
     printf("  check        %s; area %.6g (domain %.6g, %.3f%% off)\n",
-           r->status == MX_EINVALID ? "FAILED" : "conforming, valid", r->cr.area,
-           r->cr.domain_area, 100.0 * r->cr.area_error);
+           r->status == MX_EINVALID ? "FAILED" : "conforming, valid", r->m->cr.area,
+           r->m->cr.domain_area, 100.0 * r->m->cr.area_error);
   printf("  time (s)     %12.3f total:", r->total);
-  for (int p = 0; p < NPH; p++) printf(" %s %.3f", phase_name[p], r->t[p]);
+  for (int p = 0; p < M2_NPH; p++) printf(" %s %.3f", phase_name[p], r->m ? r->m->t[p] : 0.0);
   printf("\n  peak memory  %12.0f MB\n", mx_peak_rss_mb());
   for (int k = 0; k < r->nwritten; k++)
     printf("  written      %s (%lld bytes)\n", r->outputs[k], r->bytes[k]);
+  if (r->restart_written) printf("  restart      %s\n", r->restart_out);
   if (!r->noutputs) printf("  written      nothing: a dry run (give -u NAME -v, or -O FILE)\n");
 }
 
@@ -749,7 +629,8 @@ int mx_mesher2d_main(int argc, char **argv) {
   r->status = st;
   r->total = mx_wtime() - t0;
   if (o.json) print_json(&o, r);
-  else if (!o.quiet && (r->meshed || !st)) print_summary(&o, r);
-  run_free(r, &o);
+  else if (!o.quiet && ((r->m && r->m->meshed) || !st)) print_summary(&o, r);
+  mx_mesher2d_free(r->m);
+  for (int f = 0; f <= NFMT; f++) free(r->owned[f]);
   return st;
 }

@@ -335,15 +335,17 @@ static int check_restart(const char *name, const mx_restart *r, int status,
     if (r->edge[i] >= r->nv)
       BAD("edge %zu: node index %u out of range (%zu nodes)", i / 3, r->edge[i],
           r->nv);
-  for (size_t i = 0; i < 8 * r->no; i++)
-    if (r->oct_node[i] >= r->nv)
-      BAD("octant %zu: node index %u out of range (%zu nodes)", i / 8,
-          r->oct_node[i], r->nv);
+  if (r->dim != 0 && r->dim != 2 && r->dim != 3) BAD("dimension %d", r->dim);
+  const size_t nc = r->dim == 2 ? 4 : 8;
+  for (size_t i = 0; i < nc * r->no; i++)
+    if (r->oct_node[8 * (i / nc) + i % nc] >= r->nv)
+      BAD("octant %zu: node index %u out of range (%zu nodes)", i / nc,
+          r->oct_node[8 * (i / nc) + i % nc], r->nv);
   if (r->oct_tri_off[0] != 0) BAD("face offsets do not start at 0");
+  const int maxl = r->dim == 2 ? MX_RESTART_MAX_LEVEL2D : MX_RESTART_MAX_LEVEL;
   for (size_t i = 0; i < r->no; i++) {
-    if (r->oct_level[i] > MX_RESTART_MAX_LEVEL)
-      BAD("octant %zu: level %u out of range (0..%d)", i, r->oct_level[i],
-          MX_RESTART_MAX_LEVEL);
+    if (r->oct_level[i] > maxl)
+      BAD("octant %zu: level %u out of range (0..%d)", i, r->oct_level[i], maxl);
     if (r->oct_tri_off[i + 1] < r->oct_tri_off[i] ||
         r->oct_tri_off[i + 1] - r->oct_tri_off[i] > UINT32_MAX)
       BAD("octant %zu: bad face offsets", i);
@@ -558,10 +560,19 @@ static int count_words_line(tscan s) {
 
 /* nv lines "x y z" of finite numbers. */
 static int text_nodes(tscan *s, mx_restart *r) {
-  size_t cap = fits(s, r->nv, 6); /* "0 0 0\n" */
+  size_t cap = fits(s, r->nv, r->dim == 2 ? 4 : 6); /* "0 0 0\n", "0 0\n" */
   for (size_t i = 0; i < r->nv; i++) {
     if (i == cap || !next_line(s)) return truncated(s, "nodes", r->nv, i);
     s->first = i == 0;
+    if (r->dim == 2) {
+      if (i == 0 && count_words_line(*s) == 3)
+        return terr(s,
+                    "node 0: 3 coordinates: an octree restart file; "
+                    "mesher2d remeshes quadtrees only (use mixoct -c)");
+      MX_CHECK(get_reals(s, 2, r->xyz + 3 * i, "node", i));
+      r->xyz[3 * i + 2] = 0.0;
+      continue;
+    }
     if (i == 0 && count_words_line(*s) == 2)
       return terr(s,
                   "node 0: 2 coordinates: a quadtree restart file; "
@@ -597,6 +608,24 @@ static int grow_tri(tscan *s, mx_restart *r, size_t used, size_t n,
   return MX_OK;
 }
 
+/* Quadrant i of a quadtree file: "4 n0 n1 n2 n3 level" (the count read). */
+static int text_quadrant(tscan *s, mx_restart *r, size_t i, uint64_t k) {
+  if (k == 8)
+    return terr(s, "quadrant %zu: 8 corner nodes: an octree restart file; "
+                   "mesher2d remeshes quadtrees only (use mixoct -c)", i);
+  if (k != 4)
+    return terr(s, "quadrant %zu: %llu corner nodes, a quadrant has 4%s", i,
+                (unsigned long long)k, hint(s));
+  for (int j = 0; j < 4; j++)
+    MX_CHECK(get_node(s, r->nv, &r->oct_node[8 * i + j], "quadrant", i));
+  for (int j = 4; j < 8; j++) r->oct_node[8 * i + j] = 0;
+  MX_CHECK(get_uint(s, MX_RESTART_MAX_LEVEL2D, &k, "quadrant", i, "level"));
+  r->oct_level[i] = (uint8_t)k;
+  if (!at_eol(s))
+    return terr(s, "quadrant %zu: more than '4 n0 .. n3 level'%s", i, hint(s));
+  return MX_OK;
+}
+
 /* Octant i: "8 n0 .. n7 level", then "k f0 .. fk-1". */
 static int text_octant(tscan *s, mx_restart *r, size_t i, size_t *tcap) {
   const char *e, *t;
@@ -611,21 +640,26 @@ static int text_octant(tscan *s, mx_restart *r, size_t i, size_t *tcap) {
     return terr(s, "octant %zu: expected '8 n0 .. n7 level', found '%.*s'%s", i,
                 tok_show(t, e), t, hint(s));
   }
-  if (k == 4)
+  if (r->dim == 2) {
+    s->p = e;
+    MX_CHECK(text_quadrant(s, r, i, k));
+  } else if (k == 4)
     return terr(s,
                 "octant %zu: 4 corner nodes: a quadtree restart file; "
                 "mixoct remeshes octrees only",
                 i);
-  if (k != 8)
+  else if (k != 8)
     return terr(s, "octant %zu: %llu corner nodes, an octant has 8%s", i,
                 (unsigned long long)k, hint(s));
-  s->p = e;
-  for (int j = 0; j < 8; j++)
-    MX_CHECK(get_node(s, r->nv, &r->oct_node[8 * i + j], "octant", i));
-  MX_CHECK(get_uint(s, MX_RESTART_MAX_LEVEL, &k, "octant", i, "level"));
-  r->oct_level[i] = (uint8_t)k;
-  if (!at_eol(s))
-    return terr(s, "octant %zu: more than '8 n0 .. n7 level'%s", i, hint(s));
+  if (r->dim != 2) {
+    s->p = e;
+    for (int j = 0; j < 8; j++)
+      MX_CHECK(get_node(s, r->nv, &r->oct_node[8 * i + j], "octant", i));
+    MX_CHECK(get_uint(s, MX_RESTART_MAX_LEVEL, &k, "octant", i, "level"));
+    r->oct_level[i] = (uint8_t)k;
+    if (!at_eol(s))
+      return terr(s, "octant %zu: more than '8 n0 .. n7 level'%s", i, hint(s));
+  }
   s->first = 0;
   if (!next_line(s))
     return terr(s,
@@ -661,7 +695,8 @@ static int text_octant(tscan *s, mx_restart *r, size_t i, size_t *tcap) {
 
 /* no octants of two lines each; oct_tri grows as the face lists come. */
 static int text_octants(tscan *s, mx_restart *r) {
-  size_t cap = fits(s, r->no, 22); /* "8 0 0 0 0 0 0 0 0 0\n0\n" */
+  /* "8 0 0 0 0 0 0 0 0 0\n0\n", "4 0 0 0 0 0\n0\n" */
+  size_t cap = fits(s, r->no, r->dim == 2 ? 14 : 22);
   size_t tcap = 4 * cap + 16;
   if (tcap > (size_t)(s->end - s->p) / 2 + 16)
     tcap = (size_t)(s->end - s->p) / 2 + 16;
@@ -763,8 +798,8 @@ static int text_parse(const char *name, const char *buf, size_t len,
   if (s.p == s.end)
     return terr(&s, "no content: expected the header 'nodes edges octants'");
   MX_CHECK(text_header(&s, r));
-  size_t nv = fits(&s, r->nv, 6), ne = fits(&s, r->ne, 6);
-  if (alloc_arrays(r, nv, ne, fits(&s, r->no, 22), 0) != MX_OK)
+  size_t nv = fits(&s, r->nv, r->dim == 2 ? 4 : 6), ne = fits(&s, r->ne, 6);
+  if (alloc_arrays(r, nv, ne, fits(&s, r->no, r->dim == 2 ? 14 : 22), 0) != MX_OK)
     return terr(&s, "out of memory");
   MX_CHECK(text_nodes(&s, r));
   MX_CHECK(text_edges(&s, r));
@@ -1033,12 +1068,23 @@ static int text_by_type(const char *buf, size_t len) {
 
 int mx_restart_parse(const char *name, const uint8_t *buf, size_t len,
                      mx_restart *r) {
+  return mx_restart_parse_dim(name, buf, len, 3, r);
+}
+
+int mx_restart_parse_dim(const char *name, const uint8_t *buf, size_t len, int dim,
+                     mx_restart *r) {
   memset(r, 0, sizeof *r);
   int st;
   if (len == 0) {
     mx_error(name, 0, "empty file (0 bytes): not a restart file");
     return MX_EINPUT;
   }
+  if (dim == 2 && buf[0] == bin_magic[0]) {
+    mx_error(name, 0, "a binary restart file: those are octree files (mixoct -c); "
+                      "mesher2d reads the text quadtree form");
+    return MX_EINPUT;
+  }
+  r->dim = dim == 2 ? 2 : 3;
   if (buf[0] == bin_magic[0])
     st = bin_parse(name, buf, len, r);
   else
@@ -1049,12 +1095,14 @@ int mx_restart_parse(const char *name, const uint8_t *buf, size_t len,
 }
 
 /* Loads the file and parses it from memory. */
-int mx_restart_read(const char *path, mx_restart *r) {
+int mx_restart_read(const char *path, mx_restart *r) { return mx_restart_read_dim(path, 3, r); }
+
+int mx_restart_read_dim(const char *path, int dim, mx_restart *r) {
   memset(r, 0, sizeof *r);
   uint8_t *buf;
   size_t len;
   MX_CHECK(load_file(path, 0, &buf, &len));
-  int st = mx_restart_parse(path, buf, len, r);
+  int st = mx_restart_parse_dim(path, buf, len, dim, r);
   mx_free(buf);
   return st;
 }
@@ -1068,6 +1116,15 @@ int mx_restart_read(const char *path, mx_restart *r) {
 static size_t fill_nodes(const void *ctx, size_t b, size_t e, char *out) {
   const double *xyz = ((const mx_restart *)ctx)->xyz;
   char *o = out;
+  if (((const mx_restart *)ctx)->dim == 2) {
+    for (size_t i = b; i < e; i++) {
+      o += put_e8(o, xyz[3 * i]);
+      memcpy(o, "  ", 2);
+      o += put_e8(o + 2, xyz[3 * i + 1]) + 2;
+      *o++ = '\n';
+    }
+    return (size_t)(o - out);
+  }
   for (size_t i = b; i < e; i++) {
     o += put_e8(o, xyz[3 * i]);
     memcpy(o, "  ", 2);
@@ -1094,9 +1151,10 @@ static size_t fill_edges(const void *ctx, size_t b, size_t e, char *out) {
 static size_t fill_octants(const void *ctx, size_t b, size_t e, char *out) {
   const mx_restart *r = ctx;
   char *o = out;
+  const int nc = r->dim == 2 ? 4 : 8;
   for (size_t i = b; i < e; i++) {
-    *o++ = '8';
-    for (int k = 0; k < 8; k++) {
+    *o++ = (char)('0' + nc);
+    for (int k = 0; k < nc; k++) {
       *o++ = ' ';
       o += mx_put_u64(o, r->oct_node[8 * i + k]);
     }
@@ -1226,6 +1284,10 @@ static int bin_body(bin_out *o, const mx_restart *r, const uint32_t *count) {
 /* Checks the struct, then writes under a temporary name. */
 int mx_restart_write_binary(const char *path, const mx_restart *r) {
   MX_CHECK(check_restart(path, r, MX_EINTERNAL, BAD_DATA));
+  if (r->dim == 2) {
+    mx_error(path, 0, "%s: a quadtree restart file is text only", BAD_DATA);
+    return MX_EINTERNAL;
+  }
   MX_CHECK(check_mesh(path, r, MX_EINTERNAL, BAD_DATA));
   uint32_t *count = mx_alloc(4 * r->no);
   if (!count) return MX_EINPUT;

@@ -49,6 +49,13 @@
  * sub-element counts, nothing after the last section, no >= 1 and
  * nv <= UINT32_MAX.
  *
+ * ---- The quadtree form (2D, dim = 2; Appendix A: "combination of quadrants
+ * and octants is not allowed in a same file") ----
+ *   nodes "x y" (2 numbers), cells "4 n0 n1 n2 n3 level" with the corners
+ *   counter-clockwise from the lowest: (x0,y0) (x1,y0) (x1,y1) (x0,y1); the
+ *   intersected faces are the domain's segments; the same edge, transform
+ *   (3 numbers a line) and sub-element sections. Text only.
+ *
  * ---- The binary variant (ours, ".octb"), little-endian ----
  *
  *   bytes 0..7    magic 0x89 'M' 'X' 'O' 'C' 'T' '\r' '\n'
@@ -75,10 +82,14 @@
 #include <stddef.h>
 #include <stdint.h>
 
-enum { MX_RESTART_MAX_LEVEL = 16 };
+enum { MX_RESTART_MAX_LEVEL = 16, MX_RESTART_MAX_LEVEL2D = 27 };
 #define MX_RESTART_BY_TYPE "# mixoct: element indices grouped by type"
 
-typedef struct {
+typedef struct mx_restart {
+  int dim;               /* 3 (0 also means 3): octants of 8 corners, nodes
+                          * "x y z"; 2: the quadtree form, quadrants of 4
+                          * corners "4 n0 n1 n2 n3 level", nodes "x y"
+                          * (xyz keeps 3 per node, z = 0), text only */
   size_t nv, ne, no;     /* header: nodes, edges, octants */
   double *xyz;           /* 3*nv */
   uint32_t *edge;        /* 3*ne: node a, node b, mid node (0: not split) */
@@ -112,6 +123,11 @@ typedef struct {
 
 /* Reads a restart file, text or binary (told by the binary magic). */
 int mx_restart_read(const char *path, mx_restart *r);
+/* The same for a dimension: 3 as mx_restart_read, 2 the quadtree form (text;
+ * an octree file is refused, as a quadtree file is by mx_restart_read). */
+int mx_restart_read_dim(const char *path, int dim, mx_restart *r);
+int mx_restart_parse_dim(const char *name, const uint8_t *buf, size_t len, int dim,
+                         mx_restart *r);
 /* The same from memory; name is used in messages. */
 int mx_restart_parse(const char *name, const uint8_t *buf, size_t len,
                      mx_restart *r);

@@ -112,6 +112,23 @@ static int fun_crosses(const mx_qfun *f, const double lo[2], const double hi[2])
 
 /* ---- targets ------------------------------------------------------------- */
 
+/* The highest level the kept leaves anchored in the quadrant (key, level)
+ * ask for: a binary search for the first, then a walk over the quadrant's
+ * key range (each kept leaf is walked once per level above it). */
+static int keep_target(const mx_qrequests *R, uint64_t key, int level) {
+  const uint64_t end = key + ((uint64_t)1 << (2 * (MX_QMAX_LEVEL - level)));
+  size_t lo = 0, hi = R->nkeep;
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (R->keep_key[mid] < key) lo = mid + 1;
+    else hi = mid;
+  }
+  int t = 0;
+  for (size_t i = lo; i < R->nkeep && R->keep_key[i] < end; i++)
+    if (R->keep_level[i] > t) t = R->keep_level[i];
+  return t;
+}
+
 /* The highest level the requests ask of quadrant q (its flags, slices and
  * rin already set), never above its parent's (the requests are monotone;
  * this makes it exact under rounding too, so no quadrant split for balance
@@ -132,6 +149,10 @@ static uint8_t target_of(const qbuild *B, uint32_t q, const double lo[2], const 
   if (B->rin && B->rin[q] > t) t = B->rin[q];
   for (size_t f = 0; f < R->nfuns; f++)
     if (R->funs[f].level > t && fun_crosses(&R->funs[f], lo, hi)) t = R->funs[f].level;
+  if (R->nkeep) {
+    const int k = keep_target(R, T->key[q], T->level[q]);
+    if (k > t) t = k;
+  }
   const uint32_t p = T->parent[q];
   if (p != NONE && t > T->target[p]) t = T->target[p];
   return (uint8_t)(t > T->level[q] ? t : T->level[q]);
@@ -472,6 +493,7 @@ static int request_levels(const mx_qrequests *R, int *max) {
   for (size_t i = 0; i < R->nboxes; i++) LEVEL(R->boxes[i].level, "box", i);
   for (size_t i = 0; i < R->nregions; i++) LEVEL(R->region_level[i], "region", i);
   for (size_t i = 0; i < R->ndrawings; i++) LEVEL(R->drawing_level[i], "drawing", i);
+  for (size_t i = 0; i < R->nkeep; i++) LEVEL(R->keep_level[i], "kept leaf", i);
   for (size_t i = 0; i < R->nfuns; i++) {
     LEVEL(R->funs[i].level, "function", i);
     if (R->funs[i].kind < MX_QFUN_CIRCLE || R->funs[i].kind > MX_QFUN_SINE) {

@@ -23,7 +23,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define MX_QMAX_LEVEL 20 /* finest level: 2^20 lattice units per root side */
+#define MX_QMAX_LEVEL 28 /* lattice: 2^28 units per root side, levels 0 to 27 */
 
 /* ---- polylines (poly.c, io/read_poly.c) --------------------------------- */
 
@@ -52,6 +52,10 @@ int mx_read_poly(const char *path, mx_poly *P);
 int mx_read_poly_off(const char *path, mx_poly *P);
 int mx_read_poly_mdl(const char *path, mx_poly *P);
 int mx_read_poly_any(const char *path, mx_poly *P);
+/* Refinement boxes (io/read_qboxes.c): 'n_regions N', then per box
+ * 'xmin ymin xmax ymax level'; '#' comments. *boxes allocated (mx_free). */
+typedef struct mx_qbox mx_qbox;
+int mx_read_qboxes(const char *path, mx_qbox **boxes, size_t *n);
 
 /* A domain's checks: every vertex of a segment starts exactly one segment
  * and ends exactly one (closed polylines; a segment given backwards in a
@@ -96,10 +100,10 @@ int mx_poly_features(const mx_poly *P, uint32_t **out, size_t *n);
 
 /* ---- requests (qrefine.c) ------------------------------------------------ */
 
-typedef struct {
+struct mx_qbox {
   double lo[2], hi[2];
   int level;
-} mx_qbox;
+};
 
 /* The functions of the "function" refinement: a quadrant is refined to the
  * level when the function's zero set crosses it (the signs at its corners
@@ -124,6 +128,15 @@ typedef struct {
   const int *drawing_level;
   size_t nfuns;
   const mx_qfun *funs;
+  /* The leaves of an earlier quadtree (re-meshing from a restart file,
+   * Algorithm 3): keep_key ascending (anchor keys), keep_level their
+   * levels, plus one for the leaves listed for refinement. A quadrant is
+   * refined to the highest keep_level of the kept leaves anchored in it, so
+   * the earlier tree is rebuilt, its listed leaves split once, and balance
+   * restored by the same passes as the other requests. */
+  size_t nkeep;
+  const uint64_t *keep_key;
+  const uint8_t *keep_level;
 } mx_qrequests;
 
 /* ---- the quadtree (qtree.c, qedges.c, qrefine.c) ------------------------- */

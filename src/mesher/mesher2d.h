@@ -1,0 +1,77 @@
+/* The 2D mesher object behind include/mixoct.h (mx_mesher2d): what it keeps
+ * between calls and the figures of a run, read by the mesher2d program
+ * (src/cli/mesher2d.c). Only the library and src/cli include this header.
+ *
+ * The pipeline, one call each (mesher2d.c):
+ *   mx_poly_check_domain -> mx_poly_index_build -> mx_qtree_build (requests,
+ *   feature levels, the kept leaves of a restart or of the last mesh) ->
+ *   mx_qtree_leaves -> mx_qtransition -> mx_qboundary -> mx_qquality_measure
+ *   -> mx_qmesh_check. Re-meshing (restart_quadtree.c): the quadtree to and
+ *   from the restart file, elements to quadrants. */
+#ifndef MX_MESHER2D_H
+#define MX_MESHER2D_H
+
+#include "mixoct.h"
+#include "quad/quad.h"
+
+enum { M2_READ, M2_REFINE, M2_BALANCE, M2_TRANSITION, M2_BOUNDARY, M2_QUALITY, M2_CHECK,
+       M2_WRITE, M2_NPH };
+
+struct mx_mesher2d {
+  mx_params2d p;
+  mx_message_fn fn;
+  void *user;
+  char last_error[1024];
+  /* inputs */
+  int has_domain;
+  mx_poly domain;
+  mx_poly_index index;
+  mx_poly *regions, *drawings;
+  int *region_level, *drawing_level;
+  size_t nregions, ndrawings;
+  mx_qbox *boxes;
+  size_t nboxes;
+  mx_qfun *funs;
+  size_t nfuns;
+  uint32_t *features; /* the domain's feature vertices */
+  size_t nfeatures;
+  /* the leaves to keep (a loaded restart file, or the last tree when
+   * refining): anchor keys ascending, levels (+1 when listed) */
+  uint64_t *keep_key;
+  uint8_t *keep_level;
+  size_t nkeep;
+  /* a loaded restart file, before the first mesh: the elements of each of
+   * its quadrants (file order) and the quadrant's position in keep_* */
+  uint32_t *rs_nsub, *rs_pos;
+  size_t rs_n;
+  /* the state */
+  mx_qtree T;
+  mx_qstats qs;
+  uint32_t *leaves;
+  size_t nleaves;
+  mx_qmesh M;
+  mx_qboundary_stats bs;
+  mx_qquality q;
+  mx_qcheck_report cr;
+  double area_tol;
+  int meshed, checked, valid;
+  size_t refined_listed, feature_boxes;
+  double estimate_mb;
+  double t[M2_NPH], t_restart;
+};
+
+/* restart_quadtree.c */
+struct mx_restart;
+/* The current quadtree as a restart file's content (dim 2): the leaves'
+ * corners, their edges, the leaves with their segments, the cells of each. */
+int mx_qrestart_from_mesher(const mx_mesher2d *m, struct mx_restart *r);
+/* A restart file's quadrants as kept leaves of the domain's quadtree
+ * (m->keep_*, m->rs_*), each checked to lie on the lattice. */
+int mx_qrestart_to_keep(mx_mesher2d *m, const struct mx_restart *r);
+
+/* mesher2d.c: the root grid the domain's quadtree has (the box of its
+ * segments' ends, mx_qgrid_build), and the whole pipeline from the requests and kept leaves. */
+int mx_mesher2d_grid(const mx_mesher2d *m, mx_qgrid *g);
+int mx_mesher2d_run(mx_mesher2d *m);
+
+#endif
