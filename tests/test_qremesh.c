@@ -275,7 +275,12 @@ static void test_requests(void) {
 
 int main(void) {
   const char *d = getenv("MIXOCT_DATA");
-  snprintf(data, sizeof data, "%s", d ? d : "../../shared/data");
+  snprintf(data, sizeof data, "%s", d ? d : "/work/shared/data");
+  if (access(poly("box.poly"), R_OK) != 0) snprintf(data, sizeof data, "/work/shared/data");
+  if (access(poly("box.poly"), R_OK) != 0) {
+    fprintf(stderr, "no shared data (MIXOCT_DATA): %s\n", poly("box.poly"));
+    return 1;
+  }
   test_counts_and_round_trip();
   test_fig18();
   test_feature_levels();
