@@ -8,11 +8,11 @@
  * is checked at the end. */
 #include <stdint.h>
 #include <string.h>
-#include <strings.h>
 
 #include "common.h"
 #include "soa/trisoup.h"
 
+#include "io/mdl_sections.h"
 #include "io/text_scan.h"
 
 typedef struct {
@@ -23,15 +23,6 @@ typedef struct {
   long tri_line;
 } mdl_file;
 
-typedef struct {
-  const char *name, *type; /* not NUL-terminated */
-  int nname, ntype;
-} mdl_header;
-
-static int same(const char *s, int n, const char *word) {
-  return (size_t)n == strlen(word) && strncasecmp(s, word, (size_t)n) == 0;
-}
-
 /* Moves to the next content line (blank lines skipped). */
 static int next_item(mdl_file *f, const char *what, size_t i, size_t n) {
   f->p = mx_io_next_line(f->p, f->end, &f->line);
@@ -41,44 +32,6 @@ static int next_item(mdl_file *f, const char *what, size_t i, size_t n) {
            "unexpected %s: %zu of %zu %s read (truncated file or wrong count)",
            f->p < f->end ? "section header" : "end of file", i, n, what);
   return MX_EINPUT;
-}
-
-/* "[Name, TYPE]" on the current line. */
-static int parse_header(mdl_file *f, mdl_header *h) {
-  const char *p = f->p;
-  const char *nl = memchr(p, '\n', (size_t)(f->end - p));
-  const char *eol = nl ? nl : f->end;
-  const char *comma = memchr(p, ',', (size_t)(eol - p));
-  const char *close = memchr(p, ']', (size_t)(eol - p));
-  if (*p != '[' || !comma || !close || close < comma) {
-    mx_error(f->path, f->line,
-             "expected a section header such as "
-             "'[Vertices, ARRAY1<POINT3D>]', found '%.*s'",
-             mx_io_toklen(p, 0), p);
-    return MX_EINPUT;
-  }
-  h->name = mx_io_blank(p + 1);
-  h->nname = (int)(comma - h->name);
-  while (h->nname > 0 && h->name[h->nname - 1] == ' ') h->nname--;
-  h->type = mx_io_blank(comma + 1);
-  h->ntype = (int)(close - h->type);
-  while (h->ntype > 0 && h->type[h->ntype - 1] == ' ') h->ntype--;
-  return MX_OK;
-}
-
-/* The count line after an array header. */
-static int read_count(mdl_file *f, const mdl_header *h, size_t *n) {
-  f->p = mx_io_next_line(f->p, f->end, &f->line);
-  f->p = mx_io_content(f->p, f->end, &f->line, 0);
-  int64_t v;
-  const char *e = f->p < f->end ? mx_io_int(f->p, &v) : NULL;
-  if (!e || !mx_io_eol(mx_io_blank(e), 0) || v < 0 || v > UINT32_MAX) {
-    mx_error(f->path, f->line, "[%.*s] section: expected the item count",
-             h->nname, h->name);
-    return MX_EINPUT;
-  }
-  *n = (size_t)v;
-  return MX_OK;
 }
 
 static size_t guess(const mdl_file *f, size_t n, size_t min_bytes) {
@@ -119,39 +72,24 @@ static int skip_items(mdl_file *f, size_t n) {
   return MX_OK;
 }
 
-static int duplicate(mdl_file *f, int *seen, const mdl_header *h) {
-  if (!*seen) {
-    *seen = 1;
-    return MX_OK;
-  }
-  mx_error(f->path, f->line, "duplicate [%.*s] section", h->nname, h->name);
-  return MX_EINPUT;
-}
-
-static int read_array(mdl_file *f, const mdl_header *h, mx_trisoup *s) {
-  int vertices = same(h->name, h->nname, "Vertices");
-  int triangles = same(h->name, h->nname, "Triangles");
-  if (vertices) MX_CHECK(duplicate(f, &f->have_vertices, h));
-  if (triangles) MX_CHECK(duplicate(f, &f->have_triangles, h));
+static int read_array(mdl_file *f, const mx_mdl_header *h, mx_trisoup *s) {
+  int vertices = mx_mdl_same(h->name, h->nname, "Vertices");
+  int triangles = mx_mdl_same(h->name, h->nname, "Triangles");
+  if (vertices) MX_CHECK(mx_mdl_once(f->path, f->line, &f->have_vertices, h));
+  if (triangles) MX_CHECK(mx_mdl_once(f->path, f->line, &f->have_triangles, h));
   size_t n;
-  MX_CHECK(read_count(f, h, &n));
+  MX_CHECK(mx_mdl_count(f->path, &f->line, &f->p, f->end, h, UINT32_MAX, &n));
   if (vertices) return read_vertices(f, s, n);
   if (triangles) return read_triangles(f, s, n);
   return skip_items(f, n); /* Normals and anything else */
 }
 
 static int read_section(mdl_file *f, mx_trisoup *s) {
-  mdl_header h;
-  MX_CHECK(parse_header(f, &h));
-  if (h.ntype > 7 && strncasecmp(h.type, "ARRAY1<", 7) == 0)
-    return read_array(f, &h, s);
-  if (same(h.type, h.ntype, "STRING")) { /* the value is the next line */
-    f->p = mx_io_next_line(f->p, f->end, &f->line);
-    return MX_OK;
-  }
-  mx_error(f->path, f->line, "[%.*s] section: unsupported type '%.*s'", h.nname,
-           h.name, h.ntype, h.type);
-  return MX_EINPUT;
+  mx_mdl_header h;
+  MX_CHECK(mx_mdl_parse_header(f->path, f->line, f->p, f->end, "[Vertices, ARRAY1<POINT3D>]",
+                               &h));
+  if (mx_mdl_is_array(&h)) return read_array(f, &h, s);
+  return mx_mdl_non_array(f->path, &f->line, &f->p, f->end, &h);
 }
 
 /* The line of triangle i, found again by walking the section. */

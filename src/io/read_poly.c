@@ -34,6 +34,7 @@
 #include "common.h"
 #include "quad/quad.h"
 
+#include "io/mdl_sections.h"
 #include "io/text_scan.h"
 
 typedef struct {
@@ -442,59 +443,19 @@ int mx_read_poly_off(const char *path, mx_poly *P) {
 /* ---- .mdl ------------------------------------------------------------- */
 
 typedef struct {
-  const char *name, *type; /* not NUL-terminated */
-  int nname, ntype;
-} mdl_header;
-
-typedef struct {
   int have_vertices, have_edges;
   size_t cap; /* segments allocated */
 } mdl_state;
 
-static int same(const char *s, int n, const char *word) {
-  return (size_t)n == strlen(word) && strncasecmp(s, word, (size_t)n) == 0;
+/* The count line after an array header: below 2^32 - 1. */
+static int mdl_count(rd *f, const mx_mdl_header *h, size_t *n) {
+  return mx_mdl_count(f->path, &f->line, &f->p, f->end, h, (int64_t)UINT32_MAX - 1, n);
 }
 
-/* "[Name, TYPE]" on the current line. */
-static int mdl_parse_header(rd *f, mdl_header *h) {
-  const char *p = f->p;
-  const char *nl = memchr(p, '\n', (size_t)(f->end - p));
-  const char *eol = nl ? nl : f->end;
-  const char *comma = memchr(p, ',', (size_t)(eol - p));
-  const char *close = memchr(p, ']', (size_t)(eol - p));
-  if (*p != '[' || !comma || !close || close < comma) {
-    mx_error(f->path, f->line,
-             "expected a section header such as '[Vertices, ARRAY1<POINT2D>]', found '%.*s'",
-             mx_io_toklen(p, 0), p);
-    return MX_EINPUT;
-  }
-  h->name = mx_io_blank(p + 1);
-  h->nname = (int)(comma - h->name);
-  while (h->nname > 0 && h->name[h->nname - 1] == ' ') h->nname--;
-  h->type = mx_io_blank(comma + 1);
-  h->ntype = (int)(close - h->type);
-  while (h->ntype > 0 && h->type[h->ntype - 1] == ' ') h->ntype--;
-  return MX_OK;
-}
-
-/* The count line after an array header. */
-static int mdl_count(rd *f, const mdl_header *h, size_t *n) {
-  f->p = mx_io_next_line(f->p, f->end, &f->line);
-  f->p = mx_io_content(f->p, f->end, &f->line, 0);
-  int64_t v;
-  const char *e = f->p < f->end ? mx_io_int(f->p, &v) : NULL;
-  if (!e || !mx_io_eol(mx_io_blank(e), 0) || v < 0 || v >= UINT32_MAX) {
-    mx_error(f->path, f->line, "[%.*s] section: expected the item count", h->nname, h->name);
-    return MX_EINPUT;
-  }
-  *n = (size_t)v;
-  return MX_OK;
-}
-
-static int mdl_vertices(rd *f, mx_poly *P, const mdl_header *h) {
-  const int dim = same(h->type, h->ntype, "ARRAY1<POINT2D>")   ? 2
-                  : same(h->type, h->ntype, "ARRAY1<POINT3D>") ? 3
-                                                               : 0;
+static int mdl_vertices(rd *f, mx_poly *P, const mx_mdl_header *h) {
+  const int dim = mx_mdl_same(h->type, h->ntype, "ARRAY1<POINT2D>")   ? 2
+                  : mx_mdl_same(h->type, h->ntype, "ARRAY1<POINT3D>") ? 3
+                                                                      : 0;
   if (!dim) {
     mx_error(f->path, f->line, "[Vertices] section of type '%.*s': expected ARRAY1<POINT2D>",
              h->ntype, h->type);
@@ -519,7 +480,7 @@ static int mdl_vertices(rd *f, mx_poly *P, const mdl_header *h) {
 
 /* Indices are checked against the vertex count at the end: the vertices
  * may come later. */
-static int mdl_edges(rd *f, mx_poly *P, const mdl_header *h, mdl_state *s) {
+static int mdl_edges(rd *f, mx_poly *P, const mx_mdl_header *h, mdl_state *s) {
   size_t n;
   MX_CHECK(mdl_count(f, h, &n));
   MX_CHECK(fits(f, n, 3, "edges"));
@@ -535,42 +496,28 @@ static int mdl_edges(rd *f, mx_poly *P, const mdl_header *h, mdl_state *s) {
   return MX_OK;
 }
 
-static int mdl_skip(rd *f, const mdl_header *h) {
+static int mdl_skip(rd *f, const mx_mdl_header *h) {
   size_t n;
   MX_CHECK(mdl_count(f, h, &n));
   for (size_t i = 0; i < n; i++) MX_CHECK(next_item(f, "items", i, n));
   return MX_OK;
 }
 
-static int mdl_once(rd *f, int *seen, const mdl_header *h) {
-  if (!*seen) {
-    *seen = 1;
-    return MX_OK;
-  }
-  mx_error(f->path, f->line, "duplicate [%.*s] section", h->nname, h->name);
-  return MX_EINPUT;
-}
-
 static int mdl_section(rd *f, mx_poly *P, mdl_state *s) {
-  mdl_header h;
-  MX_CHECK(mdl_parse_header(f, &h));
-  if (same(h.name, h.nname, "Vertices")) {
-    MX_CHECK(mdl_once(f, &s->have_vertices, &h));
+  mx_mdl_header h;
+  MX_CHECK(mx_mdl_parse_header(f->path, f->line, f->p, f->end, "[Vertices, ARRAY1<POINT2D>]",
+                               &h));
+  if (mx_mdl_same(h.name, h.nname, "Vertices")) {
+    MX_CHECK(mx_mdl_once(f->path, f->line, &s->have_vertices, &h));
     return mdl_vertices(f, P, &h);
   }
-  if (h.ntype > 7 && strncasecmp(h.type, "ARRAY1<", 7) == 0) {
-    if (!same(h.name, h.nname, "Edges") && !same(h.name, h.nname, "Segments"))
+  if (mx_mdl_is_array(&h)) {
+    if (!mx_mdl_same(h.name, h.nname, "Edges") && !mx_mdl_same(h.name, h.nname, "Segments"))
       return mdl_skip(f, &h);
-    MX_CHECK(mdl_once(f, &s->have_edges, &h));
+    MX_CHECK(mx_mdl_once(f->path, f->line, &s->have_edges, &h));
     return mdl_edges(f, P, &h, s);
   }
-  if (same(h.type, h.ntype, "STRING")) { /* the value is the next line */
-    f->p = mx_io_next_line(f->p, f->end, &f->line);
-    return MX_OK;
-  }
-  mx_error(f->path, f->line, "[%.*s] section: unsupported type '%.*s'", h.nname, h.name, h.ntype,
-           h.type);
-  return MX_EINPUT;
+  return mx_mdl_non_array(f->path, &f->line, &f->p, f->end, &h);
 }
 
 static int parse_mdl(rd *f, mx_poly *P) {

@@ -2,8 +2,9 @@
  * triangles and quadrilaterals), chosen by the file's extension:
  *
  *   .vtu     VTK XML UnstructuredGrid 1.0, little-endian raw appended data
- *            with UInt64 block headers (as io/write_vtu.c): points Float64
- *            x y 0, cells VTK_TRIANGLE (5) / VTK_QUAD (9)
+ *            with UInt64 block headers (io/vtu_common.h, shared with
+ *            io/write_vtu.c): points Float64 x y 0, cells VTK_TRIANGLE (5)
+ *            / VTK_QUAD (9)
  *   .vtk     legacy VTK 3.0, binary (big-endian, as the format requires) or
  *            ASCII
  *   .msh     Gmsh MSH 4.1, binary (host byte order, "4.1 1 8") or ASCII:
@@ -36,6 +37,7 @@
 #include "common.h"
 #include "io/atomic_file.h"
 #include "io/text_num.h"
+#include "io/vtu_common.h"
 #include "quad/quad.h"
 #include "soa/scan.h"
 
@@ -91,28 +93,16 @@ static int qmesh_consistent(const char *path, const mx_qmesh *M) {
 
 /* ---- byte stores --------------------------------------------------------- */
 
-#define HOST_LE (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__)
+/* Little-endian ones (VTU): io/vtu_common.h. */
 
-static inline void put_le32(char *o, uint32_t v) {
-#if !HOST_LE
-  v = __builtin_bswap32(v);
-#endif
-  memcpy(o, &v, 4);
-}
-static inline void put_le64(char *o, uint64_t v) {
-#if !HOST_LE
-  v = __builtin_bswap64(v);
-#endif
-  memcpy(o, &v, 8);
-}
 static inline void put_be32(char *o, uint32_t v) {
-#if HOST_LE
+#if MX_VTU_HOST_LE
   v = __builtin_bswap32(v);
 #endif
   memcpy(o, &v, 4);
 }
 static inline void put_be64(char *o, uint64_t v) {
-#if HOST_LE
+#if MX_VTU_HOST_LE
   v = __builtin_bswap64(v);
 #endif
   memcpy(o, &v, 8);
@@ -246,9 +236,9 @@ static size_t vtu_points(const void *v, size_t b, size_t e, char *o) {
   const double *xy = ((const qctx *)v)->M->xy;
   for (size_t i = b; i < e; i++) {
     char *p = o + 24 * (i - b);
-    put_le64(p, dbits(xy[2 * i]));
-    put_le64(p + 8, dbits(xy[2 * i + 1]));
-    put_le64(p + 16, dbits(0.0));
+    mx_put_le_double(p, xy[2 * i]);
+    mx_put_le_double(p + 8, xy[2 * i + 1]);
+    mx_put_le_double(p + 16, 0.0);
   }
   return 24 * (e - b);
 }
@@ -258,8 +248,8 @@ static size_t vtu_conn(const void *v, size_t b, size_t e, char *o) {
   size_t n = 0;
   for (size_t c = b; c < e; c++)
     for (int j = 0; j < qnv(x->M, c); j++) {
-      if (x->wide) put_le64(o + n, x->M->conn[4 * c + j]);
-      else put_le32(o + n, x->M->conn[4 * c + j]);
+      if (x->wide) mx_put_le64(o + n, x->M->conn[4 * c + j]);
+      else mx_put_le32(o + n, x->M->conn[4 * c + j]);
       n += x->wide ? 8 : 4;
     }
   return n;
@@ -274,8 +264,8 @@ static size_t vtu_offsets(const void *v, size_t b, size_t e, char *o) {
   for (size_t c = b; c < e; c++) {
     q += x->M->type[c] == MX_QQUAD;
     const uint64_t end = 3 * (uint64_t)(c + 1) + q;
-    if (x->wide) put_le64(o + n, end);
-    else put_le32(o + n, (uint32_t)end);
+    if (x->wide) mx_put_le64(o + n, end);
+    else mx_put_le32(o + n, (uint32_t)end);
     n += x->wide ? 8 : 4;
   }
   return n;
@@ -292,9 +282,9 @@ static size_t vtu_field(const void *v, size_t b, size_t e, char *o) {
   size_t n = 0;
   for (size_t c = b; c < e; c++) {
     const double d = qfield(x->M, x->field, c);
-    if (x->field == 0) put_le32(o + n, (uint32_t)d);
+    if (x->field == 0) mx_put_le32(o + n, (uint32_t)d);
     else if (x->field == 1) o[n] = (char)(uint8_t)d;
-    else put_le64(o + n, dbits(d));
+    else mx_put_le_double(o + n, d);
     n += x->field == 0 ? 4 : x->field == 1 ? 1 : 8;
   }
   return n;
@@ -303,47 +293,14 @@ static size_t vtu_field(const void *v, size_t b, size_t e, char *o) {
 static const char *const vtu_ftype[NFIELDS] = {"Int32", "UInt8", "Float64"};
 static const int vtu_fsize[NFIELDS] = {4, 1, 8};
 
-static int vtu_array(mx_afile *f, const char *type, const char *name, int ncomp,
-                     uint64_t *offset, uint64_t bytes) {
-  char comp[48] = "";
-  if (ncomp > 1) snprintf(comp, sizeof comp, " NumberOfComponents=\"%d\"", ncomp);
-  MX_CHECK(mx_afile_printf(f,
-                           "        <DataArray type=\"%s\" Name=\"%s\"%s format=\"appended\" "
-                           "offset=\"%llu\"/>\n",
-                           type, name, comp, (unsigned long long)*offset));
-  *offset += 8 + bytes;
-  return MX_OK;
-}
-
 static int vtu_header(mx_afile *f, const mx_qmesh *M, uint64_t nconn, int wide) {
-  const uint64_t nc = M->ncells, isz = wide ? 8 : 4;
-  uint64_t off = 0;
-  MX_CHECK(mx_afile_printf(f,
-                           "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" "
-                           "version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
-                           "  <UnstructuredGrid>\n"
-                           "    <Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n"
-                           "      <CellData>\n",
-                           M->nnodes, M->ncells));
+  mx_vtu_head h = {0};
+  mx_vtu_begin(&h, M->nnodes, M->ncells);
+  mx_vtu_printf(&h, "      <CellData>\n");
   for (int k = 0; k < NFIELDS; k++)
-    MX_CHECK(vtu_array(f, vtu_ftype[k], field_name[k], 1, &off, (uint64_t)vtu_fsize[k] * nc));
-  MX_CHECK(mx_afile_printf(f, "      </CellData>\n      <Points>\n"));
-  MX_CHECK(vtu_array(f, "Float64", "Points", 3, &off, 24 * (uint64_t)M->nnodes));
-  MX_CHECK(mx_afile_printf(f, "      </Points>\n      <Cells>\n"));
-  MX_CHECK(vtu_array(f, wide ? "Int64" : "Int32", "connectivity", 1, &off, isz * nconn));
-  MX_CHECK(vtu_array(f, wide ? "Int64" : "Int32", "offsets", 1, &off, isz * nc));
-  MX_CHECK(vtu_array(f, "UInt8", "types", 1, &off, nc));
-  return mx_afile_printf(f, "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n"
-                            "  <AppendedData encoding=\"raw\">\n   _");
-}
-
-/* One appended block: its byte count, then the items. */
-static int vtu_block(mx_afile *f, uint64_t bytes, size_t n, size_t item, mx_afile_fill_fn fn,
-                     const qctx *x) {
-  char head[8];
-  put_le64(head, bytes);
-  MX_CHECK(mx_afile_write(f, head, 8));
-  return mx_afile_emit(f, n, item, fn, x);
+    mx_vtu_array(&h, vtu_ftype[k], field_name[k], 1, (uint64_t)vtu_fsize[k] * M->ncells);
+  mx_vtu_printf(&h, "      </CellData>\n");
+  return mx_vtu_end(f, &h, M->nnodes, M->ncells, nconn, wide);
 }
 
 /* Quads before each block of OFFSET_BLOCK cells (the offsets' prefix). */
@@ -366,13 +323,13 @@ static uint64_t *quads_before(const mx_qmesh *M) {
 static int vtu_blocks(mx_afile *f, const mx_qmesh *M, uint64_t nconn, qctx *x) {
   const uint64_t nc = M->ncells, isz = x->wide ? 8 : 4;
   for (x->field = 0; x->field < NFIELDS; x->field++)
-    MX_CHECK(vtu_block(f, (uint64_t)vtu_fsize[x->field] * nc, M->ncells,
-                       (size_t)vtu_fsize[x->field], vtu_field, x));
-  MX_CHECK(vtu_block(f, 24 * (uint64_t)M->nnodes, M->nnodes, 24, vtu_points, x));
-  MX_CHECK(vtu_block(f, isz * nconn, M->ncells, 4 * isz, vtu_conn, x));
-  MX_CHECK(vtu_block(f, isz * nc, M->ncells, isz, vtu_offsets, x));
-  MX_CHECK(vtu_block(f, nc, M->ncells, 1, vtu_types, x));
-  return mx_afile_printf(f, "\n  </AppendedData>\n</VTKFile>\n");
+    MX_CHECK(mx_vtu_block(f, (uint64_t)vtu_fsize[x->field] * nc, M->ncells,
+                          (size_t)vtu_fsize[x->field], vtu_field, x));
+  MX_CHECK(mx_vtu_block(f, 24 * (uint64_t)M->nnodes, M->nnodes, 24, vtu_points, x));
+  MX_CHECK(mx_vtu_block(f, isz * nconn, M->ncells, 4 * isz, vtu_conn, x));
+  MX_CHECK(mx_vtu_block(f, isz * nc, M->ncells, isz, vtu_offsets, x));
+  MX_CHECK(mx_vtu_block(f, nc, M->ncells, 1, vtu_types, x));
+  return mx_vtu_finish(f);
 }
 
 static int vtu_body(mx_afile *f, const mx_qmesh *M) {

@@ -1,0 +1,77 @@
+/* The VTK XML UnstructuredGrid (.vtu) layout shared by the 3D writer
+ * (io/write_vtu.c) and the 2D one (io/write_qmesh.c): version 1.0, UInt64
+ * block headers, little-endian raw appended data.
+ *
+ * The XML header is collected in an mx_vtu_head: mx_vtu_begin (up to
+ * <Piece>), the writer's own field sections with one mx_vtu_array a
+ * DataArray, then mx_vtu_end (Points, Cells, the opening of AppendedData,
+ * "_"), which writes it. Every DataArray is format="appended", its offset
+ * the bytes of the blocks before it. The blocks follow in the order of
+ * their DataArray elements, each its byte count as a UInt64 then its bytes
+ * (mx_vtu_count, mx_vtu_block); mx_vtu_finish closes the file. */
+#ifndef MX_VTU_COMMON_H
+#define MX_VTU_COMMON_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "io/atomic_file.h"
+
+#define MX_VTU_HOST_LE (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__)
+
+/* ---- little-endian stores ------------------------------------------------ */
+
+static inline void mx_put_le32(char *out, uint32_t v) {
+#if !MX_VTU_HOST_LE
+  v = __builtin_bswap32(v);
+#endif
+  memcpy(out, &v, 4);
+}
+
+static inline void mx_put_le64(char *out, uint64_t v) {
+#if !MX_VTU_HOST_LE
+  v = __builtin_bswap64(v);
+#endif
+  memcpy(out, &v, 8);
+}
+
+static inline void mx_put_le_double(char *out, double d) {
+  uint64_t v;
+  memcpy(&v, &d, 8);
+  mx_put_le64(out, v);
+}
+
+/* ---- the XML header ------------------------------------------------------ */
+
+typedef struct {
+  char *s; /* the text so far */
+  size_t len, cap;
+  int failed;      /* an allocation failed: mx_vtu_end returns MX_EINPUT */
+  uint64_t offset; /* of the next DataArray's block */
+} mx_vtu_head;
+
+void mx_vtu_printf(mx_vtu_head *h, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* The XML declaration, VTKFile, UnstructuredGrid and the Piece's start. */
+void mx_vtu_begin(mx_vtu_head *h, size_t nnodes, size_t ncells);
+/* One DataArray element (name XML-escaped, NumberOfComponents when
+ * ncomp > 1) whose block holds `bytes` bytes. */
+void mx_vtu_array(mx_vtu_head *h, const char *type, const char *name, int ncomp, uint64_t bytes);
+/* Points (Float64 x y z) and Cells (connectivity of nconn indices and
+ * offsets: Int64 when wide, else Int32; types: UInt8), the end of the XML
+ * up to the appended data's "_"; writes the header to f and frees it. */
+int mx_vtu_end(mx_afile *f, mx_vtu_head *h, size_t nnodes, size_t ncells, uint64_t nconn,
+               int wide);
+
+/* ---- the appended blocks ------------------------------------------------- */
+
+/* A block's byte count. */
+int mx_vtu_count(mx_afile *f, uint64_t bytes);
+/* A block: its byte count, then n items of at most item_bytes each formatted
+ * by fill (mx_afile_emit). */
+int mx_vtu_block(mx_afile *f, uint64_t bytes, size_t n, size_t item_bytes, mx_afile_fill_fn fill,
+                 const void *ctx);
+/* The end of the appended data and of the file. */
+int mx_vtu_finish(mx_afile *f);
+
+#endif
