@@ -13,9 +13,12 @@
 #    lines, one curve loop per polyline, the outer one with the others as
 #    holes), meshed with -2 as triangles and as quad-dominant
 #    (Mesh.RecombineAll), with a mesh size chosen so that Gmsh gives about
-#    as many vertices as mesher2d at the uniform levels of GMSH_LEVELS
-#    (default "9 12": about 60 k and 4 M vertices on the A): vertices,
-#    2D elements, wall and peak RSS of each, side by side.
+#    as many vertices as mesher2d with the requests of GMSH_RUNS (runs
+#    separated by ';', default "-a 9 -s 11;-a 12": about 90 k and 4 M
+#    vertices on the A): vertices, 2D elements, wall, peak RSS, and
+#    validity by `mixoct check` (the mixoct beside MESHER2D) for both, side
+#    by side. A Gmsh run longer than GMSH_TIMEOUT seconds (default 900) is
+#    stopped and reported as such.
 # Timings are single runs (REPEAT=N for the median of N). Last line: one
 # JSON object with every row.
 set -eu
@@ -23,7 +26,9 @@ m2d=${1:?usage: mesher2d_bench.sh MESHER2D [POLY] [LEVELS]}
 here=$(cd "$(dirname "$0")" && pwd)
 poly=${2:-$here/../../shared/data/polylines/a.poly}
 levels=${3:-8 10 12}
-glevels=${GMSH_LEVELS:-9 12}
+gruns=${GMSH_RUNS:--a 9 -s 11;-a 12}
+gtimeout=${GMSH_TIMEOUT:-900}
+mixoct=$(dirname "$(readlink -f "$m2d")")/mixoct
 repeat=${REPEAT:-1}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -36,6 +41,10 @@ timed() {
   : >"$tmp/times"
   for _ in $(seq "$repeat"); do
     /usr/bin/time -f "%e %M" -o "$tmp/t1" "$@" >"$out" 2>"$tmp/err" || {
+      if grep -q "Command terminated by signal 15\|exited with non-zero status 124" "$tmp/t1"; then
+        echo "timeout 0" # stopped by `timeout`
+        return 0
+      fi
       echo "failed: $*" >&2
       tail -3 "$tmp/err" >&2
       return 1
@@ -165,34 +174,52 @@ print(nodes, elems)
 EOF
 }
 
+# valid: `mixoct check` of the file (conforming, no inverted cell; with the
+# polygon: boundary on it, area), "-" when it cannot tell
+valid_of() {
+  if [ -x "$mixoct" ] && "$mixoct" check "$1" --poly "$poly" >/dev/null 2>&1; then echo yes
+  elif [ -x "$mixoct" ]; then echo no
+  else echo -; fi
+}
+
 printf '\n%-22s %10s %10s %9s %9s %7s\n' "vs gmsh -2" vertices elements wall_s peak_mb valid
-for L in $glevels; do
-  read -r wall peak < <(timed "$tmp/out.json" "$m2d" -p "$poly" -a "$L" --json -O "$tmp/m.vtu")
-  read -r nodes cells valid < <(python3 -c '
+IFS=';' read -r -a runs <<<"$gruns"
+for req in "${runs[@]}"; do
+  # shellcheck disable=SC2086
+  read -r wall peak < <(timed "$tmp/out.json" "$m2d" -p "$poly" $req --json -O "$tmp/m.msh")
+  read -r nodes cells < <(python3 -c '
 import json, sys
 d = json.loads(open(sys.argv[1]).read().strip().splitlines()[-1])
-print(d["nodes"], d["elements"], d.get("invalid", 0) == 0)' "$tmp/out.json")
-  printf '%-22s %10d %10d %9.3f %9.1f %7s\n' "mesher2d -a $L" "$nodes" "$cells" "$wall" \
+print(d["nodes"], d["elements"])' "$tmp/out.json")
+  valid=$(valid_of "$tmp/m.msh")
+  printf '%-22s %10d %10d %9.3f %9.1f %7s\n' "mesher2d $req" "$nodes" "$cells" "$wall" \
     "$(python3 -c "print($peak/1024)")" "$valid"
-  rows="$rows${rows:+,}{\"run\": \"mesher2d -a $L\", \"nodes\": $nodes, \"cells\": $cells, \"wall_s\": $wall, \"peak_mb\": $(python3 -c "print($peak/1024)")}"
+  rows="$rows${rows:+,}{\"run\": \"mesher2d $req\", \"nodes\": $nodes, \"cells\": $cells, \"wall_s\": $wall, \"peak_mb\": $(python3 -c "print($peak/1024)"), \"valid\": \"$valid\"}"
+  rm -f "$tmp/m.msh"
   # a triangle mesh of size h has about 1.155 area / h^2 vertices
   h=$(python3 -c "import math; print(math.sqrt(1.155 * $area / $nodes))")
   for kind in tri quad; do
     extra=""
     # (Mesh.Algorithm 8, frontal for quads, crashes Gmsh 4.8.4 here: the
-    # default algorithm, then recombination)
+    # default algorithm, then recombination, which merges triangle pairs:
+    # the same vertices at the same size)
     [ "$kind" = quad ] && extra="-setnumber Mesh.RecombineAll 1"
-    hk=$h
-    # recombination merges triangle pairs: same vertices at the same size
     # shellcheck disable=SC2086
-    read -r gwall gpeak < <(timed "$tmp/g.log" gmsh "$tmp/a.geo" -2 -format msh41 -nt 2 \
-      -clmin "$hk" -clmax "$hk" $extra -o "$tmp/g.msh")
+    read -r gwall gpeak < <(timed "$tmp/g.log" timeout "$gtimeout" gmsh "$tmp/a.geo" -2 \
+      -format msh41 -nt 2 -clmin "$h" -clmax "$h" $extra -o "$tmp/g.msh")
+    if [ "$gwall" = timeout ]; then
+      printf '%-22s %10s %10s %9s %9s %7s\n' "gmsh $kind h=$(printf %.2e "$h")" - - \
+        "> $gtimeout" - "stopped"
+      rows="$rows,{\"run\": \"gmsh $kind\", \"for\": \"$req\", \"h\": $h, \"stopped_after_s\": $gtimeout}"
+      rm -f "$tmp/g.msh"
+      continue
+    fi
     read -r gn ge < <(msh_counts "$tmp/g.msh")
-    printf '%-22s %10d %10d %9.3f %9.1f %7s\n' "gmsh $kind h=$(printf %.2e "$hk")" "$gn" "$ge" \
-      "$gwall" "$(python3 -c "print($gpeak/1024)")" "-"
-    rows="$rows,{\"run\": \"gmsh $kind\", \"level\": $L, \"h\": $hk, \"nodes\": $gn, \"cells\": $ge, \"wall_s\": $gwall, \"peak_mb\": $(python3 -c "print($gpeak/1024)")}"
+    gvalid=$(valid_of "$tmp/g.msh")
+    printf '%-22s %10d %10d %9.3f %9.1f %7s\n' "gmsh $kind h=$(printf %.2e "$h")" "$gn" "$ge" \
+      "$gwall" "$(python3 -c "print($gpeak/1024)")" "$gvalid"
+    rows="$rows,{\"run\": \"gmsh $kind\", \"for\": \"$req\", \"h\": $h, \"nodes\": $gn, \"cells\": $ge, \"wall_s\": $gwall, \"peak_mb\": $(python3 -c "print($gpeak/1024)"), \"valid\": \"$gvalid\"}"
     rm -f "$tmp/g.msh"
   done
-  rm -f "$tmp/m.vtu"
 done
 echo "{\"poly\": \"$(basename "$poly")\", \"rows\": [$rows]}"

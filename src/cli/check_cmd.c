@@ -1,8 +1,17 @@
-/* `mixoct check MESH [--surface FILE] [--volume-tol X] [--dist-tol X]
- * [--threads N] [--json] [--quiet]`:
+/* `mixoct check MESH [--surface FILE | --poly FILE] [--volume-tol X]
+ * [--dist-tol X] [--threads N] [--json] [--quiet]`:
  * reads a volume mesh (legacy VTK, VTU, Gmsh MSH 4.1, Medit .mesh/.meshb)
  * and, optionally, the surface it should fill, runs the independent checker
  * (kernels/check.h) and reports.
+ *
+ * A 2D mesh (io/read_qmesh.h: triangles and quadrilaterals in the plane
+ * z = 0, as mesher2d writes them to .vtu, .vtk, .msh and .off) is checked
+ * by quad/qcheck.c instead, against the polylines of its domain when given
+ * (--poly FILE, or --surface FILE with a .poly, a 2D .off or a .mdl): the
+ * same criteria as mesher2d's own check (see check_2d below), a report of
+ * its own, and in JSON "dimension":2 with the counters of mx_qcheck_report.
+ * A 3D surface with a 2D mesh, or polylines (--poly, a .poly) with a 3D
+ * mesh, are usage errors (exit 2).
  *
  * Output: a readable report -- one line per kind of defect with its
  * criterion, followed for a kind that occurs by the first element or node
@@ -28,34 +37,47 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "cli/cli.h"
 #include "kernels/surface_defects.h"
 #include "common.h"
 #include "io/read_mesh.h"
+#include "io/read_qmesh.h"
 #include "kernels/check.h"
+#include "quad/quad.h"
 #include "soa/trisoup.h"
 
 enum { EXIT_DEFECTS = 3, EXIT_USAGE = 2 };
 
 static void usage(FILE *f) {
   fprintf(f,
-          "usage: mixoct check MESH [--surface FILE] [--volume-tol X] "
-          "[--dist-tol X]\n"
-          "                    [--threads N] [--json] [--quiet]\n"
+          "usage: mixoct check MESH [--surface FILE | --poly FILE] "
+          "[--volume-tol X]\n"
+          "                    [--dist-tol X] [--threads N] [--json] "
+          "[--quiet]\n"
           "  MESH              legacy VTK (.vtk, ASCII or binary), VTU, Gmsh\n"
           "                    MSH 4.1 (ASCII or binary), Medit (.mesh,\n"
           "                    .meshb), GetFEM (.getfem), M3D or MVM volume\n"
-          "                    mesh (recognised by content)\n"
+          "                    mesh (recognised by content); or a 2D mesh:\n"
+          "                    triangles and quadrilaterals at z = 0 in VTK,\n"
+          "                    VTU, MSH or OFF (as mesher2d writes them)\n"
           "  --surface FILE    the closed surface the mesh should fill (.off,\n"
           "                    .stl, .obj, .mdl, .ply): volume error and\n"
-          "                    distance of the boundary nodes to it\n"
+          "                    distance of the boundary nodes to it; for a\n"
+          "                    2D mesh, its polylines as --poly\n"
+          "  --poly FILE       the domain of a 2D mesh: closed polylines\n"
+          "                    (.poly, or a 2D .off or .mdl): boundary on\n"
+          "                    them, features as vertices, area, topology\n"
           "  --volume-tol X    largest |volume error| accepted with --surface\n"
           "                    (relative; default: half a layer of elements\n"
-          "                    along the surface, 0.5 A h / V, 0.05 at least)\n"
+          "                    along the surface, 0.5 A h / V, 0.05 at least;\n"
+          "                    2D: the area error, 0.5 P h / A in [0.05,\n"
+          "                    0.25]; --area-tol X is the same option)\n"
           "  --dist-tol X      largest boundary distance accepted with\n"
           "                    --surface (relative to the surface's bounding\n"
-          "                    box diagonal, default 1e-6)\n"
+          "                    box diagonal; 2D: to the domain's diameter;\n"
+          "                    default 1e-6)\n"
           "  --threads N       OpenMP threads (default: all)\n"
           "  --json            one JSON object on the last line of stdout\n"
           "  --quiet           no report (errors only; JSON if --json)\n"
@@ -391,6 +413,231 @@ static void print_report(const char *mesh, const char *surf,
          t_check);
 }
 
+/* ---- 2D meshes ------------------------------------------------------------
+ *
+ * The criteria of mesher2d's own check (src/cli/mesher2d.c): a 2D mesh is
+ * conforming with no bad edge and no hanging node, valid when moreover no
+ * cell is inverted (quad/qcheck.c) and, against a domain, no boundary node
+ * lies off its polylines (farther than --dist-tol of its diameter), every
+ * feature is a vertex, V - E + F equals the domain's outer loops minus its
+ * holes, and the area error is within --volume-tol (default: half a layer
+ * of cells along the polylines, 0.5 P h / A with h = sqrt(area / cells),
+ * 5% at least, 25% at most). */
+
+enum { Q_AREA_AUTO = 0 };
+#define Q_AREA_MIN 0.05
+#define Q_AREA_MAX 0.25
+
+typedef struct {
+  mx_qcheck_report c;
+  mx_qquality q;
+  const char *domain;   /* the polylines' file, or NULL */
+  size_t unused_nodes;  /* informative, as in mesher2d: not a defect */
+  size_t empty, topology_off, area_off, defects;
+  double area_tol, dist_tol;
+  int area_tol_auto;
+} check2d;
+
+static int has_ext(const char *path, const char *ext) {
+  const size_t n = strlen(path), e = strlen(ext);
+  return n > e && strcasecmp(path + n - e, ext) == 0;
+}
+
+/* The polylines of a 2D mesh's domain, read and checked. */
+static int read_domain(const char *path, const char *mesh, mx_poly *P) {
+  memset(P, 0, sizeof *P);
+  if (!has_ext(path, ".poly") && !has_ext(path, ".off") && !has_ext(path, ".mdl")) {
+    mx_error(path, 0, "check: a 3D surface, but %s is a 2D mesh: give its domain's polylines "
+             "(--poly FILE: .poly, or a 2D .off or .mdl)", mesh);
+    return MX_EINPUT;
+  }
+  int st = mx_read_poly_any(path, P);
+  if (st == MX_EINPUT)
+    mx_error(path, 0, "check: %s is a 2D mesh: its domain must be closed polylines in the "
+             "plane z = 0 (.poly, or a 2D .off or .mdl)", mesh);
+  if (st == MX_OK) st = mx_poly_check_domain(P);
+  return st;
+}
+
+static double poly_perimeter(const mx_poly *P) {
+  double l = 0.0;
+  for (size_t s = 0; s < P->ns; s++) {
+    const double *a = P->xy + 2 * (size_t)P->seg[2 * s], *b = P->xy + 2 * (size_t)P->seg[2 * s + 1];
+    l += hypot(b[0] - a[0], b[1] - a[1]);
+  }
+  return l;
+}
+
+static int unused_nodes(const mx_qmesh *M, size_t *n) {
+  uint8_t *used = mx_calloc(M->nnodes + 1);
+  if (!used) return MX_EINPUT;
+#pragma omp parallel for schedule(static) if (M->ncells > 65536)
+  for (size_t c = 0; c < M->ncells; c++)
+    for (int j = 0; j < (M->type[c] == MX_QQUAD ? 4 : 3); j++) {
+#pragma omp atomic write
+      used[M->conn[4 * c + (size_t)j]] = 1;
+    }
+  size_t k = 0;
+#pragma omp parallel for schedule(static) reduction(+ : k) if (M->nnodes > 65536)
+  for (size_t i = 0; i < M->nnodes; i++) k += !used[i];
+  mx_free(used);
+  *n = k;
+  return MX_OK;
+}
+
+/* The checks and the verdict. */
+static int check_2d(const mx_qmesh *M, const mx_poly *P, const char *domain, double area_tol,
+                    double dist_tol, check2d *k) {
+  memset(k, 0, sizeof *k);
+  k->domain = domain;
+  k->dist_tol = dist_tol;
+  mx_qquality_measure(M, &k->q);
+  MX_CHECK(unused_nodes(M, &k->unused_nodes));
+  MX_CHECK(mx_qmesh_check(M, P, dist_tol, &k->c));
+  const mx_qcheck_report *c = &k->c;
+  k->empty = M->ncells == 0 || M->nnodes == 0;
+  k->defects = k->empty + c->bad_edges + c->hanging + c->inverted;
+  if (!P) return MX_OK;
+  k->area_tol = area_tol;
+  if (area_tol == Q_AREA_AUTO) {
+    const double h = M->ncells ? sqrt(fabs(c->area) / (double)M->ncells) : 0.0;
+    k->area_tol = fmin(fmax(Q_AREA_MIN, 0.5 * poly_perimeter(P) * h / fabs(c->domain_area)),
+                       Q_AREA_MAX);
+    k->area_tol_auto = 1;
+  }
+  k->topology_off = c->euler != c->domain_euler;
+  k->area_off = !(c->area_error <= k->area_tol);
+  k->defects += c->off_boundary + c->missing_features + k->topology_off + k->area_off;
+  return MX_OK;
+}
+
+/* The smallest and the mean scaled Jacobian over both cell types. */
+static void sj_summary(const mx_qquality *q, double *mn, double *mean) {
+  const size_t n = q->count[0] + q->count[1];
+  *mn = fmin(q->count[0] ? q->min[0] : INFINITY, q->count[1] ? q->min[1] : INFINITY);
+  *mean = n ? ((q->count[0] ? q->mean[0] * (double)q->count[0] : 0.0) +
+               (q->count[1] ? q->mean[1] * (double)q->count[1] : 0.0)) / (double)n
+            : NAN;
+}
+
+/* A domain counter, null without a domain. */
+static void json_dcount(const check2d *k, const char *key, size_t v) {
+  if (k->domain)
+    printf("\"%s\":%zu,", key, v);
+  else
+    printf("\"%s\":null,", key);
+}
+
+static void print_json_2d(const mx_qmesh *M, const check2d *k) {
+  const mx_qcheck_report *c = &k->c;
+  double sjmin, sjmean;
+  sj_summary(&k->q, &sjmin, &sjmean);
+  printf("{\"dimension\":2,\"nodes\":%zu,\"elements\":%zu,", M->nnodes, M->ncells);
+  printf("\"by_type\":{\"tri\":%zu,\"quad\":%zu},", k->q.count[0], k->q.count[1]);
+  printf("\"conforming\":%s,\"valid\":%s,", c->bad_edges || c->hanging ? "false" : "true",
+         k->defects ? "false" : "true");
+  printf("\"empty\":%zu,\"bad_edges\":%zu,\"hanging\":%zu,\"inverted\":%zu,\"invalid\":%zu,"
+         "\"unused_nodes\":%zu,",
+         k->empty, c->bad_edges, c->hanging, c->inverted, k->q.invalid, k->unused_nodes);
+  json_num("sj_min", sjmin, 0);
+  json_num("sj_mean", sjmean, 0);
+  json_num("min_angle", k->q.min_angle, 0);
+  printf("\"edges\":%zu,\"boundary_edges\":%zu,\"euler\":%ld,", c->edges, c->boundary_edges,
+         c->euler);
+  json_num("area", c->area, 0);
+  printf("\"domain\":");
+  json_str(k->domain);
+  printf(",");
+  if (k->domain) {
+    json_num("domain_area", c->domain_area, 0);
+    json_num("area_error", c->area_error, 0);
+    printf("\"domain_euler\":%ld,", c->domain_euler);
+  } else {
+    printf("\"domain_area\":null,\"area_error\":null,\"domain_euler\":null,");
+  }
+  json_dcount(k, "off_boundary", c->off_boundary);
+  json_dcount(k, "missing_features", c->missing_features);
+  json_dcount(k, "topology_off", k->topology_off);
+  json_dcount(k, "area_off", k->area_off);
+  printf("\"tolerances\":{");
+  json_num("boundary_dist", k->dist_tol, 0);
+  json_num("area", k->domain ? k->area_tol : NAN, 1);
+  printf("},\"defects\":%zu}\n", k->defects);
+}
+
+static void print_report_2d(const char *mesh, const mx_qmesh *M, const check2d *k,
+                            double t_read, double t_check) {
+  const mx_qcheck_report *c = &k->c;
+  char why[200];
+  double sjmin, sjmean;
+  sj_summary(&k->q, &sjmin, &sjmean);
+  printf("mixoct check %s (2D mesh)\n", mesh);
+  printf("  nodes                  %zu (%zu unused)\n", M->nnodes, k->unused_nodes);
+  printf("  elements               %zu (triangles %zu, quadrilaterals %zu)\n", M->ncells,
+         k->q.count[0], k->q.count[1]);
+  printf("  scaled Jacobian        min %.6g, mean %.6g; min angle %.4g degrees\n", sjmin, sjmean,
+         k->q.min_angle);
+  printf("  edges                  %zu (%zu on the boundary)\n", c->edges, c->boundary_edges);
+  printf("  area                   %.15g\n", c->area);
+  printf("  euler                  %ld (V - E + F: components minus holes)\n", c->euler);
+  printf("  conforming             %s\n", c->bad_edges || c->hanging ? "no" : "yes");
+  if (k->domain) {
+    printf("  domain                 %s\n", k->domain);
+    printf("  domain area            %.15g\n", c->domain_area);
+    printf("  domain euler           %ld (outer loops minus holes)\n", c->domain_euler);
+    printf("  area error             %.3e (tolerance %.3g%s)\n", c->area_error, k->area_tol,
+           k->area_tol_auto ? ": half a layer of cells along the polylines, 5% to 25%; "
+                              "--volume-tol X to set it" : "");
+  }
+  printf("  defects\n");
+  defect_line("empty mesh", k->empty, "(no cell or no node)");
+  defect_line("bad edges", c->bad_edges,
+              "(used by 3 or more cells, by 2 in the same direction, or degenerate)");
+  defect_line("hanging nodes", c->hanging,
+              "(on another cell's edge: a T-junction or a duplicated node)");
+  defect_line("inverted cells", c->inverted,
+              "(a corner not strictly convex: clockwise, degenerate or non-convex)");
+  if (k->domain) {
+    snprintf(why, sizeof why, "(boundary nodes farther than %g of the domain's diameter)",
+             k->dist_tol);
+    defect_line("boundary off polylines", c->off_boundary, why);
+    defect_line("missing features", c->missing_features, "(features with no node on them)");
+    snprintf(why, sizeof why, "(euler %ld, the domain's %ld)", c->euler, c->domain_euler);
+    defect_line("topology off", k->topology_off, why);
+    snprintf(why, sizeof why, "(area error %.3g > %.3g)", c->area_error, k->area_tol);
+    defect_line("area off", k->area_off, k->area_off ? why : NULL);
+  }
+  if (k->defects)
+    printf("  result                 not valid: %zu defect%s\n", k->defects,
+           k->defects == 1 ? "" : "s");
+  else
+    printf("  result                 OK, valid, no defect\n");
+  printf("  time                   read %.3f s, check %.3f s\n", t_read, t_check);
+}
+
+/* `mixoct check` of a 2D mesh: q is freed here. */
+static int main_2d(const char *mesh, mx_qmesh *q, const char *domain, double area_tol,
+                   double dist_tol, int json, int quiet, double t0) {
+  mx_poly P;
+  memset(&P, 0, sizeof P);
+  int st = domain ? read_domain(domain, mesh, &P) : MX_OK;
+  const double t1 = mx_wtime();
+  check2d k;
+  if (st == MX_OK) st = check_2d(q, domain ? &P : NULL, domain, area_tol, dist_tol, &k);
+  const double t2 = mx_wtime();
+  mx_poly_free(&P);
+  if (st == MX_OK) {
+    if (json)
+      print_json_2d(q, &k);
+    else if (!quiet)
+      print_report_2d(mesh, q, &k, t1 - t0, t2 - t1);
+    fflush(stdout);
+  }
+  mx_qmesh_free(q);
+  if (st != MX_OK) return st == MX_EINPUT ? EXIT_USAGE : 1;
+  return k.defects ? EXIT_DEFECTS : 0;
+}
+
 /* A number option's value: finite and >= 0. */
 static int number_arg(const char *opt, const char *v, double *out) {
   char *end;
@@ -405,7 +652,7 @@ static int number_arg(const char *opt, const char *v, double *out) {
 }
 
 int mx_check_main(int argc, char **argv) {
-  const char *mesh = NULL, *surf = NULL;
+  const char *mesh = NULL, *surf = NULL, *poly = NULL;
   int json = 0, quiet = 0;
   mx_check_options opt;
   mx_check_defaults(&opt);
@@ -426,13 +673,25 @@ int mx_check_main(int argc, char **argv) {
       surf = argv[++i];
     } else if (!strncmp(a, "--surface=", 10)) {
       surf = a + 10;
-    } else if (!strcmp(a, "--volume-tol") || !strcmp(a, "--dist-tol")) {
-      double *dst = a[2] == 'v' ? &opt.volume_tol : &opt.boundary_tol;
+    } else if (!strcmp(a, "--poly")) {
+      if (i + 1 >= argc) {
+        mx_error(NULL, 0, "check: --poly needs a file");
+        return EXIT_USAGE;
+      }
+      poly = argv[++i];
+    } else if (!strncmp(a, "--poly=", 7)) {
+      poly = a + 7;
+    } else if (!strcmp(a, "--volume-tol") || !strcmp(a, "--area-tol") ||
+               !strcmp(a, "--dist-tol")) {
+      double *dst = a[2] == 'd' ? &opt.boundary_tol : &opt.volume_tol;
       if (number_arg(a, i + 1 < argc ? argv[i + 1] : NULL, dst) != MX_OK)
         return EXIT_USAGE;
       i++;
     } else if (!strncmp(a, "--volume-tol=", 13)) {
       if (number_arg("--volume-tol", a + 13, &opt.volume_tol) != MX_OK)
+        return EXIT_USAGE;
+    } else if (!strncmp(a, "--area-tol=", 11)) {
+      if (number_arg("--area-tol", a + 11, &opt.volume_tol) != MX_OK)
         return EXIT_USAGE;
     } else if (!strncmp(a, "--dist-tol=", 11)) {
       if (number_arg("--dist-tol", a + 11, &opt.boundary_tol) != MX_OK)
@@ -463,12 +722,27 @@ int mx_check_main(int argc, char **argv) {
     usage(stderr);
     return EXIT_USAGE;
   }
+  if (poly && surf) {
+    mx_error(NULL, 0, "check: --poly and --surface both given: one domain at most");
+    return EXIT_USAGE;
+  }
   if (quiet) mx_quiet = 1;
   const double t0 = mx_wtime();
   mx_mesh_data m;
+  mx_qmesh q;
   mx_trisoup s;
   memset(&s, 0, sizeof s);
-  int st = mx_read_mesh(mesh, &m);
+  int dim = 3;
+  int st = mx_read_mesh_dim(mesh, &m, &q, &dim);
+  if (st == MX_OK && dim == 2)
+    return main_2d(mesh, &q, poly ? poly : surf, opt.volume_tol, opt.boundary_tol, json, quiet,
+                   t0);
+  if (st == MX_OK && (poly || has_ext(surf ? surf : "", ".poly"))) {
+    mx_error(poly ? poly : surf, 0, "check: polylines, but %s is a 3D mesh: give the closed "
+             "surface it fills (--surface FILE: .off, .stl, .obj, .mdl, .ply)", mesh);
+    mx_mesh_data_free(&m);
+    return EXIT_USAGE;
+  }
   if (st == MX_OK && surf) {
     st = mx_read_surface(surf, &s);
     if (st == MX_OK) st = mx_trisoup_check(&s, surf, NULL);

@@ -56,6 +56,7 @@ typedef struct {
   const char *bin_from;         /* binary data starts here (or NULL) */
   void *tmp[MAX_TMP];
   int ntmp;
+  int planar; /* VTK triangles and quadrilaterals accepted (mx_read_mesh_planar) */
 } rd;
 
 /* ---- messages ------------------------------------------------------------ */
@@ -256,18 +257,27 @@ typedef struct {
   rawarr types;
 } parts;
 
-static int vtk_to_mx(int64_t code) {
+/* Cell types while assembling: ours (MX_TET .. MX_HEX) and, in a planar
+ * read, VTK's triangle and quadrilateral (A_TRI, A_QUAD), which
+ * planar_cells then turns into faces. */
+enum { A_TRI = 4, A_QUAD = 5 };
+static const int any_nodes[6] = {4, 5, 6, 8, 3, 4};
+
+static int vtk_to_mx(int64_t code, int planar) {
   switch (code) {
     case 10: return MX_TET;
     case 14: return MX_PYRAMID;
     case 13: return MX_PRISM;
     case 12: return MX_HEX;
+    case 5: return planar ? A_TRI : -1;
+    case 9: return planar ? A_QUAD : -1;
     default: return -1;
   }
 }
 
-static const char *const type_word[4] = {"tetrahedron", "pyramid", "wedge",
-                                         "hexahedron"};
+static const char *const type_word[6] = {"tetrahedron", "pyramid", "wedge",
+                                         "hexahedron", "triangle",
+                                         "quadrilateral"};
 
 /* Cell c of the offsets form into row; 0 if fine, else 1 and (when msg is
  * not NULL) the reason. */
@@ -281,7 +291,7 @@ static int offset_cell(const parts *P, size_t c, int type, uint32_t *row,
     s = raw_int(&P->off, c);
     e = raw_int(&P->off, c + 1);
   }
-  const int64_t need = mx_cell_nodes[type];
+  const int64_t need = any_nodes[type];
   if (s < 0 || e < s || (uint64_t)e > P->cn.n) {
     if (msg)
       snprintf(msg, MSG,
@@ -308,6 +318,59 @@ static int offset_cell(const parts *P, size_t c, int type, uint32_t *row,
     row[j] = (uint32_t)v;
   }
   return 0;
+}
+
+/* A planar read: the triangles and quadrilaterals of a mesh that has no
+ * volume cell and lies in the plane z = 0 become its faces (tag 0, the
+ * file's node order), and ncells 0: a 2D mesh (io/read_qmesh.h). Both
+ * kinds of cells in one file, or a 2D cell off the plane, are errors. */
+static int planar_cells(rd *r, const parts *P, mx_mesh_data *out) {
+  const size_t nc = out->ncells, nn = out->nnodes;
+  size_t flat = SIZE_MAX, solid = SIZE_MAX, offz = SIZE_MAX;
+#pragma omp parallel for schedule(static) reduction(min : flat, solid) \
+    if (nc > 65536)
+  for (size_t c = 0; c < nc; c++) {
+    if (out->type[c] >= A_TRI) {
+      if (c < flat) flat = c;
+    } else if (c < solid) {
+      solid = c;
+    }
+  }
+  if (flat == SIZE_MAX) return MX_OK;
+  if (solid != SIZE_MAX) {
+    const size_t later = flat > solid ? flat : solid;
+    return fail(r, arr_at(r, &P->types, later),
+                "cell %zu is a %s and cell %zu a %s: a mesh is either 2D "
+                "(triangles and quadrilaterals) or 3D (volume cells)",
+                flat, type_word[out->type[flat]], solid,
+                type_word[out->type[solid]]);
+  }
+#pragma omp parallel for schedule(static) reduction(min : offz) if (nn > 65536)
+  for (size_t i = 0; i < nn; i++)
+    if (out->xyz[3 * i + 2] != 0.0 && i < offz) offz = i;
+  if (offz != SIZE_MAX)
+    return fail(r, arr_at(r, &P->pts, 3 * offz + 2),
+                "point %zu has z = %g: a mesh of triangles and "
+                "quadrilaterals is read as a 2D mesh, in the plane z = 0",
+                offz, out->xyz[3 * offz + 2]);
+  out->face_nn = mx_alloc(nc + 1);
+  out->face_conn = mx_alloc((4 * nc + 1) * sizeof *out->face_conn);
+  out->face_tag = mx_calloc((nc + 1) * sizeof *out->face_tag);
+  if (!out->face_nn || !out->face_conn || !out->face_tag) return MX_EINPUT;
+#pragma omp parallel for schedule(static) if (nc > 65536)
+  for (size_t c = 0; c < nc; c++) {
+    const int k = any_nodes[out->type[c]];
+    out->face_nn[c] = (uint8_t)k;
+    for (int j = 0; j < 4; j++)
+      out->face_conn[4 * c + (size_t)j] = j < k ? out->conn[8 * c + (size_t)j] : 0;
+  }
+  out->nfaces = nc;
+  out->ncells = 0;
+  mx_free(out->type);
+  mx_free(out->conn);
+  out->type = NULL;
+  out->conn = NULL;
+  return MX_OK;
 }
 
 static int assemble(rd *r, parts *P, mx_mesh_data *out) {
@@ -340,25 +403,27 @@ static int assemble(rd *r, parts *P, mx_mesh_data *out) {
   if (!out->type) return MX_EINPUT;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (nc > 65536)
   for (size_t c = 0; c < nc; c++) {
-    int t = vtk_to_mx(raw_int(&P->types, c));
+    int t = vtk_to_mx(raw_int(&P->types, c), r->planar);
     out->type[c] = (uint8_t)(t < 0 ? 0 : t);
     if (t < 0 && c < bad) bad = c;
   }
   if (bad != SIZE_MAX)
     return fail(r, arr_at(r, &P->types, bad),
                 "cell %zu has VTK type %lld: only tetrahedra (10), pyramids "
-                "(14), wedges (13) and hexahedra (12) are supported",
-                bad, (long long)raw_int(&P->types, bad));
+                "(14), wedges (13) and hexahedra (12)%s are supported",
+                bad, (long long)raw_int(&P->types, bad),
+                r->planar ? ", or triangles (5) and quadrilaterals (9) in "
+                            "the plane z = 0 (a 2D mesh)," : "");
   /* Connectivity. */
   if (P->list_form) {
 #pragma omp parallel for schedule(static) reduction(min : bad) if (nc > 65536)
     for (size_t c = 0; c < nc; c++)
-      if (P->nn[c] != mx_cell_nodes[out->type[c]] && c < bad) bad = c;
+      if (P->nn[c] != any_nodes[out->type[c]] && c < bad) bad = c;
     if (bad != SIZE_MAX)
       return fail(r, arr_at(r, &P->types, bad),
                   "cell %zu (%s) has %d nodes, expected %d", bad,
                   type_word[out->type[bad]], P->nn[bad],
-                  mx_cell_nodes[out->type[bad]]);
+                  any_nodes[out->type[bad]]);
   } else {
     out->conn = mx_alloc(8 * nc * sizeof(uint32_t));
     if (!out->conn) return MX_EINPUT;
@@ -384,13 +449,13 @@ static int assemble(rd *r, parts *P, mx_mesh_data *out) {
 #pragma omp parallel for schedule(static) reduction(min : bad) if (nc > 65536)
   for (size_t c = 0; c < nc; c++) {
     const uint32_t *row = out->conn + 8 * c;
-    for (int j = 0; j < mx_cell_nodes[out->type[c]]; j++)
+    for (int j = 0; j < any_nodes[out->type[c]]; j++)
       if (row[j] >= nn && c < bad) bad = c;
   }
   if (bad != SIZE_MAX) {
     const uint32_t *row = out->conn + 8 * bad;
     uint32_t v = 0;
-    for (int j = 0; j < mx_cell_nodes[out->type[bad]]; j++)
+    for (int j = 0; j < any_nodes[out->type[bad]]; j++)
       if (row[j] >= nn) {
         v = row[j];
         break;
@@ -400,7 +465,7 @@ static int assemble(rd *r, parts *P, mx_mesh_data *out) {
                 "indices)",
                 bad, v, nn);
   }
-  return MX_OK;
+  return r->planar ? planar_cells(r, P, out) : MX_OK;
 }
 
 /* The point field surface_tag from its raw values (one per node). */
@@ -2871,7 +2936,7 @@ static int load(const char *path, char **buf, size_t *len, size_t *mapped) {
   return mx_io_load(path, buf, len); /* and its messages */
 }
 
-int mx_read_mesh(const char *path, mx_mesh_data *out) {
+static int read_mesh(const char *path, int planar, mx_mesh_data *out) {
   memset(out, 0, sizeof *out);
   char *buf;
   size_t len, mapped;
@@ -2881,6 +2946,7 @@ int mx_read_mesh(const char *path, mx_mesh_data *out) {
   r.path = path;
   r.buf = buf;
   r.end = buf + len;
+  r.planar = planar;
   const char *p = r.buf;
   if (len >= 3 && memcmp(p, "\xEF\xBB\xBF", 3) == 0) p += 3; /* UTF-8 BOM */
   p = skip_ws(p, r.end);
@@ -2923,4 +2989,12 @@ int mx_read_mesh(const char *path, mx_mesh_data *out) {
     mx_free(buf);
   if (st != MX_OK) mx_mesh_data_free(out);
   return st;
+}
+
+int mx_read_mesh(const char *path, mx_mesh_data *out) {
+  return read_mesh(path, 0, out);
+}
+
+int mx_read_mesh_planar(const char *path, mx_mesh_data *out) {
+  return read_mesh(path, 1, out);
 }

@@ -94,6 +94,15 @@ typedef struct {
 } mx_mesh_data;
 
 int mx_read_mesh(const char *path, mx_mesh_data *out);
+/* The same, but a legacy VTK or VTU file may instead hold only triangles
+ * (VTK type 5) and quadrilaterals (9), every point with z = 0: a 2D mesh,
+ * returned with ncells 0 and its cells as the faces (face_nn 3 or 4, the
+ * file's node order, face_tag 0). Volume and 2D cells in one file, or a 2D
+ * cell's file with a point off the plane, are errors (MX_EINPUT). Other
+ * formats read as with mx_read_mesh (MSH, Medit: a file with no volume
+ * element has its triangles and quadrilaterals as faces already). For
+ * io/read_qmesh.h. */
+int mx_read_mesh_planar(const char *path, mx_mesh_data *out);
 /* Frees every array (the new fields too) and zeroes *m. */
 void mx_mesh_data_free(mx_mesh_data *m);
 
