@@ -43,6 +43,7 @@
 #include "kernels/surface_defects.h"
 #include "common.h"
 #include "io/read_mesh.h"
+#include "mesher/mesher2d.h"
 #include "io/read_qmesh.h"
 #include "kernels/check.h"
 #include "quad/quad.h"
@@ -425,8 +426,6 @@ static void print_report(const char *mesh, const char *surf,
  * 5% at least, 25% at most). */
 
 enum { Q_AREA_AUTO = 0 };
-#define Q_AREA_MIN 0.05
-#define Q_AREA_MAX 0.25
 
 typedef struct {
   mx_qcheck_report c;
@@ -457,15 +456,6 @@ static int read_domain(const char *path, const char *mesh, mx_poly *P) {
              "plane z = 0 (.poly, or a 2D .off or .mdl)", mesh);
   if (st == MX_OK) st = mx_poly_check_domain(P);
   return st;
-}
-
-static double poly_perimeter(const mx_poly *P) {
-  double l = 0.0;
-  for (size_t s = 0; s < P->ns; s++) {
-    const double *a = P->xy + 2 * (size_t)P->seg[2 * s], *b = P->xy + 2 * (size_t)P->seg[2 * s + 1];
-    l += hypot(b[0] - a[0], b[1] - a[1]);
-  }
-  return l;
 }
 
 static int unused_nodes(const mx_qmesh *M, size_t *n) {
@@ -500,9 +490,7 @@ static int check_2d(const mx_qmesh *M, const mx_poly *P, const char *domain, dou
   if (!P) return MX_OK;
   k->area_tol = area_tol;
   if (area_tol == Q_AREA_AUTO) {
-    const double h = M->ncells ? sqrt(fabs(c->area) / (double)M->ncells) : 0.0;
-    k->area_tol = fmin(fmax(Q_AREA_MIN, 0.5 * poly_perimeter(P) * h / fabs(c->domain_area)),
-                       Q_AREA_MAX);
+    k->area_tol = mx_qarea_tolerance(P, c, M->ncells);
     k->area_tol_auto = 1;
   }
   k->topology_off = c->euler != c->domain_euler;

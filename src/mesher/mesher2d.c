@@ -463,6 +463,11 @@ static int check_memory(mx_mesher2d *m) {
 
 /* ---- the pipeline -------------------------------------------------------------------- */
 
+double mx_qarea_tolerance(const mx_poly *P, const mx_qcheck_report *c, size_t ncells) {
+  const double h = ncells ? sqrt(fabs(c->area) / (double)ncells) : 0.0;
+  return fmin(fmax(AREA_TOL, 0.5 * poly_length(P) * h / fabs(c->domain_area)), AREA_TOL_MAX);
+}
+
 /* The independent check, and what it means: MX_EINVALID naming what failed. */
 static int check_mesh(mx_mesher2d *m) {
   const char *name = m->domain.path;
@@ -478,9 +483,7 @@ static int check_mesh(mx_mesher2d *m) {
   MX_CHECK(st);
   m->checked = 1;
   const mx_qcheck_report *c = &m->cr;
-  const double h = sqrt(fabs(c->area) / (double)m->M.ncells);
-  m->area_tol = fmax(AREA_TOL, 0.5 * poly_length(&m->domain) * h / fabs(c->domain_area));
-  m->area_tol = fmin(m->area_tol, AREA_TOL_MAX);
+  m->area_tol = mx_qarea_tolerance(&m->domain, c, m->M.ncells);
   if (c->bad_edges || c->hanging || c->inverted || m->q.invalid) {
     mx_error(name, 0, "the mesh is not valid: %zu bad edge(s), %zu hanging node(s), %zu "
              "inverted cell(s) (%zu with scaled Jacobian <= 0)", c->bad_edges, c->hanging,

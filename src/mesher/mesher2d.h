@@ -73,5 +73,9 @@ int mx_qrestart_to_keep(mx_mesher2d *m, const struct mx_restart *r);
  * segments' ends, mx_qgrid_build), and the whole pipeline from the requests and kept leaves. */
 int mx_mesher2d_grid(const mx_mesher2d *m, mx_qgrid *g);
 int mx_mesher2d_run(mx_mesher2d *m);
+/* The area tolerance of the check (mesher2d and `mixoct check`): half a
+ * layer of cells of the mean size along the polylines, relative to the
+ * domain's area, 5% at least, 25% at most. */
+double mx_qarea_tolerance(const mx_poly *P, const mx_qcheck_report *c, size_t ncells);
 
 #endif
