@@ -154,6 +154,25 @@ mesh_and_verify a7 1 - - -p "$PL/a.poly" -a 7
 mesh_and_verify as8 1 - - -p "$PL/a.poly" -s 8
 mesh_and_verify hole4 1 - - -p "$PL/square_with_hole.off" -s 4
 
+# the shared inputs at coarse to fine levels: exit 0 and `mixoct check`
+# (independent of mesher2d's own check) passes the written mesh with its
+# polygon; coarse levels rely on the feature rule (features kept apart)
+for f in a pie bar lonso; do
+  for req in "-s 2" "-s 5" "-s 8" "-a 6"; do
+    # shellcheck disable=SC2086
+    if "$M2" -p "$PL/$f.poly" $req -O "$f.vtu" --quiet 2>"$T/err" &&
+       "$BIN" check "$f.vtu" --poly "$PL/$f.poly" >"$T/out" 2>&1; then
+      ok "$f $req: valid, checked"
+    else
+      bad "$f $req: $(cat "$T/err") $(tail -3 "$T/out")"
+    fi
+    rm -f "$f.vtu"
+  done
+done
+if "$M2" -p "$PL/a.poly" -s 5 -w "$(dirname "$PL")/polylines/drawing.poly" 8 -O d.vtu --quiet 2>"$T/err" &&
+   "$BIN" check d.vtu --poly "$PL/a.poly" >"$T/out" 2>&1; then ok "a with the drawing: valid, checked"
+else bad "a with the drawing: $(cat "$T/err") $(tail -3 "$T/out")"; fi
+
 expect_exit 0 "every format" "$M2" -p "$PL/unit_square.poly" -a 3 -u all -v -x -o -g -m -O all.vtu
 for f in all.vtk all.msh all.off all.getfem all.m3d all.vtu; do
   if [ -s "$f" ]; then ok "$f written"; else bad "$f missing"; fi
