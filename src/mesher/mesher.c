@@ -34,23 +34,13 @@ static void collect_message(void *user, int level, const char *text) {
 }
 
 void mx_call_begin(mx_mesher *m, mx_call *c) {
-  c->fn = mx_msg_fn;
-  c->user = mx_msg_user;
-  c->threads = omp_get_max_threads();
-  mx_msg_fn = collect_message;
-  mx_msg_user = m;
+  mx_call_enter(c, collect_message, m, m->p.threads);
   m->last_error[0] = 0;
-  mx_oom_seen = 0;
-  if (m->p.threads > 0) omp_set_num_threads(m->p.threads);
 }
 
 int mx_call_end(mx_mesher *m, mx_call *c, int status) {
   (void)m;
-  status = mx_status_refine(status);
-  mx_msg_fn = c->fn;
-  mx_msg_user = c->user;
-  omp_set_num_threads(c->threads);
-  return status;
+  return mx_call_leave(c, status);
 }
 
 const char *mx_status_string(int status) {

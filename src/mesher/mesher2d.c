@@ -14,6 +14,7 @@
 #include "common.h"
 #include "io/restart.h"
 #include "kernels/estimate.h"
+#include "mesher/call.h"
 
 /* The check's tolerances: boundary nodes within CHECK_TOL of the domain's
  * diameter from the polylines; the area within half a layer of cells along
@@ -33,12 +34,6 @@
 
 /* ---- calls and messages ---------------------------------------------------- */
 
-typedef struct {
-  mx_message_fn fn;
-  void *user;
-  int threads;
-} call2d;
-
 static void collect_message(void *user, int level, const char *text) {
   mx_mesher2d *m = user;
   if (level == MX_MSG_ERROR && !m->last_error[0])
@@ -49,31 +44,14 @@ static void collect_message(void *user, int level, const char *text) {
     fprintf(stderr, "mesher2d: %s%s\n", level == MX_MSG_ERROR ? "error: " : "warning: ", text);
 }
 
-static void begin(mx_mesher2d *m, call2d *c) {
-  c->fn = mx_msg_fn;
-  c->user = mx_msg_user;
-  c->threads = omp_get_max_threads();
-  mx_msg_fn = collect_message;
-  mx_msg_user = m;
-  m->last_error[0] = 0;
-  mx_oom_seen = 0;
-  if (m->p.threads > 0) omp_set_num_threads(m->p.threads);
-}
-
-static int end(call2d *c, int status) {
-  status = mx_status_refine(status);
-  mx_msg_fn = c->fn;
-  mx_msg_user = c->user;
-  omp_set_num_threads(c->threads);
-  return status;
-}
-
 /* A const call (save, write) still reports through the mesher's handler. */
-#define CALL(m, expr)                  \
-  do {                                 \
-    call2d c_;                         \
-    begin((mx_mesher2d *)(m), &c_);    \
-    return end(&c_, (expr));           \
+#define CALL(m, expr)                                                   \
+  do {                                                                  \
+    mx_call c_;                                                         \
+    mx_mesher2d *m_ = (mx_mesher2d *)(m);                               \
+    mx_call_enter(&c_, collect_message, m_, m_->p.threads);             \
+    m_->last_error[0] = 0;                                              \
+    return mx_call_leave(&c_, (expr));                                  \
   } while (0)
 
 void mx_params2d_default(mx_params2d *p) {

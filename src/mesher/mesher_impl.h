@@ -5,13 +5,8 @@
 #define MX_MESHER_IMPL_H
 
 #include "common.h"
+#include "mesher/call.h"
 #include "mesher/mesher.h"
-
-typedef struct {
-  mx_message_fn fn;
-  void *user;
-  int threads;
-} mx_call;
 
 void mx_call_begin(mx_mesher *m, mx_call *c);
 /* Restores what mx_call_begin changed; MX_EINPUT after a failed allocation
