@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+HERE=$(cd "$(dirname "$0")" && pwd) # before any cd: tests/lib.sh
 # `mixoct check` on 2D meshes (io/read_qmesh.h, src/cli/check_cmd.c): the
 # shared polylines a, box and pie meshed by mesher2d at two levels into VTU,
 # legacy VTK (ASCII and binary), MSH 4.1 (ASCII and binary) and OFF; each
@@ -30,16 +31,7 @@ trap 'rm -rf "$T"' EXIT
 ln -s "$BIN" "$T/mesher2d"
 M2=$T/mesher2d
 cd "$T" || exit 1
-fails=0
-ok() { echo "ok   $*"; }
-bad() { echo "FAIL $*"; fails=$((fails + 1)); }
-expect_exit() { # code, description, command...
-  local want=$1 what=$2; shift 2
-  "$@" >"$T/out" 2>"$T/err"; local got=$?
-  if [ "$got" -eq "$want" ]; then ok "$what (exit $got)"; else bad "$what: exit $got, wanted $want"; cat "$T/err"; fi
-}
-has() { if grep -q -- "$2" "$1"; then ok "$3"; else bad "$3: '$2' not in $(cat "$1")"; fi; }
-same() { if [ "$1" == "$2" ]; then ok "$3"; else bad "$3: '$1' != '$2'"; fi; }
+. "$HERE/lib.sh"
 
 cat >"$T/tool.py" <<'EOF'
 import sys

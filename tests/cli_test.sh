@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+HERE=$(cd "$(dirname "$0")" && pwd) # before any cd: tests/lib.sh
 # End-to-end tests of the mixoct program: exit codes, messages that name the
 # file and line, no partial output, JSON summary, determinism across threads,
 # requests through the command line on box surfaces (counts reasoned in
@@ -6,15 +7,7 @@
 MIXOCT=${1:?usage: cli_test.sh path/to/mixoct}
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
-fails=0
-ok() { echo "ok   $*"; }
-bad() { echo "FAIL $*"; fails=$((fails + 1)); }
-expect_exit() { # code, description, command...
-  local want=$1 what=$2; shift 2
-  "$@" >"$T/out" 2>"$T/err"; local got=$?
-  if [ "$got" -eq "$want" ]; then ok "$what (exit $got)"; else bad "$what: exit $got, wanted $want"; cat "$T/err"; fi
-}
-has() { if grep -q -- "$2" "$1"; then ok "$3"; else bad "$3: '$2' not in $(cat "$1")"; fi; }
+. "$HERE/lib.sh"
 
 cube_off() { # file, half side
   local h=$2

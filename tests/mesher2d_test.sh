@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+HERE=$(cd "$(dirname "$0")" && pwd) # before any cd: tests/lib.sh
 # End-to-end tests of the mesher2d program (src/cli/mesher2d.c): usage and
 # input errors (exit 2, file:line messages, an unwritable output exit 4
 # before anything is read), then meshes of the shared polylines checked here
@@ -20,16 +21,7 @@ trap 'rm -rf "$T"' EXIT
 ln -s "$BIN" "$T/mesher2d"
 M2=$T/mesher2d
 cd "$T" || exit 1
-fails=0
-ok() { echo "ok   $*"; }
-bad() { echo "FAIL $*"; fails=$((fails + 1)); }
-expect_exit() { # code, description, command...
-  local want=$1 what=$2; shift 2
-  "$@" >"$T/out" 2>"$T/err"; local got=$?
-  if [ "$got" -eq "$want" ]; then ok "$what (exit $got)"; else bad "$what: exit $got, wanted $want"; cat "$T/err"; fi
-}
-has() { if grep -q -- "$2" "$1"; then ok "$3"; else bad "$3: '$2' not in $(cat "$1")"; fi; }
-absent() { if [ ! -e "$1" ]; then ok "$2"; else bad "$2: $1 exists"; fi; }
+. "$HERE/lib.sh"
 
 # ---- usage and input errors (no meshing needed) ------------------------------
 expect_exit 0 "--help" "$M2" --help

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+HERE=$(cd "$(dirname "$0")" && pwd) # before any cd: tests/lib.sh
 # End-to-end tests of the mesher_roi front (src/cli/mesher_roi.c): the
 # commands of a typical job script written for the published mesher, run on
 # the shared surfaces. The argument is mixoct (or the mesher_roi link); the
@@ -17,17 +18,7 @@ trap 'rm -rf "$T"' EXIT
 ln -s "$MIXOCT" "$T/mesher_roi"
 ROI=$T/mesher_roi
 cd "$T" || exit 1
-fails=0
-ok() { echo "ok   $*"; }
-bad() { echo "FAIL $*"; fails=$((fails + 1)); }
-expect_exit() { # code, description, command...
-  local want=$1 what=$2; shift 2
-  "$@" >"$T/out" 2>"$T/err"; local got=$?
-  if [ "$got" -eq "$want" ]; then ok "$what (exit $got)"; else bad "$what: exit $got, wanted $want"; cat "$T/err"; fi
-}
-has() { if grep -q -- "$2" "$1"; then ok "$3"; else bad "$3: '$2' not in $(cat "$1")"; fi; }
-exists() { if [ -s "$1" ]; then ok "$1 written"; else bad "$1 missing"; fi; }
-absent() { if [ ! -e "$1" ]; then ok "$2"; else bad "$2: $1 exists"; fi; }
+. "$HERE/lib.sh"
 check_mesh() { # file, description
   if "$MIXOCT" check "$1" >"$T/check" 2>&1; then ok "$2: mixoct check clean"; else bad "$2: mixoct check"; cat "$T/check"; fi
 }
