@@ -292,7 +292,7 @@ typedef struct {
                         * until features keep apart (each feature's quadrant
                         * at most half its distance to the nearest other);
                         * 0: not (two features may then claim one
-                        * node: MX_EINPUT) */
+                        * node: the mesh is refused, naming both) */
 } mx_params2d;
 
 void mx_params2d_default(mx_params2d *p);

@@ -1,4 +1,5 @@
-"""mixoct: the mixed-element octree mesher, from Python (ctypes + numpy).
+"""mixoct: the mixed-element octree mesher (3D) and quadtree mesher (2D),
+from Python (ctypes + numpy).
 
 A thin binding over the C API of ``include/mixoct.h`` (``libmixoct.so``)::
 
@@ -11,6 +12,17 @@ A thin binding over the C API of ``include/mixoct.h`` (``libmixoct.so``)::
         m.refine_elements(worst)          # Algorithm 3 of the 2021 paper
         m.write("demo.vtu")
 
+and in 2D (closed polylines in, counter-clockwise triangles and
+quadrilaterals out; the ``mesher2d`` program's calls)::
+
+    with mixoct.Mesher2D(surface_level=5) as m:
+        m.set_domain("box.poly")          # .poly, .off or a 2D .mdl
+        m.mesh()
+        print(m.counts, m.nodes.shape, m.cells.shape)   # (n, 2), (m, 4)
+        m.save_restart("box.oct")
+        m.refine_elements([7])
+        m.write("box.vtu")
+
 The library is looked for, in this order: the path in the environment
 variable ``MIXOCT_LIB``; ``libmixoct.so`` in this package's directory; the
 build directory this package was copied into (``<build>/python/mixoct`` ->
@@ -20,7 +32,8 @@ install time; the library on the linker's path (``ctypes.util``).
 Mesh arrays are views, not copies
 ---------------------------------
 ``Mesher.nodes``, ``conn``, ``types``, ``jens``, ``leaf``, ``level`` and
-``boundary`` are read-only numpy arrays over the library's own memory (no
+``boundary`` (and ``Mesher2D.nodes``, ``cells``, ``types``, ``leaf`` and
+``level``) are read-only numpy arrays over the library's own memory (no
 copy). They are valid until the next call that changes the mesh: ``mesh``,
 ``build_octree``, ``transition``, ``boundary_stage``, ``refine``,
 ``refine_elements``, ``refine_leaves``, ``load_restart`` (successful or not).
@@ -31,6 +44,7 @@ in a :class:`MeshBuffer` that records the mesh generation it was taken from:
 ``Mesher.generation`` counts the mesh changes. Take ``.copy()`` of whatever
 must outlive a re-mesh. ``close()`` (or leaving the ``with`` block) is safe
 with views alive: the C object is freed when the last view of it is gone.
+All of this holds for ``Mesher2D`` alike.
 
 Errors
 ------
@@ -39,9 +53,10 @@ Every non-zero status of the library raises a subclass of :class:`Error`
 line for bad input): :class:`InternalError` (1), :class:`InputError` (2,
 also a ``ValueError``), :class:`OutOfMemoryError` (3, also a
 ``MemoryError``), :class:`OutputError` (4), :class:`InvalidMeshError` (5:
-elements with J_ENS <= 0 are left; the mesh is still there to inspect or
-write). Warnings of the library do not go to stderr: they are collected in
-``Mesher.warnings`` (a list of str).
+elements with J_ENS <= 0 are left, or in 2D the mesh failed the independent
+check; the mesh is still there to inspect or write). Warnings of the library
+do not go to stderr: they are collected in ``Mesher.warnings`` (a list of
+str).
 
 Threads: the library runs its passes with OpenMP threads and the GIL is
 released during each call; one Mesher must not be used from two Python
@@ -58,10 +73,10 @@ import weakref
 import numpy as np
 
 __all__ = [
-    "Mesher", "MeshBuffer", "read_element_list", "load_library", "Error",
-    "InternalError", "InputError", "OutOfMemoryError", "OutputError",
+    "Mesher", "Mesher2D", "MeshBuffer", "read_element_list", "load_library",
+    "Error", "InternalError", "InputError", "OutOfMemoryError", "OutputError",
     "InvalidMeshError", "TET", "PYRAMID", "PRISM", "HEX", "TYPE_NAMES",
-    "NODES_PER_TYPE", "NO_NODE", "status_string",
+    "NODES_PER_TYPE", "TRI", "QUAD", "NO_NODE", "status_string",
 ]
 
 # ---- constants (include/mixoct.h) ------------------------------------------
@@ -70,7 +85,10 @@ OK, EINTERNAL, EINPUT, ENOMEM, EIO, EINVALID = 0, 1, 2, 3, 4, 5
 TET, PYRAMID, PRISM, HEX = 0, 1, 2, 3
 TYPE_NAMES = ("tet", "pyramid", "prism", "hex")
 NODES_PER_TYPE = (4, 5, 6, 8)
-#: the padding of ``conn`` rows shorter than 8 nodes (UINT32_MAX)
+#: the 2D cell types (Mesher2D.types)
+TRI, QUAD = 0, 1
+#: the padding of ``conn`` rows shorter than 8 nodes, and of a triangle's
+#: row of ``Mesher2D.cells`` (UINT32_MAX)
 NO_NODE = 0xFFFFFFFF
 _STAGES = {"octree": 0, "transition": 1, "full": 2}
 _BALANCE = {"edges": 0, "recursive": 1}
@@ -170,6 +188,39 @@ _MESSAGE_FN = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_int,
                                ctypes.c_char_p)
 
 
+def _fields(*groups):
+    """A structure's _fields_ from (ctype, "name name ...") groups, in
+    order."""
+    return [(n, t) for t, names in groups for n in names.split()]
+
+
+_u8p = ctypes.POINTER(ctypes.c_uint8)
+_u32p = ctypes.POINTER(ctypes.c_uint32)
+
+
+class _Params2D(ctypes.Structure):
+    _fields_ = _fields(
+        (ctypes.c_int, "surface_level all_level balance threads"),
+        (ctypes.c_double, "close_ratio max_memory_mb"),
+        (ctypes.c_int, "feature_levels"))
+
+
+class _MeshArrays2D(ctypes.Structure):
+    _fields_ = _fields((ctypes.c_size_t, "nnodes ncells nleaves"),
+                       (ctypes.POINTER(ctypes.c_double), "xy"),
+                       (_u8p, "type"), (_u32p, "conn leaf"), (_u8p, "level"))
+
+
+class _Stats2D(ctypes.Structure):
+    _fields_ = _fields(
+        (ctypes.c_size_t, "leaves quadrants nodes cells tris quads invalid "
+                          "refined_listed split_balance"),
+        (ctypes.c_int, "valid"),
+        (ctypes.c_double, "sj_min min_angle t_read t_refine t_balance "
+                          "t_transition t_boundary t_quality t_check "
+                          "t_restart"))
+
+
 # ---- the library -------------------------------------------------------------
 
 _lib = None
@@ -202,40 +253,56 @@ def _declare(lib):
     S = ctypes.c_char_p
     sz = ctypes.c_size_t
     u64p = ctypes.POINTER(ctypes.c_uint64)
-    dbl3 = ctypes.POINTER(ctypes.c_double)
+    u32p = ctypes.POINTER(ctypes.c_uint32)
+    dblp = ctypes.POINTER(ctypes.c_double)
     sig = {
         "mx_params_default": (None, [ctypes.POINTER(_Params)]),
         "mx_mesher_new": (P, [ctypes.POINTER(_Params)]),
-        "mx_mesher_free": (None, [P]),
-        "mx_mesher_set_message_handler": (None, [P, _MESSAGE_FN, P]),
-        "mx_mesher_last_error": (S, [P]),
         "mx_status_string": (S, [I]),
         "mx_mesher_add_surface": (I, [P, S]),
-        "mx_mesher_add_surface_arrays": (I, [P, S, sz, dbl3, sz,
-                                             ctypes.POINTER(ctypes.c_uint32)]),
+        "mx_mesher_add_surface_arrays": (I, [P, S, sz, dblp, sz, u32p]),
         "mx_mesher_add_demo_surface": (I, [P]),
         "mx_mesher_add_region_surface": (I, [P, S, I]),
-        "mx_mesher_add_box": (I, [P, dbl3, dbl3, I]),
-        "mx_mesher_read_boxes": (I, [P, S]),
-        "mx_mesher_set_levels": (I, [P, I, I]),
-        "mx_mesher_mesh": (I, [P]),
         "mx_mesher_build_octree": (I, [P]),
         "mx_mesher_transition": (I, [P]),
         "mx_mesher_boundary": (I, [P]),
-        "mx_mesher_refine_elements": (I, [P, u64p, sz]),
         "mx_mesher_refine_leaves": (I, [P, u64p, sz]),
-        "mx_mesher_refine": (I, [P]),
-        "mx_mesher_save_restart": (I, [P, S]),
-        "mx_mesher_load_restart": (I, [P, S]),
         "mx_read_element_list": (I, [S, ctypes.c_uint64,
                                      ctypes.POINTER(u64p),
                                      ctypes.POINTER(sz)]),
         "mx_free_array": (None, [P]),
         "mx_mesher_mesh_arrays": (I, [P, ctypes.POINTER(_MeshArrays)]),
-        "mx_mesher_write": (I, [P, S, I]),
-        "mx_mesher_written_order": (I, [P, ctypes.POINTER(ctypes.c_uint32)]),
+        "mx_mesher_written_order": (I, [P, u32p]),
         "mx_mesher_stats": (None, [P, ctypes.POINTER(_Stats)]),
+        # 2D (mx_mesher2d_*)
+        "mx_params2d_default": (None, [ctypes.POINTER(_Params2D)]),
+        "mx_mesher2d_new": (P, [ctypes.POINTER(_Params2D)]),
+        "mx_mesher2d_set_domain": (I, [P, S]),
+        "mx_mesher2d_set_domain_arrays": (I, [P, S, sz, dblp, sz, u32p]),
+        "mx_mesher2d_add_region": (I, [P, S, I]),
+        "mx_mesher2d_add_drawing": (I, [P, S, I]),
+        "mx_mesher2d_add_function": (I, [P, S, dblp, sz, I]),
+        "mx_mesher2d_restart_elements": (sz, [P]),
+        "mx_mesher2d_mesh_arrays": (I, [P, ctypes.POINTER(_MeshArrays2D)]),
+        "mx_mesher2d_stats": (None, [P, ctypes.POINTER(_Stats2D)]),
     }
+    # the calls the 3D and the 2D mesher share, by name and signature
+    shared = {
+        "free": (None, [P]),
+        "set_message_handler": (None, [P, _MESSAGE_FN, P]),
+        "last_error": (S, [P]),
+        "set_levels": (I, [P, I, I]),
+        "add_box": (I, [P, dblp, dblp, I]),
+        "read_boxes": (I, [P, S]),
+        "mesh": (I, [P]),
+        "refine_elements": (I, [P, u64p, sz]),
+        "refine": (I, [P]),
+        "save_restart": (I, [P, S]),
+        "load_restart": (I, [P, S]),
+        "write": (I, [P, S, I]),
+    }
+    for prefix in ("mx_mesher_", "mx_mesher2d_"):
+        sig.update((prefix + name, s) for name, s in shared.items())
     missing = []
     for name, (res, args) in sig.items():
         try:
@@ -246,6 +313,7 @@ def _declare(lib):
         f.restype = res
         f.argtypes = args
     # an older or partial library: the calls it lacks raise InternalError
+    # (a library without the 2D mesher still serves Mesher)
     lib.mixoct_missing = frozenset(missing)
     essential = {"mx_params_default", "mx_mesher_new", "mx_mesher_free",
                  "mx_mesher_last_error", "mx_mesher_set_message_handler"}
@@ -318,19 +386,44 @@ def _u64_array(indices, what):
     return np.ascontiguousarray(a, dtype=np.uint64)
 
 
+def _input_arrays(name, points, dim, pname, links, k, lname):
+    """The C arguments (count, double *, count, uint32 *) of a shape given
+    as arrays: points (n, dim) converted to float64, links (m, k) of 0-based
+    point indices to uint32 (copied only if needed; the library copies)."""
+    x = np.ascontiguousarray(points, dtype=np.float64)
+    t = np.asarray(links)
+    if x.ndim != 2 or x.shape[1] != dim:
+        raise InputError("%s: %s must be (n, %d), not %s"
+                         % (name, pname, dim, x.shape), EINPUT)
+    if t.ndim != 2 or t.shape[1] != k:
+        raise InputError("%s: %s must be (m, %d), not %s"
+                         % (name, lname, k, t.shape), EINPUT)
+    if t.size and (t.dtype.kind not in "iu" or t.min() < 0
+                   or t.max() > 0xFFFFFFFF):
+        raise InputError("%s: %s must hold indices 0 .. 2^32-1"
+                         % (name, lname), EINPUT)
+    t = np.ascontiguousarray(t, dtype=np.uint32)
+    # data_as keeps a reference to its array: the pointers stay valid
+    return (x.shape[0], x.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+            t.shape[0], t.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)))
+
+
 # ---- the mesher ----------------------------------------------------------------
 
 class _Handle:
     """Owns the C mesher; freed when the Mesher and all its views are gone."""
 
-    def __init__(self, lib, ptr):
-        self.lib = lib
-        self.ptr = ptr
+    def __init__(self, lib, prefix):
+        # resolved before the mesher is made: a library lacking them fails
+        # without leaking one
+        self.free_fn = _function(lib, prefix + "_free")
+        self.set_handler = _function(lib, prefix + "_set_message_handler")
+        self.ptr = None
         self.callback = None   # the ctypes callback must outlive the handle
 
     def free(self):
         if self.ptr:
-            self.lib.mx_mesher_free(self.ptr)
+            self.free_fn(self.ptr)
             self.ptr = None
 
     def __del__(self):
@@ -376,40 +469,56 @@ def _view(ptr, count, dtype, shape, owner):
     return a
 
 
-class Mesher:
-    """One mesher: inputs, requests, the octree, the mesh (see the module doc).
+def _mesh_view(key, doc):
+    """A property reading one view of the current mesh."""
+    return property(lambda self: self._get_views()[key], doc=doc)
 
-    Parameters are those of ``mx_params``: ``surface_level`` (-s, -1 none),
-    ``all_level`` (-a), ``stage`` ("octree", "transition", "full" or 0..2),
-    ``threads`` (0: OpenMP's default), ``max_memory_mb`` (0: the memory
-    available), ``repair_rounds``, and, as keywords, ``balance`` ("edges" or
-    "recursive"), ``close_ratio`` and ``staircase_quality`` (0: defaults).
-    """
 
-    def __init__(self, surface_level=-1, all_level=-1, stage="full",
-                 threads=0, max_memory_mb=0, repair_rounds=3, *,
-                 balance="edges", close_ratio=0.0, staircase_quality=0.0,
-                 library=None):
-        self._lib = load_library(library)
-        p = _Params()
-        self._lib.mx_params_default(ctypes.byref(p))
-        p.surface_level = int(surface_level)
-        p.all_level = int(all_level)
-        p.stage = _STAGES[stage] if isinstance(stage, str) else int(stage)
-        p.balance = (_BALANCE[balance] if isinstance(balance, str)
-                     else int(balance))
-        p.threads = int(threads)
-        p.max_memory_mb = float(max_memory_mb)
-        p.repair_rounds = int(repair_rounds)
-        if close_ratio:
-            p.close_ratio = float(close_ratio)
-        if staircase_quality:
-            p.staircase_quality = float(staircase_quality)
-        self.params = {f: getattr(p, f) for f, _ in _Params._fields_}
-        ptr = self._lib.mx_mesher_new(ctypes.byref(p))
-        if not ptr:
-            raise OutOfMemoryError("mx_mesher_new: out of memory", ENOMEM)
-        self._handle = _Handle(self._lib, ptr)
+def _balance(balance):
+    return _BALANCE[balance] if isinstance(balance, str) else int(balance)
+
+
+class _MesherBase:
+    """What Mesher (3D) and Mesher2D share: the C object's life, the calls,
+    their statuses and messages, the mesh views and their generations, the
+    requests, re-meshing, restart files and output.
+
+    A subclass names its C functions by _PREFIX ("mx_mesher" or
+    "mx_mesher2d": <prefix>_mesh, <prefix>_write, ...), gives the ctypes
+    structures of <prefix>_mesh_arrays and <prefix>_stats, and adds its
+    own views to the common ones (_make_views)."""
+
+    _PREFIX = None
+    _ARRAYS = None
+    _STATS = None
+    _DIM = 3
+    _COORDS = "xyz"         # the fields of the arrays structure: coordinates,
+    _NCELLS = "nelements"   # how many elements,
+    _WIDTH = 8              # the nodes of a row of conn
+    _NO_LEVEL = -1          # set_levels' "no such level"
+    _CONN = "conn"          # the view of the node rows
+    _NOUN = "elements"
+    _VIEW_KEYS = ()
+    TYPE_NAMES = TYPE_NAMES
+    NODES_PER_TYPE = NODES_PER_TYPE
+    _handle = None
+    _views = None
+
+    def _c(self, name):
+        return "%s_%s" % (self._PREFIX, name)
+
+    def _start(self, lib, params):
+        """Make the C mesher from the filled parameter structure and route
+        its messages to this object."""
+        self._lib = lib
+        self.params = {f: getattr(params, f) for f, _ in params._fields_}
+        new = _function(lib, self._c("new"))
+        handle = _Handle(lib, self._PREFIX)
+        handle.ptr = new(ctypes.byref(params))
+        if not handle.ptr:
+            raise OutOfMemoryError("%s: out of memory" % self._c("new"),
+                                   ENOMEM)
+        self._handle = handle
         #: warnings of the library, in order (str, without "mixoct: ")
         self.warnings = []
         #: every message of the last call that failed: (level, text)
@@ -431,8 +540,8 @@ class Mesher:
                 m.warnings.append(s)
 
         cb = _MESSAGE_FN(on_message)
-        self._handle.callback = cb
-        self._lib.mx_mesher_set_message_handler(ptr, cb, None)
+        handle.callback = cb
+        handle.set_handler(handle.ptr, cb, None)
 
     # ---- life ------------------------------------------------------------------
 
@@ -443,7 +552,7 @@ class Mesher:
         self._views = None
         if h is not None and h.ptr:
             # silence the handler first: the Mesher is going away
-            h.lib.mx_mesher_set_message_handler(h.ptr, _MESSAGE_FN(), None)
+            h.set_handler(h.ptr, _MESSAGE_FN(), None)
         del h
 
     @property
@@ -464,27 +573,29 @@ class Mesher:
             pass
 
     def __repr__(self):
+        name = type(self).__name__
         if self.closed:
-            return "<mixoct.Mesher closed>"
+            return "<mixoct.%s closed>" % name
         try:
             c = self.counts
         except Error:
-            return "<mixoct.Mesher without a mesh>"
-        return ("<mixoct.Mesher %d nodes, %d elements %s>"
-                % (self._arrays().nnodes, sum(c.values()), c))
+            return "<mixoct.%s without a mesh>" % name
+        return ("<mixoct.%s %d nodes, %d %s %s>"
+                % (name, self.nnodes, sum(c.values()), self._NOUN, c))
 
     # ---- calls -----------------------------------------------------------------
 
     @property
     def _ptr(self):
         if self._handle is None or not self._handle.ptr:
-            raise InputError("this Mesher is closed", EINPUT)
+            raise InputError("this %s is closed" % type(self).__name__,
+                             EINPUT)
         return self._handle.ptr
 
     @property
     def last_error(self):
         """The library's last error message ("" when none)."""
-        s = self._lib.mx_mesher_last_error(self._ptr)
+        s = _function(self._lib, self._c("last_error"))(self._ptr)
         return s.decode("utf-8", "replace") if s else ""
 
     def _call(self, name, *args, changes_mesh=False):
@@ -509,81 +620,6 @@ class Mesher:
             msg = "%s: %s" % (name, status_string(st))
         raise _ERRORS.get(st, InternalError)(msg, st)
 
-    # ---- inputs and requests ---------------------------------------------------
-
-    def add_surface(self, path):
-        """A closed surface bounding the domain (OFF, MDL, STL, OBJ)."""
-        self._call("mx_mesher_add_surface", _fspath(path))
-
-    def add_surface_arrays(self, xyz, tri, name="arrays"):
-        """A closed surface from arrays: xyz (n, 3) float, tri (m, 3) 0-based,
-        outward by the right hand. The arrays are converted to float64 and
-        uint32 (copied only if needed); the library copies them."""
-        x = np.ascontiguousarray(xyz, dtype=np.float64)
-        t = np.asarray(tri)
-        if x.ndim != 2 or x.shape[1] != 3:
-            raise InputError("%s: xyz must be (n, 3), not %s"
-                             % (name, x.shape), EINPUT)
-        if t.ndim != 2 or t.shape[1] != 3:
-            raise InputError("%s: tri must be (m, 3), not %s"
-                             % (name, t.shape), EINPUT)
-        if t.size and (t.dtype.kind not in "iu" or t.min() < 0
-                       or t.max() > 0xFFFFFFFF):
-            raise InputError("%s: tri must hold indices 0 .. 2^32-1"
-                             % name, EINPUT)
-        t = np.ascontiguousarray(t, dtype=np.uint32)
-        self._call("mx_mesher_add_surface_arrays", str(name).encode(),
-                   x.shape[0],
-                   x.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
-                   t.shape[0],
-                   t.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)))
-
-    def add_demo_surface(self):
-        """The built-in demo surface (a brain-like closed surface)."""
-        self._call("mx_mesher_add_demo_surface")
-
-    def add_region_surface(self, path, level):
-        """-r: octants meeting or inside this surface go to `level`."""
-        self._call("mx_mesher_add_region_surface", _fspath(path), int(level))
-
-    def add_box(self, lo, hi, level):
-        """-b: a box [lo, hi] whose octants go to `level` (after meshing too:
-        then call refine())."""
-        if np.size(lo) != 3 or np.size(hi) != 3:
-            raise InputError("add_box: lo and hi need 3 coordinates each",
-                             EINPUT)
-        lo3 = (ctypes.c_double * 3)(*[float(v) for v in np.ravel(lo)])
-        hi3 = (ctypes.c_double * 3)(*[float(v) for v in np.ravel(hi)])
-        self._call("mx_mesher_add_box", lo3, hi3, int(level))
-
-    def read_boxes(self, path):
-        """The boxes of a .reg file."""
-        self._call("mx_mesher_read_boxes", _fspath(path))
-
-    def set_levels(self, surface_level=-1, all_level=-1):
-        """Change the -s / -a levels (-1 none); after meshing, refine()
-        applies them to the existing octree."""
-        self._call("mx_mesher_set_levels", int(surface_level), int(all_level))
-
-    # ---- meshing -----------------------------------------------------------------
-
-    def mesh(self, allow_invalid=False):
-        """Mesh up to the stage asked. With allow_invalid, elements left with
-        J_ENS <= 0 do not raise InvalidMeshError (see stats()['invalid'])."""
-        return self._mesh_call("mx_mesher_mesh", allow_invalid)
-
-    def build_octree(self):
-        """Grid, refine and balance (the first stage alone)."""
-        self._call("mx_mesher_build_octree", changes_mesh=True)
-
-    def transition(self):
-        """The transition patterns (the second stage alone)."""
-        self._call("mx_mesher_transition", changes_mesh=True)
-
-    def boundary_stage(self, allow_invalid=False):
-        """The boundary stage with repair (the third stage alone)."""
-        return self._mesh_call("mx_mesher_boundary", allow_invalid)
-
     def _mesh_call(self, name, allow_invalid, *args):
         try:
             self._call(name, *args, changes_mesh=True)
@@ -593,141 +629,137 @@ class Mesher:
             return False
         return True
 
-    # ---- re-meshing ----------------------------------------------------------------
+    # ---- requests ----------------------------------------------------------------
+
+    def add_box(self, lo, hi, level):
+        """-b: a box [lo, hi] (3 coordinates each, 2 for Mesher2D) whose
+        leaves go to `level` (after meshing too: then call refine())."""
+        d = self._DIM
+        if np.size(lo) != d or np.size(hi) != d:
+            raise InputError("add_box: lo and hi need %d coordinates each"
+                             % d, EINPUT)
+        corner = ctypes.c_double * d
+        self._call(self._c("add_box"),
+                   corner(*[float(v) for v in np.ravel(lo)]),
+                   corner(*[float(v) for v in np.ravel(hi)]), int(level))
+
+    def read_boxes(self, path):
+        """The boxes of a .reg file (Mesher2D: 2D corners,
+        ``xmin ymin xmax ymax level``)."""
+        self._call(self._c("read_boxes"), _fspath(path))
+
+    def set_levels(self, surface_level=None, all_level=None):
+        """Change the -s / -a levels (None: no such level, i.e. -1 for
+        Mesher, 0 for Mesher2D); after meshing, refine() applies them to
+        the existing tree."""
+        self._call(self._c("set_levels"),
+                   self._NO_LEVEL if surface_level is None
+                   else int(surface_level),
+                   self._NO_LEVEL if all_level is None else int(all_level))
+
+    # ---- meshing and re-meshing -------------------------------------------------
+
+    def mesh(self, allow_invalid=False):
+        """Mesh from the requests (Mesher: up to the stage asked). With
+        allow_invalid, a mesh that breaks the validity contract (3D:
+        elements left with J_ENS <= 0, see stats()['invalid']; 2D: the
+        independent check failed, stats()['valid'] 0) is kept without
+        raising InvalidMeshError, and False is returned."""
+        return self._mesh_call(self._c("mesh"), allow_invalid)
+
+    def _refine_list(self, name, indices, allow_invalid):
+        a = _u64_array(indices, name)
+        return self._mesh_call(
+            self._c(name), allow_invalid,
+            a.ctypes.data_as(ctypes.POINTER(ctypes.c_uint64)), a.size)
 
     def refine_elements(self, indices, allow_invalid=False):
-        """Split the leaves owning these elements of the current mesh, restore
-        balance, apply the requests and mesh again (Algorithm 3). Any integer
-        array-like; an index out of range raises InputError (nothing done)."""
-        a = _u64_array(indices, "refine_elements")
-        return self._mesh_call(
-            "mx_mesher_refine_elements", allow_invalid,
-            a.ctypes.data_as(ctypes.POINTER(ctypes.c_uint64)), a.size)
-
-    def refine_leaves(self, indices, allow_invalid=False):
-        """The same with leaf indices (0 .. nleaves-1, Morton order)."""
-        a = _u64_array(indices, "refine_leaves")
-        return self._mesh_call(
-            "mx_mesher_refine_leaves", allow_invalid,
-            a.ctypes.data_as(ctypes.POINTER(ctypes.c_uint64)), a.size)
+        """Split the leaves (octants, quadrants) owning these elements of
+        the current mesh once, restore balance, apply the requests and mesh
+        again (Algorithm 3). Any integer array-like, or a boolean mask; an
+        index out of range raises InputError (nothing done)."""
+        return self._refine_list("refine_elements", indices, allow_invalid)
 
     def refine(self, allow_invalid=False):
         """Apply the current requests (boxes, levels, regions) to the
-        existing octree and mesh again."""
-        return self._mesh_call("mx_mesher_refine", allow_invalid)
+        existing tree and mesh again."""
+        return self._mesh_call(self._c("refine"), allow_invalid)
 
     # ---- restart files ---------------------------------------------------------
 
     def save_restart(self, path):
-        """The restart file of the current octree and mesh (".octb": binary)."""
-        self._call("mx_mesher_save_restart", _fspath(path))
+        """The restart file of the current tree and mesh (Mesher: ".octb"
+        binary, else text; Mesher2D: text, the quadtree form)."""
+        self._call(self._c("save_restart"), _fspath(path))
 
-    def load_restart(self, path, elements=None, allow_invalid=False):
-        """Rebuild the octree from a restart file and mesh it (add the same
-        surfaces first; requests already set apply on top).
-
-        elements: indices (array-like) or the path of an element list (the
-        published format) of elements of the mesh that was written with the
-        restart file, to refine at once (the -c / -l workflow of the
-        published mesher). They number the elements as the mesh files list
-        them: for a file mixoct wrote, grouped by body and type (element k
-        of the files is element written_order()[k] of the arrays); for the
-        published program's, its own order."""
-        self._call("mx_mesher_load_restart", _fspath(path), changes_mesh=True)
+    def _load_restart(self, path, elements, allow_invalid):
+        self._call(self._c("load_restart"), _fspath(path), changes_mesh=True)
         if isinstance(elements, (str, bytes, os.PathLike)):
             # the element count of the file's mesh is not in the C API: the
             # range is checked by refine_elements instead (no file line)
             elements = read_element_list(elements, 2 ** 64 - 1)
         if elements is None and self._has_mesh():
             return True
-        # libmixoct 0.1 loads the octree without meshing it; the mesh (and
-        # the list refinement) comes with refine_elements, whose indices
-        # refer to the file's mesh until then
+        # the library loads the tree without meshing it; the mesh (and the
+        # list refinement) comes with refine_elements, whose indices refer
+        # to the file's mesh until then
         return self.refine_elements([] if elements is None else elements,
                                     allow_invalid)
 
-    def written_order(self):
-        """For each position k of the mesh files (grouped by body, then type:
-        at most four blocks a body), the index of that element in the arrays
-        (level, type, ... and refine_elements)."""
-        n = self.nelements
-        order = np.empty(n, dtype=np.uint32)
-        self._call("mx_mesher_written_order",
-                   order.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)))
-        return order
-
     def _has_mesh(self):
-        a = _MeshArrays()
-        ok = self._lib.mx_mesher_mesh_arrays(self._ptr, ctypes.byref(a)) == OK
+        a = self._ARRAYS()
+        ok = _function(self._lib, self._c("mesh_arrays"))(
+            self._ptr, ctypes.byref(a)) == OK
         del self.messages[:]
         return ok
 
     # ---- output --------------------------------------------------------------------
 
     def write(self, path, ascii=False):
-        """Write the mesh; format by extension (.vtk .vtu .msh .mesh .meshb
-        .getfem .m3d .mvm); ascii: the ASCII variant of .vtk / .msh."""
-        self._call("mx_mesher_write", _fspath(path), 1 if ascii else 0)
+        """Write the mesh; format by extension (Mesher: .vtk .vtu .msh .mesh
+        .meshb .getfem .m3d .mvm; Mesher2D: .vtu .vtk .msh .off .getfem
+        .m3d); ascii: the ASCII variant of .vtk / .msh."""
+        self._call(self._c("write"), _fspath(path), 1 if ascii else 0)
 
     def stats(self):
-        """The figures of the last run (mx_stats) as a dict."""
-        s = _Stats()
-        self._lib.mx_mesher_stats(self._ptr, ctypes.byref(s))
-        d = {f: getattr(s, f) for f, _ in _Stats._fields_}
-        d["leaves_hash"] = "%016x" % s.leaves_hash
-        return d
+        """The figures of the last run (mx_stats, mx_stats2d) as a dict."""
+        s = self._STATS()
+        _function(self._lib, self._c("stats"))(self._ptr, ctypes.byref(s))
+        return {f: getattr(s, f) for f, _ in s._fields_}
 
     # ---- the mesh as arrays ----------------------------------------------------
 
     def _arrays(self):
-        a = _MeshArrays()
-        st = self._lib.mx_mesher_mesh_arrays(self._ptr, ctypes.byref(a))
+        a = self._ARRAYS()
+        name = self._c("mesh_arrays")
+        st = _function(self._lib, name)(self._ptr, ctypes.byref(a))
         if st != OK:
-            self._raise(st, "mx_mesher_mesh_arrays")
+            self._raise(st, name)
         return a
 
     def _get_views(self):
-        if self._views is not None:
-            return self._views
-        a = self._arrays()
-        owner = MeshBuffer(self._handle, self.generation, self)
-        n, e = a.nnodes, a.nelements
-        v = {
-            "nodes": _view(a.xyz, 3 * n, np.float64, (n, 3), owner),
+        if self._views is None:
+            owner = MeshBuffer(self._handle, self.generation, self)
+            self._views = self._make_views(self._arrays(), owner)
+        return self._views
+
+    def _make_views(self, a, owner):
+        """The views every mesh has, from its arrays structure `a`."""
+        n, e = a.nnodes, getattr(a, self._NCELLS)
+        d, w = self._DIM, self._WIDTH
+        return {
+            "nodes": _view(getattr(a, self._COORDS), d * n, np.float64,
+                           (n, d), owner),
+            self._CONN: _view(a.conn, w * e, np.uint32, (e, w), owner),
             "types": _view(a.type, e, np.uint8, (e,), owner),
-            "conn": _view(a.conn, 8 * e, np.uint32, (e, 8), owner),
-            "jens": _view(a.jens, e, np.float32, (e,), owner),
             "leaf": _view(a.leaf, e, np.uint32, (e,), owner),
             "level": _view(a.level, e, np.uint8, (e,), owner),
-            "boundary": _view(a.boundary, n, np.uint8, (n,), owner),
-            "counts": {TYPE_NAMES[t]: int(a.by_type[t]) for t in range(4)},
             "nleaves": int(a.nleaves),
-            "jens_min": float(a.jens_min),
-            "invalid": int(a.invalid),
         }
-        self._views = v
-        return v
-
-    nodes = property(lambda self: self._get_views()["nodes"],
-                     doc="(nnodes, 3) float64 coordinates (read-only view)")
-    conn = property(lambda self: self._get_views()["conn"],
-                    doc="(nelements, 8) uint32 nodes of each element, rows "
-                        "padded with NO_NODE; VTK order for tet, pyramid, "
-                        "hex, Gmsh's for prisms (read-only view)")
-    types = property(lambda self: self._get_views()["types"],
-                     doc="(nelements,) uint8: TET 0, PYRAMID 1, PRISM 2, HEX 3")
-    jens = property(lambda self: self._get_views()["jens"],
-                    doc="(nelements,) float32 J_ENS of each element")
-    leaf = property(lambda self: self._get_views()["leaf"],
-                    doc="(nelements,) uint32 octree leaf of each element")
-    level = property(lambda self: self._get_views()["level"],
-                     doc="(nelements,) uint8 level of that leaf")
-    boundary = property(lambda self: self._get_views()["boundary"],
-                        doc="(nnodes,) uint8, 1 on the domain boundary")
 
     @property
     def counts(self):
-        """Elements by type: {'tet': .., 'pyramid': .., 'prism': .., 'hex': ..}."""
+        """Elements by type name, e.g. {'tri': .., 'quad': ..} in 2D."""
         return dict(self._get_views()["counts"])
 
     @property
@@ -742,29 +774,21 @@ class Mesher:
     def nleaves(self):
         return self._get_views()["nleaves"]
 
-    @property
-    def jens_min(self):
-        return self._get_views()["jens_min"]
-
-    @property
-    def invalid(self):
-        return self._get_views()["invalid"]
-
     def cells_of_type(self, t, return_indices=False):
         """The (k, NODES_PER_TYPE[t]) node rows of the elements of type t
-        (int or name: "tet", "pyramid", "prism", "hex"), a uint32 copy; with
-        return_indices, (indices, rows) where indices are those elements'."""
+        (int or a name of TYPE_NAMES: "tet", "pyramid", "prism", "hex";
+        "tri", "quad" in 2D), a uint32 copy; with return_indices, (indices,
+        rows) where indices are those elements'."""
         if isinstance(t, str):
-            t = TYPE_NAMES.index(t)
+            t = self.TYPE_NAMES.index(t)
         idx = np.flatnonzero(self.types == t)
-        rows = self.conn[idx, :NODES_PER_TYPE[t]]
+        rows = self._get_views()[self._CONN][idx, :self.NODES_PER_TYPE[t]]
         return (idx, rows) if return_indices else rows
 
     def arrays(self, copy=False):
         """All mesh arrays in a dict (views, or copies that outlive re-meshes)."""
         v = self._get_views()
-        keys = ("nodes", "conn", "types", "jens", "leaf", "level", "boundary")
-        return {k: (v[k].copy() if copy else v[k]) for k in keys}
+        return {k: (v[k].copy() if copy else v[k]) for k in self._VIEW_KEYS}
 
     def is_current(self, array):
         """Whether a mesh view (or an array derived from one without copying)
@@ -776,6 +800,262 @@ class Mesher:
                 return owner.handle is self._handle and owner.current
             b = getattr(b, "base", None)
         return False
+
+
+class Mesher(_MesherBase):
+    """One mesher: inputs, requests, the octree, the mesh (see the module doc).
+
+    Parameters are those of ``mx_params``: ``surface_level`` (-s, -1 none),
+    ``all_level`` (-a), ``stage`` ("octree", "transition", "full" or 0..2),
+    ``threads`` (0: OpenMP's default), ``max_memory_mb`` (0: the memory
+    available), ``repair_rounds``, and, as keywords, ``balance`` ("edges" or
+    "recursive"), ``close_ratio`` and ``staircase_quality`` (0: defaults).
+    """
+
+    _PREFIX = "mx_mesher"
+    _ARRAYS = _MeshArrays
+    _STATS = _Stats
+    _VIEW_KEYS = ("nodes", "conn", "types", "jens", "leaf", "level",
+                  "boundary")
+
+    def __init__(self, surface_level=-1, all_level=-1, stage="full",
+                 threads=0, max_memory_mb=0, repair_rounds=3, *,
+                 balance="edges", close_ratio=0.0, staircase_quality=0.0,
+                 library=None):
+        lib = load_library(library)
+        p = _Params()
+        lib.mx_params_default(ctypes.byref(p))
+        p.surface_level = int(surface_level)
+        p.all_level = int(all_level)
+        p.stage = _STAGES[stage] if isinstance(stage, str) else int(stage)
+        p.balance = _balance(balance)
+        p.threads = int(threads)
+        p.max_memory_mb = float(max_memory_mb)
+        p.repair_rounds = int(repair_rounds)
+        if close_ratio:
+            p.close_ratio = float(close_ratio)
+        if staircase_quality:
+            p.staircase_quality = float(staircase_quality)
+        self._start(lib, p)
+
+    # ---- inputs ------------------------------------------------------------------
+
+    def add_surface(self, path):
+        """A closed surface bounding the domain (OFF, MDL, STL, OBJ)."""
+        self._call("mx_mesher_add_surface", _fspath(path))
+
+    def add_surface_arrays(self, xyz, tri, name="arrays"):
+        """A closed surface from arrays: xyz (n, 3) float, tri (m, 3) 0-based,
+        outward by the right hand. The arrays are converted to float64 and
+        uint32 (copied only if needed); the library copies them."""
+        self._call("mx_mesher_add_surface_arrays", str(name).encode(),
+                   *_input_arrays(name, xyz, 3, "xyz", tri, 3, "tri"))
+
+    def add_demo_surface(self):
+        """The built-in demo surface (a brain-like closed surface)."""
+        self._call("mx_mesher_add_demo_surface")
+
+    def add_region_surface(self, path, level):
+        """-r: octants meeting or inside this surface go to `level`."""
+        self._call("mx_mesher_add_region_surface", _fspath(path), int(level))
+
+    # ---- the stages alone ----------------------------------------------------------
+
+    def build_octree(self):
+        """Grid, refine and balance (the first stage alone)."""
+        self._call("mx_mesher_build_octree", changes_mesh=True)
+
+    def transition(self):
+        """The transition patterns (the second stage alone)."""
+        self._call("mx_mesher_transition", changes_mesh=True)
+
+    def boundary_stage(self, allow_invalid=False):
+        """The boundary stage with repair (the third stage alone)."""
+        return self._mesh_call("mx_mesher_boundary", allow_invalid)
+
+    # ---- re-meshing ----------------------------------------------------------------
+
+    def refine_leaves(self, indices, allow_invalid=False):
+        """As refine_elements, with leaf indices (0 .. nleaves-1, Morton
+        order)."""
+        return self._refine_list("refine_leaves", indices, allow_invalid)
+
+    def load_restart(self, path, elements=None, allow_invalid=False):
+        """Rebuild the octree from a restart file and mesh it (add the same
+        surfaces first; requests already set apply on top).
+
+        elements: indices (array-like) or the path of an element list (the
+        published format) of elements of the mesh that was written with the
+        restart file, to refine at once (the -c / -l workflow of the
+        published mesher). They number the elements as the mesh files list
+        them: for a file mixoct wrote, grouped by body and type (element k
+        of the files is element written_order()[k] of the arrays); for the
+        published program's, its own order."""
+        return self._load_restart(path, elements, allow_invalid)
+
+    def written_order(self):
+        """For each position k of the mesh files (grouped by body, then type:
+        at most four blocks a body), the index of that element in the arrays
+        (level, type, ... and refine_elements)."""
+        n = self.nelements
+        order = np.empty(n, dtype=np.uint32)
+        self._call("mx_mesher_written_order",
+                   order.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)))
+        return order
+
+    # ---- figures and arrays --------------------------------------------------------
+
+    def stats(self):
+        """The figures of the last run (mx_stats) as a dict."""
+        d = super().stats()
+        d["leaves_hash"] = "%016x" % d["leaves_hash"]
+        return d
+
+    def _make_views(self, a, owner):
+        v = super()._make_views(a, owner)
+        n, e = a.nnodes, a.nelements
+        v.update(jens=_view(a.jens, e, np.float32, (e,), owner),
+                 boundary=_view(a.boundary, n, np.uint8, (n,), owner),
+                 counts={TYPE_NAMES[t]: int(a.by_type[t]) for t in range(4)},
+                 jens_min=float(a.jens_min), invalid=int(a.invalid))
+        return v
+
+    nodes = _mesh_view("nodes",
+                       "(nnodes, 3) float64 coordinates (read-only view)")
+    conn = _mesh_view("conn",
+                      "(nelements, 8) uint32 nodes of each element, rows "
+                      "padded with NO_NODE; VTK order for tet, pyramid, "
+                      "hex, Gmsh's for prisms (read-only view)")
+    types = _mesh_view("types",
+                       "(nelements,) uint8: TET 0, PYRAMID 1, PRISM 2, HEX 3")
+    jens = _mesh_view("jens", "(nelements,) float32 J_ENS of each element")
+    leaf = _mesh_view("leaf",
+                      "(nelements,) uint32 octree leaf of each element")
+    level = _mesh_view("level", "(nelements,) uint8 level of that leaf")
+    boundary = _mesh_view("boundary",
+                          "(nnodes,) uint8, 1 on the domain boundary")
+    jens_min = _mesh_view("jens_min", "the smallest J_ENS of the mesh")
+    invalid = _mesh_view("invalid", "how many elements have J_ENS <= 0")
+
+
+class Mesher2D(_MesherBase):
+    """One 2D mesher (the ``mesher2d`` program's calls, mx_mesher2d_*): a
+    domain bounded by closed polylines, requests, the quadtree, the mesh of
+    counter-clockwise triangles and quadrilaterals (see the module doc).
+
+    Parameters are those of ``mx_params2d``: ``surface_level`` (-s,
+    quadrants meeting the polylines; 0 none), ``all_level`` (-a, every
+    quadrant of the domain; 0 none), ``balance`` ("edges" or "recursive"),
+    ``threads`` (0: OpenMP's default), ``close_ratio`` (the projection of
+    close inside nodes), ``max_memory_mb`` (0: the memory available) and
+    ``feature_levels`` (refine the quadrants holding a feature until the
+    features keep apart). Every mesh is checked by the library's
+    independent routine: a mesh that fails it raises InvalidMeshError
+    (kept: it can be read and written).
+    """
+
+    _PREFIX = "mx_mesher2d"
+    _ARRAYS = _MeshArrays2D
+    _STATS = _Stats2D
+    _DIM = 2
+    _COORDS = "xy"
+    _NCELLS = "ncells"
+    _WIDTH = 4
+    _NO_LEVEL = 0
+    _CONN = "cells"
+    _NOUN = "cells"
+    _VIEW_KEYS = ("nodes", "cells", "types", "leaf", "level")
+    TYPE_NAMES = ("tri", "quad")
+    NODES_PER_TYPE = (3, 4)
+
+    def __init__(self, surface_level=0, all_level=0, balance="edges",
+                 threads=0, close_ratio=0.3, max_memory_mb=0,
+                 feature_levels=True, *, library=None):
+        lib = load_library(library)
+        p = _Params2D()
+        _function(lib, "mx_params2d_default")(ctypes.byref(p))
+        p.surface_level = int(surface_level)
+        p.all_level = int(all_level)
+        p.balance = _balance(balance)
+        p.threads = int(threads)
+        p.close_ratio = float(close_ratio)
+        p.max_memory_mb = float(max_memory_mb)
+        p.feature_levels = 1 if feature_levels else 0
+        self._start(lib, p)
+
+    # ---- the domain and the requests -------------------------------------------
+
+    def set_domain(self, path):
+        """The domain (once): closed polylines from a .poly, .off or 2D .mdl
+        file; checked closed and not self-intersecting, loops oriented by
+        nesting (outer counter-clockwise, holes clockwise)."""
+        self._call("mx_mesher2d_set_domain", _fspath(path))
+
+    def set_domain_arrays(self, xy, seg, name="arrays"):
+        """The domain (once) from arrays: xy (n, 2) float, seg (m, 2) 0-based
+        vertex indices of the segments of closed loops (any orientation: the
+        nesting decides). `name` names the domain in messages. The arrays
+        are converted to float64 and uint32 (copied only if needed); the
+        library copies them."""
+        self._call("mx_mesher2d_set_domain_arrays", str(name).encode(),
+                   *_input_arrays(name, xy, 2, "xy", seg, 2, "seg"))
+
+    def add_region(self, path, level):
+        """Quadrants meeting or inside this closed polyline go to `level`."""
+        self._call("mx_mesher2d_add_region", _fspath(path), int(level))
+
+    def add_drawing(self, path, level):
+        """Quadrants meeting these segments (closed or not) go to `level`."""
+        self._call("mx_mesher2d_add_drawing", _fspath(path), int(level))
+
+    def add_function(self, name, args, level):
+        """Quadrants meeting a curve go to `level`: "circle" (cx, cy, r),
+        "line" (px, py, nx, ny) or "sine" (amp, freq, phase, y0:
+        y = y0 + amp sin(freq x + phase))."""
+        a = np.ascontiguousarray(np.ravel(args), dtype=np.float64)
+        self._call("mx_mesher2d_add_function", str(name).encode(),
+                   a.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), a.size,
+                   int(level))
+
+    # ---- restart files ---------------------------------------------------------
+
+    def load_restart(self, path, elements=None, allow_invalid=False):
+        """Rebuild the quadtree from a restart file and mesh it (set the same
+        domain first; requests already set apply on top).
+
+        elements: indices (array-like) or the path of an element list of
+        cells of the mesh that was saved with the restart file (numbered
+        as its arrays and files list them), to refine at once."""
+        return self._load_restart(path, elements, allow_invalid)
+
+    @property
+    def restart_elements(self):
+        """How many cells the mesh of the loaded restart file had (0: none
+        loaded)."""
+        return int(_function(self._lib, "mx_mesher2d_restart_elements")(
+            self._ptr))
+
+    # ---- arrays ----------------------------------------------------------------------
+
+    def _make_views(self, a, owner):
+        v = super()._make_views(a, owner)
+        v["counts"] = {name: int(np.count_nonzero(v["types"] == t))
+                       for t, name in enumerate(self.TYPE_NAMES)}
+        return v
+
+    nodes = _mesh_view("nodes",
+                       "(nnodes, 2) float64 coordinates (read-only view)")
+    cells = _mesh_view("cells",
+                       "(ncells, 4) uint32 nodes of each cell, counter-"
+                       "clockwise; a triangle's 4th is NO_NODE (read-only "
+                       "view)")
+    types = _mesh_view("types", "(ncells,) uint8: TRI 0, QUAD 1")
+    leaf = _mesh_view("leaf", "(ncells,) uint32 quadtree leaf of each cell")
+    level = _mesh_view("level", "(ncells,) uint8 level of that leaf")
+
+    @property
+    def ncells(self):
+        return self.nelements
 
 
 # ---- element lists ---------------------------------------------------------------
