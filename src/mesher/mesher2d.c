@@ -663,7 +663,7 @@ static int save_restart(const mx_mesher2d *m, const char *path) {
   int st = mx_qrestart_from_mesher(m, &r);
   if (!st) st = mx_restart_write_text(path, &r);
   mx_restart_free(&r);
-  ((mx_mesher2d *)m)->t_restart = mx_wtime() - t;
+  ((mx_mesher2d *)m)->t_restart += mx_wtime() - t;
   return st;
 }
 
