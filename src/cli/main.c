@@ -151,6 +151,10 @@ int mx_run(const mx_options *o) {
   return st;
 }
 
+#ifdef MX_HAVE_MPI
+int mx_p4est_main(int argc, char **argv); /* src/cli/p4est_cmd.c */
+#endif
+
 int main(int argc, char **argv) {
   /* every message goes through on_message: --json keeps the warnings and
    * the first error */
@@ -167,6 +171,16 @@ int main(int argc, char **argv) {
     return mx_mesher_roi_main(argc, argv);
   if (strcmp(base ? base + 1 : argv[0], "mesher2d") == 0)
     return mx_mesher2d_main(argc, argv);
+  for (int i = 1; i < argc; i++) /* the distributed octree (issue 14) */
+    if (strcmp(argv[i], "--p4est") == 0) {
+#ifdef MX_HAVE_MPI
+      return mx_p4est_main(argc, argv);
+#else
+      mx_error(NULL, 0, "--p4est: this mixoct was built without MPI and p4est "
+                        "(meson setup -Dmpi=enabled)");
+      return MX_EINPUT;
+#endif
+    }
   mx_options o;
   int exit_now = 0;
   int st = remesh ? mx_parse_options(argc - 1, argv + 1, &o, &exit_now)

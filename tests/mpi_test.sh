@@ -1,0 +1,148 @@
+#!/usr/bin/env bash
+HERE=$(cd "$(dirname "$0")" && pwd) # before any cd: tests/lib.sh
+# The distributed octree on p4est (`mixoct --p4est`, issue 14), run with
+# mpirun on 1, 2 and 3 ranks:
+#  - the leaves in the domain and their hash are the same for every rank
+#    count;
+#  - on the demo and shared surfaces they are the single-process octree's
+#    (leaves and leaves_hash of a separate `mixoct --stage octree --json`
+#    run: the same set of (key, level) pairs);
+#  - two unit cubes face each other across a 0.01 gap along x; the root
+#    grid (cubes of 1.01 centred on the box [0, 2.01] x [0, 1]^2) puts the
+#    plane between its two roots at x = 1.005, 0.005 from each face. A box
+#    region asks level 7 or 8 on the first cube next to the gap. At level 7
+#    (octants 0.0079 wide) the last octant before the plane meets the first
+#    cube's face: both octrees keep it, the same leaves. At level 8 (0.0039
+#    wide) it lies in the gap: the single-process octree drops it, p4est
+#    keeps it as a level-8 leaf, and its balance then splits the second
+#    cube's leaves across the plane down to level 7 where nothing of the
+#    domain that fine touches them. So p4est's leaves differ there, are
+#    the single-process ones or finer, never coarser, and every
+#    single-process leaf it splits touches, across a face or an edge, an
+#    outside quadrant two levels finer, or a leaf split for that reason
+#    (checked quadrant by quadrant, src/mpi/p4est_compare.h).
+MIXOCT=${1:?usage: mpi_test.sh path/to/mixoct}
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+. "$HERE/lib.sh"
+DATA=${MIXOCT_DATA:-/work/shared/data}
+[ -d "$DATA/surfaces" ] || DATA=/work/shared/data
+MPIRUN=${MPIRUN:-mpirun}
+if ! command -v "$MPIRUN" >/dev/null; then
+  echo "SKIP: no mpirun"
+  exit 77
+fi
+mpi() { # ranks, args...
+  local n=$1; shift
+  OMP_NUM_THREADS=1 "$MPIRUN" --oversubscribe --allow-run-as-root -n "$n" "$MIXOCT" "$@"
+}
+field() { # json file, key: the value (numbers, strings, booleans)
+  python3 -c 'import json,sys
+j=json.loads(open(sys.argv[1]).read().strip().splitlines()[-1])
+for k in sys.argv[2].split("."): j=j[k]
+print(str(j).lower() if isinstance(j,bool) else j)' "$1" "$2"
+}
+
+# Two unit cubes, the second shifted by 1 + gap along x (outward faces), and
+# a box region on the first cube's side of the gap.
+two_boxes() { # file, gap
+  python3 - "$1" "$2" <<'EOS'
+import sys
+g = float(sys.argv[2])
+V, F = [], []
+for x0 in (0.0, 1.0 + g):
+    o = len(V)
+    V += [(x0 + x, y, z) for z in (0, 1) for y in (0, 1) for x in (0, 1)]
+    for a, b, c, d in ((0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)):
+        F += [(o + a, o + b, o + c), (o + a, o + c, o + d)]
+with open(sys.argv[1], "w") as f:
+    f.write("OFF\n%d %d 0\n" % (len(V), len(F)))
+    f.writelines("%g %g %g\n" % v for v in V)
+    f.writelines("3 %d %d %d\n" % t for t in F)
+EOS
+}
+two_boxes "$T/gap.off" 0.01
+for l in 7 8; do
+  printf 'n_regions 1\n\n0.8 0.4 0.4\n1.0 0.6 0.6\n\n%d\n' $l >"$T/near_gap$l.reg"
+done
+
+# ---- the same leaves on 1, 2, 3 ranks, and the single-process ones ---------
+check_case() { # name, inputs and requests...
+  local name=$1; shift
+  "$MIXOCT" "$@" --stage octree --json >"$T/single.json" 2>/dev/null
+  local sl sh
+  sl=$(field "$T/single.json" leaves)
+  sh=$(field "$T/single.json" leaves_hash)
+  local l1="" h1=""
+  for n in 1 2 3; do
+    if ! mpi "$n" "$@" --p4est --json >"$T/p$n.json" 2>"$T/err"; then
+      bad "$name: mpirun -n $n failed"; cat "$T/err"; continue
+    fi
+    local l h r
+    l=$(field "$T/p$n.json" leaves)
+    h=$(field "$T/p$n.json" leaves_hash)
+    r=$(field "$T/p$n.json" ranks)
+    same "$r" "$n" "$name: $n rank(s) reported"
+    if [ "$n" = 1 ]; then l1=$l; h1=$h; else
+      same "$l $h" "$l1 $h1" "$name: $n ranks give the leaves of 1 rank ($l, $h)"
+    fi
+    # the per-rank leaves add up: min * n <= total <= max * n
+    local lo hi
+    lo=$(field "$T/p$n.json" per_rank.leaves | tr -d '[],' | cut -d' ' -f1)
+    hi=$(field "$T/p$n.json" per_rank.leaves | tr -d '[],' | cut -d' ' -f2)
+    if [ $((lo * n)) -le "$l" ] && [ "$l" -le $((hi * n)) ]; then
+      ok "$name: per-rank leaves $lo..$hi on $n ranks"
+    else bad "$name: per-rank leaves $lo..$hi do not add up to $l on $n ranks"; fi
+  done
+  echo "$sl $sh" >"$T/single_$name"
+  echo "$l1 $h1" >"$T/p4est_$name"
+}
+
+for c in "demo5:--demo -s 5" "cortex5:-i $DATA/surfaces/cortex.off -s 5" \
+         "hollow4:-i $DATA/surfaces/hollow-coarse.off -s 4" \
+         "cortex2b:-i $DATA/surfaces/cortex.off -s 2 -b $DATA/surfaces/cortex.reg" \
+         "gap7:-i $T/gap.off -s 2 -b $T/near_gap7.reg"; do
+  name=${c%%:*}
+  # shellcheck disable=SC2086
+  check_case "$name" ${c#*:}
+  same "$(cat "$T/p4est_$name")" "$(cat "$T/single_$name")" \
+    "$name: p4est's leaves and hash are the single-process octree's"
+done
+
+# ---- across a thin gap: p4est finer, for the reason given ------------------
+check_case gap -i "$T/gap.off" -s 2 -b "$T/near_gap8.reg"
+mpi 2 -i "$T/gap.off" -s 2 -b "$T/near_gap8.reg" --p4est --p4est-compare --json \
+  >"$T/cmp.json" 2>"$T/err" || { bad "gap: --p4est-compare failed"; cat "$T/err"; }
+same "$(field "$T/cmp.json" compare.single_leaves) $(field "$T/cmp.json" compare.single_hash)" \
+  "$(cat "$T/single_gap")" "gap: the compared single-process octree is the program's"
+only_p=$(field "$T/cmp.json" compare.only_p4est)
+only_s=$(field "$T/cmp.json" compare.only_single)
+if [ "$only_p" -gt 0 ] && [ "$only_s" -gt 0 ]; then ok "gap: the leaves differ ($only_p vs $only_s)"
+else bad "gap: the leaves should differ across the gap (only p4est $only_p, only single $only_s)"; fi
+# p4est's gap leaves of level 8 ask level >= 7 across the plane, and
+# nothing there asks more (the second cube's face asks level 2)
+same "$(field "$T/cmp.json" compare.only_p4est_levels)" "{'7': $only_p}" \
+  "gap: the leaves only p4est has are of level 7"
+same "$(field "$T/cmp.json" compare.p4est_coarser) $(field "$T/cmp.json" compare.p4est_alone)" "0 0" \
+  "gap: every p4est-only leaf lies inside a coarser single-process leaf"
+same "$(field "$T/cmp.json" compare.single_finer) $(field "$T/cmp.json" compare.single_alone)" "0 0" \
+  "gap: no single-process leaf is finer than p4est's"
+same "$(field "$T/cmp.json" compare.single_coarser)" "$only_s" \
+  "gap: every single-only leaf is split in p4est"
+split=$(field "$T/cmp.json" compare.single_split_by_p4est.leaves)
+same "$split" "$only_s" "gap: the causes cover every split leaf"
+same "$(field "$T/cmp.json" compare.single_split_by_p4est.by_common) $(field "$T/cmp.json" compare.single_split_by_p4est.unexplained)" "0 0" \
+  "gap: each split leaf touches a finer outside quadrant or a leaf split that way"
+bo=$(field "$T/cmp.json" compare.single_split_by_p4est.by_outside)
+if [ "$bo" -gt 0 ]; then ok "gap: $bo split leaves touch a finer outside quadrant"
+else bad "gap: no split leaf touches a finer outside quadrant"; fi
+# counts: common + only = total, on each side
+c=$(field "$T/cmp.json" compare.common)
+same "$((c + only_p)) $((c + only_s))" "$(field "$T/cmp.json" leaves) $(cut -d' ' -f1 "$T/single_gap")" \
+  "gap: common + only = leaves on both sides"
+
+# ---- usage ------------------------------------------------------------------
+expect_exit 2 "--p4est refuses -o (no output yet)" mpi 1 --demo -s 3 --p4est -o "$T/x.vtu"
+
+echo "$fails failure(s)"
+[ "$fails" -eq 0 ]
