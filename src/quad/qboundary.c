@@ -18,8 +18,18 @@
  * folded between kept ones) lose their shortest edge (close_folds); nodes
  * that land on one point become one (merge_same).
  *
- * Every pass is a loop over all nodes or all cells whose decisions read
- * only what the previous pass wrote (or a short ordered loop over the
+ * The steps run on the band of the transition mesh (qband.c): the cells
+ * with a node that is not deep, deep nodes being inside nodes no step can
+ * move; the others stay as they are. Local ids keep the global order, so
+ * every decision by id is the one the whole mesh would give; when the band
+ * cannot be trusted (a feature not in a leaf of its own, no leaves given,
+ * a close radius of half a side or more) the band is the whole mesh. Once the close
+ * nodes are placed, the passes go over the active cells only (cell_act):
+ * those with a node not inside (or split), the others no later step
+ * changes.
+ *
+ * Every pass is a loop over all nodes or all (active) cells whose decisions
+ * read only what the previous pass wrote (or a short ordered loop over the
  * features), so the result is the same for any thread count. After each
  * step that moves nodes, cells with a scaled Jacobian <= 0 (below SJ_OK:
  * numerically flat) are split along a diagonal or get their nodes back
@@ -28,7 +38,7 @@
 #include <string.h>
 
 #include "common.h"
-#include "quad/quad.h"
+#include "quad/qinternal.h"
 #include "soa/scan.h"
 
 /* Node flags. */
@@ -39,7 +49,12 @@ enum {
   N_CLOSE = 8,    /* moved by the projection of close inside nodes */
   N_SHRUNK = 16,  /* moved by the shrink */
   N_MOVED = 32,   /* a feature that was not already where its node was */
+  N_DEEP = 64,    /* inside, and no step moves it (qband.c): its cells outside the band */
 };
+
+/* The band could not be trusted (a feature not in a leaf of the band's):
+ * the step starts again on the whole mesh. */
+#define QB_WHOLE (-1)
 
 #define FLAT_LO 175.0
 #define INSIDE_ANGLE 150.0
@@ -65,12 +80,27 @@ typedef struct {
   double *fdir;      /*   polyline vertices; per polyline vertex, the ones */
   uint32_t *fvert;   /*   before and after it */
   uint32_t *vnb;
+  const uint8_t *open; /* per cell: its leaf is in the band whole (qinternal.h) */
+  uint32_t *acell;     /* from the removal on, the cells the passes go through */
+  size_t nac;
+  const uint8_t *deep;   /* per node: frozen (qinternal.h) */
+  const uint8_t *inside; /* per node: a node of a clear leaf, inside */
+  int band;            /* the mesh is a band of the transition mesh */
   mx_qboundary_stats *st;
 } qb;
 
 static int nv_of(const qb *B, size_t c) { return B->M->type[c] == MX_QQUAD ? 4 : 3; }
 
 static double leaf_side(const qb *B, size_t c) { return ldexp(B->g->side, -B->M->level[c]); }
+
+/* The cells the passes go through: all of them until the close nodes are
+ * placed, then (active_cells) those with a node not inside, or split: the
+ * others have all their nodes inside, where they were, and no later step
+ * moves an inside node, drops or splits a cell with one (removal keeps it,
+ * patterns, notches and folds act on nodes on the polylines, and such a
+ * cell is valid): no later pass would change them. */
+static inline size_t ncells_act(const qb *B) { return B->acell ? B->nac : B->m; }
+static inline size_t cell_act(const qb *B, size_t i) { return B->acell ? B->acell[i] : i; }
 
 /* ---- node -> cells ------------------------------------------------------- */
 
@@ -84,10 +114,12 @@ static int build_node_cells(qb *B) {
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v <= B->n; v++) off[v] = 0;
 #pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < B->m; c++)
+  for (size_t i = 0; i < ncells_act(B); i++) {
+    const size_t c = cell_act(B, i);
     if (B->alive[c])
       for (int k = 0; k < nv_of(B, c); k++)
         __atomic_fetch_add(&off[M->conn[4 * c + k]], 1, __ATOMIC_RELAXED);
+  }
   const uint64_t tot = mx_scan_u64(off, B->n + 1);
   if (!B->ids || tot > B->ids_cap) {
     mx_free(B->ids);
@@ -102,10 +134,12 @@ static int build_node_cells(qb *B) {
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < B->n; v++) cur[v] = off[v];
 #pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < B->m; c++)
+  for (size_t i = 0; i < ncells_act(B); i++) {
+    const size_t c = cell_act(B, i);
     if (B->alive[c])
       for (int k = 0; k < nv_of(B, c); k++)
         ids[__atomic_fetch_add(&cur[M->conn[4 * c + k]], 1, __ATOMIC_RELAXED)] = (uint32_t)c;
+  }
   /* Sorted per node: the lists do not depend on which thread came first. */
 #pragma omp parallel for schedule(dynamic, 4096)
   for (size_t v = 0; v < B->n; v++)
@@ -230,7 +264,8 @@ static int repair(qb *B, uint8_t undo, int before_removal, size_t *undone) {
   for (;;) {
     size_t fixed = 0, marked = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : fixed, marked)
-    for (size_t c = 0; c < B->m; c++) {
+    for (size_t i = 0; i < ncells_act(B); i++) {
+      const size_t c = cell_act(B, i);
       if (!stays(B, c, before_removal) || cell_ok(B, c)) continue;
       if (B->M->type[c] == MX_QQUAD && (B->split[c] = (uint8_t)best_split(B, c))) {
         fixed++;
@@ -286,6 +321,10 @@ static void snapshot(qb *B) { memcpy(B->xy0, B->M->xy, 2 * B->n * sizeof *B->xy0
 static void node_states(qb *B) {
 #pragma omp parallel for schedule(dynamic, 1024)
   for (size_t v = 0; v < B->n; v++) {
+    if (B->inside[v]) {
+      B->nf[v] = (uint8_t)(N_IN | (B->deep[v] ? N_DEEP : 0));
+      continue;
+    }
     const int s = mx_poly_inside(B->I, B->M->xy + 2 * v);
     B->nf[v] = s == 1 ? N_IN : s == 2 ? N_ONPOLY : 0;
   }
@@ -396,17 +435,21 @@ static void feature_keys(const qb *B, const double f[2], uint64_t *k) {
     }
 }
 
-/* The node taking feature f, from the sorted cells of the candidate leaves. */
+/* The node taking feature f, from the sorted cells of the candidate leaves.
+ * *sure: the leaf is the one holding f itself and wholly in the mesh (in a
+ * band, the whole mesh would have given the same). */
 static uint32_t feature_node(const qb *B, const uint64_t *key, const uint32_t *cid, size_t m,
-                             const double f[2]) {
+                             const double f[2], int *sure) {
   uint64_t k[FEATURE_TRIES];
   feature_keys(B, f, k);
   for (int t = 0; t < FEATURE_TRIES; t++) {
     if (k[t] == UINT64_MAX) continue;
     const size_t lo = lower_bound(key, m, k[t]);
     if (lo == m || key[lo] != k[t]) continue;
+    *sure = t <= MX_QMAX_LEVEL && B->open[cid[lo]];
     return feature_target(B, cid, lo, lower_bound(key, m, k[t] + 1), f);
   }
+  *sure = 0;
   return UINT32_MAX;
 }
 
@@ -518,10 +561,14 @@ static int features(qb *B) {
   pick = mx_alloc(nfeat * sizeof *pick);
   st = pick ? candidate_cells(B, fv, nfeat, &key, &cid, &m) : MX_ENOMEM;
   if (st == MX_OK) {
-#pragma omp parallel for schedule(dynamic, 16)
-    for (size_t i = 0; i < nfeat; i++)
-      pick[i] = feature_node(B, key, cid, m, B->P->xy + 2 * (size_t)fv[i]);
-    st = take_features(B, fv, nfeat, pick);
+    int unsure = 0;
+#pragma omp parallel for schedule(dynamic, 16) reduction(| : unsure)
+    for (size_t i = 0; i < nfeat; i++) {
+      int sure;
+      pick[i] = feature_node(B, key, cid, m, B->P->xy + 2 * (size_t)fv[i], &sure);
+      unsure |= !sure;
+    }
+    st = B->band && unsure ? QB_WHOLE : take_features(B, fv, nfeat, pick);
   }
   if (st == MX_OK) st = feature_dirs(B, fv, pick, nfeat);
   mx_free(fv), mx_free(cid), mx_free(pick), mx_free(key);
@@ -537,7 +584,7 @@ static int close_nodes(qb *B, double close_ratio) {
   size_t moved = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : moved)
   for (size_t v = 0; v < B->n; v++) {
-    if (!(B->nf[v] & N_IN) || ncells_at(B, v) == 0) continue;
+    if (!(B->nf[v] & N_IN) || (B->nf[v] & N_DEEP) || ncells_at(B, v) == 0) continue;
     double s = INFINITY, q[2], d2;
     for (uint64_t i = B->off[v]; i < B->off[v + 1]; i++) s = mx_min(s, leaf_side(B, B->ids[i]));
     const double r = close_ratio * s * sqrt(2.0);
@@ -553,10 +600,42 @@ static int close_nodes(qb *B, double close_ratio) {
   return MX_OK;
 }
 
+/* The cells with a node not inside, or split (cell_act), ascending. */
+static int active_cells(qb *B) {
+  const size_t nb = (B->m + 4095) / 4096;
+  uint64_t *cnt = mx_alloc((nb + 1) * sizeof *cnt);
+  if (!cnt) return MX_ENOMEM;
+#pragma omp parallel for schedule(static)
+  for (size_t b = 0; b < nb; b++) {
+    uint64_t k = 0;
+    for (size_t c = b * 4096; c < B->m && c < (b + 1) * 4096; c++) {
+      int act = B->split[c] != 0;
+      for (int j = 0; !act && j < nv_of(B, c); j++) act = !(B->nf[B->M->conn[4 * c + j]] & N_IN);
+      k += (uint64_t)act;
+    }
+    cnt[b] = k;
+  }
+  B->nac = (size_t)mx_scan_u64(cnt, nb);
+  if (!(B->acell = mx_alloc((B->nac + 1) * sizeof *B->acell))) return mx_free(cnt), MX_ENOMEM;
+#pragma omp parallel for schedule(static)
+  for (size_t b = 0; b < nb; b++) {
+    uint64_t k = cnt[b];
+    for (size_t c = b * 4096; c < B->m && c < (b + 1) * 4096; c++) {
+      int act = B->split[c] != 0;
+      for (int j = 0; !act && j < nv_of(B, c); j++) act = !(B->nf[B->M->conn[4 * c + j]] & N_IN);
+      if (act) B->acell[k++] = (uint32_t)c;
+    }
+  }
+  mx_free(cnt);
+  return MX_OK;
+}
+
 static int remove_cells(qb *B) {
+  MX_CHECK(active_cells(B));
   size_t removed = 0;
 #pragma omp parallel for schedule(static) reduction(+ : removed)
-  for (size_t c = 0; c < B->m; c++) {
+  for (size_t i = 0; i < ncells_act(B); i++) {
+    const size_t c = cell_act(B, i);
     B->alive[c] = (uint8_t)stays(B, c, 1);
     B->ghost[c] = !B->alive[c];
     removed += !B->alive[c];
@@ -703,7 +782,8 @@ static int merge_same(qb *B) {
   }
   if (st == MX_OK && merged) {
 #pragma omp parallel for schedule(static)
-    for (size_t c = 0; c < B->m; c++) {
+    for (size_t i = 0; i < ncells_act(B); i++) {
+      const size_t c = cell_act(B, i);
       if (B->alive[c]) B->alive[c] = (uint8_t)collapse_cell(B, c, rep);
       else if (B->ghost[c]) B->ghost[c] = (uint8_t)collapse_cell(B, c, rep);
     }
@@ -765,7 +845,8 @@ static int fold_round(qb *B, uint32_t *want, uint8_t *go, int count, size_t *don
   for (size_t v = 0; v < B->n; v++) want[v] = UINT32_MAX;
   size_t fixed = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : fixed)
-  for (size_t c = 0; c < B->m; c++) {
+  for (size_t i = 0; i < ncells_act(B); i++) {
+    const size_t c = cell_act(B, i);
     uint32_t s = 0, t = 0;
     if (!B->alive[c] || cell_ok(B, c)) continue;
     if (B->M->type[c] == MX_QQUAD && (B->split[c] = (uint8_t)best_split(B, c))) fixed++;
@@ -776,7 +857,8 @@ static int fold_round(qb *B, uint32_t *want, uint8_t *go, int count, size_t *don
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < B->n; v++) go[v] = want[v] != UINT32_MAX;
 #pragma omp parallel for schedule(dynamic, 1024)
-  for (size_t c = 0; c < B->m; c++) {
+  for (size_t i = 0; i < ncells_act(B); i++) {
+    const size_t c = cell_act(B, i);
     uint32_t s = 0, t = 0;
     if (folded_ghost(B, c) && fold_edge(B, c, &s, &t) && !go[s]) atomic_min_u32(&want[s], t);
   }
@@ -876,7 +958,8 @@ static int notch_round(qb *B, uint32_t *want, size_t *done) {
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < B->n; v++) want[v] = UINT32_MAX;
 #pragma omp parallel for schedule(dynamic, 1024)
-  for (size_t c = 0; c < B->m; c++) {
+  for (size_t i = 0; i < ncells_act(B); i++) {
+    const size_t c = cell_act(B, i);
     if (!B->alive[c]) continue;
     const int nv = nv_of(B, c);
     for (int k = 0; k < nv; k++) {
@@ -1047,7 +1130,8 @@ static int surface_patterns(qb *B) {
   node_angles(B, theta);
   size_t changed = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : changed)
-  for (size_t c = 0; c < B->m; c++) {
+  for (size_t i = 0; i < ncells_act(B); i++) {
+    const size_t c = cell_act(B, i);
     if (!B->alive[c]) continue;
     B->split[c] = 0;
     if (outside_cell(B, c)) changed++;
@@ -1063,8 +1147,10 @@ static int surface_patterns(qb *B) {
 static int first_invalid(const qb *B) {
   size_t bad = SIZE_MAX;
 #pragma omp parallel for schedule(static) reduction(min : bad)
-  for (size_t c = 0; c < B->m; c++)
+  for (size_t i = 0; i < ncells_act(B); i++) {
+    const size_t c = cell_act(B, i);
     if (B->alive[c] && !cell_ok(B, c) && c < bad) bad = c;
+  }
   if (bad == SIZE_MAX) return MX_OK;
   double p[2];
   centroid(B, bad, p);
@@ -1075,87 +1161,12 @@ static int first_invalid(const qb *B) {
   return MX_EINVALID;
 }
 
-/* The cell c of the output (1 or 2 of them) numbered from o. */
-static void emit(const qb *B, size_t c, size_t o, mx_qmesh *R) {
-  const uint32_t *v = B->M->conn + 4 * c;
-  const int k = B->split[c] - 1;
-  const size_t nc = B->split[c] ? 2 : 1;
-  for (size_t i = 0; i < nc; i++) {
-    R->type[o + i] = B->split[c] ? MX_QTRI : B->M->type[c];
-    R->leaf[o + i] = B->M->leaf[c];
-    R->level[o + i] = B->M->level[c];
-    uint32_t *w = R->conn + 4 * (o + i);
-    if (!B->split[c]) memcpy(w, v, 4 * sizeof *w);
-    else {
-      w[0] = v[k];
-      w[1] = v[(k + 1 + (int)i) & 3];
-      w[2] = v[(k + 2 + (int)i) & 3];
-      w[3] = UINT32_MAX;
-    }
-  }
-}
-
-static int compact_cells(const qb *B, mx_qmesh *R) {
-  uint64_t *pos = mx_alloc((B->m + 1) * sizeof *pos);
-  if (!pos) return MX_ENOMEM;
-#pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < B->m; c++) pos[c] = B->alive[c] ? (B->split[c] ? 2 : 1) : 0;
-  pos[B->m] = 0;
-  R->ncells = mx_scan_u64(pos, B->m + 1);
-  const size_t m = R->ncells + 1;
-  R->type = mx_alloc(m), R->level = mx_alloc(m);
-  R->conn = mx_alloc(4 * m * sizeof *R->conn), R->leaf = mx_alloc(m * sizeof *R->leaf);
-  if (!R->type || !R->level || !R->conn || !R->leaf) return mx_free(pos), MX_ENOMEM;
-#pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < B->m; c++)
-    if (B->alive[c]) emit(B, c, pos[c], R);
-  mx_free(pos);
-  return MX_OK;
-}
-
-/* Nodes the cells use, in their order; cells renumbered. */
-static int compact_nodes(const qb *B, mx_qmesh *R) {
-  uint64_t *pos = mx_calloc((B->n + 1) * sizeof *pos);
-  if (!pos) return MX_ENOMEM;
-#pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < 4 * R->ncells; i++)
-    if (R->conn[i] != UINT32_MAX) __atomic_store_n(&pos[R->conn[i]], 1, __ATOMIC_RELAXED);
-  R->nnodes = mx_scan_u64(pos, B->n + 1);
-  R->xy = mx_alloc(2 * R->nnodes * sizeof *R->xy + 1);
-  R->nkey = mx_alloc(R->nnodes * sizeof *R->nkey + 1);
-  if (!R->xy || !R->nkey) return mx_free(pos), MX_ENOMEM;
-  const mx_qmesh *M = B->M;
-#pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < B->n; v++) {
-    if (pos[v + 1] == pos[v]) continue;
-    const size_t o = pos[v];
-    R->xy[2 * o] = M->xy[2 * v];
-    R->xy[2 * o + 1] = M->xy[2 * v + 1];
-    const int moved = (B->nf[v] & (N_MOVED | N_CLOSE | N_SHRUNK)) != 0;
-    R->nkey[o] = moved || !M->nkey ? MX_QNKEY_NONE : M->nkey[v];
-  }
-#pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < 4 * R->ncells; i++)
-    if (R->conn[i] != UINT32_MAX) R->conn[i] = (uint32_t)pos[R->conn[i]];
-  mx_free(pos);
-  return MX_OK;
-}
-
-static int compact(qb *B) {
-  mx_qmesh R = {0};
-  int st = compact_cells(B, &R);
-  if (st == MX_OK) st = compact_nodes(B, &R);
-  if (st != MX_OK) return mx_qmesh_free(&R), st;
-  mx_qmesh_free(B->M);
-  *B->M = R;
-  return MX_OK;
-}
-
 /* ---- the steps in order ------------------------------------------------------- */
 
-/* The steps in order; the last repair (a shrunk node back where it was:
- * off the polylines) is for what the others left. */
-static int run(qb *B, double close_ratio) {
+/* The steps in order on the band; the last repair (a shrunk node back
+ * where it was: off the polylines) is for what the others left. Then the
+ * band goes back into the mesh, compacted. */
+static int run(qb *B, double close_ratio, mx_qband *band, mx_qmesh *M) {
   node_states(B);
   MX_CHECK(build_node_cells(B));
   MX_CHECK(features(B));
@@ -1171,7 +1182,8 @@ static int run(qb *B, double close_ratio) {
   MX_CHECK(repair(B, N_SHRUNK, 0, &undone));
   B->st->shrunk -= undone;
   MX_CHECK(first_invalid(B));
-  return compact(B);
+  mx_mem_mark("qboundary.run");
+  return mx_qband_merge(band, B->alive, B->split, B->nf, N_MOVED | N_CLOSE | N_SHRUNK, M);
 }
 
 static double domain_size(const mx_poly *P) {
@@ -1184,13 +1196,12 @@ static double domain_size(const mx_poly *P) {
   return P->nv ? hypot(hi[0] - lo[0], hi[1] - lo[1]) : 0;
 }
 
-int mx_qboundary(const mx_poly *P, const mx_poly_index *I, const mx_qtree *T,
-                 const uint32_t *leaves, double close_ratio, mx_qmesh *M,
-                 mx_qboundary_stats *stats) {
-  (void)leaves; /* a cell's leaf is found from its level and its position */
-  mx_qboundary_stats dummy;
-  qb B = {.M = M, .P = P, .I = I, .g = &T->grid, .n = M->nnodes, .m = M->ncells,
-          .st = stats ? stats : &dummy};
+/* Algorithm 2 on one band of M (or all of it). */
+static int boundary_on(const mx_poly *P, const mx_poly_index *I, const mx_qtree *T,
+                       double close_ratio, mx_qband *band, mx_qmesh *M, mx_qboundary_stats *st) {
+  mx_qmesh *L = &band->L;
+  qb B = {.M = L, .P = P, .I = I, .g = &T->grid, .n = L->nnodes, .m = L->ncells,
+          .open = band->open, .deep = band->deep, .inside = band->inside, .band = band->act != NULL, .st = st};
   memset(B.st, 0, sizeof *B.st);
   B.tol = 1e-12 * domain_size(P);
   B.nf = mx_calloc(B.n + 1);
@@ -1198,13 +1209,32 @@ int mx_qboundary(const mx_poly *P, const mx_poly_index *I, const mx_qtree *T,
   B.alive = mx_alloc(B.m + 1);
   B.split = mx_calloc(B.m + 1);
   B.ghost = mx_calloc(B.m + 1);
-  int st = B.nf && B.xy0 && B.alive && B.split && B.ghost ? MX_OK : MX_ENOMEM;
-  if (st == MX_OK) {
+  int st_ = B.nf && B.xy0 && B.alive && B.split && B.ghost ? MX_OK : MX_ENOMEM;
+  if (st_ == MX_OK) {
     memset(B.alive, 1, B.m);
-    st = run(&B, close_ratio);
+    st_ = run(&B, close_ratio, band, M);
   }
   mx_free(B.nf), mx_free(B.xy0), mx_free(B.alive), mx_free(B.split), mx_free(B.ghost);
   mx_free(B.off), mx_free(B.ids), mx_free(B.fnode), mx_free(B.fdir);
-  mx_free(B.fvert), mx_free(B.vnb);
-  return st;
+  mx_free(B.fvert), mx_free(B.vnb), mx_free(B.acell);
+  return st_;
+}
+
+/* The band needs the leaves (the cells' quadrants) and a close ratio whose
+ * radius stays under half a side (qband.c); else, or when the band cannot
+ * be trusted, the whole mesh is the band. */
+int mx_qboundary(const mx_poly *P, const mx_poly_index *I, const mx_qtree *T,
+                 const uint32_t *leaves, double close_ratio, mx_qmesh *M,
+                 mx_qboundary_stats *stats) {
+  mx_qboundary_stats dummy;
+  int whole = !leaves || !(close_ratio * sqrt(2.0) < 0.49);
+  for (;;) {
+    mx_qband band;
+    int st = mx_qband_extract(I, T, leaves, whole, M, &band);
+    mx_mem_mark("qboundary.band");
+    if (st == MX_OK) st = boundary_on(P, I, T, close_ratio, &band, M, stats ? stats : &dummy);
+    mx_qband_free(&band);
+    if (st != QB_WHOLE) return st;
+    whole = 1;
+  }
 }

@@ -2,6 +2,9 @@
  * their statistics over a mesh (quad.h). */
 #include <math.h>
 #include <string.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 #include "common.h"
 #include "quad/quad.h"
@@ -22,16 +25,50 @@ static void corner_edges(const double *xy, const uint32_t *v, int nv, int k, dou
   e2[1] = b[1] - p[1];
 }
 
+/* Whether quad v is a rectangle with sides along the axes, its corners
+ * sharing their coordinates exactly (the quadtree's squares): then every
+ * corner has the same cross product and the same product of squared edge
+ * lengths as corner 0 (differences of the same coordinates, up to exact
+ * changes of sign, multiplied in another order), so the same measures. */
+static inline int axis_rect(const double *xy, const uint32_t *v) {
+  const double *p0 = xy + 2 * (size_t)v[0], *p1 = xy + 2 * (size_t)v[1];
+  const double *p2 = xy + 2 * (size_t)v[2], *p3 = xy + 2 * (size_t)v[3];
+  return (p0[1] == p1[1] && p1[0] == p2[0] && p2[1] == p3[1] && p3[0] == p0[0]) ||
+         (p0[0] == p1[0] && p1[1] == p2[1] && p2[0] == p3[0] && p3[1] == p0[1]);
+}
+
+/* Per corner k: cross(e1, e2) / sqrt(|e1|^2 |e2|^2), 0 for a collapsed
+ * corner; the corners independent of each other (the square roots and
+ * divisions of a cell run side by side), the least taken in corner order;
+ * an axis-parallel rectangle's corners all give corner 0's. */
 double mx_qsj_nodes(const double *xy, const uint32_t *v, int nv) {
-  double sj = INFINITY;
-  for (int k = 0; k < nv; k++) {
+  const int nk = nv == 4 && axis_rect(xy, v) ? 1 : nv; /* the corners to measure */
+  double cr[4], l2[4], s[4];
+  for (int k = 0; k < nk; k++) {
     double e1[2], e2[2];
     corner_edges(xy, v, nv, k, e1, e2);
-    const double l = sqrt((e1[0] * e1[0] + e1[1] * e1[1]) * (e2[0] * e2[0] + e2[1] * e2[1]));
-    /* A zero-length edge is a collapsed cell: not valid. */
-    const double s = l > 0 ? (e1[0] * e2[1] - e1[1] * e2[0]) / l : 0.0;
-    sj = mx_min(sj, s);
+    cr[k] = e1[0] * e2[1] - e1[1] * e2[0];
+    l2[k] = (e1[0] * e1[0] + e1[1] * e1[1]) * (e2[0] * e2[0] + e2[1] * e2[1]);
   }
+  int k = 0;
+#ifdef __SSE2__
+  /* two corners at a time: IEEE square roots and divisions, the same values */
+  for (; k + 1 < nk; k += 2) {
+    const __m128d l = _mm_sqrt_pd(_mm_loadu_pd(l2 + k));
+    const __m128d pos = _mm_cmpgt_pd(l, _mm_setzero_pd());
+    const __m128d q = _mm_div_pd(_mm_loadu_pd(cr + k), _mm_or_pd(_mm_and_pd(pos, l),
+                                                                  _mm_andnot_pd(pos, _mm_set1_pd(1.0))));
+    _mm_storeu_pd(s + k, _mm_and_pd(pos, q));
+  }
+#endif
+  for (; k < nk; k++) {
+    const double l = sqrt(l2[k]);
+    /* A zero-length edge is a collapsed cell: not valid. */
+    const double q = cr[k] / (l > 0 ? l : 1.0);
+    s[k] = l > 0 ? q : 0.0;
+  }
+  double sj = INFINITY;
+  for (k = 0; k < nk; k++) sj = mx_min(sj, s[k]);
   return nv == 3 ? sj / SIN60 : sj;
 }
 
@@ -65,6 +102,12 @@ static double min_angle_fast(const mx_qmesh *M, size_t c, double right) {
   const int nv = cell_nv(M, c);
   const uint32_t *v = M->conn + 4 * c;
   double a = INFINITY;
+  if (nv == 4 && axis_rect(M->xy, v)) {
+    /* all corners as corner 0: a right angle when counter-clockwise */
+    double e1[2], e2[2];
+    corner_edges(M->xy, v, nv, 0, e1, e2);
+    if (e1[0] * e2[1] - e1[1] * e2[0] > 0) return right;
+  }
   for (int k = 0; k < nv; k++) {
     double e1[2], e2[2];
     corner_edges(M->xy, v, nv, k, e1, e2);

@@ -9,7 +9,10 @@
  * cover: a node is owned by the first leaf (in the given, Morton, order)
  * that uses it, which its coverage tells (owner_quadrant), and numbered
  * when its owner lists its nodes: the numbering does not depend on the
- * thread count.
+ * thread count. The leaves' keys and levels are gathered first (the passes
+ * then read them in order), and the blocks' nodes are stored in the Morton
+ * order of the blocks (the passes, going over the leaves in that order,
+ * read and write ids near each other).
  *
  * The local nodes of a leaf, in half sizes: 0 (0,0), 1 (1,0), 2 (2,0),
  * 3 (2,1), 4 (2,2), 5 (1,2), 6 (0,2), 7 (0,1), 8 the centre (1,1). A turn
@@ -232,11 +235,11 @@ typedef struct {
   uint32_t x, y, s;
 } fleaf;
 
-static inline __attribute__((always_inline)) fleaf leaf_at(const node_table *H,
-                                                           const mx_qtree *T, uint32_t q) {
+static inline __attribute__((always_inline)) fleaf leaf_at(const node_table *H, uint64_t key,
+                                                           int level) {
   uint32_t x, y;
-  mx_qkey_xy(T->key[q], &x, &y);
-  return (fleaf){x >> H->shift, y >> H->shift, mx_qsize(T->level[q]) >> H->shift};
+  mx_qkey_xy(key, &x, &y);
+  return (fleaf){x >> H->shift, y >> H->shift, mx_qsize(level) >> H->shift};
 }
 
 /* Local node k of leaf f on that lattice (a mid-node only when s >= 2). */
@@ -247,7 +250,7 @@ static inline __attribute__((always_inline)) fleaf leaf_at(const node_table *H,
  * quadrants it covers, by chunks; a chunk that fills the table is done
  * again after the table doubled (covering a quadrant twice changes
  * nothing). */
-static int cover(const mx_qtree *T, const uint32_t *leaves, size_t n, node_table *H) {
+static int cover(const uint64_t *key, const uint8_t *lev, size_t n, node_table *H) {
   const size_t chunk = 1 << 16;
   for (size_t lo = 0; lo < n;) {
     const size_t hi = n - lo < chunk ? n : lo + chunk;
@@ -257,8 +260,8 @@ static int cover(const mx_qtree *T, const uint32_t *leaves, size_t n, node_table
       cursor_init(&c);
 #pragma omp for schedule(static)
       for (size_t i = lo; i < hi; i++) {
-        const fleaf f = leaf_at(H, T, leaves[i]);
-        const int step = T->level[leaves[i]] < H->finest ? 1 : 2;
+        const fleaf f = leaf_at(H, key[i], lev[i]);
+        const int step = lev[i] < H->finest ? 1 : 2;
         for (int k = 0; k < 8; k += step) {
           int nib, p;
           if (!block_at(H, &c, NX(k), NY(k), 1, &nib, &p)) continue;
@@ -274,7 +277,9 @@ static int cover(const mx_qtree *T, const uint32_t *leaves, size_t n, node_table
   return MX_OK;
 }
 
-/* Each block's place in id: a prefix sum of its node counts over the table. */
+/* Each block's place in id: a prefix sum of its node counts, the blocks
+ * taken in Morton order (the passes go over the leaves in that order: the
+ * ids they read and write are then near each other). */
 static int place_blocks(node_table *H) {
   const size_t B = 4096, nb = (H->cap + B - 1) / B;
   uint64_t *off = mx_alloc((nb + 1) * sizeof *off);
@@ -282,40 +287,76 @@ static int place_blocks(node_table *H) {
 #pragma omp parallel for schedule(static) if (PAR(H->cap))
   for (size_t j = 0; j < nb; j++) {
     uint64_t c = 0;
-    for (size_t i = j * B; i < H->cap && i < (j + 1) * B; i++)
-      c += (uint64_t)__builtin_popcountll(nonzero(H->b[i].corner));
+    for (size_t i = j * B; i < H->cap && i < (j + 1) * B; i++) c += H->b[i].kw != 0;
     off[j] = c;
   }
-  const uint64_t total = mx_scan_u64(off, nb);
+  const size_t nblk = (size_t)mx_scan_u64(off, nb);
+  uint64_t *key = mx_alloc((nblk + 1) * sizeof *key);
+  uint32_t *slot = mx_alloc((nblk + 1) * sizeof *slot);
+  uint64_t *cnt = mx_alloc((nblk + 1) * sizeof *cnt);
+  int st = key && slot && cnt ? MX_OK : MX_EINPUT;
+  if (st == MX_OK) {
 #pragma omp parallel for schedule(static) if (PAR(H->cap))
-  for (size_t j = 0; j < nb; j++) {
-    uint64_t c = off[j];
-    for (size_t i = j * B; i < H->cap && i < (j + 1) * B; i++) {
-      H->b[i].off = (uint32_t)c;
-      c += (uint64_t)__builtin_popcountll(nonzero(H->b[i].corner));
+    for (size_t j = 0; j < nb; j++) {
+      uint64_t c = off[j];
+      for (size_t i = j * B; i < H->cap && i < (j + 1) * B; i++) {
+        const uint64_t kw = H->b[i].kw;
+        if (!kw) continue;
+        key[c] = mx_qkey((uint32_t)((kw - 1) >> 32), (uint32_t)(kw - 1));
+        slot[c++] = (uint32_t)i;
+      }
     }
+    st = mx_sort_u64(key, slot, nblk);
   }
-  mx_free(off);
-  H->id = mx_alloc((total + 1) * sizeof *H->id);
-  return H->id ? MX_OK : MX_EINPUT;
+  if (st == MX_OK) {
+#pragma omp parallel for schedule(static) if (PAR(nblk))
+    for (size_t k = 0; k < nblk; k++)
+      cnt[k] = (uint64_t)__builtin_popcountll(nonzero(H->b[slot[k]].corner));
+    const uint64_t total = mx_scan_u64(cnt, nblk);
+#pragma omp parallel for schedule(static) if (PAR(nblk))
+    for (size_t k = 0; k < nblk; k++) H->b[slot[k]].off = (uint32_t)cnt[k];
+    H->id = mx_alloc((total + 1) * sizeof *H->id);
+    if (!H->id) st = MX_EINPUT;
+  }
+  mx_free(off), mx_free(key), mx_free(slot), mx_free(cnt);
+  return st;
 }
 
-static int build_table(const mx_qtree *T, const uint32_t *leaves, size_t n, node_table *H) {
-  int finest = 0, unsorted = 0;
-#pragma omp parallel for schedule(static) reduction(max : finest) reduction(| : unsorted) \
-    if (PAR(n))
+/* The leaves' keys and levels, gathered in their order (the passes read
+ * them sequentially, not scattered over the quadtree); the finest level;
+ * whether they are in Morton order. */
+static int gather_leaves(const mx_qtree *T, const uint32_t *leaves, size_t n, uint64_t *key,
+                         uint8_t *lev, int *finest) {
+  int fin = 0, unsorted = 0;
+#pragma omp parallel for schedule(static) reduction(max : fin) reduction(| : unsorted) if (PAR(n))
   for (size_t i = 0; i < n; i++) {
-    if (T->level[leaves[i]] > finest) finest = T->level[leaves[i]];
-    unsorted |= i > 0 && T->key[leaves[i]] <= T->key[leaves[i - 1]];
+    if (i + 16 < n) __builtin_prefetch(&T->key[leaves[i + 16]]);
+    key[i] = T->key[leaves[i]];
+    lev[i] = T->level[leaves[i]];
+    if (lev[i] > fin) fin = lev[i];
+    unsorted |= i > 0 && key[i] <= T->key[leaves[i - 1]];
   }
   if (unsorted) {
     mx_error(NULL, 0, "internal: the transition's leaves are not in Morton order");
     return MX_EINTERNAL;
   }
+  *finest = fin;
+  return MX_OK;
+}
+
+static int build_table(const uint64_t *key, const uint8_t *lev, size_t n, int finest,
+                       node_table *H) {
   H->finest = finest;
   H->shift = MX_QMAX_LEVEL - finest;
-  MX_CHECK(resize(H, n / 8 + 1024));
-  MX_CHECK(cover(T, leaves, n, H));
+  /* the blocks holding a leaf's anchor (those of a block are consecutive
+   * in Morton order), times 4 for those holding only other nodes and a
+   * table half full at most: few resizes, whatever the grading */
+  const int sh = 2 * H->shift + 4;
+  size_t runs = 0;
+#pragma omp parallel for schedule(static) reduction(+ : runs) if (PAR(n))
+  for (size_t i = 0; i < n; i++) runs += i == 0 || key[i] >> sh != key[i - 1] >> sh;
+  MX_CHECK(resize(H, 4 * runs + 1024));
+  MX_CHECK(cover(key, lev, n, H));
   return place_blocks(H);
 }
 
@@ -340,6 +381,8 @@ static unsigned owner_quadrant(unsigned cov, uint32_t x, uint32_t y) {
 typedef struct {
   const mx_qtree *T;
   const uint32_t *leaves;
+  const uint64_t *key; /* per leaf (gathered) */
+  const uint8_t *lev;
   size_t n, nchunks;
   node_table H;
   pattern pat[16];
@@ -351,8 +394,8 @@ typedef struct {
 
 /* Leaf i's mask and owned nodes; returns its nodes | cells << 32. */
 static uint64_t classify_leaf(pass *X, cursor *c, size_t i) {
-  const fleaf f = leaf_at(&X->H, X->T, X->leaves[i]);
-  const int step = X->T->level[X->leaves[i]] < X->H.finest ? 1 : 2;
+  const fleaf f = leaf_at(&X->H, X->key[i], X->lev[i]);
+  const int step = X->lev[i] < X->H.finest ? 1 : 2;
   unsigned m = 0, own = 0;
   for (int k = 0; k < 8; k += step) {
     int nib, p;
@@ -373,7 +416,7 @@ static uint64_t classify_leaf(pass *X, cursor *c, size_t i) {
  * returns the next id. */
 static uint32_t number_leaf(pass *X, cursor *c, size_t i, uint32_t id) {
   const mx_qgrid *g = &X->T->grid;
-  const fleaf f = leaf_at(&X->H, X->T, X->leaves[i]);
+  const fleaf f = leaf_at(&X->H, X->key[i], X->lev[i]);
   const int sh = X->H.shift;
   for (unsigned o = X->owned[i]; o; o &= o - 1, id++) {
     const int k = __builtin_ctz(o);
@@ -388,10 +431,9 @@ static uint32_t number_leaf(pass *X, cursor *c, size_t i, uint32_t id) {
 /* Leaf i's cells (its pattern on its node ids), its nodes and cells
  * starting at off (nodes | cells << 32); returns where the next leaf's start. */
 static uint64_t emit_leaf(pass *X, cursor *cu, size_t i, uint64_t off) {
-  const uint32_t q = X->leaves[i];
   const unsigned mask = X->mask[i], owned = X->owned[i], use = used_nodes(mask);
   uint32_t id[9], next = (uint32_t)off;
-  const fleaf f = leaf_at(&X->H, X->T, q);
+  const fleaf f = leaf_at(&X->H, X->key[i], X->lev[i]);
   for (int k = 0; k < 9; k++) {
     if (!((use >> k) & 1)) continue;
     id[k] = ((owned >> k) & 1) ? next++ : *node_id(&X->H, cu, NX(k), NY(k));
@@ -404,7 +446,7 @@ static uint64_t emit_leaf(pass *X, cursor *cu, size_t i, uint64_t off) {
     for (int v = 0; v < 4; v++) M->conn[4 * c + v] = v == 3 && tri ? NONE : id[p->cell[j][v]];
     M->type[c] = tri ? MX_QTRI : MX_QQUAD;
     M->leaf[c] = (uint32_t)i;
-    M->level[c] = X->T->level[q];
+    M->level[c] = X->lev[i];
   }
   return (uint64_t)next | (uint64_t)c << 32;
 }
@@ -421,10 +463,11 @@ static void run_pass(pass *X, int what) {
     for (size_t ch = 0; ch < X->nchunks; ch++) {
       const size_t lo = ch * CHUNK, hi = lo + CHUNK < X->n ? lo + CHUNK : X->n;
       uint64_t s = what == CLASSIFY ? 0 : X->base[ch];
-      for (size_t i = lo; i < hi; i++)
+      for (size_t i = lo; i < hi; i++) {
         if (what == CLASSIFY) s += classify_leaf(X, &c, i);
         else if (what == NUMBER) s = number_leaf(X, &c, i, (uint32_t)s);
         else s = emit_leaf(X, &c, i, s);
+      }
       if (what == CLASSIFY) X->base[ch] = s;
     }
   }
@@ -460,11 +503,15 @@ int mx_qtransition(const mx_qtree *T, const uint32_t *leaves, size_t n, mx_qmesh
   }
   pass X = {.T = T, .leaves = leaves, .n = n, .nchunks = (n + CHUNK - 1) / CHUNK, .M = M};
   turn_patterns(X.pat);
+  uint64_t *key = mx_alloc((n + 1) * sizeof *key);
+  uint8_t *lev = mx_alloc(n + 1);
+  X.key = key, X.lev = lev;
   X.mask = mx_alloc(n + 1);
   X.owned = mx_alloc((n + 1) * sizeof *X.owned);
   X.base = mx_alloc((X.nchunks + 1) * sizeof *X.base);
-  int st = X.mask && X.owned && X.base ? MX_OK : MX_EINPUT;
-  if (!st) st = build_table(T, leaves, n, &X.H);
+  int st = key && lev && X.mask && X.owned && X.base ? MX_OK : MX_EINPUT, finest = 0;
+  if (!st) st = gather_leaves(T, leaves, n, key, lev, &finest);
+  if (!st) st = build_table(key, lev, n, finest, &X.H);
   if (!st) {
     run_pass(&X, CLASSIFY);
     const uint64_t total = mx_scan_u64(X.base, X.nchunks);
@@ -475,7 +522,7 @@ int mx_qtransition(const mx_qtree *T, const uint32_t *leaves, size_t n, mx_qmesh
     run_pass(&X, EMIT);
   }
   nt_free(&X.H);
-  mx_free(X.mask), mx_free(X.owned), mx_free(X.base);
+  mx_free(X.mask), mx_free(X.owned), mx_free(X.base), mx_free(key), mx_free(lev);
   if (st) mx_qmesh_free(M);
   return st;
 }

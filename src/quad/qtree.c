@@ -63,23 +63,44 @@ static int is_leaf(const mx_qtree *T, size_t q) {
   return !(T->flags[q] & (MX_Q_SPLIT | MX_Q_OUT));
 }
 
-/* Count per block, prefix sum, fill, then sort by key: Morton order. */
+/* Count per block, prefix sum, fill, then sort by key: Morton order. The
+ * leaves in the order they were made are often in Morton order already (a
+ * uniform refinement splits each level in that order): then the count pass
+ * sees it and there is nothing to sort. */
 int mx_qtree_leaves(const mx_qtree *T, uint32_t **leaves, size_t *n) {
   *leaves = NULL;
   *n = 0;
   const size_t B = 4096, nb = (T->n + B - 1) / B;
   uint64_t *off = mx_alloc((nb + 1) * sizeof *off);
-  if (!off) return MX_EINPUT;
-#pragma omp parallel for schedule(static) if (PAR(T->n))
-  for (size_t b = 0; b < nb; b++) {
-    uint64_t k = 0;
-    for (size_t q = b * B; q < T->n && q < (b + 1) * B; q++) k += (uint64_t)is_leaf(T, q);
-    off[b] = k;
+  uint64_t *first = mx_alloc((nb + 1) * sizeof *first), *last = mx_alloc((nb + 1) * sizeof *last);
+  if (!off || !first || !last) {
+    mx_free(off), mx_free(first), mx_free(last);
+    return MX_EINPUT;
   }
+  int unsorted = 0;
+#pragma omp parallel for schedule(static) reduction(| : unsorted) if (PAR(T->n))
+  for (size_t b = 0; b < nb; b++) {
+    uint64_t k = 0, prev = 0;
+    for (size_t q = b * B; q < T->n && q < (b + 1) * B; q++) {
+      if (!is_leaf(T, q)) continue;
+      if (k == 0) first[b] = T->key[q];
+      else unsorted |= T->key[q] <= prev;
+      prev = T->key[q];
+      k++;
+    }
+    off[b] = k;
+    last[b] = prev;
+  }
+  for (size_t b = 0, p = SIZE_MAX; b < nb && !unsorted; b++) {
+    if (!off[b]) continue;
+    if (p != SIZE_MAX && first[b] <= last[p]) unsorted = 1;
+    p = b;
+  }
+  mx_free(first), mx_free(last);
   const size_t total = mx_scan_u64(off, nb);
   uint32_t *l = mx_alloc((total + 1) * sizeof *l);
-  uint64_t *k = mx_alloc((total + 1) * sizeof *k);
-  if (!l || !k) {
+  uint64_t *k = unsorted ? mx_alloc((total + 1) * sizeof *k) : NULL;
+  if (!l || (unsorted && !k)) {
     mx_free(off), mx_free(l), mx_free(k);
     return MX_EINPUT;
   }
@@ -89,11 +110,12 @@ int mx_qtree_leaves(const mx_qtree *T, uint32_t **leaves, size_t *n) {
     for (size_t q = b * B; q < T->n && q < (b + 1) * B; q++)
       if (is_leaf(T, q)) {
         l[w] = (uint32_t)q;
-        k[w++] = T->key[q];
+        if (k) k[w] = T->key[q];
+        w++;
       }
   }
   mx_free(off);
-  int st = mx_sort_u64(k, l, total);
+  int st = k ? mx_sort_u64(k, l, total) : MX_OK;
   mx_free(k);
   if (st) {
     mx_free(l);
