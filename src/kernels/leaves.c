@@ -52,6 +52,12 @@ static inline uint64_t mix64(uint64_t x) {
   return x;
 }
 
+uint64_t mx_leaf_hash_term(uint64_t key, int level) {
+  return mix64(mix64(key) ^ (uint64_t)level);
+}
+
+uint64_t mx_leaf_hash_finish(uint64_t sum, uint64_t n) { return mix64(sum ^ n); }
+
 uint64_t mx_leaves_hash(const mx_builder *B, const uint32_t *leaves,
                         size_t n) {
   /* A set hash: the sum of a strong mix of each (key, level) pair. Leaf keys
@@ -61,8 +67,8 @@ uint64_t mx_leaves_hash(const mx_builder *B, const uint32_t *leaves,
   uint64_t h = 0;
 #pragma omp parallel for schedule(static) reduction(+ : h)
   for (size_t i = 0; i < n; i++)
-    h += mix64(mix64(T->key[leaves[i]]) ^ T->level[leaves[i]]);
-  return mix64(h ^ (uint64_t)n);
+    h += mx_leaf_hash_term(T->key[leaves[i]], T->level[leaves[i]]);
+  return mx_leaf_hash_finish(h, (uint64_t)n);
 }
 
 int mx_leaf_hex_mesh(const mx_builder *B, const uint32_t *leaves, size_t n,

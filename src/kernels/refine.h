@@ -124,6 +124,10 @@ int mx_leaves(const mx_builder *B, uint32_t **out, size_t *n);
 int mx_leaves_sorted(const mx_builder *B, uint32_t *leaves, size_t n);
 /* Order-independent fingerprint of the set of (key, level) leaf pairs. */
 uint64_t mx_leaves_hash(const mx_builder *B, const uint32_t *leaves, size_t n);
+/* Its parts, for leaves held elsewhere (the distributed octree, src/mpi/):
+ * the hash is mx_leaf_hash_finish(sum of the terms, count). */
+uint64_t mx_leaf_hash_term(uint64_t key, int level);
+uint64_t mx_leaf_hash_finish(uint64_t sum, uint64_t n);
 /* 1 when octants (ka, la) and (kb, lb) share a face or an edge, or part of
  * one (contact of dimension 1 or 2; corner contact does not count). */
 int mx_octants_touch(uint64_t ka, int la, uint64_t kb, int lb);

@@ -40,25 +40,6 @@ static uint64_t corner_key(uint64_t key, int level, int c) {
                           p[2] + corner_xyz[c][2] * s);
 }
 
-/* Index of key in the sorted unique keys v[0..n), or UINT32_MAX. */
-static uint32_t find_key(const uint64_t *v, size_t n, uint64_t key) {
-  size_t lo = 0, hi = n;
-  while (lo < hi) {
-    const size_t mid = lo + (hi - lo) / 2;
-    if (v[mid] < key) lo = mid + 1; else hi = mid;
-  }
-  return lo < n && v[lo] == key ? (uint32_t)lo : UINT32_MAX;
-}
-
-static size_t sort_unique(uint64_t *k, size_t n, int *st) {
-  *st = mx_sort_u64(k, NULL, n);
-  if (*st || n == 0) return 0;
-  size_t w = 1;
-  for (size_t i = 1; i < n; i++)
-    if (k[i] != k[w - 1]) k[w++] = k[i];
-  return w;
-}
-
 /* Edges of every stored octant, per (level, axis), sorted and unique. */
 static int restart_edges(const mx_mesher *m, const uint64_t *vkey, size_t nv, mx_restart *r) {
   const mx_octree *T = &m->B.oct;
@@ -93,7 +74,7 @@ static int restart_edges(const mx_mesher *m, const uint64_t *vkey, size_t nv, mx
     for (int l = 0; l <= MX_MAX_LEVEL && !st; l++)
       for (int a = 0; a < 3 && !st; a++) {
         if (!keys[l][a]) continue;
-        nk[l][a] = sort_unique(keys[l][a], nk[l][a], &st);
+        nk[l][a] = mx_sort_unique_u64(keys[l][a], nk[l][a], &st);
         total += nk[l][a];
       }
   }
@@ -112,9 +93,9 @@ static int restart_edges(const mx_mesher *m, const uint64_t *vkey, size_t nv, mx
         q[a] += s;
         uint32_t h[3] = {p[0], p[1], p[2]};
         h[a] += s / 2;
-        const uint32_t ia = find_key(vkey, nv, keys[l][a][i]);
-        const uint32_t ib = find_key(vkey, nv, mx_morton_encode(q[0], q[1], q[2]));
-        const uint32_t im = s > 1 ? find_key(vkey, nv, mx_morton_encode(h[0], h[1], h[2]))
+        const uint32_t ia = mx_find_u64(vkey, nv, keys[l][a][i]);
+        const uint32_t ib = mx_find_u64(vkey, nv, mx_morton_encode(q[0], q[1], q[2]));
+        const uint32_t im = s > 1 ? mx_find_u64(vkey, nv, mx_morton_encode(h[0], h[1], h[2]))
                                   : UINT32_MAX;
         r->edge[3 * w + 0] = ia;
         r->edge[3 * w + 1] = ib;
@@ -139,7 +120,7 @@ static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r
   for (size_t o = 0; o < T->n; o++)
     for (int c = 0; c < 8; c++) vkey[8 * o + c] = corner_key(T->key[o], T->level[o], c);
   int st = MX_OK;
-  const size_t nv = sort_unique(vkey, 8 * T->n, &st);
+  const size_t nv = mx_sort_unique_u64(vkey, 8 * T->n, &st);
   if (!st) {
     r->nv = nv;
     r->xyz = mx_alloc((3 * nv + 1) * sizeof *r->xyz);
@@ -173,7 +154,7 @@ static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r
     for (size_t i = 0; i < no; i++) {
       const uint32_t o = m->leaves[i];
       for (int c = 0; c < 8; c++)
-        r->oct_node[8 * i + c] = find_key(vkey, nv, corner_key(T->key[o], T->level[o], c));
+        r->oct_node[8 * i + c] = mx_find_u64(vkey, nv, corner_key(T->key[o], T->level[o], c));
       r->oct_level[i] = T->level[o];
       uint64_t k = 0;
       for (uint32_t j = 0; j < T->tri_cnt[o]; j++)

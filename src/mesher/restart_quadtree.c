@@ -20,25 +20,6 @@
 #include "mesher/mesher2d.h"
 #include "soa/scan.h"
 
-static uint32_t find_key(const uint64_t *v, size_t n, uint64_t key) {
-  size_t lo = 0, hi = n;
-  while (lo < hi) {
-    const size_t mid = lo + (hi - lo) / 2;
-    if (v[mid] < key) lo = mid + 1;
-    else hi = mid;
-  }
-  return lo < n && v[lo] == key ? (uint32_t)lo : UINT32_MAX;
-}
-
-static size_t sort_unique(uint64_t *k, size_t n, int *st) {
-  *st = mx_sort_u64(k, NULL, n);
-  if (*st || n == 0) return 0;
-  size_t w = 1;
-  for (size_t i = 1; i < n; i++)
-    if (k[i] != k[w - 1]) k[w++] = k[i];
-  return w;
-}
-
 /* Corner c (counter-clockwise from the lowest) of leaf q, as a lattice key. */
 static uint64_t corner_key(const mx_qtree *T, uint32_t q, int c) {
   uint32_t x, y;
@@ -55,7 +36,7 @@ static int nodes_of(const mx_mesher2d *m, mx_restart *r, uint64_t **keys) {
   for (size_t i = 0; i < n; i++)
     for (int c = 0; c < 4; c++) k[4 * i + c] = corner_key(&m->T, m->leaves[i], c);
   int st;
-  const size_t nv = sort_unique(k, 4 * n, &st);
+  const size_t nv = mx_sort_unique_u64(k, 4 * n, &st);
   r->xyz = st ? NULL : mx_alloc((3 * nv + 1) * sizeof *r->xyz);
   if (!st && !r->xyz) st = MX_ENOMEM;
   if (st) {
@@ -84,12 +65,12 @@ static int edges_of(const mx_mesher2d *m, mx_restart *r, const uint64_t *vk) {
 #pragma omp parallel for schedule(static) if (n > 16384)
   for (size_t i = 0; i < n; i++)
     for (int c = 0; c < 4; c++) {
-      uint64_t a = find_key(vk, nv, corner_key(&m->T, m->leaves[i], c));
-      uint64_t b = find_key(vk, nv, corner_key(&m->T, m->leaves[i], (c + 1) & 3));
+      uint64_t a = mx_find_u64(vk, nv, corner_key(&m->T, m->leaves[i], c));
+      uint64_t b = mx_find_u64(vk, nv, corner_key(&m->T, m->leaves[i], (c + 1) & 3));
       e[4 * i + c] = a < b ? a << 32 | b : b << 32 | a;
     }
   int st;
-  const size_t ne = sort_unique(e, 4 * n, &st);
+  const size_t ne = mx_sort_unique_u64(e, 4 * n, &st);
   r->edge = st ? NULL : mx_alloc((3 * ne + 1) * sizeof *r->edge);
   if (!st && !r->edge) st = MX_ENOMEM;
   if (!st) {
@@ -99,7 +80,7 @@ static int edges_of(const mx_mesher2d *m, mx_restart *r, const uint64_t *vk) {
       uint32_t xa, ya, xb, yb;
       mx_qkey_xy(vk[a], &xa, &ya);
       mx_qkey_xy(vk[b], &xb, &yb);
-      const uint32_t mid = find_key(vk, nv, mx_qkey((xa + xb) / 2, (ya + yb) / 2));
+      const uint32_t mid = mx_find_u64(vk, nv, mx_qkey((xa + xb) / 2, (ya + yb) / 2));
       r->edge[3 * j] = a, r->edge[3 * j + 1] = b;
       r->edge[3 * j + 2] = mid == UINT32_MAX ? 0 : mid;
     }
@@ -125,7 +106,7 @@ static int cells_of(const mx_mesher2d *m, mx_restart *r, const uint64_t *vk) {
 #pragma omp parallel for schedule(static) if (n > 16384)
   for (size_t i = 0; i < n; i++) {
     const uint32_t q = m->leaves[i];
-    for (int c = 0; c < 4; c++) r->oct_node[8 * i + c] = find_key(vk, r->nv, corner_key(T, q, c));
+    for (int c = 0; c < 4; c++) r->oct_node[8 * i + c] = mx_find_u64(vk, r->nv, corner_key(T, q, c));
     for (int c = 4; c < 8; c++) r->oct_node[8 * i + c] = 0;
     r->oct_level[i] = T->level[q];
     memcpy(r->oct_tri + r->oct_tri_off[i], T->seg_pool + T->seg_off[q],

@@ -3,25 +3,15 @@
 #include "mpi/p4est_leaves.h"
 
 #include "common.h"
+#include "kernels/refine.h"
 #include "soa/scan.h"
 
 #include <string.h>
 
-/* The 64-bit finaliser mx_leaves_hash uses (kernels/leaves.c). */
-static uint64_t mix64(uint64_t x) {
-  x ^= x >> 30;
-  x *= 0xbf58476d1ce4e5b9ULL;
-  x ^= x >> 27;
-  x *= 0x94d049bb133111ebULL;
-  x ^= x >> 31;
-  return x;
-}
+/* The single-process hash's parts (kernels/leaves.c): the same fingerprint. */
+uint64_t mx_p4est_leaf_mix(uint64_t key, int level) { return mx_leaf_hash_term(key, level); }
 
-uint64_t mx_p4est_leaf_mix(uint64_t key, int level) {
-  return mix64(mix64(key) ^ (uint64_t)level);
-}
-
-uint64_t mx_p4est_hash_finish(uint64_t sum, uint64_t n) { return mix64(sum ^ n); }
+uint64_t mx_p4est_hash_finish(uint64_t sum, uint64_t n) { return mx_leaf_hash_finish(sum, n); }
 
 int mx_p4est_summarize(const mx_p4est_octree *P, mx_p4est_summary *s) {
   memset(s, 0, sizeof *s);

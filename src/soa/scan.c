@@ -111,3 +111,22 @@ int mx_sort_u64(uint64_t *keys, uint32_t *vals, size_t n) {
   mx_free(hist);
   return MX_OK;
 }
+
+size_t mx_sort_unique_u64(uint64_t *k, size_t n, int *st) {
+  *st = mx_sort_u64(k, NULL, n);
+  if (*st || n == 0) return 0;
+  size_t w = 1;
+  for (size_t i = 1; i < n; i++)
+    if (k[i] != k[w - 1]) k[w++] = k[i];
+  return w;
+}
+
+uint32_t mx_find_u64(const uint64_t *v, size_t n, uint64_t key) {
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (v[mid] < key) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo < n && v[lo] == key ? (uint32_t)lo : UINT32_MAX;
+}

@@ -14,4 +14,10 @@ uint64_t mx_scan_u64(uint64_t *a, size_t n);
  * MX_EINPUT (out of memory). */
 int mx_sort_u64(uint64_t *keys, uint32_t *vals, size_t n);
 
+/* Sorts keys and drops repeats; returns how many are left (0 on failure,
+ * *st the status). */
+size_t mx_sort_unique_u64(uint64_t *keys, size_t n, int *st);
+/* The index of key in the ascending keys v[0..n), or UINT32_MAX. */
+uint32_t mx_find_u64(const uint64_t *v, size_t n, uint64_t key);
+
 #endif
