@@ -41,6 +41,10 @@
 #include "quad/qinternal.h"
 #include "soa/scan.h"
 
+/* The next and previous corner of a cell of nv corners (no division). */
+static inline int nxt(int k, int nv) { return k + 1 == nv ? 0 : k + 1; }
+static inline int prv(int k, int nv) { return k == 0 ? nv - 1 : k - 1; }
+
 /* Node flags. */
 enum {
   N_IN = 1,       /* strictly inside the domain (counts for keeping a cell) */
@@ -175,7 +179,7 @@ static double cell_sj(const qb *B, size_t c) {
 static int clearly_valid(const double *xy, const uint32_t *v, int nv) {
   for (int k = 0; k < nv; k++) {
     const double *p = xy + 2 * (size_t)v[k];
-    const double *a = xy + 2 * (size_t)v[(k + 1) % nv], *b = xy + 2 * (size_t)v[(k + nv - 1) % nv];
+    const double *a = xy + 2 * (size_t)v[nxt(k, nv)], *b = xy + 2 * (size_t)v[prv(k, nv)];
     const double e1[2] = {a[0] - p[0], a[1] - p[1]}, e2[2] = {b[0] - p[0], b[1] - p[1]};
     const double x = e1[0] * e2[1] - e1[1] * e2[0];
     const double l2 = (e1[0] * e1[0] + e1[1] * e1[1]) * (e2[0] * e2[0] + e2[1] * e2[1]);
@@ -218,8 +222,8 @@ static int holds_feature(const qb *B, size_t c, int k) {
   if (lo == B->nfeat || B->fnode[lo] != v) return 0;
   const int nv = nv_of(B, c);
   const double *p = B->M->xy + 2 * (size_t)v;
-  const double *a = B->M->xy + 2 * (size_t)B->M->conn[4 * c + (k + 1) % nv];
-  const double *b = B->M->xy + 2 * (size_t)B->M->conn[4 * c + (k + nv - 1) % nv];
+  const double *a = B->M->xy + 2 * (size_t)B->M->conn[4 * c + nxt(k, nv)];
+  const double *b = B->M->xy + 2 * (size_t)B->M->conn[4 * c + prv(k, nv)];
   const double e1[2] = {a[0] - p[0], a[1] - p[1]}, e2[2] = {b[0] - p[0], b[1] - p[1]};
   return ccw_angle(e1, B->fdir + 2 * lo) <= ccw_angle(e1, e2);
 }
@@ -357,7 +361,7 @@ static int moved_cell(const qb *B, size_t c, uint32_t v, const double f[2], doub
   }
   int n = 0;
   for (int k = 0; k < nv; k++) {
-    const int l = (k + 1) % nv;
+    const int l = nxt(k, nv);
     if (p[2 * k] != p[2 * l] || p[2 * k + 1] != p[2 * l + 1])
       xy[2 * n] = p[2 * k], xy[2 * n + 1] = p[2 * k + 1], n++;
   }
@@ -522,7 +526,9 @@ static int is_candidate(const uint64_t *cand, size_t nc, uint64_t k) {
 }
 
 /* The cells of the leaves that may hold a feature, sorted by leaf key: only
- * those are ever looked up, so the other cells need not be sorted. */
+ * those are ever looked up, so the other cells need not be sorted. Only
+ * cells of open leaves are taken: a feature's node is sure to be the whole
+ * mesh's only when found in one (feature_node). */
 static int candidate_cells(const qb *B, const uint32_t *fv, size_t nfeat, uint64_t **key,
                            uint32_t **cid, size_t *m) {
   const size_t nc = nfeat * FEATURE_TRIES;
@@ -535,7 +541,8 @@ static int candidate_cells(const qb *B, const uint32_t *fv, size_t nfeat, uint64
   mx_free(cidx);
   if (st == MX_OK) {
 #pragma omp parallel for schedule(static)
-    for (size_t c = 0; c < B->m; c++) pos[c] = is_candidate(cand, nc, cell_leaf_key(B, c));
+    for (size_t c = 0; c < B->m; c++)
+      pos[c] = B->open[c] && is_candidate(cand, nc, cell_leaf_key(B, c));
     pos[B->m] = 0;
     *m = mx_scan_u64(pos, B->m + 1);
     *key = mx_alloc(*m * sizeof **key + 1);
@@ -742,7 +749,7 @@ static int collapse_cell(qb *B, size_t c, const uint32_t *rep) {
   int n = 0;
   for (int k = 0; k < nv; k++) {
     const uint32_t r = rep[v[k]];
-    if (r != rep[v[(k + 1) % nv]]) w[n++] = r;
+    if (r != rep[v[nxt(k, nv)]]) w[n++] = r;
   }
   if (n < 3 || (n == 4 && (w[0] == w[2] || w[1] == w[3]))) return 0;
   for (int k = 0; k < 4; k++) v[k] = k < n ? w[k] : UINT32_MAX;
@@ -801,7 +808,7 @@ static int fold_edge(const qb *B, size_t c, uint32_t *s, uint32_t *t) {
   const int nv = nv_of(B, c);
   double best = INFINITY;
   for (int k = 0; k < nv; k++) {
-    uint32_t a = v[k], b = v[(k + 1) % nv];
+    uint32_t a = v[k], b = v[nxt(k, nv)];
     if (!(B->nf[a] & B->nf[b] & N_ONPOLY)) continue;
     const int ma = (B->nf[a] & (N_SHRUNK | N_CLOSE)) && !(B->nf[a] & N_FEATURE);
     const int mb = (B->nf[b] & (N_SHRUNK | N_CLOSE)) && !(B->nf[b] & N_FEATURE);
@@ -912,7 +919,7 @@ static size_t edge_cells(const qb *B, uint32_t a, uint32_t b) {
   for (uint64_t i = B->off[a]; i < B->off[a + 1]; i++) {
     const size_t c = B->ids[i];
     const int nv = nv_of(B, c), k = corner_of(B, c, a);
-    n += B->M->conn[4 * c + (k + 1) % nv] == b || B->M->conn[4 * c + (k + nv - 1) % nv] == b;
+    n += B->M->conn[4 * c + nxt(k, nv)] == b || B->M->conn[4 * c + prv(k, nv)] == b;
   }
   return n;
 }
@@ -928,19 +935,37 @@ static uint32_t near_vertex(const qb *B, const double p[2]) {
   return hypot(pa[0] - p[0], pa[1] - p[1]) <= hypot(pb[0] - p[0], pb[1] - p[1]) ? a : b;
 }
 
+/* What the rounds of notch closing remember of each side of each active
+ * cell: its ends when last measured (NONE2: never) and whether its middle
+ * lay outside and far then; per node, the round (plus one) it last moved
+ * in. A side whose ends are the same and did not move in the round before
+ * has the same middle: its answer stands. */
+#define NONE2 UINT64_MAX
+typedef struct {
+  uint64_t *ends;
+  uint8_t *far, *moved;
+  uint8_t round;
+} notch_memo;
+
 /* Boundary edge a-b cuts across a notch when its middle lies
  * outside the domain by more than a tenth of its length (its two nodes went
  * onto the two sides of a reflex corner): the moved one of the two nearer to
- * the corner goes onto it. Returns 1 with *s (node) and *t (vertex). */
-static int notch_edge(const qb *B, uint32_t a, uint32_t b, uint32_t *s, uint32_t *t) {
+ * the corner goes onto it. Returns 1 with *s (node) and *t (vertex). The
+ * side's slot j of the memo. */
+static int notch_edge(const qb *B, uint32_t a, uint32_t b, uint32_t *s, uint32_t *t,
+                      notch_memo *N, size_t j) {
   if (!(B->nf[a] & B->nf[b] & N_ONPOLY) || edge_cells(B, a, b) != 1) return 0;
   const double *pa = B->M->xy + 2 * (size_t)a, *pb = B->M->xy + 2 * (size_t)b;
   const double mid[2] = {0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])};
-  double q[2], d2;
-  const double len = hypot(pb[0] - pa[0], pb[1] - pa[1]);
-  if (mx_poly_inside(B->I, mid) != 0 ||
-      mx_poly_closest(B->I, mid, 0.1 * len, q, &d2) != UINT32_MAX)
-    return 0;
+  const uint64_t ends = (uint64_t)a << 32 | b;
+  if (N->ends[j] != ends || N->moved[a] == N->round || N->moved[b] == N->round) {
+    double q[2], d2;
+    const double len = hypot(pb[0] - pa[0], pb[1] - pa[1]);
+    N->far[j] = !(mx_poly_inside(B->I, mid) != 0 ||
+                  mx_poly_closest(B->I, mid, 0.1 * len, q, &d2) != UINT32_MAX);
+    N->ends[j] = ends;
+  }
+  if (!N->far[j]) return 0;
   const uint32_t v = near_vertex(B, mid);
   const double *pv = B->P->xy + 2 * (size_t)v;
   const int ma = (B->nf[a] & (N_SHRUNK | N_CLOSE)) && !(B->nf[a] & N_FEATURE);
@@ -954,7 +979,7 @@ static int notch_edge(const qb *B, uint32_t a, uint32_t b, uint32_t *s, uint32_t
 
 /* One round of notch closing (notch_edge); nodes sent onto a vertex that
  * holds a node become that node (merge_same). */
-static int notch_round(qb *B, uint32_t *want, size_t *done) {
+static int notch_round(qb *B, uint32_t *want, notch_memo *N, size_t *done) {
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < B->n; v++) want[v] = UINT32_MAX;
 #pragma omp parallel for schedule(dynamic, 1024)
@@ -964,7 +989,8 @@ static int notch_round(qb *B, uint32_t *want, size_t *done) {
     const int nv = nv_of(B, c);
     for (int k = 0; k < nv; k++) {
       uint32_t s, t;
-      if (notch_edge(B, B->M->conn[4 * c + k], B->M->conn[4 * c + (k + 1) % nv], &s, &t))
+      if (notch_edge(B, B->M->conn[4 * c + k], B->M->conn[4 * c + nxt(k, nv)], &s, &t, N,
+                     4 * i + (size_t)k))
         atomic_min_u32(&want[s], t);
     }
   }
@@ -979,19 +1005,26 @@ static int notch_round(qb *B, uint32_t *want, size_t *done) {
     if (want[v] != UINT32_MAX) {
       B->M->xy[2 * v] = B->P->xy[2 * (size_t)want[v]];
       B->M->xy[2 * v + 1] = B->P->xy[2 * (size_t)want[v] + 1];
+      N->moved[v] = (uint8_t)(N->round + 1);
       moved++;
     }
   *done = moved;
+  N->round++;
   return moved ? merge_same(B) : MX_OK;
 }
 
 static int close_notches(qb *B) {
+  const size_t ns = 4 * ncells_act(B);
   uint32_t *want = mx_alloc(B->n * sizeof *want + 1);
-  if (!want) return MX_ENOMEM;
+  notch_memo N = {mx_alloc(ns * sizeof *N.ends + 1), mx_alloc(ns + 1), mx_calloc(B->n + 1), 0};
+  int st = want && N.ends && N.far && N.moved ? MX_OK : MX_ENOMEM;
+  if (st == MX_OK) {
+#pragma omp parallel for schedule(static)
+    for (size_t j = 0; j < ns; j++) N.ends[j] = NONE2;
+  }
   size_t done = 1;
-  int st = MX_OK;
-  for (int r = 0; r < 16 && done && st == MX_OK; r++) st = notch_round(B, want, &done);
-  mx_free(want);
+  for (int r = 0; r < 16 && done && st == MX_OK; r++) st = notch_round(B, want, &N, &done);
+  mx_free(want), mx_free(N.ends), mx_free(N.far), mx_free(N.moved);
   return st;
 }
 

@@ -43,6 +43,10 @@
 #include "quad/quad.h"
 #include "soa/scan.h"
 
+/* The next and previous corner of a cell of nv corners (no division). */
+static inline int nxt(int k, int nv) { return k + 1 == nv ? 0 : k + 1; }
+static inline int prv(int k, int nv) { return k == 0 ? nv - 1 : k - 1; }
+
 enum { AREA_BLOCK = 4096, PAR_MIN = 16384 }; /* fewer items: one thread */
 #define HANG_EPS 1e-10 /* relative to the edge's length */
 #define NODE_BLOCK 12  /* log2 of the node ids per block of the side buckets */
@@ -495,7 +499,7 @@ static void sort_u32(uint32_t *a, size_t n) {
 static inline void side_of(const mx_qmesh *M, uint32_t cs, uint32_t *lo, uint32_t *hi, int *up) {
   const size_t c = cs >> 2;
   const int s = (int)(cs & 3), nv = qnv(M, c);
-  const uint32_t a = M->conn[4 * c + s], b = M->conn[4 * c + (s + 1) % nv];
+  const uint32_t a = M->conn[4 * c + s], b = M->conn[4 * c + nxt(s, nv)];
   *lo = a < b ? a : b, *hi = a < b ? b : a, *up = a < b;
 }
 
@@ -528,7 +532,7 @@ static int side_counts(const mx_qmesh *M, buckets *K) {
       const uint32_t *r = M->conn + 4 * c;
       const int nv = qnv(M, c);
       for (int s = 0; s < nv; s++) {
-        const uint32_t a = r[s], b = r[(s + 1) % nv];
+        const uint32_t a = r[s], b = r[nxt(s, nv)];
         hk[(a < b ? a : b) >> NODE_BLOCK]++;
       }
     }
@@ -579,7 +583,7 @@ static size_t side_round(const mx_qmesh *M, buckets *K, size_t q0) {
       const uint32_t *r = M->conn + 4 * c;
       const int nv = qnv(M, c);
       for (int s = 0; s < nv; s++) {
-        const uint32_t a = r[s], b = r[(s + 1) % nv];
+        const uint32_t a = r[s], b = r[nxt(s, nv)];
         const size_t q = (a < b ? a : b) >> NODE_BLOCK;
         if (q >= q0 && q < q1) K->rec[hk[q]++] = (uint32_t)(4 * c + (size_t)s);
       }
@@ -688,8 +692,8 @@ static double cell_area2(const mx_qmesh *M, size_t c, int *bad) {
   *bad = 0;
   for (int j = 0; j < nv; j++) {
     const double *p = M->xy + 2 * (size_t)r[j];
-    const double *n = M->xy + 2 * (size_t)r[(j + 1) % nv];
-    const double *q = M->xy + 2 * (size_t)r[(j + nv - 1) % nv];
+    const double *n = M->xy + 2 * (size_t)r[nxt(j, nv)];
+    const double *q = M->xy + 2 * (size_t)r[prv(j, nv)];
     const double cr = (n[0] - p[0]) * (q[1] - p[1]) - (n[1] - p[1]) * (q[0] - p[0]);
     if (!(cr > 0)) *bad = 1; /* NaN too */
     a2 += p[0] * n[1] - p[1] * n[0];

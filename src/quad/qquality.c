@@ -9,6 +9,10 @@
 #include "common.h"
 #include "quad/quad.h"
 
+/* The next and previous corner of a cell of nv corners (no division). */
+static inline int nxt(int k, int nv) { return k + 1 == nv ? 0 : k + 1; }
+static inline int prv(int k, int nv) { return k == 0 ? nv - 1 : k - 1; }
+
 #define SIN60 0.86602540378443864676
 #define DEG (180.0 / 3.14159265358979323846)
 
@@ -17,8 +21,8 @@
 static void corner_edges(const double *xy, const uint32_t *v, int nv, int k, double e1[2],
                          double e2[2]) {
   const double *p = xy + 2 * (size_t)v[k];
-  const double *a = xy + 2 * (size_t)v[(k + 1) % nv];
-  const double *b = xy + 2 * (size_t)v[(k + nv - 1) % nv];
+  const double *a = xy + 2 * (size_t)v[nxt(k, nv)];
+  const double *b = xy + 2 * (size_t)v[prv(k, nv)];
   e1[0] = a[0] - p[0];
   e1[1] = a[1] - p[1];
   e2[0] = b[0] - p[0];
@@ -125,7 +129,7 @@ static double cell_area(const mx_qmesh *M, size_t c) {
   const int nv = cell_nv(M, c);
   double s = 0;
   for (int k = 0; k < nv; k++) {
-    const double *p = M->xy + 2 * (size_t)v[k], *q = M->xy + 2 * (size_t)v[(k + 1) % nv];
+    const double *p = M->xy + 2 * (size_t)v[k], *q = M->xy + 2 * (size_t)v[nxt(k, nv)];
     s += p[0] * q[1] - p[1] * q[0];
   }
   return 0.5 * s;
