@@ -79,13 +79,7 @@ static int qmesh_consistent(const char *path, const mx_qmesh *M) {
     mx_error(path, 0, "internal error: incomplete 2D mesh");
     return MX_EINTERNAL;
   }
-  size_t bad = M->ncells;
-#pragma omp parallel for reduction(min : bad) schedule(static) if (M->ncells > 65536)
-  for (size_t c = 0; c < M->ncells; c++) {
-    int ok = M->type[c] <= MX_QQUAD;
-    for (int j = 0; ok && j < qnv(M, c); j++) ok = M->conn[4 * c + j] < M->nnodes;
-    if (!ok && c < bad) bad = c;
-  }
+  const size_t bad = mx_qmesh_bad_cell(M);
   if (bad == M->ncells) return MX_OK;
   mx_error(path, 0, "internal error: cell %zu has a bad type or node index", bad);
   return MX_EINTERNAL;

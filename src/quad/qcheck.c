@@ -97,45 +97,10 @@ static int structure_ok(const mx_qmesh *M) {
              M->nnodes);
     return MX_EINPUT;
   }
-  size_t bad = M->ncells;
-#pragma omp parallel for reduction(min : bad) schedule(static) if (M->ncells > 65536)
-  for (size_t c = 0; c < M->ncells; c++) {
-    int ok = M->type[c] <= MX_QQUAD;
-    for (int j = 0; ok && j < qnv(M, c); j++) ok = M->conn[4 * c + j] < M->nnodes;
-    if (!ok && c < bad) bad = c;
-  }
+  const size_t bad = mx_qmesh_bad_cell(M);
   if (bad == M->ncells) return MX_OK;
   mx_error(NULL, 0, "mesh check: cell %zu has a bad type or node index", bad);
   return MX_EINTERNAL;
-}
-
-/* Exclusive prefix sum of n counts (the total returned). */
-static uint64_t scan_u32(uint32_t *a, size_t n) {
-  int nt = n < 65536 ? 1 : omp_get_max_threads();
-  if (nt > 256) nt = 256;
-  uint64_t part[257] = {0};
-  int used = 1;
-#pragma omp parallel num_threads(nt)
-  {
-    const int t = omp_get_thread_num(), T = omp_get_num_threads();
-    const size_t lo = n * (size_t)t / (size_t)T, hi = n * (size_t)(t + 1) / (size_t)T;
-    uint64_t s = 0;
-    for (size_t i = lo; i < hi; i++) s += a[i];
-    part[t + 1] = s;
-#pragma omp barrier
-#pragma omp single
-    {
-      for (int k = 0; k < T; k++) part[k + 1] += part[k];
-      used = T;
-    }
-    s = part[t];
-    for (size_t i = lo; i < hi; i++) {
-      const uint32_t v = a[i];
-      a[i] = (uint32_t)s;
-      s += v;
-    }
-  }
-  return part[used];
 }
 
 /* The nodes some cell uses. */
@@ -258,7 +223,7 @@ static int grid_build(const mx_qmesh *M, qc_ctx *x) {
 #pragma omp parallel for schedule(static) if (n > PAR_MIN)
   for (size_t i = 0; i < n; i++)
     if (x->used[i]) __atomic_fetch_add(&goff[node_cell(x, M->xy + 2 * i)], 1, __ATOMIC_RELAXED);
-  const uint64_t total = scan_u32(goff, ng);
+  const uint64_t total = mx_scan_u32(goff, ng);
   x->gids = mx_alloc((total + 1) * sizeof *x->gids);
   x->gxy = mx_alloc((2 * total + 1) * sizeof *x->gxy);
   if (!x->gids || !x->gxy) return MX_ENOMEM;

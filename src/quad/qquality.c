@@ -199,3 +199,15 @@ void mx_qquality_measure(const mx_qmesh *M, mx_qquality *q) {
   q->invalid = inv;
   q->area = area;
 }
+
+size_t mx_qmesh_bad_cell(const mx_qmesh *M) {
+  size_t bad = M->ncells;
+#pragma omp parallel for reduction(min : bad) schedule(static) if (M->ncells > 65536)
+  for (size_t c = 0; c < M->ncells; c++) {
+    int ok = M->type[c] <= MX_QQUAD;
+    const int nv = M->type[c] == MX_QQUAD ? 4 : 3;
+    for (int j = 0; ok && j < nv; j++) ok = M->conn[4 * c + j] < M->nnodes;
+    if (!ok && c < bad) bad = c;
+  }
+  return bad;
+}

@@ -287,6 +287,9 @@ typedef struct {
 } mx_qmesh;
 
 void mx_qmesh_free(mx_qmesh *M);
+/* The first cell with a bad type or a node index >= nnodes; ncells when
+ * none (qquality.c). The writers and the check test this first. */
+size_t mx_qmesh_bad_cell(const mx_qmesh *M);
 
 /* Transition patterns (Fig. 4): a leaf's mask has bit e set when the
  * midpoint of its edge e (0 bottom, 1 right, 2 top, 3 left) is a node of a

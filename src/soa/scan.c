@@ -6,12 +6,22 @@
 #include <stdlib.h>
 #include <string.h>
 
-uint64_t mx_scan_u64(uint64_t *a, size_t n) {
+/* Entries of 64 or 32 bits (w32), summed in 64 bits: one body for both
+ * widths (the branch on w32 is the same for every entry). */
+static inline uint64_t get(const void *a, size_t i, int w32) {
+  return w32 ? ((const uint32_t *)a)[i] : ((const uint64_t *)a)[i];
+}
+static inline void put(void *a, size_t i, int w32, uint64_t v) {
+  if (w32) ((uint32_t *)a)[i] = (uint32_t)v;
+  else ((uint64_t *)a)[i] = v;
+}
+
+static uint64_t scan(void *a, size_t n, int w32) {
   if (n < 65536) {
     uint64_t s = 0;
     for (size_t i = 0; i < n; i++) {
-      uint64_t v = a[i];
-      a[i] = s;
+      const uint64_t v = get(a, i, w32);
+      put(a, i, w32, s);
       s += v;
     }
     return s;
@@ -25,7 +35,7 @@ uint64_t mx_scan_u64(uint64_t *a, size_t n) {
     int t = omp_get_thread_num(), T = omp_get_num_threads();
     size_t lo = n * (size_t)t / (size_t)T, hi = n * (size_t)(t + 1) / (size_t)T;
     uint64_t s = 0;
-    for (size_t i = lo; i < hi; i++) s += a[i];
+    for (size_t i = lo; i < hi; i++) s += get(a, i, w32);
     part[t + 1] = s;
 #pragma omp barrier
 #pragma omp single
@@ -35,13 +45,17 @@ uint64_t mx_scan_u64(uint64_t *a, size_t n) {
     }
     s = part[t];
     for (size_t i = lo; i < hi; i++) {
-      uint64_t v = a[i];
-      a[i] = s;
+      const uint64_t v = get(a, i, w32);
+      put(a, i, w32, s);
       s += v;
     }
   }
   return part[used];
 }
+
+uint64_t mx_scan_u64(uint64_t *a, size_t n) { return scan(a, n, 0); }
+
+uint64_t mx_scan_u32(uint32_t *a, size_t n) { return scan(a, n, 1); }
 
 /* LSD radix sort, 8 bits a pass, skipping the bytes where all keys agree.
  * Each pass: per-thread histograms of contiguous slices, one prefix over

@@ -8,6 +8,8 @@
 
 /* a[i] <- a[0] + ... + a[i-1]; returns the total. Parallel (OpenMP). */
 uint64_t mx_scan_u64(uint64_t *a, size_t n);
+/* The same on 32-bit counts whose total fits 32 bits (returned in 64). */
+uint64_t mx_scan_u32(uint32_t *a, size_t n);
 
 /* Sorts keys ascending (LSD radix on the bits that vary); when vals is not
  * NULL it is permuted along. tmp arrays are allocated inside. MX_OK or
