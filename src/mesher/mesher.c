@@ -723,25 +723,18 @@ int mx_repair(mx_mesher *m) {
  * too coarse for thin parts of the input, or the inside flooded). The
  * tolerance is the one of `mixoct check --surface`: half a layer of
  * elements along the surface, 5% at least. One closed input only (with
- * holes or several bodies the enclosed volume needs their nesting). */
-static int volume_check(mx_mesher *m) {
-  const mx_mesh_out *M = &m->M;
-  if (m->p.stage != MX_STAGE_FULL || m->ndomain != 1 || m->p.repair_input || !M->ncells)
+ * holes or several bodies the enclosed volume needs their nesting). The
+ * verdict takes the volume vm and the count ncells of a mesh (a distributed
+ * mesh's sums over its ranks). */
+int mx_volume_verdict(mx_mesher *m, double vm, size_t ncells) {
+  if (m->p.stage != MX_STAGE_FULL || m->ndomain != 1 || m->p.repair_input || !ncells)
     return MX_OK;
   const mx_trisoup *d = &m->domain;
   if (d->nshells > 1) return MX_OK;
   double area = 0.0;
   const double vs = fabs(enclosed_volume(d, &area));
-  double vm = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : vm)
-  for (size_t c = 0; c < M->ncells; c++) {
-    double p[8][3];
-    const int nv = mx_cell_nodes[M->type[c]];
-    for (int k = 0; k < nv; k++) memcpy(p[k], M->xyz + 3 * (size_t)M->conn[8 * c + k], sizeof p[k]);
-    vm += mx_element_volume(M->type[c], (const double(*)[3])p);
-  }
   if (!(vs > 0.0)) return MX_OK;
-  const double h = cbrt(fabs(vm) / (double)M->ncells);
+  const double h = cbrt(fabs(vm) / (double)ncells);
   const double tol = fmax(0.05, 0.5 * area * h / vs), err = (vm - vs) / vs;
   m->S.volume_error = err;
   if (fabs(err) <= tol) return MX_OK;
@@ -750,6 +743,24 @@ static int volume_check(mx_mesher *m) {
            "surface): the levels are too coarse for thin parts of the input; ask for finer "
            "ones (-s, -a, -b, -r)", 100.0 * vm / vs, vm, vs, 100.0 * tol);
   return MX_EINVALID;
+}
+
+double mx_mesh_volume(const mx_mesh_out *M) {
+  double vm = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : vm)
+  for (size_t c = 0; c < M->ncells; c++) {
+    double p[8][3];
+    const int nv = mx_cell_nodes[M->type[c]];
+    for (int k = 0; k < nv; k++) memcpy(p[k], M->xyz + 3 * (size_t)M->conn[8 * c + k], sizeof p[k]);
+    vm += mx_element_volume(M->type[c], (const double(*)[3])p);
+  }
+  return vm;
+}
+
+static int volume_check(mx_mesher *m) {
+  if (m->p.stage != MX_STAGE_FULL || m->ndomain != 1 || m->p.repair_input || !m->M.ncells)
+    return MX_OK;
+  return mx_volume_verdict(m, mx_mesh_volume(&m->M), m->M.ncells);
 }
 
 /* Per-node flags, counts and quality of the mesh just made; MX_EINVALID

@@ -20,6 +20,11 @@ int mx_mesh_stages(mx_mesher *m);   /* the stages up to params.stage */
 int mx_mesh_full(mx_mesher *m);     /* transition + boundary, whole octree */
 int mx_repair(mx_mesher *m);        /* repair rounds on the full-stage mesh */
 int mx_mesh_finish(mx_mesher *m);   /* flags, counts; MX_EINVALID if invalid */
+/* The sum of the elements' signed volumes; the domain volume check on a
+ * mesh of that volume and ncells elements (MX_EINVALID, message given,
+ * when it holds much more or less than the input encloses). */
+double mx_mesh_volume(const mx_mesh_out *M);
+int mx_volume_verdict(mx_mesher *m, double vm, size_t ncells);
 /* After a refinement of the octree (old_leaves: the leaves before it, in
  * Morton order): the transition and boundary stages again, only on the
  * leaves around what was split when the current mesh allows it
@@ -29,6 +34,11 @@ int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold);
  * the mesher held. */
 int mx_remesh_after_refine(mx_mesher *m);
 int mx_build_tree(mx_mesher *m);    /* grid, refine, balance, leaves */
+/* The split set (m->split_keys, replaced) of an octree with the leaves
+ * (key[i], level[i]), i < n, in any order: every ancestor of a leaf is
+ * split; mx_build_tree then refines from the roots through it
+ * (restart_octree.c). MX_OK or MX_ENOMEM. */
+int mx_mesher_set_split_keys(mx_mesher *m, const uint64_t *key, const uint8_t *level, size_t n);
 mx_requests mx_mesher_requests(const mx_mesher *m);
 /* Write the mixed mesh (src/mesher/output.c): written order, boundary tags
  * and bodies, fields. */

@@ -361,6 +361,48 @@ static int adopt_mesh(mx_mesher *m, mx_restart *r, const uint64_t *key) {
   return mx_mesh_finish(m) == MX_EINVALID ? MX_EINPUT : MX_OK;
 }
 
+int mx_mesher_set_split_keys(mx_mesher *m, const uint64_t *key, const uint8_t *level, size_t n) {
+  for (int l = 0; l <= MX_MAX_LEVEL; l++) {
+    mx_free(m->split_keys[l]);
+    m->split_keys[l] = NULL;
+    m->nsplit[l] = 0;
+  }
+  uint64_t *skey = mx_alloc((n + 1) * sizeof *skey);
+  uint32_t *perm = mx_alloc((n + 1) * sizeof *perm);
+  int st = skey && perm ? MX_OK : MX_ENOMEM;
+  if (!st) {
+    memcpy(skey, key, n * sizeof *skey);
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; i++) perm[i] = (uint32_t)i;
+    st = mx_sort_u64(skey, perm, n);
+  }
+  /* level by level; in Morton order of the leaves, each level's ancestors
+   * come sorted */
+  for (int l = 0; !st && l < MX_MAX_LEVEL; l++) {
+    const uint64_t mask = ~(uint64_t)0 << (3 * (MX_MAX_LEVEL - l));
+    size_t k = 0;
+    uint64_t *v = NULL;
+    for (size_t i = 0; i < n; i++) {
+      if (level[perm[i]] <= l) continue;
+      const uint64_t a = skey[i] & mask;
+      if (k && v[k - 1] == a) continue;
+      if (!v) {
+        v = mx_alloc((n + 1) * sizeof *v);
+        if (!v) {
+          st = MX_ENOMEM;
+          break;
+        }
+      }
+      v[k++] = a;
+    }
+    m->split_keys[l] = v;
+    m->nsplit[l] = k;
+  }
+  mx_free(skey);
+  mx_free(perm);
+  return st;
+}
+
 static int load_restart(mx_mesher *m, const char *path) {
   mx_restart r;
   memset(&r, 0, sizeof r);
@@ -392,49 +434,12 @@ static int load_restart(mx_mesher *m, const char *path) {
     if (!st) st = mx_grid_build(lo, hi, m->domain_name[0], &g);
   }
   uint64_t *key = NULL;
-  uint32_t *perm = NULL;
   if (!st) {
     key = mx_alloc((r.no + 1) * sizeof *key);
-    perm = mx_alloc((r.no + 1) * sizeof *perm);
-    if (!key || !perm) st = MX_ENOMEM;
+    if (!key) st = MX_ENOMEM;
   }
-  if (!st) {
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < r.no; i++) perm[i] = (uint32_t)i;
-    st = octant_keys(&r, &g, path, key);
-  }
-  /* split set: the ancestors of the leaves, level by level; in Morton order
-   * of the leaves, each level's ancestors come sorted */
-  uint64_t *skey = NULL;
-  if (!st) {
-    skey = mx_alloc((r.no + 1) * sizeof *skey);
-    if (!skey) st = MX_ENOMEM;
-  }
-  if (!st) {
-    memcpy(skey, key, r.no * sizeof *skey);
-    st = mx_sort_u64(skey, perm, r.no);
-  }
-  for (int l = 0; !st && l < MX_MAX_LEVEL; l++) {
-    const uint64_t mask = ~(uint64_t)0 << (3 * (MX_MAX_LEVEL - l));
-    size_t n = 0;
-    uint64_t *v = NULL;
-    for (size_t i = 0; i < r.no; i++) {
-      if (r.oct_level[perm[i]] <= l) continue;
-      const uint64_t a = skey[i] & mask;
-      if (n && v[n - 1] == a) continue;
-      if (!v) {
-        v = mx_alloc((r.no + 1) * sizeof *v);
-        if (!v) {
-          st = MX_ENOMEM;
-          break;
-        }
-      }
-      v[n++] = a;
-    }
-    m->split_keys[l] = v;
-    m->nsplit[l] = n;
-  }
-  mx_free(skey);
+  if (!st) st = octant_keys(&r, &g, path, key);
+  if (!st) st = mx_mesher_set_split_keys(m, key, r.oct_level, r.no);
   if (!st) st = mx_build_tree(m);
   /* the file's elements -> our leaves */
   uint64_t *lkeys = NULL;
@@ -475,7 +480,6 @@ static int load_restart(mx_mesher *m, const char *path) {
   m->file_by_type = r.by_type;
   if (!st && r.has_mesh) st = adopt_mesh(m, &r, key);
   mx_free(key);
-  mx_free(perm);
   mx_restart_free(&r);
   return st;
 }
