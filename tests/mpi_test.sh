@@ -75,7 +75,7 @@ check_case() { # name, inputs and requests...
   sh=$(field "$T/single.json" leaves_hash)
   local l1="" h1=""
   for n in 1 2 3; do
-    if ! mpi "$n" "$@" --p4est --json >"$T/p$n.json" 2>"$T/err"; then
+    if ! mpi "$n" "$@" --p4est --stage octree --json >"$T/p$n.json" 2>"$T/err"; then
       bad "$name: mpirun -n $n failed"; cat "$T/err"; continue
     fi
     local l h r
@@ -111,7 +111,7 @@ done
 
 # ---- across a thin gap: p4est finer, for the reason given ------------------
 check_case gap -i "$T/gap.off" -s 2 -b "$T/near_gap8.reg"
-mpi 2 -i "$T/gap.off" -s 2 -b "$T/near_gap8.reg" --p4est --p4est-compare --json \
+mpi 2 -i "$T/gap.off" -s 2 -b "$T/near_gap8.reg" --p4est --p4est-compare --stage octree --json \
   >"$T/cmp.json" 2>"$T/err" || { bad "gap: --p4est-compare failed"; cat "$T/err"; }
 same "$(field "$T/cmp.json" compare.single_leaves) $(field "$T/cmp.json" compare.single_hash)" \
   "$(cat "$T/single_gap")" "gap: the compared single-process octree is the program's"
@@ -141,8 +141,84 @@ c=$(field "$T/cmp.json" compare.common)
 same "$((c + only_p)) $((c + only_s))" "$(field "$T/cmp.json" leaves) $(cut -d' ' -f1 "$T/single_gap")" \
   "gap: common + only = leaves on both sides"
 
+# ---- the mesh: on 1, 2, 3 ranks the single-process one ----------------------
+# Each rank meshes its leaves with halo rings around them (src/mpi/p4est_mesh.h).
+# The mesh is compared by its counts and by the hash of its elements as sets
+# of node coordinates (io/pvtu.h: mx_mesh_hash; the run reports it summed over
+# the ranks, `mixoct check` computes it from a file), against a separate
+# single-process run; both files the run writes (.pvtu: one piece per rank,
+# read back merged; .msh: one binary file written with MPI-IO) are checked
+# by `mixoct check`: no defect (conforming across the partition boundaries:
+# no face used by three elements, no hanging node, no open boundary edge),
+# the same counts and hash, and with --surface the boundary on the input.
+mesh_case() { # name, surface file for `check --surface` or "", inputs and requests...
+  local name=$1 surf=$2; shift 2
+  if ! "$MIXOCT" "$@" -o "$T/s_$name.vtu" --json >"$T/s.json" 2>"$T/err"; then
+    bad "$name: the single-process run failed"; cat "$T/err"; return
+  fi
+  "$MIXOCT" check "$T/s_$name.vtu" --json >"$T/sc.json" 2>/dev/null
+  local want
+  want="$(field "$T/s.json" nodes) $(field "$T/s.json" elements) $(field "$T/sc.json" mesh_hash)"
+  echo "$want" >"$T/want_$name"
+  local sarg=()
+  [ -n "$surf" ] && sarg=(--surface "$surf")
+  for n in 1 2 3; do
+    rm -f "$T"/m.pvtu "$T"/m_*.vtu "$T"/m.msh
+    if ! mpi "$n" "$@" --p4est --json -o "$T/m.pvtu" -o "$T/m.msh" >"$T/m.json" 2>"$T/err"; then
+      bad "$name: mpirun -n $n failed"; cat "$T/err"; continue
+    fi
+    same "$(field "$T/m.json" mesh.nodes) $(field "$T/m.json" mesh.elements) $(field "$T/m.json" mesh.mesh_hash)" \
+      "$want" "$name: $n rank(s) give the single-process mesh (nodes, elements, hash)"
+    same "$(field "$T/m.json" valid)" true "$name: $n rank(s): reported valid"
+    same "$(find "$T" -maxdepth 1 -name 'm_*.vtu' | wc -l)" "$n" "$name: one piece per rank"
+    for f in m.pvtu m.msh; do
+      if "$MIXOCT" check "$T/$f" "${sarg[@]}" --json >"$T/c.json" 2>"$T/err"; then
+        same "$(field "$T/c.json" defects) $(field "$T/c.json" nodes) $(field "$T/c.json" elements) $(field "$T/c.json" mesh_hash)" \
+          "0 $want" "$name: $n rank(s): $f checked, no defect, the same mesh"
+      else
+        bad "$name: $n rank(s): mixoct check $f failed"; head -5 "$T/err"
+      fi
+    done
+  done
+}
+mesh_case demo5 "" --demo -s 5
+mesh_case cortex6 "$DATA/surfaces/cortex.off" -i "$DATA/surfaces/cortex.off" -s 6
+mesh_case hollow4 "" -i "$DATA/surfaces/hollow-coarse.off" -s 4
+mesh_case cortex3b "$DATA/surfaces/cortex.off" -i "$DATA/surfaces/cortex.off" -s 3 \
+  -b "$DATA/surfaces/cortex.reg"
+
+# A halo of one ring is too thin: the ranks compute some shared nodes
+# differently, see it, and mesh again with more rings; the result is still
+# the single-process mesh.
+MX_P4EST_FIRST_RINGS=1 mpi 2 -i "$DATA/surfaces/cortex.off" -s 6 --p4est --json \
+  >"$T/r1.json" 2>"$T/err" || { bad "one ring: run failed"; cat "$T/err"; }
+d1=$(field "$T/r1.json" mesh.differ_first_attempt)
+if [ "$d1" -gt 0 ]; then ok "one ring: $d1 shared node(s) differ and are caught"
+else bad "one ring: no shared node differs (the check would see nothing)"; fi
+same "$(field "$T/r1.json" mesh.attempts) $(field "$T/r1.json" mesh.mesh_hash)" \
+  "2 $(cut -d' ' -f3 "$T/want_cortex6")" "one ring: meshed again, the single-process mesh"
+
+# The files do not depend on the thread count (2 ranks x 1 and x 2 threads),
+# and the single-process program writes a .pvtu too (one piece), the same mesh.
+mkdir -p "$T/t1" "$T/t2"
+for t in 1 2; do
+  OMP_NUM_THREADS=$t "$MPIRUN" --oversubscribe --allow-run-as-root -n 2 -x OMP_NUM_THREADS \
+    "$MIXOCT" -i "$DATA/surfaces/cortex.off" -s 6 --p4est --threads "$t" --quiet \
+    -o "$T/t$t/c.pvtu" -o "$T/t$t/c.msh" 2>"$T/err" || { bad "threads $t: run failed"; cat "$T/err"; }
+done
+for f in c.pvtu c_0.vtu c_1.vtu c.msh; do
+  if cmp -s "$T/t1/$f" "$T/t2/$f"; then ok "2 ranks: $f the same bytes with 1 and 2 threads"
+  else bad "2 ranks: $f differs between 1 and 2 threads"; fi
+done
+"$MIXOCT" -i "$DATA/surfaces/cortex.off" -s 6 -o "$T/one.pvtu" --quiet
+"$MIXOCT" check "$T/one.pvtu" --json >"$T/c.json" 2>/dev/null
+same "$(field "$T/c.json" defects) $(field "$T/c.json" mesh_hash)" "0 $(cut -d' ' -f3 "$T/want_cortex6")" \
+  "single process: .pvtu (one piece) holds the same mesh"
+
 # ---- usage ------------------------------------------------------------------
-expect_exit 2 "--p4est refuses -o (no output yet)" mpi 1 --demo -s 3 --p4est -o "$T/x.vtu"
+expect_exit 2 "--p4est writes .pvtu or .msh only" mpi 1 --demo -s 3 --p4est -o "$T/x.vtu"
+expect_exit 2 "--p4est: no ASCII .msh" mpi 1 --demo -s 3 --p4est --ascii -o "$T/x.msh"
+expect_exit 2 "--p4est: no restart file" mpi 1 --demo -s 3 --p4est --restart "$T/x.oct"
 
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]

@@ -1819,7 +1819,7 @@ static void test_program(void) {
            "'%s' check '%s' --json | tail -n 1 | python3 -c \"import json, "
            "sys; d = json.loads(sys.stdin.read()); "
            "assert d['defects'] == 10 and d['faces_overshared'] == 1; "
-           "assert set(d) == set('nodes elements by_type empty invalid "
+           "assert set(d) == set('nodes elements by_type mesh_hash empty invalid "
            "degenerate jens_min jens_mean faces_interior faces_boundary "
            "faces_overshared faces_misoriented quad_vs_triangles "
            "open_boundary_edges nonmanifold_edges hanging_nodes "

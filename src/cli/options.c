@@ -43,8 +43,10 @@ static const char *usage_text =
     "  -r, --region-surface S RL   octants meeting or inside surface S\n"
     "\n"
     "Output:\n"
-    "  -o, --output OUT            .vtk (legacy), .vtu, .msh (Gmsh 4.1), .mesh /\n"
-    "                              .meshb (Medit), .getfem, .m3d, .mvm; repeatable\n"
+    "  -o, --output OUT            .vtk (legacy), .vtu, .pvtu (parallel VTU: one\n"
+    "                              piece per MPI rank with --p4est), .msh (Gmsh\n"
+    "                              4.1), .mesh / .meshb (Medit), .getfem, .m3d,\n"
+    "                              .mvm; repeatable\n"
     "                              (one mesh, several files); without -o nothing\n"
     "                              is written (a dry run). Checked before meshing;\n"
     "                              written to a temporary name and renamed:\n"
@@ -414,8 +416,8 @@ int mx_check_output_path(const char *path, int mesh) {
   const char *slash = strrchr(path, '/');
   if (dot && slash && dot < slash) dot = NULL;
   if (mesh && (!dot || !mx_mesh_format_known(path))) {
-    mx_error(path, 0, "unknown output format \"%s\" (use .vtk, .vtu, .msh, .mesh, .meshb, "
-                      ".getfem, .m3d or .mvm)", dot ? dot : "");
+    mx_error(path, 0, "unknown output format \"%s\" (use .vtk, .vtu, .pvtu, .msh, .mesh, "
+                      ".meshb, .getfem, .m3d or .mvm)", dot ? dot : "");
     return MX_EINPUT;
   }
   struct stat st;

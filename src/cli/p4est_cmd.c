@@ -1,4 +1,5 @@
-/* `mpirun -n N mixoct -i SURF -s L --p4est [--json] [--p4est-compare]`:
+/* `mpirun -n N mixoct -i SURF -s L --p4est [-o OUT.pvtu|.msh] [--json]
+ * [--p4est-compare] [--stage octree]`:
  * the distributed octree on p4est (src/mpi/p4est_octree.h), built only
  * with MPI (meson -Dmpi). Every rank reads the inputs and sets up the same
  * builder; rank 0 reports the leaves in the domain, their hash (the one
@@ -6,14 +7,16 @@
  * set), the slowest rank's seconds per step, and per-rank min/max of
  * leaves, quadrants and peak memory. --p4est-compare: rank 0 also builds
  * the single-process octree and compares the leaves (src/mpi/p4est_compare.h).
- * Meshing, output and the rest of issue 14 are not done yet: -o is
- * refused. */
+ * Then, unless --stage octree, each rank meshes its leaves, the mesh is
+ * checked and written (src/cli/p4est_mesh_cmd.c). */
 #include "cli/cli.h"
+#include "cli/p4est_cli.h"
 #include "common.h"
 #include "mesher/mesher_impl.h"
 #include "mpi/p4est_compare.h"
 #include "mpi/p4est_inputs.h"
 #include "mpi/p4est_leaves.h"
+#include "mpi/p4est_mesh.h"
 #include "mpi/p4est_octree.h"
 
 #include <inttypes.h>
@@ -47,8 +50,10 @@ static int setup(const mx_options *o, mx_mesher **out) {
   mx_params_default(&p);
   p.surface_level = o->req.s_level;
   p.all_level = o->req.a_level;
-  p.stage = MX_STAGE_OCTREE;
+  /* the octree, or the mesh (the transition stage alone is not offered) */
+  p.stage = o->stage == MX_STAGE_OCTREE ? MX_STAGE_OCTREE : MX_STAGE_FULL;
   p.threads = o->threads;
+  p.max_memory_mb = o->max_memory_mb;
   mx_mesher *m = mx_mesher_new(&p);
   if (!m) {
     mx_error(NULL, 0, "out of memory");
@@ -127,7 +132,7 @@ static void report(const mx_options *o, const mx_p4est_octree *P, const mx_p4est
                    double t_setup, double t_total, int threads, int compared,
                    const mx_leaf_diff *d, const mx_split_causes *why,
                    uint64_t single_hash, double st_refine,
-                   double st_balance) {
+                   double st_balance, const mx_p4est_mesh_report *mesh) {
   if (!o->json) {
     printf("p4est octree: %d rank(s) x %d thread(s), levels up to %d\n", P->size, threads,
            P->max_level);
@@ -148,6 +153,7 @@ static void report(const mx_options *o, const mx_p4est_octree *P, const mx_p4est
       printf("  single-process leaves p4est split: %zu; p4est's balance reached them across "
              "the outside %zu, through such leaves %zu, otherwise %zu (+%zu unexplained)\n",
              why->split, why->by_outside, why->by_chain, why->by_common, why->unexplained);
+    if (mesh) mx_p4est_mesh_text(mesh);
     return;
   }
   size_t lv[MX_MAX_LEVEL + 1];
@@ -190,7 +196,9 @@ static void report(const mx_options *o, const mx_p4est_octree *P, const mx_p4est
     printf(", \"single_phases\": {\"refine\": %.6f, \"balance\": %.6f}}, ", st_refine,
            st_balance);
   }
-  printf("\"total_s\": %.6f, \"peak_rss_mb\": %.1f}\n", t_total, s->rss_max_mb);
+  if (mesh) mx_p4est_mesh_json(mesh);
+  printf("\"valid\": %s, \"total_s\": %.6f, \"peak_rss_mb\": %.1f}\n",
+         mesh ? "true" : "null", t_total, mesh ? mesh->rss[1] : s->rss_max_mb);
 }
 
 static int run(const mx_options *o, int compare) {
@@ -214,12 +222,21 @@ static int run(const mx_options *o, int compare) {
   double st_refine = 0, st_balance = 0;
   if (!st) st = mx_p4est_build(&P, &I.B, MPI_COMM_WORLD, NULL);
   if (!st) st = mx_p4est_summarize(&P, &s);
+  if (!st && compare) st = compare_single(m, &P, &d, &why, &single_hash, &st_refine, &st_balance);
+  mx_p4est_mesh_report *mesh = NULL;
+  if (!st && m->p.stage == MX_STAGE_FULL) {
+    mesh = calloc(1, sizeof *mesh);
+    st = agree(mesh ? MX_OK : MX_ENOMEM);
+    if (!st) st = mx_p4est_mesh_run(o, &P, m, t0, mesh);
+    if (!st) mx_p4est_mesh_reduce(&P, mesh);
+  }
   double t_total = mx_wtime() - t0;
   MPI_Allreduce(MPI_IN_PLACE, &t_total, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  if (!st && compare) st = compare_single(m, &P, &d, &why, &single_hash, &st_refine, &st_balance);
-  if (!st && rank0)
+  if (!st && rank0 && (o->json || !o->quiet))
     report(o, &P, &s, t_setup, t_total, omp_get_max_threads(), compare, &d, &why,
-           single_hash, st_refine, st_balance);
+           single_hash, st_refine, st_balance, mesh);
+  if (mesh) mx_p4est_mesh_free(&mesh->D);
+  free(mesh);
   if (st && rank0 && o->json)
     printf("{\"p4est\": true, \"exit_code\": %d, \"error\": \"%s\"}\n", st,
            mx_status_string(st));
@@ -252,11 +269,12 @@ int mx_p4est_main(int argc, char **argv) {
   mx_options o;
   int exit_now = 0;
   int st = av ? mx_parse_options(ac, av, &o, &exit_now) : MX_ENOMEM;
-  if (!st && !exit_now && (o.noutputs || o.restart_out || o.restart_in || o.boundary_out)) {
-    mx_error(NULL, 0, "--p4est builds the distributed octree only (issue 14, in progress): "
-                      "no -o, -c, --restart or --boundary yet");
+  if (!st && !exit_now && (o.restart_out || o.restart_in || o.boundary_out)) {
+    mx_error(NULL, 0, "--p4est: no -c, --restart or --boundary (the distributed path "
+                      "meshes from the surfaces and levels only)");
     st = MX_EINPUT;
   }
+  if (!st && !exit_now) st = mx_p4est_check_outputs(&o);
   if (!st && !exit_now) {
     mx_quiet = o.quiet;
     if (o.threads > 0) omp_set_num_threads(o.threads);

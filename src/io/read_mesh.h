@@ -14,6 +14,17 @@
  *    <AppendedData encoding="raw"> or format="ascii"; points Float32 or
  *    Float64 with 3 components; connectivity, offsets and types of any
  *    integer type (Int8 .. UInt64). Compressed and base64 data are refused.
+ *  - a parallel VTU master (.pvtu: VTKFile type="PUnstructuredGrid"),
+ *    read as one mesh: each <Piece Source="..."/> (relative to the
+ *    .pvtu's directory unless absolute) a VTU file as above, all with the
+ *    same point and cell arrays; with the point array GlobalNodeId
+ *    (integers) in the pieces the points of one id are one node (numbered
+ *    by id; their coordinates must agree), without it points of different
+ *    pieces with bitwise-equal coordinates are one node (numbered in the
+ *    order they first appear; points of one piece stay distinct); cells in
+ *    piece order; surface_tag merged with the nodes (io/pvtu.h writes
+ *    such files). A missing or unreadable piece is an error naming the
+ *    .pvtu's line.
  * Cell types: VTK 10 (tetra), 14 (pyramid), 13 (wedge), 12 (hexahedron);
  * any other type is an error. Node order stays VTK's (as in soa/mesh.h);
  *  - Gmsh MSH 4.1 ("$MeshFormat" first), ASCII or binary (either byte

@@ -51,6 +51,8 @@ static void xml_name(mx_vtu_head *h, const char *name) {
   }
 }
 
+void mx_vtu_escaped(mx_vtu_head *h, const char *s) { xml_name(h, s); }
+
 void mx_vtu_begin(mx_vtu_head *h, size_t nnodes, size_t ncells) {
   mx_vtu_printf(h,
                 "<?xml version=\"1.0\"?>\n"

@@ -54,6 +54,9 @@ typedef struct {
 void mx_vtu_printf(mx_vtu_head *h, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* The XML declaration, VTKFile, UnstructuredGrid and the Piece's start. */
 void mx_vtu_begin(mx_vtu_head *h, size_t nnodes, size_t ncells);
+/* Text with the XML special characters escaped (names in attribute
+ * values; also the .pvtu master, io/write_pvtu.c). */
+void mx_vtu_escaped(mx_vtu_head *h, const char *s);
 /* One DataArray element (name XML-escaped, NumberOfComponents when
  * ncomp > 1) whose block holds `bytes` bytes. */
 void mx_vtu_array(mx_vtu_head *h, const char *type, const char *name, int ncomp, uint64_t bytes);
@@ -73,5 +76,24 @@ int mx_vtu_block(mx_afile *f, uint64_t bytes, size_t n, size_t item_bytes, mx_af
                  const void *ctx);
 /* The end of the appended data and of the file. */
 int mx_vtu_finish(mx_afile *f);
+
+/* ---- the 3D writer's extension point (io/write_vtu.c) ---------------------- */
+
+/* What a piece of a parallel file (io/pvtu.h) adds to mx_write_vtu: an
+ * Int64 point array named ids_name after the view's point fields (none when
+ * ids is NULL), and, with fixed_types, integer fields typed by their source
+ * alone (8-bit values UInt8, int32 values Int32): mx_write_vtu writes an
+ * int32 field as UInt8 when its values fit, which differs between pieces,
+ * and every piece must declare the types its .pvtu does. */
+typedef struct {
+  const char *ids_name;
+  const uint64_t *ids;
+  int fixed_types;
+} mx_vtu_extra;
+
+/* mx_write_vtu with the additions of x (NULL: none, the same bytes). */
+int mx_write_vtu_extra(const char *path, const mx_mesh_view *m, const mx_vtu_extra *x);
+/* The VTU type a field has with fixed_types: Float64, UInt8 or Int32. */
+const char *mx_vtu_fixed_type(const mx_field *fd);
 
 #endif

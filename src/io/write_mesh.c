@@ -6,6 +6,7 @@
 
 #include "common.h"
 #include "io/atomic_file.h"
+#include "io/pvtu.h"
 #include "soa/mesh.h"
 
 /* The extension of the last path component, "" when it has none. */
@@ -26,15 +27,23 @@ int mx_write_mesh(const char *path, const mx_mesh_view *m, int ascii) {
   if (strcasecmp(ext, ".getfem") == 0) return mx_write_getfem(path, m);
   if (strcasecmp(ext, ".m3d") == 0) return mx_write_m3d(path, m);
   if (strcasecmp(ext, ".mvm") == 0) return mx_write_mvm(path, m);
+  if (strcasecmp(ext, ".pvtu") == 0) {
+    /* one piece (the distributed path writes one per rank) */
+    char piece[4096];
+    mx_pvtu_piece_path(path, 0, piece, sizeof piece);
+    MX_CHECK(mx_write_vtu_piece(piece, m, NULL));
+    return mx_write_pvtu_master(path, 1, m, 0);
+  }
   mx_error(path, 0,
-           "unknown output format \"%s\" (use .vtk, .vtu, .msh, .mesh, .meshb, "
+           "unknown output format \"%s\" (use .vtk, .vtu, .pvtu, .msh, .mesh, .meshb, "
            ".getfem, .m3d or .mvm)",
            ext);
   return MX_EINPUT;
 }
 
 int mx_mesh_format_known(const char *path) {
-  static const char *known[] = {".vtk", ".vtu", ".msh", ".mesh", ".meshb", ".getfem", ".m3d", ".mvm"};
+  static const char *known[] = {".vtk",    ".vtu", ".pvtu", ".msh", ".mesh",
+                                ".meshb",  ".getfem", ".m3d", ".mvm"};
   const char *ext = path_extension(path);
   for (size_t i = 0; i < sizeof known / sizeof *known; i++)
     if (strcasecmp(ext, known[i]) == 0) return 1;

@@ -52,15 +52,9 @@
 #include "common.h"
 #include "io/atomic_file.h"
 #include "io/boundary_faces.h"
+#include "io/msh_order.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
-
-/* Gmsh element type per mixoct type, and mixoct's node j of Gmsh's node k. */
-static const int msh_type[4] = {4, 7, 6, 5};
-static const int8_t msh_perm[4][8] = {{0, 1, 2, 3, 0, 0, 0, 0},
-                                      {0, 1, 2, 3, 4, 0, 0, 0},
-                                      {0, 1, 2, 3, 4, 5, 0, 0},
-                                      {0, 1, 2, 3, 4, 5, 6, 7}};
 
 enum {
   ENTITY_TAG = 1,
@@ -153,7 +147,7 @@ static size_t fill_elements_bin(const void *vctx, size_t b, size_t e,
   const msh_ctx *ctx = vctx;
   const mx_mesh_view *m = ctx->m;
   const int t = ctx->type, nn = mx_cell_nodes[t];
-  const int8_t *perm = msh_perm[t];
+  const int8_t *perm = mx_msh_perm[t];
   size_t n = 0;
   for (size_t k = ctx->base + b; k < ctx->base + e; k++) {
     const size_t c = mx_view_cell(m, k);
@@ -176,7 +170,7 @@ static size_t fill_elements_ascii(const void *vctx, size_t b, size_t e,
   const msh_ctx *ctx = vctx;
   const mx_mesh_view *m = ctx->m;
   const int t = ctx->type, nn = mx_cell_nodes[t];
-  const int8_t *perm = msh_perm[t];
+  const int8_t *perm = mx_msh_perm[t];
   size_t n = 0;
   for (size_t k = ctx->base + b; k < ctx->base + e; k++) {
     const size_t c = mx_view_cell(m, k);
@@ -529,7 +523,7 @@ static int cell_block(mx_afile *f, const mx_mesh_view *m, const msh_layout *L, i
   const size_t nitems = L->khi[r] - L->klo[r];
   const size_t per_cell = (size_t)mx_cell_nodes[t] + 1;
   const size_t data_max = MX_U64_CHARS + MX_DOUBLE_CHARS + 2;
-  if (!fd) MX_CHECK(block_head(f, 3, entity, msh_type[t], count, binary));
+  if (!fd) MX_CHECK(block_head(f, 3, entity, mx_msh_type[t], count, binary));
   if (binary) return mx_afile_emit(f, nitems, fd ? 12 : 8 * per_cell, fill_elements_bin, &ctx);
   return mx_afile_emit(f, nitems, fd ? data_max : (MX_U64_CHARS + 1) * per_cell,
                        fill_elements_ascii, &ctx);

@@ -5,7 +5,8 @@
  * On a little-endian host coordinates and fields are copied straight from
  * the mesh arrays into the output chunks; connectivity, offsets and types are converted in
  * parallel in place in them (io/atomic_file.h: a background thread writes
- * one chunk while the next is filled). */
+ * one chunk while the next is filled). mx_write_vtu_extra adds what a
+ * piece of a .pvtu needs (io/vtu_common.h, io/write_pvtu.c). */
 #include <stdint.h>
 #include <string.h>
 
@@ -52,15 +53,27 @@ static int fits_u8(const mx_field *fd, size_t count) {
   return out == 0;
 }
 
+/* With fixed types (the pieces of a .pvtu, io/vtu_common.h) only an 8-bit
+ * source is UInt8. */
+static int narrow_u8(const mx_field *fd, size_t count, int fixed) {
+  return fixed ? !fd->is_double && !fd->ivalues : fits_u8(fd, count);
+}
+
+const char *mx_vtu_fixed_type(const mx_field *fd) {
+  return fd->is_double ? "Float64" : narrow_u8(fd, 0, 1) ? "UInt8" : "Int32";
+}
+
+/* The fields, then the Int64 ids when ids_name is not NULL. */
 static void xml_fields(mx_vtu_head *h, const char *tag, int nfields, const mx_field *fields,
-                       size_t count) {
+                       size_t count, int fixed, const char *ids_name) {
   mx_vtu_printf(h, "      <%s>\n", tag);
   for (int i = 0; i < nfields; i++) {
     const mx_field *fd = &fields[i];
-    const int u8 = fits_u8(fd, count);
+    const int u8 = narrow_u8(fd, count, fixed);
     mx_vtu_array(h, fd->is_double ? "Float64" : u8 ? "UInt8" : "Int32", fd->name, 1,
                  (uint64_t)count * (fd->is_double ? 8 : u8 ? 1 : 4));
   }
+  if (ids_name) mx_vtu_array(h, "Int64", ids_name, 1, 8 * (uint64_t)count);
   mx_vtu_printf(h, "      </%s>\n", tag);
 }
 
@@ -69,11 +82,12 @@ static int needs_wide(const mx_mesh_view *m, size_t nconn) {
   return nconn > (size_t)INT32_MAX || m->nnodes > (size_t)INT32_MAX;
 }
 
-static int xml_header(mx_afile *f, const mx_mesh_view *m, size_t nconn) {
+static int xml_header(mx_afile *f, const mx_mesh_view *m, size_t nconn, const mx_vtu_extra *x) {
   mx_vtu_head h = {0};
   mx_vtu_begin(&h, m->nnodes, m->ncells);
-  xml_fields(&h, "PointData", m->npoint_fields, m->point_fields, m->nnodes);
-  xml_fields(&h, "CellData", m->ncell_fields, m->cell_fields, m->ncells);
+  xml_fields(&h, "PointData", m->npoint_fields, m->point_fields, m->nnodes, x->fixed_types,
+             x->ids ? x->ids_name : NULL);
+  xml_fields(&h, "CellData", m->ncell_fields, m->cell_fields, m->ncells, x->fixed_types, NULL);
   return mx_vtu_end(f, &h, m->nnodes, m->ncells, nconn, needs_wide(m, nconn));
 }
 
@@ -187,12 +201,13 @@ static size_t fill_ints_gather(const void *vctx, size_t b, size_t e, char *out) 
 /* Float64, UInt8 or Int32, as xml_fields declared it. Only an int32 or
  * double source in index order is copied straight from memory. */
 static int write_field_block(mx_afile *f, const mx_field *fd, size_t count,
-                             const uint32_t *order) {
+                             const uint32_t *order, int fixed) {
   vtu_ctx gctx = {NULL, fd, NULL, 0, order};
   if (fd->is_double && fd->dvalues && !order) return write_double_block(f, fd->dvalues, count);
   if (fd->is_double)
     return mx_vtu_block(f, 8 * (uint64_t)count, count, 8, fill_doubles_gather, &gctx);
-  if (fits_u8(fd, count)) return mx_vtu_block(f, (uint64_t)count, count, 1, fill_u8, &gctx);
+  if (narrow_u8(fd, count, fixed))
+    return mx_vtu_block(f, (uint64_t)count, count, 1, fill_u8, &gctx);
   MX_CHECK(mx_vtu_count(f, 4 * (uint64_t)count));
 #if MX_VTU_HOST_LE
   if (!order) return mx_afile_write(f, fd->ivalues, 4 * count);
@@ -201,11 +216,17 @@ static int write_field_block(mx_afile *f, const mx_field *fd, size_t count,
 }
 
 static int write_fields(mx_afile *f, int nfields, const mx_field *fields,
-                        size_t count, const uint32_t *order) {
+                        size_t count, const uint32_t *order, int fixed) {
   for (int i = 0; i < nfields; i++) {
-    MX_CHECK(write_field_block(f, &fields[i], count, order));
+    MX_CHECK(write_field_block(f, &fields[i], count, order, fixed));
   }
   return MX_OK;
+}
+
+static size_t fill_ids(const void *vctx, size_t b, size_t e, char *out) {
+  const uint64_t *ids = vctx;
+  for (size_t i = b; i < e; i++) mx_put_le64(out + 8 * (i - b), ids[i]);
+  return 8 * (e - b);
 }
 
 /* Nodes before the first cell of each OFFSET_BLOCK-cell block. */
@@ -239,19 +260,27 @@ static int write_cell_blocks(mx_afile *f, const mx_mesh_view *m, size_t nconn) {
   return st;
 }
 
-static int write_body(mx_afile *f, const mx_mesh_view *m) {
+static int write_body(mx_afile *f, const mx_mesh_view *m, const mx_vtu_extra *x) {
   size_t nconn = conn_length(m);
-  MX_CHECK(xml_header(f, m, nconn));
-  MX_CHECK(write_fields(f, m->npoint_fields, m->point_fields, m->nnodes, NULL));
-  MX_CHECK(write_fields(f, m->ncell_fields, m->cell_fields, m->ncells, m->order));
+  MX_CHECK(xml_header(f, m, nconn, x));
+  MX_CHECK(write_fields(f, m->npoint_fields, m->point_fields, m->nnodes, NULL, x->fixed_types));
+  if (x->ids)
+    MX_CHECK(mx_vtu_block(f, 8 * (uint64_t)m->nnodes, m->nnodes, 8, fill_ids, x->ids));
+  MX_CHECK(write_fields(f, m->ncell_fields, m->cell_fields, m->ncells, m->order,
+                        x->fixed_types));
   MX_CHECK(write_double_block(f, m->xyz, 3 * m->nnodes));
   MX_CHECK(write_cell_blocks(f, m, nconn));
   return mx_vtu_finish(f);
 }
 
-int mx_write_vtu(const char *path, const mx_mesh_view *m) {
+int mx_write_vtu_extra(const char *path, const mx_mesh_view *m, const mx_vtu_extra *x) {
+  static const mx_vtu_extra none = {NULL, NULL, 0};
   MX_CHECK(mx_mesh_view_check(path, m));
   mx_afile f;
   MX_CHECK(mx_afile_open(&f, path));
-  return mx_afile_finish(&f, write_body(&f, m));
+  return mx_afile_finish(&f, write_body(&f, m, x ? x : &none));
+}
+
+int mx_write_vtu(const char *path, const mx_mesh_view *m) {
+  return mx_write_vtu_extra(path, m, NULL);
 }

@@ -27,7 +27,10 @@
  * roots, refinement), p4est_balance.c, p4est_partition.c (partition, lists,
  * ghost), p4est_leaves.c (inside leaves, hash, per-rank figures),
  * p4est_compare.c (against the single-process leaves), p4est_inputs.c (the
- * builder from the mesher's inputs). Every function taking the forest is
+ * builder from the mesher's inputs); the mesh on the forest: p4est_mesh.h
+ * (p4est_mesh.c each rank's patch, p4est_halo.c the rings of other ranks'
+ * leaves, p4est_nodes.c the shared nodes, exchange.c the all-to-all),
+ * write_msh_mpi.h (one Gmsh file from every rank). Every function taking the forest is
  * collective over its communicator unless said otherwise. */
 #ifndef MX_P4EST_OCTREE_H
 #define MX_P4EST_OCTREE_H
@@ -120,6 +123,13 @@ int mx_p4est_balance(mx_p4est_octree *P);      /* p4est_balance.c */
  * (expected elements). p4est_partition.c */
 int mx_p4est_partition(mx_p4est_octree *P, int mesh_weights);
 int mx_p4est_ghost(mx_p4est_octree *P);        /* p4est_partition.c */
+
+/* Repair (as the single-process mx_repair): the leaves in the domain whose
+ * keys are listed (sorted; each rank lists its own) split once, then the
+ * balance, partition and ghost layer again. *nsplit: leaves split over all
+ * ranks (0: nothing changed). p4est_refine.c */
+int mx_p4est_refine_listed(mx_p4est_octree *P, const uint64_t *keys, size_t n,
+                           long long *nsplit);
 
 /* Room for n more pooled triangle ids (not collective). */
 int mx_p4est_pool_reserve(mx_p4est_octree *P, size_t n);

@@ -366,3 +366,40 @@ int mx_p4est_refine(mx_p4est_octree *P) {
   }
   return MX_OK;
 }
+
+/* ---- repair: listed leaves split once ------------------------------------ */
+
+int mx_p4est_refine_listed(mx_p4est_octree *P, const uint64_t *keys, size_t n,
+                           long long *nsplit) {
+  p8est_t *p8 = P->p8;
+  long long k = 0;
+  int top = 0;
+  for (p4est_topidx_t t = p8->first_local_tree; t <= p8->last_local_tree; t++) {
+    p8est_tree_t *tr = p8est_tree_array_index(p8->trees, t);
+    for (size_t i = 0; i < tr->quadrants.elem_count; i++) {
+      p8est_quadrant_t *q = p8est_quadrant_array_index(&tr->quadrants, i);
+      mx_pq *d = q->p.user_data;
+      if (!mx_pq_kept(d) || mx_find_u64(keys, n, mx_p4est_key(P, t, q)) == UINT32_MAX) continue;
+      if (d->target <= q->level) d->target = (uint8_t)(q->level + 1);
+      if (d->target > top) top = d->target;
+      k++;
+    }
+  }
+  MPI_Allreduce(&k, nsplit, 1, MPI_LONG_LONG, MPI_SUM, P->comm);
+  MPI_Allreduce(MPI_IN_PLACE, &top, 1, MPI_INT, MPI_MAX, P->comm);
+  if (!*nsplit) return MX_OK;
+  if (top > P->max_level) P->max_level = top;
+  if (P->max_level > P8EST_QMAXLEVEL) {
+    mx_error(NULL, 0, "a repair asks level %d, deeper than p4est allows (%d)", P->max_level,
+             P8EST_QMAXLEVEL);
+    return MX_EINPUT;
+  }
+  MX_CHECK(mx_p4est_refine(P));
+  MX_CHECK(mx_p4est_balance(P));
+  if (P->ghost) p8est_ghost_destroy(P->ghost);
+  P->ghost = NULL;
+  mx_free(P->ghost_data);
+  P->ghost_data = NULL;
+  MX_CHECK(mx_p4est_partition(P, 1));
+  return mx_p4est_ghost(P);
+}
