@@ -19,7 +19,9 @@
 #     partition boundary, boundary on the input), and its hash compared with
 #     the single-process file's.
 # Runs are single (REPEAT=N: median of N for the times). mpirun gets
-# --oversubscribe --allow-run-as-root. The last line is one JSON object with
+# --oversubscribe --allow-run-as-root, and --bind-to none with more than one
+# thread per rank (Open MPI binds a rank to one core by default, so its
+# threads would share it). The last line is one JSON object with
 # every row.
 set -eu
 mixoct=${1:?usage: p4est_bench.sh MIXOCT [SURFACE] [LEVELS]}
@@ -38,7 +40,7 @@ j=json.loads(open(sys.argv[1]).read().strip().splitlines()[-1])
 for k in sys.argv[2].split("."): j=j[k]
 print(j)' "$1" "$2"
 }
-median() { tr ' ' '\n' | sort -g | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
+median() { tr ' ' '\n' | grep -v '^$' | sort -g | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
 
 # run OUT RANKS THREADS args...: RANKS 0 = the single-process program
 run() {
@@ -50,7 +52,10 @@ run() {
       OMP_NUM_THREADS=$threads "$mixoct" --threads "$threads" "$@" --json >"$out" 2>"$tmp/err" ||
         { cat "$tmp/err" >&2; return 1; }
     else
-      OMP_NUM_THREADS=$threads "$mpirun" --oversubscribe --allow-run-as-root -n "$ranks" \
+      # Open MPI binds each rank to one core by default: threads need room
+      local bind=()
+      [ "$threads" -gt 1 ] && bind=(--bind-to none)
+      OMP_NUM_THREADS=$threads "$mpirun" --oversubscribe --allow-run-as-root "${bind[@]}" -n "$ranks" \
         -x OMP_NUM_THREADS "$mixoct" --threads "$threads" "$@" --p4est --json >"$out" 2>"$tmp/err" ||
         { cat "$tmp/err" >&2; return 1; }
     fi
