@@ -52,8 +52,8 @@ static int verdict(mx_mesher *m, const mx_p4est_mesh *D) {
   return mx_volume_verdict(m, D->volume, (size_t)D->cells);
 }
 
-static int write_outputs(const mx_options *o, const mx_p4est_octree *P, const mx_p4est_mesh *D) {
-  const mx_mesh_out *M = &D->M;
+/* This rank's elements as the writers and the hash take them. */
+static mx_mesh_view rank_view(const mx_mesh_out *M) {
   mx_mesh_view v;
   memset(&v, 0, sizeof v);
   v.nnodes = M->nnodes;
@@ -61,6 +61,12 @@ static int write_outputs(const mx_options *o, const mx_p4est_octree *P, const mx
   v.ncells = M->ncells;
   v.type = M->type;
   v.conn = M->conn;
+  return v;
+}
+
+static int write_outputs(const mx_options *o, const mx_p4est_octree *P, const mx_p4est_mesh *D) {
+  const mx_mesh_out *M = &D->M;
+  mx_mesh_view v = rank_view(M);
   const mx_field cf[2] = {{.name = "level", .u8values = M->level},
                           {.name = "jens", .is_double = 1, .fvalues = M->jens}};
   v.ncell_fields = 2;
@@ -127,13 +133,7 @@ int mx_p4est_mesh_run(const mx_options *o, mx_p4est_octree *P, mx_mesher *m, dou
   if (!st) {
     /* the hash `mixoct check` computes from a file, over every rank's
      * elements */
-    mx_mesh_view v;
-    memset(&v, 0, sizeof v);
-    v.nnodes = D->M.nnodes;
-    v.xyz = D->M.xyz;
-    v.ncells = D->M.ncells;
-    v.type = D->M.type;
-    v.conn = D->M.conn;
+    const mx_mesh_view v = rank_view(&D->M);
     uint64_t sum = mx_mesh_hash_sum(&v), all = 0;
     MPI_Allreduce(&sum, &all, 1, MPI_UINT64_T, MPI_SUM, P->comm);
     rep->hash = mx_mesh_hash_finish(all, D->cells);

@@ -661,9 +661,22 @@ int mx_mesh_full(mx_mesher *m) {
  * by list refinement (Algorithm 3), and the octree is meshed again around
  * them (remesh_local.c), up to repair_rounds times. m->S.contacts holds the
  * contacts of the final mesh. */
+int mx_repair_go_on(int round, uint64_t defects, int max_rounds, uint64_t *best, int *worse) {
+  if (defects == 0 || round >= max_rounds) return 0;
+  /* a repair that makes things worse twice in a row does not converge
+   * (a surface feature finer than any level, an input's hole) */
+  if (round == 0 || defects < *best) {
+    *best = defects;
+    *worse = 0;
+  } else if (++*worse >= 2) {
+    return 0;
+  }
+  return 1;
+}
+
 int mx_repair(mx_mesher *m) {
   uint8_t *flag = NULL;
-  size_t best = 0;
+  uint64_t best = 0;
   int worse = 0;
   for (int round = 0;; round++) {
     mx_free(flag);
@@ -677,16 +690,9 @@ int mx_repair(mx_mesher *m) {
       mx_free(flag);
       return st;
     }
-    const size_t defects = m->M.invalid + m->S.contacts.nodes;
-    if (defects == 0 || round >= m->p.repair_rounds) break;
-    /* a repair that makes things worse twice in a row does not converge
-     * (a surface feature finer than any level, an input's hole) */
-    if (round == 0 || defects < best) {
-      best = defects;
-      worse = 0;
-    } else if (++worse >= 2) {
+    if (!mx_repair_go_on(round, m->M.invalid + m->S.contacts.nodes, m->p.repair_rounds, &best,
+                         &worse))
       break;
-    }
     if (m->on_round) m->on_round(round + 1);
     size_t n = 0;
     uint32_t *octs = mx_alloc((m->M.invalid + m->S.contacts.elements + 1) * sizeof *octs);

@@ -319,14 +319,9 @@ int mx_p4est_mesh_build(mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D) {
   int worse = 0;
   for (int round = 0;; round++) {
     MX_CHECK(mesh_once(P, m, D));
-    const uint64_t defects = D->invalid + D->contact_cells;
-    if (defects == 0 || round >= m->p.repair_rounds) break;
-    if (round == 0 || defects < best) {
-      best = defects;
-      worse = 0;
-    } else if (++worse >= 2) {
+    if (!mx_repair_go_on(round, D->invalid + D->contact_cells, m->p.repair_rounds, &best,
+                         &worse))
       break;
-    }
     long long n = 0;
     MX_CHECK(mx_p4est_refine_listed(P, D->defect_key, D->ndefect, &n));
     if (n == 0) break;
