@@ -198,6 +198,37 @@ else bad "one ring: no shared node differs (the check would see nothing)"; fi
 same "$(field "$T/r1.json" mesh.attempts) $(field "$T/r1.json" mesh.mesh_hash)" \
   "2 $(cut -d' ' -f3 "$T/want_cortex6")" "one ring: meshed again, the single-process mesh"
 
+# Repair (MX_P4EST_TEST_REPAIR: the leaf of the element with the lowest J_ENS
+# taken as a defect): split in the forest, balanced, meshed again; on 1, 2, 3
+# ranks the mesh of the single-process list refinement (-c, -l: Algorithm 3)
+# of that element.
+"$MIXOCT" -i "$DATA/surfaces/cortex.off" -s 6 -o "$T/r.vtk" --ascii --restart "$T/r.oct" --quiet
+python3 - "$T/r.vtk" >"$T/worst.txt" <<'EOS'
+import sys
+w = open(sys.argv[1]).read().split("\n")
+n = int([l for l in w if l.startswith("CELL_DATA")][0].split()[1])
+k = [i for i, l in enumerate(w) if l.startswith("SCALARS jens")][0] + 2
+v = []
+while len(v) < n:
+    v += [float(x) for x in w[k].split()]
+    k += 1
+print(v.index(min(v)))
+EOS
+"$MIXOCT" -i "$DATA/surfaces/cortex.off" -c "$T/r.oct" -l "$T/worst.txt" -o "$T/rl.vtu" --quiet
+"$MIXOCT" check "$T/rl.vtu" --json >"$T/rl.json" 2>/dev/null
+for n in 1 2 3; do
+  MX_P4EST_TEST_REPAIR=1 "$MPIRUN" --oversubscribe --allow-run-as-root -n "$n" -x MX_P4EST_TEST_REPAIR \
+    -x OMP_NUM_THREADS=1 "$MIXOCT" -i "$DATA/surfaces/cortex.off" -s 6 --p4est --json \
+    -o "$T/rp.pvtu" >"$T/rp.json" 2>"$T/err" || { bad "repair: $n rank(s) failed"; cat "$T/err"; continue; }
+  same "$(field "$T/rp.json" mesh.repair_rounds) $(field "$T/rp.json" mesh.repaired_leaves)" "1 1" \
+    "repair: $n rank(s): one round, one leaf split"
+  same "$(field "$T/rp.json" mesh.nodes) $(field "$T/rp.json" mesh.elements) $(field "$T/rp.json" mesh.mesh_hash)" \
+    "$(field "$T/rl.json" nodes) $(field "$T/rl.json" elements) $(field "$T/rl.json" mesh_hash)" \
+    "repair: $n rank(s): the single-process list refinement's mesh"
+  "$MIXOCT" check "$T/rp.pvtu" --surface "$DATA/surfaces/cortex.off" --json >"$T/c.json" 2>/dev/null
+  same "$(field "$T/c.json" defects)" 0 "repair: $n rank(s): the .pvtu checked, no defect"
+done
+
 # The files do not depend on the thread count (2 ranks x 1 and x 2 threads),
 # and the single-process program writes a .pvtu too (one piece), the same mesh.
 mkdir -p "$T/t1" "$T/t2"

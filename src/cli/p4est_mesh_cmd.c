@@ -167,7 +167,8 @@ void mx_p4est_mesh_reduce(const mx_p4est_octree *P, mx_p4est_mesh_report *rep) {
 void mx_p4est_mesh_json(const mx_p4est_mesh_report *rep) {
   const mx_p4est_mesh *D = &rep->D;
   const double *phmax = rep->phmax;
-  printf("\"mesh\": {\"nodes\": %" PRIu64 ", \"elements\": %" PRIu64 ", \"by_type\": {\"tet\": "
+  printf("\"mesh\": {\"leaves\": %" PRIu64 ", ", D->leaves);
+  printf("\"nodes\": %" PRIu64 ", \"elements\": %" PRIu64 ", \"by_type\": {\"tet\": "
          "%" PRIu64 ", \"pyramid\": %" PRIu64 ", \"prism\": %" PRIu64 ", \"hex\": %" PRIu64
          "}, \"jens_min\": %.6g, \"invalid\": %" PRIu64 ", \"contact_elements\": %" PRIu64
          ", \"volume\": %.17g, \"mesh_hash\": \"%016" PRIx64 "\", \"halo_rings\": %d, "

@@ -188,6 +188,16 @@ static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4e
       invalid += core[c] && mx_jens_invalid(M.jens[c]);
       contact += core[c] && flag[c];
     }
+    D->worst_jens = 2.0f;
+    D->worst_key = UINT64_MAX;
+    for (size_t c = 0; c < M.ncells; c++) {
+      if (!core[c]) continue;
+      const uint64_t k = m->B.oct.key[pl[M.leaf[c]]];
+      if (M.jens[c] < D->worst_jens || (M.jens[c] == D->worst_jens && k < D->worst_key)) {
+        D->worst_jens = M.jens[c];
+        D->worst_key = k;
+      }
+    }
     D->invalid = invalid;
     D->contact_cells = contact;
     st = defect_leaves(m, pl, &M, core, flag, D);
@@ -314,14 +324,32 @@ static int mesh_once(mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D) {
   return st;
 }
 
+/* MX_P4EST_TEST_REPAIR: the worst element's leaf as the only defect. */
+static int force_defect(const mx_p4est_octree *P, mx_p4est_mesh *D) {
+  float j = D->worst_jens, jmin = 0;
+  MPI_Allreduce(&j, &jmin, 1, MPI_FLOAT, MPI_MIN, P->comm);
+  uint64_t k = D->worst_jens == jmin ? D->worst_key : UINT64_MAX, kmin = 0;
+  MPI_Allreduce(&k, &kmin, 1, MPI_UINT64_T, MPI_MIN, P->comm);
+  mx_free(D->defect_key);
+  D->defect_key = mx_alloc(sizeof *D->defect_key);
+  if (!D->defect_key) return MX_ENOMEM;
+  D->defect_key[0] = kmin;
+  D->ndefect = k == kmin && kmin != UINT64_MAX;
+  return MX_OK;
+}
+
 int mx_p4est_mesh_build(mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D) {
   uint64_t best = 0;
   int worse = 0;
+  const int test_repair = getenv("MX_P4EST_TEST_REPAIR") != NULL;
   for (int round = 0;; round++) {
     MX_CHECK(mesh_once(P, m, D));
-    if (!mx_repair_go_on(round, D->invalid + D->contact_cells, m->p.repair_rounds, &best,
-                         &worse))
+    if (round == 0 && test_repair) {
+      MX_CHECK(agree(P->comm, force_defect(P, D)));
+    } else if (!mx_repair_go_on(round, D->invalid + D->contact_cells, m->p.repair_rounds,
+                                &best, &worse)) {
       break;
+    }
     long long n = 0;
     MX_CHECK(mx_p4est_refine_listed(P, D->defect_key, D->ndefect, &n));
     if (n == 0) break;

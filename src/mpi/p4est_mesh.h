@@ -51,6 +51,8 @@ typedef struct {
   long long repaired;     /* leaves split by them (global) */
   uint64_t *defect_key;   /* this rank's leaves with defects, sorted */
   size_t ndefect;
+  float worst_jens;       /* this rank's lowest J_ENS, and the key of its leaf */
+  uint64_t worst_key;     /* (the smallest key among equal J_ENS) */
   uint64_t differ_first;   /* shared-node differences of the first attempt (global) */
   size_t core_leaves, patch_leaves, tree_leaves;
   size_t shared_nodes;    /* nodes another rank's elements use too */
@@ -64,7 +66,10 @@ typedef struct {
  * remain, their leaves are split once (mx_p4est_refine_listed), the forest
  * balanced and partitioned again, and everything meshed again, up to
  * m->p.repair_rounds rounds, stopping when the defects grow twice in a row
- * (counted in elements here).
+ * (counted in elements here). For the tests, MX_P4EST_TEST_REPAIR=1 in the
+ * environment makes the leaf of the element with the lowest J_ENS (the
+ * smallest key among equal ones) a defect in the first round: the repair
+ * path runs on any input.
  *
  * m: the rank's mesher with the inputs and requests the forest was built
  * from (its requests are cleared here: the octree of m becomes the patch's).
