@@ -246,6 +246,13 @@ done
 same "$(field "$T/c.json" defects) $(field "$T/c.json" mesh_hash)" "0 $(cut -d' ' -f3 "$T/want_cortex6")" \
   "single process: .pvtu (one piece) holds the same mesh"
 
+# A rank that cannot write its piece (a directory in the way): rank 0 names
+# it, the other pieces are removed, no master: nothing half written.
+mkdir -p "$T/pv/o_1.vtu"
+expect_exit 4 "a piece that cannot be written" mpi 2 --demo -s 3 --p4est -o "$T/pv/o.pvtu" --quiet
+has "$T/err" "rank 1 could not write its piece" "a piece that cannot be written: rank 0 names it"
+same "$(ls "$T/pv")" "o_1.vtu" "a piece that cannot be written: nothing else left"
+
 # ---- usage ------------------------------------------------------------------
 expect_exit 2 "--p4est writes .pvtu or .msh only" mpi 1 --demo -s 3 --p4est -o "$T/x.vtu"
 expect_exit 2 "--p4est: no ASCII .msh" mpi 1 --demo -s 3 --p4est --ascii -o "$T/x.msh"

@@ -78,9 +78,20 @@ static int write_outputs(const mx_options *o, const mx_p4est_octree *P, const mx
     if (n > 5 && strcmp(path + n - 5, ".pvtu") == 0) {
       char piece[4096];
       mx_pvtu_piece_path(path, P->rank, piece, sizeof piece);
-      st = agree(P->comm, mx_write_vtu_piece(piece, &v, D->gid));
+      const int mine = mx_write_vtu_piece(piece, &v, D->gid);
+      st = agree(P->comm, mine);
+      /* messages are printed by rank 0: name the first rank that failed */
+      int who = mine ? P->rank : P->size, first = who;
+      MPI_Allreduce(&who, &first, 1, MPI_INT, MPI_MIN, P->comm);
+      if (first > 0 && first < P->size) {
+        char other[4096];
+        mx_pvtu_piece_path(path, first, other, sizeof other);
+        mx_error(other, 0, "rank %d could not write its piece (see its file system)", first);
+      }
       if (!st && P->rank == 0) st = mx_write_pvtu_master(path, P->size, &v, 1);
       st = agree(P->comm, st);
+      /* all pieces and the master, or nothing */
+      if (st && !mine) remove(piece);
     } else {
       mx_dist_mesh dm;
       memset(&dm, 0, sizeof dm);
