@@ -11,7 +11,7 @@ typedef struct {
   uint64_t hash;   /* the mesh hash over every rank's elements (io/mesh_hash.h) */
   double t_mesh, t_write, t_total; /* this rank */
   /* reduced over the ranks by mx_p4est_mesh_reduce: [min, max] per rank */
-  double leaves[2], cells[2], nodes[2], patch[2], sec[2], rss[2], shared[2];
+  double leaves[2], cells[2], nodes[2], patch[2], sec[2], rss[2], shared[2], estimate[2];
   double phmax[7]; /* halo, tree, transition, boundary, exchange, mesh, write */
   long long sent_bytes, largest_message; /* sum, max */
 } mx_p4est_mesh_report;

@@ -167,6 +167,7 @@ void mx_p4est_mesh_reduce(const mx_p4est_octree *P, mx_p4est_mesh_report *rep) {
   minmax(c, rep->t_total, rep->sec);
   minmax(c, mx_peak_rss_mb(), rep->rss);
   minmax(c, (double)D->shared_nodes, rep->shared);
+  minmax(c, D->estimate_mb, rep->estimate);
   const double ph[7] = {D->t_halo, D->t_tree,    D->t_transition, D->t_boundary,
                         D->t_exchange, rep->t_mesh, rep->t_write};
   MPI_Allreduce(ph, rep->phmax, 7, MPI_DOUBLE, MPI_MAX, c);
@@ -200,6 +201,7 @@ void mx_p4est_mesh_json(const mx_p4est_mesh_report *rep) {
   print_pair("nodes", rep->nodes, 0);
   print_pair("shared_nodes", rep->shared, 0);
   print_pair("seconds", rep->sec, 0);
+  print_pair("memory_estimate_mb", rep->estimate, 0);
   print_pair("peak_rss_mb", rep->rss, 1);
   printf("}}, ");
 }

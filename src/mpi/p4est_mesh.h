@@ -55,6 +55,7 @@ typedef struct {
   uint64_t worst_key;     /* (the smallest key among equal J_ENS) */
   uint64_t differ_first;   /* shared-node differences of the first attempt (global) */
   size_t core_leaves, patch_leaves, tree_leaves;
+  double estimate_mb;     /* the memory estimated for the patch (check_memory) */
   size_t shared_nodes;    /* nodes another rank's elements use too */
   long long sent_bytes;   /* node records sent to other ranks, every attempt */
   long long largest_message; /* bytes, to one rank in one exchange */
