@@ -48,6 +48,9 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now);
  * directory, and its directory exists and is writable. MX_EINPUT / MX_EIO
  * with a message naming it. */
 int mx_check_output_path(const char *path, int mesh);
+/* The surfaces (--demo, -i), region surfaces (-r) and boxes (-b) of the
+ * options added to m (src/cli/main.c; also the --p4est front). */
+int mx_add_inputs(const mx_options *o, mx_mesher *m);
 
 /* One line describing the machine (hwloc when built in, OpenMP threads). */
 void mx_topology_string(char *buf, size_t n);

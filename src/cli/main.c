@@ -72,6 +72,11 @@ static int setup(const mx_options *o, mx_mesher **out) {
   m->release_edges = 1; /* one run: the edge infos' memory goes to the mesh */
   m->on_level = mx_progress_on_level;
   mx_progress_stage("read");
+  return mx_add_inputs(o, m);
+}
+
+/* The options' inputs and requests, shared with the --p4est front. */
+int mx_add_inputs(const mx_options *o, mx_mesher *m) {
   if (o->demo) MX_CHECK(mx_mesher_add_demo_surface(m));
   for (int i = 0; i < o->ninputs; i++) MX_CHECK(mx_mesher_add_surface(m, o->inputs[i]));
   for (int r = 0; r < o->nregion_surf; r++)

@@ -13,6 +13,7 @@
 #include "cli/p4est_cli.h"
 #include "common.h"
 #include "mesher/mesher_impl.h"
+#include "mpi/exchange.h"
 #include "mpi/p4est_compare.h"
 #include "mpi/p4est_inputs.h"
 #include "mpi/p4est_leaves.h"
@@ -39,12 +40,6 @@ static void on_message(void *user, int level, const char *text) {
     fprintf(stderr, "mixoct: %s%s\n", level == MX_MSG_ERROR ? "error: " : "warning: ", text);
 }
 
-static int agree(int st) {
-  int all = st;
-  MPI_Allreduce(&st, &all, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  return all;
-}
-
 static int setup(const mx_options *o, mx_mesher **out) {
   mx_params p;
   mx_params_default(&p);
@@ -61,12 +56,7 @@ static int setup(const mx_options *o, mx_mesher **out) {
   }
   *out = m;
   mx_mesher_set_message_handler(m, on_message, NULL);
-  if (o->demo) MX_CHECK(mx_mesher_add_demo_surface(m));
-  for (int i = 0; i < o->ninputs; i++) MX_CHECK(mx_mesher_add_surface(m, o->inputs[i]));
-  for (int r = 0; r < o->nregion_surf; r++)
-    MX_CHECK(mx_mesher_add_region_surface(m, o->region_surf[r], o->req.rlevel[r]));
-  if (o->regions_file) MX_CHECK(mx_mesher_read_boxes(m, o->regions_file));
-  return MX_OK;
+  return mx_add_inputs(o, m);
 }
 
 /* Rank 0: the single-process octree of the same inputs, compared: the
@@ -114,7 +104,7 @@ static int compare_single(mx_mesher *m, const mx_p4est_octree *P, mx_leaf_diff *
   mx_free(la);
   mx_free(kb);
   mx_free(lb);
-  return agree(st);
+  return mx_mpi_agree(MPI_COMM_WORLD, st);
 }
 
 static void print_levels(const size_t *n) {
@@ -208,7 +198,7 @@ static int run(const mx_options *o, int compare) {
   memset(&I, 0, sizeof I);
   int st = setup(o, &m);
   if (!st) st = mx_p4est_inputs_init(&I, m);
-  st = agree(st);
+  st = mx_mpi_agree(MPI_COMM_WORLD, st);
   double t_setup = mx_wtime() - t0;
   MPI_Allreduce(MPI_IN_PLACE, &t_setup, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
   mx_p4est_octree P;
@@ -226,7 +216,7 @@ static int run(const mx_options *o, int compare) {
   mx_p4est_mesh_report *mesh = NULL;
   if (!st && m->p.stage == MX_STAGE_FULL) {
     mesh = calloc(1, sizeof *mesh);
-    st = agree(mesh ? MX_OK : MX_ENOMEM);
+    st = mx_mpi_agree(MPI_COMM_WORLD, mesh ? MX_OK : MX_ENOMEM);
     if (!st) st = mx_p4est_mesh_run(o, &P, m, t0, mesh);
     if (!st) mx_p4est_mesh_reduce(&P, mesh);
   }

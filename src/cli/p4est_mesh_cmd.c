@@ -7,6 +7,7 @@
 #include "common.h"
 #include "io/pvtu.h"
 #include "mesher/mesher_impl.h"
+#include "mpi/exchange.h"
 #include "mpi/write_msh_mpi.h"
 #include "soa/mesh.h"
 
@@ -20,12 +21,6 @@ static void minmax(MPI_Comm comm, double v, double out[2]) {
   MPI_Allreduce(a, b, 2, MPI_DOUBLE, MPI_MAX, comm);
   out[0] = -b[1];
   out[1] = b[0];
-}
-
-static int agree(MPI_Comm comm, int st) {
-  int all = st;
-  MPI_Allreduce(&st, &all, 1, MPI_INT, MPI_MAX, comm);
-  return all;
 }
 
 /* Exit 0 only for a mesh with no element left with J_ENS < 1e-6, no node
@@ -79,7 +74,7 @@ static int write_outputs(const mx_options *o, const mx_p4est_octree *P, const mx
       char piece[4096];
       mx_pvtu_piece_path(path, P->rank, piece, sizeof piece);
       const int mine = mx_write_vtu_piece(piece, &v, D->gid);
-      st = agree(P->comm, mine);
+      st = mx_mpi_agree(P->comm, mine);
       /* messages are printed by rank 0: name the first rank that failed */
       int who = mine ? P->rank : P->size, first = who;
       MPI_Allreduce(&who, &first, 1, MPI_INT, MPI_MIN, P->comm);
@@ -89,7 +84,7 @@ static int write_outputs(const mx_options *o, const mx_p4est_octree *P, const mx
         mx_error(other, 0, "rank %d could not write its piece (see its file system)", first);
       }
       if (!st && P->rank == 0) st = mx_write_pvtu_master(path, P->size, &v, 1);
-      st = agree(P->comm, st);
+      st = mx_mpi_agree(P->comm, st);
       /* all pieces and the master, or nothing */
       if (st && !mine) remove(piece);
     } else {
@@ -149,7 +144,7 @@ int mx_p4est_mesh_run(const mx_options *o, mx_p4est_octree *P, mx_mesher *m, dou
     MPI_Allreduce(&sum, &all, 1, MPI_UINT64_T, MPI_SUM, P->comm);
     rep->hash = mx_mesh_hash_finish(all, D->cells);
   }
-  if (!st) st = agree(P->comm, verdict(m, D));
+  if (!st) st = mx_mpi_agree(P->comm, verdict(m, D));
   const double t2 = mx_wtime();
   if (!st) st = write_outputs(o, P, D);
   rep->t_write = mx_wtime() - t2;

@@ -5,6 +5,12 @@
 
 #include <limits.h>
 
+int mx_mpi_agree(MPI_Comm comm, int st) {
+  int all = st;
+  MPI_Allreduce(&st, &all, 1, MPI_INT, MPI_MAX, comm);
+  return all;
+}
+
 int mx_exchange(MPI_Comm comm, int st, size_t size, const void *send, const int *scount,
                 void **recv, int **rcount_out, int **rdispl_out, long long *sent,
                 long long *largest) {

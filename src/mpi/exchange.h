@@ -1,10 +1,14 @@
 /* All-to-all exchange of fixed-size records (the distributed mesh's node
- * lists and halo queries). */
+ * lists and halo queries), and the agreement on a status. */
 #ifndef MX_MPI_EXCHANGE_H
 #define MX_MPI_EXCHANGE_H
 
 #include <mpi.h>
 #include <stddef.h>
+
+/* The largest status over the ranks of comm (MX_OK when every rank's is):
+ * a failure on one rank becomes everyone's. Collective. */
+int mx_mpi_agree(MPI_Comm comm, int st);
 
 /* Sends send[] (records of `size` bytes grouped by destination rank,
  * scount[r] to rank r) and receives *recv (mx_alloc; rcount and rdispl,

@@ -12,6 +12,7 @@
 #include "kernels/remesh.h"
 #include "kernels/splice.h"
 #include "mesher/mesher_impl.h"
+#include "mpi/exchange.h"
 #include "mpi/p4est_halo.h"
 #include "mpi/p4est_nodes.h"
 #include "soa/scan.h"
@@ -224,12 +225,6 @@ static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4e
   return MX_OK;
 }
 
-static int agree(MPI_Comm comm, int st) {
-  int all = st;
-  MPI_Allreduce(&st, &all, 1, MPI_INT, MPI_MAX, comm);
-  return all;
-}
-
 /* Global counts, quality, defects and volume. */
 static void reduce_figures(const mx_p4est_octree *P, mx_p4est_mesh *D) {
   uint64_t loc[9] = {D->nowned, D->M.ncells, D->M.by_type[0], D->M.by_type[1],
@@ -297,7 +292,7 @@ static int mesh_once(mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D) {
   const int first_rings = env ? atoi(env) : 0;
   mx_halo H;
   double t = mx_wtime();
-  int st = agree(P->comm, mx_halo_init(P, &H));
+  int st = mx_mpi_agree(P->comm, mx_halo_init(P, &H));
   D->t_halo += mx_wtime() - t;
   for (int a = 0; !st && a < NATTEMPTS; a++) {
     t = mx_wtime();
@@ -312,7 +307,7 @@ static int mesh_once(mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D) {
     if (st) break;
     mx_shared sh;
     memset(&sh, 0, sizeof sh);
-    st = agree(P->comm, mesh_patch(P, &H, m, D, &sh));
+    st = mx_mpi_agree(P->comm, mesh_patch(P, &H, m, D, &sh));
     size_t differ = 0;
     t = mx_wtime();
     if (!st) st = mx_shared_agree(P, D, &sh, a == NATTEMPTS - 1, &differ);
@@ -350,7 +345,7 @@ int mx_p4est_mesh_build(mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D) {
   for (int round = 0;; round++) {
     MX_CHECK(mesh_once(P, m, D));
     if (round == 0 && test_repair) {
-      MX_CHECK(agree(P->comm, force_defect(P, D)));
+      MX_CHECK(mx_mpi_agree(P->comm, force_defect(P, D)));
     } else if (!mx_repair_go_on(round, D->invalid + D->contact_cells, m->p.repair_rounds,
                                 &best, &worse)) {
       break;

@@ -15,6 +15,7 @@
 #include "mpi/p4est_octree.h"
 
 #include "common.h"
+#include "mpi/exchange.h"
 #include "kernels/intersect.h"
 #include "soa/scan.h"
 
@@ -326,12 +327,6 @@ static int prepare_level(mx_p4est_octree *P, level_side *S, int l) {
   return MX_OK;
 }
 
-/* 1 when every rank's status is MX_OK; else the largest status. */
-static int agree(const mx_p4est_octree *P, int st) {
-  int all = st;
-  MPI_Allreduce(&st, &all, 1, MPI_INT, MPI_MAX, P->comm);
-  return all;
-}
 
 int mx_p4est_refine(mx_p4est_octree *P) {
   for (int l = 0; l < P->max_level; l++) {
@@ -339,7 +334,7 @@ int mx_p4est_refine(mx_p4est_octree *P) {
     level_side S;
     memset(&S, 0, sizeof S);
     int st = prepare_level(P, &S, l);
-    st = agree(P, st);
+    st = mx_mpi_agree(P->comm, st);
     if (st) {
       level_side_free(&S);
       return st;
@@ -351,7 +346,7 @@ int mx_p4est_refine(mx_p4est_octree *P) {
     if (!P->status && S.cursor != S.n) P->status = MX_EINTERNAL;
     P->split_requested += S.n;
     level_side_free(&S);
-    st = agree(P, P->status);
+    st = mx_mpi_agree(P->comm, P->status);
     P->t.refine += mx_wtime() - t0;
     if (st) {
       if (st == MX_EINTERNAL)
