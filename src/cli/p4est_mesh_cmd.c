@@ -1,15 +1,10 @@
 /* `mpirun -n N mixoct -i SURF -s L --p4est [-o OUT.pvtu|OUT.msh] [--json]`:
- * the mesh part (src/mpi/p4est_mesh.h): each rank meshes its leaves, the
- * verdict over all ranks (exit 0 only for a valid mesh), the outputs, and
- * the report (rank 0: global counts, per-rank min/max). */
+ * the mesh part: the library calls (src/mpi/p4est_mesh.h: each rank meshes
+ * its leaves, the verdict over all ranks, the outputs) in order, and the
+ * report (rank 0: global counts, per-rank min/max). */
 #include "cli/p4est_cli.h"
 
 #include "common.h"
-#include "io/pvtu.h"
-#include "mesher/mesher_impl.h"
-#include "mpi/exchange.h"
-#include "mpi/write_msh_mpi.h"
-#include "soa/mesh.h"
 
 #include <inttypes.h>
 #include <stdio.h>
@@ -23,101 +18,16 @@ static void minmax(MPI_Comm comm, double v, double out[2]) {
   out[1] = b[0];
 }
 
-/* Exit 0 only for a mesh with no element left with J_ENS < 1e-6, no node
- * lying on an element it is not a node of, holding the input's volume. */
-static int verdict(mx_mesher *m, const mx_p4est_mesh *D) {
-  if (D->cells == 0) {
-    mx_error(m->ndomain ? m->domain_name[0] : NULL, 0,
-             "the mesh is empty: no element lies in the domain (%" PRIu64 " leaves); ask for "
-             "finer levels (-s, -a, -b, -r)", D->leaves);
-    return MX_EINPUT;
-  }
-  if (D->invalid) {
-    mx_error(NULL, 0, "%" PRIu64 " element(s) with J_ENS < 1e-6 remain after %d repair "
-             "round(s)", D->invalid, D->repair_rounds);
-    return MX_EINVALID;
-  }
-  if (D->contact_cells) {
-    mx_error(NULL, 0, "%" PRIu64 " element(s) where two parts of the boundary meet (a node "
-             "on an element it is not a node of: a non-conforming mesh) after %d repair "
-             "round(s); ask for finer levels there (-s, -b, -r)", D->contact_cells,
-             D->repair_rounds);
-    return MX_EINVALID;
-  }
-  return mx_volume_verdict(m, D->volume, (size_t)D->cells);
-}
-
-/* This rank's elements as the writers and the hash take them. */
-static mx_mesh_view rank_view(const mx_mesh_out *M) {
-  mx_mesh_view v;
-  memset(&v, 0, sizeof v);
-  v.nnodes = M->nnodes;
-  v.xyz = M->xyz;
-  v.ncells = M->ncells;
-  v.type = M->type;
-  v.conn = M->conn;
-  return v;
-}
-
-static int write_outputs(const mx_options *o, const mx_p4est_octree *P, const mx_p4est_mesh *D) {
-  const mx_mesh_out *M = &D->M;
-  mx_mesh_view v = rank_view(M);
-  const mx_field cf[2] = {{.name = "level", .u8values = M->level},
-                          {.name = "jens", .is_double = 1, .fvalues = M->jens}};
-  v.ncell_fields = 2;
-  v.cell_fields = cf;
-  int st = MX_OK;
-  for (int k = 0; k < o->noutputs && !st; k++) {
-    const char *path = o->outputs[k];
-    const size_t n = strlen(path);
-    if (n > 5 && strcmp(path + n - 5, ".pvtu") == 0) {
-      char piece[4096];
-      mx_pvtu_piece_path(path, P->rank, piece, sizeof piece);
-      const int mine = mx_write_vtu_piece(piece, &v, D->gid);
-      st = mx_mpi_agree(P->comm, mine);
-      /* messages are printed by rank 0: name the first rank that failed */
-      int who = mine ? P->rank : P->size, first = who;
-      MPI_Allreduce(&who, &first, 1, MPI_INT, MPI_MIN, P->comm);
-      if (first > 0 && first < P->size) {
-        char other[4096];
-        mx_pvtu_piece_path(path, first, other, sizeof other);
-        mx_error(other, 0, "rank %d could not write its piece (see its file system)", first);
-      }
-      if (!st && P->rank == 0) st = mx_write_pvtu_master(path, P->size, &v, 1);
-      st = mx_mpi_agree(P->comm, st);
-      /* all pieces and the master, or nothing */
-      if (st && !mine) remove(piece);
-    } else {
-      mx_dist_mesh dm;
-      memset(&dm, 0, sizeof dm);
-      dm.nnodes = M->nnodes;
-      dm.xyz = M->xyz;
-      dm.gid = D->gid;
-      dm.owned = D->owned;
-      dm.first_owned = D->first_owned;
-      dm.nowned = D->nowned;
-      dm.nglobal = D->nodes;
-      dm.ncells = M->ncells;
-      dm.type = M->type;
-      dm.conn = M->conn;
-      st = mx_write_msh_mpi(path, P->comm, &dm);
-    }
-  }
-  return st;
-}
-
 int mx_p4est_check_outputs(const mx_options *o) {
   for (int k = 0; k < o->noutputs; k++) {
     const char *path = o->outputs[k];
-    const size_t n = strlen(path);
-    const int pvtu = n > 5 && strcmp(path + n - 5, ".pvtu") == 0;
-    const int msh = n > 4 && strcmp(path + n - 4, ".msh") == 0;
-    if (!pvtu && !msh) {
+    const int kind = mx_p4est_output_kind(path);
+    if (!kind) {
       mx_error(path, 0, "with --p4est the mesh is written as a parallel VTU (.pvtu, one "
                         "piece per rank) or one binary Gmsh file (.msh, MPI-IO)");
       return MX_EINPUT;
     }
-    if (msh && o->ascii) {
+    if (kind == 2 && o->ascii) {
       mx_error(path, 0, "with --p4est the .msh file is binary (--ascii is not offered)");
       return MX_EINPUT;
     }
@@ -136,17 +46,10 @@ int mx_p4est_mesh_run(const mx_options *o, mx_p4est_octree *P, mx_mesher *m, dou
   const double t1 = mx_wtime();
   int st = mx_p4est_mesh_build(P, m, D);
   rep->t_mesh = mx_wtime() - t1;
-  if (!st) {
-    /* the hash `mixoct check` computes from a file, over every rank's
-     * elements */
-    const mx_mesh_view v = rank_view(&D->M);
-    uint64_t sum = mx_mesh_hash_sum(&v), all = 0;
-    MPI_Allreduce(&sum, &all, 1, MPI_UINT64_T, MPI_SUM, P->comm);
-    rep->hash = mx_mesh_hash_finish(all, D->cells);
-  }
-  if (!st) st = mx_mpi_agree(P->comm, verdict(m, D));
+  if (!st) rep->hash = mx_p4est_mesh_hash(P, D);
+  if (!st) st = mx_p4est_mesh_verdict(P, m, D);
   const double t2 = mx_wtime();
-  if (!st) st = write_outputs(o, P, D);
+  for (int k = 0; k < o->noutputs && !st; k++) st = mx_p4est_mesh_write(P, D, o->outputs[k]);
   rep->t_write = mx_wtime() - t2;
   rep->t_total = mx_wtime() - t0;
   return st;

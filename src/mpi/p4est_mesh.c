@@ -17,6 +17,7 @@
 #include "mpi/p4est_nodes.h"
 #include "soa/scan.h"
 
+#include <inttypes.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -357,6 +358,32 @@ int mx_p4est_mesh_build(mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D) {
     D->repaired += n;
   }
   return MX_OK;
+}
+
+static int verdict_local(mx_mesher *m, const mx_p4est_mesh *D) {
+  if (D->cells == 0) {
+    mx_error(m->ndomain ? m->domain_name[0] : NULL, 0,
+             "the mesh is empty: no element lies in the domain (%" PRIu64 " leaves); ask for "
+             "finer levels (-s, -a, -b, -r)", D->leaves);
+    return MX_EINPUT;
+  }
+  if (D->invalid) {
+    mx_error(NULL, 0, "%" PRIu64 " element(s) with J_ENS < 1e-6 remain after %d repair "
+             "round(s)", D->invalid, D->repair_rounds);
+    return MX_EINVALID;
+  }
+  if (D->contact_cells) {
+    mx_error(NULL, 0, "%" PRIu64 " element(s) where two parts of the boundary meet (a node "
+             "on an element it is not a node of: a non-conforming mesh) after %d repair "
+             "round(s); ask for finer levels there (-s, -b, -r)", D->contact_cells,
+             D->repair_rounds);
+    return MX_EINVALID;
+  }
+  return mx_volume_verdict(m, D->volume, (size_t)D->cells);
+}
+
+int mx_p4est_mesh_verdict(const mx_p4est_octree *P, mx_mesher *m, const mx_p4est_mesh *D) {
+  return mx_mpi_agree(P->comm, verdict_local(m, D));
 }
 
 void mx_p4est_mesh_free(mx_p4est_mesh *D) {

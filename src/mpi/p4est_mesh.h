@@ -77,6 +77,19 @@ typedef struct {
  * P: built by mx_p4est_build. D: zeroed by the caller. MX_OK, or an error
  * with a message (the same status on every rank). */
 int mx_p4est_mesh_build(mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D);
+/* Exit 0 is only for a non-empty mesh with no element left with J_ENS <
+ * 1e-6, no node lying on an element it is not a node of, holding the
+ * volume the input encloses (mx_volume_verdict); else the status, with
+ * the message, on every rank. */
+int mx_p4est_mesh_verdict(const mx_p4est_octree *P, mx_mesher *m, const mx_p4est_mesh *D);
+/* The hash `mixoct check` computes from a file (io/pvtu.h), over every
+ * rank's elements (p4est_output.c). */
+uint64_t mx_p4est_mesh_hash(const mx_p4est_octree *P, const mx_p4est_mesh *D);
+/* What a path is written as: 1 .pvtu (a piece per rank with GlobalNodeId,
+ * rank 0 the master; all of them or nothing), 2 .msh (one binary Gmsh file,
+ * MPI-IO: write_msh_mpi.h), 0 neither (not collective). */
+int mx_p4est_output_kind(const char *path);
+int mx_p4est_mesh_write(const mx_p4est_octree *P, const mx_p4est_mesh *D, const char *path);
 void mx_p4est_mesh_free(mx_p4est_mesh *D);
 
 #endif

@@ -29,7 +29,8 @@
  * p4est_compare.c (against the single-process leaves), p4est_inputs.c (the
  * builder from the mesher's inputs); the mesh on the forest: p4est_mesh.h
  * (p4est_mesh.c each rank's patch, p4est_halo.c the rings of other ranks'
- * leaves, p4est_nodes.c the shared nodes, exchange.c the all-to-all),
+ * leaves, p4est_nodes.c the shared nodes, p4est_output.c the files,
+ * exchange.c the all-to-all),
  * write_msh_mpi.h (one Gmsh file from every rank). Every function taking the forest is
  * collective over its communicator unless said otherwise. */
 #ifndef MX_P4EST_OCTREE_H

@@ -1,0 +1,92 @@
+/* The distributed mesh written (src/mpi/p4est_mesh.h): a .pvtu with one
+ * piece per rank, or one binary .msh written by every rank with MPI-IO; and
+ * its hash over every rank's elements. */
+#include "mpi/p4est_mesh.h"
+
+#include "common.h"
+#include "io/pvtu.h"
+#include "mpi/exchange.h"
+#include "mpi/write_msh_mpi.h"
+#include "soa/mesh.h"
+
+#include <stdio.h>
+#include <string.h>
+
+/* This rank's elements as the writers and the hash take them. */
+static mx_mesh_view rank_view(const mx_mesh_out *M) {
+  mx_mesh_view v;
+  memset(&v, 0, sizeof v);
+  v.nnodes = M->nnodes;
+  v.xyz = M->xyz;
+  v.ncells = M->ncells;
+  v.type = M->type;
+  v.conn = M->conn;
+  return v;
+}
+
+uint64_t mx_p4est_mesh_hash(const mx_p4est_octree *P, const mx_p4est_mesh *D) {
+  const mx_mesh_view v = rank_view(&D->M);
+  uint64_t sum = mx_mesh_hash_sum(&v), all = 0;
+  MPI_Allreduce(&sum, &all, 1, MPI_UINT64_T, MPI_SUM, P->comm);
+  return mx_mesh_hash_finish(all, D->cells);
+}
+
+/* Every rank its piece, rank 0 the master: all of them or nothing. */
+static int write_pvtu(const mx_p4est_octree *P, const mx_p4est_mesh *D, const char *path) {
+  const mx_mesh_out *M = &D->M;
+  mx_mesh_view v = rank_view(M);
+  const mx_field cf[2] = {{.name = "level", .u8values = M->level},
+                          {.name = "jens", .is_double = 1, .fvalues = M->jens}};
+  v.ncell_fields = 2;
+  v.cell_fields = cf;
+  char piece[4096];
+  mx_pvtu_piece_path(path, P->rank, piece, sizeof piece);
+  const int mine = mx_write_vtu_piece(piece, &v, D->gid);
+  int st = mx_mpi_agree(P->comm, mine);
+  /* messages are printed by rank 0: name the first rank that failed */
+  int who = mine ? P->rank : P->size, first = who;
+  MPI_Allreduce(&who, &first, 1, MPI_INT, MPI_MIN, P->comm);
+  if (first > 0 && first < P->size) {
+    char other[4096];
+    mx_pvtu_piece_path(path, first, other, sizeof other);
+    mx_error(other, 0, "rank %d could not write its piece (see its file system)", first);
+  }
+  if (!st && P->rank == 0) st = mx_write_pvtu_master(path, P->size, &v, 1);
+  st = mx_mpi_agree(P->comm, st);
+  if (st && !mine) remove(piece);
+  return st;
+}
+
+static int write_msh(const mx_p4est_octree *P, const mx_p4est_mesh *D, const char *path) {
+  const mx_mesh_out *M = &D->M;
+  mx_dist_mesh dm;
+  memset(&dm, 0, sizeof dm);
+  dm.nnodes = M->nnodes;
+  dm.xyz = M->xyz;
+  dm.gid = D->gid;
+  dm.owned = D->owned;
+  dm.first_owned = D->first_owned;
+  dm.nowned = D->nowned;
+  dm.nglobal = D->nodes;
+  dm.ncells = M->ncells;
+  dm.type = M->type;
+  dm.conn = M->conn;
+  return mx_write_msh_mpi(path, P->comm, &dm);
+}
+
+int mx_p4est_output_kind(const char *path) {
+  const size_t n = strlen(path);
+  if (n > 5 && strcmp(path + n - 5, ".pvtu") == 0) return 1;
+  if (n > 4 && strcmp(path + n - 4, ".msh") == 0) return 2;
+  return 0;
+}
+
+int mx_p4est_mesh_write(const mx_p4est_octree *P, const mx_p4est_mesh *D, const char *path) {
+  switch (mx_p4est_output_kind(path)) {
+    case 1: return write_pvtu(P, D, path);
+    case 2: return write_msh(P, D, path);
+    default:
+      mx_error(path, 0, "the distributed mesh is written as .pvtu or .msh");
+      return MX_EINPUT;
+  }
+}
