@@ -137,6 +137,14 @@ static void leaf_box(uint64_t key, int level, uint32_t c[3], uint32_t *s) {
   *s = mx_octant_size(level);
 }
 
+/* The lowest corner of neighbour d (0..26, 13 the box itself) of the box
+ * (c, s): the same-size box shifted by (d % 3 - 1, d / 3 % 3 - 1, d / 9 - 1)
+ * sides; may lie outside the lattice. */
+static void neighbour_box(const uint32_t c[3], uint32_t s, int d, int64_t nb[3]) {
+  const int off[3] = {d % 3 - 1, d / 3 % 3 - 1, d / 9 - 1};
+  for (int a = 0; a < 3; a++) nb[a] = (int64_t)c[a] + off[a] * (int64_t)s;
+}
+
 /* The ranks whose part of the curve meets the box at c (lattice) of the
  * given level: [*lo, *hi]; 0 when the box lies outside the root grid. */
 static int box_owners(const mx_p4est_octree *P, const mx_halo *H, const int64_t c[3], int level,
@@ -211,9 +219,8 @@ static size_t local_touching(const mx_halo *H, uint64_t key, int level, uint32_t
   size_t n = 0;
   for (int d = 0; d < 27; d++) {
     if (d == 13) continue; /* the leaf itself */
-    const int64_t nb[3] = {(int64_t)c[0] + (d % 3 - 1) * (int64_t)s,
-                           (int64_t)c[1] + (d / 3 % 3 - 1) * (int64_t)s,
-                           (int64_t)c[2] + (d / 9 - 1) * (int64_t)s};
+    int64_t nb[3];
+    neighbour_box(c, s, d, nb);
     if (nb[0] < 0 || nb[1] < 0 || nb[2] < 0 || nb[0] > UINT32_MAX - s || nb[1] > UINT32_MAX - s ||
         nb[2] > UINT32_MAX - s)
       continue;
@@ -236,9 +243,8 @@ int mx_halo_expand(const mx_p4est_octree *P, mx_halo *H) {
     leaf_box(H->key[i], H->level[i], c, &s);
     for (int d = 0; d < 27 && !st; d++) {
       if (d == 13) continue;
-      const int64_t nb[3] = {(int64_t)c[0] + (d % 3 - 1) * (int64_t)s,
-                             (int64_t)c[1] + (d / 3 % 3 - 1) * (int64_t)s,
-                             (int64_t)c[2] + (d / 9 - 1) * (int64_t)s};
+      int64_t nb[3];
+      neighbour_box(c, s, d, nb);
       int lo, hi;
       if (!box_owners(P, H, nb, H->level[i], &lo, &hi)) continue;
       for (int q = lo; q <= hi && !st; q++) {
