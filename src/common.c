@@ -22,31 +22,81 @@ int mx_status_refine(int status) {
   return status;
 }
 
-/* Control characters (from a file name or bytes of an input echoed in a
- * message) are shown as \xNN: a message never drives the terminal. */
+/* The length of the valid UTF-8 sequence at p (1 to 4), 0 when the bytes
+ * there are not one (a stray continuation byte, an overlong form, a
+ * surrogate, a code point above U+10FFFF, a sequence cut short). */
+static int utf8_length(const unsigned char *p) {
+  const unsigned c = p[0];
+  int n;
+  unsigned lo = 0x80, hi = 0xbf; /* the range of the second byte */
+  if (c < 0x80) return 1;
+  if (c >= 0xc2 && c <= 0xdf) n = 2;
+  else if (c >= 0xe0 && c <= 0xef) {
+    n = 3;
+    if (c == 0xe0) lo = 0xa0;
+    if (c == 0xed) hi = 0x9f;
+  } else if (c >= 0xf0 && c <= 0xf4) {
+    n = 4;
+    if (c == 0xf0) lo = 0x90;
+    if (c == 0xf4) hi = 0x8f;
+  } else {
+    return 0;
+  }
+  if (p[1] < lo || p[1] > hi) return 0;
+  for (int k = 2; k < n; k++)
+    if (p[k] < 0x80 || p[k] > 0xbf) return 0;
+  return n;
+}
+
+/* Control characters and bytes that are not UTF-8 (from a file name or
+ * bytes of an input echoed in a message) are shown as \xNN: a message
+ * never drives the terminal and is always valid text. */
 static void escape_controls(const char *in, char *out, size_t n) {
   size_t w = 0;
-  for (const unsigned char *p = (const unsigned char *)in; *p && w + 5 < n; p++) {
-    if (*p < 0x20 || *p == 0x7f) {
+  for (const unsigned char *p = (const unsigned char *)in; *p && w + 5 < n;) {
+    const int len = utf8_length(p);
+    if (len == 0 || *p < 0x20 || *p == 0x7f) {
       snprintf(out + w, n - w, "\\x%02x", *p);
       w += 4;
+      p++;
     } else {
-      out[w++] = (char)*p;
+      memcpy(out + w, p, (size_t)len);
+      w += (size_t)len;
+      p += len;
     }
   }
   out[w] = '\0';
 }
 
+/* s cut in the middle to at most max bytes ("head ... tail"), so that a
+ * path of thousands of characters leaves room for the reason after it. */
+static void elide_middle(char *s, size_t max) {
+  const size_t n = strlen(s);
+  if (n <= max) return;
+  const size_t keep = (max - 5) / 2;
+  size_t tail = n - keep; /* not inside a UTF-8 sequence */
+  while (tail < n && ((unsigned char)s[tail] & 0xc0) == 0x80) tail++;
+  size_t head = keep;
+  while (head > 0 && ((unsigned char)s[head] & 0xc0) == 0x80) head--;
+  memmove(s + head + 5, s + tail, n - tail + 1);
+  memcpy(s + head, " ... ", 5);
+}
+
 static void vreport(const char *kind, const char *file, long line,
                     const char *fmt, va_list ap) {
-  char msg[1024], full[1400], safe[2800];
+  char msg[8192], name[1024], full[2600], safe[4 * 2600 + 1];
   vsnprintf(msg, sizeof msg, fmt, ap);
+  elide_middle(msg, 1500);
+  if (file) {
+    snprintf(name, sizeof name, "%s", file);
+    elide_middle(name, 600);
+  }
   if (file && line > 0)
-    snprintf(full, sizeof full, "%s:%ld: %s", file, line, msg);
+    snprintf(full, sizeof full, "%.600s:%ld: %.1500s", name, line, msg);
   else if (file)
-    snprintf(full, sizeof full, "%s: %s", file, msg);
+    snprintf(full, sizeof full, "%.600s: %.1500s", name, msg);
   else
-    snprintf(full, sizeof full, "%s", msg);
+    snprintf(full, sizeof full, "%.1500s", msg);
   escape_controls(full, safe, sizeof safe);
   if (mx_msg_fn) {
     mx_msg_fn(mx_msg_user, kind[0] == 'e' ? MX_MSG_ERROR : MX_MSG_WARNING, safe);
@@ -54,9 +104,7 @@ static void vreport(const char *kind, const char *file, long line,
   }
   /* "mixoct: FILE:LINE: error: text" */
   const char *colon = file ? strstr(safe, ": ") : NULL;
-  if (colon && line > 0) { /* after FILE:LINE */
-    fprintf(stderr, "mixoct: %.*s: %s%s\n", (int)(colon - safe), safe, kind, colon + 2);
-  } else if (colon) {
+  if (colon) { /* after FILE or FILE:LINE */
     fprintf(stderr, "mixoct: %.*s: %s%s\n", (int)(colon - safe), safe, kind, colon + 2);
   } else {
     fprintf(stderr, "mixoct: %s%s\n", kind, safe);

@@ -48,6 +48,9 @@ int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now);
  * directory, and its directory exists and is writable. MX_EINPUT / MX_EIO
  * with a message naming it. */
 int mx_check_output_path(const char *path, int mesh);
+/* Before reading: no output is an input or another output (by file
+ * identity, io/file_identity.h). MX_EINPUT with a message naming both. */
+int mx_check_run_files(const mx_options *o);
 /* The surfaces (--demo, -i), region surfaces (-r) and boxes (-b) of the
  * options added to m (src/cli/main.c; also the --p4est front). */
 int mx_add_inputs(const mx_options *o, mx_mesher *m);
@@ -76,6 +79,7 @@ int mx_patterns_main(int argc, char **argv);
 typedef struct {
   int status;                          /* the exit code */
   int valid;                           /* exit 0's promise: a valid mesh */
+  int stage;                           /* MX_STAGE_*: full unless --stage */
   int noutputs;
   const char *outputs[MX_MAX_OUTPUTS + 2]; /* written: meshes, boundary, restart */
   long long bytes[MX_MAX_OUTPUTS + 2];

@@ -143,7 +143,10 @@ int mx_run(const mx_options *o) {
     if (wst) st = wst;
   }
   run_info.status = st;
-  run_info.valid = st == MX_OK;
+  /* exit 0's promise is the full stage's: an intermediate stage's mesh is
+   * written as asked (exit 0) but not reported valid */
+  run_info.valid = st == MX_OK && o->stage == MX_STAGE_FULL;
+  run_info.stage = o->stage;
   if (m && (!st || st == MX_EINVALID)) {
     report(o, m, t_start);
   } else if (o->json) {

@@ -23,6 +23,7 @@
 #include "cli/cli.h"
 #include "common.h"
 #include "io/atomic_file.h"
+#include "io/file_identity.h"
 #include "mesher/mesher2d.h"
 
 #ifndef MX_VERSION
@@ -40,7 +41,7 @@ static const char *usage2d =
     "  -d FILE.mdl        the same (the 3D program's flag)\n"
     "\n"
     "Refinement requests (a quadrant takes the largest level asked; levels 0\n"
-    "to 19, each one halves the quadrant side):\n"
+    "to 27, each one halves the quadrant side):\n"
     "  -s RL              quadrants meeting the domain's polylines\n"
     "  -a RL              every quadrant of the domain\n"
     "  -b FILE.reg2       boxes: 'n_regions N', then per box\n"
@@ -375,34 +376,25 @@ static int output_list(const m2_options *o, m2_run *r) {
   return outputs_spare_inputs(o, r);
 }
 
-/* An output that is one of the inputs (-u a -o with -p a.off) would be
- * replaced by the mesh: refused before anything is written. */
-static int same_file(const char *a, const char *b) {
-  struct stat sa, sb;
-  return a && b && stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev &&
-         sa.st_ino == sb.st_ino;
-}
-
+/* No output may replace an input (-u a -o with -p a.off) or another
+ * output; the restart file written may replace the one read (read whole
+ * before, written under a temporary name: the re-meshing loop of the
+ * paper). Refused before anything is read or written. */
 static int outputs_spare_inputs(const m2_options *o, const m2_run *r) {
-  for (int k = 0; k < r->noutputs; k++) {
-    int clash = same_file(r->outputs[k], o->domain) || same_file(r->outputs[k], o->boxes_file) ||
-                same_file(r->outputs[k], o->restart_in) || same_file(r->outputs[k], o->list);
-    for (int i = 0; i < o->nregions; i++) clash |= same_file(r->outputs[k], o->region_path[i]);
-    for (int i = 0; i < o->ndrawings; i++) clash |= same_file(r->outputs[k], o->drawing_path[i]);
-    if (clash) {
-      mx_error(r->outputs[k], 0, "the output would replace an input file: choose another name");
-      return MX_EINPUT;
-    }
-  }
-  /* the restart file may replace the one read (read whole before, written
-   * under a temporary name): the re-meshing loop of the paper */
-  if (r->restart_out && (same_file(r->restart_out, o->domain) ||
-                         same_file(r->restart_out, o->boxes_file))) {
-    mx_error(r->restart_out, 0, "the restart file would replace an input file: choose another "
-                                "name");
-    return MX_EINPUT;
-  }
-  return MX_OK;
+  mx_file_use u[MAXOUT + NFMT + 2 * MAXREQ + 6];
+  int n = 0;
+  u[n++] = (mx_file_use){o->domain, "the domain", MX_FILE_INPUT};
+  u[n++] = (mx_file_use){o->boxes_file, "the boxes file", MX_FILE_INPUT};
+  u[n++] = (mx_file_use){o->list, "the element list", MX_FILE_INPUT};
+  u[n++] = (mx_file_use){o->restart_in, "the restart file read", MX_FILE_RESTART_IN};
+  for (int i = 0; i < o->nregions; i++)
+    u[n++] = (mx_file_use){o->region_path[i], "the region", MX_FILE_INPUT};
+  for (int i = 0; i < o->ndrawings; i++)
+    u[n++] = (mx_file_use){o->drawing_path[i], "the drawing", MX_FILE_INPUT};
+  for (int k = 0; k < r->noutputs; k++)
+    u[n++] = (mx_file_use){r->outputs[k], "the mesh output", MX_FILE_OUTPUT};
+  u[n++] = (mx_file_use){r->restart_out, "the restart file written", MX_FILE_RESTART_OUT};
+  return mx_check_file_uses(u, n);
 }
 
 /* ---- the pipeline, as library calls (src/mesher/mesher2d.c) ------------------ */

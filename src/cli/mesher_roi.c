@@ -229,6 +229,7 @@ int mx_mesher_roi_main(int argc, char **argv) {
     }
   }
   o.ascii = 1; /* the published mesher writes ASCII legacy VTK */
+  if (!st) st = mx_check_run_files(&o);
   if (!st) {
     if (o.quiet) mx_quiet = 1;
     if (o.threads > 0) omp_set_num_threads(o.threads);

@@ -1,4 +1,6 @@
 #include "cli/cli.h"
+#include "io/file_identity.h"
+#include "io/pvtu.h"
 #include "soa/mesh.h"
 
 #include "common.h"
@@ -106,7 +108,10 @@ static const char *usage_text =
     "\n"
     "Exit codes:\n"
     "  0  a valid mesh was written: non-empty, conforming, every element with\n"
-    "     J_ENS >= 1e-6 (none inverted or degenerate), its boundary on the input\n"
+    "     J_ENS >= 1e-6 (none inverted or degenerate), its boundary on the input;\n"
+    "     with --stage octree or transition, 0 means only that the stage asked\n"
+    "     for was written (octree: hanging nodes, not conforming; transition: no\n"
+    "     boundary on the input), and --json says \"valid\": false\n"
     "  1  internal failure (a bug: please report it)\n"
     "  2  bad input or usage, refused before meshing or with an empty result\n"
     "     (the message names the file and line)\n"
@@ -393,6 +398,7 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
     return MX_EINPUT;
   }
   /* fail before meshing, not after a long run */
+  MX_CHECK(mx_check_run_files(o)); /* first: an input named as output is that */
   for (int k = 0; k < o->noutputs; k++) MX_CHECK(mx_check_output_path(o->outputs[k], 1));
   if (o->restart_out) MX_CHECK(mx_check_output_path(o->restart_out, 0));
   if (o->boundary_out) {
@@ -409,6 +415,31 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
     MX_CHECK(mx_check_output_path(o->boundary_out, 1));
   }
   return MX_OK;
+}
+
+int mx_check_run_files(const mx_options *o) {
+  enum { N = MX_MAX_INPUTS + MX_MAX_REGIONS + 2 * MX_MAX_OUTPUTS + 5 };
+  mx_file_use u[N];
+  char piece[MX_MAX_OUTPUTS][4096];
+  int n = 0;
+  for (int i = 0; i < o->ninputs; i++)
+    u[n++] = (mx_file_use){o->inputs[i], "the input surface", MX_FILE_INPUT};
+  for (int i = 0; i < o->nregion_surf; i++)
+    u[n++] = (mx_file_use){o->region_surf[i], "the region surface", MX_FILE_INPUT};
+  u[n++] = (mx_file_use){o->regions_file, "the boxes file", MX_FILE_INPUT};
+  u[n++] = (mx_file_use){o->list_in, "the element list", MX_FILE_INPUT};
+  u[n++] = (mx_file_use){o->restart_in, "the restart file read", MX_FILE_RESTART_IN};
+  for (int k = 0; k < o->noutputs; k++) {
+    u[n++] = (mx_file_use){o->outputs[k], "the mesh output", MX_FILE_OUTPUT};
+    const char *dot = strrchr(o->outputs[k], '.');
+    if (dot && strcasecmp(dot, ".pvtu") == 0) { /* its piece, written beside it */
+      mx_pvtu_piece_path(o->outputs[k], 0, piece[k], sizeof piece[k]);
+      u[n++] = (mx_file_use){piece[k], "the first piece of the .pvtu output", MX_FILE_OUTPUT};
+    }
+  }
+  u[n++] = (mx_file_use){o->boundary_out, "the boundary output", MX_FILE_OUTPUT};
+  u[n++] = (mx_file_use){o->restart_out, "the restart file written", MX_FILE_RESTART_OUT};
+  return mx_check_file_uses(u, n);
 }
 
 int mx_check_output_path(const char *path, int mesh) {

@@ -272,7 +272,13 @@ void mx_print_summary(const mx_summary *s, const mx_run_info *ri) {
            b < 1e6 ? b / 1e3 : b / 1e6, b < 1e6 ? "kB" : "MB");
   }
   if (ri->dry_run) printf("  written      nothing: a dry run (give -o FILE to write the mesh)\n");
-  if (ri->status == MX_EINVALID && s->invalid)
+  if (ri->status == MX_OK && ri->stage == MX_STAGE_OCTREE)
+    printf("  result       the octree stage only: the leaves as hexahedra, with hanging "
+           "nodes (not a conforming mesh; --stage full for one)\n");
+  else if (ri->status == MX_OK && ri->stage == MX_STAGE_TRANSITION)
+    printf("  result       the transition stage only: the conforming mesh of the whole "
+           "octree, without the boundary on the input (--stage full for that)\n");
+  else if (ri->status == MX_EINVALID && s->invalid)
     printf("  result       INVALID: %zu element(s) with J_ENS below %g (exit 5)\n", s->invalid,
            MX_JENS_VALID);
   else if (ri->status == MX_EINVALID && s->contacts.nodes)

@@ -1219,6 +1219,15 @@ static int piece_ids(rd *r, const xarr *x, const vtu_layout *lay, size_t nnodes)
   return MX_OK;
 }
 
+/* Whether the file's last non-blank bytes are the closing tag: a file cut
+ * short (also in its raw appended data) lacks it. */
+static int xml_closed(const rd *r, const char *tag) {
+  const char *e = r->end;
+  while (e > r->buf && (e[-1] == ' ' || e[-1] == '\t' || e[-1] == '\n' || e[-1] == '\r')) e--;
+  const size_t n = strlen(tag);
+  return (size_t)(e - r->buf) >= n && memcmp(e - n, tag, n) == 0;
+}
+
 static int read_vtu(rd *r, mx_mesh_data *out) {
   const char *p = r->buf, *end = r->end;
   int seen = 0, pieces = 0, in_points = 0, in_cells = 0, in_pdata = 0, in_cdata = 0;
@@ -1235,6 +1244,9 @@ static int read_vtu(rd *r, mx_mesh_data *out) {
     if (tag_is(&t, "VTKFile")) {
       if (t.closing) break;
       seen = 1;
+      if (!xml_closed(r, "</VTKFile>"))
+        return fail(r, NULL, "the file does not end with </VTKFile>: it is cut short "
+                             "(an interrupted write or copy?)");
       if (attr_eq(&t, "type", "PUnstructuredGrid")) {
         if (r->piece)
           return fail(r, t.start, "a piece of a .pvtu must be an UnstructuredGrid file, not "
@@ -2700,6 +2712,9 @@ static int read_medit_ascii(rd *r, const char *p, mx_mesh_data *out) {
     if (tok_eq(t, n, "MeshVersionFormatted")) {
       int64_t v = 0;
       MX_CHECK(cur_int(&c, &v, "MeshVersionFormatted"));
+      if (v < 1 || v > 4)
+        return fail(r, t, "MeshVersionFormatted %lld: the Medit format has versions 1 "
+                          "to 4", (long long)v);
       continue;
     }
     if (code == MED_DIM) {

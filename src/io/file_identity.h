@@ -1,0 +1,31 @@
+/* mixoct: whether two paths name one file, and the check of a run's files
+ * before anything is read or written: no output may replace an input or
+ * another output.
+ *
+ * Identity is the file's, not the spelling's: for files that exist, device
+ * and inode (so "a.vtk", "./a.vtk", a hard link and a symbolic link to it are
+ * one file); for files not yet written, the device and inode of the
+ * directory they go to and their name in it. */
+#ifndef MX_FILE_IDENTITY_H
+#define MX_FILE_IDENTITY_H
+
+/* How a run uses a file. The restart file written may replace the restart
+ * file read (the re-meshing loop of the 2021 paper: it is read whole before
+ * and written under a temporary name); nothing else may share a file with
+ * an output. */
+enum { MX_FILE_INPUT, MX_FILE_OUTPUT, MX_FILE_RESTART_IN, MX_FILE_RESTART_OUT };
+
+typedef struct {
+  const char *path; /* NULL: not used by this run (skipped) */
+  const char *what; /* for the message: "the mesh (-o)", "the input (-i)" */
+  int use;          /* MX_FILE_* */
+} mx_file_use;
+
+/* 1 when a and b name the same file (existing or to be written), else 0. */
+int mx_same_file(const char *a, const char *b);
+
+/* MX_OK, or MX_EINPUT with a message naming both paths when an output is
+ * the same file as an input or as another output. */
+int mx_check_file_uses(const mx_file_use *u, int n);
+
+#endif
