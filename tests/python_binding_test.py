@@ -330,6 +330,39 @@ def write_files():
 
 
 @check
+def outputs_spare_inputs():
+    # the library refuses to write over a file the mesher read (issue 23)
+    xyz, tri = cube(1.0)
+    path = os.path.join(TMP, "spare_in.off")
+    with open(path, "w") as f:
+        f.write("OFF\n%d %d 0\n" % (len(xyz), len(tri)))
+        f.writelines("%g %g %g\n" % tuple(p) for p in xyz)
+        f.writelines("3 %d %d %d\n" % tuple(t) for t in tri)
+    with open(path, "rb") as f:
+        before = f.read()
+    m = mixoct.Mesher(surface_level=2)
+    m.add_surface(path)
+    m.mesh()
+    link = os.path.join(TMP, "spare_in_link.vtk")
+    if os.path.lexists(link):
+        os.remove(link)
+    os.symlink(path, link)
+    for bad in (link,):
+        e = raises(mixoct.InputError, m.write, bad)
+        assert "input" in str(e), str(e)
+    e = raises(mixoct.InputError, m.save_restart, path)
+    assert "input" in str(e), str(e)
+    with open(path, "rb") as f:
+        assert f.read() == before
+    restart = os.path.join(TMP, "spare.oct")
+    m.save_restart(restart)
+    m2 = mixoct.Mesher()
+    m2.add_surface(path)
+    m2.load_restart(restart)
+    m2.save_restart(restart)  # the re-meshing loop: allowed
+
+
+@check
 def memory_budget():
     m = mixoct.Mesher(surface_level=9, max_memory_mb=1)
     m.add_demo_surface()

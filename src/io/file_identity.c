@@ -22,6 +22,14 @@ static int parent_of(const char *path, struct stat *dir, const char **base) {
   return r;
 }
 
+int mx_file_id_of(const char *path, mx_file_id *id) {
+  struct stat st;
+  if (!path || stat(path, &st) != 0) return 0;
+  id->dev = (unsigned long long)st.st_dev;
+  id->ino = (unsigned long long)st.st_ino;
+  return 1;
+}
+
 int mx_same_file(const char *a, const char *b) {
   if (!a || !b || !*a || !*b) return 0;
   struct stat sa, sb;

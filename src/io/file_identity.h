@@ -21,6 +21,14 @@ typedef struct {
   int use;          /* MX_FILE_* */
 } mx_file_use;
 
+/* A file's identity, to compare with paths later (the library remembers
+ * the files a mesher read). */
+typedef struct {
+  unsigned long long dev, ino;
+} mx_file_id;
+/* 1 and *id filled when path names an existing file, else 0. */
+int mx_file_id_of(const char *path, mx_file_id *id);
+
 /* 1 when a and b name the same file (existing or to be written), else 0. */
 int mx_same_file(const char *a, const char *b);
 

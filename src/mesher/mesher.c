@@ -154,6 +154,32 @@ static int add_domain(mx_mesher *m, mx_trisoup *s, const char *name) {
   return MX_OK;
 }
 
+void mx_mesher_note_read(mx_mesher *m, const char *path, int restart) {
+  const int cap = (int)(sizeof m->read_id / sizeof m->read_id[0]);
+  mx_file_id id;
+  if (m->nread == cap || !mx_file_id_of(path, &id)) return;
+  for (int i = 0; i < m->nread; i++)
+    if (m->read_id[i].dev == id.dev && m->read_id[i].ino == id.ino) {
+      m->read_restart[i] &= (uint8_t)restart; /* an input in any other role */
+      return;
+    }
+  m->read_id[m->nread] = id;
+  m->read_restart[m->nread++] = (uint8_t)restart;
+}
+
+int mx_mesher_spares_inputs(const mx_mesher *m, const char *path, int restart_out) {
+  mx_file_id id;
+  if (!mx_file_id_of(path, &id)) return MX_OK; /* a new file */
+  for (int i = 0; i < m->nread; i++) {
+    if (m->read_id[i].dev != id.dev || m->read_id[i].ino != id.ino) continue;
+    if (restart_out && m->read_restart[i]) return MX_OK; /* the re-meshing loop */
+    mx_error(path, 0, "this file was read as an input of the mesh: writing it would "
+                      "replace the input; nothing was written, choose another name");
+    return MX_EINPUT;
+  }
+  return MX_OK;
+}
+
 int mx_mesher_add_surface(mx_mesher *m, const char *path) {
   mx_call c;
   mx_call_begin(m, &c);
@@ -165,6 +191,7 @@ int mx_mesher_add_surface(mx_mesher *m, const char *path) {
   if (!st) st = mx_read_surface(path, &s);
   if (!st) st = mx_trisoup_check(&s, path, NULL);
   if (!st) st = add_domain(m, &s, path);
+  if (!st) mx_mesher_note_read(m, path, 0);
   mx_trisoup_free(&s);
   m->S.ph.read += mx_wtime() - t;
   return mx_call_end(m, &c, st);
@@ -244,6 +271,7 @@ int mx_mesher_add_region_surface(mx_mesher *m, const char *path, int level) {
     st = mx_read_surface(path, &m->region[r]);
     if (!st) st = mx_trisoup_check(&m->region[r], path, NULL);
     if (!st) {
+      mx_mesher_note_read(m, path, 0);
       m->region_name[r] = strdup(path);
       m->region_level[r] = level;
       m->nregions++;
@@ -287,6 +315,7 @@ int mx_mesher_read_boxes(mx_mesher *m, const char *path) {
   size_t n = 0;
   int st = mx_read_reg(path, &b, &n);
   for (size_t i = 0; !st && i < n; i++) st = push_box(m, &b[i]);
+  if (!st) mx_mesher_note_read(m, path, 0);
   mx_free(b);
   return mx_call_end(m, &c, st);
 }
@@ -921,6 +950,8 @@ int mx_mesher_write(const mx_mesher *cm, const char *path, int ascii) {
     mx_error(path, 0, "unknown output format (use .vtk .vtu .msh .mesh .meshb "
                       ".getfem .m3d .mvm)");
     st = MX_EINPUT;
+  } else if (mx_mesher_spares_inputs(m, path, 0)) {
+    st = MX_EINPUT; /* an input: refused, named */
   } else if (m->mesh_stage == MX_STAGE_OCTREE) {
     st = write_octree(m, path, ascii);
   } else if (m->mesh_stage < 0) {

@@ -13,6 +13,7 @@
 #include "kernels/refine.h"
 #include "kernels/splice.h"
 #include "kernels/transition.h"
+#include "io/file_identity.h"
 #include "soa/regions.h"
 #include "soa/trisoup.h"
 
@@ -59,6 +60,12 @@ typedef struct {
 } mx_summary;
 
 
+/* Remembers a file the mesher read (restart: 1 for the restart file). */
+void mx_mesher_note_read(mx_mesher *m, const char *path, int restart);
+/* MX_OK, or MX_EINPUT with a message when path is a file the mesher read
+ * (restart_out: the restart file written, which may replace the one read). */
+int mx_mesher_spares_inputs(const mx_mesher *m, const char *path, int restart_out);
+
 struct mx_mesher {
   mx_params p;
   mx_message_fn fn;
@@ -78,6 +85,11 @@ struct mx_mesher {
   int assembled;            /* soup holds domain + regions */
   mx_box_region *boxes;
   size_t nboxes;
+  /* the files read (surfaces, boxes, restart file): no output may replace
+   * one (the restart file written may replace the one read) */
+  mx_file_id read_id[64 + MX_MAX_REGIONS + 8];
+  uint8_t read_restart[64 + MX_MAX_REGIONS + 8];
+  int nread;
 
   /* the octree, its leaves in Morton order */
   int have_tree;

@@ -155,7 +155,9 @@ int mx_mesher_write_boundary(const mx_mesher *cm, const char *path) {
   mx_call_begin(m, &c);
   const double t = mx_wtime();
   int st = MX_OK;
-  if (m->mesh_stage != MX_STAGE_FULL) {
+  if (path && mx_mesher_spares_inputs(m, path, 0)) {
+    st = MX_EINPUT; /* an input: refused, named */
+  } else if (m->mesh_stage != MX_STAGE_FULL) {
     mx_error(path, 0, "the boundary faces are written for a full-stage mesh only");
     st = MX_EINPUT;
   }

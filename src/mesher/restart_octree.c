@@ -203,8 +203,8 @@ int mx_mesher_save_restart(const mx_mesher *cm, const char *path) {
   mx_call c;
   mx_call_begin(m, &c);
   const double t = mx_wtime();
-  int st = MX_OK;
-  if (!m->have_tree || m->mesh_stage < MX_STAGE_TRANSITION) {
+  int st = path ? mx_mesher_spares_inputs(m, path, 1) : MX_OK;
+  if (!st && (!m->have_tree || m->mesh_stage < MX_STAGE_TRANSITION)) {
     mx_error(path, 0, "no mesh to write a restart file for: mesh first");
     st = MX_EINPUT;
   }
@@ -493,6 +493,7 @@ int mx_mesher_load_restart(mx_mesher *m, const char *path) {
   m->S.ph.read = read;
   int st = load_restart(m, path);
   if (st) mx_tree_clear(m);
+  else mx_mesher_note_read(m, path, 1);
   m->S.t_restart = mx_wtime() - t;
   return mx_call_end(m, &c, st);
 }
