@@ -22,21 +22,6 @@ int mx_status_refine(int status) {
   return status;
 }
 
-/* Control characters (from a file name or bytes of an input echoed in a
- * message) are shown as \xNN: a message never drives the terminal. */
-static void escape_controls(const char *in, char *out, size_t n) {
-  size_t w = 0;
-  for (const unsigned char *p = (const unsigned char *)in; *p && w + 5 < n; p++) {
-    if (*p < 0x20 || *p == 0x7f) {
-      snprintf(out + w, n - w, "\\x%02x", *p);
-      w += 4;
-    } else {
-      out[w++] = (char)*p;
-    }
-  }
-  out[w] = '\0';
-}
-
 /* The length of the valid UTF-8 character at p (at most n bytes, n >= 1,
  * p[0] >= 0x80) that is not a C1 control, else 0. */
 static size_t utf8_char(const unsigned char *p, size_t n) {
@@ -100,6 +85,30 @@ const char *mx_show_word(const void *word, size_t len, char *out) {
   }
   out[w] = '\0';
   return out;
+}
+
+/* Control characters and bytes that are not valid UTF-8 (from a file name
+ * or bytes of an input echoed in a message) are shown as \xNN: a message
+ * never drives the terminal, and is valid UTF-8. */
+static void escape_controls(const char *in, char *out, size_t n) {
+  size_t w = 0, len = strlen(in);
+  const unsigned char *p = (const unsigned char *)in;
+  for (size_t i = 0; i < len && w + 5 < n;) {
+    const size_t k = p[i] >= 0x80 ? utf8_char(p + i, len - i) : 0;
+    if (k) {
+      if (w + k + 1 > n) break;
+      memcpy(out + w, p + i, k);
+      w += k;
+      i += k;
+    } else if (p[i] < 0x20 || p[i] >= 0x7f) {
+      snprintf(out + w, n - w, "\\x%02x", p[i]);
+      w += 4;
+      i++;
+    } else {
+      out[w++] = (char)p[i++];
+    }
+  }
+  out[w] = '\0';
 }
 
 static void vreport(const char *kind, const char *file, long line,

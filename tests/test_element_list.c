@@ -246,12 +246,18 @@ static void test_lists(void) {
   memset(needle + 12, '7', MX_WORD_SHOW - 11);
   strcpy(needle + MX_WORD_SHOW + 1, "...\" is not");
   REFUSED("long word cut", big, 10, 1, needle);
+  /* a file name that is not UTF-8 is escaped in the message too */
+  uint64_t *v;
+  size_t n;
+  clear();
+  CHECK(mx_parse_index_list("L\xff\x1b.txt", "x\n", 2, 10, &v, &n) == MX_EINPUT);
+  CHECK(strncmp(msgs, "L\\xff\\x1b.txt:1: \"x\"", 17) == 0);
+  printf("%s %-26s %s", strncmp(msgs, "L\\xff\\x1b.txt:1: ", 14) == 0 ? "ok  " : "FAIL",
+         "file name not UTF-8", msgs);
   /* a long list: the output grows past its first size */
   const size_t many = 5000;
   char *text = malloc(8 * many + 1), *p = text;
   for (size_t i = 0; i < many; i++) p += sprintf(p, "%zu\n", i % 977);
-  uint64_t *v;
-  size_t n;
   clear();
   int rc = mx_parse_index_list("many", text, (size_t)(p - text), 977, &v, &n);
   int ok = rc == MX_OK && n == many;
