@@ -18,10 +18,12 @@
  *     and gives a short word of plain ASCII back as it is.
  *
  * Build and run: tools/fuzz.sh SECONDS list (seeds in tools/fuzz_seeds/list);
- * by hand, from the source root:
+ * by hand, from the source root, once fuzz.sh has built its archive:
  *   clang -std=c17 -g -O1 -fsanitize=fuzzer,address,undefined -fopenmp \
- *     -D_GNU_SOURCE -Isrc -Iinclude tools/fuzz_list.c src/io/element_list.c \
- *     src/io/read_surface.c src/common.c -lm -o fuzz_list */
+ *     -D_GNU_SOURCE -Isrc -Iinclude tools/fuzz_list.c \
+ *     build-fuzz/libmixoct_fuzz.a -lm -o fuzz_list
+ * (a copy of src/common.c that escaped only C0 controls in messages, put
+ * before the archive, aborts on the seeds: the byte 0xff of the name). */
 #include <ctype.h>
 #include <math.h>
 #include <stdint.h>
