@@ -187,11 +187,16 @@ int mx_mesher_save_restart(const mx_mesher *m, const char *path);
  * does not hold it), octant by octant for the published program's. */
 int mx_mesher_load_restart(mx_mesher *m, const char *path);
 size_t mx_mesher_restart_elements(const mx_mesher *m);
-/* Read a list of element indices (the published format: indices separated
- * by white space; words that are not all digits are ignored; a negative
- * index is an error). *out is allocated (free with mx_free_array). Indices
- * >= limit are MX_EINPUT with the file and line. Messages go to the current
- * handler (stderr outside a mesher call). */
+/* Read a list of element indices (the published format: one index per
+ * line; blanks, commas and line ends separate indices, '#' starts a comment
+ * to the end of the line). Each word must be a whole number >= 0 and
+ * < limit, written as an integer or as a real with a whole value ("12",
+ * "12.0", "1.2e+01", numpy.savetxt's "1.200000000000000000e+01"); any
+ * other word (not a number, a fraction, negative, NaN, too large) is
+ * MX_EINPUT with a message naming the file, the line and the word. An
+ * empty list is read with a warning. *out is allocated (free with
+ * mx_free_array). Messages go to the current handler (stderr outside a
+ * mesher call). */
 int mx_read_element_list(const char *path, uint64_t limit, uint64_t **out,
                          size_t *n);
 void mx_free_array(void *p);

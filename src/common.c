@@ -22,47 +22,90 @@ int mx_status_refine(int status) {
   return status;
 }
 
-/* The length of the valid UTF-8 sequence at p (1 to 4), 0 when the bytes
- * there are not one (a stray continuation byte, an overlong form, a
- * surrogate, a code point above U+10FFFF, a sequence cut short). */
-static int utf8_length(const unsigned char *p) {
+/* The length of the valid UTF-8 character at p (at most n bytes, n >= 1,
+ * p[0] >= 0x80) that is not a C1 control, else 0. */
+static size_t utf8_char(const unsigned char *p, size_t n) {
   const unsigned c = p[0];
-  int n;
-  unsigned lo = 0x80, hi = 0xbf; /* the range of the second byte */
-  if (c < 0x80) return 1;
-  if (c >= 0xc2 && c <= 0xdf) n = 2;
-  else if (c >= 0xe0 && c <= 0xef) {
-    n = 3;
+  /* the bytes of the character and the range of its second byte, which
+   * rules out overlong forms, surrogates and code points above U+10FFFF */
+  size_t k;
+  unsigned lo = 0x80, hi = 0xbf;
+  if (c >= 0xc2 && c <= 0xdf) {
+    k = 2;
+  } else if (c >= 0xe0 && c <= 0xef) {
+    k = 3;
     if (c == 0xe0) lo = 0xa0;
     if (c == 0xed) hi = 0x9f;
   } else if (c >= 0xf0 && c <= 0xf4) {
-    n = 4;
+    k = 4;
     if (c == 0xf0) lo = 0x90;
     if (c == 0xf4) hi = 0x8f;
   } else {
     return 0;
   }
-  if (p[1] < lo || p[1] > hi) return 0;
-  for (int k = 2; k < n; k++)
-    if (p[k] < 0x80 || p[k] > 0xbf) return 0;
-  return n;
+  if (n < k || p[1] < lo || p[1] > hi) return 0;
+  for (size_t i = 2; i < k; i++)
+    if ((p[i] & 0xc0) != 0x80) return 0;
+  if (c == 0xc2 && p[1] < 0xa0) return 0; /* U+0080 .. U+009F */
+  return k;
 }
 
-/* Control characters and bytes that are not UTF-8 (from a file name or
- * bytes of an input echoed in a message) are shown as \xNN: a message
- * never drives the terminal and is always valid text. */
-static void escape_controls(const char *in, char *out, size_t n) {
-  size_t w = 0;
-  for (const unsigned char *p = (const unsigned char *)in; *p && w + 5 < n;) {
-    const int len = utf8_length(p);
-    if (len == 0 || *p < 0x20 || *p == 0x7f) {
-      snprintf(out + w, n - w, "\\x%02x", *p);
-      w += 4;
-      p++;
+const char *mx_show_word(const void *word, size_t len, char *out) {
+  static const char hex[] = "0123456789abcdef";
+  const unsigned char *p = word;
+  const size_t show = len < MX_WORD_SHOW ? len : MX_WORD_SHOW;
+  size_t w = 0, i = 0;
+  while (i < show) {
+    const unsigned c = p[i];
+    size_t k = c >= 0x80 ? utf8_char(p + i, len - i) : 0;
+    if (k && i + k <= show) { /* a whole character that fits */
+      memcpy(out + w, p + i, k);
+      w += k;
+      i += k;
+    } else if (k) { /* would cross the cut: cut before it */
+      break;
+    } else if (c >= 0x20 && c < 0x7f && c != '\\') {
+      out[w++] = (char)c;
+      i++;
+    } else if (c == '\\') {
+      out[w++] = '\\';
+      out[w++] = '\\';
+      i++;
     } else {
-      memcpy(out + w, p, (size_t)len);
-      w += (size_t)len;
-      p += len;
+      out[w++] = '\\';
+      out[w++] = 'x';
+      out[w++] = hex[c >> 4];
+      out[w++] = hex[c & 15];
+      i++;
+    }
+  }
+  if (i < len) {
+    memcpy(out + w, "...", 3);
+    w += 3;
+  }
+  out[w] = '\0';
+  return out;
+}
+
+/* Control characters and bytes that are not valid UTF-8 (from a file name
+ * or bytes of an input echoed in a message) are shown as \xNN: a message
+ * never drives the terminal, and is valid UTF-8. */
+static void escape_controls(const char *in, char *out, size_t n) {
+  size_t w = 0, len = strlen(in);
+  const unsigned char *p = (const unsigned char *)in;
+  for (size_t i = 0; i < len && w + 5 < n;) {
+    const size_t k = p[i] >= 0x80 ? utf8_char(p + i, len - i) : 0;
+    if (k) {
+      if (w + k + 1 > n) break;
+      memcpy(out + w, p + i, k);
+      w += k;
+      i += k;
+    } else if (p[i] < 0x20 || p[i] >= 0x7f) {
+      snprintf(out + w, n - w, "\\x%02x", p[i]);
+      w += 4;
+      i++;
+    } else {
+      out[w++] = (char)p[i++];
     }
   }
   out[w] = '\0';

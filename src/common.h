@@ -23,6 +23,15 @@ void mx_warning(const char *file, long line, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 extern int mx_quiet; /* when set, warnings are not printed */
 
+/* A word of an input file as a message may show it: bytes that are not
+ * printable ASCII or part of a valid UTF-8 character (control bytes, C1
+ * controls, invalid or cut sequences) and backslashes become \xNN and
+ * \\; a word longer than MX_WORD_SHOW bytes is cut there (at a character
+ * boundary) and "..." added. out must have MX_WORD_BUF bytes; returns out
+ * (NUL-terminated). */
+enum { MX_WORD_SHOW = 40, MX_WORD_BUF = 4 * MX_WORD_SHOW + 4 };
+const char *mx_show_word(const void *word, size_t len, char *out);
+
 /* Where messages go: NULL (the default) prints them on stderr as above;
  * otherwise fn(user, MX_MSG_ERROR or MX_MSG_WARNING, "FILE:LINE: text").
  * The mesher object installs its handler for the duration of each call. */

@@ -283,6 +283,47 @@ expect_exit 2 "--boundary wants .vtu" "$MIXOCT" --demo -s 3 --boundary "$T/bd.ms
 expect_exit 2 "--boundary needs the full stage" "$MIXOCT" --demo -s 3 --stage transition --boundary "$T/bd2.vtu"
 [ -e "$T/bd2.vtu" ] && bad "a refused --boundary wrote a file" || ok "a refused --boundary writes nothing"
 expect_exit 4 "--boundary into a missing directory fails before meshing" "$MIXOCT" --demo -s 3 --boundary "$T/no/dir/b.vtu"
+# -l LIST: one rule for every word (src/io/element_list.h). The demo at
+# level 3 and its restart file; a list written by numpy.savetxt, with whole
+# reals, CR LF, commas or comments must refine what the same integers do;
+# any other word is exit 2 naming the file, the line and the word.
+"$MIXOCT" --demo -s 3 --restart "$T/d3.oct" --json --quiet >"$T/d3.json"
+nel=$(tail -1 "$T/d3.json" | python3 -c 'import json,sys; print(json.load(sys.stdin)["elements"])')
+list_run() { # list file, then more arguments: "exit leaves refined_listed" of the re-mesh
+  "$MIXOCT" remesh -c "$T/d3.oct" --demo -l "$@" --json 2>"$T/err" | tail -1 | python3 -c '
+import json,sys; d=json.load(sys.stdin); print(d["exit_code"], d["leaves"], d.get("refined_listed"))'
+}
+printf '1\n5\n7\n' >"$T/l_int.txt"
+want=$(list_run "$T/l_int.txt")
+case $want in "0 "*" 0" | "0 "*" None" | "") bad "-l 1 5 7 refined nothing: $want" ;; *) ok "-l 1 5 7: exit, leaves, listed leaves $want" ;; esac
+printf '1.000000000000000000e+00\n5.000000000000000000e+00\n7.000000000000000000e+00\n' >"$T/l_np.txt"
+printf '1.000000000000000000e+00,5.000000000000000000e+00,7.000000000000000000e+00\n' >"$T/l_npc.txt"
+printf '1.0\n5.\n0.7e+01\n' >"$T/l_real.txt"
+printf '# elements to refine\r\n1\r\n5 # five\r\n7\r\n' >"$T/l_crlf.txt"
+for f in l_np l_npc l_real l_crlf; do
+  same "$(list_run "$T/$f.txt")" "$want" "-l $f.txt refines as the integers 1 5 7 do"
+done
+same "$("$MIXOCT" -c "$T/d3.oct" --demo -l "$T/l_np.txt" --json 2>/dev/null | tail -1 | python3 -c '
+import json,sys; d=json.load(sys.stdin); print(d["exit_code"], d["leaves"], d.get("refined_listed"))')" "$want" \
+  "mixoct -c -l (no subcommand): the same list, the same leaves"
+printf '12.0\n1.2e+01\n' >"$T/l_12a.txt"
+printf '12\n' >"$T/l_12b.txt"
+same "$(list_run "$T/l_12a.txt")" "$(list_run "$T/l_12b.txt")" "12.0 and 1.2e+01 are element 12"
+list_refused() { # description, list text, line, word, text of the message
+  printf -- "$2" >"$T/l_bad.txt"
+  expect_exit 2 "-l: $1" "$MIXOCT" remesh -c "$T/d3.oct" --demo -l "$T/l_bad.txt"
+  has "$T/err" "l_bad.txt:$3: .*\"$4\" $5" "-l: $1: file, line $3, word $4"
+}
+list_refused "a word" '1\n5\nabc\n' 3 abc "is not an element index"
+list_refused "12.5" '1\r\n12.5\r\n' 2 12.5 "is not a whole number"
+list_refused "a negative index" '-1\n' 1 -1 "is negative"
+list_refused "out of range" "1\n$nel\n" 2 "$nel" "is out of range: $nel elements"
+list_refused "NaN" '# x\n\nnan\n' 3 nan "is not a finite number"
+list_refused "semicolons" '1;5;7\n' 1 '1;5;7' "is not an element index"
+absent "$T/l_out.vtk" "nothing written after a refused list"
+: >"$T/l_empty.txt"
+expect_exit 0 "-l: an empty list is read" "$MIXOCT" remesh -c "$T/d3.oct" --demo -l "$T/l_empty.txt"
+has "$T/err" "l_empty.txt: .*no element index in the list" "-l: an empty list is a warning"
 # SIGTERM while writing: no temporary left
 "$MIXOCT" --demo -s 7 -o "$T/sig.vtk" --ascii --quiet 2>/dev/null &
 pid=$!

@@ -223,6 +223,26 @@ echo "60" >far.txt
 expect_exit 2 "-l: an element beyond the mesh" "$M2" -p "$PL/box.poly" -c box3.oct -l far.txt -u far -o
 has "$T/err" "far.txt:1" "-l: the bad index is named with file and line"
 absent far.off "-l: nothing written on a bad list"
+# the list rule of the 3D program (src/io/element_list.h): numpy.savetxt's
+# reals and CR LF are the first element; a word, a fraction, a negative
+# number are refused naming file, line and word; an empty list warns
+printf '# numpy.savetxt\r\n0.000000000000000000e+00\r\n0.0\r\n' >np.txt
+"$M2" -p "$PL/box.poly" -c box3.oct -l np.txt -u box3np -o --json >box3np.json 2>"$T/err"
+same "$(tail -n 1 box3np.json | python3 -c 'import json,sys; d=json.load(sys.stdin); print(d["leaves"], d["refined_listed"], d["exit_code"])')" \
+  "63 1 0" "-l: a numpy.savetxt list splits the first element's quadrant"
+m2_refused() { # description, list text, line, word, text of the message
+  printf -- "$2" >bad2.txt
+  expect_exit 2 "-l: $1" "$M2" -p "$PL/box.poly" -c box3.oct -l bad2.txt -u bad2 -o
+  has "$T/err" "bad2.txt:$3: .*\"$4\" $5" "-l: $1: file, line $3, word $4"
+}
+m2_refused "a word" '0\nabc\n' 2 abc "is not an element index"
+m2_refused "12.5" '12.5\n' 1 12.5 "is not a whole number"
+m2_refused "a negative number" '\n\n-1\n' 3 -1 "is negative"
+m2_refused "an index beyond the mesh" '1.0\n6.0e+01\n' 2 6.0e+01 "is out of range: 60 elements"
+absent bad2.off "-l: nothing written on a refused list"
+: >empty2.txt
+expect_exit 0 "-l: an empty list is read" "$M2" -p "$PL/box.poly" -c box3.oct -l empty2.txt -u empty2 -o
+has "$T/err" "empty2.txt: .*no element index" "-l: an empty list is a warning"
 expect_exit 2 "-c: a restart file of another domain" "$M2" -p "$PL/a.poly" -c box3.oct -u other -o
 has "$T/err" "another domain" "-c: another domain: says so"
 "$M2" -p "$PL/box.poly" -s 3 -u nors -o --no-restart >/dev/null 2>&1

@@ -184,6 +184,15 @@ expect_exit 0 "re-mesh from our restart file" "$ROI" -o "$S/cortex.off" -c c4.oc
 exists "$T/c4r.vtk"
 exists "$T/c4r.oct"
 check_mesh "$T/c4r.vtk" "re-meshed from c4.oct"
+# the same list as numpy.savetxt writes it: the same mesh; a word: exit 2
+printf '%s\n' 0.000000000000000000e+00 5.000000000000000000e+00 1.700000000000000000e+01 \
+  1.000000000000000000e+02 1.000000000000000000e+02 >"$T/l4np.txt"
+expect_exit 0 "re-mesh with the list in numpy.savetxt format" "$ROI" -o "$S/cortex.off" -c c4.oct -l l4np.txt -u c4np -v
+if cmp -s "$T/c4r.vtk" "$T/c4np.vtk"; then ok "numpy.savetxt list: the same mesh as the integers"; else bad "numpy.savetxt list: another mesh than the integers"; fi
+printf '0 5\nx17\n' >"$T/l4x.txt"
+expect_exit 2 "a list with a word" "$ROI" -o "$S/cortex.off" -c c4.oct -l l4x.txt -u c4x -v
+has "$T/err" 'l4x.txt:2: .*"x17" is not an element index' "the word is named with its line"
+absent "$T/c4x.vtk" "nothing written after a bad list"
 if [ -f "$R/c5.oct" ]; then
   expect_exit 0 "re-mesh the published c5.oct with its list" "$ROI" -o "$S/cortex.off" -c "$R/c5.oct" -l "$R/list.txt" -u p5r -v --json
   exists "$T/p5r.vtk"

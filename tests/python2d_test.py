@@ -334,6 +334,8 @@ def errors_name_the_file():
     e = raises(mixoct.InputError, m.refine_elements, [60])
     assert "60" in e.message, e.message
     raises(mixoct.InputError, m.refine_elements, [-1])
+    e = raises(ValueError, m.refine_elements, np.array([0.0, 12.5]))
+    assert "12.5 at position 1 is not a whole number" in str(e), str(e)
     e = raises(mixoct.InputError, m.write, os.path.join(TMP, "x.unknown"))
     assert e.message
     m.close()

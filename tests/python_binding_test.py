@@ -160,7 +160,16 @@ def refine_elements_grows():
     assert m.nelements > e0, (m.nelements, e0)
     assert m.stats()["refined_listed"] >= 1
     assert m.invalid == 0 and np.all(m.jens > 0)
-    # numpy int32, a boolean mask, a tuple: all accepted
+    # numpy int32, whole reals (numpy.loadtxt's float64), a boolean mask, a
+    # tuple: all accepted; the reals refine as the integers do
+    r = demo(3)
+    r.refine_elements(np.array([1.0, 5.0, 7.0]))
+    i = demo(3)
+    i.refine_elements([1, 5, 7])
+    assert r.nleaves == i.nleaves and r.stats()["refined_listed"] >= 1
+    assert r.stats()["leaves_hash"] == i.stats()["leaves_hash"]
+    r.close()
+    i.close()
     l1 = m.nleaves
     m.refine_elements(np.array([0, 1], dtype=np.int32))
     mask = np.zeros(m.nelements, dtype=bool)
@@ -196,6 +205,15 @@ def out_of_range_index():
     assert str(m.nelements - 1) in str(e) or str(m.nelements) in str(e), e
     raises(mixoct.InputError, m.refine_elements, [-1])
     raises(mixoct.InputError, m.refine_elements, [1.5])
+    # reals, as numpy.loadtxt gives them: the bad one named by position
+    for bad, why in (([0.0, 2.5], "2.5 at position 1 is not a whole number"),
+                     ([3.0, -1.0], "-1.0 at position 1 is negative"),
+                     ([np.nan], "nan at position 0 is not a finite number"),
+                     ([np.inf], "inf at position 0 is not a finite number"),
+                     ([2.0 ** 64], "at position 0 is too large"),
+                     ([5, -2], "-2 at position 1 is negative")):
+        e = raises(ValueError, m.refine_elements, np.array(bad))
+        assert isinstance(e, mixoct.InputError) and why in str(e), (bad, str(e))
     # the header: "an index out of range is MX_EINPUT (nothing done)"
     assert m.nelements == e0 and m.stats()["leaves_hash"] == h0
     m.close()
@@ -289,7 +307,7 @@ def restart_then_list():
     inv[order] = np.arange(order.size, dtype=order.dtype)
     filesel = inv[sel]
     with open(lst, "w") as f:
-        f.write("elements\n%s\n" % " ".join(str(i) for i in filesel))
+        f.write("# elements\n%s\n" % " ".join(str(i) for i in filesel))
     m.refine_elements(sel)
     want = (m.nelements, m.nleaves, m.stats()["leaves_hash"])
     m.close()
@@ -306,11 +324,27 @@ def restart_then_list():
 def element_list():
     path = os.path.join(TMP, "elements.txt")
     with open(path, "w") as f:
-        f.write("3 1\n4 x 1 5\n")
+        f.write("# elements\r\n3 1\r\n4,1,5\r\n")
     a = mixoct.read_element_list(path, 10)
     assert a.dtype == np.uint64 and list(a) == [3, 1, 4, 1, 5], a
     e = raises(mixoct.InputError, mixoct.read_element_list, path, 5)
     assert path in str(e)
+    # numpy.savetxt's file is read as the integers it holds
+    np.savetxt(path, np.array([3, 1, 4]))
+    a = mixoct.read_element_list(path, 10)
+    assert list(a) == [3, 1, 4], a
+    np.savetxt(path, np.array([3, 1, 4]), delimiter=",", header="elements")
+    assert list(mixoct.read_element_list(path, 10)) == [3, 1, 4]
+    # a word, a fraction: refused (the message on stderr), not skipped
+    for text in ("3 1\n4 x 1 5\n", "3\n1.5\n", "-1\n"):
+        with open(path, "w") as f:
+            f.write(text)
+        e = raises(ValueError, mixoct.read_element_list, path, 10)
+        assert isinstance(e, mixoct.InputError) and e.status == 2
+    with open(path, "w") as f:
+        f.write("# nothing\n")
+    a = mixoct.read_element_list(path, 10)
+    assert a.dtype == np.uint64 and a.size == 0
 
 
 @check

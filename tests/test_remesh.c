@@ -484,8 +484,11 @@ static void test_bad(void) {
   CHECK(mx_read_element_list(OUT "/neg.txt", 100, &l, &n) == MX_EINPUT);
   put(OUT "/range.txt", "1 2\n3 400\n");
   CHECK(mx_read_element_list(OUT "/range.txt", 100, &l, &n) == MX_EINPUT);
-  put(OUT "/words.txt", "# elements\n1 2 x3 7\n");
-  CHECK(mx_read_element_list(OUT "/words.txt", 100, &l, &n) == MX_OK && n == 3);
+  put(OUT "/words.txt", "# elements\n1 2 x3 7\n"); /* a word: refused, not skipped */
+  CHECK(mx_read_element_list(OUT "/words.txt", 100, &l, &n) == MX_EINPUT && !l && !n);
+  put(OUT "/reals.txt", "# elements\n1.000000000000000000e+00 2.0\n7\n"); /* numpy */
+  CHECK(mx_read_element_list(OUT "/reals.txt", 100, &l, &n) == MX_OK && n == 3 && l[0] == 1 &&
+        l[1] == 2 && l[2] == 7);
   mx_free_array(l);
   CHECK(mx_read_element_list(OUT "/missing.txt", 100, &l, &n) == MX_EINPUT);
   /* truncated restart file */

@@ -1,5 +1,5 @@
-/* Tests of the restart file reader and writers (src/io/restart.h) and of
- * the element index lists.
+/* Tests of the restart file reader and writers (src/io/restart.h); the
+ * element index lists are tests/test_element_list.c.
  *
  * - The published program's file c5.oct ($MIXOCT_DATA/remesh/c5.oct):
  *   counts, the corner order (every octant is an axis-aligned cube of side
@@ -14,7 +14,6 @@
  *   magic and version, checksummed but inconsistent data): each must fail
  *   with MX_EINPUT, an empty struct, and a message naming the file (and the
  *   line for text).
- * - Index lists.
  * Exit status: 0, 1 on a failure, 77 (skip) when c5.oct is absent and all
  * else passed. */
 #include <fcntl.h>
@@ -761,68 +760,6 @@ static void test_bad_binary(void) {
   free_small(&s);
 }
 
-/* ---- index lists ----------------------------------------------------------
- */
-
-static void index_list(const char *name, const char *text, uint64_t limit,
-                       int want_ok, const uint64_t *want, size_t nwant,
-                       long line, const char *needle) {
-  char path[128];
-  tpath(path, sizeof path, name);
-  write_bytes(path, text, strlen(text));
-  uint64_t *v = (uint64_t *)1;
-  size_t n = 99;
-  int before = mx_test_failures;
-  capture_begin();
-  int rc = mx_read_index_list(path, limit, &v, &n);
-  const char *msg = capture_end();
-  if (want_ok) {
-    T(rc == MX_OK && n == nwant && v != NULL);
-    T(rc == MX_OK && (nwant == 0 || memcmp(v, want, 8 * nwant) == 0));
-  } else {
-    char loc[256];
-    snprintf(loc, sizeof loc, "%s:%ld:", path, line);
-    T(rc == MX_EINPUT && v == NULL && n == 0);
-    T(strstr(msg, line > 0 ? loc : path) != NULL);
-    T(needle == NULL || strstr(msg, needle) != NULL);
-  }
-  if (rc == MX_OK) mx_free(v);
-  printf("%s %-22s %s", mx_test_failures == before ? "ok  " : "FAIL", name,
-         msg[0] ? msg : "read as expected\n");
-}
-
-/* Words, CR LF, range, negative, overflow, empty, missing, list.txt. */
-static void test_index_lists(const char *data) {
-  static const uint64_t w[] = {1, 2, 3, 7, 9};
-  index_list("list_words.txt", "1 2 3\n  7 foo 9", 10, 1, w, 5, 0, NULL);
-  index_list("list_crlf.txt", "1\r\n2\r\n3\r\n7x x7 +5\r\n7\t9\r\n", 10, 1, w,
-             5, 0, NULL);
-  index_list("list_range.txt", "1 2\n3 10\n", 10, 0, NULL, 0, 2,
-             "10 is out of range (10 elements");
-  index_list("list_neg.txt", "1\n\n -3\n", 10, 0, NULL, 0, 3, "-3 is negative");
-  index_list("list_over.txt", "1\n123456789012345678901234567890\n", 10, 0,
-             NULL, 0, 2, "too large");
-  index_list("list_empty.txt", "", 10, 1, NULL, 0, 0, NULL);
-  index_list("list_blank.txt", " \n\t\n", 10, 1, NULL, 0, 0, NULL);
-  char path[4700];
-  uint64_t *v;
-  size_t n;
-  tpath(path, sizeof path, "missing.txt");
-  capture_begin();
-  int rc = mx_read_index_list(path, 10, &v, &n);
-  T(rc == MX_EINPUT && strstr(capture_end(), "cannot open") != NULL);
-  if (data) {
-    snprintf(path, sizeof path, "%s/remesh/list.txt", data);
-    if (access(path, R_OK) == 0) {
-      rc = mx_read_index_list(path, 26209, &v, &n);
-      T(rc == MX_OK && n == 1139);
-      printf("%s list.txt: %zu element indices\n",
-             rc == MX_OK && n == 1139 ? "ok  " : "FAIL", n);
-      if (rc == MX_OK) mx_free(v);
-    }
-  }
-}
-
 /* ---- main ---------------------------------------------------------------- */
 
 /* $MIXOCT_DATA, else ../shared/data beside the source root (found from
@@ -858,7 +795,6 @@ int main(void) {
   test_small();
   test_bad_text();
   test_bad_binary();
-  test_index_lists(have_c5 ? data : NULL);
   free(small_text);
 
   char cmd[128];

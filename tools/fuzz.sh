@@ -8,7 +8,8 @@
 # mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d
 # mesh_mvm (mx_read_mesh of `mixoct check`, the input written under that
 # extension; tools/fuzz_readers.c)
-# and restart (tools/fuzz_restart.c). Each runs SECONDS_PER_TARGET seconds
+# restart (tools/fuzz_restart.c) and list (the element index lists of -l,
+# tools/fuzz_list.c). Each runs SECONDS_PER_TARGET seconds
 # (default 60) from its seeds tools/fuzz_seeds/TARGET plus a corpus kept
 # outside the tree, up to FUZZ_JOBS targets at a time (default: nproc). One
 # line per target: executions, time, crashes, and the path of each crash
@@ -31,7 +32,7 @@ set -u
 export LC_ALL=C
 
 root=$(cd "$(dirname "$0")/.." && pwd)
-all_targets="off mdl stl obj ply reg poly mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d mesh_mvm restart"
+all_targets="off mdl stl obj ply reg poly mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d mesh_mvm restart list"
 
 secs=60
 case ${1:-} in
@@ -126,6 +127,7 @@ link_target() {
   local t=$1 bin=$build/fuzz_$1 src=tools/fuzz_readers.c def
   case $t in
     restart) src=tools/fuzz_restart.c; def= ;;
+    list) src=tools/fuzz_list.c; def= ;;
     mesh_*) def="-DFUZZ_FORMAT=mesh -DFUZZ_EXT=${t#mesh_}" ;;
     *) def="-DFUZZ_FORMAT=$t" ;;
   esac

@@ -67,6 +67,7 @@ time in two Python threads may see each other's warnings.
 
 import ctypes
 import ctypes.util
+import math
 import os
 import weakref
 
@@ -366,6 +367,12 @@ def _fspath(path):
 
 
 def _u64_array(indices, what):
+    """Indices (elements or leaves) as a uint64 array, by the rule of the
+    element lists (src/io/element_list.h): whole numbers >= 0, given as
+    integers or as reals with a whole value (numpy.loadtxt gives float64:
+    1.0 is 1); a fraction, a negative number, NaN, an infinity or a value
+    above 2**64 - 1 raises InputError (a ValueError) naming its position.
+    A boolean array is a mask. The range is checked by the library."""
     a = np.asarray(indices)
     if a.ndim == 0:
         a = a.reshape(1)
@@ -374,15 +381,29 @@ def _u64_array(indices, what):
                          % (what, a.shape), EINPUT)
     if a.dtype.kind == "b":
         a = np.flatnonzero(a)       # a mask over the elements (or leaves)
-    if a.size and a.dtype.kind not in "iu":
-        if a.dtype.kind == "f" and np.all(np.floor(a) == a):
-            a = a.astype(np.int64)
+    if a.size == 0:
+        return np.zeros(0, dtype=np.uint64)
+    if a.dtype.kind not in "iuf":
+        raise InputError("%s: integer indices are expected, not %s"
+                         % (what, a.dtype), EINPUT)
+    if a.dtype.kind == "f":
+        with np.errstate(invalid="ignore"):
+            bad = ~np.isfinite(a) | (a < 0) | (a != np.floor(a)) | (a >= 2.0 ** 64)
+    else:
+        bad = a < 0
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        v = a[i].item()
+        if not math.isfinite(v):
+            why = "is not a finite number"
+        elif v < 0:
+            why = "is negative"
+        elif v != math.floor(v):
+            why = "is not a whole number"
         else:
-            raise InputError("%s: integer indices are expected, not %s"
-                             % (what, a.dtype), EINPUT)
-    if a.size and a.dtype.kind == "i" and a.min() < 0:
-        raise InputError("%s: negative index %d" % (what, int(a.min())),
-                         EINPUT)
+            why = "is too large (above 2**64 - 1)"
+        raise InputError("%s: index %r at position %d %s"
+                         % (what, v, i, why), EINPUT)
     return np.ascontiguousarray(a, dtype=np.uint64)
 
 
@@ -676,8 +697,10 @@ class _MesherBase:
     def refine_elements(self, indices, allow_invalid=False):
         """Split the leaves (octants, quadrants) owning these elements of
         the current mesh once, restore balance, apply the requests and mesh
-        again (Algorithm 3). Any integer array-like, or a boolean mask; an
-        index out of range raises InputError (nothing done)."""
+        again (Algorithm 3). Any integer array-like, reals with whole values
+        (what numpy.loadtxt gives), or a boolean mask; a fraction, a
+        negative number, NaN or an index out of range raises InputError, a
+        ValueError naming the index (nothing done)."""
         return self._refine_list("refine_elements", indices, allow_invalid)
 
     def refine(self, allow_invalid=False):
@@ -1061,9 +1084,15 @@ class Mesher2D(_MesherBase):
 # ---- element lists ---------------------------------------------------------------
 
 def read_element_list(path, limit):
-    """The element indices of a list file (the published format: indices
-    separated by white space; words that are not all digits are ignored), as
-    a numpy uint64 array. Indices >= limit raise InputError (file and line)."""
+    """The element indices of a list file, as a numpy uint64 array. The
+    published format is one index per line; blanks, commas and line ends
+    separate indices, '#' starts a comment. Each word is a whole number
+    >= 0, as an integer or a real with a whole value (numpy.savetxt's
+    1.200000000000000000e+01 is 12); any other word (not a number, a
+    fraction, a negative number, NaN, an index >= limit) raises InputError,
+    the message (file, line and word) on stderr. An empty list is read,
+    with a warning on stderr. One rule with the command line's -l (the
+    library reads the file)."""
     lib = load_library()
     out = ctypes.POINTER(ctypes.c_uint64)()
     n = ctypes.c_size_t(0)

@@ -80,7 +80,7 @@ static int read_all(int fd, const char *path, char **buf, size_t *len,
 
 /* Reads the whole file into *buf (mx_alloc'd, NUL-terminated after *len
  * bytes). Missing, unreadable, directory and empty files are errors. */
-int mx_io_load(const char *path, char **buf, size_t *len) {
+static int load(const char *path, int allow_empty, char **buf, size_t *len) {
   *buf = NULL;
   *len = 0;
   int fd = open(path, O_RDONLY | O_CLOEXEC);
@@ -107,13 +107,21 @@ int mx_io_load(const char *path, char **buf, size_t *len) {
   size_t hint = S_ISREG(st.st_mode) ? (size_t)st.st_size : 65536;
   int status = read_all(fd, path, buf, len, hint);
   close(fd);
-  if (status == MX_OK && *len == 0) {
+  if (status == MX_OK && *len == 0 && !allow_empty) {
     mx_error(path, 0, "empty file");
     mx_free(*buf);
     *buf = NULL;
     return MX_EINPUT;
   }
   return status;
+}
+
+int mx_io_load(const char *path, char **buf, size_t *len) {
+  return load(path, 0, buf, len);
+}
+
+int mx_io_load_empty_ok(const char *path, char **buf, size_t *len) {
+  return load(path, 1, buf, len);
 }
 
 /* ---- lines and tokens ------------------------------------------------- */

@@ -1,5 +1,4 @@
-/* mixoct: restart files, text and binary, and element index lists (see
- * restart.h for the formats).
+/* mixoct: restart files, text and binary (see restart.h for the formats).
  *
  * Reading loads the whole file and scans it in place with bounded,
  * hand-written number parsing (no NUL terminator is needed, so the same
@@ -1297,59 +1296,5 @@ int mx_restart_write_binary(const char *path, const mx_restart *r) {
   int st = mx_afile_open(&o.f, path);
   if (st == MX_OK) st = mx_afile_finish(&o.f, bin_body(&o, r, count));
   mx_free(count);
-  return st;
-}
-
-/* ---- element index lists ------------------------------------------------- */
-
-/* Whitespace-separated words; all-digit words are indices, '-' and digits
- * is an error, other words are skipped. The output has room for len / 2 + 1
- * indices, the most len bytes can hold. */
-int mx_parse_index_list(const char *name, const uint8_t *buf, size_t len,
-                        uint64_t limit, uint64_t **out, size_t *n) {
-  *out = NULL;
-  *n = 0;
-  uint64_t *a = mx_alloc(8 * (len / 2 + 1)); /* "7 " a number at least */
-  if (!a) return MX_EINPUT;
-  const char *p = (const char *)buf, *end = p + len;
-  long line = 1;
-  size_t k = 0;
-  while (p < end) {
-    if (*p == '\n' || is_sp(*p)) {
-      line += *p++ == '\n';
-      continue;
-    }
-    const char *t = p;
-    while (p < end && !is_sp(*p) && *p != '\n') p++;
-    uint64_t v;
-    int ok = parse_uint(t, p, &v);
-    if (ok == 0) continue; /* a word, not all digits: ignored */
-    const char *why = ok < 0       ? "is negative"
-                      : ok == 2    ? "is too large"
-                      : v >= limit ? "is out of range"
-                                   : NULL;
-    if (why) {
-      mx_error(name, line, "element index %.*s %s (%llu elements, 0-based)",
-               tok_show(t, p), t, why, (unsigned long long)limit);
-      mx_free(a);
-      return MX_EINPUT;
-    }
-    a[k++] = v;
-  }
-  *out = a;
-  *n = k;
-  return MX_OK;
-}
-
-/* Loads the file (an empty one is an empty list) and parses it. */
-int mx_read_index_list(const char *path, uint64_t limit, uint64_t **out,
-                       size_t *n) {
-  *out = NULL;
-  *n = 0;
-  uint8_t *buf;
-  size_t len;
-  MX_CHECK(load_file(path, 1, &buf, &len));
-  int st = mx_parse_index_list(path, buf, len, limit, out, n);
-  mx_free(buf);
   return st;
 }

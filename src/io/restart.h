@@ -141,14 +141,4 @@ int mx_restart_write_binary(const char *path, const mx_restart *r);
 /* Frees the arrays (mx_free) and zeroes *r. */
 void mx_restart_free(mx_restart *r);
 
-/* Element list for re-meshing: indices separated by white space. Words
- * that are not all digits are ignored (the published program's rule), but
- * for '-' followed by digits: a negative index is an error. Each index must
- * be < limit. An empty file or list gives *n = 0. *out is allocated with
- * mx_alloc (never NULL on success). */
-int mx_read_index_list(const char *path, uint64_t limit, uint64_t **out,
-                       size_t *n);
-int mx_parse_index_list(const char *name, const uint8_t *buf, size_t len,
-                        uint64_t limit, uint64_t **out, size_t *n);
-
 #endif

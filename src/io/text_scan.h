@@ -9,6 +9,8 @@
 
 /* Loads the file into a NUL-terminated buffer (mx_free it). */
 int mx_io_load(const char *path, char **buf, size_t *len);
+/* The same, but an empty file is no error (*len = 0, *buf still allocated). */
+int mx_io_load_empty_ok(const char *path, char **buf, size_t *len);
 const char *mx_io_blank(const char *p);
 int mx_io_eol(const char *p, char comment);
 int mx_io_delim(const char *p, char comment);

@@ -21,6 +21,7 @@
 
 #include "kernels/mesh_edit.h"
 
+#include "io/element_list.h"
 #include "io/restart.h"
 #include "kernels/grid.h"
 #include "soa/scan.h"
