@@ -506,7 +506,7 @@ int mx_build_tree(mx_mesher *m) {
     /* the domain: where the generalized winding number is above 1/2, for
      * the octants (instead of the ray parity) and the nodes alike */
     if (!m->have_index) {
-      MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
+      MX_CHECK(mx_surface_index_build_given(&m->SI, &m->soup, 0, m->nt_domain));
       m->have_index = 1;
     }
     m->SI.closed = 0;
