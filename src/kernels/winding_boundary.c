@@ -6,6 +6,7 @@
 
 #include "common.h"
 #include "kernels/surface_defects.h"
+#include "soa/scan.h"
 
 #define MAXP 256 /* pieces per triangle */
 #define MAXV 32  /* corners per piece */
@@ -210,17 +211,169 @@ static int in_triangle(const double Q[9], const double n[3], const double x[3]) 
   return !(neg && pos);
 }
 
+/* Whether the winding number of W takes whole values only: every edge of
+ * the input (its points compared by coordinates) used as often in each
+ * direction, the triangles oriented as W has them. */
+static int whole_values(const mx_trisoup *d, const mx_surface_index *W, int *whole) {
+  uint64_t *key = mx_alloc((d->nv + 1) * sizeof *key);
+  uint32_t *canon = mx_alloc((d->nv + 1) * sizeof *canon);
+  uint32_t *order = mx_alloc((d->nv + 1) * sizeof *order);
+  int st = key && canon && order ? MX_OK : MX_EINPUT;
+  /* points sorted by a hash of their coordinates; within a run of one
+   * hash, the first point with the same coordinates stands for them */
+  if (!st) {
+    for (size_t v = 0; v < d->nv; v++) {
+      const double p[3] = {d->x[v], d->y[v], d->z[v]};
+      uint64_t h = 1469598103934665603ull;
+      const unsigned char *b = (const unsigned char *)p;
+      for (size_t i = 0; i < sizeof p; i++) h = (h ^ b[i]) * 1099511628211ull;
+      key[v] = h;
+      order[v] = (uint32_t)v;
+    }
+    st = mx_sort_u64(key, order, d->nv);
+  }
+  if (!st)
+    for (size_t i = 0; i < d->nv;) {
+      size_t j = i;
+      while (j < d->nv && key[j] == key[i]) j++;
+      for (size_t a = i; a < j; a++) {
+        const uint32_t va = order[a];
+        canon[va] = va;
+        for (size_t b = i; b < a; b++) {
+          const uint32_t vb = order[b];
+          if (d->x[va] == d->x[vb] && d->y[va] == d->y[vb] && d->z[va] == d->z[vb]) {
+            canon[va] = canon[vb];
+            break;
+          }
+        }
+      }
+      i = j;
+    }
+  mx_free(order);
+  mx_free(key);
+  const size_t ne = 3 * (size_t)W->nt;
+  uint64_t *ek = st ? NULL : mx_alloc((ne + 1) * sizeof *ek);
+  uint32_t *ev = st ? NULL : mx_alloc((ne + 1) * sizeof *ev);
+  if (!st && (!ek || !ev)) st = MX_EINPUT;
+  if (!st) {
+    for (uint32_t i = 0; i < W->nt; i++) {
+      const uint32_t *v = d->tri + 3 * (size_t)W->tri_id[i];
+      for (int k = 0; k < 3; k++) {
+        uint32_t a = canon[v[k]], b = canon[v[(k + 1) % 3]];
+        if (W->tsign[i] < 0) {
+          const uint32_t x = a;
+          a = b;
+          b = x;
+        }
+        ek[3 * (size_t)i + k] = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+        ev[3 * (size_t)i + k] = a < b; /* 1: from the lower point */
+      }
+    }
+    st = mx_sort_u64(ek, ev, ne);
+  }
+  if (!st) {
+    *whole = 1;
+    for (size_t i = 0; i < ne && *whole;) {
+      size_t j = i;
+      long net = 0;
+      while (j < ne && ek[j] == ek[i]) net += ev[j++] ? 1 : -1;
+      if ((uint32_t)(ek[i] >> 32) != (uint32_t)ek[i]) *whole = net == 0;
+      i = j;
+    }
+  }
+  mx_free(ek);
+  mx_free(ev);
+  mx_free(canon);
+  return st;
+}
+
+static int degenerate(const mx_trisoup *s, uint32_t t) {
+  double P[9], n[3];
+  tri_points(s, t, P);
+  return !(tri_frame(P, n) > 0.0);
+}
+
+/* The triangles that nothing meets, in sets connected through edges used by
+ * exactly two of them (vertex ids): comp[t] = the set's first triangle
+ * (UINT32_MAX for the others), par[t] = 1 when t runs the other way round
+ * from it. Serial, O(n log n). */
+static int free_sets(const mx_trisoup *s, const partners *R, uint32_t *comp, uint8_t *par) {
+  const size_t nt = s->nt, ne = 3 * nt;
+  uint64_t *ek = mx_alloc((ne + 1) * sizeof *ek);
+  uint32_t *ev = mx_alloc((ne + 1) * sizeof *ev);
+  uint32_t *nb = mx_alloc((ne + 1) * sizeof *nb); /* across edge e: the neighbour */
+  uint8_t *nbp = mx_alloc(ne + 1);                /* and 1 if it runs the same way */
+  uint32_t *queue = mx_alloc((nt + 1) * sizeof *queue);
+  int st = ek && ev && nb && nbp && queue ? MX_OK : MX_EINPUT;
+  if (!st) {
+    for (size_t t = 0; t < nt; t++) {
+      const int fr = R->off[t + 1] == R->off[t] && !degenerate(s, (uint32_t)t);
+      comp[t] = UINT32_MAX;
+      par[t] = fr ? 2 : 0; /* 2: free, not reached yet */
+      for (int k = 0; k < 3; k++) {
+        const uint32_t a = s->tri[3 * t + k], b = s->tri[3 * t + (k + 1) % 3];
+        ek[3 * t + k] = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+        ev[3 * t + k] = (uint32_t)(3 * t + k);
+        nb[3 * t + k] = UINT32_MAX;
+      }
+    }
+    st = mx_sort_u64(ek, ev, ne);
+  }
+  if (!st)
+    for (size_t i = 0; i < ne;) {
+      size_t j = i;
+      while (j < ne && ek[j] == ek[i]) j++;
+      if (j - i == 2) {
+        const uint32_t e1 = ev[i], e2 = ev[i + 1], t1 = e1 / 3, t2 = e2 / 3;
+        if (t1 != t2 && par[t1] == 2 && par[t2] == 2) {
+          const int up1 = s->tri[e1] < s->tri[3 * t1 + (e1 % 3 + 1) % 3];
+          const int up2 = s->tri[e2] < s->tri[3 * t2 + (e2 % 3 + 1) % 3];
+          nb[e1] = t2;
+          nb[e2] = t1;
+          nbp[e1] = nbp[e2] = (uint8_t)(up1 == up2);
+        }
+      }
+      i = j;
+    }
+  if (!st)
+    for (size_t t0 = 0; t0 < nt; t0++) {
+      if (par[t0] != 2) continue;
+      size_t qh = 0, qt = 0;
+      queue[qt++] = (uint32_t)t0;
+      comp[t0] = (uint32_t)t0;
+      par[t0] = 0;
+      while (qh < qt) {
+        const uint32_t t = queue[qh++];
+        for (int k = 0; k < 3; k++) {
+          const uint32_t u = nb[3 * (size_t)t + k];
+          if (u == UINT32_MAX || par[u] != 2) continue;
+          comp[u] = (uint32_t)t0;
+          par[u] = (uint8_t)(par[t] ^ nbp[3 * (size_t)t + k]);
+          queue[qt++] = u;
+        }
+      }
+    }
+  mx_free(ek);
+  mx_free(ev);
+  mx_free(nb);
+  mx_free(nbp);
+  mx_free(queue);
+  return st;
+}
+
 enum { DROP_IN = 0, DROP_OUT, DROP_COPY, KEEP, KEEP_TURNED };
 
 /* One triangle t: its pieces in W (cut by the partners' planes) and the
  * verdict of each in verdict[]. Returns the number of pieces (0 for a
  * degenerate triangle). */
-static int triangle_pieces(const mx_trisoup *s, const mx_surface_index *Wn,
-                           const partners *R, uint32_t t, pieces *W, uint8_t *verdict,
-                           double *area) {
-  double P[9], n[3];
+/* The pieces of triangle t in W (cut by the planes of the triangles that
+ * meet it, tidied); P, n, dp: its points, unit normal and diameter.
+ * Returns the number of pieces (0 for a degenerate triangle). */
+static int cut_triangle(const mx_trisoup *s, const partners *R, uint32_t t, pieces *W,
+                        double P[9], double n[3], double *dp_out) {
   tri_points(s, t, P);
   const double dp = tri_frame(P, n);
+  *dp_out = dp;
   if (!(dp > 0.0)) return 0;
   W->n = 1;
   W->capped = 0;
@@ -249,9 +402,24 @@ static int triangle_pieces(const mx_trisoup *s, const mx_surface_index *Wn,
       cut(W, nq, dot3(nq, Q), tol);
     }
   }
+  for (int i = 0; i < W->n; i++) tidy(W, i, tol);
+  return W->n;
+}
+
+/* The pieces of triangle t (cut_triangle) and the verdict of each in
+ * verdict[]: classified (*nq counts the winding number evaluations), or
+ * copied from known when not NULL. *area: the kept pieces' area. */
+static int triangle_pieces(const mx_trisoup *s, const mx_surface_index *Wn,
+                           const partners *R, uint32_t t, pieces *W, uint8_t *verdict,
+                           const uint8_t *known, double *area, int *nq) {
+  double P[9], n[3], dp;
   *area = 0.0;
+  if (!cut_triangle(s, R, t, W, P, n, &dp)) return 0;
+  if (known) {
+    memcpy(verdict, known, (size_t)W->n);
+    return W->n;
+  }
   for (int i = 0; i < W->n; i++) {
-    tidy(W, i, tol);
     const int nv = W->nv[i];
     if (nv < 3) {
       verdict[i] = DROP_OUT;
@@ -278,6 +446,7 @@ static int triangle_pieces(const mx_trisoup *s, const mx_surface_index *Wn,
       b[a] = c[a] - eps * n[a];
     }
     const int in_f = mx_winding_number(Wn, f) > 0.5, in_b = mx_winding_number(Wn, b) > 0.5;
+    *nq += 2;
     if (in_f == in_b) {
       verdict[i] = in_f ? DROP_IN : DROP_OUT;
       continue;
@@ -323,11 +492,61 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
   uint8_t *whole = mx_alloc(nt + 1); /* the verdict of a triangle nothing cut */
   if (!status && (!ntri || !nnew || !tarea || !whole)) status = MX_EINPUT;
   size_t cut_n = 0, pieces_n = 0, kept = 0, in_n = 0, out_n = 0, copies = 0, turned = 0,
-         capped = 0;
+         capped = 0, queries = 0;
   int oom = 0;
+  /* with whole values, one verdict per set of free triangles (free_sets) */
+  uint32_t *comp = NULL;
+  uint8_t *par = NULL;
+  if (!status) status = whole_values(s, Wn, &st->whole);
+  if (!status && st->whole) {
+    comp = mx_alloc((nt + 1) * sizeof *comp);
+    par = mx_alloc(nt + 1);
+    status = comp && par ? free_sets(s, &R, comp, par) : MX_EINPUT;
+  }
+  /* the pieces of each triangle (cutting is cheap; classifying is not:
+   * the verdicts are kept for the writing pass) */
+  uint64_t *poff = NULL;
+  uint8_t *known = NULL;
   if (!status) {
-#pragma omp parallel reduction(+ : cut_n, pieces_n, kept, in_n, out_n, copies, turned, capped) \
-    reduction(| : oom)
+    poff = mx_alloc((nt + 1) * sizeof *poff);
+    if (!poff) status = MX_EINPUT;
+  }
+  if (!status) {
+#pragma omp parallel reduction(| : oom)
+    {
+      pieces *W = NULL;
+#pragma omp for schedule(dynamic, 64)
+      for (size_t t = 0; t < nt; t++) {
+        if (R.off[t + 1] == R.off[t]) {
+          poff[t] = !degenerate(s, (uint32_t)t);
+          continue;
+        }
+        if (!W) W = mx_alloc(sizeof *W);
+        if (!W) {
+          oom = 1;
+          continue;
+        }
+        double P[9], n[3], dp;
+        poff[t] = (uint64_t)cut_triangle(s, &R, (uint32_t)t, W, P, n, &dp);
+      }
+      mx_free(W);
+    }
+    if (oom) status = MX_EINPUT;
+  }
+  if (!status) {
+    uint64_t sum = 0;
+    for (size_t t = 0; t < nt; t++) {
+      const uint64_t k = poff[t];
+      poff[t] = sum;
+      sum += k;
+    }
+    poff[nt] = sum;
+    known = mx_alloc(sum + 1);
+    if (!known) status = MX_EINPUT;
+  }
+  if (!status) {
+#pragma omp parallel reduction(+ : cut_n, pieces_n, kept, in_n, out_n, copies, turned, capped, \
+                                   queries) reduction(| : oom)
     {
       pieces *W = mx_alloc(sizeof *W);
       uint8_t verdict[MAXP];
@@ -335,7 +554,12 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
 #pragma omp for schedule(dynamic, 64)
       for (size_t t = 0; t < nt; t++) {
         if (!W) continue;
-        const int np = triangle_pieces(s, Wn, &R, (uint32_t)t, W, verdict, &tarea[t]);
+        if (comp && comp[t] != UINT32_MAX && comp[t] != t) continue; /* below */
+        int nq = 0;
+        const int np =
+            triangle_pieces(s, Wn, &R, (uint32_t)t, W, verdict, NULL, &tarea[t], &nq);
+        queries += (size_t)nq;
+        memcpy(known + poff[t], verdict, (size_t)np);
         whole[t] = np == 1 && W->nv[0] == 3 && W->id[0][0] != NEW && W->id[0][1] != NEW &&
                            W->id[0][2] != NEW
                        ? verdict[0]
@@ -356,6 +580,31 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
     }
     if (oom) status = MX_EINPUT;
   }
+  if (!status && comp)
+    for (size_t t = 0; t < nt; t++) {
+      if (comp[t] == UINT32_MAX || comp[t] == t) continue;
+      uint8_t v = whole[comp[t]];
+      if (par[t] && v >= KEEP) v = v == KEEP ? KEEP_TURNED : KEEP;
+      whole[t] = v;
+      pieces_n++;
+      kept += v >= KEEP;
+      turned += v == KEEP_TURNED;
+      in_n += v == DROP_IN;
+      out_n += v == DROP_OUT;
+      ntri[t] = v >= KEEP;
+      nnew[t] = 0;
+      if (v >= KEEP) {
+        double P[9], n[3], u[3], w[3], x[3];
+        tri_points(s, (uint32_t)t, P);
+        tri_frame(P, n);
+        sub3(P + 3, P, u);
+        sub3(P + 6, P, w);
+        cross3(u, w, x);
+        tarea[t] = 0.5 * norm3(x);
+      }
+    }
+  mx_free(comp);
+  mx_free(par);
   /* offsets, then the output in the triangles' order */
   uint64_t tot_t = 0, tot_v = s->nv;
   uint64_t *toff = NULL, *voff = NULL;
@@ -406,7 +655,9 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
           continue;
         }
         double dummy;
-        const int np = triangle_pieces(s, Wn, &R, (uint32_t)t, W, verdict, &dummy);
+        int nq = 0;
+        const int np =
+            triangle_pieces(s, Wn, &R, (uint32_t)t, W, verdict, known + poff[t], &dummy, &nq);
         uint64_t nv = voff[t];
         size_t k = 0;
         for (int i = 0; i < np; i++) {
@@ -446,6 +697,7 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
     st->copies = copies;
     st->turned = turned;
     st->capped = capped;
+    st->queries = queries;
   }
   mx_free(R.off);
   mx_free(R.adj);
@@ -455,5 +707,7 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
   mx_free(whole);
   mx_free(toff);
   mx_free(voff);
+  mx_free(poff);
+  mx_free(known);
   return status;
 }

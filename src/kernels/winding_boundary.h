@@ -16,7 +16,10 @@
  * domain lies behind it (the winding number above 1/2 behind); of coplanar
  * pieces lying on each other (the faces two overlapping cubes share), only
  * the one of the smallest triangle is kept. Triangles that nothing meets
- * are classified whole (their pieces: the triangle, its vertices kept).
+ * are classified whole (their pieces: the triangle, its vertices kept);
+ * when the winding number takes whole values, once per set of such
+ * triangles connected through edges used by exactly two of them (the
+ * sides of a triangle are those of its neighbour across such an edge).
  *
  * The pieces bound the domain: their signed volume is the domain's where
  * the winding number takes only the values 0, 1, 2, ... (every edge of the
@@ -47,6 +50,12 @@ typedef struct {
   size_t turned;     /* kept pieces turned to have the domain behind */
   size_t capped;     /* triangles whose cutting stopped at the limit */
   double area;       /* area of the kept pieces */
+  int whole;         /* 1: the winding number takes whole values only (every
+                        edge of the input, its points compared by
+                        coordinates, used as often in each direction as
+                        oriented by the index): the kept pieces then bound
+                        the domain exactly */
+  size_t queries;    /* winding number evaluations */
 } mx_winding_boundary_stats;
 
 /* s: the input (shell per triangle); W: the index of its triangles

@@ -17,7 +17,6 @@
 
 #include "kernels/grid.h"
 #include "kernels/winding_boundary.h"
-#include "soa/scan.h"
 
 int mx_winding_domain(mx_mesher *m, mx_trisoup *boundary) {
   memset(boundary, 0, sizeof *boundary);
@@ -31,88 +30,7 @@ int mx_winding_domain(mx_mesher *m, mx_trisoup *boundary) {
              "oriented inside out?");
     return MX_EINPUT;
   }
-  /* whether the winding number takes only whole values: every edge of the
-   * input (its points compared by coordinates) used as often in each
-   * direction; the boundary's signed volume is then the domain's */
-  const mx_trisoup *d = &m->domain;
-  const mx_surface_index *W = &m->WI;
-  uint64_t *key = mx_alloc((d->nv + 1) * sizeof *key);
-  uint32_t *canon = mx_alloc((d->nv + 1) * sizeof *canon);
-  uint32_t *order = mx_alloc((d->nv + 1) * sizeof *order);
-  int st = key && canon && order ? MX_OK : MX_EINPUT;
-  /* points in lexicographic order of their coordinates: a comparison sort
-   * on the three doubles would do; sort by a hash, then settle the runs */
-  if (!st) {
-    for (size_t v = 0; v < d->nv; v++) {
-      const double p[3] = {d->x[v], d->y[v], d->z[v]};
-      uint64_t h = 1469598103934665603ull;
-      const unsigned char *b = (const unsigned char *)p;
-      for (size_t i = 0; i < sizeof p; i++) h = (h ^ b[i]) * 1099511628211ull;
-      key[v] = h;
-      order[v] = (uint32_t)v;
-    }
-    st = mx_sort_u64(key, order, d->nv);
-  }
-  if (!st) {
-    for (size_t i = 0; i < d->nv;) {
-      size_t j = i;
-      while (j < d->nv && key[j] == key[i]) j++;
-      /* within a run of one hash: the first point of the same coordinates */
-      for (size_t a = i; a < j; a++) {
-        const uint32_t va = order[a];
-        canon[va] = va;
-        for (size_t b = i; b < a; b++) {
-          const uint32_t vb = order[b];
-          if (d->x[va] == d->x[vb] && d->y[va] == d->y[vb] && d->z[va] == d->z[vb]) {
-            canon[va] = canon[vb];
-            break;
-          }
-        }
-      }
-      i = j;
-    }
-  }
-  mx_free(order);
-  mx_free(key);
-  uint64_t *ek = NULL;
-  uint32_t *ev = NULL;
-  const size_t ne = 3 * (size_t)W->nt;
-  if (!st) {
-    ek = mx_alloc((ne + 1) * sizeof *ek);
-    ev = mx_alloc((ne + 1) * sizeof *ev);
-    if (!ek || !ev) st = MX_EINPUT;
-  }
-  if (!st) {
-    for (uint32_t i = 0; i < W->nt; i++) {
-      const uint32_t *v = d->tri + 3 * (size_t)W->tri_id[i];
-      for (int k = 0; k < 3; k++) {
-        uint32_t a = canon[v[k]], b = canon[v[(k + 1) % 3]];
-        if (W->tsign[i] < 0) {
-          const uint32_t x = a;
-          a = b;
-          b = x;
-        }
-        ek[3 * (size_t)i + k] = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
-        ev[3 * (size_t)i + k] = a < b; /* 1: from the lower point */
-      }
-    }
-    st = mx_sort_u64(ek, ev, ne);
-  }
-  if (!st) {
-    int whole = 1;
-    for (size_t i = 0; i < ne && whole;) {
-      size_t j = i;
-      long net = 0;
-      while (j < ne && ek[j] == ek[i]) net += ev[j++] ? 1 : -1;
-      if ((uint32_t)(ek[i] >> 32) != (uint32_t)ek[i]) whole = net == 0;
-      i = j;
-    }
-    m->winding_whole = whole;
-  }
-  mx_free(ek);
-  mx_free(ev);
-  mx_free(canon);
-  if (st) return st;
+  m->winding_whole = ws->whole;
   /* the boundary's signed volume, about the centre of its box */
   const mx_trisoup *b = boundary;
   double lo[3], hi[3], o[3];
@@ -174,7 +92,13 @@ double mx_winding_domain_volume(const mx_mesher *m) {
  * as given when the soup holds the boundary of its domain. */
 int mx_mesher_index(mx_mesher *m) {
   if (m->have_index) return MX_OK;
-  MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
+  /* the boundary's pieces are oriented already (the domain behind): as
+   * given, without the shells' nesting (pieces cut apart are shells of
+   * their own, each a winding number query) */
+  if (m->have_winding)
+    MX_CHECK(mx_surface_index_build_given(&m->SI, &m->soup, 0, m->nt_domain));
+  else
+    MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
   m->have_index = 1;
   if (m->p.repair_input) m->SI.closed = 0;
   if (m->have_winding) m->SI.side = &m->WI;
