@@ -13,6 +13,7 @@
 #include "check.h"
 #include "common.h"
 #include "kernels/distance.h"
+#include "kernels/surface_defects.h"
 #include "kernels/winding_boundary.h"
 #include "soa/trisoup.h"
 
@@ -73,6 +74,17 @@ static mx_winding_boundary_stats run(const char *what, const box *b, int nb, int
   memset(&s, 0, sizeof s);
   memset(&out, 0, sizeof out);
   for (int i = 0; i < nb; i++) add_box(&s, b[i].lo, b[i].size, weld, b[i].inward);
+  /* the pairs the cutting uses are the defect finder's */
+  {
+    mx_surface_defects r;
+    uint64_t *pairs = NULL;
+    size_t np = 0;
+    CHECK(mx_surface_defects_find(&s, &r) == MX_OK);
+    CHECK(mx_surface_meeting_pairs(&s, &pairs, &np) == MX_OK);
+    CHECK(np == r.intersecting_pairs + r.crossing_pairs);
+    for (size_t k = 0; k + 1 < np; k++) CHECK(pairs[k] < pairs[k + 1]);
+    mx_free(pairs);
+  }
   mx_surface_index W;
   CHECK(mx_surface_index_build_given(&W, &s, 0, (uint32_t)s.nt) == MX_OK);
   CHECK(W.closed == 0);
