@@ -767,6 +767,7 @@ double mx_signed_distance(const mx_surface_index *S, const double p[3],
   if (q) memcpy(q, qq, sizeof qq);
   if (d2 == 0.0) return 0.0;
   const double d = sqrt(d2);
+  if (S->side) return mx_winding_number(S->side, p) > 0.5 ? -d : d;
   if (!S->nt) return d;
   if (S->closed) {
     const double *n = pseudonormal(S, slot, f);
@@ -780,6 +781,7 @@ double mx_signed_distance(const mx_surface_index *S, const double p[3],
 }
 
 int mx_inside(const mx_surface_index *S, const double p[3]) {
+  if (S->side) return mx_winding_number(S->side, p) > 0.5;
   if (!S->closed) return mx_winding_number(S, p) > 0.5;
   return mx_signed_distance(S, p, NULL) <= 0.0;
 }
@@ -1104,7 +1106,7 @@ static int build_caps(mx_surface_index *S, const uint8_t *fix,
 /* Orientation of the shells (see distance.h): seeds' centroids, signed
  * volumes, nesting depths by the winding number, then the final signs. */
 static int orient_shells(mx_surface_index *S, const uint8_t *fix,
-                         const uint32_t *seed, const uint32_t *cap_shell) {
+                         const uint32_t *seed, const uint32_t *cap_shell, int given) {
   const uint32_t nt = S->nt, nc = S->nshells;
   const size_t ncap = S->ncap;
   double *rep = mx_alloc(3 * (size_t)nc * sizeof *rep + 8);
@@ -1125,7 +1127,9 @@ static int orient_shells(mx_surface_index *S, const uint8_t *fix,
     return MX_EINPUT;
   }
   /* A point of each shell: the centroid of its seed triangle, clamped to
-   * the triangle's box so that the BVH descends to the triangle. */
+   * the triangle's box so that the BVH descends to the triangle; as given:
+   * the centre of the shell's box (the same for any order of its
+   * triangles). */
   for (uint32_t c = 0; c < nc; c++) {
     const double *t = S->tv + 9 * (size_t)seed[c];
     for (int a = 0; a < 3; a++) {
@@ -1133,6 +1137,34 @@ static int orient_shells(mx_surface_index *S, const uint8_t *fix,
       const double hi = mx_max(t[a], mx_max(t[3 + a], t[6 + a]));
       rep[3 * c + a] = mx_min(hi, mx_max(lo, (t[a] + t[3 + a] + t[6 + a]) / 3.0));
     }
+  }
+  if (given) {
+    double *box = mx_alloc(6 * (size_t)nc * sizeof *box + 8);
+    if (!box) {
+      mx_free(rep);
+      mx_free(vol);
+      mx_free(csign);
+      mx_free(ssign);
+      mx_free(capw);
+      mx_free(nflip);
+      mx_free(nsize);
+      return MX_EINPUT;
+    }
+    for (uint32_t c = 0; c < nc; c++)
+      for (int a = 0; a < 3; a++) {
+        box[6 * c + a] = INFINITY;
+        box[6 * c + 3 + a] = -INFINITY;
+      }
+    for (uint32_t i = 0; i < nt; i++) {
+      double *b = box + 6 * (size_t)S->shell_of[i];
+      for (int k = 0; k < 9; k++) {
+        b[k % 3] = mx_min(b[k % 3], S->tv[9 * (size_t)i + k]);
+        b[3 + k % 3] = mx_max(b[3 + k % 3], S->tv[9 * (size_t)i + k]);
+      }
+    }
+    for (uint32_t c = 0; c < nc; c++)
+      for (int a = 0; a < 3; a++) rep[3 * c + a] = 0.5 * (box[6 * c + a] + box[6 * c + 3 + a]);
+    mx_free(box);
   }
   /* Signed volumes (6 times), relative to the shell's point. */
   for (uint32_t i = 0; i < nt; i++) {
@@ -1147,11 +1179,22 @@ static int orient_shells(mx_surface_index *S, const uint8_t *fix,
     vol[c] += fix[i] ? -v : v;
   }
   for (uint32_t c = 0; c < nc; c++) csign[c] = vol[c] < 0.0 ? -1 : 1;
+  if (given) {
+    /* the way that keeps most triangles as given; ties: outward */
+    for (uint32_t i = 0; i < nt; i++) {
+      nsize[S->shell_of[i]]++;
+      nflip[S->shell_of[i]] += fix[i];
+    }
+    for (uint32_t c = 0; c < nc; c++)
+      if (2 * nflip[c] != nsize[c]) csign[c] = 2 * nflip[c] > nsize[c] ? -1 : 1;
+    memset(nflip, 0, (size_t)nc * sizeof *nflip);
+    memset(nsize, 0, (size_t)nc * sizeof *nsize);
+  }
   /* Every shell outward, then the nesting depth of each. */
   for (uint32_t i = 0; i < nt; i++)
     ssign[i] = (int8_t)((fix[i] ? -1 : 1) * csign[S->shell_of[i]]);
   for (size_t j = 0; j < ncap; j++) capw[j] = S->cap_w[j] * csign[cap_shell[j]];
-  if (nc > 1) {
+  if (nc > 1 && !given) {
 #pragma omp parallel for schedule(dynamic, 1) if (nc > 8)
     for (uint32_t c = 0; c < nc; c++) {
       const double w = winding(S, rep + 3 * c, ssign, capw, seed[c]);
@@ -1276,8 +1319,8 @@ static int build_hints(mx_surface_index *S) {
   return MX_OK;
 }
 
-int mx_surface_index_build(mx_surface_index *S, const mx_trisoup *soup,
-                           uint32_t t0, uint32_t t1) {
+static int index_build(mx_surface_index *S, const mx_trisoup *soup, uint32_t t0,
+                       uint32_t t1, int given) {
   memset(S, 0, sizeof *S);
   if (t0 > t1 || t1 > soup->nt) {
     mx_error(NULL, 0, "surface index: triangle range [%u, %u) outside [0, %zu)",
@@ -1382,7 +1425,8 @@ int mx_surface_index_build(mx_surface_index *S, const mx_trisoup *soup,
     S->closed = S->open_edges == 0 && S->conflict_edges == 0;
     st = build_caps(S, fix, &cap_shell);
   }
-  if (st == MX_OK) st = orient_shells(S, fix, seed, cap_shell);
+  if (st == MX_OK) st = orient_shells(S, fix, seed, cap_shell, given);
+  if (given) S->closed = 0;
   if (st == MX_OK) st = pseudonormals(S, &E);
   if (st == MX_OK) st = build_hints(S);
   edge_sort_free(&E);
@@ -1391,4 +1435,14 @@ int mx_surface_index_build(mx_surface_index *S, const mx_trisoup *soup,
   mx_free(cap_shell);
   if (st != MX_OK) mx_surface_index_free(S);
   return st;
+}
+
+int mx_surface_index_build(mx_surface_index *S, const mx_trisoup *soup,
+                           uint32_t t0, uint32_t t1) {
+  return index_build(S, soup, t0, t1, 0);
+}
+
+int mx_surface_index_build_given(mx_surface_index *S, const mx_trisoup *soup,
+                                 uint32_t t0, uint32_t t1) {
+  return index_build(S, soup, t0, t1, 1);
 }

@@ -114,7 +114,7 @@ typedef struct {
   float v[16][4]; /* n, n.a, m0, m0.a, m1, m1.b, m2, m2.c (x y z w each) */
 } mx_leaf_pack;
 
-typedef struct {
+typedef struct mx_surface_index {
   const mx_trisoup *soup;
   uint32_t t0, t1, nt;  /* the triangles [t0, t1); nt = t1 - t0 */
 
@@ -168,6 +168,11 @@ typedef struct {
   size_t nreoriented;       /* triangles flipped to agree with their shell */
   int closed;               /* 1: no open, non-manifold or conflicting edge;
                                the pseudonormal sign is used */
+  /* Set by the caller after the build (NULL by default): the side of a
+   * point (mx_inside, the sign of mx_signed_distance) is then the winding
+   * number of this other index above 1/2, closed or not (an index over the
+   * boundary of a winding number's domain defers to the input's). */
+  const struct mx_surface_index *side;
 } mx_surface_index;
 
 /* Build the index of the triangles [t0, t1) of soup. MX_OK, or MX_EINPUT
@@ -175,6 +180,16 @@ typedef struct {
  * an index for which every point is outside at infinite distance. */
 int mx_surface_index_build(mx_surface_index *S, const mx_trisoup *soup,
                            uint32_t t0, uint32_t t1);
+/* The same, with the triangles' orientation as given instead of the shell
+ * rule above: within each shell the orientation is made consistent through
+ * the manifold edges as above, then the shell is turned the way that keeps
+ * most of its triangles as given (ties: positive signed volume about the
+ * centre of the shell's box); shells are never flipped for their nesting.
+ * The winding number is then the input's own (Jacobson et al.): 2 where
+ * two bodies overlap, whatever the order of the triangles; closed is 0. For
+ * --repair-input. */
+int mx_surface_index_build_given(mx_surface_index *S, const mx_trisoup *soup,
+                                 uint32_t t0, uint32_t t1);
 void mx_surface_index_free(mx_surface_index *S);
 
 /* Exact closest point q of p on the triangles (Voronoi regions of the

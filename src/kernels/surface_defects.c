@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "common.h"
+#include "soa/scan.h"
 
 #define NEX MX_DEFECT_EXAMPLES
 #define LEAF 4
@@ -805,6 +806,9 @@ typedef struct {
   size_t inter, cross, bodies;
   size_t nex[2];
   mx_defect_example ex[2][NEX];
+  uint64_t *pairs; /* collecting (mx_surface_meeting_pairs): the pairs met */
+  size_t npairs, cap;
+  int oom;
   char pad_[64];
 } pair_acc;
 
@@ -818,6 +822,7 @@ typedef struct {
   const mx_trisoup *s;
   const uint32_t *body;
   pair_acc *acc; /* one per thread */
+  int collect;   /* keep every pair met (acc->pairs) */
 } pair_ctx;
 
 /* Narrow phase on slots i < j whose boxes meet. */
@@ -830,6 +835,20 @@ static void test_pair(const pair_ctx *c, uint32_t i, uint32_t j) {
     return;
   pair_acc *A = &c->acc[omp_get_thread_num()];
   uint32_t ti = B->tid[i], tj = B->tid[j];
+  if (c->collect) {
+    if (A->npairs == A->cap) {
+      const size_t cap = A->cap ? 2 * A->cap : 256;
+      uint64_t *g = mx_realloc(A->pairs, cap * sizeof *g);
+      if (!g) {
+        A->oom = 1;
+        return;
+      }
+      A->pairs = g;
+      A->cap = cap;
+    }
+    A->pairs[A->npairs++] = ti < tj ? (uint64_t)ti << 32 | tj : (uint64_t)tj << 32 | ti;
+    return;
+  }
   mx_defect_example x = {ti < tj ? ti : tj, ti < tj ? tj : ti, NONE, NONE,
                          {w[0], w[1], w[2]}};
   const uint16_t *sh = c->s->shell;
@@ -907,7 +926,7 @@ static int pair_defects(const bvh *B, const mx_trisoup *s, const uint32_t *body,
   int nth = omp_get_max_threads();
   pair_acc *acc = mx_calloc((size_t)nth * sizeof *acc);
   if (!acc) return MX_EINPUT;
-  pair_ctx c = {B, s, body, acc};
+  pair_ctx c = {B, s, body, acc, 0};
   const pair_ctx *cp = &c;
 #pragma omp parallel num_threads(nth) if (B->n > 256) default(none) shared(cp)
 #pragma omp single
@@ -926,6 +945,74 @@ static int pair_defects(const bvh *B, const mx_trisoup *s, const uint32_t *body,
 }
 
 /* ==== public ============================================================= */
+
+/* Per triangle: its projection axis, -1 when degenerate. */
+static void projection_axes(const mx_trisoup *s, int8_t *axis) {
+  const size_t nt = s->nt;
+#pragma omp parallel for schedule(static) if (nt > 20000)
+  for (size_t t = 0; t < nt; t++) {
+    const uint32_t *v = s->tri + 3 * t;
+    if (repeats(v)) {
+      axis[t] = -1;
+      continue;
+    }
+    double P[9];
+    for (int k = 0; k < 3; k++) {
+      P[3 * k] = s->x[v[k]];
+      P[3 * k + 1] = s->y[v[k]];
+      P[3 * k + 2] = s->z[v[k]];
+    }
+    axis[t] = (int8_t)drop_axis(P);
+  }
+}
+
+int mx_surface_meeting_pairs(const mx_trisoup *s, uint64_t **pairs, size_t *npairs) {
+  *pairs = NULL;
+  *npairs = 0;
+  if (s->nt < 2) return MX_OK;
+  MX_CHECK(indices_valid(s));
+  int8_t *axis = mx_alloc(s->nt);
+  if (!axis) return MX_EINPUT;
+  projection_axes(s, axis);
+  bvh B;
+  int st = bvh_build(&B, s, axis);
+  mx_free(axis);
+  const int nth = omp_get_max_threads();
+  pair_acc *acc = st ? NULL : mx_calloc((size_t)nth * sizeof *acc);
+  if (!st && !acc) st = MX_EINPUT;
+  if (!st && B.n >= 2) {
+    pair_ctx c = {&B, s, NULL, acc, 1};
+    const pair_ctx *cp = &c;
+#pragma omp parallel num_threads(nth) if (B.n > 256) default(none) shared(cp)
+#pragma omp single
+    self_node(cp, 0, 0);
+  }
+  size_t n = 0;
+  for (int t = 0; acc && t < nth; t++) {
+    n += acc[t].npairs;
+    if (acc[t].oom) st = MX_EINPUT;
+  }
+  uint64_t *all = st ? NULL : mx_alloc((n + 1) * sizeof *all);
+  if (!st && !all) st = MX_EINPUT;
+  if (!st) {
+    size_t k = 0;
+    for (int t = 0; t < nth; t++) {
+      memcpy(all + k, acc[t].pairs, acc[t].npairs * sizeof *all);
+      k += acc[t].npairs;
+    }
+    st = mx_sort_u64(all, NULL, n);
+  }
+  for (int t = 0; acc && t < nth; t++) mx_free(acc[t].pairs);
+  mx_free(acc);
+  bvh_free(&B);
+  if (st) {
+    mx_free(all);
+    return st;
+  }
+  *pairs = all;
+  *npairs = n;
+  return MX_OK;
+}
 
 int mx_surface_defects_find(const mx_trisoup *s, mx_surface_defects *r) {
   memset(r, 0, sizeof *r);
@@ -947,21 +1034,7 @@ int mx_surface_defects_find(const mx_trisoup *s, mx_surface_defects *r) {
   bodies(s, vroot, body);
   mx_free(vroot);
 
-#pragma omp parallel for schedule(static) if (nt > 20000)
-  for (size_t t = 0; t < nt; t++) {
-    const uint32_t *v = s->tri + 3 * t;
-    if (repeats(v)) {
-      axis[t] = -1;
-      continue;
-    }
-    double P[9];
-    for (int k = 0; k < 3; k++) {
-      P[3 * k] = s->x[v[k]];
-      P[3 * k + 1] = s->y[v[k]];
-      P[3 * k + 2] = s->z[v[k]];
-    }
-    axis[t] = (int8_t)drop_axis(P);
-  }
+  projection_axes(s, axis);
   size_t nex = 0;
   for (size_t t = 0; t < nt; t++) {
     if (axis[t] >= 0) continue;

@@ -99,6 +99,13 @@ typedef struct {
  * triangles), with a message. Prints nothing else. */
 int mx_surface_defects_find(const mx_trisoup *s, mx_surface_defects *r);
 
+/* Every pair of triangles that meets (those counted in intersecting_pairs
+ * and crossing_pairs above), as keys (smaller triangle << 32 | larger),
+ * increasing; *pairs is allocated with mx_alloc (NULL when there is none).
+ * The same for any thread count. MX_OK, or MX_EINPUT (out of memory, bad
+ * index). */
+int mx_surface_meeting_pairs(const mx_trisoup *s, uint64_t **pairs, size_t *npairs);
+
 /* Sum of all counts except intersecting_bodies (already in
  * intersecting_pairs): 0 for a clean surface. */
 size_t mx_surface_defects_total(const mx_surface_defects *r);

@@ -106,6 +106,7 @@ void mx_mesher_free(mx_mesher *m) {
   if (!m) return;
   mx_tree_clear(m);
   if (m->have_index) mx_surface_index_free(&m->SI);
+  if (m->have_winding) mx_surface_index_free(&m->WI);
   mx_trisoup_free(&m->domain);
   mx_trisoup_free(&m->soup);
   for (int i = 0; i < m->ndomain; i++) free(m->domain_name[i]);
@@ -439,8 +440,11 @@ static int assemble_inputs(mx_mesher *m) {
     mx_error(NULL, 0, "no input surface: add one (-i FILE) or the demo (--demo)");
     return MX_EINPUT;
   }
-  MX_CHECK(mx_trisoup_check_shells(&m->domain, (uint32_t)m->domain.nt,
-                                   (const char *const *)m->domain_name));
+  /* two inputs with a triangle in common are refused, but for the winding
+   * number's domain (a face two touching bodies share bounds nothing) */
+  if (!m->p.repair_input)
+    MX_CHECK(mx_trisoup_check_shells(&m->domain, (uint32_t)m->domain.nt,
+                                     (const char *const *)m->domain_name));
   {
     /* a box the grid refuses (flat, coordinates out of range, too thin) is
      * reported as such before the defects are looked for */
@@ -450,9 +454,19 @@ static int assemble_inputs(mx_mesher *m) {
     MX_CHECK(mx_grid_build(lo, hi, m->domain_name[0], &g));
   }
   MX_CHECK(input_policy(m));
-  MX_CHECK(mx_trisoup_append(&m->soup, &m->domain));
-  /* one shell per input file, as the readers gave them */
-  memcpy(m->soup.shell, m->domain.shell, m->domain.nt * sizeof *m->soup.shell);
+  if (m->S.input_repaired) {
+    /* the boundary of the winding number's domain instead of the input */
+    mx_trisoup b;
+    int st = mx_winding_domain(m, &b);
+    if (!st) st = mx_trisoup_append(&m->soup, &b);
+    if (!st) memcpy(m->soup.shell, b.shell, b.nt * sizeof *m->soup.shell);
+    mx_trisoup_free(&b);
+    MX_CHECK(st);
+  } else {
+    MX_CHECK(mx_trisoup_append(&m->soup, &m->domain));
+    /* one shell per input file, as the readers gave them */
+    memcpy(m->soup.shell, m->domain.shell, m->domain.nt * sizeof *m->soup.shell);
+  }
   m->soup.nshells = m->domain.nshells;
   m->nt_domain = (uint32_t)m->soup.nt;
   for (int r = 0; r < m->nregions; r++) {
@@ -534,13 +548,9 @@ int mx_build_tree(mx_mesher *m) {
   if (m->p.repair_input) {
     /* the domain: where the generalized winding number is above 1/2, for
      * the octants (instead of the ray parity) and the nodes alike */
-    if (!m->have_index) {
-      MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
-      m->have_index = 1;
-    }
-    m->SI.closed = 0;
+    MX_CHECK(mx_mesher_index(m));
     m->B.loc_domain.inside_fn = winding_inside;
-    m->B.loc_domain.inside_ctx = &m->SI;
+    m->B.loc_domain.inside_ctx = m->have_winding ? &m->WI : &m->SI;
   }
   for (int l = 0; l <= MX_MAX_LEVEL; l++) {
     m->B.split_keys[l] = m->split_keys[l];
@@ -662,8 +672,7 @@ static int boundary_once(mx_mesher *m) {
   stage(m, "boundary");
   if (!m->have_index) {
     stage(m, "index");
-    MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
-    m->have_index = 1;
+    MX_CHECK(mx_mesher_index(m));
     stage(m, "boundary");
   }
   mx_boundary_stats bs;
@@ -758,25 +767,34 @@ int mx_repair(mx_mesher *m) {
  * too coarse for thin parts of the input, or the inside flooded). The
  * tolerance is the one of `mixoct check --surface`: half a layer of
  * elements along the surface, 5% at least. One closed input only (with
- * holes or several bodies the enclosed volume needs their nesting). The
- * verdict takes the volume vm and the count ncells of a mesh (a distributed
- * mesh's sums over its ranks). */
+ * holes or several bodies the enclosed volume needs their nesting), or the
+ * winding number's domain of --repair-input (its volume and boundary from
+ * winding_domain.c, any number of inputs and bodies). The verdict takes the
+ * volume vm and the count ncells of a mesh (a distributed mesh's sums over
+ * its ranks). */
 int mx_volume_verdict(mx_mesher *m, double vm, size_t ncells) {
-  if (m->p.stage != MX_STAGE_FULL || m->ndomain != 1 || m->p.repair_input || !ncells)
-    return MX_OK;
-  const mx_trisoup *d = &m->domain;
-  if (d->nshells > 1) return MX_OK;
-  double area = 0.0;
-  const double vs = fabs(enclosed_volume(d, &area));
+  if (m->p.stage != MX_STAGE_FULL || !ncells) return MX_OK;
+  double area = 0.0, vs;
+  const char *what = "the input encloses";
+  if (m->have_winding) {
+    vs = mx_winding_domain_volume(m);
+    area = m->S.winding.area;
+    what = "the input's winding number domain holds (--repair-input)";
+  } else {
+    if (m->ndomain != 1 || m->p.repair_input) return MX_OK;
+    const mx_trisoup *d = &m->domain;
+    if (d->nshells > 1) return MX_OK;
+    vs = fabs(enclosed_volume(d, &area));
+  }
   if (!(vs > 0.0)) return MX_OK;
   const double h = cbrt(fabs(vm) / (double)ncells);
   const double tol = fmax(0.05, 0.5 * area * h / vs), err = (vm - vs) / vs;
   m->S.volume_error = err;
   if (fabs(err) <= tol) return MX_OK;
-  mx_error(m->domain_name[0], 0, "the mesh holds %.1f%% of the volume the input encloses "
+  mx_error(m->domain_name[0], 0, "the mesh holds %.1f%% of the volume %s "
            "(%.4g against %.4g; tolerance %.1f%%: half a layer of elements along the "
            "surface): the levels are too coarse for thin parts of the input; ask for finer "
-           "ones (-s, -a, -b, -r)", 100.0 * vm / vs, vm, vs, 100.0 * tol);
+           "ones (-s, -a, -b, -r)", 100.0 * vm / vs, what, vm, vs, 100.0 * tol);
   return MX_EINVALID;
 }
 
@@ -793,7 +811,8 @@ double mx_mesh_volume(const mx_mesh_out *M) {
 }
 
 static int volume_check(mx_mesher *m) {
-  if (m->p.stage != MX_STAGE_FULL || m->ndomain != 1 || m->p.repair_input || !m->M.ncells)
+  if (m->p.stage != MX_STAGE_FULL || !m->M.ncells ||
+      (!m->have_winding && (m->ndomain != 1 || m->p.repair_input)))
     return MX_OK;
   return mx_volume_verdict(m, mx_mesh_volume(&m->M), m->M.ncells);
 }

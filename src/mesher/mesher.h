@@ -14,6 +14,7 @@
 #include "kernels/splice.h"
 #include "kernels/transition.h"
 #include "io/file_identity.h"
+#include "kernels/winding_boundary.h"
 #include "soa/regions.h"
 #include "soa/trisoup.h"
 
@@ -51,6 +52,7 @@ typedef struct {
   size_t reoriented;        /* input triangles flipped by the input policy */
   double volume_error;      /* (mesh - enclosed) / enclosed, one closed input */
   int input_repaired;       /* the domain is the winding number's (repair_input) */
+  mx_winding_boundary_stats winding; /* its boundary (input_repaired) */
   int local;                /* 1: every re-mesh of the call was local */
   int local_attempts;       /* patches tried (more rings when one fell short) */
   size_t patch_leaves;      /* leaves meshed again (core and context) after */
@@ -106,6 +108,14 @@ struct mx_mesher {
 
   int have_index;
   mx_surface_index SI;
+  /* --repair-input on an input with no well-defined inside
+   * (winding_domain.c): the input's index, orientation as given, whose
+   * winding number decides the sides; the soup's domain triangles are then
+   * the boundary of its domain, of signed volume winding_volume (the
+   * domain's when winding_whole: the winding number takes whole values) */
+  int have_winding, winding_whole;
+  mx_surface_index WI;
+  double winding_volume;
 
   /* the mesh: the stage reached (-1: none) */
   int mesh_stage;

@@ -38,6 +38,15 @@ int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold);
  * the mesher held. */
 int mx_remesh_after_refine(mx_mesher *m);
 int mx_build_tree(mx_mesher *m);    /* grid, refine, balance, leaves */
+/* --repair-input on an input with no well-defined inside (winding_domain.c):
+ * m->WI, and in *boundary (empty on entry) the boundary of the winding
+ * number's domain, which replaces the input in the soup; MX_EINPUT when the
+ * domain is empty. */
+int mx_winding_domain(mx_mesher *m, mx_trisoup *boundary);
+/* The volume of that domain (the volume rule's reference). */
+double mx_winding_domain_volume(const mx_mesher *m);
+/* m->SI over the soup's domain triangles, built once (sides as above). */
+int mx_mesher_index(mx_mesher *m);
 /* The split set (m->split_keys, replaced) of an octree with the leaves
  * (key[i], level[i]), i < n, in any order: every ancestor of a leaf is
  * split; mx_build_tree then refines from the roots through it

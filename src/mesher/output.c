@@ -68,8 +68,7 @@ static int make_tags(mx_mesher *m, const mx_mesh_view *v, tags *T) {
   T->node_tag = mx_alloc((M->nnodes + 1) * sizeof *T->node_tag);
   if (!T->cell_body || !T->node_tag) return MX_ENOMEM;
   if (!m->have_index) {
-    MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
-    m->have_index = 1;
+    MX_CHECK(mx_mesher_index(m));
   }
   const mx_tag_inputs in = {&m->B, m->leaves, M->leaf, &m->soup, m->nt_domain,
                             m->ndomain, &m->SI, m->p.repair_input};

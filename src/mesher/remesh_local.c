@@ -178,8 +178,7 @@ int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold) {
   if (!m->p.remesh_full && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states &&
       old_leaves && !m->have_index) {
     /* a mesh read from a restart file: the surface index is built here */
-    MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
-    m->have_index = 1;
+    MX_CHECK(mx_mesher_index(m));
   }
   if (!m->p.remesh_full && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states &&
       m->have_index && old_leaves)
