@@ -170,6 +170,30 @@ static void plane(const mx_trisoup *s, const uint32_t *idx, size_t m, double n[3
   *size = sqrt(*size);
 }
 
+/* Projection along axis ax (coordinates ax + 1, ax + 2 cyclically: the
+ * turning sense of the polygon there is the sign of n[ax]). */
+static void project(const mx_trisoup *s, const uint32_t *idx, size_t m, int ax, double *xy) {
+  const double *X[3] = {s->x, s->y, s->z};
+  const double *xi = X[(ax + 1) % 3], *xj = X[(ax + 2) % 3];
+  for (size_t p = 0; p < m; p++) {
+    xy[2 * p] = xi[idx[p]];
+    xy[2 * p + 1] = xj[idx[p]];
+  }
+}
+
+/* Whether every corner of the polygon is collinear with its neighbours in
+ * the projection along ax. */
+static int flat(const mx_trisoup *s, const uint32_t *idx, size_t m, int ax) {
+  const double *X[3] = {s->x, s->y, s->z};
+  const double *xi = X[(ax + 1) % 3], *xj = X[(ax + 2) % 3];
+  for (size_t i = 0; i < m; i++) {
+    const uint32_t a = idx[i ? i - 1 : m - 1], b = idx[i], c = idx[i + 1 < m ? i + 1 : 0];
+    const double pa[2] = {xi[a], xj[a]}, pb[2] = {xi[b], xj[b]}, pc[2] = {xi[c], xj[c]};
+    if (mx_orient2d(pa, pb, pc) != 0) return 0;
+  }
+  return 1;
+}
+
 /* ---- loops at repeated corners -------------------------------------------- */
 
 static int cmp_u64(const void *a, const void *b) {
@@ -249,6 +273,29 @@ static int loop_sign(const double *xy, const uint32_t *P, size_t L) {
     area += (u[0] - q[0]) * (v[1] - q[1]) - (u[1] - q[1]) * (v[0] - q[0]);
   }
   return (area > 0) - (area < 0);
+}
+
+/* Whether two edges of the loop that are not neighbours meet (closed
+ * segments, exact): the loop crosses or touches itself. Tested up to 64
+ * corners (a larger loop that crosses itself has no ear left, or makes
+ * triangles that cross, which the input check names). */
+static int meets_itself(const double *xy, const uint32_t *P, size_t L) {
+  if (L > 64) return 0;
+  for (size_t i = 0; i + 2 < L; i++) {
+    const double *a = xy + 2 * (size_t)P[i], *b = xy + 2 * (size_t)P[i + 1];
+    for (size_t j = i + 2; j < L; j++) {
+      if (i == 0 && j == L - 1) continue; /* neighbours across the end */
+      const double *c = xy + 2 * (size_t)P[j], *d = xy + 2 * (size_t)P[j + 1 < L ? j + 1 : 0];
+      int apart = 0;
+      for (int k = 0; k < 2 && !apart; k++)
+        apart = fmax(a[k], b[k]) < fmin(c[k], d[k]) || fmax(c[k], d[k]) < fmin(a[k], b[k]);
+      if (apart) continue; /* the boxes: collinear segments that meet overlap there */
+      const int o1 = mx_orient2d(a, b, c), o2 = mx_orient2d(a, b, d);
+      const int o3 = mx_orient2d(c, d, a), o4 = mx_orient2d(c, d, b);
+      if (o1 * o2 <= 0 && o3 * o4 <= 0) return 1;
+    }
+  }
+  return 0;
 }
 
 /* ---- ear clipping ---------------------------------------------------------- */
@@ -402,33 +449,34 @@ static int clip(mx_polysplit *ps, mx_trisoup *s, scratch *w, const uint32_t *P, 
 
 /* ---- one face ---------------------------------------------------------------- */
 
+static inline int same_point(const mx_trisoup *s, uint32_t a, uint32_t b) {
+  return a == b || (s->x[a] == s->x[b] && s->y[a] == s->y[b] && s->z[a] == s->z[b]);
+}
+
 static int split_polygon(mx_polysplit *ps, mx_trisoup *s, const uint32_t *v, size_t k,
                          const mx_face_at *at) {
   scratch w;
   MX_CHECK(scratch_for(ps, k, &w));
-  size_t m = 0; /* repeats in a row dropped */
+  size_t m = 0; /* repeats in a row dropped (same index, or same point) */
   for (size_t i = 0; i < k; i++)
-    if (m == 0 || v[i] != w.idx[m - 1]) w.idx[m++] = v[i];
-  while (m > 1 && w.idx[m - 1] == w.idx[0]) m--;
+    if (m == 0 || !same_point(s, v[i], w.idx[m - 1])) w.idx[m++] = v[i];
+  while (m > 1 && same_point(s, w.idx[m - 1], w.idx[0])) m--;
   int repeated = m < k;
   size_t made = 0;
   double n[3] = {0, 0, 0}, dev = 0, size = 0;
   if (m >= 3) plane(s, w.idx, m, n, &dev, &size);
-  if (m < 3 || (n[0] == 0.0 && n[1] == 0.0 && n[2] == 0.0)) {
+  int ax = 0; /* the axis of projection */
+  for (int d = 1; d < 3; d++)
+    if (fabs(n[d]) > fabs(n[ax])) ax = d;
+  if (n[ax] == 0.0) /* no vector area: one where the polygon is not flat */
+    for (ax = 0; ax < 3 && m >= 3 && flat(s, w.idx, m, ax);) ax++;
+  if (m < 3 || ax == 3) { /* collinear corners */
     note(&ps->zero_area, at, 0.0);
     return MX_OK;
   }
-  int ax = 0;
-  for (int d = 1; d < 3; d++)
-    if (fabs(n[d]) > fabs(n[ax])) ax = d;
-  const double *X[3] = {s->x, s->y, s->z};
-  const double *xi = X[(ax + 1) % 3], *xj = X[(ax + 2) % 3];
-  for (size_t p = 0; p < m; p++) {
-    w.xy[2 * p] = xi[w.idx[p]];
-    w.xy[2 * p + 1] = xj[w.idx[p]];
-  }
+  project(s, w.idx, m, ax, w.xy);
   if (dev > PLANAR_TOL * size) note(&ps->nonplanar, at, dev / size);
-  const int sense = n[ax] > 0 ? 1 : -1;
+  const int sense = n[ax] > 0 ? 1 : -1; /* n[ax] = 0: a crossing, refused */
   const size_t nl = loops(&w, m);
   for (size_t l = 0, off = 0; l < nl; off += w.len[l++]) {
     const uint32_t *P = w.order + off;
@@ -437,6 +485,9 @@ static int split_polygon(mx_polysplit *ps, mx_trisoup *s, const uint32_t *v, siz
     if (L < 3) continue; /* an edge there and back */
     const int sg = loop_sign(w.xy, P, L);
     if (sg == 0) continue;
+    if (meets_itself(w.xy, P, L))
+      return refuse(ps, at, k, "crosses or touches itself (seen along its mean normal): it "
+                               "cannot be split into triangles; fix the face");
     if (nl > 1 && sg != sense)
       return refuse(ps, at, k, "comes back to a corner and turns the other way there (a "
                                "hole bridged by repeated corners, or a crossing): it cannot "
@@ -480,9 +531,9 @@ int mx_polysplit_finish(mx_polysplit *ps, mx_trisoup *s) {
   ps->nq = ps->nqv = 0;
   char what[160];
   snprintf(what, sizeof what,
-           "is not planar (a corner is %.2g of its size away from its mean plane): "
+           "is not planar (a corner is off its mean plane by %.2g%% of its size): "
            "split in its projection on that plane",
-           ps->nonplanar.worst);
+           100.0 * ps->nonplanar.worst);
   warn(ps, &ps->nonplanar, what, "are not planar");
   warn(ps, &ps->zero_area,
        "has no area (its corners are collinear or repeated): no triangle made for it",
