@@ -359,6 +359,14 @@ static void test_degenerate(void) {
   CHECK(flat_triangles(&s) == 0);
   CHECK(mx_trisoup_line(&s, 0) == 10 && mx_trisoup_line(&s, 2) == 12 && mx_trisoup_line(&s, 4) == 13);
   mx_trisoup_free(&s);
+  /* no face with an area at all: refused (found by tools/fuzz.sh off) */
+  const char *none = "OFF\n4 2 0\n0 0 0\n1 0 0\n2 0 0\n1 1 0\n4 0 1 2 1\n4 0 3 0 3\n";
+  memset(&s, 0, sizeof s);
+  CHECK(read_text(mx_read_off, "no_area.off", none, strlen(none), &s, path, sizeof path) == MX_EINPUT);
+  CHECK(s.nt == 0 && s.tri == NULL);
+  CHECK(strstr(captured, "error: no triangle: every face has no area") != NULL);
+  CHECK(strstr(captured, "(2 faces have no area)") != NULL);
+  printf("no_area.off: %s", captured);
 }
 
 /* ---- the names of triangles in messages -------------------------------------------- */

@@ -386,6 +386,10 @@ static int add(mx_trisoup *s, const scratch *w, const uint32_t *P, uint32_t a, u
   return mx_trisoup_add_face_triangle(s, w->idx[P[a]], w->idx[P[b]], w->idx[P[c]], face);
 }
 
+static inline const double *pt3(const scratch *w, const uint32_t *P, uint32_t node) {
+  return w->xy + 2 * (size_t)P[node];
+}
+
 static int too_large(const mx_polysplit *ps, const mx_face_at *at, size_t L) {
   return refuse(ps, at, L, "is too large and too tangled (reflex corners) to split into "
                            "triangles here: split it into smaller faces");
@@ -395,7 +399,9 @@ static int too_large(const mx_polysplit *ps, const mx_face_at *at, size_t L) {
 static int clip(mx_polysplit *ps, mx_trisoup *s, scratch *w, const uint32_t *P, size_t L,
                 int sg, const mx_face_at *at, size_t *made) {
   const uint32_t face = at->face < UINT32_MAX ? (uint32_t)at->face : UINT32_MAX;
-  if (L == 3) return add(s, w, P, 0, 1, 2, face, made);
+  if (L == 3) /* a flat one makes no triangle */
+    return mx_orient2d(pt3(w, P, 0), pt3(w, P, 1), pt3(w, P, 2)) ? add(s, w, P, 0, 1, 2, face, made)
+                                                                 : MX_OK;
   clipper c = {w, P, sg, 0, 0};
   const uint32_t n0 = (uint32_t)L;
   for (uint32_t i = 0; i < n0; i++) {
@@ -449,6 +455,18 @@ static int clip(mx_polysplit *ps, mx_trisoup *s, scratch *w, const uint32_t *P, 
 
 /* ---- one face ---------------------------------------------------------------- */
 
+/* Four distinct corners turning strictly the way of the face at each one:
+ * a convex quadrilateral (four turns of one sign cannot wind twice), whose
+ * split is the fan from corner 0, as clip makes it. */
+static int convex_quad(const scratch *w, int sense) {
+  const uint32_t *v = w->idx;
+  if (v[0] == v[2] || v[1] == v[3]) return 0; /* v[i] != v[i + 1] already */
+  for (int i = 0; i < 4; i++)
+    if (mx_orient2d(w->xy + 2 * ((i + 3) % 4), w->xy + 2 * i, w->xy + 2 * ((i + 1) % 4)) != sense)
+      return 0;
+  return 1;
+}
+
 static inline int same_point(const mx_trisoup *s, uint32_t a, uint32_t b) {
   return a == b || (s->x[a] == s->x[b] && s->y[a] == s->y[b] && s->z[a] == s->z[b]);
 }
@@ -477,6 +495,13 @@ static int split_polygon(mx_polysplit *ps, mx_trisoup *s, const uint32_t *v, siz
   project(s, w.idx, m, ax, w.xy);
   if (dev > PLANAR_TOL * size) note(&ps->nonplanar, at, dev / size);
   const int sense = n[ax] > 0 ? 1 : -1; /* n[ax] = 0: a crossing, refused */
+  if (m == 4 && convex_quad(&w, sense)) { /* most polygons: what clip gives, sooner */
+    const uint32_t face = at->face < UINT32_MAX ? (uint32_t)at->face : UINT32_MAX;
+    MX_CHECK(mx_trisoup_add_face_triangle(s, w.idx[0], w.idx[1], w.idx[2], face));
+    MX_CHECK(mx_trisoup_add_face_triangle(s, w.idx[0], w.idx[2], w.idx[3], face));
+    if (repeated) note(&ps->repeated, at, 0.0);
+    return MX_OK;
+  }
   const size_t nl = loops(&w, m);
   for (size_t l = 0, off = 0; l < nl; off += w.len[l++]) {
     const uint32_t *P = w.order + off;
@@ -525,6 +550,12 @@ int mx_polysplit_face(mx_polysplit *ps, mx_trisoup *s, mx_face_at at) {
   return MX_OK;
 }
 
+int mx_polysplit_triangle(mx_polysplit *ps, mx_trisoup *s, const uint32_t v[3], mx_face_at at) {
+  if (!ps->defer) return split_face(ps, s, v, 3, &at);
+  for (int j = 0; j < 3; j++) MX_CHECK(mx_polysplit_corner(ps, v[j]));
+  return mx_polysplit_face(ps, s, at);
+}
+
 int mx_polysplit_finish(mx_polysplit *ps, mx_trisoup *s) {
   for (size_t i = 0; i < ps->nq; i++)
     MX_CHECK(split_face(ps, s, ps->qv + ps->q[i].start, ps->q[i].k, &ps->q[i].at));
@@ -539,5 +570,7 @@ int mx_polysplit_finish(mx_polysplit *ps, mx_trisoup *s) {
        "has no area (its corners are collinear or repeated): no triangle made for it",
        "have no area");
   warn(ps, &ps->repeated, "repeats a corner: split where it comes back to it", "repeat a corner");
-  return MX_OK;
+  if (s->nt > 0 || ps->zero_area.count == 0) return MX_OK;
+  mx_error(ps->path, 0, "no triangle: every face has no area");
+  return MX_EINPUT;
 }

@@ -93,10 +93,14 @@ static inline int mx_polysplit_corner(mx_polysplit *ps, uint32_t v) {
  * naming the file, line and face. */
 int mx_polysplit_face(mx_polysplit *ps, mx_trisoup *s, mx_face_at at);
 
+/* The same for a face of three corners v[0..3), given directly. */
+int mx_polysplit_triangle(mx_polysplit *ps, mx_trisoup *s, const uint32_t v[3], mx_face_at at);
+
 /* From now on faces wait for mx_polysplit_finish. */
 void mx_polysplit_defer(mx_polysplit *ps);
 
-/* Splits the faces that waited, then prints the warnings. */
+/* Splits the faces that waited, then prints the warnings; MX_EINPUT when
+ * no face made a triangle. */
 int mx_polysplit_finish(mx_polysplit *ps, mx_trisoup *s);
 
 #endif

@@ -34,9 +34,12 @@ static int extends(mx_line_run *r, uint32_t f, uint32_t l) {
 }
 
 int mx_trisoup_note_line(mx_trisoup *s, size_t t, uint32_t face, long line) {
+  mx_line_run *last = s->nrun ? &s->run[s->nrun - 1] : NULL;
+  if (last && last->step && face >= last->face0 && line > 0 &&
+      (uint64_t)line == last->line0 + (uint64_t)last->step * (face - last->face0))
+    return MX_OK; /* the usual case: the next face on the next line */
   if (t > UINT32_MAX) return MX_OK; /* beyond what runs hold: lines unknown */
   const uint32_t l = line > 0 && line <= (long)UINT32_MAX ? (uint32_t)line : 0;
-  mx_line_run *last = s->nrun ? &s->run[s->nrun - 1] : NULL;
   if (!last && l == 0) return MX_OK;
   if (last && l != 0 && extends(last, face, l)) return MX_OK;
   if (last && l == 0 && last->line0 == 0) return MX_OK;
