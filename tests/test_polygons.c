@@ -326,6 +326,30 @@ static void test_refused(void) {
       "10 0 1 2 3 0 4 5 6 7 4\n";
   expect_refused("hole.off", hole, 11, 0, "turns the other way");
   free(t.s);
+  /* a figure of eight of 101 corners (beyond the exact test of crossings):
+   * no ear is left once the lobe turning the face's way is clipped */
+  text e = {0};
+  put(&e, "OFF\n101 1 0\n");
+  for (int i = 0; i < 101; i++) {
+    const double a = 2 * acos(-1.0) * i / 101;
+    put(&e, "%.17g %.17g 0\n", sin(a), sin(a) * cos(a));
+  }
+  put(&e, "101");
+  for (int i = 0; i < 101; i++) put(&e, " %d", i);
+  put(&e, "\n");
+  expect_refused("eight.off", e.s, 104, 0, "a polygon of 101 corners crosses itself");
+  free(e.s);
+  /* a comb of 30002 corners, 15000 of them reflex: beyond the 2^27 tests a
+   * face may take, refused at once */
+  text z = {0};
+  const int N = 30000;
+  put(&z, "OFF\n%d 1 0\n0 0 0\n%d 0 0\n", N + 2, N);
+  for (int j = 0; j < N; j++) put(&z, "%d %d 0\n", N - j, 1 + j % 2);
+  put(&z, "%d", N + 2);
+  for (int i = 0; i < N + 2; i++) put(&z, " %d", i);
+  put(&z, "\n");
+  expect_refused("comb.off", z.s, N + 5, 0, "a polygon of 30002 corners is too large and too tangled");
+  free(z.s);
   /* OBJ counts faces from 1 */
   const char *obj = "v 0 0 0\nv 1 1 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 3 4\n";
   expect_refused("bowtie.obj", obj, 6, 2, "crosses or touches itself");

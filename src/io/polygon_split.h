@@ -5,7 +5,8 @@
  * face (mx_polysplit_face), which adds its triangles to the soup with the
  * face's number and line (soa/trisoup.h). A triangle is added as it is. A
  * polygon:
- *   - repeated corners: a corner equal to the one before is dropped; a
+ *   - repeated corners: a corner equal to the one before (same index or
+ *     same point) is dropped; a
  *     polygon that comes back to a corner is split there into loops, each
  *     split on its own (a loop of two corners, an edge there and back, makes
  *     nothing). A loop turning the other way than the face (a hole bridged
@@ -22,14 +23,16 @@
  *     convex polygon gives the fan from its first corner (as before), and a
  *     corner on a straight run gives no zero-area triangle (it is never an
  *     ear, and a simple polygon always has a strictly convex ear);
- *   - a polygon with no ear left (it crosses itself in the projection) is
- *     refused naming the face, as is one beyond 2^28 tests (too large and
- *     too tangled);
+ *   - a polygon that crosses or touches itself in the projection (two edges
+ *     that are not neighbours meet: tested exactly up to 64 corners a loop),
+ *     or that has no ear left, is refused naming the face, as is one that
+ *     would take more than 2^27 point-in-triangle tests (k r > 2^25: too
+ *     large and too tangled, about a second);
  *   - a polygon whose corners leave its mean plane by more than 1e-3 of its
  *     size is split the same way (its triangles form a surface over its
  *     projection, so they do not cross each other): a warning;
  *   - a polygon of zero area (collinear or repeated corners only) makes no
- *     triangle: a warning.
+ *     triangle: a warning (an error when no face of the file makes one).
  * The warnings come once a file, from mx_polysplit_finish: how many faces,
  * and the first one. A reader whose faces may come before the coordinates
  * they use calls mx_polysplit_defer: the faces then wait for
