@@ -17,6 +17,7 @@
 #include "check.h"
 #include "file_util.h"
 #include "common.h"
+#include "io/polygon_split.h"
 #include "kernels/surface_defects.h"
 #include "soa/trisoup.h"
 
@@ -253,6 +254,86 @@ static void test_large_convex(void) {
          s.nt);
   mx_trisoup_free(&s);
   free(t.s);
+}
+
+/* Random simple polygons, straight to the splitter: star-shaped around the
+ * origin (corners by increasing angle) on a small integer grid, so that
+ * many corners lie on straight runs. Each must become k - 2 triangles, all
+ * turning the polygon's way (none flat, none folded), whose areas add up to
+ * the polygon's exactly (half-integers). */
+static uint64_t rng = 88172645463325252ull;
+static int rnd(int n) {
+  rng ^= rng << 13;
+  rng ^= rng >> 7;
+  rng ^= rng << 17;
+  return (int)(rng % (uint64_t)n);
+}
+
+static void test_random_simple(void) {
+  int bad = 0, polygons = 0;
+  size_t triangles = 0;
+  for (int trial = 0; trial < 400; trial++) {
+    /* corners: distinct directions from the origin, sorted by angle */
+    int k = 4 + rnd(40), pts[64][2], n = 0;
+    const int span = 3 + rnd(6);
+    for (int tries = 0; n < k && tries < 2000; tries++) {
+      const int x = rnd(2 * span + 1) - span, y = rnd(2 * span + 1) - span;
+      if (x == 0 && y == 0) continue;
+      int dup = 0; /* one corner a direction */
+      for (int i = 0; i < n && !dup; i++)
+        dup = pts[i][0] * y - pts[i][1] * x == 0 && pts[i][0] * x + pts[i][1] * y > 0;
+      if (dup) continue;
+      pts[n][0] = x;
+      pts[n][1] = y;
+      n++;
+    }
+    for (int i = 1; i < n; i++) /* by angle */
+      for (int j = i; j > 0 && atan2(pts[j][1], pts[j][0]) < atan2(pts[j - 1][1], pts[j - 1][0]); j--) {
+        int t[2] = {pts[j][0], pts[j][1]};
+        pts[j][0] = pts[j - 1][0], pts[j][1] = pts[j - 1][1];
+        pts[j - 1][0] = t[0], pts[j - 1][1] = t[1];
+      }
+    long twice = 0; /* twice the area */
+    for (int i = 0; i < n; i++)
+      twice += (long)pts[i][0] * pts[(i + 1) % n][1] - (long)pts[(i + 1) % n][0] * pts[i][1];
+    int origin_inside = 1; /* star-shaped around the origin: each turn around it < pi */
+    for (int i = 0; i < n; i++)
+      origin_inside &= (long)pts[i][0] * pts[(i + 1) % n][1] - (long)pts[(i + 1) % n][0] * pts[i][1] > 0;
+    if (n < 4 || !origin_inside) continue;
+    /* a plane z = a x + b y (integers: planar exactly), the order either way */
+    const int a = rnd(3) - 1, b = rnd(3) - 1, rev = rnd(2), first = rnd(n);
+    mx_trisoup s = {0};
+    mx_polysplit ps;
+    mx_polysplit_init(&ps, "random");
+    for (int i = 0; i < n; i++) {
+      const double c[3] = {pts[i][0], pts[i][1], a * pts[i][0] + b * pts[i][1]};
+      CHECK(mx_trisoup_set_vertex(&s, (size_t)i, c) == MX_OK);
+    }
+    for (int i = 0; i < n; i++) {
+      const int j = (first + (rev ? n - i : i)) % n;
+      CHECK(mx_polysplit_corner(&ps, (uint32_t)j) == MX_OK);
+    }
+    const int rc = mx_polysplit_face(&ps, &s, (mx_face_at){(uint64_t)trial, 0, -1});
+    CHECK(rc == MX_OK && mx_polysplit_finish(&ps, &s) == MX_OK);
+    mx_polysplit_free(&ps);
+    long sum = 0;
+    int ok = rc == MX_OK && s.nt == (size_t)n - 2;
+    for (size_t t = 0; ok && t < s.nt; t++) {
+      const uint32_t *v = s.tri + 3 * t;
+      const long o = (long)(s.x[v[1]] - s.x[v[0]]) * (long)(s.y[v[2]] - s.y[v[0]]) -
+                     (long)(s.y[v[1]] - s.y[v[0]]) * (long)(s.x[v[2]] - s.x[v[0]]);
+      ok = rev ? o < 0 : o > 0;
+      sum += rev ? -o : o;
+    }
+    ok = ok && sum == twice;
+    bad += !ok;
+    polygons++;
+    triangles += s.nt;
+    mx_trisoup_free(&s);
+  }
+  CHECK(bad == 0 && polygons > 200);
+  printf("%s random simple polygons      %d of them, %zu triangles, %d wrong\n", bad ? "FAIL" : "ok  ",
+         polygons, triangles, bad);
 }
 
 /* ---- faces that are not plain polygons ------------------------------------------- */
@@ -580,6 +661,7 @@ int main(void) {
   test_prisms();
   test_straight_runs();
   test_large_convex();
+  test_random_simple();
   test_nonplanar();
   test_refused();
   test_degenerate();
