@@ -316,11 +316,17 @@ static void test_off_polygons(void) {
   mx_trisoup s;
   CHECK(mx_read_off(path, &s) == MX_OK);
   CHECK(s.nv == 5 && s.nt == 5);
-  static const uint32_t want[15] = {0, 1, 2, 0, 2, 3, 0, 1,
-                                    2, 0, 2, 3, 0, 3, 4};
+  /* the square as the fan from its first corner; the pentagon (the square
+   * and the apex above its centre: not planar) by ear clipping in its
+   * projection on z = 0, where the apex is a reflex corner */
+  static const uint32_t want[15] = {0, 1, 2, 0, 2, 3, 2, 3,
+                                    4, 4, 0, 1, 4, 1, 2};
+  static const uint32_t faces[5] = {0, 0, 1, 1, 1};
   CHECK(s.nt == 5 && memcmp(s.tri, want, sizeof want) == 0);
+  CHECK(memcmp(s.face, faces, sizeof faces) == 0);
+  CHECK(mx_trisoup_line(&s, 0) == 8 && mx_trisoup_line(&s, 4) == 9);
   mx_trisoup_free(&s);
-  printf("ok   quad.off                     polygons fan-split\n");
+  printf("ok   quad.off                     polygons split in their plane\n");
 }
 
 /* ---- MDL -------------------------------------------------------------- */

@@ -1,7 +1,10 @@
 /* libFuzzer targets for the input readers, one per format, chosen when
  * compiling with -DFUZZ_FORMAT=NAME:
- *   off mdl stl obj ply  mx_read_off .. mx_read_ply (src/io/read_*.c), then
- *                        mx_trisoup_check (src/io/surface_check.c)
+ *   off mdl stl obj ply  mx_read_off .. mx_read_ply (src/io/read_*.c; polygon
+ *                        faces split by src/io/polygon_split.c), then
+ *                        mx_trisoup_check (src/io/surface_check.c); the
+ *                        faces and lines the soup keeps checked before and
+ *                        after
  *   reg                  mx_read_reg (src/io/read_reg.c)
  *   mesh                 mx_read_mesh (src/io/read_mesh.c), as `mixoct
  *                        check` calls it, then mx_check_mesh on small meshes;
@@ -253,6 +256,30 @@ static int read_surface(const char *p, mx_trisoup *s) {
 #endif
 }
 
+/* Where the triangles come from: faces in file order (the triangles of a
+ * polygon together), lines of text files known and increasing, names that
+ * fit their buffer. */
+static void check_faces(const mx_trisoup *s) {
+  REQUIRE(s->nt == 0 || (s->face && s->cap_t >= s->nt));
+  long last = 0;
+  for (size_t t = 0; t < s->nt; t++) {
+    if (t) REQUIRE(s->face[t] >= s->face[t - 1]);
+    const long line = mx_trisoup_line(s, t);
+    REQUIRE(line >= 0);
+#if FUZZ_ID == FMT_off || FUZZ_ID == FMT_obj || FUZZ_ID == FMT_mdl
+    REQUIRE(line > 0 && line >= last); /* text formats */
+#endif
+    last = line;
+  }
+  for (size_t k = 0; k < 4 && k < s->nt; k++) {
+    char name[40];
+    const size_t t = k < 2 ? k : s->nt - (k - 1);
+    mx_trisoup_name(s, t, name, sizeof name);
+    REQUIRE(strlen(name) < sizeof name);
+    REQUIRE(!strncmp(name, "face ", 5) || !strncmp(name, "triangle ", 9));
+  }
+}
+
 static void fuzz_file(void) {
   mx_trisoup s;
   memset(&s, 0, sizeof s);
@@ -269,10 +296,12 @@ static void fuzz_file(void) {
     REQUIRE(isfinite(s.x[i]) && isfinite(s.y[i]) && isfinite(s.z[i]));
   for (size_t i = 0; i < 3 * s.nt; i++) REQUIRE(s.tri[i] < s.nv);
   for (size_t i = 0; i < s.nt; i++) REQUIRE(s.shell[i] == 0);
+  check_faces(&s);
   /* the checks after reading, as the mesher runs them */
   size_t open_edges;
   const int st = mx_trisoup_check(&s, path, &open_edges);
   REQUIRE(st == MX_OK || (st == MX_EINPUT && s.nt == 0));
+  check_faces(&s);
   double lo[3], hi[3];
   mx_trisoup_bbox(&s, lo, hi);
   for (int d = 0; d < 3; d++) REQUIRE(lo[d] <= hi[d]);

@@ -62,6 +62,8 @@ static int read_triangles(mdl_file *f, mx_trisoup *s, size_t n) {
       MX_CHECK(mx_io_index(f->path, f->line, &f->p, 0, UINT32_MAX,
                            &s->tri[3 * i + k], "triangle", i));
     s->shell[i] = 0;
+    s->face[i] = (uint32_t)i;
+    MX_CHECK(mx_trisoup_note_line(s, i, (uint32_t)i, f->line));
     s->nt = i + 1;
   }
   return MX_OK;

@@ -1,13 +1,17 @@
 /* Wavefront OBJ reader: "v x y z [...]" and "f a b c ..." with 1-based,
  * negative (relative to the vertices read so far) and "a/b/c", "a//c",
- * "a/b" forms; polygons are fan-split; every other line is ignored. A first
- * pass counts the vertices, so positive indices may refer forward. */
+ * "a/b" forms; polygons are split into triangles in their plane
+ * (io/polygon_split.c); every other line is ignored. A first pass counts
+ * the vertices, so positive indices may refer forward (the faces from the
+ * first such one on are split once all vertices are read). Triangles
+ * remember their face, numbered from 1 as OBJ counts, and its line. */
 #include <stdint.h>
 #include <string.h>
 
 #include "common.h"
 #include "soa/trisoup.h"
 
+#include "io/polygon_split.h"
 #include "io/text_scan.h"
 
 typedef struct {
@@ -75,23 +79,22 @@ static int read_corner(obj_file *f, const char **p, const mx_trisoup *s,
   return MX_OK;
 }
 
-static int read_face(obj_file *f, mx_trisoup *s) {
+static int read_face(obj_file *f, mx_trisoup *s, mx_polysplit *ps) {
   const char *q = mx_io_blank(f->p + 1);
-  uint32_t first = 0, prev = 0, cur;
-  int k = 0;
+  uint32_t cur;
+  size_t k = 0;
   for (; !mx_io_eol(q, '#'); k++, q = mx_io_blank(q)) {
     MX_CHECK(read_corner(f, &q, s, &cur));
-    if (k >= 2) MX_CHECK(mx_trisoup_add_triangle(s, first, prev, cur));
-    if (k == 0) first = cur;
-    prev = cur;
+    if (cur >= s->nv) mx_polysplit_defer(ps); /* its coordinates come later */
+    MX_CHECK(mx_polysplit_corner(ps, cur));
   }
   if (k < 3) {
-    mx_error(f->path, f->line, "face %zu has %d vertices (at least 3 needed)",
+    mx_error(f->path, f->line, "face %zu has %zu vertices (at least 3 needed)",
              f->nfaces + 1, k);
     return MX_EINPUT;
   }
   f->nfaces++;
-  return MX_OK;
+  return mx_polysplit_face(ps, s, (mx_face_at){f->nfaces, f->line, -1});
 }
 
 static int parse_obj(obj_file *f, mx_trisoup *s) {
@@ -106,14 +109,19 @@ static int parse_obj(obj_file *f, mx_trisoup *s) {
     return MX_EINPUT;
   }
   MX_CHECK(mx_trisoup_reserve(s, f->nv_total, nf));
-  for (f->p = mx_io_content(f->p, f->end, &f->line, '#'); f->p < f->end;) {
+  mx_polysplit ps;
+  mx_polysplit_init(&ps, f->path);
+  int st = MX_OK;
+  for (f->p = mx_io_content(f->p, f->end, &f->line, '#'); f->p < f->end && st == MX_OK;) {
     char k = keyword(f->p);
-    if (k == 'v') MX_CHECK(read_vertex(f, s));
-    if (k == 'f') MX_CHECK(read_face(f, s));
+    if (k == 'v') st = read_vertex(f, s);
+    if (k == 'f') st = read_face(f, s, &ps);
     f->p = mx_io_next_line(f->p, f->end, &f->line);
     f->p = mx_io_content(f->p, f->end, &f->line, '#');
   }
-  return MX_OK;
+  if (st == MX_OK) st = mx_polysplit_finish(&ps, s);
+  mx_polysplit_free(&ps);
+  return st;
 }
 
 int mx_read_obj(const char *path, mx_trisoup *out) {

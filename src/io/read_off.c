@@ -1,12 +1,15 @@
 /* OFF reader: "OFF" header, counts "nv nf ne" (same line or next), nv lines
- * "x y z", nf lines "k i0 .. ik-1" (0-based; k > 3 fan-split; trailing
- * values such as colours ignored). '#' starts a comment anywhere. */
+ * "x y z", nf lines "k i0 .. ik-1" (0-based; polygons, k > 3, split into
+ * triangles in their plane by io/polygon_split.c; trailing values such as
+ * colours ignored). '#' starts a comment anywhere. Triangles remember their
+ * face (numbered from 0) and its line. */
 #include <stdint.h>
 #include <string.h>
 
 #include "common.h"
 #include "soa/trisoup.h"
 
+#include "io/polygon_split.h"
 #include "io/text_scan.h"
 
 typedef struct {
@@ -96,8 +99,8 @@ static int read_vertices(off_file *f, mx_trisoup *s) {
   return MX_OK;
 }
 
-/* One face line "k i0 .. ik-1 [ignored]": a fan of k-2 triangles. */
-static int read_face(off_file *f, mx_trisoup *s, size_t i) {
+/* One face line "k i0 .. ik-1 [ignored]". */
+static int read_face(off_file *f, mx_trisoup *s, mx_polysplit *ps, size_t i) {
   int64_t k;
   const char *e = mx_io_int(f->p, &k);
   if (!e || !mx_io_delim(e, '#') || k < 3) {
@@ -107,25 +110,27 @@ static int read_face(off_file *f, mx_trisoup *s, size_t i) {
     return MX_EINPUT;
   }
   f->p = e;
-  uint32_t first, prev, cur;
-  MX_CHECK(mx_io_index(f->path, f->line, &f->p, '#', f->nv, &first, "face", i));
-  MX_CHECK(mx_io_index(f->path, f->line, &f->p, '#', f->nv, &prev, "face", i));
-  for (int64_t j = 2; j < k; j++) {
-    MX_CHECK(mx_io_index(f->path, f->line, &f->p, '#', f->nv, &cur, "face", i));
-    MX_CHECK(mx_trisoup_add_triangle(s, first, prev, cur));
-    prev = cur;
+  for (int64_t j = 0; j < k; j++) {
+    uint32_t v;
+    MX_CHECK(mx_io_index(f->path, f->line, &f->p, '#', f->nv, &v, "face", i));
+    MX_CHECK(mx_polysplit_corner(ps, v));
   }
-  return MX_OK;
+  return mx_polysplit_face(ps, s, (mx_face_at){i, f->line, -1});
 }
 
 static int read_faces(off_file *f, mx_trisoup *s) {
   size_t guess = (size_t)(f->end - f->p) / 8 + 1; /* "3 0 1 2\n" at least */
   MX_CHECK(mx_trisoup_reserve(s, 0, f->nf < guess ? f->nf : guess));
-  for (size_t i = 0; i < f->nf; i++) {
-    MX_CHECK(next_item(f, "faces", i, f->nf));
-    MX_CHECK(read_face(f, s, i));
+  mx_polysplit ps;
+  mx_polysplit_init(&ps, f->path);
+  int st = MX_OK;
+  for (size_t i = 0; i < f->nf && st == MX_OK; i++) {
+    st = next_item(f, "faces", i, f->nf);
+    if (st == MX_OK) st = read_face(f, s, &ps, i);
   }
-  return MX_OK;
+  if (st == MX_OK) st = mx_polysplit_finish(&ps, s);
+  mx_polysplit_free(&ps);
+  return st;
 }
 
 static int read_trailer(off_file *f) {

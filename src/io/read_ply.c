@@ -4,7 +4,9 @@
  * "end_header"; "comment" and "obj_info" lines ignored; CRLF accepted)
  * declares the elements, stored in header order. Read: x, y, z of the
  * "vertex" element and the "vertex_indices" (or "vertex_index") list of the
- * "face" element, 0-based, polygons fan-split; every other property and
+ * "face" element, 0-based, polygons split into triangles in their plane
+ * (io/polygon_split.c; after the vertices when the faces come first in the
+ * file); triangles remember their face (from 0); every other property and
  * element is skipped. The counts are checked against the file size before
  * anything is allocated. In ASCII each item is one line; blank lines are
  * ignored, anything after the declared data is an error (as in OFF). In
@@ -17,6 +19,7 @@
 #include "common.h"
 #include "soa/trisoup.h"
 
+#include "io/polygon_split.h"
 #include "io/text_scan.h"
 
 /* ---- types ------------------------------------------------------------ */
@@ -71,6 +74,7 @@ typedef struct {
   ply_prop *prop;
   size_t nprop, cap_prop;
   size_t nv, nf; /* declared vertex and face counts */
+  mx_polysplit *split;
 } ply_file;
 
 /* ---- header tokens ---------------------------------------------------- */
@@ -520,7 +524,7 @@ static int bin_vertex(const bin_reader *r, mx_trisoup *s, uint64_t i,
   return MX_OK;
 }
 
-/* The face's k indices at b (in bounds), fan-split. */
+/* The face's k indices at b (in bounds). */
 static int bin_face(const bin_reader *r, mx_trisoup *s, uint64_t i,
                     const unsigned char *item, const unsigned char *b,
                     int64_t k, int type) {
@@ -532,7 +536,6 @@ static int bin_face(const bin_reader *r, mx_trisoup *s, uint64_t i,
     return MX_EINPUT;
   }
   const int size = type_size[type];
-  uint32_t first = 0, prev = 0;
   for (int64_t j = 0; j < k; j++, b += size) {
     int64_t v = bin_int(b, type, r->big);
     if (v < 0) {
@@ -550,12 +553,9 @@ static int bin_face(const bin_reader *r, mx_trisoup *s, uint64_t i,
                r->f->nv);
       return MX_EINPUT;
     }
-    uint32_t cur = (uint32_t)v;
-    if (j >= 2) MX_CHECK(mx_trisoup_add_triangle(s, first, prev, cur));
-    if (j == 0) first = cur;
-    prev = cur;
+    MX_CHECK(mx_polysplit_corner(r->f->split, (uint32_t)v));
   }
-  return MX_OK;
+  return mx_polysplit_face(r->f->split, s, (mx_face_at){i, 0, (int64_t)offset(r, item)});
 }
 
 /* Items without lists: fixed size, so checked against the end once. */
@@ -719,15 +719,13 @@ static int text_face(ply_file *f, mx_trisoup *s, uint64_t i, const char **q,
              "needed)", (unsigned long long)i, (long long)k);
     return MX_EINPUT;
   }
-  uint32_t first = 0, prev = 0, cur;
   for (int64_t j = 0; j < k; j++) {
+    uint32_t cur;
     MX_CHECK(mx_io_index(f->path, f->line, q, 0, f->nv, &cur, "face",
                          (size_t)i));
-    if (j >= 2) MX_CHECK(mx_trisoup_add_triangle(s, first, prev, cur));
-    if (j == 0) first = cur;
-    prev = cur;
+    MX_CHECK(mx_polysplit_corner(f->split, cur));
   }
-  return MX_OK;
+  return mx_polysplit_face(f->split, s, (mx_face_at){i, f->line, -1});
 }
 
 static int text_vertex(ply_file *f, mx_trisoup *s, uint64_t i,
@@ -805,9 +803,11 @@ static int parse_ply(ply_file *f, mx_trisoup *s) {
   MX_CHECK(check_sizes(f));
   MX_CHECK(check_counts(f));
   MX_CHECK(mx_trisoup_reserve(s, f->nv, f->nf));
+  /* faces before the vertices wait for their coordinates */
+  if (find_kind(f, EL_FACE) < find_kind(f, EL_VERTEX)) mx_polysplit_defer(f->split);
   MX_CHECK(f->format == FMT_ASCII ? read_ascii(f, s) : read_binary(f, s));
   s->nv = f->nv;
-  return MX_OK;
+  return mx_polysplit_finish(f->split, s);
 }
 
 int mx_read_ply(const char *path, mx_trisoup *out) {
@@ -823,7 +823,11 @@ int mx_read_ply(const char *path, mx_trisoup *out) {
   f.p = buf;
   f.line = 1;
   out->nshells = 1;
+  mx_polysplit split;
+  mx_polysplit_init(&split, path);
+  f.split = &split;
   int status = parse_ply(&f, out);
+  mx_polysplit_free(&split);
   mx_free(f.elem);
   mx_free(f.prop);
   mx_free(buf);

@@ -2,7 +2,7 @@
  * Medit files go through io/read_mesh.c's readers (one parser per format):
  * a 2D mesh comes back from them as faces with no volume cell and is
  * converted here; OFF, which read_mesh.c does not read, has its own small
- * parser below (faces kept whole: io/read_off.c fans them into triangles). */
+ * parser below (faces kept whole: io/read_off.c splits them into triangles). */
 #include "io/read_qmesh.h"
 
 #include <stdio.h>

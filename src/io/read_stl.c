@@ -210,6 +210,9 @@ static int expect(stl_text *f, const char *word) {
 }
 
 static int ascii_facet(stl_text *f, mx_trisoup *s) {
+  /* facet i becomes triangle i (merged in blocks, in order) */
+  if (f->nfacets < UINT32_MAX)
+    MX_CHECK(mx_trisoup_note_line(s, f->nfacets, (uint32_t)f->nfacets, f->line));
   MX_CHECK(expect(f, "normal"));
   f->p = mx_io_next_line(f->p, f->end, &f->line); /* normal ignored */
   MX_CHECK(expect(f, "outer"));

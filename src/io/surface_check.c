@@ -27,21 +27,12 @@ static int degenerate(const mx_trisoup *s, const uint32_t *t) {
          ux * vy - uy * vx == 0;
 }
 
-/* Compacts the triangle arrays in place; returns how many were removed. */
-static size_t remove_degenerate(mx_trisoup *s) {
-  size_t kept = 0;
-  for (size_t i = 0; i < s->nt; i++) {
-    const uint32_t *t = s->tri + 3 * i;
-    if (degenerate(s, t)) continue;
-    if (kept != i) {
-      memmove(s->tri + 3 * kept, t, 3 * sizeof *t);
-      s->shell[kept] = s->shell[i];
-    }
-    kept++;
-  }
-  size_t removed = s->nt - kept;
-  s->nt = kept;
-  return removed;
+/* For mx_trisoup_remove_if: drops degenerate triangles, naming the first. */
+static int drop_degenerate(const mx_trisoup *s, size_t t, void *first) {
+  if (!degenerate(s, s->tri + 3 * t)) return 0;
+  char *name = first;
+  if (!name[0]) mx_trisoup_name(s, t, name, 96);
+  return 1;
 }
 
 static int cmp_u32(const void *a, const void *b) {
@@ -115,12 +106,13 @@ static int count_open_edges(const mx_trisoup *s, size_t *open) {
 int mx_trisoup_check(mx_trisoup *s, const char *path, size_t *open_edges) {
   if (open_edges) *open_edges = 0;
   MX_CHECK(indices_valid(s, path));
-  size_t removed = remove_degenerate(s);
+  char first[96] = "";
+  size_t removed = mx_trisoup_remove_if(s, drop_degenerate, first);
   if (removed)
     mx_warning(path, 0,
                "removed %zu degenerate triangle%s (zero area or repeated "
-               "vertex)",
-               removed, removed == 1 ? "" : "s");
+               "vertex), the first: %s",
+               removed, removed == 1 ? "" : "s", first);
   if (s->nt == 0) {
     mx_error(path, 0, "no triangles");
     return MX_EINPUT;
@@ -193,13 +185,13 @@ int mx_trisoup_check_shells(const mx_trisoup *s, uint32_t nt, const char *const 
       sorted_points(s, b, q);
       if (memcmp(p, q, sizeof p) != 0) continue;
       const uint32_t a0 = a < b ? a : b, b0 = a < b ? b : a;
-      uint32_t first_a = a0, first_b = b0;
-      while (first_a > 0 && s->shell[first_a - 1] == s->shell[a0]) first_a--;
-      while (first_b > 0 && s->shell[first_b - 1] == s->shell[b0]) first_b--;
+      char na[96], nb[96];
+      mx_trisoup_name(s, a0, na, sizeof na);
+      mx_trisoup_name(s, b0, nb, sizeof nb);
       mx_error(names[s->shell[b0]], 0,
-               "triangle %u lies on triangle %u of %s: the two surfaces overlap, so "
+               "%s lies on %s of %s: the two surfaces overlap, so "
                "they do not bound a domain (give one of them, or separate them)",
-               b0 - first_b, a0 - first_a, names[s->shell[a0]]);
+               nb, na, names[s->shell[a0]]);
       st = MX_EINPUT;
       break;
     }

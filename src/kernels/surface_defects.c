@@ -1202,35 +1202,32 @@ static void out(outbuf *o, const char *fmt, ...) {
   o->left -= m;
 }
 
-/* Number of triangle t within its input, and that input. */
-static uint32_t local_tri(const mx_trisoup *s, uint32_t t, unsigned *input) {
-  *input = 0;
-  if (!s || !s->shell || t >= s->nt) return t;
-  uint32_t f = t;
-  uint16_t sh = s->shell[t];
-  while (f > 0 && s->shell[f - 1] == sh) f--;
-  *input = sh;
-  return t - f;
-}
-
-/* "triangle T", "triangles T and U", with "of input K" when the soup holds
- * several inputs. */
+/* "triangle T", "triangles T and U", "face F (triangle 2 of 4, line L)",
+ * ... as the inputs' files number them (mx_trisoup_name), with "of input
+ * K" when the soup holds several inputs. */
 static void out_tris(outbuf *o, const mx_trisoup *s, uint32_t t, uint32_t u) {
-  int multi = s && s->nshells > 1;
-  unsigned it, iu;
-  uint32_t lt = local_tri(s, t, &it);
+  const int multi = s && s->nshells > 1;
+  const unsigned it = s && s->shell && t < s->nt ? s->shell[t] : 0;
+  char nt[128], nu[128];
+  const int pt = mx_trisoup_name(s, t, nt, sizeof nt);
   if (u == NONE) {
-    out(o, "triangle %u", lt);
+    out(o, "%s", nt);
     if (multi) out(o, " of input %u", it);
     return;
   }
-  uint32_t lu = local_tri(s, u, &iu);
-  if (it == iu) {
-    out(o, "triangles %u and %u", lt, lu);
-    if (multi) out(o, " of input %u", it);
-  } else {
-    out(o, "triangle %u of input %u and triangle %u of input %u", lt, it, lu, iu);
+  const unsigned iu = s && s->shell && u < s->nt ? s->shell[u] : 0;
+  const int pu = mx_trisoup_name(s, u, nu, sizeof nu);
+  if (it != iu) {
+    out(o, "%s of input %u and %s of input %u", nt, it, nu, iu);
+    return;
   }
+  /* "triangles 3 and 5" when both names are a word and a number */
+  const char *sp = strchr(nt, ' ');
+  if (!pt && !pu && sp && strncmp(nt, nu, (size_t)(sp - nt) + 1) == 0)
+    out(o, "%.*ss %s and %s", (int)(sp - nt), nt, sp + 1, strchr(nu, ' ') + 1);
+  else
+    out(o, "%s and %s", nt, nu);
+  if (multi) out(o, " of input %u", it);
 }
 
 #define SHOWN 3

@@ -641,12 +641,14 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
         if (!ntri[t]) continue;
         uint32_t *o = out->tri + 3 * toff[t];
         uint16_t *sh = out->shell + toff[t];
+        uint32_t *fc = out->face + toff[t]; /* the pieces keep their input face */
         if (whole[t] != 255) { /* the triangle itself */
           const uint32_t *v = s->tri + 3 * t;
           o[0] = v[0];
           o[1] = whole[t] == KEEP_TURNED ? v[2] : v[1];
           o[2] = whole[t] == KEEP_TURNED ? v[1] : v[2];
           sh[0] = s->shell[t];
+          fc[0] = s->face[t];
           continue;
         }
         if (!W) W = mx_alloc(sizeof *W);
@@ -678,6 +680,7 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
             o[3 * k + 1] = turn ? id[c + 1] : id[c];
             o[3 * k + 2] = turn ? id[c] : id[c + 1];
             sh[k] = s->shell[t];
+            fc[k] = s->face[t];
           }
         }
       }

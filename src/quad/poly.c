@@ -2,9 +2,8 @@
  * domain, the grid that locates points against it, and its features.
  *
  * Decisions that must be exact (do two segments meet, on which side of a
- * segment a point lies) go through one orientation predicate: a filtered
- * double evaluation and, when that is too close to call, the exact sign of
- * the sum of its six products (each split into two doubles by fma).
+ * segment a point lies) go through one orientation predicate, exact
+ * (kernels/orient2d.h).
  *
  * The grid: square cells, about 4 segments a cell, each segment listed in
  * every cell within `margin` of it (so rounding never loses one), ids
@@ -17,6 +16,7 @@
 #include <string.h>
 
 #include "common.h"
+#include "kernels/orient2d.h"
 #include "quad/quad.h"
 #include "soa/scan.h"
 
@@ -43,48 +43,6 @@ static const char *seg_name(const mx_poly *P, uint32_t s, char buf[40]) {
   if (P->line) snprintf(buf, 40, "line %u", P->line[s]);
   else snprintf(buf, 40, "segment %u", s);
   return buf;
-}
-
-/* ---- exact orientation -------------------------------------------------- */
-
-static inline void two_sum(double a, double b, double *s, double *err) {
-  const double x = a + b, bv = x - a, av = x - bv;
-  *s = x;
-  *err = (a - av) + (b - bv);
-}
-
-/* The sign of the exact sum of t[0..n), n <= 12: the terms are added one by
- * one to a nonoverlapping expansion (Shewchuk's Grow-Expansion), whose sign
- * is that of its largest, last nonzero, component. */
-static int expansion_sign(const double *t, int n) {
-  double e[12];
-  int m = 0;
-  for (int i = 0; i < n; i++) {
-    double q = t[i];
-    for (int j = 0; j < m; j++) two_sum(q, e[j], &q, &e[j]);
-    e[m++] = q;
-  }
-  for (int j = m - 1; j >= 0; j--)
-    if (e[j] != 0.0) return e[j] > 0.0 ? 1 : -1;
-  return 0;
-}
-
-/* 1 when c lies left of a->b, -1 right of it, 0 on its line. */
-static int orient(const double *a, const double *b, const double *c) {
-  const double l = (b[0] - a[0]) * (c[1] - a[1]), r = (b[1] - a[1]) * (c[0] - a[0]);
-  const double det = l - r, bound = 3.3306690738754716e-16 * (fabs(l) + fabs(r));
-  if (det > bound) return 1;
-  if (-det > bound) return -1;
-  /* det = bx cy - bx ay - ax cy - by cx + by ax + ay cx, exactly */
-  const double f[6][2] = {{b[0], c[1]},  {-b[0], a[1]}, {-a[0], c[1]},
-                          {-b[1], c[0]}, {b[1], a[0]},  {a[1], c[0]}};
-  double t[12];
-  for (int k = 0; k < 6; k++) {
-    t[2 * k] = f[k][0] * f[k][1];
-    t[2 * k + 1] = fma(f[k][0], f[k][1], -t[2 * k]);
-    if (!isfinite(t[2 * k])) return (det > 0) - (det < 0); /* beyond exact reach */
-  }
-  return expansion_sign(t, 12);
 }
 
 /* ---- the grid ----------------------------------------------------------- */
@@ -276,7 +234,7 @@ static int counts_here(const mx_poly_index *I, uint32_t s, const double *p, uint
   const double *a = from(I->P, s), *b = to(I->P, s);
   if ((a[1] > p[1]) == (b[1] > p[1])) return 0;
   const double *lo = a[1] < b[1] ? a : b, *hi = a[1] < b[1] ? b : a;
-  const int side = orient(lo, hi, p); /* > 0: the crossing is right of p */
+  const int side = mx_orient2d(lo, hi, p); /* > 0: the crossing is right of p */
   if (right ? side <= 0 : side >= 0) return 0;
   const double xc = a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
   uint32_t home = cell_of(xc, I->lo[0], I->h, I->nx);
@@ -425,7 +383,7 @@ static int collinear_meet(const double *a, const double *b, const double *c, con
 /* Segments sharing vertex o, their other ends p and q: they meet elsewhere
  * only when one folds back onto the other. */
 static int adjacent_meet(const double *o, const double *p, const double *q) {
-  if (orient(o, p, q) != 0) return MEET_NONE;
+  if (mx_orient2d(o, p, q) != 0) return MEET_NONE;
   const int same = sgn(p[0] - o[0]) == sgn(q[0] - o[0]) && sgn(p[1] - o[1]) == sgn(q[1] - o[1]);
   return same ? MEET_OVERLAP : MEET_NONE;
 }
@@ -444,7 +402,7 @@ static int meet(const mx_poly *P, uint32_t s, uint32_t t) {
   for (int k = 0; k < 2; k++)
     if (mx_max(a[k], b[k]) < mx_min(c[k], d[k]) || mx_max(c[k], d[k]) < mx_min(a[k], b[k]))
       return MEET_NONE;
-  const int o1 = orient(a, b, c), o2 = orient(a, b, d), o3 = orient(c, d, a), o4 = orient(c, d, b);
+  const int o1 = mx_orient2d(a, b, c), o2 = mx_orient2d(a, b, d), o3 = mx_orient2d(c, d, a), o4 = mx_orient2d(c, d, b);
   if (o1 * o2 > 0 || o3 * o4 > 0) return MEET_NONE;
   if (!o1 && !o2 && !o3 && !o4) return collinear_meet(a, b, c, d);
   return o1 * o2 < 0 && o3 * o4 < 0 ? MEET_CROSS : MEET_TOUCH;
@@ -732,7 +690,7 @@ static int orient_loops(mx_poly *P, const mx_poly_index *I, const uint32_t *inc,
   for (size_t L = 0; L < nl; L++) {
     const uint32_t s = low[L], v = P->seg[2 * (size_t)s];
     const uint32_t in = inc[2 * (size_t)v] == s ? inc[2 * (size_t)v + 1] : inc[2 * (size_t)v];
-    const int ccw = orient(from(P, in), vtx(P, v), to(P, s)) > 0;
+    const int ccw = mx_orient2d(from(P, in), vtx(P, v), to(P, s)) > 0;
     const int hole = ray_parity(I, vtx(P, v), loop_of, (uint32_t)L, 0);
     flip[L] = (uint8_t)(ccw == hole);
     nflip += flip[L];

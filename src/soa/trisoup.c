@@ -1,4 +1,4 @@
-/* The triangle soup: growth, concatenation and bounding box. */
+/* The triangle soup: growth, concatenation, removal and bounding box. */
 #include "soa/trisoup.h"
 
 #include <string.h>
@@ -12,6 +12,8 @@ void mx_trisoup_free(mx_trisoup *s) {
   mx_free(s->z);
   mx_free(s->tri);
   mx_free(s->shell);
+  mx_free(s->face);
+  mx_free(s->run);
   memset(s, 0, sizeof *s);
 }
 
@@ -66,6 +68,11 @@ static int reserve_triangles(mx_trisoup *s, size_t nt) {
   uint16_t *shell = resize(s->shell, cap, sizeof *shell);
   if (!shell) return MX_EINPUT;
   s->shell = shell;
+  uint32_t *face = resize(s->face, cap, sizeof *face);
+  if (!face) return MX_EINPUT;
+  s->face = face;
+  /* a soup filled directly (tri and nt) has one face a triangle */
+  for (size_t t = s->cap_t; t < cap; t++) face[t] = t < UINT32_MAX ? (uint32_t)t : UINT32_MAX;
   s->cap_t = cap;
   return MX_OK;
 }
@@ -95,6 +102,8 @@ int mx_trisoup_append(mx_trisoup *dst, const mx_trisoup *src) {
   for (size_t i = 0; i < 3 * src->nt; i++)
     dst->tri[3 * dst->nt + i] = src->tri[i] + off;
   for (size_t i = 0; i < src->nt; i++) dst->shell[dst->nt + i] = dst->nshells;
+  if (src->nt > 0) memcpy(dst->face + dst->nt, src->face, src->nt * sizeof *src->face);
+  MX_CHECK(mx_trisoup_append_runs(dst, src));
   dst->nv += src->nv;
   dst->nt += src->nt;
   dst->nshells++;
@@ -120,14 +129,41 @@ void mx_trisoup_bbox(const mx_trisoup *s, double lo[3], double hi[3]) {
   }
 }
 
-int mx_trisoup_add_triangle(mx_trisoup *s, uint32_t a, uint32_t b, uint32_t c) {
+int mx_trisoup_add_face_triangle(mx_trisoup *s, uint32_t a, uint32_t b, uint32_t c,
+                                 uint32_t face) {
   if (s->nt >= s->cap_t) MX_CHECK(mx_trisoup_reserve(s, 0, s->nt + 1));
   uint32_t *t = s->tri + 3 * s->nt;
   t[0] = a;
   t[1] = b;
   t[2] = c;
+  s->face[s->nt] = face;
   s->shell[s->nt++] = 0;
   return MX_OK;
+}
+
+int mx_trisoup_add_triangle(mx_trisoup *s, uint32_t a, uint32_t b, uint32_t c) {
+  const uint32_t face = s->nt < UINT32_MAX ? (uint32_t)s->nt : UINT32_MAX;
+  return mx_trisoup_add_face_triangle(s, a, b, c, face);
+}
+
+size_t mx_trisoup_remove_if(mx_trisoup *s, int (*drop)(const mx_trisoup *s, size_t t, void *ctx),
+                            void *ctx) {
+  size_t kept = 0, r = 0;
+  for (size_t i = 0; i < s->nt; i++) {
+    for (; r < s->nrun && s->run[r].t0 <= i; r++) s->run[r].t0 = (uint32_t)kept;
+    if (drop(s, i, ctx)) continue;
+    if (kept != i) {
+      memmove(s->tri + 3 * kept, s->tri + 3 * i, 3 * sizeof *s->tri);
+      s->shell[kept] = s->shell[i];
+      s->face[kept] = s->face[i];
+    }
+    kept++;
+  }
+  for (; r < s->nrun; r++) s->run[r].t0 = (uint32_t)kept;
+  mx_trisoup_drop_empty_runs(s);
+  const size_t removed = s->nt - kept;
+  s->nt = kept;
+  return removed;
 }
 
 int mx_trisoup_set_vertex(mx_trisoup *s, size_t i, const double c[3]) {
