@@ -897,16 +897,7 @@ static void test_speed(void) {
 /* ---- main ------------------------------------------------------------- */
 
 static void remove_tmpdir(void) {
-  DIR *d = opendir(tmpdir);
-  if (!d) return;
-  struct dirent *e;
-  char path[512];
-  while ((e = readdir(d)) != NULL) {
-    if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-    snprintf(path, sizeof path, "%s/%s", tmpdir, e->d_name);
-    unlink(path);
-  }
-  closedir(d);
+  remove_dir_files(tmpdir);
   rmdir(tmpdir);
 }
 

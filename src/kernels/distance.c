@@ -1116,7 +1116,9 @@ static int orient_shells(mx_surface_index *S, const uint8_t *fix,
   int32_t *capw = mx_alloc(ncap * sizeof *capw + 4);
   size_t *nflip = mx_calloc((size_t)nc * sizeof *nflip + 8);
   size_t *nsize = mx_calloc((size_t)nc * sizeof *nsize + 8);
-  if (!rep || !vol || !csign || !ssign || !capw || !nflip || !nsize) {
+  double *box = given ? mx_alloc(6 * (size_t)nc * sizeof *box + 8) : NULL;
+  if (!rep || !vol || !csign || !ssign || !capw || !nflip || !nsize || (given && !box)) {
+    mx_free(box);
     mx_free(rep);
     mx_free(vol);
     mx_free(csign);
@@ -1139,17 +1141,6 @@ static int orient_shells(mx_surface_index *S, const uint8_t *fix,
     }
   }
   if (given) {
-    double *box = mx_alloc(6 * (size_t)nc * sizeof *box + 8);
-    if (!box) {
-      mx_free(rep);
-      mx_free(vol);
-      mx_free(csign);
-      mx_free(ssign);
-      mx_free(capw);
-      mx_free(nflip);
-      mx_free(nsize);
-      return MX_EINPUT;
-    }
     for (uint32_t c = 0; c < nc; c++)
       for (int a = 0; a < 3; a++) {
         box[6 * c + a] = INFINITY;
