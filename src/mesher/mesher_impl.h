@@ -20,9 +20,10 @@ int mx_mesh_stages(mx_mesher *m);   /* the stages up to params.stage */
 int mx_mesh_full(mx_mesher *m);     /* transition + boundary, whole octree */
 int mx_repair(mx_mesher *m);        /* repair rounds on the full-stage mesh */
 /* Whether the repair goes on after round `round` left `defects`: none left,
- * the rounds spent, or worse twice in a row stop it (best, worse: the
- * caller's, zero at first). */
-int mx_repair_go_on(int round, uint64_t defects, int max_rounds, uint64_t *best, int *worse);
+ * the rounds spent, or two rounds in a row that did not lower the count
+ * below the round before stop it (last, stalled: the caller's, zero at
+ * first). */
+int mx_repair_go_on(int round, uint64_t defects, int max_rounds, uint64_t *last, int *stalled);
 int mx_mesh_finish(mx_mesher *m);   /* flags, counts; MX_EINVALID if invalid */
 /* The sum of the elements' signed volumes; the domain volume check on a
  * mesh of that volume and ncells elements (MX_EINVALID, message given,
