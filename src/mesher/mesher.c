@@ -662,30 +662,30 @@ int mx_mesh_full(mx_mesher *m) {
  * them (remesh_local.c), up to repair_rounds times. m->S.contacts holds the
  * contacts of the final mesh.
  *
- * When to go on: a round is judged against the round before it, not against
- * the best one so far. A repair often gets worse before it gets better: the
- * first split puts transition patterns at the surface, where the shrink
- * inverts more than before (the triple torus of issue 23 at -s 6: 2 defects,
- * then 30, 10, 2, 0). Judged against the best (2), the rounds with 30 and 10
- * counted as two rounds worse in a row and the repair stopped while it was
- * converging. A repair that does not lower the count twice in a row does not
- * converge (a surface feature finer than any level, an input's hole: 9, 19,
- * 27 ...) and stops. *last: the count of the round before; *stalled: the
- * rounds in a row that did not lower it. */
-int mx_repair_go_on(int round, uint64_t defects, int max_rounds, uint64_t *last, int *stalled) {
+ * When to go on: a round is worse when it does not lower the count of the
+ * round before it; two worse rounds since the best one stop the repair (a
+ * surface feature finer than any level, an input's hole: 17, 33, 45 ...).
+ * Not "not below the best": a repair often gets worse before it gets
+ * better, as the first split puts transition patterns at the surface where
+ * the shrink inverts more than before (the triple torus of issue 23 at -s 6:
+ * 2 defects, then 30, 10, 2, 0); judged against the best (2), 30 and 10
+ * were two worse rounds and the repair stopped while it was converging. */
+int mx_repair_go_on(int round, uint64_t defects, int max_rounds, mx_repair_progress *p) {
   if (defects == 0 || round >= max_rounds) return 0;
-  if (round == 0 || defects < *last)
-    *stalled = 0;
-  else if (++*stalled >= 2)
+  const uint64_t before = p->last;
+  p->last = defects;
+  if (round == 0 || defects < p->best) {
+    p->best = defects;
+    p->worse = 0;
+  } else if (defects >= before && ++p->worse >= 2) {
     return 0;
-  *last = defects;
+  }
   return 1;
 }
 
 int mx_repair(mx_mesher *m) {
   uint8_t *flag = NULL;
-  uint64_t last = 0;
-  int stalled = 0;
+  mx_repair_progress progress = {0, 0, 0};
   for (int round = 0;; round++) {
     mx_free(flag);
     flag = mx_alloc(m->M.ncells + 1);
@@ -698,8 +698,8 @@ int mx_repair(mx_mesher *m) {
       mx_free(flag);
       return st;
     }
-    if (!mx_repair_go_on(round, m->M.invalid + m->S.contacts.nodes, m->p.repair_rounds, &last,
-                         &stalled))
+    if (!mx_repair_go_on(round, m->M.invalid + m->S.contacts.nodes, m->p.repair_rounds,
+                         &progress))
       break;
     if (m->on_round) m->on_round(round + 1);
     size_t n = 0;

@@ -340,15 +340,14 @@ static int force_defect(const mx_p4est_octree *P, mx_p4est_mesh *D) {
 }
 
 int mx_p4est_mesh_build(mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D) {
-  uint64_t last = 0;
-  int stalled = 0;
+  mx_repair_progress progress = {0, 0, 0};
   const int test_repair = getenv("MX_P4EST_TEST_REPAIR") != NULL;
   for (int round = 0;; round++) {
     MX_CHECK(mesh_once(P, m, D));
     if (round == 0 && test_repair) {
       MX_CHECK(mx_mpi_agree(P->comm, force_defect(P, D)));
     } else if (!mx_repair_go_on(round, D->invalid + D->contact_cells, m->p.repair_rounds,
-                                &last, &stalled)) {
+                                &progress)) {
       break;
     }
     long long n = 0;
