@@ -154,6 +154,24 @@ static int add_domain(mx_mesher *m, mx_trisoup *s, const char *name) {
   return MX_OK;
 }
 
+/* What a message about the mesh as a whole names: the input file, or
+ * "the inputs a, b" when there are several (cut with ", ..." past n bytes);
+ * NULL without an input. */
+const char *mx_inputs_label(const mx_mesher *m, char *buf, size_t n) {
+  if (m->ndomain == 0 || n == 0) return NULL;
+  if (m->ndomain == 1) return m->domain_name[0];
+  size_t w = (size_t)snprintf(buf, n, "the inputs %s", m->domain_name[0]);
+  for (int i = 1; i < m->ndomain && w < n; i++) {
+    const size_t len = strlen(m->domain_name[i]);
+    if (w + 2 + len + 5 >= n) { /* room for ", ..." */
+      snprintf(buf + w, n - w, ", ...");
+      break;
+    }
+    w += (size_t)snprintf(buf + w, n - w, ", %s", m->domain_name[i]);
+  }
+  return buf;
+}
+
 int mx_mesher_add_surface(mx_mesher *m, const char *path) {
   mx_call c;
   mx_call_begin(m, &c);
@@ -752,7 +770,8 @@ int mx_volume_verdict(mx_mesher *m, double vm, size_t ncells) {
   const double tol = fmax(0.05, 0.5 * area * h / vs), err = (vm - vs) / vs;
   m->S.volume_error = err;
   if (fabs(err) <= tol) return MX_OK;
-  mx_error(m->domain_name[0], 0, "the mesh holds %.1f%% of the volume the input encloses "
+  char inputs[MX_INPUTS_LABEL];
+  mx_error(mx_inputs_label(m, inputs, sizeof inputs), 0, "the mesh holds %.1f%% of the volume the input encloses "
            "(%.4g against %.4g; tolerance %.1f%%: half a layer of elements along the "
            "surface): the levels are too coarse for thin parts of the input; ask for finer "
            "ones (-s, -a, -b, -r)", 100.0 * vm / vs, vm, vs, 100.0 * tol);
@@ -780,8 +799,10 @@ static int volume_check(mx_mesher *m) {
 /* Per-node flags, counts and quality of the mesh just made; MX_EINVALID
  * when elements with J_ENS < 1e-6 remain. */
 int mx_mesh_finish(mx_mesher *m) {
+  char inputs[MX_INPUTS_LABEL];
+  const char *name = mx_inputs_label(m, inputs, sizeof inputs);
   if (m->M.ncells == 0) {
-    mx_error(m->ndomain ? m->domain_name[0] : NULL, 0,
+    mx_error(name, 0,
              "the mesh is empty: no element lies in the domain (%zu leaves); ask for finer "
              "levels (-s, -a, -b, -r)", m->nleaves);
     return MX_EINPUT;
@@ -790,13 +811,13 @@ int mx_mesh_finish(mx_mesher *m) {
   m->S.leaves = m->nleaves;
   count_mesh(m);
   if (m->M.invalid > 0) {
-    mx_error(NULL, 0, "%zu element(s) with J_ENS < 1e-6 remain after %d repair round(s)",
+    mx_error(name, 0, "%zu element(s) with J_ENS < 1e-6 remain after %d repair round(s)",
              m->M.invalid, m->S.repair_rounds);
     return MX_EINVALID;
   }
   if (m->S.contacts.nodes > 0) {
     const mx_contacts *k = &m->S.contacts;
-    mx_error(NULL, 0, "%zu node(s) lie on a face or an edge of an element they are not a "
+    mx_error(name, 0, "%zu node(s) lie on a face or an edge of an element they are not a "
              "node of (two parts of the boundary meet: a non-conforming mesh) after %d "
              "repair round(s); the first, node %u, at (%.17g, %.17g, %.17g); ask for finer "
              "levels there (-s, -b, -r)", k->nodes, m->S.repair_rounds, k->first_node,

@@ -27,6 +27,11 @@ typedef struct {
   int worse;           /* rounds since the best that did not lower the count */
 } mx_repair_progress;
 int mx_repair_go_on(int round, uint64_t defects, int max_rounds, mx_repair_progress *p);
+/* The input file a message about the whole mesh names, or "the inputs a,
+ * b" (in buf) when there are several; NULL without an input. Every exit-5
+ * message (MX_EINVALID) names it. */
+enum { MX_INPUTS_LABEL = 512 };
+const char *mx_inputs_label(const mx_mesher *m, char *buf, size_t n);
 int mx_mesh_finish(mx_mesher *m);   /* flags, counts; MX_EINVALID if invalid */
 /* The sum of the elements' signed volumes; the domain volume check on a
  * mesh of that volume and ncells elements (MX_EINVALID, message given,
