@@ -253,6 +253,35 @@ expect_exit 4 "a piece that cannot be written" mpi 2 --demo -s 3 --p4est -o "$T/
 has "$T/err" "rank 1 could not write its piece" "a piece that cannot be written: rank 0 names it"
 same "$(ls "$T/pv")" "o_1.vtu" "a piece that cannot be written: nothing else left"
 
+# ---- the repair's rule and the exit-5 messages ------------------------------
+# The distributed repair goes by the same rule (mx_repair_go_on): CGAL's
+# triple torus at -s 6 (defects 2, 30, 10, 2, 0; see repair_test.sh) is
+# valid after 4 rounds on 2 ranks, the single-process mesh. Skipped without
+# Debian's libcgal-demo archive.
+CGAL_DATA=${CGAL_DATA:-/usr/share/doc/libcgal-dev/data.tar.gz}
+if [ -r "$CGAL_DATA" ] && tar -xzf "$CGAL_DATA" -C "$T" data/meshes/3torus.off 2>/dev/null; then
+  "$MIXOCT" -i "$T/data/meshes/3torus.off" -s 6 -o "$T/t3.vtu" --quiet
+  "$MIXOCT" check "$T/t3.vtu" --json >"$T/t3c.json" 2>/dev/null
+  if mpi 2 -i "$T/data/meshes/3torus.off" -s 6 --p4est --json -o "$T/t3.pvtu" \
+    >"$T/t3.json" 2>"$T/err"; then
+    "$MIXOCT" check "$T/t3.pvtu" --json >"$T/t3pc.json" 2>/dev/null
+    same "$(field "$T/t3.json" mesh.repair_rounds) $(field "$T/t3pc.json" defects) $(field "$T/t3pc.json" mesh_hash)" \
+      "4 0 $(field "$T/t3c.json" mesh_hash)" \
+      "3torus.off -s 6 on 2 ranks: 4 repair rounds, no defect, the single-process mesh"
+  else
+    bad "3torus.off -s 6 on 2 ranks failed"; cat "$T/err"
+  fi
+else
+  echo "skipped: the triple torus ($CGAL_DATA not found; Debian: libcgal-demo)"
+fi
+# the distributed verdict names the input (the volume rule: a cube at -s 1)
+printf 'OFF\n8 12 0\n' >"$T/vcube.off"
+for v in "-.85 -.85 -.85" ".85 -.85 -.85" "-.85 .85 -.85" ".85 .85 -.85" "-.85 -.85 .85" \
+  ".85 -.85 .85" "-.85 .85 .85" ".85 .85 .85"; do echo "$v" >>"$T/vcube.off"; done
+printf '3 0 2 1\n3 1 2 3\n3 4 5 6\n3 5 7 6\n3 0 1 4\n3 1 5 4\n3 2 6 3\n3 3 6 7\n3 0 4 2\n3 2 4 6\n3 1 3 5\n3 3 7 5\n' >>"$T/vcube.off"
+expect_exit 5 "--p4est, a cube at -s 1: the volume rule" mpi 1 -i "$T/vcube.off" -s 1 --p4est --quiet
+has "$T/err" "error: $T/vcube.off: the mesh holds" "--p4est: the exit-5 message names the input"
+
 # ---- usage ------------------------------------------------------------------
 expect_exit 2 "--p4est writes .pvtu or .msh only" mpi 1 --demo -s 3 --p4est -o "$T/x.vtu"
 expect_exit 2 "--p4est: no ASCII .msh" mpi 1 --demo -s 3 --p4est --ascii -o "$T/x.msh"

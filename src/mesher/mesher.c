@@ -181,6 +181,24 @@ int mx_mesher_spares_inputs(const mx_mesher *m, const char *path, int restart_ou
   return MX_OK;
 }
 
+/* What a message about the mesh as a whole names: the input file, or
+ * "the inputs a, b" when there are several (cut with ", ..." past n bytes);
+ * NULL without an input. */
+const char *mx_inputs_label(const mx_mesher *m, char *buf, size_t n) {
+  if (m->ndomain == 0 || n == 0) return NULL;
+  if (m->ndomain == 1) return m->domain_name[0];
+  size_t w = (size_t)snprintf(buf, n, "the inputs %s", m->domain_name[0]);
+  for (int i = 1; i < m->ndomain && w < n; i++) {
+    const size_t len = strlen(m->domain_name[i]);
+    if (w + 2 + len + 5 >= n) { /* room for ", ..." */
+      snprintf(buf + w, n - w, ", ...");
+      break;
+    }
+    w += (size_t)snprintf(buf + w, n - w, ", %s", m->domain_name[i]);
+  }
+  return buf;
+}
+
 int mx_mesher_add_surface(mx_mesher *m, const char *path) {
   mx_call c;
   mx_call_begin(m, &c);
@@ -698,15 +716,24 @@ int mx_mesh_full(mx_mesher *m) {
  * (kernels/contacts.h: two sheets of the boundary meeting), are split once
  * by list refinement (Algorithm 3), and the octree is meshed again around
  * them (remesh_local.c), up to repair_rounds times. m->S.contacts holds the
- * contacts of the final mesh. */
-int mx_repair_go_on(int round, uint64_t defects, int max_rounds, uint64_t *best, int *worse) {
+ * contacts of the final mesh.
+ *
+ * When to go on: a round is worse when it does not lower the count of the
+ * round before it; two worse rounds since the best one stop the repair (a
+ * surface feature finer than any level, an input's hole: 17, 33, 45 ...).
+ * Not "not below the best": a repair often gets worse before it gets
+ * better, as the first split puts transition patterns at the surface where
+ * the shrink inverts more than before (the triple torus of issue 23 at -s 6:
+ * 2 defects, then 30, 10, 2, 0); judged against the best (2), 30 and 10
+ * were two worse rounds and the repair stopped while it was converging. */
+int mx_repair_go_on(int round, uint64_t defects, int max_rounds, mx_repair_progress *p) {
   if (defects == 0 || round >= max_rounds) return 0;
-  /* a repair that makes things worse twice in a row does not converge
-   * (a surface feature finer than any level, an input's hole) */
-  if (round == 0 || defects < *best) {
-    *best = defects;
-    *worse = 0;
-  } else if (++*worse >= 2) {
+  const uint64_t before = p->last;
+  p->last = defects;
+  if (round == 0 || defects < p->best) {
+    p->best = defects;
+    p->worse = 0;
+  } else if (defects >= before && ++p->worse >= 2) {
     return 0;
   }
   return 1;
@@ -714,8 +741,7 @@ int mx_repair_go_on(int round, uint64_t defects, int max_rounds, uint64_t *best,
 
 int mx_repair(mx_mesher *m) {
   uint8_t *flag = NULL;
-  uint64_t best = 0;
-  int worse = 0;
+  mx_repair_progress progress = {0, 0, 0};
   for (int round = 0;; round++) {
     mx_free(flag);
     flag = mx_alloc(m->M.ncells + 1);
@@ -728,8 +754,8 @@ int mx_repair(mx_mesher *m) {
       mx_free(flag);
       return st;
     }
-    if (!mx_repair_go_on(round, m->M.invalid + m->S.contacts.nodes, m->p.repair_rounds, &best,
-                         &worse))
+    if (!mx_repair_go_on(round, m->M.invalid + m->S.contacts.nodes, m->p.repair_rounds,
+                         &progress))
       break;
     if (m->on_round) m->on_round(round + 1);
     size_t n = 0;
@@ -791,7 +817,8 @@ int mx_volume_verdict(mx_mesher *m, double vm, size_t ncells) {
   const double tol = fmax(0.05, 0.5 * area * h / vs), err = (vm - vs) / vs;
   m->S.volume_error = err;
   if (fabs(err) <= tol) return MX_OK;
-  mx_error(m->domain_name[0], 0, "the mesh holds %.1f%% of the volume %s "
+  char inputs[MX_INPUTS_LABEL];
+  mx_error(mx_inputs_label(m, inputs, sizeof inputs), 0, "the mesh holds %.1f%% of the volume %s "
            "(%.4g against %.4g; tolerance %.1f%%: half a layer of elements along the "
            "surface): the levels are too coarse for thin parts of the input; ask for finer "
            "ones (-s, -a, -b, -r)", 100.0 * vm / vs, what, vm, vs, 100.0 * tol);
@@ -820,8 +847,10 @@ static int volume_check(mx_mesher *m) {
 /* Per-node flags, counts and quality of the mesh just made; MX_EINVALID
  * when elements with J_ENS < 1e-6 remain. */
 int mx_mesh_finish(mx_mesher *m) {
+  char inputs[MX_INPUTS_LABEL];
+  const char *name = mx_inputs_label(m, inputs, sizeof inputs);
   if (m->M.ncells == 0) {
-    mx_error(m->ndomain ? m->domain_name[0] : NULL, 0,
+    mx_error(name, 0,
              "the mesh is empty: no element lies in the domain (%zu leaves); ask for finer "
              "levels (-s, -a, -b, -r)", m->nleaves);
     return MX_EINPUT;
@@ -830,13 +859,13 @@ int mx_mesh_finish(mx_mesher *m) {
   m->S.leaves = m->nleaves;
   count_mesh(m);
   if (m->M.invalid > 0) {
-    mx_error(NULL, 0, "%zu element(s) with J_ENS < 1e-6 remain after %d repair round(s)",
+    mx_error(name, 0, "%zu element(s) with J_ENS < 1e-6 remain after %d repair round(s)",
              m->M.invalid, m->S.repair_rounds);
     return MX_EINVALID;
   }
   if (m->S.contacts.nodes > 0) {
     const mx_contacts *k = &m->S.contacts;
-    mx_error(NULL, 0, "%zu node(s) lie on a face or an edge of an element they are not a "
+    mx_error(name, 0, "%zu node(s) lie on a face or an edge of an element they are not a "
              "node of (two parts of the boundary meet: a non-conforming mesh) after %d "
              "repair round(s); the first, node %u, at (%.17g, %.17g, %.17g); ask for finer "
              "levels there (-s, -b, -r)", k->nodes, m->S.repair_rounds, k->first_node,

@@ -20,9 +20,18 @@ int mx_mesh_stages(mx_mesher *m);   /* the stages up to params.stage */
 int mx_mesh_full(mx_mesher *m);     /* transition + boundary, whole octree */
 int mx_repair(mx_mesher *m);        /* repair rounds on the full-stage mesh */
 /* Whether the repair goes on after round `round` left `defects`: none left,
- * the rounds spent, or worse twice in a row stop it (best, worse: the
- * caller's, zero at first). */
-int mx_repair_go_on(int round, uint64_t defects, int max_rounds, uint64_t *best, int *worse);
+ * the rounds spent, or two rounds since the best one that did not lower the
+ * count of the round before stop it (p: the caller's, zeroed at first). */
+typedef struct {
+  uint64_t best, last; /* the least count so far; the round before's */
+  int worse;           /* rounds since the best that did not lower the count */
+} mx_repair_progress;
+int mx_repair_go_on(int round, uint64_t defects, int max_rounds, mx_repair_progress *p);
+/* The input file a message about the whole mesh names, or "the inputs a,
+ * b" (in buf) when there are several; NULL without an input. Every exit-5
+ * message (MX_EINVALID) names it. */
+enum { MX_INPUTS_LABEL = 512 };
+const char *mx_inputs_label(const mx_mesher *m, char *buf, size_t n);
 int mx_mesh_finish(mx_mesher *m);   /* flags, counts; MX_EINVALID if invalid */
 /* The sum of the elements' signed volumes; the domain volume check on a
  * mesh of that volume and ncells elements (MX_EINVALID, message given,

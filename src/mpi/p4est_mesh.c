@@ -311,7 +311,10 @@ static int mesh_once(mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D) {
     st = mx_mpi_agree(P->comm, mesh_patch(P, &H, m, D, &sh));
     size_t differ = 0;
     t = mx_wtime();
-    if (!st) st = mx_shared_agree(P, D, &sh, a == NATTEMPTS - 1, &differ);
+    char inputs[MX_INPUTS_LABEL];
+    if (!st)
+      st = mx_shared_agree(P, D, &sh, a == NATTEMPTS - 1, mx_inputs_label(m, inputs, sizeof inputs),
+                           &differ);
     if (a == 0) D->differ_first = differ;
     if (!st && !differ) st = mx_shared_number(P, D, &sh);
     D->t_exchange += mx_wtime() - t;
@@ -340,15 +343,14 @@ static int force_defect(const mx_p4est_octree *P, mx_p4est_mesh *D) {
 }
 
 int mx_p4est_mesh_build(mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D) {
-  uint64_t best = 0;
-  int worse = 0;
+  mx_repair_progress progress = {0, 0, 0};
   const int test_repair = getenv("MX_P4EST_TEST_REPAIR") != NULL;
   for (int round = 0;; round++) {
     MX_CHECK(mesh_once(P, m, D));
     if (round == 0 && test_repair) {
       MX_CHECK(mx_mpi_agree(P->comm, force_defect(P, D)));
     } else if (!mx_repair_go_on(round, D->invalid + D->contact_cells, m->p.repair_rounds,
-                                &best, &worse)) {
+                                &progress)) {
       break;
     }
     long long n = 0;
@@ -361,19 +363,21 @@ int mx_p4est_mesh_build(mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D) {
 }
 
 static int verdict_local(mx_mesher *m, const mx_p4est_mesh *D) {
+  char inputs[MX_INPUTS_LABEL];
+  const char *name = mx_inputs_label(m, inputs, sizeof inputs);
   if (D->cells == 0) {
-    mx_error(m->ndomain ? m->domain_name[0] : NULL, 0,
+    mx_error(name, 0,
              "the mesh is empty: no element lies in the domain (%" PRIu64 " leaves); ask for "
              "finer levels (-s, -a, -b, -r)", D->leaves);
     return MX_EINPUT;
   }
   if (D->invalid) {
-    mx_error(NULL, 0, "%" PRIu64 " element(s) with J_ENS < 1e-6 remain after %d repair "
+    mx_error(name, 0, "%" PRIu64 " element(s) with J_ENS < 1e-6 remain after %d repair "
              "round(s)", D->invalid, D->repair_rounds);
     return MX_EINVALID;
   }
   if (D->contact_cells) {
-    mx_error(NULL, 0, "%" PRIu64 " element(s) where two parts of the boundary meet (a node "
+    mx_error(name, 0, "%" PRIu64 " element(s) where two parts of the boundary meet (a node "
              "on an element it is not a node of: a non-conforming mesh) after %d repair "
              "round(s); ask for finer levels there (-s, -b, -r)", D->contact_cells,
              D->repair_rounds);

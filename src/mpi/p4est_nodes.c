@@ -108,7 +108,7 @@ static int same_rec(const node_rec *a, const node_rec *b) {
 }
 
 int mx_shared_agree(const mx_p4est_octree *P, mx_p4est_mesh *D, const mx_shared *sh, int last,
-                    size_t *differ) {
+                    const char *inputs, size_t *differ) {
   const int R = P->size;
   *differ = 0;
   node_rec *send = mx_alloc((sh->n + 1) * sizeof *send);
@@ -162,7 +162,7 @@ int mx_shared_agree(const mx_p4est_octree *P, mx_p4est_mesh *D, const mx_shared 
     MPI_Bcast(first, 3, MPI_DOUBLE, gwho < P->size ? gwho : 0, P->comm);
     *differ = (size_t)gb;
     if (gb && last) {
-      mx_error(NULL, 0, "%llu node(s) on the partition boundary came out differently on the "
+      mx_error(inputs, 0, "%llu node(s) on the partition boundary came out differently on the "
                         "ranks sharing them, after %d halo rings; the first near (%.17g, "
                         "%.17g, %.17g) (rank %d): the distributed mesh would not conform",
                gb, D->rings, first[0], first[1], first[2], gwho);

@@ -26,9 +26,10 @@ int mx_shared_collect(const mx_mesh_out *M, const uint8_t *states, const uint8_t
                       const int32_t *leaf_owner, int rank, mx_shared *sh);
 /* Sends each peer its list, compares what comes back; *differ: entries
  * that differ over all ranks. last: a difference is an error (message
- * naming the first node, MX_EINVALID), else the caller tries again. */
+ * naming the inputs and the first node, MX_EINVALID), else the caller
+ * tries again. */
 int mx_shared_agree(const mx_p4est_octree *P, mx_p4est_mesh *D, const mx_shared *sh, int last,
-                    size_t *differ);
+                    const char *inputs, size_t *differ);
 /* Owners, global numbers (D->gid, D->owned, D->first_owned, D->nowned) of
  * D->M's nodes. */
 int mx_shared_number(const mx_p4est_octree *P, mx_p4est_mesh *D, const mx_shared *sh);
