@@ -1228,6 +1228,12 @@ static int xml_closed(const rd *r, const char *tag) {
   return (size_t)(e - r->buf) >= n && memcmp(e - n, tag, n) == 0;
 }
 
+static int vtkfile_closed(const rd *r) {
+  if (xml_closed(r, "</VTKFile>")) return MX_OK;
+  return fail(r, NULL, "the file does not end with </VTKFile>: it is cut short (an "
+                       "interrupted write or copy?)");
+}
+
 static int read_vtu(rd *r, mx_mesh_data *out) {
   const char *p = r->buf, *end = r->end;
   int seen = 0, pieces = 0, in_points = 0, in_cells = 0, in_pdata = 0, in_cdata = 0;
@@ -1244,13 +1250,11 @@ static int read_vtu(rd *r, mx_mesh_data *out) {
     if (tag_is(&t, "VTKFile")) {
       if (t.closing) break;
       seen = 1;
-      if (!xml_closed(r, "</VTKFile>"))
-        return fail(r, NULL, "the file does not end with </VTKFile>: it is cut short "
-                             "(an interrupted write or copy?)");
       if (attr_eq(&t, "type", "PUnstructuredGrid")) {
         if (r->piece)
           return fail(r, t.start, "a piece of a .pvtu must be an UnstructuredGrid file, not "
                       "another PUnstructuredGrid");
+        MX_CHECK(vtkfile_closed(r));
         return read_pvtu(r, t.after, out);
       }
       if (!attr_eq(&t, "type", "UnstructuredGrid"))
@@ -1270,6 +1274,7 @@ static int read_vtu(rd *r, mx_mesh_data *out) {
                     "compressed data (%.*s) is not supported: write the file "
                     "uncompressed",
                     shown(cn), cv);
+      MX_CHECK(vtkfile_closed(r));
     } else if (!seen) {
       return fail(r, t.start, "expected <VTKFile>, found <%.*s>",
                   shown(t.nlen), t.name);
