@@ -223,9 +223,13 @@ static const char *const with_arg[][2] = {
 /* argv with the forms getopt users expect split in two: `--output=x.vtu`
  * and `-s5` / `-ox.vtu` become `--output x.vtu`, `-s 5`, `-o x.vtu`. The
  * strings live as long as the process (the options point into them). */
+/* kept for the process's life, reachable (not a leak) */
+static char **volatile split_argv;
+
 static char **split_attached(int argc, char **argv, int *nargc) {
   char **v = malloc((2 * (size_t)argc + 1) * sizeof *v);
   if (!v) return NULL;
+  split_argv = v;
   int n = 0;
   for (int i = 0; i < argc; i++) {
     const char *a = argv[i];

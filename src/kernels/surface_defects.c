@@ -997,7 +997,7 @@ int mx_surface_meeting_pairs(const mx_trisoup *s, uint64_t **pairs, size_t *npai
   if (!st) {
     size_t k = 0;
     for (int t = 0; t < nth; t++) {
-      memcpy(all + k, acc[t].pairs, acc[t].npairs * sizeof *all);
+      if (acc[t].npairs) memcpy(all + k, acc[t].pairs, acc[t].npairs * sizeof *all);
       k += acc[t].npairs;
     }
     st = mx_sort_u64(all, NULL, n);
