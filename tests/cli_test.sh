@@ -336,5 +336,15 @@ kill -TERM "$pid" 2>/dev/null; wait "$pid"; code=$?
 if ls "$T"/sig.vtk.tmp.* >/dev/null 2>&1; then bad "SIGTERM left a temporary file"; else ok "SIGTERM during the write (temporary seen: $seen): none left (exit $code)"; fi
 [ "$code" -eq 143 ] && ok "SIGTERM: exit 143" || ok "SIGTERM came after the end (exit $code)"
 
+# Threads that sleep at barriers (issue 24): without a policy from the user
+# the program sets the passive one (and starts itself again); the user's
+# choice is kept; the mesh does not depend on it.
+wp() { tail -1 "$1" | python3 -c 'import json,sys; print(json.load(sys.stdin)["wait_policy"])'; }
+env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT "$MIXOCT" --demo -s 4 -o "$T/wp1.vtu" --json >"$T/wp.json" 2>/dev/null
+same "$(wp "$T/wp.json")" "passive (set by mixoct)" "no policy chosen: passive, set by the program"
+OMP_WAIT_POLICY=active "$MIXOCT" --demo -s 4 -o "$T/wp2.vtu" --json >"$T/wp.json" 2>/dev/null
+same "$(wp "$T/wp.json")" "active" "the user's OMP_WAIT_POLICY is kept"
+cmp -s "$T/wp1.vtu" "$T/wp2.vtu" && ok "the same mesh with either policy" || bad "the mesh depends on the wait policy"
+
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]

@@ -55,6 +55,10 @@ int mx_check_run_files(const mx_options *o);
  * options added to m (src/cli/main.c; also the --p4est front). */
 int mx_add_inputs(const mx_options *o, mx_mesher *m);
 
+/* The OpenMP wait policy of this run: "passive (set by mixoct)", the
+ * user's OMP_WAIT_POLICY, or "default" (src/cli/main.c). */
+const char *mx_wait_policy_name(void);
+
 /* One line describing the machine (hwloc when built in, OpenMP threads). */
 void mx_topology_string(char *buf, size_t n);
 

@@ -163,7 +163,34 @@ int mx_run(const mx_options *o) {
 int mx_p4est_main(int argc, char **argv); /* src/cli/p4est_cmd.c */
 #endif
 
+/* OpenMP threads that wait for each other sleep instead of spinning
+ * (issue 24): libgomp's default spins at every barrier, and when another
+ * job holds a core the spinning thread steals the time slice of the thread
+ * it waits for (two threads then 2-7x slower than one). libgomp reads
+ * OMP_WAIT_POLICY once, when it is loaded, before main: so when the user
+ * has not chosen a policy (OMP_WAIT_POLICY, GOMP_SPINCOUNT), the program
+ * sets the passive one and starts itself again (same pid, same argv). Not
+ * under valgrind (its preload is in LD_PRELOAD: the new image would run
+ * without it). If the exec fails, the run goes on with the default. */
+static void passive_wait_policy(char **argv) {
+  if (getenv("OMP_WAIT_POLICY") || getenv("GOMP_SPINCOUNT")) return;
+  const char *pre = getenv("LD_PRELOAD");
+  if (pre && strstr(pre, "vgpreload")) return;
+  if (setenv("OMP_WAIT_POLICY", "passive", 1) != 0) return;
+  if (setenv("MIXOCT_WAIT_POLICY_SET", "1", 1) != 0) return;
+  execv("/proc/self/exe", argv);
+  unsetenv("OMP_WAIT_POLICY"); /* could not: as before */
+  unsetenv("MIXOCT_WAIT_POLICY_SET");
+}
+
+const char *mx_wait_policy_name(void) {
+  const char *p = getenv("OMP_WAIT_POLICY");
+  if (!p) return getenv("GOMP_SPINCOUNT") ? "spincount" : "default";
+  return getenv("MIXOCT_WAIT_POLICY_SET") ? "passive (set by mixoct)" : p;
+}
+
 int main(int argc, char **argv) {
+  passive_wait_policy(argv);
   /* every message goes through on_message: --json keeps the warnings and
    * the first error */
   mx_msg_fn = on_message;

@@ -159,7 +159,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s) {
          "\"remesh_local\": %s, \"remesh_patch_leaves\": %zu, \"remesh_core_leaves\": %zu, "
          "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"memory_estimate_mb\": %.1f, "
          "\"memory_estimate_prior_mb\": %.1f, "
-         "\"threads\": %d, "
+         "\"threads\": %d, \"wait_policy\": \"%s\", "
          "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, %s"
          "\"topology\": \"%s\"}\n",
          s->leaves, s->leaves_hash, nodes, elements, hex,
@@ -172,6 +172,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s) {
          s->ph.boundary, s->ph.verify, s->ph.quality, s->ph.write, s->t_restart,
          s->refined_listed, s->repaired, s->repair_rounds, s->local ? "true" : "false",
          s->local ? s->patch_leaves : 0, s->local ? s->core_leaves : 0, s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->memory_prior_mb, s->threads,
+         mx_wait_policy_name(),
          s->mesh ? s->jens_min : 1.0,
          s->mesh ? s->invalid : 0, qual, bnd, topo);
 }
