@@ -83,26 +83,33 @@ static int restart_edges(const mx_mesher *m, const uint64_t *vkey, size_t nv, mx
     r->edge = mx_alloc((3 * total + 1) * sizeof *r->edge);
     if (!r->edge) st = MX_ENOMEM;
   }
+  /* the ends and the mid-node of each edge: three searches in the sorted
+   * node keys, in parallel (each edge writes its own row: the same rows for
+   * any thread count) */
   size_t w = 0;
   for (int l = 0; l <= MX_MAX_LEVEL && !st; l++) {
     const uint32_t s = mx_octant_size(l);
     for (int a = 0; a < 3; a++) {
-      for (size_t i = 0; i < nk[l][a]; i++) {
+      const uint64_t *k = keys[l][a];
+      uint32_t *e = r->edge + 3 * w;
+      const size_t n = nk[l][a];
+#pragma omp parallel for schedule(static) if (n > 4096)
+      for (size_t i = 0; i < n; i++) {
         uint32_t p[3], q[3];
-        mx_morton_decode(keys[l][a][i], p);
+        mx_morton_decode(k[i], p);
         memcpy(q, p, sizeof q);
         q[a] += s;
         uint32_t h[3] = {p[0], p[1], p[2]};
         h[a] += s / 2;
-        const uint32_t ia = mx_find_u64(vkey, nv, keys[l][a][i]);
+        const uint32_t ia = mx_find_u64(vkey, nv, k[i]);
         const uint32_t ib = mx_find_u64(vkey, nv, mx_morton_encode(q[0], q[1], q[2]));
         const uint32_t im = s > 1 ? mx_find_u64(vkey, nv, mx_morton_encode(h[0], h[1], h[2]))
                                   : UINT32_MAX;
-        r->edge[3 * w + 0] = ia;
-        r->edge[3 * w + 1] = ib;
-        r->edge[3 * w + 2] = im == UINT32_MAX ? 0 : im;
-        w++;
+        e[3 * i + 0] = ia;
+        e[3 * i + 1] = ib;
+        e[3 * i + 2] = im == UINT32_MAX ? 0 : im;
       }
+      w += n;
     }
   }
   r->ne = w;
