@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "common.h"
-#include "kernels/orient2d.h"
+#include "geom/orient2d.h"
 
 #define NONE UINT32_MAX
 #define PLANAR_TOL 1e-3                 /* of the polygon's size */

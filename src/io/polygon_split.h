@@ -13,7 +13,7 @@
  *     by repeated corners, or a crossing) is refused;
  *   - its mean plane: the Newell normal n; the corners are projected along
  *     the axis of n's largest component (dropping a coordinate: exact, so
- *     the orientation tests on the projection are exact, kernels/orient2d.h);
+ *     the orientation tests on the projection are exact, geom/orient2d.h);
  *   - ear clipping: an ear is a strictly convex corner b (neighbours a, c)
  *     whose closed triangle abc holds no other corner but copies of a and c;
  *     only reflex and flat corners need testing, and ears are kept in a list

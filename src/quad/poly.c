@@ -3,7 +3,7 @@
  *
  * Decisions that must be exact (do two segments meet, on which side of a
  * segment a point lies) go through one orientation predicate, exact
- * (kernels/orient2d.h).
+ * (geom/orient2d.h).
  *
  * The grid: square cells, about 4 segments a cell, each segment listed in
  * every cell within `margin` of it (so rounding never loses one), ids
@@ -16,7 +16,7 @@
 #include <string.h>
 
 #include "common.h"
-#include "kernels/orient2d.h"
+#include "geom/orient2d.h"
 #include "quad/quad.h"
 #include "soa/scan.h"
 
