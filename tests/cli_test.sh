@@ -9,33 +9,6 @@ T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 . "$HERE/lib.sh"
 
-cube_off() { # file, half side
-  local h=$2
-  cat >"$1" <<EOS
-OFF
-8 12 0
--$h -$h -$h
-$h -$h -$h
--$h $h -$h
-$h $h -$h
--$h -$h $h
-$h -$h $h
--$h $h $h
-$h $h $h
-3 0 2 1
-3 1 2 3
-3 4 5 6
-3 5 7 6
-3 0 1 4
-3 1 5 4
-3 2 6 3
-3 3 6 7
-3 0 4 2
-3 2 4 6
-3 1 3 5
-3 3 7 5
-EOS
-}
 
 expect_exit 0 "--help" "$MIXOCT" --help
 has "$T/out" "--surface-level" "help lists the options"

@@ -16,30 +16,7 @@ cd "$T" || exit 1
 ln -s "$MIXOCT" mesher_roi
 ln -s "$MIXOCT" mesher2d
 
-cat >cube.off <<EOS
-OFF
-8 12 0
-0 0 0
-1 0 0
-0 1 0
-1 1 0
-0 0 1
-1 0 1
-0 1 1
-1 1 1
-3 0 2 1
-3 1 2 3
-3 4 5 6
-3 5 7 6
-3 0 1 4
-3 1 5 4
-3 2 6 3
-3 3 6 7
-3 0 4 2
-3 2 4 6
-3 1 3 5
-3 3 7 5
-EOS
+cube_off cube.off 0.5
 cp cube.off in.off
 sum_in=$(cksum <in.off)
 nothing_new() { # what: no file but the ones listed before

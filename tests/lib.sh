@@ -12,3 +12,32 @@ has() { if grep -q -- "$2" "$1"; then ok "$3"; else bad "$3: '$2' not in $(cat "
 same() { if [ "$1" == "$2" ]; then ok "$3"; else bad "$3: '$1' != '$2'"; fi; }
 exists() { if [ -s "$1" ]; then ok "$1 written"; else bad "$1 missing"; fi; }
 absent() { if [ ! -e "$1" ]; then ok "$2"; else bad "$2: $1 exists"; fi; }
+
+# A closed cube [-h, h]^3 of 12 outward triangles, as OFF.
+cube_off() { # file, half side
+  local h=$2
+  cat >"$1" <<EOS
+OFF
+8 12 0
+-$h -$h -$h
+$h -$h -$h
+-$h $h -$h
+$h $h -$h
+-$h -$h $h
+$h -$h $h
+-$h $h $h
+$h $h $h
+3 0 2 1
+3 1 2 3
+3 4 5 6
+3 5 7 6
+3 0 1 4
+3 1 5 4
+3 2 6 3
+3 3 6 7
+3 0 4 2
+3 2 4 6
+3 1 3 5
+3 3 7 5
+EOS
+}
