@@ -144,3 +144,34 @@ uint32_t mx_find_u64(const uint64_t *v, size_t n, uint64_t key) {
   }
   return lo < n && v[lo] == key ? (uint32_t)lo : UINT32_MAX;
 }
+
+uint32_t mx_find_u64_near(const uint64_t *v, size_t n, uint64_t key, size_t *hint) {
+  size_t lo, hi; /* the first place with v[place] >= key lies in [lo, hi] */
+  size_t h = *hint < n ? *hint : n;
+  if (h < n && v[h] < key) {
+    size_t step = 1;
+    lo = h + 1;
+    hi = lo;
+    while (hi < n && v[hi] < key) {
+      lo = hi + 1;
+      hi = n - hi > step ? hi + step : n;
+      step *= 2;
+    }
+  } else {
+    size_t step = 1;
+    hi = h;
+    lo = h;
+    while (lo > 0 && v[lo - 1] >= key) {
+      hi = lo - 1;
+      lo = lo - 1 > step ? lo - 1 - step : 0;
+      step *= 2;
+    }
+  }
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (v[mid] < key) lo = mid + 1;
+    else hi = mid;
+  }
+  *hint = lo;
+  return lo < n && v[lo] == key ? (uint32_t)lo : UINT32_MAX;
+}

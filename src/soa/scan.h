@@ -21,5 +21,12 @@ int mx_sort_u64(uint64_t *keys, uint32_t *vals, size_t n);
 size_t mx_sort_unique_u64(uint64_t *keys, size_t n, int *st);
 /* The index of key in the ascending keys v[0..n), or UINT32_MAX. */
 uint32_t mx_find_u64(const uint64_t *v, size_t n, uint64_t key);
+/* The same, searched outwards from *hint (doubling steps, then halving):
+ * O(log d) reads for a key d places away from the hint, so a run of keys
+ * that are near one another in Morton order (the corners of successive
+ * leaves) costs a cache line or two each instead of a full search. *hint is
+ * set to the key's place (its insertion place when absent) for the next
+ * call; any start value is valid. */
+uint32_t mx_find_u64_near(const uint64_t *v, size_t n, uint64_t key, size_t *hint);
 
 #endif

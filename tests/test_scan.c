@@ -1,0 +1,58 @@
+/* soa/scan: the searches in sorted keys, against a plain linear scan. */
+#include "soa/scan.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+
+static int failures;
+#define CHECK(c)                                                      \
+  do {                                                                \
+    if (!(c)) {                                                       \
+      fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #c); \
+      failures++;                                                     \
+    }                                                                 \
+  } while (0)
+
+static uint64_t rng = 88172645463325252ull;
+static uint64_t next(void) {
+  rng ^= rng << 13;
+  rng ^= rng >> 7;
+  rng ^= rng << 17;
+  return rng;
+}
+
+/* the first place with v[place] >= key (n when none) */
+static size_t lower(const uint64_t *v, size_t n, uint64_t key) {
+  size_t i = 0;
+  while (i < n && v[i] < key) i++;
+  return i;
+}
+
+int main(void) {
+  enum { N = 3000 };
+  static uint64_t v[N], k[N];
+  for (size_t n = 0; n <= N; n = n < 10 ? n + 1 : n * 3) {
+    /* sorted, distinct, with gaps of varying size (clusters as in Morton) */
+    uint64_t x = 5;
+    for (size_t i = 0; i < n; i++) {
+      x += 1 + (next() % 4 == 0 ? next() % 1000 : next() % 3);
+      v[i] = x;
+    }
+    int st = 0;
+    for (size_t i = 0; i < n; i++) k[i] = v[next() % n];
+    CHECK(mx_sort_unique_u64(k, n, &st) <= n && st == 0);
+    size_t hint = 0;
+    for (int q = 0; q < 4000; q++) {
+      /* keys present, absent, below and above all, near and far */
+      uint64_t key = n && q % 3 ? v[next() % n] + (uint64_t)(q % 5 == 0) : next() % (x + 10);
+      if (q % 7 == 0) hint = next(); /* any start value */
+      const size_t at = lower(v, n, key);
+      const uint32_t want = at < n && v[at] == key ? (uint32_t)at : UINT32_MAX;
+      CHECK(mx_find_u64(v, n, key) == want);
+      CHECK(mx_find_u64_near(v, n, key, &hint) == want);
+      CHECK(hint == at);
+    }
+  }
+  printf("%s\n", failures ? "FAIL" : "ok");
+  return failures != 0;
+}
