@@ -16,10 +16,14 @@
  * other processes: min(requested, max(1, processors - others running)),
  * measured at the start of each call and again between its stages
  * (mx_call_recheck, call.h): /proc/loadavg's running count less this
- * process's running threads, a few tens of microseconds.
+ * process's running threads, a few tens of microseconds; when that sees
+ * other threads, twice more within 0.75 ms, the fewest kept (a kernel
+ * worker or a short command is gone by then: a quiet machine must not lose
+ * a thread to them). Calls and stages within 0.1 s of a measure use it.
  *
  * Off when mx_params.threads > 0 (the caller's count wins) or when
- * OMP_WAIT_POLICY or GOMP_SPINCOUNT was set when the library was loaded.
+ * OMP_WAIT_POLICY (active or passive: libgomp ignores other values) or
+ * GOMP_SPINCOUNT was set when the library was loaded.
  * MIXOCT_TEST_BUSY=N (tests only): the limit applies whatever the policy,
  * as if N threads of other processes were running. */
 #ifndef MX_LOAD_LIMIT_H
@@ -31,7 +35,8 @@ int mx_load_limit(int requested, int procs, int others);
 
 /* Running threads of other processes now: the running count of
  * /proc/loadavg less this process's threads in state R (one of them is
- * the caller); -1 when /proc cannot be read. */
+ * the caller), the fewest of up to three looks within 0.75 ms; -1 when
+ * /proc cannot be read. */
 int mx_others_running(void);
 
 /* The thread count for a call that asks for `requested` (OpenMP's

@@ -64,7 +64,7 @@ uint64_t mx_scan_u32(uint32_t *a, size_t n) { return scan(a, n, 1); }
 int mx_sort_u64(uint64_t *keys, uint32_t *vals, size_t n) {
   if (n < 2) return MX_OK;
   uint64_t all_or = 0, all_and = ~0ULL;
-#pragma omp parallel for reduction(| : all_or) reduction(& : all_and)
+#pragma omp parallel for reduction(| : all_or) reduction(& : all_and) if (n >= 65536)
   for (size_t i = 0; i < n; i++) {
     all_or |= keys[i];
     all_and &= keys[i];
