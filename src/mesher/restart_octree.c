@@ -27,6 +27,7 @@
 #include "soa/scan.h"
 
 #include <math.h>
+#include <omp.h>
 #include <string.h>
 
 /* Corner c of the published order: bit pattern (x, y, z) per corner. */
@@ -41,80 +42,215 @@ static uint64_t corner_key(uint64_t key, int level, int c) {
                           p[2] + corner_xyz[c][2] * s);
 }
 
+/* The nodes and edges of the file are the corners and edges of every stored
+ * octant, so each is shared by several octants: emitting all 8 corners and
+ * 12 edges of every octant, then sorting and dropping repeats, sorts about
+ * three keys for each one kept. Two rules leave most repeats unmade:
+ * - a corner c of a split octant is corner c of its child c: the child
+ *   emits it when that child is kept;
+ * - a corner or edge shared by siblings is emitted by one of them: the
+ *   sibling j & b for corner bits b (the one on the low side, per axis, of
+ *   the point), and likewise for an edge on the two axes across it, when
+ *   that sibling is kept.
+ * Both hand the point or edge to an octant that has it too and is stored
+ * (kept), and who it is handed to follows the same rules, so every corner
+ * and edge of every stored octant is still emitted at least once; the sort
+ * drops the repeats across families. Corner bits here: x | y << 1 | z << 2
+ * (the children's numbering), not the published corner order. */
+static unsigned corner_emit_mask(const mx_octree *T, uint32_t o) {
+  unsigned m = 0xffu & ~(unsigned)T->kept[o]; /* kept is 0 for a leaf */
+  const uint32_t P = T->parent[o];
+  if (P == MX_NONE) return m;
+  const unsigned j = (unsigned)mx_morton_child_id(T->key[o], T->level[o]);
+  const unsigned kp = T->kept[P];
+  for (unsigned b = 0; b < 8; b++) {
+    const unsigned jc = j & b;
+    if (jc != j && ((kp >> jc) & 1u)) m &= ~(1u << b);
+  }
+  return m;
+}
+
+/* Edge bits a * 4 + jj: axis a, offsets jj & 1 along a + 1, jj >> 1 along
+ * a + 2 (mod 3), as mx_edge_key numbers them. */
+static unsigned edge_emit_mask(const mx_octree *T, uint32_t o) {
+  const uint32_t P = T->parent[o];
+  if (P == MX_NONE) return 0xfffu;
+  const unsigned j = (unsigned)mx_morton_child_id(T->key[o], T->level[o]);
+  const unsigned kp = T->kept[P];
+  unsigned m = 0;
+  for (unsigned a = 0; a < 3; a++)
+    for (unsigned jj = 0; jj < 4; jj++) {
+      const unsigned b = (a + 1) % 3, c = (a + 2) % 3;
+      unsigned jc = j;
+      if (!(jj & 1u)) jc &= ~(1u << b);
+      if (!(jj & 2u)) jc &= ~(1u << c);
+      if (jc == j || !((kp >> jc) & 1u)) m |= 1u << (a * 4 + jj);
+    }
+  return m;
+}
+
+enum { EMIT_MAX_THREADS = 256 };
+
+/* The threads' shares of the octants: the same contiguous ranges in the
+ * counting pass and the filling pass. */
+static size_t share_lo(size_t n, int t, int nt) { return n * (size_t)t / (size_t)nt; }
+
+/* Node keys: the corners of every stored octant, sorted and unique
+ * (*vkey_out, *nv_out). */
+static int restart_node_keys(const mx_octree *T, uint64_t **vkey_out, size_t *nv_out) {
+  size_t cnt[EMIT_MAX_THREADS + 1] = {0};
+  int nt = omp_get_max_threads();
+  if (nt > EMIT_MAX_THREADS) nt = EMIT_MAX_THREADS;
+  if (T->n < 65536) nt = 1;
+#pragma omp parallel num_threads(nt)
+  {
+    const int t = omp_get_thread_num(), tn = omp_get_num_threads();
+    size_t k = 0;
+    for (size_t o = share_lo(T->n, t, tn); o < share_lo(T->n, t + 1, tn); o++)
+      k += (size_t)__builtin_popcount(corner_emit_mask(T, (uint32_t)o));
+    cnt[t + 1] = k;
+#pragma omp single
+    nt = tn;
+  }
+  for (int t = 0; t < nt; t++) cnt[t + 1] += cnt[t];
+  uint64_t *vkey = mx_alloc((cnt[nt] + 1) * sizeof *vkey);
+  if (!vkey) return MX_ENOMEM;
+#pragma omp parallel num_threads(nt)
+  {
+    const int t = omp_get_thread_num();
+    uint64_t *w = vkey + cnt[t];
+    for (size_t o = share_lo(T->n, t, nt); o < share_lo(T->n, t + 1, nt); o++) {
+      const unsigned m = corner_emit_mask(T, (uint32_t)o);
+      if (!m) continue;
+      uint32_t p[3];
+      mx_morton_decode(T->key[o], p);
+      const uint32_t s = mx_octant_size(T->level[o]);
+      for (unsigned b = 0; b < 8; b++)
+        if ((m >> b) & 1u)
+          *w++ = mx_morton_encode(p[0] + (b & 1u) * s, p[1] + ((b >> 1) & 1u) * s,
+                                  p[2] + (b >> 2) * s);
+    }
+  }
+  int st = MX_OK;
+  *nv_out = mx_sort_unique_u64(vkey, cnt[nt], &st);
+  if (st) {
+    mx_free(vkey);
+    return st;
+  }
+  *vkey_out = vkey;
+  return MX_OK;
+}
+
 /* Edges of every stored octant, per (level, axis), sorted and unique. */
 static int restart_edges(const mx_mesher *m, const uint64_t *vkey, size_t nv, mx_restart *r) {
   const mx_octree *T = &m->B.oct;
-  size_t cnt[MX_MAX_LEVEL + 1] = {0};
-  for (size_t o = 0; o < T->n; o++) cnt[T->level[o]]++;
-  size_t total = 0;
-  uint64_t *keys[MX_MAX_LEVEL + 1][3];
-  size_t nk[MX_MAX_LEVEL + 1][3];
-  int st = MX_OK;
+  enum { NLA = (MX_MAX_LEVEL + 1) * 3 };
+  int nt = omp_get_max_threads();
+  if (nt > 64) nt = 64;
+  if (T->n < 65536) nt = 1;
+  /* cnt[t][la]: thread t's edges of (level, axis) la; then where they go */
+  size_t(*cnt)[NLA] = mx_calloc((size_t)nt * sizeof *cnt);
+  uint64_t *keys[NLA];
+  size_t nk[NLA];
   memset(keys, 0, sizeof keys);
-  for (int l = 0; l <= MX_MAX_LEVEL && !st; l++)
-    for (int a = 0; a < 3 && !st; a++) {
-      nk[l][a] = 0;
-      if (!cnt[l]) continue;
-      keys[l][a] = mx_alloc((4 * cnt[l] + 1) * sizeof **keys);
-      if (!keys[l][a]) st = MX_ENOMEM;
-    }
+  memset(nk, 0, sizeof nk);
+  int st = cnt ? MX_OK : MX_ENOMEM;
   if (!st) {
-    for (size_t o = 0; o < T->n; o++) {
-      const int l = T->level[o];
-      const uint32_t s = mx_octant_size(l);
-      uint32_t c[3];
-      mx_morton_decode(T->key[o], c);
-      for (int a = 0; a < 3; a++)
-        for (int j = 0; j < 4; j++) {
-          uint32_t p[3] = {c[0], c[1], c[2]};
-          p[(a + 1) % 3] += (uint32_t)(j & 1) * s;
-          p[(a + 2) % 3] += (uint32_t)(j >> 1) * s;
-          keys[l][a][nk[l][a]++] = mx_morton_encode(p[0], p[1], p[2]);
-        }
-    }
-    for (int l = 0; l <= MX_MAX_LEVEL && !st; l++)
-      for (int a = 0; a < 3 && !st; a++) {
-        if (!keys[l][a]) continue;
-        nk[l][a] = mx_sort_unique_u64(keys[l][a], nk[l][a], &st);
-        total += nk[l][a];
+#pragma omp parallel num_threads(nt)
+    {
+      const int t = omp_get_thread_num(), tn = omp_get_num_threads();
+      size_t *c = cnt[t];
+      for (size_t o = share_lo(T->n, t, tn); o < share_lo(T->n, t + 1, tn); o++) {
+        const unsigned em = edge_emit_mask(T, (uint32_t)o);
+        const int l = T->level[o];
+        for (int a = 0; a < 3; a++) c[l * 3 + a] += (size_t)__builtin_popcount((em >> (4 * a)) & 15u);
       }
+#pragma omp single
+      nt = tn;
+    }
+    for (int la = 0; la < NLA; la++) {
+      size_t s = 0;
+      for (int t = 0; t < nt; t++) {
+        const size_t c = cnt[t][la];
+        cnt[t][la] = s;
+        s += c;
+      }
+      nk[la] = s;
+      if (s && !st) {
+        keys[la] = mx_alloc(s * sizeof **keys);
+        if (!keys[la]) st = MX_ENOMEM;
+      }
+    }
+  }
+  if (!st) {
+#pragma omp parallel num_threads(nt)
+    {
+      const int t = omp_get_thread_num();
+      size_t *w = cnt[t];
+      for (size_t o = share_lo(T->n, t, nt); o < share_lo(T->n, t + 1, nt); o++) {
+        const unsigned em = edge_emit_mask(T, (uint32_t)o);
+        const int l = T->level[o];
+        const uint32_t s = mx_octant_size(l);
+        uint32_t c[3];
+        mx_morton_decode(T->key[o], c);
+        for (int a = 0; a < 3; a++)
+          for (int j = 0; j < 4; j++) {
+            if (!((em >> (4 * a + j)) & 1u)) continue;
+            uint32_t p[3] = {c[0], c[1], c[2]};
+            p[(a + 1) % 3] += (uint32_t)(j & 1) * s;
+            p[(a + 2) % 3] += (uint32_t)(j >> 1) * s;
+            keys[l * 3 + a][w[l * 3 + a]++] = mx_morton_encode(p[0], p[1], p[2]);
+          }
+      }
+    }
+  }
+  size_t total = 0;
+  for (int la = 0; la < NLA && !st; la++) {
+    if (!keys[la]) continue;
+    nk[la] = mx_sort_unique_u64(keys[la], nk[la], &st);
+    total += nk[la];
   }
   if (!st) {
     r->edge = mx_alloc((3 * total + 1) * sizeof *r->edge);
     if (!r->edge) st = MX_ENOMEM;
   }
-  /* the ends and the mid-node of each edge: three searches in the sorted
-   * node keys, in parallel (each edge writes its own row: the same rows for
-   * any thread count) */
+  /* the ends and the mid-node of each edge: searches in the sorted node
+   * keys from the place of the one before (the edges' keys ascend), in
+   * parallel (each edge writes its own row: the same rows for any thread
+   * count) */
   size_t w = 0;
-  for (int l = 0; l <= MX_MAX_LEVEL && !st; l++) {
-    const uint32_t s = mx_octant_size(l);
-    for (int a = 0; a < 3; a++) {
-      const uint64_t *k = keys[l][a];
-      uint32_t *e = r->edge + 3 * w;
-      const size_t n = nk[l][a];
-#pragma omp parallel for schedule(static) if (n > 4096)
-      for (size_t i = 0; i < n; i++) {
-        uint32_t p[3], q[3];
+  for (int la = 0; la < NLA && !st; la++) {
+    const int a = la % 3;
+    const uint32_t s = mx_octant_size(la / 3);
+    const uint64_t *k = keys[la];
+    uint32_t *e = r->edge + 3 * w;
+    const size_t n = nk[la];
+#pragma omp parallel if (n > 4096)
+    {
+      const int t = omp_get_thread_num(), tn = omp_get_num_threads();
+      size_t ha = 0, hb = 0, hm = 0;
+      for (size_t i = share_lo(n, t, tn); i < share_lo(n, t + 1, tn); i++) {
+        uint32_t p[3], q[3], h[3];
         mx_morton_decode(k[i], p);
         memcpy(q, p, sizeof q);
+        memcpy(h, p, sizeof h);
         q[a] += s;
-        uint32_t h[3] = {p[0], p[1], p[2]};
         h[a] += s / 2;
-        const uint32_t ia = mx_find_u64(vkey, nv, k[i]);
-        const uint32_t ib = mx_find_u64(vkey, nv, mx_morton_encode(q[0], q[1], q[2]));
-        const uint32_t im = s > 1 ? mx_find_u64(vkey, nv, mx_morton_encode(h[0], h[1], h[2]))
-                                  : UINT32_MAX;
+        const uint32_t ia = mx_find_u64_near(vkey, nv, k[i], &ha);
+        const uint32_t ib = mx_find_u64_near(vkey, nv, mx_morton_encode(q[0], q[1], q[2]), &hb);
+        const uint32_t im =
+            s > 1 ? mx_find_u64_near(vkey, nv, mx_morton_encode(h[0], h[1], h[2]), &hm)
+                  : UINT32_MAX;
         e[3 * i + 0] = ia;
         e[3 * i + 1] = ib;
         e[3 * i + 2] = im == UINT32_MAX ? 0 : im;
       }
-      w += n;
     }
+    w += n;
   }
   r->ne = w;
-  for (int l = 0; l <= MX_MAX_LEVEL; l++)
-    for (int a = 0; a < 3; a++) mx_free(keys[l][a]);
+  for (int la = 0; la < NLA; la++) mx_free(keys[la]);
+  mx_free(cnt);
   return st;
 }
 
@@ -122,18 +258,13 @@ static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r
   const mx_octree *T = &m->B.oct;
   memset(r, 0, sizeof *r);
   /* nodes: corners of every stored octant */
-  uint64_t *vkey = mx_alloc((8 * T->n + 1) * sizeof *vkey);
-  if (!vkey) return MX_ENOMEM;
-#pragma omp parallel for schedule(static)
-  for (size_t o = 0; o < T->n; o++)
-    for (int c = 0; c < 8; c++) vkey[8 * o + c] = corner_key(T->key[o], T->level[o], c);
-  int st = MX_OK;
-  const size_t nv = mx_sort_unique_u64(vkey, 8 * T->n, &st);
-  if (!st) {
-    r->nv = nv;
-    r->xyz = mx_alloc((3 * nv + 1) * sizeof *r->xyz);
-    if (!r->xyz) st = MX_ENOMEM;
-  }
+  uint64_t *vkey = NULL;
+  size_t nv = 0;
+  int st = restart_node_keys(T, &vkey, &nv);
+  if (st) return st;
+  r->nv = nv;
+  r->xyz = mx_alloc((3 * nv + 1) * sizeof *r->xyz);
+  if (!r->xyz) st = MX_ENOMEM;
   if (!st) {
     const mx_grid *g = &m->B.grid;
 #pragma omp parallel for schedule(static)
@@ -158,11 +289,21 @@ static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r
     if (!r->oct_node || !r->oct_level || !r->oct_tri_off) st = MX_ENOMEM;
   }
   if (!st) {
+    /* corner c of successive leaves: near the one before in Morton order */
+#pragma omp parallel
+    {
+      const int t = omp_get_thread_num(), tn = omp_get_num_threads();
+      size_t hint[8] = {0};
+      for (size_t i = share_lo(no, t, tn); i < share_lo(no, t + 1, tn); i++) {
+        const uint32_t o = m->leaves[i];
+        for (int c = 0; c < 8; c++)
+          r->oct_node[8 * i + c] =
+              mx_find_u64_near(vkey, nv, corner_key(T->key[o], T->level[o], c), &hint[c]);
+      }
+    }
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < no; i++) {
       const uint32_t o = m->leaves[i];
-      for (int c = 0; c < 8; c++)
-        r->oct_node[8 * i + c] = mx_find_u64(vkey, nv, corner_key(T->key[o], T->level[o], c));
       r->oct_level[i] = T->level[o];
       uint64_t k = 0;
       for (uint32_t j = 0; j < T->tri_cnt[o]; j++)
