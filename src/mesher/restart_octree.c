@@ -24,6 +24,7 @@
 #include "io/element_list.h"
 #include "io/restart.h"
 #include "kernels/grid.h"
+#include "soa/key_index.h"
 #include "soa/scan.h"
 
 #include <math.h>
@@ -142,7 +143,7 @@ static int restart_node_keys(const mx_octree *T, uint64_t **vkey_out, size_t *nv
 }
 
 /* Edges of every stored octant, per (level, axis), sorted and unique. */
-static int restart_edges(const mx_mesher *m, const uint64_t *vkey, size_t nv, mx_restart *r) {
+static int restart_edges(const mx_mesher *m, const mx_key_index *H, mx_restart *r) {
   const mx_octree *T = &m->B.oct;
   enum { NLA = (MX_MAX_LEVEL + 1) * 3 };
   int nt = omp_get_max_threads();
@@ -214,37 +215,29 @@ static int restart_edges(const mx_mesher *m, const uint64_t *vkey, size_t nv, mx
     r->edge = mx_alloc((3 * total + 1) * sizeof *r->edge);
     if (!r->edge) st = MX_ENOMEM;
   }
-  /* the ends and the mid-node of each edge: searches in the sorted node
-   * keys from the place of the one before (the edges' keys ascend), in
+  /* the ends and the mid-node of each edge, from the node index, in
    * parallel (each edge writes its own row: the same rows for any thread
-   * count) */
+   * count); the lookups of a few edges ahead are prefetched */
+  enum { AHEAD = 8 };
   size_t w = 0;
   for (int la = 0; la < NLA && !st; la++) {
     const int a = la % 3;
     const uint32_t s = mx_octant_size(la / 3);
+    const uint64_t da = mx_morton_encode(a == 0 ? s : 0, a == 1 ? s : 0, a == 2 ? s : 0);
+    const uint64_t dm = mx_morton_encode(a == 0 ? s / 2 : 0, a == 1 ? s / 2 : 0, a == 2 ? s / 2 : 0);
     const uint64_t *k = keys[la];
     uint32_t *e = r->edge + 3 * w;
     const size_t n = nk[la];
-#pragma omp parallel if (n > 4096)
-    {
-      const int t = omp_get_thread_num(), tn = omp_get_num_threads();
-      size_t ha = 0, hb = 0, hm = 0;
-      for (size_t i = share_lo(n, t, tn); i < share_lo(n, t + 1, tn); i++) {
-        uint32_t p[3], q[3], h[3];
-        mx_morton_decode(k[i], p);
-        memcpy(q, p, sizeof q);
-        memcpy(h, p, sizeof h);
-        q[a] += s;
-        h[a] += s / 2;
-        const uint32_t ia = mx_find_u64_near(vkey, nv, k[i], &ha);
-        const uint32_t ib = mx_find_u64_near(vkey, nv, mx_morton_encode(q[0], q[1], q[2]), &hb);
-        const uint32_t im =
-            s > 1 ? mx_find_u64_near(vkey, nv, mx_morton_encode(h[0], h[1], h[2]), &hm)
-                  : UINT32_MAX;
-        e[3 * i + 0] = ia;
-        e[3 * i + 1] = ib;
-        e[3 * i + 2] = im == UINT32_MAX ? 0 : im;
+#pragma omp parallel for schedule(static) if (n > 4096)
+    for (size_t i = 0; i < n; i++) {
+      if (i + AHEAD < n) {
+        mx_key_index_prefetch(H, mx_morton_add(k[i + AHEAD], da));
+        if (s > 1) mx_key_index_prefetch(H, mx_morton_add(k[i + AHEAD], dm));
       }
+      const uint32_t im = s > 1 ? mx_key_index_find(H, mx_morton_add(k[i], dm)) : UINT32_MAX;
+      e[3 * i + 0] = mx_key_index_find(H, k[i]);
+      e[3 * i + 1] = mx_key_index_find(H, mx_morton_add(k[i], da));
+      e[3 * i + 2] = im == UINT32_MAX ? 0 : im;
     }
     w += n;
   }
@@ -274,7 +267,17 @@ static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r
       for (int a = 0; a < 3; a++) r->xyz[3 * i + a] = g->origin[a] + (double)p[a] * g->unit;
     }
   }
-  if (!st && with_edges) st = restart_edges(m, vkey, nv, r);
+  /* where each node key lies in the sorted keys, by hashing */
+  mx_key_index H = {NULL, 0, 0};
+  if (!st) {
+    int top = 0;
+    for (size_t o = 0; o < T->n; o++)
+      if (T->level[o] > top) top = T->level[o];
+    st = mx_key_index_build(&H, vkey, nv, 3 * (MX_MAX_LEVEL - top));
+  }
+  mx_free(vkey);
+  vkey = NULL;
+  if (!st && with_edges) st = restart_edges(m, &H, r);
   if (!st && !with_edges) {
     r->edge = mx_alloc(sizeof *r->edge); /* none: implied by the octants */
     if (!r->edge) st = MX_ENOMEM;
@@ -289,17 +292,18 @@ static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r
     if (!r->oct_node || !r->oct_level || !r->oct_tri_off) st = MX_ENOMEM;
   }
   if (!st) {
-    /* corner c of successive leaves: near the one before in Morton order */
-#pragma omp parallel
-    {
-      const int t = omp_get_thread_num(), tn = omp_get_num_threads();
-      size_t hint[8] = {0};
-      for (size_t i = share_lo(no, t, tn); i < share_lo(no, t + 1, tn); i++) {
-        const uint32_t o = m->leaves[i];
+    /* the corners of each leaf, from the node index (those of the next
+     * leaf prefetched) */
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < no; i++) {
+      if (i + 1 < no) {
+        const uint32_t q = m->leaves[i + 1];
         for (int c = 0; c < 8; c++)
-          r->oct_node[8 * i + c] =
-              mx_find_u64_near(vkey, nv, corner_key(T->key[o], T->level[o], c), &hint[c]);
+          mx_key_index_prefetch(&H, corner_key(T->key[q], T->level[q], c));
       }
+      const uint32_t o = m->leaves[i];
+      for (int c = 0; c < 8; c++)
+        r->oct_node[8 * i + c] = mx_key_index_find(&H, corner_key(T->key[o], T->level[o], c));
     }
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < no; i++) {
@@ -339,6 +343,7 @@ static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r
     r->by_type = 1; /* our meshes are written grouped by type (io/cell_order.c) */
   }
   mx_free(vkey);
+  mx_key_index_free(&H);
   return st;
 }
 

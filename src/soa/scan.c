@@ -167,11 +167,16 @@ uint32_t mx_find_u64_near(const uint64_t *v, size_t n, uint64_t key, size_t *hin
       step *= 2;
     }
   }
-  while (lo < hi) {
-    const size_t mid = lo + (hi - lo) / 2;
-    if (v[mid] < key) lo = mid + 1;
-    else hi = mid;
+  /* the first place in [lo, hi] without a branch per step: the place is
+   * in [b, b + len] all along, and b[len] may be v[n], never read */
+  const uint64_t *b = v + lo;
+  for (size_t len = hi - lo; len > 1;) {
+    const size_t half = len / 2;
+    b = b[half] < key ? b + half : b;
+    len -= half;
   }
-  *hint = lo;
-  return lo < n && v[lo] == key ? (uint32_t)lo : UINT32_MAX;
+  size_t at = (size_t)(b - v);
+  if (hi > lo && *b < key) at++;
+  *hint = at;
+  return at < n && v[at] == key ? (uint32_t)at : UINT32_MAX;
 }

@@ -1,0 +1,60 @@
+/* Lattice keys -> their place in a sorted key array, by hashing: a lookup
+ * costs one cache miss at most (lookups of successive points overlap their
+ * misses), where a search in the sorted array costs a chain of dependent
+ * ones. The restart file's writer looks up the ends of every edge and the
+ * corners of every leaf this way.
+ *
+ * Keys are placed by spatial blocks (mx_block_slot): the points of one block
+ * of 4x4x4 lattice spacings land in one window (twice its size) of the
+ * table, so points taken in Morton order touch a few windows at a time, and
+ * the blocks themselves are spread by a mixing hash. The transition stage's
+ * node hash places its nodes the same way. */
+#ifndef MX_KEY_INDEX_H
+#define MX_KEY_INDEX_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* Home slot of a key in a table of cap slots; shift: the low key bits that
+ * are zero for every key stored (3 per level below the finest lattice). */
+static inline size_t mx_block_slot(uint64_t key, size_t cap, int shift) {
+  const uint64_t k = key >> shift;
+  uint64_t h = (k >> 6) * 0x9E3779B97F4A7C15ULL;
+  h ^= h >> 31;
+  const size_t base = (size_t)(((unsigned __int128)h * cap) >> 64);
+  const size_t s = base + 2 * (size_t)(k & 63);
+  return s >= cap ? s - cap : s;
+}
+
+typedef struct {
+  uint64_t kw; /* key + 1; 0: empty */
+  uint64_t id; /* its place in the sorted keys */
+} mx_key_slot;
+
+typedef struct {
+  mx_key_slot *e;
+  size_t cap;
+  int shift;
+} mx_key_index;
+
+/* Index of the n distinct keys (any order; id = place in the array), in
+ * parallel. MX_OK, or MX_ENOMEM (nothing to free then). */
+int mx_key_index_build(mx_key_index *H, const uint64_t *keys, size_t n, int shift);
+void mx_key_index_free(mx_key_index *H);
+
+/* The id of key, or UINT32_MAX when it is not in the index. */
+static inline uint32_t mx_key_index_find(const mx_key_index *H, uint64_t key) {
+  size_t i = mx_block_slot(key, H->cap, H->shift);
+  for (;;) {
+    const uint64_t kw = H->e[i].kw;
+    if (kw == key + 1) return (uint32_t)H->e[i].id;
+    if (!kw) return UINT32_MAX;
+    i = i + 1 == H->cap ? 0 : i + 1;
+  }
+}
+
+static inline void mx_key_index_prefetch(const mx_key_index *H, uint64_t key) {
+  __builtin_prefetch(&H->e[mx_block_slot(key, H->cap, H->shift)], 0);
+}
+
+#endif
