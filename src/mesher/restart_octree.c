@@ -156,16 +156,21 @@ static int restart_edges(const mx_mesher *m, const mx_key_index *H, mx_restart *
   memset(keys, 0, sizeof keys);
   memset(nk, 0, sizeof nk);
   int st = cnt ? MX_OK : MX_ENOMEM;
+  uint32_t split_levels = 0; /* bit l: an octant of level l has a kept child */
   if (!st) {
 #pragma omp parallel num_threads(nt)
     {
       const int t = omp_get_thread_num(), tn = omp_get_num_threads();
       size_t *c = cnt[t];
+      uint32_t split = 0;
       for (size_t o = share_lo(T->n, t, tn); o < share_lo(T->n, t + 1, tn); o++) {
         const unsigned em = edge_emit_mask(T, (uint32_t)o);
         const int l = T->level[o];
         for (int a = 0; a < 3; a++) c[l * 3 + a] += (size_t)__builtin_popcount((em >> (4 * a)) & 15u);
+        if (T->kept[o]) split |= 1u << l;
       }
+#pragma omp atomic
+      split_levels |= split;
 #pragma omp single
       nt = tn;
     }
@@ -226,15 +231,18 @@ static int restart_edges(const mx_mesher *m, const mx_key_index *H, mx_restart *
     const uint64_t da = mx_morton_encode(a == 0 ? s : 0, a == 1 ? s : 0, a == 2 ? s : 0);
     const uint64_t dm = mx_morton_encode(a == 0 ? s / 2 : 0, a == 1 ? s / 2 : 0, a == 2 ? s / 2 : 0);
     const uint64_t *k = keys[la];
+    /* a mid-node is the corner of a child of an octant of this level */
+    const int mids = s > 1 && ((split_levels >> (la / 3)) & 1u);
     uint32_t *e = r->edge + 3 * w;
     const size_t n = nk[la];
 #pragma omp parallel for schedule(static) if (n > 4096)
     for (size_t i = 0; i < n; i++) {
       if (i + AHEAD < n) {
+        mx_key_index_prefetch(H, k[i + AHEAD]);
         mx_key_index_prefetch(H, mx_morton_add(k[i + AHEAD], da));
-        if (s > 1) mx_key_index_prefetch(H, mx_morton_add(k[i + AHEAD], dm));
+        if (mids) mx_key_index_prefetch(H, mx_morton_add(k[i + AHEAD], dm));
       }
-      const uint32_t im = s > 1 ? mx_key_index_find(H, mx_morton_add(k[i], dm)) : UINT32_MAX;
+      const uint32_t im = mids ? mx_key_index_find(H, mx_morton_add(k[i], dm)) : UINT32_MAX;
       e[3 * i + 0] = mx_key_index_find(H, k[i]);
       e[3 * i + 1] = mx_key_index_find(H, mx_morton_add(k[i], da));
       e[3 * i + 2] = im == UINT32_MAX ? 0 : im;

@@ -8,10 +8,13 @@ int mx_key_index_build(mx_key_index *H, const uint64_t *keys, size_t n, int shif
    * edge without a mid-node) meets an empty slot soon */
   size_t cap = 64;
   while (cap < 2 * n) cap *= 2;
-  H->e = mx_calloc(cap * sizeof *H->e);
+  H->e = mx_alloc(cap * sizeof *H->e);
   H->cap = cap;
   H->shift = shift;
   if (!H->e) return MX_ENOMEM;
+  /* zeroed by all the threads: the first touch of fresh pages costs most */
+#pragma omp parallel for schedule(static) if (cap > 65536)
+  for (size_t i = 0; i < cap; i++) H->e[i].kw = 0;
   /* distinct keys: each claims a free slot with one compare-and-swap */
 #pragma omp parallel for schedule(static) if (n > 65536)
   for (size_t k = 0; k < n; k++) {
