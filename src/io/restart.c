@@ -252,15 +252,24 @@ static int check_restart(const char *name, const mx_restart *r, int status,
   if (!r->xyz || !r->edge || !r->oct_node || !r->oct_level || !r->oct_tri_off ||
       (r->oct_tri_off[r->no] > 0 && !r->oct_tri))
     BAD("missing arrays");
-  for (size_t i = 0; i < 3 * r->nv; i++)
+  /* the big arrays are counted in parallel; a serial pass finds the first
+   * fault to report only when there is one */
+  size_t bad = 0;
+#pragma omp parallel for schedule(static) reduction(+ : bad) if (r->nv > 65536)
+  for (size_t i = 0; i < 3 * r->nv; i++) bad += !isfinite(r->xyz[i]);
+  for (size_t i = 0; bad && i < 3 * r->nv; i++)
     if (!isfinite(r->xyz[i])) BAD("node %zu: non-finite coordinate", i / 3);
-  for (size_t i = 0; i < 3 * r->ne; i++)
+#pragma omp parallel for schedule(static) reduction(+ : bad) if (r->ne > 65536)
+  for (size_t i = 0; i < 3 * r->ne; i++) bad += r->edge[i] >= r->nv;
+  for (size_t i = 0; bad && i < 3 * r->ne; i++)
     if (r->edge[i] >= r->nv)
       BAD("edge %zu: node index %u out of range (%zu nodes)", i / 3, r->edge[i],
           r->nv);
   if (r->dim != 0 && r->dim != 2 && r->dim != 3) BAD("dimension %d", r->dim);
   const size_t nc = r->dim == 2 ? 4 : 8;
-  for (size_t i = 0; i < nc * r->no; i++)
+#pragma omp parallel for schedule(static) reduction(+ : bad) if (r->no > 65536)
+  for (size_t i = 0; i < nc * r->no; i++) bad += r->oct_node[8 * (i / nc) + i % nc] >= r->nv;
+  for (size_t i = 0; bad && i < nc * r->no; i++)
     if (r->oct_node[8 * (i / nc) + i % nc] >= r->nv)
       BAD("octant %zu: node index %u out of range (%zu nodes)", i / nc,
           r->oct_node[8 * (i / nc) + i % nc], r->nv);
