@@ -276,15 +276,13 @@ static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r
     }
   }
   /* where each node key lies in the sorted keys, by hashing */
-  mx_key_index H = {NULL, 0, 0};
+  mx_key_index H = {NULL, NULL, 0, 0};
   if (!st) {
     int top = 0;
     for (size_t o = 0; o < T->n; o++)
       if (T->level[o] > top) top = T->level[o];
     st = mx_key_index_build(&H, vkey, nv, 3 * (MX_MAX_LEVEL - top));
   }
-  mx_free(vkey);
-  vkey = NULL;
   if (!st && with_edges) st = restart_edges(m, &H, r);
   if (!st && !with_edges) {
     r->edge = mx_alloc(sizeof *r->edge); /* none: implied by the octants */

@@ -4,28 +4,25 @@
 #include "common.h"
 
 int mx_key_index_build(mx_key_index *H, const uint64_t *keys, size_t n, int shift) {
-  /* load at most 1/2: short probe runs, and a lookup of an absent key (an
-   * edge without a mid-node) meets an empty slot soon */
   size_t cap = 64;
-  while (cap < 2 * n) cap *= 2;
-  H->e = mx_alloc(cap * sizeof *H->e);
+  while (10 * n > 7 * cap) cap *= 2;
+  H->slot = mx_alloc(cap * sizeof *H->slot);
+  H->keys = keys;
   H->cap = cap;
   H->shift = shift;
-  if (!H->e) return MX_ENOMEM;
-  /* zeroed by all the threads: the first touch of fresh pages costs most */
+  if (!H->slot) return MX_ENOMEM;
+  /* emptied by all the threads: the first touch of fresh pages costs most */
 #pragma omp parallel for schedule(static) if (cap > 65536)
-  for (size_t i = 0; i < cap; i++) H->e[i].kw = 0;
+  for (size_t i = 0; i < cap; i++) H->slot[i] = UINT32_MAX;
   /* distinct keys: each claims a free slot with one compare-and-swap */
 #pragma omp parallel for schedule(static) if (n > 65536)
   for (size_t k = 0; k < n; k++) {
     size_t i = mx_block_slot(keys[k], cap, shift);
     for (;;) {
-      uint64_t expected = 0;
-      if (__atomic_compare_exchange_n(&H->e[i].kw, &expected, keys[k] + 1, 0, __ATOMIC_RELAXED,
-                                      __ATOMIC_RELAXED)) {
-        H->e[i].id = k;
+      uint32_t expected = UINT32_MAX;
+      if (__atomic_compare_exchange_n(&H->slot[i], &expected, (uint32_t)k, 0, __ATOMIC_RELAXED,
+                                      __ATOMIC_RELAXED))
         break;
-      }
       i = i + 1 == cap ? 0 : i + 1;
     }
   }
@@ -33,7 +30,7 @@ int mx_key_index_build(mx_key_index *H, const uint64_t *keys, size_t n, int shif
 }
 
 void mx_key_index_free(mx_key_index *H) {
-  mx_free(H->e);
-  H->e = NULL;
+  mx_free(H->slot);
+  H->slot = NULL;
   H->cap = 0;
 }
