@@ -249,8 +249,8 @@ static int check_restart(const char *name, const mx_restart *r, int status,
   } while (0)
   if (r->no == 0) BAD("no octants");
   if (r->nv > UINT32_MAX) BAD("%zu nodes: more than 32-bit indices", r->nv);
-  if (!r->xyz || !r->edge || !r->oct_node || !r->oct_level || !r->oct_tri_off ||
-      (r->oct_tri_off[r->no] > 0 && !r->oct_tri))
+  if (!r->xyz || (!r->edge && !r->edge_rows) || (!r->oct_node && !r->oct_rows) ||
+      !r->oct_level || !r->oct_tri_off || (r->oct_tri_off[r->no] > 0 && !r->oct_tri))
     BAD("missing arrays");
   /* the big arrays are counted in parallel; a serial pass finds the first
    * fault to report only when there is one */
@@ -259,17 +259,18 @@ static int check_restart(const char *name, const mx_restart *r, int status,
   for (size_t i = 0; i < 3 * r->nv; i++) bad += !isfinite(r->xyz[i]);
   for (size_t i = 0; bad && i < 3 * r->nv; i++)
     if (!isfinite(r->xyz[i])) BAD("node %zu: non-finite coordinate", i / 3);
-#pragma omp parallel for schedule(static) reduction(+ : bad) if (r->ne > 65536)
-  for (size_t i = 0; i < 3 * r->ne; i++) bad += r->edge[i] >= r->nv;
-  for (size_t i = 0; bad && i < 3 * r->ne; i++)
+  const size_t ne = r->edge ? r->ne : 0, no = r->oct_node ? r->no : 0; /* else generated */
+#pragma omp parallel for schedule(static) reduction(+ : bad) if (ne > 65536)
+  for (size_t i = 0; i < 3 * ne; i++) bad += r->edge[i] >= r->nv;
+  for (size_t i = 0; bad && i < 3 * ne; i++)
     if (r->edge[i] >= r->nv)
       BAD("edge %zu: node index %u out of range (%zu nodes)", i / 3, r->edge[i],
           r->nv);
   if (r->dim != 0 && r->dim != 2 && r->dim != 3) BAD("dimension %d", r->dim);
   const size_t nc = r->dim == 2 ? 4 : 8;
-#pragma omp parallel for schedule(static) reduction(+ : bad) if (r->no > 65536)
-  for (size_t i = 0; i < nc * r->no; i++) bad += r->oct_node[8 * (i / nc) + i % nc] >= r->nv;
-  for (size_t i = 0; bad && i < nc * r->no; i++)
+#pragma omp parallel for schedule(static) reduction(+ : bad) if (no > 65536)
+  for (size_t i = 0; i < nc * no; i++) bad += r->oct_node[8 * (i / nc) + i % nc] >= r->nv;
+  for (size_t i = 0; bad && i < nc * no; i++)
     if (r->oct_node[8 * (i / nc) + i % nc] >= r->nv)
       BAD("octant %zu: node index %u out of range (%zu nodes)", i / nc,
           r->oct_node[8 * (i / nc) + i % nc], r->nv);
@@ -1087,13 +1088,23 @@ static size_t fill_nodes(const void *ctx, size_t b, size_t e, char *out) {
   return (size_t)(o - out);
 }
 
+enum { GEN_BLOCK = 256 }; /* rows made at a time by a generator */
+
 static size_t fill_edges(const void *ctx, size_t b, size_t e, char *out) {
-  const uint32_t *ed = ((const mx_restart *)ctx)->edge;
+  const mx_restart *r = ctx;
+  uint32_t rows[3 * GEN_BLOCK];
   char *o = out;
-  for (size_t i = b; i < e; i++) {
-    for (int k = 0; k < 3; k++) {
-      o += mx_put_u64(o, ed[3 * i + k]);
-      *o++ = k < 2 ? ' ' : '\n';
+  for (size_t i0 = b; i0 < e; i0 += GEN_BLOCK) {
+    const size_t i1 = e - i0 < GEN_BLOCK ? e : i0 + GEN_BLOCK;
+    const uint32_t *ed = r->edge ? r->edge + 3 * i0 : rows;
+    if (!r->edge) r->edge_rows(r->gen, i0, i1, rows);
+    for (size_t i = 0; i < 3 * (i1 - i0); i += 3) {
+      o += mx_put_u64(o, ed[i]);
+      *o++ = ' ';
+      o += mx_put_u64(o, ed[i + 1]);
+      *o++ = ' ';
+      o += mx_put_u64(o, ed[i + 2]);
+      *o++ = '\n';
     }
   }
   return (size_t)(o - out);
@@ -1101,23 +1112,29 @@ static size_t fill_edges(const void *ctx, size_t b, size_t e, char *out) {
 
 static size_t fill_octants(const void *ctx, size_t b, size_t e, char *out) {
   const mx_restart *r = ctx;
+  uint32_t rows[8 * GEN_BLOCK];
   char *o = out;
   const int nc = r->dim == 2 ? 4 : 8;
-  for (size_t i = b; i < e; i++) {
-    *o++ = (char)('0' + nc);
-    for (int k = 0; k < nc; k++) {
+  for (size_t i0 = b; i0 < e; i0 += GEN_BLOCK) {
+    const size_t i1 = e - i0 < GEN_BLOCK ? e : i0 + GEN_BLOCK;
+    const uint32_t *on = r->oct_node ? r->oct_node + 8 * i0 : rows;
+    if (!r->oct_node) r->oct_rows(r->gen, i0, i1, rows);
+    for (size_t i = i0; i < i1; i++, on += 8) {
+      *o++ = (char)('0' + nc);
+      for (int k = 0; k < nc; k++) {
+        *o++ = ' ';
+        o += mx_put_u64(o, on[k]);
+      }
       *o++ = ' ';
-      o += mx_put_u64(o, r->oct_node[8 * i + k]);
+      o += mx_put_u64(o, r->oct_level[i]);
+      *o++ = '\n';
+      o += mx_put_u64(o, r->oct_tri_off[i + 1] - r->oct_tri_off[i]);
+      for (uint64_t j = r->oct_tri_off[i]; j < r->oct_tri_off[i + 1]; j++) {
+        *o++ = ' ';
+        o += mx_put_u64(o, r->oct_tri[j]);
+      }
+      *o++ = '\n';
     }
-    *o++ = ' ';
-    o += mx_put_u64(o, r->oct_level[i]);
-    *o++ = '\n';
-    o += mx_put_u64(o, r->oct_tri_off[i + 1] - r->oct_tri_off[i]);
-    for (uint64_t j = r->oct_tri_off[i]; j < r->oct_tri_off[i + 1]; j++) {
-      *o++ = ' ';
-      o += mx_put_u64(o, r->oct_tri[j]);
-    }
-    *o++ = '\n';
   }
   return (size_t)(o - out);
 }
@@ -1237,6 +1254,10 @@ int mx_restart_write_binary(const char *path, const mx_restart *r) {
   MX_CHECK(check_restart(path, r, MX_EINTERNAL, BAD_DATA));
   if (r->dim == 2) {
     mx_error(path, 0, "%s: a quadtree restart file is text only", BAD_DATA);
+    return MX_EINTERNAL;
+  }
+  if (!r->edge || !r->oct_node) {
+    mx_error(path, 0, "%s: the binary writer takes stored rows, not generated ones", BAD_DATA);
     return MX_EINTERNAL;
   }
   MX_CHECK(check_mesh(path, r, MX_EINTERNAL, BAD_DATA));

@@ -142,21 +142,40 @@ static int restart_node_keys(const mx_octree *T, uint64_t **vkey_out, size_t *nv
   return MX_OK;
 }
 
+enum { NLA = (MX_MAX_LEVEL + 1) * 3 }; /* (level, axis) pairs: la = level * 3 + axis */
+
+/* What the text writer needs to make the edge rows and the octants'
+ * corners while it writes (mx_restart's generators): the sorted node keys
+ * and their index, the sorted edge keys of each (level, axis) and where
+ * their rows start. */
+typedef struct {
+  const mx_mesher *m;
+  uint64_t *vkey;       /* the nodes' lattice keys, sorted */
+  mx_key_index H;       /* key -> node */
+  uint64_t *keys[NLA];  /* edges: lower ends, sorted and unique */
+  size_t first[NLA + 1]; /* row of the first edge of each (level, axis) */
+  uint32_t split_levels; /* bit l: an octant of level l has a kept child */
+} restart_gen;
+
+static void restart_gen_free(restart_gen *g) {
+  mx_free(g->vkey);
+  mx_key_index_free(&g->H);
+  for (int la = 0; la < NLA; la++) mx_free(g->keys[la]);
+  memset(g, 0, sizeof *g);
+}
+
 /* Edges of every stored octant, per (level, axis), sorted and unique. */
-static int restart_edges(const mx_mesher *m, const mx_key_index *H, mx_restart *r) {
+static int restart_edge_keys(const mx_mesher *m, restart_gen *g) {
   const mx_octree *T = &m->B.oct;
-  enum { NLA = (MX_MAX_LEVEL + 1) * 3 };
   int nt = omp_get_max_threads();
   if (nt > 64) nt = 64;
   if (T->n < 65536) nt = 1;
   /* cnt[t][la]: thread t's edges of (level, axis) la; then where they go */
   size_t(*cnt)[NLA] = mx_calloc((size_t)nt * sizeof *cnt);
-  uint64_t *keys[NLA];
   size_t nk[NLA];
-  memset(keys, 0, sizeof keys);
   memset(nk, 0, sizeof nk);
   int st = cnt ? MX_OK : MX_ENOMEM;
-  uint32_t split_levels = 0; /* bit l: an octant of level l has a kept child */
+  uint32_t split_levels = 0;
   if (!st) {
 #pragma omp parallel num_threads(nt)
     {
@@ -183,11 +202,12 @@ static int restart_edges(const mx_mesher *m, const mx_key_index *H, mx_restart *
       }
       nk[la] = s;
       if (s && !st) {
-        keys[la] = mx_alloc(s * sizeof **keys);
-        if (!keys[la]) st = MX_ENOMEM;
+        g->keys[la] = mx_alloc(s * sizeof **g->keys);
+        if (!g->keys[la]) st = MX_ENOMEM;
       }
     }
   }
+  g->split_levels = split_levels;
   if (!st) {
 #pragma omp parallel num_threads(nt)
     {
@@ -205,112 +225,128 @@ static int restart_edges(const mx_mesher *m, const mx_key_index *H, mx_restart *
             uint32_t p[3] = {c[0], c[1], c[2]};
             p[(a + 1) % 3] += (uint32_t)(j & 1) * s;
             p[(a + 2) % 3] += (uint32_t)(j >> 1) * s;
-            keys[l * 3 + a][w[l * 3 + a]++] = mx_morton_encode(p[0], p[1], p[2]);
+            g->keys[l * 3 + a][w[l * 3 + a]++] = mx_morton_encode(p[0], p[1], p[2]);
           }
       }
     }
   }
-  size_t total = 0;
-  for (int la = 0; la < NLA && !st; la++) {
-    if (!keys[la]) continue;
-    nk[la] = mx_sort_unique_u64(keys[la], nk[la], &st);
-    total += nk[la];
+  g->first[0] = 0;
+  for (int la = 0; la < NLA; la++) {
+    if (!st && g->keys[la]) nk[la] = mx_sort_unique_u64(g->keys[la], nk[la], &st);
+    g->first[la + 1] = g->first[la] + (st ? 0 : nk[la]);
   }
-  if (!st) {
-    r->edge = mx_alloc((3 * total + 1) * sizeof *r->edge);
-    if (!r->edge) st = MX_ENOMEM;
-  }
-  /* the ends and the mid-node of each edge, from the node index, in
-   * parallel (each edge writes its own row: the same rows for any thread
-   * count); the lookups of a few edges ahead are prefetched */
-  enum { AHEAD = 8 };
-  size_t w = 0;
-  for (int la = 0; la < NLA && !st; la++) {
-    const int a = la % 3;
-    const uint32_t s = mx_octant_size(la / 3);
-    const uint64_t da = mx_morton_encode(a == 0 ? s : 0, a == 1 ? s : 0, a == 2 ? s : 0);
-    const uint64_t dm = mx_morton_encode(a == 0 ? s / 2 : 0, a == 1 ? s / 2 : 0, a == 2 ? s / 2 : 0);
-    const uint64_t *k = keys[la];
-    /* a mid-node is the corner of a child of an octant of this level */
-    const int mids = s > 1 && ((split_levels >> (la / 3)) & 1u);
-    uint32_t *e = r->edge + 3 * w;
-    const size_t n = nk[la];
-#pragma omp parallel for schedule(static) if (n > 4096)
-    for (size_t i = 0; i < n; i++) {
-      if (i + AHEAD < n) {
-        mx_key_index_prefetch(H, k[i + AHEAD]);
-        mx_key_index_prefetch(H, mx_morton_add(k[i + AHEAD], da));
-        if (mids) mx_key_index_prefetch(H, mx_morton_add(k[i + AHEAD], dm));
-      }
-      const uint32_t im = mids ? mx_key_index_find(H, mx_morton_add(k[i], dm)) : UINT32_MAX;
-      e[3 * i + 0] = mx_key_index_find(H, k[i]);
-      e[3 * i + 1] = mx_key_index_find(H, mx_morton_add(k[i], da));
-      e[3 * i + 2] = im == UINT32_MAX ? 0 : im;
-    }
-    w += n;
-  }
-  r->ne = w;
-  for (int la = 0; la < NLA; la++) mx_free(keys[la]);
   mx_free(cnt);
   return st;
 }
 
-static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r) {
+/* Rows [begin, end) of the edges section: the ends and the mid-node (0:
+ * none) of each edge, from the node index, the lookups of a few edges
+ * ahead prefetched. Called by the writer's threads, block by block. */
+static void edge_rows(const void *gen, size_t begin, size_t end, uint32_t *rows) {
+  const restart_gen *g = gen;
+  enum { AHEAD = 8 };
+  int la = 0;
+  while (g->first[la + 1] <= begin) la++;
+  for (size_t row = begin; row < end; la++) {
+    const int a = la % 3;
+    const uint32_t s = mx_octant_size(la / 3);
+    const uint64_t da = mx_morton_encode(a == 0 ? s : 0, a == 1 ? s : 0, a == 2 ? s : 0);
+    const uint64_t dm = mx_morton_encode(a == 0 ? s / 2 : 0, a == 1 ? s / 2 : 0, a == 2 ? s / 2 : 0);
+    /* a mid-node is the corner of a child of an octant of this level */
+    const int mids = s > 1 && ((g->split_levels >> (la / 3)) & 1u);
+    const size_t stop = end < g->first[la + 1] ? end : g->first[la + 1];
+    if (row >= stop) continue; /* no edges of this (level, axis) */
+    const uint64_t *k = g->keys[la] - g->first[la]; /* indexed by row */
+    for (; row < stop; row++, rows += 3) {
+      if (row + AHEAD < stop) {
+        mx_key_index_prefetch(&g->H, k[row + AHEAD]);
+        mx_key_index_prefetch(&g->H, mx_morton_add(k[row + AHEAD], da));
+        if (mids) mx_key_index_prefetch(&g->H, mx_morton_add(k[row + AHEAD], dm));
+      }
+      const uint32_t im = mids ? mx_key_index_find(&g->H, mx_morton_add(k[row], dm)) : UINT32_MAX;
+      rows[0] = mx_key_index_find(&g->H, k[row]);
+      rows[1] = mx_key_index_find(&g->H, mx_morton_add(k[row], da));
+      rows[2] = im == UINT32_MAX ? 0 : im;
+    }
+  }
+}
+
+/* Rows [begin, end) of the octants section: the corners of each leaf, in
+ * the published order, from the node index (those of the next leaf
+ * prefetched). */
+static void oct_rows(const void *gen, size_t begin, size_t end, uint32_t *rows) {
+  const restart_gen *g = gen;
+  const mx_octree *T = &g->m->B.oct;
+  const uint32_t *leaves = g->m->leaves;
+  for (size_t i = begin; i < end; i++, rows += 8) {
+    if (i + 1 < end) {
+      const uint32_t q = leaves[i + 1];
+      for (int c = 0; c < 8; c++)
+        mx_key_index_prefetch(&g->H, corner_key(T->key[q], T->level[q], c));
+    }
+    const uint32_t o = leaves[i];
+    for (int c = 0; c < 8; c++)
+      rows[c] = mx_key_index_find(&g->H, corner_key(T->key[o], T->level[o], c));
+  }
+}
+
+/* The restart data of a mesher: the nodes' coordinates, the octants'
+ * levels, faces and element counts stored in r; the edge rows (text only:
+ * binary files have no edges) and the octants' corners made by the
+ * generators from g while the text file is written, or stored in r for the
+ * binary file. */
+static int restart_from_mesher(const mx_mesher *m, int text, mx_restart *r, restart_gen *g) {
   const mx_octree *T = &m->B.oct;
   memset(r, 0, sizeof *r);
+  memset(g, 0, sizeof *g);
+  g->m = m;
   /* nodes: corners of every stored octant */
-  uint64_t *vkey = NULL;
   size_t nv = 0;
-  int st = restart_node_keys(T, &vkey, &nv);
+  int st = restart_node_keys(T, &g->vkey, &nv);
   if (st) return st;
   r->nv = nv;
   r->xyz = mx_alloc((3 * nv + 1) * sizeof *r->xyz);
   if (!r->xyz) st = MX_ENOMEM;
   if (!st) {
-    const mx_grid *g = &m->B.grid;
+    const mx_grid *gr = &m->B.grid;
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < nv; i++) {
       uint32_t p[3];
-      mx_morton_decode(vkey[i], p);
-      for (int a = 0; a < 3; a++) r->xyz[3 * i + a] = g->origin[a] + (double)p[a] * g->unit;
+      mx_morton_decode(g->vkey[i], p);
+      for (int a = 0; a < 3; a++) r->xyz[3 * i + a] = gr->origin[a] + (double)p[a] * gr->unit;
     }
   }
   /* where each node key lies in the sorted keys, by hashing */
-  mx_key_index H = {NULL, NULL, 0, 0};
   if (!st) {
     int top = 0;
     for (size_t o = 0; o < T->n; o++)
       if (T->level[o] > top) top = T->level[o];
-    st = mx_key_index_build(&H, vkey, nv, 3 * (MX_MAX_LEVEL - top));
+    st = mx_key_index_build(&g->H, g->vkey, nv, 3 * (MX_MAX_LEVEL - top));
   }
-  if (!st && with_edges) st = restart_edges(m, &H, r);
-  if (!st && !with_edges) {
+  const size_t no = m->nleaves;
+  r->no = no;
+  if (!st && text) {
+    st = restart_edge_keys(m, g);
+    r->ne = g->first[NLA];
+    r->edge_rows = edge_rows;
+    r->oct_rows = oct_rows;
+    r->gen = g;
+  } else if (!st) {
     r->edge = mx_alloc(sizeof *r->edge); /* none: implied by the octants */
-    if (!r->edge) st = MX_ENOMEM;
+    r->oct_node = mx_alloc((8 * no + 1) * sizeof *r->oct_node);
+    if (!r->edge || !r->oct_node) st = MX_ENOMEM;
+    if (!st) {
+#pragma omp parallel for schedule(static, 256)
+      for (size_t i = 0; i < no; i++) oct_rows(g, i, i + 1, r->oct_node + 8 * i);
+    }
   }
   /* octants: the leaves, in Morton order */
-  const size_t no = m->nleaves;
   if (!st) {
-    r->no = no;
-    r->oct_node = mx_alloc((8 * no + 1) * sizeof *r->oct_node);
     r->oct_level = mx_alloc(no + 1);
     r->oct_tri_off = mx_alloc((no + 1) * sizeof *r->oct_tri_off);
-    if (!r->oct_node || !r->oct_level || !r->oct_tri_off) st = MX_ENOMEM;
+    if (!r->oct_level || !r->oct_tri_off) st = MX_ENOMEM;
   }
   if (!st) {
-    /* the corners of each leaf, from the node index (those of the next
-     * leaf prefetched) */
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < no; i++) {
-      if (i + 1 < no) {
-        const uint32_t q = m->leaves[i + 1];
-        for (int c = 0; c < 8; c++)
-          mx_key_index_prefetch(&H, corner_key(T->key[q], T->level[q], c));
-      }
-      const uint32_t o = m->leaves[i];
-      for (int c = 0; c < 8; c++)
-        r->oct_node[8 * i + c] = mx_key_index_find(&H, corner_key(T->key[o], T->level[o], c));
-    }
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < no; i++) {
       const uint32_t o = m->leaves[i];
@@ -348,8 +384,6 @@ static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r
     for (size_t c = 0; !st && c < m->M.ncells; c++) r->nsub[m->M.leaf[c]]++;
     r->by_type = 1; /* our meshes are written grouped by type (io/cell_order.c) */
   }
-  mx_free(vkey);
-  mx_key_index_free(&H);
   return st;
 }
 
@@ -370,8 +404,10 @@ int mx_mesher_save_restart(const mx_mesher *cm, const char *path) {
   }
   const int binary = path && ends_with(path, ".octb");
   mx_restart r;
+  restart_gen g;
   memset(&r, 0, sizeof r);
-  if (!st) st = restart_from_mesher(m, !binary, &r);
+  memset(&g, 0, sizeof g);
+  if (!st) st = restart_from_mesher(m, !binary, &r, &g);
   /* the binary variant carries the mesh too: a re-mesh from it is local */
   if (!st && binary && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states) {
     r.has_mesh = 1;
@@ -397,6 +433,7 @@ int mx_mesher_save_restart(const mx_mesher *cm, const char *path) {
   r.mesh_state = r.mesh_type = NULL;
   r.mesh_conn = r.mesh_leaf = NULL;
   mx_restart_free(&r);
+  restart_gen_free(&g);
   m->S.t_restart += mx_wtime() - t;
   return mx_call_end(m, &c, st);
 }
