@@ -249,15 +249,16 @@ static int check_restart(const char *name, const mx_restart *r, int status,
   } while (0)
   if (r->no == 0) BAD("no octants");
   if (r->nv > UINT32_MAX) BAD("%zu nodes: more than 32-bit indices", r->nv);
-  if (!r->xyz || (!r->edge && !r->edge_rows) || (!r->oct_node && !r->oct_rows) ||
+  if ((!r->xyz && !r->node_rows) || (!r->edge && !r->edge_rows) || (!r->oct_node && !r->oct_rows) ||
       !r->oct_level || !r->oct_tri_off || (r->oct_tri_off[r->no] > 0 && !r->oct_tri))
     BAD("missing arrays");
   /* the big arrays are counted in parallel; a serial pass finds the first
    * fault to report only when there is one */
   size_t bad = 0;
-#pragma omp parallel for schedule(static) reduction(+ : bad) if (r->nv > 65536)
-  for (size_t i = 0; i < 3 * r->nv; i++) bad += !isfinite(r->xyz[i]);
-  for (size_t i = 0; bad && i < 3 * r->nv; i++)
+  const size_t nv = r->xyz ? r->nv : 0; /* else generated */
+#pragma omp parallel for schedule(static) reduction(+ : bad) if (nv > 65536)
+  for (size_t i = 0; i < 3 * nv; i++) bad += !isfinite(r->xyz[i]);
+  for (size_t i = 0; bad && i < 3 * nv; i++)
     if (!isfinite(r->xyz[i])) BAD("node %zu: non-finite coordinate", i / 3);
   const size_t ne = r->edge ? r->ne : 0, no = r->oct_node ? r->no : 0; /* else generated */
 #pragma omp parallel for schedule(static) reduction(+ : bad) if (ne > 65536)
@@ -1071,24 +1072,29 @@ static inline size_t put_e8_memo(char *out, double x, e8_memo *memo) {
 
 /* Fill functions of mx_afile_emit (items [b, e) of one section, in the
  * published layout; see the max_item_bytes given in text_body). */
+enum { GEN_BLOCK = 256 }; /* rows made at a time by a generator */
+
 static size_t fill_nodes(const void *ctx, size_t b, size_t e, char *out) {
   const mx_restart *r = ctx;
-  const double *xyz = r->xyz;
   const int nd = r->dim == 2 ? 2 : 3;
   e8_memo memo[E8_MEMO];
   for (int k = 0; k < E8_MEMO; k++) memo[k].len = 0;
+  double made[3 * GEN_BLOCK];
   char *o = out;
-  for (size_t i = b; i < e; i++) {
-    for (int d = 0; d < nd; d++) {
-      o += put_e8_memo(o, xyz[3 * i + d], memo);
-      memcpy(o, d + 1 < nd ? "  " : "\n", d + 1 < nd ? 2 : 1);
-      o += d + 1 < nd ? 2 : 1;
+  for (size_t i0 = b; i0 < e; i0 += GEN_BLOCK) {
+    const size_t i1 = e - i0 < GEN_BLOCK ? e : i0 + GEN_BLOCK;
+    const double *xyz = r->xyz ? r->xyz + 3 * i0 : made;
+    if (!r->xyz) r->node_rows(r->gen, i0, i1, made);
+    for (size_t i = 0; i < i1 - i0; i++) {
+      for (int d = 0; d < nd; d++) {
+        o += put_e8_memo(o, xyz[3 * i + d], memo);
+        memcpy(o, d + 1 < nd ? "  " : "\n", d + 1 < nd ? 2 : 1);
+        o += d + 1 < nd ? 2 : 1;
+      }
     }
   }
   return (size_t)(o - out);
 }
-
-enum { GEN_BLOCK = 256 }; /* rows made at a time by a generator */
 
 static size_t fill_edges(const void *ctx, size_t b, size_t e, char *out) {
   const mx_restart *r = ctx;
@@ -1256,7 +1262,7 @@ int mx_restart_write_binary(const char *path, const mx_restart *r) {
     mx_error(path, 0, "%s: a quadtree restart file is text only", BAD_DATA);
     return MX_EINTERNAL;
   }
-  if (!r->edge || !r->oct_node) {
+  if (!r->xyz || !r->edge || !r->oct_node) {
     mx_error(path, 0, "%s: the binary writer takes stored rows, not generated ones", BAD_DATA);
     return MX_EINTERNAL;
   }

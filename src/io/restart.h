@@ -110,8 +110,10 @@ typedef struct mx_restart {
    * instead of stored, block by block by the writer's threads (a mesher's
    * restart file: the lookups that give the edges' ends and mid-nodes and
    * the octants' corners then overlap the disk's writing, and the arrays
-   * are never allocated). When a generator is set, its array (edge,
-   * oct_node) may be NULL; rows must be valid (node indices below nv). */
+   * are never allocated). When a generator is set, its array (xyz, edge,
+   * oct_node) may be NULL; rows must be valid (finite coordinates, node
+   * indices below nv). */
+  void (*node_rows)(const void *gen, size_t begin, size_t end, double *xyz); /* 3 a node */
   void (*edge_rows)(const void *gen, size_t begin, size_t end, uint32_t *rows); /* 3 a row */
   void (*oct_rows)(const void *gen, size_t begin, size_t end, uint32_t *rows);  /* 8 a row */
   const void *gen;

@@ -151,6 +151,7 @@ enum { NLA = (MX_MAX_LEVEL + 1) * 3 }; /* (level, axis) pairs: la = level * 3 + 
 typedef struct {
   const mx_mesher *m;
   uint64_t *vkey;       /* the nodes' lattice keys, sorted */
+  size_t nv;
   mx_key_index H;       /* key -> node */
   uint64_t *keys[NLA];  /* edges: lower ends, sorted and unique */
   size_t first[NLA + 1]; /* row of the first edge of each (level, axis) */
@@ -239,6 +240,17 @@ static int restart_edge_keys(const mx_mesher *m, restart_gen *g) {
   return st;
 }
 
+/* Coordinates of nodes [begin, end): their lattice points through the grid. */
+static void node_rows(const void *gen, size_t begin, size_t end, double *xyz) {
+  const restart_gen *g = gen;
+  const mx_grid *gr = &g->m->B.grid;
+  for (size_t i = begin; i < end; i++, xyz += 3) {
+    uint32_t p[3];
+    mx_morton_decode(g->vkey[i], p);
+    for (int a = 0; a < 3; a++) xyz[a] = gr->origin[a] + (double)p[a] * gr->unit;
+  }
+}
+
 /* Rows [begin, end) of the edges section: the ends and the mid-node (0:
  * none) of each edge, from the node index, the lookups of a few edges
  * ahead prefetched. Called by the writer's threads, block by block. */
@@ -257,14 +269,15 @@ static void edge_rows(const void *gen, size_t begin, size_t end, uint32_t *rows)
     const size_t stop = end < g->first[la + 1] ? end : g->first[la + 1];
     if (row >= stop) continue; /* no edges of this (level, axis) */
     const uint64_t *k = g->keys[la] - g->first[la]; /* indexed by row */
+    /* the lower ends ascend: each is searched from the one before */
+    size_t near = mx_key_index_find(&g->H, k[row]);
     for (; row < stop; row++, rows += 3) {
       if (row + AHEAD < stop) {
-        mx_key_index_prefetch(&g->H, k[row + AHEAD]);
         mx_key_index_prefetch(&g->H, mx_morton_add(k[row + AHEAD], da));
         if (mids) mx_key_index_prefetch(&g->H, mx_morton_add(k[row + AHEAD], dm));
       }
       const uint32_t im = mids ? mx_key_index_find(&g->H, mx_morton_add(k[row], dm)) : UINT32_MAX;
-      rows[0] = mx_key_index_find(&g->H, k[row]);
+      rows[0] = mx_find_u64_near(g->vkey, g->nv, k[row], &near);
       rows[1] = mx_key_index_find(&g->H, mx_morton_add(k[row], da));
       rows[2] = im == UINT32_MAX ? 0 : im;
     }
@@ -278,14 +291,18 @@ static void oct_rows(const void *gen, size_t begin, size_t end, uint32_t *rows) 
   const restart_gen *g = gen;
   const mx_octree *T = &g->m->B.oct;
   const uint32_t *leaves = g->m->leaves;
+  /* corner 0 is the leaf's anchor, and the anchors ascend: searched from
+   * the one before; the other corners from the index */
+  size_t near = begin < end ? mx_key_index_find(&g->H, T->key[leaves[begin]]) : 0;
   for (size_t i = begin; i < end; i++, rows += 8) {
     if (i + 1 < end) {
       const uint32_t q = leaves[i + 1];
-      for (int c = 0; c < 8; c++)
+      for (int c = 1; c < 8; c++)
         mx_key_index_prefetch(&g->H, corner_key(T->key[q], T->level[q], c));
     }
     const uint32_t o = leaves[i];
-    for (int c = 0; c < 8; c++)
+    rows[0] = mx_find_u64_near(g->vkey, g->nv, T->key[o], &near);
+    for (int c = 1; c < 8; c++)
       rows[c] = mx_key_index_find(&g->H, corner_key(T->key[o], T->level[o], c));
   }
 }
@@ -304,16 +321,14 @@ static int restart_from_mesher(const mx_mesher *m, int text, mx_restart *r, rest
   size_t nv = 0;
   int st = restart_node_keys(T, &g->vkey, &nv);
   if (st) return st;
+  g->nv = nv;
   r->nv = nv;
-  r->xyz = mx_alloc((3 * nv + 1) * sizeof *r->xyz);
-  if (!r->xyz) st = MX_ENOMEM;
-  if (!st) {
-    const mx_grid *gr = &m->B.grid;
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < nv; i++) {
-      uint32_t p[3];
-      mx_morton_decode(g->vkey[i], p);
-      for (int a = 0; a < 3; a++) r->xyz[3 * i + a] = gr->origin[a] + (double)p[a] * gr->unit;
+  if (!text) { /* the text writer makes the coordinates as it goes */
+    r->xyz = mx_alloc((3 * nv + 1) * sizeof *r->xyz);
+    if (!r->xyz) st = MX_ENOMEM;
+    if (!st) {
+#pragma omp parallel for schedule(static, 256)
+      for (size_t i = 0; i < nv; i++) node_rows(g, i, i + 1, r->xyz + 3 * i);
     }
   }
   /* where each node key lies in the sorted keys, by hashing */
@@ -328,6 +343,7 @@ static int restart_from_mesher(const mx_mesher *m, int text, mx_restart *r, rest
   if (!st && text) {
     st = restart_edge_keys(m, g);
     r->ne = g->first[NLA];
+    r->node_rows = node_rows;
     r->edge_rows = edge_rows;
     r->oct_rows = oct_rows;
     r->gen = g;
