@@ -17,7 +17,7 @@ int mx_key_index_build(mx_key_index *H, const uint64_t *keys, size_t n, int shif
   /* distinct keys: each claims a free slot with one compare-and-swap */
 #pragma omp parallel for schedule(static) if (n > 65536)
   for (size_t k = 0; k < n; k++) {
-    size_t i = mx_block_slot(keys[k], cap, shift);
+    size_t i = mx_key_slot(keys[k], cap, shift);
     for (;;) {
       uint32_t expected = UINT32_MAX;
       if (__atomic_compare_exchange_n(&H->slot[i], &expected, (uint32_t)k, 0, __ATOMIC_RELAXED,
