@@ -35,13 +35,6 @@
 static const uint8_t corner_xyz[8][3] = {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0},
                                          {0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0}};
 
-static uint64_t corner_key(uint64_t key, int level, int c) {
-  uint32_t p[3];
-  mx_morton_decode(key, p);
-  const uint32_t s = mx_octant_size(level);
-  return mx_morton_encode(p[0] + corner_xyz[c][0] * s, p[1] + corner_xyz[c][1] * s,
-                          p[2] + corner_xyz[c][2] * s);
-}
 
 /* The nodes and edges of the file are the corners and edges of every stored
  * octant, so each is shared by several octants: emitting all 8 corners and
@@ -58,36 +51,61 @@ static uint64_t corner_key(uint64_t key, int level, int c) {
  * and edge of every stored octant is still emitted at least once; the sort
  * drops the repeats across families. Corner bits here: x | y << 1 | z << 2
  * (the children's numbering), not the published corner order. */
-static unsigned corner_emit_mask(const mx_octree *T, uint32_t o) {
-  unsigned m = 0xffu & ~(unsigned)T->kept[o]; /* kept is 0 for a leaf */
-  const uint32_t P = T->parent[o];
-  if (P == MX_NONE) return m;
-  const unsigned j = (unsigned)mx_morton_child_id(T->key[o], T->level[o]);
-  const unsigned kp = T->kept[P];
-  for (unsigned b = 0; b < 8; b++) {
-    const unsigned jc = j & b;
-    if (jc != j && ((kp >> jc) & 1u)) m &= ~(1u << b);
+typedef struct {
+  uint8_t corner[8][256]; /* [child j][parent's kept mask]: corners j emits */
+  uint16_t edge[8][256];  /* the same for edges (bits a * 4 + jj) */
+  uint64_t cdelta[MX_MAX_LEVEL + 1][8];  /* corner bits b as Morton offsets */
+  uint64_t edelta[MX_MAX_LEVEL + 1][12]; /* lower end of edge a * 4 + jj */
+} emit_tables;
+
+/* The rules above for every (child, parent's kept mask), and the offsets of
+ * the corners and edges of an octant of each level as Morton keys (added
+ * to its key with mx_morton_add: no decoding). Edge bits a * 4 + jj: axis
+ * a, offsets jj & 1 along a + 1, jj >> 1 along a + 2 (mod 3), as
+ * mx_edge_key numbers them. */
+static void emit_tables_make(emit_tables *E) {
+  for (unsigned j = 0; j < 8; j++)
+    for (unsigned kp = 0; kp < 256; kp++) {
+      unsigned cm = 0, em = 0;
+      for (unsigned b = 0; b < 8; b++) {
+        const unsigned jc = j & b;
+        if (jc == j || !((kp >> jc) & 1u)) cm |= 1u << b;
+      }
+      for (unsigned a = 0; a < 3; a++)
+        for (unsigned jj = 0; jj < 4; jj++) {
+          unsigned jc = j;
+          if (!(jj & 1u)) jc &= ~(1u << ((a + 1) % 3));
+          if (!(jj & 2u)) jc &= ~(1u << ((a + 2) % 3));
+          if (jc == j || !((kp >> jc) & 1u)) em |= 1u << (a * 4 + jj);
+        }
+      E->corner[j][kp] = (uint8_t)cm;
+      E->edge[j][kp] = (uint16_t)em;
+    }
+  for (int l = 0; l <= MX_MAX_LEVEL; l++) {
+    const uint32_t s = mx_octant_size(l);
+    for (unsigned b = 0; b < 8; b++)
+      E->cdelta[l][b] = mx_morton_encode((b & 1u) * s, ((b >> 1) & 1u) * s, (b >> 2) * s);
+    for (int a = 0; a < 3; a++)
+      for (int jj = 0; jj < 4; jj++) {
+        uint32_t p[3] = {0, 0, 0};
+        p[(a + 1) % 3] = (uint32_t)(jj & 1) * s;
+        p[(a + 2) % 3] = (uint32_t)(jj >> 1) * s;
+        E->edelta[l][a * 4 + jj] = mx_morton_encode(p[0], p[1], p[2]);
+      }
   }
-  return m;
 }
 
-/* Edge bits a * 4 + jj: axis a, offsets jj & 1 along a + 1, jj >> 1 along
- * a + 2 (mod 3), as mx_edge_key numbers them. */
-static unsigned edge_emit_mask(const mx_octree *T, uint32_t o) {
+static unsigned corner_emit_mask(const mx_octree *T, const emit_tables *E, uint32_t o) {
+  const unsigned m = 0xffu & ~(unsigned)T->kept[o]; /* kept is 0 for a leaf */
+  const uint32_t P = T->parent[o];
+  if (P == MX_NONE) return m;
+  return m & E->corner[mx_morton_child_id(T->key[o], T->level[o])][T->kept[P]];
+}
+
+static unsigned edge_emit_mask(const mx_octree *T, const emit_tables *E, uint32_t o) {
   const uint32_t P = T->parent[o];
   if (P == MX_NONE) return 0xfffu;
-  const unsigned j = (unsigned)mx_morton_child_id(T->key[o], T->level[o]);
-  const unsigned kp = T->kept[P];
-  unsigned m = 0;
-  for (unsigned a = 0; a < 3; a++)
-    for (unsigned jj = 0; jj < 4; jj++) {
-      const unsigned b = (a + 1) % 3, c = (a + 2) % 3;
-      unsigned jc = j;
-      if (!(jj & 1u)) jc &= ~(1u << b);
-      if (!(jj & 2u)) jc &= ~(1u << c);
-      if (jc == j || !((kp >> jc) & 1u)) m |= 1u << (a * 4 + jj);
-    }
-  return m;
+  return E->edge[mx_morton_child_id(T->key[o], T->level[o])][T->kept[P]];
 }
 
 enum { EMIT_MAX_THREADS = 256 };
@@ -98,7 +116,8 @@ static size_t share_lo(size_t n, int t, int nt) { return n * (size_t)t / (size_t
 
 /* Node keys: the corners of every stored octant, sorted and unique
  * (*vkey_out, *nv_out). */
-static int restart_node_keys(const mx_octree *T, uint64_t **vkey_out, size_t *nv_out) {
+static int restart_node_keys(const mx_octree *T, const emit_tables *E, uint64_t **vkey_out,
+                             size_t *nv_out) {
   size_t cnt[EMIT_MAX_THREADS + 1] = {0};
   int nt = omp_get_max_threads();
   if (nt > EMIT_MAX_THREADS) nt = EMIT_MAX_THREADS;
@@ -108,7 +127,7 @@ static int restart_node_keys(const mx_octree *T, uint64_t **vkey_out, size_t *nv
     const int t = omp_get_thread_num(), tn = omp_get_num_threads();
     size_t k = 0;
     for (size_t o = share_lo(T->n, t, tn); o < share_lo(T->n, t + 1, tn); o++)
-      k += (size_t)__builtin_popcount(corner_emit_mask(T, (uint32_t)o));
+      k += (size_t)__builtin_popcount(corner_emit_mask(T, E, (uint32_t)o));
     cnt[t + 1] = k;
 #pragma omp single
     nt = tn;
@@ -121,15 +140,9 @@ static int restart_node_keys(const mx_octree *T, uint64_t **vkey_out, size_t *nv
     const int t = omp_get_thread_num();
     uint64_t *w = vkey + cnt[t];
     for (size_t o = share_lo(T->n, t, nt); o < share_lo(T->n, t + 1, nt); o++) {
-      const unsigned m = corner_emit_mask(T, (uint32_t)o);
-      if (!m) continue;
-      uint32_t p[3];
-      mx_morton_decode(T->key[o], p);
-      const uint32_t s = mx_octant_size(T->level[o]);
-      for (unsigned b = 0; b < 8; b++)
-        if ((m >> b) & 1u)
-          *w++ = mx_morton_encode(p[0] + (b & 1u) * s, p[1] + ((b >> 1) & 1u) * s,
-                                  p[2] + (b >> 2) * s);
+      const uint64_t *d = E->cdelta[T->level[o]];
+      for (unsigned m = corner_emit_mask(T, E, (uint32_t)o); m; m &= m - 1)
+        *w++ = mx_morton_add(T->key[o], d[__builtin_ctz(m)]);
     }
   }
   int st = MX_OK;
@@ -156,6 +169,8 @@ typedef struct {
   uint64_t *keys[NLA];  /* edges: lower ends, sorted and unique */
   size_t first[NLA + 1]; /* row of the first edge of each (level, axis) */
   uint32_t split_levels; /* bit l: an octant of level l has a kept child */
+  emit_tables E;
+  uint64_t pdelta[MX_MAX_LEVEL + 1][8]; /* corners in the published order */
 } restart_gen;
 
 static void restart_gen_free(restart_gen *g) {
@@ -166,7 +181,7 @@ static void restart_gen_free(restart_gen *g) {
 }
 
 /* Edges of every stored octant, per (level, axis), sorted and unique. */
-static int restart_edge_keys(const mx_mesher *m, restart_gen *g) {
+static int restart_edge_keys(const mx_mesher *m, const emit_tables *E, restart_gen *g) {
   const mx_octree *T = &m->B.oct;
   int nt = omp_get_max_threads();
   if (nt > 64) nt = 64;
@@ -184,7 +199,7 @@ static int restart_edge_keys(const mx_mesher *m, restart_gen *g) {
       size_t *c = cnt[t];
       uint32_t split = 0;
       for (size_t o = share_lo(T->n, t, tn); o < share_lo(T->n, t + 1, tn); o++) {
-        const unsigned em = edge_emit_mask(T, (uint32_t)o);
+        const unsigned em = edge_emit_mask(T, E, (uint32_t)o);
         const int l = T->level[o];
         for (int a = 0; a < 3; a++) c[l * 3 + a] += (size_t)__builtin_popcount((em >> (4 * a)) & 15u);
         if (T->kept[o]) split |= 1u << l;
@@ -215,19 +230,12 @@ static int restart_edge_keys(const mx_mesher *m, restart_gen *g) {
       const int t = omp_get_thread_num();
       size_t *w = cnt[t];
       for (size_t o = share_lo(T->n, t, nt); o < share_lo(T->n, t + 1, nt); o++) {
-        const unsigned em = edge_emit_mask(T, (uint32_t)o);
         const int l = T->level[o];
-        const uint32_t s = mx_octant_size(l);
-        uint32_t c[3];
-        mx_morton_decode(T->key[o], c);
-        for (int a = 0; a < 3; a++)
-          for (int j = 0; j < 4; j++) {
-            if (!((em >> (4 * a + j)) & 1u)) continue;
-            uint32_t p[3] = {c[0], c[1], c[2]};
-            p[(a + 1) % 3] += (uint32_t)(j & 1) * s;
-            p[(a + 2) % 3] += (uint32_t)(j >> 1) * s;
-            g->keys[l * 3 + a][w[l * 3 + a]++] = mx_morton_encode(p[0], p[1], p[2]);
-          }
+        const uint64_t *d = E->edelta[l];
+        for (unsigned em = edge_emit_mask(T, E, (uint32_t)o); em; em &= em - 1) {
+          const int e = __builtin_ctz(em), la = l * 3 + e / 4;
+          g->keys[la][w[la]++] = mx_morton_add(T->key[o], d[e]);
+        }
       }
     }
   }
@@ -298,12 +306,12 @@ static void oct_rows(const void *gen, size_t begin, size_t end, uint32_t *rows) 
     if (i + 1 < end) {
       const uint32_t q = leaves[i + 1];
       for (int c = 1; c < 8; c++)
-        mx_key_index_prefetch(&g->H, corner_key(T->key[q], T->level[q], c));
+        mx_key_index_prefetch(&g->H, mx_morton_add(T->key[q], g->pdelta[T->level[q]][c]));
     }
     const uint32_t o = leaves[i];
     rows[0] = mx_find_u64_near(g->vkey, g->nv, T->key[o], &near);
     for (int c = 1; c < 8; c++)
-      rows[c] = mx_key_index_find(&g->H, corner_key(T->key[o], T->level[o], c));
+      rows[c] = mx_key_index_find(&g->H, mx_morton_add(T->key[o], g->pdelta[T->level[o]][c]));
   }
 }
 
@@ -319,7 +327,11 @@ static int restart_from_mesher(const mx_mesher *m, int text, mx_restart *r, rest
   g->m = m;
   /* nodes: corners of every stored octant */
   size_t nv = 0;
-  int st = restart_node_keys(T, &g->vkey, &nv);
+  emit_tables_make(&g->E);
+  for (int l = 0; l <= MX_MAX_LEVEL; l++)
+    for (int c = 0; c < 8; c++)
+      g->pdelta[l][c] = g->E.cdelta[l][corner_xyz[c][0] | corner_xyz[c][1] << 1 | corner_xyz[c][2] << 2];
+  int st = restart_node_keys(T, &g->E, &g->vkey, &nv);
   if (st) return st;
   g->nv = nv;
   r->nv = nv;
@@ -341,7 +353,7 @@ static int restart_from_mesher(const mx_mesher *m, int text, mx_restart *r, rest
   const size_t no = m->nleaves;
   r->no = no;
   if (!st && text) {
-    st = restart_edge_keys(m, g);
+    st = restart_edge_keys(m, &g->E, g);
     r->ne = g->first[NLA];
     r->node_rows = node_rows;
     r->edge_rows = edge_rows;
