@@ -28,7 +28,18 @@
  *
  * Threads: every pass is parallel (OpenMP); mx_params.threads sets how many
  * (0: OMP_NUM_THREADS, else one per processor). The result does not depend
- * on the thread count. One mesher must not be used by two threads at once;
+ * on the thread count. With threads 0, when the environment chose no OpenMP
+ * wait policy (neither OMP_WAIT_POLICY nor GOMP_SPINCOUNT was set when the
+ * library was loaded), a call runs with at most as many threads as there
+ * are processors left free by the running threads of other processes (at
+ * least one), read from /proc at the start of the call and between its
+ * stages (tens of microseconds): libgomp's default policy makes a waiting
+ * thread spin, and when another job holds a core the spinning thread takes
+ * the time slice of the thread it waits for (2 threads then run several
+ * times slower than 1). mx_params.threads > 0, or a wait policy set before
+ * the process starts (OMP_WAIT_POLICY=passive suits a shared machine),
+ * turns this off; mx_last_call_threads tells the count a call ran with.
+ * One mesher must not be used by two threads at once;
  * message handlers are per process (the handler of the mesher whose call
  * is running receives the messages): use one mesher at a time per process
  * when handlers matter. Mesh arrays are the mesher's own memory: they stay
@@ -73,6 +84,11 @@ enum { MX_BALANCE_EDGES = 0, MX_BALANCE_RECURSIVE = 1 };
  * variable MX_HEAP=heap keeps every freed array in the heap instead,
  * MX_HEAP=default leaves the C library's settings. */
 void mx_heap_setup(void);
+
+/* The OpenMP thread count the calling thread's last mesher call (3D or 2D)
+ * ran with, after the load limit (see "Threads" above): the fewest of its
+ * stages when the limit changed it between them; 0 before any call. */
+int mx_last_call_threads(void);
 
 /* Message levels given to the handler. */
 enum { MX_MSG_ERROR = 0, MX_MSG_WARNING = 1 };

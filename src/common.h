@@ -38,6 +38,15 @@ const char *mx_show_word(const void *word, size_t len, char *out);
 extern mx_message_fn mx_msg_fn;
 extern void *mx_msg_user;
 
+/* A parallel loop over fewer items than this, each of a few nanoseconds of
+ * work, runs on one thread (`if (n > MX_PAR_MIN)`): starting a team and
+ * its barrier cost about 5 us while the other threads spin, and about 50
+ * us when they sleep (OMP_WAIT_POLICY=passive, which the programs and the
+ * Python binding set) in this 2-core VM, about what 16384 such items take.
+ * Small inputs and the coarse levels of any input run hundreds of such
+ * loops (the letter A at -s 8: 140 of its 344 regions). */
+enum { MX_PAR_MIN = 16384 };
+
 /* Set when an allocation failed (mx_alloc & co.), so a caller that received
  * MX_EINPUT from deep inside can tell "out of memory" apart; cleared by
  * whoever reads it (mx_status_refine). */

@@ -63,21 +63,69 @@ released during each call; one Mesher must not be used from two Python
 threads at once. The library's message handler is per process (the mesher
 whose call is running gets the messages), so two Meshers working at the same
 time in two Python threads may see each other's warnings.
+
+The wait policy: libgomp (the OpenMP runtime of libmixoct.so) makes a
+thread that waits at a barrier spin by default, and when another job holds
+a core the spinning thread takes the time slice of the thread it waits
+for: on a shared machine 2 threads then run several times slower than 1.
+libgomp reads ``OMP_WAIT_POLICY`` once, when it is loaded, so on import,
+before anything loads the library, this module sets
+``os.environ["OMP_WAIT_POLICY"] = "passive"`` (waiting threads sleep; the
+C environment changes too, and child processes inherit it) unless
+``OMP_WAIT_POLICY`` or ``GOMP_SPINCOUNT`` is set already (yours is kept;
+``GOMP_SPINCOUNT=300000`` keeps libgomp's default) or libgomp is loaded
+already (another module started it: setting the variable would change
+nothing; the library then limits each call's threads to the processors
+other processes leave free, see include/mixoct.h). ``wait_policy`` says
+which: ``"passive (set by mixoct)"``, ``"the user's (OMP_WAIT_POLICY=...)"``
+or ``"the user's (GOMP_SPINCOUNT=...)"``, or ``"default (libgomp was loaded
+before mixoct)"``. :func:`last_call_threads` gives the thread count the
+last call ran with.
 """
 
-import ctypes
-import ctypes.util
-import math
 import os
-import weakref
 
-import numpy as np
+
+def _libgomp_loaded():
+    """Whether libgomp.so (the one libmixoct.so needs; not a copy that a
+    wheel bundles under another name) is mapped in this process."""
+    try:
+        with open("/proc/self/maps") as f:
+            # address perms offset dev inode path
+            paths = (line.split(None, 5)[5:] for line in f)
+            return any(os.path.basename(p[0].strip()).startswith("libgomp.so")
+                       for p in paths if p)
+    except OSError:
+        return False
+
+
+def _choose_wait_policy():
+    for name in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT"):
+        if name in os.environ:
+            return "the user's (%s=%s)" % (name, os.environ[name])
+    if _libgomp_loaded():
+        return "default (libgomp was loaded before mixoct)"
+    os.environ["OMP_WAIT_POLICY"] = "passive"
+    return "passive (set by mixoct)"
+
+
+#: what OpenMP threads do when they wait (see the module's doc); chosen on
+#: import, before numpy or the library can load libgomp
+wait_policy = _choose_wait_policy()
+
+import ctypes  # noqa: E402 (after the wait policy: see above)
+import ctypes.util  # noqa: E402
+import math  # noqa: E402
+import weakref  # noqa: E402
+
+import numpy as np  # noqa: E402
 
 __all__ = [
     "Mesher", "Mesher2D", "MeshBuffer", "read_element_list", "load_library",
     "Error", "InternalError", "InputError", "OutOfMemoryError", "OutputError",
     "InvalidMeshError", "TET", "PYRAMID", "PRISM", "HEX", "TYPE_NAMES",
     "NODES_PER_TYPE", "TRI", "QUAD", "NO_NODE", "status_string",
+    "wait_policy", "last_call_threads",
 ]
 
 # ---- constants (include/mixoct.h) ------------------------------------------
@@ -260,6 +308,7 @@ def _declare(lib):
         "mx_params_default": (None, [ctypes.POINTER(_Params)]),
         "mx_mesher_new": (P, [ctypes.POINTER(_Params)]),
         "mx_status_string": (S, [I]),
+        "mx_last_call_threads": (I, []),
         "mx_mesher_add_surface": (I, [P, S]),
         "mx_mesher_add_surface_arrays": (I, [P, S, sz, dblp, sz, u32p]),
         "mx_mesher_add_demo_surface": (I, [P]),
@@ -354,6 +403,14 @@ def load_library(path=None):
     raise ImportError(
         "libmixoct.so not found (set MIXOCT_LIB to its path; tried: %s)"
         % ("; ".join(errors) if errors else ", ".join(names) or "nothing"))
+
+
+def last_call_threads():
+    """The OpenMP thread count the last call of a mesher (from this Python
+    thread) ran with: ``threads`` when given, else OpenMP's default, limited
+    to the processors other processes left free when libgomp spins (see the
+    module's doc); 0 before any call."""
+    return int(_function(load_library(), "mx_last_call_threads")())
 
 
 def status_string(status):

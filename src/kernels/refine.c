@@ -286,7 +286,7 @@ int mx_split_octants(mx_builder *B, const uint32_t *list, size_t n,
   MX_CHECK(grow_scratch((void **)&B->scratch_off, &B->scratch_off_cap,
                         2 * n + 2, sizeof(uint64_t)));
   uint64_t *moff = B->scratch_off, *coff = B->scratch_off + n + 1;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > MX_PAR_MIN)
   for (size_t i = 0; i < n; i++) moff[i] = T->tri_cnt[list[i]];
   const uint64_t nmask = mx_scan_u64(moff, n);
   MX_CHECK(grow_scratch((void **)&B->scratch_mask, &B->scratch_mask_cap,
@@ -306,7 +306,7 @@ int mx_split_octants(mx_builder *B, const uint32_t *list, size_t n,
   uint64_t *toff = mx_alloc((n + 1) * sizeof *toff);
   if (!toff) return MX_EINPUT;
   size_t dropped = 0;
-#pragma omp parallel for schedule(static) reduction(+ : dropped)
+#pragma omp parallel for schedule(static) reduction(+ : dropped) if (n > MX_PAR_MIN)
   for (size_t i = 0; i < n; i++) {
     coff[i] = (uint64_t)__builtin_popcount(info[i].kept);
     dropped += 8 - coff[i];
@@ -502,7 +502,7 @@ static int next_candidates(const mx_builder *B, const uint32_t *cand,
   const mx_octree *T = &B->oct;
   uint64_t *off = mx_alloc((n + 1) * sizeof *off);
   if (!off) return MX_EINPUT;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > MX_PAR_MIN)
   for (size_t i = 0; i < n; i++) {
     const uint32_t o = cand[i];
     uint64_t s = 0;
@@ -518,7 +518,7 @@ static int next_candidates(const mx_builder *B, const uint32_t *cand,
     mx_free(off);
     return MX_EINPUT;
   }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > MX_PAR_MIN)
   for (size_t i = 0; i < n; i++) {
     const uint32_t o = cand[i];
     uint64_t w = off[i];

@@ -117,7 +117,7 @@ static int colour_work(const mx_mesh_out *M, const uint32_t *inc, const uint64_t
     mx_free(prio);
     return -1;
   }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nw > MX_PAR_MIN)
   for (size_t i = 0; i < nw; i++) {
     colour[i] = -1;
     prio[i] = node_priority(M, work[i]);
@@ -125,7 +125,7 @@ static int colour_work(const mx_mesh_out *M, const uint32_t *inc, const uint64_t
   size_t left = nw;
   int ncol = 0, overflow = 0;
   while (left && !overflow) {
-#pragma omp parallel for schedule(dynamic, 256)
+#pragma omp parallel for schedule(dynamic, 256) if (nw >= 4096)
     for (size_t i = 0; i < nw; i++) {
       pick[i] = 0;
       if (colour[i] >= 0) continue;
@@ -145,7 +145,8 @@ static int colour_work(const mx_mesh_out *M, const uint32_t *inc, const uint64_t
       pick[i] = (uint8_t)best;
     }
     size_t got = 0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(+ : got) reduction(| : overflow)
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : got) reduction(| : overflow) \
+    if (nw >= 4096)
     for (size_t i = 0; i < nw; i++) {
       if (!pick[i]) continue;
       uint64_t used[MAX_COLOURS / 64] = {0, 0, 0, 0};

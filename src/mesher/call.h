@@ -11,11 +11,18 @@ typedef struct {
   mx_message_fn fn;
   void *user;
   int threads;
+  int outer_default; /* the enclosing call's, restored on leaving */
 } mx_call;
 
 /* collect(user, ...) receives the call's messages; threads > 0 sets the
- * OpenMP thread count. */
+ * OpenMP thread count, 0 leaves OpenMP's default under the load limit
+ * (load_limit.h). */
 void mx_call_enter(mx_call *c, mx_message_fn collect, void *user, int threads);
+/* Between two stages of a call: the load limit measured again (when it
+ * applies to the call), so that a call that started while other processes
+ * were busy gets the processors back when they are done, and the other way
+ * round. Outside parallel regions only. */
+void mx_call_recheck(void);
 /* Returns the status to give the caller. */
 int mx_call_leave(mx_call *c, int status);
 

@@ -500,6 +500,7 @@ static int assemble_inputs(mx_mesher *m) {
 
 static void stage(const mx_mesher *m, const char *name) {
   mx_mem_mark(name);
+  mx_call_recheck();
   if (m->on_stage) m->on_stage(name);
 }
 

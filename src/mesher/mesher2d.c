@@ -489,9 +489,12 @@ static int check_mesh(mx_mesher2d *m) {
   return MX_OK;
 }
 
+/* After a stage: its status, and the thread count measured again for the
+ * next one (call.h). */
 static int stage(mx_mesher2d *m, int st, const char *name) {
   if (st == MX_EINTERNAL && !m->last_error[0])
     mx_error(NULL, 0, "internal failure in the %s stage", name);
+  mx_call_recheck();
   return st;
 }
 

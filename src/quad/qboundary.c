@@ -115,9 +115,9 @@ static int build_node_cells(qb *B) {
   if (!B->off) B->off = mx_alloc((B->n + 1) * sizeof *B->off);
   uint64_t *off = B->off;
   if (!off) return MX_ENOMEM;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (B->n > MX_PAR_MIN)
   for (size_t v = 0; v <= B->n; v++) off[v] = 0;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (ncells_act(B) > MX_PAR_MIN)
   for (size_t i = 0; i < ncells_act(B); i++) {
     const size_t c = cell_act(B, i);
     if (B->alive[c])
@@ -135,9 +135,9 @@ static int build_node_cells(qb *B) {
   /* not kept: it would add to the peak of the later steps */
   uint64_t *cur = mx_alloc(B->n * sizeof *cur + 1);
   if (!cur) return MX_ENOMEM;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (B->n > MX_PAR_MIN)
   for (size_t v = 0; v < B->n; v++) cur[v] = off[v];
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (ncells_act(B) > MX_PAR_MIN)
   for (size_t i = 0; i < ncells_act(B); i++) {
     const size_t c = cell_act(B, i);
     if (B->alive[c])

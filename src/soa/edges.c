@@ -44,13 +44,13 @@ static int table_grow(mx_edge_table *T, size_t need) {
   if (cap < T->cap + T->cap / 2) cap = T->cap + T->cap / 2;
   mx_edge *e = mx_alloc(cap * sizeof *e);
   if (!e) return MX_EINPUT;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (cap > MX_PAR_MIN)
   for (size_t i = 0; i < cap; i++) {
     e[i].kw = 0;
     e[i].slot[0] = e[i].slot[1] = e[i].slot[2] = e[i].slot[3] = UINT32_MAX;
   }
   mx_edge_table nt = {e, cap, T->count};
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (T->cap > MX_PAR_MIN)
   for (size_t i = 0; i < T->cap; i++)
     if (T->e[i].kw) put_concurrent(&nt, &T->e[i]);
   mx_free(T->e);
