@@ -25,8 +25,8 @@ MIXOCT=${1:?usage: mpi_test.sh path/to/mixoct}
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 . "$HERE/lib.sh"
-DATA=${MIXOCT_DATA:-/work/shared/data}
-[ -d "$DATA/surfaces" ] || DATA=/work/shared/data
+DATA=${MIXOCT_DATA:-$HERE/../../shared/data}
+[ -d "$DATA/surfaces" ] || DATA=$HERE/../../shared/data
 MPIRUN=${MPIRUN:-mpirun}
 if ! command -v "$MPIRUN" >/dev/null; then
   echo "SKIP: no mpirun"

@@ -388,8 +388,8 @@ static void test_requests(void) {
 
 int main(void) {
   const char *d = getenv("MIXOCT_DATA");
-  snprintf(data, sizeof data, "%s", d ? d : "/work/shared/data");
-  if (access(poly("box.poly"), R_OK) != 0) snprintf(data, sizeof data, "/work/shared/data");
+  snprintf(data, sizeof data, "%s", d ? d : MIXOCT_TEST_DATA);
+  if (access(poly("box.poly"), R_OK) != 0) snprintf(data, sizeof data, "%s", MIXOCT_TEST_DATA);
   if (access(poly("box.poly"), R_OK) != 0) {
     fprintf(stderr, "no shared data (MIXOCT_DATA): %s\n", poly("box.poly"));
     return 1;
