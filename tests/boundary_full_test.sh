@@ -18,12 +18,12 @@
 # (a development aid while --stage full is not there: the distance checks
 # then fail).
 MIXOCT=${1:?usage: boundary_full_test.sh path/to/mixoct}
-DATA=${MIXOCT_DATA:-/work/shared/data}
+HERE=$(cd "$(dirname "$0")" && pwd)
+DATA=${MIXOCT_DATA:-$HERE/../../shared/data}
 # meson points MIXOCT_DATA at the source tree's ../shared/data; a clone made
 # elsewhere falls back to the usual place
-[ -d "$DATA/surfaces" ] || DATA=/work/shared/data
+[ -d "$DATA/surfaces" ] || DATA=$HERE/../../shared/data
 STAGE=${MIXOCT_TEST_STAGE:-full}
-HERE=$(cd "$(dirname "$0")" && pwd)
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 fails=0
@@ -186,6 +186,9 @@ if [ -d "$DATA/surfaces" ]; then
       run_case "$surf" "$k" "$flags"
     done
   done
+elif [ -n "${CI:-}" ]; then
+  echo "FAIL: $DATA/surfaces not found (CI is set: the data must be there)"
+  fails=$((fails + 1))
 else
   echo "SKIP: $DATA/surfaces not found (set MIXOCT_DATA)"
 fi

@@ -22,8 +22,8 @@ HERE=$(cd "$(dirname "$0")" && pwd) # before any cd: tests/lib.sh
 # truncated files. The argument is the mixoct program.
 BIN=${1:?usage: check2d_test.sh path/to/mixoct}
 BIN=$(readlink -f "$BIN")
-DATA=${MIXOCT_DATA:-/work/shared/data}
-[ -d "$DATA/polylines" ] || DATA=/work/shared/data
+DATA=${MIXOCT_DATA:-$HERE/../../shared/data}
+[ -d "$DATA/polylines" ] || DATA=$HERE/../../shared/data
 PL=$DATA/polylines
 command -v python3 >/dev/null || { echo "SKIP: python3 not found"; exit 77; }
 T=$(mktemp -d)

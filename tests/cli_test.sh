@@ -319,5 +319,12 @@ OMP_WAIT_POLICY=active "$MIXOCT" --demo -s 4 -o "$T/wp2.vtu" --json >"$T/wp.json
 same "$(wp "$T/wp.json")" "active" "the user's OMP_WAIT_POLICY is kept"
 cmp -s "$T/wp1.vtu" "$T/wp2.vtu" && ok "the same mesh with either policy" || bad "the mesh depends on the wait policy"
 
+# Every phase in the summary (issue 24): the restart file's writing is one,
+# reported in the table and in --json when --restart is given.
+"$MIXOCT" --demo -s 4 -o "$T/ph.vtu" --restart "$T/ph.oct" >"$T/ph.txt" 2>&1
+has "$T/ph.txt" " restart [0-9]" "the summary shows the restart phase"
+"$MIXOCT" --demo -s 4 -o "$T/ph2.vtu" --restart "$T/ph2.oct" --json >"$T/ph.json" 2>/dev/null
+json_ok "$T/ph.json" "d['phases']['restart'] > 0 and d['phases']['write'] > 0" "--json: restart and write phases"
+
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]

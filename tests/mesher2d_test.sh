@@ -13,8 +13,8 @@ HERE=$(cd "$(dirname "$0")" && pwd) # before any cd: tests/lib.sh
 # meshing part prints SKIP and the script exits 77.
 BIN=${1:?usage: mesher2d_test.sh path/to/mesher2d}
 BIN=$(readlink -f "$BIN")
-DATA=${MIXOCT_DATA:-/work/shared/data}
-[ -d "$DATA/polylines" ] || DATA=/work/shared/data
+DATA=${MIXOCT_DATA:-$HERE/../../shared/data}
+[ -d "$DATA/polylines" ] || DATA=$HERE/../../shared/data
 PL=$DATA/polylines
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT

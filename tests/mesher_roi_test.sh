@@ -4,14 +4,14 @@ HERE=$(cd "$(dirname "$0")" && pwd) # before any cd: tests/lib.sh
 # commands of a typical job script written for the published mesher, run on
 # the shared surfaces. The argument is mixoct (or the mesher_roi link); the
 # script makes its own link named mesher_roi in a temporary directory and
-# runs there. Data from $MIXOCT_DATA (default /work/shared/data), never
+# runs there. Data from $MIXOCT_DATA (default ../shared/data next to the source tree), never
 # copied into the repository. Needs python3 (the files are parsed back).
 MIXOCT=${1:?usage: mesher_roi_test.sh path/to/mixoct}
 MIXOCT=$(readlink -f "$MIXOCT")
-DATA=${MIXOCT_DATA:-/work/shared/data}
+DATA=${MIXOCT_DATA:-$HERE/../../shared/data}
 # meson points MIXOCT_DATA at the source tree's ../shared/data; a clone made
 # elsewhere falls back to the usual place
-[ -d "$DATA/surfaces" ] || DATA=/work/shared/data
+[ -d "$DATA/surfaces" ] || DATA=$HERE/../../shared/data
 S=$DATA/surfaces
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT

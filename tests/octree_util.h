@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "check.h"
 #include "common.h"
 #include "kernels/refine.h"
 #include "kernels/remesh.h"
@@ -43,7 +44,7 @@ static void add_box(mx_trisoup *s, const double lo[3], const double hi[3],
  * usual places); 0 with "SKIP ..." printed when it is not there. */
 static inline int load_shared_surface(const char *name, mx_trisoup *s) {
   const char *dirs[] = {getenv("MIXOCT_DATA"), "../../shared/data",
-                        "../../../shared/data", "/work/shared/data"};
+                        "../../../shared/data", MIXOCT_TEST_DATA};
   char path[512];
   for (int i = 0; i < 4; i++) {
     if (!dirs[i]) continue;
@@ -55,7 +56,7 @@ static inline int load_shared_surface(const char *name, mx_trisoup *s) {
     return mx_read_surface(path, s) == MX_OK &&
            mx_trisoup_check(s, path, NULL) == MX_OK;
   }
-  printf("SKIP: ../shared/data/surfaces/%s not found\n", name);
+  TEST_DATA_MISSING("../shared/data/surfaces/%s not found", name);
   return 0;
 }
 

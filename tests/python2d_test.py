@@ -6,7 +6,7 @@ Run by meson (test 'python2d') with PYTHONPATH=<build>/python, or by hand:
     PYTHONPATH=<build>/python /usr/bin/python3 tests/python2d_test.py
 
 MIXOCT_DATA: the shared data folder (polylines/box.poly), by default
-/work/shared/data. Without numpy or the data it prints SKIP and exits 77
+../shared/data next to the source tree. Without numpy or the data it prints SKIP and exits 77
 (meson's "skipped"), unless CI is set, where that is a failure. The checks
 run under unittest, in the order of this file.
 
@@ -48,9 +48,11 @@ except ImportError:
 
 import mixoct  # noqa: E402  (after the numpy check)
 
-DATA = os.environ.get("MIXOCT_DATA") or "/work/shared/data"
+NEXT_TO_SOURCE = os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                              "..", "..", "shared", "data")
+DATA = os.environ.get("MIXOCT_DATA") or NEXT_TO_SOURCE
 if not os.path.isdir(os.path.join(DATA, "polylines")):
-    DATA = "/work/shared/data"
+    DATA = NEXT_TO_SOURCE
 BOX = os.path.join(DATA, "polylines", "box.poly")
 if not os.path.isfile(BOX):
     skip("%s not found (set MIXOCT_DATA)" % BOX)

@@ -307,7 +307,7 @@ static void test_files(const char *dir, const char *data) {
   printf("%s mx_read_element_list       %s", rc == MX_EINPUT ? "ok  " : "FAIL", msgs);
   snprintf(path, sizeof path, "%s/remesh/list.txt", data);
   if (access(path, R_OK) != 0) {
-    printf("SKIP list.txt: %s not found (set MIXOCT_DATA)\n", path);
+    TEST_DATA_MISSING("list.txt: %s not found (set MIXOCT_DATA)", path);
     return;
   }
   clear();
@@ -326,7 +326,7 @@ int main(void) {
     return 1;
   }
   const char *data = getenv("MIXOCT_DATA");
-  if (!data || !*data) data = "/work/shared/data";
+  if (!data || !*data) data = MIXOCT_TEST_DATA;
   test_words();
   test_show();
   test_lists();

@@ -53,7 +53,7 @@ static void write_text(const char *path, const char *text) {
 
 static void find_data(void) {
   const char *dirs[] = {getenv("MIXOCT_DATA"), "../../shared/data", "../../../shared/data",
-                        "/work/shared/data"};
+                        MIXOCT_TEST_DATA};
   for (int i = 0; i < 4; i++) {
     if (!dirs[i]) continue;
     char p[600];
@@ -71,7 +71,7 @@ static int read_shared(const char *name, mx_poly *P) {
   char path[700];
   snprintf(path, sizeof path, "%s/%s", data, name);
   if (!data[0] || access(path, R_OK) != 0) {
-    printf("SKIP %s: not found (set MIXOCT_DATA)\n", name);
+    TEST_DATA_MISSING("%s: not found (set MIXOCT_DATA)", name);
     return 0;
   }
   msgs_reset();

@@ -22,8 +22,16 @@
  * L >= 4 (a child of a split level L-1 quadrant) lies within 3 s_{L-1} of p.
  * Balance is checked by mx_qtree_unbalanced (a sort of the leaves' edges,
  * independent of the edge infos), validity by the mesher's independent
- * check (every call returns MX_EINVALID when it fails). */
+ * check (every call returns MX_EINVALID when it fails).
+ *
+ * The restart data (mx_qrestart_from_mesher, which avoids sorting every
+ * corner and side) against its definition computed the plain way: every
+ * leaf corner sorted and made unique; each leaf's corners found there;
+ * every leaf side once by its ends' numbers, ascending, with the node at
+ * its midpoint or 0; on trees with out-of-domain leaves, deep grading and
+ * a refined corner, for 1 and 2 threads. */
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -92,6 +100,111 @@ static double leaf_distance(const mx_qtree *T, uint32_t q) {
     d2 += d * d;
   }
   return sqrt(d2);
+}
+
+static int cmp_u64(const void *a, const void *b) {
+  const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+  return x < y ? -1 : x > y;
+}
+
+/* Index of key in the ascending keys, or UINT32_MAX. */
+static uint32_t index_of(const uint64_t *v, size_t n, uint64_t key) {
+  const uint64_t *p = bsearch(&key, v, n, sizeof *v, cmp_u64);
+  return p ? (uint32_t)(p - v) : UINT32_MAX;
+}
+
+static size_t sort_unique(uint64_t *v, size_t n) {
+  qsort(v, n, sizeof *v, cmp_u64);
+  size_t w = 0;
+  for (size_t i = 0; i < n; i++)
+    if (!w || v[i] != v[w - 1]) v[w++] = v[i];
+  return w;
+}
+
+static void check_restart_data(const mx_mesher2d *m, int threads) {
+  omp_set_num_threads(threads);
+  mx_restart r;
+  CHECK(mx_qrestart_from_mesher(m, &r) == MX_OK);
+  const mx_qtree *T = &m->T;
+  const size_t n = m->nleaves;
+  uint64_t *key = mx_alloc((4 * n + 1) * sizeof *key), *side = mx_alloc((4 * n + 1) * sizeof *side);
+  uint32_t *corner = mx_alloc((4 * n + 1) * sizeof *corner);
+  for (size_t i = 0; i < n; i++) {
+    uint32_t x, y;
+    mx_qkey_xy(T->key[m->leaves[i]], &x, &y);
+    const uint32_t s = mx_qsize(T->level[m->leaves[i]]);
+    key[4 * i] = mx_qkey(x, y), key[4 * i + 1] = mx_qkey(x + s, y);
+    key[4 * i + 2] = mx_qkey(x + s, y + s), key[4 * i + 3] = mx_qkey(x, y + s);
+  }
+  uint64_t *node = mx_alloc((4 * n + 1) * sizeof *node);
+  memcpy(node, key, 4 * n * sizeof *key);
+  const size_t nv = sort_unique(node, 4 * n);
+  CHECK(r.dim == 2 && r.no == n && r.nv == nv);
+  size_t bad = 0;
+  for (size_t v = 0; v < nv && r.nv == nv; v++) {
+    uint32_t x, y;
+    mx_qkey_xy(node[v], &x, &y);
+    bad += r.xyz[3 * v] != T->grid.origin[0] + T->grid.unit * (double)x ||
+           r.xyz[3 * v + 1] != T->grid.origin[1] + T->grid.unit * (double)y ||
+           r.xyz[3 * v + 2] != 0;
+  }
+  for (size_t i = 0; i < n; i++) {
+    for (int c = 0; c < 4; c++) {
+      corner[4 * i + c] = index_of(node, nv, key[4 * i + c]);
+      bad += r.oct_node[8 * i + c] != corner[4 * i + c] || r.oct_node[8 * i + 4 + c] != 0;
+    }
+    for (int c = 0; c < 4; c++) {
+      const uint32_t a = corner[4 * i + c], b = corner[4 * i + ((c + 1) & 3)];
+      side[4 * i + c] = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+    }
+    bad += r.oct_level[i] != T->level[m->leaves[i]];
+  }
+  const size_t ne = sort_unique(side, 4 * n);
+  CHECK(r.ne == ne);
+  for (size_t j = 0; j < ne && r.ne == ne; j++) {
+    const uint32_t a = (uint32_t)(side[j] >> 32), b = (uint32_t)side[j];
+    uint32_t xa, ya, xb, yb;
+    mx_qkey_xy(node[a], &xa, &ya);
+    mx_qkey_xy(node[b], &xb, &yb);
+    const uint32_t mid = index_of(node, nv, mx_qkey((xa + xb) / 2, (ya + yb) / 2));
+    bad += r.edge[3 * j] != a || r.edge[3 * j + 1] != b ||
+           r.edge[3 * j + 2] != (mid == UINT32_MAX ? 0 : mid);
+  }
+  /* segments and cells of each leaf */
+  size_t cells = 0;
+  for (size_t i = 0; i < n; i++) {
+    const uint32_t q = m->leaves[i];
+    bad += r.oct_tri_off[i + 1] - r.oct_tri_off[i] != T->seg_cnt[q] ||
+           memcmp(r.oct_tri + r.oct_tri_off[i], T->seg_pool + T->seg_off[q],
+                  T->seg_cnt[q] * sizeof *r.oct_tri) != 0;
+    for (uint32_t k = 0; k < r.nsub[i]; k++) bad += m->M.leaf[cells + k] != i;
+    cells += r.nsub[i];
+  }
+  CHECK(bad == 0 && cells == m->M.ncells);
+  if (bad) fprintf(stderr, "restart data: %zu differences (%zu leaves)\n", bad, n);
+  mx_free(key), mx_free(side), mx_free(corner), mx_free(node);
+  mx_restart_free(&r);
+}
+
+static void test_restart_data(void) {
+  for (int k = 0; k < 4; k++) {
+    mx_params2d p;
+    mx_params2d_default(&p);
+    p.surface_level = k == 0 ? 7 : 3;
+    p.all_level = k == 3 ? 5 : 0;
+    mx_mesher2d *m = mx_mesher2d_new(&p);
+    CHECK(mx_mesher2d_set_domain(m, poly(k == 0 ? "a.poly" : "box.poly")) == MX_OK);
+    const double circle[3] = {1.5, 0.4, 0.9};
+    if (k == 1) CHECK(mx_mesher2d_add_function(m, "circle", circle, 3, 10) == MX_OK);
+    CHECK(mx_mesher2d_mesh(m) == MX_OK);
+    for (int it = 0; k == 2 && it < 8; it++) {
+      const uint64_t e = corner_cell(m);
+      CHECK(mx_mesher2d_refine_elements(m, &e, 1) == MX_OK);
+    }
+    check_restart_data(m, 1);
+    check_restart_data(m, 2);
+    mx_mesher2d_free(m);
+  }
 }
 
 static void test_counts_and_round_trip(void) {
@@ -275,14 +388,15 @@ static void test_requests(void) {
 
 int main(void) {
   const char *d = getenv("MIXOCT_DATA");
-  snprintf(data, sizeof data, "%s", d ? d : "/work/shared/data");
-  if (access(poly("box.poly"), R_OK) != 0) snprintf(data, sizeof data, "/work/shared/data");
+  snprintf(data, sizeof data, "%s", d ? d : MIXOCT_TEST_DATA);
+  if (access(poly("box.poly"), R_OK) != 0) snprintf(data, sizeof data, "%s", MIXOCT_TEST_DATA);
   if (access(poly("box.poly"), R_OK) != 0) {
     fprintf(stderr, "no shared data (MIXOCT_DATA): %s\n", poly("box.poly"));
     return 1;
   }
   test_counts_and_round_trip();
   test_fig18();
+  test_restart_data();
   test_feature_levels();
   test_requests();
   return TEST_DONE();

@@ -555,7 +555,7 @@ static void test_letter_a(void) {
   domain D;
   mx_quiet = 1;
   if (mx_read_poly_any(path, &D.P) != MX_OK) {
-    printf("SKIP the letter A: %s not read\n", path);
+    TEST_DATA_MISSING("the letter A: %s not read", path);
     return;
   }
   domain_init(&D);
@@ -632,7 +632,7 @@ static void test_masks(void) {
 static int bench(int level, int threads) {
   const char *dir = getenv("MIXOCT_DATA");
   char path[1024];
-  snprintf(path, sizeof path, "%s/polylines/a.poly", dir ? dir : "/work/shared/data");
+  snprintf(path, sizeof path, "%s/polylines/a.poly", dir ? dir : MIXOCT_TEST_DATA);
   domain D;
   if (mx_read_poly_any(path, &D.P) != MX_OK) return 1;
   domain_init(&D);

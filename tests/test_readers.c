@@ -17,7 +17,7 @@
 #include "soa/regions.h"
 #include "soa/trisoup.h"
 
-#define SURF "/work/shared/data/surfaces/"
+#define SURF MIXOCT_TEST_DATA "/surfaces/"
 
 typedef int (*reader_fn)(const char *path, mx_trisoup *out);
 
@@ -671,7 +671,7 @@ static void test_reg(void) {
     check_reg_good(SURF "cortex.reg", 88);
     printf("ok   cortex.reg (2 regions)\n");
   } else {
-    printf("SKIP %scortex.reg: not present\n", SURF);
+    TEST_DATA_MISSING("%scortex.reg: not present", SURF);
   }
   bad_files(read_reg_as_soup, "reg");
   bad_edit(read_reg_as_soup, "keyword.reg", edit(REG_GOOD, 1, "regions 2"), 1,
@@ -780,7 +780,7 @@ static void test_samples(void) {
     char path[256];
     snprintf(path, sizeof path, "%s%s", SURF, files[i].name);
     if (access(path, R_OK) != 0) {
-      printf("SKIP %s: not present\n", path);
+      TEST_DATA_MISSING("%s: not present", path);
       continue;
     }
     mx_trisoup s;
@@ -879,7 +879,7 @@ static void test_speed(void) {
   unlink(path);
   mx_trisoup_free(&demo);
   if (access(SURF "cortex.off", R_OK) != 0) {
-    printf("SKIP %scortex.off: not present\n", SURF);
+    TEST_DATA_MISSING("%scortex.off: not present", SURF);
     return;
   }
   double best = INFINITY;

@@ -33,7 +33,7 @@ static int cmp_u64(const void *a, const void *b) {
 
 static int find_data(void) {
   const char *dirs[] = {getenv("MIXOCT_DATA"), "../../shared/data", "../../../shared/data",
-                        "/work/shared/data"};
+                        MIXOCT_TEST_DATA};
   for (int i = 0; i < 4; i++) {
     if (!dirs[i]) continue;
     char p[600];
@@ -660,7 +660,7 @@ int main(void) {
   test_repair_rule();
   test_invalid_messages();
   if (!find_data()) {
-    printf("SKIP: ../shared/data not found (the repair rule and messages were tested)\n");
+    TEST_DATA_MISSING("../shared/data not found (the repair rule and messages were tested)");
     return mx_test_failures ? TEST_DONE() : 77;
   }
   mx_quiet = 1;

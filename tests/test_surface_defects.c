@@ -709,7 +709,7 @@ static void test_threads(void) {
 static void test_samples(void) {
   const char *data = getenv("MIXOCT_DATA");
   char dir[512];
-  snprintf(dir, sizeof dir, "%s/surfaces", data ? data : "/work/shared/data");
+  snprintf(dir, sizeof dir, "%s/surfaces", data ? data : MIXOCT_TEST_DATA);
   static const char *clean[] = {"cortex.off", "femur.mdl", "hex.off",
                                 "cyl50.off", "sein.mdl", "fertilityRotated.mdl",
                                 "hollow-coarse.off", "suture.off",
@@ -719,7 +719,7 @@ static void test_samples(void) {
     char path[640];
     snprintf(path, sizeof path, "%s/%s", dir, clean[i]);
     if (access(path, R_OK) != 0) {
-      printf("SKIP %s: not present\n", path);
+      TEST_DATA_MISSING("%s: not present", path);
       continue;
     }
     mx_trisoup s = {0};

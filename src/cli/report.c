@@ -255,6 +255,7 @@ void mx_print_summary(const mx_summary *s, const mx_run_info *ri) {
       {"verify", s->ph.verify, s->full},
       {"quality", s->ph.quality, s->mesh},
       {"write", s->ph.write, s->ph.write > 0.0},
+      {"restart", s->t_restart, s->t_restart > 0.0}, /* reading or writing */
   };
   printf("  time (s)     %12.3f total:", s->ph.total);
   int col = 0;

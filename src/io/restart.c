@@ -198,82 +198,6 @@ static int parse_real(const char *t, const char *e, double *v) {
   return ok;
 }
 
-static const uint64_t pow10_u64[20] = {1ull,
-                                       10ull,
-                                       100ull,
-                                       1000ull,
-                                       10000ull,
-                                       100000ull,
-                                       1000000ull,
-                                       10000000ull,
-                                       100000000ull,
-                                       1000000000ull,
-                                       10000000000ull,
-                                       100000000000ull,
-                                       1000000000000ull,
-                                       10000000000000ull,
-                                       100000000000000ull,
-                                       1000000000000000ull,
-                                       10000000000000000ull,
-                                       100000000000000000ull,
-                                       1000000000000000000ull,
-                                       10000000000000000000ull};
-
-/* x as printf's "%+1.8E" writes it, rounded as printf rounds (to nearest,
- * ties to even, on the exact binary value). For 1e-14 <= |x| < 1e9 the
- * 9 digits come from exact 128-bit integer arithmetic: x = m 2^e with
- * e < 0, D = round(m 10^k 2^e), 10^8 <= D < 10^9; anything else goes to
- * snprintf. Writes at most 16 bytes; returns how many. */
-static size_t put_e8(char *out, double x) {
-  double a = fabs(x);
-  if (a >= 1e-14 && a < 1e9) {
-    int e2;
-    uint64_t m = (uint64_t)ldexp(frexp(a, &e2), 53);
-    int shift = 53 - e2; /* a = m / 2^shift, 23 < shift < 100 */
-    int d = (int)floor(log10(a));
-    for (int tries = 0; tries < 3; tries++) {
-      int k = 8 - d;
-      if (k < 0 || k > 22) break;
-      unsigned __int128 n = (unsigned __int128)m * pow10_u64[k < 19 ? k : 19];
-      if (k > 19) n *= pow10_u64[k - 19];
-      unsigned __int128 q = n >> shift;
-      if (q >= 1000000000ull) {
-        d++;
-        continue;
-      }
-      uint64_t digits = (uint64_t)q;
-      if (digits < 100000000ull) {
-        d--;
-        continue;
-      }
-      unsigned __int128 half = (unsigned __int128)1 << (shift - 1);
-      unsigned __int128 rest = n & ((half << 1) - 1);
-      if (rest > half || (rest == half && (digits & 1))) digits++;
-      if (digits == 1000000000ull) { /* 9.99999999|5 -> 1.00000000E+(d+1) */
-        digits = 100000000ull;
-        d++;
-      }
-      char *o = out;
-      *o++ = x < 0 ? '-' : '+';
-      *o++ = (char)('0' + digits / 100000000ull);
-      *o++ = '.';
-      uint64_t low = digits % 100000000ull;
-      for (int i = 7; i >= 0; i--, low /= 10) o[i] = (char)('0' + low % 10);
-      o += 8;
-      *o++ = 'E';
-      *o++ = d < 0 ? '-' : '+';
-      int ad = d < 0 ? -d : d;
-      *o++ = (char)('0' + ad / 10);
-      *o++ = (char)('0' + ad % 10);
-      return (size_t)(o - out);
-    }
-  }
-  char tmp[48];
-  int n = snprintf(tmp, sizeof tmp, "%+1.8E", x);
-  memcpy(out, tmp, (size_t)n);
-  return (size_t)n;
-}
-
 /* ---- struct helpers ------------------------------------------------------ */
 
 void mx_restart_free(mx_restart *r) {
@@ -325,18 +249,29 @@ static int check_restart(const char *name, const mx_restart *r, int status,
   } while (0)
   if (r->no == 0) BAD("no octants");
   if (r->nv > UINT32_MAX) BAD("%zu nodes: more than 32-bit indices", r->nv);
-  if (!r->xyz || !r->edge || !r->oct_node || !r->oct_level || !r->oct_tri_off ||
-      (r->oct_tri_off[r->no] > 0 && !r->oct_tri))
+  if ((!r->xyz && !r->node_rows) || (!r->edge && !r->edge_rows) || (!r->oct_node && !r->oct_rows) ||
+      !r->oct_level || !r->oct_tri_off || (r->oct_tri_off[r->no] > 0 && !r->oct_tri))
     BAD("missing arrays");
-  for (size_t i = 0; i < 3 * r->nv; i++)
+  /* the big arrays are counted in parallel; a serial pass finds the first
+   * fault to report only when there is one */
+  size_t bad = 0;
+  const size_t nv = r->xyz ? r->nv : 0; /* else generated */
+#pragma omp parallel for schedule(static) reduction(+ : bad) if (nv > 65536)
+  for (size_t i = 0; i < 3 * nv; i++) bad += !isfinite(r->xyz[i]);
+  for (size_t i = 0; bad && i < 3 * nv; i++)
     if (!isfinite(r->xyz[i])) BAD("node %zu: non-finite coordinate", i / 3);
-  for (size_t i = 0; i < 3 * r->ne; i++)
+  const size_t ne = r->edge ? r->ne : 0, no = r->oct_node ? r->no : 0; /* else generated */
+#pragma omp parallel for schedule(static) reduction(+ : bad) if (ne > 65536)
+  for (size_t i = 0; i < 3 * ne; i++) bad += r->edge[i] >= r->nv;
+  for (size_t i = 0; bad && i < 3 * ne; i++)
     if (r->edge[i] >= r->nv)
       BAD("edge %zu: node index %u out of range (%zu nodes)", i / 3, r->edge[i],
           r->nv);
   if (r->dim != 0 && r->dim != 2 && r->dim != 3) BAD("dimension %d", r->dim);
   const size_t nc = r->dim == 2 ? 4 : 8;
-  for (size_t i = 0; i < nc * r->no; i++)
+#pragma omp parallel for schedule(static) reduction(+ : bad) if (no > 65536)
+  for (size_t i = 0; i < nc * no; i++) bad += r->oct_node[8 * (i / nc) + i % nc] >= r->nv;
+  for (size_t i = 0; bad && i < nc * no; i++)
     if (r->oct_node[8 * (i / nc) + i % nc] >= r->nv)
       BAD("octant %zu: node index %u out of range (%zu nodes)", i / nc,
           r->oct_node[8 * (i / nc) + i % nc], r->nv);
@@ -1110,38 +1045,72 @@ int mx_restart_read_dim(const char *path, int dim, mx_restart *r) {
 
 /* ---- text writing -------------------------------------------------------- */
 
+/* Node coordinates are lattice values, each met on many nodes (a few
+ * thousand distinct values per axis for millions of nodes): a small
+ * direct-mapped memo of formatted values, keyed by the exact bits, makes
+ * most of them a 16-byte copy. */
+enum { E8_MEMO = 1024 };
+typedef struct {
+  uint64_t bits;
+  char text[MX_E8_CHARS];
+  uint32_t len; /* 0: empty */
+} e8_memo;
+
+/* x as mx_put_e8 writes it; may write up to MX_E8_CHARS bytes at out
+ * whatever the length returned. */
+static inline size_t put_e8_memo(char *out, double x, e8_memo *memo) {
+  uint64_t bits;
+  memcpy(&bits, &x, sizeof bits);
+  e8_memo *m = &memo[(bits * 0x9E3779B97F4A7C15ULL) >> 54];
+  if (m->len == 0 || m->bits != bits) {
+    m->bits = bits;
+    m->len = (uint32_t)mx_put_e8(m->text, x);
+  }
+  memcpy(out, m->text, MX_E8_CHARS);
+  return m->len;
+}
+
 /* Fill functions of mx_afile_emit (items [b, e) of one section, in the
  * published layout; see the max_item_bytes given in text_body). */
+enum { GEN_BLOCK = 256 }; /* rows made at a time by a generator */
+
 static size_t fill_nodes(const void *ctx, size_t b, size_t e, char *out) {
-  const double *xyz = ((const mx_restart *)ctx)->xyz;
+  const mx_restart *r = ctx;
+  const int nd = r->dim == 2 ? 2 : 3;
+  e8_memo memo[E8_MEMO];
+  for (int k = 0; k < E8_MEMO; k++) memo[k].len = 0;
+  double made[3 * GEN_BLOCK];
   char *o = out;
-  if (((const mx_restart *)ctx)->dim == 2) {
-    for (size_t i = b; i < e; i++) {
-      o += put_e8(o, xyz[3 * i]);
-      memcpy(o, "  ", 2);
-      o += put_e8(o + 2, xyz[3 * i + 1]) + 2;
-      *o++ = '\n';
+  for (size_t i0 = b; i0 < e; i0 += GEN_BLOCK) {
+    const size_t i1 = e - i0 < GEN_BLOCK ? e : i0 + GEN_BLOCK;
+    const double *xyz = r->xyz ? r->xyz + 3 * i0 : made;
+    if (!r->xyz) r->node_rows(r->gen, i0, i1, made);
+    for (size_t i = 0; i < i1 - i0; i++) {
+      for (int d = 0; d < nd; d++) {
+        o += put_e8_memo(o, xyz[3 * i + d], memo);
+        memcpy(o, d + 1 < nd ? "  " : "\n", d + 1 < nd ? 2 : 1);
+        o += d + 1 < nd ? 2 : 1;
+      }
     }
-    return (size_t)(o - out);
-  }
-  for (size_t i = b; i < e; i++) {
-    o += put_e8(o, xyz[3 * i]);
-    memcpy(o, "  ", 2);
-    o += put_e8(o + 2, xyz[3 * i + 1]) + 2;
-    memcpy(o, "  ", 2);
-    o += put_e8(o + 2, xyz[3 * i + 2]) + 2;
-    *o++ = '\n';
   }
   return (size_t)(o - out);
 }
 
 static size_t fill_edges(const void *ctx, size_t b, size_t e, char *out) {
-  const uint32_t *ed = ((const mx_restart *)ctx)->edge;
+  const mx_restart *r = ctx;
+  uint32_t rows[3 * GEN_BLOCK];
   char *o = out;
-  for (size_t i = b; i < e; i++) {
-    for (int k = 0; k < 3; k++) {
-      o += mx_put_u64(o, ed[3 * i + k]);
-      *o++ = k < 2 ? ' ' : '\n';
+  for (size_t i0 = b; i0 < e; i0 += GEN_BLOCK) {
+    const size_t i1 = e - i0 < GEN_BLOCK ? e : i0 + GEN_BLOCK;
+    const uint32_t *ed = r->edge ? r->edge + 3 * i0 : rows;
+    if (!r->edge) r->edge_rows(r->gen, i0, i1, rows);
+    for (size_t i = 0; i < 3 * (i1 - i0); i += 3) {
+      o += mx_put_u64(o, ed[i]);
+      *o++ = ' ';
+      o += mx_put_u64(o, ed[i + 1]);
+      *o++ = ' ';
+      o += mx_put_u64(o, ed[i + 2]);
+      *o++ = '\n';
     }
   }
   return (size_t)(o - out);
@@ -1149,23 +1118,29 @@ static size_t fill_edges(const void *ctx, size_t b, size_t e, char *out) {
 
 static size_t fill_octants(const void *ctx, size_t b, size_t e, char *out) {
   const mx_restart *r = ctx;
+  uint32_t rows[8 * GEN_BLOCK];
   char *o = out;
   const int nc = r->dim == 2 ? 4 : 8;
-  for (size_t i = b; i < e; i++) {
-    *o++ = (char)('0' + nc);
-    for (int k = 0; k < nc; k++) {
+  for (size_t i0 = b; i0 < e; i0 += GEN_BLOCK) {
+    const size_t i1 = e - i0 < GEN_BLOCK ? e : i0 + GEN_BLOCK;
+    const uint32_t *on = r->oct_node ? r->oct_node + 8 * i0 : rows;
+    if (!r->oct_node) r->oct_rows(r->gen, i0, i1, rows);
+    for (size_t i = i0; i < i1; i++, on += 8) {
+      *o++ = (char)('0' + nc);
+      for (int k = 0; k < nc; k++) {
+        *o++ = ' ';
+        o += mx_put_u64(o, on[k]);
+      }
       *o++ = ' ';
-      o += mx_put_u64(o, r->oct_node[8 * i + k]);
+      o += mx_put_u64(o, r->oct_level[i]);
+      *o++ = '\n';
+      o += mx_put_u64(o, r->oct_tri_off[i + 1] - r->oct_tri_off[i]);
+      for (uint64_t j = r->oct_tri_off[i]; j < r->oct_tri_off[i + 1]; j++) {
+        *o++ = ' ';
+        o += mx_put_u64(o, r->oct_tri[j]);
+      }
+      *o++ = '\n';
     }
-    *o++ = ' ';
-    o += mx_put_u64(o, r->oct_level[i]);
-    *o++ = '\n';
-    o += mx_put_u64(o, r->oct_tri_off[i + 1] - r->oct_tri_off[i]);
-    for (uint64_t j = r->oct_tri_off[i]; j < r->oct_tri_off[i + 1]; j++) {
-      *o++ = ' ';
-      o += mx_put_u64(o, r->oct_tri[j]);
-    }
-    *o++ = '\n';
   }
   return (size_t)(o - out);
 }
@@ -1187,7 +1162,7 @@ static int text_body(mx_afile *f, const mx_restart *r) {
     if (r->oct_tri_off[i + 1] - r->oct_tri_off[i] > maxk)
       maxk = r->oct_tri_off[i + 1] - r->oct_tri_off[i];
   MX_CHECK(mx_afile_printf(f, "%zu %zu %zu\n\n", r->nv, r->ne, r->no));
-  MX_CHECK(mx_afile_emit(f, r->nv, 3 * 16 + 5, fill_nodes, r));
+  MX_CHECK(mx_afile_emit(f, r->nv, 3 * MX_E8_CHARS + 5, fill_nodes, r));
   MX_CHECK(mx_afile_write(f, "\n", 1));
   MX_CHECK(mx_afile_emit(f, r->ne, 3 * 11, fill_edges, r));
   MX_CHECK(mx_afile_write(f, "\n", 1));
@@ -1285,6 +1260,10 @@ int mx_restart_write_binary(const char *path, const mx_restart *r) {
   MX_CHECK(check_restart(path, r, MX_EINTERNAL, BAD_DATA));
   if (r->dim == 2) {
     mx_error(path, 0, "%s: a quadtree restart file is text only", BAD_DATA);
+    return MX_EINTERNAL;
+  }
+  if (!r->xyz || !r->edge || !r->oct_node) {
+    mx_error(path, 0, "%s: the binary writer takes stored rows, not generated ones", BAD_DATA);
     return MX_EINTERNAL;
   }
   MX_CHECK(check_mesh(path, r, MX_EINTERNAL, BAD_DATA));

@@ -106,6 +106,17 @@ typedef struct mx_restart {
                           * order; 0: octant by octant (the published
                           * program's). Text: the last line is the comment
                           * MX_RESTART_BY_TYPE; binary: flag bit 3. */
+  /* Text writing only, optional: rows made while the file is written
+   * instead of stored, block by block by the writer's threads (a mesher's
+   * restart file: the lookups that give the edges' ends and mid-nodes and
+   * the octants' corners then overlap the disk's writing, and the arrays
+   * are never allocated). When a generator is set, its array (xyz, edge,
+   * oct_node) may be NULL; rows must be valid (finite coordinates, node
+   * indices below nv). */
+  void (*node_rows)(const void *gen, size_t begin, size_t end, double *xyz); /* 3 a node */
+  void (*edge_rows)(const void *gen, size_t begin, size_t end, uint32_t *rows); /* 3 a row */
+  void (*oct_rows)(const void *gen, size_t begin, size_t end, uint32_t *rows);  /* 8 a row */
+  const void *gen;
   /* Binary variant only, optional: the mesh written with the file (the
    * full stage: element -> octant, node lattice keys and states), so that
    * a re-mesh from the file is local (mesher/remesh_local.c). Elements are

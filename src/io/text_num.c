@@ -4,6 +4,7 @@
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
+#include <stdio.h>
 #include <string.h>
 
 #ifndef __SIZEOF_INT128__
@@ -17,23 +18,116 @@ static const char digit_pairs[201] =
     "37383940414243444546474849505152535455565758596061626364656667686970717273"
     "7475767778798081828384858687888990919293949596979899";
 
+static const uint64_t pow10_u64[20] = {1ull,
+                                       10ull,
+                                       100ull,
+                                       1000ull,
+                                       10000ull,
+                                       100000ull,
+                                       1000000ull,
+                                       10000000ull,
+                                       100000000ull,
+                                       1000000000ull,
+                                       10000000000ull,
+                                       100000000000ull,
+                                       1000000000000ull,
+                                       10000000000000ull,
+                                       100000000000000ull,
+                                       1000000000000000ull,
+                                       10000000000000000ull,
+                                       100000000000000000ull,
+                                       1000000000000000000ull,
+                                       10000000000000000000ull};
+
+/* Digits of v >= 1: the bit length times log10(2) (1233 / 4096) is the count or
+ * one too many. */
+static inline size_t decimal_digits(uint64_t v) {
+  const unsigned bits = 64u - (unsigned)__builtin_clzll(v | 1u);
+  const unsigned t = (bits * 1233u) >> 12;
+  return (size_t)t + 1u - (v < pow10_u64[t]);
+}
+
+/* The digits are written from the end, two at a time, straight to out. */
 size_t mx_put_u64(char *out, uint64_t v) {
-  char tmp[MX_U64_CHARS];
-  size_t n = sizeof tmp;
-  while (v >= 100) {
-    const unsigned r = (unsigned)(v % 100);
-    v /= 100;
-    n -= 2;
-    memcpy(tmp + n, digit_pairs + 2 * r, 2);
+  if (v < 10u) {
+    *out = (char)('0' + v);
+    return 1;
   }
-  if (v >= 10) {
-    n -= 2;
-    memcpy(tmp + n, digit_pairs + 2 * v, 2);
-  } else {
-    tmp[--n] = (char)('0' + v);
+  const size_t n = decimal_digits(v);
+  char *p = out + n;
+  while (v > UINT32_MAX) {
+    const unsigned r = (unsigned)(v % 100u);
+    v /= 100u;
+    p -= 2;
+    memcpy(p, digit_pairs + 2 * r, 2);
   }
-  memcpy(out, tmp + n, sizeof tmp - n);
-  return sizeof tmp - n;
+  uint32_t w = (uint32_t)v; /* 32-bit divisions from here */
+  while (w >= 100u) {
+    const unsigned r = w % 100u;
+    w /= 100u;
+    p -= 2;
+    memcpy(p, digit_pairs + 2 * r, 2);
+  }
+  if (w >= 10u) memcpy(p - 2, digit_pairs + 2 * w, 2);
+  else p[-1] = (char)('0' + w);
+  return n;
+}
+
+/* x as printf's "%+1.8E" writes it, rounded as printf rounds (to nearest,
+ * ties to even, on the exact binary value). For 1e-14 <= |x| < 1e9 the
+ * 9 digits come from exact 128-bit integer arithmetic: x = m 2^e with
+ * e < 0, D = round(m 10^k 2^e), 10^8 <= D < 10^9; anything else goes to
+ * snprintf. Writes at most 16 bytes; returns how many. */
+size_t mx_put_e8(char *out, double x) {
+  double a = fabs(x);
+  if (a >= 1e-14 && a < 1e9) {
+    int e2;
+    uint64_t m = (uint64_t)ldexp(frexp(a, &e2), 53);
+    int shift = 53 - e2; /* a = m / 2^shift, 23 < shift < 100 */
+    int d = (int)floor(log10(a));
+    for (int tries = 0; tries < 3; tries++) {
+      int k = 8 - d;
+      if (k < 0 || k > 22) break;
+      unsigned __int128 n = (unsigned __int128)m * pow10_u64[k < 19 ? k : 19];
+      if (k > 19) n *= pow10_u64[k - 19];
+      unsigned __int128 q = n >> shift;
+      if (q >= 1000000000ull) {
+        d++;
+        continue;
+      }
+      uint64_t digits = (uint64_t)q;
+      if (digits < 100000000ull) {
+        d--;
+        continue;
+      }
+      unsigned __int128 half = (unsigned __int128)1 << (shift - 1);
+      unsigned __int128 rest = n & ((half << 1) - 1);
+      if (rest > half || (rest == half && (digits & 1))) digits++;
+      if (digits == 1000000000ull) { /* 9.99999999|5 -> 1.00000000E+(d+1) */
+        digits = 100000000ull;
+        d++;
+      }
+      char *o = out;
+      *o++ = x < 0 ? '-' : '+';
+      *o++ = (char)('0' + digits / 100000000ull);
+      *o++ = '.';
+      uint64_t low = digits % 100000000ull;
+      for (int i = 7; i >= 0; i--, low /= 10) o[i] = (char)('0' + low % 10);
+      o += 8;
+      *o++ = 'E';
+      *o++ = d < 0 ? '-' : '+';
+      int ad = d < 0 ? -d : d;
+      *o++ = (char)('0' + ad / 10);
+      *o++ = (char)('0' + ad % 10);
+      return (size_t)(o - out);
+    }
+  }
+  /* the rest (and inf, nan) from snprintf, with '.' whatever the locale */
+  char tmp[48];
+  const int n = snprintf(tmp, sizeof tmp, "%+1.8E", x);
+  if (n <= 0 || n > MX_E8_CHARS) return 0;
+  for (int i = 0; i < n; i++) out[i] = tmp[i] >= '0' || tmp[i] == '+' || tmp[i] == '-' ? tmp[i] : '.';
+  return (size_t)n;
 }
 
 size_t mx_put_i64(char *out, int64_t v) {

@@ -22,6 +22,9 @@
  *                  least two exponent digits ("1e+22", "-2.5e-07",
  *                  "4.9406564584124654e-324"); "0" and "-0" for zeros,
  *                  "inf", "-inf", "nan", "-nan" otherwise.
+ *   mx_put_e8      x exactly as printf's "%+1.8E" writes it in the C locale
+ *                  ("+1.25000000E-03"), at most MX_E8_CHARS bytes: the
+ *                  published restart file's and M3D/MVM layout
  *   mx_put_xyz_lines  the points [begin, end) of xyz (3 doubles a point) as
  *                  lines "x y z\n" of mx_put_double numbers, at most
  *                  MX_XYZ_LINE_MAX bytes a point
@@ -38,6 +41,7 @@ enum {
   MX_U64_CHARS = 20,    /* 18446744073709551615 */
   MX_I64_CHARS = 20,    /* -9223372036854775808 */
   MX_DOUBLE_CHARS = 24, /* "-d.dddddddddddddddde-308"; fixed forms <= 23 */
+  MX_E8_CHARS = 16,     /* "%+1.8E": "+d.ddddddddE+ddd" */
   MX_NUM_MAX = 26,      /* any of the above with a separator, rounded up */
   MX_XYZ_LINE_MAX = 3 * (MX_DOUBLE_CHARS + 1), /* "x y z\n" */
 };
@@ -45,6 +49,7 @@ enum {
 size_t mx_put_u64(char *out, uint64_t v);
 size_t mx_put_i64(char *out, int64_t v);
 size_t mx_put_double(char *out, double x);
+size_t mx_put_e8(char *out, double x);
 size_t mx_put_xyz_lines(char *out, const double *xyz, size_t begin,
                         size_t end);
 

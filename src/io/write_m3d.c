@@ -67,30 +67,12 @@ enum {
 
 /* ---- text ---------------------------------------------------------------- */
 
-/* x as "%+1.8E" with '.' as the decimal point (snprintf follows the
- * locale's); returns the bytes written, at most SCI_CHARS. */
-static size_t put_sci(char *out, double x) {
-  char buf[64];
-  const int len = snprintf(buf, sizeof buf, "%+1.8E", x);
-  if (len <= 0) return 0;
-  if (!isfinite(x)) { /* "+INF", "-NAN": no decimal point */
-    memcpy(out, buf, (size_t)len);
-    return (size_t)len;
-  }
-  size_t n = 0, i = 0;
-  out[n++] = buf[i++]; /* sign */
-  out[n++] = buf[i++]; /* first digit */
-  out[n++] = '.';
-  while (buf[i] && (buf[i] < '0' || buf[i] > '9')) i++; /* the radix */
-  while (buf[i] && n < SCI_CHARS) out[n++] = buf[i++];
-  return n;
-}
 
 static size_t put_xyz(char *out, const double *p) {
-  size_t n = put_sci(out, p[0]);
+  size_t n = mx_put_e8(out, p[0]);
   for (int d = 1; d < 3; d++) {
     out[n++] = ' ';
-    n += put_sci(out + n, p[d]);
+    n += mx_put_e8(out + n, p[d]);
   }
   out[n++] = '\n';
   return n;

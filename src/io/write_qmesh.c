@@ -739,14 +739,6 @@ static int getfem_body(mx_afile *f, const mx_qmesh *M) {
   return mx_afile_printf(f, "\nEND MESH STRUCTURE DESCRIPTION\n");
 }
 
-/* x as "%+1.8E" with '.' as the radix whatever the locale. */
-static size_t put_sci(char *o, double x) {
-  char buf[48];
-  const int len = snprintf(buf, sizeof buf, "%+1.8E", x);
-  if (len <= 0 || len > 24) return 0;
-  for (int i = 0; i < len; i++) o[i] = buf[i] == ',' ? '.' : buf[i];
-  return (size_t)len;
-}
 enum { SCI_MAX = 24 };
 static const char m3d_tail[] = " 1000.0 0.45 1.0\n";
 
@@ -757,7 +749,7 @@ static size_t m3d_nodes(const void *v, size_t b, size_t e, char *o) {
     o[n++] = '1';
     for (int d = 0; d < 3; d++) {
       o[n++] = ' ';
-      n += put_sci(o + n, d < 2 ? x->M->xy[2 * i + d] : 0.0);
+      n += mx_put_e8(o + n, d < 2 ? x->M->xy[2 * i + d] : 0.0);
     }
     o[n++] = '\n';
   }

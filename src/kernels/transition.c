@@ -9,6 +9,7 @@
 #include "kernels/quality.h"
 #include "patterns/lattice.h"
 #include "patterns/lookup.h"
+#include "soa/key_index.h"
 #include "soa/mesh.h"
 #include "soa/scan.h"
 
@@ -126,10 +127,8 @@ typedef struct {
   uint32_t id;
 } node_entry;
 
-/* Nodes are hashed by spatial blocks: the points of one block of 4x4x4
- * finest-level node spacings land in one window (twice its size) of the table, so leaves taken
- * in Morton order touch a few windows at a time (cache friendly), while the
- * blocks themselves are spread by a mixing hash. */
+/* Nodes are hashed by spatial blocks (mx_block_slot, soa/key_index.h):
+ * leaves taken in Morton order touch a few windows of the table at a time. */
 typedef struct {
   node_entry *e;
   size_t cap;
@@ -137,15 +136,7 @@ typedef struct {
   int overflow;
 } node_hash;
 
-static inline size_t nh_slot_of(uint64_t key, size_t cap, int shift) {
-  const uint64_t k = key >> shift;
-  uint64_t h = (k >> 6) * 0x9E3779B97F4A7C15ULL;
-  h ^= h >> 31;
-  const size_t base = (size_t)(((unsigned __int128)h * cap) >> 64);
-  const size_t s = base + 2 * (size_t)(k & 63);
-  return s >= cap ? s - cap : s;
-}
-#define nh_slot(key, cap) nh_slot_of(key, cap, H->shift)
+#define nh_slot(key, cap) mx_block_slot(key, cap, H->shift)
 
 static size_t nh_insert(node_hash *H, uint64_t key, uint32_t owner) {
   const uint64_t want = key + 1;
@@ -345,12 +336,12 @@ int mx_transition_build(const mx_builder *B, const uint32_t *leaves, size_t n,
         np += (size_t)leaf_points(T->key[o], T->level[o], mask[i], pk + np);
       }
       for (size_t j = 0; j < np && j < 16; j++)
-        __builtin_prefetch(&H.e[nh_slot_of(pk[j], H.cap, H.shift)], 1);
+        __builtin_prefetch(&H.e[mx_block_slot(pk[j], H.cap, H.shift)], 1);
       size_t j = 0;
       for (size_t i = b; i < end; i++) {
         const int k = __builtin_popcount(mask[i]);
         for (int q = 0; q < k; q++, j++) {
-          if (j + 16 < np) __builtin_prefetch(&H.e[nh_slot_of(pk[j + 16], H.cap, H.shift)], 1);
+          if (j + 16 < np) __builtin_prefetch(&H.e[mx_block_slot(pk[j + 16], H.cap, H.shift)], 1);
           slot[poff[i] + (uint64_t)q] = (uint32_t)nh_insert(&H, pk[j], (uint32_t)i + 1);
         }
       }

@@ -598,7 +598,9 @@ int mx_build_tree(mx_mesher *m) {
   m->S.ph.refine += m->B.stats.t_refine;
   m->S.ph.balance += m->B.stats.t_balance;
   m->S.max_level = mx_max_requested_level(&req);
+  const double tl = mx_wtime();
   MX_CHECK(mx_update_leaves(m));
+  m->S.ph.balance += mx_wtime() - tl; /* the leaf list: the octree's last step */
   return check_memory_leaves(m);
 }
 
@@ -856,7 +858,11 @@ int mx_mesh_finish(mx_mesher *m) {
              "levels (-s, -a, -b, -r)", m->nleaves);
     return MX_EINPUT;
   }
-  MX_CHECK(boundary_flags(m));
+  /* the boundary flags and the volume check count as verification */
+  const double t = mx_wtime();
+  int st = boundary_flags(m);
+  m->S.ph.verify += mx_wtime() - t;
+  MX_CHECK(st);
   m->S.leaves = m->nleaves;
   count_mesh(m);
   if (m->M.invalid > 0) {
@@ -873,7 +879,10 @@ int mx_mesh_finish(mx_mesher *m) {
              k->first[0], k->first[1], k->first[2]);
     return MX_EINVALID;
   }
-  return volume_check(m);
+  const double tv = mx_wtime();
+  st = volume_check(m);
+  m->S.ph.verify += mx_wtime() - tv;
+  return st;
 }
 
 /* Mesh the current octree up to params.stage. */

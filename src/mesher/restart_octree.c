@@ -24,145 +24,360 @@
 #include "io/element_list.h"
 #include "io/restart.h"
 #include "kernels/grid.h"
+#include "soa/key_index.h"
 #include "soa/scan.h"
 
 #include <math.h>
+#include <omp.h>
 #include <string.h>
 
 /* Corner c of the published order: bit pattern (x, y, z) per corner. */
 static const uint8_t corner_xyz[8][3] = {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0},
                                          {0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0}};
 
-static uint64_t corner_key(uint64_t key, int level, int c) {
-  uint32_t p[3];
-  mx_morton_decode(key, p);
-  const uint32_t s = mx_octant_size(level);
-  return mx_morton_encode(p[0] + corner_xyz[c][0] * s, p[1] + corner_xyz[c][1] * s,
-                          p[2] + corner_xyz[c][2] * s);
+
+/* The nodes and edges of the file are the corners and edges of every stored
+ * octant, so each is shared by several octants: emitting all 8 corners and
+ * 12 edges of every octant, then sorting and dropping repeats, sorts about
+ * three keys for each one kept. Two rules leave most repeats unmade:
+ * - a corner c of a split octant is corner c of its child c: the child
+ *   emits it when that child is kept;
+ * - a corner or edge shared by siblings is emitted by one of them: the
+ *   sibling j & b for corner bits b (the one on the low side, per axis, of
+ *   the point), and likewise for an edge on the two axes across it, when
+ *   that sibling is kept.
+ * Both hand the point or edge to an octant that has it too and is stored
+ * (kept), and who it is handed to follows the same rules, so every corner
+ * and edge of every stored octant is still emitted at least once; the sort
+ * drops the repeats across families. Corner bits here: x | y << 1 | z << 2
+ * (the children's numbering), not the published corner order. */
+typedef struct {
+  uint8_t corner[8][256]; /* [child j][parent's kept mask]: corners j emits */
+  uint16_t edge[8][256];  /* the same for edges (bits a * 4 + jj) */
+  uint64_t cdelta[MX_MAX_LEVEL + 1][8];  /* corner bits b as Morton offsets */
+  uint64_t edelta[MX_MAX_LEVEL + 1][12]; /* lower end of edge a * 4 + jj */
+} emit_tables;
+
+/* The rules above for every (child, parent's kept mask), and the offsets of
+ * the corners and edges of an octant of each level as Morton keys (added
+ * to its key with mx_morton_add: no decoding). Edge bits a * 4 + jj: axis
+ * a, offsets jj & 1 along a + 1, jj >> 1 along a + 2 (mod 3), as
+ * mx_edge_key numbers them. */
+static void emit_tables_make(emit_tables *E) {
+  for (unsigned j = 0; j < 8; j++)
+    for (unsigned kp = 0; kp < 256; kp++) {
+      unsigned cm = 0, em = 0;
+      for (unsigned b = 0; b < 8; b++) {
+        const unsigned jc = j & b;
+        if (jc == j || !((kp >> jc) & 1u)) cm |= 1u << b;
+      }
+      for (unsigned a = 0; a < 3; a++)
+        for (unsigned jj = 0; jj < 4; jj++) {
+          unsigned jc = j;
+          if (!(jj & 1u)) jc &= ~(1u << ((a + 1) % 3));
+          if (!(jj & 2u)) jc &= ~(1u << ((a + 2) % 3));
+          if (jc == j || !((kp >> jc) & 1u)) em |= 1u << (a * 4 + jj);
+        }
+      E->corner[j][kp] = (uint8_t)cm;
+      E->edge[j][kp] = (uint16_t)em;
+    }
+  for (int l = 0; l <= MX_MAX_LEVEL; l++) {
+    const uint32_t s = mx_octant_size(l);
+    for (unsigned b = 0; b < 8; b++)
+      E->cdelta[l][b] = mx_morton_encode((b & 1u) * s, ((b >> 1) & 1u) * s, (b >> 2) * s);
+    for (int a = 0; a < 3; a++)
+      for (int jj = 0; jj < 4; jj++) {
+        uint32_t p[3] = {0, 0, 0};
+        p[(a + 1) % 3] = (uint32_t)(jj & 1) * s;
+        p[(a + 2) % 3] = (uint32_t)(jj >> 1) * s;
+        E->edelta[l][a * 4 + jj] = mx_morton_encode(p[0], p[1], p[2]);
+      }
+  }
+}
+
+static unsigned corner_emit_mask(const mx_octree *T, const emit_tables *E, uint32_t o) {
+  const unsigned m = 0xffu & ~(unsigned)T->kept[o]; /* kept is 0 for a leaf */
+  const uint32_t P = T->parent[o];
+  if (P == MX_NONE) return m;
+  return m & E->corner[mx_morton_child_id(T->key[o], T->level[o])][T->kept[P]];
+}
+
+static unsigned edge_emit_mask(const mx_octree *T, const emit_tables *E, uint32_t o) {
+  const uint32_t P = T->parent[o];
+  if (P == MX_NONE) return 0xfffu;
+  return E->edge[mx_morton_child_id(T->key[o], T->level[o])][T->kept[P]];
+}
+
+enum { EMIT_MAX_THREADS = 256 };
+
+/* The threads' shares of the octants: the same contiguous ranges in the
+ * counting pass and the filling pass. */
+static size_t share_lo(size_t n, int t, int nt) { return n * (size_t)t / (size_t)nt; }
+
+/* Node keys: the corners of every stored octant, sorted and unique
+ * (*vkey_out, *nv_out). */
+static int restart_node_keys(const mx_octree *T, const emit_tables *E, uint64_t **vkey_out,
+                             size_t *nv_out) {
+  size_t cnt[EMIT_MAX_THREADS + 1] = {0};
+  int nt = omp_get_max_threads();
+  if (nt > EMIT_MAX_THREADS) nt = EMIT_MAX_THREADS;
+  if (T->n < 65536) nt = 1;
+#pragma omp parallel num_threads(nt)
+  {
+    const int t = omp_get_thread_num(), tn = omp_get_num_threads();
+    size_t k = 0;
+    for (size_t o = share_lo(T->n, t, tn); o < share_lo(T->n, t + 1, tn); o++)
+      k += (size_t)__builtin_popcount(corner_emit_mask(T, E, (uint32_t)o));
+    cnt[t + 1] = k;
+#pragma omp single
+    nt = tn;
+  }
+  for (int t = 0; t < nt; t++) cnt[t + 1] += cnt[t];
+  uint64_t *vkey = mx_alloc((cnt[nt] + 1) * sizeof *vkey);
+  if (!vkey) return MX_ENOMEM;
+#pragma omp parallel num_threads(nt)
+  {
+    const int t = omp_get_thread_num();
+    uint64_t *w = vkey + cnt[t];
+    for (size_t o = share_lo(T->n, t, nt); o < share_lo(T->n, t + 1, nt); o++) {
+      const uint64_t *d = E->cdelta[T->level[o]];
+      for (unsigned m = corner_emit_mask(T, E, (uint32_t)o); m; m &= m - 1)
+        *w++ = mx_morton_add(T->key[o], d[__builtin_ctz(m)]);
+    }
+  }
+  int st = MX_OK;
+  *nv_out = mx_sort_unique_u64(vkey, cnt[nt], &st);
+  if (st) {
+    mx_free(vkey);
+    return st;
+  }
+  *vkey_out = vkey;
+  return MX_OK;
+}
+
+enum { NLA = (MX_MAX_LEVEL + 1) * 3 }; /* (level, axis) pairs: la = level * 3 + axis */
+
+/* What the text writer needs to make the edge rows and the octants'
+ * corners while it writes (mx_restart's generators): the sorted node keys
+ * and their index, the sorted edge keys of each (level, axis) and where
+ * their rows start. */
+typedef struct {
+  const mx_mesher *m;
+  uint64_t *vkey;       /* the nodes' lattice keys, sorted */
+  size_t nv;
+  mx_key_index H;       /* key -> node */
+  uint64_t *keys[NLA];  /* edges: lower ends, sorted and unique */
+  size_t first[NLA + 1]; /* row of the first edge of each (level, axis) */
+  uint32_t split_levels; /* bit l: an octant of level l has a kept child */
+  emit_tables E;
+  uint64_t pdelta[MX_MAX_LEVEL + 1][8]; /* corners in the published order */
+} restart_gen;
+
+static void restart_gen_free(restart_gen *g) {
+  mx_free(g->vkey);
+  mx_key_index_free(&g->H);
+  for (int la = 0; la < NLA; la++) mx_free(g->keys[la]);
+  memset(g, 0, sizeof *g);
 }
 
 /* Edges of every stored octant, per (level, axis), sorted and unique. */
-static int restart_edges(const mx_mesher *m, const uint64_t *vkey, size_t nv, mx_restart *r) {
+static int restart_edge_keys(const mx_mesher *m, const emit_tables *E, restart_gen *g) {
   const mx_octree *T = &m->B.oct;
-  size_t cnt[MX_MAX_LEVEL + 1] = {0};
-  for (size_t o = 0; o < T->n; o++) cnt[T->level[o]]++;
-  size_t total = 0;
-  uint64_t *keys[MX_MAX_LEVEL + 1][3];
-  size_t nk[MX_MAX_LEVEL + 1][3];
-  int st = MX_OK;
-  memset(keys, 0, sizeof keys);
-  for (int l = 0; l <= MX_MAX_LEVEL && !st; l++)
-    for (int a = 0; a < 3 && !st; a++) {
-      nk[l][a] = 0;
-      if (!cnt[l]) continue;
-      keys[l][a] = mx_alloc((4 * cnt[l] + 1) * sizeof **keys);
-      if (!keys[l][a]) st = MX_ENOMEM;
-    }
+  int nt = omp_get_max_threads();
+  if (nt > 64) nt = 64;
+  if (T->n < 65536) nt = 1;
+  /* cnt[t][la]: thread t's edges of (level, axis) la; then where they go */
+  size_t(*cnt)[NLA] = mx_calloc((size_t)nt * sizeof *cnt);
+  size_t nk[NLA];
+  memset(nk, 0, sizeof nk);
+  int st = cnt ? MX_OK : MX_ENOMEM;
+  uint32_t split_levels = 0;
   if (!st) {
-    for (size_t o = 0; o < T->n; o++) {
-      const int l = T->level[o];
-      const uint32_t s = mx_octant_size(l);
-      uint32_t c[3];
-      mx_morton_decode(T->key[o], c);
-      for (int a = 0; a < 3; a++)
-        for (int j = 0; j < 4; j++) {
-          uint32_t p[3] = {c[0], c[1], c[2]};
-          p[(a + 1) % 3] += (uint32_t)(j & 1) * s;
-          p[(a + 2) % 3] += (uint32_t)(j >> 1) * s;
-          keys[l][a][nk[l][a]++] = mx_morton_encode(p[0], p[1], p[2]);
+#pragma omp parallel num_threads(nt)
+    {
+      const int t = omp_get_thread_num(), tn = omp_get_num_threads();
+      size_t *c = cnt[t];
+      uint32_t split = 0;
+      for (size_t o = share_lo(T->n, t, tn); o < share_lo(T->n, t + 1, tn); o++) {
+        const unsigned em = edge_emit_mask(T, E, (uint32_t)o);
+        const int l = T->level[o];
+        for (int a = 0; a < 3; a++) c[l * 3 + a] += (size_t)__builtin_popcount((em >> (4 * a)) & 15u);
+        if (T->kept[o]) split |= 1u << l;
+      }
+#pragma omp atomic
+      split_levels |= split;
+#pragma omp single
+      nt = tn;
+    }
+    for (int la = 0; la < NLA; la++) {
+      size_t s = 0;
+      for (int t = 0; t < nt; t++) {
+        const size_t c = cnt[t][la];
+        cnt[t][la] = s;
+        s += c;
+      }
+      nk[la] = s;
+      if (s && !st) {
+        g->keys[la] = mx_alloc(s * sizeof **g->keys);
+        if (!g->keys[la]) st = MX_ENOMEM;
+      }
+    }
+  }
+  g->split_levels = split_levels;
+  if (!st) {
+#pragma omp parallel num_threads(nt)
+    {
+      const int t = omp_get_thread_num();
+      size_t *w = cnt[t];
+      for (size_t o = share_lo(T->n, t, nt); o < share_lo(T->n, t + 1, nt); o++) {
+        const int l = T->level[o];
+        const uint64_t *d = E->edelta[l];
+        for (unsigned em = edge_emit_mask(T, E, (uint32_t)o); em; em &= em - 1) {
+          const int e = __builtin_ctz(em), la = l * 3 + e / 4;
+          g->keys[la][w[la]++] = mx_morton_add(T->key[o], d[e]);
         }
-    }
-    for (int l = 0; l <= MX_MAX_LEVEL && !st; l++)
-      for (int a = 0; a < 3 && !st; a++) {
-        if (!keys[l][a]) continue;
-        nk[l][a] = mx_sort_unique_u64(keys[l][a], nk[l][a], &st);
-        total += nk[l][a];
       }
-  }
-  if (!st) {
-    r->edge = mx_alloc((3 * total + 1) * sizeof *r->edge);
-    if (!r->edge) st = MX_ENOMEM;
-  }
-  /* the ends and the mid-node of each edge: three searches in the sorted
-   * node keys, in parallel (each edge writes its own row: the same rows for
-   * any thread count) */
-  size_t w = 0;
-  for (int l = 0; l <= MX_MAX_LEVEL && !st; l++) {
-    const uint32_t s = mx_octant_size(l);
-    for (int a = 0; a < 3; a++) {
-      const uint64_t *k = keys[l][a];
-      uint32_t *e = r->edge + 3 * w;
-      const size_t n = nk[l][a];
-#pragma omp parallel for schedule(static) if (n > 4096)
-      for (size_t i = 0; i < n; i++) {
-        uint32_t p[3], q[3];
-        mx_morton_decode(k[i], p);
-        memcpy(q, p, sizeof q);
-        q[a] += s;
-        uint32_t h[3] = {p[0], p[1], p[2]};
-        h[a] += s / 2;
-        const uint32_t ia = mx_find_u64(vkey, nv, k[i]);
-        const uint32_t ib = mx_find_u64(vkey, nv, mx_morton_encode(q[0], q[1], q[2]));
-        const uint32_t im = s > 1 ? mx_find_u64(vkey, nv, mx_morton_encode(h[0], h[1], h[2]))
-                                  : UINT32_MAX;
-        e[3 * i + 0] = ia;
-        e[3 * i + 1] = ib;
-        e[3 * i + 2] = im == UINT32_MAX ? 0 : im;
-      }
-      w += n;
     }
   }
-  r->ne = w;
-  for (int l = 0; l <= MX_MAX_LEVEL; l++)
-    for (int a = 0; a < 3; a++) mx_free(keys[l][a]);
+  g->first[0] = 0;
+  for (int la = 0; la < NLA; la++) {
+    if (!st && g->keys[la]) nk[la] = mx_sort_unique_u64(g->keys[la], nk[la], &st);
+    g->first[la + 1] = g->first[la] + (st ? 0 : nk[la]);
+  }
+  mx_free(cnt);
   return st;
 }
 
-static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r) {
-  const mx_octree *T = &m->B.oct;
-  memset(r, 0, sizeof *r);
-  /* nodes: corners of every stored octant */
-  uint64_t *vkey = mx_alloc((8 * T->n + 1) * sizeof *vkey);
-  if (!vkey) return MX_ENOMEM;
-#pragma omp parallel for schedule(static)
-  for (size_t o = 0; o < T->n; o++)
-    for (int c = 0; c < 8; c++) vkey[8 * o + c] = corner_key(T->key[o], T->level[o], c);
-  int st = MX_OK;
-  const size_t nv = mx_sort_unique_u64(vkey, 8 * T->n, &st);
-  if (!st) {
-    r->nv = nv;
-    r->xyz = mx_alloc((3 * nv + 1) * sizeof *r->xyz);
-    if (!r->xyz) st = MX_ENOMEM;
+/* Coordinates of nodes [begin, end): their lattice points through the grid. */
+static void node_rows(const void *gen, size_t begin, size_t end, double *xyz) {
+  const restart_gen *g = gen;
+  const mx_grid *gr = &g->m->B.grid;
+  for (size_t i = begin; i < end; i++, xyz += 3) {
+    uint32_t p[3];
+    mx_morton_decode(g->vkey[i], p);
+    for (int a = 0; a < 3; a++) xyz[a] = gr->origin[a] + (double)p[a] * gr->unit;
   }
-  if (!st) {
-    const mx_grid *g = &m->B.grid;
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < nv; i++) {
-      uint32_t p[3];
-      mx_morton_decode(vkey[i], p);
-      for (int a = 0; a < 3; a++) r->xyz[3 * i + a] = g->origin[a] + (double)p[a] * g->unit;
+}
+
+/* Rows [begin, end) of the edges section: the ends and the mid-node (0:
+ * none) of each edge, from the node index, the lookups of a few edges
+ * ahead prefetched. Called by the writer's threads, block by block. */
+static void edge_rows(const void *gen, size_t begin, size_t end, uint32_t *rows) {
+  const restart_gen *g = gen;
+  enum { AHEAD = 8 };
+  int la = 0;
+  while (g->first[la + 1] <= begin) la++;
+  for (size_t row = begin; row < end; la++) {
+    const int a = la % 3;
+    const uint32_t s = mx_octant_size(la / 3);
+    const uint64_t da = mx_morton_encode(a == 0 ? s : 0, a == 1 ? s : 0, a == 2 ? s : 0);
+    const uint64_t dm = mx_morton_encode(a == 0 ? s / 2 : 0, a == 1 ? s / 2 : 0, a == 2 ? s / 2 : 0);
+    /* a mid-node is the corner of a child of an octant of this level */
+    const int mids = s > 1 && ((g->split_levels >> (la / 3)) & 1u);
+    const size_t stop = end < g->first[la + 1] ? end : g->first[la + 1];
+    if (row >= stop) continue; /* no edges of this (level, axis) */
+    const uint64_t *k = g->keys[la] - g->first[la]; /* indexed by row */
+    /* the lower ends ascend: each is searched from the one before */
+    size_t near = mx_key_index_find(&g->H, k[row]);
+    for (; row < stop; row++, rows += 3) {
+      if (row + AHEAD < stop) {
+        mx_key_index_prefetch(&g->H, mx_morton_add(k[row + AHEAD], da));
+        if (mids) mx_key_index_prefetch(&g->H, mx_morton_add(k[row + AHEAD], dm));
+      }
+      const uint32_t im = mids ? mx_key_index_find(&g->H, mx_morton_add(k[row], dm)) : UINT32_MAX;
+      rows[0] = mx_find_u64_near(g->vkey, g->nv, k[row], &near);
+      rows[1] = mx_key_index_find(&g->H, mx_morton_add(k[row], da));
+      rows[2] = im == UINT32_MAX ? 0 : im;
     }
   }
-  if (!st && with_edges) st = restart_edges(m, vkey, nv, r);
-  if (!st && !with_edges) {
+}
+
+/* Rows [begin, end) of the octants section: the corners of each leaf, in
+ * the published order, from the node index (those of the next leaf
+ * prefetched). */
+static void oct_rows(const void *gen, size_t begin, size_t end, uint32_t *rows) {
+  const restart_gen *g = gen;
+  const mx_octree *T = &g->m->B.oct;
+  const uint32_t *leaves = g->m->leaves;
+  /* corner 0 is the leaf's anchor, and the anchors ascend: searched from
+   * the one before; the other corners from the index */
+  size_t near = begin < end ? mx_key_index_find(&g->H, T->key[leaves[begin]]) : 0;
+  for (size_t i = begin; i < end; i++, rows += 8) {
+    if (i + 1 < end) {
+      const uint32_t q = leaves[i + 1];
+      for (int c = 1; c < 8; c++)
+        mx_key_index_prefetch(&g->H, mx_morton_add(T->key[q], g->pdelta[T->level[q]][c]));
+    }
+    const uint32_t o = leaves[i];
+    rows[0] = mx_find_u64_near(g->vkey, g->nv, T->key[o], &near);
+    for (int c = 1; c < 8; c++)
+      rows[c] = mx_key_index_find(&g->H, mx_morton_add(T->key[o], g->pdelta[T->level[o]][c]));
+  }
+}
+
+/* The restart data of a mesher: the nodes' coordinates, the octants'
+ * levels, faces and element counts stored in r; the edge rows (text only:
+ * binary files have no edges) and the octants' corners made by the
+ * generators from g while the text file is written, or stored in r for the
+ * binary file. */
+static int restart_from_mesher(const mx_mesher *m, int text, mx_restart *r, restart_gen *g) {
+  const mx_octree *T = &m->B.oct;
+  memset(r, 0, sizeof *r);
+  memset(g, 0, sizeof *g);
+  g->m = m;
+  /* nodes: corners of every stored octant */
+  size_t nv = 0;
+  emit_tables_make(&g->E);
+  for (int l = 0; l <= MX_MAX_LEVEL; l++)
+    for (int c = 0; c < 8; c++)
+      g->pdelta[l][c] = g->E.cdelta[l][corner_xyz[c][0] | corner_xyz[c][1] << 1 | corner_xyz[c][2] << 2];
+  int st = restart_node_keys(T, &g->E, &g->vkey, &nv);
+  if (st) return st;
+  g->nv = nv;
+  r->nv = nv;
+  if (!text) { /* the text writer makes the coordinates as it goes */
+    r->xyz = mx_alloc((3 * nv + 1) * sizeof *r->xyz);
+    if (!r->xyz) st = MX_ENOMEM;
+    if (!st) {
+#pragma omp parallel for schedule(static, 256)
+      for (size_t i = 0; i < nv; i++) node_rows(g, i, i + 1, r->xyz + 3 * i);
+    }
+  }
+  /* where each node key lies in the sorted keys, by hashing */
+  if (!st) {
+    int top = 0;
+    for (size_t o = 0; o < T->n; o++)
+      if (T->level[o] > top) top = T->level[o];
+    st = mx_key_index_build(&g->H, g->vkey, nv, 3 * (MX_MAX_LEVEL - top));
+  }
+  const size_t no = m->nleaves;
+  r->no = no;
+  if (!st && text) {
+    st = restart_edge_keys(m, &g->E, g);
+    r->ne = g->first[NLA];
+    r->node_rows = node_rows;
+    r->edge_rows = edge_rows;
+    r->oct_rows = oct_rows;
+    r->gen = g;
+  } else if (!st) {
     r->edge = mx_alloc(sizeof *r->edge); /* none: implied by the octants */
-    if (!r->edge) st = MX_ENOMEM;
+    r->oct_node = mx_alloc((8 * no + 1) * sizeof *r->oct_node);
+    if (!r->edge || !r->oct_node) st = MX_ENOMEM;
+    if (!st) {
+#pragma omp parallel for schedule(static, 256)
+      for (size_t i = 0; i < no; i++) oct_rows(g, i, i + 1, r->oct_node + 8 * i);
+    }
   }
   /* octants: the leaves, in Morton order */
-  const size_t no = m->nleaves;
   if (!st) {
-    r->no = no;
-    r->oct_node = mx_alloc((8 * no + 1) * sizeof *r->oct_node);
     r->oct_level = mx_alloc(no + 1);
     r->oct_tri_off = mx_alloc((no + 1) * sizeof *r->oct_tri_off);
-    if (!r->oct_node || !r->oct_level || !r->oct_tri_off) st = MX_ENOMEM;
+    if (!r->oct_level || !r->oct_tri_off) st = MX_ENOMEM;
   }
   if (!st) {
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < no; i++) {
       const uint32_t o = m->leaves[i];
-      for (int c = 0; c < 8; c++)
-        r->oct_node[8 * i + c] = mx_find_u64(vkey, nv, corner_key(T->key[o], T->level[o], c));
       r->oct_level[i] = T->level[o];
       uint64_t k = 0;
       for (uint32_t j = 0; j < T->tri_cnt[o]; j++)
@@ -197,7 +412,6 @@ static int restart_from_mesher(const mx_mesher *m, int with_edges, mx_restart *r
     for (size_t c = 0; !st && c < m->M.ncells; c++) r->nsub[m->M.leaf[c]]++;
     r->by_type = 1; /* our meshes are written grouped by type (io/cell_order.c) */
   }
-  mx_free(vkey);
   return st;
 }
 
@@ -218,8 +432,10 @@ int mx_mesher_save_restart(const mx_mesher *cm, const char *path) {
   }
   const int binary = path && ends_with(path, ".octb");
   mx_restart r;
+  restart_gen g;
   memset(&r, 0, sizeof r);
-  if (!st) st = restart_from_mesher(m, !binary, &r);
+  memset(&g, 0, sizeof g);
+  if (!st) st = restart_from_mesher(m, !binary, &r, &g);
   /* the binary variant carries the mesh too: a re-mesh from it is local */
   if (!st && binary && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states) {
     r.has_mesh = 1;
@@ -245,6 +461,7 @@ int mx_mesher_save_restart(const mx_mesher *cm, const char *path) {
   r.mesh_state = r.mesh_type = NULL;
   r.mesh_conn = r.mesh_leaf = NULL;
   mx_restart_free(&r);
+  restart_gen_free(&g);
   m->S.t_restart += mx_wtime() - t;
   return mx_call_end(m, &c, st);
 }

@@ -48,6 +48,14 @@ static inline void mx_morton_decode(uint64_t key, uint32_t c[3]) {
   c[2] = mx_morton_compact(key >> 2);
 }
 
+/* a + b of two Morton keys, axis by axis, without decoding them (the sum
+ * of dilated integers: the bits of the other axes set to 1 carry through);
+ * a carry out of an axis' top bit is lost. */
+static inline uint64_t mx_morton_add(uint64_t a, uint64_t b) {
+  const uint64_t x = 0x9249249249249249ULL, y = x << 1, z = x << 2;
+  return (((a | ~x) + (b & x)) & x) | (((a | ~y) + (b & y)) & y) | (((a | ~z) + (b & z)) & z);
+}
+
 /* Side of an octant of this level, in lattice units. */
 static inline uint32_t mx_octant_size(int level) {
   return 1u << (MX_MAX_LEVEL - level);

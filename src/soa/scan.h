@@ -11,7 +11,7 @@ uint64_t mx_scan_u64(uint64_t *a, size_t n);
 /* The same on 32-bit counts whose total fits 32 bits (returned in 64). */
 uint64_t mx_scan_u32(uint32_t *a, size_t n);
 
-/* Sorts keys ascending (LSD radix on the bits that vary); when vals is not
+/* Sorts keys ascending (LSD radix, 11-bit digits, on the bits that vary); when vals is not
  * NULL it is permuted along. tmp arrays are allocated inside. MX_OK or
  * MX_EINPUT (out of memory). */
 int mx_sort_u64(uint64_t *keys, uint32_t *vals, size_t n);
