@@ -30,7 +30,7 @@ static size_t lower(const uint64_t *v, size_t n, uint64_t key) {
 
 int main(void) {
   enum { N = 3000 };
-  static uint64_t v[N], k[N];
+  static uint64_t v[N];
   for (size_t n = 0; n <= N; n = n < 10 ? n + 1 : n * 3) {
     /* sorted, distinct, with gaps of varying size (clusters as in Morton) */
     uint64_t x = 5;
@@ -38,9 +38,6 @@ int main(void) {
       x += 1 + (next() % 4 == 0 ? next() % 1000 : next() % 3);
       v[i] = x;
     }
-    int st = 0;
-    for (size_t i = 0; i < n; i++) k[i] = v[next() % n];
-    CHECK(mx_sort_unique_u64(k, n, &st) <= n && st == 0);
     size_t hint = 0;
     for (int q = 0; q < 4000; q++) {
       /* keys present, absent, below and above all, near and far */

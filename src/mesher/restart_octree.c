@@ -156,6 +156,7 @@ static int restart_node_keys(const mx_octree *T, const emit_tables *E, uint64_t 
 }
 
 enum { NLA = (MX_MAX_LEVEL + 1) * 3 }; /* (level, axis) pairs: la = level * 3 + axis */
+enum { GEN_ROWS = 256 };                /* rows a generator makes at a time (binary file) */
 
 /* What the text writer needs to make the edge rows and the octants'
  * corners while it writes (mx_restart's generators): the sorted node keys
@@ -339,8 +340,9 @@ static int restart_from_mesher(const mx_mesher *m, int text, mx_restart *r, rest
     r->xyz = mx_alloc((3 * nv + 1) * sizeof *r->xyz);
     if (!r->xyz) st = MX_ENOMEM;
     if (!st) {
-#pragma omp parallel for schedule(static, 256)
-      for (size_t i = 0; i < nv; i++) node_rows(g, i, i + 1, r->xyz + 3 * i);
+#pragma omp parallel for schedule(static)
+      for (size_t b = 0; b < nv; b += GEN_ROWS)
+        node_rows(g, b, nv - b < GEN_ROWS ? nv : b + GEN_ROWS, r->xyz + 3 * b);
     }
   }
   /* where each node key lies in the sorted keys, by hashing */
@@ -364,8 +366,11 @@ static int restart_from_mesher(const mx_mesher *m, int text, mx_restart *r, rest
     r->oct_node = mx_alloc((8 * no + 1) * sizeof *r->oct_node);
     if (!r->edge || !r->oct_node) st = MX_ENOMEM;
     if (!st) {
-#pragma omp parallel for schedule(static, 256)
-      for (size_t i = 0; i < no; i++) oct_rows(g, i, i + 1, r->oct_node + 8 * i);
+      /* in blocks, as the text writer calls it: a leaf's anchor is searched
+       * from the one before within a block */
+#pragma omp parallel for schedule(static)
+      for (size_t b = 0; b < no; b += GEN_ROWS)
+        oct_rows(g, b, no - b < GEN_ROWS ? no : b + GEN_ROWS, r->oct_node + 8 * b);
     }
   }
   /* octants: the leaves, in Morton order */
