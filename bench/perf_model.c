@@ -63,7 +63,7 @@
 #include "mixoct.h"
 #include "kernels/boundary.h"
 #include "kernels/contacts.h"
-#include "kernels/distance.h"
+#include "geom/distance.h"
 #include "kernels/surface_patterns.h"
 #include "kernels/transition.h"
 #include "mesher/mesher.h"
@@ -364,7 +364,7 @@ static const term MODEL[] = {
     {"verify", K_SURF_NODE, 1 + M_XYZ, 0, 0, "per surface node: sel + xyz read"},
     {"verify", K_SURF_PROBE, 0, 0, 1, "per grid probe: the cell's hash slot (1 line)"},
 
-    /* quality: mx_quality_tabulate (kernels/quality.c) */
+    /* quality: mx_quality_tabulate (geom/quality.c) */
     {"quality", K_ELEM, M_TYPE + M_JENS, 0, 0, "per element: type + jens read"},
 
     /* write: mx_write_mixed (mesher/output.c) = prepare + mx_write_vtu */

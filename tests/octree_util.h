@@ -11,10 +11,10 @@
 #include <string.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "kernels/refine.h"
 #include "kernels/remesh.h"
-#include "morton/morton.h"
+#include "base/morton.h"
 #include "soa/trisoup.h"
 
 /* Append an axis-aligned box surface (12 triangles, outward) to s. */

@@ -5,8 +5,8 @@
 
 #include "check.h"
 #include "kernels/boundary.h"
-#include "kernels/check.h"
-#include "kernels/locate.h"
+#include "verify/check.h"
+#include "geom/locate.h"
 #include "soa/mesh.h"
 #include "octree_util.h"
 

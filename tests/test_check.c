@@ -1,5 +1,5 @@
 /* Tests of the mesh reader (src/io/read_mesh.c), the independent checker
- * (src/kernels/check.c) and `mixoct check` (src/cli/check_cmd.c).
+ * (src/verify/check.c) and `mixoct check` (src/cli/check_cmd.c).
  *
  * Meshes are built by hand: one cube as a hexahedron, two prisms, six
  * tetrahedra, six pyramids; conforming blocks; and defects made on purpose
@@ -17,11 +17,11 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "file_util.h"
 #include "io/read_mesh.h"
 #include "kernels/boundary.h"
-#include "kernels/check.h"
+#include "verify/check.h"
 #include "kernels/contacts.h"
 #include "soa/mesh.h"
 #include "soa/trisoup.h"

@@ -30,7 +30,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/atomic_file.h"
 #include "io/chunk_out.h"
 #include "io/read_mesh.h"

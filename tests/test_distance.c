@@ -1,5 +1,5 @@
 /* Distance, signed distance, winding number and inside/outside
- * (src/kernels/distance.h) against analytic answers on boxes, against the
+ * (src/geom/distance.h) against analytic answers on boxes, against the
  * winding number on the demo surface, and against the ray-parity locator on
  * the cortex. Run with the argument "quick" for small counts (valgrind). */
 #include <math.h>
@@ -8,9 +8,9 @@
 #include <string.h>
 
 #include "check.h"
-#include "common.h"
-#include "kernels/distance.h"
-#include "kernels/locate.h"
+#include "base/common.h"
+#include "geom/distance.h"
+#include "geom/locate.h"
 #include "octree_util.h"
 #include "soa/trisoup.h"
 

@@ -1,5 +1,5 @@
 /* Tests of the element index lists (src/io/element_list.h) and of the word
- * display of messages (mx_show_word, src/common.h).
+ * display of messages (mx_show_word, src/base/common.h).
  *
  * - mx_word_index on integers, whole reals in every spelling numpy and
  *   printf write, fractions, negatives, NaN and infinities, overflow at
@@ -19,7 +19,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/element_list.h"
 
 /* ---- messages ----------------------------------------------------------- */

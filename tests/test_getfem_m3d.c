@@ -35,7 +35,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/read_mesh.h"
 #include "soa/mesh.h"
 

@@ -21,7 +21,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/boundary_faces.h"
 #include "kernels/transition.h"
 #include "octree_util.h"

@@ -1,6 +1,6 @@
 /* Morton keys: round trips, parent/children, neighbours across root cubes. */
 #include "check.h"
-#include "morton/morton.h"
+#include "base/morton.h"
 
 #include <stdint.h>
 #include <stdlib.h>

@@ -27,8 +27,8 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "common.h"
-#include "kernels/quality.h"
+#include "base/common.h"
+#include "geom/quality.h"
 #include "soa/mesh.h"
 
 #define OUT_DIR "msh_out"

@@ -38,7 +38,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/read_mesh.h"
 #include "mpi/write_msh_mpi.h"
 #include "soa/mesh.h"

@@ -6,8 +6,8 @@
 #include <string.h>
 
 #include "check.h"
-#include "common.h"
-#include "kernels/quality.h"
+#include "base/common.h"
+#include "geom/quality.h"
 #include "patterns/lattice.h"
 #include "patterns/lookup.h"
 #include "soa/mesh.h"

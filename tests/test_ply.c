@@ -16,7 +16,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "file_util.h"
 #include "soa/trisoup.h"
 

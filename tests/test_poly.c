@@ -12,7 +12,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "quad/quad.h"
 
 static char tmpdir[64];

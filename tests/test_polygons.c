@@ -16,7 +16,7 @@
 
 #include "check.h"
 #include "file_util.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/polygon_split.h"
 #include "kernels/surface_defects.h"
 #include "soa/trisoup.h"

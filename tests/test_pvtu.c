@@ -24,7 +24,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/pvtu.h"
 #include "io/read_mesh.h"
 #include "mixoct.h"

@@ -11,7 +11,7 @@
 #include <string.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "quad/quad.h"
 
 #define PI 3.14159265358979323846

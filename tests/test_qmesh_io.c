@@ -28,7 +28,7 @@
 #include <string.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "quad/quad.h"
 
 #define OUT_DIR "qmesh_io_out"

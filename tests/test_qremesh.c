@@ -38,7 +38,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/restart.h"
 #include "mesher/mesher2d.h"
 #include "mixoct.h"

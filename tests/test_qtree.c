@@ -15,7 +15,7 @@
 #include <sys/resource.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "quad/quad.h"
 
 /* ---- polylines --------------------------------------------------------- */

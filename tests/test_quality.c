@@ -2,7 +2,7 @@
 #include <math.h>
 
 #include "check.h"
-#include "kernels/quality.h"
+#include "geom/quality.h"
 #include "soa/mesh.h"
 
 static int near(double a, double b) { return fabs(a - b) < 1e-12; }

@@ -13,7 +13,7 @@
 
 #include "check.h"
 #include "file_util.h"
-#include "common.h"
+#include "base/common.h"
 #include "soa/regions.h"
 #include "soa/trisoup.h"
 

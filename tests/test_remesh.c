@@ -7,9 +7,9 @@
  * bad restart and list files. Without the shared data: the repair's rule to
  * go on (mx_repair_go_on) and the exit-5 messages naming the inputs. */
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/read_mesh.h"
-#include "kernels/check.h"
+#include "verify/check.h"
 #include "mesher/mesher.h"
 #include "mesher/mesher_impl.h"
 #include "mixoct.h"

@@ -10,7 +10,7 @@
  * domain: parents with some children missing), with a level everywhere,
  * and an octree stage only; for 1 and 2 threads. */
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/restart.h"
 #include "mesher/mesher.h"
 #include "mesher/mesher_impl.h"

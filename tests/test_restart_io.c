@@ -26,7 +26,7 @@
 
 #include "check.h"
 #include "file_util.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/restart.h"
 
 static int npass;

@@ -1,5 +1,5 @@
-/* soa/scan: the searches in sorted keys, against a plain linear scan. */
-#include "soa/scan.h"
+/* base/scan: the searches in sorted keys, against a plain linear scan. */
+#include "base/scan.h"
 
 #include <stdio.h>
 #include <stdlib.h>

@@ -10,7 +10,7 @@
 #include "check.h"
 #include "kernels/boundary.h"
 #include "kernels/mesh_edit.h"
-#include "kernels/quality.h"
+#include "geom/quality.h"
 #include "kernels/smooth.h"
 #include "soa/mesh.h"
 #include "octree_util.h"

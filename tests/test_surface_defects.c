@@ -11,7 +11,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "kernels/surface_defects.h"
 #include "soa/trisoup.h"
 

@@ -17,8 +17,8 @@
 #include <string.h>
 
 #include "check.h"
-#include "common.h"
-#include "kernels/quality.h"
+#include "base/common.h"
+#include "geom/quality.h"
 #include "kernels/surface_patterns.h"
 #include "patterns/surface_table.h"
 #include "soa/mesh.h"

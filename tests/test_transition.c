@@ -1,11 +1,11 @@
 /* The transition stage: conforming meshes of whole octrees, checked by the
- * independent checker (src/kernels/check.c): no invalid element, faces
+ * independent checker (src/verify/check.c): no invalid element, faces
  * matched, closed boundary, no hanging node, the volume of the leaves; and
  * the same mesh for 1 and 2 threads. */
 #include <math.h>
 
 #include "check.h"
-#include "kernels/check.h"
+#include "verify/check.h"
 #include "kernels/transition.h"
 #include "soa/mesh.h"
 #include "octree_util.h"

@@ -1,6 +1,6 @@
 /* Tests of the boundary of the winding number's domain
  * (src/kernels/winding_boundary.c) and of the index with the orientation as
- * given (mx_surface_index_build_given, src/kernels/distance.c), on boxes
+ * given (mx_surface_index_build_given, src/geom/distance.c), on boxes
  * built in code: touching (welded or not), overlapping (coplanar faces, or
  * crossing ones), nested with the inner box inward (a cavity); the kept
  * pieces' area and signed volume are those of the union, in either order of
@@ -11,8 +11,8 @@
 #include <string.h>
 
 #include "check.h"
-#include "common.h"
-#include "kernels/distance.h"
+#include "base/common.h"
+#include "geom/distance.h"
 #include "kernels/surface_defects.h"
 #include "kernels/winding_boundary.h"
 #include "soa/trisoup.h"

@@ -19,7 +19,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/atomic_file.h"
 #include "soa/mesh.h"
 

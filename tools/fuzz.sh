@@ -149,9 +149,9 @@ link_all() {
 
 # First the sources of the readers and of their checks; every source but
 # the command line (src/cli) when a fuzzer needs more (remembered).
-core_srcs=$(cd "$root" && ls src/*.c src/soa/*.c src/io/*.c src/morton/*.c \
-              src/kernels/check.c src/kernels/quality.c src/quad/poly.c 2>/dev/null)
-all_srcs=$(cd "$root" && ls src/*.c src/*/*.c | grep -v '^src/cli/')
+core_srcs=$(cd "$root" && ls src/base/*.c src/soa/*.c src/io/*.c src/geom/*.c \
+              src/verify/check.c src/quad/poly.c 2>/dev/null)
+all_srcs=$(cd "$root" && ls src/*/*.c | grep -v '^src/cli/')
 if [ "$(cat "$build/libset" 2>/dev/null)" != all ]; then
   build_lib "$core_srcs"
   if ! link_all 1; then

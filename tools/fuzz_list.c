@@ -1,5 +1,5 @@
 /* libFuzzer target for the element index lists (src/io/element_list.c) and
- * the word display of their messages (mx_show_word, src/common.c).
+ * the word display of their messages (mx_show_word, src/base/common.c).
  *
  * Each input is parsed as a list (mx_parse_index_list) with a limit of 1000
  * and with none (UINT64_MAX), taken as one word (mx_word_index) and shown
@@ -22,7 +22,7 @@
  *   clang -std=c17 -g -O1 -fsanitize=fuzzer,address,undefined -fopenmp \
  *     -D_GNU_SOURCE -Isrc -Iinclude tools/fuzz_list.c \
  *     build-fuzz/libmixoct_fuzz.a -lm -o fuzz_list
- * (a copy of src/common.c that escaped only C0 controls in messages, put
+ * (a copy of src/base/common.c that escaped only C0 controls in messages, put
  * before the archive, aborts on the seeds: the byte 0xff of the name). */
 #include <ctype.h>
 #include <math.h>
@@ -31,7 +31,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/element_list.h"
 
 #define REQUIRE(cond)                                                          \

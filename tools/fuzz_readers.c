@@ -42,9 +42,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/read_mesh.h"
-#include "kernels/check.h"
+#include "verify/check.h"
 #include "quad/quad.h"
 #include "soa/mesh.h"
 #include "soa/regions.h"

@@ -12,7 +12,7 @@
  * Build, from the source root:
  *   clang -std=c17 -g -O1 -fsanitize=fuzzer,address,undefined -fopenmp \
  *     -D_GNU_SOURCE -Isrc -Iinclude tools/fuzz_restart.c src/io/restart.c \
- *     src/common.c src/io/atomic_file.c src/io/text_num.c -lm -o fuzz_restart
+ *     src/base/common.c src/io/atomic_file.c src/io/text_num.c -lm -o fuzz_restart
  * Run (new inputs go to the first directory; the seed is read from the
  * second; round-trip files go to $TMPDIR, /dev/shm is fastest;
  * -close_fd_mask=2 silences the messages of the refused inputs, libFuzzer
@@ -26,7 +26,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/restart.h"
 
 /* The checksum of restart.h (4-lane multiply-xorshift over 8-byte words),

@@ -50,7 +50,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "kernels/quality.h"
+#include "geom/quality.h"
 #include "patterns/lattice.h"
 #include "patterns/surface_table.h"
 #include "soa/mesh.h"

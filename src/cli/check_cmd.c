@@ -2,7 +2,7 @@
  * [--dist-tol X] [--threads N] [--json] [--quiet]`:
  * reads a volume mesh (legacy VTK, VTU, Gmsh MSH 4.1, Medit .mesh/.meshb)
  * and, optionally, the surface it should fill, runs the independent checker
- * (kernels/check.h) and reports.
+ * (verify/check.h) and reports.
  *
  * A 2D mesh (io/read_qmesh.h: triangles and quadrilaterals in the plane
  * z = 0, as mesher2d writes them to .vtu, .vtk, .msh and .off) is checked
@@ -20,7 +20,7 @@
  * numbers are null; the ids per kind in "defective_elements" and
  * "defective_nodes"); --quiet prints nothing but errors (and the JSON object
  * when --json is given) and silences warnings.
- * Boundary tags (kernels/check.h), when the mesh has them: a "boundary
+ * Boundary tags (verify/check.h), when the mesh has them: a "boundary
  * tags" block (per tag: name, triangles, quadrilaterals, whether its faces
  * close up) and the two tag defects; in JSON the counters
  * "tagged_not_boundary" and "boundary_untagged" with the other defects,
@@ -45,12 +45,12 @@
 
 #include "cli/cli.h"
 #include "kernels/surface_defects.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/pvtu.h"
 #include "io/read_mesh.h"
 #include "mesher/mesher2d.h"
 #include "io/read_qmesh.h"
-#include "kernels/check.h"
+#include "verify/check.h"
 #include "quad/quad.h"
 #include "soa/trisoup.h"
 

@@ -6,7 +6,7 @@
  * 3 out of memory, 4 output failure, 5 invalid elements left). */
 #include "cli/cli.h"
 #include "cli/progress.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/atomic_file.h"
 #include "mixoct.h"
 

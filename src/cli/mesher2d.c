@@ -21,7 +21,7 @@
 #include <sys/stat.h>
 
 #include "cli/cli.h"
-#include "common.h"
+#include "base/common.h"
 #include "io/atomic_file.h"
 #include "io/file_identity.h"
 #include "mesher/mesher2d.h"

@@ -39,7 +39,7 @@
 #include <string.h>
 
 #include "cli/cli.h"
-#include "common.h"
+#include "base/common.h"
 
 static const char *roi_usage =
     "usage: mesher_roi (-d in.mdl | -o in.off) [requests] [-u outname -v|-g|-m|-i]\n"

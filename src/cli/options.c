@@ -3,8 +3,8 @@
 #include "io/pvtu.h"
 #include "soa/mesh.h"
 
-#include "common.h"
-#include "morton/morton.h"
+#include "base/common.h"
+#include "base/morton.h"
 
 #include <errno.h>
 #include <omp.h>

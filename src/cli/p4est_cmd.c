@@ -11,7 +11,7 @@
  * checked and written (src/cli/p4est_mesh_cmd.c). */
 #include "cli/cli.h"
 #include "cli/p4est_cli.h"
-#include "common.h"
+#include "base/common.h"
 #include "mesher/mesher_impl.h"
 #include "mpi/exchange.h"
 #include "mpi/p4est_compare.h"

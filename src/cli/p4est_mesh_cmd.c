@@ -4,7 +4,7 @@
  * report (rank 0: global counts, per-rank min/max). */
 #include "cli/p4est_cli.h"
 
-#include "common.h"
+#include "base/common.h"
 
 #include <inttypes.h>
 #include <stdio.h>

@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "cli/cli.h"
-#include "common.h"
+#include "base/common.h"
 #include "patterns/lattice.h"
 #include "patterns/lookup.h"
 #include "soa/mesh.h"

@@ -3,7 +3,7 @@
 #include "cli/progress.h"
 
 #include "cli/cli.h"
-#include "common.h"
+#include "base/common.h"
 
 #include <pthread.h>
 #include <stdio.h>

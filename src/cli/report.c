@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "kernels/quality.h"
+#include "geom/quality.h"
 
 static const char *type_name[4] = {"tet", "pyramid", "prism", "hex"};
 

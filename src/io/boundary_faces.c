@@ -12,8 +12,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "common.h"
-#include "soa/scan.h"
+#include "base/common.h"
+#include "base/scan.h"
 
 enum {
   SLOTS = 6,         /* face slots per element */

@@ -7,7 +7,7 @@
  * meshio requires. Element lists for re-meshing refer to this order. */
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "soa/mesh.h"
 
 enum { CHUNK = 65536 };

@@ -11,7 +11,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "common.h"
+#include "base/common.h"
 
 enum {
   CHUNK_BYTES = 8 << 20, /* one buffer */

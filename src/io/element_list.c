@@ -1,7 +1,7 @@
 /* mixoct: element index lists (the rule is in element_list.h). */
 #include "io/element_list.h"
 
-#include "common.h"
+#include "base/common.h"
 #include "io/text_scan.h"
 
 enum { FIRST_CAP = 1024 }; /* indices the output starts with room for */

@@ -4,7 +4,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "common.h"
+#include "base/common.h"
 
 /* The name of path in its directory, and the directory's status. */
 static int parent_of(const char *path, struct stat *dir, const char **base) {

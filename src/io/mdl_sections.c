@@ -4,7 +4,7 @@
 #include <string.h>
 #include <strings.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/text_scan.h"
 
 int mx_mdl_same(const char *s, int n, const char *word) {

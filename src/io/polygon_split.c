@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "geom/orient2d.h"
 
 #define NONE UINT32_MAX

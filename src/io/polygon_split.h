@@ -44,7 +44,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "soa/trisoup.h"
 
 /* A face in its file, for messages and for the soup: its number as the

@@ -9,7 +9,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "soa/trisoup.h"
 
 #include "io/mdl_sections.h"

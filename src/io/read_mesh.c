@@ -27,10 +27,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/getfem_tables.h"
 #include "io/text_scan.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 #define HOST_LE (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__)
 

@@ -6,7 +6,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "soa/trisoup.h"
 
 #include "io/polygon_split.h"

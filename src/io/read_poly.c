@@ -31,7 +31,7 @@
 #include <string.h>
 #include <strings.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "quad/quad.h"
 
 #include "io/mdl_sections.h"

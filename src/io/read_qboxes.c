@@ -9,7 +9,7 @@
 #include <stdio.h>
 #include <strings.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/text_scan.h"
 #include "quad/quad.h"
 

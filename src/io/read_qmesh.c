@@ -8,7 +8,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/text_scan.h"
 
 enum { PAR_MIN = 65536 }; /* fewer items: one thread */

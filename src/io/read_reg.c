@@ -7,8 +7,8 @@
 #include <string.h>
 #include <strings.h>
 
-#include "common.h"
-#include "morton/morton.h"
+#include "base/common.h"
+#include "base/morton.h"
 #include "soa/regions.h"
 
 #include "io/text_scan.h"

@@ -8,7 +8,7 @@
 #include <string.h>
 #include <strings.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "soa/trisoup.h"
 
 #include "io/text_scan.h"

@@ -3,7 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "soa/trisoup.h"
 
 static int indices_valid(const mx_trisoup *s, const char *path) {

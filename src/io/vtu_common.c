@@ -4,7 +4,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 
-#include "common.h"
+#include "base/common.h"
 
 static void head_grow(mx_vtu_head *h, size_t need) {
   if (h->failed || h->len + need + 1 <= h->cap) return;

@@ -74,7 +74,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/atomic_file.h"
 #include "io/boundary_faces.h"
 #include "io/getfem_tables.h"

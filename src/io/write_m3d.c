@@ -44,7 +44,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/atomic_file.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"

@@ -56,7 +56,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/atomic_file.h"
 #include "io/boundary_faces.h"
 #include "io/text_num.h"

@@ -4,7 +4,7 @@
 #include <string.h>
 #include <strings.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/atomic_file.h"
 #include "io/pvtu.h"
 #include "soa/mesh.h"

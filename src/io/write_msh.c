@@ -32,7 +32,7 @@
  *   hex     (-1,-1,-1) (1,-1,-1) (1,1,-1) (-1,1,-1) then the same at z = 1
  * In each, the right-hand normal of the first face (0,1,2[,3]) points into
  * the element, towards the other nodes. mixoct's cells (VTK order, see
- * soa/mesh.h and kernels/quality.c) follow the same rule: the pyramid base
+ * soa/mesh.h and geom/quality.c) follow the same rule: the pyramid base
  * 0,1,2,3 turns counter-clockwise seen from the apex 4, the prism triangle
  * 0,1,2 counter-clockwise seen from 3,4,5. So the permutation below is the
  * identity for every type; it is kept as a table so the rule is written in
@@ -49,7 +49,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/atomic_file.h"
 #include "io/boundary_faces.h"
 #include "io/msh_order.h"

@@ -10,7 +10,7 @@
 #include <string.h>
 #include <strings.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/atomic_file.h"
 #include "io/vtu_common.h"
 

@@ -34,12 +34,12 @@
 #include <string.h>
 #include <strings.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/atomic_file.h"
 #include "io/text_num.h"
 #include "io/vtu_common.h"
 #include "quad/quad.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 enum { NFIELDS = 3, OFFSET_BLOCK = 4096, PAR_MIN = 16384 }; /* fewer: one thread */
 static const char *const field_name[NFIELDS] = {"type", "level", "sj"};

@@ -10,11 +10,11 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/atomic_file.h"
 #include "io/vtu_common.h"
 #include "soa/mesh.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 enum { OFFSET_BLOCK = 4096 }; /* cells per precomputed offsets prefix */
 

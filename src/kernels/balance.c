@@ -14,8 +14,8 @@
  * is drained one level at a time, each wave in index order (deterministic). */
 #include "kernels/refine.h"
 
-#include "common.h"
-#include "soa/scan.h"
+#include "base/common.h"
+#include "base/scan.h"
 
 #include <omp.h>
 #include <stdlib.h>

@@ -16,7 +16,7 @@
  * closure does not depend on the order of the splits. */
 #include "kernels/refine.h"
 
-#include "common.h"
+#include "base/common.h"
 
 #include <stdlib.h>
 #include <string.h>

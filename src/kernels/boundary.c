@@ -1,10 +1,10 @@
 #include "kernels/boundary.h"
 
-#include "common.h"
+#include "base/common.h"
 #include "kernels/mesh_edit.h"
-#include "kernels/quality.h"
+#include "geom/quality.h"
 #include "soa/mesh.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 #include <math.h>
 #include <string.h>

@@ -10,7 +10,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "kernels/distance.h"
+#include "geom/distance.h"
 #include "kernels/refine.h"
 #include "kernels/transition.h"
 

@@ -4,7 +4,7 @@
 
 #include "soa/mesh.h"
 
-#include "common.h"
+#include "base/common.h"
 #include "kernels/mesh_edit.h"
 #include "kernels/smooth.h"
 

@@ -3,7 +3,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "soa/octree.h"
 
 /* The shell of the domain triangles leaf octant o meets when they all come

@@ -20,7 +20,7 @@
 #include <stdint.h>
 
 #include "io/boundary_faces.h"
-#include "kernels/distance.h"
+#include "geom/distance.h"
 #include "kernels/refine.h"
 #include "soa/mesh.h"
 

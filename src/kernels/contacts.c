@@ -2,12 +2,12 @@
 
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/read_mesh.h"
 #include "kernels/boundary.h"
-#include "kernels/check.h"
+#include "verify/check.h"
 #include "soa/mesh.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 enum { CHUNK = 16384 };
 

@@ -4,7 +4,7 @@
  * conforming by construction; such contacts appear only where the boundary
  * stage moved nodes: two sheets of the surface projected onto the same
  * place (a thin part, two features meeting, parts of the input touching).
- * Searched with the checker's own routine (kernels/check.h,
+ * Searched with the checker's own routine (verify/check.h,
  * mx_check_contacts) among the elements with a surface node and their
  * nodes, so `mixoct check` and the mesher agree on what a contact is. */
 #ifndef MX_CONTACTS_H

@@ -1,6 +1,6 @@
 #include "kernels/grid.h"
 
-#include "common.h"
+#include "base/common.h"
 
 #include <math.h>
 

@@ -6,7 +6,7 @@
 
 #include <stdint.h>
 
-#include "morton/morton.h"
+#include "base/morton.h"
 
 typedef struct {
   double origin[3]; /* lowest corner of the grid */

@@ -1,7 +1,7 @@
 #include "kernels/refine.h"
 
-#include "common.h"
-#include "soa/scan.h"
+#include "base/common.h"
+#include "base/scan.h"
 
 int mx_leaves_sorted(const mx_builder *B, uint32_t *leaves, size_t n) {
   uint64_t *k = mx_alloc((n + 1) * sizeof *k);

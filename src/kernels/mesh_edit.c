@@ -5,10 +5,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "common.h"
-#include "kernels/quality.h"
+#include "base/common.h"
+#include "geom/quality.h"
 #include "soa/mesh.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 int mx_mesh_keep_cells(mx_mesh_out *M, const uint8_t *keep) {
   const size_t nc = M->ncells;

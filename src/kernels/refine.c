@@ -1,9 +1,9 @@
 #include "kernels/refine.h"
 #include "kernels/remesh.h"
 
-#include "common.h"
-#include "kernels/intersect.h"
-#include "soa/scan.h"
+#include "base/common.h"
+#include "geom/intersect.h"
+#include "base/scan.h"
 
 #include <math.h>
 #include <omp.h>

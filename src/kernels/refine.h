@@ -21,7 +21,7 @@
 #include <stdint.h>
 
 #include "kernels/grid.h"
-#include "kernels/locate.h"
+#include "geom/locate.h"
 #include "kernels/requests.h"
 #include "soa/edges.h"
 #include "soa/octree.h"

@@ -3,7 +3,7 @@
  * kernels/remesh.h. */
 #include "kernels/remesh.h"
 
-#include "common.h"
+#include "base/common.h"
 
 #include <omp.h>
 #include <string.h>

@@ -4,12 +4,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "kernels/boundary.h"
 #include "kernels/mesh_edit.h"
-#include "kernels/quality.h"
+#include "geom/quality.h"
 #include "soa/mesh.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 static int cmp_u32(const void *a, const void *b) {
   const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;

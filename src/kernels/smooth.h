@@ -11,7 +11,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "kernels/distance.h"
+#include "geom/distance.h"
 #include "kernels/transition.h"
 
 /* q_target: elements below it are worked on; sweeps: passes over the work

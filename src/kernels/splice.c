@@ -2,11 +2,11 @@
 
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "kernels/mesh_edit.h"
-#include "kernels/quality.h"
+#include "geom/quality.h"
 #include "soa/mesh.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 /* ---- leaves touching octants -------------------------------------------- */
 

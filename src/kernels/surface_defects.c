@@ -10,8 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "common.h"
-#include "soa/scan.h"
+#include "base/common.h"
+#include "base/scan.h"
 
 #define NEX MX_DEFECT_EXAMPLES
 #define LEAF 4

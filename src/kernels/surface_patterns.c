@@ -2,13 +2,13 @@
 
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "kernels/boundary.h"
 #include "kernels/mesh_edit.h"
-#include "kernels/quality.h"
+#include "geom/quality.h"
 #include "patterns/surface_table.h"
 #include "soa/mesh.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 static const int case_base[4] = {-1, MX_SURFACE_BASE_PYRAMID, MX_SURFACE_BASE_PRISM,
                                  MX_SURFACE_BASE_HEX};

@@ -5,13 +5,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "common.h"
-#include "kernels/quality.h"
+#include "base/common.h"
+#include "geom/quality.h"
 #include "patterns/lattice.h"
 #include "patterns/lookup.h"
 #include "soa/key_index.h"
 #include "soa/mesh.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 /* ---- the node mask ------------------------------------------------------ */
 

@@ -4,9 +4,9 @@
 #include <math.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "kernels/surface_defects.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 #define MAXP 256 /* pieces per triangle */
 #define MAXV 32  /* corners per piece */

@@ -37,7 +37,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "kernels/distance.h"
+#include "geom/distance.h"
 #include "soa/trisoup.h"
 
 typedef struct {

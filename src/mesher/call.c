@@ -3,7 +3,7 @@
 
 #include <omp.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "mesher/load_limit.h"
 
 /* The calling thread's call: OpenMP's default count when the load limit

@@ -8,8 +8,8 @@
 
 #include "kernels/boundary_stage.h"
 #include "kernels/contacts.h"
-#include "kernels/distance.h"
-#include "kernels/quality.h"
+#include "geom/distance.h"
+#include "geom/quality.h"
 #include "kernels/refine.h"
 #include "kernels/splice.h"
 #include "kernels/transition.h"

@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/restart.h"
 #include "kernels/estimate.h"
 #include "mesher/call.h"

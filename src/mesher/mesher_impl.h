@@ -4,7 +4,7 @@
 #ifndef MX_MESHER_IMPL_H
 #define MX_MESHER_IMPL_H
 
-#include "common.h"
+#include "base/common.h"
 #include "mesher/call.h"
 #include "mesher/mesher.h"
 

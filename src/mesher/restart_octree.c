@@ -25,7 +25,7 @@
 #include "io/restart.h"
 #include "kernels/grid.h"
 #include "soa/key_index.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 #include <math.h>
 #include <omp.h>

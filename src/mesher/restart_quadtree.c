@@ -16,10 +16,10 @@
 #include <omp.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/restart.h"
 #include "mesher/mesher2d.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 /* ---- writing ------------------------------------------------------------------ */
 

@@ -3,7 +3,7 @@
  * inputs together, as oriented in their files, is above 1/2.
  *
  * m->WI indexes the input (m->domain) with its orientation as given
- * (kernels/distance.h, mx_surface_index_build_given): it decides the side
+ * (geom/distance.h, mx_surface_index_build_given): it decides the side
  * of every point, the octants' and the nodes'. The domain triangles of the
  * soup are replaced by the boundary of that domain
  * (kernels/winding_boundary.h): the parts of the input inside the union of

@@ -1,7 +1,7 @@
 /* All-to-all exchange of fixed-size records (src/mpi/exchange.h). */
 #include "mpi/exchange.h"
 
-#include "common.h"
+#include "base/common.h"
 
 #include <limits.h>
 

@@ -9,7 +9,7 @@
  * calls it from one thread. */
 #include "mpi/p4est_octree.h"
 
-#include "common.h"
+#include "base/common.h"
 
 #include <p8est_bits.h>
 #include <p8est_extended.h>

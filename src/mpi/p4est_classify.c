@@ -5,8 +5,8 @@
  * a child the same way. */
 #include "mpi/p4est_octree.h"
 
-#include "common.h"
-#include "kernels/intersect.h"
+#include "base/common.h"
+#include "geom/intersect.h"
 
 #include <string.h>
 

@@ -23,7 +23,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "morton/morton.h"
+#include "base/morton.h"
 
 typedef struct {
   size_t n_a, n_b;        /* leaves of A (p4est) and B (single-process) */

@@ -1,9 +1,9 @@
 /* The halo of a rank, ring by ring (src/mpi/p4est_halo.h). */
 #include "mpi/p4est_halo.h"
 
-#include "common.h"
+#include "base/common.h"
 #include "mpi/exchange.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 #include <string.h>
 

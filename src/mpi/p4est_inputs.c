@@ -1,7 +1,7 @@
 /* The builder of the distributed octree from a mesher's inputs. */
 #include "mpi/p4est_inputs.h"
 
-#include "common.h"
+#include "base/common.h"
 #include "kernels/surface_defects.h"
 #include "mesher/mesher_impl.h"
 

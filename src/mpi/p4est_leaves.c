@@ -2,9 +2,9 @@
  * reduced over the ranks; and the leaves gathered on one rank. */
 #include "mpi/p4est_leaves.h"
 
-#include "common.h"
+#include "base/common.h"
 #include "kernels/refine.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 #include <string.h>
 

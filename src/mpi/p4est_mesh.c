@@ -3,19 +3,19 @@
  * p4est_nodes.c. */
 #include "mpi/p4est_mesh.h"
 
-#include "common.h"
+#include "base/common.h"
 #include "kernels/boundary_stage.h"
 #include "kernels/contacts.h"
 #include "kernels/estimate.h"
 #include "kernels/mesh_edit.h"
-#include "kernels/quality.h"
+#include "geom/quality.h"
 #include "kernels/remesh.h"
 #include "kernels/splice.h"
 #include "mesher/mesher_impl.h"
 #include "mpi/exchange.h"
 #include "mpi/p4est_halo.h"
 #include "mpi/p4est_nodes.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 #include <inttypes.h>
 #include <stdlib.h>

@@ -2,10 +2,10 @@
  * (src/mpi/p4est_nodes.h). */
 #include "mpi/p4est_nodes.h"
 
-#include "common.h"
+#include "base/common.h"
 #include "mpi/exchange.h"
 #include "soa/mesh.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 #include <inttypes.h>
 #include <string.h>

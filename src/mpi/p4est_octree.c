@@ -2,7 +2,7 @@
  * p4est_octree.h). */
 #include "mpi/p4est_octree.h"
 
-#include "common.h"
+#include "base/common.h"
 
 #include <string.h>
 

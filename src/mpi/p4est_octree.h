@@ -137,7 +137,7 @@ int mx_p4est_pool_reserve(mx_p4est_octree *P, size_t n);
 int mx_p4est_mask_reserve(mx_p4est_octree *P, size_t n);
 
 /* Morton key of a quadrant on our finest lattice, root offset included
- * (src/morton/morton.h), from its tree's root cube and its coordinates. */
+ * (src/base/morton.h), from its tree's root cube and its coordinates. */
 static inline uint64_t mx_p4est_key(const mx_p4est_octree *P, p4est_topidx_t t,
                                     const p8est_quadrant_t *q) {
   const int32_t *r = P->tree_root + 3 * (size_t)t;

@@ -3,7 +3,7 @@
  * its hash over every rank's elements. */
 #include "mpi/p4est_mesh.h"
 
-#include "common.h"
+#include "base/common.h"
 #include "io/pvtu.h"
 #include "mpi/exchange.h"
 #include "mpi/write_msh_mpi.h"

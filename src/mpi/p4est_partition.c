@@ -14,7 +14,7 @@
  * sum in the new local order. */
 #include "mpi/p4est_octree.h"
 
-#include "common.h"
+#include "base/common.h"
 
 #include <p8est_communication.h>
 #include <p8est_extended.h>

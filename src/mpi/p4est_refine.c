@@ -14,10 +14,10 @@
  * checked). */
 #include "mpi/p4est_octree.h"
 
-#include "common.h"
+#include "base/common.h"
 #include "mpi/exchange.h"
-#include "kernels/intersect.h"
-#include "soa/scan.h"
+#include "geom/intersect.h"
+#include "base/scan.h"
 
 #include <math.h>
 #include <string.h>

@@ -50,7 +50,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "io/msh_order.h"
 #include "mpi/write_msh_mpi.h"
 #include "soa/mesh.h"

@@ -15,10 +15,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "geom/orient2d.h"
 #include "quad/quad.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 void mx_poly_free(mx_poly *P) {
   mx_free(P->xy);

@@ -35,9 +35,9 @@
 #include <omp.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "quad/qinternal.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 #define NONE UINT32_MAX
 #define BLK 4096 /* cells per block of the counting passes */

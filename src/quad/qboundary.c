@@ -37,9 +37,9 @@
 #include <math.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "quad/qinternal.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 /* The next and previous corner of a cell of nv corners (no division). */
 static inline int nxt(int k, int nv) { return k + 1 == nv ? 0 : k + 1; }

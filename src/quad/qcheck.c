@@ -39,9 +39,9 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "quad/quad.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 /* The next and previous corner of a cell of nv corners (no division). */
 static inline int nxt(int k, int nv) { return k + 1 == nv ? 0 : k + 1; }

@@ -6,7 +6,7 @@
 #include <emmintrin.h>
 #endif
 
-#include "common.h"
+#include "base/common.h"
 #include "quad/quad.h"
 
 /* The next and previous corner of a cell of nv corners (no division). */

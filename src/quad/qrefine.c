@@ -15,9 +15,9 @@
 #include <math.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "quad/quad.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 /* Small loops run on one thread: a parallel region costs more than them. */
 #define PAR(n) ((n) > 4096)

@@ -20,9 +20,9 @@
  * to bit e + 1 (mod 4). */
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "quad/quad.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 /* Small loops run on one thread: a parallel region costs more than them. */
 #define PAR(n) ((n) > 4096)

@@ -1,6 +1,6 @@
 #include "soa/edges.h"
 
-#include "common.h"
+#include "base/common.h"
 
 #include <stdlib.h>
 #include <string.h>

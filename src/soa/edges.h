@@ -20,7 +20,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "morton/morton.h"
+#include "base/morton.h"
 
 typedef struct {
   uint64_t kw;       /* 0 = empty; else key + 1 */

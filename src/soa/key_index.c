@@ -1,7 +1,7 @@
 /* Lattice keys -> place in a sorted array: see soa/key_index.h. */
 #include "soa/key_index.h"
 
-#include "common.h"
+#include "base/common.h"
 
 int mx_key_index_build(mx_key_index *H, const uint64_t *keys, size_t n, int shift) {
   size_t cap = 64;

@@ -3,7 +3,7 @@
 
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 
 void mx_trisoup_free(mx_trisoup *s) {
   if (!s) return;

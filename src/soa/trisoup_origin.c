@@ -4,7 +4,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "common.h"
+#include "base/common.h"
 #include "soa/trisoup.h"
 
 static int push_run(mx_trisoup *s, mx_line_run r) {

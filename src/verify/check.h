@@ -4,7 +4,7 @@
  *
  * Definitions (the counters marked * are defects):
  *  empty*              1 when the mesh has no element or no node, else 0;
- *  invalid*            elements whose J_ENS (kernels/quality.h) is <= 0 or
+ *  invalid*            elements whose J_ENS (geom/quality.h) is <= 0 or
  *                      not a number (inverted, or exactly flat);
  *  degenerate*         elements with 0 < J_ENS < degenerate_below (1e-6 by
  *                      default: nodes (nearly) collinear or coplanar); an

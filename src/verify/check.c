@@ -29,16 +29,16 @@
  * finite input (extents up to 2 * DBL_MAX, down to 1e-300).
  * A face is named by its slot 6 * cell + local face, so ncells is limited to
  * (2^32 - 1) / 6. */
-#include "kernels/check.h"
+#include "verify/check.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "common.h"
-#include "kernels/quality.h"
+#include "base/common.h"
+#include "geom/quality.h"
 #include "soa/mesh.h"
-#include "soa/scan.h"
+#include "base/scan.h"
 
 enum {
   CHUNK = 16384,

@@ -1,6 +1,6 @@
-#include "kernels/intersect.h"
+#include "geom/intersect.h"
 
-#include "common.h"
+#include "base/common.h"
 
 #include <math.h>
 

@@ -1,9 +1,9 @@
 /* Distance, signed distance, winding number and inside/outside: see
  * distance.h for the methods and the orientation rule. */
-#include "kernels/distance.h"
+#include "geom/distance.h"
 
-#include "common.h"
-#include "soa/scan.h"
+#include "base/common.h"
+#include "base/scan.h"
 
 #include <math.h>
 #include <string.h>

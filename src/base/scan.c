@@ -1,6 +1,6 @@
-#include "soa/scan.h"
+#include "base/scan.h"
 
-#include "common.h"
+#include "base/common.h"
 
 #include <omp.h>
 #include <stdlib.h>

@@ -1,4 +1,4 @@
-#include "kernels/quality.h"
+#include "geom/quality.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,4 +1,4 @@
-#include "morton/morton.h"
+#include "base/morton.h"
 
 uint64_t mx_morton_neighbor(uint64_t key, int level, int dx, int dy, int dz,
                             const int dims[3]) {

@@ -1,6 +1,6 @@
-#include "kernels/locate.h"
+#include "geom/locate.h"
 
-#include "common.h"
+#include "base/common.h"
 
 #include <math.h>
 #include <stdlib.h>
