@@ -3394,21 +3394,6 @@ static text_reader published_reader(const rd *r, const char *p) {
 
 /* ---- entry points -------------------------------------------------------- */
 
-void mx_mesh_data_free(mx_mesh_data *m) {
-  if (!m) return;
-  mx_free(m->xyz);
-  mx_free(m->type);
-  mx_free(m->conn);
-  mx_free(m->face_nn);
-  mx_free(m->face_conn);
-  mx_free(m->face_tag);
-  for (size_t i = 0; m->name && i < m->nnames; i++) mx_free(m->name[i]);
-  mx_free(m->name_tag);
-  mx_free(m->name);
-  mx_free(m->node_tag);
-  memset(m, 0, sizeof *m);
-}
-
 /* A regular file whose size is not a multiple of the page size is mapped:
  * no copy, and the rest of its last page reads as zeros, so the text is
  * NUL-terminated like a loaded one. Anything else is loaded. *mapped

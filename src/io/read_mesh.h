@@ -81,28 +81,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "soa/mesh.h"
+#include "soa/mesh_data.h"
 
-typedef struct {
-  size_t nnodes, ncells;
-  double *xyz;    /* 3*nnodes, interleaved */
-  uint8_t *type;  /* ncells, MX_TET .. MX_HEX */
-  uint32_t *conn; /* 8 per cell; entries past the type's node count are 0 */
-  /* Tagged boundary faces, when the file has them (else 0 and NULL; see
-   * "Boundary tags" above), in the file's order: */
-  size_t nfaces;
-  uint8_t *face_nn;    /* nfaces: 3 (triangle) or 4 (quadrilateral) */
-  uint32_t *face_conn; /* 4 per face, 0-based; a triangle's 4th entry is 0 */
-  int32_t *face_tag;   /* nfaces */
-  /* Names of boundary tags, when the file has them (else 0 and NULL): tag
-   * name_tag[i] is named name[i] (NUL-terminated); tags are unique. */
-  size_t nnames;
-  int32_t *name_tag;
-  char **name;
-  /* The point field surface_tag of a VTK or VTU file (nnodes values), or
-   * NULL. */
-  int32_t *node_tag;
-} mx_mesh_data;
 
 int mx_read_mesh(const char *path, mx_mesh_data *out);
 /* The same, but a legacy VTK or VTU file may instead hold only triangles
@@ -114,13 +94,4 @@ int mx_read_mesh(const char *path, mx_mesh_data *out);
  * element has its triangles and quadrilaterals as faces already). For
  * io/read_qmesh.h. */
 int mx_read_mesh_planar(const char *path, mx_mesh_data *out);
-/* Frees every array (the new fields too) and zeroes *m. */
-void mx_mesh_data_free(mx_mesh_data *m);
-
-/* A view for the writers (no fields). */
-static inline mx_mesh_view mx_mesh_data_view(const mx_mesh_data *m) {
-  mx_mesh_view v = {.nnodes = m->nnodes, .xyz = m->xyz, .ncells = m->ncells, .type = m->type, .conn = m->conn, .ncell_fields = 0, .cell_fields = NULL, .npoint_fields = 0, .point_fields = NULL};
-  return v;
-}
-
 #endif

@@ -99,7 +99,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "io/read_mesh.h"
+#include "soa/mesh_data.h"
 #include "soa/trisoup.h"
 
 enum { MX_CHECK_LIST = 20, MX_CHECK_SHOWN = 5 };
