@@ -320,7 +320,7 @@ static const term MODEL[] = {
     {"b.shrink", K_SHRUNK, M_XYZ, M_XYZ, 0, "per node moved: xyz read + written"},
 
     {"b.smooth", K_ELEM, M_JENS + 2 * (M_TYPE + M_CONN) + M_TYPE + M_JENS, 0, 0,
-     "mx_smooth_nodes per element: jens read (work set), type + conn read (count and fill "
+     "mx_untangle per element: jens read (work set), type + conn read (count and fill "
      "of the incidence lists), summary reads type + jens"},
     {"b.smooth", K_NODE, 2 * 1 + SCAN_R + U64 + 3 * 1, 1 + U64 + SCAN_W + U64 + IDX, 0,
      "per node: mark + off zeroed, mark gathered x2, prefix sum, cur copied, mark read by "

@@ -303,8 +303,8 @@ void mx_mesher_stats(const mx_mesher *m, mx_stats *s);
  * that fails it makes the call return MX_EINVALID (the mesh is kept, and
  * mx_mesher2d_write still writes it when asked). */
 typedef struct {
-  int surface_level;   /* -s: quadrants meeting the polylines; 0 none */
-  int all_level;       /* -a: every quadrant of the domain; 0 none */
+  int surface_level;   /* -s: quadrants meeting the polylines; -1 none */
+  int all_level;       /* -a: every quadrant of the domain; -1 none */
   int balance;         /* MX_BALANCE_EDGES (default) or MX_BALANCE_RECURSIVE */
   int threads;         /* 0: the OpenMP default */
   double close_ratio;  /* projection of close inside nodes, 0: 0.3 */
@@ -330,7 +330,8 @@ const char *mx_mesher2d_last_error(const mx_mesher2d *m);
 int mx_mesher2d_set_domain(mx_mesher2d *m, const char *path);
 int mx_mesher2d_set_domain_arrays(mx_mesher2d *m, const char *name, size_t nv,
                                   const double *xy, size_t ns, const uint32_t *seg);
-/* Requests (a quadrant takes the highest level asked; levels 0 to 27). */
+/* Requests (a quadrant takes the highest level asked; levels 0 to 27;
+ * -1: none, as in 3D). */
 int mx_mesher2d_set_levels(mx_mesher2d *m, int surface_level, int all_level);
 int mx_mesher2d_add_box(mx_mesher2d *m, const double lo[2], const double hi[2], int level);
 int mx_mesher2d_read_boxes(mx_mesher2d *m, const char *path);

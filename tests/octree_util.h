@@ -13,7 +13,9 @@
 #include "check.h"
 #include "base/common.h"
 #include "kernels/refine.h"
-#include "kernels/remesh.h"
+#include "kernels/closures.h"
+#include "kernels/edges_lazy.h"
+#include "kernels/refine_list.h"
 #include "base/morton.h"
 #include "soa/trisoup.h"
 

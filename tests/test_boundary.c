@@ -5,6 +5,7 @@
 
 #include "check.h"
 #include "kernels/boundary.h"
+#include "kernels/mesh_edit.h"
 #include "verify/check.h"
 #include "geom/locate.h"
 #include "soa/mesh.h"
@@ -34,6 +35,36 @@ static void release(built *b) {
   mx_mesh_out_free(&b->M);
   mx_free(b->leaves);
   mx_builder_free(&b->B);
+}
+
+/* Line 11 of Algorithm 1 (2015 paper) on its own, as the paper states it:
+ * the close nodes moved (mx_move_close_nodes), then the elements left with
+ * no inside node removed and the nodes no element uses dropped (the
+ * pipeline removes them within the surface patterns' pass). */
+static int remove_close_to_boundary(mx_mesh_out *M, uint8_t **states_io,
+                                const mx_surface_index *S, double ratio,
+                                size_t *moved, size_t *removed) {
+  const size_t nc = M->ncells;
+  MX_CHECK(mx_move_close_nodes(M, *states_io, S, ratio, moved, NULL));
+  const uint8_t *states = *states_io;
+  /* Remove the elements left with no inside node, then the nodes no
+   * element uses. */
+  uint8_t *keep = mx_alloc(nc + 1);
+  if (!keep) return MX_ENOMEM;
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++) {
+    int in = 0;
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+      in |= states[M->conn[8 * c + k]] == MX_NODE_INSIDE;
+    keep[c] = (uint8_t)in;
+  }
+  int st = mx_mesh_keep_cells(M, keep);
+  mx_free(keep);
+  if (!st) st = mx_mesh_drop_unused_nodes(M, states_io, NULL);
+  if (st) return st;
+  *removed = nc - M->ncells;
+  mx_mesh_summarize(M);
+  return MX_OK;
 }
 
 int main(void) {
@@ -129,7 +160,7 @@ int main(void) {
       for (size_t v = 0; v < b.M.nnodes; v++)
         on0 += fabs(mx_signed_distance(&S, b.M.xyz + 3 * v, NULL)) <= 1e-9 * diag;
       const size_t n0 = b.M.nnodes, c0 = b.M.ncells;
-      CHECK(mx_remove_close_to_boundary(&b.M, &st, &S, 0.3, &moved, &removed) == MX_OK);
+      CHECK(remove_close_to_boundary(&b.M, &st, &S, 0.3, &moved, &removed) == MX_OK);
       /* every element keeps an inside node; moved nodes are on the surface */
       size_t no_inside = 0, on1 = 0;
       for (size_t c = 0; c < b.M.ncells; c++) {

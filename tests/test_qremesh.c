@@ -386,6 +386,23 @@ static void test_requests(void) {
   mx_mesher2d_free(m);
 }
 
+/* "No level" is -1 in 2D as in 3D (mx_params_default): the defaults, and
+ * set_levels(-1, ...) gives the same mesh as level 0 (nothing asked of
+ * that request); -2 is refused. */
+static void test_no_level(void) {
+  mx_params2d p;
+  mx_params2d_default(&p);
+  CHECK(p.surface_level == -1 && p.all_level == -1);
+  mx_mesher2d *a = box_mesher(-1), *b = box_mesher(0);
+  mx_mesher2d_set_message_handler(a, quiet, NULL);
+  CHECK(mx_mesher2d_set_levels(a, -1, 4) == MX_OK && mx_mesher2d_set_levels(b, 0, 4) == MX_OK);
+  CHECK(mx_mesher2d_mesh(a) == MX_OK && mx_mesher2d_mesh(b) == MX_OK);
+  CHECK(same_mesh(a, b));
+  CHECK(mx_mesher2d_set_levels(a, -2, 4) == MX_EINPUT);
+  mx_mesher2d_free(a);
+  mx_mesher2d_free(b);
+}
+
 int main(void) {
   const char *d = getenv("MIXOCT_DATA");
   snprintf(data, sizeof data, "%s", d ? d : MIXOCT_TEST_DATA);
@@ -399,5 +416,6 @@ int main(void) {
   test_restart_data();
   test_feature_levels();
   test_requests();
+  test_no_level();
   return TEST_DONE();
 }

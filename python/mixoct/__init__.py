@@ -1024,8 +1024,8 @@ class Mesher2D(_MesherBase):
     counter-clockwise triangles and quadrilaterals (see the module doc).
 
     Parameters are those of ``mx_params2d``: ``surface_level`` (-s,
-    quadrants meeting the polylines; 0 none), ``all_level`` (-a, every
-    quadrant of the domain; 0 none), ``balance`` ("edges" or "recursive"),
+    quadrants meeting the polylines; -1 none), ``all_level`` (-a, every
+    quadrant of the domain; -1 none), ``balance`` ("edges" or "recursive"),
     ``threads`` (0: OpenMP's default), ``close_ratio`` (the projection of
     close inside nodes), ``max_memory_mb`` (0: the memory available) and
     ``feature_levels`` (refine the quadrants holding a feature until the
@@ -1041,14 +1041,13 @@ class Mesher2D(_MesherBase):
     _COORDS = "xy"
     _NCELLS = "ncells"
     _WIDTH = 4
-    _NO_LEVEL = 0
     _CONN = "cells"
     _NOUN = "cells"
     _VIEW_KEYS = ("nodes", "cells", "types", "leaf", "level")
     TYPE_NAMES = ("tri", "quad")
     NODES_PER_TYPE = (3, 4)
 
-    def __init__(self, surface_level=0, all_level=0, balance="edges",
+    def __init__(self, surface_level=-1, all_level=-1, balance="edges",
                  threads=0, close_ratio=0.3, max_memory_mb=0,
                  feature_levels=True, *, library=None):
         lib = load_library(library)

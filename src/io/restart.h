@@ -119,7 +119,7 @@ typedef struct mx_restart {
   const void *gen;
   /* Binary variant only, optional: the mesh written with the file (the
    * full stage: element -> octant, node lattice keys and states), so that
-   * a re-mesh from the file is local (mesher/remesh_local.c). Elements are
+   * a re-mesh from the file is local (mesher/remesh_patch.c). Elements are
    * grouped by octant, nsub[i] of them for octant i. */
   int has_mesh;
   size_t mesh_nn, mesh_nc;

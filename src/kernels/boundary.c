@@ -150,32 +150,6 @@ int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index 
   return MX_OK;
 }
 
-int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states_io,
-                                const mx_surface_index *S, double ratio,
-                                size_t *moved, size_t *removed) {
-  const size_t nc = M->ncells;
-  MX_CHECK(mx_move_close_nodes(M, *states_io, S, ratio, moved, NULL));
-  const uint8_t *states = *states_io;
-  /* Remove the elements left with no inside node, then the nodes no
-   * element uses. */
-  uint8_t *keep = mx_alloc(nc + 1);
-  if (!keep) return MX_EINPUT;
-#pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < nc; c++) {
-    int in = 0;
-    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
-      in |= states[M->conn[8 * c + k]] == MX_NODE_INSIDE;
-    keep[c] = (uint8_t)in;
-  }
-  int st = mx_mesh_keep_cells(M, keep);
-  mx_free(keep);
-  if (!st) st = mx_mesh_drop_unused_nodes(M, states_io, NULL);
-  if (st) return st;
-  *removed = nc - M->ncells;
-  mx_mesh_summarize(M);
-  return MX_OK;
-}
-
 /* Distinct outside nodes of the elements [c0, c1) (one leaf's), in order of
  * first use. */
 static int leaf_outside_nodes(const mx_mesh_out *M, size_t c0, size_t c1,

@@ -1,7 +1,8 @@
 /* The boundary stage (Lobos & Gonzalez 2015, Algorithm 1, lines 11-14).
- * Done so far: the inside/outside state of every node (mx_node_states),
- * "remove close to boundary" (mx_remove_close_to_boundary) and "shrink to
- * boundary" (mx_shrink_to_boundary). The surface
+ * Here: the inside/outside state of every node (mx_node_states),
+ * "remove close to boundary" (mx_move_close_nodes; the elements it leaves
+ * outside go with the surface patterns) and "shrink to boundary"
+ * (mx_shrink_to_boundary). The surface
  * patterns and the staircase are in kernels/surface_patterns.h; the whole
  * stage in kernels/boundary_stage.h. */
 #ifndef MX_BOUNDARY_H
@@ -32,17 +33,9 @@ int mx_node_states(const mx_builder *B, const uint32_t *leaves,
  * closest point on the surface lies within `ratio` (0.3 in the paper) of the
  * average length of its incident element edges moves onto that point and
  * becomes an outside node; all moves are decided on the positions before any
- * of them. Then the elements left with no inside node are removed, the nodes
- * no element uses any more are dropped (numbering kept in order), and the
- * J_ENS of elements with a moved node is recomputed. *states is replaced by
- * the states of the remaining nodes (allocated with mx_alloc). */
-int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states,
-                                const mx_surface_index *S, double ratio,
-                                size_t *moved, size_t *removed);
-
-/* The moves of mx_remove_close_to_boundary alone (states updated),
- * without removing anything: the surface patterns drop the elements left
- * with no inside node in the same pass. With moved_flags NULL, J_ENS is
+ * of them (states updated). The elements left with no inside node are
+ * removed by the surface patterns (kernels/surface_patterns.h) in their
+ * pass. With moved_flags NULL, J_ENS is
  * recomputed here; otherwise *moved_flags receives (mx_alloc) one byte per
  * node, 1 where it moved, and the caller recomputes. */
 int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index *S,

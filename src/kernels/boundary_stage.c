@@ -6,7 +6,8 @@
 
 #include "base/common.h"
 #include "kernels/mesh_edit.h"
-#include "kernels/smooth.h"
+#include "kernels/staircase.h"
+#include "kernels/untangle.h"
 
 int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
                       const mx_surface_index *S, mx_mesh_out *M,
@@ -41,7 +42,7 @@ int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
   t1 = t;
   if (!st) stats->inverted = M->invalid; /* counted by the shrink */
   /* untangle what the shrink inverted, and lift the worst elements */
-  if (!st) st = mx_smooth_nodes(M, states, S, staircase_q, 20, &stats->smoothed);
+  if (!st) st = mx_untangle(M, states, S, staircase_q, 20, &stats->smoothed);
   t = mx_wtime();
   mx_mem_mark("b.smooth");
   stats->t_smooth = t - t1;

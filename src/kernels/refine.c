@@ -1,5 +1,7 @@
 #include "kernels/refine.h"
-#include "kernels/remesh.h"
+#include "kernels/closures.h"
+#include "kernels/edges_lazy.h"
+#include "kernels/refine_list.h"
 
 #include "base/common.h"
 #include "geom/intersect.h"

@@ -1,5 +1,5 @@
-/* Line 12 of Algorithm 1 (2015 paper), "apply surface patterns", and line
- * 14, "decrease staircase effect".
+/* Line 12 of Algorithm 1 (2015 paper), "apply surface patterns" (line 14,
+ * "decrease staircase effect", is kernels/staircase.h).
  *
  * The quad-face rule (Fig. 9): a quad face of an element whose four nodes
  * are not all on the same side is split along the diagonal holding more
@@ -14,7 +14,8 @@
  * replaced by the tessellation of the generated table
  * (src/patterns/surface_table.c, tools/patterngen --surface) for its inside
  * mask; the sub-elements with no inside node are outside and dropped. They
- * are kept aside as the "optional" elements of the staircase reduction. */
+ * are kept aside as the "optional" elements of the staircase reduction
+ * (kernels/staircase.h). */
 #ifndef MX_SURFACE_PATTERNS_H
 #define MX_SURFACE_PATTERNS_H
 
@@ -56,12 +57,6 @@ static inline int mx_surface_diagonal(int ia, int ib, int ic, int id) {
  * one get their J_ENS recomputed. */
 int mx_surface_patterns(mx_mesh_out *M, uint8_t **states, const uint8_t *moved,
                         mx_optional *opt, mx_surface_stats *stats);
-
-/* Staircase reduction: put back the optional elements with J_ENS > q_min
- * (0.2 in the paper), computed at the current node positions (after the
- * shrink). They are appended to M. */
-int mx_staircase(mx_mesh_out *M, const mx_optional *opt, double q_min,
-                 mx_surface_stats *stats);
 
 void mx_optional_free(mx_optional *opt);
 

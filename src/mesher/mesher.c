@@ -10,7 +10,9 @@
 #include "kernels/estimate.h"
 #include "kernels/grid.h"
 #include "kernels/mesh_edit.h"
-#include "kernels/remesh.h"
+#include "kernels/closures.h"
+#include "kernels/edges_lazy.h"
+#include "kernels/refine_list.h"
 #include "kernels/splice.h"
 #include "soa/mesh.h"
 
@@ -718,7 +720,7 @@ int mx_mesh_full(mx_mesher *m) {
  * J_ENS < 1e-6, or elements a node lies on without being one of their nodes
  * (kernels/contacts.h: two sheets of the boundary meeting), are split once
  * by list refinement (Algorithm 3), and the octree is meshed again around
- * them (remesh_local.c), up to repair_rounds times. m->S.contacts holds the
+ * them (remesh_patch.c), up to repair_rounds times. m->S.contacts holds the
  * contacts of the final mesh.
  *
  * When to go on: a round is worse when it does not lower the count of the

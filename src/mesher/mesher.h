@@ -48,7 +48,7 @@ typedef struct {
   size_t refined_listed;    /* leaves split by the last list refinement */
   size_t remesh_splits;     /* octants split by the last re-mesh (list, balance, requests) */
   double t_restart;         /* seconds reading or writing the restart file */
-  /* the last re-mesh after a refinement (remesh_local.c) */
+  /* the last re-mesh after a refinement (remesh_patch.c) */
   size_t reoriented;        /* input triangles flipped by the input policy */
   double volume_error;      /* (mesh - enclosed) / enclosed, one closed input */
   int input_repaired;       /* the domain is the winding number's (repair_input) */

@@ -56,6 +56,8 @@ static void collect_message(void *user, int level, const char *text) {
 
 void mx_params2d_default(mx_params2d *p) {
   memset(p, 0, sizeof *p);
+  p->surface_level = -1; /* none, as in 3D */
+  p->all_level = -1;
   p->balance = MX_BALANCE_EDGES;
   p->close_ratio = 0.3;
   p->feature_levels = 1;
@@ -194,8 +196,8 @@ int mx_mesher2d_set_domain_arrays(mx_mesher2d *m, const char *name, size_t nv, c
 }
 
 static int set_levels(mx_mesher2d *m, int s, int a) {
-  MX_CHECK(level_ok(s, "the surface level"));
-  MX_CHECK(level_ok(a, "the all level"));
+  if (s != -1) MX_CHECK(level_ok(s, "the surface level")); /* -1: none */
+  if (a != -1) MX_CHECK(level_ok(a, "the all level"));
   m->p.surface_level = s;
   m->p.all_level = a;
   return MX_OK;
@@ -408,8 +410,8 @@ static double estimate_leaves(const mx_mesher2d *m, const mx_qgrid *g) {
   const double A = poly_area(&m->domain), L = poly_length(&m->domain);
 #define H(l) ldexp(g->side, -(l))
   double n = 1.0 + 1.5 * (double)m->nkeep;
-  if (m->p.all_level) n += A / (H(m->p.all_level) * H(m->p.all_level));
-  if (m->p.surface_level) n += 4.0 * L / H(m->p.surface_level);
+  if (m->p.all_level > 0) n += A / (H(m->p.all_level) * H(m->p.all_level));
+  if (m->p.surface_level > 0) n += 4.0 * L / H(m->p.surface_level);
   for (size_t b = 0; b < m->nboxes; b++) {
     const mx_qbox *x = &m->boxes[b];
     const double w = fmin(x->hi[0] - x->lo[0], g->side) + H(x->level),
@@ -511,7 +513,9 @@ int mx_mesher2d_run(mx_mesher2d *m) {
   MX_CHECK(feature_boxes(m, &boxes, &nboxes));
   m->feature_boxes = nboxes - m->nboxes;
   const mx_qrequests req = {
-      .s_level = m->p.surface_level, .a_level = m->p.all_level,
+      /* level 0 asks for nothing either: the quadtree's requests take 0 */
+      .s_level = m->p.surface_level > 0 ? m->p.surface_level : 0,
+      .a_level = m->p.all_level > 0 ? m->p.all_level : 0,
       .nboxes = nboxes, .boxes = boxes,
       .nregions = m->nregions, .regions = m->regions, .region_level = m->region_level,
       .ndrawings = m->ndrawings, .drawings = m->drawings, .drawing_level = m->drawing_level,

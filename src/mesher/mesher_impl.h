@@ -41,7 +41,7 @@ int mx_volume_verdict(mx_mesher *m, double vm, size_t ncells);
 /* After a refinement of the octree (old_leaves: the leaves before it, in
  * Morton order): the transition and boundary stages again, only on the
  * leaves around what was split when the current mesh allows it
- * (remesh_local.c), else on the whole octree. Does not repair. */
+ * (remesh_patch.c), else on the whole octree. Does not repair. */
 int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold);
 /* The leaves of the refined octree, then mx_remesh_changed from the leaves
  * the mesher held. */

@@ -4,7 +4,9 @@
  * octree meshed again. */
 #include "mesher/mesher_impl.h"
 
-#include "kernels/remesh.h"
+#include "kernels/closures.h"
+#include "kernels/edges_lazy.h"
+#include "kernels/refine_list.h"
 #include "soa/mesh.h"
 
 #include <string.h>

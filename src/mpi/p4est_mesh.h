@@ -4,7 +4,7 @@
  * pattern on its neighbours' nodes (one ring), the boundary steps (node
  * states, projection, surface patterns, shrink, untangling, staircase) on
  * the elements a few rings out. So each rank meshes a patch, as the local
- * re-mesh does (src/mesher/remesh_local.c): its own leaves (the core) and
+ * re-mesh does (src/mesher/remesh_patch.c): its own leaves (the core) and
  * `rings` layers of ghost leaves around them (p8est_ghost_expand), with the
  * single-process pipeline (mx_transition, mx_boundary_stage) on an octree of
  * our own rebuilt from the patch's leaves (their ancestors as split set,

@@ -1,24 +1,17 @@
-/* Refining an octree that is already balanced, for re-meshing (Jaillet &
- * Lobos 2021, section 4.2):
+/* Edge infos where and when they are needed (re-meshing: Jaillet & Lobos
+ * 2021, section 4.2):
  *
- * mx_refine_list            Algorithm 3: the listed leaves are split once
- *                           (a leaf listed twice is split once), and their
- *                           unbalanced neighbours through the edge infos and
- *                           the to_balance list
- * mx_retarget_leaves        the level every leaf asks for under the current
- *                           requests (boxes, levels, region surfaces)
- * mx_refine_leaves_to_target  Algorithm 1 from the existing leaves: level
- *                           by level, split the leaves asking for more,
- *                           drain to_balance before the next level
  * mx_raise_edge_levels      edge infos for every octant of levels that were
  *                           not kept (the finest level of a run keeps none)
  * mx_edges_ensure           edge infos at such levels only around the
  *                           octants a refinement splits
+ * mx_edges_release/restore  freed between two meshings, registered again
+ *                           by the next step that splits or looks edges up
  *
  * The octree's octants stay where they are (indices do not move); new
  * octants are appended. */
-#ifndef MX_REMESH_H
-#define MX_REMESH_H
+#ifndef MX_EDGES_LAZY_H
+#define MX_EDGES_LAZY_H
 
 #include "kernels/refine.h"
 
@@ -37,14 +30,12 @@ int mx_edges_restore(mx_builder *B);
  * neighbours: what the transition masks and the balance look up there.
  * Octants already registered are skipped (flag MX_OCT_EDGES). */
 int mx_edges_ensure(mx_builder *B, const uint32_t *list, size_t n, int with_parents);
-/* Splits (with balance) the leaves coarser than a face closure of the
- * transition next to them (a face centre whose neighbour's children were
- * dropped outside the domain adds edge midpoints that a coarser leaf along
- * the edge cannot take): called after every refinement of the octree. */
-int mx_resolve_closures(mx_builder *B);
-void mx_retarget_leaves(mx_builder *B);
-int mx_refine_leaves_to_target(mx_builder *B);
-/* octs: octant indices (leaves; octants no longer leaves are skipped). */
-int mx_refine_list(mx_builder *B, const uint32_t *octs, size_t n);
+/* B->root_of: the root octant of each root cube, built once. MX_OK or
+ * MX_EINPUT (memory). */
+int mx_build_root_map(mx_builder *B);
+
+/* The deepest octant holding the level-`level` cell of key k, no deeper
+ * than that level (MX_NONE outside the octree; needs B->root_of). */
+uint32_t mx_covering_octant(const mx_builder *B, uint64_t key, int level);
 
 #endif

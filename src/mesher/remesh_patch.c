@@ -28,7 +28,9 @@
 #include <string.h>
 
 #include "kernels/mesh_edit.h"
-#include "kernels/remesh.h"
+#include "kernels/closures.h"
+#include "kernels/edges_lazy.h"
+#include "kernels/refine_list.h"
 #include "kernels/splice.h"
 
 /* (core, patch) rings of the attempts. With 3 and 6 the cortex re-meshes of

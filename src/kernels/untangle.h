@@ -5,8 +5,8 @@
  * node (outside: on the surface) moves to the closest surface point of each
  * such point, so the boundary stays on the surface. This is what makes elements inverted by the shrink valid again
  * (the repair by refinement of the 2021 paper remains the fallback). */
-#ifndef MX_SMOOTH_H
-#define MX_SMOOTH_H
+#ifndef MX_UNTANGLE_H
+#define MX_UNTANGLE_H
 
 #include <stddef.h>
 #include <stdint.h>
@@ -20,7 +20,7 @@
  * colours in turn and the nodes of one colour in parallel (their moves touch
  * disjoint elements): deterministic, whatever the threads. *moved: node
  * moves accepted. */
-int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S,
+int mx_untangle(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S,
                     double q_target, int sweeps, size_t *moved);
 
 #endif

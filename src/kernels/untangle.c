@@ -1,4 +1,4 @@
-#include "kernels/smooth.h"
+#include "kernels/untangle.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -231,7 +231,7 @@ static int move_node(mx_mesh_out *M, const mx_surface_index *S, const uint32_t *
   return 1;
 }
 
-int mx_smooth_nodes(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S,
+int mx_untangle(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S,
                     double q_target, int sweeps, size_t *moved) {
   const size_t nn = M->nnodes, nc = M->ncells;
   *moved = 0;

@@ -1,4 +1,4 @@
-/* The untangling step (kernels/smooth.h) on a 2x2x2 block of hexahedra
+/* The untangling step (kernels/untangle.h) on a 2x2x2 block of hexahedra
  * filling the cube [-1, 1]^3: the centre node is pushed through a corner of
  * the block so that elements are inverted, one boundary node is slid along
  * its face; the step must make every element valid again, keep every
@@ -11,7 +11,7 @@
 #include "kernels/boundary.h"
 #include "kernels/mesh_edit.h"
 #include "geom/quality.h"
-#include "kernels/smooth.h"
+#include "kernels/untangle.h"
 #include "soa/mesh.h"
 #include "octree_util.h"
 
@@ -83,7 +83,7 @@ int main(void) {
     mx_mesh_summarize(&M);
     CHECK(M.invalid > 0);
     size_t moved = 0;
-    CHECK(mx_smooth_nodes(&M, states, &S, 0.2, 20, &moved) == MX_OK);
+    CHECK(mx_untangle(&M, states, &S, 0.2, 20, &moved) == MX_OK);
     CHECK(moved > 0);
     mx_mesh_update_jens(&M, NULL); /* recomputed independently */
     mx_mesh_summarize(&M);
