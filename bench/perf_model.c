@@ -628,7 +628,7 @@ static int probe(const char *input, int level, int threads, double *K, double fi
   }
   /* the octree: splits, children, triangle ids, edges, balance runs */
   const mx_builder *B = &m->B;
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &B->tree.oct;
   K[K_TRI] = (double)B->soup->nt;
   int ins[256];
   for (int k = 0; k < 256; k++) ins[k] = edge_inserts((uint8_t)k);
@@ -645,13 +645,13 @@ static int probe(const char *input, int level, int threads, double *K, double fi
     const int nk = __builtin_popcount(T->kept[o]);
     K[bal ? K_CHILD_B : K_CHILD_R] += nk;
     for (int k = 0; k < nk; k++) K[bal ? K_TRIC_B : K_TRIC_R] += T->tri_cnt[T->child0[o] + (uint32_t)k];
-    if (B->use_edges && T->level[o] + 1 <= B->edge_levels)
+    if (B->tree.use_edges && T->level[o] + 1 <= B->tree.edge_levels)
       K[bal ? K_EDGE_B : K_EDGE_R] += ins[T->kept[o]];
     if (T->parent[o] != MX_NONE) parent_mark[T->parent[o]] = 1;
   }
   for (size_t o = 0; o < T->n; o++) K[K_RUNS] += parent_mark[o];
   free(parent_mark);
-  const int etop = mx_edge_top(B);
+  const int etop = mx_edge_top(&B->tree);
   for (size_t i = 0; i < m->nleaves; i++) K[K_LEAF_E] += T->level[m->leaves[i]] <= etop;
 
   /* the transition mesh: points per leaf, inside-leaf elements, states */
@@ -742,7 +742,7 @@ static int probe(const char *input, int level, int threads, double *K, double fi
           for (int j = 0; j < mx_cell_nodes[M->type[d]]; j++)
             if (S[M->conn[8 * d + j]] == MX_NODE_OUTSIDE) k = add_distinct(vs, k, 64, M->conn[8 * d + j]);
         size_t dom = 0;
-        for (uint32_t j = 0; j < T->tri_cnt[o]; j++) dom += T->tri_pool[T->tri_off[o] + j] < B->nt_domain;
+        for (uint32_t j = 0; j < T->tri_cnt[o]; j++) dom += T->tri_pool[T->tri_off[o] + j] < B->tree.nt_domain;
         K[K_SHR_PAIR] += k;
         K[K_SHR_TEST] += (double)k * (double)dom;
       }

@@ -141,7 +141,7 @@ static int ls_has(const leafset *s, uint64_t key, int level) {
 
 static inline int check_balance(const mx_builder *B, const uint32_t *leaves,
                          size_t n) {
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &B->tree.oct;
   leafset s;
   s.cap = 1024;
   while (s.cap < 4 * n) s.cap *= 2;
@@ -171,7 +171,7 @@ static inline int check_balance(const mx_builder *B, const uint32_t *leaves,
           int64_t p[3] = {c[0] + dx * sz, c[1] + dy * sz, c[2] + dz * sz};
           int out = 0;
           for (int a = 0; a < 3; a++)
-            if (p[a] < 0 || p[a] >= ((int64_t)B->grid.dims[a] << MX_MAX_LEVEL))
+            if (p[a] < 0 || p[a] >= ((int64_t)B->tree.grid.dims[a] << MX_MAX_LEVEL))
               out = 1;
           if (out) continue;
           for (int m = l; m >= 0; m--) {
@@ -212,9 +212,9 @@ static inline run_result run_build(const mx_trisoup *soup, uint32_t nt_domain,
   if (!st && !use_edges) st = mx_resolve_closures(&B);
   uint32_t *leaves = NULL;
   size_t n = 0;
-  if (!st && !mx_leaves(&B, &leaves, &n)) {
+  if (!st && !mx_leaves(&B.tree, &leaves, &n)) {
     r.leaves = n;
-    r.hash = mx_leaves_hash(&B, leaves, n);
+    r.hash = mx_leaves_hash(&B.tree, leaves, n);
     r.balanced = check_balance(&B, leaves, n);
   }
   mx_free(leaves);

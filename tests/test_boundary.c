@@ -5,6 +5,7 @@
 
 #include "check.h"
 #include "kernels/boundary.h"
+#include "kernels/transition.h"
 #include "kernels/mesh_edit.h"
 #include "verify/check.h"
 #include "geom/locate.h"
@@ -25,9 +26,9 @@ static int build(const mx_trisoup *s, int level, built *b) {
   int st = mx_builder_init(&b->B, s, (uint32_t)s->nt, rt0, &r, 1, NULL);
   if (!st) st = mx_build_roots(&b->B);
   if (!st) st = mx_refine_balanced(&b->B);
-  if (!st) st = mx_leaves(&b->B, &b->leaves, &b->n);
-  if (!st) st = mx_leaves_sorted(&b->B, b->leaves, b->n);
-  if (!st) st = mx_transition(&b->B, b->leaves, b->n, &b->M);
+  if (!st) st = mx_leaves(&b->B.tree, &b->leaves, &b->n);
+  if (!st) st = mx_leaves_sorted(&b->B.tree, b->leaves, b->n);
+  if (!st) st = mx_transition(&b->B.tree, b->leaves, b->n, &b->M);
   return st;
 }
 
@@ -82,7 +83,7 @@ int main(void) {
     CHECK(mx_surface_index_build(&S, &cube, 0, (uint32_t)cube.nt) == MX_OK);
     uint8_t *st = mx_alloc(b.M.nnodes + 1);
     size_t q = 0;
-    CHECK(mx_node_states(&b.B, b.leaves, &b.M, &S, st, &q) == MX_OK);
+    CHECK(mx_node_states(&b.B.tree, b.leaves, &b.M, &S, st, &q) == MX_OK);
     size_t wrong = 0, inside = 0;
     for (size_t v = 0; v < b.M.nnodes; v++) {
       const double *p = b.M.xyz + 3 * v;
@@ -113,7 +114,7 @@ int main(void) {
     uint8_t *st = mx_alloc(b.M.nnodes + 1);
     size_t q = 0;
     double t = mx_wtime();
-    CHECK(mx_node_states(&b.B, b.leaves, &b.M, &S, st, &q) == MX_OK);
+    CHECK(mx_node_states(&b.B.tree, b.leaves, &b.M, &S, st, &q) == MX_OK);
     t = mx_wtime() - t;
     size_t wrong = 0, checked = 0, inside = 0;
     for (size_t v = 0; v < b.M.nnodes; v++) {
@@ -126,7 +127,7 @@ int main(void) {
     }
     size_t bad_inherit = 0;
     for (size_t c = 0; c < b.M.ncells; c++) {
-      if (b.B.oct.flags[b.leaves[b.M.leaf[c]]] & MX_OCT_SURFACE) continue;
+      if (b.B.tree.oct.flags[b.leaves[b.M.leaf[c]]] & MX_OCT_SURFACE) continue;
       for (int k = 0; k < mx_cell_nodes[b.M.type[c]]; k++)
         bad_inherit += st[b.M.conn[8 * c + k]] != MX_NODE_INSIDE;
     }
@@ -155,7 +156,7 @@ int main(void) {
       CHECK(build(&s, 5, &b) == MX_OK);
       uint8_t *st = mx_alloc(b.M.nnodes + 1);
       size_t q = 0, moved = 0, removed = 0;
-      CHECK(mx_node_states(&b.B, b.leaves, &b.M, &S, st, &q) == MX_OK);
+      CHECK(mx_node_states(&b.B.tree, b.leaves, &b.M, &S, st, &q) == MX_OK);
       size_t on0 = 0;
       for (size_t v = 0; v < b.M.nnodes; v++)
         on0 += fabs(mx_signed_distance(&S, b.M.xyz + 3 * v, NULL)) <= 1e-9 * diag;
@@ -191,7 +192,7 @@ int main(void) {
       double *before = mx_alloc(3 * b.M.nnodes * sizeof *before);
       memcpy(before, b.M.xyz, 3 * b.M.nnodes * sizeof *before);
       size_t shrunk = 0;
-      CHECK(mx_shrink_to_boundary(&b.B, b.leaves, &b.M, st, &shrunk) == MX_OK);
+      CHECK(mx_shrink_to_boundary(&b.B.tree, b.leaves, &b.M, st, &shrunk) == MX_OK);
       size_t far = 0, outside = 0, inside_moved = 0;
       for (size_t v = 0; v < b.M.nnodes; v++) {
         if (st[v] == MX_NODE_OUTSIDE) {

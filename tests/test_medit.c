@@ -630,9 +630,9 @@ static int transition_mesh(mx_mesh_out *M, int s_level) {
   if (!st) st = mx_refine_balanced(&B);
   uint32_t *leaves = NULL;
   size_t n = 0;
-  if (!st) st = mx_leaves(&B, &leaves, &n);
-  if (!st) st = mx_leaves_sorted(&B, leaves, n);
-  if (!st) st = mx_transition(&B, leaves, n, M);
+  if (!st) st = mx_leaves(&B.tree, &leaves, &n);
+  if (!st) st = mx_leaves_sorted(&B.tree, leaves, n);
+  if (!st) st = mx_transition(&B.tree, leaves, n, M);
   mx_free(leaves);
   mx_builder_free(&B);
   mx_trisoup_free(&demo);

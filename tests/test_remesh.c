@@ -103,9 +103,9 @@ static void test_list_vs_scratch(void) {
   size_t nk[MX_MAX_LEVEL + 1] = {0};
   for (size_t i = 0; i < n; i++) {
     const uint32_t o = a->leaves[list[i]];
-    const int l = a->B.oct.level[o];
+    const int l = a->B.tree.oct.level[o];
     keys[l] = realloc(keys[l], (nk[l] + 1) * sizeof **keys);
-    keys[l][nk[l]++] = a->B.oct.key[o];
+    keys[l][nk[l]++] = a->B.tree.oct.key[o];
   }
   CHECK(mx_mesher_refine_leaves(a, list, n) == MX_OK);
   CHECK(a->nleaves > n0);
@@ -154,7 +154,7 @@ static void test_full_equals_scratch(void) {
   CHECK(mesh_is_valid(a));
   /* from scratch: split set = every split octant of a */
   mx_mesher *b = cortex_mesher(4, MX_STAGE_FULL);
-  const mx_octree *T = &a->B.oct;
+  const mx_octree *T = &a->B.tree.oct;
   for (size_t o = 0; o < T->n; o++) {
     if (!(T->flags[o] & MX_OCT_SPLIT)) continue;
     const int l = T->level[o];

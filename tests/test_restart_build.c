@@ -55,7 +55,7 @@ static const uint8_t corner_xyz[8][3] = {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0,
 static void check_file(const mx_mesher *m, const char *path) {
   mx_restart r;
   CHECK(mx_restart_read(path, &r) == MX_OK);
-  const mx_octree *T = &m->B.oct;
+  const mx_octree *T = &m->B.tree.oct;
   uint64_t *v = malloc(8 * T->n * sizeof *v);
   for (size_t o = 0; o < T->n; o++) {
     uint32_t p[3];
@@ -71,7 +71,7 @@ static void check_file(const mx_mesher *m, const char *path) {
     uint32_t p[3];
     mx_morton_decode(v[i], p);
     for (int a = 0; a < 3; a++) { /* the file keeps 9 digits ("%+1.8E") */
-      const double x = m->B.grid.origin[a] + (double)p[a] * m->B.grid.unit;
+      const double x = m->B.tree.grid.origin[a] + (double)p[a] * m->B.tree.grid.unit;
       bad_xyz += !(fabs(r.xyz[3 * i + a] - x) <= 5.0000001e-9 * fabs(x));
     }
   }

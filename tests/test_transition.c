@@ -22,12 +22,12 @@ static int run_mesh(const mx_trisoup *s, uint32_t ntd, const uint32_t *rt0,
   if (!st) st = mx_refine_balanced(&B);
   uint32_t *leaves = NULL;
   size_t n = 0;
-  if (!st) st = mx_leaves(&B, &leaves, &n);
-  if (!st) st = mx_leaves_sorted(&B, leaves, n);
-  if (!st) st = mx_transition(&B, leaves, n, M);
+  if (!st) st = mx_leaves(&B.tree, &leaves, &n);
+  if (!st) st = mx_leaves_sorted(&B.tree, leaves, n);
+  if (!st) st = mx_transition(&B.tree, leaves, n, M);
   *leaf_volume = 0.0;
   for (size_t i = 0; !st && i < n; i++) {
-    const double h = ldexp(B.grid.side, -B.oct.level[leaves[i]]);
+    const double h = ldexp(B.tree.grid.side, -B.tree.oct.level[leaves[i]]);
     *leaf_volume += h * h * h;
   }
   mx_free(leaves);

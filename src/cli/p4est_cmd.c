@@ -79,8 +79,8 @@ static int compare_single(mx_mesher *m, const mx_p4est_octree *P, mx_leaf_diff *
       la = mx_alloc(nq + 1);
       if (!kb || !lb || !ka || !la) st = MX_EINPUT;
       for (size_t i = 0; !st && i < nb; i++) {
-        kb[i] = m->B.oct.key[m->leaves[i]];
-        lb[i] = m->B.oct.level[m->leaves[i]];
+        kb[i] = m->B.tree.oct.key[m->leaves[i]];
+        lb[i] = m->B.tree.oct.level[m->leaves[i]];
       }
       size_t na = 0;
       for (size_t i = 0; !st && i < nq; i++)
@@ -90,9 +90,9 @@ static int compare_single(mx_mesher *m, const mx_p4est_octree *P, mx_leaf_diff *
         }
       if (!st) {
         mx_leaf_diff_compute(ka, la, na, kb, lb, nb, d);
-        mx_leaf_diff_causes(qa, qla, qin, nq, kb, lb, nb, P->B->grid.dims, why);
+        mx_leaf_diff_causes(qa, qla, qin, nq, kb, lb, nb, P->B->tree.grid.dims, why);
       }
-      *hash = mx_leaves_hash(&m->B, m->leaves, m->nleaves);
+      *hash = mx_leaves_hash(&m->B.tree, m->leaves, m->nleaves);
       *t_refine = m->S.ph.refine;
       *t_balance = m->S.ph.balance;
     }

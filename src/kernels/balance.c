@@ -56,14 +56,14 @@ static int touches_kept_child(const mx_octree *T, const uint32_t *run,
  * MX_OCT_QUEUED flag) onto buf. P's 12 edges are looked up once per run. */
 static void find_unbalanced(mx_builder *B, const uint32_t *run, size_t k,
                             uint32_t **buf, size_t *n, size_t *cap) {
-  mx_octree *T = &B->oct;
+  mx_octree *T = &B->tree.oct;
   const uint32_t p = T->parent[run[0]];
   if (p == MX_NONE) return;
   const int lp = T->level[p];
   uint32_t anchor[3];
   mx_octant_anchor(T->key[p], lp, anchor);
   for (int a = 0; a < 3; a++) {
-    const mx_edge_table *E = &B->edges.t[lp][a];
+    const mx_edge_table *E = &B->tree.edges.t[lp][a];
     for (int j = 0; j < 4; j++) {
       const size_t e = mx_edge_find(E, mx_edge_key(anchor, a, j));
       if (e == SIZE_MAX) continue;
@@ -113,7 +113,7 @@ int mx_balance_drain(mx_builder *B, const uint32_t *split, size_t n) {
 #pragma omp parallel
     {
       const int t = omp_get_thread_num();
-      const uint32_t *par = B->oct.parent;
+      const uint32_t *par = B->tree.oct.parent;
 #pragma omp for schedule(dynamic, 256)
       for (size_t i = 0; i < ncur; i++) {
         /* Runs of siblings (the lists are grouped by parent). */

@@ -73,7 +73,7 @@ static int map_grow(rtree *R, size_t n) {
 
 /* Attach nodes for the kept children of node p (already split in the SoA). */
 static int attach_children(rtree *R, rnode *p) {
-  const mx_octree *T = &R->B->oct;
+  const mx_octree *T = &R->B->tree.oct;
   for (int c = 0; c < 8; c++) {
     uint32_t ch = mx_octree_child(T, p->oct, c);
     if (ch == MX_NONE) continue;
@@ -91,7 +91,7 @@ static int attach_children(rtree *R, rnode *p) {
 }
 
 static int is_leaf(const rtree *R, const rnode *n) {
-  return !(R->B->oct.flags[n->oct] & MX_OCT_SPLIT);
+  return !(R->B->tree.oct.flags[n->oct] & MX_OCT_SPLIT);
 }
 
 /* Neighbour of n in direction d (components in {-1,0,1}) of n's size or
@@ -99,9 +99,9 @@ static int is_leaf(const rtree *R, const rnode *n) {
  * NULL where the domain has no octant. */
 static rnode *neighbor(const rtree *R, const rnode *n, const int d[3]) {
   if (!n->parent) {
-    const mx_grid *g = &R->B->grid;
+    const mx_grid *g = &R->B->tree.grid;
     uint32_t c[3];
-    mx_morton_decode(R->B->oct.key[n->oct], c);
+    mx_morton_decode(R->B->tree.oct.key[n->oct], c);
     int p[3];
     for (int a = 0; a < 3; a++) {
       p[a] = (int)(c[a] >> MX_MAX_LEVEL) + d[a];
@@ -128,11 +128,11 @@ static rnode *neighbor(const rtree *R, const rnode *n, const int d[3]) {
 
 int mx_balance_recursive(mx_builder *B) {
   double t0 = mx_wtime();
-  mx_octree *T = &B->oct;
+  mx_octree *T = &B->tree.oct;
   rtree R;
   memset(&R, 0, sizeof R);
   R.B = B;
-  const mx_grid *g = &B->grid;
+  const mx_grid *g = &B->tree.grid;
   const size_t nroot = (size_t)g->dims[0] * g->dims[1] * g->dims[2];
   R.roots = calloc(nroot, sizeof *R.roots);
   int st = R.roots ? map_grow(&R, T->n) : MX_EINPUT;

@@ -9,10 +9,10 @@
 #include <math.h>
 #include <string.h>
 
-int mx_node_states(const mx_builder *B, const uint32_t *leaves,
+int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
                    const mx_mesh_out *M, const mx_surface_index *S,
                    uint8_t *states, size_t *queries) {
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &tr->oct;
   enum { UNKNOWN = 2 };
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < M->nnodes; v++) states[v] = UNKNOWN;
@@ -167,15 +167,15 @@ static int leaf_outside_nodes(const mx_mesh_out *M, size_t c0, size_t c1,
 }
 
 /* Closest domain triangle of leaf o's list to p: squared distance, id. */
-static double leaf_closest(const mx_builder *B, uint32_t o, const double p[3],
+static double leaf_closest(const mx_tree *tr, uint32_t o, const double p[3],
                            uint32_t *tri) {
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &tr->oct;
   double best = INFINITY, q[3];
   *tri = UINT32_MAX;
   for (uint32_t k = 0; k < T->tri_cnt[o]; k++) {
     const uint32_t t = T->tri_pool[T->tri_off[o] + k];
-    if (t >= B->nt_domain) continue;
-    const double d2 = mx_closest_on_triangle(B->tri_xyz + 9 * (size_t)t, p, q);
+    if (t >= tr->nt_domain) continue;
+    const double d2 = mx_closest_on_triangle(tr->tri_xyz + 9 * (size_t)t, p, q);
     if (d2 < best || (d2 == best && t < *tri)) {
       best = d2;
       *tri = t;
@@ -190,7 +190,7 @@ static inline uint64_t dbits(double d) {
   return u; /* non-negative doubles order as their bits */
 }
 
-int mx_shrink_to_boundary(const mx_builder *B, const uint32_t *leaves,
+int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
                           mx_mesh_out *M, const uint8_t *states, size_t *moved) {
   const size_t nn = M->nnodes, nc = M->ncells;
   /* Elements are in leaf order: each leaf's elements form one run. */
@@ -241,12 +241,12 @@ int mx_shrink_to_boundary(const mx_builder *B, const uint32_t *leaves,
 #pragma omp parallel for schedule(dynamic, 256)
   for (size_t r = 0; r < nr; r++) {
     const uint32_t o = leaves[M->leaf[run[r]]];
-    if (!B->oct.tri_cnt[o]) continue;
+    if (!tr->oct.tri_cnt[o]) continue;
     uint32_t vs[64];
     const int k = leaf_outside_nodes(M, run[r], run[r + 1], states, vs);
     for (int j = 0; j < k; j++) {
       uint32_t t;
-      const double d2 = leaf_closest(B, o, M->xyz + 3 * (size_t)vs[j], &t);
+      const double d2 = leaf_closest(tr, o, M->xyz + 3 * (size_t)vs[j], &t);
       if (t == UINT32_MAX) continue;
       const uint64_t mine = dbits(d2);
       const uint32_t v = vs[j];
@@ -265,7 +265,7 @@ int mx_shrink_to_boundary(const mx_builder *B, const uint32_t *leaves,
   for (size_t v = 0; v < nn; v++) {
     if (btri[v] == UINT32_MAX) continue;
     double q[3];
-    mx_closest_on_triangle(B->tri_xyz + 9 * (size_t)btri[v], M->xyz + 3 * v, q);
+    mx_closest_on_triangle(tr->tri_xyz + 9 * (size_t)btri[v], M->xyz + 3 * v, q);
     memcpy(M->xyz + 3 * v, q, sizeof q);
     nm++;
   }

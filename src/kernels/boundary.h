@@ -12,8 +12,8 @@
 #include <stdint.h>
 
 #include "geom/distance.h"
-#include "kernels/refine.h"
-#include "kernels/transition.h"
+#include "soa/tree.h"
+#include "soa/mesh.h"
 
 enum { MX_NODE_OUTSIDE = 0, MX_NODE_INSIDE = 1 };
 
@@ -24,7 +24,7 @@ enum { MX_NODE_OUTSIDE = 0, MX_NODE_INSIDE = 1 };
  * the domain (angle-weighted pseudonormals, or the generalized winding number
  * for a surface that is not closed). *queries receives the number of
  * located nodes. */
-int mx_node_states(const mx_builder *B, const uint32_t *leaves,
+int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
                    const mx_mesh_out *M, const mx_surface_index *S,
                    uint8_t *states, size_t *queries);
 
@@ -46,7 +46,7 @@ int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index 
  * elements use it (ties: the lowest triangle id); then J_ENS is recomputed
  * for the elements that moved. Deterministic. *moved receives the number of
  * nodes moved. */
-int mx_shrink_to_boundary(const mx_builder *B, const uint32_t *leaves,
+int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
                           mx_mesh_out *M, const uint8_t *states, size_t *moved);
 
 #endif

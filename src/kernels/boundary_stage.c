@@ -9,7 +9,7 @@
 #include "kernels/staircase.h"
 #include "kernels/untangle.h"
 
-int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
+int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
                       const mx_surface_index *S, mx_mesh_out *M,
                       double close_ratio, double staircase_q,
                       mx_boundary_stats *stats, uint8_t **states_out) {
@@ -18,7 +18,7 @@ int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
   if (!states) return MX_EINPUT;
   uint8_t *moved = NULL;
   double t = mx_wtime();
-  int st = mx_node_states(B, leaves, M, S, states, &stats->located);
+  int st = mx_node_states(tr, leaves, M, S, states, &stats->located);
   double t1 = mx_wtime();
   mx_mem_mark("b.states");
   stats->t_states = t1 - t;
@@ -35,7 +35,7 @@ int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
   t1 = mx_wtime();
   mx_mem_mark("b.patterns");
   stats->t_patterns = t1 - t;
-  if (!st) st = mx_shrink_to_boundary(B, leaves, M, states, &stats->shrunk);
+  if (!st) st = mx_shrink_to_boundary(tr, leaves, M, states, &stats->shrunk);
   t = mx_wtime();
   mx_mem_mark("b.shrink");
   stats->t_shrink = t - t1;

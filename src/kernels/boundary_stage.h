@@ -31,7 +31,7 @@ typedef struct {
  * against +10% for 0.3). staircase_q: 0.2 (the paper); it is also the
  * target of the untangling/smoothing step. M is edited in place. */
 #define MX_CLOSE_RATIO 0.5
-int mx_boundary_stage(const mx_builder *B, const uint32_t *leaves,
+int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
                       const mx_surface_index *S, mx_mesh_out *M,
                       double close_ratio, double staircase_q,
                       mx_boundary_stats *stats, uint8_t **states_out);

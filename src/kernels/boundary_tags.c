@@ -9,7 +9,7 @@
 /* The shell of the domain triangles leaf octant o meets when they all come
  * from one file; -1 when it meets none or several. */
 static int leaf_shell(const mx_tag_inputs *in, uint32_t o) {
-  const mx_octree *T = &in->B->oct;
+  const mx_octree *T = &in->tree->oct;
   const uint32_t *t = T->tri_pool + T->tri_off[o];
   int s = -1;
   for (uint32_t i = 0; i < T->tri_cnt[o]; i++) {

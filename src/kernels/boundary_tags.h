@@ -21,11 +21,11 @@
 
 #include "io/boundary_faces.h"
 #include "geom/distance.h"
-#include "kernels/refine.h"
+#include "soa/tree.h"
 #include "soa/mesh.h"
 
 typedef struct {
-  const mx_builder *B;       /* the octree: each leaf's triangles */
+  const mx_tree *tree;       /* the octree: each leaf's triangles */
   const uint32_t *leaves;    /* leaf index -> octant */
   const uint32_t *cell_leaf; /* per cell: its leaf index */
   const mx_trisoup *soup;    /* shell of each triangle */

@@ -23,10 +23,10 @@ static int kept_on_edge(const mx_octree *T, uint32_t x, int p, int sp, int q, in
  * edge cannot: the midpoint would hang on its face (a T-junction). Such
  * coarser leaves are split here, with balance, until none is left. */
 int mx_resolve_closures(mx_builder *B) {
-  mx_octree *T = &B->oct;
+  mx_octree *T = &B->tree.oct;
   MX_CHECK(mx_edges_restore(B));
   MX_CHECK(mx_build_root_map(B));
-  const int top = mx_edge_top(B);
+  const int top = mx_edge_top(&B->tree);
   for (int round = 0; round < 64; round++) {
     size_t n = 0, cap = 0;
     uint32_t *list = NULL;
@@ -39,7 +39,7 @@ int mx_resolve_closures(mx_builder *B) {
         const int a = f / 2, sd = f % 2; /* face of y on the side sd of axis a */
         int dd[3] = {0, 0, 0};
         dd[a] = sd ? 1 : -1;
-        const uint64_t xk = mx_morton_neighbor(T->key[y], l, dd[0], dd[1], dd[2], B->grid.dims);
+        const uint64_t xk = mx_morton_neighbor(T->key[y], l, dd[0], dd[1], dd[2], B->tree.grid.dims);
         if (xk == UINT64_MAX) continue;
         const uint32_t x = mx_covering_octant(B, xk, l);
         if (x == MX_NONE || T->level[x] != l || (T->flags[x] & MX_OCT_SPLIT)) continue;
@@ -59,7 +59,7 @@ int mx_resolve_closures(mx_builder *B) {
           uint32_t cells[2];
           for (int k = 0; k < 2; k++) {
             const uint64_t base = k ? T->key[y] : xk;
-            const uint64_t ck = mx_morton_neighbor(base, l, od[0], od[1], od[2], B->grid.dims);
+            const uint64_t ck = mx_morton_neighbor(base, l, od[0], od[1], od[2], B->tree.grid.dims);
             cells[k] = ck == UINT64_MAX ? MX_NONE : mx_covering_octant(B, ck, l);
             const uint32_t z = cells[k];
             /* a split octant of level l there with a kept child on the edge */
@@ -104,7 +104,7 @@ int mx_resolve_closures(mx_builder *B) {
         continue;
       }
       st = mx_split_octants(B, list, k, 1);
-      if (!st) st = B->use_edges ? mx_balance_drain(B, list, k) : mx_balance_recursive(B);
+      if (!st) st = B->tree.use_edges ? mx_balance_drain(B, list, k) : mx_balance_recursive(B);
       /* the rest of the list is rebuilt next round */
       break;
     }

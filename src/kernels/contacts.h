@@ -13,7 +13,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "kernels/transition.h"
+#include "soa/mesh.h"
 
 typedef struct {
   size_t nodes;     /* nodes lying on an element they are not a node of */

@@ -30,12 +30,12 @@ int mx_edges_restore(mx_builder *B);
  * neighbours: what the transition masks and the balance look up there.
  * Octants already registered are skipped (flag MX_OCT_EDGES). */
 int mx_edges_ensure(mx_builder *B, const uint32_t *list, size_t n, int with_parents);
-/* B->root_of: the root octant of each root cube, built once. MX_OK or
+/* B->tree.root_of: the root octant of each root cube, built once. MX_OK or
  * MX_EINPUT (memory). */
 int mx_build_root_map(mx_builder *B);
 
 /* The deepest octant holding the level-`level` cell of key k, no deeper
- * than that level (MX_NONE outside the octree; needs B->root_of). */
+ * than that level (MX_NONE outside the octree; needs B->tree.root_of). */
 uint32_t mx_covering_octant(const mx_builder *B, uint64_t key, int level);
 
 #endif

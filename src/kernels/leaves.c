@@ -3,18 +3,18 @@
 #include "base/common.h"
 #include "base/scan.h"
 
-int mx_leaves_sorted(const mx_builder *B, uint32_t *leaves, size_t n) {
+int mx_leaves_sorted(const mx_tree *tr, uint32_t *leaves, size_t n) {
   uint64_t *k = mx_alloc((n + 1) * sizeof *k);
   if (!k) return MX_EINPUT;
 #pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < n; i++) k[i] = B->oct.key[leaves[i]];
+  for (size_t i = 0; i < n; i++) k[i] = tr->oct.key[leaves[i]];
   int st = mx_sort_u64(k, leaves, n);
   mx_free(k);
   return st;
 }
 
-int mx_leaves(const mx_builder *B, uint32_t **out, size_t *n) {
-  const mx_octree *T = &B->oct;
+int mx_leaves(const mx_tree *tr, uint32_t **out, size_t *n) {
+  const mx_octree *T = &tr->oct;
   const size_t nb = (T->n + 4095) / 4096; /* blocks of octants */
   uint64_t *off = mx_alloc((nb + 1) * sizeof *off);
   if (!off) return MX_EINPUT;
@@ -58,12 +58,12 @@ uint64_t mx_leaf_hash_term(uint64_t key, int level) {
 
 uint64_t mx_leaf_hash_finish(uint64_t sum, uint64_t n) { return mix64(sum ^ n); }
 
-uint64_t mx_leaves_hash(const mx_builder *B, const uint32_t *leaves,
+uint64_t mx_leaves_hash(const mx_tree *tr, const uint32_t *leaves,
                         size_t n) {
   /* A set hash: the sum of a strong mix of each (key, level) pair. Leaf keys
    * are unique, so it fingerprints the set of leaves whatever their order,
    * with no sort, in parallel. */
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &tr->oct;
   uint64_t h = 0;
 #pragma omp parallel for schedule(static) reduction(+ : h)
   for (size_t i = 0; i < n; i++)
@@ -71,9 +71,9 @@ uint64_t mx_leaves_hash(const mx_builder *B, const uint32_t *leaves,
   return mx_leaf_hash_finish(h, (uint64_t)n);
 }
 
-int mx_leaf_hex_mesh(const mx_builder *B, const uint32_t *leaves, size_t n,
+int mx_leaf_hex_mesh(const mx_tree *tr, const uint32_t *leaves, size_t n,
                      mx_hexmesh *out) {
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &tr->oct;
   const size_t m = 8 * n;
   uint64_t *k = mx_alloc((m + 1) * sizeof *k);
   uint32_t *slot = mx_alloc((m + 1) * sizeof *slot);
@@ -112,7 +112,7 @@ int mx_leaf_hex_mesh(const mx_builder *B, const uint32_t *leaves, size_t n,
     uint32_t c[3];
     mx_morton_decode(k[i], c);
     for (int a = 0; a < 3; a++)
-      out->xyz[3 * id + a] = B->grid.origin[a] + (double)c[a] * B->grid.unit;
+      out->xyz[3 * id + a] = tr->grid.origin[a] + (double)c[a] * tr->grid.unit;
     id++;
   }
   out->nnodes = nn;

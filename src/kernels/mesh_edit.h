@@ -7,7 +7,7 @@
 
 #include <stdint.h>
 
-#include "kernels/transition.h"
+#include "soa/mesh.h"
 
 /* Keep the elements c with keep[c] != 0, in order. */
 int mx_mesh_keep_cells(mx_mesh_out *M, const uint8_t *keep);

@@ -30,16 +30,16 @@ int mx_builder_init(mx_builder *B, const mx_trisoup *soup, uint32_t nt_domain,
                     int use_edges, const char *name) {
   memset(B, 0, sizeof *B);
   B->soup = soup;
-  B->nt_domain = nt_domain;
+  B->tree.nt_domain = nt_domain;
   B->req = *req;
-  B->use_edges = use_edges;
+  B->tree.use_edges = use_edges;
   /* Balance can only be lost next to an octant two levels finer, so a leaf of
    * level max-1 or max is never split for balance; the transition stage reads
    * the edge infos of a leaf's own level to find its split neighbours, and a
    * leaf of the top level has none. So edge infos are kept for levels up to
    * max - 1, never for the top level (the largest table by far). */
-  B->edge_levels = mx_max_requested_level(req) - 1;
-  B->edge_lazy_top = -1;
+  B->tree.edge_levels = mx_max_requested_level(req) - 1;
+  B->tree.edge_lazy_top = -1;
   double lo[3], hi[3];
   mx_trisoup dom = *soup;
   dom.nt = nt_domain; /* the grid covers the domain's triangles' vertices */
@@ -54,18 +54,18 @@ int mx_builder_init(mx_builder *B, const mx_trisoup *soup, uint32_t nt_domain,
         hi[a] = mx_max(hi[a], p[a]);
       }
     }
-  MX_CHECK(mx_grid_build(lo, hi, name, &B->grid));
+  MX_CHECK(mx_grid_build(lo, hi, name, &B->tree.grid));
   const size_t nt = soup->nt;
-  B->tri_xyz = mx_alloc(9 * nt * sizeof *B->tri_xyz);
+  B->tree.tri_xyz = mx_alloc(9 * nt * sizeof *B->tree.tri_xyz);
   B->tri_region = mx_alloc(nt + 1);
-  if (!B->tri_xyz || !B->tri_region) return MX_EINPUT;
+  if (!B->tree.tri_xyz || !B->tri_region) return MX_EINPUT;
 #pragma omp parallel for schedule(static)
   for (size_t t = 0; t < nt; t++)
     for (int k = 0; k < 3; k++) {
       uint32_t v = soup->tri[3 * t + k];
-      B->tri_xyz[9 * t + 3 * k + 0] = soup->x[v];
-      B->tri_xyz[9 * t + 3 * k + 1] = soup->y[v];
-      B->tri_xyz[9 * t + 3 * k + 2] = soup->z[v];
+      B->tree.tri_xyz[9 * t + 3 * k + 0] = soup->x[v];
+      B->tree.tri_xyz[9 * t + 3 * k + 1] = soup->y[v];
+      B->tree.tri_xyz[9 * t + 3 * k + 2] = soup->z[v];
     }
   memset(B->tri_region, 255, nt);
   for (int r = 0; r < req->nregions; r++)
@@ -79,16 +79,16 @@ int mx_builder_init(mx_builder *B, const mx_trisoup *soup, uint32_t nt_domain,
 }
 
 void mx_builder_free(mx_builder *B) {
-  mx_free(B->tri_xyz);
+  mx_free(B->tree.tri_xyz);
   mx_free(B->tri_region);
   mx_locator_free(&B->loc_domain);
   for (int r = 0; r < MX_MAX_REGIONS; r++) mx_locator_free(&B->loc_region[r]);
-  mx_octree_free(&B->oct);
-  mx_edges_free(&B->edges);
+  mx_octree_free(&B->tree.oct);
+  mx_edges_free(&B->tree.edges);
   mx_free(B->scratch_mask);
   mx_free(B->scratch_info);
   mx_free(B->scratch_off);
-  mx_free(B->root_of);
+  mx_free(B->tree.root_of);
   memset(B, 0, sizeof *B);
 }
 
@@ -146,21 +146,21 @@ static uint8_t locate_children(const mx_locator *L, uint8_t need,
  * and what level they ask for. */
 static void classify_children(const mx_builder *B, uint32_t o, uint8_t *mask,
                               split_info *si) {
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &B->tree.oct;
   const uint64_t key = T->key[o];
   const int l = T->level[o];
   const uint32_t *tris = T->tri_pool + T->tri_off[o];
   const uint32_t nt = T->tri_cnt[o];
   double clo[8][3], chi[8][3], cc[8][3], ch[8][3];
   for (int c = 0; c < 8; c++) {
-    mx_octant_box(&B->grid, mx_morton_child(key, l, c), l + 1, clo[c], chi[c]);
+    mx_octant_box(&B->tree.grid, mx_morton_child(key, l, c), l + 1, clo[c], chi[c]);
     box_centre(clo[c], chi[c], cc[c], ch[c]);
   }
   const double *mid = clo[7];
   memset(si, 0, sizeof *si);
   for (uint32_t i = 0; i < nt; i++) {
     const uint32_t t = tris[i];
-    const double *v = B->tri_xyz + 9 * (size_t)t;
+    const double *v = B->tree.tri_xyz + 9 * (size_t)t;
     unsigned cand = 0xff;
     for (int a = 0; a < 3; a++) {
       double mn = mx_min(v[a], mx_min(v[3 + a], v[6 + a]));
@@ -237,20 +237,20 @@ static int grow_scratch(void **p, size_t *cap, size_t need, size_t elem) {
  * the octants in its slots when needed (transition.c, leaf_mask). */
 static int register_children_edges(mx_builder *B, const uint32_t *list,
                                    size_t n, int l) {
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &B->tree.oct;
   for (size_t lo = 0; lo < n;) {
     size_t chunk = n - lo;
     {
       size_t room = SIZE_MAX;
       for (int a = 0; a < 3; a++) {
-        const mx_edge_table *E = &B->edges.t[l + 1][a];
+        const mx_edge_table *E = &B->tree.edges.t[l + 1][a];
         size_t lim = (size_t)(0.75 * (double)E->cap);
         room = lim > E->count ? (lim - E->count < room ? lim - E->count : room)
                               : 0;
       }
       if (room / 18 < (chunk < 16384 ? chunk : 16384)) {
         size_t want = chunk < 262144 ? chunk : 262144;
-        MX_CHECK(mx_edges_reserve(&B->edges, l + 1, 18 * want));
+        MX_CHECK(mx_edges_reserve(&B->tree.edges, l + 1, 18 * want));
         continue;
       }
       if (room / 18 < chunk) chunk = room / 18;
@@ -262,13 +262,13 @@ static int register_children_edges(mx_builder *B, const uint32_t *list,
 #pragma omp for schedule(static)
       for (size_t i = lo; i < lo + chunk; i++) {
         const uint32_t o = list[i];
-        mx_edges_register_children(&B->edges, T->child0[o], T->kept[o],
+        mx_edges_register_children(&B->tree.edges, T->child0[o], T->kept[o],
                                    T->key[o], l, mine);
       }
 #pragma omp critical
       for (int a = 0; a < 3; a++) created[a] += mine[a];
     }
-    mx_edges_add_count(&B->edges, l + 1, created);
+    mx_edges_add_count(&B->tree.edges, l + 1, created);
     lo += chunk;
   }
   return MX_OK;
@@ -277,13 +277,13 @@ static int register_children_edges(mx_builder *B, const uint32_t *list,
 int mx_split_octants(mx_builder *B, const uint32_t *list, size_t n,
                      int for_balance) {
   if (n == 0) return MX_OK;
-  mx_octree *T = &B->oct;
+  mx_octree *T = &B->tree.oct;
   const int l = T->level[list[0]];
-  if (B->use_edges) MX_CHECK(mx_edges_restore(B));
+  if (B->tree.use_edges) MX_CHECK(mx_edges_restore(B));
   /* below the levels whose edge infos are complete: those of these octants
    * and their neighbours (transition masks), and of their parents and the
    * parents' neighbours (the balance looks for leaves there) */
-  if (B->use_edges && l > B->edge_levels) MX_CHECK(mx_edges_ensure(B, list, n, 1));
+  if (B->tree.use_edges && l > B->tree.edge_levels) MX_CHECK(mx_edges_ensure(B, list, n, 1));
   /* Offsets of each parent's triangles in the mask scratch. */
   MX_CHECK(grow_scratch((void **)&B->scratch_off, &B->scratch_off_cap,
                         2 * n + 2, sizeof(uint64_t)));
@@ -368,7 +368,7 @@ int mx_split_octants(mx_builder *B, const uint32_t *list, size_t n,
     B->stats.split_balance += n;
   else
     B->stats.split_requested += n;
-  if (!B->use_edges || l + 1 > B->edge_levels) return MX_OK;
+  if (!B->tree.use_edges || l + 1 > B->tree.edge_levels) return MX_OK;
   return register_children_edges(B, list, n, l);
 }
 
@@ -377,7 +377,7 @@ int mx_split_octants(mx_builder *B, const uint32_t *list, size_t n,
 /* Roots: each triangle is tested against the root cubes its bounding box
  * covers; a root that meets no triangle is located once. */
 int mx_build_roots(mx_builder *B) {
-  const mx_grid *g = &B->grid;
+  const mx_grid *g = &B->tree.grid;
   const int nx = g->dims[0], ny = g->dims[1], nz = g->dims[2];
   const size_t nroot = (size_t)nx * ny * nz;
   const size_t nt = B->soup->nt;
@@ -387,7 +387,7 @@ int mx_build_roots(mx_builder *B) {
   uint32_t *list = NULL;
   for (int pass = 0; pass < 2; pass++) {
     for (size_t t = 0; t < nt; t++) {
-      const double *v = B->tri_xyz + 9 * t;
+      const double *v = B->tree.tri_xyz + 9 * t;
       int r0[3], r1[3];
       for (int a = 0; a < 3; a++) {
         double mn = mx_min(v[a], mx_min(v[3 + a], v[6 + a]));
@@ -428,7 +428,7 @@ int mx_build_roots(mx_builder *B) {
       cnt[0] = 0;
     }
   }
-  mx_octree *T = &B->oct;
+  mx_octree *T = &B->tree.oct;
   int st = mx_octree_reserve(T, nroot, cnt[nroot]);
   if (st) {
     mx_free(cnt);
@@ -487,12 +487,12 @@ int mx_build_roots(mx_builder *B) {
       }
   mx_free(cnt);
   mx_free(list);
-  if (B->use_edges && B->edge_levels >= 0) {
-    MX_CHECK(mx_edges_reserve(&B->edges, 0, 4 * T->n + 16));
+  if (B->tree.use_edges && B->tree.edge_levels >= 0) {
+    MX_CHECK(mx_edges_reserve(&B->tree.edges, 0, 4 * T->n + 16));
     size_t created[3] = {0, 0, 0};
     for (size_t o = 0; o < T->n; o++)
-      mx_edges_register(&B->edges, (uint32_t)o, T->key[o], 0, created);
-    mx_edges_add_count(&B->edges, 0, created);
+      mx_edges_register(&B->tree.edges, (uint32_t)o, T->key[o], 0, created);
+    mx_edges_add_count(&B->tree.edges, 0, created);
   }
   return MX_OK;
 }
@@ -501,7 +501,7 @@ int mx_build_roots(mx_builder *B) {
  * finer level, in parent order then child order. */
 static int next_candidates(const mx_builder *B, const uint32_t *cand,
                            size_t n, uint32_t **out, size_t *nout) {
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &B->tree.oct;
   uint64_t *off = mx_alloc((n + 1) * sizeof *off);
   if (!off) return MX_EINPUT;
 #pragma omp parallel for schedule(static) if (n > MX_PAR_MIN)
@@ -536,7 +536,7 @@ static int next_candidates(const mx_builder *B, const uint32_t *cand,
 }
 
 static int refine_levels(mx_builder *B, int balance_now) {
-  mx_octree *T = &B->oct;
+  mx_octree *T = &B->tree.oct;
   size_t n = 0;
   uint32_t *cand = mx_alloc((T->n + 1) * sizeof *cand);
   if (!cand) return MX_EINPUT;

@@ -11,12 +11,12 @@
 #include <string.h>
 
 void mx_retarget_leaves(mx_builder *B) {
-  mx_octree *T = &B->oct;
+  mx_octree *T = &B->tree.oct;
 #pragma omp parallel for schedule(static)
   for (size_t o = 0; o < T->n; o++) {
     if (T->flags[o] & MX_OCT_SPLIT) continue;
     double lo[3], hi[3];
-    mx_octant_box(&B->grid, T->key[o], T->level[o], lo, hi);
+    mx_octant_box(&B->tree.grid, T->key[o], T->level[o], lo, hi);
     const int t = mx_target_level(&B->req, lo, hi, (T->flags[o] & MX_OCT_SURFACE) != 0,
                                   (unsigned)(T->rmeet[o] | T->rin[o]));
     T->target[o] = (uint8_t)(t > T->level[o] ? t : T->level[o]);
@@ -49,7 +49,7 @@ int mx_refine_leaves_to_target(mx_builder *B) {
 }
 
 static int sweep_levels(mx_builder *B, int *done) {
-  mx_octree *T = &B->oct;
+  mx_octree *T = &B->tree.oct;
   /* One pass: every leaf asking for more, in index order, and the deepest
    * level asked. */
   size_t n = 0;
@@ -113,7 +113,7 @@ static int sweep_levels(mx_builder *B, int *done) {
     st = mx_split_octants(B, cand, nc, 0);
     double t1 = mx_wtime();
     B->stats.t_refine += t1 - t0;
-    if (!st && B->use_edges) st = mx_balance_drain(B, cand, nc);
+    if (!st && B->tree.use_edges) st = mx_balance_drain(B, cand, nc);
     B->stats.t_balance += mx_wtime() - t1;
     prev = cand;
     nprev = nc;
@@ -122,12 +122,12 @@ static int sweep_levels(mx_builder *B, int *done) {
   mx_free(prev);
   mx_free(cand);
   mx_free(want);
-  if (!st && !B->use_edges) st = mx_balance_recursive(B);
+  if (!st && !B->tree.use_edges) st = mx_balance_recursive(B);
   return st;
 }
 
 int mx_refine_list(mx_builder *B, const uint32_t *octs, size_t n) {
-  mx_octree *T = &B->oct;
+  mx_octree *T = &B->tree.oct;
   for (size_t i = 0; i < n; i++) {
     const uint32_t o = octs[i];
     if (o >= T->n || (T->flags[o] & MX_OCT_SPLIT)) continue;

@@ -24,9 +24,9 @@ static int box_meets(const mx_octree *T, uint32_t o, const mx_lattice_box *b) {
 }
 
 /* Mark the leaves under octant r meeting box b. */
-static void mark_under(const mx_builder *B, const uint32_t *pos, uint32_t r,
+static void mark_under(const mx_tree *tr, const uint32_t *pos, uint32_t r,
                        const mx_lattice_box *b, uint8_t *mark, uint8_t value) {
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &tr->oct;
   uint32_t stack[8 * (MX_MAX_LEVEL + 2)];
   int top = 0;
   stack[top++] = r;
@@ -60,9 +60,9 @@ static inline int holds_key(const mx_octree *T, uint32_t x, uint64_t k) {
   return (T->key[x] >> sh) == (k >> sh);
 }
 
-int mx_leaves_touching(const mx_builder *B, const uint32_t *pos, const uint32_t *octs, size_t n,
+int mx_leaves_touching(const mx_tree *tr, const uint32_t *pos, const uint32_t *octs, size_t n,
                        uint8_t *mark, uint8_t value) {
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &tr->oct;
   /* the roots are the first octants built */
   size_t nroots = 0;
   while (nroots < T->n && T->parent[nroots] == MX_NONE) nroots++;
@@ -78,10 +78,10 @@ int mx_leaves_touching(const mx_builder *B, const uint32_t *pos, const uint32_t 
       b.lo[d] = a[d];
       b.hi[d] = a[d] + s;
     }
-    mark_under(B, pos, o, &b, mark, value); /* o itself, or what is under it */
+    mark_under(tr, pos, o, &b, mark, value); /* o itself, or what is under it */
     for (int d = 0; d < 26; d++) {
       const uint64_t nk = mx_morton_neighbor(T->key[o], l, dir26[d][0], dir26[d][1],
-                                             dir26[d][2], B->grid.dims);
+                                             dir26[d][2], tr->grid.dims);
       if (nk == UINT64_MAX) continue;
       /* up from o to an ancestor holding the neighbour cell, then down */
       uint32_t x = T->parent[o];
@@ -97,7 +97,7 @@ int mx_leaves_touching(const mx_builder *B, const uint32_t *pos, const uint32_t 
         x = ch;
       }
       if (holds_key(T, x, nk) && (T->level[x] == l || !(T->flags[x] & MX_OCT_SPLIT)))
-        mark_under(B, pos, x, &b, mark, value);
+        mark_under(tr, pos, x, &b, mark, value);
     }
   }
   return MX_OK;

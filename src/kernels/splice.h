@@ -19,15 +19,15 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "kernels/refine.h"
-#include "kernels/transition.h"
+#include "soa/tree.h"
+#include "soa/mesh.h"
 
 /* mark[i] = value, where it is 0, for every leaf meeting (touching or
  * inside) the closed box of one of the octants octs[0..n): i = pos[o] for
  * the leaf octant o (pos: the position of each octant in the leaf list,
  * MX_NONE if not in it). Each query starts from the smallest ancestor
  * holding the octant's neighbourhood. */
-int mx_leaves_touching(const mx_builder *B, const uint32_t *pos, const uint32_t *octs, size_t n,
+int mx_leaves_touching(const mx_tree *tr, const uint32_t *pos, const uint32_t *octs, size_t n,
                        uint8_t *mark, uint8_t value);
 
 /* Renumber the nodes of M by first use (see above); *states (may be NULL)

@@ -22,7 +22,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "kernels/transition.h"
+#include "soa/mesh.h"
 
 typedef struct {
   size_t n;

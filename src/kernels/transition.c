@@ -28,18 +28,18 @@ static int kept_child_on_edge(const mx_octree *T, uint32_t x, int a, int s) {
 
 /* The 27-bit node mask of leaf o before the body centre; *closure gets the
  * midpoints added by the closure. */
-static uint32_t leaf_mask(const mx_builder *B, uint32_t o, uint32_t *closure) {
-  const mx_octree *T = &B->oct;
+static uint32_t leaf_mask(const mx_tree *tr, uint32_t o, uint32_t *closure) {
+  const mx_octree *T = &tr->oct;
   const int l = T->level[o];
   uint32_t mask = 0xffu;
   *closure = 0;
-  if (l > mx_edge_top(B)) return mask; /* no finer octant anywhere */
+  if (l > mx_edge_top(tr)) return mask; /* no finer octant anywhere */
   uint32_t anchor[3];
   mx_octant_anchor(T->key[o], l, anchor);
   uint32_t across[6]; /* octant of level l across each face, or MX_NONE */
   for (int f = 0; f < 6; f++) across[f] = MX_NONE;
   for (int a = 0; a < 3; a++) {
-    const mx_edge_table *E = &B->edges.t[l][a];
+    const mx_edge_table *E = &tr->edges.t[l][a];
     for (int j = 0; j < 4; j++) {
       const size_t e = mx_edge_find(E, mx_edge_key(anchor, a, j));
       if (e == SIZE_MAX) continue;
@@ -85,9 +85,9 @@ static uint32_t leaf_mask(const mx_builder *B, uint32_t o, uint32_t *closure) {
  * other leaves of the same level around it (its edge infos) get it too.
  * (Closures are rare: they need a face neighbour split with some of its
  * children dropped outside the domain.) */
-static int propagate_closures(const mx_builder *B, const uint32_t *leaves,
+static int propagate_closures(const mx_tree *tr, const uint32_t *leaves,
                               size_t n, uint32_t *mask, const uint32_t *cbits) {
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &tr->oct;
   uint32_t *pos = mx_alloc((T->n + 1) * sizeof *pos);
   if (!pos) return MX_EINPUT;
 #pragma omp parallel for schedule(static)
@@ -103,7 +103,7 @@ static int propagate_closures(const mx_builder *B, const uint32_t *leaves,
     mx_octant_anchor(T->key[o], l, anchor);
     for (uint32_t b = cbits[i]; b; b &= b - 1) {
       const int bit = __builtin_ctz(b), a = (bit - 8) / 4, j = (bit - 8) % 4;
-      const mx_edge_table *E = &B->edges.t[l][a];
+      const mx_edge_table *E = &tr->edges.t[l][a];
       const size_t e = mx_edge_find(E, mx_edge_key(anchor, a, j));
       if (e == SIZE_MAX) continue;
       for (int s = 0; s < 4; s++) {
@@ -193,25 +193,14 @@ static inline int leaf_points(uint64_t key, int level, uint32_t m,
   return k;
 }
 
-void mx_mesh_out_free(mx_mesh_out *m) {
-  mx_free(m->xyz);
-  mx_free(m->type);
-  mx_free(m->conn);
-  mx_free(m->level);
-  mx_free(m->leaf);
-  mx_free(m->jens);
-  mx_free(m->nkey);
-  memset(m, 0, sizeof *m);
-}
-
-int mx_transition_masks(const mx_builder *B, const uint32_t *leaves, size_t n,
+int mx_transition_masks(const mx_tree *tr, const uint32_t *leaves, size_t n,
                         mx_leaf_masks *lm) {
   memset(lm, 0, sizeof *lm);
-  if (B->edges_released) {
+  if (tr->edges_released) {
     mx_error(NULL, 0, "internal: transition masks without edge infos");
     return MX_EINTERNAL;
   }
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &tr->oct;
   uint32_t *mask = mx_alloc((n + 1) * sizeof *mask);
   int st = !mask ? MX_EINPUT : MX_OK;
   size_t closures = 0;
@@ -222,14 +211,14 @@ int mx_transition_masks(const mx_builder *B, const uint32_t *leaves, size_t n,
     for (size_t i = 0; i < n; i++) {
       if (i + 4 < n) {
         const uint32_t ahead = leaves[i + 4];
-        if (T->level[ahead] <= mx_edge_top(B))
-          mx_edges_prefetch_octant(&B->edges, T->key[ahead], T->level[ahead]);
+        if (T->level[ahead] <= mx_edge_top(tr))
+          mx_edges_prefetch_octant(&tr->edges, T->key[ahead], T->level[ahead]);
       }
-      mask[i] = leaf_mask(B, leaves[i], &cbits[i]);
+      mask[i] = leaf_mask(tr, leaves[i], &cbits[i]);
       closures += (size_t)__builtin_popcount(cbits[i]);
     }
   }
-  if (!st && closures) st = propagate_closures(B, leaves, n, mask, cbits);
+  if (!st && closures) st = propagate_closures(tr, leaves, n, mask, cbits);
   mx_free(cbits);
   if (st) {
     mx_free(mask);
@@ -240,22 +229,22 @@ int mx_transition_masks(const mx_builder *B, const uint32_t *leaves, size_t n,
   return MX_OK;
 }
 
-int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
+int mx_transition(const mx_tree *tr, const uint32_t *leaves, size_t n,
                   mx_mesh_out *out) {
   mx_leaf_masks lm;
   memset(out, 0, sizeof *out);
-  MX_CHECK(mx_transition_masks(B, leaves, n, &lm));
-  return mx_transition_build(B, leaves, n, &lm, out);
+  MX_CHECK(mx_transition_masks(tr, leaves, n, &lm));
+  return mx_transition_build(tr, leaves, n, &lm, out);
 }
 
-int mx_transition_build(const mx_builder *B, const uint32_t *leaves, size_t n,
+int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
                         mx_leaf_masks *lm, mx_mesh_out *out) {
   memset(out, 0, sizeof *out);
   uint32_t *mask = lm->mask;
   const size_t closures = lm->closures;
   lm->mask = NULL;
   int st = mx_patterns_init();
-  const mx_octree *T = &B->oct;
+  const mx_octree *T = &tr->oct;
   mx_pattern_ref *ref = mx_alloc((n + 1) * sizeof *ref);
   uint64_t *noff = mx_alloc((n + 1) * sizeof *noff);
   uint64_t *eoff = mx_alloc((n + 1) * sizeof *eoff);
@@ -384,7 +373,7 @@ int mx_transition_build(const mx_builder *B, const uint32_t *leaves, size_t n,
         uint32_t c[3];
         mx_morton_decode(e->kw - 1, c);
         for (int a = 0; a < 3; a++)
-          out->xyz[3 * id + a] = B->grid.origin[a] + (double)c[a] * B->grid.unit;
+          out->xyz[3 * id + a] = tr->grid.origin[a] + (double)c[a] * tr->grid.unit;
         id++;
       }
     }

@@ -20,30 +20,12 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "kernels/refine.h"
+#include "soa/tree.h"
+#include "soa/mesh.h"
 
-typedef struct {
-  size_t nnodes, ncells;
-  double *xyz;      /* 3 * nnodes */
-  uint8_t *type;    /* ncells */
-  uint32_t *conn;   /* 8 * ncells, VTK order */
-  uint8_t *level;   /* level of the leaf each element comes from */
-  uint32_t *leaf;   /* index (in the leaves list) of that leaf */
-  float *jens;      /* J_ENS of each element (computed in double, kept in
-                     * float: 4 bytes instead of 8 for every element) */
-  uint64_t *nkey;   /* per node: its lattice key (mx_lattice_key), or
-                     * MX_NKEY_NONE for a node off the lattice (an element
-                     * centre of the surface patterns); kept by every edit */
-  size_t closures;  /* face midpoints added by the closure */
-  size_t centre_leaves; /* leaves whose pattern uses the body centre */
-  size_t by_type[4];
-  double jens_min;
-  size_t invalid;   /* elements with J_ENS < 1e-6 */
-} mx_mesh_out;
-#define MX_NKEY_NONE UINT64_MAX
 
 /* leaves: the balanced leaves, in Morton order (mx_leaves_sorted). */
-int mx_transition(const mx_builder *B, const uint32_t *leaves, size_t n,
+int mx_transition(const mx_tree *tr, const uint32_t *leaves, size_t n,
                   mx_mesh_out *out);
 /* The same in two steps, so that the caller can free the edge infos in
  * between (only step 1 reads them): the masks (with the closures), then
@@ -52,10 +34,9 @@ typedef struct {
   uint32_t *mask;
   size_t closures;
 } mx_leaf_masks;
-int mx_transition_masks(const mx_builder *B, const uint32_t *leaves, size_t n,
+int mx_transition_masks(const mx_tree *tr, const uint32_t *leaves, size_t n,
                         mx_leaf_masks *lm);
-int mx_transition_build(const mx_builder *B, const uint32_t *leaves, size_t n,
+int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
                         mx_leaf_masks *lm, mx_mesh_out *out);
-void mx_mesh_out_free(mx_mesh_out *m);
 
 #endif

@@ -12,7 +12,7 @@
 #include <stdint.h>
 
 #include "geom/distance.h"
-#include "kernels/transition.h"
+#include "soa/mesh.h"
 
 /* q_target: elements below it are worked on; sweeps: passes over the work
  * set. The work nodes are coloured so that no two nodes of one element

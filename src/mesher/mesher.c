@@ -510,7 +510,7 @@ static void stage(const mx_mesher *m, const char *name) {
  * max_memory_mb, or else the memory available now. */
 static int check_memory(mx_mesher *m, const mx_requests *req) {
   const double need = mx_estimate_bytes(&m->soup, m->nt_domain, m->region_t0, req,
-                                        &m->B.grid, m->p.stage);
+                                        &m->B.tree.grid, m->p.stage);
   m->S.memory_estimate_mb = m->S.memory_prior_mb = need / 1048576.0;
   const double avail = mx_available_bytes();
   const double limit = m->p.max_memory_mb > 0 ? m->p.max_memory_mb * 1048576.0 : avail;
@@ -547,8 +547,8 @@ static int check_memory_leaves(mx_mesher *m) {
 int mx_update_leaves(mx_mesher *m) {
   mx_free(m->leaves);
   m->leaves = NULL;
-  MX_CHECK(mx_leaves(&m->B, &m->leaves, &m->nleaves));
-  return mx_leaves_sorted(&m->B, m->leaves, m->nleaves);
+  MX_CHECK(mx_leaves(&m->B.tree, &m->leaves, &m->nleaves));
+  return mx_leaves_sorted(&m->B.tree, m->leaves, m->nleaves);
 }
 
 static int winding_inside(const void *ctx, const double p[3]) {
@@ -576,7 +576,7 @@ int mx_build_tree(mx_mesher *m) {
   for (int l = 0; l <= MX_MAX_LEVEL; l++) {
     m->B.split_keys[l] = m->split_keys[l];
     m->B.nsplit[l] = m->nsplit[l];
-    if (m->nsplit[l] && l > m->B.edge_levels) m->B.edge_levels = l;
+    if (m->nsplit[l] && l > m->B.tree.edge_levels) m->B.tree.edge_levels = l;
   }
   MX_CHECK(check_memory(m, &req));
   MX_CHECK(mx_build_roots(&m->B));
@@ -668,11 +668,11 @@ static int transition(mx_mesher *m) {
   stage(m, "transition");
   MX_CHECK(mx_edges_restore(&m->B));
   mx_leaf_masks lm;
-  MX_CHECK(mx_transition_masks(&m->B, m->leaves, m->nleaves, &lm));
+  MX_CHECK(mx_transition_masks(&m->B.tree, m->leaves, m->nleaves, &lm));
   /* nothing reads the edge infos again until the octree is split: their
    * memory goes to the mesh (rebuilt by the next split, kernels/remesh.h) */
   if (m->release_edges) mx_edges_release(&m->B);
-  MX_CHECK(mx_transition_build(&m->B, m->leaves, m->nleaves, &lm, &m->M));
+  MX_CHECK(mx_transition_build(&m->B.tree, m->leaves, m->nleaves, &lm, &m->M));
   m->mesh_stage = MX_STAGE_TRANSITION;
   m->S.ph.transition += mx_wtime() - t;
   return MX_OK;
@@ -699,7 +699,7 @@ static int boundary_once(mx_mesher *m) {
     stage(m, "boundary");
   }
   mx_boundary_stats bs;
-  MX_CHECK(mx_boundary_stage(&m->B, m->leaves, &m->SI, &m->M, m->p.close_ratio,
+  MX_CHECK(mx_boundary_stage(&m->B.tree, m->leaves, &m->SI, &m->M, m->p.close_ratio,
                              m->p.staircase_quality, &bs, &m->states));
   m->S.boundary = bs;
   m->S.full = 1;
@@ -772,7 +772,7 @@ int mx_repair(mx_mesher *m) {
     for (size_t c = 0; c < m->M.ncells; c++) {
       if (!mx_jens_invalid(m->M.jens[c]) && !flag[c]) continue;
       const uint32_t o = m->leaves[m->M.leaf[c]];
-      if (m->B.oct.level[o] < MX_MAX_LEVEL - 1) octs[n++] = o; /* else: as fine as can be */
+      if (m->B.tree.oct.level[o] < MX_MAX_LEVEL - 1) octs[n++] = o; /* else: as fine as can be */
     }
     if (n == 0) break;
     const size_t before = m->M.invalid;
@@ -924,11 +924,11 @@ void mx_fill_tree_stats(mx_mesher *m) {
   mx_summary *S = &m->S;
   if (!m->have_tree) return;
   S->leaves = m->nleaves;
-  S->leaves_hash = mx_leaves_hash(&m->B, m->leaves, m->nleaves);
-  S->octants = m->B.oct.n;
-  S->edges = m->B.edges_released ? m->B.released_edges : mx_edges_total(&m->B.edges);
+  S->leaves_hash = mx_leaves_hash(&m->B.tree, m->leaves, m->nleaves);
+  S->octants = m->B.tree.oct.n;
+  S->edges = m->B.tree.edges_released ? m->B.tree.released_edges : mx_edges_total(&m->B.tree.edges);
   S->edge_bytes =
-      m->B.edges_released ? m->B.released_edge_bytes : mx_edges_bytes(&m->B.edges);
+      m->B.tree.edges_released ? m->B.tree.released_edge_bytes : mx_edges_bytes(&m->B.tree.edges);
   S->located = m->B.stats.located;
   S->split_requested = m->B.stats.split_requested;
   S->split_balance = m->B.stats.split_balance;
@@ -985,7 +985,7 @@ int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a) {
 static int write_octree(mx_mesher *m, const char *path, int ascii) {
   if (!m->have_hex) {
     if (m->release_edges) mx_edges_release(&m->B); /* not read by the hexahedra */
-    MX_CHECK(mx_leaf_hex_mesh(&m->B, m->leaves, m->nleaves, &m->hex));
+    MX_CHECK(mx_leaf_hex_mesh(&m->B.tree, m->leaves, m->nleaves, &m->hex));
     m->have_hex = 1;
   }
   m->S.nodes = m->hex.nnodes;
@@ -1029,7 +1029,7 @@ void mx_mesher_stats(const mx_mesher *m, mx_stats *s) {
   const mx_summary *S = &m->S;
   memset(s, 0, sizeof *s);
   s->leaves = m->nleaves;
-  s->octants = m->have_tree ? m->B.oct.n : 0;
+  s->octants = m->have_tree ? m->B.tree.oct.n : 0;
   s->nodes = S->nodes;
   s->elements = S->elements;
   s->invalid = S->invalid;
@@ -1038,7 +1038,7 @@ void mx_mesher_stats(const mx_mesher *m, mx_stats *s) {
   s->repaired = S->repaired;
   s->repair_rounds = S->repair_rounds;
   s->jens_min = S->jens_min;
-  s->leaves_hash = m->have_tree ? mx_leaves_hash(&m->B, m->leaves, m->nleaves) : 0;
+  s->leaves_hash = m->have_tree ? mx_leaves_hash(&m->B.tree, m->leaves, m->nleaves) : 0;
   s->t_read = S->ph.read;
   s->t_grid = S->ph.grid;
   s->t_refine = S->ph.refine;

@@ -52,7 +52,7 @@ static int make_tags(mx_mesher *m, const mx_mesh_view *v, tags *T) {
    * domain). Only faces with all nodes such are matched. */
   uint8_t *near = mx_calloc(M->nnodes + 1);
   if (!near) return MX_ENOMEM;
-  const mx_octree *O = &m->B.oct;
+  const mx_octree *O = &m->B.tree.oct;
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < M->ncells; c++) {
     const uint32_t *row = M->conn + 8 * c;
@@ -70,7 +70,7 @@ static int make_tags(mx_mesher *m, const mx_mesh_view *v, tags *T) {
   if (!m->have_index) {
     MX_CHECK(mx_mesher_index(m));
   }
-  const mx_tag_inputs in = {&m->B, m->leaves, M->leaf, &m->soup, m->nt_domain,
+  const mx_tag_inputs in = {&m->B.tree, m->leaves, M->leaf, &m->soup, m->nt_domain,
                             m->ndomain, &m->SI, m->p.repair_input};
   size_t off = 0;
   MX_CHECK(mx_boundary_tags(v, &in, &T->bf, T->cell_body, &T->nbodies, &T->body_tag, &off));

@@ -26,11 +26,11 @@ static int refine_and_mesh(mx_mesher *m, uint32_t *octs, size_t n) {
   size_t listed = 0;
   for (size_t i = 0; i < n; i++) {
     /* a leaf listed through several elements is split once */
-    if (B->oct.flags[octs[i]] & MX_OCT_QUEUED) continue;
-    B->oct.flags[octs[i]] |= MX_OCT_QUEUED;
+    if (B->tree.oct.flags[octs[i]] & MX_OCT_QUEUED) continue;
+    B->tree.oct.flags[octs[i]] |= MX_OCT_QUEUED;
     octs[listed++] = octs[i];
   }
-  for (size_t i = 0; i < listed; i++) B->oct.flags[octs[i]] &= (uint8_t)~MX_OCT_QUEUED;
+  for (size_t i = 0; i < listed; i++) B->tree.oct.flags[octs[i]] &= (uint8_t)~MX_OCT_QUEUED;
   MX_CHECK(mx_refine_list(B, octs, listed));
   m->S.refined_listed = listed;
   /* Algorithm 2's requests on top (boxes, levels, regions) */
@@ -90,9 +90,9 @@ static int refine_indices(mx_mesher *m, const uint64_t *idx, size_t n, const uin
                         "this mixoct sees it: not refined", lost);
   /* the finest level first: a refused list leaves the mesher as it was */
   for (size_t i = 0; i < k; i++)
-    if (m->B.oct.level[octs[i]] >= MX_MAX_LEVEL - 1) {
+    if (m->B.tree.oct.level[octs[i]] >= MX_MAX_LEVEL - 1) {
       mx_error(NULL, 0, "cannot refine a leaf of level %d: %d is the finest level",
-               m->B.oct.level[octs[i]], MX_MAX_LEVEL - 1);
+               m->B.tree.oct.level[octs[i]], MX_MAX_LEVEL - 1);
       mx_free(octs);
       return MX_EINPUT;
     }

@@ -43,7 +43,7 @@ static const int attempt_rings[2][2] = {{3, 6}, {6, 12}};
  * leaf positions. *nsplit: the old leaves that were split. */
 static int mark_rings(mx_mesher *m, const uint32_t *old, size_t nold, const uint32_t *pos,
                       int rings, uint8_t *mark, size_t *nsplit) {
-  const mx_octree *T = &m->B.oct;
+  const mx_octree *T = &m->B.tree.oct;
   const size_t nl = m->nleaves;
   size_t n = 0;
   uint32_t top = 0; /* octants above the old leaves' ids are new */
@@ -59,14 +59,14 @@ static int mark_rings(mx_mesher *m, const uint32_t *old, size_t nold, const uint
   n = 0;
   for (size_t i = 0; i < nold; i++)
     if (T->flags[old[i]] & MX_OCT_SPLIT) q[n++] = old[i];
-  int st = mx_leaves_touching(&m->B, pos, q, n, mark, 1);
+  int st = mx_leaves_touching(&m->B.tree, pos, q, n, mark, 1);
   for (int ring = 2; !st && ring <= rings; ring++) {
     n = 0;
     /* new leaves lie in a split old leaf: whatever touches them touches
      * it, and is in ring 1 already */
     for (size_t i = 0; i < nl; i++)
       if (mark[i] == ring - 1 && (ring > 2 || m->leaves[i] <= top)) q[n++] = m->leaves[i];
-    st = mx_leaves_touching(&m->B, pos, q, n, mark, (uint8_t)ring);
+    st = mx_leaves_touching(&m->B.tree, pos, q, n, mark, (uint8_t)ring);
   }
   mx_free(q);
   return st;
@@ -77,7 +77,7 @@ static int mark_rings(mx_mesher *m, const uint32_t *old, size_t nold, const uint
 static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core_rings,
                         int patch_rings, int last, int *done) {
   *done = 0;
-  mx_octree *T = &m->B.oct;
+  mx_octree *T = &m->B.tree.oct;
   const double t0 = mx_wtime();
   const size_t nl = m->nleaves;
   uint32_t *pos = mx_alloc((T->n + 1) * sizeof *pos);
@@ -129,11 +129,11 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
     memset(&bs, 0, sizeof bs);
     const double t1 = mx_wtime();
     st = mx_edges_restore(&m->B);
-    if (!st) st = mx_transition(&m->B, P, np, &Mp);
+    if (!st) st = mx_transition(&m->B.tree, P, np, &Mp);
     const double t2 = mx_wtime();
     m->S.ph.transition += t2 - t1;
     if (!st) {
-      st = mx_boundary_stage(&m->B, P, &m->SI, &Mp, m->p.close_ratio, m->p.staircase_quality,
+      st = mx_boundary_stage(&m->B.tree, P, &m->SI, &Mp, m->p.close_ratio, m->p.staircase_quality,
                              &bs, &pstates);
       if (!st) st = mx_mesh_sort_by_leaf(&Mp, np);
       mx_mesh_out Mn;

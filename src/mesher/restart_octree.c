@@ -183,7 +183,7 @@ static void restart_gen_free(restart_gen *g) {
 
 /* Edges of every stored octant, per (level, axis), sorted and unique. */
 static int restart_edge_keys(const mx_mesher *m, const emit_tables *E, restart_gen *g) {
-  const mx_octree *T = &m->B.oct;
+  const mx_octree *T = &m->B.tree.oct;
   int nt = omp_get_max_threads();
   if (nt > 64) nt = 64;
   if (T->n < 65536) nt = 1;
@@ -252,7 +252,7 @@ static int restart_edge_keys(const mx_mesher *m, const emit_tables *E, restart_g
 /* Coordinates of nodes [begin, end): their lattice points through the grid. */
 static void node_rows(const void *gen, size_t begin, size_t end, double *xyz) {
   const restart_gen *g = gen;
-  const mx_grid *gr = &g->m->B.grid;
+  const mx_grid *gr = &g->m->B.tree.grid;
   for (size_t i = begin; i < end; i++, xyz += 3) {
     uint32_t p[3];
     mx_morton_decode(g->vkey[i], p);
@@ -298,7 +298,7 @@ static void edge_rows(const void *gen, size_t begin, size_t end, uint32_t *rows)
  * prefetched). */
 static void oct_rows(const void *gen, size_t begin, size_t end, uint32_t *rows) {
   const restart_gen *g = gen;
-  const mx_octree *T = &g->m->B.oct;
+  const mx_octree *T = &g->m->B.tree.oct;
   const uint32_t *leaves = g->m->leaves;
   /* corner 0 is the leaf's anchor, and the anchors ascend: searched from
    * the one before; the other corners from the index */
@@ -322,7 +322,7 @@ static void oct_rows(const void *gen, size_t begin, size_t end, uint32_t *rows) 
  * generators from g while the text file is written, or stored in r for the
  * binary file. */
 static int restart_from_mesher(const mx_mesher *m, int text, mx_restart *r, restart_gen *g) {
-  const mx_octree *T = &m->B.oct;
+  const mx_octree *T = &m->B.tree.oct;
   memset(r, 0, sizeof *r);
   memset(g, 0, sizeof *g);
   g->m = m;
@@ -539,9 +539,9 @@ static uint32_t leaf_holding(const mx_mesher *m, const uint64_t *keys, uint64_t 
   if (lo == 0) return UINT32_MAX;
   const uint32_t o = m->leaves[lo - 1];
   uint32_t a[3], p[3];
-  mx_morton_decode(m->B.oct.key[o], a);
+  mx_morton_decode(m->B.tree.oct.key[o], a);
   mx_morton_decode(pk, p);
-  const uint32_t s = mx_octant_size(m->B.oct.level[o]);
+  const uint32_t s = mx_octant_size(m->B.tree.oct.level[o]);
   for (int d = 0; d < 3; d++)
     if (p[d] < a[d] || p[d] >= a[d] + s) return UINT32_MAX;
   return (uint32_t)(lo - 1);
@@ -555,8 +555,8 @@ static int adopt_mesh(mx_mesher *m, mx_restart *r, const uint64_t *key) {
   size_t differ = 0;
 #pragma omp parallel for schedule(static) reduction(+ : differ)
   for (size_t i = 0; i < r->no; i++)
-    differ += m->B.oct.key[m->leaves[i]] != key[i] ||
-              m->B.oct.level[m->leaves[i]] != r->oct_level[i];
+    differ += m->B.tree.oct.key[m->leaves[i]] != key[i] ||
+              m->B.tree.oct.level[m->leaves[i]] != r->oct_level[i];
   if (differ) return MX_OK; /* meshed again from the octree when refined */
   mx_mesh_out *M = &m->M;
   memset(M, 0, sizeof *M);
@@ -682,7 +682,7 @@ static int load_restart(mx_mesher *m, const char *path) {
     m->file_nelem = st ? 0 : (size_t)total;
   }
   if (!st && r.nsub) {
-    for (size_t i = 0; i < m->nleaves; i++) lkeys[i] = m->B.oct.key[m->leaves[i]];
+    for (size_t i = 0; i < m->nleaves; i++) lkeys[i] = m->B.tree.oct.key[m->leaves[i]];
     size_t lost = 0;
     uint64_t *first = mx_alloc((r.no + 1) * sizeof *first);
     if (!first) st = MX_ENOMEM;

@@ -59,14 +59,14 @@ int mx_winding_domain(mx_mesher *m, mx_trisoup *boundary) {
  * leaves' order: the same for any thread count. */
 double mx_winding_domain_volume(const mx_mesher *m) {
   if (m->winding_whole || !m->have_tree || !m->nleaves) return m->winding_volume;
-  const mx_octree *T = &m->B.oct;
+  const mx_octree *T = &m->B.tree.oct;
   double *lv = mx_alloc((m->nleaves + 1) * sizeof *lv);
   if (!lv) return m->winding_volume;
 #pragma omp parallel for schedule(dynamic, 256)
   for (size_t i = 0; i < m->nleaves; i++) {
     const uint32_t o = m->leaves[i];
     double lo[3], hi[3];
-    mx_octant_box(&m->B.grid, T->key[o], T->level[o], lo, hi);
+    mx_octant_box(&m->B.tree.grid, T->key[o], T->level[o], lo, hi);
     const double v = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
     if (!(T->flags[o] & MX_OCT_SURFACE)) {
       lv[i] = v;

@@ -47,7 +47,7 @@ void mx_pq_classify(const mx_builder *B, uint64_t key, int level, const mx_pq *d
   }
   double clo[8][3], chi[8][3], cc[8][3], ch[8][3];
   for (int c = 0; c < 8; c++) {
-    mx_octant_box(&B->grid, mx_morton_child(key, level, c), level + 1, clo[c], chi[c]);
+    mx_octant_box(&B->tree.grid, mx_morton_child(key, level, c), level + 1, clo[c], chi[c]);
     for (int a = 0; a < 3; a++) {
       cc[c][a] = 0.5 * (clo[c][a] + chi[c][a]);
       ch[c][a] = 0.5 * (chi[c][a] - clo[c][a]);
@@ -58,7 +58,7 @@ void mx_pq_classify(const mx_builder *B, uint64_t key, int level, const mx_pq *d
   uint32_t ntri[8] = {0};
   for (uint32_t i = 0; i < d->tri_cnt; i++) {
     const uint32_t t = tris[i];
-    const double *v = B->tri_xyz + 9 * (size_t)t;
+    const double *v = B->tree.tri_xyz + 9 * (size_t)t;
     unsigned cand = 0xff; /* children the triangle's box reaches */
     for (int a = 0; a < 3; a++) {
       const double mn = mx_min(v[a], mx_min(v[3 + a], v[6 + a]));

@@ -62,7 +62,7 @@ int mx_halo_init(const mx_p4est_octree *P, mx_halo *H) {
   p8est_t *p8 = P->p8;
   const p8est_ghost_t *G = P->ghost;
   const size_t nq = (size_t)p8->local_num_quadrants, ng = G->ghosts.elem_count;
-  const int *dims = P->B->grid.dims;
+  const int *dims = P->B->tree.grid.dims;
   const size_t nroots = (size_t)dims[0] * (size_t)dims[1] * (size_t)dims[2];
   H->lkey = mx_alloc((nq + 1) * sizeof *H->lkey);
   H->llevel = mx_alloc(nq + 1);
@@ -149,7 +149,7 @@ static void neighbour_box(const uint32_t c[3], uint32_t s, int d, int64_t nb[3])
  * given level: [*lo, *hi]; 0 when the box lies outside the root grid. */
 static int box_owners(const mx_p4est_octree *P, const mx_halo *H, const int64_t c[3], int level,
                       int *lo, int *hi) {
-  const int *dims = P->B->grid.dims;
+  const int *dims = P->B->tree.grid.dims;
   int64_t root[3];
   for (int a = 0; a < 3; a++) {
     if (c[a] < 0 || c[a] >= (int64_t)dims[a] << MX_MAX_LEVEL) return 0;

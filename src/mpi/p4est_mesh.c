@@ -93,9 +93,9 @@ static int patch_tree(mx_mesher *m, const patch_set *s, uint32_t **pl, int32_t *
   size_t np = 0, wrong = 0;
   for (size_t i = 0; i < m->nleaves; i++) {
     const uint32_t o = m->leaves[i];
-    const uint32_t j = mx_find_u64(s->key, s->n, m->B.oct.key[o]);
+    const uint32_t j = mx_find_u64(s->key, s->n, m->B.tree.oct.key[o]);
     if (j == UINT32_MAX) continue;
-    if (s->level[j] != m->B.oct.level[o] || np == s->n) {
+    if (s->level[j] != m->B.tree.oct.level[o] || np == s->n) {
       wrong++;
       continue;
     }
@@ -124,7 +124,7 @@ static int defect_leaves(const mx_mesher *m, const uint32_t *pl, const mx_mesh_o
   for (size_t c = 0; c < M->ncells; c++) {
     if (!core[c] || (!mx_jens_invalid(M->jens[c]) && !flag[c])) continue;
     const uint32_t o = pl[M->leaf[c]];
-    if (m->B.oct.level[o] < MX_MAX_LEVEL - 1) k[n++] = m->B.oct.key[o];
+    if (m->B.tree.oct.level[o] < MX_MAX_LEVEL - 1) k[n++] = m->B.tree.oct.key[o];
   }
   int st = MX_OK;
   D->ndefect = mx_sort_unique_u64(k, n, &st);
@@ -158,11 +158,11 @@ static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4e
   if (!st) st = mx_edges_restore(&m->B);
   mx_leaf_masks lm;
   memset(&lm, 0, sizeof lm);
-  if (!st) st = mx_transition_masks(&m->B, pl, np, &lm);
+  if (!st) st = mx_transition_masks(&m->B.tree, pl, np, &lm);
   /* nothing reads the edge infos after the masks: their memory goes to the
    * mesh, as in the single-process program */
   if (!st) mx_edges_release(&m->B);
-  if (!st) st = mx_transition_build(&m->B, pl, np, &lm, &M);
+  if (!st) st = mx_transition_build(&m->B.tree, pl, np, &lm, &M);
   else mx_free(lm.mask);
   D->t_transition += mx_wtime() - t;
   t = mx_wtime();
@@ -172,7 +172,7 @@ static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4e
   }
   mx_boundary_stats bs;
   if (!st)
-    st = mx_boundary_stage(&m->B, pl, &m->SI, &M, m->p.close_ratio, m->p.staircase_quality,
+    st = mx_boundary_stage(&m->B.tree, pl, &m->SI, &M, m->p.close_ratio, m->p.staircase_quality,
                            &bs, &states);
   if (!st) st = mx_mesh_sort_by_leaf(&M, np);
   /* defects of the core's elements, seen with their neighbours */
@@ -196,7 +196,7 @@ static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4e
     D->worst_key = UINT64_MAX;
     for (size_t c = 0; c < M.ncells; c++) {
       if (!core[c]) continue;
-      const uint64_t k = m->B.oct.key[pl[M.leaf[c]]];
+      const uint64_t k = m->B.tree.oct.key[pl[M.leaf[c]]];
       if (M.jens[c] < D->worst_jens || (M.jens[c] == D->worst_jens && k < D->worst_key)) {
         D->worst_jens = M.jens[c];
         D->worst_key = k;

@@ -79,7 +79,7 @@ static void root_box(const mx_grid *g, int i, int j, int k, double c[3], double 
 }
 
 static int build_root_table(const mx_builder *B, root_table *R, size_t *nlocated) {
-  const mx_grid *g = &B->grid;
+  const mx_grid *g = &B->tree.grid;
   const int nx = g->dims[0], ny = g->dims[1], nz = g->dims[2];
   const size_t nroot = (size_t)nx * ny * nz, nt = B->soup->nt;
   R->off = mx_calloc((nroot + 1) * sizeof *R->off);
@@ -88,7 +88,7 @@ static int build_root_table(const mx_builder *B, root_table *R, size_t *nlocated
   /* pass 0 counts the (root, triangle) pairs, pass 1 lists them */
   for (int pass = 0; pass < 2; pass++) {
     for (size_t t = 0; t < nt; t++) {
-      const double *v = B->tri_xyz + 9 * t;
+      const double *v = B->tree.tri_xyz + 9 * t;
       int r0[3], r1[3];
       for (int a = 0; a < 3; a++) {
         const double mn = mx_min(v[a], mx_min(v[3 + a], v[6 + a]));
@@ -163,7 +163,7 @@ static void init_root(p8est_t *p8, p4est_topidx_t t, p8est_quadrant_t *q) {
   mx_p4est_octree *P = p8->user_pointer;
   const root_table *R = P->side;
   const int32_t *ijk = P->tree_root + 3 * (size_t)t;
-  const int *dims = P->B->grid.dims;
+  const int *dims = P->B->tree.grid.dims;
   const size_t r = ((size_t)ijk[2] * dims[1] + ijk[1]) * dims[0] + ijk[0];
   mx_pq *d = q->p.user_data;
   *d = R->data[r];
@@ -179,7 +179,7 @@ static void init_root(p8est_t *p8, p4est_topidx_t t, p8est_quadrant_t *q) {
 }
 
 int mx_p4est_new_forest(mx_p4est_octree *P) {
-  const mx_grid *g = &P->B->grid;
+  const mx_grid *g = &P->B->tree.grid;
   P->conn = p8est_connectivity_new_brick(g->dims[0], g->dims[1], g->dims[2], 0, 0, 0);
   const p4est_topidx_t nt = P->conn->num_trees;
   P->tree_root = mx_alloc(3 * ((size_t)nt + 1) * sizeof *P->tree_root);

@@ -31,6 +31,37 @@ static const int8_t mx_cell_faces[4][6][4] = {
     {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6},
      {3, 0, 4, 7}}};
 
+/* The mesh every stage from the transition to the writers edits (the
+ * mixed mesh of the octree's leaves): structure of arrays, one row of 8
+ * node indices per element. Read by the writers through mx_mesh_view
+ * (below; src/mesher/output.c builds it). */
+typedef struct {
+  size_t nnodes, ncells;
+  double *xyz;      /* 3 * nnodes */
+  uint8_t *type;    /* ncells */
+  uint32_t *conn;   /* 8 * ncells, VTK order */
+  uint8_t *level;   /* level of the leaf each element comes from */
+  uint32_t *leaf;   /* index (in the leaves list) of that leaf */
+  float *jens;      /* J_ENS of each element (computed in double, kept in
+                     * float: 4 bytes instead of 8 for every element) */
+  uint16_t *material; /* per element: its material, for several materials
+                       * (issue 26); NULL: one material. Always NULL today:
+                       * the stages that edit elements (kernels/mesh_edit.h,
+                       * surface patterns, staircase, splice) must carry it
+                       * once something sets it. */
+  uint64_t *nkey;   /* per node: its lattice key (mx_lattice_key), or
+                     * MX_NKEY_NONE for a node off the lattice (an element
+                     * centre of the surface patterns); kept by every edit */
+  size_t closures;  /* face midpoints added by the closure */
+  size_t centre_leaves; /* leaves whose pattern uses the body centre */
+  size_t by_type[4];
+  double jens_min;
+  size_t invalid;   /* elements with J_ENS < 1e-6 */
+} mx_mesh_out;
+#define MX_NKEY_NONE UINT64_MAX
+/* Frees every array and zeroes *m (src/soa/mesh.c). */
+void mx_mesh_out_free(mx_mesh_out *m);
+
 /* A cell or point field. is_double says how it is written: 0 as int32
  * (legacy VTK "int", VTU Int32 or UInt8 when every value fits, ...), 1 as
  * double. The values are read from one source array, which may be narrower
