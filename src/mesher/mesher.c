@@ -500,11 +500,7 @@ static int assemble_inputs(mx_mesher *m) {
 
 /* ---- stages ------------------------------------------------------------ */
 
-static void stage(const mx_mesher *m, const char *name) {
-  mx_mem_mark(name);
-  mx_call_recheck();
-  if (m->on_stage) m->on_stage(name);
-}
+static void stage(const mx_mesher *m, const char *name) { mx_mesher_stage(m, name); }
 
 /* Refuse a run that cannot fit: the estimate (kernels/estimate.h) against
  * max_memory_mb, or else the memory available now. */
@@ -666,13 +662,9 @@ static int transition(mx_mesher *m) {
   mx_mesh_clear(m);
   const double t = mx_wtime();
   stage(m, "transition");
-  MX_CHECK(mx_edges_restore(&m->B));
-  mx_leaf_masks lm;
-  MX_CHECK(mx_transition_masks(&m->B.tree, m->leaves, m->nleaves, &lm));
   /* nothing reads the edge infos again until the octree is split: their
-   * memory goes to the mesh (rebuilt by the next split, kernels/remesh.h) */
-  if (m->release_edges) mx_edges_release(&m->B);
-  MX_CHECK(mx_transition_build(&m->B.tree, m->leaves, m->nleaves, &lm, &m->M));
+   * memory goes to the mesh (rebuilt by the next split) */
+  MX_CHECK(mx_pipeline_transition(m, m->leaves, m->nleaves, m->release_edges, &m->M));
   m->mesh_stage = MX_STAGE_TRANSITION;
   m->S.ph.transition += mx_wtime() - t;
   return MX_OK;
@@ -693,17 +685,10 @@ int mx_mesher_transition(mx_mesher *m) {
 static int boundary_once(mx_mesher *m) {
   const double t = mx_wtime();
   stage(m, "boundary");
-  if (!m->have_index) {
-    stage(m, "index");
-    MX_CHECK(mx_mesher_index(m));
-    stage(m, "boundary");
-  }
   mx_boundary_stats bs;
-  MX_CHECK(mx_boundary_stage(&m->B.tree, m->leaves, &m->SI, &m->M, m->p.close_ratio,
-                             m->p.staircase_quality, &bs, &m->states));
+  MX_CHECK(mx_pipeline_boundary(m, m->leaves, m->nleaves, &m->M, &m->states, &bs));
   m->S.boundary = bs;
   m->S.full = 1;
-  MX_CHECK(mx_mesh_sort_by_leaf(&m->M, m->nleaves));
   MX_CHECK(mx_mesh_renumber_first_use(&m->M, &m->states));
   m->mesh_stage = MX_STAGE_FULL;
   m->S.ph.boundary += mx_wtime() - t;

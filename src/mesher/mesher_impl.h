@@ -7,6 +7,7 @@
 #include "base/common.h"
 #include "mesher/call.h"
 #include "mesher/mesher.h"
+#include "mesher/pipeline.h"
 
 void mx_call_begin(mx_mesher *m, mx_call *c);
 /* Restores what mx_call_begin changed; MX_EINPUT after a failed allocation
@@ -54,8 +55,6 @@ int mx_build_tree(mx_mesher *m);    /* grid, refine, balance, leaves */
 int mx_winding_domain(mx_mesher *m, mx_trisoup *boundary);
 /* The volume of that domain (the volume rule's reference). */
 double mx_winding_domain_volume(const mx_mesher *m);
-/* m->SI over the soup's domain triangles, built once (sides as above). */
-int mx_mesher_index(mx_mesher *m);
 /* The split set (m->split_keys, replaced) of an octree with the leaves
  * (key[i], level[i]), i < n, in any order: every ancestor of a leaf is
  * split; mx_build_tree then refines from the roots through it

@@ -67,8 +67,9 @@ static int make_tags(mx_mesher *m, const mx_mesh_view *v, tags *T) {
   T->cell_body = mx_alloc((M->ncells + 1) * sizeof *T->cell_body);
   T->node_tag = mx_alloc((M->nnodes + 1) * sizeof *T->node_tag);
   if (!T->cell_body || !T->node_tag) return MX_ENOMEM;
-  if (!m->have_index) {
-    MX_CHECK(mx_mesher_index(m));
+  if (!m->have_index) { /* every full-stage mesh has it (mesher/pipeline.h) */
+    mx_error(NULL, 0, "internal: boundary tags without the surface index");
+    return MX_EINTERNAL;
   }
   const mx_tag_inputs in = {&m->B.tree, m->leaves, M->leaf, &m->soup, m->nt_domain,
                             m->ndomain, &m->SI, m->p.repair_input};

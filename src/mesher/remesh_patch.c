@@ -128,14 +128,11 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
     mx_boundary_stats bs;
     memset(&bs, 0, sizeof bs);
     const double t1 = mx_wtime();
-    st = mx_edges_restore(&m->B);
-    if (!st) st = mx_transition(&m->B.tree, P, np, &Mp);
+    st = mx_pipeline_transition(m, P, np, 0, &Mp);
     const double t2 = mx_wtime();
     m->S.ph.transition += t2 - t1;
     if (!st) {
-      st = mx_boundary_stage(&m->B.tree, P, &m->SI, &Mp, m->p.close_ratio, m->p.staircase_quality,
-                             &bs, &pstates);
-      if (!st) st = mx_mesh_sort_by_leaf(&Mp, np);
+      st = mx_pipeline_boundary(m, P, np, &Mp, &pstates, &bs);
       mx_mesh_out Mn;
       uint8_t *nstates = NULL;
       mx_splice_stats ss;
@@ -178,12 +175,7 @@ int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold) {
   int done = 0;
   if (m->S.local_attempts == 0) m->S.local = 1; /* until a re-mesh is not */
   if (!m->p.remesh_full && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states &&
-      old_leaves && !m->have_index) {
-    /* a mesh read from a restart file: the surface index is built here */
-    MX_CHECK(mx_mesher_index(m));
-  }
-  if (!m->p.remesh_full && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states &&
-      m->have_index && old_leaves)
+      old_leaves)
     for (int a = 0; a < 2 && !done; a++) {
       m->S.local_attempts++;
       MX_CHECK(remesh_local(m, old_leaves, nold, attempt_rings[a][0], attempt_rings[a][1], 0,

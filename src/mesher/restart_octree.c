@@ -588,6 +588,9 @@ static int adopt_mesh(mx_mesher *m, mx_restart *r, const uint64_t *key) {
   mx_mesh_summarize(M);
   m->mesh_stage = MX_STAGE_FULL;
   m->S.full = 1;
+  /* a full-stage mesh that did not come through the pipeline: its surface
+   * index (the boundary tags and the next re-mesh read it) */
+  MX_CHECK(mx_mesher_index(m));
   return mx_mesh_finish(m) == MX_EINVALID ? MX_EINPUT : MX_OK;
 }
 

@@ -86,21 +86,3 @@ double mx_winding_domain_volume(const mx_mesher *m) {
   mx_free(lv);
   return s;
 }
-
-/* The surface index of the soup's domain triangles (m->SI), once: with
- * --repair-input the side of a point is the winding number's, of the input
- * as given when the soup holds the boundary of its domain. */
-int mx_mesher_index(mx_mesher *m) {
-  if (m->have_index) return MX_OK;
-  /* the boundary's pieces are oriented already (the domain behind): as
-   * given, without the shells' nesting (pieces cut apart are shells of
-   * their own, each a winding number query) */
-  if (m->have_winding)
-    MX_CHECK(mx_surface_index_build_given(&m->SI, &m->soup, 0, m->nt_domain));
-  else
-    MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
-  m->have_index = 1;
-  if (m->p.repair_input) m->SI.closed = 0;
-  if (m->have_winding) m->SI.side = &m->WI;
-  return MX_OK;
-}

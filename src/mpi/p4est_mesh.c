@@ -155,26 +155,13 @@ static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4e
   memset(&M, 0, sizeof M);
   uint8_t *states = NULL;
   t = mx_wtime();
-  if (!st) st = mx_edges_restore(&m->B);
-  mx_leaf_masks lm;
-  memset(&lm, 0, sizeof lm);
-  if (!st) st = mx_transition_masks(&m->B.tree, pl, np, &lm);
   /* nothing reads the edge infos after the masks: their memory goes to the
    * mesh, as in the single-process program */
-  if (!st) mx_edges_release(&m->B);
-  if (!st) st = mx_transition_build(&m->B.tree, pl, np, &lm, &M);
-  else mx_free(lm.mask);
+  if (!st) st = mx_pipeline_transition(m, pl, np, 1, &M);
   D->t_transition += mx_wtime() - t;
   t = mx_wtime();
-  if (!st && !m->have_index) {
-    st = mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain);
-    m->have_index = !st;
-  }
   mx_boundary_stats bs;
-  if (!st)
-    st = mx_boundary_stage(&m->B.tree, pl, &m->SI, &M, m->p.close_ratio, m->p.staircase_quality,
-                           &bs, &states);
-  if (!st) st = mx_mesh_sort_by_leaf(&M, np);
+  if (!st) st = mx_pipeline_boundary(m, pl, np, &M, &states, &bs);
   /* defects of the core's elements, seen with their neighbours */
   uint8_t *flag = NULL, *core = NULL;
   if (!st) {

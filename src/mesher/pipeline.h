@@ -1,0 +1,40 @@
+/* The stages after refinement, chained once (src/mesher/pipeline.c), for
+ * every path that meshes leaves of an octree:
+ *
+ *   the single-process mesher   the whole octree        (mesher.c)
+ *   the local re-mesh           the patch of the leaves
+ *                               around what was split   (remesh_patch.c)
+ *   the distributed path        each rank's patch       (mpi/p4est_mesh.c)
+ *
+ * mx_pipeline_transition  the edge infos restored, each leaf's node mask
+ *                         (then the edge infos released when asked: nothing
+ *                         reads them again until the octree is split), the
+ *                         transition patterns' elements;
+ * mx_pipeline_boundary    the mesher's surface index (built once, here),
+ *                         the boundary stage (kernels/boundary_stage.h),
+ *                         the elements grouped by leaf.
+ *
+ * leaves: octant indices of the mesher's tree, in Morton order. The
+ * callers time the steps and keep the results. */
+#ifndef MX_PIPELINE_H
+#define MX_PIPELINE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "kernels/boundary_stage.h"
+#include "mesher/mesher.h"
+
+int mx_pipeline_transition(mx_mesher *m, const uint32_t *leaves, size_t n, int release_edges,
+                           mx_mesh_out *M);
+int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh_out *M,
+                         uint8_t **states, mx_boundary_stats *bs);
+/* m->SI over the soup's domain triangles, built the first time it is
+ * asked for and kept (the only place it is built): with --repair-input the
+ * side of a point is the winding number's. */
+int mx_mesher_index(mx_mesher *m);
+/* The progress hook and the load limit between two stages (the
+ * mesher's on_stage, mx_call_recheck). */
+void mx_mesher_stage(const mx_mesher *m, const char *name);
+
+#endif
