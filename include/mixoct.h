@@ -122,6 +122,22 @@ mx_mesher *mx_mesher_new(const mx_params *p);
 void mx_mesher_free(mx_mesher *m);
 /* Replace the message handler (NULL: stderr, the default). */
 void mx_mesher_set_message_handler(mx_mesher *m, mx_message_fn fn, void *user);
+/* Progress hooks, each may be NULL, all called from the calling thread
+ * (never from a parallel region) with `user`: on_stage before each step
+ * ("grid", "refine", "balance", "transition", "index", "boundary",
+ * "verify", "quality", ...), on_level before each octree level is refined
+ * (1..max_level), on_round before each repair round (1, 2, ...). */
+typedef struct {
+  void (*on_stage)(void *user, const char *name);
+  void (*on_level)(void *user, int level, int max_level);
+  void (*on_round)(void *user, int round);
+  void *user;
+} mx_progress;
+void mx_mesher_set_progress(mx_mesher *m, const mx_progress *hooks);
+/* early != 0: the edge infos are freed once the transition has read them
+ * (their memory goes to the mesh: a single run's peak is lower); the next
+ * refinement or re-mesh rebuilds them (time). 0, the default, keeps them. */
+void mx_mesher_release_edges_early(mx_mesher *m, int early);
 /* The last error message of this mesher ("" when none). */
 const char *mx_mesher_last_error(const mx_mesher *m);
 /* The status code's name, e.g. "bad input". */

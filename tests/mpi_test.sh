@@ -294,6 +294,7 @@ has "$T/err" "error: $T/vcube.off: the mesh holds" "--p4est: the exit-5 message 
 expect_exit 2 "--p4est writes .pvtu or .msh only" mpi 1 --demo -s 3 --p4est -o "$T/x.vtu"
 expect_exit 2 "--p4est: no ASCII .msh" mpi 1 --demo -s 3 --p4est --ascii -o "$T/x.msh"
 expect_exit 2 "--p4est: no restart file" mpi 1 --demo -s 3 --p4est --restart "$T/x.oct"
+expect_exit 2 "--p4est: no --repair-input" mpi 1 --demo -s 3 --p4est --repair-input
 
 fi # mesh part
 

@@ -47,8 +47,8 @@ static void on_signal(int sig) {
 }
 
 /* Hooks of the mesher for the progress line. */
-static void on_stage(const char *name) { mx_progress_stage(name); }
-static void on_round(int round) { mx_progress_round(round); }
+static void on_stage(void *user, const char *name) { (void)user, mx_progress_stage(name); }
+static void on_round(void *user, int round) { (void)user, mx_progress_round(round); }
 
 /* The mesher of a run: parameters, inputs and requests from the options. */
 static int setup(const mx_options *o, mx_mesher **out) {
@@ -68,10 +68,9 @@ static int setup(const mx_options *o, mx_mesher **out) {
   }
   *out = m;
   mx_mesher_set_message_handler(m, on_message, &run_info);
-  m->on_stage = on_stage;
-  m->on_round = on_round;
-  m->release_edges = 1; /* one run: the edge infos' memory goes to the mesh */
-  m->on_level = mx_progress_on_level;
+  const mx_progress hooks = {on_stage, mx_progress_on_level, on_round, NULL};
+  mx_mesher_set_progress(m, &hooks);
+  mx_mesher_release_edges_early(m, 1); /* one run: their memory goes to the mesh */
   mx_progress_stage("read");
   return mx_add_inputs(o, m);
 }

@@ -264,6 +264,11 @@ int mx_p4est_main(int argc, char **argv) {
                       "meshes from the surfaces and levels only)");
     st = MX_EINPUT;
   }
+  if (!st && !exit_now && o.repair_input) {
+    mx_error(NULL, 0, "--p4est: no --repair-input (the distributed octree locates octants "
+                      "by ray parity: it needs a closed, manifold input)");
+    st = MX_EINPUT;
+  }
   if (!st && !exit_now) st = mx_p4est_check_outputs(&o);
   if (!st && !exit_now) {
     mx_quiet = o.quiet;

@@ -132,9 +132,7 @@ struct mx_mesher {
    * (about 90 B per leaf). */
   int release_edges;
   /* hooks for the program's progress line (NULL: none) */
-  void (*on_stage)(const char *name);
-  void (*on_round)(int round);
-  void (*on_level)(void *user, int level, int max_level);
+  mx_progress progress;     /* mx_mesher_set_progress */
 };
 
 /* The figures of the last run (counts, phases, boundary steps). */

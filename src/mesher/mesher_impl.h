@@ -47,6 +47,12 @@ int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold);
 /* The leaves of the refined octree, then mx_remesh_changed from the leaves
  * the mesher held. */
 int mx_remesh_after_refine(mx_mesher *m);
+/* The inputs assembled into m->soup once (inputs.c): the input policy,
+ * the domain's triangles, then each region's. */
+int mx_mesher_assemble_inputs(mx_mesher *m);
+/* The volume a closed surface encloses (signed: negative inside out), and
+ * in *area (may be NULL) its area (inputs.c). */
+double mx_enclosed_volume(const mx_trisoup *d, double *area);
 int mx_build_tree(mx_mesher *m);    /* grid, refine, balance, leaves */
 /* --repair-input on an input with no well-defined inside (winding_domain.c):
  * m->WI, and in *boundary (empty on entry) the boundary of the winding

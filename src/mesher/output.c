@@ -10,6 +10,8 @@
 #include "kernels/boundary.h"
 #include "kernels/boundary_tags.h"
 #include "mesher/mesher_impl.h"
+
+#include "kernels/edges_lazy.h"
 #include "soa/mesh.h"
 
 /* The last path component, quotes turned into apostrophes (a name inside
@@ -185,4 +187,47 @@ int mx_mesher_written_order(const mx_mesher *m, uint32_t *order) {
     return MX_EINPUT;
   }
   return mx_written_order(m, order);
+}
+
+static int write_octree(mx_mesher *m, const char *path, int ascii) {
+  if (!m->have_hex) {
+    if (m->release_edges) mx_edges_release(&m->B); /* not read by the hexahedra */
+    MX_CHECK(mx_leaf_hex_mesh(&m->B.tree, m->leaves, m->nleaves, &m->hex));
+    m->have_hex = 1;
+  }
+  m->S.nodes = m->hex.nnodes;
+  m->S.nodes_counted = 1;
+  uint8_t *type = mx_alloc(m->nleaves + 1);
+  if (!type) return MX_ENOMEM;
+  memset(type, MX_HEX, m->nleaves);
+  mx_field level = {.name = "level", .ivalues = m->hex.level};
+  mx_mesh_view v = {.nnodes = m->hex.nnodes, .xyz = m->hex.xyz, .ncells = m->nleaves, .type = type, .conn = m->hex.conn, .ncell_fields = 1, .cell_fields = &level, .npoint_fields = 0, .point_fields = NULL};
+  int st = mx_write_mesh(path, &v, ascii);
+  mx_free(type);
+  return st;
+}
+
+int mx_mesher_write(const mx_mesher *cm, const char *path, int ascii) {
+  mx_mesher *m = (mx_mesher *)cm; /* the octree stage's hex mesh is cached */
+  mx_call c;
+  mx_call_begin(m, &c);
+  const double t = mx_wtime();
+  int st = MX_OK;
+  if (!path || !mx_mesh_format_known(path)) {
+    mx_error(path, 0, "unknown output format (use .vtk .vtu .msh .mesh .meshb "
+                      ".getfem .m3d .mvm)");
+    st = MX_EINPUT;
+  } else if (mx_mesher_spares_inputs(m, path, 0)) {
+    st = MX_EINPUT; /* an input: refused, named */
+  } else if (m->mesh_stage == MX_STAGE_OCTREE) {
+    st = write_octree(m, path, ascii);
+  } else if (m->mesh_stage < 0) {
+    mx_error(path, 0, "no mesh to write: call mx_mesher_mesh first");
+    st = MX_EINPUT;
+  } else {
+    mx_mesher_stage(m, "write");
+    st = mx_write_mixed(m, path, ascii);
+  }
+  m->S.ph.write += mx_wtime() - t;
+  return mx_call_end(m, &c, st);
 }

@@ -11,7 +11,7 @@
 void mx_mesher_stage(const mx_mesher *m, const char *name) {
   mx_mem_mark(name);
   mx_call_recheck();
-  if (m->on_stage) m->on_stage(name);
+  if (m->progress.on_stage) m->progress.on_stage(m->progress.user, name);
 }
 
 int mx_mesher_index(mx_mesher *m) {
