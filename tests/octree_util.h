@@ -209,7 +209,7 @@ static inline run_result run_build(const mx_trisoup *soup, uint32_t nt_domain,
   }
   int st = use_edges ? mx_refine_balanced(&B) : mx_refine_unbalanced(&B);
   if (!st && !use_edges) st = mx_balance_recursive(&B);
-  if (!st && !use_edges) st = mx_resolve_closures(&B);
+  if (!st) st = mx_resolve_closures(&B);
   uint32_t *leaves = NULL;
   size_t n = 0;
   if (!st && !mx_leaves(&B.tree, &leaves, &n)) {

@@ -26,6 +26,7 @@ static int build(const mx_trisoup *s, int level, built *b) {
   int st = mx_builder_init(&b->B, s, (uint32_t)s->nt, rt0, &r, 1, NULL);
   if (!st) st = mx_build_roots(&b->B);
   if (!st) st = mx_refine_balanced(&b->B);
+  if (!st) st = mx_resolve_closures(&b->B);
   if (!st) st = mx_leaves(&b->B.tree, &b->leaves, &b->n);
   if (!st) st = mx_leaves_sorted(&b->B.tree, b->leaves, b->n);
   if (!st) st = mx_transition(&b->B.tree, b->leaves, b->n, &b->M);

@@ -628,6 +628,7 @@ static int transition_mesh(mx_mesh_out *M, int s_level) {
   if (!st) st = mx_builder_init(&B, &demo, (uint32_t)demo.nt, r0, &r, 1, NULL);
   if (!st) st = mx_build_roots(&B);
   if (!st) st = mx_refine_balanced(&B);
+  if (!st) st = mx_resolve_closures(&B);
   uint32_t *leaves = NULL;
   size_t n = 0;
   if (!st) st = mx_leaves(&B.tree, &leaves, &n);

@@ -20,6 +20,7 @@ static int run_mesh(const mx_trisoup *s, uint32_t ntd, const uint32_t *rt0,
   int st = mx_builder_init(&B, s, ntd, rt0, req, 1, NULL);
   if (!st) st = mx_build_roots(&B);
   if (!st) st = mx_refine_balanced(&B);
+  if (!st) st = mx_resolve_closures(&B);
   uint32_t *leaves = NULL;
   size_t n = 0;
   if (!st) st = mx_leaves(&B.tree, &leaves, &n);

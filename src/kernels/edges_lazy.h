@@ -13,7 +13,7 @@
 #ifndef MX_EDGES_LAZY_H
 #define MX_EDGES_LAZY_H
 
-#include "kernels/refine.h"
+#include "kernels/builder.h"
 
 int mx_raise_edge_levels(mx_builder *B, int levels);
 /* Memory between meshings: once the transition masks are known, nothing

@@ -1,4 +1,4 @@
-#include "kernels/refine.h"
+#include "kernels/leaves.h"
 
 #include "base/common.h"
 #include "base/scan.h"

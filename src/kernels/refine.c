@@ -1,7 +1,5 @@
 #include "kernels/refine.h"
-#include "kernels/closures.h"
 #include "kernels/edges_lazy.h"
-#include "kernels/refine_list.h"
 
 #include "base/common.h"
 #include "geom/intersect.h"
@@ -566,8 +564,5 @@ static int refine_levels(mx_builder *B, int balance_now) {
   return MX_OK;
 }
 
-int mx_refine_balanced(mx_builder *B) {
-  MX_CHECK(refine_levels(B, 1));
-  return mx_resolve_closures(B);
-}
+int mx_refine_balanced(mx_builder *B) { return refine_levels(B, 1); }
 int mx_refine_unbalanced(mx_builder *B) { return refine_levels(B, 0); }

@@ -4,6 +4,7 @@
  * inputs.c, the repair in repair.c, re-meshing in remesh.c, the restart
  * file in restart_octree.c, the files in output.c. */
 #include "mesher/mesher_impl.h"
+#include "mesher/pipeline.h"
 
 #include "kernels/splice.h"
 #include "kernels/surface_defects.h"
@@ -224,6 +225,7 @@ int mx_build_tree(mx_mesher *m) {
   stage(m, "refine");
   if (use_edges) {
     MX_CHECK(mx_refine_balanced(&m->B));
+    MX_CHECK(mx_resolve_closures(&m->B));
     /* with a split set, octants split for balance may have children that
      * must be split too (kernels/remesh.h) */
     {

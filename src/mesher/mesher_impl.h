@@ -7,7 +7,6 @@
 #include "base/common.h"
 #include "mesher/call.h"
 #include "mesher/mesher.h"
-#include "mesher/pipeline.h"
 
 void mx_call_begin(mx_mesher *m, mx_call *c);
 /* Restores what mx_call_begin changed; MX_EINPUT after a failed allocation

@@ -10,6 +10,7 @@
 #include "kernels/boundary.h"
 #include "kernels/boundary_tags.h"
 #include "mesher/mesher_impl.h"
+#include "mesher/pipeline.h"
 
 #include "kernels/edges_lazy.h"
 #include "soa/mesh.h"

@@ -24,6 +24,7 @@
  * tests/test_remesh.c and bench/remesh_bench.c compare against a run from
  * scratch. */
 #include "mesher/mesher_impl.h"
+#include "mesher/pipeline.h"
 
 #include <string.h>
 

@@ -1,5 +1,6 @@
 /* The repair rounds of the full stage: see mx_repair below. */
 #include "mesher/mesher_impl.h"
+#include "mesher/pipeline.h"
 
 #include "kernels/estimate.h"
 #include "kernels/grid.h"

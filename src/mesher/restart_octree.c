@@ -18,6 +18,7 @@
  * the file is ours. Elements of the file's mesh map to the leaf holding
  * their octant's centre. */
 #include "mesher/mesher_impl.h"
+#include "mesher/pipeline.h"
 
 #include "kernels/mesh_edit.h"
 

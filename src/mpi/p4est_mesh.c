@@ -14,6 +14,7 @@
 #include "kernels/refine_list.h"
 #include "kernels/splice.h"
 #include "mesher/mesher_impl.h"
+#include "mesher/pipeline.h"
 #include "mpi/exchange.h"
 #include "mpi/p4est_halo.h"
 #include "mpi/p4est_nodes.h"
