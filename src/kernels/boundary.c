@@ -58,7 +58,7 @@ int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index 
     mx_free(cand);
     mx_free(len);
     mx_free(cnt);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
@@ -112,7 +112,7 @@ int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index 
     mx_free(cand);
     mx_free(len);
     mx_free(cnt);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   size_t nmoved = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : nmoved)
@@ -159,7 +159,7 @@ int mx_remove_close_to_boundary(mx_mesh_out *M, uint8_t **states_io,
   /* Remove the elements left with no inside node, then the nodes no
    * element uses. */
   uint8_t *keep = mx_alloc(nc + 1);
-  if (!keep) return MX_EINPUT;
+  if (!keep) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
     int in = 0;
@@ -225,7 +225,7 @@ int mx_shrink_to_boundary(const mx_builder *B, const uint32_t *leaves,
   uint32_t *btri = mx_alloc((nn + 1) * sizeof *btri);
   if (!run || !best || !btri) {
     mx_free(run); mx_free(best); mx_free(btri);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   /* the runs' starts: counted per block, prefix-summed, filled */
   enum { RB = 1 << 16 };
@@ -233,7 +233,7 @@ int mx_shrink_to_boundary(const mx_builder *B, const uint32_t *leaves,
   uint64_t *boff = mx_alloc((nbk + 1) * sizeof *boff);
   if (!boff) {
     mx_free(run); mx_free(best); mx_free(btri);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (size_t b = 0; b < nbk; b++) {
@@ -262,7 +262,7 @@ int mx_shrink_to_boundary(const mx_builder *B, const uint32_t *leaves,
   uint8_t *lock = mx_calloc(nn + 1);
   if (!lock) {
     mx_free(run); mx_free(best); mx_free(btri);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(dynamic, 256)
   for (size_t r = 0; r < nr; r++) {

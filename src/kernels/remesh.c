@@ -107,7 +107,7 @@ int mx_edges_ensure(mx_builder *B, const uint32_t *list, size_t n, int with_pare
    * (the flag, set atomically, says who registers) */
   enum { K = 38 };
   uint32_t *got = mx_alloc((K * n + 1) * sizeof *got);
-  if (!got) return MX_EINPUT;
+  if (!got) return MX_ENOMEM;
   size_t count[2] = {0, 0};
 #pragma omp parallel for schedule(static) reduction(+ : count[:2])
   for (size_t i = 0; i < n; i++) {
@@ -172,7 +172,7 @@ static int build_root_map(mx_builder *B) {
   const mx_octree *T = &B->oct;
   const size_t nr = (size_t)B->grid.dims[0] * B->grid.dims[1] * B->grid.dims[2];
   B->root_of = mx_alloc((nr + 1) * sizeof *B->root_of);
-  if (!B->root_of) return MX_EINPUT;
+  if (!B->root_of) return MX_ENOMEM;
   for (size_t r = 0; r < nr; r++) B->root_of[r] = MX_NONE;
   for (size_t o = 0; o < T->n; o++) {
     if (T->parent[o] != MX_NONE) continue;
@@ -257,7 +257,7 @@ int mx_resolve_closures(mx_builder *B) {
               cap = cap ? 2 * cap : 64;
               uint32_t *g = mx_realloc(list, cap * sizeof *g);
               if (!g) {
-                st = MX_EINPUT;
+                st = MX_ENOMEM;
                 break;
               }
               list = g;
@@ -350,7 +350,7 @@ static int sweep_levels(mx_builder *B, int *done) {
   /* no mx_raise_edge_levels: the splits below edge_levels register what
    * they need (mx_edges_ensure, from mx_split_octants) */
   uint32_t *want = mx_alloc((n + 1) * sizeof *want);
-  if (!want) return MX_EINPUT;
+  if (!want) return MX_ENOMEM;
   size_t w = 0;
   for (size_t o = 0; o < T->n; o++)
     if (!(T->flags[o] & MX_OCT_SPLIT) && T->target[o] > T->level[o])
@@ -367,7 +367,7 @@ static int sweep_levels(mx_builder *B, int *done) {
     for (size_t i = 0; i < nprev; i++) nk += (size_t)__builtin_popcount(T->kept[prev[i]]);
     cand = mx_alloc((n + nk + 1) * sizeof *cand);
     if (!cand) {
-      st = MX_EINPUT;
+      st = MX_ENOMEM;
       break;
     }
     size_t nc = 0;

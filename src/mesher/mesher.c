@@ -65,7 +65,7 @@ void mx_params_default(mx_params *p) {
 }
 
 mx_mesher *mx_mesher_new(const mx_params *p) {
-  mx_mesher *m = calloc(1, sizeof *m);
+  mx_mesher *m = mx_calloc(sizeof *m);
   if (!m) return NULL;
   if (p)
     m->p = *p;
@@ -109,14 +109,14 @@ void mx_mesher_free(mx_mesher *m) {
   if (m->have_winding) mx_surface_index_free(&m->WI);
   mx_trisoup_free(&m->domain);
   mx_trisoup_free(&m->soup);
-  for (int i = 0; i < m->ndomain; i++) free(m->domain_name[i]);
+  for (int i = 0; i < m->ndomain; i++) mx_free(m->domain_name[i]);
   for (int r = 0; r < m->nregions; r++) {
     mx_trisoup_free(&m->region[r]);
-    free(m->region_name[r]);
+    mx_free(m->region_name[r]);
   }
   mx_free(m->boxes);
   for (int l = 0; l <= MX_MAX_LEVEL; l++) mx_free(m->split_keys[l]);
-  free(m);
+  mx_free(m);
 }
 
 void mx_mesher_set_message_handler(mx_mesher *m, mx_message_fn fn, void *user) {
@@ -144,11 +144,11 @@ static int add_domain(mx_mesher *m, mx_trisoup *s, const char *name) {
     mx_error(name, 0, "too many input surfaces (at most 64)");
     return MX_EINPUT;
   }
-  char *nm = strdup(name);
+  char *nm = mx_strdup(name);
   if (!nm) return MX_ENOMEM;
   int st = mx_trisoup_append(&m->domain, s);
   if (st) {
-    free(nm);
+    mx_free(nm);
     return st;
   }
   m->domain_name[m->ndomain++] = nm;
@@ -289,9 +289,11 @@ int mx_mesher_add_region_surface(mx_mesher *m, const char *path, int level) {
     memset(&m->region[r], 0, sizeof m->region[r]);
     st = mx_read_surface(path, &m->region[r]);
     if (!st) st = mx_trisoup_check(&m->region[r], path, NULL);
+    char *name = st ? NULL : mx_strdup(path);
+    if (!st && !name) st = MX_ENOMEM;
     if (!st) {
       mx_mesher_note_read(m, path, 0);
-      m->region_name[r] = strdup(path);
+      m->region_name[r] = name;
       m->region_level[r] = level;
       m->nregions++;
     } else {

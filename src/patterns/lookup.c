@@ -30,7 +30,7 @@ static void build(void) {
   lut = mx_alloc(sizeof(mx_pattern_ref) << MX_CONFIG_BITS);
   mx_pattern_elem_jens = mx_alloc((size_t)mx_pattern_nelems * sizeof(double));
   if (!lut || !mx_pattern_elem_jens) {
-    init_status = MX_EINPUT;
+    init_status = MX_ENOMEM;
     return;
   }
 #pragma omp parallel for schedule(static)
