@@ -547,6 +547,7 @@ static int check_memory_leaves(mx_mesher *m) {
 int mx_update_leaves(mx_mesher *m) {
   mx_free(m->leaves);
   m->leaves = NULL;
+  m->nleaves = 0;
   MX_CHECK(mx_leaves(&m->B, &m->leaves, &m->nleaves));
   return mx_leaves_sorted(&m->B, m->leaves, m->nleaves);
 }
@@ -889,7 +890,13 @@ int mx_mesh_finish(mx_mesher *m) {
 
 /* Mesh the current octree up to params.stage. */
 int mx_mesh_stages(mx_mesher *m) {
-  if (!m->have_tree) MX_CHECK(mx_build_tree(m));
+  if (!m->have_tree) {
+    const int st = mx_build_tree(m);
+    if (st) { /* no half-built tree left for the next call to take */
+      mx_tree_clear(m);
+      return st;
+    }
+  }
   m->S.leaves = m->nleaves;
   if (m->p.stage == MX_STAGE_OCTREE) {
     mx_mesh_clear(m);
