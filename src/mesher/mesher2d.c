@@ -345,7 +345,7 @@ static int feature_boxes(const mx_mesher2d *m, mx_qbox **boxes, size_t *nboxes) 
     mx_free(b);
     return MX_ENOMEM;
   }
-  memcpy(b, *boxes, *nboxes * sizeof *b);
+  if (*nboxes) memcpy(b, *boxes, *nboxes * sizeof *b);
   for (size_t i = 0; i < nf; i++) {
     f[3 * i] = m->domain.xy[2 * (size_t)m->features[i]];
     f[3 * i + 1] = m->domain.xy[2 * (size_t)m->features[i] + 1];
