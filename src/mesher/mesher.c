@@ -563,8 +563,12 @@ int mx_build_tree(mx_mesher *m) {
   MX_CHECK(assemble_inputs(m));
   const mx_requests req = mx_mesher_requests(m);
   const int use_edges = m->p.balance == MX_BALANCE_EDGES;
-  MX_CHECK(mx_builder_init(&m->B, &m->soup, m->nt_domain, m->region_t0, &req, use_edges,
-                           m->ndomain ? m->domain_name[0] : NULL));
+  const int st = mx_builder_init(&m->B, &m->soup, m->nt_domain, m->region_t0, &req, use_edges,
+                                 m->ndomain ? m->domain_name[0] : NULL);
+  if (st) { /* what it made before failing */
+    mx_builder_free(&m->B);
+    return st;
+  }
   m->have_tree = 1;
   m->B.on_level = m->on_level;
   if (m->p.repair_input) {
