@@ -8,11 +8,14 @@
  *   B: an inside-out box at -s 5, 1 thread, quiet (mx_quiet on its thread):
  *      the warning that the surface was turned over is not given (alone and
  *      not quiet, B gets it).
- * Both run 6 times side by side, started together. */
+ * Both run 6 times side by side, started together; then once more from
+ * the two threads of an OpenMP team (A on thread 1: a caller that is itself
+ * a worker of the user's team still gets its messages). */
 #include "base/common.h"
 #include "check.h"
 #include "mixoct.h"
 
+#include <omp.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -173,5 +176,27 @@ int main(void) {
   CHECK(mx_quiet == 0); /* the threads' flags were theirs */
   printf("6 rounds of A and B side by side: the meshes alone, the messages their own "
          "(A's last round: %d invalid requests during B's calls)\n", ra.invalid);
+  atomic_store(&b_done, 0);
+  int team = 0;
+#pragma omp parallel num_threads(2)
+  {
+#pragma omp single
+    team = omp_get_num_threads();
+    if (team == 2) {
+      if (omp_get_thread_num() == 1) run_a(&ra);
+      else run_b(&rb, 1);
+    }
+  }
+  if (team == 2) {
+    CHECK(ra.status == MX_OK && ra.hash == a0.hash);
+    CHECK(ra.bad_status == MX_EINPUT && ra.g.errors == ra.invalid);
+    CHECK(strcmp(ra.g.first_error, a0.g.first_error) == 0);
+    CHECK(rb.status == MX_OK && rb.hash == b0.hash);
+    CHECK(rb.g.errors == 0 && rb.g.warnings == 0);
+    CHECK(ra.quiet == 0 && rb.quiet == 1);
+    printf("from the two threads of an OpenMP team: the same\n");
+  } else {
+    printf("SKIP the OpenMP team of 2 (got %d thread)\n", team);
+  }
   return TEST_DONE();
 }

@@ -23,9 +23,11 @@ _Thread_local void *mx_msg_user = NULL;
 _Thread_local int mx_oom_seen = 0;
 _Thread_local unsigned long mx_msg_errors = 0;
 
+_Thread_local int mx_msg_level = 0;
+
 int mx_msg_worker(void) {
 #ifdef _OPENMP
-  for (int l = omp_get_level(); l > 0; l--)
+  for (int l = omp_get_level(); l > mx_msg_level; l--)
     if (omp_get_ancestor_thread_num(l) != 0) return 1;
 #endif
   return 0;

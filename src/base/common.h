@@ -41,14 +41,19 @@ const char *mx_show_word(const void *word, size_t len, char *out);
  * their own messages. The worker threads of an OpenMP team do not see the
  * caller's: code inside a parallel region reports nothing itself but
  * returns a status (or what to say) that the region's caller reports after
- * it; a message still sent from a worker goes to stderr, and an allocation
+ * it; an error still sent from a worker goes to stderr, a warning is dropped
+ * (the worker does not know the caller's quiet flag), and an allocation
  * that fails there says nothing (the MX_ENOMEM it returns is reported by
  * the call, mx_call_leave). */
 extern _Thread_local mx_message_fn mx_msg_fn;
 extern _Thread_local void *mx_msg_user;
-/* 1 on a worker thread of an OpenMP team (at any level of nesting): the
- * thread that does not see the caller's handler. */
+/* 1 on a worker thread of an OpenMP team started inside the calling
+ * thread's call (at any level of nesting below mx_msg_level): a thread
+ * that does not see the caller's handler. */
 int mx_msg_worker(void);
+/* The OpenMP nesting level of the calling thread when its call began (a
+ * caller may itself be a thread of the user's team); set by mx_call_enter. */
+extern _Thread_local int mx_msg_level;
 /* Errors reported on this thread so far (mx_error): a call that returns
  * MX_ENOMEM with none reported says "out of memory" itself. */
 extern _Thread_local unsigned long mx_msg_errors;

@@ -17,6 +17,7 @@ typedef struct {
   int threads;
   int outer_default; /* the enclosing call's, restored on leaving */
   unsigned long errors; /* mx_msg_errors on entering */
+  int level;            /* mx_msg_level on entering */
 } mx_call;
 
 /* collect(user, ...) receives the call's messages; threads > 0 sets the
