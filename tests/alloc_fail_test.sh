@@ -12,8 +12,8 @@
 #   alloc_fail_test.sh SOURCE_ROOT BUILD_DIR
 #
 # Environment: ALLOC_FAIL_CC (default cc), ALLOC_FAIL_JOBS (parallel
-# compilations, default nproc), MX_ALLOC_FAIL_STRIDE (default 6: every
-# 6th k of the larger runs, see the test) and MX_ALLOC_FAIL_ONLY (passed to
+# compilations, default nproc), MX_ALLOC_FAIL_STRIDE (default 3: every
+# 3rd k of the larger runs, see the test) and MX_ALLOC_FAIL_ONLY (passed to
 # the test). SKIP (77) when the compiler cannot build with the
 # sanitizers, a failure instead when CI is set.
 set -u
@@ -101,7 +101,7 @@ echo "alloc_fail_asan: built in $((t1 - t0)) s"
 
 # libgomp's threads sleep while they wait (as the programs set it): a
 # spinning team on a shared machine makes each run seconds long.
-OMP_WAIT_POLICY=passive MX_ALLOC_FAIL_STRIDE=${MX_ALLOC_FAIL_STRIDE:-6} \
+OMP_WAIT_POLICY=passive MX_ALLOC_FAIL_STRIDE=${MX_ALLOC_FAIL_STRIDE:-3} \
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:exitcode=23 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   "$bin"
