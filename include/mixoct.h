@@ -39,10 +39,9 @@
  * times slower than 1). mx_params.threads > 0, or a wait policy set before
  * the process starts (OMP_WAIT_POLICY=passive suits a shared machine),
  * turns this off; mx_last_call_threads tells the count a call ran with.
- * One mesher must not be used by two threads at once;
- * message handlers are per process (the handler of the mesher whose call
- * is running receives the messages): use one mesher at a time per process
- * when handlers matter. Mesh arrays are the mesher's own memory: they stay
+ * One mesher must not be used by two threads at once; two meshers may be
+ * used at once from two threads: each call's messages go to its own
+ * mesher's handler, and its thread count is its own. Mesh arrays are the mesher's own memory: they stay
  * valid until the next call that changes the mesh (refine, mesh, load,
  * free), and nothing tells a holder that they went stale. */
 #ifndef MIXOCT_H

@@ -60,9 +60,9 @@ str).
 
 Threads: the library runs its passes with OpenMP threads and the GIL is
 released during each call; one Mesher must not be used from two Python
-threads at once. The library's message handler is per process (the mesher
-whose call is running gets the messages), so two Meshers working at the same
-time in two Python threads may see each other's warnings.
+threads at once. Two Meshers may work at the same time in two Python
+threads: the library's messages go to the handler of the calling thread's
+mesher, so each sees its own warnings only.
 
 The wait policy: libgomp (the OpenMP runtime of libmixoct.so) makes a
 thread that waits at a barrier spin by default, and when another job holds

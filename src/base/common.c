@@ -1,3 +1,5 @@
+/* Statuses, messages (per calling thread), allocation (with its test hook),
+ * words shown in messages, the clock and the memory marks: see common.h. */
 #include "base/common.h"
 
 #include <limits.h>
@@ -11,10 +13,25 @@
 #include <sys/resource.h>
 #include <time.h>
 
-int mx_quiet = 0;
-mx_message_fn mx_msg_fn = NULL;
-void *mx_msg_user = NULL;
-int mx_oom_seen = 0;
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+_Thread_local int mx_quiet = 0;
+_Thread_local mx_message_fn mx_msg_fn = NULL;
+_Thread_local void *mx_msg_user = NULL;
+_Thread_local int mx_oom_seen = 0;
+_Thread_local unsigned long mx_msg_errors = 0;
+
+_Thread_local int mx_msg_level = 0;
+
+int mx_msg_worker(void) {
+#ifdef _OPENMP
+  for (int l = omp_get_level(); l > mx_msg_level; l--)
+    if (omp_get_ancestor_thread_num(l) != 0) return 1;
+#endif
+  return 0;
+}
 
 int mx_status_refine(int status) {
   if (status == MX_EINPUT && mx_oom_seen) status = MX_ENOMEM;
@@ -141,7 +158,7 @@ static void vreport(const char *kind, const char *file, long line,
   else
     snprintf(full, sizeof full, "%.1500s", msg);
   escape_controls(full, safe, sizeof safe);
-  if (mx_msg_fn) {
+  if (mx_msg_fn && !mx_msg_worker()) {
     mx_msg_fn(mx_msg_user, kind[0] == 'e' ? MX_MSG_ERROR : MX_MSG_WARNING, safe);
     return;
   }
@@ -155,6 +172,7 @@ static void vreport(const char *kind, const char *file, long line,
 }
 
 void mx_error(const char *file, long line, const char *fmt, ...) {
+  mx_msg_errors++;
   va_list ap;
   va_start(ap, fmt);
   vreport("error: ", file, line, fmt, ap);
@@ -162,7 +180,7 @@ void mx_error(const char *file, long line, const char *fmt, ...) {
 }
 
 void mx_warning(const char *file, long line, const char *fmt, ...) {
-  if (mx_quiet) return;
+  if (mx_quiet || mx_msg_worker()) return; /* a worker's: not the caller's to see */
   va_list ap;
   va_start(ap, fmt);
   vreport("warning: ", file, line, fmt, ap);
@@ -184,7 +202,36 @@ void mx_heap_setup(void) {
   }
 }
 
+/* The test hook (mx_alloc_fail_countdown): armed, the allocations since
+ * it was set, and the one that fails (0: none). */
+static int hook_armed;
+static long hook_count, hook_fail_at;
+
+void mx_alloc_fail_countdown(long k) {
+  __atomic_store_n(&hook_armed, 0, __ATOMIC_SEQ_CST);
+  __atomic_store_n(&hook_count, 0, __ATOMIC_SEQ_CST);
+  __atomic_store_n(&hook_fail_at, k > 0 ? k : 0, __ATOMIC_SEQ_CST);
+  __atomic_store_n(&hook_armed, k != 0, __ATOMIC_SEQ_CST);
+}
+
+long mx_alloc_count(void) { return __atomic_load_n(&hook_count, __ATOMIC_SEQ_CST); }
+
+/* 1 when this allocation is the one the hook makes fail. */
+static int hook_fails(void) {
+  if (__builtin_expect(!__atomic_load_n(&hook_armed, __ATOMIC_RELAXED), 1)) return 0;
+  const long n = __atomic_add_fetch(&hook_count, 1, __ATOMIC_SEQ_CST);
+  return n == __atomic_load_n(&hook_fail_at, __ATOMIC_SEQ_CST);
+}
+
+/* NULL after the message (on the calling thread only: see mx_msg_fn). */
+static void *out_of_memory(size_t bytes) {
+  mx_oom_seen = 1;
+  if (!mx_msg_worker()) mx_error(NULL, 0, "out of memory (asked for %zu bytes)", bytes);
+  return NULL;
+}
+
 void *mx_alloc(size_t bytes) {
+  if (hook_fails()) return out_of_memory(bytes);
   if (bytes == 0) bytes = 1;
   enum { HUGE = 2u << 20 };
   if (bytes >= 8 * (size_t)HUGE) {
@@ -192,11 +239,7 @@ void *mx_alloc(size_t bytes) {
      * pages in "madvise" mode): one page fault per 2 MB instead of 512. */
     const size_t rounded = (bytes + HUGE - 1) & ~(size_t)(HUGE - 1);
     void *p = aligned_alloc(HUGE, rounded);
-    if (!p) {
-      mx_oom_seen = 1;
-      mx_error(NULL, 0, "out of memory (asked for %zu bytes)", bytes);
-      return NULL;
-    }
+    if (!p) return out_of_memory(bytes);
 #ifdef MADV_HUGEPAGE
     madvise(p, rounded, MADV_HUGEPAGE);
 #endif
@@ -204,11 +247,7 @@ void *mx_alloc(size_t bytes) {
   }
   size_t rounded = (bytes + 63) & ~(size_t)63;
   void *p = aligned_alloc(64, rounded);
-  if (!p) {
-    mx_oom_seen = 1;
-    mx_error(NULL, 0, "out of memory (asked for %zu bytes)", bytes);
-  }
-  return p;
+  return p ? p : out_of_memory(bytes);
 }
 
 void *mx_calloc(size_t bytes) {
@@ -218,12 +257,16 @@ void *mx_calloc(size_t bytes) {
 }
 
 void *mx_realloc(void *p, size_t bytes) {
+  if (hook_fails()) return out_of_memory(bytes);
   void *q = realloc(p, bytes ? bytes : 1);
-  if (!q) {
-    mx_oom_seen = 1;
-    mx_error(NULL, 0, "out of memory (asked for %zu bytes)", bytes);
-  }
-  return q;
+  return q ? q : out_of_memory(bytes);
+}
+
+char *mx_strdup(const char *s) {
+  const size_t n = strlen(s) + 1;
+  char *c = mx_alloc(n);
+  if (c) memcpy(c, s, n);
+  return c;
 }
 
 void mx_free(void *p) { free(p); }

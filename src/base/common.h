@@ -21,7 +21,8 @@ void mx_error(const char *file, long line, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 void mx_warning(const char *file, long line, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
-extern int mx_quiet; /* when set, warnings are not printed */
+/* when set, warnings are not printed; per thread (see mx_msg_fn) */
+extern _Thread_local int mx_quiet;
 
 /* A word of an input file as a message may show it: bytes that are not
  * printable ASCII or part of a valid UTF-8 character (control bytes, C1
@@ -34,9 +35,28 @@ const char *mx_show_word(const void *word, size_t len, char *out);
 
 /* Where messages go: NULL (the default) prints them on stderr as above;
  * otherwise fn(user, MX_MSG_ERROR or MX_MSG_WARNING, "FILE:LINE: text").
- * The mesher object installs its handler for the duration of each call. */
-extern mx_message_fn mx_msg_fn;
-extern void *mx_msg_user;
+ * The handler, its user pointer and mx_quiet belong to the calling thread:
+ * the mesher object installs its own for the duration of each call
+ * (mesher/call.c), so two meshers used at once from two threads each get
+ * their own messages. The worker threads of an OpenMP team do not see the
+ * caller's: code inside a parallel region reports nothing itself but
+ * returns a status (or what to say) that the region's caller reports after
+ * it; an error still sent from a worker goes to stderr, a warning is dropped
+ * (the worker does not know the caller's quiet flag), and an allocation
+ * that fails there says nothing (the MX_ENOMEM it returns is reported by
+ * the call, mx_call_leave). */
+extern _Thread_local mx_message_fn mx_msg_fn;
+extern _Thread_local void *mx_msg_user;
+/* 1 on a worker thread of an OpenMP team started inside the calling
+ * thread's call (at any level of nesting below mx_msg_level): a thread
+ * that does not see the caller's handler. */
+int mx_msg_worker(void);
+/* The OpenMP nesting level of the calling thread when its call began (a
+ * caller may itself be a thread of the user's team); set by mx_call_enter. */
+extern _Thread_local int mx_msg_level;
+/* Errors reported on this thread so far (mx_error): a call that returns
+ * MX_ENOMEM with none reported says "out of memory" itself. */
+extern _Thread_local unsigned long mx_msg_errors;
 
 /* A parallel loop over fewer items than this, each of a few nanoseconds of
  * work, runs on one thread (`if (n > MX_PAR_MIN)`): starting a team and
@@ -47,20 +67,36 @@ extern void *mx_msg_user;
  * loops (the letter A at -s 8: 140 of its 344 regions). */
 enum { MX_PAR_MIN = 16384 };
 
-/* Set when an allocation failed (mx_alloc & co.), so a caller that received
- * MX_EINPUT from deep inside can tell "out of memory" apart; cleared by
- * whoever reads it (mx_status_refine). */
-extern int mx_oom_seen;
+/* Set (on the thread that asked) when an allocation failed, so that a
+ * caller that received MX_EINPUT from the code not yet converted to
+ * MX_ENOMEM can tell "out of memory" apart; cleared by mx_status_refine.
+ * Transitional: every allocation failure returns MX_ENOMEM where it
+ * happens (`if (!p) return MX_ENOMEM;`, after freeing what the function
+ * owns); the flag goes once no site returns MX_EINPUT for it. */
+extern _Thread_local int mx_oom_seen;
 /* MX_EINPUT turned into MX_ENOMEM when an allocation failed since the flag
  * was last cleared; clears the flag. */
 int mx_status_refine(int status);
 
-/* Allocation in one place: 64-byte aligned, zeroed on request. Failure prints
- * a message and returns NULL; callers return MX_EINPUT ("out of memory"). */
+/* Allocation in one place (the library and the programs use only these):
+ * 64-byte aligned, zeroed on request. Failure returns NULL, after a message
+ * "out of memory (asked for N bytes)" on the calling thread (none from a
+ * worker thread, see mx_msg_fn); the caller returns MX_ENOMEM. */
 void *mx_alloc(size_t bytes);
 void *mx_calloc(size_t bytes);
 void *mx_realloc(void *p, size_t bytes);
+/* A copy of string s (mx_free), NULL when out of memory. */
+char *mx_strdup(const char *s);
 void mx_free(void *p);
+
+/* Test hook (not in the public API; tests/test_alloc_fail.c): k > 0 makes
+ * the k-th allocation from now (mx_alloc, mx_calloc, mx_realloc,
+ * mx_strdup, in any thread) fail, once; k = 0 disables the failure. Either
+ * way the count of allocations restarts at 0; mx_alloc_count tells it
+ * (counting costs an atomic add per allocation only while the hook is
+ * armed: mx_alloc_fail_countdown(-1) counts without failing). */
+void mx_alloc_fail_countdown(long k);
+long mx_alloc_count(void);
 /* Bytes [0, to) of array p are no longer read: the whole pages among them,
  * from the one holding byte `from` (those before were given earlier), go
  * back to the system (they read as zeros after). A pass that copies an

@@ -84,7 +84,7 @@ int mx_sort_u64(uint64_t *keys, uint32_t *vals, size_t n) {
     mx_free(k2);
     mx_free(v2);
     mx_free(hist);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   uint64_t *src = keys, *dst = k2;
   uint32_t *vsrc = vals, *vdst = v2;

@@ -31,7 +31,7 @@ static void on_message(void *user, int level, const char *text) {
     return;
   }
   if (ri->nwarnings < MX_MAX_WARNINGS) {
-    ri->warnings[ri->nwarnings] = strdup(text);
+    ri->warnings[ri->nwarnings] = mx_strdup(text);
     if (ri->warnings[ri->nwarnings]) ri->nwarnings++;
   } else {
     ri->warnings_dropped++;
@@ -62,10 +62,7 @@ static int setup(const mx_options *o, mx_mesher **out) {
   p.repair_input = o->repair_input;
   p.threads = o->threads; /* --threads N: N, whatever the load (mixoct.h) */
   mx_mesher *m = mx_mesher_new(&p);
-  if (!m) {
-    mx_error(NULL, 0, "out of memory");
-    return MX_ENOMEM;
-  }
+  if (!m) return MX_ENOMEM; /* said by mx_alloc */
   *out = m;
   mx_mesher_set_message_handler(m, on_message, &run_info);
   const mx_progress hooks = {on_stage, mx_progress_on_level, on_round, NULL};
@@ -155,7 +152,7 @@ int mx_run(const mx_options *o) {
   }
   mx_mesher_free(m);
   mx_progress_done();
-  for (int k = 0; k < run_info.nwarnings; k++) free(run_info.warnings[k]);
+  for (int k = 0; k < run_info.nwarnings; k++) mx_free(run_info.warnings[k]);
   return st;
 }
 

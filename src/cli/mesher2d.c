@@ -353,7 +353,7 @@ static int output_list(const m2_options *o, m2_run *r) {
   for (int f = 0; f < NFMT; f++) {
     if (!o->want[f]) continue;
     const size_t len = strlen(o->outname) + strlen(formats[f].ext) + 1;
-    r->owned[f] = malloc(len);
+    r->owned[f] = mx_alloc(len);
     if (!r->owned[f]) return MX_ENOMEM;
     snprintf(r->owned[f], len, "%s%s", o->outname, formats[f].ext);
     r->outputs[r->noutputs++] = r->owned[f];
@@ -361,7 +361,7 @@ static int output_list(const m2_options *o, m2_run *r) {
   for (int k = 0; k < o->nextra; k++) r->outputs[r->noutputs++] = o->extra[k];
   if (o->outname && !o->no_restart) { /* NAME.oct, as the published program */
     const size_t len = strlen(o->outname) + 5;
-    r->owned[NFMT] = malloc(len);
+    r->owned[NFMT] = mx_alloc(len);
     if (!r->owned[NFMT]) return MX_ENOMEM;
     snprintf(r->owned[NFMT], len, "%s.oct", o->outname);
     r->restart_out = r->owned[NFMT];
@@ -627,6 +627,6 @@ int mx_mesher2d_main(int argc, char **argv) {
   if (o.json) print_json(&o, r);
   else if (!o.quiet && ((r->m && r->m->meshed) || !st)) print_summary(&o, r);
   mx_mesher2d_free(r->m);
-  for (int f = 0; f <= NFMT; f++) free(r->owned[f]);
+  for (int f = 0; f <= NFMT; f++) mx_free(r->owned[f]);
   return st;
 }

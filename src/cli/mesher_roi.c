@@ -185,22 +185,19 @@ static int translate(int argc, char **argv, char **margv, int *margc, const char
 }
 
 int mx_mesher_roi_main(int argc, char **argv) {
-  char **margv = malloc(((size_t)argc + 4) * sizeof *margv);
-  if (!margv) {
-    mx_error(NULL, 0, "out of memory");
-    return MX_EINPUT;
-  }
+  char **margv = mx_alloc(((size_t)argc + 4) * sizeof *margv);
+  if (!margv) return MX_ENOMEM;
   int margc = 0, want[NFMT] = {0}, exit_now = 0;
   const char *outname = NULL;
   int st = translate(argc, argv, margv, &margc, &outname, want, &exit_now);
   if (st || exit_now) {
-    free(margv);
+    mx_free(margv);
     return st ? MX_EINPUT : 0;
   }
   mx_options o;
   st = mx_parse_options(margc, margv, &o, &exit_now);
-  free(margv);
-  if (st) return MX_EINPUT;
+  mx_free(margv);
+  if (st) return st == MX_ENOMEM ? MX_ENOMEM : MX_EINPUT;
   if (exit_now) return 0;
 
   /* outputs[0] is also o.output, so everything that asks whether the run
@@ -209,10 +206,9 @@ int mx_mesher_roi_main(int argc, char **argv) {
   for (int f = 0; f < NFMT; f++) {
     if (!want[f]) continue;
     const size_t len = strlen(outname) + strlen(formats[f].ext) + 1;
-    names[f] = malloc(len);
+    names[f] = mx_alloc(len);
     if (!names[f]) {
-      mx_error(NULL, 0, "out of memory");
-      st = MX_EINPUT;
+      st = MX_ENOMEM;
       break;
     }
     snprintf(names[f], len, "%s%s", outname, formats[f].ext);
@@ -221,9 +217,8 @@ int mx_mesher_roi_main(int argc, char **argv) {
   if (o.noutputs > 0) o.output = o.outputs[0];
   if (!st && outname) {
     const size_t len = strlen(outname) + 5;
-    oct = malloc(len);
+    oct = mx_alloc(len);
     if (!oct) {
-      mx_error(NULL, 0, "out of memory");
       st = MX_ENOMEM;
     } else {
       snprintf(oct, len, "%s.oct", outname);
@@ -237,7 +232,7 @@ int mx_mesher_roi_main(int argc, char **argv) {
     if (o.threads > 0) omp_set_num_threads(o.threads);
     st = mx_run(&o);
   }
-  for (int f = 0; f < NFMT; f++) free(names[f]);
-  free(oct);
+  for (int f = 0; f < NFMT; f++) mx_free(names[f]);
+  mx_free(oct);
   return st == MX_OK ? 0 : st;
 }

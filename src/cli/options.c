@@ -227,10 +227,12 @@ static const char *const with_arg[][2] = {
 static char **volatile split_argv;
 
 static char **split_attached(int argc, char **argv, int *nargc) {
-  char **v = malloc((2 * (size_t)argc + 1) * sizeof *v);
+  /* the new argv, then the names this function allocated (freed if one
+   * cannot be) */
+  char **v = mx_alloc((3 * (size_t)argc + 1) * sizeof *v);
   if (!v) return NULL;
-  split_argv = v;
-  int n = 0;
+  char **names = v + 2 * (size_t)argc + 1;
+  int n = 0, nnames = 0;
   for (int i = 0; i < argc; i++) {
     const char *a = argv[i];
     v[n++] = argv[i];
@@ -239,8 +241,15 @@ static char **split_attached(int argc, char **argv, int *nargc) {
       const char *sh = with_arg[k][0], *lg = with_arg[k][1];
       const size_t ll = strlen(lg);
       if (strncmp(a, lg, ll) == 0 && a[ll] == '=') {
-        char *name = strndup(a, ll);
-        if (!name) break;
+        char *name = mx_alloc(ll + 1);
+        if (!name) {
+          for (int j = 0; j < nnames; j++) mx_free(names[j]);
+          mx_free(v);
+          return NULL;
+        }
+        memcpy(name, a, ll);
+        name[ll] = '\0';
+        names[nnames++] = name;
         v[n - 1] = name;
         v[n++] = (char *)a + ll + 1;
         break;
@@ -254,16 +263,14 @@ static char **split_attached(int argc, char **argv, int *nargc) {
   }
   v[n] = NULL;
   *nargc = n;
+  split_argv = v;
   return v;
 }
 
 int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
   int argc = argc0;
   char **argv = split_attached(argc0, argv0, &argc);
-  if (!argv) {
-    mx_error(NULL, 0, "out of memory");
-    return MX_ENOMEM;
-  }
+  if (!argv) return MX_ENOMEM;
   memset(o, 0, sizeof *o);
   o->req.s_level = -1;
   o->req.a_level = -1;

@@ -50,10 +50,7 @@ static int setup(const mx_options *o, mx_mesher **out) {
   p.threads = o->threads;
   p.max_memory_mb = o->max_memory_mb;
   mx_mesher *m = mx_mesher_new(&p);
-  if (!m) {
-    mx_error(NULL, 0, "out of memory");
-    return MX_ENOMEM;
-  }
+  if (!m) return MX_ENOMEM; /* said by mx_alloc */
   *out = m;
   mx_mesher_set_message_handler(m, on_message, NULL);
   return mx_add_inputs(o, m);
@@ -77,7 +74,7 @@ static int compare_single(mx_mesher *m, const mx_p4est_octree *P, mx_leaf_diff *
       lb = mx_alloc(nb + 1);
       ka = mx_alloc((nq + 1) * sizeof *ka);
       la = mx_alloc(nq + 1);
-      if (!kb || !lb || !ka || !la) st = MX_EINPUT;
+      if (!kb || !lb || !ka || !la) st = MX_ENOMEM;
       for (size_t i = 0; !st && i < nb; i++) {
         kb[i] = m->B.tree.oct.key[m->leaves[i]];
         lb[i] = m->B.tree.oct.level[m->leaves[i]];
@@ -215,7 +212,7 @@ static int run(const mx_options *o, int compare) {
   if (!st && compare) st = compare_single(m, &P, &d, &why, &single_hash, &st_refine, &st_balance);
   mx_p4est_mesh_report *mesh = NULL;
   if (!st && m->p.stage == MX_STAGE_FULL) {
-    mesh = calloc(1, sizeof *mesh);
+    mesh = mx_calloc(sizeof *mesh);
     st = mx_mpi_agree(MPI_COMM_WORLD, mesh ? MX_OK : MX_ENOMEM);
     if (!st) st = mx_p4est_mesh_run(o, &P, m, t0, mesh);
     if (!st) mx_p4est_mesh_reduce(&P, mesh);
@@ -226,7 +223,7 @@ static int run(const mx_options *o, int compare) {
     report(o, &P, &s, t_setup, t_total, omp_get_max_threads(), compare, &d, &why,
            single_hash, st_refine, st_balance, mesh);
   if (mesh) mx_p4est_mesh_free(&mesh->D);
-  free(mesh);
+  mx_free(mesh);
   if (st && rank0 && o->json)
     printf("{\"p4est\": true, \"exit_code\": %d, \"error\": \"%s\"}\n", st,
            mx_status_string(st));
@@ -246,7 +243,7 @@ int mx_p4est_main(int argc, char **argv) {
   sc_init(MPI_COMM_WORLD, 0, 0, NULL, SC_LP_SILENT);
   p4est_init(NULL, SC_LP_SILENT);
   /* our flags out, the rest parsed as usual */
-  char **av = malloc(((size_t)argc + 1) * sizeof *av);
+  char **av = mx_alloc(((size_t)argc + 1) * sizeof *av);
   int ac = 0, compare = 0;
   for (int i = 0; av && i < argc; i++) {
     if (strcmp(argv[i], "--p4est") == 0) continue;
@@ -275,7 +272,7 @@ int mx_p4est_main(int argc, char **argv) {
     if (o.threads > 0) omp_set_num_threads(o.threads);
     st = run(&o, compare);
   }
-  free(av);
+  mx_free(av);
   sc_finalize();
   MPI_Finalize();
   return st;

@@ -62,7 +62,7 @@ int mx_locator_build(mx_locator *L, const mx_trisoup *soup, uint32_t t0,
   }
   size_t ncell = (size_t)L->n[0] * (size_t)L->n[1];
   L->cell_off = mx_calloc((ncell + 1) * sizeof *L->cell_off);
-  if (!L->cell_off) return MX_EINPUT;
+  if (!L->cell_off) return MX_ENOMEM;
   for (uint32_t t = t0; t < t1; t++) {
     int c0[2], c1[2];
     tri_cells(L, t, c0, c1);
@@ -75,7 +75,7 @@ int mx_locator_build(mx_locator *L, const mx_trisoup *soup, uint32_t t0,
   uint32_t *fill = mx_alloc(ncell * sizeof *fill + 4);
   if (!L->cell_tri || !fill) {
     mx_free(fill);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   memcpy(fill, L->cell_off, ncell * sizeof *fill);
   for (uint32_t t = t0; t < t1; t++) {

@@ -170,40 +170,46 @@ void mx_quality_tabulate(const uint8_t *type, const float *jens, size_t n,
   q->invalid = q->below_02 = 0;
   q->min_all = INFINITY;
   if (n == 0) return;
-  double *sum = calloc(4 * nch, sizeof *sum);
-  if (!sum) return;
+  /* chunk sums added in chunk order whatever the thread count, a group of
+   * GROUP chunks at a time (no allocation: this cannot fail) */
+  enum { GROUP = 256 };
+  double sum[4 * GROUP];
+  double s[4] = {0.0, 0.0, 0.0, 0.0};
   size_t count[4] = {0}, bins[MX_QBINS] = {0}, invalid = 0, below = 0;
   double mn[4] = {INFINITY, INFINITY, INFINITY, INFINITY};
   double mx[4] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
+  for (size_t g0 = 0; g0 < nch; g0 += GROUP) {
+    const size_t ng = nch - g0 < GROUP ? nch - g0 : GROUP;
+    for (size_t k = 0; k < 4 * ng; k++) sum[k] = 0.0;
 #pragma omp parallel for schedule(static) reduction(+ : count[:4], bins[:MX_QBINS], invalid, below) \
     reduction(min : mn[:4]) reduction(max : mx[:4])
-  for (size_t c = 0; c < nch; c++) {
-    const size_t hi = (c + 1) * chunk < n ? (c + 1) * chunk : n;
-    for (size_t i = c * chunk; i < hi; i++) {
-      const int t = type[i];
-      const double v = jens[i];
-      count[t]++;
-      sum[4 * c + t] += v;
-      if (v < mn[t]) mn[t] = v;
-      if (v > mx[t]) mx[t] = v;
-      int b = 0;
-      while (b < MX_QBINS - 1 && !(v < mx_qbin_upper[b])) b++;
-      bins[b]++;
-      invalid += mx_jens_invalid(v);
-      below += v < 0.2;
+    for (size_t c = g0; c < g0 + ng; c++) {
+      const size_t hi = (c + 1) * chunk < n ? (c + 1) * chunk : n;
+      for (size_t i = c * chunk; i < hi; i++) {
+        const int t = type[i];
+        const double v = jens[i];
+        count[t]++;
+        sum[4 * (c - g0) + t] += v;
+        if (v < mn[t]) mn[t] = v;
+        if (v > mx[t]) mx[t] = v;
+        int b = 0;
+        while (b < MX_QBINS - 1 && !(v < mx_qbin_upper[b])) b++;
+        bins[b]++;
+        invalid += mx_jens_invalid(v);
+        below += v < 0.2;
+      }
     }
+    for (int t = 0; t < 4; t++)
+      for (size_t c = 0; c < ng; c++) s[t] += sum[4 * c + t];
   }
   for (int t = 0; t < 4; t++) {
-    double s = 0.0;
-    for (size_t c = 0; c < nch; c++) s += sum[4 * c + t];
     q->count[t] = count[t];
     q->min[t] = mn[t];
     q->max[t] = mx[t];
-    q->mean[t] = count[t] ? s / (double)count[t] : 0.0;
+    q->mean[t] = count[t] ? s[t] / (double)count[t] : 0.0;
     if (mn[t] < q->min_all) q->min_all = mn[t];
   }
   for (int b = 0; b < MX_QBINS; b++) q->bins[b] = bins[b];
   q->invalid = invalid;
   q->below_02 = below;
-  free(sum);
 }

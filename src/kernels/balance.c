@@ -53,9 +53,10 @@ static int touches_kept_child(const mx_octree *T, const uint32_t *run,
 /* Leaves of level l-1 touching a kept child of one of the just-split octants
  * run[0..k)
  * (level l, all children of the same parent P), pushed once each (the
- * MX_OCT_QUEUED flag) onto buf. P's 12 edges are looked up once per run. */
+ * MX_OCT_QUEUED flag) onto buf. P's 12 edges are looked up once per run. When
+ * buf cannot grow, sets *oom and returns. */
 static void find_unbalanced(mx_builder *B, const uint32_t *run, size_t k,
-                            uint32_t **buf, size_t *n, size_t *cap) {
+                            uint32_t **buf, size_t *n, size_t *cap, int *oom) {
   mx_octree *T = &B->tree.oct;
   const uint32_t p = T->parent[run[0]];
   if (p == MX_NONE) return;
@@ -78,9 +79,14 @@ static void find_unbalanced(mx_builder *B, const uint32_t *run, size_t k,
                                         __ATOMIC_RELAXED);
         if (old & MX_OCT_QUEUED) continue;
         if (*n == *cap) {
-          *cap = *cap ? 2 * *cap : 256;
-          *buf = realloc(*buf, *cap * sizeof **buf);
-          if (!*buf) abort(); /* out of memory in a worker: no way back */
+          const size_t c2 = *cap ? 2 * *cap : 256;
+          uint32_t *g = mx_realloc(*buf, c2 * sizeof *g);
+          if (!g) { /* out of memory in a worker: told after the region */
+            __atomic_store_n(oom, 1, __ATOMIC_RELAXED);
+            return;
+          }
+          *buf = g;
+          *cap = c2;
         }
         (*buf)[(*n)++] = m;
       }
@@ -100,16 +106,17 @@ int mx_balance_drain(mx_builder *B, const uint32_t *split, size_t n) {
   int st = MX_OK;
   while (ncur > 0 && st == MX_OK) {
     const int nth = omp_get_max_threads();
-    uint32_t **bufs = calloc((size_t)nth, sizeof *bufs);
-    size_t *cnt = calloc((size_t)nth, sizeof *cnt);
-    size_t *cap = calloc((size_t)nth, sizeof *cap);
+    uint32_t **bufs = mx_calloc((size_t)nth * sizeof *bufs);
+    size_t *cnt = mx_calloc((size_t)nth * sizeof *cnt);
+    size_t *cap = mx_calloc((size_t)nth * sizeof *cap);
     if (!bufs || !cnt || !cap) {
-      free(bufs);
-      free(cnt);
-      free(cap);
-      st = MX_EINPUT;
+      mx_free(bufs);
+      mx_free(cnt);
+      mx_free(cap);
+      st = MX_ENOMEM;
       break;
     }
+    int oom = 0;
 #pragma omp parallel
     {
       const int t = omp_get_thread_num();
@@ -120,22 +127,22 @@ int mx_balance_drain(mx_builder *B, const uint32_t *split, size_t n) {
         if (i > 0 && par[cur[i - 1]] == par[cur[i]]) continue;
         size_t k = 1;
         while (i + k < ncur && par[cur[i + k]] == par[cur[i]]) k++;
-        find_unbalanced(B, cur + i, k, &bufs[t], &cnt[t], &cap[t]);
+        find_unbalanced(B, cur + i, k, &bufs[t], &cnt[t], &cap[t], &oom);
       }
     }
     size_t total = 0;
     for (int t = 0; t < nth; t++) total += cnt[t];
-    uint32_t *next = mx_alloc((total + 1) * sizeof *next);
-    if (!next) st = MX_EINPUT;
+    uint32_t *next = oom ? NULL : mx_alloc((total + 1) * sizeof *next);
+    if (!next) st = MX_ENOMEM;
     size_t w = 0;
     for (int t = 0; t < nth; t++) {
       if (next && cnt[t]) memcpy(next + w, bufs[t], cnt[t] * sizeof *next);
       w += cnt[t];
-      free(bufs[t]);
+      mx_free(bufs[t]);
     }
-    free(bufs);
-    free(cnt);
-    free(cap);
+    mx_free(bufs);
+    mx_free(cnt);
+    mx_free(cap);
     if (st) break;
     qsort(next, total, sizeof *next, cmp_u32);
     st = mx_split_octants(B, next, total, 1);

@@ -41,10 +41,10 @@ typedef struct {
 
 static rnode *node_new(rtree *R) {
   if (R->nchunks == 0 || R->used == CHUNK) {
-    rnode **c = realloc(R->chunks, (R->nchunks + 1) * sizeof *c);
+    rnode **c = mx_realloc(R->chunks, (R->nchunks + 1) * sizeof *c);
     if (!c) return NULL;
     R->chunks = c;
-    R->chunks[R->nchunks] = calloc(CHUNK, sizeof(rnode));
+    R->chunks[R->nchunks] = mx_calloc(CHUNK * sizeof(rnode));
     if (!R->chunks[R->nchunks]) return NULL;
     R->nchunks++;
     R->used = 0;
@@ -53,18 +53,18 @@ static rnode *node_new(rtree *R) {
 }
 
 static void rtree_free(rtree *R) {
-  for (size_t i = 0; i < R->nchunks; i++) free(R->chunks[i]);
-  free(R->chunks);
-  free(R->roots);
-  free(R->of_oct);
+  for (size_t i = 0; i < R->nchunks; i++) mx_free(R->chunks[i]);
+  mx_free(R->chunks);
+  mx_free(R->roots);
+  mx_free(R->of_oct);
 }
 
 static int map_grow(rtree *R, size_t n) {
   if (n <= R->of_oct_cap) return MX_OK;
   size_t cap = R->of_oct_cap ? R->of_oct_cap : 1024;
   while (cap < n) cap *= 2;
-  rnode **m = realloc(R->of_oct, cap * sizeof *m);
-  if (!m) return MX_EINPUT;
+  rnode **m = mx_realloc(R->of_oct, cap * sizeof *m);
+  if (!m) return MX_ENOMEM;
   memset(m + R->of_oct_cap, 0, (cap - R->of_oct_cap) * sizeof *m);
   R->of_oct = m;
   R->of_oct_cap = cap;
@@ -78,7 +78,7 @@ static int attach_children(rtree *R, rnode *p) {
     uint32_t ch = mx_octree_child(T, p->oct, c);
     if (ch == MX_NONE) continue;
     rnode *n = node_new(R);
-    if (!n) return MX_EINPUT;
+    if (!n) return MX_ENOMEM;
     n->parent = p;
     n->oct = ch;
     n->level = (uint8_t)(p->level + 1);
@@ -134,14 +134,14 @@ int mx_balance_recursive(mx_builder *B) {
   R.B = B;
   const mx_grid *g = &B->tree.grid;
   const size_t nroot = (size_t)g->dims[0] * g->dims[1] * g->dims[2];
-  R.roots = calloc(nroot, sizeof *R.roots);
-  int st = R.roots ? map_grow(&R, T->n) : MX_EINPUT;
+  R.roots = mx_calloc(nroot * sizeof *R.roots);
+  int st = R.roots ? map_grow(&R, T->n) : MX_ENOMEM;
   /* Build the pointer tree from the refined octants (parents come first). */
   for (size_t o = 0; o < T->n && !st; o++) {
     if (T->parent[o] != MX_NONE) continue;
     rnode *n = node_new(&R);
     if (!n) {
-      st = MX_EINPUT;
+      st = MX_ENOMEM;
       break;
     }
     n->oct = (uint32_t)o;
@@ -155,8 +155,8 @@ int mx_balance_recursive(mx_builder *B) {
     if (T->flags[o] & MX_OCT_SPLIT) st = attach_children(&R, R.of_oct[o]);
   /* Worklist: every octant, leaf or split. */
   size_t cap = T->n + 16, top = 0;
-  uint32_t *work = malloc(cap * sizeof *work);
-  if (!work) st = MX_EINPUT;
+  uint32_t *work = mx_alloc(cap * sizeof *work);
+  if (!work) st = MX_ENOMEM;
   for (size_t o = T->n; o-- > 0 && !st;) work[top++] = (uint32_t)o;
   static const int dirs[18][3] = {
       {1, 0, 0},  {-1, 0, 0}, {0, 1, 0},  {0, -1, 0}, {0, 0, 1},  {0, 0, -1},
@@ -176,9 +176,9 @@ int mx_balance_recursive(mx_builder *B) {
         const int nk = __builtin_popcount(T->kept[q->oct]);
         if (top + (size_t)nk + 1 > cap) {
           cap = 2 * cap + 16;
-          uint32_t *w = realloc(work, cap * sizeof *w);
+          uint32_t *w = mx_realloc(work, cap * sizeof *w);
           if (!w) {
-            st = MX_EINPUT;
+            st = MX_ENOMEM;
             break;
           }
           work = w;
@@ -187,7 +187,7 @@ int mx_balance_recursive(mx_builder *B) {
       }
     }
   }
-  free(work);
+  mx_free(work);
   rtree_free(&R);
   B->stats.t_balance += mx_wtime() - t0;
   return st;

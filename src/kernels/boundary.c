@@ -58,7 +58,7 @@ int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index 
     mx_free(cand);
     mx_free(len);
     mx_free(cnt);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
@@ -112,7 +112,7 @@ int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index 
     mx_free(cand);
     mx_free(len);
     mx_free(cnt);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   size_t nmoved = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : nmoved)
@@ -199,7 +199,7 @@ int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
   uint32_t *btri = mx_alloc((nn + 1) * sizeof *btri);
   if (!run || !best || !btri) {
     mx_free(run); mx_free(best); mx_free(btri);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   /* the runs' starts: counted per block, prefix-summed, filled */
   enum { RB = 1 << 16 };
@@ -207,7 +207,7 @@ int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
   uint64_t *boff = mx_alloc((nbk + 1) * sizeof *boff);
   if (!boff) {
     mx_free(run); mx_free(best); mx_free(btri);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (size_t b = 0; b < nbk; b++) {
@@ -236,7 +236,7 @@ int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
   uint8_t *lock = mx_calloc(nn + 1);
   if (!lock) {
     mx_free(run); mx_free(best); mx_free(btri);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(dynamic, 256)
   for (size_t r = 0; r < nr; r++) {

@@ -15,7 +15,7 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
                       mx_boundary_stats *stats, uint8_t **states_out) {
   memset(stats, 0, sizeof *stats);
   uint8_t *states = mx_alloc(M->nnodes + 1);
-  if (!states) return MX_EINPUT;
+  if (!states) return MX_ENOMEM;
   uint8_t *moved = NULL;
   double t = mx_wtime();
   int st = mx_node_states(tr, leaves, M, S, states, &stats->located);

@@ -47,7 +47,7 @@ static int sort_list(uint32_t *fv, uint64_t *src, int32_t *tag, size_t n, int nv
   uint32_t *f2 = mx_alloc((nv * n + 1) * sizeof *f2);
   uint64_t *s2 = mx_alloc((n + 1) * sizeof *s2);
   int32_t *t2 = mx_alloc((n + 1) * sizeof *t2);
-  int st = start && f2 && s2 && t2 ? MX_OK : MX_EINPUT;
+  int st = start && f2 && s2 && t2 ? MX_OK : MX_ENOMEM;
   if (!st) {
     for (size_t i = 0; i < n; i++) start[tag[i] + 1]++;
     for (int t = 1; t <= maxtag + 1; t++) start[t] += start[t - 1];
@@ -75,7 +75,7 @@ int mx_boundary_tags(const mx_mesh_view *v, const mx_tag_inputs *in, mx_boundary
   *off_input = 0;
   bf->tri_tag = mx_alloc((bf->ntri + 1) * sizeof *bf->tri_tag);
   bf->quad_tag = mx_alloc((bf->nquad + 1) * sizeof *bf->quad_tag);
-  if (!bf->tri_tag || !bf->quad_tag) return MX_EINPUT;
+  if (!bf->tri_tag || !bf->quad_tag) return MX_ENOMEM;
   double lo[3], hi[3];
   mx_trisoup_bbox(in->soup, lo, hi);
   const double off_tol =
@@ -100,7 +100,7 @@ int mx_boundary_tags(const mx_mesh_view *v, const mx_tag_inputs *in, mx_boundary
   int nb = 0;
   int st = mx_cell_bodies(v, cell_body, &nb);
   int32_t *bt = st ? NULL : mx_alloc(((size_t)nb + 1) * sizeof *bt);
-  if (!st && !bt) st = MX_EINPUT;
+  if (!st && !bt) st = MX_ENOMEM;
   if (!st) {
     for (int b = 0; b < nb; b++) bt[b] = INT32_MAX;
     for (size_t i = 0; i < bf->ntri; i++) {

@@ -80,7 +80,7 @@ int mx_resolve_closures(mx_builder *B) {
               cap = cap ? 2 * cap : 64;
               uint32_t *g = mx_realloc(list, cap * sizeof *g);
               if (!g) {
-                st = MX_EINPUT;
+                st = MX_ENOMEM;
                 break;
               }
               list = g;

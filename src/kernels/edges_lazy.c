@@ -107,7 +107,7 @@ int mx_edges_ensure(mx_builder *B, const uint32_t *list, size_t n, int with_pare
    * (the flag, set atomically, says who registers) */
   enum { K = 38 };
   uint32_t *got = mx_alloc((K * n + 1) * sizeof *got);
-  if (!got) return MX_EINPUT;
+  if (!got) return MX_ENOMEM;
   size_t count[2] = {0, 0};
 #pragma omp parallel for schedule(static) reduction(+ : count[:2])
   for (size_t i = 0; i < n; i++) {
@@ -171,7 +171,7 @@ int mx_build_root_map(mx_builder *B) {
   const mx_octree *T = &B->tree.oct;
   const size_t nr = (size_t)B->tree.grid.dims[0] * B->tree.grid.dims[1] * B->tree.grid.dims[2];
   B->tree.root_of = mx_alloc((nr + 1) * sizeof *B->tree.root_of);
-  if (!B->tree.root_of) return MX_EINPUT;
+  if (!B->tree.root_of) return MX_ENOMEM;
   for (size_t r = 0; r < nr; r++) B->tree.root_of[r] = MX_NONE;
   for (size_t o = 0; o < T->n; o++) {
     if (T->parent[o] != MX_NONE) continue;

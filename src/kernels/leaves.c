@@ -5,7 +5,7 @@
 
 int mx_leaves_sorted(const mx_tree *tr, uint32_t *leaves, size_t n) {
   uint64_t *k = mx_alloc((n + 1) * sizeof *k);
-  if (!k) return MX_EINPUT;
+  if (!k) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
   for (size_t i = 0; i < n; i++) k[i] = tr->oct.key[leaves[i]];
   int st = mx_sort_u64(k, leaves, n);
@@ -17,7 +17,7 @@ int mx_leaves(const mx_tree *tr, uint32_t **out, size_t *n) {
   const mx_octree *T = &tr->oct;
   const size_t nb = (T->n + 4095) / 4096; /* blocks of octants */
   uint64_t *off = mx_alloc((nb + 1) * sizeof *off);
-  if (!off) return MX_EINPUT;
+  if (!off) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
   for (size_t b = 0; b < nb; b++) {
     uint64_t k = 0;
@@ -29,7 +29,7 @@ int mx_leaves(const mx_tree *tr, uint32_t **out, size_t *n) {
   uint32_t *l = mx_alloc((total + 1) * sizeof *l);
   if (!l) {
     mx_free(off);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (size_t b = 0; b < nb; b++) {
@@ -124,7 +124,7 @@ oom:
   mx_free(k);
   mx_free(slot);
   mx_hexmesh_free(out);
-  return MX_EINPUT;
+  return MX_ENOMEM;
 }
 
 void mx_hexmesh_free(mx_hexmesh *h) {

@@ -13,7 +13,7 @@
 int mx_mesh_keep_cells(mx_mesh_out *M, const uint8_t *keep) {
   const size_t nc = M->ncells;
   uint64_t *dst = mx_alloc((nc + 1) * sizeof *dst);
-  if (!dst) return MX_EINPUT;
+  if (!dst) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) dst[c] = keep[c] != 0;
   const uint64_t nk = mx_scan_u64(dst, nc);
@@ -25,7 +25,7 @@ int mx_mesh_keep_cells(mx_mesh_out *M, const uint8_t *keep) {
   if (!type || !conn || !level || !leaf || !jens) {
     mx_free(type); mx_free(conn); mx_free(level); mx_free(leaf); mx_free(jens);
     mx_free(dst);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
@@ -51,7 +51,7 @@ int mx_mesh_apply_node_ids(mx_mesh_out *M, uint8_t **states, const uint32_t *new
   uint64_t *nkey = M->nkey ? mx_alloc((nu + 1) * sizeof *nkey) : NULL;
   if (!xyz || (states && !st2) || (M->nkey && !nkey)) {
     mx_free(xyz); mx_free(st2); mx_free(nkey);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < M->nnodes; v++) {
@@ -83,7 +83,7 @@ int mx_mesh_drop_unused_nodes(mx_mesh_out *M, uint8_t **states, uint32_t **newid
   uint32_t *newid = mx_alloc((nn + 1) * sizeof *newid);
   if (!id || !newid) {
     mx_free(id); mx_free(newid);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < M->ncells; c++)
@@ -154,7 +154,7 @@ static int cells_alloc(mx_mesh_out *B, size_t n) {
   B->leaf = mx_alloc((n + 1) * sizeof *B->leaf);
   B->jens = mx_alloc((n + 1) * sizeof *B->jens);
   B->conn = mx_alloc((8 * n + 1) * sizeof *B->conn);
-  return B->type && B->level && B->leaf && B->jens && B->conn ? MX_OK : MX_EINPUT;
+  return B->type && B->level && B->leaf && B->jens && B->conn ? MX_OK : MX_ENOMEM;
 }
 
 /* When the elements are in leaf order but for a short tail (the staircase
@@ -175,7 +175,7 @@ static int merge_short_tail(mx_mesh_out *M, size_t p) {
   memset(&saved, 0, sizeof saved);
   int st = cells_alloc(&tail, k);
   if (!st) st = cells_alloc(&saved, nch * save);
-  if (!st && !ord) st = MX_EINPUT;
+  if (!st && !ord) st = MX_ENOMEM;
   if (!st) {
     /* the tail in (leaf, index) order: stable by leaf */
     for (size_t i = 0; i < k; i++) ord[i] = (uint64_t)M->leaf[p + i] << 32 | (p + i);
@@ -246,7 +246,7 @@ int mx_mesh_sort_by_leaf(mx_mesh_out *M, size_t nleaves) {
   if (!start || !perm || !type || !conn || !level || !leaf || !jens) {
     mx_free(start); mx_free(perm); mx_free(type); mx_free(conn);
     mx_free(level); mx_free(leaf); mx_free(jens);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   for (size_t c = 0; c < n; c++) start[M->leaf[c] + 1]++;
   for (size_t l = 0; l < nleaves; l++) start[l + 1] += start[l];

@@ -56,7 +56,7 @@ int mx_builder_init(mx_builder *B, const mx_trisoup *soup, uint32_t nt_domain,
   const size_t nt = soup->nt;
   B->tree.tri_xyz = mx_alloc(9 * nt * sizeof *B->tree.tri_xyz);
   B->tri_region = mx_alloc(nt + 1);
-  if (!B->tree.tri_xyz || !B->tri_region) return MX_EINPUT;
+  if (!B->tree.tri_xyz || !B->tri_region) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
   for (size_t t = 0; t < nt; t++)
     for (int k = 0; k < 3; k++) {
@@ -224,7 +224,7 @@ static int grow_scratch(void **p, size_t *cap, size_t need, size_t elem) {
   while (n < need) n += n / 2;
   mx_free(*p);
   *p = mx_alloc(n * elem);
-  if (!*p) return MX_EINPUT;
+  if (!*p) return MX_ENOMEM;
   *cap = n;
   return MX_OK;
 }
@@ -304,7 +304,7 @@ int mx_split_octants(mx_builder *B, const uint32_t *list, size_t n,
   B->stats.located += located;
   /* Count children and their triangles; prefix sums give where they go. */
   uint64_t *toff = mx_alloc((n + 1) * sizeof *toff);
-  if (!toff) return MX_EINPUT;
+  if (!toff) return MX_ENOMEM;
   size_t dropped = 0;
 #pragma omp parallel for schedule(static) reduction(+ : dropped) if (n > MX_PAR_MIN)
   for (size_t i = 0; i < n; i++) {
@@ -380,7 +380,7 @@ int mx_build_roots(mx_builder *B) {
   const size_t nroot = (size_t)nx * ny * nz;
   const size_t nt = B->soup->nt;
   uint32_t *cnt = mx_calloc((nroot + 1) * sizeof *cnt);
-  if (!cnt) return MX_EINPUT;
+  if (!cnt) return MX_ENOMEM;
   /* Pass 1 counts, pass 2 fills: pairs (root, triangle) in triangle order. */
   uint32_t *list = NULL;
   for (int pass = 0; pass < 2; pass++) {
@@ -419,7 +419,7 @@ int mx_build_roots(mx_builder *B) {
       list = mx_alloc((size_t)cnt[nroot] * sizeof *list + 4);
       if (!list) {
         mx_free(cnt);
-        return MX_EINPUT;
+        return MX_ENOMEM;
       }
     } else {
       for (size_t r = nroot; r > 0; r--) cnt[r] = cnt[r - 1];
@@ -501,7 +501,7 @@ static int next_candidates(const mx_builder *B, const uint32_t *cand,
                            size_t n, uint32_t **out, size_t *nout) {
   const mx_octree *T = &B->tree.oct;
   uint64_t *off = mx_alloc((n + 1) * sizeof *off);
-  if (!off) return MX_EINPUT;
+  if (!off) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) if (n > MX_PAR_MIN)
   for (size_t i = 0; i < n; i++) {
     const uint32_t o = cand[i];
@@ -516,7 +516,7 @@ static int next_candidates(const mx_builder *B, const uint32_t *cand,
   uint32_t *next = mx_alloc((total + 1) * sizeof *next);
   if (!next) {
     mx_free(off);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static) if (n > MX_PAR_MIN)
   for (size_t i = 0; i < n; i++) {
@@ -537,7 +537,7 @@ static int refine_levels(mx_builder *B, int balance_now) {
   mx_octree *T = &B->tree.oct;
   size_t n = 0;
   uint32_t *cand = mx_alloc((T->n + 1) * sizeof *cand);
-  if (!cand) return MX_EINPUT;
+  if (!cand) return MX_ENOMEM;
   for (size_t o = 0; o < T->n; o++)
     if (T->target[o] > T->level[o]) cand[n++] = (uint32_t)o;
   while (n > 0) {

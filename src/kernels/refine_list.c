@@ -68,7 +68,7 @@ static int sweep_levels(mx_builder *B, int *done) {
   /* no mx_raise_edge_levels: the splits below edge_levels register what
    * they need (mx_edges_ensure, from mx_split_octants) */
   uint32_t *want = mx_alloc((n + 1) * sizeof *want);
-  if (!want) return MX_EINPUT;
+  if (!want) return MX_ENOMEM;
   size_t w = 0;
   for (size_t o = 0; o < T->n; o++)
     if (!(T->flags[o] & MX_OCT_SPLIT) && T->target[o] > T->level[o])
@@ -85,7 +85,7 @@ static int sweep_levels(mx_builder *B, int *done) {
     for (size_t i = 0; i < nprev; i++) nk += (size_t)__builtin_popcount(T->kept[prev[i]]);
     cand = mx_alloc((n + nk + 1) * sizeof *cand);
     if (!cand) {
-      st = MX_EINPUT;
+      st = MX_ENOMEM;
       break;
     }
     size_t nc = 0;

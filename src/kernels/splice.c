@@ -114,7 +114,7 @@ static int first_use_ids(const uint8_t *type, const uint32_t *conn, size_t nc, s
   uint32_t *newid = mx_alloc((nn + 1) * sizeof *newid);
   if (!first || !cnt || !newid) {
     mx_free(first); mx_free(cnt); mx_free(newid);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < nn; v++) {
@@ -173,7 +173,7 @@ static int leaf_ranges(const mx_mesh_out *M, size_t nleaves, uint64_t **lo_out,
   uint64_t *hi = mx_alloc((nleaves + 1) * sizeof *hi);
   if (!lo || !hi) {
     mx_free(lo); mx_free(hi);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (size_t l = 0; l < nleaves; l++) lo[l] = hi[l] = 0;
@@ -237,7 +237,7 @@ int mx_mesh_splice(const mx_mesh_out *O, const uint8_t *ostates, size_t nold_lea
   uint8_t *ouse = mx_calloc(O->nnodes + 1), *puse = mx_calloc(P->nnodes + 1);
   uint32_t *pmap = mx_alloc((P->nnodes + 1) * sizeof *pmap);
   key_map H = {NULL, NULL, 0};
-  int st = (!off || !ouse || !puse || !pmap) ? MX_EINPUT : MX_OK;
+  int st = (!off || !ouse || !puse || !pmap) ? MX_ENOMEM : MX_OK;
   if (!st) st = leaf_ranges(O, nold_leaves, &olo, &ohi);
   if (!st) st = leaf_ranges(P, npatch_leaves, &plo, &phi);
   /* 1. Elements per leaf, and the nodes each side keeps. */
@@ -268,7 +268,7 @@ int mx_mesh_splice(const mx_mesh_out *O, const uint8_t *ostates, size_t nold_lea
     while (H.cap < 2 * npk + 64) H.cap *= 2;
     H.key = mx_calloc(H.cap * sizeof *H.key);
     H.val = mx_alloc(H.cap * sizeof *H.val);
-    if (!H.key || !H.val) st = MX_EINPUT;
+    if (!H.key || !H.val) st = MX_ENOMEM;
   }
   size_t shared = 0, moved = 0;
   if (!st) {
@@ -300,7 +300,7 @@ int mx_mesh_splice(const mx_mesh_out *O, const uint8_t *ostates, size_t nold_lea
     out->level = mx_alloc((nc + 1) * sizeof *out->level);
     out->leaf = mx_alloc((nc + 1) * sizeof *out->leaf);
     out->jens = mx_alloc((nc + 1) * sizeof *out->jens);
-    if (!out->type || !out->conn || !out->level || !out->leaf || !out->jens) st = MX_EINPUT;
+    if (!out->type || !out->conn || !out->level || !out->leaf || !out->jens) st = MX_ENOMEM;
     if (ntmp >= UINT32_MAX) st = MX_EINPUT;
   }
   size_t kept = 0, patched = 0;
@@ -367,7 +367,7 @@ int mx_mesh_splice(const mx_mesh_out *O, const uint8_t *ostates, size_t nold_lea
     out->xyz = mx_alloc((3 * nu + 3) * sizeof *out->xyz);
     out->nkey = mx_alloc((nu + 1) * sizeof *out->nkey);
     states = mx_alloc(nu + 1);
-    if (!out->xyz || !out->nkey || !states) st = MX_EINPUT;
+    if (!out->xyz || !out->nkey || !states) st = MX_ENOMEM;
   }
   if (!st) {
 #pragma omp parallel for schedule(static)

@@ -18,7 +18,7 @@ int mx_staircase(mx_mesh_out *M, const mx_optional *opt, double q_min,
   if (!ok || !q) {
     mx_free(ok);
     mx_free(q);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   size_t n = 0;
 #pragma omp parallel for schedule(static) reduction(+ : n)
@@ -44,7 +44,7 @@ int mx_staircase(mx_mesh_out *M, const mx_optional *opt, double q_min,
   if (!jens) {
     mx_free(ok);
     mx_free(q);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   size_t w = nc;
   for (size_t i = 0; i < opt->n; i++) {

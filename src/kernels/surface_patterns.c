@@ -91,7 +91,7 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *move
   /* 1. Count kept and optional sub-elements and centres per block. */
   const size_t nb = (nc + SP_BLOCK - 1) / SP_BLOCK;
   uint64_t *bout = mx_alloc((3 * nb + 3) * sizeof *bout);
-  if (!bout) return MX_EINPUT;
+  if (!bout) return MX_ENOMEM;
   uint64_t *bopt = bout + nb + 1, *bcen = bopt + nb + 1;
   size_t patterned = 0, removed = 0;
 #pragma omp parallel for schedule(static) reduction(+ : patterned, removed)
@@ -137,7 +137,7 @@ int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *move
     mx_free(type); mx_free(conn); mx_free(level); mx_free(leaf); mx_free(jens);
     mx_free(bout);
     mx_optional_free(opt);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   states = st2;
   /* By windows of blocks: the elements read go back to the system at each

@@ -89,7 +89,7 @@ static int propagate_closures(const mx_tree *tr, const uint32_t *leaves,
                               size_t n, uint32_t *mask, const uint32_t *cbits) {
   const mx_octree *T = &tr->oct;
   uint32_t *pos = mx_alloc((T->n + 1) * sizeof *pos);
-  if (!pos) return MX_EINPUT;
+  if (!pos) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
   for (size_t o = 0; o < T->n; o++) pos[o] = MX_NONE;
 #pragma omp parallel for schedule(static)
@@ -202,10 +202,10 @@ int mx_transition_masks(const mx_tree *tr, const uint32_t *leaves, size_t n,
   }
   const mx_octree *T = &tr->oct;
   uint32_t *mask = mx_alloc((n + 1) * sizeof *mask);
-  int st = !mask ? MX_EINPUT : MX_OK;
+  int st = !mask ? MX_ENOMEM : MX_OK;
   size_t closures = 0;
   uint32_t *cbits = mx_alloc((n + 1) * sizeof *cbits);
-  if (!cbits) st = MX_EINPUT;
+  if (!cbits) st = MX_ENOMEM;
   if (!st) {
 #pragma omp parallel for schedule(static) reduction(+ : closures)
     for (size_t i = 0; i < n; i++) {
@@ -256,7 +256,7 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
       if (T->level[leaves[i]] > top) top = T->level[leaves[i]];
     H.shift = 3 * (MX_MAX_LEVEL - top - 1);
   }
-  if (!st && (!mask || !ref || !noff || !eoff)) st = MX_EINPUT;
+  if (!st && (!mask || !ref || !noff || !eoff)) st = MX_ENOMEM;
   size_t centres = 0, bad = 0, points = 0;
   if (!st) {
 #pragma omp parallel for schedule(static) reduction(+ : centres, bad, points)
@@ -284,13 +284,13 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
   uint64_t *poff = mx_alloc((n + 1) * sizeof *poff);
   uint32_t *slot = NULL;
   uint64_t npts = 0;
-  if (!st && !poff) st = MX_EINPUT;
+  if (!st && !poff) st = MX_ENOMEM;
   if (!st) {
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < n; i++) poff[i] = (uint64_t)__builtin_popcount(mask[i]);
     npts = mx_scan_u64(poff, n);
     slot = mx_alloc((npts + 1) * sizeof *slot);
-    if (!slot) st = MX_EINPUT;
+    if (!slot) st = MX_ENOMEM;
   }
   /* Node hash: every point, with its owner (the first leaf using it); the
    * slot of each (leaf, point) is kept so later passes do not hash again. */
@@ -306,7 +306,7 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
     H.overflow = 0;
     H.e = mx_alloc(cap * sizeof *H.e);
     if (!H.e) {
-      st = MX_EINPUT;
+      st = MX_ENOMEM;
       break;
     }
     /* zeroed in parallel, in order: the pages fault here, not one at a time
@@ -355,7 +355,7 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
     out->ncells = mx_scan_u64(eoff, n);
     out->xyz = mx_alloc((3 * out->nnodes + 1) * sizeof *out->xyz);
     out->nkey = mx_alloc((out->nnodes + 1) * sizeof *out->nkey);
-    if (!out->xyz || !out->nkey) st = MX_EINPUT;
+    if (!out->xyz || !out->nkey) st = MX_ENOMEM;
   }
   /* Number the nodes: owners in leaf order, points in lattice order. */
   if (!st) {
@@ -395,7 +395,7 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
     out->level = mx_alloc((out->ncells + 1) * sizeof *out->level);
     out->leaf = mx_alloc((out->ncells + 1) * sizeof *out->leaf);
     out->jens = mx_alloc((out->ncells + 1) * sizeof *out->jens);
-    if (!out->type || !out->conn || !out->level || !out->leaf || !out->jens) st = MX_EINPUT;
+    if (!out->type || !out->conn || !out->level || !out->leaf || !out->jens) st = MX_ENOMEM;
   }
   if (!st) {
     /* Elements. */

@@ -115,7 +115,7 @@ static int colour_work(const mx_mesh_out *M, const uint32_t *inc, const uint64_t
   if (!pick || !prio) {
     mx_free(pick);
     mx_free(prio);
-    return -1;
+    return -2; /* out of memory */
   }
 #pragma omp parallel for schedule(static) if (nw > MX_PAR_MIN)
   for (size_t i = 0; i < nw; i++) {
@@ -237,7 +237,7 @@ int mx_untangle(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S
   *moved = 0;
   /* The work set: the nodes of the elements below the target. */
   uint8_t *mark = mx_calloc(nn + 1);
-  if (!mark) return MX_EINPUT;
+  if (!mark) return MX_ENOMEM;
   size_t bad = 0;
 #pragma omp parallel for schedule(static) reduction(+ : bad)
   for (size_t c = 0; c < nc; c++) {
@@ -257,7 +257,7 @@ int mx_untangle(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S
   uint64_t *off = mx_calloc((nn + 1) * sizeof *off);
   if (!off) {
     mx_free(mark);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++)
@@ -275,7 +275,7 @@ int mx_untangle(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S
   uint32_t *work = mx_alloc((nw + 1) * sizeof *work);
   if (!inc || !cur || !work) {
     mx_free(inc); mx_free(cur); mx_free(work); mx_free(off); mx_free(mark);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   memcpy(cur, off, nn * sizeof *cur);
 #pragma omp parallel for schedule(static)
@@ -291,7 +291,7 @@ int mx_untangle(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S
     uint64_t *boff = mx_alloc((nb + 1) * sizeof *boff);
     if (!boff) {
       mx_free(inc); mx_free(cur); mx_free(work); mx_free(off); mx_free(mark);
-      return MX_EINPUT;
+      return MX_ENOMEM;
     }
 #pragma omp parallel for schedule(static)
     for (size_t b = 0; b < nb; b++) {
@@ -319,7 +319,7 @@ int mx_untangle(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S
   uint8_t *onsurf = mx_alloc(nw + 1);
   if (!onsurf) {
     mx_free(inc); mx_free(work); mx_free(off); mx_free(mark);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(dynamic, 1024)
   for (size_t i = 0; i < nw; i++) {
@@ -334,7 +334,7 @@ int mx_untangle(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S
   int16_t *colour = mx_alloc((nw + 1) * sizeof *colour);
   uint32_t *byc = mx_alloc((nw + 1) * sizeof *byc);
   size_t cstart[MAX_COLOURS + 1];
-  int ncol = -1;
+  int ncol = -2; /* -2: out of memory; -1: too many colours */
   if (widx && colour && byc) {
 #pragma omp parallel for schedule(static)
     for (size_t v = 0; v < nn; v++) widx[v] = UINT32_MAX;
@@ -346,8 +346,8 @@ int mx_untangle(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S
   if (ncol < 0) {
     mx_free(colour); mx_free(byc); mx_free(onsurf);
     mx_free(inc); mx_free(work); mx_free(off); mx_free(mark);
-    mx_error(NULL, 0, "out of memory, or more than %d colours, in the untangling",
-             MAX_COLOURS);
+    if (ncol == -2) return MX_ENOMEM;
+    mx_error(NULL, 0, "more than %d colours in the untangling", MAX_COLOURS);
     return MX_EINPUT;
   }
   memset(cstart, 0, sizeof cstart);

@@ -157,7 +157,7 @@ static int partners_build(const mx_trisoup *s, partners *R) {
   R->adj = mx_alloc((2 * np + 1) * sizeof *R->adj);
   if (!R->off || !R->adj) {
     mx_free(pairs);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   for (size_t k = 0; k < np; k++) {
     R->off[(pairs[k] >> 32) + 1]++;
@@ -167,7 +167,7 @@ static int partners_build(const mx_trisoup *s, partners *R) {
   uint64_t *fill = mx_alloc((s->nt + 1) * sizeof *fill);
   if (!fill) {
     mx_free(pairs);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   memcpy(fill, R->off, s->nt * sizeof *fill);
   /* sorted by (i, j): for each t the pairs with t as j (i < t) come before
@@ -218,7 +218,7 @@ static int whole_values(const mx_trisoup *d, const mx_surface_index *W, int *who
   uint64_t *key = mx_alloc((d->nv + 1) * sizeof *key);
   uint32_t *canon = mx_alloc((d->nv + 1) * sizeof *canon);
   uint32_t *order = mx_alloc((d->nv + 1) * sizeof *order);
-  int st = key && canon && order ? MX_OK : MX_EINPUT;
+  int st = key && canon && order ? MX_OK : MX_ENOMEM;
   /* points sorted by a hash of their coordinates; within a run of one
    * hash, the first point with the same coordinates stands for them */
   if (!st) {
@@ -254,7 +254,7 @@ static int whole_values(const mx_trisoup *d, const mx_surface_index *W, int *who
   const size_t ne = 3 * (size_t)W->nt;
   uint64_t *ek = st ? NULL : mx_alloc((ne + 1) * sizeof *ek);
   uint32_t *ev = st ? NULL : mx_alloc((ne + 1) * sizeof *ev);
-  if (!st && (!ek || !ev)) st = MX_EINPUT;
+  if (!st && (!ek || !ev)) st = MX_ENOMEM;
   if (!st) {
     for (uint32_t i = 0; i < W->nt; i++) {
       const uint32_t *v = d->tri + 3 * (size_t)W->tri_id[i];
@@ -304,7 +304,7 @@ static int free_sets(const mx_trisoup *s, const partners *R, uint32_t *comp, uin
   uint32_t *nb = mx_alloc((ne + 1) * sizeof *nb); /* across edge e: the neighbour */
   uint8_t *nbp = mx_alloc(ne + 1);                /* and 1 if it runs the same way */
   uint32_t *queue = mx_alloc((nt + 1) * sizeof *queue);
-  int st = ek && ev && nb && nbp && queue ? MX_OK : MX_EINPUT;
+  int st = ek && ev && nb && nbp && queue ? MX_OK : MX_ENOMEM;
   if (!st) {
     for (size_t t = 0; t < nt; t++) {
       const int fr = R->off[t + 1] == R->off[t] && !degenerate(s, (uint32_t)t);
@@ -490,7 +490,7 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
   uint32_t *nnew = mx_calloc((nt + 1) * sizeof *nnew);
   double *tarea = mx_calloc((nt + 1) * sizeof *tarea);
   uint8_t *whole = mx_alloc(nt + 1); /* the verdict of a triangle nothing cut */
-  if (!status && (!ntri || !nnew || !tarea || !whole)) status = MX_EINPUT;
+  if (!status && (!ntri || !nnew || !tarea || !whole)) status = MX_ENOMEM;
   size_t cut_n = 0, pieces_n = 0, kept = 0, in_n = 0, out_n = 0, copies = 0, turned = 0,
          capped = 0, queries = 0;
   int oom = 0;
@@ -501,7 +501,7 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
   if (!status && st->whole) {
     comp = mx_alloc((nt + 1) * sizeof *comp);
     par = mx_alloc(nt + 1);
-    status = comp && par ? free_sets(s, &R, comp, par) : MX_EINPUT;
+    status = comp && par ? free_sets(s, &R, comp, par) : MX_ENOMEM;
   }
   /* the pieces of each triangle (cutting is cheap; classifying is not:
    * the verdicts are kept for the writing pass) */
@@ -509,7 +509,7 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
   uint8_t *known = NULL;
   if (!status) {
     poff = mx_alloc((nt + 1) * sizeof *poff);
-    if (!poff) status = MX_EINPUT;
+    if (!poff) status = MX_ENOMEM;
   }
   if (!status) {
 #pragma omp parallel reduction(| : oom)
@@ -531,7 +531,7 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
       }
       mx_free(W);
     }
-    if (oom) status = MX_EINPUT;
+    if (oom) status = MX_ENOMEM;
   }
   if (!status) {
     uint64_t sum = 0;
@@ -542,7 +542,7 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
     }
     poff[nt] = sum;
     known = mx_alloc(sum + 1);
-    if (!known) status = MX_EINPUT;
+    if (!known) status = MX_ENOMEM;
   }
   if (!status) {
 #pragma omp parallel reduction(+ : cut_n, pieces_n, kept, in_n, out_n, copies, turned, capped, \
@@ -578,7 +578,7 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
       }
       mx_free(W);
     }
-    if (oom) status = MX_EINPUT;
+    if (oom) status = MX_ENOMEM;
   }
   if (!status && comp)
     for (size_t t = 0; t < nt; t++) {
@@ -611,7 +611,7 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
   if (!status) {
     toff = mx_alloc((nt + 1) * sizeof *toff);
     voff = mx_alloc((nt + 1) * sizeof *voff);
-    if (!toff || !voff) status = MX_EINPUT;
+    if (!toff || !voff) status = MX_ENOMEM;
   }
   if (!status) {
     for (size_t t = 0; t < nt; t++) {
@@ -686,7 +686,7 @@ int mx_winding_boundary(const mx_trisoup *s, const mx_surface_index *Wn, mx_tris
       }
       mx_free(W);
     }
-    if (oom) status = MX_EINPUT;
+    if (oom) status = MX_ENOMEM;
   }
   if (!status) {
     out->nv = (size_t)tot_v;

@@ -1,7 +1,11 @@
 /* One public call of a mesher object (3D mx_mesher, 2D mx_mesher2d): its
- * message collector installed as the library's handler and its thread count
- * set for the call's duration, then both restored and the status refined
- * (MX_EINPUT after a failed allocation becomes MX_ENOMEM). */
+ * message collector installed as the calling thread's handler and its
+ * thread count set for the call's duration (both are the calling thread's:
+ * the handler is thread-local, omp_set_num_threads sets the thread's own
+ * nthreads-var), then both restored. A call that fails with MX_ENOMEM and
+ * said nothing (the allocation failed in a worker thread) says "out of
+ * memory"; the status is refined (MX_EINPUT after a failed allocation
+ * becomes MX_ENOMEM: transitional, for the sites not yet converted). */
 #ifndef MX_CALL_H
 #define MX_CALL_H
 
@@ -12,6 +16,8 @@ typedef struct {
   void *user;
   int threads;
   int outer_default; /* the enclosing call's, restored on leaving */
+  unsigned long errors; /* mx_msg_errors on entering */
+  int level;            /* mx_msg_level on entering */
 } mx_call;
 
 /* collect(user, ...) receives the call's messages; threads > 0 sets the

@@ -37,11 +37,11 @@ static int add_domain(mx_mesher *m, mx_trisoup *s, const char *name) {
     mx_error(name, 0, "too many input surfaces (at most 64)");
     return MX_EINPUT;
   }
-  char *nm = strdup(name);
+  char *nm = mx_strdup(name);
   if (!nm) return MX_ENOMEM;
   int st = mx_trisoup_append(&m->domain, s);
   if (st) {
-    free(nm);
+    mx_free(nm);
     return st;
   }
   m->domain_name[m->ndomain++] = nm;
@@ -182,9 +182,11 @@ int mx_mesher_add_region_surface(mx_mesher *m, const char *path, int level) {
     memset(&m->region[r], 0, sizeof m->region[r]);
     st = mx_read_surface(path, &m->region[r]);
     if (!st) st = mx_trisoup_check(&m->region[r], path, NULL);
+    char *name = st ? NULL : mx_strdup(path);
+    if (!st && !name) st = MX_ENOMEM;
     if (!st) {
       mx_mesher_note_read(m, path, 0);
-      m->region_name[r] = strdup(path);
+      m->region_name[r] = name;
       m->region_level[r] = level;
       m->nregions++;
     } else {

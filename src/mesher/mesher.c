@@ -70,7 +70,7 @@ void mx_params_default(mx_params *p) {
 }
 
 mx_mesher *mx_mesher_new(const mx_params *p) {
-  mx_mesher *m = calloc(1, sizeof *m);
+  mx_mesher *m = mx_calloc(sizeof *m);
   if (!m) return NULL;
   if (p)
     m->p = *p;
@@ -114,14 +114,14 @@ void mx_mesher_free(mx_mesher *m) {
   if (m->have_winding) mx_surface_index_free(&m->WI);
   mx_trisoup_free(&m->domain);
   mx_trisoup_free(&m->soup);
-  for (int i = 0; i < m->ndomain; i++) free(m->domain_name[i]);
+  for (int i = 0; i < m->ndomain; i++) mx_free(m->domain_name[i]);
   for (int r = 0; r < m->nregions; r++) {
     mx_trisoup_free(&m->region[r]);
-    free(m->region_name[r]);
+    mx_free(m->region_name[r]);
   }
   mx_free(m->boxes);
   for (int l = 0; l <= MX_MAX_LEVEL; l++) mx_free(m->split_keys[l]);
-  free(m);
+  mx_free(m);
 }
 
 void mx_mesher_set_message_handler(mx_mesher *m, mx_message_fn fn, void *user) {
@@ -187,6 +187,7 @@ static int check_memory_leaves(mx_mesher *m) {
 int mx_update_leaves(mx_mesher *m) {
   mx_free(m->leaves);
   m->leaves = NULL;
+  m->nleaves = 0;
   MX_CHECK(mx_leaves(&m->B.tree, &m->leaves, &m->nleaves));
   return mx_leaves_sorted(&m->B.tree, m->leaves, m->nleaves);
 }
@@ -202,8 +203,12 @@ int mx_build_tree(mx_mesher *m) {
   MX_CHECK(mx_mesher_assemble_inputs(m));
   const mx_requests req = mx_mesher_requests(m);
   const int use_edges = m->p.balance == MX_BALANCE_EDGES;
-  MX_CHECK(mx_builder_init(&m->B, &m->soup, m->nt_domain, m->region_t0, &req, use_edges,
-                           m->ndomain ? m->domain_name[0] : NULL));
+  const int st = mx_builder_init(&m->B, &m->soup, m->nt_domain, m->region_t0, &req, use_edges,
+                                 m->ndomain ? m->domain_name[0] : NULL);
+  if (st) { /* what it made before failing */
+    mx_builder_free(&m->B);
+    return st;
+  }
   m->have_tree = 1;
   m->B.on_level = m->progress.on_level;
   m->B.on_level_user = m->progress.user;
@@ -444,7 +449,13 @@ int mx_mesh_finish(mx_mesher *m) {
 
 /* Mesh the current octree up to params.stage. */
 int mx_mesh_stages(mx_mesher *m) {
-  if (!m->have_tree) MX_CHECK(mx_build_tree(m));
+  if (!m->have_tree) {
+    const int st = mx_build_tree(m);
+    if (st) { /* no half-built tree left for the next call to take */
+      mx_tree_clear(m);
+      return st;
+    }
+  }
   m->S.leaves = m->nleaves;
   if (m->p.stage == MX_STAGE_OCTREE) {
     mx_mesh_clear(m);

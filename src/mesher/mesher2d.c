@@ -64,7 +64,7 @@ void mx_params2d_default(mx_params2d *p) {
 }
 
 mx_mesher2d *mx_mesher2d_new(const mx_params2d *p) {
-  mx_mesher2d *m = calloc(1, sizeof *m);
+  mx_mesher2d *m = mx_calloc(sizeof *m);
   if (!m) return NULL;
   if (p) m->p = *p;
   else mx_params2d_default(&m->p);
@@ -98,14 +98,14 @@ void mx_mesher2d_free(mx_mesher2d *m) {
   mx_poly_free(&m->domain);
   for (size_t k = 0; k < m->nregions; k++) mx_poly_free(&m->regions[k]);
   for (size_t k = 0; k < m->ndrawings; k++) mx_poly_free(&m->drawings[k]);
-  free(m->regions);
-  free(m->drawings);
-  free(m->region_level);
-  free(m->drawing_level);
-  free(m->boxes);
-  free(m->funs);
+  mx_free(m->regions);
+  mx_free(m->drawings);
+  mx_free(m->region_level);
+  mx_free(m->drawing_level);
+  mx_free(m->boxes);
+  mx_free(m->funs);
   mx_free(m->features);
-  free(m);
+  mx_free(m);
 }
 
 void mx_mesher2d_set_message_handler(mx_mesher2d *m, mx_message_fn fn, void *user) {
@@ -165,12 +165,11 @@ static int set_domain_arrays(mx_mesher2d *m, const char *name, size_t nv, const 
   P->xy = mx_alloc(2 * nv * sizeof *P->xy);
   P->seg = mx_alloc(2 * ns * sizeof *P->seg);
   P->line = mx_alloc(ns * sizeof *P->line);
-  P->path = malloc(strlen(name ? name : "arrays") + 1);
+  P->path = mx_strdup(name ? name : "arrays");
   if (!P->xy || !P->seg || !P->line || !P->path) {
     mx_poly_free(P);
     return MX_ENOMEM;
   }
-  strcpy(P->path, name ? name : "arrays");
   P->nv = nv, P->ns = ns;
   for (size_t i = 0; i < 2 * nv; i++) P->xy[i] = xy[i];
   for (size_t s = 0; s < ns; s++) {
@@ -205,10 +204,10 @@ static int set_levels(mx_mesher2d *m, int s, int a) {
 
 int mx_mesher2d_set_levels(mx_mesher2d *m, int s, int a) { CALL(m, set_levels(m, s, a)); }
 
-/* Room for one more item in a malloc'd array. */
+/* Room for one more item in an array of mx_alloc. */
 static int grow(void **p, size_t n, size_t elem) {
   if (n & (n - 1)) return MX_OK; /* capacity: powers of two */
-  void *q = realloc(*p, (n ? 2 * n : 1) * elem);
+  void *q = mx_realloc(*p, (n ? 2 * n : 1) * elem);
   if (!q) return MX_ENOMEM;
   *p = q;
   return MX_OK;
@@ -348,7 +347,7 @@ static int feature_boxes(const mx_mesher2d *m, mx_qbox **boxes, size_t *nboxes) 
     mx_free(b);
     return MX_ENOMEM;
   }
-  memcpy(b, *boxes, *nboxes * sizeof *b);
+  if (*nboxes) memcpy(b, *boxes, *nboxes * sizeof *b);
   for (size_t i = 0; i < nf; i++) {
     f[3 * i] = m->domain.xy[2 * (size_t)m->features[i]];
     f[3 * i + 1] = m->domain.xy[2 * (size_t)m->features[i] + 1];

@@ -31,27 +31,31 @@ static int refine_and_mesh(mx_mesher *m, uint32_t *octs, size_t n) {
     octs[listed++] = octs[i];
   }
   for (size_t i = 0; i < listed; i++) B->tree.oct.flags[octs[i]] &= (uint8_t)~MX_OCT_QUEUED;
-  MX_CHECK(mx_refine_list(B, octs, listed));
+  int st = mx_refine_list(B, octs, listed);
   m->S.refined_listed = listed;
   /* Algorithm 2's requests on top (boxes, levels, regions) */
-  mx_retarget_leaves(B);
-  MX_CHECK(mx_refine_leaves_to_target(B));
+  if (!st) mx_retarget_leaves(B);
+  if (!st) st = mx_refine_leaves_to_target(B);
+  if (st) { /* a tree refined half-way is not kept: the next mesh builds it again */
+    mx_tree_clear(m);
+    return st;
+  }
   m->S.remesh_splits = B->stats.split_requested + B->stats.split_balance - s0;
   m->S.ph.refine += B->stats.t_refine - tr;
   m->S.ph.balance += B->stats.t_balance - tb;
   mx_free(m->file_leaf);
   m->file_leaf = NULL;
   m->file_nelem = 0;
-  int st;
   if (m->mesh_stage == MX_STAGE_FULL && m->p.stage == MX_STAGE_FULL) {
     /* mesh again around what changed, keep the rest */
     st = mx_remesh_after_refine(m);
     if (!st) st = mx_repair(m);
     if (!st) st = mx_mesh_finish(m);
   } else {
-    MX_CHECK(mx_update_leaves(m));
-    st = mx_mesh_stages(m);
+    st = mx_update_leaves(m);
+    if (!st) st = mx_mesh_stages(m);
   }
+  if (st && !m->leaves) mx_tree_clear(m); /* the leaves could not be listed */
   mx_fill_tree_stats(m);
   m->S.ph.total = mx_wtime() - t0;
   return st;

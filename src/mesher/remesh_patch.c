@@ -56,7 +56,7 @@ static int mark_rings(mx_mesher *m, const uint32_t *old, size_t nold, const uint
   *nsplit = n;
   if (!n) return MX_OK;
   uint32_t *q = mx_alloc(((n > nl ? n : nl) + 1) * sizeof *q);
-  if (!q) return MX_EINPUT;
+  if (!q) return MX_ENOMEM;
   n = 0;
   for (size_t i = 0; i < nold; i++)
     if (T->flags[old[i]] & MX_OCT_SPLIT) q[n++] = old[i];
@@ -86,7 +86,7 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
   uint32_t *from_old = mx_alloc((nl + 1) * sizeof *from_old);
   uint32_t *from_patch = mx_alloc((nl + 1) * sizeof *from_patch);
   uint32_t *P = mx_alloc((nl + 1) * sizeof *P);
-  int st = (!pos || !mark || !from_old || !from_patch || !P) ? MX_EINPUT : MX_OK;
+  int st = (!pos || !mark || !from_old || !from_patch || !P) ? MX_ENOMEM : MX_OK;
   size_t nsplit = 0;
   if (!st) {
 #pragma omp parallel for schedule(static)

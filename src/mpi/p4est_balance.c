@@ -24,7 +24,7 @@ static void balance_replace(p8est_t *p8, p4est_topidx_t t, int nout, p8est_quadr
   }
   const mx_pq *d = out[0]->p.user_data;
   if (mx_p4est_mask_reserve(P, (size_t)d->tri_cnt + 1)) {
-    P->status = MX_EINPUT;
+    P->status = MX_ENOMEM;
     return;
   }
   mx_pq_family f;
@@ -33,7 +33,7 @@ static void balance_replace(p8est_t *p8, p4est_topidx_t t, int nout, p8est_quadr
   P->located += f.located;
   const uint64_t n = mx_pq_family_tris(&f);
   if (mx_p4est_pool_reserve(P, n + 1)) { /* may move the pool: offsets stay */
-    P->status = MX_EINPUT;
+    P->status = MX_ENOMEM;
     return;
   }
   mx_pq_fill(&f, P->pool + d->tri_off, d->tri_cnt, P->mask, P->pool + P->pool_n, P->pool_n);

@@ -95,7 +95,7 @@ int mx_p4est_gather_leaves(const mx_p4est_octree *P, int root, int all_quadrants
               mx_pq_kept(p8est_quadrant_array_index(&tr->quadrants, i)->p.user_data);
   }
   uint64_t *mine = mx_alloc((2 * nloc + 1) * sizeof *mine);
-  int st = mine ? MX_OK : MX_EINPUT, all = st;
+  int st = mine ? MX_OK : MX_ENOMEM, all = st;
   MPI_Allreduce(&st, &all, 1, MPI_INT, MPI_MAX, P->comm);
   if (all) {
     mx_free(mine);
@@ -120,7 +120,7 @@ int mx_p4est_gather_leaves(const mx_p4est_octree *P, int root, int all_quadrants
   if (P->rank == root) {
     counts = mx_alloc(((size_t)P->size + 1) * sizeof *counts);
     displs = mx_alloc(((size_t)P->size + 1) * sizeof *displs);
-    st = counts && displs ? MX_OK : MX_EINPUT;
+    st = counts && displs ? MX_OK : MX_ENOMEM;
   }
   MPI_Gather(&cnt, 1, MPI_INT, counts, 1, MPI_INT, root, P->comm);
   if (P->rank == root && !st) {
@@ -129,7 +129,7 @@ int mx_p4est_gather_leaves(const mx_p4est_octree *P, int root, int all_quadrants
       total += (size_t)counts[r];
     }
     all_pairs = mx_alloc((total + 1) * sizeof *all_pairs);
-    if (!all_pairs) st = MX_EINPUT;
+    if (!all_pairs) st = MX_ENOMEM;
   }
   MPI_Allreduce(&st, &all, 1, MPI_INT, MPI_MAX, P->comm);
   if (!all)
@@ -148,7 +148,7 @@ int mx_p4est_gather_leaves(const mx_p4est_octree *P, int root, int all_quadrants
   uint64_t *k = mx_alloc((m + 1) * sizeof *k);
   uint32_t *idx = mx_alloc((m + 1) * sizeof *idx);
   uint8_t *lv = mx_alloc(m + 1), *in = kept ? mx_alloc(m + 1) : NULL;
-  if (!k || !idx || !lv || (kept && !in)) st = MX_EINPUT;
+  if (!k || !idx || !lv || (kept && !in)) st = MX_ENOMEM;
   for (size_t i = 0; !st && i < m; i++) {
     k[i] = all_pairs[2 * i];
     idx[i] = (uint32_t)i;

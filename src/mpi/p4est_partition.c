@@ -70,7 +70,7 @@ int mx_p4est_partition(mx_p4est_octree *P, int mesh_weights) {
   size_t total = 0;
   FOR_LOCAL(p8, d, i, { total += d->tri_cnt; });
   uint32_t *src = mx_alloc((total + 1) * sizeof *src);
-  int st = old_gfq && src_sizes && src ? MX_OK : MX_EINPUT;
+  int st = old_gfq && src_sizes && src ? MX_OK : MX_ENOMEM;
   int all = st;
   MPI_Allreduce(&st, &all, 1, MPI_INT, MPI_MAX, P->comm);
   if (all) {
@@ -102,7 +102,7 @@ int mx_p4est_partition(mx_p4est_octree *P, int mesh_weights) {
   }
   const size_t nnew = (size_t)p8->local_num_quadrants;
   int *dest_sizes = mx_alloc((nnew + 1) * sizeof *dest_sizes);
-  st = dest_sizes ? MX_OK : MX_EINPUT;
+  st = dest_sizes ? MX_OK : MX_ENOMEM;
   MPI_Allreduce(&st, &all, 1, MPI_INT, MPI_MAX, P->comm);
   uint32_t *dest = NULL;
   if (!all) {
@@ -111,7 +111,7 @@ int mx_p4est_partition(mx_p4est_octree *P, int mesh_weights) {
     size_t bytes = 0;
     for (size_t i = 0; i < nnew; i++) bytes += (size_t)dest_sizes[i];
     dest = mx_alloc(bytes + sizeof *dest);
-    st = dest ? MX_OK : MX_EINPUT;
+    st = dest ? MX_OK : MX_ENOMEM;
     MPI_Allreduce(&st, &all, 1, MPI_INT, MPI_MAX, P->comm);
   }
   if (!all) {
@@ -147,7 +147,7 @@ int mx_p4est_ghost(mx_p4est_octree *P) {
   P->ghost = p8est_ghost_new(P->p8, P8EST_CONNECT_FULL);
   const size_t n = P->ghost->ghosts.elem_count;
   P->ghost_data = mx_alloc((n + 1) * sizeof *P->ghost_data);
-  int st = P->ghost_data ? MX_OK : MX_EINPUT, all = st;
+  int st = P->ghost_data ? MX_OK : MX_ENOMEM, all = st;
   MPI_Allreduce(&st, &all, 1, MPI_INT, MPI_MAX, P->comm);
   if (!all) p8est_ghost_exchange_data(P->p8, P->ghost, P->ghost_data);
   P->t.ghost += mx_wtime() - t0;

@@ -38,7 +38,7 @@ int mx_p4est_pool_reserve(mx_p4est_octree *P, size_t n) {
   size_t cap = P->pool_cap ? P->pool_cap : 4096;
   while (cap < P->pool_n + n) cap += cap / 2;
   uint32_t *p = mx_realloc(P->pool, cap * sizeof *p);
-  if (!p) return MX_EINPUT;
+  if (!p) return MX_ENOMEM;
   P->pool = p;
   P->pool_cap = cap;
   return MX_OK;
@@ -52,7 +52,7 @@ int mx_p4est_mask_reserve(mx_p4est_octree *P, size_t n) {
   P->mask = mx_alloc(cap);
   if (!P->mask) {
     P->mask_cap = 0;
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   P->mask_cap = cap;
   return MX_OK;
@@ -84,7 +84,7 @@ static int build_root_table(const mx_builder *B, root_table *R, size_t *nlocated
   const size_t nroot = (size_t)nx * ny * nz, nt = B->soup->nt;
   R->off = mx_calloc((nroot + 1) * sizeof *R->off);
   R->data = mx_calloc((nroot + 1) * sizeof *R->data);
-  if (!R->off || !R->data) return MX_EINPUT;
+  if (!R->off || !R->data) return MX_ENOMEM;
   /* pass 0 counts the (root, triangle) pairs, pass 1 lists them */
   for (int pass = 0; pass < 2; pass++) {
     for (size_t t = 0; t < nt; t++) {
@@ -116,7 +116,7 @@ static int build_root_table(const mx_builder *B, root_table *R, size_t *nlocated
     if (pass == 0) {
       for (size_t r = 0; r < nroot; r++) R->off[r + 1] += R->off[r];
       R->tri = mx_alloc(((size_t)R->off[nroot] + 1) * sizeof *R->tri);
-      if (!R->tri) return MX_EINPUT;
+      if (!R->tri) return MX_ENOMEM;
     } else {
       for (size_t r = nroot; r > 0; r--) R->off[r] = R->off[r - 1];
       R->off[0] = 0;
@@ -170,7 +170,7 @@ static void init_root(p8est_t *p8, p4est_topidx_t t, p8est_quadrant_t *q) {
   d->tri_off = P->pool_n;
   if (!d->tri_cnt) return;
   if (mx_p4est_pool_reserve(P, d->tri_cnt)) {
-    P->status = MX_EINPUT;
+    P->status = MX_ENOMEM;
     d->tri_cnt = 0;
     return;
   }
@@ -183,7 +183,7 @@ int mx_p4est_new_forest(mx_p4est_octree *P) {
   P->conn = p8est_connectivity_new_brick(g->dims[0], g->dims[1], g->dims[2], 0, 0, 0);
   const p4est_topidx_t nt = P->conn->num_trees;
   P->tree_root = mx_alloc(3 * ((size_t)nt + 1) * sizeof *P->tree_root);
-  if (!P->tree_root) return MX_EINPUT;
+  if (!P->tree_root) return MX_ENOMEM;
   /* a tree's root cube: the brick coordinates of its corner 0 */
   for (p4est_topidx_t t = 0; t < nt; t++) {
     const p4est_topidx_t v = P->conn->tree_to_vertex[P8EST_CHILDREN * t];
@@ -283,7 +283,7 @@ static int prepare_level(mx_p4est_octree *P, level_side *S, int l) {
   S->fam = mx_alloc((n + 1) * sizeof *S->fam);
   S->moff = mx_alloc((n + 1) * sizeof *S->moff);
   S->toff = mx_alloc((n + 1) * sizeof *S->toff);
-  if (!S->tree || !S->quad || !S->data || !S->fam || !S->moff || !S->toff) return MX_EINPUT;
+  if (!S->tree || !S->quad || !S->data || !S->fam || !S->moff || !S->toff) return MX_ENOMEM;
   size_t k = 0;
   for (p4est_topidx_t t = p8->first_local_tree; t <= p8->last_local_tree; t++) {
     p8est_tree_t *tr = p8est_tree_array_index(p8->trees, t);

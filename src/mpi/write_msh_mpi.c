@@ -72,6 +72,7 @@ typedef struct {
   int rank, size;
   MPI_File fh;
   int failed;          /* this rank saw a failure: it writes nothing more */
+  int oom;             /* and it was an allocation (the status: MX_ENOMEM) */
   char msg[MSG_MAX];   /* its first message (after agree: the agreed one) */
   char *buf;           /* one chunk */
   size_t chunk;
@@ -137,6 +138,7 @@ static int check_local(wctx *W, const mx_dist_mesh *D, uint32_t **pos_out) {
   }
   uint32_t *pos = mx_alloc((size_t)(D->nowned + 1) * sizeof *pos);
   if (!pos) {
+    W->oom = 1;
     fail(W, "out of memory");
     return -1;
   }
@@ -365,7 +367,7 @@ static void make_layout(wctx *W, const mx_dist_mesh *D, layout *L, double box[6]
 
 /* Rank 0: where the bytes go (name: the temporary it creates, or path
  * itself when that is an existing non-regular file such as /dev/null),
- * and in *final (malloc'ed) the file to rename it onto, or NULL. 1 if it
+ * and in *final (mx_free) the file to rename it onto, or NULL. 1 if it
  * created the temporary. */
 static int choose_names(wctx *W, const char *path, char name[NAME_LEN], char **final) {
   name[0] = '\0';
@@ -374,19 +376,20 @@ static int choose_names(wctx *W, const char *path, char name[NAME_LEN], char **f
   char *real = NULL;
   if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode))
     real = realpath(path, NULL); /* written through the link */
-  if (!real) real = strdup(path);
+  if (!real) real = mx_strdup(path);
   if (!real) {
+    W->oom = 1;
     fail(W, "out of memory");
     return 0;
   }
   if (strlen(real) + 32 >= NAME_LEN) {
     fail(W, "cannot write: path too long");
-    free(real);
+    mx_free(real);
     return 0;
   }
   if (stat(real, &st) == 0 && !S_ISREG(st.st_mode)) {
     snprintf(name, NAME_LEN, "%s", real); /* renaming would replace it */
-    free(real);
+    mx_free(real);
     return 0;
   }
   const long pid = (long)getpid();
@@ -399,7 +402,7 @@ static int choose_names(wctx *W, const char *path, char name[NAME_LEN], char **f
   if (fd < 0) {
     fail(W, "cannot write: %s", strerror(errno));
     name[0] = '\0';
-    free(real);
+    mx_free(real);
     return 0;
   }
   close(fd);
@@ -416,7 +419,10 @@ static void write_file(wctx *W, const mx_dist_mesh *D, const uint32_t *pos) {
   size_t plen = 0;
   make_layout(W, D, &L, box, &plen, prefix);
   W->buf = mx_alloc(W->chunk);
-  if (!W->buf) fail(W, "out of memory");
+  if (!W->buf) {
+    W->oom = 1;
+    fail(W, "out of memory");
+  }
   if (W->rank == 0) {
     write_part(W, 0, prefix, plen);
     write_part(W, L.mid, mid, head_mid(mid, L.nblocks, L.ncells));
@@ -494,6 +500,6 @@ int mx_write_msh_mpi(const char *path, MPI_Comm comm, const mx_dist_mesh *D) {
     if (failed && created) unlink(name);
     if (failed) mx_error(path, 0, "%s", W.msg);
   }
-  free(final);
-  return failed ? MX_EINPUT : MX_OK;
+  mx_free(final);
+  return !failed ? MX_OK : W.oom ? MX_ENOMEM : MX_EINPUT;
 }

@@ -10,8 +10,10 @@
 
 static mx_pattern_ref *lut;
 double *mx_pattern_elem_jens;
-static int init_status = MX_OK;
-static pthread_once_t once = PTHREAD_ONCE_INIT;
+/* built once, by the first call that can (one that ran out of memory
+ * leaves nothing, and the next call tries again) */
+static int built;
+static pthread_mutex_t build_lock = PTHREAD_MUTEX_INITIALIZER;
 
 static int find_class(uint32_t canon) {
   int lo = 0, hi = mx_pattern_nclasses - 1;
@@ -25,14 +27,18 @@ static int find_class(uint32_t canon) {
   return -1;
 }
 
-static void build(void) {
+static int build(void) {
   mx_lattice_init();
   lut = mx_alloc(sizeof(mx_pattern_ref) << MX_CONFIG_BITS);
   mx_pattern_elem_jens = mx_alloc((size_t)mx_pattern_nelems * sizeof(double));
   if (!lut || !mx_pattern_elem_jens) {
-    init_status = MX_EINPUT;
-    return;
+    mx_free(lut);
+    mx_free(mx_pattern_elem_jens);
+    lut = NULL;
+    mx_pattern_elem_jens = NULL;
+    return MX_ENOMEM;
   }
+  int init_status = MX_OK;
 #pragma omp parallel for schedule(static)
   for (uint32_t c = 0; c < (1u << MX_CONFIG_BITS); c++) {
     lut[c].cls = 0xffff;
@@ -63,14 +69,27 @@ static void build(void) {
       for (int a = 0; a < 3; a++) x[v][a] = mx_lat_xyz[e->v[v]][a];
     mx_pattern_elem_jens[k] = mx_jens(e->type, x);
   }
-  if (init_status != MX_OK)
+  if (init_status != MX_OK) {
     mx_error(NULL, 0, "the compiled pattern table misses configurations: "
                       "regenerate src/patterns/table.c with tools/patterngen");
+    mx_free(lut);
+    mx_free(mx_pattern_elem_jens);
+    lut = NULL;
+    mx_pattern_elem_jens = NULL;
+  }
+  return init_status;
 }
 
 int mx_patterns_init(void) {
-  pthread_once(&once, build);
-  return init_status;
+  if (__atomic_load_n(&built, __ATOMIC_ACQUIRE)) return MX_OK;
+  pthread_mutex_lock(&build_lock);
+  int st = MX_OK;
+  if (!built) {
+    st = build();
+    if (st == MX_OK) __atomic_store_n(&built, 1, __ATOMIC_RELEASE);
+  }
+  pthread_mutex_unlock(&build_lock);
+  return st;
 }
 
 mx_pattern_ref mx_pattern_lookup(uint32_t config) { return lut[config]; }

@@ -71,7 +71,7 @@ int mx_qbalance_find(const mx_qtree *T, size_t nroots, uint32_t **out, size_t *n
   uint8_t *hit = mx_alloc(T->n + 1);
   if (!S.root || !off || !hit) {
     mx_free(S.root), mx_free(off), mx_free(hit);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   for (uint32_t r = 0; r < nroots; r++) {
     uint32_t x, y;
@@ -98,7 +98,7 @@ int mx_qbalance_find(const mx_qtree *T, size_t nroots, uint32_t **out, size_t *n
     }
   }
   mx_free(S.root), mx_free(off), mx_free(hit);
-  if (!list) return MX_EINPUT;
+  if (!list) return MX_ENOMEM;
   *out = list;
   *n = total;
   return MX_OK;

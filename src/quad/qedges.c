@@ -89,7 +89,7 @@ static int reserve(qtable *T, size_t need) {
   qtable N = {mx_alloc(cap * sizeof *N.kw), mx_alloc(2 * cap * sizeof *N.slot), cap, T->count};
   if (!N.kw || !N.slot) {
     mx_free(N.kw), mx_free(N.slot);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static) if (PAR(cap))
   for (size_t i = 0; i < cap; i++) {
@@ -112,7 +112,7 @@ static int reserve(qtable *T, size_t need) {
 
 int mx_qedges_new(int top, mx_qedges **E) {
   *E = mx_calloc(sizeof **E);
-  if (!*E) return MX_EINPUT;
+  if (!*E) return MX_ENOMEM;
   (*E)->top = top < MX_QMAX_LEVEL - 1 ? top : MX_QMAX_LEVEL - 1;
   return MX_OK;
 }
@@ -246,7 +246,7 @@ int mx_qedges_unbalanced(const mx_qedges *E, mx_qtree *T, const uint32_t *split,
   uint64_t *off = mx_alloc((n + 1) * sizeof *off);
   if (!cand || !off) {
     mx_free(cand), mx_free(off);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static) if (PAR(n))
   for (size_t i = 0; i < n; i++) {
@@ -262,7 +262,7 @@ int mx_qedges_unbalanced(const mx_qedges *E, mx_qtree *T, const uint32_t *split,
   const size_t total = mx_scan_u64(off, n);
   uint32_t *list = mx_alloc((total + 1) * sizeof *list);
   uint64_t *key = mx_alloc((total + 1) * sizeof *key);
-  int st = list && key ? MX_OK : MX_EINPUT;
+  int st = list && key ? MX_OK : MX_ENOMEM;
   if (!st) {
 #pragma omp parallel for schedule(static) if (PAR(n))
     for (size_t i = 0; i < n; i++)

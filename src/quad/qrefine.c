@@ -162,7 +162,7 @@ static uint8_t target_of(const qbuild *B, uint32_t q, const double lo[2], const 
 
 static int grow(void **p, size_t n, size_t elem) {
   void *q = mx_realloc(*p, (n ? n : 1) * elem);
-  if (!q) return MX_EINPUT;
+  if (!q) return MX_ENOMEM;
   *p = q;
   return MX_OK;
 }
@@ -350,7 +350,7 @@ static int split_masks(qbuild *B, const uint32_t *list, size_t n, split_scratch 
   const uint64_t nm = mx_scan_u64(S->moff, n), nr = mx_scan_u64(S->roff, n);
   S->dmask = mx_alloc(nm + 1);
   S->rmask = mx_alloc(nr + 1);
-  if (!S->dmask || !S->rmask) return MX_EINPUT;
+  if (!S->dmask || !S->rmask) return MX_ENOMEM;
 #pragma omp parallel for schedule(dynamic, 256) if (PAR(n))
   for (size_t i = 0; i < n; i++) {
     const uint32_t p = list[i];
@@ -389,7 +389,7 @@ static int split_list(qbuild *B, const uint32_t *list, size_t n, int for_balance
   MX_CHECK(reserve_quadrants(B, n0 + 4 * n));
   split_scratch S = {0};
   S.moff = mx_alloc(4 * (n + 1) * sizeof(uint64_t));
-  int st = S.moff ? MX_OK : MX_EINPUT;
+  int st = S.moff ? MX_OK : MX_ENOMEM;
   if (!st) {
     S.roff = S.moff + (n + 1);
     S.doff = S.roff + (n + 1);
@@ -458,7 +458,7 @@ static int make_roots(qbuild *B) {
   mx_qtree *T = B->T;
   const size_t nr = (size_t)T->grid.dims[0] * T->grid.dims[1];
   uint64_t *k = mx_alloc(nr * sizeof *k);
-  if (!k) return MX_EINPUT;
+  if (!k) return MX_ENOMEM;
   for (uint32_t j = 0, m = 0; j < T->grid.dims[1]; j++)
     for (uint32_t i = 0; i < T->grid.dims[0]; i++)
       k[m++] = mx_qkey(i << MX_QMAX_LEVEL, j << MX_QMAX_LEVEL);
@@ -521,7 +521,7 @@ static int request_segments(qbuild *B) {
   B->nrs = n;
   if (R->nregions) {
     B->ridx = mx_calloc(R->nregions * sizeof *B->ridx);
-    if (!B->ridx) return MX_EINPUT;
+    if (!B->ridx) return MX_ENOMEM;
     for (size_t i = 0; i < R->nregions; i++)
       MX_CHECK(mx_poly_index_build(&R->regions[i], &B->ridx[i]));
   }
@@ -529,7 +529,7 @@ static int request_segments(qbuild *B) {
   B->rseg = mx_alloc(4 * n * sizeof *B->rseg);
   B->rlev = mx_alloc(n);
   B->rreg = mx_alloc(n * sizeof *B->rreg);
-  if (!B->rseg || !B->rlev || !B->rreg) return MX_EINPUT;
+  if (!B->rseg || !B->rlev || !B->rreg) return MX_ENOMEM;
   size_t k = 0;
   for (size_t i = 0; i < R->nregions + R->ndrawings; i++) {
     const int reg = i < R->nregions;
@@ -550,7 +550,7 @@ static int builder_init(qbuild *B, const mx_poly *dom, const mx_poly_index *I,
   B->dom = dom, B->I = I, B->req = req, B->T = T;
   double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
   B->dseg = mx_alloc((4 * dom->ns + 1) * sizeof *B->dseg);
-  if (!B->dseg) return MX_EINPUT;
+  if (!B->dseg) return MX_ENOMEM;
   for (size_t s = 0; s < dom->ns; s++) {
     seg_coords(dom, s, B->dseg + 4 * s);
     for (int a = 0; a < 2; a++) {
@@ -585,7 +585,7 @@ static void builder_free(qbuild *B) {
 static int next_candidates(const mx_qtree *T, const uint32_t *cand, size_t n, uint32_t **out,
                            size_t *nout) {
   uint64_t *off = mx_alloc((n + 1) * sizeof *off);
-  if (!off) return MX_EINPUT;
+  if (!off) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) if (PAR(n))
   for (size_t i = 0; i < n; i++) {
     uint64_t k = 0;
@@ -606,7 +606,7 @@ static int next_candidates(const mx_qtree *T, const uint32_t *cand, size_t n, ui
   mx_free(off);
   *out = next;
   *nout = total;
-  return next ? MX_OK : MX_EINPUT;
+  return next ? MX_OK : MX_ENOMEM;
 }
 
 /* Step 3: the leaves made unbalanced by the splits of `split`, split in
@@ -633,7 +633,7 @@ static int drain(qbuild *B, const uint32_t *split, size_t n) {
 static int refine(qbuild *B) {
   mx_qtree *T = B->T;
   uint32_t *cand = mx_alloc((B->nroots + 1) * sizeof *cand);
-  if (!cand) return MX_EINPUT;
+  if (!cand) return MX_ENOMEM;
   size_t n = 0;
   for (uint32_t r = 0; r < B->nroots; r++)
     if (T->target[r] > 0) cand[n++] = r;

@@ -205,7 +205,7 @@ static uint32_t *node_id(node_table *H, cursor *c, uint32_t fx, uint32_t fy) {
 /* A table of cap entries holding H's blocks (rehashed in parallel). */
 static int resize(node_table *H, size_t cap) {
   block *b = mx_alloc(cap * sizeof *b);
-  if (!b) return MX_EINPUT;
+  if (!b) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) if (PAR(cap))
   for (size_t i = 0; i < cap; i++) b[i] = (block){0, 0, 0, 0};
   node_table N = {.b = b, .cap = cap};
@@ -283,7 +283,7 @@ static int cover(const uint64_t *key, const uint8_t *lev, size_t n, node_table *
 static int place_blocks(node_table *H) {
   const size_t B = 4096, nb = (H->cap + B - 1) / B;
   uint64_t *off = mx_alloc((nb + 1) * sizeof *off);
-  if (!off) return MX_EINPUT;
+  if (!off) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) if (PAR(H->cap))
   for (size_t j = 0; j < nb; j++) {
     uint64_t c = 0;
@@ -294,7 +294,7 @@ static int place_blocks(node_table *H) {
   uint64_t *key = mx_alloc((nblk + 1) * sizeof *key);
   uint32_t *slot = mx_alloc((nblk + 1) * sizeof *slot);
   uint64_t *cnt = mx_alloc((nblk + 1) * sizeof *cnt);
-  int st = key && slot && cnt ? MX_OK : MX_EINPUT;
+  int st = key && slot && cnt ? MX_OK : MX_ENOMEM;
   if (st == MX_OK) {
 #pragma omp parallel for schedule(static) if (PAR(H->cap))
     for (size_t j = 0; j < nb; j++) {
@@ -316,7 +316,7 @@ static int place_blocks(node_table *H) {
 #pragma omp parallel for schedule(static) if (PAR(nblk))
     for (size_t k = 0; k < nblk; k++) H->b[slot[k]].off = (uint32_t)cnt[k];
     H->id = mx_alloc((total + 1) * sizeof *H->id);
-    if (!H->id) st = MX_EINPUT;
+    if (!H->id) st = MX_ENOMEM;
   }
   mx_free(off), mx_free(key), mx_free(slot), mx_free(cnt);
   return st;
@@ -482,7 +482,7 @@ static int mesh_alloc(mx_qmesh *M, size_t nn, size_t nc) {
   M->conn = mx_alloc((4 * nc + 1) * sizeof *M->conn);
   M->leaf = mx_alloc((nc + 1) * sizeof *M->leaf);
   M->level = mx_alloc(nc + 1);
-  return M->xy && M->nkey && M->type && M->conn && M->leaf && M->level ? MX_OK : MX_EINPUT;
+  return M->xy && M->nkey && M->type && M->conn && M->leaf && M->level ? MX_OK : MX_ENOMEM;
 }
 
 void mx_qmesh_free(mx_qmesh *M) {
@@ -509,7 +509,7 @@ int mx_qtransition(const mx_qtree *T, const uint32_t *leaves, size_t n, mx_qmesh
   X.mask = mx_alloc(n + 1);
   X.owned = mx_alloc((n + 1) * sizeof *X.owned);
   X.base = mx_alloc((X.nchunks + 1) * sizeof *X.base);
-  int st = key && lev && X.mask && X.owned && X.base ? MX_OK : MX_EINPUT, finest = 0;
+  int st = key && lev && X.mask && X.owned && X.base ? MX_OK : MX_ENOMEM, finest = 0;
   if (!st) st = gather_leaves(T, leaves, n, key, lev, &finest);
   if (!st) st = build_table(key, lev, n, finest, &X.H);
   if (!st) {

@@ -75,7 +75,7 @@ int mx_qtree_leaves(const mx_qtree *T, uint32_t **leaves, size_t *n) {
   uint64_t *first = mx_alloc((nb + 1) * sizeof *first), *last = mx_alloc((nb + 1) * sizeof *last);
   if (!off || !first || !last) {
     mx_free(off), mx_free(first), mx_free(last);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   int unsorted = 0;
 #pragma omp parallel for schedule(static) reduction(| : unsorted) if (PAR(T->n))
@@ -102,7 +102,7 @@ int mx_qtree_leaves(const mx_qtree *T, uint32_t **leaves, size_t *n) {
   uint64_t *k = unsorted ? mx_alloc((total + 1) * sizeof *k) : NULL;
   if (!l || (unsorted && !k)) {
     mx_free(off), mx_free(l), mx_free(k);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static) if (PAR(T->n))
   for (size_t b = 0; b < nb; b++) {
@@ -148,7 +148,7 @@ static int corners_build(const mx_qtree *T, corner_set *C) {
   C->lev = mx_alloc(4 * nl + 1);
   if (!k || !v || !C->lev) {
     mx_free(k), mx_free(v), mx_free(C->lev);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   size_t m = 0;
   for (size_t q = 0; q < T->n; q++) {

@@ -43,7 +43,7 @@ static int table_grow(mx_edge_table *T, size_t need) {
   size_t cap = (size_t)((double)need / 0.6) + 1024;
   if (cap < T->cap + T->cap / 2) cap = T->cap + T->cap / 2;
   mx_edge *e = mx_alloc(cap * sizeof *e);
-  if (!e) return MX_EINPUT;
+  if (!e) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) if (cap > MX_PAR_MIN)
   for (size_t i = 0; i < cap; i++) {
     e[i].kw = 0;

@@ -15,7 +15,7 @@ void mx_octree_free(mx_octree *t) {
 #define GROW(field, n)                                                      \
   do {                                                                      \
     void *p_ = mx_realloc(t->field, (n) * sizeof *t->field);                \
-    if (!p_) return MX_EINPUT;                                              \
+    if (!p_) return MX_ENOMEM;                                              \
     t->field = p_;                                                          \
   } while (0)
 

@@ -43,13 +43,13 @@ static int reserve_vertices(mx_trisoup *s, size_t nv) {
   size_t cap = grown(s->cap_v, nv);
   if (cap > (size_t)UINT32_MAX) cap = (size_t)UINT32_MAX;
   double *x = resize(s->x, cap, sizeof *x);
-  if (!x) return MX_EINPUT;
+  if (!x) return MX_ENOMEM;
   s->x = x;
   double *y = resize(s->y, cap, sizeof *y);
-  if (!y) return MX_EINPUT;
+  if (!y) return MX_ENOMEM;
   s->y = y;
   double *z = resize(s->z, cap, sizeof *z);
-  if (!z) return MX_EINPUT;
+  if (!z) return MX_ENOMEM;
   s->z = z;
   s->cap_v = cap;
   return MX_OK;
@@ -63,13 +63,13 @@ static int reserve_triangles(mx_trisoup *s, size_t nt) {
   }
   size_t cap = grown(s->cap_t, nt);
   uint32_t *tri = resize(s->tri, 3 * cap, sizeof *tri);
-  if (!tri) return MX_EINPUT;
+  if (!tri) return MX_ENOMEM;
   s->tri = tri;
   uint16_t *shell = resize(s->shell, cap, sizeof *shell);
-  if (!shell) return MX_EINPUT;
+  if (!shell) return MX_ENOMEM;
   s->shell = shell;
   uint32_t *face = resize(s->face, cap, sizeof *face);
-  if (!face) return MX_EINPUT;
+  if (!face) return MX_ENOMEM;
   s->face = face;
   /* a soup filled directly (tri and nt) has one face a triangle */
   for (size_t t = s->cap_t; t < cap; t++) face[t] = t < UINT32_MAX ? (uint32_t)t : UINT32_MAX;

@@ -11,7 +11,7 @@ static int push_run(mx_trisoup *s, mx_line_run r) {
   if (s->nrun == s->cap_run) {
     const size_t cap = s->cap_run ? 2 * s->cap_run : 4;
     mx_line_run *p = mx_realloc(s->run, cap * sizeof *p);
-    if (!p) return MX_EINPUT;
+    if (!p) return MX_ENOMEM;
     s->run = p;
     s->cap_run = cap;
   }
