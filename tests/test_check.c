@@ -25,6 +25,7 @@
 #include "kernels/contacts.h"
 #include "soa/mesh.h"
 #include "soa/trisoup.h"
+#include "io/read_surface.h"
 
 static int small_only = 0;
 static char tmpdir[64];

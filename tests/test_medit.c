@@ -29,6 +29,7 @@
 
 #define OUT_DIR "medit_out"
 #include "file_util.h"
+#include "io/demo_surface.h"
 
 /* ====================================================================== */
 /* Medit conventions, written here from the documentation                 */

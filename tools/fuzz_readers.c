@@ -49,6 +49,7 @@
 #include "soa/mesh.h"
 #include "soa/regions.h"
 #include "soa/trisoup.h"
+#include "io/read_surface.h"
 
 /* FUZZ_FORMAT as a number, by token pasting: FMT_off and so on. */
 #define FMT_off 1

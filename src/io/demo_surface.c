@@ -11,6 +11,7 @@
 
 #include "base/common.h"
 #include "soa/trisoup.h"
+#include "io/demo_surface.h"
 
 #define EMPTY_KEY UINT64_MAX
 

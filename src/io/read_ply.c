@@ -21,6 +21,7 @@
 
 #include "io/polygon_split.h"
 #include "io/text_scan.h"
+#include "io/read_surface.h"
 
 /* ---- types ------------------------------------------------------------ */
 

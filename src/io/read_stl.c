@@ -12,6 +12,7 @@
 #include "soa/trisoup.h"
 
 #include "io/text_scan.h"
+#include "io/read_surface.h"
 
 /* ---- exact vertex merging --------------------------------------------- */
 

@@ -19,6 +19,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include "io/read_surface.h"
+#include "io/demo_surface.h"
 
 /* ---- calls, messages, status ------------------------------------------ */
 
