@@ -9,6 +9,7 @@
 
 #include "base/common.h"
 #include "soa/mesh.h"
+#include "io/cell_order.h"
 
 enum { CHUNK = 65536 };
 

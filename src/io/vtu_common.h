@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include "io/atomic_file.h"
+#include "soa/mesh.h"
 
 #define MX_VTU_HOST_LE (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__)
 

@@ -15,6 +15,8 @@
 #include "io/boundary_faces.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/mesh_view_check.h"
 
 typedef struct {
   const mx_mesh_view *m;

@@ -80,6 +80,8 @@
 #include "io/getfem_tables.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/mesh_view_check.h"
 
 /* GetFEM's node order, face numbers and geometric transformations
  * (mx_getfem_node, mx_getfem_face, mx_getfem_geotrans): io/getfem_tables.h,

@@ -48,6 +48,8 @@
 #include "io/atomic_file.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/mesh_view_check.h"
 
 /* The letter of each type, MX_TET .. MX_HEX. */
 static const char cell_letter[4] = {'T', 'P', 'R', 'H'};

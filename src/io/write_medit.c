@@ -61,6 +61,9 @@
 #include "io/boundary_faces.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/cell_order.h"
+#include "io/mesh_view_check.h"
 
 enum {
   KW_DIMENSION = 3,

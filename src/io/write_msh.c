@@ -55,6 +55,8 @@
 #include "io/msh_order.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/mesh_view_check.h"
 
 enum {
   ENTITY_TAG = 1,

@@ -13,6 +13,8 @@
 #include "io/atomic_file.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/mesh_view_check.h"
 
 enum { NAME_MAX_BYTES = 1024 };
 

@@ -15,6 +15,8 @@
 #include "io/vtu_common.h"
 #include "soa/mesh.h"
 #include "base/scan.h"
+#include "io/write_mesh.h"
+#include "io/mesh_view_check.h"
 
 enum { OFFSET_BLOCK = 4096 }; /* cells per precomputed offsets prefix */
 

@@ -21,6 +21,7 @@
 #include <string.h>
 #include "io/read_surface.h"
 #include "io/demo_surface.h"
+#include "io/write_mesh.h"
 
 /* ---- calls, messages, status ------------------------------------------ */
 

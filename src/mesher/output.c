@@ -11,6 +11,8 @@
 #include "kernels/boundary_tags.h"
 #include "mesher/mesher_impl.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/cell_order.h"
 
 /* The last path component, quotes turned into apostrophes (a name inside
  * the quotes of Gmsh's $PhysicalNames). */
