@@ -13,8 +13,7 @@
  * hexahedra), in index order within a group. mx_cells_by_type: by type
  * alone, first (may be NULL) receiving where each type starts, first[4] =
  * n. mx_cells_written_order: the bodies, then mx_cells_in_order, the order
- * every mesh file of mixoct lists its cells in. MX_OK or MX_EINPUT
- * (memory). */
+ * every mesh file of mixoct lists its cells in. MX_OK or MX_ENOMEM. */
 int mx_cell_bodies(const mx_mesh_view *v, int32_t *cell_body, int *nbodies);
 int mx_cells_in_order(const uint8_t *type, const int32_t *body, int nbodies, size_t n,
                       uint32_t *order);

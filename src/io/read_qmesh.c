@@ -33,7 +33,7 @@ static int qmesh_from_faces(const mx_mesh_data *m, mx_qmesh *q) {
   q->conn = mx_alloc((4 * nc + 1) * sizeof *q->conn);
   if (!q->xy || !q->type || !q->conn) {
     mx_qmesh_free(q);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   q->nnodes = nn;
   q->ncells = nc;
@@ -171,7 +171,7 @@ static int off_parse(off_rd *f, mx_qmesh *q) {
   q->xy = mx_alloc((2 * nv + 1) * sizeof *q->xy);
   q->type = mx_alloc(nf + 1);
   q->conn = mx_alloc((4 * nf + 1) * sizeof *q->conn);
-  if (!q->xy || !q->type || !q->conn) return MX_EINPUT;
+  if (!q->xy || !q->type || !q->conn) return MX_ENOMEM;
   q->nnodes = nv;
   for (size_t i = 0; i < nv; i++) {
     MX_CHECK(off_next(f, "vertices", i, nv));

@@ -39,7 +39,7 @@ static int read_all(int fd, const char *path, char **buf, size_t *len,
   char *b = mx_alloc(cap);
   if (!b) {
     mx_error(path, 0, "cannot load the file: out of memory");
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   for (;;) {
     if (n + 1 >= cap) {
@@ -50,7 +50,7 @@ static int read_all(int fd, const char *path, char **buf, size_t *len,
       char *nb = mx_realloc(b, 2 * cap);
       if (!nb) {
         mx_free(b);
-        return MX_EINPUT;
+        return MX_ENOMEM;
       }
       b = nb;
       cap *= 2;

@@ -48,7 +48,7 @@ static inline void mx_put_le_double(char *out, double d) {
 typedef struct {
   char *s; /* the text so far */
   size_t len, cap;
-  int failed;      /* an allocation failed: mx_vtu_end returns MX_EINPUT */
+  int failed;      /* an allocation failed: mx_vtu_end returns MX_ENOMEM */
   uint64_t offset; /* of the next DataArray's block */
 } mx_vtu_head;
 

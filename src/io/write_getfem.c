@@ -178,7 +178,7 @@ static int write_regions(mx_afile *f, const mx_mesh_view *m) {
   const struct mx_boundary_faces *bf = m->bfaces;
   if (!bf || !bf->tri_tag || !bf->quad_tag || m->ntags <= 0) return MX_OK;
   uint32_t *cv = mx_alloc((m->ncells + 1) * sizeof *cv);
-  if (!cv) return MX_EINPUT;
+  if (!cv) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
   for (size_t k = 0; k < m->ncells; k++) cv[mx_view_cell(m, k)] = (uint32_t)k;
   region_ctx c = {m, cv, NULL};

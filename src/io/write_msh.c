@@ -303,7 +303,7 @@ static int block_ranges(const mx_mesh_view *m, msh_layout *L) {
   size_t *lo = mx_alloc(n4 * sizeof *lo), *hi = mx_alloc(n4 * sizeof *hi);
   L->klo = lo;
   L->khi = hi;
-  if (!lo || !hi) return MX_EINPUT;
+  if (!lo || !hi) return MX_ENOMEM;
   for (size_t i = 0; i < n4; i++) lo[i] = SIZE_MAX, hi[i] = 0;
   const int tagged = L->tagged;
 #pragma omp parallel for schedule(static) reduction(min : lo[:n4]) reduction(max : hi[:n4]) \
@@ -340,7 +340,7 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
   L->bbox = mx_alloc(6 * nb * sizeof *L->bbox);
   if (!L->ntri || !L->nquad || !L->ncell || !L->tbox || !L->bbox) {
     layout_free(L);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   for (size_t i = 0; i < nt; i++)
     for (int a = 0; a < 3; a++) L->tbox[6 * i + a] = INFINITY, L->tbox[6 * i + 3 + a] = -INFINITY;
@@ -366,7 +366,7 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
   L->tag0 = mx_alloc((nt + 1) * sizeof *L->tag0);
   if (!L->tri0 || !L->quad0 || !L->tag0) {
     layout_free(L);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   size_t a = 0, b = 0;
   uint64_t e = m->ncells;

@@ -250,7 +250,7 @@ static uint64_t *offset_block_starts(const mx_mesh_view *m) {
 
 static int write_cell_blocks(mx_afile *f, const mx_mesh_view *m, size_t nconn) {
   uint64_t *block_start = offset_block_starts(m);
-  if (!block_start) return MX_EINPUT;
+  if (!block_start) return MX_ENOMEM;
   const int wide = needs_wide(m, nconn);
   const uint64_t isz = wide ? 8 : 4;
   vtu_ctx ctx = {m, NULL, block_start, wide, NULL};
