@@ -33,6 +33,7 @@
 
 #define OUT_DIR "qmesh_io_out"
 #include "file_util.h"
+#include "mesher/qmesh_output.h"
 
 /* ---- the meshes ----------------------------------------------------------- */
 

@@ -61,7 +61,31 @@ static int check_fields(const char *path, int n, const mx_field *fields,
   return MX_OK;
 }
 
+/* A 2D view: types triangle or quadrilateral, the nodes of each cell below
+ * nnodes; the first bad cell is named. */
+static int check_2d(const char *path, const mx_mesh_view *m) {
+  if ((m->nnodes && !m->xyz) || (m->ncells && (!m->type || !m->conn))) {
+    mx_error(path, 0, "internal error: incomplete 2D mesh");
+    return MX_EINTERNAL;
+  }
+  size_t bad = m->ncells;
+#pragma omp parallel for reduction(min : bad) schedule(static) if (m->ncells > 65536)
+  for (size_t c = 0; c < m->ncells; c++) {
+    int ok = m->type[c] <= MX_CELL_QUAD;
+    const int nv = m->type[c] == MX_CELL_QUAD ? 4 : 3;
+    for (int j = 0; ok && j < nv; j++) ok = m->conn[4 * c + j] < m->nnodes;
+    if (!ok && c < bad) bad = c;
+  }
+  if (bad < m->ncells) {
+    mx_error(path, 0, "internal error: cell %zu has a bad type or node index", bad);
+    return MX_EINTERNAL;
+  }
+  MX_CHECK(check_fields(path, m->ncell_fields, m->cell_fields, m->ncells, "cell"));
+  return check_fields(path, m->npoint_fields, m->point_fields, m->nnodes, "point");
+}
+
 int mx_mesh_view_check(const char *path, const mx_mesh_view *m) {
+  if (m && mx_view_is_2d(m)) return check_2d(path, m);
   if (!m || (m->nnodes > 0 && !m->xyz) ||
       (m->ncells > 0 && (!m->type || !m->conn)) || m->ncell_fields < 0 ||
       m->npoint_fields < 0) {

@@ -5,7 +5,8 @@
 #include "soa/mesh.h"
 
 /* Shared by the mesh writers: checks that a mesh view is consistent (types
- * in range, node indices < nnodes, arrays and field values present). Prints
+ * in range, node indices < nnodes, arrays and field values present; a 2D
+ * view, soa/mesh.h, with its own types and 4 nodes per row). Prints
  * a message naming path and returns MX_EINTERNAL otherwise. */
 int mx_mesh_view_check(const char *path, const mx_mesh_view *m);
 

@@ -16,7 +16,21 @@ static const char *path_extension(const char *path) {
   return dot && dot != base ? dot : "";
 }
 
+/* A 2D view: .vtu, .vtk, .msh, .off, .getfem, .m3d. */
+static int write_plane(const char *path, const mx_mesh_view *m, int ascii) {
+  const char *ext = path_extension(path);
+  if (strcasecmp(ext, ".vtu") == 0) return mx_write_vtu(path, m);
+  if (strcasecmp(ext, ".vtk") == 0) return mx_write_vtk_legacy(path, m, !ascii);
+  if (strcasecmp(ext, ".msh") == 0) return mx_write_msh(path, m, !ascii);
+  if (strcasecmp(ext, ".off") == 0) return mx_write_off(path, m);
+  if (strcasecmp(ext, ".getfem") == 0) return mx_write_getfem(path, m);
+  if (strcasecmp(ext, ".m3d") == 0) return mx_write_m3d(path, m);
+  mx_error(path, 0, "unknown 2D output format (use .vtu, .vtk, .msh, .off, .getfem or .m3d)");
+  return MX_EINPUT;
+}
+
 int mx_write_mesh(const char *path, const mx_mesh_view *m, int ascii) {
+  if (mx_view_is_2d(m)) return write_plane(path, m, ascii);
   const char *ext = path_extension(path);
   if (strcasecmp(ext, ".vtk") == 0) return mx_write_vtk_legacy(path, m, !ascii);
   if (strcasecmp(ext, ".vtu") == 0) return mx_write_vtu(path, m);
@@ -43,6 +57,14 @@ int mx_write_mesh(const char *path, const mx_mesh_view *m, int ascii) {
 int mx_mesh_format_known(const char *path) {
   static const char *known[] = {".vtk",    ".vtu", ".pvtu", ".msh", ".mesh",
                                 ".meshb",  ".getfem", ".m3d", ".mvm"};
+  const char *ext = path_extension(path);
+  for (size_t i = 0; i < sizeof known / sizeof *known; i++)
+    if (strcasecmp(ext, known[i]) == 0) return 1;
+  return 0;
+}
+
+int mx_plane_format_known(const char *path) {
+  static const char *known[] = {".vtu", ".vtk", ".msh", ".off", ".getfem", ".m3d"};
   const char *ext = path_extension(path);
   for (size_t i = 0; i < sizeof known / sizeof *known; i++)
     if (strcasecmp(ext, known[i]) == 0) return 1;

@@ -1,5 +1,6 @@
-/* The mesh writers, one per format (src/io/write_*.c), and mx_write_mesh,
- * which picks one from the file's extension (src/io/write_mesh.c). */
+/* The mesh writers, one per format (src/io/write_*.c), each for 3D and 2D
+ * views (soa/mesh.h: dim), and mx_write_mesh, which picks one from the
+ * file's extension (src/io/write_mesh.c). */
 #ifndef MX_WRITE_MESH_H
 #define MX_WRITE_MESH_H
 
@@ -21,14 +22,19 @@ int mx_write_medit(const char *path, const mx_mesh_view *m, int binary);
 int mx_write_getfem(const char *path, const mx_mesh_view *m);
 int mx_write_m3d(const char *path, const mx_mesh_view *m);
 int mx_write_mvm(const char *path, const mx_mesh_view *m);
+/* OFF, for a 2D view only (src/io/write_off.c). */
+int mx_write_off(const char *path, const mx_mesh_view *m);
 /* The boundary faces of the view (view.bfaces, with their tags) as a
  * surface VTU of their own (src/io/write_boundary.c). */
 int mx_write_boundary_vtu(const char *path, const mx_mesh_view *m);
 /* Dispatch on the extension: .vtk (legacy), .vtu, .msh, .mesh, .meshb,
  * .getfem, .m3d; ascii selects the ASCII variant where a format has both
- * (.vtk, .msh). */
+ * (.vtk, .msh). A 2D view (soa/mesh.h: dim 2) goes to .vtu, .vtk, .msh,
+ * .off, .getfem or .m3d. */
 int mx_write_mesh(const char *path, const mx_mesh_view *m, int ascii);
 /* 1 if the extension of path names a format mx_write_mesh knows. */
 int mx_mesh_format_known(const char *path);
+/* The same for a 2D view. */
+int mx_plane_format_known(const char *path);
 
 #endif

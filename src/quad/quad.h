@@ -344,14 +344,9 @@ typedef struct {
 
 void mx_qquality_measure(const mx_qmesh *M, mx_qquality *q);
 
-/* ---- output and checks (io/write_qmesh.c, qcheck.c) ---------------------- */
+/* ---- checks (qcheck.c) ----------------------------------------------------- */
 
-/* By extension: .vtu (binary), .vtk (legacy), .msh (Gmsh 4.1: the cells,
- * and the boundary edges as lines in a physical group "boundary"), .off,
- * .getfem, .m3d. Written to a temporary name and renamed (io/atomic_file.h).
- * Cell fields: type, level, sj (scaled Jacobian). */
-int mx_write_qmesh(const char *path, const mx_qmesh *M, int ascii);
-int mx_qmesh_format_known(const char *path);
+/* Writing: mesher/qmesh_output.h (through io's 2D mesh view). */
 
 /* Independent checks of a 2D mesh: conformity (every edge used by one or two
  * cells, twice in opposite directions; no node lying inside another cell's

@@ -1,4 +1,5 @@
-/* A mesh as plain arrays, the form every writer takes. Cells are rows of 8
+/* A mesh as plain arrays, the form every writer takes (a 2D mesh too: see
+ * mx_mesh_view's dim). Cells are rows of 8
  * node indices (unused entries are ignored), with a type each. Node order
  * inside a cell follows VTK's convention for tetrahedra, pyramids and
  * hexahedra; for prisms it is Gmsh's (the triangle 0 1 2 turns, by the right
@@ -85,7 +86,25 @@ typedef struct {
   const int32_t *cell_body;
   int nbodies;
   const char *const *body_names;
+  /* The dimension: 3 (or 0, as in a plain view) a volume mesh as above; 2
+   * a planar mesh (mx_view_is_2d): xyz holds x y per node (written with
+   * z = 0), type MX_CELL_TRI / MX_CELL_QUAD, conn 4 per cell (a triangle's
+   * 4th entry unused), cells counter-clockwise and written in index order
+   * (order, bfaces, tags and bodies unused). */
+  int dim;
 } mx_mesh_view;
+
+/* The cells of a 2D view (dim 2): counter-clockwise triangles and
+ * quadrilaterals (the values of quad/quad.h's MX_QTRI and MX_QQUAD). */
+enum { MX_CELL_TRI = 0, MX_CELL_QUAD = 1 };
+
+/* Whether the view is of a 2D mesh. */
+static inline int mx_view_is_2d(const mx_mesh_view *m) { return m->dim == 2; }
+
+/* The node count of cell c of a 2D view. */
+static inline int mx_view_nv2(const mx_mesh_view *m, size_t c) {
+  return m->type[c] == MX_CELL_QUAD ? 4 : 3;
+}
 
 /* The index of the k-th cell written. */
 static inline size_t mx_view_cell(const mx_mesh_view *m, size_t k) {
