@@ -172,5 +172,10 @@ int mx_rd_is_meshb(const rd *r);
 int mx_rd_m3d(rd *r, const char *p, mx_mesh_data *out);
 int mx_rd_mvm(rd *r, const char *p, mx_mesh_data *out);
 int mx_rd_getfem(rd *r, const char *p, mx_mesh_data *out);
+/* An OFF file as a 2D mesh (src/io/read_off_plane.c), and whether the
+ * first content token of the file at path (after blanks and '#' comment
+ * lines, in its first bytes) is an OFF keyword. */
+int mx_rd_off_plane(const char *path, mx_mesh_data *out);
+int mx_rd_is_off(const char *path);
 
 #endif

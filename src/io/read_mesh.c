@@ -3,7 +3,9 @@
  * published mesher's text files, its extension), and the reader of that
  * format called: legacy VTK (read_vtk.c), VTU (read_vtu.c; a .pvtu master:
  * read_pvtu.c), Gmsh MSH 4.1 (read_msh.c), Medit .mesh / .meshb
- * (read_medit.c), M3D and MVM (read_m3d.c), GetFEM (read_getfem.c). */
+ * (read_medit.c), M3D and MVM (read_m3d.c), GetFEM (read_getfem.c); and a
+ * mesh that is 2D or 3D by its content (mx_read_mesh_dim; an OFF file as a
+ * 2D mesh: read_off_plane.c). */
 #include "io/read_mesh.h"
 
 #include <fcntl.h>
@@ -146,4 +148,26 @@ int mx_read_mesh(const char *path, mx_mesh_data *out) {
 
 int mx_read_mesh_planar(const char *path, mx_mesh_data *out) {
   return mx_rd_file(path, 1, NULL, out);
+}
+
+/* Whether m is a 2D mesh: faces, no volume cell, every z = 0. */
+static int planar_faces(const mx_mesh_data *m) {
+  if (m->ncells || !m->nfaces) return 0;
+  size_t off = 0;
+#pragma omp parallel for schedule(static) reduction(+ : off) if (m->nnodes > 65536)
+  for (size_t i = 0; i < m->nnodes; i++) off += m->xyz[3 * i + 2] != 0.0;
+  return off == 0;
+}
+
+int mx_read_mesh_dim(const char *path, mx_mesh_data *out, int *dim) {
+  memset(out, 0, sizeof *out);
+  *dim = 3;
+  if (mx_rd_is_off(path)) {
+    MX_CHECK(mx_rd_off_plane(path, out));
+    *dim = 2;
+    return MX_OK;
+  }
+  MX_CHECK(mx_read_mesh_planar(path, out));
+  if (planar_faces(out)) *dim = 2;
+  return MX_OK;
 }

@@ -77,7 +77,7 @@ static int offset_cell(const parts *P, size_t c, int type, uint32_t *row,
 
 /* A planar read: the triangles and quadrilaterals of a mesh that has no
  * volume cell and lies in the plane z = 0 become its faces (tag 0, the
- * file's node order), and ncells 0: a 2D mesh (io/read_qmesh.h). Both
+ * file's node order), and ncells 0: a 2D mesh (io/read_mesh.h: mx_read_mesh_dim). Both
  * kinds of cells in one file, or a 2D cell off the plane, are errors. */
 static int planar_cells(rd *r, const parts *P, mx_mesh_data *out) {
   const size_t nc = out->ncells, nn = out->nnodes;

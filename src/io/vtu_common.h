@@ -1,5 +1,5 @@
-/* The VTK XML UnstructuredGrid (.vtu) layout shared by the 3D writer
- * (io/write_vtu.c) and the 2D one (io/write_qmesh.c): version 1.0, UInt64
+/* The VTK XML UnstructuredGrid (.vtu) layout of io/write_vtu.c (3D and 2D
+ * views) and the pieces of a .pvtu: version 1.0, UInt64
  * block headers, little-endian raw appended data.
  *
  * The XML header is collected in an mx_vtu_head: mx_vtu_begin (up to

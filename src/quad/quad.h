@@ -7,7 +7,7 @@
  *     --grid + refine + balance (qtree.c, qrefine.c, qedges.c)--> mx_qtree
  *     --transition (qtransition.c)--> mx_qmesh (conforming, whole grid)
  *     --boundary, Algorithm 2 (qboundary.c)--> mx_qmesh of the domain
- *     --quality (qquality.c), write (io/write_qmesh.c), check (qcheck.c)
+ *     --quality (qquality.c), write (mesher/qmesh_output.c, through io), check (qcheck.c)
  *
  * The same machinery as 3D where the idea is the same: Morton keys on a
  * finest lattice (x in bit 0, y in bit 1), a level-synchronous refinement
@@ -22,6 +22,8 @@
 
 #include <stddef.h>
 #include <stdint.h>
+
+#include "soa/mesh_data.h"
 
 #define MX_QMAX_LEVEL 28 /* lattice: 2^28 units per root side, levels 0 to 27 */
 
@@ -287,6 +289,10 @@ typedef struct {
 } mx_qmesh;
 
 void mx_qmesh_free(mx_qmesh *M);
+/* The faces of a 2D mesh read by io (io/read_mesh.h: mx_read_mesh_dim) as
+ * the cells of q, in the file's node order (m is left as it was;
+ * quad/qmesh_faces.c). MX_OK or MX_ENOMEM. */
+int mx_qmesh_from_faces(const mx_mesh_data *m, mx_qmesh *q);
 /* The first cell with a bad type or a node index >= nnodes; ncells when
  * none (qquality.c). The writers and the check test this first. */
 size_t mx_qmesh_bad_cell(const mx_qmesh *M);
