@@ -101,8 +101,6 @@ static int sort_names(mx_mesh_data *out) {
   return MX_OK;
 }
 
-
-
 enum { MSH_TYPES = 32 };
 /* nodes per Gmsh element type (0: unknown) */
 static const int8_t msh_type_nodes[MSH_TYPES] = {

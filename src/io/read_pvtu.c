@@ -28,7 +28,6 @@
 #include "base/scan.h"
 #include "io/vtk_xml.h"
 
-
 typedef struct {
   const char *tag; /* its <Piece> element in the master, for messages */
   char *path;

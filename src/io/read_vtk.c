@@ -303,7 +303,6 @@ static int leg_skip_field(legacy *L) {
   return MX_OK;
 }
 
-
 /* Steps over n values of type t (binary: after the end of the header
  * line); 0, nothing printed, when they are not all there. */
 static int leg_skip_values(legacy *L, size_t n, vtype t) {

@@ -26,8 +26,6 @@ int mx_rd_grow_cells(rd *r, mx_mesh_data *out, size_t n) {
   return MX_OK;
 }
 
-
-
 /* The next tokens must be the blank-separated words of `words`. */
 int mx_rd_cur_words(cur *c, const char *words, const char *what) {
   for (const char *w = words; *w;) {

@@ -15,7 +15,6 @@
 #include "io/mesh_reader.h"
 #include "io/text_scan.h"
 
-
 typedef struct {
   rd *r;
   const char *p;
