@@ -53,6 +53,7 @@
 #include "quad/quad.h"
 #include "soa/trisoup.h"
 #include "io/read_surface.h"
+#include "io/read_poly.h"
 
 enum { EXIT_DEFECTS = 3, EXIT_USAGE = 2 };
 

@@ -24,40 +24,14 @@
 #include <stdint.h>
 
 #include "soa/mesh_data.h"
+#include "soa/poly.h"
 
-#define MX_QMAX_LEVEL 28 /* lattice: 2^28 units per root side, levels 0 to 27 */
+/* MX_QMAX_LEVEL (the lattice): soa/poly.h. */
 
 /* ---- polylines (poly.c, io/read_poly.c) --------------------------------- */
 
-/* A set of polylines. For a domain every polyline is closed and oriented so
- * that the domain lies on the left of each segment (outer boundaries
- * counter-clockwise, holes clockwise: the outward normal is on the right).
- * A drawing's polylines may be open (they only drive refinement). */
-typedef struct {
-  size_t nv, ns;
-  double *xy;        /* 2 per vertex */
-  uint32_t *seg;     /* 2 per segment: from, to (vertex indices) */
-  uint32_t *line;    /* per segment: the line of the input that defined it (messages) */
-  size_t nholes;
-  double *holes;     /* 2 per hole point (.poly); informative once oriented */
-  size_t nloops;     /* closed polylines found by mx_poly_check_domain */
-  char *path;        /* the file it came from (messages) */
-} mx_poly;
-
-void mx_poly_free(mx_poly *P);
-
-/* Readers: .poly (Triangle's format: vertices, segments, holes; '#'
- * comments; indices from the first vertex number, 0 or 1), .off (each face a
- * closed polygon, z ignored, must be 0), and 2D .mdl. Bad input: MX_EINPUT
- * with a message naming the file and line. By extension: mx_read_poly_any. */
-int mx_read_poly(const char *path, mx_poly *P);
-int mx_read_poly_off(const char *path, mx_poly *P);
-int mx_read_poly_mdl(const char *path, mx_poly *P);
-int mx_read_poly_any(const char *path, mx_poly *P);
-/* Refinement boxes (io/read_qboxes.c): 'n_regions N', then per box
- * 'xmin ymin xmax ymax level'; '#' comments. *boxes allocated (mx_free). */
-typedef struct mx_qbox mx_qbox;
-int mx_read_qboxes(const char *path, mx_qbox **boxes, size_t *n);
+/* The polylines (mx_poly) and refinement boxes (mx_qbox): soa/poly.h; their
+ * readers: io/read_poly.h. */
 
 /* A domain's checks: every vertex of a segment starts exactly one segment
  * and ends exactly one (closed polylines; a segment given backwards in a
@@ -101,11 +75,6 @@ uint32_t mx_poly_closest(const mx_poly_index *I, const double p[2], double rmax,
 int mx_poly_features(const mx_poly *P, uint32_t **out, size_t *n);
 
 /* ---- requests (qrefine.c) ------------------------------------------------ */
-
-struct mx_qbox {
-  double lo[2], hi[2];
-  int level;
-};
 
 /* The functions of the "function" refinement: a quadrant is refined to the
  * level when the function's zero set crosses it (the signs at its corners
