@@ -71,6 +71,7 @@
 #include "soa/edges.h"
 #include "soa/mesh.h"
 #include "soa/octree.h"
+#include "io/write_mesh.h"
 
 /* ---- sizes: sizeof on the project's types ------------------------------- */
 

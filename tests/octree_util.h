@@ -18,6 +18,7 @@
 #include "kernels/refine_list.h"
 #include "base/morton.h"
 #include "soa/trisoup.h"
+#include "io/read_surface.h"
 
 /* Append an axis-aligned box surface (12 triangles, outward) to s. */
 static void add_box(mx_trisoup *s, const double lo[3], const double hi[3],

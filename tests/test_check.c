@@ -25,6 +25,8 @@
 #include "kernels/contacts.h"
 #include "soa/mesh.h"
 #include "soa/trisoup.h"
+#include "io/read_surface.h"
+#include "io/write_mesh.h"
 
 static int small_only = 0;
 static char tmpdir[64];

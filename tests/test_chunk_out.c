@@ -38,6 +38,8 @@
 
 #define OUT_DIR "chunk_out_out"
 #include "file_util.h"
+#include "io/write_mesh.h"
+#include "io/cell_order.h"
 
 /* ====================================================================== */
 /* The stream itself                                                      */

@@ -13,6 +13,7 @@
 #include "geom/locate.h"
 #include "octree_util.h"
 #include "soa/trisoup.h"
+#include "io/demo_surface.h"
 
 static int quick = 0;
 static size_t scaled(size_t n) { return quick ? mx_max(n / 50, 200) : n; }

@@ -41,6 +41,7 @@
 
 #define OUT_DIR "getfem_m3d_out"
 #include "file_util.h"
+#include "io/write_mesh.h"
 
 /* ====================================================================== */
 /* Readers                                                                */

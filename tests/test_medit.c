@@ -29,6 +29,8 @@
 
 #define OUT_DIR "medit_out"
 #include "file_util.h"
+#include "io/demo_surface.h"
+#include "io/write_mesh.h"
 
 /* ====================================================================== */
 /* Medit conventions, written here from the documentation                 */

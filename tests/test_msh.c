@@ -33,6 +33,7 @@
 
 #define OUT_DIR "msh_out"
 #include "file_util.h"
+#include "io/write_mesh.h"
 
 /* ====================================================================== */
 /* Gmsh's conventions, from the Gmsh manual (not from the writer)         */

@@ -45,6 +45,7 @@
 
 #define OUT_DIR "msh_mpi_out"
 #include "file_util.h"
+#include "io/write_mesh.h"
 
 static int rank, nranks;
 

@@ -6,6 +6,7 @@
 #include "octree_util.h"
 
 #include <math.h>
+#include "io/demo_surface.h"
 
 /* Both balances and both thread counts must agree; the checker must pass. */
 static size_t leaves_all_ways(const mx_trisoup *s, uint32_t ntd,

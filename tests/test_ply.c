@@ -19,6 +19,8 @@
 #include "base/common.h"
 #include "file_util.h"
 #include "soa/trisoup.h"
+#include "io/read_surface.h"
+#include "io/demo_surface.h"
 
 typedef int (*reader_fn)(const char *path, mx_trisoup *out);
 

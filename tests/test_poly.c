@@ -14,6 +14,7 @@
 #include "check.h"
 #include "base/common.h"
 #include "quad/quad.h"
+#include "io/read_poly.h"
 
 static char tmpdir[64];
 static char data[512]; /* .../polylines, "" when not found */

@@ -20,6 +20,7 @@
 #include "io/polygon_split.h"
 #include "kernels/surface_defects.h"
 #include "soa/trisoup.h"
+#include "io/read_surface.h"
 
 static char tmpdir[64];
 static char captured[16384];

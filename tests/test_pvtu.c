@@ -32,6 +32,7 @@
 
 #define OUT_DIR "pvtu_out"
 #include "file_util.h"
+#include "io/write_mesh.h"
 
 /* ---- the whole mesh ------------------------------------------------------ */
 

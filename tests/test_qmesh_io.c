@@ -1,5 +1,6 @@
-/* Tests of the 2D mesh writers (src/io/write_qmesh.c) and of the
- * independent 2D mesh check (src/quad/qcheck.c).
+/* Tests of the 2D mesh writers (io/write_mesh.h, through
+ * mesher/qmesh_output.c) and of the independent 2D mesh check
+ * (src/quad/qcheck.c).
  *
  * The mesh: the rectangle [0,2] x [0,1], its left half one quadrant cut
  * into the 3 triangles of the one-mid-node transition (the mid-node (1,0.5)
@@ -33,6 +34,7 @@
 
 #define OUT_DIR "qmesh_io_out"
 #include "file_util.h"
+#include "mesher/qmesh_output.h"
 
 /* ---- the meshes ----------------------------------------------------------- */
 

@@ -17,6 +17,7 @@
 #include "check.h"
 #include "base/common.h"
 #include "quad/quad.h"
+#include "io/read_poly.h"
 
 /* ---- polylines --------------------------------------------------------- */
 

@@ -16,6 +16,8 @@
 #include "base/common.h"
 #include "soa/regions.h"
 #include "soa/trisoup.h"
+#include "io/read_surface.h"
+#include "io/demo_surface.h"
 
 #define SURF MIXOCT_TEST_DATA "/surfaces/"
 

@@ -14,6 +14,8 @@
 #include "base/common.h"
 #include "kernels/surface_defects.h"
 #include "soa/trisoup.h"
+#include "io/read_surface.h"
+#include "io/demo_surface.h"
 
 /* ---- building surfaces ----------------------------------------------- */
 

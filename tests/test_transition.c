@@ -9,6 +9,8 @@
 #include "kernels/transition.h"
 #include "soa/mesh.h"
 #include "octree_util.h"
+#include "io/demo_surface.h"
+#include "io/write_mesh.h"
 
 static int run_mesh(const mx_trisoup *s, uint32_t ntd, const uint32_t *rt0,
                     const mx_requests *req, int threads, mx_mesh_out *M,

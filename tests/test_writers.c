@@ -25,6 +25,7 @@
 
 #define OUT_DIR "writers_out"
 #include "file_util.h"
+#include "io/write_mesh.h"
 
 /* ====================================================================== */
 /* Test meshes                                                            */

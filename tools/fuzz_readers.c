@@ -49,6 +49,8 @@
 #include "soa/mesh.h"
 #include "soa/regions.h"
 #include "soa/trisoup.h"
+#include "io/read_surface.h"
+#include "io/read_poly.h"
 
 /* FUZZ_FORMAT as a number, by token pasting: FMT_off and so on. */
 #define FMT_off 1

@@ -4,9 +4,9 @@
  * and, optionally, the surface it should fill, runs the independent checker
  * (verify/check.h) and reports.
  *
- * A 2D mesh (io/read_qmesh.h: triangles and quadrilaterals in the plane
- * z = 0, as mesher2d writes them to .vtu, .vtk, .msh and .off) is checked
- * by quad/qcheck.c instead, against the polylines of its domain when given
+ * A 2D mesh (io/read_mesh.h: mx_read_mesh_dim; triangles and
+ * quadrilaterals in the plane z = 0, as mesher2d writes them to .vtu, .vtk,
+ * .msh and .off) is checked by quad/qcheck.c instead, against the polylines of its domain when given
  * (--poly FILE, or --surface FILE with a .poly, a 2D .off or a .mdl): the
  * same criteria as mesher2d's own check (see check_2d below), a report of
  * its own, and in JSON "dimension":2 with the counters of mx_qcheck_report.
@@ -49,10 +49,11 @@
 #include "io/pvtu.h"
 #include "io/read_mesh.h"
 #include "mesher/mesher2d.h"
-#include "io/read_qmesh.h"
 #include "verify/check.h"
 #include "quad/quad.h"
 #include "soa/trisoup.h"
+#include "io/read_surface.h"
+#include "io/read_poly.h"
 
 enum { EXIT_DEFECTS = 3, EXIT_USAGE = 2 };
 
@@ -728,10 +729,15 @@ int mx_check_main(int argc, char **argv) {
   mx_trisoup s;
   memset(&s, 0, sizeof s);
   int dim = 3;
-  int st = mx_read_mesh_dim(mesh, &m, &q, &dim);
-  if (st == MX_OK && dim == 2)
-    return main_2d(mesh, &q, poly ? poly : surf, opt.volume_tol, opt.boundary_tol, json, quiet,
-                   t0);
+  memset(&q, 0, sizeof q);
+  int st = mx_read_mesh_dim(mesh, &m, &dim);
+  if (st == MX_OK && dim == 2) {
+    st = mx_qmesh_from_faces(&m, &q);
+    mx_mesh_data_free(&m);
+    if (st == MX_OK)
+      return main_2d(mesh, &q, poly ? poly : surf, opt.volume_tol, opt.boundary_tol, json, quiet,
+                     t0);
+  }
   if (st == MX_OK && (poly || has_ext(surf ? surf : "", ".poly"))) {
     mx_error(poly ? poly : surf, 0, "check: polylines, but %s is a 3D mesh: give the closed "
              "surface it fills (--surface FILE: .off, .stl, .obj, .mdl, .ply)", mesh);

@@ -25,6 +25,7 @@
 #include "io/atomic_file.h"
 #include "io/file_identity.h"
 #include "mesher/mesher2d.h"
+#include "mesher/qmesh_output.h"
 
 #ifndef MX_VERSION
 #define MX_VERSION "0.1.0"

@@ -14,6 +14,7 @@
 #include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include "io/write_mesh.h"
 
 static const char *usage_text =
     "mixoct: a parallel mixed-element octree mesher (hexahedra, prisms,\n"

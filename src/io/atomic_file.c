@@ -114,7 +114,7 @@ static int target_is_special(const char *path) {
 /* The double-buffered stream to the open f->fp. */
 static int attach_stream(mx_afile *f) {
   f->out = mx_chunk_out_new(fileno(f->fp));
-  if (!f->out) return afile_fail_quiet(f, MX_EINPUT);
+  if (!f->out) return afile_fail_quiet(f, MX_ENOMEM);
   return MX_OK;
 }
 
@@ -128,7 +128,7 @@ static int open_in_place(mx_afile *f) {
 static int open_temporary(mx_afile *f) {
   size_t n = strlen(f->real) + 64;
   f->tmp = mx_alloc(n);
-  if (!f->tmp) return afile_fail_quiet(f, MX_EINPUT);
+  if (!f->tmp) return afile_fail_quiet(f, MX_ENOMEM);
   long pid = (long)getpid();
   for (int k = 0; k < AFILE_TMP_TRIES; k++) {
     if (k == 0)

@@ -36,8 +36,6 @@
 #include <stddef.h>
 #include <stdio.h>
 
-#include "soa/mesh.h"
-
 struct mx_chunk_out;
 
 typedef struct {
@@ -78,11 +76,5 @@ typedef size_t (*mx_afile_fill_fn)(const void *ctx, size_t begin, size_t end,
                                    char *out);
 int mx_afile_emit(mx_afile *f, size_t nitems, size_t max_item_bytes,
                   mx_afile_fill_fn fill, const void *ctx);
-
-/* Shared by the mesh writers (implemented in write_mesh.c): checks that a
- * mesh view is consistent (types in range, node indices < nnodes, arrays and
- * field values present). Prints a message naming path and returns
- * MX_EINTERNAL otherwise. */
-int mx_mesh_view_check(const char *path, const mx_mesh_view *m);
 
 #endif

@@ -143,7 +143,7 @@ static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint64_t **end
                       uint32_t **list_out, size_t *nfaces) {
   const size_t nn = m->nnodes, nc = m->ncells;
   uint64_t *pos = mx_calloc((nn + 1) * sizeof *pos);
-  if (!pos) return MX_EINPUT;
+  if (!pos) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
     const unsigned t = m->type[c];
@@ -158,7 +158,7 @@ static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint64_t **end
   uint32_t *list = mx_alloc((total ? total : 1) * sizeof *list);
   if (!list) {
     mx_free(pos);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   /* pos[v] walks from the start of v's list to its end (= start of v+1) */
 #pragma omp parallel for schedule(static)
@@ -250,7 +250,7 @@ static int gather(const mx_mesh_view *m, const uint8_t *mult,
   if (!ntri || !nquad) {
     mx_free(ntri);
     mx_free(nquad);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (size_t k = 0; k < nchunks; k++) {
@@ -275,12 +275,12 @@ static int gather(const mx_mesh_view *m, const uint8_t *mult,
   if (bf->ntri) {
     bf->tri = mx_alloc(3 * bf->ntri * sizeof *bf->tri);
     bf->tri_src = mx_alloc(bf->ntri * sizeof *bf->tri_src);
-    if (!bf->tri || !bf->tri_src) st = MX_EINPUT;
+    if (!bf->tri || !bf->tri_src) st = MX_ENOMEM;
   }
   if (bf->nquad) {
     bf->quad = mx_alloc(4 * bf->nquad * sizeof *bf->quad);
     bf->quad_src = mx_alloc(bf->nquad * sizeof *bf->quad_src);
-    if (!bf->quad || !bf->quad_src) st = MX_EINPUT;
+    if (!bf->quad || !bf->quad_src) st = MX_ENOMEM;
   }
   if (st == MX_OK) {
 #pragma omp parallel for schedule(static)
@@ -337,7 +337,7 @@ int mx_boundary_faces_extract_masked(const mx_mesh_view *m, const uint8_t *mask,
   /* faces left out keep multiplicity 0: not boundary faces */
   uint8_t *mult = mask ? mx_calloc(m->ncells * SLOTS * sizeof *mult)
                        : mx_alloc(m->ncells * SLOTS * sizeof *mult);
-  int st = mult ? count_uses(m, end, list, mult) : MX_EINPUT;
+  int st = mult ? count_uses(m, end, list, mult) : MX_ENOMEM;
   mx_free(end);
   mx_free(list);
   if (st == MX_OK) st = gather(m, mult, bf);

@@ -35,7 +35,8 @@ typedef struct mx_boundary_faces {
 /* Fills *bf (zeroed first; free with mx_boundary_faces_free). The view must
  * be consistent (types in range, node indices below nnodes: see
  * mx_mesh_view_check); cells are limited to 2^32 / 6. Returns MX_OK, or
- * MX_EINPUT with a message when memory runs out or the mesh is too large. */
+ * MX_ENOMEM when memory runs out, MX_EINPUT with a message when the mesh
+ * is too large. */
 int mx_boundary_faces_extract(const mx_mesh_view *m, mx_boundary_faces *bf);
 /* The same among the faces whose nodes all have mask[node] != 0: the others
  * are taken as interior (the caller knows no boundary face has such a node:

@@ -9,6 +9,7 @@
 
 #include "base/common.h"
 #include "soa/mesh.h"
+#include "io/cell_order.h"
 
 enum { CHUNK = 65536 };
 
@@ -45,7 +46,7 @@ int mx_cell_bodies(const mx_mesh_view *v, int32_t *cell_body, int *nbodies) {
   const size_t nn = v->nnodes, nc = v->ncells;
   *nbodies = 0;
   uint32_t *root = mx_alloc((nn + 1) * sizeof *root);
-  if (!root) return MX_EINPUT;
+  if (!root) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
   for (size_t i = 0; i < nn; i++) root[i] = (uint32_t)i;
 #pragma omp parallel for schedule(static)
@@ -59,7 +60,7 @@ int mx_cell_bodies(const mx_mesh_view *v, int32_t *cell_body, int *nbodies) {
   int32_t *num = mx_calloc((nn + 1) * sizeof *num);
   if (!num) {
     mx_free(root);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) __atomic_store_n(&num[root[v->conn[8 * c]]], 1, __ATOMIC_RELAXED);
@@ -79,7 +80,7 @@ int mx_cells_in_order(const uint8_t *type, const int32_t *body, int nbodies, siz
   const size_t nkeys = 4 * (size_t)(body && nbodies > 0 ? nbodies : 1);
   const size_t nchunks = (n + CHUNK - 1) / CHUNK;
   size_t *cnt = mx_calloc((nkeys * nchunks + 1) * sizeof *cnt);
-  if (!cnt) return MX_EINPUT;
+  if (!cnt) return MX_ENOMEM;
 #define KEY(c) ((body && nbodies > 0 ? 4 * (size_t)(body[c] - 1) : 0) + (type[c] & 3u))
 #pragma omp parallel for schedule(static)
   for (size_t k = 0; k < nchunks; k++) {
@@ -120,7 +121,7 @@ int mx_cells_by_type(const uint8_t *type, size_t n, uint32_t *order, size_t firs
 
 int mx_cells_written_order(const mx_mesh_view *v, uint32_t *order) {
   int32_t *body = mx_alloc((v->ncells + 1) * sizeof *body);
-  if (!body) return MX_EINPUT;
+  if (!body) return MX_ENOMEM;
   int nb = 0;
   int st = mx_cell_bodies(v, body, &nb);
   if (!st) st = mx_cells_in_order(v->type, body, nb, v->ncells, order);

@@ -11,6 +11,7 @@
 
 #include "base/common.h"
 #include "soa/trisoup.h"
+#include "io/demo_surface.h"
 
 #define EMPTY_KEY UINT64_MAX
 
@@ -79,7 +80,7 @@ static int edge_map_init(edge_map *m, size_t nedges) {
   if (!m->key || !m->mid) {
     mx_free(m->key);
     mx_free(m->mid);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   memset(m->key, 0xff, cap * sizeof *m->key);
   return MX_OK;

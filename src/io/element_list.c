@@ -128,7 +128,7 @@ int mx_parse_index_list(const char *name, const void *buf, size_t len, uint64_t 
       (unsigned char)p[2] == 0xbf)
     p += 3;
   uint64_t *a = mx_alloc(FIRST_CAP * sizeof *a);
-  if (!a) return MX_EINPUT;
+  if (!a) return MX_ENOMEM;
   size_t k = 0, cap = FIRST_CAP;
   long line = 1;
   while (p < end) {
@@ -154,7 +154,7 @@ int mx_parse_index_list(const char *name, const void *buf, size_t len, uint64_t 
         uint64_t *b = mx_realloc(a, 2 * cap * sizeof *a);
         if (!b) {
           mx_free(a);
-          return MX_EINPUT;
+          return MX_ENOMEM;
         }
         a = b;
         cap *= 2;

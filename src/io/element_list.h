@@ -51,7 +51,7 @@ int mx_word_index(const char *w, size_t len, uint64_t *v);
 /* The list in buf (len bytes, no NUL needed), name used in messages; every
  * index must be < limit. *out is allocated with mx_alloc (never NULL on
  * success; NULL and *n = 0 on error). MX_OK, MX_EINPUT (one message), or
- * MX_EINPUT with mx_oom_seen set when out of memory. */
+ * MX_ENOMEM. */
 int mx_parse_index_list(const char *name, const void *buf, size_t len,
                         uint64_t limit, uint64_t **out, size_t *n);
 

@@ -50,7 +50,7 @@ static void *grown(void *p, size_t *cap, size_t need, size_t item) {
 
 int mx_polysplit_grow(mx_polysplit *ps) {
   uint32_t *v = grown(ps->v, &ps->cap_v, ps->nv + 1, sizeof *v);
-  if (!v) return MX_EINPUT;
+  if (!v) return MX_ENOMEM;
   ps->v = v;
   return MX_OK;
 }
@@ -108,7 +108,7 @@ static int scratch_for(mx_polysplit *ps, size_t m, scratch *w) {
   const size_t bytes = m * (2 * sizeof(double) + sizeof(uint64_t)) +
                        (11 * m + 1) * sizeof(uint32_t) + 3 * m + 64;
   unsigned char *p = grown(ps->work, &ps->cap_work, bytes, 1);
-  if (!p) return MX_EINPUT;
+  if (!p) return MX_ENOMEM;
   ps->work = p;
   w->xy = (double *)p;
   w->key = (uint64_t *)(w->xy + 2 * m);
@@ -543,10 +543,10 @@ int mx_polysplit_face(mx_polysplit *ps, mx_trisoup *s, mx_face_at at) {
   ps->nv = 0;
   if (!ps->defer) return split_face(ps, s, ps->v, k, &at);
   uint32_t *qv = grown(ps->qv, &ps->cap_qv, ps->nqv + k, sizeof *qv);
-  if (!qv) return MX_EINPUT;
+  if (!qv) return MX_ENOMEM;
   ps->qv = qv;
   struct mx_queued_face *q = grown(ps->q, &ps->cap_q, ps->nq + 1, sizeof *q);
-  if (!q) return MX_EINPUT;
+  if (!q) return MX_ENOMEM;
   ps->q = q;
   memcpy(qv + ps->nqv, ps->v, k * sizeof *qv);
   q[ps->nq++] = (struct mx_queued_face){ps->nqv, k, at};

@@ -80,12 +80,12 @@ typedef struct {
 void mx_polysplit_init(mx_polysplit *ps, const char *path);
 void mx_polysplit_free(mx_polysplit *ps);
 
-/* Grows the corner buffer; MX_EINPUT when out of memory. */
+/* Grows the corner buffer; MX_ENOMEM when out of memory. */
 int mx_polysplit_grow(mx_polysplit *ps);
 
 /* One more corner of the current face (a vertex index, in range). */
 static inline int mx_polysplit_corner(mx_polysplit *ps, uint32_t v) {
-  if (ps->nv == ps->cap_v && mx_polysplit_grow(ps) != MX_OK) return MX_EINPUT;
+  if (ps->nv == ps->cap_v && mx_polysplit_grow(ps) != MX_OK) return MX_ENOMEM;
   ps->v[ps->nv++] = v;
   return MX_OK;
 }

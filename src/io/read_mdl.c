@@ -14,6 +14,7 @@
 
 #include "io/mdl_sections.h"
 #include "io/text_scan.h"
+#include "io/read_surface.h"
 
 typedef struct {
   const char *path, *p, *end; /* p: the current content line */

@@ -92,6 +92,23 @@ int mx_read_mesh(const char *path, mx_mesh_data *out);
  * cell's file with a point off the plane, are errors (MX_EINPUT). Other
  * formats read as with mx_read_mesh (MSH, Medit: a file with no volume
  * element has its triangles and quadrilaterals as faces already). For
- * io/read_qmesh.h. */
+ * mx_read_mesh_dim. */
 int mx_read_mesh_planar(const char *path, mx_mesh_data *out);
+
+/* A mesh file that is 2D or 3D by its content (for `mixoct check`): *dim 2
+ * for a 2D mesh, returned as mx_read_mesh_planar returns one (ncells 0, the
+ * triangles and quadrilaterals as the faces, every z = 0), else *dim 3 and
+ * the mesh as mx_read_mesh_planar reads it:
+ *  - legacy VTK (ASCII or binary) and VTU: only triangles (VTK type 5) and
+ *    quadrilaterals (9), every point with z = 0;
+ *  - Gmsh MSH 4.1 (ASCII or binary) and Medit: no volume element, the
+ *    triangles (type 2) and quadrangles (3) of dimension 2 (the lines of the
+ *    "boundary" group are skipped), every node with z = 0;
+ *  - OFF ("OFF" first, as io/read_off.c's variants): faces of 3 or 4
+ *    vertices, every vertex with z = 0 (else MX_EINPUT naming the line: an
+ *    OFF file is only read as a 2D mesh here; src/io/read_off_plane.c).
+ * The 2D cells keep the file's node order (a clockwise cell stays
+ * clockwise: the checks see it). GetFEM and M3D 2D files are not read
+ * (their 3D readers take 3 coordinates and volume types). */
+int mx_read_mesh_dim(const char *path, mx_mesh_data *out, int *dim);
 #endif

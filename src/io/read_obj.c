@@ -13,6 +13,7 @@
 
 #include "io/polygon_split.h"
 #include "io/text_scan.h"
+#include "io/read_surface.h"
 
 typedef struct {
   const char *path, *p, *end; /* p: the current content line */

@@ -21,6 +21,7 @@
 
 #include "io/polygon_split.h"
 #include "io/text_scan.h"
+#include "io/read_surface.h"
 
 /* ---- types ------------------------------------------------------------ */
 
@@ -130,7 +131,7 @@ static int grow(void **p, size_t *cap, size_t n, size_t item) {
   if (n < *cap) return MX_OK;
   size_t c = *cap ? 2 * *cap : 8;
   void *q = mx_realloc(*p, c * item);
-  if (!q) return MX_EINPUT;
+  if (!q) return MX_ENOMEM;
   *p = q;
   *cap = c;
   return MX_OK;

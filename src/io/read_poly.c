@@ -32,7 +32,7 @@
 #include <strings.h>
 
 #include "base/common.h"
-#include "quad/quad.h"
+#include "io/read_poly.h"
 
 #include "io/mdl_sections.h"
 #include "io/text_scan.h"

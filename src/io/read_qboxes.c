@@ -11,7 +11,7 @@
 
 #include "base/common.h"
 #include "io/text_scan.h"
-#include "quad/quad.h"
+#include "io/read_poly.h"
 
 typedef struct {
   const char *path, *p, *end;

@@ -116,7 +116,7 @@ static int room(reg_file *f, size_t i) {
   if (cap > f->n) cap = f->n;
   if (cap == 0) cap = 1;
   mx_box_region *b = mx_realloc(f->boxes, cap * sizeof *b);
-  if (!b) return MX_EINPUT;
+  if (!b) return MX_ENOMEM;
   f->boxes = b;
   f->cap = cap;
   return MX_OK;

@@ -12,6 +12,7 @@
 #include "soa/trisoup.h"
 
 #include "io/text_scan.h"
+#include "io/read_surface.h"
 
 /* ---- exact vertex merging --------------------------------------------- */
 
@@ -50,7 +51,7 @@ static int map_init(vertex_map *m, size_t expected) {
   size_t cap = 64;
   while (cap < 2 * expected) cap *= 2;
   m->slot = mx_alloc(cap * sizeof *m->slot);
-  if (!m->slot) return MX_EINPUT;
+  if (!m->slot) return MX_ENOMEM;
   memset(m->slot, 0xff, cap * sizeof *m->slot);
   m->mask = cap - 1;
   return MX_OK;
@@ -268,7 +269,7 @@ static int parse_ascii(stl_text *f, mx_trisoup *s) {
 static int read_ascii(const char *path, const char *buf, size_t len,
                       mx_trisoup *s) {
   stl_text *f = mx_alloc(sizeof *f); /* the block is 1 kB: not on the stack */
-  if (!f) return MX_EINPUT;
+  if (!f) return MX_ENOMEM;
   memset(f, 0, sizeof *f);
   f->path = path;
   f->p = buf;

@@ -82,7 +82,7 @@ static int load_file(const char *path, int allow_empty, uint8_t **buf,
     n += (size_t)got;
   }
   close(fd);
-  if (!b) return MX_EINPUT; /* out of memory, already reported */
+  if (!b) return MX_ENOMEM; /* out of memory, already reported */
   if (n == 0 && !allow_empty) {
     mx_error(path, 0, "empty file (0 bytes): not a restart file");
     mx_free(b);
@@ -230,7 +230,7 @@ static int alloc_arrays(mx_restart *r, size_t nv, size_t ne, size_t no,
   if (with_nsub) r->nsub = mx_alloc(4 * no);
   if (!r->xyz || !r->edge || !r->oct_node || !r->oct_level || !r->oct_tri_off ||
       (with_nsub && !r->nsub))
-    return MX_EINPUT;
+    return MX_ENOMEM;
   r->oct_tri_off[0] = 0;
   return MX_OK;
 }
@@ -933,11 +933,11 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
   r->by_type = (flags & BIN_BYTYPE) != 0;
   uint32_t *count = mx_alloc(4 * no);
   int st = count ? alloc_arrays(r, r->nv, r->ne, r->no, flags & BIN_NSUB)
-                 : MX_EINPUT;
+                 : MX_ENOMEM;
   if (st == MX_OK) r->oct_tri = mx_alloc(4 * ntri);
   if (st != MX_OK || !r->oct_tri) {
     mx_free(count);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   const uint8_t *p = b + BIN_HEADER + (with_mesh ? 16 : 0);
   take(r->xyz, &p, 3 * nv, 8);
@@ -962,7 +962,7 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
     if (!r->mesh_xyz || !r->mesh_nkey || !r->mesh_state || !r->mesh_type || !r->mesh_conn ||
         !r->mesh_leaf || !r->mesh_jens) {
       mx_free(count);
-      return MX_EINPUT;
+      return MX_ENOMEM;
     }
     take(r->mesh_xyz, &p, 3 * mnn, 8);
     take(r->mesh_nkey, &p, mnn, 8);
@@ -1268,7 +1268,7 @@ int mx_restart_write_binary(const char *path, const mx_restart *r) {
   }
   MX_CHECK(check_mesh(path, r, MX_EINTERNAL, BAD_DATA));
   uint32_t *count = mx_alloc(4 * r->no);
-  if (!count) return MX_EINPUT;
+  if (!count) return MX_ENOMEM;
   for (size_t i = 0; i < r->no; i++)
     count[i] = (uint32_t)(r->oct_tri_off[i + 1] - r->oct_tri_off[i]);
   bin_out o = {.status = MX_OK};

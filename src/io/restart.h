@@ -72,8 +72,8 @@
  * against the sizes (before allocating anything), the checksum, and the
  * same semantic checks as for text.
  *
- * Every function returns MX_OK or MX_EINPUT (bad or unreadable file, out of
- * memory) after one message naming the file (and the line, for text); the
+ * Every function returns MX_OK, MX_EINPUT (bad or unreadable file) after one
+ * message naming the file (and the line, for text), or MX_ENOMEM; the
  * writers return what the atomic-file helpers return on a write failure and
  * MX_EINTERNAL for an inconsistent struct. On failure *r is left empty. */
 #ifndef MX_RESTART_H

@@ -1,4 +1,4 @@
-/* Text scanning shared by the readers (defined in src/io/read_surface.c):
+/* Text scanning shared by the readers (src/io/text_scan.c):
  * load a whole file, step over blanks, lines and comments, and parse numbers
  * and indices with messages that name the file and line. */
 #ifndef MX_TEXT_SCAN_H

@@ -85,7 +85,7 @@ int mx_vtu_end(mx_afile *f, mx_vtu_head *h, size_t nnodes, size_t ncells, uint64
   mx_vtu_printf(h,
                 "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n"
                 "  <AppendedData encoding=\"raw\">\n   _");
-  const int st = h->failed ? MX_EINPUT : mx_afile_write(f, h->s, h->len);
+  const int st = h->failed ? MX_ENOMEM : mx_afile_write(f, h->s, h->len);
   mx_free(h->s);
   *h = (mx_vtu_head){0};
   return st;

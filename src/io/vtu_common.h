@@ -1,5 +1,5 @@
-/* The VTK XML UnstructuredGrid (.vtu) layout shared by the 3D writer
- * (io/write_vtu.c) and the 2D one (io/write_qmesh.c): version 1.0, UInt64
+/* The VTK XML UnstructuredGrid (.vtu) layout of io/write_vtu.c (3D and 2D
+ * views) and the pieces of a .pvtu: version 1.0, UInt64
  * block headers, little-endian raw appended data.
  *
  * The XML header is collected in an mx_vtu_head: mx_vtu_begin (up to
@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include "io/atomic_file.h"
+#include "soa/mesh.h"
 
 #define MX_VTU_HOST_LE (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__)
 
@@ -47,7 +48,7 @@ static inline void mx_put_le_double(char *out, double d) {
 typedef struct {
   char *s; /* the text so far */
   size_t len, cap;
-  int failed;      /* an allocation failed: mx_vtu_end returns MX_EINPUT */
+  int failed;      /* an allocation failed: mx_vtu_end returns MX_ENOMEM */
   uint64_t offset; /* of the next DataArray's block */
 } mx_vtu_head;
 

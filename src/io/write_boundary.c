@@ -15,6 +15,8 @@
 #include "io/boundary_faces.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/mesh_view_check.h"
 
 typedef struct {
   const mx_mesh_view *m;
@@ -123,7 +125,7 @@ int mx_write_boundary_vtu(const char *path, const mx_mesh_view *m) {
     return MX_EINTERNAL;
   }
   uint32_t *newid = mx_alloc((m->nnodes + 1) * sizeof *newid);
-  if (!newid) return MX_EINPUT;
+  if (!newid) return MX_ENOMEM;
   memset(newid, 0xff, m->nnodes * sizeof *newid);
   for (size_t i = 0; i < 3 * bf->ntri; i++) newid[bf->tri[i]] = 0;
   for (size_t i = 0; i < 4 * bf->nquad; i++) newid[bf->quad[i]] = 0;
@@ -133,7 +135,7 @@ int mx_write_boundary_vtu(const char *path, const mx_mesh_view *m) {
   uint32_t *used = mx_alloc((nused + 1) * sizeof *used);
   if (!used) {
     mx_free(newid);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   for (size_t v = 0; v < m->nnodes; v++)
     if (newid[v] != UINT32_MAX) used[newid[v]] = (uint32_t)v;

@@ -70,7 +70,9 @@
  * to the same double, else 17 (always exact; mx_put_double of io/text_num.h,
  * laid out like "%g"). The points and convexes are produced in chunks filled
  * in parallel by mx_afile_emit, so the file is the same byte for byte
- * whatever the number of threads. */
+ * whatever the number of threads.
+ * A 2D view (soa/mesh.h: dim 2) is written by the section "a 2D view"
+ * below. */
 #include <stdint.h>
 #include <string.h>
 
@@ -78,8 +80,11 @@
 #include "io/atomic_file.h"
 #include "io/boundary_faces.h"
 #include "io/getfem_tables.h"
+#include "io/plane_mesh.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/mesh_view_check.h"
 
 /* GetFEM's node order, face numbers and geometric transformations
  * (mx_getfem_node, mx_getfem_face, mx_getfem_geotrans): io/getfem_tables.h,
@@ -176,7 +181,7 @@ static int write_regions(mx_afile *f, const mx_mesh_view *m) {
   const struct mx_boundary_faces *bf = m->bfaces;
   if (!bf || !bf->tri_tag || !bf->quad_tag || m->ntags <= 0) return MX_OK;
   uint32_t *cv = mx_alloc((m->ncells + 1) * sizeof *cv);
-  if (!cv) return MX_EINPUT;
+  if (!cv) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
   for (size_t k = 0; k < m->ncells; k++) cv[mx_view_cell(m, k)] = (uint32_t)k;
   region_ctx c = {m, cv, NULL};
@@ -207,9 +212,71 @@ static int write_body(mx_afile *f, const mx_mesh_view *m) {
   return write_regions(f, m);
 }
 
+/* ---- a 2D view (soa/mesh.h: dim 2) ---------------------------------------
+ *
+ * 2D points; 'GT_PK(2,1)' triangles, 'GT_QK(2,1)' quadrilaterals, whose
+ * reference order is the tensor one, (0,0) (1,0) (0,1) (1,1): our
+ * counter-clockwise a b c d is written a b d c. No regions. */
+
+typedef struct {
+  const mx_mesh_view *M;
+} plane_ctx;
+
+static size_t fill_plane_points(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  size_t n = 0;
+  for (size_t i = b; i < e; i++) {
+    memcpy(o + n, "  POINT  ", 9);
+    n += 9;
+    n += mx_put_u64(o + n, i);
+    for (int d = 0; d < 2; d++) {
+      memcpy(o + n, "  ", 2);
+      n += 2;
+      n += mx_put_double(o + n, x->M->xyz[2 * i + d]);
+    }
+    o[n++] = '\n';
+  }
+  return n;
+}
+
+static size_t fill_plane_convexes(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  static const int tensor[4] = {0, 1, 3, 2}; /* GT_QK's node j is our node tensor[j] */
+  size_t n = 0;
+  for (size_t c = b; c < e; c++) {
+    const uint32_t *r = x->M->conn + 4 * c;
+    const int quad = x->M->type[c] == MX_CELL_QUAD;
+    memcpy(o + n, "  CONVEX ", 9);
+    n += 9;
+    n += mx_put_u64(o + n, c);
+    const char *gt = quad ? "    'GT_QK(2,1)'     " : "    'GT_PK(2,1)'     ";
+    memcpy(o + n, gt, 21);
+    n += 21;
+    for (int j = 0; j < (quad ? 4 : 3); j++) {
+      o[n++] = ' ';
+      n += mx_put_u64(o + n, r[quad ? tensor[j] : j]);
+    }
+    o[n++] = '\n';
+  }
+  return n;
+}
+
+static int write_plane_body(mx_afile *f, const mx_mesh_view *M) {
+  plane_ctx x = {.M = M};
+  MX_CHECK(mx_afile_printf(f, "%% GETFEM MESH FILE\n%% GETFEM VERSION 5.4\n"
+                              "%% mixoct: %zu points, %zu convexes\n\nBEGIN POINTS LIST\n\n",
+                           M->nnodes, M->ncells));
+  MX_CHECK(mx_afile_emit(f, M->nnodes, 10 + MX_U64_CHARS + 2 * (2 + MX_DOUBLE_CHARS), fill_plane_points,
+                         &x));
+  MX_CHECK(mx_afile_printf(f, "\nEND POINTS LIST\n\n\n\nBEGIN MESH STRUCTURE DESCRIPTION\n\n"));
+  MX_CHECK(mx_afile_emit(f, M->ncells, 32 + 5 * (MX_U64_CHARS + 1), fill_plane_convexes, &x));
+  return mx_afile_printf(f, "\nEND MESH STRUCTURE DESCRIPTION\n");
+}
+
 int mx_write_getfem(const char *path, const mx_mesh_view *m) {
   MX_CHECK(mx_mesh_view_check(path, m));
   mx_afile f;
   MX_CHECK(mx_afile_open(&f, path));
+  if (mx_view_is_2d(m)) return mx_afile_finish(&f, write_plane_body(&f, m));
   return mx_afile_finish(&f, write_body(&f, m));
 }

@@ -38,7 +38,9 @@
  *
  * Nodes and elements are produced in chunks filled in parallel by
  * mx_afile_emit, so a file is the same byte for byte whatever the number of
- * threads. */
+ * threads.
+ * A 2D view (soa/mesh.h: dim 2) is written by the section "a 2D view"
+ * below. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -46,8 +48,11 @@
 
 #include "base/common.h"
 #include "io/atomic_file.h"
+#include "io/plane_mesh.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/mesh_view_check.h"
 
 /* The letter of each type, MX_TET .. MX_HEX. */
 static const char cell_letter[4] = {'T', 'P', 'R', 'H'};
@@ -150,10 +155,58 @@ static int write_mvm_body(mx_afile *f, const mx_mesh_view *m) {
   return mx_afile_emit(f, m->ncells, MVM_CELL_MAX, fill_mvm_cells, m);
 }
 
+/* ---- a 2D view (soa/mesh.h: dim 2) ---------------------------------------
+ *
+ * The layout above with letters T (triangle) and Q (quadrilateral), z = 0. */
+
+typedef struct {
+  const mx_mesh_view *M;
+} plane_ctx;
+
+enum { PLANE_SCI_MAX = 24 };
+static const char plane_tail[] = " 1000.0 0.45 1.0\n";
+
+static size_t fill_plane_nodes(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  size_t n = 0;
+  for (size_t i = b; i < e; i++) {
+    o[n++] = '1';
+    for (int d = 0; d < 3; d++) {
+      o[n++] = ' ';
+      n += mx_put_e8(o + n, d < 2 ? x->M->xyz[2 * i + d] : 0.0);
+    }
+    o[n++] = '\n';
+  }
+  return n;
+}
+
+static size_t fill_plane_cells(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  size_t n = 0;
+  for (size_t c = b; c < e; c++) {
+    const int nv = mx_view_nv2(x->M, c);
+    o[n++] = nv == 4 ? 'Q' : 'T';
+    n += mx_plane_put_ids(o + n, x->M->conn + 4 * c, nv, 0);
+    memcpy(o + n, plane_tail, sizeof plane_tail - 1);
+    n += sizeof plane_tail - 1;
+  }
+  return n;
+}
+
+static int write_plane_body(mx_afile *f, const mx_mesh_view *M) {
+  plane_ctx x = {.M = M};
+  MX_CHECK(mx_afile_printf(f, "[Nodes, ARRAY1<STRING>]\n%zu\n\n", M->nnodes));
+  MX_CHECK(mx_afile_emit(f, M->nnodes, 3 + 3 * (PLANE_SCI_MAX + 1), fill_plane_nodes, &x));
+  MX_CHECK(mx_afile_printf(f, "\n[Elements, ARRAY1<STRING>]\n%zu\n\n", M->ncells));
+  return mx_afile_emit(f, M->ncells, 1 + 4 * (MX_U64_CHARS + 1) + sizeof plane_tail, fill_plane_cells,
+                       &x);
+}
+
 int mx_write_m3d(const char *path, const mx_mesh_view *m) {
   MX_CHECK(mx_mesh_view_check(path, m));
   mx_afile f;
   MX_CHECK(mx_afile_open(&f, path));
+  if (mx_view_is_2d(m)) return mx_afile_finish(&f, write_plane_body(&f, m));
   return mx_afile_finish(&f, write_m3d_body(&f, m));
 }
 

@@ -61,6 +61,9 @@
 #include "io/boundary_faces.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/cell_order.h"
+#include "io/mesh_view_check.h"
 
 enum {
   KW_DIMENSION = 3,
@@ -209,7 +212,7 @@ static int cells_by_type(const mx_mesh_view *m, uint32_t **cells_out, size_t fir
   const size_t n = m->ncells;
   uint32_t *cells = mx_alloc((n + 1) * sizeof *cells);
   uint8_t *wtype = m->order ? mx_alloc(n + 1) : NULL;
-  int st = cells && (wtype || !m->order) ? MX_OK : MX_EINPUT;
+  int st = cells && (wtype || !m->order) ? MX_OK : MX_ENOMEM;
   if (!st && m->order) {
 #pragma omp parallel for schedule(static)
     for (size_t k = 0; k < n; k++) wtype[k] = m->type[m->order[k]];

@@ -43,7 +43,9 @@
  *
  * Every large section is formatted (ASCII) or packed (binary) in parallel
  * chunks by mx_afile_emit: the bytes do not depend on the thread count.
- * ASCII doubles read back exactly (see mx_put_double in io/text_num.h). */
+ * ASCII doubles read back exactly (see mx_put_double in io/text_num.h).
+ * A 2D view (soa/mesh.h: dim 2) is written by the section "a 2D view"
+ * below. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -53,8 +55,11 @@
 #include "io/atomic_file.h"
 #include "io/boundary_faces.h"
 #include "io/msh_order.h"
+#include "io/plane_mesh.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/mesh_view_check.h"
 
 enum {
   ENTITY_TAG = 1,
@@ -301,7 +306,7 @@ static int block_ranges(const mx_mesh_view *m, msh_layout *L) {
   size_t *lo = mx_alloc(n4 * sizeof *lo), *hi = mx_alloc(n4 * sizeof *hi);
   L->klo = lo;
   L->khi = hi;
-  if (!lo || !hi) return MX_EINPUT;
+  if (!lo || !hi) return MX_ENOMEM;
   for (size_t i = 0; i < n4; i++) lo[i] = SIZE_MAX, hi[i] = 0;
   const int tagged = L->tagged;
 #pragma omp parallel for schedule(static) reduction(min : lo[:n4]) reduction(max : hi[:n4]) \
@@ -338,7 +343,7 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
   L->bbox = mx_alloc(6 * nb * sizeof *L->bbox);
   if (!L->ntri || !L->nquad || !L->ncell || !L->tbox || !L->bbox) {
     layout_free(L);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   for (size_t i = 0; i < nt; i++)
     for (int a = 0; a < 3; a++) L->tbox[6 * i + a] = INFINITY, L->tbox[6 * i + 3 + a] = -INFINITY;
@@ -364,7 +369,7 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
   L->tag0 = mx_alloc((nt + 1) * sizeof *L->tag0);
   if (!L->tri0 || !L->quad0 || !L->tag0) {
     layout_free(L);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   size_t a = 0, b = 0;
   uint64_t e = m->ncells;
@@ -623,9 +628,259 @@ static int write_body(mx_afile *f, const mx_mesh_view *m, int binary) {
   return st;
 }
 
+/* ---- a 2D view (soa/mesh.h: dim 2) ---------------------------------------
+ *
+ * One surface entity (tag 1, physical 1 "domain") holding the nodes, the
+ * triangles (type 2) and quadrilaterals (type 3); one curve entity (tag 1,
+ * physical 2 "boundary") holding the boundary edges (used by one cell) as
+ * lines (type 1), oriented as in their cell (the domain on their left);
+ * $ElementData per cell field, a line carrying its cell's value. Element
+ * tags are a cell's index + 1 (lines follow), node tags index + 1. */
+
+typedef struct {
+  const mx_mesh_view *M;
+  const mx_field *fd;     /* the cell field being written */
+  int type;               /* the cells of this block's type */
+  int data;               /* $ElementData lines instead of elements */
+  int binary;
+  const uint64_t *bedge;  /* boundary edges, 4 * cell + side */
+} plane_ctx;
+
+enum { PLANE_SURF = 1, PLANE_CURVE = 1, PHYS_DOMAIN = 1, PHYS_BOUNDARY = 2 };
+
+static size_t fill_plane_node_tags(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  size_t n = 0;
+  for (size_t i = b; i < e; i++) {
+    if (x->binary) {
+      const uint64_t t = i + 1;
+      memcpy(o + n, &t, 8);
+      n += 8;
+    } else {
+      n += mx_put_u64(o + n, i + 1);
+      o[n++] = '\n';
+    }
+  }
+  return n;
+}
+
+static size_t fill_plane_coords(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  size_t n = 0;
+  for (size_t i = b; i < e; i++) {
+    const double *p = x->M->xyz + 2 * i, z = 0.0;
+    if (!x->binary) {
+      n += mx_plane_put_xy0(o + n, p, '\n');
+      continue;
+    }
+    memcpy(o + n, p, 16);
+    memcpy(o + n + 16, &z, 8);
+    n += 24;
+  }
+  return n;
+}
+
+/* One element line (or its $ElementData line): tag, then nodes (or the
+ * value of cell c's field). */
+static size_t plane_item(const plane_ctx *x, uint64_t tag, size_t c, const uint32_t *nodes, int nv,
+                       char *o) {
+  size_t n = 0;
+  if (x->data) {
+    const mx_field *fd = x->fd;
+    const double d = fd->is_double ? mx_field_double(fd, c) : (double)mx_field_int(fd, c);
+    if (x->binary) {
+      const int32_t t = (int32_t)tag;
+      memcpy(o, &t, 4);
+      memcpy(o + 4, &d, 8);
+      return 12;
+    }
+    n = mx_put_u64(o, tag);
+    o[n++] = ' ';
+    n += fd->is_double ? mx_put_double(o + n, d) : mx_put_i64(o + n, (int64_t)mx_field_int(fd, c));
+    o[n++] = '\n';
+    return n;
+  }
+  if (x->binary) {
+    memcpy(o, &tag, 8);
+    for (int j = 0; j < nv; j++) {
+      const uint64_t t = (uint64_t)nodes[j] + 1;
+      memcpy(o + 8 + 8 * j, &t, 8);
+    }
+    return 8 * (size_t)(nv + 1);
+  }
+  n = mx_put_u64(o, tag);
+  n += mx_plane_put_ids(o + n, nodes, nv, 1);
+  o[n++] = '\n';
+  return n;
+}
+
+/* The cells of block type x->type, scanning every cell (others skipped). */
+static size_t fill_plane_cells(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  size_t n = 0;
+  for (size_t c = b; c < e; c++)
+    if (x->M->type[c] == x->type)
+      n += plane_item(x, c + 1, c, x->M->conn + 4 * c, mx_view_nv2(x->M, c), o + n);
+  return n;
+}
+
+static size_t fill_plane_lines(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  size_t n = 0;
+  for (size_t i = b; i < e; i++) {
+    const size_t c = (size_t)(x->bedge[i] >> 2);
+    const int s = (int)(x->bedge[i] & 3), nv = mx_view_nv2(x->M, c);
+    const uint32_t ab[2] = {x->M->conn[4 * c + s], x->M->conn[4 * c + (s + 1) % nv]};
+    n += plane_item(x, x->M->ncells + i + 1, c, ab, 2, o + n);
+  }
+  return n;
+}
+
+static int plane_bin_int(mx_afile *f, int32_t v) { return mx_afile_write(f, &v, 4); }
+static int plane_bin_size(mx_afile *f, uint64_t v) { return mx_afile_write(f, &v, 8); }
+
+static void plane_box(const mx_mesh_view *M, double box[6]) {
+  double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+#pragma omp parallel for reduction(min : x0, y0) reduction(max : x1, y1) schedule(static) \
+    if (M->nnodes > 65536)
+  for (size_t i = 0; i < M->nnodes; i++) {
+    x0 = mx_min(x0, M->xyz[2 * i]), x1 = mx_max(x1, M->xyz[2 * i]);
+    y0 = mx_min(y0, M->xyz[2 * i + 1]), y1 = mx_max(y1, M->xyz[2 * i + 1]);
+  }
+  if (M->nnodes == 0) x0 = y0 = x1 = y1 = 0.0;
+  const double b[6] = {x0, y0, 0.0, x1, y1, 0.0};
+  memcpy(box, b, sizeof b);
+}
+
+/* One entity: tag, box, one physical tag, no bounding entities. */
+static int plane_entity(mx_afile *f, const double box[6], int phys, int binary) {
+  if (binary) {
+    MX_CHECK(plane_bin_int(f, 1));
+    MX_CHECK(mx_afile_write(f, box, 6 * sizeof *box));
+    MX_CHECK(plane_bin_size(f, 1));
+    MX_CHECK(plane_bin_int(f, phys));
+    return plane_bin_size(f, 0);
+  }
+  char line[6 * (MX_DOUBLE_CHARS + 1) + 32];
+  size_t n = 1;
+  line[0] = '1';
+  for (int k = 0; k < 6; k++) {
+    line[n++] = ' ';
+    n += mx_put_double(line + n, box[k]);
+  }
+  n += (size_t)snprintf(line + n, sizeof line - n, " 1 %d 0\n", phys);
+  return mx_afile_write(f, line, n);
+}
+
+static int plane_head(mx_afile *f, const mx_mesh_view *M, int binary) {
+  MX_CHECK(mx_afile_printf(f, "$MeshFormat\n4.1 %d 8\n", binary));
+  if (binary) {
+    MX_CHECK(plane_bin_int(f, 1));
+    MX_CHECK(mx_afile_write(f, "\n", 1));
+  }
+  MX_CHECK(mx_afile_printf(f, "$EndMeshFormat\n$PhysicalNames\n2\n2 %d \"domain\"\n"
+                              "1 %d \"boundary\"\n$EndPhysicalNames\n$Entities\n",
+                           PHYS_DOMAIN, PHYS_BOUNDARY));
+  double box[6];
+  plane_box(M, box);
+  if (binary) {
+    const uint64_t counts[4] = {0, 1, 1, 0};
+    MX_CHECK(mx_afile_write(f, counts, sizeof counts));
+  } else {
+    MX_CHECK(mx_afile_printf(f, "0 1 1 0\n"));
+  }
+  MX_CHECK(plane_entity(f, box, PHYS_BOUNDARY, binary)); /* the curve (PLANE_CURVE) */
+  MX_CHECK(plane_entity(f, box, PHYS_DOMAIN, binary));   /* the surface (PLANE_SURF) */
+  if (binary) MX_CHECK(mx_afile_write(f, "\n", 1));
+  return mx_afile_printf(f, "$EndEntities\n");
+}
+
+/* Four numbers: as text on a line, or as size_t. */
+static int plane_four(mx_afile *f, const uint64_t v[4], int binary) {
+  if (binary) return mx_afile_write(f, v, 4 * sizeof *v);
+  return mx_afile_printf(f, "%llu %llu %llu %llu\n", (unsigned long long)v[0],
+                         (unsigned long long)v[1], (unsigned long long)v[2],
+                         (unsigned long long)v[3]);
+}
+
+static int plane_block_head(mx_afile *f, int dim, int tag, int type, size_t n, int binary) {
+  if (!binary) return mx_afile_printf(f, "%d %d %d %zu\n", dim, tag, type, n);
+  MX_CHECK(plane_bin_int(f, dim));
+  MX_CHECK(plane_bin_int(f, tag));
+  MX_CHECK(plane_bin_int(f, type));
+  return plane_bin_size(f, n);
+}
+
+static int plane_nodes(mx_afile *f, const mx_mesh_view *M, plane_ctx *x) {
+  const uint64_t nn = M->nnodes, head[4] = {nn > 0, nn, nn > 0, nn};
+  MX_CHECK(mx_afile_printf(f, "$Nodes\n"));
+  MX_CHECK(plane_four(f, head, x->binary));
+  if (nn) {
+    MX_CHECK(plane_block_head(f, 2, PLANE_SURF, 0, nn, x->binary));
+    MX_CHECK(mx_afile_emit(f, nn, MX_U64_CHARS + 1, fill_plane_node_tags, x));
+    MX_CHECK(mx_afile_emit(f, nn, MX_XY0_MAX, fill_plane_coords, x));
+  }
+  if (x->binary) MX_CHECK(mx_afile_write(f, "\n", 1));
+  return mx_afile_printf(f, "$EndNodes\n");
+}
+
+/* The blocks (triangles, quadrilaterals, lines), as elements or as one
+ * field's data lines (x->data). */
+static int plane_blocks(mx_afile *f, const size_t count[3], size_t nb, plane_ctx *x) {
+  const size_t line = MX_U64_CHARS + MX_DOUBLE_CHARS + 2 > 5 * (MX_U64_CHARS + 1)
+                          ? MX_U64_CHARS + MX_DOUBLE_CHARS + 2
+                          : 5 * (MX_U64_CHARS + 1);
+  for (int t = MX_CELL_TRI; t <= MX_CELL_QUAD; t++) {
+    if (!count[t]) continue;
+    if (!x->data) MX_CHECK(plane_block_head(f, 2, PLANE_SURF, t == MX_CELL_TRI ? 2 : 3, count[t],
+                                          x->binary));
+    x->type = t;
+    MX_CHECK(mx_afile_emit(f, x->M->ncells, line, fill_plane_cells, x));
+  }
+  if (!nb) return MX_OK;
+  if (!x->data) MX_CHECK(plane_block_head(f, 1, PLANE_CURVE, 1, nb, x->binary));
+  return mx_afile_emit(f, nb, line, fill_plane_lines, x);
+}
+
+static int plane_elements(mx_afile *f, const mx_mesh_view *M, size_t nb, plane_ctx *x) {
+  const size_t nq = mx_plane_count_quads(M), count[3] = {M->ncells - nq, nq, nb};
+  const uint64_t ne = M->ncells + nb;
+  const uint64_t head[4] = {(uint64_t)(count[0] > 0) + (count[1] > 0) + (nb > 0), ne, ne > 0, ne};
+  MX_CHECK(mx_afile_printf(f, "$Elements\n"));
+  MX_CHECK(plane_four(f, head, x->binary));
+  x->data = 0;
+  MX_CHECK(plane_blocks(f, count, nb, x));
+  if (x->binary) MX_CHECK(mx_afile_write(f, "\n", 1));
+  MX_CHECK(mx_afile_printf(f, "$EndElements\n"));
+  /* one $ElementData per field, over every element in file order */
+  x->data = 1;
+  for (int k = 0; k < M->ncell_fields; k++) {
+    x->fd = &M->cell_fields[k];
+    MX_CHECK(mx_afile_printf(f, "$ElementData\n1\n\"%s\"\n1\n0\n3\n0\n1\n%llu\n",
+                             x->fd->name, (unsigned long long)ne));
+    MX_CHECK(plane_blocks(f, count, nb, x));
+    if (x->binary) MX_CHECK(mx_afile_write(f, "\n", 1));
+    MX_CHECK(mx_afile_printf(f, "$EndElementData\n"));
+  }
+  return MX_OK;
+}
+
+static int write_plane_body(mx_afile *f, const mx_mesh_view *M, int binary) {
+  uint64_t *bedge = NULL;
+  size_t nb = 0;
+  MX_CHECK(mx_plane_boundary_edges(M, &bedge, &nb));
+  plane_ctx x = {.M = M, .binary = binary, .bedge = bedge};
+  int st = plane_head(f, M, binary);
+  if (!st) st = plane_nodes(f, M, &x);
+  if (!st) st = plane_elements(f, M, nb, &x);
+  mx_free(bedge);
+  return st;
+}
+
 int mx_write_msh(const char *path, const mx_mesh_view *m, int binary) {
   MX_CHECK(mx_mesh_view_check(path, m));
   mx_afile f;
   MX_CHECK(mx_afile_open(&f, path));
+  if (mx_view_is_2d(m)) return mx_afile_finish(&f, write_plane_body(&f, m, binary));
   return mx_afile_finish(&f, write_body(&f, m, binary));
 }

@@ -66,7 +66,7 @@ static int master_text(mx_vtu_head *h, const char *pvtu_path, int npieces, const
   /* the pieces lie beside the master: their names without the directory */
   const size_t n = strlen(pvtu_path) + 32;
   char *piece = mx_alloc(n);
-  if (!piece) return MX_EINPUT;
+  if (!piece) return MX_ENOMEM;
   for (int i = 0; i < npieces; i++) {
     mx_pvtu_piece_path(pvtu_path, i, piece, n);
     const char *slash = strrchr(piece, '/');
@@ -76,7 +76,7 @@ static int master_text(mx_vtu_head *h, const char *pvtu_path, int npieces, const
   }
   mx_free(piece);
   mx_vtu_printf(h, "  </PUnstructuredGrid>\n</VTKFile>\n");
-  return h->failed ? MX_EINPUT : MX_OK;
+  return h->failed ? MX_ENOMEM : MX_OK;
 }
 
 int mx_write_pvtu_master(const char *pvtu_path, int npieces, const mx_mesh_view *v,

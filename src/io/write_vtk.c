@@ -4,15 +4,20 @@
  * kinds are produced in chunks, filled in parallel by mx_afile_emit, so the
  * file is the same byte for byte whatever the number of threads. ASCII
  * doubles are written with 17 significant digits, or 15 when those read
- * back to the same double (see mx_put_double in io/text_num.h). */
+ * back to the same double (see mx_put_double in io/text_num.h).
+ * A 2D view (soa/mesh.h: dim 2) is written by the section "a 2D view"
+ * below. */
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "base/common.h"
 #include "io/atomic_file.h"
+#include "io/plane_mesh.h"
 #include "io/text_num.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/mesh_view_check.h"
 
 enum { NAME_MAX_BYTES = 1024 };
 
@@ -254,8 +259,119 @@ static int write_body(mx_afile *f, const mx_mesh_view *m, int binary) {
   return MX_OK;
 }
 
+/* ---- a 2D view (soa/mesh.h: dim 2) ---------------------------------------
+ *
+ * Points "x y 0", cells VTK_TRIANGLE (5) / VTK_QUAD (9), the cell fields as
+ * "int" or "double" scalars under their own names, in index order. */
+
+typedef struct {
+  const mx_mesh_view *m;
+  const mx_field *fd;
+  int binary;
+} plane_ctx;
+
+static size_t fill_plane_points(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  size_t n = 0;
+  for (size_t i = b; i < e; i++) {
+    const double *p = x->m->xyz + 2 * i;
+    if (!x->binary) {
+      n += mx_plane_put_xy0(o + n, p, '\n');
+      continue;
+    }
+    put_be_double(o + n, p[0]);
+    put_be_double(o + n + 8, p[1]);
+    put_be_double(o + n + 16, 0.0);
+    n += 24;
+  }
+  return n;
+}
+
+static size_t fill_plane_cells(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  size_t n = 0;
+  for (size_t c = b; c < e; c++) {
+    const int nv = mx_view_nv2(x->m, c);
+    const uint32_t *row = x->m->conn + 4 * c;
+    if (!x->binary) {
+      o[n++] = (char)('0' + nv);
+      n += mx_plane_put_ids(o + n, row, nv, 0);
+      o[n++] = '\n';
+      continue;
+    }
+    put_be32(o + n, (uint32_t)nv);
+    n += 4;
+    for (int j = 0; j < nv; j++, n += 4) put_be32(o + n, row[j]);
+  }
+  return n;
+}
+
+static size_t fill_plane_types(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  size_t n = 0;
+  for (size_t c = b; c < e; c++) {
+    const uint32_t t = x->m->type[c] == MX_CELL_QUAD ? 9 : 5;
+    if (x->binary) {
+      put_be32(o + n, t);
+      n += 4;
+    } else {
+      o[n++] = t == 9 ? '9' : '5';
+      o[n++] = '\n';
+    }
+  }
+  return n;
+}
+
+static size_t fill_plane_field(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  const mx_field *fd = x->fd;
+  size_t n = 0;
+  for (size_t c = b; c < e; c++) {
+    if (x->binary && fd->is_double) {
+      put_be_double(o + n, mx_field_double(fd, c));
+      n += 8;
+    } else if (x->binary) {
+      put_be32(o + n, (uint32_t)mx_field_int(fd, c));
+      n += 4;
+    } else {
+      n += fd->is_double ? mx_put_double(o + n, mx_field_double(fd, c))
+                         : mx_put_i64(o + n, (int64_t)mx_field_int(fd, c));
+      o[n++] = '\n';
+    }
+  }
+  return n;
+}
+
+static int write_plane_body(mx_afile *f, const mx_mesh_view *m, int binary) {
+  plane_ctx x = {.m = m, .binary = binary};
+  const size_t nconn = 3 * m->ncells + mx_plane_count_quads(m);
+  MX_CHECK(mx_afile_printf(f, "# vtk DataFile Version 3.0\nmixoct 2D mesh\n%s\n"
+                              "DATASET UNSTRUCTURED_GRID\nPOINTS %zu double\n",
+                           binary ? "BINARY" : "ASCII", m->nnodes));
+  MX_CHECK(mx_afile_emit(f, m->nnodes, MX_XY0_MAX, fill_plane_points, &x));
+  MX_CHECK(mx_afile_printf(f, "%sCELLS %zu %zu\n", binary ? "\n" : "", m->ncells,
+                           m->ncells + nconn));
+  MX_CHECK(mx_afile_emit(f, m->ncells, 2 + 4 * (MX_U64_CHARS + 1), fill_plane_cells, &x));
+  MX_CHECK(mx_afile_printf(f, "%sCELL_TYPES %zu\n", binary ? "\n" : "", m->ncells));
+  MX_CHECK(mx_afile_emit(f, m->ncells, 4, fill_plane_types, &x));
+  MX_CHECK(mx_afile_printf(f, "%sCELL_DATA %zu\n", binary ? "\n" : "", m->ncells));
+  for (int k = 0; k < m->ncell_fields; k++) {
+    x.fd = &m->cell_fields[k];
+    MX_CHECK(mx_afile_printf(f, "SCALARS %s %s 1\nLOOKUP_TABLE default\n", x.fd->name,
+                             x.fd->is_double ? "double" : "int"));
+    MX_CHECK(mx_afile_emit(f, m->ncells, MX_NUM_MAX, fill_plane_field, &x));
+    if (binary) MX_CHECK(mx_afile_write(f, "\n", 1));
+  }
+  return MX_OK;
+}
+
 int mx_write_vtk_legacy(const char *path, const mx_mesh_view *m, int binary) {
   MX_CHECK(mx_mesh_view_check(path, m));
+  if (mx_view_is_2d(m)) {
+    mx_afile f;
+    MX_CHECK(mx_afile_open(&f, path));
+    return mx_afile_finish(&f, write_plane_body(&f, m, binary));
+  }
   if (m->nnodes > (size_t)INT32_MAX) {
     mx_error(path, 0,
              "%zu nodes are too many for legacy VTK (32-bit ids): use .vtu",

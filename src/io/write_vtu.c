@@ -6,15 +6,20 @@
  * the mesh arrays into the output chunks; connectivity, offsets and types are converted in
  * parallel in place in them (io/atomic_file.h: a background thread writes
  * one chunk while the next is filled). mx_write_vtu_extra adds what a
- * piece of a .pvtu needs (io/vtu_common.h, io/write_pvtu.c). */
+ * piece of a .pvtu needs (io/vtu_common.h, io/write_pvtu.c).
+ * A 2D view (soa/mesh.h: dim 2) is written by the section "a 2D view"
+ * below. */
 #include <stdint.h>
 #include <string.h>
 
 #include "base/common.h"
 #include "io/atomic_file.h"
+#include "io/plane_mesh.h"
 #include "io/vtu_common.h"
 #include "soa/mesh.h"
 #include "base/scan.h"
+#include "io/write_mesh.h"
+#include "io/mesh_view_check.h"
 
 enum { OFFSET_BLOCK = 4096 }; /* cells per precomputed offsets prefix */
 
@@ -248,7 +253,7 @@ static uint64_t *offset_block_starts(const mx_mesh_view *m) {
 
 static int write_cell_blocks(mx_afile *f, const mx_mesh_view *m, size_t nconn) {
   uint64_t *block_start = offset_block_starts(m);
-  if (!block_start) return MX_EINPUT;
+  if (!block_start) return MX_ENOMEM;
   const int wide = needs_wide(m, nconn);
   const uint64_t isz = wide ? 8 : 4;
   vtu_ctx ctx = {m, NULL, block_start, wide, NULL};
@@ -273,11 +278,145 @@ static int write_body(mx_afile *f, const mx_mesh_view *m, const mx_vtu_extra *x)
   return mx_vtu_finish(f);
 }
 
+/* ---- a 2D view (soa/mesh.h: dim 2) ---------------------------------------
+ *
+ * Points Float64 x y 0, cells VTK_TRIANGLE (5) / VTK_QUAD (9), Int32 or
+ * Int64 indices as for 3D; each cell field Float64 (double), UInt8 (from
+ * 8-bit values) or Int32, in index order. */
+
+typedef struct {
+  const mx_mesh_view *m;
+  const mx_field *fd;
+  int wide;                /* Int64 indices */
+  const uint64_t *qbefore; /* quadrilaterals before each OFFSET_BLOCK cells */
+} plane_ctx;
+
+static int plane_field_size(const mx_field *fd) {
+  return fd->is_double ? 8 : fd->u8values ? 1 : 4;
+}
+
+static size_t fill_plane_points(const void *v, size_t b, size_t e, char *o) {
+  const double *xy = ((const plane_ctx *)v)->m->xyz;
+  for (size_t i = b; i < e; i++) {
+    char *p = o + 24 * (i - b);
+    mx_put_le_double(p, xy[2 * i]);
+    mx_put_le_double(p + 8, xy[2 * i + 1]);
+    mx_put_le_double(p + 16, 0.0);
+  }
+  return 24 * (e - b);
+}
+
+static size_t fill_plane_conn(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  size_t n = 0;
+  for (size_t c = b; c < e; c++)
+    for (int j = 0; j < mx_view_nv2(x->m, c); j++) {
+      if (x->wide) mx_put_le64(o + n, x->m->conn[4 * c + j]);
+      else mx_put_le32(o + n, x->m->conn[4 * c + j]);
+      n += x->wide ? 8 : 4;
+    }
+  return n;
+}
+
+/* The end of cell c's connectivity: 3 per cell plus one per quadrilateral. */
+static size_t fill_plane_offsets(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  uint64_t q = x->qbefore[b / OFFSET_BLOCK];
+  for (size_t c = b / OFFSET_BLOCK * OFFSET_BLOCK; c < b; c++)
+    q += x->m->type[c] == MX_CELL_QUAD;
+  size_t n = 0;
+  for (size_t c = b; c < e; c++) {
+    q += x->m->type[c] == MX_CELL_QUAD;
+    const uint64_t end = 3 * (uint64_t)(c + 1) + q;
+    if (x->wide) mx_put_le64(o + n, end);
+    else mx_put_le32(o + n, (uint32_t)end);
+    n += x->wide ? 8 : 4;
+  }
+  return n;
+}
+
+static size_t fill_plane_types(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  for (size_t c = b; c < e; c++) o[c - b] = x->m->type[c] == MX_CELL_QUAD ? 9 : 5;
+  return e - b;
+}
+
+static size_t fill_plane_field(const void *v, size_t b, size_t e, char *o) {
+  const plane_ctx *x = v;
+  const mx_field *fd = x->fd;
+  const int size = plane_field_size(fd);
+  size_t n = 0;
+  for (size_t c = b; c < e; c++, n += (size_t)size) {
+    if (size == 8) mx_put_le_double(o + n, mx_field_double(fd, c));
+    else if (size == 1) o[n] = (char)fd->u8values[c];
+    else mx_put_le32(o + n, (uint32_t)mx_field_int(fd, c));
+  }
+  return n;
+}
+
+static int plane_header(mx_afile *f, const mx_mesh_view *m, uint64_t nconn, int wide) {
+  mx_vtu_head h = {0};
+  mx_vtu_begin(&h, m->nnodes, m->ncells);
+  mx_vtu_printf(&h, "      <CellData>\n");
+  for (int k = 0; k < m->ncell_fields; k++) {
+    const mx_field *fd = &m->cell_fields[k];
+    const int size = plane_field_size(fd);
+    mx_vtu_array(&h, size == 8 ? "Float64" : size == 1 ? "UInt8" : "Int32", fd->name, 1,
+                 (uint64_t)size * m->ncells);
+  }
+  mx_vtu_printf(&h, "      </CellData>\n");
+  return mx_vtu_end(f, &h, m->nnodes, m->ncells, nconn, wide);
+}
+
+/* Quadrilaterals before each block of OFFSET_BLOCK cells (the offsets'
+ * prefix). */
+static uint64_t *plane_quads_before(const mx_mesh_view *m) {
+  const size_t nb = m->ncells / OFFSET_BLOCK + 1;
+  uint64_t *q = mx_alloc(nb * sizeof *q);
+  if (!q) return NULL;
+#pragma omp parallel for schedule(static) if (nb > 16)
+  for (size_t k = 0; k < nb; k++) {
+    const size_t lo = k * OFFSET_BLOCK,
+                 hi = lo + OFFSET_BLOCK < m->ncells ? lo + OFFSET_BLOCK : m->ncells;
+    uint64_t s = 0;
+    for (size_t c = lo; c < hi; c++) s += m->type[c] == MX_CELL_QUAD;
+    q[k] = s;
+  }
+  mx_scan_u64(q, nb);
+  return q;
+}
+
+static int plane_blocks(mx_afile *f, const mx_mesh_view *m, uint64_t nconn, plane_ctx *x) {
+  const uint64_t nc = m->ncells, isz = x->wide ? 8 : 4;
+  for (int k = 0; k < m->ncell_fields; k++) {
+    x->fd = &m->cell_fields[k];
+    const int size = plane_field_size(x->fd);
+    MX_CHECK(mx_vtu_block(f, (uint64_t)size * nc, m->ncells, (size_t)size, fill_plane_field, x));
+  }
+  MX_CHECK(mx_vtu_block(f, 24 * (uint64_t)m->nnodes, m->nnodes, 24, fill_plane_points, x));
+  MX_CHECK(mx_vtu_block(f, isz * nconn, m->ncells, 4 * isz, fill_plane_conn, x));
+  MX_CHECK(mx_vtu_block(f, isz * nc, m->ncells, isz, fill_plane_offsets, x));
+  MX_CHECK(mx_vtu_block(f, nc, m->ncells, 1, fill_plane_types, x));
+  return mx_vtu_finish(f);
+}
+
+static int write_plane_body(mx_afile *f, const mx_mesh_view *m) {
+  const uint64_t nconn = 3 * (uint64_t)m->ncells + mx_plane_count_quads(m);
+  plane_ctx x = {.m = m, .wide = nconn > (uint64_t)INT32_MAX};
+  MX_CHECK(plane_header(f, m, nconn, x.wide));
+  x.qbefore = plane_quads_before(m);
+  if (!x.qbefore) return MX_ENOMEM;
+  const int st = plane_blocks(f, m, nconn, &x);
+  mx_free((void *)x.qbefore);
+  return st;
+}
+
 int mx_write_vtu_extra(const char *path, const mx_mesh_view *m, const mx_vtu_extra *x) {
   static const mx_vtu_extra none = {NULL, NULL, 0};
   MX_CHECK(mx_mesh_view_check(path, m));
   mx_afile f;
   MX_CHECK(mx_afile_open(&f, path));
+  if (mx_view_is_2d(m)) return mx_afile_finish(&f, write_plane_body(&f, m));
   return mx_afile_finish(&f, write_body(&f, m, x ? x : &none));
 }
 

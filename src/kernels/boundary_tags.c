@@ -5,6 +5,7 @@
 
 #include "base/common.h"
 #include "soa/octree.h"
+#include "io/cell_order.h"
 
 /* The shell of the domain triangles leaf octant o meets when they all come
  * from one file; -1 when it meets none or several. */

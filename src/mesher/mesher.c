@@ -24,6 +24,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include "io/read_surface.h"
+#include "io/demo_surface.h"
+#include "io/write_mesh.h"
 
 /* ---- calls, messages, status ------------------------------------------ */
 

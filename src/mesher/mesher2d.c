@@ -15,6 +15,8 @@
 #include "io/restart.h"
 #include "kernels/estimate.h"
 #include "mesher/call.h"
+#include "mesher/qmesh_output.h"
+#include "io/read_poly.h"
 
 /* The check's tolerances: boundary nodes within CHECK_TOL of the domain's
  * diameter from the polylines; the area within half a layer of cells along

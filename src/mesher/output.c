@@ -14,6 +14,8 @@
 
 #include "kernels/edges_lazy.h"
 #include "soa/mesh.h"
+#include "io/write_mesh.h"
+#include "io/cell_order.h"
 
 /* The last path component, quotes turned into apostrophes (a name inside
  * the quotes of Gmsh's $PhysicalNames). */

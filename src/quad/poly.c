@@ -20,15 +20,6 @@
 #include "quad/quad.h"
 #include "base/scan.h"
 
-void mx_poly_free(mx_poly *P) {
-  mx_free(P->xy);
-  mx_free(P->seg);
-  mx_free(P->line);
-  mx_free(P->holes);
-  mx_free(P->path);
-  memset(P, 0, sizeof *P);
-}
-
 static inline const double *vtx(const mx_poly *P, uint32_t v) { return P->xy + 2 * (size_t)v; }
 static inline const double *from(const mx_poly *P, uint32_t s) {
   return vtx(P, P->seg[2 * (size_t)s]);

@@ -7,7 +7,7 @@
  *     --grid + refine + balance (qtree.c, qrefine.c, qedges.c)--> mx_qtree
  *     --transition (qtransition.c)--> mx_qmesh (conforming, whole grid)
  *     --boundary, Algorithm 2 (qboundary.c)--> mx_qmesh of the domain
- *     --quality (qquality.c), write (io/write_qmesh.c), check (qcheck.c)
+ *     --quality (qquality.c), write (mesher/qmesh_output.c, through io), check (qcheck.c)
  *
  * The same machinery as 3D where the idea is the same: Morton keys on a
  * finest lattice (x in bit 0, y in bit 1), a level-synchronous refinement
@@ -23,39 +23,15 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define MX_QMAX_LEVEL 28 /* lattice: 2^28 units per root side, levels 0 to 27 */
+#include "soa/mesh_data.h"
+#include "soa/poly.h"
+
+/* MX_QMAX_LEVEL (the lattice): soa/poly.h. */
 
 /* ---- polylines (poly.c, io/read_poly.c) --------------------------------- */
 
-/* A set of polylines. For a domain every polyline is closed and oriented so
- * that the domain lies on the left of each segment (outer boundaries
- * counter-clockwise, holes clockwise: the outward normal is on the right).
- * A drawing's polylines may be open (they only drive refinement). */
-typedef struct {
-  size_t nv, ns;
-  double *xy;        /* 2 per vertex */
-  uint32_t *seg;     /* 2 per segment: from, to (vertex indices) */
-  uint32_t *line;    /* per segment: the line of the input that defined it (messages) */
-  size_t nholes;
-  double *holes;     /* 2 per hole point (.poly); informative once oriented */
-  size_t nloops;     /* closed polylines found by mx_poly_check_domain */
-  char *path;        /* the file it came from (messages) */
-} mx_poly;
-
-void mx_poly_free(mx_poly *P);
-
-/* Readers: .poly (Triangle's format: vertices, segments, holes; '#'
- * comments; indices from the first vertex number, 0 or 1), .off (each face a
- * closed polygon, z ignored, must be 0), and 2D .mdl. Bad input: MX_EINPUT
- * with a message naming the file and line. By extension: mx_read_poly_any. */
-int mx_read_poly(const char *path, mx_poly *P);
-int mx_read_poly_off(const char *path, mx_poly *P);
-int mx_read_poly_mdl(const char *path, mx_poly *P);
-int mx_read_poly_any(const char *path, mx_poly *P);
-/* Refinement boxes (io/read_qboxes.c): 'n_regions N', then per box
- * 'xmin ymin xmax ymax level'; '#' comments. *boxes allocated (mx_free). */
-typedef struct mx_qbox mx_qbox;
-int mx_read_qboxes(const char *path, mx_qbox **boxes, size_t *n);
+/* The polylines (mx_poly) and refinement boxes (mx_qbox): soa/poly.h; their
+ * readers: io/read_poly.h. */
 
 /* A domain's checks: every vertex of a segment starts exactly one segment
  * and ends exactly one (closed polylines; a segment given backwards in a
@@ -99,11 +75,6 @@ uint32_t mx_poly_closest(const mx_poly_index *I, const double p[2], double rmax,
 int mx_poly_features(const mx_poly *P, uint32_t **out, size_t *n);
 
 /* ---- requests (qrefine.c) ------------------------------------------------ */
-
-struct mx_qbox {
-  double lo[2], hi[2];
-  int level;
-};
 
 /* The functions of the "function" refinement: a quadrant is refined to the
  * level when the function's zero set crosses it (the signs at its corners
@@ -287,6 +258,10 @@ typedef struct {
 } mx_qmesh;
 
 void mx_qmesh_free(mx_qmesh *M);
+/* The faces of a 2D mesh read by io (io/read_mesh.h: mx_read_mesh_dim) as
+ * the cells of q, in the file's node order (m is left as it was;
+ * quad/qmesh_faces.c). MX_OK or MX_ENOMEM. */
+int mx_qmesh_from_faces(const mx_mesh_data *m, mx_qmesh *q);
 /* The first cell with a bad type or a node index >= nnodes; ncells when
  * none (qquality.c). The writers and the check test this first. */
 size_t mx_qmesh_bad_cell(const mx_qmesh *M);
@@ -344,14 +319,9 @@ typedef struct {
 
 void mx_qquality_measure(const mx_qmesh *M, mx_qquality *q);
 
-/* ---- output and checks (io/write_qmesh.c, qcheck.c) ---------------------- */
+/* ---- checks (qcheck.c) ----------------------------------------------------- */
 
-/* By extension: .vtu (binary), .vtk (legacy), .msh (Gmsh 4.1: the cells,
- * and the boundary edges as lines in a physical group "boundary"), .off,
- * .getfem, .m3d. Written to a temporary name and renamed (io/atomic_file.h).
- * Cell fields: type, level, sj (scaled Jacobian). */
-int mx_write_qmesh(const char *path, const mx_qmesh *M, int ascii);
-int mx_qmesh_format_known(const char *path);
+/* Writing: mesher/qmesh_output.h (through io's 2D mesh view). */
 
 /* Independent checks of a 2D mesh: conformity (every edge used by one or two
  * cells, twice in opposite directions; no node lying inside another cell's

@@ -1,4 +1,5 @@
-/* A mesh as plain arrays, the form every writer takes. Cells are rows of 8
+/* A mesh as plain arrays, the form every writer takes (a 2D mesh too: see
+ * mx_mesh_view's dim). Cells are rows of 8
  * node indices (unused entries are ignored), with a type each. Node order
  * inside a cell follows VTK's convention for tetrahedra, pyramids and
  * hexahedra; for prisms it is Gmsh's (the triangle 0 1 2 turns, by the right
@@ -116,52 +117,29 @@ typedef struct {
   const int32_t *cell_body;
   int nbodies;
   const char *const *body_names;
+  /* The dimension: 3 (or 0, as in a plain view) a volume mesh as above; 2
+   * a planar mesh (mx_view_is_2d): xyz holds x y per node (written with
+   * z = 0), type MX_CELL_TRI / MX_CELL_QUAD, conn 4 per cell (a triangle's
+   * 4th entry unused), cells counter-clockwise and written in index order
+   * (order, bfaces, tags and bodies unused). */
+  int dim;
 } mx_mesh_view;
 
-/* The order cells are written in (src/io/cell_order.c). Bodies: the parts
- * of the mesh connected through nodes, numbered 1.. by their smallest node
- * (cell_body: ncells values). mx_cells_in_order: the cells grouped by body
- * (body NULL: one), then by type (tetrahedra, pyramids, prisms,
- * hexahedra), in index order within a group. mx_cells_by_type: by type
- * alone, first (may be NULL) receiving where each type starts, first[4] =
- * n. mx_cells_written_order: the bodies, then mx_cells_in_order, the order
- * every mesh file of mixoct lists its cells in. MX_OK or MX_EINPUT
- * (memory). */
-int mx_cell_bodies(const mx_mesh_view *v, int32_t *cell_body, int *nbodies);
-int mx_cells_in_order(const uint8_t *type, const int32_t *body, int nbodies, size_t n,
-                      uint32_t *order);
-int mx_cells_by_type(const uint8_t *type, size_t n, uint32_t *order, size_t first[5]);
-int mx_cells_written_order(const mx_mesh_view *v, uint32_t *order);
+/* The cells of a 2D view (dim 2): counter-clockwise triangles and
+ * quadrilaterals (the values of quad/quad.h's MX_QTRI and MX_QQUAD). */
+enum { MX_CELL_TRI = 0, MX_CELL_QUAD = 1 };
+
+/* Whether the view is of a 2D mesh. */
+static inline int mx_view_is_2d(const mx_mesh_view *m) { return m->dim == 2; }
+
+/* The node count of cell c of a 2D view. */
+static inline int mx_view_nv2(const mx_mesh_view *m, size_t c) {
+  return m->type[c] == MX_CELL_QUAD ? 4 : 3;
+}
 
 /* The index of the k-th cell written. */
 static inline size_t mx_view_cell(const mx_mesh_view *m, size_t k) {
   return m->order ? m->order[k] : k;
 }
-
-/* Writers (src/io/write_*.c). The file is written under a temporary name in
- * the same directory and renamed at the end; on any failure (permission, full
- * disk) the temporary is removed, a message names the file, and MX_EINPUT is
- * returned. */
-int mx_write_vtk_legacy(const char *path, const mx_mesh_view *m, int binary);
-int mx_write_vtu(const char *path, const mx_mesh_view *m);
-/* Gmsh MSH 4.1 (src/io/write_msh.c). */
-int mx_write_msh(const char *path, const mx_mesh_view *m, int binary);
-/* Medit .mesh (ASCII) / .meshb (binary), with the boundary triangles and
- * quadrilaterals (src/io/write_medit.c). */
-int mx_write_medit(const char *path, const mx_mesh_view *m, int binary);
-/* The published mesher's GetFEM and M3D files (src/io/write_getfem.c,
- * src/io/write_m3d.c). */
-int mx_write_getfem(const char *path, const mx_mesh_view *m);
-int mx_write_m3d(const char *path, const mx_mesh_view *m);
-int mx_write_mvm(const char *path, const mx_mesh_view *m);
-/* The boundary faces of the view (view.bfaces, with their tags) as a
- * surface VTU of their own (src/io/write_boundary.c). */
-int mx_write_boundary_vtu(const char *path, const mx_mesh_view *m);
-/* Dispatch on the extension: .vtk (legacy), .vtu, .msh, .mesh, .meshb,
- * .getfem, .m3d; ascii selects the ASCII variant where a format has both
- * (.vtk, .msh). */
-int mx_write_mesh(const char *path, const mx_mesh_view *m, int ascii);
-/* 1 if the extension of path names a format mx_write_mesh knows. */
-int mx_mesh_format_known(const char *path);
 
 #endif

@@ -1,58 +1,14 @@
-/* mixoct: 2D meshes read back (see read_qmesh.h). The VTK, VTU, MSH and
- * Medit files go through io/read_mesh.c's readers (one parser per format):
- * a 2D mesh comes back from them as faces with no volume cell and is
- * converted here; OFF, which read_mesh.c does not read, has its own small
- * parser below (faces kept whole: io/read_off.c splits them into triangles). */
-#include "io/read_qmesh.h"
-
+/* mixoct: an OFF file read as a 2D mesh (for mx_read_mesh_dim, see
+ * read_mesh.h): "OFF" (or a variant whose extra per-vertex data is
+ * ignored, as io/read_off.c), the counts, vertices with z = 0, faces of 3
+ * or 4 vertices kept whole (io/read_off.c, the surface reader, splits them
+ * into triangles) as the mesh's faces, tag 0, in the file's node order. */
 #include <stdio.h>
 #include <string.h>
 
 #include "base/common.h"
+#include "io/mesh_reader.h"
 #include "io/text_scan.h"
-
-enum { PAR_MIN = 65536 }; /* fewer items: one thread */
-
-/* ---- from io/read_mesh.c's faces ----------------------------------------- */
-
-/* Whether m is a 2D mesh: faces, no volume cell, every z = 0. */
-static int planar_faces(const mx_mesh_data *m) {
-  if (m->ncells || !m->nfaces) return 0;
-  size_t off = 0;
-#pragma omp parallel for schedule(static) reduction(+ : off) if (m->nnodes > PAR_MIN)
-  for (size_t i = 0; i < m->nnodes; i++) off += m->xyz[3 * i + 2] != 0.0;
-  return off == 0;
-}
-
-/* m's faces as the cells of q (m is left as it was). */
-static int qmesh_from_faces(const mx_mesh_data *m, mx_qmesh *q) {
-  memset(q, 0, sizeof *q);
-  const size_t nn = m->nnodes, nc = m->nfaces;
-  q->xy = mx_alloc((2 * nn + 1) * sizeof *q->xy);
-  q->type = mx_alloc(nc + 1);
-  q->conn = mx_alloc((4 * nc + 1) * sizeof *q->conn);
-  if (!q->xy || !q->type || !q->conn) {
-    mx_qmesh_free(q);
-    return MX_EINPUT;
-  }
-  q->nnodes = nn;
-  q->ncells = nc;
-#pragma omp parallel for schedule(static) if (nn > PAR_MIN)
-  for (size_t i = 0; i < nn; i++) {
-    q->xy[2 * i] = m->xyz[3 * i];
-    q->xy[2 * i + 1] = m->xyz[3 * i + 1];
-  }
-#pragma omp parallel for schedule(static) if (nc > PAR_MIN)
-  for (size_t c = 0; c < nc; c++) {
-    const int k = m->face_nn[c];
-    q->type[c] = k == 4 ? MX_QQUAD : MX_QTRI;
-    for (int j = 0; j < 4; j++)
-      q->conn[4 * c + (size_t)j] = j < k ? m->face_conn[4 * c + (size_t)j] : UINT32_MAX;
-  }
-  return MX_OK;
-}
-
-/* ---- OFF ------------------------------------------------------------------ */
 
 typedef struct {
   const char *path, *p, *end; /* p: the current content line */
@@ -126,7 +82,7 @@ static int off_header(off_rd *f, size_t *nv, size_t *nf) {
   return MX_OK;
 }
 
-static int off_vertex(off_rd *f, mx_qmesh *q, size_t i) {
+static int off_vertex(off_rd *f, mx_mesh_data *q, size_t i) {
   double c[3];
   MX_CHECK(mx_io_numbers(f->path, f->line, &f->p, '#', 3, c, "vertex", i));
   if (c[2] != 0.0) {
@@ -136,12 +92,13 @@ static int off_vertex(off_rd *f, mx_qmesh *q, size_t i) {
              i, c[2]);
     return MX_EINPUT;
   }
-  q->xy[2 * i] = c[0];
-  q->xy[2 * i + 1] = c[1];
+  q->xyz[3 * i] = c[0];
+  q->xyz[3 * i + 1] = c[1];
+  q->xyz[3 * i + 2] = 0.0;
   return MX_OK;
 }
 
-static int off_face(off_rd *f, mx_qmesh *q, size_t c) {
+static int off_face(off_rd *f, mx_mesh_data *q, size_t c) {
   int64_t k;
   const char *s = mx_io_blank(f->p);
   const char *e = mx_io_int(s, &k);
@@ -157,21 +114,22 @@ static int off_face(off_rd *f, mx_qmesh *q, size_t c) {
     return MX_EINPUT;
   }
   f->p = e;
-  uint32_t *row = q->conn + 4 * c;
-  row[3] = UINT32_MAX;
+  uint32_t *row = q->face_conn + 4 * c;
+  row[3] = 0;
   for (int j = 0; j < (int)k; j++)
     MX_CHECK(mx_io_index(f->path, f->line, &f->p, '#', q->nnodes, &row[j], "face", c));
-  q->type[c] = k == 4 ? MX_QQUAD : MX_QTRI;
+  q->face_nn[c] = (uint8_t)k;
   return MX_OK;
 }
 
-static int off_parse(off_rd *f, mx_qmesh *q) {
+static int off_parse(off_rd *f, mx_mesh_data *q) {
   size_t nv = 0, nf = 0;
   MX_CHECK(off_header(f, &nv, &nf));
-  q->xy = mx_alloc((2 * nv + 1) * sizeof *q->xy);
-  q->type = mx_alloc(nf + 1);
-  q->conn = mx_alloc((4 * nf + 1) * sizeof *q->conn);
-  if (!q->xy || !q->type || !q->conn) return MX_EINPUT;
+  q->xyz = mx_alloc((3 * nv + 1) * sizeof *q->xyz);
+  q->face_nn = mx_alloc(nf + 1);
+  q->face_conn = mx_alloc((4 * nf + 1) * sizeof *q->face_conn);
+  q->face_tag = mx_calloc((nf + 1) * sizeof *q->face_tag);
+  if (!q->xyz || !q->face_nn || !q->face_conn || !q->face_tag) return MX_ENOMEM;
   q->nnodes = nv;
   for (size_t i = 0; i < nv; i++) {
     MX_CHECK(off_next(f, "vertices", i, nv));
@@ -180,7 +138,7 @@ static int off_parse(off_rd *f, mx_qmesh *q) {
   for (size_t c = 0; c < nf; c++) {
     MX_CHECK(off_next(f, "faces", c, nf));
     MX_CHECK(off_face(f, q, c));
-    q->ncells = c + 1;
+    q->nfaces = c + 1;
   }
   f->p = mx_io_next_line(f->p, f->end, &f->line);
   f->p = mx_io_content(f->p, f->end, &f->line, '#');
@@ -190,7 +148,7 @@ static int off_parse(off_rd *f, mx_qmesh *q) {
   return MX_EINPUT;
 }
 
-static int read_off_2d(const char *path, mx_qmesh *q) {
+int mx_rd_off_plane(const char *path, mx_mesh_data *q) {
   memset(q, 0, sizeof *q);
   char *buf;
   size_t len;
@@ -198,13 +156,13 @@ static int read_off_2d(const char *path, mx_qmesh *q) {
   off_rd f = {path, buf, buf + len, 1};
   const int st = off_parse(&f, q);
   mx_free(buf);
-  if (st != MX_OK) mx_qmesh_free(q);
+  if (st != MX_OK) mx_mesh_data_free(q);
   return st;
 }
 
 /* Whether the file's first content token (after blanks and '#' comment
  * lines) is an OFF keyword; read from its first bytes only. */
-static int is_off(const char *path) {
+int mx_rd_is_off(const char *path) {
   FILE *fp = fopen(path, "rb");
   if (!fp) return 0; /* the reader names the file */
   char buf[4096];
@@ -225,34 +183,4 @@ static int is_off(const char *path) {
   int k = 0;
   while (p + k < end && p[k] && !strchr(" \t\r\n#", p[k])) k++;
   return off_keyword(p, k);
-}
-
-/* ---- entry points ---------------------------------------------------------- */
-
-int mx_read_mesh_dim(const char *path, mx_mesh_data *m, mx_qmesh *q, int *dim) {
-  memset(m, 0, sizeof *m);
-  memset(q, 0, sizeof *q);
-  *dim = 3;
-  if (is_off(path)) {
-    MX_CHECK(read_off_2d(path, q));
-    *dim = 2;
-    return MX_OK;
-  }
-  MX_CHECK(mx_read_mesh_planar(path, m));
-  if (!planar_faces(m)) return MX_OK;
-  const int st = qmesh_from_faces(m, q);
-  mx_mesh_data_free(m);
-  if (st == MX_OK) *dim = 2;
-  return st;
-}
-
-int mx_read_qmesh(const char *path, mx_qmesh *q) {
-  mx_mesh_data m;
-  int dim = 0;
-  MX_CHECK(mx_read_mesh_dim(path, &m, q, &dim));
-  if (dim == 2) return MX_OK;
-  mx_mesh_data_free(&m);
-  mx_error(path, 0, "not a 2D mesh: it has volume cells, or no triangle or quadrilateral in the "
-           "plane z = 0");
-  return MX_EINPUT;
 }

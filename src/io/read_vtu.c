@@ -1,0 +1,303 @@
+/* mixoct: reading VTK XML unstructured grids, .vtu (see read_mesh.h): the
+ * points, the cells as offsets + connectivity and the cell types, ASCII or
+ * appended raw, cut into parts that io/vtk_cells.c assembles; the point
+ * fields surface_tag and (in a piece of a .pvtu) GlobalNodeId. A .pvtu
+ * master goes to read_pvtu.c. */
+#include "io/mesh_reader.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "base/common.h"
+#include "io/vtk_cells.h"
+#include "io/vtk_xml.h"
+
+static const char *const vtu_type_name[T_NONE] = {
+    "Int8",  "UInt8",  "Int16",  "UInt16",  "Int32",
+    "UInt32", "Int64", "UInt64", "Float32", "Float64"};
+
+typedef struct {
+  int present, appended;
+  vtype t;
+  uint64_t ncomp, offset;
+  const char *tag, *text;
+} xarr;
+
+static int parse_data_array(const rd *r, const xtag *t, xarr *x) {
+  const char *v;
+  size_t n;
+  x->present = 1;
+  x->tag = t->start;
+  x->t = T_NONE;
+  if (!mx_rd_xml_attr(t, "type", &v, &n))
+    return mx_rd_fail(r, t->start, "<DataArray> has no type attribute");
+  for (int k = 0; k < T_NONE; k++)
+    if (n == strlen(vtu_type_name[k]) && memcmp(v, vtu_type_name[k], n) == 0)
+      x->t = (vtype)k;
+  if (x->t == T_NONE)
+    return mx_rd_fail(r, t->start, "<DataArray> type \"%.*s\" is not supported",
+                      shown(n), v);
+  x->ncomp = 1;
+  MX_CHECK(mx_rd_attr_size(r, t, "NumberOfComponents", &x->ncomp, 0));
+  if (!mx_rd_xml_attr(t, "format", &v, &n))
+    return mx_rd_fail(r, t->start, "<DataArray> has no format attribute");
+  if (n == 8 && memcmp(v, "appended", 8) == 0) {
+    x->appended = 1;
+    return mx_rd_attr_size(r, t, "offset", &x->offset, 1);
+  }
+  if (n == 5 && memcmp(v, "ascii", 5) == 0) {
+    if (t->selfclose) return mx_rd_fail(r, t->start, "empty ascii <DataArray/>");
+    x->text = t->after;
+    return MX_OK;
+  }
+  return mx_rd_fail(r, t->start,
+                    "<DataArray> format \"%.*s\" is not supported (appended raw or "
+                    "ascii only)",
+                    shown(n), v);
+}
+
+typedef struct {
+  int swap, hsize;
+  const char *base; /* first byte after '_' */
+} vtu_layout;
+
+/* The values of x; want is the expected count (SIZE_MAX: any, appended
+ * only). */
+static int resolve(rd *r, const xarr *x, const vtu_layout *lay, size_t want,
+                   rawarr *out, const char *what) {
+  if (!x->appended) {
+    const char *p = x->text;
+    MX_CHECK(mx_rd_ascii_array(r, &p, '<', want, is_float(x->t), out, what));
+    p = skip_ws(p, r->end);
+    if (p < r->end && *p != '<')
+      return mx_rd_fail(r, p, "%s: more than the %zu expected values", what, want);
+    return MX_OK;
+  }
+  if (!lay->base)
+    return mx_rd_fail(r, x->tag, "%s: format=\"appended\" without <AppendedData>",
+                      what);
+  const size_t avail = (size_t)(r->end - lay->base);
+  if (x->offset > avail || avail - x->offset < (size_t)lay->hsize)
+    return mx_rd_fail(r, x->tag,
+                      "%s: appended offset %llu lies past the end of the file "
+                      "(truncated file?)",
+                      what, (unsigned long long)x->offset);
+  const unsigned char *at = (const unsigned char *)lay->base + x->offset;
+  uint64_t nbytes = load_bits(at, lay->hsize, lay->swap);
+  const size_t room = avail - x->offset - (size_t)lay->hsize;
+  const size_t es = (size_t)vsize[x->t];
+  if (nbytes > room)
+    return mx_rd_fail(r, (const char *)at,
+                      "%s: block of %llu bytes but only %zu are left (truncated "
+                      "file?)",
+                      what, (unsigned long long)nbytes, room);
+  if (nbytes % es)
+    return mx_rd_fail(r, (const char *)at,
+                      "%s: block of %llu bytes is not a whole number of %s values",
+                      what, (unsigned long long)nbytes, vtu_type_name[x->t]);
+  size_t n = (size_t)nbytes / es;
+  if (want != SIZE_MAX && n != want)
+    return mx_rd_fail(r, (const char *)at, "%s: %zu values, expected %zu", what, n,
+                      want);
+  *out = (rawarr){at + lay->hsize, n, x->t, lay->swap, NULL};
+  return MX_OK;
+}
+
+/* One point or cell array for a piece's signature (mx_rd_pvtu compares
+ * them): a hash of its section, type and name, summed over the arrays. */
+static uint64_t array_sig(const xtag *t) {
+  const char *v;
+  size_t n;
+  uint64_t h = 0xcbf29ce484222325ull; /* FNV-1a, then a finaliser */
+  for (int k = 0; k < 2; k++) {
+    if (!mx_rd_xml_attr(t, k ? "Name" : "type", &v, &n)) n = 0;
+    for (size_t i = 0; i < n; i++) h = (h ^ (unsigned char)v[i]) * 0x100000001b3ull;
+    h = (h ^ 0x100) * 0x100000001b3ull;
+  }
+  h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+  return h ^ (h >> 31);
+}
+
+/* A piece's GlobalNodeId (one non-negative integer per point). */
+static int piece_ids(rd *r, const xarr *x, const vtu_layout *lay, size_t nnodes) {
+  if (is_float(x->t) || x->ncomp != 1)
+    return mx_rd_fail(r, x->tag, "GlobalNodeId: expected one component of an integer type");
+  rawarr a;
+  MX_CHECK(resolve(r, x, lay, nnodes, &a, "GlobalNodeId"));
+  uint64_t *gid = mx_alloc((nnodes + 1) * sizeof *gid);
+  if (!gid) return MX_ENOMEM;
+  r->piece->gid = gid;
+  size_t bad = SIZE_MAX;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (nnodes > 65536)
+  for (size_t i = 0; i < nnodes; i++) {
+    const int64_t v = raw_int(&a, i);
+    gid[i] = (uint64_t)v;
+    if (v < 0 && i < bad) bad = i;
+  }
+  if (bad != SIZE_MAX)
+    return mx_rd_fail(r, mx_rd_arr_at(r, &a, bad), "GlobalNodeId: value %zu is negative or too large",
+                      bad);
+  return MX_OK;
+}
+
+/* Whether the file's last non-blank bytes are the closing tag: a file cut
+ * short (also in its raw appended data) lacks it. */
+static int xml_closed(const rd *r, const char *tag) {
+  const char *e = r->end;
+  while (e > r->buf && (e[-1] == ' ' || e[-1] == '\t' || e[-1] == '\n' || e[-1] == '\r')) e--;
+  const size_t n = strlen(tag);
+  return (size_t)(e - r->buf) >= n && memcmp(e - n, tag, n) == 0;
+}
+
+static int vtkfile_closed(const rd *r) {
+  if (xml_closed(r, "</VTKFile>")) return MX_OK;
+  return mx_rd_fail(r, NULL, "the file does not end with </VTKFile>: it is cut short (an "
+                       "interrupted write or copy?)");
+}
+
+int mx_rd_vtu(rd *r, mx_mesh_data *out) {
+  const char *p = r->buf, *end = r->end;
+  int seen = 0, pieces = 0, in_points = 0, in_cells = 0, in_pdata = 0, in_cdata = 0;
+  vtu_layout lay = {0, 4, NULL};
+  xarr pts = {0}, con = {0}, offs = {0}, typ = {0}, ntag = {0}, gidx = {0};
+  uint64_t npts = 0, ncells = 0;
+  const char *piece_tag = NULL;
+  for (;;) {
+    xtag t;
+    int found;
+    MX_CHECK(mx_rd_xml_next(r, p, &t, &found));
+    if (!found) break;
+    p = t.after;
+    if (mx_rd_tag_is(&t, "VTKFile")) {
+      if (t.closing) break;
+      seen = 1;
+      if (mx_rd_attr_eq(&t, "type", "PUnstructuredGrid")) {
+        if (r->piece)
+          return mx_rd_fail(r, t.start, "a piece of a .pvtu must be an UnstructuredGrid file, not "
+                            "another PUnstructuredGrid");
+        MX_CHECK(vtkfile_closed(r));
+        return mx_rd_pvtu(r, t.after, out);
+      }
+      if (!mx_rd_attr_eq(&t, "type", "UnstructuredGrid"))
+        return mx_rd_fail(r, t.start,
+                          "not an UnstructuredGrid VTK XML file (type attribute)");
+      const int big = mx_rd_attr_eq(&t, "byte_order", "BigEndian");
+      lay.swap = big == HOST_LE;
+      if (mx_rd_attr_eq(&t, "header_type", "UInt64"))
+        lay.hsize = 8;
+      else if (mx_rd_xml_attr(&t, "header_type", &(const char *){0}, &(size_t){0}) &&
+               !mx_rd_attr_eq(&t, "header_type", "UInt32"))
+        return mx_rd_fail(r, t.start, "header_type must be UInt32 or UInt64");
+      const char *cv;
+      size_t cn;
+      if (mx_rd_xml_attr(&t, "compressor", &cv, &cn) && cn > 0)
+        return mx_rd_fail(r, t.start,
+                          "compressed data (%.*s) is not supported: write the file "
+                          "uncompressed",
+                          shown(cn), cv);
+      MX_CHECK(vtkfile_closed(r));
+    } else if (!seen) {
+      return mx_rd_fail(r, t.start, "expected <VTKFile>, found <%.*s>",
+                        shown(t.nlen), t.name);
+    } else if (mx_rd_tag_is(&t, "Piece")) {
+      if (t.closing) continue;
+      if (++pieces > 1)
+        return mx_rd_fail(r, t.start, "more than one <Piece> is not supported");
+      piece_tag = t.start;
+      MX_CHECK(mx_rd_attr_size(r, &t, "NumberOfPoints", &npts, 1));
+      MX_CHECK(mx_rd_attr_size(r, &t, "NumberOfCells", &ncells, 1));
+    } else if (mx_rd_tag_is(&t, "Points")) {
+      in_points = !t.closing && !t.selfclose;
+    } else if (mx_rd_tag_is(&t, "Cells")) {
+      in_cells = !t.closing && !t.selfclose;
+    } else if (mx_rd_tag_is(&t, "PointData")) {
+      in_pdata = !t.closing && !t.selfclose;
+    } else if (mx_rd_tag_is(&t, "CellData")) {
+      in_cdata = !t.closing && !t.selfclose;
+    } else if (mx_rd_tag_is(&t, "DataArray") && !t.closing) {
+      xarr *x = NULL;
+      if (r->piece && in_pdata) r->piece->point_sig += array_sig(&t);
+      if (r->piece && in_cdata) r->piece->cell_sig += array_sig(&t);
+      if (r->piece && in_pdata && mx_rd_attr_eq(&t, "Name", "GlobalNodeId")) {
+        if (gidx.present) return mx_rd_fail(r, t.start, "GlobalNodeId given twice");
+        x = &gidx;
+      } else if (in_pdata && mx_rd_attr_eq(&t, "Name", "surface_tag")) {
+        if (ntag.present)
+          return mx_rd_fail(r, t.start, "surface_tag given twice");
+        x = &ntag;
+      } else if (in_points && !pts.present)
+        x = &pts;
+      else if (in_cells && mx_rd_attr_eq(&t, "Name", "connectivity"))
+        x = &con;
+      else if (in_cells && mx_rd_attr_eq(&t, "Name", "offsets"))
+        x = &offs;
+      else if (in_cells && mx_rd_attr_eq(&t, "Name", "types"))
+        x = &typ;
+      if (x) MX_CHECK(parse_data_array(r, &t, x));
+    } else if (mx_rd_tag_is(&t, "AppendedData") && !t.closing) {
+      if (!mx_rd_attr_eq(&t, "encoding", "raw"))
+        return mx_rd_fail(r, t.start,
+                          "<AppendedData> encoding must be \"raw\" (base64 is not "
+                          "supported)");
+      const char *q = skip_ws(t.after, end);
+      if (q >= end || *q != '_')
+        return mx_rd_fail(r, q, "expected '_' at the start of the appended data");
+      lay.base = q + 1;
+      r->bin_from = lay.base;
+      break;
+    }
+  }
+  if (!seen) return mx_rd_fail(r, NULL, "no <VTKFile> element");
+  if (!pieces) return mx_rd_fail(r, NULL, "no <Piece> element");
+  if (!pts.present) return mx_rd_fail(r, piece_tag, "no <Points> DataArray");
+  if (!is_float(pts.t) || pts.ncomp != 3)
+    return mx_rd_fail(r, pts.tag,
+                      "Points: expected Float32 or Float64 with "
+                      "NumberOfComponents=\"3\"");
+  if (npts >= UINT32_MAX || ncells > SIZE_MAX / 64)
+    return mx_rd_fail(r, piece_tag, "too many points or cells");
+  parts P;
+  memset(&P, 0, sizeof P);
+  P.nnodes = (size_t)npts;
+  P.ncells = (size_t)ncells;
+  P.vtu_offsets = 1;
+  MX_CHECK(resolve(r, &pts, &lay, 3 * P.nnodes, &P.pts, "Points"));
+  static const int64_t zero = 0;
+  const rawarr none = {(const unsigned char *)&zero, 0, T_I64, 0, NULL};
+  P.off = P.cn = P.types = none;
+  if (ncells > 0 || con.present || offs.present || typ.present) {
+    const char *names[3] = {"offsets", "types", "connectivity"};
+    xarr *xs[3] = {&offs, &typ, &con};
+    for (int i = 0; i < 3; i++) {
+      if (!xs[i]->present)
+        return mx_rd_fail(r, piece_tag, "no <Cells> DataArray Name=\"%s\"",
+                          names[i]);
+      if (is_float(xs[i]->t) || xs[i]->ncomp != 1)
+        return mx_rd_fail(r, xs[i]->tag,
+                          "%s: expected one component of an integer type",
+                          names[i]);
+    }
+    MX_CHECK(resolve(r, &offs, &lay, P.ncells, &P.off, "offsets"));
+    MX_CHECK(resolve(r, &typ, &lay, P.ncells, &P.types, "types"));
+    size_t want = SIZE_MAX;
+    if (!con.appended) {
+      int64_t last = P.ncells ? raw_int(&P.off, P.ncells - 1) : 0;
+      if (last < 0 || (uint64_t)last > 8 * (uint64_t)P.ncells)
+        return mx_rd_fail(r, offs.tag, "offsets: the last offset %lld is invalid",
+                          (long long)last);
+      want = (size_t)last;
+    }
+    MX_CHECK(resolve(r, &con, &lay, want, &P.cn, "connectivity"));
+  }
+  rawarr tags;
+  const int with_tags = ntag.present && !is_float(ntag.t) && ntag.ncomp == 1;
+  if (with_tags)
+    MX_CHECK(resolve(r, &ntag, &lay, P.nnodes, &tags, "surface_tag"));
+  MX_CHECK(mx_rd_assemble(r, &P, out));
+  if (gidx.present) MX_CHECK(piece_ids(r, &gidx, &lay, P.nnodes));
+  return with_tags ? mx_rd_node_tags(r, &tags, out) : MX_OK;
+}

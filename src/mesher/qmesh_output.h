@@ -1,0 +1,17 @@
+/* Writing a 2D mesh (quad/quad.h: mx_qmesh) through io's writers: the mesh
+ * as a 2D mesh view (soa/mesh.h, dim 2) with its cell fields
+ * (src/mesher/qmesh_output.c). */
+#ifndef MX_QMESH_OUTPUT_H
+#define MX_QMESH_OUTPUT_H
+
+#include "quad/quad.h"
+
+/* By extension: .vtu (binary), .vtk (legacy), .msh (Gmsh 4.1: the cells,
+ * and the boundary edges as lines in a physical group "boundary"), .off,
+ * .getfem, .m3d (io/write_mesh.h: mx_write_mesh). Written to a temporary
+ * name and renamed (io/atomic_file.h). Cell fields: type, level, sj (scaled
+ * Jacobian). */
+int mx_write_qmesh(const char *path, const mx_qmesh *M, int ascii);
+int mx_qmesh_format_known(const char *path);
+
+#endif
