@@ -7,6 +7,8 @@
  * (mpi/p4est_inputs.c) both take it. */
 #include "mesher/mesher_impl.h"
 
+#include "io/demo_surface.h"
+#include "io/read_surface.h"
 #include "kernels/estimate.h"
 #include "kernels/grid.h"
 #include "kernels/mesh_edit.h"
