@@ -148,7 +148,7 @@ static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
   const size_t nn = m->nnodes;
   w->flags = mx_calloc(nn + 1);
   w->ef = mx_calloc(m->ncells + 1);
-  if (!w->flags || !w->ef) return MX_EINPUT;
+  if (!w->flags || !w->ef) return MX_ENOMEM;
   uint8_t *flags = w->flags;
   MX_CHECK(mx_ck_element_pass(m, flags, w->ef, o->degenerate_below, r));
   size_t unused = 0;

@@ -42,7 +42,7 @@ int mx_ck_boundary_pass(const mx_mesh_data *m, const faces *F,
   if (!bnd || !ek) {
     mx_free(bnd);
     mx_free(ek);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   size_t nb = 0;
   for (size_t s = 0; s < nslots; s++)

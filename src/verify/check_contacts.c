@@ -123,7 +123,7 @@ static int ggrid_build(ggrid *g, const mx_mesh_data *m, const ubox *U,
     mx_free(off);
     mx_free(ubx);
     mx_free(ulev);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   off[n] = 0;
   uint32_t levels = 0;
@@ -156,7 +156,7 @@ static int ggrid_build(ggrid *g, const mx_mesh_data *m, const ubox *U,
   float *ebox = mx_alloc((6 * ne + 1) * sizeof *ebox);
   g->elem = mx_alloc((ne + 1) * sizeof *g->elem);
   g->box = mx_alloc((6 * ne + 1) * sizeof *g->box);
-  int st = key && idx && eel && ebox && g->elem && g->box ? MX_OK : MX_EINPUT;
+  int st = key && idx && eel && ebox && g->elem && g->box ? MX_OK : MX_ENOMEM;
   if (st == MX_OK) {
 #pragma omp parallel for schedule(static) if (n > SMALL)
     for (size_t i = 0; i < n; i++) {
@@ -197,7 +197,7 @@ static int ggrid_build(ggrid *g, const mx_mesh_data *m, const ubox *U,
     while (size < 2 * (uint64_t)runs) size *= 2;
     g->mask = size - 1;
     g->tab = mx_calloc((size_t)size * sizeof *g->tab);
-    if (!g->tab) st = MX_EINPUT;
+    if (!g->tab) st = MX_ENOMEM;
   }
   if (st == MX_OK) {
 #pragma omp parallel for schedule(static) if (ne > SMALL)
@@ -419,7 +419,7 @@ int mx_ck_geometric_pass(const mx_mesh_data *m, const faces *F,
   /* the elements with a face used once, in index order */
   const size_t nchunks = (nc + CHUNK - 1) / CHUNK;
   uint64_t *cnt = mx_calloc((nchunks + 1) * sizeof *cnt);
-  if (!cnt) return MX_EINPUT;
+  if (!cnt) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) if (nchunks > 1)
   for (size_t k = 0; k < nchunks; k++) {
     const size_t end = (k + 1) * CHUNK < nc ? (k + 1) * CHUNK : nc;
@@ -436,7 +436,7 @@ int mx_ck_geometric_pass(const mx_mesh_data *m, const faces *F,
   uint32_t *list = mx_alloc((nl + 1) * sizeof *list);
   if (!list) {
     mx_free(cnt);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static) if (nchunks > 1)
   for (size_t k = 0; k < nchunks; k++) {

@@ -61,7 +61,7 @@ static int tgrid_build(tgrid *g, const mx_trisoup *s, const double blo[3],
   g->h = h;
   g->inv_h = 1.0 / h;
   g->start = mx_calloc((ncells + 1) * sizeof *g->start);
-  if (!g->start) return MX_EINPUT;
+  if (!g->start) return MX_ENOMEM;
   for (size_t t = 0; t < s->nt; t++) {
     int lo[3], hi[3];
     tri_cells(g, t, lo, hi);
@@ -72,7 +72,7 @@ static int tgrid_build(tgrid *g, const mx_trisoup *s, const double blo[3],
   }
   const uint64_t total = mx_scan_u64(g->start, ncells + 1);
   g->tri = mx_alloc((size_t)total * sizeof *g->tri + 4);
-  if (!g->tri) return MX_EINPUT;
+  if (!g->tri) return MX_ENOMEM;
   for (size_t t = 0; t < s->nt; t++) {
     int lo[3], hi[3];
     tri_cells(g, t, lo, hi);
@@ -171,7 +171,7 @@ int mx_ck_surface_distance(const mx_mesh_data *m, const mx_trisoup *s,
   if (nb == 0) return MX_OK;
   uint32_t *bn = mx_alloc(nb * sizeof *bn);
   tgrid g;
-  int st = bn ? tgrid_build(&g, s, lo, hi) : MX_EINPUT;
+  int st = bn ? tgrid_build(&g, s, lo, hi) : MX_ENOMEM;
   if (st != MX_OK) {
     if (bn) tgrid_free(&g);
     mx_free(bn);
@@ -207,7 +207,7 @@ int mx_ck_surface_distance(const mx_mesh_data *m, const mx_trisoup *s,
   }
   tgrid_free(&g);
   mx_free(bn);
-  if (oom) return MX_EINPUT;
+  if (oom) return MX_ENOMEM;
   r->boundary_max_dist = sqrt(worst) / sdiag;
   r->boundary_off_surface = off;
   return MX_OK;

@@ -50,7 +50,7 @@ int mx_ck_chash_build(chash *H, const mx_mesh_data *m, size_t *dups) {
   chash_box(H, m);
   const size_t ncells = (size_t)H->d[0] * H->d[1] * H->d[2];
   H->seg = mx_calloc((ncells + 1) * sizeof *H->seg);
-  if (!H->seg) return MX_EINPUT;
+  if (!H->seg) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) if (m->nnodes > 65536)
   for (size_t n = 0; n < m->nnodes; n++) {
     const int64_t c = chash_cell(H, m->xyz + 3 * n);
@@ -64,7 +64,7 @@ int mx_ck_chash_build(chash *H, const mx_mesh_data *m, size_t *dups) {
   }
   const uint64_t total = mx_scan_u64(H->seg, ncells + 1);
   H->slot = mx_calloc((size_t)total * sizeof *H->slot + 8);
-  if (!H->slot) return MX_EINPUT;
+  if (!H->slot) return MX_ENOMEM;
   size_t d = 0;
 #pragma omp parallel for schedule(static) reduction(+ : d) \
     if (m->nnodes > 65536)

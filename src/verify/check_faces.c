@@ -53,7 +53,7 @@ int mx_ck_faces_bucket(const mx_mesh_data *m, faces *F) {
   const size_t nn = m->nnodes, nc = m->ncells;
   F->end = mx_calloc((nn + 1) * sizeof *F->end);
   F->use = mx_calloc(6 * nc + 1);
-  if (!F->end || !F->use) return MX_EINPUT;
+  if (!F->end || !F->use) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) if (nc > SMALL)
   for (size_t c = 0; c < nc; c++) {
     for (int j = 0; j < nfaces[m->type[c]]; j++) {
@@ -64,7 +64,7 @@ int mx_ck_faces_bucket(const mx_mesh_data *m, faces *F) {
   }
   const uint64_t total = mx_scan_u64(F->end, nn);
   F->slot = mx_alloc((size_t)total * sizeof *F->slot + 4);
-  if (!F->slot) return MX_EINPUT;
+  if (!F->slot) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) if (nc > SMALL)
   for (size_t c = 0; c < nc; c++) {
     for (int j = 0; j < nfaces[m->type[c]]; j++) {
@@ -151,7 +151,7 @@ int mx_ck_faces_match(const mx_mesh_data *m, faces *F, const chash *H,
     }
     mx_free(k);
   }
-  if (oom) return MX_EINPUT;
+  if (oom) return MX_ENOMEM;
   fc->interior = interior;
   fc->boundary = boundary;
   fc->overshared = over;

@@ -24,7 +24,7 @@ static int sorted_names(const mx_mesh_data *m, uint64_t **out) {
   if (!m->nnames || !m->name || !m->name_tag || m->nnames >= UINT32_MAX)
     return MX_OK;
   uint64_t *k = mx_alloc(m->nnames * sizeof *k);
-  if (!k) return MX_EINPUT;
+  if (!k) return MX_ENOMEM;
   for (size_t i = 0; i < m->nnames; i++) k[i] = tag_key(m->name_tag[i], (uint32_t)i);
   const int st = mx_sort_u64(k, NULL, m->nnames);
   if (st != MX_OK) {
@@ -58,7 +58,7 @@ static int keep_names(mx_check_tag *list, size_t n, mx_check_tags *tags) {
   for (size_t i = 0; i < n; i++)
     if (list[i].name) total += strlen(list[i].name) + 1;
   char *buf = mx_alloc(total);
-  if (!buf) return MX_EINPUT;
+  if (!buf) return MX_ENOMEM;
   size_t at = 0;
   for (size_t i = 0; i < n; i++) {
     if (!list[i].name) continue;
@@ -83,7 +83,7 @@ static int face_tag_list(const mx_mesh_data *m, const uint8_t *bad,
   if (!k || !ek) {
     mx_free(k);
     mx_free(ek);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   for (size_t i = 0; i < nf; i++) k[i] = tag_key(m->face_tag[i], (uint32_t)i);
   int st = mx_sort_u64(k, NULL, nf);
@@ -91,7 +91,7 @@ static int face_tag_list(const mx_mesh_data *m, const uint8_t *bad,
   for (size_t i = 0; st == MX_OK && i < nf; i++)
     nt += i == 0 || key_tag(k[i]) != key_tag(k[i - 1]);
   mx_check_tag *list = st == MX_OK ? mx_calloc((nt + 1) * sizeof *list) : NULL;
-  if (st == MX_OK && !list) st = MX_EINPUT;
+  if (st == MX_OK && !list) st = MX_ENOMEM;
   size_t t = 0;
   for (size_t a = 0; st == MX_OK && a < nf; t++) {
     size_t b = a + 1;
@@ -137,7 +137,7 @@ static int node_tag_list(const mx_mesh_data *m, const uint64_t *names,
                          mx_check_tag **out, size_t *nout) {
   const size_t nn = m->nnodes;
   uint64_t *k = mx_alloc((nn + 1) * sizeof *k);
-  if (!k) return MX_EINPUT;
+  if (!k) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) if (nn > SMALL)
   for (size_t i = 0; i < nn; i++) k[i] = tag_key(m->node_tag[i], 0);
   int st = mx_sort_u64(k, NULL, nn);
@@ -145,7 +145,7 @@ static int node_tag_list(const mx_mesh_data *m, const uint64_t *names,
   for (size_t i = 0; st == MX_OK && i < nn; i++)
     nt += (i == 0 || k[i] != k[i - 1]) && key_tag(k[i]) != 0;
   mx_check_tag *list = st == MX_OK ? mx_calloc((nt + 1) * sizeof *list) : NULL;
-  if (st == MX_OK && !list) st = MX_EINPUT;
+  if (st == MX_OK && !list) st = MX_ENOMEM;
   size_t t = 0;
   for (size_t a = 0; st == MX_OK && a < nn;) {
     size_t b = a + 1;
@@ -183,7 +183,7 @@ int mx_ck_tag_pass(const mx_mesh_data *m, const faces *F,
   if (!named || !bad) {
     mx_free(named);
     mx_free(bad);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   size_t nb = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : nb) \
@@ -229,7 +229,7 @@ int mx_ck_tag_pass(const mx_mesh_data *m, const faces *F,
     const size_t n = tags->nface_tags + tags->nnode_tags;
     if (st == MX_OK && n) { /* both lists' names in one buffer */
       all = mx_alloc(n * sizeof *all);
-      if (!all) st = MX_EINPUT;
+      if (!all) st = MX_ENOMEM;
     }
     if (all) {
       if (tags->nface_tags)

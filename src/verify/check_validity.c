@@ -39,7 +39,7 @@ int mx_ck_element_pass(const mx_mesh_data *m, uint8_t *flags, uint8_t *ef,
                         double degen_below, mx_check_report *r) {
   const size_t nc = m->ncells, nchunks = (nc + CHUNK - 1) / CHUNK;
   elem_acc *acc = mx_alloc((nchunks + 1) * sizeof *acc);
-  if (!acc) return MX_EINPUT;
+  if (!acc) return MX_ENOMEM;
 #pragma omp parallel for schedule(dynamic, 1) if (nchunks > 1)
   for (size_t k = 0; k < nchunks; k++) {
     elem_acc a = {0.0, 0.0, INFINITY, 0, 0, {0, 0, 0, 0}};

@@ -13,7 +13,7 @@
 static int surface_open(const mx_trisoup *s, size_t *open) {
   const size_t ne = 3 * s->nt;
   uint64_t *k = mx_alloc((ne + 1) * sizeof *k);
-  if (!k) return MX_EINPUT;
+  if (!k) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) if (s->nt > 65536)
   for (size_t t = 0; t < s->nt; t++)
     for (int x = 0; x < 3; x++) {
@@ -44,7 +44,7 @@ int mx_ck_surface_volume(const mx_trisoup *s, mx_check_report *r) {
   /* Enclosed volume, in fixed chunks. */
   const size_t nchunks = (s->nt + CHUNK - 1) / CHUNK;
   double *part = mx_alloc((nchunks + 1) * sizeof *part);
-  if (!part) return MX_EINPUT;
+  if (!part) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) if (nchunks > 1)
   for (size_t k = 0; k < nchunks; k++) {
     double v = 0.0;
