@@ -2,14 +2,16 @@
  * on an element with a surface face that they are not a node of.
  *
  * Candidates come from the octree's lattice: each element with a surface
- * face goes, by its bounding box padded with the tolerance, into the cells
- * of one level of the lattice -- its leaf's level, or a coarser one when
- * the boundary stage stretched it beyond a cell of that level -- at most
- * two per axis. A cell is named by the lattice key of its lowest corner
- * (mx_lattice_key, the keys of the mesh's nodes), and each occupied level
- * has a key index (soa/key_index.h) from a cell's key to its run of
- * elements. A surface node then looks up its own cell on every occupied
- * level and tests the elements whose padded box holds it.
+ * face is filed in the cells of one level of the lattice that its bounding
+ * box meets -- its leaf's level, or, when the boundary stage stretched it
+ * beyond its leaf, the coarser level whose cells are twice its size if
+ * that files it in fewer cells. A cell is named by the lattice key of its
+ * lowest corner (mx_lattice_key, the keys of the mesh's nodes), and each
+ * occupied level has a key index (soa/key_index.h) from a cell's key to its
+ * run of elements, each with its box padded by the tolerance. A surface
+ * node then looks up, on every occupied level, the cells within the
+ * level's reach of it (its own cell, unless it lies that close to a cell
+ * boundary), and tests the elements whose padded box holds it.
  *
  * The test (lies_on) is the definition of contacts.h: within tol (1e-9)
  * times half the element's largest extent of a face (quads: the four
@@ -127,23 +129,26 @@ static int lies_on(const mx_mesh_out *M, size_t c, uint32_t v, const double p[3]
 
 /* ---- the elements filed in lattice cells ---------------------------------- */
 
+/* An element filed in a cell: its padded box relative to the cell's lowest
+ * corner, in cell sides, rounded outwards to floats, for a first test. */
+typedef struct {
+  float lo[3], hi[3];
+  uint32_t elem; /* the element id */
+} filed;
+
 typedef struct {
   const mx_grid *G;
-  uint32_t ncand;        /* elements filed */
-  const uint32_t *cand;  /* their ids */
-  double *box;           /* 6 per element: its padded box */
   uint32_t levels;       /* bit l: some element filed at level l */
+  double reach[NLEV];    /* per level: how far around a node to look, in
+                          * lattice units */
   uint64_t *ukey[NLEV];  /* per level: the distinct cell keys, ascending */
   uint32_t *first[NLEV]; /* per level: a cell's first entry (nu + 1) */
   mx_key_index index[NLEV];
-  uint32_t *entry;       /* the entries' elements (places in cand), by level
-                          * then cell */
-  uint32_t lev_beg[NLEV + 1]; /* entries of each level */
+  filed *ent;            /* the entries, by level then cell */
 } lattice_cells;
 
 static void lattice_cells_free(lattice_cells *L) {
-  mx_free(L->box);
-  mx_free(L->entry);
+  mx_free(L->ent);
   for (int l = 0; l < NLEV; l++) {
     mx_free(L->ukey[l]);
     mx_free(L->first[l]);
@@ -157,13 +162,40 @@ static inline double lattice_coord(const mx_grid *G, double x, int a) {
   return (x - G->origin[a]) / G->unit;
 }
 
-/* The cell of level l holding lattice coordinate u along axis a (clamped to
- * the grid: a monotonic function of u). */
+/* The cell of level l holding lattice coordinate u along axis a, clamped to
+ * the grid (a monotonic function of u). */
+/* 2^e, |e| <= MX_MAX_LEVEL (exact). */
+static inline double pow2(int e) {
+  return (double)(1ull << (e + MX_MAX_LEVEL)) * (1.0 / (double)(1u << MX_MAX_LEVEL));
+}
+
 static inline uint32_t cell_of(const mx_grid *G, double u, int a, int l) {
-  const double f = floor(ldexp(u, l - MX_MAX_LEVEL));
+  const double f = floor(u * pow2(l - MX_MAX_LEVEL));
   const double top = (double)((uint32_t)G->dims[a] << l) - 1.0;
   if (!(f > 0.0)) return 0;
   return f > top ? (uint32_t)top : (uint32_t)f;
+}
+
+/* The margin of a cell, in its sides: an element is filed in the cells its
+ * box meets once shrunk by it, so that a box on cell boundaries (up to
+ * rounding) stays in its own cells; a node looks that much farther. */
+#define CELL_MARGIN 0x1p-20
+
+/* Lattice coordinate u relative to the lowest corner of cell c of level l,
+ * in cell sides (a monotonic function of u). */
+static inline double cell_rel(double u, uint32_t c, int l) {
+  return (u - (double)c * pow2(MX_MAX_LEVEL - l)) * pow2(l - MX_MAX_LEVEL);
+}
+
+/* x rounded to a float below (above) it (a float ulp or two away at most). */
+static inline float float_below(double x) {
+  const float f = (float)x;
+  return (double)f > x ? f - (fabsf(f) * 0x1p-23f + 0x1p-126f) : f;
+}
+
+static inline float float_above(double x) {
+  const float f = (float)x;
+  return (double)f < x ? f + (fabsf(f) * 0x1p-23f + 0x1p-126f) : f;
 }
 
 static inline uint64_t cell_key(const uint32_t c[3], int l) {
@@ -171,12 +203,32 @@ static inline uint64_t cell_key(const uint32_t c[3], int l) {
   return mx_lattice_key(c[0] << s, c[1] << s, c[2] << s);
 }
 
-/* Padded box of element c (world coordinates, holding every point lies_on
- * accepts: the tolerance twice, and the rounding of the relative
- * coordinates), and its level: the leaf's, or the finest whose cells are at
- * least as large as the box. */
-static int element_cells(const lattice_cells *L, const mx_mesh_out *M, uint32_t c, double b[6],
-                         uint32_t c0[3], uint32_t c1[3]) {
+/* The cells c0..c1 of level l that the box ulo..uhi (lattice units) meets
+ * once shrunk by CELL_MARGIN (a box thinner than twice the margin: its
+ * middle); returns their number. */
+static uint64_t cells_met(const mx_grid *G, const double ulo[3], const double uhi[3], int l,
+                          uint32_t c0[3], uint32_t c1[3]) {
+  const double margin = CELL_MARGIN * pow2(MX_MAX_LEVEL - l);
+  uint64_t k = 1;
+  for (int a = 0; a < 3; a++) {
+    double x0 = ulo[a] + margin, x1 = uhi[a] - margin;
+    if (x0 > x1) x0 = x1 = 0.5 * (ulo[a] + uhi[a]);
+    c0[a] = cell_of(G, x0, a, l);
+    c1[a] = cell_of(G, x1, a, l);
+    k *= c1[a] - c0[a] + 1;
+  }
+  return k;
+}
+
+/* Element c: its level -- its leaf's, or the coarser one whose cells are
+ * at least twice as large as its box (the boundary stage may have stretched
+ * it beyond its leaf), whichever files it in fewer cells --, the cells c0..c1
+ * of that level its box meets (cells_met), its box padded so as to hold
+ * every point lies_on accepts (the tolerance twice, and the rounding of the
+ * relative coordinates) in lattice units, and the largest pad in lattice
+ * units. */
+static int element_cells(const mx_grid *G, const mx_mesh_out *M, uint32_t c, double b[6],
+                         uint32_t c0[3], uint32_t c1[3], double *pad_max) {
   const int t = M->type[c];
   const uint32_t *row = M->conn + 8 * (size_t)c;
   double *lo = b, *hi = b + 3;
@@ -189,20 +241,36 @@ static int element_cells(const lattice_cells *L, const mx_mesh_out *M, uint32_t 
       lo[a] = mx_min(lo[a], M->xyz[3 * (size_t)row[j] + (size_t)a]);
       hi[a] = mx_max(hi[a], M->xyz[3 * (size_t)row[j] + (size_t)a]);
     }
+  double ulo[3], uhi[3], span = 0.0;
+  for (int a = 0; a < 3; a++) {
+    ulo[a] = lattice_coord(G, lo[a], a);
+    uhi[a] = lattice_coord(G, hi[a], a);
+    span = mx_max(span, uhi[a] - ulo[a]);
+  }
+  /* the leaf's level, or the coarser one whose cells are at least twice as
+   * large as the box, whichever files it in fewer cells */
+  const int leaf = M->level && M->level[c] < MX_MAX_LEVEL ? M->level[c] : MX_MAX_LEVEL;
+  int fit = leaf;
+  while (fit > 0 && !(pow2(MX_MAX_LEVEL - fit) >= 2.0 * span)) fit--;
+  int l = leaf;
+  const uint64_t k = cells_met(G, ulo, uhi, leaf, c0, c1);
+  if (fit != leaf) {
+    uint32_t f0[3], f1[3];
+    if (cells_met(G, ulo, uhi, fit, f0, f1) < k) {
+      l = fit;
+      memcpy(c0, f0, sizeof f0);
+      memcpy(c1, f1, sizeof f1);
+    }
+  }
   const double ext = mx_max(hi[0] - lo[0], mx_max(hi[1] - lo[1], hi[2] - lo[2]));
-  double span = 0.0;
+  double pm = 0.0;
   for (int a = 0; a < 3; a++) {
     const double pad = 2.0 * contact_tol * ext + (fabs(lo[a]) + fabs(hi[a])) * 0x1p-40 + 0x1p-1000;
-    lo[a] -= pad;
-    hi[a] += pad;
-    span = mx_max(span, lattice_coord(L->G, hi[a], a) - lattice_coord(L->G, lo[a], a));
+    lo[a] = lattice_coord(G, lo[a] - pad, a);
+    hi[a] = lattice_coord(G, hi[a] + pad, a);
+    pm = mx_max(pm, pad);
   }
-  int l = M->level && M->level[c] < MX_MAX_LEVEL ? M->level[c] : MX_MAX_LEVEL;
-  while (l > 0 && !(ldexp(1.0, MX_MAX_LEVEL - l) >= span)) l--;
-  for (int a = 0; a < 3; a++) {
-    c0[a] = cell_of(L->G, lattice_coord(L->G, lo[a], a), a, l);
-    c1[a] = cell_of(L->G, lattice_coord(L->G, hi[a], a), a, l);
-  }
+  *pad_max = pm / G->unit;
   return l;
 }
 
@@ -211,59 +279,73 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
                                const uint32_t *cand, size_t n) {
   memset(L, 0, sizeof *L);
   L->G = G;
-  L->cand = cand;
-  L->ncand = (uint32_t)n;
   uint8_t *lev = mx_alloc(n + 1);
   uint64_t *cnt = mx_alloc((n + 1) * sizeof *cnt);
   uint32_t *order = mx_alloc((n + 1) * sizeof *order);
-  L->box = mx_alloc((6 * n + 1) * sizeof *L->box);
-  if (!lev || !cnt || !order || !L->box) {
+  uint32_t *cells = mx_alloc((6 * n + 1) * sizeof *cells);
+  double *box = mx_alloc((6 * n + 1) * sizeof *box), *pad = mx_alloc((n + 1) * sizeof *pad);
+  if (!lev || !cnt || !order || !cells || !box || !pad) {
     mx_free(lev);
     mx_free(cnt);
     mx_free(order);
+    mx_free(cells);
+    mx_free(box);
+    mx_free(pad);
     return MX_ENOMEM;
   }
-#pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < n; i++) {
-    uint32_t c0[3], c1[3];
-    lev[i] = (uint8_t)element_cells(L, M, cand[i], L->box + 6 * i, c0, c1);
-  }
+#pragma omp parallel for schedule(static) if (n > CHUNK)
+  for (size_t i = 0; i < n; i++)
+    lev[i] = (uint8_t)element_cells(G, M, cand[i], box + 6 * i, cells + 6 * i, cells + 6 * i + 3,
+                                    &pad[i]);
   /* the elements by level (a counting sort), then their entries in that
-   * order: the entries of a level are contiguous */
+   * order: the entries of a level are contiguous. A node looks around
+   * itself as far as twice the largest pad of the level and twice the
+   * margin, in lattice units. */
   size_t per[NLEV + 1] = {0};
-  for (size_t i = 0; i < n; i++) per[lev[i] + 1]++;
+  for (size_t i = 0; i < n; i++) {
+    per[lev[i] + 1]++;
+    L->reach[lev[i]] = mx_max(L->reach[lev[i]], 2.0 * pad[i]);
+  }
+  for (int l = 0; l < NLEV; l++) L->reach[l] += 2.0 * CELL_MARGIN * pow2(MX_MAX_LEVEL - l);
   for (int l = 0; l < NLEV; l++) per[l + 1] += per[l];
   for (size_t i = 0; i < n; i++) order[per[lev[i]]++] = (uint32_t)i;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > CHUNK)
   for (size_t k = 0; k < n; k++) {
-    const uint32_t i = order[k];
-    uint32_t c0[3], c1[3];
-    double b[6];
-    element_cells(L, M, cand[i], b, c0, c1);
-    cnt[k] = (uint64_t)(c1[0] - c0[0] + 1) * (c1[1] - c0[1] + 1) * (c1[2] - c0[2] + 1);
+    const uint32_t *c = cells + 6 * (size_t)order[k];
+    cnt[k] = (uint64_t)(c[3] - c[0] + 1) * (c[4] - c[1] + 1) * (c[5] - c[2] + 1);
   }
   cnt[n] = 0;
   const uint64_t total = mx_scan_u64(cnt, n + 1);
   int st = total < UINT32_MAX ? MX_OK : MX_ENOMEM;
   uint64_t *key = NULL;
+  uint32_t *idx = NULL;
+  filed *unsorted = NULL;
   if (st == MX_OK) {
     key = mx_alloc((total + 1) * sizeof *key);
-    L->entry = mx_alloc((total + 1) * sizeof *L->entry);
-    if (!key || !L->entry) st = MX_ENOMEM;
+    idx = mx_alloc((total + 1) * sizeof *idx);
+    unsorted = mx_alloc((total + 1) * sizeof *unsorted);
+    L->ent = mx_alloc((total + 1) * sizeof *L->ent);
+    if (!key || !idx || !unsorted || !L->ent) st = MX_ENOMEM;
   }
   if (st == MX_OK) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > CHUNK)
     for (size_t k = 0; k < n; k++) {
       const uint32_t i = order[k];
-      uint32_t c0[3], c1[3], c[3];
-      double b[6];
-      const int l = element_cells(L, M, cand[i], b, c0, c1);
+      const uint32_t *c0 = cells + 6 * (size_t)i, *c1 = c0 + 3;
+      const double *b = box + 6 * (size_t)i;
+      const int l = lev[i];
+      uint32_t c[3];
       size_t e = (size_t)cnt[k];
       for (c[2] = c0[2]; c[2] <= c1[2]; c[2]++)
         for (c[1] = c0[1]; c[1] <= c1[1]; c[1]++)
           for (c[0] = c0[0]; c[0] <= c1[0]; c[0]++, e++) {
             key[e] = cell_key(c, l);
-            L->entry[e] = i;
+            idx[e] = (uint32_t)e;
+            for (int a = 0; a < 3; a++) {
+              unsorted[e].lo[a] = float_below(cell_rel(b[a], c[a], l));
+              unsorted[e].hi[a] = float_above(cell_rel(b[3 + a], c[a], l));
+            }
+            unsorted[e].elem = cand[i];
           }
     }
     /* per level: entries sorted by cell, the distinct cells indexed */
@@ -271,12 +353,10 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
     for (int l = 0; l < NLEV && st == MX_OK; l++) {
       const size_t k0 = k;
       while (k < n && lev[order[k]] == l) k++;
-      const uint32_t e0 = (uint32_t)cnt[k0], e1 = (uint32_t)(k < n ? cnt[k] : total);
-      L->lev_beg[l] = e0;
-      L->lev_beg[l + 1] = e1;
+      const uint32_t e0 = (uint32_t)cnt[k0], e1 = (uint32_t)cnt[k];
       if (e1 == e0) continue;
       L->levels |= 1u << l;
-      if (mx_sort_u64(key + e0, L->entry + e0, e1 - e0) != MX_OK) {
+      if (mx_sort_u64(key + e0, idx + e0, e1 - e0) != MX_OK) {
         st = MX_ENOMEM;
         break;
       }
@@ -298,36 +378,69 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
       st = mx_key_index_build(&L->index[l], L->ukey[l], nu, 3 * (MX_MAX_LEVEL - l));
     }
   }
+  if (st == MX_OK) {
+#pragma omp parallel for schedule(static) if (total > CHUNK)
+    for (size_t e = 0; e < (size_t)total; e++) L->ent[e] = unsorted[idx[e]];
+  }
+  mx_free(unsorted);
   mx_free(key);
+  mx_free(idx);
   mx_free(lev);
   mx_free(cnt);
   mx_free(order);
+  mx_free(cells);
+  mx_free(box);
+  mx_free(pad);
   return st;
 }
 
 /* 1 when the point of node v lies on some filed element; flags them in
- * elem_hit (when not NULL). */
+ * elem_hit (when not NULL). On each occupied level, the cells within the
+ * level's reach of the point (one, unless it is that close to a cell
+ * boundary): an element whose padded box holds the point was filed in one
+ * of them. */
 static int node_contacts(const lattice_cells *L, const mx_mesh_out *M, uint32_t v,
                          uint8_t *elem_hit) {
   const double *p = M->xyz + 3 * (size_t)v;
   double u[3];
   for (int a = 0; a < 3; a++) u[a] = lattice_coord(L->G, p[a], a);
-  int hit = 0;
+  uint32_t q0[NLEV][3], q1[NLEV][3];
+  uint64_t key[NLEV];
+  int lv[NLEV], nl = 0;
   for (int l = 0; l < NLEV; l++) {
     if (!(L->levels >> l & 1)) continue;
-    uint32_t c[3];
-    for (int a = 0; a < 3; a++) c[a] = cell_of(L->G, u[a], a, l);
-    const uint32_t id = mx_key_index_find(&L->index[l], cell_key(c, l));
-    if (id == UINT32_MAX) continue;
-    for (uint32_t e = L->first[l][id]; e < L->first[l][id + 1]; e++) {
-      const uint32_t i = L->entry[e];
-      const double *b = L->box + 6 * (size_t)i;
-      if (p[0] < b[0] || p[0] > b[3] || p[1] < b[1] || p[1] > b[4] || p[2] < b[2] || p[2] > b[5])
-        continue;
-      if (!lies_on(M, L->cand[i], v, p)) continue;
-      hit = 1;
-      if (elem_hit) __atomic_store_n(&elem_hit[L->cand[i]], 1, __ATOMIC_RELAXED);
+    int one = 1;
+    for (int a = 0; a < 3; a++) {
+      q0[nl][a] = cell_of(L->G, u[a] - L->reach[l], a, l);
+      q1[nl][a] = cell_of(L->G, u[a] + L->reach[l], a, l);
+      one &= q0[nl][a] == q1[nl][a];
     }
+    key[nl] = one ? cell_key(q0[nl], l) : UINT64_MAX;
+    if (one) mx_key_index_prefetch(&L->index[l], key[nl]);
+    lv[nl++] = l;
+  }
+  int hit = 0;
+  for (int k = 0; k < nl; k++) {
+    const int l = lv[k];
+    uint32_t c[3];
+    for (c[2] = q0[k][2]; c[2] <= q1[k][2]; c[2]++)
+      for (c[1] = q0[k][1]; c[1] <= q1[k][1]; c[1]++)
+        for (c[0] = q0[k][0]; c[0] <= q1[k][0]; c[0]++) {
+          const uint32_t id =
+              mx_key_index_find(&L->index[l], key[k] != UINT64_MAX ? key[k] : cell_key(c, l));
+          if (id == UINT32_MAX) continue;
+          double r[3];
+          for (int a = 0; a < 3; a++) r[a] = cell_rel(u[a], c[a], l);
+          for (uint32_t e = L->first[l][id]; e < L->first[l][id + 1]; e++) {
+            const filed *f = &L->ent[e];
+            if (r[0] < f->lo[0] || r[0] > f->hi[0] || r[1] < f->lo[1] || r[1] > f->hi[1] ||
+                r[2] < f->lo[2] || r[2] > f->hi[2])
+              continue;
+            if (!lies_on(M, f->elem, v, p)) continue;
+            hit = 1;
+            if (elem_hit) __atomic_store_n(&elem_hit[f->elem], 1, __ATOMIC_RELAXED);
+          }
+        }
   }
   return hit;
 }
@@ -389,7 +502,7 @@ int mx_find_contacts(const mx_mesh_out *M, const mx_grid *G, const uint8_t *stat
     lattice_cells L;
     st = lattice_cells_build(&L, G, M, list, (size_t)nl);
     if (st == MX_OK) {
-#pragma omp parallel for schedule(dynamic, 2048) reduction(+ : found)
+#pragma omp parallel for schedule(dynamic, 2048) reduction(+ : found) if (nn > CHUNK)
       for (size_t v = 0; v < nn; v++) {
         if (states[v] != MX_NODE_OUTSIDE) continue;
         if (node_contacts(&L, M, (uint32_t)v, ehit)) {
