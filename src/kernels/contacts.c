@@ -18,7 +18,7 @@
  * triangles from its edges to its centroid), measured with the closest
  * points of geom/distance.h in coordinates relative to the element's lowest
  * corner; a node at exactly the point of one of the element's nodes is a
- * duplicate, not a contact. The checker (verify/) searches the same
+ * duplicate, not a contact. The checker (src/verify) searches the same
  * contacts with code of its own; tests/test_contacts.c compares the two. */
 #include "kernels/contacts.h"
 

@@ -7,11 +7,11 @@
  * Searched among the elements with a surface face and the surface nodes,
  * with the mesher's own code (contacts.c: the elements filed in cells of the
  * octree's lattice, named by lattice keys). The definition is the one of
- * `mixoct check`'s geometric hanging nodes (verify/check.h): a node within
- * 1e-9 times half the element's largest extent of a face of the element
- * (a quad: the four triangles from its edges to its centroid); a node at
- * exactly the point of one of the element's nodes is a duplicate, not a
- * contact. The checker finds the same contacts with its own search
+ * `mixoct check`'s geometric hanging nodes (the checker, src/verify): a
+ * node within 1e-9 times half the element's largest extent of a face of the
+ * element (a quad: the four triangles from its edges to its centroid); a
+ * node at exactly the point of one of the element's nodes is a duplicate,
+ * not a contact. The checker finds the same contacts with its own search
  * (tests/test_contacts.c compares the two). */
 #ifndef MX_CONTACTS_H
 #define MX_CONTACTS_H
