@@ -1126,6 +1126,25 @@ static void hex_and_cone(tm *t, const double P[3]) {
 /* The mesher's own search (kernels/contacts.h) on the meshes of the
  * checker's test: it agrees with the checker where the nodes are surface
  * nodes, looks at nothing else, and leaves a conforming mesh alone. */
+/* One root cube around the nodes, as the mesher's grid would be. */
+static void grid_around(const double *xyz, size_t nn, mx_grid *G) {
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (size_t v = 0; v < nn; v++)
+    for (int a = 0; a < 3; a++) {
+      lo[a] = fmin(lo[a], xyz[3 * v + (size_t)a]);
+      hi[a] = fmax(hi[a], xyz[3 * v + (size_t)a]);
+    }
+  double side = 0.0;
+  for (int a = 0; a < 3; a++) side = fmax(side, hi[a] - lo[a]);
+  side = side > 0.0 ? 1.01 * side : 1.0;
+  for (int a = 0; a < 3; a++) {
+    G->origin[a] = 0.5 * (lo[a] + hi[a]) - 0.5 * side;
+    G->dims[a] = 1;
+  }
+  G->side = side;
+  G->unit = ldexp(side, -MX_MAX_LEVEL);
+}
+
 static size_t contacts_of(const tm *t, uint8_t state, uint8_t *eflag, mx_contacts *k) {
   uint8_t *st = xrealloc(NULL, t->nn + 1);
   memset(st, state, t->nn);
@@ -1136,7 +1155,9 @@ static size_t contacts_of(const tm *t, uint8_t state, uint8_t *eflag, mx_contact
   M.xyz = t->xyz;
   M.type = t->type;
   M.conn = t->conn;
-  CHECK(mx_find_contacts(&M, st, eflag, k) == MX_OK);
+  mx_grid G;
+  grid_around(t->xyz, t->nn, &G);
+  CHECK(mx_find_contacts(&M, &G, st, eflag, k) == MX_OK);
   free(st);
   return k->nodes;
 }

@@ -4,15 +4,22 @@
  * conforming by construction; such contacts appear only where the boundary
  * stage moved nodes: two sheets of the surface projected onto the same
  * place (a thin part, two features meeting, parts of the input touching).
- * Searched with the checker's own routine (verify/check.h,
- * mx_check_contacts) among the elements with a surface node and their
- * nodes, so `mixoct check` and the mesher agree on what a contact is. */
+ * Searched among the elements with a surface face and the surface nodes,
+ * with the mesher's own code (contacts.c: the elements filed in cells of the
+ * octree's lattice, named by lattice keys). The definition is the one of
+ * `mixoct check`'s geometric hanging nodes (the checker, src/verify): a
+ * node within 1e-9 times half the element's largest extent of a face of the
+ * element (a quad: the four triangles from its edges to its centroid); a
+ * node at exactly the point of one of the element's nodes is a duplicate,
+ * not a contact. The checker finds the same contacts with its own search
+ * (tests/test_contacts.c compares the two). */
 #ifndef MX_CONTACTS_H
 #define MX_CONTACTS_H
 
 #include <stddef.h>
 #include <stdint.h>
 
+#include "soa/grid.h"
 #include "soa/mesh.h"
 
 typedef struct {
@@ -23,11 +30,14 @@ typedef struct {
   uint32_t first_node;
 } mx_contacts;
 
-/* states: per node (kernels/boundary.h), MX_NODE_OUTSIDE on the surface.
+/* states: per node (kernels/boundary.h), MX_NODE_OUTSIDE on the surface;
+ * G: the octree's grid (its lattice names the cells of the search; M->level,
+ * when not NULL, gives each element's leaf level).
  * elem_flag (M->ncells bytes, or NULL): set to 1 for the elements involved,
- * 0 elsewhere. Deterministic, parallel, O(elements near the surface). */
-int mx_find_contacts(const mx_mesh_out *M, const uint8_t *states, uint8_t *elem_flag,
-                     mx_contacts *out);
+ * 0 elsewhere. Deterministic, parallel, O(elements near the surface).
+ * MX_OK, or MX_ENOMEM. */
+int mx_find_contacts(const mx_mesh_out *M, const mx_grid *G, const uint8_t *states,
+                     uint8_t *elem_flag, mx_contacts *out);
 /* 1 when a face of element c has surface (outside) nodes only: the
  * elements the search looks at. */
 int mx_surface_face(const mx_mesh_out *M, const uint8_t *states, size_t c);

@@ -55,7 +55,7 @@ int mx_repair(mx_mesher *m) {
     if (!flag) return MX_ENOMEM;
     const double t = mx_wtime();
     mx_mesher_stage(m, "verify");
-    int st = mx_find_contacts(&m->M, m->states, flag, &m->S.contacts);
+    int st = mx_find_contacts(&m->M, &m->B.tree.grid, m->states, flag, &m->S.contacts);
     m->S.ph.verify += mx_wtime() - t;
     if (st) {
       mx_free(flag);

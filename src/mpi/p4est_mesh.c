@@ -171,7 +171,7 @@ static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4e
     if (!flag || !core) st = MX_ENOMEM;
   }
   mx_contacts ct;
-  if (!st) st = mx_find_contacts(&M, states, flag, &ct);
+  if (!st) st = mx_find_contacts(&M, &m->B.tree.grid, states, flag, &ct);
   size_t invalid = 0, contact = 0;
   if (!st) {
 #pragma omp parallel for schedule(static) reduction(+ : invalid, contact)

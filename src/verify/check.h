@@ -205,10 +205,10 @@ typedef struct {
 /* The defaults above. */
 void mx_check_defaults(mx_check_options *o);
 
-/* Fills *r. Returns MX_OK, or MX_EINPUT (message printed) for a mesh that
+/* Fills *r. Returns MX_OK, MX_EINPUT (message printed) for a mesh that
  * cannot be checked at all: a type out of range, a node index >= nnodes, a
  * coordinate that is not finite, or more than 2^32 - 2 nodes or 715 million
- * cells; also when out of memory. opt NULL: the defaults. */
+ * cells; MX_ENOMEM when out of memory. opt NULL: the defaults. */
 int mx_check_mesh_opt(const mx_mesh_data *m, const mx_trisoup *surface,
                       const mx_check_options *opt, mx_check_report *r);
 /* The same with the default options. */
@@ -222,13 +222,15 @@ int mx_check_mesh_tags(const mx_mesh_data *m, const mx_trisoup *surface,
                        mx_check_tags *tags);
 void mx_check_tags_free(mx_check_tags *tags);
 
-/* The geometric hanging-node search of the check alone, for the mesher's own
- * verification: the nodes v with node_sel[v] != 0 against the n elements of
- * `list` (ascending ids), with the same definition and tolerance as
- * geometric_hanging_nodes above. node_hit[v] (when not NULL) is set to 1 for
- * each node found, elem_hit[c] (when not NULL) becomes non-zero for each
- * element a node lies on; *found: the nodes found. Deterministic. MX_EINPUT
- * when out of memory. */
+/* The geometric hanging-node search of the check alone: the nodes v with
+ * node_sel[v] != 0 against the n elements of `list` (ascending ids), with
+ * the same definition and tolerance as geometric_hanging_nodes above.
+ * node_hit[v] (when not NULL) is set to 1 for each node found, elem_hit[c]
+ * (when not NULL) becomes non-zero for each element a node lies on; *found:
+ * the nodes found. Deterministic. MX_ENOMEM when out of memory. The mesher
+ * does not call it: it finds its contacts with its own search
+ * (kernels/contacts.h), and tests/test_contacts.c compares the two on the
+ * same nodes and elements. */
 int mx_check_contacts(const mx_mesh_data *m, const uint32_t *list, size_t n,
                       const uint8_t *node_sel, double tol, uint8_t *node_hit,
                       uint8_t *elem_hit, size_t *found);
