@@ -10,14 +10,17 @@
 # Data: MIXOCT_DATA or ../shared/data next to the source tree.
 set -u
 HERE=$(cd "$(dirname "$0")" && pwd)
-D=${MIXOCT_DATA:-$HERE/../../shared/data}
+D=$(cd "${MIXOCT_DATA:-$HERE/../../shared/data}" && pwd)
 case "${1:-}" in
 run)
   B=$(cd "$2" && pwd); O=$3; fail=0
   for t in 1 2; do
     W=$O/t$t; rm -rf "$W"; mkdir -p "$W"; cd "$W" || exit 1
     export OMP_NUM_THREADS=$t
-    r() { "$@" --quiet > /dev/null 2>> log.txt || echo "exit $? : $*" >> status.txt; }
+    # the status of a failed run, its command with the build and data
+    # directories named BIN and DATA (two builds compare equal)
+    st() { echo "exit $1 : ${*:2}" | sed "s|$B|BIN|g; s|$D|DATA|g" >> status.txt; }
+    r() { "$@" --quiet > /dev/null 2>> log.txt || st $? "$@"; }
     S=$D/surfaces
     r $B/mixoct -i $S/cortex.off -s 7 -o c7.vtu -o c7.vtk -o c7.msh -o c7.mesh \
       -o c7.meshb -o c7.getfem -o c7.m3d -o c7.mvm --restart c7.oct --boundary c7b.vtu
