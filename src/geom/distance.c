@@ -4,6 +4,7 @@
 
 #include "base/common.h"
 #include "base/scan.h"
+#include "geom/surface_topology.h"
 
 #include <math.h>
 #include <string.h>
@@ -818,115 +819,6 @@ static inline void slot_edge(const mx_surface_index *S, uint32_t i, int k,
   *vb = v[(k + 1) % 3];
 }
 
-/* Edges: the 3 nt (slot, k) sorted by vertex pair. keys/vals sorted,
- * pos[e] = rank of e, rstart[j] = first rank of j's run. */
-typedef struct {
-  uint64_t *key;
-  uint32_t *val, *pos, *rstart;
-  size_t ne;
-} edge_sort;
-
-static void edge_sort_free(edge_sort *E) {
-  mx_free(E->key);
-  mx_free(E->val);
-  mx_free(E->pos);
-  mx_free(E->rstart);
-}
-
-static int sort_edges(const mx_surface_index *S, edge_sort *E) {
-  const size_t ne = 3 * (size_t)S->nt;
-  E->ne = ne;
-  E->key = mx_alloc(ne * sizeof *E->key);
-  E->val = mx_alloc(ne * sizeof *E->val);
-  E->pos = mx_alloc(ne * sizeof *E->pos);
-  E->rstart = mx_alloc(ne * sizeof *E->rstart);
-  if (!E->key || !E->val || !E->pos || !E->rstart) return MX_EINPUT;
-#pragma omp parallel for schedule(static) if (ne > 30000)
-  for (size_t e = 0; e < ne; e++) {
-    uint32_t a, b;
-    slot_edge(S, (uint32_t)(e / 3), (int)(e % 3), &a, &b);
-    E->key[e] = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
-    E->val[e] = (uint32_t)e;
-  }
-  MX_CHECK(mx_sort_u64(E->key, E->val, ne));
-#pragma omp parallel for schedule(static) if (ne > 30000)
-  for (size_t j = 0; j < ne; j++) E->pos[E->val[j]] = (uint32_t)j;
-  for (size_t j = 0; j < ne; j++)
-    E->rstart[j] = (j && E->key[j] == E->key[j - 1]) ? E->rstart[j - 1]
-                                                      : (uint32_t)j;
-  return MX_OK;
-}
-
-static inline size_t run_end(const edge_sort *E, size_t s) {
-  size_t j = s + 1;
-  while (j < E->ne && E->key[j] == E->key[s]) j++;
-  return j;
-}
-
-/* 1 if edge e = 3 i + k runs from its lower to its higher vertex index. */
-static inline int edge_up(const mx_surface_index *S, uint32_t e) {
-  uint32_t a, b;
-  slot_edge(S, e / 3, (int)(e % 3), &a, &b);
-  return a < b;
-}
-
-/* Shells by breadth-first search through the edges; orientation made
- * consistent through the manifold edges (fix[i] = 1: slot i is reversed
- * with respect to its shell's seed). seed[c] = first slot of shell c. */
-static int find_shells(mx_surface_index *S, const edge_sort *E, uint8_t *fix,
-                       uint32_t **seed_out) {
-  const uint32_t nt = S->nt;
-  uint32_t *queue = mx_alloc((size_t)nt * sizeof *queue + 4);
-  uint32_t *seed = mx_alloc((size_t)nt * sizeof *seed + 4);
-  if (!queue || !seed) {
-    mx_free(queue);
-    mx_free(seed);
-    return MX_EINPUT;
-  }
-  uint32_t *comp = S->shell_of;
-  for (uint32_t i = 0; i < nt; i++) comp[i] = UINT32_MAX;
-  uint32_t nc = 0;
-  size_t conflicts = 0;
-  for (uint32_t s0 = 0; s0 < nt; s0++) {
-    if (comp[s0] != UINT32_MAX) continue;
-    const uint32_t c = nc++;
-    seed[c] = s0;
-    comp[s0] = c;
-    fix[s0] = 0;
-    size_t qh = 0, qt = 0;
-    queue[qt++] = s0;
-    while (qh < qt) {
-      const uint32_t t = queue[qh++];
-      for (int k = 0; k < 3; k++) {
-        const uint32_t e = 3 * t + (uint32_t)k;
-        const size_t s = E->rstart[E->pos[e]], end = run_end(E, s);
-        const int manifold = end - s == 2;
-        const int up = edge_up(S, e);
-        for (size_t j = s; j < end; j++) {
-          const uint32_t e2 = E->val[j], t2 = e2 / 3;
-          if (t2 == t) continue;
-          /* Two faces agree when they run through the edge in opposite
-           * directions. Across other edges the input orientation is kept. */
-          const uint8_t want =
-              manifold ? (uint8_t)(fix[t] ^ (edge_up(S, e2) == up)) : fix[t];
-          if (comp[t2] == UINT32_MAX) {
-            comp[t2] = c;
-            fix[t2] = want;
-            queue[qt++] = t2;
-          } else if (manifold && fix[t2] != want && t < t2) {
-            conflicts++;
-          }
-        }
-      }
-    }
-  }
-  S->nshells = nc;
-  S->conflict_edges = conflicts;
-  mx_free(queue);
-  *seed_out = seed;
-  return MX_OK;
-}
-
 /* Growable list of boundary entries: key (lo << 32 | hi), weight (+w:
  * lo -> hi, -w: hi -> lo) and shell. */
 typedef struct {
@@ -1224,7 +1116,7 @@ static int orient_shells(mx_surface_index *S, const uint8_t *fix,
 
 /* Face normals, edge pseudonormals (sum of the normals of the faces of the
  * edge), vertex pseudonormals (angle-weighted sum). */
-static int pseudonormals(mx_surface_index *S, const edge_sort *E) {
+static int pseudonormals(mx_surface_index *S, const mx_edge_table *E) {
   const uint32_t nt = S->nt;
   const size_t nv = S->soup->nv;
 #pragma omp parallel for schedule(static) if (nt > 10000)
@@ -1239,16 +1131,16 @@ static int pseudonormals(mx_surface_index *S, const edge_sort *E) {
     for (int a = 0; a < 3; a++) S->fn[3 * (size_t)i + a] = f * n[a];
   }
 #pragma omp parallel for schedule(static) if (nt > 10000)
-  for (size_t j = 0; j < E->ne; j++) {
-    if (E->rstart[j] != j) continue;
-    const size_t end = run_end(E, j);
+  for (size_t j = 0; j < E->n; j++) {
+    if (j && E->key[j] == E->key[j - 1]) continue;
+    const size_t end = mx_edge_run_end(E, j);
     double n[3] = {0.0, 0.0, 0.0};
     for (size_t k = j; k < end; k++) {
-      const double *f = S->fn + 3 * (size_t)(E->val[k] / 3);
+      const double *f = S->fn + 3 * (size_t)(E->half[k] / 3);
       for (int a = 0; a < 3; a++) n[a] += f[a];
     }
     for (size_t k = j; k < end; k++)
-      memcpy(S->en + 3 * (size_t)E->val[k], n, sizeof n);
+      memcpy(S->en + 3 * (size_t)E->half[k], n, sizeof n);
   }
   S->vn = mx_calloc(3 * nv * sizeof *S->vn + 8);
   if (!S->vn) return MX_EINPUT;
@@ -1395,22 +1287,23 @@ static int index_build(mx_surface_index *S, const mx_trisoup *soup, uint32_t t0,
   mx_free(pack_count);
 
   /* Edges and shells. */
-  edge_sort E;
+  mx_edge_table E;
   memset(&E, 0, sizeof E);
   uint8_t *fix = mx_alloc((size_t)nt + 8);
   uint32_t *seed = NULL, *cap_shell = NULL;
-  int st = fix ? sort_edges(S, &E) : MX_EINPUT;
+  int st = fix ? mx_edge_table_build(&E, soup->tri, S->tri_id, nt, 0, 1) : MX_ENOMEM;
   if (st == MX_OK) {
     size_t open = 0, nonman = 0;
-    for (size_t j = 0; j < E.ne;) {
-      const size_t end = run_end(&E, j);
+    for (size_t j = 0; j < E.n;) {
+      const size_t end = mx_edge_run_end(&E, j);
       if (end - j != 2) open++;
       if (end - j > 2) nonman++;
       j = end;
     }
     S->open_edges = open;
     S->nonmanifold_edges = nonman;
-    st = find_shells(S, &E, fix, &seed);
+    st = mx_surface_shells(&E, 1, S->shell_of, fix, &S->nshells, &seed,
+                           &S->conflict_edges);
   }
   if (st == MX_OK) {
     S->closed = S->open_edges == 0 && S->conflict_edges == 0;
@@ -1420,7 +1313,7 @@ static int index_build(mx_surface_index *S, const mx_trisoup *soup, uint32_t t0,
   if (given) S->closed = 0;
   if (st == MX_OK) st = pseudonormals(S, &E);
   if (st == MX_OK) st = build_hints(S);
-  edge_sort_free(&E);
+  mx_edge_table_free(&E);
   mx_free(fix);
   mx_free(seed);
   mx_free(cap_shell);

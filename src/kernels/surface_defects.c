@@ -12,6 +12,7 @@
 
 #include "base/common.h"
 #include "base/scan.h"
+#include "geom/surface_topology.h"
 
 #define NEX MX_DEFECT_EXAMPLES
 #define LEAF 4
@@ -439,84 +440,12 @@ static mx_defect_example edge_example(const mx_trisoup *s, uint32_t t,
   return e;
 }
 
-/* ==== edges ============================================================== */
-
-/* The directed edges h = 3 t + k (from tri[h] to the next vertex of t),
- * bucketed by their smaller vertex (bucket v: [v ? end[v - 1] : 0,
- * end[v])), each bucket sorted by (larger vertex, h): entries
- * (larger << 32) | h. Triangles that repeat a vertex are left out. */
-typedef struct {
-  size_t *end;
-  uint64_t *e;
-} edge_table;
-
-
-static int cmp_u64(const void *a, const void *b) {
-  uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-  return (x > y) - (x < y);
-}
+/* ==== edges ==============================================================
+ * The edge table of geom/surface_topology.h over the soup's triangles,
+ * those that repeat a vertex left out. */
 
 static inline int repeats(const uint32_t *t) {
   return t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
-}
-
-static void edges_free(edge_table *E) {
-  mx_free(E->end);
-  mx_free(E->e);
-  E->end = NULL;
-  E->e = NULL;
-}
-
-static int edges_build(const mx_trisoup *s, edge_table *E) {
-  const size_t nv = s->nv, nh = 3 * s->nt;
-  E->end = mx_calloc((nv + 1) * sizeof *E->end);
-  E->e = mx_alloc((nh ? nh : 1) * sizeof *E->e);
-  if (!E->end || !E->e) {
-    edges_free(E);
-    return MX_EINPUT;
-  }
-  size_t *end = E->end;
-  for (size_t t = 0; t < s->nt; t++) {
-    const uint32_t *v = s->tri + 3 * t;
-    if (repeats(v)) continue;
-    for (int k = 0; k < 3; k++) {
-      uint32_t a = v[k], b = v[k == 2 ? 0 : k + 1];
-      end[(a < b ? a : b) + 1]++;
-    }
-  }
-  for (size_t v = 0; v < nv; v++) end[v + 1] += end[v];
-  for (size_t t = 0; t < s->nt; t++) {
-    const uint32_t *v = s->tri + 3 * t;
-    if (repeats(v)) continue;
-    for (int k = 0; k < 3; k++) {
-      uint32_t a = v[k], b = v[k == 2 ? 0 : k + 1];
-      uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
-      E->e[end[lo]++] = (uint64_t)hi << 32 | (uint32_t)(3 * t + k);
-    }
-  }
-#pragma omp parallel for schedule(dynamic, 4096) if (nv > 50000)
-  for (size_t v = 0; v < nv; v++) {
-    uint64_t *b = E->e + (v ? end[v - 1] : 0);
-    size_t m = end[v] - (v ? end[v - 1] : 0);
-    if (m > 24) {
-      qsort(b, m, sizeof *b, cmp_u64);
-      continue;
-    }
-    for (size_t i = 1; i < m; i++) {
-      uint64_t x = b[i];
-      size_t j = i;
-      for (; j > 0 && b[j - 1] > x; j--) b[j] = b[j - 1];
-      b[j] = x;
-    }
-  }
-  return MX_OK;
-}
-
-/* Runs of one edge in bucket v: [i, j). */
-static inline size_t run_end(const uint64_t *e, size_t i, size_t end) {
-  size_t j = i + 1;
-  while (j < end && (e[j] >> 32) == (e[i] >> 32)) j++;
-  return j;
 }
 
 static int indices_valid(const mx_trisoup *s) {
@@ -540,38 +469,39 @@ typedef struct {
   mx_defect_example ex[3][NEX];
 } edge_acc;
 
-static void edge_defects(const mx_trisoup *s, const edge_table *E,
-                         mx_surface_defects *r) {
-  const size_t nv = s->nv;
-  int nth = omp_get_max_threads();
+/* Runs starting in each chunk of this many entries of the table go to one
+ * task. */
+#define EDGE_CHUNK 16384
+
+static int edge_defects(const mx_trisoup *s, const mx_edge_table *E,
+                        mx_surface_defects *r) {
+  const size_t n = E->n, nchunk = (n + EDGE_CHUNK - 1) / EDGE_CHUNK;
+  const int nth = omp_get_max_threads();
   edge_acc *acc = mx_calloc((size_t)nth * sizeof *acc);
-  edge_acc single;
-  if (!acc) {
-    nth = 1;
-    memset(&single, 0, sizeof single);
-  }
-#pragma omp parallel num_threads(nth) if (nv > 50000)
+  if (!acc) return MX_ENOMEM;
+#pragma omp parallel num_threads(nth) if (n > 150000)
   {
-    edge_acc *A = acc ? &acc[omp_get_thread_num()] : &single;
-#pragma omp for schedule(dynamic, 4096)
-    for (size_t v = 0; v < nv; v++) {
-      const uint64_t *e = E->e;
-      size_t i = v ? E->end[v - 1] : 0, end = E->end[v];
-      while (i < end) {
-        size_t j = run_end(e, i, end);
-        uint32_t w = (uint32_t)(e[i] >> 32);
-        uint32_t h0 = (uint32_t)e[i], t0 = h0 / 3;
-        uint32_t t1 = j - i > 1 ? (uint32_t)e[i + 1] / 3 : NONE;
+    edge_acc *A = &acc[omp_get_thread_num()];
+#pragma omp for schedule(dynamic, 1)
+    for (size_t ch = 0; ch < nchunk; ch++) {
+      const size_t stop = mx_min((ch + 1) * EDGE_CHUNK, n);
+      size_t i = ch * EDGE_CHUNK;
+      while (i > 0 && i < stop && E->key[i] == E->key[i - 1]) i++;
+      while (i < stop) {
+        const size_t j = mx_edge_run_end(E, i);
+        const uint32_t v = (uint32_t)(E->key[i] >> 32), w = (uint32_t)E->key[i];
+        const uint32_t h0 = E->half[i], t0 = h0 / 3;
+        const uint32_t t1 = j - i > 1 ? E->half[i + 1] / 3 : NONE;
         int kind = -1;
         if (j - i == 1)
           kind = 0;
         else if (j - i > 2)
           kind = 1;
-        else if (s->tri[h0] == s->tri[(uint32_t)e[i + 1]])
+        else if (s->tri[h0] == s->tri[E->half[i + 1]])
           kind = 2;
         if (kind >= 0) {
           A->cnt[kind]++;
-          mx_defect_example x = edge_example(s, t0, t1, (uint32_t)v, w);
+          mx_defect_example x = edge_example(s, t0, t1, v, w);
           ex_add(A->ex[kind], &A->nex[kind], &x);
         }
         i = j;
@@ -583,13 +513,14 @@ static void edge_defects(const mx_trisoup *s, const edge_table *E,
   size_t *cnt[3] = {&r->boundary_edges, &r->nonmanifold_edges,
                     &r->misoriented_edges};
   for (int t = 0; t < nth; t++) {
-    edge_acc *A = acc ? &acc[t] : &single;
+    edge_acc *A = &acc[t];
     for (int k = 0; k < 3; k++) {
       *cnt[k] += A->cnt[k];
       for (size_t x = 0; x < A->nex[k]; x++) ex_add(dst[k], &nex[k], &A->ex[k][x]);
     }
   }
   mx_free(acc);
+  return MX_OK;
 }
 
 /* Bodies: triangles connected through shared vertices (union-find over
@@ -1022,15 +953,19 @@ int mx_surface_defects_find(const mx_trisoup *s, mx_surface_defects *r) {
   int8_t *axis = mx_alloc(nt);
   uint32_t *body = mx_alloc(nt * sizeof *body);
   uint32_t *vroot = mx_alloc((s->nv ? s->nv : 1) * sizeof *vroot);
-  edge_table E = {0};
-  if (!axis || !body || !vroot || edges_build(s, &E) != MX_OK) {
+  mx_edge_table E;
+  int st = axis && body && vroot ? mx_edge_table_build(&E, s->tri, NULL, (uint32_t)nt, 1, 0)
+                                 : MX_ENOMEM;
+  if (st == MX_OK) {
+    st = edge_defects(s, &E, r);
+    mx_edge_table_free(&E);
+  }
+  if (st != MX_OK) {
     mx_free(axis);
     mx_free(body);
     mx_free(vroot);
-    return MX_EINPUT;
+    return st;
   }
-  edge_defects(s, &E, r);
-  edges_free(&E);
   bodies(s, vroot, body);
   mx_free(vroot);
 
@@ -1049,7 +984,7 @@ int mx_surface_defects_find(const mx_trisoup *s, mx_surface_defects *r) {
   }
 
   bvh B;
-  int st = bvh_build(&B, s, axis);
+  st = bvh_build(&B, s, axis);
   if (st == MX_OK) st = pair_defects(&B, s, body, r);
   bvh_free(&B);
   mx_free(axis);
@@ -1067,75 +1002,40 @@ int mx_surface_orient(mx_trisoup *s, size_t *flipped) {
   if (s->nt == 0) return MX_OK;
   MX_CHECK(indices_valid(s));
   const size_t nt = s->nt;
-  edge_table E = {0};
-  uint32_t *adj = mx_alloc(3 * nt * sizeof *adj);
+  mx_edge_table E;
   uint32_t *comp = mx_alloc(nt * sizeof *comp);
-  uint32_t *queue = mx_alloc(nt * sizeof *queue);
   uint8_t *flip = mx_calloc(nt);
-  int st = MX_OK;
-  if (!adj || !comp || !queue || !flip || edges_build(s, &E) != MX_OK) {
-    st = MX_EINPUT;
-    goto done;
+  int st = comp && flip ? mx_edge_table_build(&E, s->tri, NULL, (uint32_t)nt, 1, 1) : MX_ENOMEM;
+  if (st != MX_OK) {
+    mx_free(comp);
+    mx_free(flip);
+    return st;
   }
-  /* Neighbour across each edge used by exactly two triangles. */
-  for (size_t h = 0; h < 3 * nt; h++) adj[h] = NONE;
-  for (size_t v = 0; v < s->nv; v++) {
-    size_t i = v ? E.end[v - 1] : 0, end = E.end[v];
-    while (i < end) {
-      size_t j = run_end(E.e, i, end);
-      if (j - i == 2) {
-        uint32_t h0 = (uint32_t)E.e[i], h1 = (uint32_t)E.e[i + 1];
-        adj[h0] = h1;
-        adj[h1] = h0;
-      }
-      i = j;
-    }
-  }
-  /* Flood fill: flip[u] makes u agree with the triangle it was reached
-   * from (opposite directions along the common edge). */
-  for (size_t t = 0; t < nt; t++) comp[t] = NONE;
+  /* Pieces: shells through the manifold edges; flip[u] makes u agree with
+   * the triangle it was reached from. */
   uint32_t ncomp = 0;
-  for (size_t seed = 0; seed < nt; seed++) {
-    if (comp[seed] != NONE || repeats(s->tri + 3 * seed)) continue;
-    size_t qh = 0, qt = 0;
-    comp[seed] = ncomp;
-    queue[qt++] = (uint32_t)seed;
-    while (qh < qt) {
-      uint32_t t = queue[qh++];
-      for (int k = 0; k < 3; k++) {
-        uint32_t h = 3 * t + k, g = adj[h];
-        if (g == NONE) continue;
-        uint32_t u = g / 3;
-        uint8_t want = flip[t] ^ (s->tri[h] == s->tri[g]);
-        if (comp[u] == NONE) {
-          comp[u] = ncomp;
-          flip[u] = want;
-          queue[qt++] = u;
-        }
-      }
-    }
-    ncomp++;
-  }
+  st = mx_surface_shells(&E, 0, comp, flip, &ncomp, NULL, NULL);
   /* Per piece: open?, volume, size, flips so far. */
-  uint8_t *open = mx_calloc(ncomp ? ncomp : 1);
-  double *vol = mx_calloc((ncomp ? ncomp : 1) * sizeof *vol);
-  size_t *size = mx_calloc((ncomp ? ncomp : 1) * 2 * sizeof *size);
-  uint32_t *ref = mx_alloc((ncomp ? ncomp : 1) * sizeof *ref);
-  if (!open || !vol || !size || !ref) {
-    st = MX_EINPUT;
-    goto done2;
+  uint8_t *open = NULL;
+  double *vol = NULL;
+  size_t *size = NULL;
+  uint32_t *ref = NULL;
+  if (st == MX_OK) {
+    open = mx_calloc(ncomp ? ncomp : 1);
+    vol = mx_calloc((ncomp ? ncomp : 1) * sizeof *vol);
+    size = mx_calloc((ncomp ? ncomp : 1) * 2 * sizeof *size);
+    ref = mx_alloc((ncomp ? ncomp : 1) * sizeof *ref);
+    if (!open || !vol || !size || !ref) st = MX_ENOMEM;
   }
-  for (size_t v = 0; v < s->nv; v++) {
-    size_t i = v ? E.end[v - 1] : 0, end = E.end[v];
-    while (i < end) {
-      size_t j = run_end(E.e, i, end);
-      for (size_t a = i; a < j; a++) {
-        uint32_t c = comp[(uint32_t)E.e[a] / 3], uses = 0;
-        for (size_t b = i; b < j; b++) uses += comp[(uint32_t)E.e[b] / 3] == c;
-        if (uses != 2) open[c] = 1;
-      }
-      i = j;
+  if (st != MX_OK) goto done;
+  for (size_t i = 0; i < E.n;) {
+    const size_t j = mx_edge_run_end(&E, i);
+    for (size_t a = i; a < j; a++) {
+      uint32_t c = comp[E.half[a] / 3], uses = 0;
+      for (size_t b = i; b < j; b++) uses += comp[E.half[b] / 3] == c;
+      if (uses != 2) open[c] = 1;
     }
+    i = j;
   }
   for (uint32_t c = 0; c < ncomp; c++) ref[c] = NONE;
   for (size_t t = 0; t < nt; t++) {
@@ -1168,16 +1068,13 @@ int mx_surface_orient(mx_trisoup *s, size_t *flipped) {
     nflip++;
   }
   if (flipped) *flipped = nflip;
-done2:
+done:
   mx_free(open);
   mx_free(vol);
   mx_free(size);
   mx_free(ref);
-done:
-  edges_free(&E);
-  mx_free(adj);
+  mx_edge_table_free(&E);
   mx_free(comp);
-  mx_free(queue);
   mx_free(flip);
   return st;
 }
