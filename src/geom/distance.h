@@ -77,6 +77,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "geom/bvh.h"
 #include "soa/trisoup.h"
 
 /* Feature of a triangle that holds a closest point: the face, edge k (from
@@ -87,14 +88,6 @@ enum {
   MX_FEATURE_EDGE = 1,   /* + k, k = 0, 1, 2 */
   MX_FEATURE_VERTEX = 4, /* + k, k = 0, 1, 2 */
 };
-
-typedef struct {
-  double lo[3], hi[3]; /* bounding box of the triangles below */
-  uint32_t first;      /* leaf: first slot; internal: left child (right = first + 1) */
-  uint32_t count;      /* leaf: 1..4 triangles; internal: 0 */
-  uint32_t ntri;       /* triangles below */
-  uint32_t pad_;
-} mx_bvh_node;
 
 /* The same tree with two levels merged, for the closest-point queries:
  * for each of up to 4 children an oriented bounding box (centre c, first

@@ -1,0 +1,132 @@
+/* The binary BVH over triangles: build (see bvh.h). */
+#include "geom/bvh.h"
+
+#include <math.h>
+
+#include "base/common.h"
+
+#define LEAF_MAX MX_BVH_LEAF_MAX
+#define TASK_MIN 16384 /* subtrees at least this big become tasks */
+
+/* Leaves of a subtree of m >= 1 triangles (a node of more than LEAF_MAX
+ * gives floor(m/2) to the left child, the rest to the right); returns L(m)
+ * and sets *next to L(m + 1), carried together so the recursion is a
+ * chain of log2(m) calls. */
+static size_t leaf_pair(size_t m, size_t *next) {
+  if (m + 1 <= LEAF_MAX) {
+    *next = 1;
+    return 1;
+  }
+  if (m <= LEAF_MAX) { /* m == LEAF_MAX: m + 1 splits once more */
+    size_t a, b;
+    a = leaf_pair((m + 1) / 2, &b);
+    *next = (m + 1) % 2 ? a + b : 2 * a;
+    return 1;
+  }
+  size_t a, b; /* L(k), L(k + 1) */
+  const size_t k = m / 2;
+  a = leaf_pair(k, &b);
+  if (m % 2 == 0) {
+    *next = a + b;
+    return 2 * a;
+  }
+  *next = 2 * b;
+  return a + b;
+}
+
+size_t mx_bvh_node_count(size_t m) {
+  size_t next;
+  return 2 * leaf_pair(m, &next) - 1;
+}
+
+/* Reorders a[0..n) so that a[k] holds the element of rank k by key[a[.]],
+ * smaller keys before, larger after (Hoare partitions, median of three). */
+static void select_nth(uint32_t *a, int64_t n, int64_t k, const double *key) {
+  int64_t lo = 0, hi = n - 1;
+  while (hi > lo) {
+    const int64_t mid = lo + (hi - lo) / 2;
+    double x0 = key[a[lo]], x1 = key[a[mid]], x2 = key[a[hi]];
+    const double x = mx_max(mx_min(x0, x1), mx_min(mx_max(x0, x1), x2));
+    int64_t i = lo, j = hi;
+    while (i <= j) {
+      while (key[a[i]] < x) i++;
+      while (key[a[j]] > x) j--;
+      if (i <= j) {
+        const uint32_t t = a[i];
+        a[i] = a[j];
+        a[j] = t;
+        i++;
+        j--;
+      }
+    }
+    if (k <= j)
+      hi = j;
+    else if (k >= i)
+      lo = i;
+    else
+      return;
+  }
+}
+
+typedef struct {
+  mx_bvh_node *nodes;
+  uint32_t *idx;      /* slot -> triangle */
+  const double *cen;  /* 3 nt centroids, SoA: cen[a * nt + t] */
+  uint32_t nt;
+  const uint32_t *tri;
+  const double *co[3];
+} build_ctx;
+
+static void build_node(const build_ctx *B, uint32_t node, uint32_t first,
+                       uint32_t m, uint32_t base) {
+  const double *const *co = B->co;
+  mx_bvh_node *N = &B->nodes[node];
+  double clo[3] = {INFINITY, INFINITY, INFINITY},
+         chi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int a = 0; a < 3; a++) {
+    N->lo[a] = INFINITY;
+    N->hi[a] = -INFINITY;
+  }
+  for (uint32_t i = first; i < first + m; i++) {
+    const uint32_t t = B->idx[i];
+    const uint32_t *v = B->tri + 3 * (size_t)t;
+    for (int a = 0; a < 3; a++) {
+      for (int k = 0; k < 3; k++) {
+        N->lo[a] = mx_min(N->lo[a], co[a][v[k]]);
+        N->hi[a] = mx_max(N->hi[a], co[a][v[k]]);
+      }
+      const double c = B->cen[(size_t)a * B->nt + t];
+      clo[a] = mx_min(clo[a], c);
+      chi[a] = mx_max(chi[a], c);
+    }
+  }
+  N->ntri = m;
+  N->pad_ = 0;
+  if (m <= LEAF_MAX) {
+    N->first = first;
+    N->count = m;
+    return;
+  }
+  int axis = 0;
+  for (int a = 1; a < 3; a++)
+    if (chi[a] - clo[a] > chi[axis] - clo[axis]) axis = a;
+  const uint32_t ml = m / 2;
+  select_nth(B->idx + first, m, ml, B->cen + (size_t)axis * B->nt);
+  N->first = base;
+  N->count = 0;
+  const uint32_t lbase = base + 2;
+  const uint32_t rbase = lbase + (uint32_t)(mx_bvh_node_count(ml) - 1);
+#pragma omp task if (m >= TASK_MIN) default(none) firstprivate(B, base, first, ml, lbase)
+  build_node(B, base, first, ml, lbase);
+  build_node(B, base + 1, first + ml, m - ml, rbase);
+}
+
+void mx_bvh_build(mx_bvh_node *nodes, uint32_t *idx, const double *cen, uint32_t nt,
+                  const uint32_t *tri, const double *x, const double *y,
+                  const double *z) {
+  build_ctx B = {nodes, idx, cen, nt, tri, {x, y, z}};
+  const build_ctx *bp = &B;
+#pragma omp parallel if (nt >= TASK_MIN) default(none) shared(bp, nt)
+#pragma omp single
+  build_node(bp, 0, 0, nt, 1);
+}
