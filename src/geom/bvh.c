@@ -1,4 +1,5 @@
-/* The binary BVH over triangles: build (see bvh.h). */
+/* The binary BVH over triangles: build, and the traversal of the tree
+ * against itself (broad phase); see bvh.h. */
 #include "geom/bvh.h"
 
 #include <math.h>
@@ -129,4 +130,86 @@ void mx_bvh_build(mx_bvh_node *nodes, uint32_t *idx, const double *cen, uint32_t
 #pragma omp parallel if (nt >= TASK_MIN) default(none) shared(bp, nt)
 #pragma omp single
   build_node(bp, 0, 0, nt, 1);
+}
+
+/* ---- pairs of slots whose boxes meet ----------------------------------- */
+
+/* Recursion levels below which the traversal spawns tasks. */
+#define TASK_DEPTH 10
+
+typedef struct {
+  const mx_bvh_node *nodes;
+  const double *box;
+  mx_bvh_pair_fn visit;
+  void *ctx;
+} pair_walk;
+
+static inline int nodes_meet(const mx_bvh_node *a, const mx_bvh_node *b) {
+  return a->lo[0] <= b->hi[0] && b->lo[0] <= a->hi[0] && a->lo[1] <= b->hi[1] &&
+         b->lo[1] <= a->hi[1] && a->lo[2] <= b->hi[2] && b->lo[2] <= a->hi[2];
+}
+
+static inline int boxes_meet(const double *a, const double *b) {
+  return a[0] <= b[3] && b[0] <= a[3] && a[1] <= b[4] && b[1] <= a[4] &&
+         a[2] <= b[5] && b[2] <= a[5];
+}
+
+/* Pairs between the subtrees a and b (disjoint). */
+static void cross_nodes(const pair_walk *W, uint32_t a, uint32_t b, int depth) {
+  const mx_bvh_node *A = &W->nodes[a], *N = &W->nodes[b];
+  if (!nodes_meet(A, N)) return;
+  if (A->count && N->count) {
+    const double *box = W->box;
+    for (uint32_t i = A->first; i < A->first + A->count; i++)
+      for (uint32_t j = N->first; j < N->first + N->count; j++)
+        if (boxes_meet(box + 6 * (size_t)i, box + 6 * (size_t)j)) W->visit(W->ctx, i, j);
+    return;
+  }
+  uint32_t a0 = a, a1 = a, b0 = b, b1 = b;
+  if (N->count || (!A->count && A->ntri >= N->ntri))
+    a0 = A->first, a1 = A->first + 1;
+  else
+    b0 = N->first, b1 = N->first + 1;
+  if (depth < TASK_DEPTH) {
+#pragma omp task default(none) firstprivate(W, a0, b0, depth)
+    cross_nodes(W, a0, b0, depth + 1);
+    cross_nodes(W, a1, b1, depth + 1);
+  } else {
+    cross_nodes(W, a0, b0, depth + 1);
+    cross_nodes(W, a1, b1, depth + 1);
+  }
+}
+
+/* Pairs within the subtree id. */
+static void self_node(const pair_walk *W, uint32_t id, int depth) {
+  const mx_bvh_node *N = &W->nodes[id];
+  if (N->count) {
+    const double *box = W->box;
+    for (uint32_t i = N->first; i < N->first + N->count; i++)
+      for (uint32_t j = i + 1; j < N->first + N->count; j++)
+        if (boxes_meet(box + 6 * (size_t)i, box + 6 * (size_t)j)) W->visit(W->ctx, i, j);
+    return;
+  }
+  const uint32_t l = N->first, r = N->first + 1;
+  if (depth < TASK_DEPTH) {
+#pragma omp task default(none) firstprivate(W, l, depth)
+    self_node(W, l, depth + 1);
+#pragma omp task default(none) firstprivate(W, r, depth)
+    self_node(W, r, depth + 1);
+    cross_nodes(W, l, r, depth + 1);
+  } else {
+    self_node(W, l, depth + 1);
+    self_node(W, r, depth + 1);
+    cross_nodes(W, l, r, depth + 1);
+  }
+}
+
+void mx_bvh_self_pairs(const mx_bvh_node *nodes, const double *box, uint32_t nslots,
+                       mx_bvh_pair_fn visit, void *ctx) {
+  if (nslots < 2) return;
+  const pair_walk W = {nodes, box, visit, ctx};
+  const pair_walk *wp = &W;
+#pragma omp parallel if (nslots > 256) default(none) shared(wp)
+#pragma omp single
+  self_node(wp, 0, 0);
 }

@@ -5,7 +5,9 @@
  * MX_BVH_LEAF_MAX triangles; O(n log n), subtrees built as OpenMP tasks.
  * The tree's shape depends only on the triangle count: a node of m > 4
  * triangles gives floor(m / 2) to its left child. Used by the surface index
- * (geom/distance.h: closest points, winding number). */
+ * (geom/distance.h: closest points, winding number) and, traversed against
+ * itself, as the broad phase of the self-intersection test
+ * (kernels/surface_defects.c). */
 #ifndef MX_BVH_H
 #define MX_BVH_H
 
@@ -22,6 +24,9 @@ typedef struct {
   uint32_t pad_;
 } mx_bvh_node;
 
+/* Receives a pair of slots whose boxes meet (from any thread). */
+typedef void (*mx_bvh_pair_fn)(void *ctx, uint32_t i, uint32_t j);
+
 /* Nodes of the tree of m >= 1 triangles. */
 size_t mx_bvh_node_count(size_t m);
 
@@ -33,5 +38,15 @@ size_t mx_bvh_node_count(size_t m);
 void mx_bvh_build(mx_bvh_node *nodes, uint32_t *idx, const double *cen, uint32_t nt,
                   const uint32_t *tri, const double *x, const double *y,
                   const double *z);
+
+/* Broad phase: calls visit(ctx, i, j) once for every pair of slots i != j
+ * (in no particular order, either first) whose closed boxes meet (compared
+ * exactly); box: 6 per slot (lo, hi), nslots: the slots of the tree. The
+ * tree is traversed against itself (the pairs within a node are those
+ * within each child and those across the two children; a pair of nodes
+ * whose boxes do not meet is dropped whole), the first levels as OpenMP
+ * tasks of a parallel region of omp_get_max_threads() threads. */
+void mx_bvh_self_pairs(const mx_bvh_node *nodes, const double *box, uint32_t nslots,
+                       mx_bvh_pair_fn visit, void *ctx);
 
 #endif

@@ -12,10 +12,10 @@
 
 #include "base/common.h"
 #include "base/scan.h"
+#include "geom/bvh.h"
 #include "geom/surface_topology.h"
 
 #define NEX MX_DEFECT_EXAMPLES
-#define LEAF 4
 #define NONE UINT32_MAX
 
 /* ==== exact signs ========================================================
@@ -547,25 +547,22 @@ static void bodies(const mx_trisoup *s, uint32_t *p, uint32_t *body) {
   for (size_t t = 0; t < s->nt; t++) body[t] = uf_find(p, s->tri[3 * t]);
 }
 
-/* ==== broad phase ======================================================== */
+/* ==== broad phase ========================================================
+ * The BVH of geom/bvh.h over the non-degenerate triangles, traversed
+ * against itself (mx_bvh_self_pairs). A pair of triangles is handed to the
+ * narrow phase in a fixed order, the one of smaller (Morton code of its box
+ * centre, id) first, so that the point found at an intersection does not
+ * depend on the tree. */
 
 typedef struct {
-  double lo[3], hi[3];
-  uint32_t first, end; /* slots */
-  uint32_t right;      /* internal: right child (left: this + 1); leaf: 0 */
-  uint32_t pad_;
-} bnode;
-
-typedef struct {
-  uint32_t n;      /* slots (non-degenerate triangles) */
-  uint32_t *tid;   /* slot -> triangle */
-  uint32_t *code;  /* Morton code per slot */
-  double *tv;      /* 9 per slot */
-  double *box;     /* 6 per slot: lo, hi */
-  uint32_t *vid;   /* 3 per slot */
-  int8_t *axis;    /* per slot */
-  bnode *nodes;
-  uint32_t nn;
+  uint32_t n;         /* slots (non-degenerate triangles) */
+  uint32_t *tid;      /* slot -> triangle */
+  uint32_t *code;     /* Morton code per slot */
+  double *tv;         /* 9 per slot */
+  double *box;        /* 6 per slot: lo, hi */
+  uint32_t *vid;      /* 3 per slot */
+  int8_t *axis;       /* per slot */
+  mx_bvh_node *nodes;
 } bvh;
 
 static void bvh_free(bvh *B) {
@@ -588,74 +585,32 @@ static inline uint32_t spread3(uint32_t x) {
   return x;
 }
 
-static uint32_t split_at(const uint32_t *code, uint32_t l, uint32_t r) {
-  uint32_t x = code[l] ^ code[r - 1];
-  if (x == 0) return l + (r - l) / 2;
-  uint32_t mask = 1u << (31 - __builtin_clz(x));
-  uint32_t lo = l, hi = r - 1; /* code[lo] lacks the bit, code[hi] has it */
-  while (hi - lo > 1) {
-    uint32_t m = lo + (hi - lo) / 2;
-    if (code[m] & mask) hi = m;
-    else lo = m;
-  }
-  return hi;
-}
-
-static uint32_t build_node(bvh *B, uint32_t l, uint32_t r) {
-  uint32_t id = B->nn++;
-  bnode *nd = &B->nodes[id];
-  nd->first = l;
-  nd->end = r;
-  if (r - l <= LEAF) {
-    nd->right = 0;
-    for (int a = 0; a < 3; a++) {
-      nd->lo[a] = B->box[6 * (size_t)l + a];
-      nd->hi[a] = B->box[6 * (size_t)l + 3 + a];
-    }
-    for (uint32_t i = l + 1; i < r; i++)
-      for (int a = 0; a < 3; a++) {
-        nd->lo[a] = mx_min(nd->lo[a], B->box[6 * (size_t)i + a]);
-        nd->hi[a] = mx_max(nd->hi[a], B->box[6 * (size_t)i + 3 + a]);
-      }
-    return id;
-  }
-  uint32_t mid = split_at(B->code, l, r);
-  build_node(B, l, mid);
-  uint32_t rt = build_node(B, mid, r);
-  nd = &B->nodes[id];
-  const bnode *L = &B->nodes[id + 1], *R = &B->nodes[rt];
-  nd->right = rt;
-  for (int a = 0; a < 3; a++) {
-    nd->lo[a] = mx_min(L->lo[a], R->lo[a]);
-    nd->hi[a] = mx_max(L->hi[a], R->hi[a]);
-  }
-  return id;
-}
-
-/* Slots: the non-degenerate triangles sorted by (Morton code of the box
- * centre, id). axis[t] per triangle (-1: degenerate) is given. */
+/* The slots: the non-degenerate triangles (axis_of[t] >= 0) in the tree's
+ * order. */
 static int bvh_build(bvh *B, const mx_trisoup *s, const int8_t *axis_of) {
   memset(B, 0, sizeof *B);
   size_t n = 0;
   for (size_t t = 0; t < s->nt; t++) n += axis_of[t] >= 0;
   B->n = (uint32_t)n;
   if (n == 0) return MX_OK;
-  size_t nodes_max = 2 * n;
-  uint32_t *ids = mx_alloc(n * sizeof *ids), *keys = mx_alloc(n * sizeof *keys);
-  uint32_t *ids2 = mx_alloc(n * sizeof *ids2), *keys2 = mx_alloc(n * sizeof *keys2);
-  B->tid = ids2;
-  B->code = keys2;
+  uint32_t *ids = mx_alloc(n * sizeof *ids), *codes = mx_alloc(n * sizeof *codes);
+  uint32_t *vtri = mx_alloc(3 * n * sizeof *vtri);
+  double *cen = mx_alloc(3 * n * sizeof *cen);
+  B->tid = mx_alloc(n * sizeof *B->tid);
+  B->code = mx_alloc(n * sizeof *B->code);
   B->tv = mx_alloc(9 * n * sizeof *B->tv);
   B->box = mx_alloc(6 * n * sizeof *B->box);
   B->vid = mx_alloc(3 * n * sizeof *B->vid);
   B->axis = mx_alloc(n);
-  B->nodes = mx_alloc(nodes_max * sizeof *B->nodes);
-  if (!ids || !keys || !ids2 || !keys2 || !B->tv || !B->box || !B->vid ||
-      !B->axis || !B->nodes) {
+  B->nodes = mx_alloc(mx_bvh_node_count(n) * sizeof *B->nodes);
+  if (!ids || !codes || !vtri || !cen || !B->tid || !B->code || !B->tv || !B->box ||
+      !B->vid || !B->axis || !B->nodes) {
     mx_free(ids);
-    mx_free(keys);
+    mx_free(codes);
+    mx_free(vtri);
+    mx_free(cen);
     bvh_free(B);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   double lo[3] = {INFINITY, INFINITY, INFINITY};
   double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -685,41 +640,27 @@ static int bvh_build(bvh *B, const mx_trisoup *s, const int8_t *axis_of) {
       double M = mx_max(c[a][v[0]], mx_max(c[a][v[1]], c[a][v[2]]));
       double f = (0.5 * (m + M) - lo[a]) * scale[a];
       q[a] = f <= 0.0 ? 0 : f >= 1023.0 ? 1023 : (uint32_t)f;
+      vtri[3 * i + (size_t)a] = v[a];
+      cen[(size_t)a * n + i] = (c[a][v[0]] + c[a][v[1]] + c[a][v[2]]) / 3.0;
     }
-    keys[i] = spread3(q[0]) << 2 | spread3(q[1]) << 1 | spread3(q[2]);
+    codes[i] = spread3(q[0]) << 2 | spread3(q[1]) << 1 | spread3(q[2]);
+    B->tid[i] = (uint32_t)i;
   }
-  /* Stable LSD radix sort on the 30-bit codes, 3 passes of 10 bits; the
-   * input is in increasing id, so ties stay in increasing id. */
-  uint32_t *src_k = keys, *src_i = ids, *dst_k = keys2, *dst_i = ids2;
-  for (int pass = 0; pass < 3; pass++) {
-    size_t cnt[1025] = {0};
-    int sh = 10 * pass;
-    for (size_t i = 0; i < n; i++) cnt[((src_k[i] >> sh) & 1023) + 1]++;
-    for (int b = 0; b < 1024; b++) cnt[b + 1] += cnt[b];
-    for (size_t i = 0; i < n; i++) {
-      size_t d = cnt[(src_k[i] >> sh) & 1023]++;
-      dst_k[d] = src_k[i];
-      dst_i[d] = src_i[i];
-    }
-    uint32_t *tk = src_k, *ti = src_i;
-    src_k = dst_k, src_i = dst_i, dst_k = tk, dst_i = ti;
-  }
-  /* After 3 passes the result is in keys/ids (pass 0 -> keys2, 1 -> keys,
-   * 2 -> keys2): src_* points at it. */
-  B->tid = src_i;
-  B->code = src_k;
-  mx_free(dst_i);
-  mx_free(dst_k);
+  mx_bvh_build(B->nodes, B->tid, cen, (uint32_t)n, vtri, s->x, s->y, s->z);
+  mx_free(vtri);
+  mx_free(cen);
 #pragma omp parallel for schedule(static) if (n > 20000)
   for (size_t i = 0; i < n; i++) {
-    uint32_t t = B->tid[i];
+    const uint32_t k = B->tid[i], t = ids[k];
+    B->tid[i] = t;
+    B->code[i] = codes[k];
     double *P = B->tv + 9 * i, *bx = B->box + 6 * i;
-    for (int k = 0; k < 3; k++) {
-      uint32_t v = s->tri[3 * (size_t)t + k];
-      B->vid[3 * i + k] = v;
-      P[3 * k] = s->x[v];
-      P[3 * k + 1] = s->y[v];
-      P[3 * k + 2] = s->z[v];
+    for (int j = 0; j < 3; j++) {
+      uint32_t v = s->tri[3 * (size_t)t + j];
+      B->vid[3 * i + j] = v;
+      P[3 * j] = s->x[v];
+      P[3 * j + 1] = s->y[v];
+      P[3 * j + 2] = s->z[v];
     }
     for (int a = 0; a < 3; a++) {
       bx[a] = mx_min(P[a], mx_min(P[3 + a], P[6 + a]));
@@ -727,7 +668,8 @@ static int bvh_build(bvh *B, const mx_trisoup *s, const int8_t *axis_of) {
     }
     B->axis[i] = axis_of[t];
   }
-  build_node(B, 0, (uint32_t)n);
+  mx_free(ids);
+  mx_free(codes);
   return MX_OK;
 }
 
@@ -743,11 +685,6 @@ typedef struct {
   char pad_[64];
 } pair_acc;
 
-static inline int boxes_meet(const double *a, const double *b) {
-  return a[0] <= b[3] && b[0] <= a[3] && a[1] <= b[4] && b[1] <= a[4] &&
-         a[2] <= b[5] && b[2] <= a[5];
-}
-
 typedef struct {
   const bvh *B;
   const mx_trisoup *s;
@@ -756,9 +693,15 @@ typedef struct {
   int collect;   /* keep every pair met (acc->pairs) */
 } pair_ctx;
 
-/* Narrow phase on slots i < j whose boxes meet. */
-static void test_pair(const pair_ctx *c, uint32_t i, uint32_t j) {
+/* Narrow phase on slots i and j whose boxes meet (mx_bvh_pair_fn). */
+static void test_pair(void *ctx, uint32_t i, uint32_t j) {
+  const pair_ctx *c = ctx;
   const bvh *B = c->B;
+  if (B->code[j] < B->code[i] || (B->code[j] == B->code[i] && B->tid[j] < B->tid[i])) {
+    const uint32_t x = i;
+    i = j;
+    j = x;
+  }
   double w[3];
   if (!pair_meets(B->tv + 9 * (size_t)i, B->tv + 9 * (size_t)j,
                   B->vid + 3 * (size_t)i, B->vid + 3 * (size_t)j, B->axis[i],
@@ -792,76 +735,14 @@ static void test_pair(const pair_ctx *c, uint32_t i, uint32_t j) {
   ex_add(A->ex[kind], &A->nex[kind], &x);
 }
 
-static inline int nodes_meet(const bnode *a, const bnode *b) {
-  return a->lo[0] <= b->hi[0] && b->lo[0] <= a->hi[0] && a->lo[1] <= b->hi[1] &&
-         b->lo[1] <= a->hi[1] && a->lo[2] <= b->hi[2] && b->lo[2] <= a->hi[2];
-}
-
-/* Recursion levels below which the traversal spawns tasks. */
-#define TASK_DEPTH 10
-
-/* Pairs between the subtrees a and b (every slot of a before every slot
- * of b, so the pairs come as i < j). */
-static void cross_nodes(const pair_ctx *c, uint32_t a, uint32_t b, int depth) {
-  const bnode *A = &c->B->nodes[a], *N = &c->B->nodes[b];
-  if (!nodes_meet(A, N)) return;
-  if (A->right == 0 && N->right == 0) {
-    const double *box = c->B->box;
-    for (uint32_t i = A->first; i < A->end; i++)
-      for (uint32_t j = N->first; j < N->end; j++)
-        if (boxes_meet(box + 6 * (size_t)i, box + 6 * (size_t)j)) test_pair(c, i, j);
-    return;
-  }
-  uint32_t a0 = a, a1 = a, b0 = b, b1 = b;
-  if (N->right == 0 || (A->right != 0 && A->end - A->first >= N->end - N->first))
-    a0 = a + 1, a1 = A->right;
-  else
-    b0 = b + 1, b1 = N->right;
-  if (depth < TASK_DEPTH) {
-#pragma omp task default(none) firstprivate(c, a0, b0, depth)
-    cross_nodes(c, a0, b0, depth + 1);
-    cross_nodes(c, a1, b1, depth + 1);
-  } else {
-    cross_nodes(c, a0, b0, depth + 1);
-    cross_nodes(c, a1, b1, depth + 1);
-  }
-}
-
-/* Pairs within the subtree id. */
-static void self_node(const pair_ctx *c, uint32_t id, int depth) {
-  const bnode *N = &c->B->nodes[id];
-  if (N->right == 0) {
-    const double *box = c->B->box;
-    for (uint32_t i = N->first; i < N->end; i++)
-      for (uint32_t j = i + 1; j < N->end; j++)
-        if (boxes_meet(box + 6 * (size_t)i, box + 6 * (size_t)j)) test_pair(c, i, j);
-    return;
-  }
-  uint32_t l = id + 1, r = N->right;
-  if (depth < TASK_DEPTH) {
-#pragma omp task default(none) firstprivate(c, l, depth)
-    self_node(c, l, depth + 1);
-#pragma omp task default(none) firstprivate(c, r, depth)
-    self_node(c, r, depth + 1);
-    cross_nodes(c, l, r, depth + 1);
-  } else {
-    self_node(c, l, depth + 1);
-    self_node(c, r, depth + 1);
-    cross_nodes(c, l, r, depth + 1);
-  }
-}
-
 static int pair_defects(const bvh *B, const mx_trisoup *s, const uint32_t *body,
                         mx_surface_defects *r) {
   if (B->n < 2) return MX_OK;
   int nth = omp_get_max_threads();
   pair_acc *acc = mx_calloc((size_t)nth * sizeof *acc);
-  if (!acc) return MX_EINPUT;
+  if (!acc) return MX_ENOMEM;
   pair_ctx c = {B, s, body, acc, 0};
-  const pair_ctx *cp = &c;
-#pragma omp parallel num_threads(nth) if (B->n > 256) default(none) shared(cp)
-#pragma omp single
-  self_node(cp, 0, 0);
+  mx_bvh_self_pairs(B->nodes, B->box, B->n, test_pair, &c);
   size_t nex[2] = {0, 0};
   for (int t = 0; t < nth; t++) {
     pair_acc *A = &acc[t];
@@ -903,28 +784,25 @@ int mx_surface_meeting_pairs(const mx_trisoup *s, uint64_t **pairs, size_t *npai
   if (s->nt < 2) return MX_OK;
   MX_CHECK(indices_valid(s));
   int8_t *axis = mx_alloc(s->nt);
-  if (!axis) return MX_EINPUT;
+  if (!axis) return MX_ENOMEM;
   projection_axes(s, axis);
   bvh B;
   int st = bvh_build(&B, s, axis);
   mx_free(axis);
   const int nth = omp_get_max_threads();
   pair_acc *acc = st ? NULL : mx_calloc((size_t)nth * sizeof *acc);
-  if (!st && !acc) st = MX_EINPUT;
+  if (!st && !acc) st = MX_ENOMEM;
   if (!st && B.n >= 2) {
     pair_ctx c = {&B, s, NULL, acc, 1};
-    const pair_ctx *cp = &c;
-#pragma omp parallel num_threads(nth) if (B.n > 256) default(none) shared(cp)
-#pragma omp single
-    self_node(cp, 0, 0);
+    mx_bvh_self_pairs(B.nodes, B.box, B.n, test_pair, &c);
   }
   size_t n = 0;
   for (int t = 0; acc && t < nth; t++) {
     n += acc[t].npairs;
-    if (acc[t].oom) st = MX_EINPUT;
+    if (acc[t].oom) st = MX_ENOMEM;
   }
   uint64_t *all = st ? NULL : mx_alloc((n + 1) * sizeof *all);
-  if (!st && !all) st = MX_EINPUT;
+  if (!st && !all) st = MX_ENOMEM;
   if (!st) {
     size_t k = 0;
     for (int t = 0; t < nth; t++) {
