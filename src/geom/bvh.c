@@ -3,8 +3,10 @@
 #include "geom/bvh.h"
 
 #include <math.h>
+#include <string.h>
 
 #include "base/common.h"
+#include "base/scan.h"
 
 #define LEAF_MAX MX_BVH_LEAF_MAX
 #define TASK_MIN 16384 /* subtrees at least this big become tasks */
@@ -130,6 +132,121 @@ void mx_bvh_build(mx_bvh_node *nodes, uint32_t *idx, const double *cen, uint32_t
 #pragma omp parallel if (nt >= TASK_MIN) default(none) shared(bp, nt)
 #pragma omp single
   build_node(bp, 0, 0, nt, 1);
+}
+
+/* ---- the Morton tree ---------------------------------------------------- */
+
+static inline uint32_t spread3(uint32_t x) {
+  x &= 0x3ff;
+  x = (x | x << 16) & 0x030000ff;
+  x = (x | x << 8) & 0x0300f00f;
+  x = (x | x << 4) & 0x030c30c3;
+  x = (x | x << 2) & 0x09249249;
+  return x;
+}
+
+/* The first place in [l, r) whose code has the highest bit where code[l]
+ * and code[r - 1] differ (the middle when they are equal). */
+static uint32_t split_at(const uint32_t *code, uint32_t l, uint32_t r) {
+  uint32_t x = code[l] ^ code[r - 1];
+  if (x == 0) return l + (r - l) / 2;
+  uint32_t mask = 1u << (31 - __builtin_clz(x));
+  uint32_t lo = l, hi = r - 1; /* code[lo] lacks the bit, code[hi] has it */
+  while (hi - lo > 1) {
+    uint32_t m = lo + (hi - lo) / 2;
+    if (code[m] & mask) hi = m;
+    else lo = m;
+  }
+  return hi;
+}
+
+typedef struct {
+  mx_bvh_node *nodes;
+  const uint32_t *code;
+  const double *box;
+  uint32_t nn;
+} morton_ctx;
+
+static void morton_node(morton_ctx *M, uint32_t id, uint32_t l, uint32_t r) {
+  mx_bvh_node *nd = &M->nodes[id];
+  nd->ntri = r - l;
+  nd->pad_ = 0;
+  if (r - l <= LEAF_MAX) {
+    const double *box = M->box;
+    nd->first = l;
+    nd->count = r - l;
+    for (int a = 0; a < 3; a++) {
+      nd->lo[a] = box[6 * (size_t)l + a];
+      nd->hi[a] = box[6 * (size_t)l + 3 + a];
+    }
+    for (uint32_t i = l + 1; i < r; i++)
+      for (int a = 0; a < 3; a++) {
+        nd->lo[a] = mx_min(nd->lo[a], box[6 * (size_t)i + a]);
+        nd->hi[a] = mx_max(nd->hi[a], box[6 * (size_t)i + 3 + a]);
+      }
+    return;
+  }
+  const uint32_t mid = split_at(M->code, l, r), c = M->nn;
+  M->nn += 2;
+  nd->first = c;
+  nd->count = 0;
+  morton_node(M, c, l, mid);
+  morton_node(M, c + 1, mid, r);
+  const mx_bvh_node *L = &M->nodes[c], *R = &M->nodes[c + 1];
+  nd = &M->nodes[id];
+  for (int a = 0; a < 3; a++) {
+    nd->lo[a] = mx_min(L->lo[a], R->lo[a]);
+    nd->hi[a] = mx_max(L->hi[a], R->hi[a]);
+  }
+}
+
+uint32_t mx_bvh_build_morton(double *box, uint32_t n, uint32_t *order, uint32_t *code,
+                             mx_bvh_node *nodes) {
+  uint64_t *key = mx_alloc((size_t)n * sizeof *key);
+  double *tmp = mx_alloc(6 * (size_t)n * sizeof *tmp);
+  if (!key || !tmp) {
+    mx_free(key);
+    mx_free(tmp);
+    return 0;
+  }
+  double lo[3] = {INFINITY, INFINITY, INFINITY};
+  double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (uint32_t i = 0; i < n; i++)
+    for (int a = 0; a < 3; a++) {
+      lo[a] = mx_min(lo[a], box[6 * (size_t)i + a]);
+      hi[a] = mx_max(hi[a], box[6 * (size_t)i + 3 + a]);
+    }
+  double scale[3];
+  for (int a = 0; a < 3; a++)
+    scale[a] = hi[a] > lo[a] ? 1023.0 / (hi[a] - lo[a]) : 0.0;
+#pragma omp parallel for schedule(static) if (n > 20000)
+  for (uint32_t i = 0; i < n; i++) {
+    uint32_t q[3];
+    for (int a = 0; a < 3; a++) {
+      const double f =
+          (0.5 * (box[6 * (size_t)i + a] + box[6 * (size_t)i + 3 + a]) - lo[a]) * scale[a];
+      q[a] = f <= 0.0 ? 0 : f >= 1023.0 ? 1023 : (uint32_t)f;
+    }
+    key[i] = spread3(q[0]) << 2 | spread3(q[1]) << 1 | spread3(q[2]);
+    order[i] = i;
+  }
+  /* stable: ties stay in increasing item */
+  if (mx_sort_u64(key, order, n) != MX_OK) {
+    mx_free(key);
+    mx_free(tmp);
+    return 0;
+  }
+  memcpy(tmp, box, 6 * (size_t)n * sizeof *tmp);
+#pragma omp parallel for schedule(static) if (n > 20000)
+  for (uint32_t i = 0; i < n; i++) {
+    code[i] = (uint32_t)key[i];
+    memcpy(box + 6 * (size_t)i, tmp + 6 * (size_t)order[i], 6 * sizeof *box);
+  }
+  mx_free(key);
+  mx_free(tmp);
+  morton_ctx M = {nodes, code, box, 1};
+  morton_node(&M, 0, 0, n);
+  return M.nn;
 }
 
 /* ---- pairs of slots whose boxes meet ----------------------------------- */

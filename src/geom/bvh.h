@@ -5,9 +5,14 @@
  * MX_BVH_LEAF_MAX triangles; O(n log n), subtrees built as OpenMP tasks.
  * The tree's shape depends only on the triangle count: a node of m > 4
  * triangles gives floor(m / 2) to its left child. Used by the surface index
- * (geom/distance.h: closest points, winding number) and, traversed against
- * itself, as the broad phase of the self-intersection test
- * (kernels/surface_defects.c). */
+ * (geom/distance.h: closest points, winding number).
+ *
+ * The broad phase of the self-intersection test (kernels/surface_defects.c)
+ * traverses a tree of the same nodes against itself; that tree is built
+ * along a Morton curve instead, in O(n): the median split costs about as
+ * much as the whole test on a large surface (327,680 triangles: 0.16 s for
+ * the build against 0.14 to 0.2 s for the former test's build, traversal
+ * and exact tests together, one thread). */
 #ifndef MX_BVH_H
 #define MX_BVH_H
 
@@ -38,6 +43,17 @@ size_t mx_bvh_node_count(size_t m);
 void mx_bvh_build(mx_bvh_node *nodes, uint32_t *idx, const double *cen, uint32_t nt,
                   const uint32_t *tri, const double *x, const double *y,
                   const double *z);
+
+/* The tree of the broad phase, cheaper to build (O(n)): the n >= 1 boxes
+ * (6 per item: lo, hi) sorted along a Morton curve (30 bits) of their
+ * centres in the union of the boxes, ties by item, each node split at the
+ * highest bit where its first and last codes differ (the middle when they
+ * do not), leaves of at most MX_BVH_LEAF_MAX items. box is reordered in
+ * place into the tree's order (the slots); order receives the item of each
+ * slot, code the code of each slot (n each); nodes needs 2 n entries.
+ * Returns the nodes used, 0 when out of memory. */
+uint32_t mx_bvh_build_morton(double *box, uint32_t n, uint32_t *order, uint32_t *code,
+                             mx_bvh_node *nodes);
 
 /* Broad phase: calls visit(ctx, i, j) once for every pair of slots i != j
  * (in no particular order, either first) whose closed boxes meet (compared

@@ -548,11 +548,12 @@ static void bodies(const mx_trisoup *s, uint32_t *p, uint32_t *body) {
 }
 
 /* ==== broad phase ========================================================
- * The BVH of geom/bvh.h over the non-degenerate triangles, traversed
- * against itself (mx_bvh_self_pairs). A pair of triangles is handed to the
- * narrow phase in a fixed order, the one of smaller (Morton code of its box
- * centre, id) first, so that the point found at an intersection does not
- * depend on the tree. */
+ * The broad phase of geom/bvh.h: the Morton tree of the non-degenerate
+ * triangles' boxes (mx_bvh_build_morton) traversed against itself
+ * (mx_bvh_self_pairs). A pair of triangles is handed to the narrow phase in
+ * a fixed order, the one of smaller (Morton code of its box centre, id)
+ * first, so that the point found at an intersection does not depend on the
+ * traversal. */
 
 typedef struct {
   uint32_t n;         /* slots (non-degenerate triangles) */
@@ -576,15 +577,6 @@ static void bvh_free(bvh *B) {
   memset(B, 0, sizeof *B);
 }
 
-static inline uint32_t spread3(uint32_t x) {
-  x &= 0x3ff;
-  x = (x | x << 16) & 0x030000ff;
-  x = (x | x << 8) & 0x0300f00f;
-  x = (x | x << 4) & 0x030c30c3;
-  x = (x | x << 2) & 0x09249249;
-  return x;
-}
-
 /* The slots: the non-degenerate triangles (axis_of[t] >= 0) in the tree's
  * order. */
 static int bvh_build(bvh *B, const mx_trisoup *s, const int8_t *axis_of) {
@@ -593,83 +585,52 @@ static int bvh_build(bvh *B, const mx_trisoup *s, const int8_t *axis_of) {
   for (size_t t = 0; t < s->nt; t++) n += axis_of[t] >= 0;
   B->n = (uint32_t)n;
   if (n == 0) return MX_OK;
-  uint32_t *ids = mx_alloc(n * sizeof *ids), *codes = mx_alloc(n * sizeof *codes);
-  uint32_t *vtri = mx_alloc(3 * n * sizeof *vtri);
-  double *cen = mx_alloc(3 * n * sizeof *cen);
+  uint32_t *ids = mx_alloc(n * sizeof *ids);
   B->tid = mx_alloc(n * sizeof *B->tid);
   B->code = mx_alloc(n * sizeof *B->code);
   B->tv = mx_alloc(9 * n * sizeof *B->tv);
   B->box = mx_alloc(6 * n * sizeof *B->box);
   B->vid = mx_alloc(3 * n * sizeof *B->vid);
   B->axis = mx_alloc(n);
-  B->nodes = mx_alloc(mx_bvh_node_count(n) * sizeof *B->nodes);
-  if (!ids || !codes || !vtri || !cen || !B->tid || !B->code || !B->tv || !B->box ||
-      !B->vid || !B->axis || !B->nodes) {
+  B->nodes = mx_alloc(2 * n * sizeof *B->nodes);
+  if (!ids || !B->tid || !B->code || !B->tv || !B->box || !B->vid || !B->axis ||
+      !B->nodes) {
     mx_free(ids);
-    mx_free(codes);
-    mx_free(vtri);
-    mx_free(cen);
     bvh_free(B);
     return MX_ENOMEM;
   }
-  double lo[3] = {INFINITY, INFINITY, INFINITY};
-  double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   n = 0;
-  for (size_t t = 0; t < s->nt; t++) {
-    if (axis_of[t] < 0) continue;
-    ids[n++] = (uint32_t)t;
-    for (int k = 0; k < 3; k++) {
-      uint32_t v = s->tri[3 * t + k];
-      double c[3] = {s->x[v], s->y[v], s->z[v]};
-      for (int a = 0; a < 3; a++) {
-        lo[a] = mx_min(lo[a], c[a]);
-        hi[a] = mx_max(hi[a], c[a]);
-      }
-    }
-  }
-  double scale[3];
-  for (int a = 0; a < 3; a++)
-    scale[a] = hi[a] > lo[a] ? 1023.0 / (hi[a] - lo[a]) : 0.0;
+  for (size_t t = 0; t < s->nt; t++)
+    if (axis_of[t] >= 0) ids[n++] = (uint32_t)t;
 #pragma omp parallel for schedule(static) if (n > 20000)
   for (size_t i = 0; i < n; i++) {
     const uint32_t *v = s->tri + 3 * (size_t)ids[i];
     const double *c[3] = {s->x, s->y, s->z};
-    uint32_t q[3];
     for (int a = 0; a < 3; a++) {
-      double m = mx_min(c[a][v[0]], mx_min(c[a][v[1]], c[a][v[2]]));
-      double M = mx_max(c[a][v[0]], mx_max(c[a][v[1]], c[a][v[2]]));
-      double f = (0.5 * (m + M) - lo[a]) * scale[a];
-      q[a] = f <= 0.0 ? 0 : f >= 1023.0 ? 1023 : (uint32_t)f;
-      vtri[3 * i + (size_t)a] = v[a];
-      cen[(size_t)a * n + i] = (c[a][v[0]] + c[a][v[1]] + c[a][v[2]]) / 3.0;
+      B->box[6 * i + a] = mx_min(c[a][v[0]], mx_min(c[a][v[1]], c[a][v[2]]));
+      B->box[6 * i + 3 + a] = mx_max(c[a][v[0]], mx_max(c[a][v[1]], c[a][v[2]]));
     }
-    codes[i] = spread3(q[0]) << 2 | spread3(q[1]) << 1 | spread3(q[2]);
-    B->tid[i] = (uint32_t)i;
   }
-  mx_bvh_build(B->nodes, B->tid, cen, (uint32_t)n, vtri, s->x, s->y, s->z);
-  mx_free(vtri);
-  mx_free(cen);
+  if (!mx_bvh_build_morton(B->box, (uint32_t)n, B->tid, B->code, B->nodes)) {
+    mx_free(ids);
+    bvh_free(B);
+    return MX_ENOMEM;
+  }
 #pragma omp parallel for schedule(static) if (n > 20000)
   for (size_t i = 0; i < n; i++) {
-    const uint32_t k = B->tid[i], t = ids[k];
+    const uint32_t t = ids[B->tid[i]];
     B->tid[i] = t;
-    B->code[i] = codes[k];
-    double *P = B->tv + 9 * i, *bx = B->box + 6 * i;
+    double *P = B->tv + 9 * i;
     for (int j = 0; j < 3; j++) {
-      uint32_t v = s->tri[3 * (size_t)t + j];
+      const uint32_t v = s->tri[3 * (size_t)t + j];
       B->vid[3 * i + j] = v;
       P[3 * j] = s->x[v];
       P[3 * j + 1] = s->y[v];
       P[3 * j + 2] = s->z[v];
     }
-    for (int a = 0; a < 3; a++) {
-      bx[a] = mx_min(P[a], mx_min(P[3 + a], P[6 + a]));
-      bx[3 + a] = mx_max(P[a], mx_max(P[3 + a], P[6 + a]));
-    }
     B->axis[i] = axis_of[t];
   }
   mx_free(ids);
-  mx_free(codes);
   return MX_OK;
 }
 
