@@ -7,7 +7,7 @@
  * triangles gives floor(m / 2) to its left child. Used by the surface index
  * (geom/distance.h: closest points, winding number).
  *
- * The broad phase of the self-intersection test (kernels/surface_defects.c)
+ * The broad phase of the self-intersection test (geom/surface_defects.c)
  * traverses a tree of the same nodes against itself; that tree is built
  * along a Morton curve instead, in O(n): the median split costs about as
  * much as the whole test on a large surface (327,680 triangles: 0.16 s for

@@ -15,14 +15,15 @@
  * Strackee 1983 per triangle); 1 inside a closed surface, 0 outside, and a
  * smooth, robust vote in between for a surface with holes.
  *
- * Index. A BVH over the triangles (flat array of nodes, top-down median
- * split on the longest axis of the centroids, leaves of <= 4 triangles,
- * O(n log n), subtrees built as OpenMP tasks), the triangles' coordinates
+ * Index. A BVH over the triangles (geom/bvh.h: flat array of nodes, top-down
+ * median split on the longest axis of the centroids, leaves of <= 4
+ * triangles, O(n log n), subtrees built as OpenMP tasks), the triangles' coordinates
  * copied in BVH order, the face normals, three edge pseudonormals per
  * triangle and one pseudonormal per vertex. The index points to the soup,
  * which must stay alive and unchanged while the index is used.
  *
- * Shells and orientation. The edges are found by sorting vertex-pair keys.
+ * Shells and orientation. The edges and shells are those of
+ * geom/surface_topology.h.
  * A shell is a set of triangles connected through edges. Within a shell the
  * orientation is made consistent by propagation through the manifold edges
  * (used by exactly two triangles); a triangle that disagrees with its
@@ -168,8 +169,8 @@ typedef struct mx_surface_index {
   const struct mx_surface_index *side;
 } mx_surface_index;
 
-/* Build the index of the triangles [t0, t1) of soup. MX_OK, or MX_EINPUT
- * (out of memory, bad range, more than 2^30 triangles). An empty range gives
+/* Build the index of the triangles [t0, t1) of soup. MX_OK, MX_ENOMEM, or
+ * MX_EINPUT (bad range, more than 2^30 triangles). An empty range gives
  * an index for which every point is outside at infinite distance. */
 int mx_surface_index_build(mx_surface_index *S, const mx_trisoup *soup,
                            uint32_t t0, uint32_t t1);

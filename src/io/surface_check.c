@@ -61,7 +61,7 @@ int mx_trisoup_check(mx_trisoup *s, const char *path, size_t *open_edges) {
   size_t open;
   MX_CHECK(count_open_edges(s, &open));
   /* an open surface is the input policy's to refuse or repair (mesher.c,
-   * kernels/surface_defects.c), with the places of its defects */
+   * geom/surface_defects.c), with the places of its defects */
   if (open_edges) *open_edges = open;
   return MX_OK;
 }

@@ -2,7 +2,7 @@
 #include "mpi/p4est_inputs.h"
 
 #include "base/common.h"
-#include "kernels/surface_defects.h"
+#include "geom/surface_defects.h"
 #include "mesher/mesher_impl.h"
 
 #include <string.h>
