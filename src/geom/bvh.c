@@ -1,12 +1,11 @@
-/* The binary BVH over triangles: build, and the traversal of the tree
- * against itself (broad phase); see bvh.h. */
+/* The binary BVH over triangles: the median-split build of the surface
+ * index and the Morton build of the broad phase; see bvh.h. */
 #include "geom/bvh.h"
 
 #include <math.h>
 #include <string.h>
 
 #include "base/common.h"
-#include "base/scan.h"
 
 #define LEAF_MAX MX_BVH_LEAF_MAX
 #define TASK_MIN 16384 /* subtrees at least this big become tasks */
@@ -136,15 +135,6 @@ void mx_bvh_build(mx_bvh_node *nodes, uint32_t *idx, const double *cen, uint32_t
 
 /* ---- the Morton tree ---------------------------------------------------- */
 
-static inline uint32_t spread3(uint32_t x) {
-  x &= 0x3ff;
-  x = (x | x << 16) & 0x030000ff;
-  x = (x | x << 8) & 0x0300f00f;
-  x = (x | x << 4) & 0x030c30c3;
-  x = (x | x << 2) & 0x09249249;
-  return x;
-}
-
 /* The first place in [l, r) whose code has the highest bit where code[l]
  * and code[r - 1] differ (the middle when they are equal). */
 static uint32_t split_at(const uint32_t *code, uint32_t l, uint32_t r) {
@@ -200,133 +190,40 @@ static void morton_node(morton_ctx *M, uint32_t id, uint32_t l, uint32_t r) {
   }
 }
 
-uint32_t mx_bvh_build_morton(double *box, uint32_t n, uint32_t *order, uint32_t *code,
-                             mx_bvh_node *nodes) {
-  uint64_t *key = mx_alloc((size_t)n * sizeof *key);
-  double *tmp = mx_alloc(6 * (size_t)n * sizeof *tmp);
-  if (!key || !tmp) {
-    mx_free(key);
-    mx_free(tmp);
-    return 0;
-  }
-  double lo[3] = {INFINITY, INFINITY, INFINITY};
-  double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (uint32_t i = 0; i < n; i++)
-    for (int a = 0; a < 3; a++) {
-      lo[a] = mx_min(lo[a], box[6 * (size_t)i + a]);
-      hi[a] = mx_max(hi[a], box[6 * (size_t)i + 3 + a]);
-    }
-  double scale[3];
-  for (int a = 0; a < 3; a++)
-    scale[a] = hi[a] > lo[a] ? 1023.0 / (hi[a] - lo[a]) : 0.0;
-#pragma omp parallel for schedule(static) if (n > 20000)
-  for (uint32_t i = 0; i < n; i++) {
-    uint32_t q[3];
-    for (int a = 0; a < 3; a++) {
-      const double f =
-          (0.5 * (box[6 * (size_t)i + a] + box[6 * (size_t)i + 3 + a]) - lo[a]) * scale[a];
-      q[a] = f <= 0.0 ? 0 : f >= 1023.0 ? 1023 : (uint32_t)f;
-    }
-    key[i] = spread3(q[0]) << 2 | spread3(q[1]) << 1 | spread3(q[2]);
-    order[i] = i;
-  }
-  /* stable: ties stay in increasing item */
-  if (mx_sort_u64(key, order, n) != MX_OK) {
-    mx_free(key);
-    mx_free(tmp);
-    return 0;
-  }
-  memcpy(tmp, box, 6 * (size_t)n * sizeof *tmp);
-#pragma omp parallel for schedule(static) if (n > 20000)
-  for (uint32_t i = 0; i < n; i++) {
-    code[i] = (uint32_t)key[i];
-    memcpy(box + 6 * (size_t)i, tmp + 6 * (size_t)order[i], 6 * sizeof *box);
-  }
-  mx_free(key);
-  mx_free(tmp);
+uint32_t mx_bvh_build_morton(mx_bvh_node *nodes, const uint32_t *code, const double *box,
+                             uint32_t n) {
   morton_ctx M = {nodes, code, box, 1};
   morton_node(&M, 0, 0, n);
   return M.nn;
 }
 
-/* ---- pairs of slots whose boxes meet ----------------------------------- */
-
-/* Recursion levels below which the traversal spawns tasks. */
-#define TASK_DEPTH 10
-
-typedef struct {
-  const mx_bvh_node *nodes;
-  const double *box;
-  mx_bvh_pair_fn visit;
-  void *ctx;
-} pair_walk;
-
-static inline int nodes_meet(const mx_bvh_node *a, const mx_bvh_node *b) {
-  return a->lo[0] <= b->hi[0] && b->lo[0] <= a->hi[0] && a->lo[1] <= b->hi[1] &&
-         b->lo[1] <= a->hi[1] && a->lo[2] <= b->hi[2] && b->lo[2] <= a->hi[2];
-}
-
-static inline int boxes_meet(const double *a, const double *b) {
-  return a[0] <= b[3] && b[0] <= a[3] && a[1] <= b[4] && b[1] <= a[4] &&
-         a[2] <= b[5] && b[2] <= a[5];
-}
-
-/* Pairs between the subtrees a and b (disjoint). */
-static void cross_nodes(const pair_walk *W, uint32_t a, uint32_t b, int depth) {
-  const mx_bvh_node *A = &W->nodes[a], *N = &W->nodes[b];
-  if (!nodes_meet(A, N)) return;
-  if (A->count && N->count) {
-    const double *box = W->box;
-    for (uint32_t i = A->first; i < A->first + A->count; i++)
-      for (uint32_t j = N->first; j < N->first + N->count; j++)
-        if (boxes_meet(box + 6 * (size_t)i, box + 6 * (size_t)j)) W->visit(W->ctx, i, j);
-    return;
+int mx_morton_sort30(uint32_t *code, uint32_t *order, uint32_t n) {
+  uint32_t *k2 = mx_alloc(((size_t)n + 1) * sizeof *k2);
+  uint32_t *o2 = mx_alloc(((size_t)n + 1) * sizeof *o2);
+  if (!k2 || !o2) {
+    mx_free(k2);
+    mx_free(o2);
+    return MX_ENOMEM;
   }
-  uint32_t a0 = a, a1 = a, b0 = b, b1 = b;
-  if (N->count || (!A->count && A->ntri >= N->ntri))
-    a0 = A->first, a1 = A->first + 1;
-  else
-    b0 = N->first, b1 = N->first + 1;
-  if (depth < TASK_DEPTH) {
-#pragma omp task default(none) firstprivate(W, a0, b0, depth)
-    cross_nodes(W, a0, b0, depth + 1);
-    cross_nodes(W, a1, b1, depth + 1);
-  } else {
-    cross_nodes(W, a0, b0, depth + 1);
-    cross_nodes(W, a1, b1, depth + 1);
+  uint32_t *src_k = code, *src_o = order, *dst_k = k2, *dst_o = o2;
+  for (int pass = 0; pass < 3; pass++) {
+    size_t cnt[1025] = {0};
+    const int sh = 10 * pass;
+    for (uint32_t i = 0; i < n; i++) cnt[((src_k[i] >> sh) & 1023) + 1]++;
+    for (int b = 0; b < 1024; b++) cnt[b + 1] += cnt[b];
+    for (uint32_t i = 0; i < n; i++) {
+      const size_t d = cnt[(src_k[i] >> sh) & 1023]++;
+      dst_k[d] = src_k[i];
+      dst_o[d] = src_o[i];
+    }
+    uint32_t *tk = src_k, *to = src_o;
+    src_k = dst_k, src_o = dst_o, dst_k = tk, dst_o = to;
   }
+  /* after 3 passes the result is in k2, o2 */
+  memcpy(code, src_k, (size_t)n * sizeof *code);
+  memcpy(order, src_o, (size_t)n * sizeof *order);
+  mx_free(k2);
+  mx_free(o2);
+  return MX_OK;
 }
 
-/* Pairs within the subtree id. */
-static void self_node(const pair_walk *W, uint32_t id, int depth) {
-  const mx_bvh_node *N = &W->nodes[id];
-  if (N->count) {
-    const double *box = W->box;
-    for (uint32_t i = N->first; i < N->first + N->count; i++)
-      for (uint32_t j = i + 1; j < N->first + N->count; j++)
-        if (boxes_meet(box + 6 * (size_t)i, box + 6 * (size_t)j)) W->visit(W->ctx, i, j);
-    return;
-  }
-  const uint32_t l = N->first, r = N->first + 1;
-  if (depth < TASK_DEPTH) {
-#pragma omp task default(none) firstprivate(W, l, depth)
-    self_node(W, l, depth + 1);
-#pragma omp task default(none) firstprivate(W, r, depth)
-    self_node(W, r, depth + 1);
-    cross_nodes(W, l, r, depth + 1);
-  } else {
-    self_node(W, l, depth + 1);
-    self_node(W, r, depth + 1);
-    cross_nodes(W, l, r, depth + 1);
-  }
-}
-
-void mx_bvh_self_pairs(const mx_bvh_node *nodes, const double *box, uint32_t nslots,
-                       mx_bvh_pair_fn visit, void *ctx) {
-  if (nslots < 2) return;
-  const pair_walk W = {nodes, box, visit, ctx};
-  const pair_walk *wp = &W;
-#pragma omp parallel if (nslots > 256) default(none) shared(wp)
-#pragma omp single
-  self_node(wp, 0, 0);
-}

@@ -29,9 +29,6 @@ typedef struct {
   uint32_t pad_;
 } mx_bvh_node;
 
-/* Receives a pair of slots whose boxes meet (from any thread). */
-typedef void (*mx_bvh_pair_fn)(void *ctx, uint32_t i, uint32_t j);
-
 /* Nodes of the tree of m >= 1 triangles. */
 size_t mx_bvh_node_count(size_t m);
 
@@ -44,25 +41,20 @@ void mx_bvh_build(mx_bvh_node *nodes, uint32_t *idx, const double *cen, uint32_t
                   const uint32_t *tri, const double *x, const double *y,
                   const double *z);
 
-/* The tree of the broad phase, cheaper to build (O(n)): the n >= 1 boxes
- * (6 per item: lo, hi) sorted along a Morton curve (30 bits) of their
- * centres in the union of the boxes, ties by item, each node split at the
- * highest bit where its first and last codes differ (the middle when they
- * do not), leaves of at most MX_BVH_LEAF_MAX items. box is reordered in
- * place into the tree's order (the slots); order receives the item of each
- * slot, code the code of each slot (n each); nodes needs 2 n entries.
- * Returns the nodes used, 0 when out of memory. */
-uint32_t mx_bvh_build_morton(double *box, uint32_t n, uint32_t *order, uint32_t *code,
-                             mx_bvh_node *nodes);
+/* The tree of the broad phase, cheaper to build (O(n)). The slots are
+ * items sorted along a Morton curve (mx_morton_sort30: 30-bit codes, ties by
+ * item); each node is split at the highest bit where its first and last
+ * codes differ (the middle when they do not), leaves of at most
+ * MX_BVH_LEAF_MAX slots. code and box (6 per slot: lo, hi) are in slot
+ * order; nodes needs 2 n entries. Returns the nodes used. */
+uint32_t mx_bvh_build_morton(mx_bvh_node *nodes, const uint32_t *code, const double *box,
+                             uint32_t n);
 
-/* Broad phase: calls visit(ctx, i, j) once for every pair of slots i != j
- * (in no particular order, either first) whose closed boxes meet (compared
- * exactly); box: 6 per slot (lo, hi), nslots: the slots of the tree. The
- * tree is traversed against itself (the pairs within a node are those
- * within each child and those across the two children; a pair of nodes
- * whose boxes do not meet is dropped whole), the first levels as OpenMP
- * tasks of a parallel region of omp_get_max_threads() threads. */
-void mx_bvh_self_pairs(const mx_bvh_node *nodes, const double *box, uint32_t nslots,
-                       mx_bvh_pair_fn visit, void *ctx);
+/* Sorts code[0..n) (values below 2^30) with order alongside, stably (ties
+ * keep their order): an LSD radix sort, 3 passes of 10 bits. MX_OK or
+ * MX_ENOMEM. */
+int mx_morton_sort30(uint32_t *code, uint32_t *order, uint32_t n);
+
+/* The traversal of the broad phase: geom/bvh_pairs.h. */
 
 #endif

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "base/common.h"
+#include "base/morton.h"
 #include "base/scan.h"
 #include "geom/bvh.h"
 #include "geom/surface_topology.h"
@@ -53,10 +54,6 @@ static mx_defect_example edge_example(const mx_trisoup *s, uint32_t t,
 /* ==== edges ==============================================================
  * The edge table of geom/surface_topology.h over the soup's triangles,
  * those that repeat a vertex left out. */
-
-static inline int repeats(const uint32_t *t) {
-  return t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
-}
 
 static int indices_valid(const mx_trisoup *s) {
   if (s->nt > ((size_t)1 << 30)) {
@@ -160,10 +157,9 @@ static void bodies(const mx_trisoup *s, uint32_t *p, uint32_t *body) {
 /* ==== broad phase ========================================================
  * The broad phase of geom/bvh.h: the Morton tree of the non-degenerate
  * triangles' boxes (mx_bvh_build_morton) traversed against itself
- * (mx_bvh_self_pairs). A pair of triangles is handed to the narrow phase in
- * a fixed order, the one of smaller (Morton code of its box centre, id)
- * first, so that the point found at an intersection does not depend on the
- * traversal. */
+ * (mx_bvh_self_pairs). A pair of triangles reaches the narrow phase in slot
+ * order, the one of smaller (Morton code of its box centre, id) first (the
+ * point found at an intersection depends on the order). */
 
 typedef struct {
   uint32_t n;         /* slots (non-degenerate triangles) */
@@ -187,60 +183,82 @@ static void bvh_free(bvh *B) {
   memset(B, 0, sizeof *B);
 }
 
-/* The slots: the non-degenerate triangles (axis_of[t] >= 0) in the tree's
- * order. */
+/* The slots: the non-degenerate triangles (axis_of[t] >= 0) sorted by
+ * (Morton code of the box centre, id). */
 static int bvh_build(bvh *B, const mx_trisoup *s, const int8_t *axis_of) {
   memset(B, 0, sizeof *B);
   size_t n = 0;
   for (size_t t = 0; t < s->nt; t++) n += axis_of[t] >= 0;
   B->n = (uint32_t)n;
   if (n == 0) return MX_OK;
-  uint32_t *ids = mx_alloc(n * sizeof *ids);
   B->tid = mx_alloc(n * sizeof *B->tid);
   B->code = mx_alloc(n * sizeof *B->code);
+  if (!B->tid || !B->code) {
+    bvh_free(B);
+    return MX_ENOMEM;
+  }
+  double lo[3] = {INFINITY, INFINITY, INFINITY};
+  double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  n = 0;
+  for (size_t t = 0; t < s->nt; t++) {
+    if (axis_of[t] < 0) continue;
+    B->tid[n++] = (uint32_t)t;
+    for (int k = 0; k < 3; k++) {
+      uint32_t v = s->tri[3 * t + k];
+      double c[3] = {s->x[v], s->y[v], s->z[v]};
+      for (int a = 0; a < 3; a++) {
+        lo[a] = mx_min(lo[a], c[a]);
+        hi[a] = mx_max(hi[a], c[a]);
+      }
+    }
+  }
+  double scale[3];
+  for (int a = 0; a < 3; a++)
+    scale[a] = hi[a] > lo[a] ? 1023.0 / (hi[a] - lo[a]) : 0.0;
+#pragma omp parallel for schedule(static) if (n > 20000)
+  for (size_t i = 0; i < n; i++) {
+    const uint32_t *v = s->tri + 3 * (size_t)B->tid[i];
+    const double *c[3] = {s->x, s->y, s->z};
+    uint32_t q[3];
+    for (int a = 0; a < 3; a++) {
+      double m = mx_min(c[a][v[0]], mx_min(c[a][v[1]], c[a][v[2]]));
+      double M = mx_max(c[a][v[0]], mx_max(c[a][v[1]], c[a][v[2]]));
+      double f = (0.5 * (m + M) - lo[a]) * scale[a];
+      q[a] = f <= 0.0 ? 0 : f >= 1023.0 ? 1023 : (uint32_t)f;
+    }
+    B->code[i] = (uint32_t)mx_morton_encode(q[2], q[1], q[0]); /* x highest */
+  }
+  if (mx_morton_sort30(B->code, B->tid, (uint32_t)n) != MX_OK) {
+    bvh_free(B);
+    return MX_ENOMEM;
+  }
   B->tv = mx_alloc(9 * n * sizeof *B->tv);
   B->box = mx_alloc(6 * n * sizeof *B->box);
   B->vid = mx_alloc(3 * n * sizeof *B->vid);
   B->axis = mx_alloc(n);
   B->nodes = mx_alloc(2 * n * sizeof *B->nodes);
-  if (!ids || !B->tid || !B->code || !B->tv || !B->box || !B->vid || !B->axis ||
-      !B->nodes) {
-    mx_free(ids);
+  if (!B->tv || !B->box || !B->vid || !B->axis || !B->nodes) {
     bvh_free(B);
     return MX_ENOMEM;
   }
-  n = 0;
-  for (size_t t = 0; t < s->nt; t++)
-    if (axis_of[t] >= 0) ids[n++] = (uint32_t)t;
 #pragma omp parallel for schedule(static) if (n > 20000)
   for (size_t i = 0; i < n; i++) {
-    const uint32_t *v = s->tri + 3 * (size_t)ids[i];
-    const double *c[3] = {s->x, s->y, s->z};
-    for (int a = 0; a < 3; a++) {
-      B->box[6 * i + a] = mx_min(c[a][v[0]], mx_min(c[a][v[1]], c[a][v[2]]));
-      B->box[6 * i + 3 + a] = mx_max(c[a][v[0]], mx_max(c[a][v[1]], c[a][v[2]]));
+    const uint32_t t = B->tid[i];
+    double *P = B->tv + 9 * i, *bx = B->box + 6 * i;
+    for (int k = 0; k < 3; k++) {
+      const uint32_t v = s->tri[3 * (size_t)t + k];
+      B->vid[3 * i + k] = v;
+      P[3 * k] = s->x[v];
+      P[3 * k + 1] = s->y[v];
+      P[3 * k + 2] = s->z[v];
     }
-  }
-  if (!mx_bvh_build_morton(B->box, (uint32_t)n, B->tid, B->code, B->nodes)) {
-    mx_free(ids);
-    bvh_free(B);
-    return MX_ENOMEM;
-  }
-#pragma omp parallel for schedule(static) if (n > 20000)
-  for (size_t i = 0; i < n; i++) {
-    const uint32_t t = ids[B->tid[i]];
-    B->tid[i] = t;
-    double *P = B->tv + 9 * i;
-    for (int j = 0; j < 3; j++) {
-      const uint32_t v = s->tri[3 * (size_t)t + j];
-      B->vid[3 * i + j] = v;
-      P[3 * j] = s->x[v];
-      P[3 * j + 1] = s->y[v];
-      P[3 * j + 2] = s->z[v];
+    for (int a = 0; a < 3; a++) {
+      bx[a] = mx_min(P[a], mx_min(P[3 + a], P[6 + a]));
+      bx[3 + a] = mx_max(P[a], mx_max(P[3 + a], P[6 + a]));
     }
     B->axis[i] = axis_of[t];
   }
-  mx_free(ids);
+  mx_bvh_build_morton(B->nodes, B->code, B->box, (uint32_t)n);
   return MX_OK;
 }
 
@@ -264,15 +282,11 @@ typedef struct {
   int collect;   /* keep every pair met (acc->pairs) */
 } pair_ctx;
 
-/* Narrow phase on slots i and j whose boxes meet (mx_bvh_pair_fn). */
-static void test_pair(void *ctx, uint32_t i, uint32_t j) {
+/* Narrow phase on slots i < j whose boxes meet (the visit of
+ * geom/bvh_pairs.h). */
+static inline void test_pair(void *ctx, uint32_t i, uint32_t j) {
   const pair_ctx *c = ctx;
   const bvh *B = c->B;
-  if (B->code[j] < B->code[i] || (B->code[j] == B->code[i] && B->tid[j] < B->tid[i])) {
-    const uint32_t x = i;
-    i = j;
-    j = x;
-  }
   double w[3];
   if (!mx_triangles_meet(B->tv + 9 * (size_t)i, B->tv + 9 * (size_t)j,
                   B->vid + 3 * (size_t)i, B->vid + 3 * (size_t)j, B->axis[i],
@@ -306,6 +320,9 @@ static void test_pair(void *ctx, uint32_t i, uint32_t j) {
   ex_add(A->ex[kind], &A->nex[kind], &x);
 }
 
+#define MX_BVH_VISIT test_pair
+#include "geom/bvh_pairs.h"
+
 static int pair_defects(const bvh *B, const mx_trisoup *s, const uint32_t *body,
                         mx_surface_defects *r) {
   if (B->n < 2) return MX_OK;
@@ -313,7 +330,7 @@ static int pair_defects(const bvh *B, const mx_trisoup *s, const uint32_t *body,
   pair_acc *acc = mx_calloc((size_t)nth * sizeof *acc);
   if (!acc) return MX_ENOMEM;
   pair_ctx c = {B, s, body, acc, 0};
-  mx_bvh_self_pairs(B->nodes, B->box, B->n, test_pair, &c);
+  mx_bvh_self_pairs(B->nodes, B->box, B->n, &c);
   size_t nex[2] = {0, 0};
   for (int t = 0; t < nth; t++) {
     pair_acc *A = &acc[t];
@@ -329,26 +346,6 @@ static int pair_defects(const bvh *B, const mx_trisoup *s, const uint32_t *body,
 
 /* ==== public ============================================================= */
 
-/* Per triangle: its projection axis, -1 when degenerate. */
-static void projection_axes(const mx_trisoup *s, int8_t *axis) {
-  const size_t nt = s->nt;
-#pragma omp parallel for schedule(static) if (nt > 20000)
-  for (size_t t = 0; t < nt; t++) {
-    const uint32_t *v = s->tri + 3 * t;
-    if (repeats(v)) {
-      axis[t] = -1;
-      continue;
-    }
-    double P[9];
-    for (int k = 0; k < 3; k++) {
-      P[3 * k] = s->x[v[k]];
-      P[3 * k + 1] = s->y[v[k]];
-      P[3 * k + 2] = s->z[v[k]];
-    }
-    axis[t] = (int8_t)mx_triangle_axis(P);
-  }
-}
-
 int mx_surface_meeting_pairs(const mx_trisoup *s, uint64_t **pairs, size_t *npairs) {
   *pairs = NULL;
   *npairs = 0;
@@ -356,7 +353,7 @@ int mx_surface_meeting_pairs(const mx_trisoup *s, uint64_t **pairs, size_t *npai
   MX_CHECK(indices_valid(s));
   int8_t *axis = mx_alloc(s->nt);
   if (!axis) return MX_ENOMEM;
-  projection_axes(s, axis);
+  mx_triangle_axes(s, axis);
   bvh B;
   int st = bvh_build(&B, s, axis);
   mx_free(axis);
@@ -365,7 +362,7 @@ int mx_surface_meeting_pairs(const mx_trisoup *s, uint64_t **pairs, size_t *npai
   if (!st && !acc) st = MX_ENOMEM;
   if (!st && B.n >= 2) {
     pair_ctx c = {&B, s, NULL, acc, 1};
-    mx_bvh_self_pairs(B.nodes, B.box, B.n, test_pair, &c);
+    mx_bvh_self_pairs(B.nodes, B.box, B.n, &c);
   }
   size_t n = 0;
   for (int t = 0; acc && t < nth; t++) {
@@ -418,7 +415,7 @@ int mx_surface_defects_find(const mx_trisoup *s, mx_surface_defects *r) {
   bodies(s, vroot, body);
   mx_free(vroot);
 
-  projection_axes(s, axis);
+  mx_triangle_axes(s, axis);
   size_t nex = 0;
   for (size_t t = 0; t < nt; t++) {
     if (axis[t] >= 0) continue;

@@ -30,12 +30,12 @@ void mx_edge_table_free(mx_edge_table *T) {
   T->n = 0;
 }
 
-int mx_edge_table_build(mx_edge_table *T, const uint32_t *tri, const uint32_t *order,
-                        uint32_t ntri, int skip_repeats, int with_first) {
-  memset(T, 0, sizeof *T);
-  T->tri = tri;
-  T->order = order;
-  T->ntri = ntri;
+/* The half-edges of T's list bucketed by their smaller vertex (bucket v:
+ * [v ? end[v - 1] : 0, end[v]), vertex vmin + v), each bucket sorted:
+ * entries (larger vertex << 32) | h in e (T->n of them). */
+static int bucket_edges(mx_edge_table *T, int skip_repeats, uint64_t *e, size_t **end_out,
+                        uint32_t *vmin_out, size_t *nb_out) {
+  const uint32_t ntri = T->ntri;
   const size_t nh = 3 * (size_t)ntri;
   /* the range of vertex indices used: the buckets */
   uint32_t vmin = UINT32_MAX, vmax = 0;
@@ -46,15 +46,7 @@ int mx_edge_table_build(mx_edge_table *T, const uint32_t *tri, const uint32_t *o
   }
   const size_t nb = ntri ? (size_t)(vmax - vmin) + 1 : 0;
   size_t *end = mx_calloc((nb + 1) * sizeof *end);
-  T->key = mx_alloc((nh ? nh : 1) * sizeof *T->key);
-  T->half = mx_alloc((nh ? nh : 1) * sizeof *T->half);
-  T->first = with_first ? mx_alloc((nh ? nh : 1) * sizeof *T->first) : NULL;
-  if (!end || !T->key || !T->half || (with_first && !T->first)) {
-    mx_free(end);
-    mx_edge_table_free(T);
-    return MX_ENOMEM;
-  }
-  /* counting sort on the smaller vertex; entries (larger << 32) | h */
+  if (!end) return MX_ENOMEM;
   for (uint32_t i = 0; i < ntri; i++) {
     if (skip_repeats && repeats(T, i)) continue;
     for (int k = 0; k < 3; k++) {
@@ -64,8 +56,6 @@ int mx_edge_table_build(mx_edge_table *T, const uint32_t *tri, const uint32_t *o
   }
   for (size_t v = 0; v < nb; v++) end[v + 1] += end[v];
   T->n = end[nb];
-  if (with_first && T->n < nh) memset(T->first, 0xff, nh * sizeof *T->first);
-  uint64_t *e = T->key;
   for (uint32_t i = 0; i < ntri; i++) {
     if (skip_repeats && repeats(T, i)) continue;
     for (int k = 0; k < 3; k++) {
@@ -74,22 +64,51 @@ int mx_edge_table_build(mx_edge_table *T, const uint32_t *tri, const uint32_t *o
       e[end[lo - vmin]++] = (uint64_t)hi << 32 | (3 * i + (uint32_t)k);
     }
   }
-  /* end[v] is now the end of bucket v (its start: end[v - 1], 0 for v = 0);
-   * sort each bucket, then split the entries into key and half */
+  /* end[v] is now the end of bucket v */
 #pragma omp parallel for schedule(dynamic, 4096) if (nb > 50000)
   for (size_t v = 0; v < nb; v++) {
     const size_t b0 = v ? end[v - 1] : 0, m = end[v] - b0;
     uint64_t *b = e + b0;
     if (m > 24) {
       qsort(b, m, sizeof *b, cmp_u64);
-    } else {
-      for (size_t i = 1; i < m; i++) {
-        const uint64_t x = b[i];
-        size_t j = i;
-        for (; j > 0 && b[j - 1] > x; j--) b[j] = b[j - 1];
-        b[j] = x;
-      }
+      continue;
     }
+    for (size_t i = 1; i < m; i++) {
+      const uint64_t x = b[i];
+      size_t j = i;
+      for (; j > 0 && b[j - 1] > x; j--) b[j] = b[j - 1];
+      b[j] = x;
+    }
+  }
+  *end_out = end;
+  *vmin_out = vmin;
+  *nb_out = nb;
+  return MX_OK;
+}
+
+int mx_edge_table_build(mx_edge_table *T, const uint32_t *tri, const uint32_t *order,
+                        uint32_t ntri, int skip_repeats, int with_first) {
+  memset(T, 0, sizeof *T);
+  T->tri = tri;
+  T->order = order;
+  T->ntri = ntri;
+  const size_t nh = 3 * (size_t)ntri;
+  T->key = mx_alloc((nh ? nh : 1) * sizeof *T->key);
+  T->half = mx_alloc((nh ? nh : 1) * sizeof *T->half);
+  T->first = with_first ? mx_alloc((nh ? nh : 1) * sizeof *T->first) : NULL;
+  size_t *end = NULL, nb = 0;
+  uint32_t vmin = 0;
+  if (!T->key || !T->half || (with_first && !T->first) ||
+      bucket_edges(T, skip_repeats, T->key, &end, &vmin, &nb) != MX_OK) {
+    mx_edge_table_free(T);
+    return MX_ENOMEM;
+  }
+  if (with_first && T->n < nh) memset(T->first, 0xff, nh * sizeof *T->first);
+  /* split the entries into key and half, note the runs' starts */
+  uint64_t *e = T->key;
+#pragma omp parallel for schedule(dynamic, 4096) if (nb > 50000)
+  for (size_t v = 0; v < nb; v++) {
+    const size_t b0 = v ? end[v - 1] : 0;
     const uint64_t lo = (uint64_t)(v + vmin) << 32;
     size_t run = b0;
     for (size_t j = b0; j < end[v]; j++) {
@@ -104,14 +123,33 @@ int mx_edge_table_build(mx_edge_table *T, const uint32_t *tri, const uint32_t *o
   return MX_OK;
 }
 
-size_t mx_edge_table_open(const mx_edge_table *T) {
-  size_t bad = 0;
-  for (size_t j = 0; j < T->n;) {
-    const size_t end = mx_edge_run_end(T, j);
-    bad += end - j != 2;
-    j = end;
+int mx_edges_open(const uint32_t *tri, uint32_t ntri, size_t *open) {
+  mx_edge_table T;
+  memset(&T, 0, sizeof T);
+  T.tri = tri;
+  T.ntri = ntri;
+  const size_t nh = 3 * (size_t)ntri;
+  uint64_t *e = mx_alloc((nh ? nh : 1) * sizeof *e);
+  size_t *end = NULL, nb = 0;
+  uint32_t vmin = 0;
+  if (!e || bucket_edges(&T, 0, e, &end, &vmin, &nb) != MX_OK) {
+    mx_free(e);
+    return MX_ENOMEM;
   }
-  return bad;
+  size_t bad = 0; /* serial: the bucketing dominates anyway */
+  for (size_t v = 0; v < nb; v++) {
+    const size_t b1 = end[v];
+    for (size_t i = v ? end[v - 1] : 0; i < b1;) {
+      size_t j = i + 1;
+      while (j < b1 && (e[j] >> 32) == (e[i] >> 32)) j++;
+      bad += j - i != 2;
+      i = j;
+    }
+  }
+  mx_free(e);
+  mx_free(end);
+  *open = bad;
+  return MX_OK;
 }
 
 int mx_surface_shells(const mx_edge_table *T, int through_all, uint32_t *shell,

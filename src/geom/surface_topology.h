@@ -63,8 +63,10 @@ int mx_edge_table_build(mx_edge_table *T, const uint32_t *tri, const uint32_t *o
                         uint32_t ntri, int skip_repeats, int with_first);
 void mx_edge_table_free(mx_edge_table *T);
 
-/* Edges used by other than exactly two half-edges (open or non-manifold). */
-size_t mx_edge_table_open(const mx_edge_table *T);
+/* The edges of the triangles tri[0 .. 3 ntri) used by other than exactly
+ * two half-edges (open or non-manifold), counted from the buckets alone (no
+ * table kept). MX_OK or MX_ENOMEM. */
+int mx_edges_open(const uint32_t *tri, uint32_t ntri, size_t *open);
 
 /* Shells of the list (needs T->first): shell[i] (UINT32_MAX for a
  * triangle left out of the table), flip[i] relative to the seed;

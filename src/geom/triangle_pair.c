@@ -180,7 +180,7 @@ static inline void normal_of(const double *P, double n[3]) {
 
 /* An axis along which the triangle's projection has nonzero area (exactly),
  * the largest normal component first; -1 if the triangle is degenerate. */
-int mx_triangle_axis(const double *P) {
+static int triangle_axis(const double *P) {
   double n[3];
   normal_of(P, n);
   int o[3] = {0, 1, 2};
@@ -398,3 +398,22 @@ int mx_triangles_meet(const double *P, const double *Q, const uint32_t *pv,
   return 1; /* the same three points */
 }
 
+
+void mx_triangle_axes(const mx_trisoup *s, int8_t *axis) {
+  const size_t nt = s->nt;
+#pragma omp parallel for schedule(static) if (nt > 20000)
+  for (size_t t = 0; t < nt; t++) {
+    const uint32_t *v = s->tri + 3 * t;
+    if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) {
+      axis[t] = -1;
+      continue;
+    }
+    double P[9];
+    for (int k = 0; k < 3; k++) {
+      P[3 * k] = s->x[v[k]];
+      P[3 * k + 1] = s->y[v[k]];
+      P[3 * k + 2] = s->z[v[k]];
+    }
+    axis[t] = (int8_t)triangle_axis(P);
+  }
+}

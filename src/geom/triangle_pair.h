@@ -12,12 +12,15 @@
 
 #include <stdint.h>
 
-/* An axis along which the triangle P (9 coordinates) projects with nonzero
- * area (exactly), the largest normal component first; -1 if degenerate. */
-int mx_triangle_axis(const double *P);
+#include "soa/trisoup.h"
+
+/* Per triangle of s, an axis along which it projects with nonzero area
+ * (exactly), the largest normal component first; -1 if degenerate
+ * (repeated vertex, or exactly collinear points). */
+void mx_triangle_axes(const mx_trisoup *s, int8_t *axis);
 
 /* Do the triangles P and Q (9 coordinates each, vertex ids pv and qv,
- * projection axes kp and kq from mx_triangle_axis; neither degenerate)
+ * projection axes kp and kq from mx_triangle_axes; neither degenerate)
  * meet beyond the convex hull of their common vertices (same id or same
  * coordinates)? w receives a point of (or next to) the intersection; it
  * depends on which triangle is P. */

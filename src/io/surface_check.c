@@ -36,14 +36,6 @@ static int drop_degenerate(const mx_trisoup *s, size_t t, void *first) {
   return 1;
 }
 
-static int count_open_edges(const mx_trisoup *s, size_t *open) {
-  mx_edge_table T;
-  MX_CHECK(mx_edge_table_build(&T, s->tri, NULL, (uint32_t)s->nt, 0, 0));
-  *open = mx_edge_table_open(&T);
-  mx_edge_table_free(&T);
-  return MX_OK;
-}
-
 int mx_trisoup_check(mx_trisoup *s, const char *path, size_t *open_edges) {
   if (open_edges) *open_edges = 0;
   MX_CHECK(indices_valid(s, path));
@@ -59,7 +51,7 @@ int mx_trisoup_check(mx_trisoup *s, const char *path, size_t *open_edges) {
     return MX_EINPUT;
   }
   size_t open;
-  MX_CHECK(count_open_edges(s, &open));
+  MX_CHECK(mx_edges_open(s->tri, (uint32_t)s->nt, &open));
   /* an open surface is the input policy's to refuse or repair (mesher.c,
    * geom/surface_defects.c), with the places of its defects */
   if (open_edges) *open_edges = open;
