@@ -232,7 +232,7 @@ static int index_build(mx_surface_index *S, const mx_trisoup *soup, uint32_t t0,
   memset(&E, 0, sizeof E);
   uint8_t *fix = mx_alloc((size_t)nt + 8);
   uint32_t *seed = NULL, *cap_shell = NULL;
-  int st = fix ? mx_edge_table_build(&E, soup->tri, S->tri_id, nt, 0, 1) : MX_ENOMEM;
+  int st = fix ? mx_edge_table_build(&E, soup->tri, S->tri_id, nt, (uint32_t)soup->nv, 0, 1) : MX_ENOMEM;
   if (st == MX_OK) {
     size_t open = 0, nonman = 0;
     for (size_t j = 0; j < E.n;) {

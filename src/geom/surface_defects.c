@@ -400,7 +400,7 @@ int mx_surface_defects_find(const mx_trisoup *s, mx_surface_defects *r) {
   uint32_t *body = mx_alloc(nt * sizeof *body);
   uint32_t *vroot = mx_alloc((s->nv ? s->nv : 1) * sizeof *vroot);
   mx_edge_table E;
-  int st = axis && body && vroot ? mx_edge_table_build(&E, s->tri, NULL, (uint32_t)nt, 1, 0)
+  int st = axis && body && vroot ? mx_edge_table_build(&E, s->tri, NULL, (uint32_t)nt, (uint32_t)s->nv, 1, 0)
                                  : MX_ENOMEM;
   if (st == MX_OK) {
     st = edge_defects(s, &E, r);
@@ -451,7 +451,7 @@ int mx_surface_orient(mx_trisoup *s, size_t *flipped) {
   mx_edge_table E;
   uint32_t *comp = mx_alloc(nt * sizeof *comp);
   uint8_t *flip = mx_calloc(nt);
-  int st = comp && flip ? mx_edge_table_build(&E, s->tri, NULL, (uint32_t)nt, 1, 1) : MX_ENOMEM;
+  int st = comp && flip ? mx_edge_table_build(&E, s->tri, NULL, (uint32_t)nt, (uint32_t)s->nv, 1, 1) : MX_ENOMEM;
   if (st != MX_OK) {
     mx_free(comp);
     mx_free(flip);

@@ -31,27 +31,19 @@ void mx_edge_table_free(mx_edge_table *T) {
 }
 
 /* The half-edges of T's list bucketed by their smaller vertex (bucket v:
- * [v ? end[v - 1] : 0, end[v]), vertex vmin + v), each bucket sorted:
- * entries (larger vertex << 32) | h in e (T->n of them). */
-static int bucket_edges(mx_edge_table *T, int skip_repeats, uint64_t *e, size_t **end_out,
-                        uint32_t *vmin_out, size_t *nb_out) {
+ * [v ? end[v - 1] : 0, end[v]) for vertex v < nv), each
+ * bucket sorted: entries (larger vertex << 32) | h in e (T->n of them). */
+static int bucket_edges(mx_edge_table *T, uint32_t nv, int skip_repeats, uint64_t *e,
+                        size_t **end_out) {
   const uint32_t ntri = T->ntri;
-  const size_t nh = 3 * (size_t)ntri;
-  /* the range of vertex indices used: the buckets */
-  uint32_t vmin = UINT32_MAX, vmax = 0;
-  for (size_t h = 0; h < nh; h++) {
-    const uint32_t v = mx_half_start(T, (uint32_t)h);
-    vmin = v < vmin ? v : vmin;
-    vmax = v > vmax ? v : vmax;
-  }
-  const size_t nb = ntri ? (size_t)(vmax - vmin) + 1 : 0;
+  const size_t nb = nv;
   size_t *end = mx_calloc((nb + 1) * sizeof *end);
   if (!end) return MX_ENOMEM;
   for (uint32_t i = 0; i < ntri; i++) {
     if (skip_repeats && repeats(T, i)) continue;
     for (int k = 0; k < 3; k++) {
       const uint32_t a = mx_edge_vertex(T, i, k), b = mx_edge_vertex(T, i, k == 2 ? 0 : k + 1);
-      end[(a < b ? a : b) - vmin + 1]++;
+      end[(a < b ? a : b) + 1]++;
     }
   }
   for (size_t v = 0; v < nb; v++) end[v + 1] += end[v];
@@ -61,7 +53,7 @@ static int bucket_edges(mx_edge_table *T, int skip_repeats, uint64_t *e, size_t 
     for (int k = 0; k < 3; k++) {
       const uint32_t a = mx_edge_vertex(T, i, k), b = mx_edge_vertex(T, i, k == 2 ? 0 : k + 1);
       const uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
-      e[end[lo - vmin]++] = (uint64_t)hi << 32 | (3 * i + (uint32_t)k);
+      e[end[lo]++] = (uint64_t)hi << 32 | (3 * i + (uint32_t)k);
     }
   }
   /* end[v] is now the end of bucket v */
@@ -81,13 +73,11 @@ static int bucket_edges(mx_edge_table *T, int skip_repeats, uint64_t *e, size_t 
     }
   }
   *end_out = end;
-  *vmin_out = vmin;
-  *nb_out = nb;
   return MX_OK;
 }
 
 int mx_edge_table_build(mx_edge_table *T, const uint32_t *tri, const uint32_t *order,
-                        uint32_t ntri, int skip_repeats, int with_first) {
+                        uint32_t ntri, uint32_t nv, int skip_repeats, int with_first) {
   memset(T, 0, sizeof *T);
   T->tri = tri;
   T->order = order;
@@ -96,10 +86,10 @@ int mx_edge_table_build(mx_edge_table *T, const uint32_t *tri, const uint32_t *o
   T->key = mx_alloc((nh ? nh : 1) * sizeof *T->key);
   T->half = mx_alloc((nh ? nh : 1) * sizeof *T->half);
   T->first = with_first ? mx_alloc((nh ? nh : 1) * sizeof *T->first) : NULL;
-  size_t *end = NULL, nb = 0;
-  uint32_t vmin = 0;
+  size_t *end = NULL;
+  const size_t nb = nv;
   if (!T->key || !T->half || (with_first && !T->first) ||
-      bucket_edges(T, skip_repeats, T->key, &end, &vmin, &nb) != MX_OK) {
+      bucket_edges(T, nv, skip_repeats, T->key, &end) != MX_OK) {
     mx_edge_table_free(T);
     return MX_ENOMEM;
   }
@@ -109,7 +99,7 @@ int mx_edge_table_build(mx_edge_table *T, const uint32_t *tri, const uint32_t *o
 #pragma omp parallel for schedule(dynamic, 4096) if (nb > 50000)
   for (size_t v = 0; v < nb; v++) {
     const size_t b0 = v ? end[v - 1] : 0;
-    const uint64_t lo = (uint64_t)(v + vmin) << 32;
+    const uint64_t lo = (uint64_t)v << 32;
     size_t run = b0;
     for (size_t j = b0; j < end[v]; j++) {
       const uint32_t h = (uint32_t)e[j];
@@ -123,16 +113,16 @@ int mx_edge_table_build(mx_edge_table *T, const uint32_t *tri, const uint32_t *o
   return MX_OK;
 }
 
-int mx_edges_open(const uint32_t *tri, uint32_t ntri, size_t *open) {
+int mx_edges_open(const uint32_t *tri, uint32_t ntri, uint32_t nv, size_t *open) {
   mx_edge_table T;
   memset(&T, 0, sizeof T);
   T.tri = tri;
   T.ntri = ntri;
   const size_t nh = 3 * (size_t)ntri;
   uint64_t *e = mx_alloc((nh ? nh : 1) * sizeof *e);
-  size_t *end = NULL, nb = 0;
-  uint32_t vmin = 0;
-  if (!e || bucket_edges(&T, 0, e, &end, &vmin, &nb) != MX_OK) {
+  size_t *end = NULL;
+  const size_t nb = nv;
+  if (!e || bucket_edges(&T, nv, 0, e, &end) != MX_OK) {
     mx_free(e);
     return MX_ENOMEM;
   }

@@ -10,9 +10,8 @@
  * Edges. An edge is an unordered pair of vertex indices; the edge table
  * lists the half-edges grouped by edge ("runs"), the edges in increasing
  * (smaller vertex, larger vertex) and each run in increasing h. It is made
- * by a counting sort on the smaller vertex (over the range of vertex
- * indices the list uses) and a sort of each bucket, O(n) plus the buckets'
- * sorts. A run of length 1 is an open edge, of length 2 a manifold edge, of
+ * by a counting sort on the smaller vertex and a sort of each bucket, O(n +
+ * nv) plus the buckets' sorts. A run of length 1 is an open edge, of length 2 a manifold edge, of
  * 3 or more a non-manifold one; the two half-edges of a manifold edge agree
  * (the same orientation) when they run in opposite directions.
  *
@@ -57,16 +56,18 @@ static inline size_t mx_edge_run_end(const mx_edge_table *T, size_t j) {
   return e;
 }
 
-/* The edge table of the list; skip_repeats: triangles that repeat a vertex
- * are left out; with_first: fill T->first. MX_OK or MX_ENOMEM. */
+/* The edge table of the list (vertex indices below nv); skip_repeats:
+ * triangles that repeat a vertex are left out; with_first: fill T->first.
+ * MX_OK or MX_ENOMEM. */
 int mx_edge_table_build(mx_edge_table *T, const uint32_t *tri, const uint32_t *order,
-                        uint32_t ntri, int skip_repeats, int with_first);
+                        uint32_t ntri, uint32_t nv, int skip_repeats, int with_first);
 void mx_edge_table_free(mx_edge_table *T);
 
-/* The edges of the triangles tri[0 .. 3 ntri) used by other than exactly
+/* The edges of the triangles tri[0 .. 3 ntri) (vertices below nv) used by
+ * other than exactly
  * two half-edges (open or non-manifold), counted from the buckets alone (no
  * table kept). MX_OK or MX_ENOMEM. */
-int mx_edges_open(const uint32_t *tri, uint32_t ntri, size_t *open);
+int mx_edges_open(const uint32_t *tri, uint32_t ntri, uint32_t nv, size_t *open);
 
 /* Shells of the list (needs T->first): shell[i] (UINT32_MAX for a
  * triangle left out of the table), flip[i] relative to the seed;

@@ -51,7 +51,7 @@ int mx_trisoup_check(mx_trisoup *s, const char *path, size_t *open_edges) {
     return MX_EINPUT;
   }
   size_t open;
-  MX_CHECK(mx_edges_open(s->tri, (uint32_t)s->nt, &open));
+  MX_CHECK(mx_edges_open(s->tri, (uint32_t)s->nt, (uint32_t)s->nv, &open));
   /* an open surface is the input policy's to refuse or repair (mesher.c,
    * geom/surface_defects.c), with the places of its defects */
   if (open_edges) *open_edges = open;
