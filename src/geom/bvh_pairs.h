@@ -9,9 +9,9 @@
  * void *ctx and two uint32_t slots) before including this header, which
  * defines the static function
  *   mx_bvh_self_pairs(nodes, box, nslots, ctx)
- * (box: 6 per slot, lo then hi) so that the visit is inlined into the
- * traversal (a call through a pointer per pair costs several percent of the
- * self-intersection test). */
+ * (box: 6 per slot, lo then hi), so that the visit is a direct call (a call
+ * through a pointer per pair cost a few percent of the self-intersection
+ * test). */
 #ifndef MX_BVH_PAIRS_H
 #define MX_BVH_PAIRS_H
 

@@ -31,8 +31,7 @@
  * (pairs within a node = pairs within each child + pairs across the two
  * children; OpenMP tasks for the first levels); pairs whose closed boxes
  * meet (compared exactly) go to the narrow phase, the triangle of smaller
- * (Morton code, id) first. Narrow phase (geom/triangle_pair.h): exact signs
- * only, no tolerance:
+ * (Morton code, id) first. Narrow phase: exact signs only, no tolerance:
  * orient3d and orient2d in double behind a semi-static error bound
  * (Shewchuk's bound A) and, when that does not decide, exactly (each
  * difference of coordinates split into two doubles, each product made
