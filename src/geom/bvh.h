@@ -25,7 +25,7 @@ typedef struct {
   double lo[3], hi[3]; /* bounding box of the triangles below */
   uint32_t first;      /* leaf: first slot; internal: left child (right = first + 1) */
   uint32_t count;      /* leaf: 1..4 triangles; internal: 0 */
-  uint32_t ntri;       /* triangles below */
+  uint32_t ntri;       /* triangles (slots) below */
   uint32_t pad_;
 } mx_bvh_node;
 
@@ -34,9 +34,9 @@ size_t mx_bvh_node_count(size_t m);
 
 /* Builds the tree of the nt >= 1 triangles tri[3 t .. 3 t + 2] (vertex
  * indices into x, y, z) into nodes (mx_bvh_node_count(nt) of them). cen:
- * the centroids, cen[a * nt + t] for axis a. idx: nt entries in any order
- * on input (the triangles 0 .. nt-1), the triangle of each slot (the
- * tree's order) on output. The same tree for any thread count. */
+ * the centroids, cen[a * nt + t] for axis a. idx: the triangles 0 .. nt-1
+ * on input (their order decides the order of ties), the triangle of each
+ * slot (the tree's order) on output. The same tree for any thread count. */
 void mx_bvh_build(mx_bvh_node *nodes, uint32_t *idx, const double *cen, uint32_t nt,
                   const uint32_t *tri, const double *x, const double *y,
                   const double *z);
