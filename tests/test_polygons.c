@@ -18,7 +18,7 @@
 #include "file_util.h"
 #include "base/common.h"
 #include "io/polygon_split.h"
-#include "kernels/surface_defects.h"
+#include "geom/surface_defects.h"
 #include "soa/trisoup.h"
 #include "io/read_surface.h"
 

@@ -1,5 +1,5 @@
 /* Tests of the surface defect finder and the orientation repair
- * (src/kernels/surface_defects.c): surfaces built in code with known
+ * (src/geom/surface_defects.c): surfaces built in code with known
  * defects (counts asserted exactly where they are known), exact touching
  * versus one-ulp misses, independence from the thread count, and the
  * shared sample surfaces when present. */
@@ -12,7 +12,7 @@
 
 #include "check.h"
 #include "base/common.h"
-#include "kernels/surface_defects.h"
+#include "geom/surface_defects.h"
 #include "soa/trisoup.h"
 #include "io/read_surface.h"
 #include "io/demo_surface.h"

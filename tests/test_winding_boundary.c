@@ -13,7 +13,7 @@
 #include "check.h"
 #include "base/common.h"
 #include "geom/distance.h"
-#include "kernels/surface_defects.h"
+#include "geom/surface_defects.h"
 #include "kernels/winding_boundary.h"
 #include "soa/trisoup.h"
 

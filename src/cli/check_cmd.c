@@ -44,7 +44,7 @@
 #include <strings.h>
 
 #include "cli/cli.h"
-#include "kernels/surface_defects.h"
+#include "geom/surface_defects.h"
 #include "base/common.h"
 #include "io/pvtu.h"
 #include "io/read_mesh.h"

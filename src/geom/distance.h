@@ -15,14 +15,15 @@
  * Strackee 1983 per triangle); 1 inside a closed surface, 0 outside, and a
  * smooth, robust vote in between for a surface with holes.
  *
- * Index. A BVH over the triangles (flat array of nodes, top-down median
- * split on the longest axis of the centroids, leaves of <= 4 triangles,
- * O(n log n), subtrees built as OpenMP tasks), the triangles' coordinates
+ * Index. A BVH over the triangles (geom/bvh.h: flat array of nodes, top-down
+ * median split on the longest axis of the centroids, leaves of <= 4
+ * triangles, O(n log n), subtrees built as OpenMP tasks), the triangles' coordinates
  * copied in BVH order, the face normals, three edge pseudonormals per
  * triangle and one pseudonormal per vertex. The index points to the soup,
  * which must stay alive and unchanged while the index is used.
  *
- * Shells and orientation. The edges are found by sorting vertex-pair keys.
+ * Shells and orientation. The edges and shells are those of
+ * geom/surface_topology.h.
  * A shell is a set of triangles connected through edges. Within a shell the
  * orientation is made consistent by propagation through the manifold edges
  * (used by exactly two triangles); a triangle that disagrees with its
@@ -77,6 +78,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "geom/bvh.h"
 #include "soa/trisoup.h"
 
 /* Feature of a triangle that holds a closest point: the face, edge k (from
@@ -87,14 +89,6 @@ enum {
   MX_FEATURE_EDGE = 1,   /* + k, k = 0, 1, 2 */
   MX_FEATURE_VERTEX = 4, /* + k, k = 0, 1, 2 */
 };
-
-typedef struct {
-  double lo[3], hi[3]; /* bounding box of the triangles below */
-  uint32_t first;      /* leaf: first slot; internal: left child (right = first + 1) */
-  uint32_t count;      /* leaf: 1..4 triangles; internal: 0 */
-  uint32_t ntri;       /* triangles below */
-  uint32_t pad_;
-} mx_bvh_node;
 
 /* The same tree with two levels merged, for the closest-point queries:
  * for each of up to 4 children an oriented bounding box (centre c, first
@@ -175,8 +169,8 @@ typedef struct mx_surface_index {
   const struct mx_surface_index *side;
 } mx_surface_index;
 
-/* Build the index of the triangles [t0, t1) of soup. MX_OK, or MX_EINPUT
- * (out of memory, bad range, more than 2^30 triangles). An empty range gives
+/* Build the index of the triangles [t0, t1) of soup. MX_OK, MX_ENOMEM, or
+ * MX_EINPUT (bad range, more than 2^30 triangles). An empty range gives
  * an index for which every point is outside at infinite distance. */
 int mx_surface_index_build(mx_surface_index *S, const mx_trisoup *soup,
                            uint32_t t0, uint32_t t1);

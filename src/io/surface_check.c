@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "base/common.h"
+#include "geom/surface_topology.h"
 #include "soa/trisoup.h"
 
 static int indices_valid(const mx_trisoup *s, const char *path) {
@@ -35,74 +36,6 @@ static int drop_degenerate(const mx_trisoup *s, size_t t, void *first) {
   return 1;
 }
 
-static int cmp_u32(const void *a, const void *b) {
-  uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-  return (x > y) - (x < y);
-}
-
-static void sort_small(uint32_t *v, size_t n) {
-  if (n > 32) {
-    qsort(v, n, sizeof *v, cmp_u32);
-    return;
-  }
-  for (size_t i = 1; i < n; i++) {
-    uint32_t x = v[i];
-    size_t j = i;
-    for (; j > 0 && v[j - 1] > x; j--) v[j] = v[j - 1];
-    v[j] = x;
-  }
-}
-
-/* Distinct values in sorted v[0..n) that do not occur exactly twice. */
-static size_t odd_runs(const uint32_t *v, size_t n) {
-  size_t bad = 0;
-  for (size_t i = 0; i < n;) {
-    size_t j = i + 1;
-    while (j < n && v[j] == v[i]) j++;
-    bad += j - i != 2;
-    i = j;
-  }
-  return bad;
-}
-
-/* Buckets every edge under its smaller vertex (counting sort), stores the
- * larger one, then counts per bucket. On return end[v] is the end of bucket
- * v and its start is end[v - 1] (0 for v = 0). */
-static void bucket_edges(const mx_trisoup *s, size_t *end, uint32_t *other) {
-  memset(end, 0, (s->nv + 1) * sizeof *end);
-  for (size_t i = 0; i < 3 * s->nt; i++) {
-    uint32_t a = s->tri[i], b = s->tri[i % 3 == 2 ? i - 2 : i + 1];
-    end[(a < b ? a : b) + 1]++;
-  }
-  for (size_t v = 0; v < s->nv; v++) end[v + 1] += end[v];
-  for (size_t i = 0; i < 3 * s->nt; i++) {
-    uint32_t a = s->tri[i], b = s->tri[i % 3 == 2 ? i - 2 : i + 1];
-    uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
-    other[end[lo]++] = hi;
-  }
-}
-
-static int count_open_edges(const mx_trisoup *s, size_t *open) {
-  size_t *end = mx_alloc((s->nv + 1) * sizeof *end);
-  uint32_t *other = mx_alloc(3 * s->nt * sizeof *other);
-  if (!end || !other) {
-    mx_free(end);
-    mx_free(other);
-    return MX_EINPUT;
-  }
-  bucket_edges(s, end, other);
-  size_t bad = 0; /* serial: the bucketing above dominates anyway */
-  for (size_t v = 0; v < s->nv; v++) {
-    size_t b = v ? end[v - 1] : 0;
-    sort_small(other + b, end[v] - b);
-    bad += odd_runs(other + b, end[v] - b);
-  }
-  mx_free(end);
-  mx_free(other);
-  *open = bad;
-  return MX_OK;
-}
-
 int mx_trisoup_check(mx_trisoup *s, const char *path, size_t *open_edges) {
   if (open_edges) *open_edges = 0;
   MX_CHECK(indices_valid(s, path));
@@ -118,9 +51,9 @@ int mx_trisoup_check(mx_trisoup *s, const char *path, size_t *open_edges) {
     return MX_EINPUT;
   }
   size_t open;
-  MX_CHECK(count_open_edges(s, &open));
+  MX_CHECK(mx_edges_open(s->tri, (uint32_t)s->nt, (uint32_t)s->nv, &open));
   /* an open surface is the input policy's to refuse or repair (mesher.c,
-   * kernels/surface_defects.c), with the places of its defects */
+   * geom/surface_defects.c), with the places of its defects */
   if (open_edges) *open_edges = open;
   return MX_OK;
 }
@@ -165,7 +98,7 @@ static void sorted_points(const mx_trisoup *s, uint32_t t, double p[3][3]) {
 int mx_trisoup_check_shells(const mx_trisoup *s, uint32_t nt, const char *const *names) {
   if (s->nshells < 2 || nt < 2) return MX_OK;
   tri_key *k = mx_alloc(nt * sizeof *k);
-  if (!k) return MX_EINPUT;
+  if (!k) return MX_ENOMEM;
   for (uint32_t t = 0; t < nt; t++) {
     double p[3][3];
     sorted_points(s, t, p);

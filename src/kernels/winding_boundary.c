@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "base/common.h"
-#include "kernels/surface_defects.h"
+#include "geom/surface_defects.h"
 #include "base/scan.h"
 
 #define MAXP 256 /* pieces per triangle */

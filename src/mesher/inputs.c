@@ -16,7 +16,7 @@
 #include "kernels/edges_lazy.h"
 #include "kernels/refine_list.h"
 #include "kernels/splice.h"
-#include "kernels/surface_defects.h"
+#include "geom/surface_defects.h"
 #include "soa/mesh.h"
 
 #include <math.h>

@@ -7,7 +7,7 @@
 #include "mesher/pipeline.h"
 
 #include "kernels/splice.h"
-#include "kernels/surface_defects.h"
+#include "geom/surface_defects.h"
 
 #include "io/boundary_faces.h"
 #include "kernels/estimate.h"

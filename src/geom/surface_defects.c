@@ -1,7 +1,7 @@
 /* Defects of input surfaces: open, non-manifold and misoriented edges,
  * degenerate triangles, pairs of triangles that intersect; orientation.
  * See surface_defects.h for the definitions and the method. */
-#include "kernels/surface_defects.h"
+#include "geom/surface_defects.h"
 
 #include <math.h>
 #include <omp.h>
@@ -11,10 +11,12 @@
 #include <string.h>
 
 #include "base/common.h"
+#include "base/morton.h"
 #include "base/scan.h"
+#include "geom/bvh.h"
+#include "geom/surface_topology.h"
 
 #define NEX MX_DEFECT_EXAMPLES
-#define LEAF 4
 #define NONE UINT32_MAX
 
 /* ==== exact signs ========================================================
@@ -408,6 +410,27 @@ static int pair_meets(const double *P, const double *Q, const uint32_t *pv,
   return 1; /* the same three points */
 }
 
+
+/* Per triangle: its projection axis, -1 when degenerate. */
+static void projection_axes(const mx_trisoup *s, int8_t *axis) {
+  const size_t nt = s->nt;
+#pragma omp parallel for schedule(static) if (nt > 20000)
+  for (size_t t = 0; t < nt; t++) {
+    const uint32_t *v = s->tri + 3 * t;
+    if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) {
+      axis[t] = -1;
+      continue;
+    }
+    double P[9];
+    for (int k = 0; k < 3; k++) {
+      P[3 * k] = s->x[v[k]];
+      P[3 * k + 1] = s->y[v[k]];
+      P[3 * k + 2] = s->z[v[k]];
+    }
+    axis[t] = (int8_t)drop_axis(P);
+  }
+}
+
 /* ==== examples =========================================================== */
 
 static int ex_less(const mx_defect_example *a, const mx_defect_example *b) {
@@ -439,85 +462,9 @@ static mx_defect_example edge_example(const mx_trisoup *s, uint32_t t,
   return e;
 }
 
-/* ==== edges ============================================================== */
-
-/* The directed edges h = 3 t + k (from tri[h] to the next vertex of t),
- * bucketed by their smaller vertex (bucket v: [v ? end[v - 1] : 0,
- * end[v])), each bucket sorted by (larger vertex, h): entries
- * (larger << 32) | h. Triangles that repeat a vertex are left out. */
-typedef struct {
-  size_t *end;
-  uint64_t *e;
-} edge_table;
-
-
-static int cmp_u64(const void *a, const void *b) {
-  uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-  return (x > y) - (x < y);
-}
-
-static inline int repeats(const uint32_t *t) {
-  return t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
-}
-
-static void edges_free(edge_table *E) {
-  mx_free(E->end);
-  mx_free(E->e);
-  E->end = NULL;
-  E->e = NULL;
-}
-
-static int edges_build(const mx_trisoup *s, edge_table *E) {
-  const size_t nv = s->nv, nh = 3 * s->nt;
-  E->end = mx_calloc((nv + 1) * sizeof *E->end);
-  E->e = mx_alloc((nh ? nh : 1) * sizeof *E->e);
-  if (!E->end || !E->e) {
-    edges_free(E);
-    return MX_EINPUT;
-  }
-  size_t *end = E->end;
-  for (size_t t = 0; t < s->nt; t++) {
-    const uint32_t *v = s->tri + 3 * t;
-    if (repeats(v)) continue;
-    for (int k = 0; k < 3; k++) {
-      uint32_t a = v[k], b = v[k == 2 ? 0 : k + 1];
-      end[(a < b ? a : b) + 1]++;
-    }
-  }
-  for (size_t v = 0; v < nv; v++) end[v + 1] += end[v];
-  for (size_t t = 0; t < s->nt; t++) {
-    const uint32_t *v = s->tri + 3 * t;
-    if (repeats(v)) continue;
-    for (int k = 0; k < 3; k++) {
-      uint32_t a = v[k], b = v[k == 2 ? 0 : k + 1];
-      uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
-      E->e[end[lo]++] = (uint64_t)hi << 32 | (uint32_t)(3 * t + k);
-    }
-  }
-#pragma omp parallel for schedule(dynamic, 4096) if (nv > 50000)
-  for (size_t v = 0; v < nv; v++) {
-    uint64_t *b = E->e + (v ? end[v - 1] : 0);
-    size_t m = end[v] - (v ? end[v - 1] : 0);
-    if (m > 24) {
-      qsort(b, m, sizeof *b, cmp_u64);
-      continue;
-    }
-    for (size_t i = 1; i < m; i++) {
-      uint64_t x = b[i];
-      size_t j = i;
-      for (; j > 0 && b[j - 1] > x; j--) b[j] = b[j - 1];
-      b[j] = x;
-    }
-  }
-  return MX_OK;
-}
-
-/* Runs of one edge in bucket v: [i, j). */
-static inline size_t run_end(const uint64_t *e, size_t i, size_t end) {
-  size_t j = i + 1;
-  while (j < end && (e[j] >> 32) == (e[i] >> 32)) j++;
-  return j;
-}
+/* ==== edges ==============================================================
+ * The edge table of geom/surface_topology.h over the soup's triangles,
+ * those that repeat a vertex left out. */
 
 static int indices_valid(const mx_trisoup *s) {
   if (s->nt > ((size_t)1 << 30)) {
@@ -540,38 +487,39 @@ typedef struct {
   mx_defect_example ex[3][NEX];
 } edge_acc;
 
-static void edge_defects(const mx_trisoup *s, const edge_table *E,
-                         mx_surface_defects *r) {
-  const size_t nv = s->nv;
-  int nth = omp_get_max_threads();
+/* Runs starting in each chunk of this many entries of the table go to one
+ * task. */
+#define EDGE_CHUNK 16384
+
+static int edge_defects(const mx_trisoup *s, const mx_edge_table *E,
+                        mx_surface_defects *r) {
+  const size_t n = E->n, nchunk = (n + EDGE_CHUNK - 1) / EDGE_CHUNK;
+  const int nth = omp_get_max_threads();
   edge_acc *acc = mx_calloc((size_t)nth * sizeof *acc);
-  edge_acc single;
-  if (!acc) {
-    nth = 1;
-    memset(&single, 0, sizeof single);
-  }
-#pragma omp parallel num_threads(nth) if (nv > 50000)
+  if (!acc) return MX_ENOMEM;
+#pragma omp parallel num_threads(nth) if (n > 150000)
   {
-    edge_acc *A = acc ? &acc[omp_get_thread_num()] : &single;
-#pragma omp for schedule(dynamic, 4096)
-    for (size_t v = 0; v < nv; v++) {
-      const uint64_t *e = E->e;
-      size_t i = v ? E->end[v - 1] : 0, end = E->end[v];
-      while (i < end) {
-        size_t j = run_end(e, i, end);
-        uint32_t w = (uint32_t)(e[i] >> 32);
-        uint32_t h0 = (uint32_t)e[i], t0 = h0 / 3;
-        uint32_t t1 = j - i > 1 ? (uint32_t)e[i + 1] / 3 : NONE;
+    edge_acc *A = &acc[omp_get_thread_num()];
+#pragma omp for schedule(dynamic, 1)
+    for (size_t ch = 0; ch < nchunk; ch++) {
+      const size_t stop = mx_min((ch + 1) * EDGE_CHUNK, n);
+      size_t i = ch * EDGE_CHUNK;
+      while (i > 0 && i < stop && E->key[i] == E->key[i - 1]) i++;
+      while (i < stop) {
+        const size_t j = mx_edge_run_end(E, i);
+        const uint32_t v = (uint32_t)(E->key[i] >> 32), w = (uint32_t)E->key[i];
+        const uint32_t h0 = E->half[i], t0 = h0 / 3;
+        const uint32_t t1 = j - i > 1 ? E->half[i + 1] / 3 : NONE;
         int kind = -1;
         if (j - i == 1)
           kind = 0;
         else if (j - i > 2)
           kind = 1;
-        else if (s->tri[h0] == s->tri[(uint32_t)e[i + 1]])
+        else if (s->tri[h0] == s->tri[E->half[i + 1]])
           kind = 2;
         if (kind >= 0) {
           A->cnt[kind]++;
-          mx_defect_example x = edge_example(s, t0, t1, (uint32_t)v, w);
+          mx_defect_example x = edge_example(s, t0, t1, v, w);
           ex_add(A->ex[kind], &A->nex[kind], &x);
         }
         i = j;
@@ -583,13 +531,14 @@ static void edge_defects(const mx_trisoup *s, const edge_table *E,
   size_t *cnt[3] = {&r->boundary_edges, &r->nonmanifold_edges,
                     &r->misoriented_edges};
   for (int t = 0; t < nth; t++) {
-    edge_acc *A = acc ? &acc[t] : &single;
+    edge_acc *A = &acc[t];
     for (int k = 0; k < 3; k++) {
       *cnt[k] += A->cnt[k];
       for (size_t x = 0; x < A->nex[k]; x++) ex_add(dst[k], &nex[k], &A->ex[k][x]);
     }
   }
   mx_free(acc);
+  return MX_OK;
 }
 
 /* Bodies: triangles connected through shared vertices (union-find over
@@ -616,25 +565,22 @@ static void bodies(const mx_trisoup *s, uint32_t *p, uint32_t *body) {
   for (size_t t = 0; t < s->nt; t++) body[t] = uf_find(p, s->tri[3 * t]);
 }
 
-/* ==== broad phase ======================================================== */
+/* ==== broad phase ========================================================
+ * The broad phase of geom/bvh.h: the Morton tree of the non-degenerate
+ * triangles' boxes (mx_bvh_build_morton) traversed against itself
+ * (mx_bvh_self_pairs). A pair of triangles reaches the narrow phase in slot
+ * order, the one of smaller (Morton code of its box centre, id) first (the
+ * point found at an intersection depends on the order). */
 
 typedef struct {
-  double lo[3], hi[3];
-  uint32_t first, end; /* slots */
-  uint32_t right;      /* internal: right child (left: this + 1); leaf: 0 */
-  uint32_t pad_;
-} bnode;
-
-typedef struct {
-  uint32_t n;      /* slots (non-degenerate triangles) */
-  uint32_t *tid;   /* slot -> triangle */
-  uint32_t *code;  /* Morton code per slot */
-  double *tv;      /* 9 per slot */
-  double *box;     /* 6 per slot: lo, hi */
-  uint32_t *vid;   /* 3 per slot */
-  int8_t *axis;    /* per slot */
-  bnode *nodes;
-  uint32_t nn;
+  uint32_t n;         /* slots (non-degenerate triangles) */
+  uint32_t *tid;      /* slot -> triangle */
+  uint32_t *code;     /* Morton code per slot */
+  double *tv;         /* 9 per slot */
+  double *box;        /* 6 per slot: lo, hi */
+  uint32_t *vid;      /* 3 per slot */
+  int8_t *axis;       /* per slot */
+  mx_bvh_node *nodes;
 } bvh;
 
 static void bvh_free(bvh *B) {
@@ -648,90 +594,26 @@ static void bvh_free(bvh *B) {
   memset(B, 0, sizeof *B);
 }
 
-static inline uint32_t spread3(uint32_t x) {
-  x &= 0x3ff;
-  x = (x | x << 16) & 0x030000ff;
-  x = (x | x << 8) & 0x0300f00f;
-  x = (x | x << 4) & 0x030c30c3;
-  x = (x | x << 2) & 0x09249249;
-  return x;
-}
-
-static uint32_t split_at(const uint32_t *code, uint32_t l, uint32_t r) {
-  uint32_t x = code[l] ^ code[r - 1];
-  if (x == 0) return l + (r - l) / 2;
-  uint32_t mask = 1u << (31 - __builtin_clz(x));
-  uint32_t lo = l, hi = r - 1; /* code[lo] lacks the bit, code[hi] has it */
-  while (hi - lo > 1) {
-    uint32_t m = lo + (hi - lo) / 2;
-    if (code[m] & mask) hi = m;
-    else lo = m;
-  }
-  return hi;
-}
-
-static uint32_t build_node(bvh *B, uint32_t l, uint32_t r) {
-  uint32_t id = B->nn++;
-  bnode *nd = &B->nodes[id];
-  nd->first = l;
-  nd->end = r;
-  if (r - l <= LEAF) {
-    nd->right = 0;
-    for (int a = 0; a < 3; a++) {
-      nd->lo[a] = B->box[6 * (size_t)l + a];
-      nd->hi[a] = B->box[6 * (size_t)l + 3 + a];
-    }
-    for (uint32_t i = l + 1; i < r; i++)
-      for (int a = 0; a < 3; a++) {
-        nd->lo[a] = mx_min(nd->lo[a], B->box[6 * (size_t)i + a]);
-        nd->hi[a] = mx_max(nd->hi[a], B->box[6 * (size_t)i + 3 + a]);
-      }
-    return id;
-  }
-  uint32_t mid = split_at(B->code, l, r);
-  build_node(B, l, mid);
-  uint32_t rt = build_node(B, mid, r);
-  nd = &B->nodes[id];
-  const bnode *L = &B->nodes[id + 1], *R = &B->nodes[rt];
-  nd->right = rt;
-  for (int a = 0; a < 3; a++) {
-    nd->lo[a] = mx_min(L->lo[a], R->lo[a]);
-    nd->hi[a] = mx_max(L->hi[a], R->hi[a]);
-  }
-  return id;
-}
-
-/* Slots: the non-degenerate triangles sorted by (Morton code of the box
- * centre, id). axis[t] per triangle (-1: degenerate) is given. */
+/* The slots: the non-degenerate triangles (axis_of[t] >= 0) sorted by
+ * (Morton code of the box centre, id). */
 static int bvh_build(bvh *B, const mx_trisoup *s, const int8_t *axis_of) {
   memset(B, 0, sizeof *B);
   size_t n = 0;
   for (size_t t = 0; t < s->nt; t++) n += axis_of[t] >= 0;
   B->n = (uint32_t)n;
   if (n == 0) return MX_OK;
-  size_t nodes_max = 2 * n;
-  uint32_t *ids = mx_alloc(n * sizeof *ids), *keys = mx_alloc(n * sizeof *keys);
-  uint32_t *ids2 = mx_alloc(n * sizeof *ids2), *keys2 = mx_alloc(n * sizeof *keys2);
-  B->tid = ids2;
-  B->code = keys2;
-  B->tv = mx_alloc(9 * n * sizeof *B->tv);
-  B->box = mx_alloc(6 * n * sizeof *B->box);
-  B->vid = mx_alloc(3 * n * sizeof *B->vid);
-  B->axis = mx_alloc(n);
-  B->nodes = mx_alloc(nodes_max * sizeof *B->nodes);
-  if (!ids || !keys || !ids2 || !keys2 || !B->tv || !B->box || !B->vid ||
-      !B->axis || !B->nodes) {
-    mx_free(ids);
-    mx_free(keys);
+  B->tid = mx_alloc(n * sizeof *B->tid);
+  B->code = mx_alloc(n * sizeof *B->code);
+  if (!B->tid || !B->code) {
     bvh_free(B);
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   double lo[3] = {INFINITY, INFINITY, INFINITY};
   double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   n = 0;
   for (size_t t = 0; t < s->nt; t++) {
     if (axis_of[t] < 0) continue;
-    ids[n++] = (uint32_t)t;
+    B->tid[n++] = (uint32_t)t;
     for (int k = 0; k < 3; k++) {
       uint32_t v = s->tri[3 * t + k];
       double c[3] = {s->x[v], s->y[v], s->z[v]};
@@ -746,7 +628,7 @@ static int bvh_build(bvh *B, const mx_trisoup *s, const int8_t *axis_of) {
     scale[a] = hi[a] > lo[a] ? 1023.0 / (hi[a] - lo[a]) : 0.0;
 #pragma omp parallel for schedule(static) if (n > 20000)
   for (size_t i = 0; i < n; i++) {
-    const uint32_t *v = s->tri + 3 * (size_t)ids[i];
+    const uint32_t *v = s->tri + 3 * (size_t)B->tid[i];
     const double *c[3] = {s->x, s->y, s->z};
     uint32_t q[3];
     for (int a = 0; a < 3; a++) {
@@ -755,36 +637,27 @@ static int bvh_build(bvh *B, const mx_trisoup *s, const int8_t *axis_of) {
       double f = (0.5 * (m + M) - lo[a]) * scale[a];
       q[a] = f <= 0.0 ? 0 : f >= 1023.0 ? 1023 : (uint32_t)f;
     }
-    keys[i] = spread3(q[0]) << 2 | spread3(q[1]) << 1 | spread3(q[2]);
+    B->code[i] = (uint32_t)mx_morton_encode(q[2], q[1], q[0]); /* x highest */
   }
-  /* Stable LSD radix sort on the 30-bit codes, 3 passes of 10 bits; the
-   * input is in increasing id, so ties stay in increasing id. */
-  uint32_t *src_k = keys, *src_i = ids, *dst_k = keys2, *dst_i = ids2;
-  for (int pass = 0; pass < 3; pass++) {
-    size_t cnt[1025] = {0};
-    int sh = 10 * pass;
-    for (size_t i = 0; i < n; i++) cnt[((src_k[i] >> sh) & 1023) + 1]++;
-    for (int b = 0; b < 1024; b++) cnt[b + 1] += cnt[b];
-    for (size_t i = 0; i < n; i++) {
-      size_t d = cnt[(src_k[i] >> sh) & 1023]++;
-      dst_k[d] = src_k[i];
-      dst_i[d] = src_i[i];
-    }
-    uint32_t *tk = src_k, *ti = src_i;
-    src_k = dst_k, src_i = dst_i, dst_k = tk, dst_i = ti;
+  if (mx_morton_sort30(B->code, B->tid, (uint32_t)n) != MX_OK) {
+    bvh_free(B);
+    return MX_ENOMEM;
   }
-  /* After 3 passes the result is in keys/ids (pass 0 -> keys2, 1 -> keys,
-   * 2 -> keys2): src_* points at it. */
-  B->tid = src_i;
-  B->code = src_k;
-  mx_free(dst_i);
-  mx_free(dst_k);
+  B->tv = mx_alloc(9 * n * sizeof *B->tv);
+  B->box = mx_alloc(6 * n * sizeof *B->box);
+  B->vid = mx_alloc(3 * n * sizeof *B->vid);
+  B->axis = mx_alloc(n);
+  B->nodes = mx_alloc(2 * n * sizeof *B->nodes);
+  if (!B->tv || !B->box || !B->vid || !B->axis || !B->nodes) {
+    bvh_free(B);
+    return MX_ENOMEM;
+  }
 #pragma omp parallel for schedule(static) if (n > 20000)
   for (size_t i = 0; i < n; i++) {
-    uint32_t t = B->tid[i];
+    const uint32_t t = B->tid[i];
     double *P = B->tv + 9 * i, *bx = B->box + 6 * i;
     for (int k = 0; k < 3; k++) {
-      uint32_t v = s->tri[3 * (size_t)t + k];
+      const uint32_t v = s->tri[3 * (size_t)t + k];
       B->vid[3 * i + k] = v;
       P[3 * k] = s->x[v];
       P[3 * k + 1] = s->y[v];
@@ -796,7 +669,7 @@ static int bvh_build(bvh *B, const mx_trisoup *s, const int8_t *axis_of) {
     }
     B->axis[i] = axis_of[t];
   }
-  build_node(B, 0, (uint32_t)n);
+  mx_bvh_build_morton(B->nodes, B->code, B->box, (uint32_t)n);
   return MX_OK;
 }
 
@@ -812,11 +685,6 @@ typedef struct {
   char pad_[64];
 } pair_acc;
 
-static inline int boxes_meet(const double *a, const double *b) {
-  return a[0] <= b[3] && b[0] <= a[3] && a[1] <= b[4] && b[1] <= a[4] &&
-         a[2] <= b[5] && b[2] <= a[5];
-}
-
 typedef struct {
   const bvh *B;
   const mx_trisoup *s;
@@ -825,8 +693,10 @@ typedef struct {
   int collect;   /* keep every pair met (acc->pairs) */
 } pair_ctx;
 
-/* Narrow phase on slots i < j whose boxes meet. */
-static void test_pair(const pair_ctx *c, uint32_t i, uint32_t j) {
+/* Narrow phase on slots i < j whose boxes meet (the visit of
+ * geom/bvh_pairs.h); not inline, so that pair_meets is inlined here. */
+static void test_pair(void *ctx, uint32_t i, uint32_t j) {
+  const pair_ctx *c = ctx;
   const bvh *B = c->B;
   double w[3];
   if (!pair_meets(B->tv + 9 * (size_t)i, B->tv + 9 * (size_t)j,
@@ -861,76 +731,17 @@ static void test_pair(const pair_ctx *c, uint32_t i, uint32_t j) {
   ex_add(A->ex[kind], &A->nex[kind], &x);
 }
 
-static inline int nodes_meet(const bnode *a, const bnode *b) {
-  return a->lo[0] <= b->hi[0] && b->lo[0] <= a->hi[0] && a->lo[1] <= b->hi[1] &&
-         b->lo[1] <= a->hi[1] && a->lo[2] <= b->hi[2] && b->lo[2] <= a->hi[2];
-}
-
-/* Recursion levels below which the traversal spawns tasks. */
-#define TASK_DEPTH 10
-
-/* Pairs between the subtrees a and b (every slot of a before every slot
- * of b, so the pairs come as i < j). */
-static void cross_nodes(const pair_ctx *c, uint32_t a, uint32_t b, int depth) {
-  const bnode *A = &c->B->nodes[a], *N = &c->B->nodes[b];
-  if (!nodes_meet(A, N)) return;
-  if (A->right == 0 && N->right == 0) {
-    const double *box = c->B->box;
-    for (uint32_t i = A->first; i < A->end; i++)
-      for (uint32_t j = N->first; j < N->end; j++)
-        if (boxes_meet(box + 6 * (size_t)i, box + 6 * (size_t)j)) test_pair(c, i, j);
-    return;
-  }
-  uint32_t a0 = a, a1 = a, b0 = b, b1 = b;
-  if (N->right == 0 || (A->right != 0 && A->end - A->first >= N->end - N->first))
-    a0 = a + 1, a1 = A->right;
-  else
-    b0 = b + 1, b1 = N->right;
-  if (depth < TASK_DEPTH) {
-#pragma omp task default(none) firstprivate(c, a0, b0, depth)
-    cross_nodes(c, a0, b0, depth + 1);
-    cross_nodes(c, a1, b1, depth + 1);
-  } else {
-    cross_nodes(c, a0, b0, depth + 1);
-    cross_nodes(c, a1, b1, depth + 1);
-  }
-}
-
-/* Pairs within the subtree id. */
-static void self_node(const pair_ctx *c, uint32_t id, int depth) {
-  const bnode *N = &c->B->nodes[id];
-  if (N->right == 0) {
-    const double *box = c->B->box;
-    for (uint32_t i = N->first; i < N->end; i++)
-      for (uint32_t j = i + 1; j < N->end; j++)
-        if (boxes_meet(box + 6 * (size_t)i, box + 6 * (size_t)j)) test_pair(c, i, j);
-    return;
-  }
-  uint32_t l = id + 1, r = N->right;
-  if (depth < TASK_DEPTH) {
-#pragma omp task default(none) firstprivate(c, l, depth)
-    self_node(c, l, depth + 1);
-#pragma omp task default(none) firstprivate(c, r, depth)
-    self_node(c, r, depth + 1);
-    cross_nodes(c, l, r, depth + 1);
-  } else {
-    self_node(c, l, depth + 1);
-    self_node(c, r, depth + 1);
-    cross_nodes(c, l, r, depth + 1);
-  }
-}
+#define MX_BVH_VISIT test_pair
+#include "geom/bvh_pairs.h"
 
 static int pair_defects(const bvh *B, const mx_trisoup *s, const uint32_t *body,
                         mx_surface_defects *r) {
   if (B->n < 2) return MX_OK;
   int nth = omp_get_max_threads();
   pair_acc *acc = mx_calloc((size_t)nth * sizeof *acc);
-  if (!acc) return MX_EINPUT;
+  if (!acc) return MX_ENOMEM;
   pair_ctx c = {B, s, body, acc, 0};
-  const pair_ctx *cp = &c;
-#pragma omp parallel num_threads(nth) if (B->n > 256) default(none) shared(cp)
-#pragma omp single
-  self_node(cp, 0, 0);
+  mx_bvh_self_pairs(B->nodes, B->box, B->n, &c);
   size_t nex[2] = {0, 0};
   for (int t = 0; t < nth; t++) {
     pair_acc *A = &acc[t];
@@ -946,54 +757,31 @@ static int pair_defects(const bvh *B, const mx_trisoup *s, const uint32_t *body,
 
 /* ==== public ============================================================= */
 
-/* Per triangle: its projection axis, -1 when degenerate. */
-static void projection_axes(const mx_trisoup *s, int8_t *axis) {
-  const size_t nt = s->nt;
-#pragma omp parallel for schedule(static) if (nt > 20000)
-  for (size_t t = 0; t < nt; t++) {
-    const uint32_t *v = s->tri + 3 * t;
-    if (repeats(v)) {
-      axis[t] = -1;
-      continue;
-    }
-    double P[9];
-    for (int k = 0; k < 3; k++) {
-      P[3 * k] = s->x[v[k]];
-      P[3 * k + 1] = s->y[v[k]];
-      P[3 * k + 2] = s->z[v[k]];
-    }
-    axis[t] = (int8_t)drop_axis(P);
-  }
-}
-
 int mx_surface_meeting_pairs(const mx_trisoup *s, uint64_t **pairs, size_t *npairs) {
   *pairs = NULL;
   *npairs = 0;
   if (s->nt < 2) return MX_OK;
   MX_CHECK(indices_valid(s));
   int8_t *axis = mx_alloc(s->nt);
-  if (!axis) return MX_EINPUT;
+  if (!axis) return MX_ENOMEM;
   projection_axes(s, axis);
   bvh B;
   int st = bvh_build(&B, s, axis);
   mx_free(axis);
   const int nth = omp_get_max_threads();
   pair_acc *acc = st ? NULL : mx_calloc((size_t)nth * sizeof *acc);
-  if (!st && !acc) st = MX_EINPUT;
+  if (!st && !acc) st = MX_ENOMEM;
   if (!st && B.n >= 2) {
     pair_ctx c = {&B, s, NULL, acc, 1};
-    const pair_ctx *cp = &c;
-#pragma omp parallel num_threads(nth) if (B.n > 256) default(none) shared(cp)
-#pragma omp single
-    self_node(cp, 0, 0);
+    mx_bvh_self_pairs(B.nodes, B.box, B.n, &c);
   }
   size_t n = 0;
   for (int t = 0; acc && t < nth; t++) {
     n += acc[t].npairs;
-    if (acc[t].oom) st = MX_EINPUT;
+    if (acc[t].oom) st = MX_ENOMEM;
   }
   uint64_t *all = st ? NULL : mx_alloc((n + 1) * sizeof *all);
-  if (!st && !all) st = MX_EINPUT;
+  if (!st && !all) st = MX_ENOMEM;
   if (!st) {
     size_t k = 0;
     for (int t = 0; t < nth; t++) {
@@ -1022,15 +810,19 @@ int mx_surface_defects_find(const mx_trisoup *s, mx_surface_defects *r) {
   int8_t *axis = mx_alloc(nt);
   uint32_t *body = mx_alloc(nt * sizeof *body);
   uint32_t *vroot = mx_alloc((s->nv ? s->nv : 1) * sizeof *vroot);
-  edge_table E = {0};
-  if (!axis || !body || !vroot || edges_build(s, &E) != MX_OK) {
+  mx_edge_table E;
+  int st = axis && body && vroot ? mx_edge_table_build(&E, s->tri, NULL, (uint32_t)nt, (uint32_t)s->nv, 1, 0)
+                                 : MX_ENOMEM;
+  if (st == MX_OK) {
+    st = edge_defects(s, &E, r);
+    mx_edge_table_free(&E);
+  }
+  if (st != MX_OK) {
     mx_free(axis);
     mx_free(body);
     mx_free(vroot);
-    return MX_EINPUT;
+    return st;
   }
-  edge_defects(s, &E, r);
-  edges_free(&E);
   bodies(s, vroot, body);
   mx_free(vroot);
 
@@ -1049,7 +841,7 @@ int mx_surface_defects_find(const mx_trisoup *s, mx_surface_defects *r) {
   }
 
   bvh B;
-  int st = bvh_build(&B, s, axis);
+  st = bvh_build(&B, s, axis);
   if (st == MX_OK) st = pair_defects(&B, s, body, r);
   bvh_free(&B);
   mx_free(axis);
@@ -1067,75 +859,40 @@ int mx_surface_orient(mx_trisoup *s, size_t *flipped) {
   if (s->nt == 0) return MX_OK;
   MX_CHECK(indices_valid(s));
   const size_t nt = s->nt;
-  edge_table E = {0};
-  uint32_t *adj = mx_alloc(3 * nt * sizeof *adj);
+  mx_edge_table E;
   uint32_t *comp = mx_alloc(nt * sizeof *comp);
-  uint32_t *queue = mx_alloc(nt * sizeof *queue);
   uint8_t *flip = mx_calloc(nt);
-  int st = MX_OK;
-  if (!adj || !comp || !queue || !flip || edges_build(s, &E) != MX_OK) {
-    st = MX_EINPUT;
-    goto done;
+  int st = comp && flip ? mx_edge_table_build(&E, s->tri, NULL, (uint32_t)nt, (uint32_t)s->nv, 1, 1) : MX_ENOMEM;
+  if (st != MX_OK) {
+    mx_free(comp);
+    mx_free(flip);
+    return st;
   }
-  /* Neighbour across each edge used by exactly two triangles. */
-  for (size_t h = 0; h < 3 * nt; h++) adj[h] = NONE;
-  for (size_t v = 0; v < s->nv; v++) {
-    size_t i = v ? E.end[v - 1] : 0, end = E.end[v];
-    while (i < end) {
-      size_t j = run_end(E.e, i, end);
-      if (j - i == 2) {
-        uint32_t h0 = (uint32_t)E.e[i], h1 = (uint32_t)E.e[i + 1];
-        adj[h0] = h1;
-        adj[h1] = h0;
-      }
-      i = j;
-    }
-  }
-  /* Flood fill: flip[u] makes u agree with the triangle it was reached
-   * from (opposite directions along the common edge). */
-  for (size_t t = 0; t < nt; t++) comp[t] = NONE;
+  /* Pieces: shells through the manifold edges; flip[u] makes u agree with
+   * the triangle it was reached from. */
   uint32_t ncomp = 0;
-  for (size_t seed = 0; seed < nt; seed++) {
-    if (comp[seed] != NONE || repeats(s->tri + 3 * seed)) continue;
-    size_t qh = 0, qt = 0;
-    comp[seed] = ncomp;
-    queue[qt++] = (uint32_t)seed;
-    while (qh < qt) {
-      uint32_t t = queue[qh++];
-      for (int k = 0; k < 3; k++) {
-        uint32_t h = 3 * t + k, g = adj[h];
-        if (g == NONE) continue;
-        uint32_t u = g / 3;
-        uint8_t want = flip[t] ^ (s->tri[h] == s->tri[g]);
-        if (comp[u] == NONE) {
-          comp[u] = ncomp;
-          flip[u] = want;
-          queue[qt++] = u;
-        }
-      }
-    }
-    ncomp++;
-  }
+  st = mx_surface_shells(&E, 0, comp, flip, &ncomp, NULL, NULL);
   /* Per piece: open?, volume, size, flips so far. */
-  uint8_t *open = mx_calloc(ncomp ? ncomp : 1);
-  double *vol = mx_calloc((ncomp ? ncomp : 1) * sizeof *vol);
-  size_t *size = mx_calloc((ncomp ? ncomp : 1) * 2 * sizeof *size);
-  uint32_t *ref = mx_alloc((ncomp ? ncomp : 1) * sizeof *ref);
-  if (!open || !vol || !size || !ref) {
-    st = MX_EINPUT;
-    goto done2;
+  uint8_t *open = NULL;
+  double *vol = NULL;
+  size_t *size = NULL;
+  uint32_t *ref = NULL;
+  if (st == MX_OK) {
+    open = mx_calloc(ncomp ? ncomp : 1);
+    vol = mx_calloc((ncomp ? ncomp : 1) * sizeof *vol);
+    size = mx_calloc((ncomp ? ncomp : 1) * 2 * sizeof *size);
+    ref = mx_alloc((ncomp ? ncomp : 1) * sizeof *ref);
+    if (!open || !vol || !size || !ref) st = MX_ENOMEM;
   }
-  for (size_t v = 0; v < s->nv; v++) {
-    size_t i = v ? E.end[v - 1] : 0, end = E.end[v];
-    while (i < end) {
-      size_t j = run_end(E.e, i, end);
-      for (size_t a = i; a < j; a++) {
-        uint32_t c = comp[(uint32_t)E.e[a] / 3], uses = 0;
-        for (size_t b = i; b < j; b++) uses += comp[(uint32_t)E.e[b] / 3] == c;
-        if (uses != 2) open[c] = 1;
-      }
-      i = j;
+  if (st != MX_OK) goto done;
+  for (size_t i = 0; i < E.n;) {
+    const size_t j = mx_edge_run_end(&E, i);
+    for (size_t a = i; a < j; a++) {
+      uint32_t c = comp[E.half[a] / 3], uses = 0;
+      for (size_t b = i; b < j; b++) uses += comp[E.half[b] / 3] == c;
+      if (uses != 2) open[c] = 1;
     }
+    i = j;
   }
   for (uint32_t c = 0; c < ncomp; c++) ref[c] = NONE;
   for (size_t t = 0; t < nt; t++) {
@@ -1168,16 +925,13 @@ int mx_surface_orient(mx_trisoup *s, size_t *flipped) {
     nflip++;
   }
   if (flipped) *flipped = nflip;
-done2:
+done:
   mx_free(open);
   mx_free(vol);
   mx_free(size);
   mx_free(ref);
-done:
-  edges_free(&E);
-  mx_free(adj);
+  mx_edge_table_free(&E);
   mx_free(comp);
-  mx_free(queue);
   mx_free(flip);
   return st;
 }

@@ -1,9 +1,8 @@
 /* Defects of input surfaces: what makes a triangulated surface fail to
  * bound a well-defined inside.
  *
- * Edges (an edge is an unordered pair of vertex indices, found by sorting
- * the 3 nt directed edges by their smaller then larger vertex; no per-edge
- * allocation):
+ * Edges (an edge is an unordered pair of vertex indices; the edge table of
+ * geom/surface_topology.h, no per-edge allocation):
  *   boundary     used by one triangle only (the surface has a hole);
  *   non-manifold used by three triangles or more;
  *   misoriented  used by exactly two triangles that traverse it in the same
@@ -26,12 +25,13 @@
  * (so a surface nested inside another is not a crossing, a surface
  * touching another is).
  *
- * Method. Broad phase: a BVH over the triangles' boxes (triangles sorted
- * along a Morton curve of their box centres, split at the highest differing
- * bit, leaves of up to 4), traversed against itself (pairs within a node =
- * pairs within each child + pairs across the two children; OpenMP tasks
- * for the first levels); pairs whose closed boxes meet (compared exactly)
- * go to the narrow phase. Narrow phase: exact signs only, no tolerance:
+ * Method. Broad phase (geom/bvh.h): a BVH over the triangles' boxes
+ * (triangles sorted along a Morton curve of their box centres, split at the
+ * highest differing bit, leaves of up to 4), traversed against itself
+ * (pairs within a node = pairs within each child + pairs across the two
+ * children; OpenMP tasks for the first levels); pairs whose closed boxes
+ * meet (compared exactly) go to the narrow phase, the triangle of smaller
+ * (Morton code, id) first. Narrow phase: exact signs only, no tolerance:
  * orient3d and orient2d in double behind a semi-static error bound
  * (Shewchuk's bound A) and, when that does not decide, exactly (each
  * difference of coordinates split into two doubles, each product made
@@ -94,15 +94,15 @@ typedef struct {
   mx_defect_example degenerate[MX_DEFECT_EXAMPLES];
 } mx_surface_defects;
 
-/* Finds every defect above in the whole soup; *r is overwritten. MX_OK, or
- * MX_EINPUT (out of memory, vertex index out of range, more than 2^30
+/* Finds every defect above in the whole soup; *r is overwritten. MX_OK,
+ * MX_ENOMEM, or MX_EINPUT (vertex index out of range, more than 2^30
  * triangles), with a message. Prints nothing else. */
 int mx_surface_defects_find(const mx_trisoup *s, mx_surface_defects *r);
 
 /* Every pair of triangles that meets (those counted in intersecting_pairs
  * and crossing_pairs above), as keys (smaller triangle << 32 | larger),
  * increasing; *pairs is allocated with mx_alloc (NULL when there is none).
- * The same for any thread count. MX_OK, or MX_EINPUT (out of memory, bad
+ * The same for any thread count. MX_OK, MX_ENOMEM, or MX_EINPUT (bad
  * index). */
 int mx_surface_meeting_pairs(const mx_trisoup *s, uint64_t **pairs, size_t *npairs);
 
@@ -121,7 +121,7 @@ size_t mx_surface_defects_total(const mx_surface_defects *r);
  * the caller (the distance index does it by parity). A non-orientable piece
  * (a Moebius strip) keeps misoriented edges; mx_surface_defects_find counts
  * them afterwards. *flipped (may be NULL) receives the number of triangles
- * flipped. MX_OK, or MX_EINPUT (out of memory, bad index). Deterministic,
+ * flipped. MX_OK, MX_ENOMEM, or MX_EINPUT (bad index). Deterministic,
  * idempotent. */
 int mx_surface_orient(mx_trisoup *s, size_t *flipped);
 

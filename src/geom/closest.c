@@ -1,0 +1,391 @@
+/* Closest points on the surface index (geom/distance.h): on one triangle
+ * (Voronoi regions), over the index (descent of the 4-wide tree, nearest
+ * child first, float lower bounds, exact tests in double), the signed
+ * distance and inside/outside from the pseudonormals, and the
+ * pseudonormals themselves. */
+#include "geom/surface_index_impl.h"
+
+#include <string.h>
+
+#include "base/common.h"
+
+/* Closest point of p on the segment a + t (b - a), t in [0, 1]; returns
+ * the squared distance and sets *where to -1 (at a), 1 (at b) or 0. */
+static inline double closest_on_segment(const double p[3], const double a[3],
+                                        const double b[3], double q[3],
+                                        int *where) {
+  double ab[3], ap[3];
+  sub3(b, a, ab);
+  sub3(p, a, ap);
+  const double l2 = dot3(ab, ab), s = dot3(ab, ap);
+  double t;
+  if (!(l2 > 0.0) || s <= 0.0) {
+    t = 0.0;
+    *where = -1;
+  } else if (s >= l2) {
+    t = 1.0;
+    *where = 1;
+  } else {
+    t = s / l2;
+    *where = 0;
+  }
+  for (int i = 0; i < 3; i++) q[i] = (t == 1.0) ? b[i] : a[i] + t * ab[i];
+  double d[3];
+  sub3(p, q, d);
+  return dot3(d, d);
+}
+
+/* Closest point q of p on the triangle t = (a, b, c) (9 doubles), by the
+ * Voronoi regions of its vertices, edges and face, decided with the
+ * barycentric-coordinate signs of the projections; returns |p - q|^2 and the
+ * MX_FEATURE_* code. */
+static inline double closest_on_triangle(const double *t, const double p[3],
+                                         double q[3], int *feat) {
+  const double *a = t, *b = t + 3, *c = t + 6;
+  double ab[3], ac[3], ap[3], d[3];
+  sub3(b, a, ab);
+  sub3(c, a, ac);
+  sub3(p, a, ap);
+  const double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+  if (d1 <= 0.0 && d2 <= 0.0) { /* behind a along both edges */
+    memcpy(q, a, 3 * sizeof *q);
+    *feat = MX_FEATURE_VERTEX + 0;
+    return dot3(ap, ap);
+  }
+  double bp[3];
+  sub3(p, b, bp);
+  const double d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+  if (d3 >= 0.0 && d4 <= d3) {
+    memcpy(q, b, 3 * sizeof *q);
+    *feat = MX_FEATURE_VERTEX + 1;
+    return dot3(bp, bp);
+  }
+  const double vc = d1 * d4 - d3 * d2; /* area coordinate of c */
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    const double den = d1 - d3, s = den > 0.0 ? d1 / den : 0.0;
+    for (int i = 0; i < 3; i++) q[i] = a[i] + s * ab[i];
+    *feat = MX_FEATURE_EDGE + 0;
+    sub3(p, q, d);
+    return dot3(d, d);
+  }
+  double cp[3];
+  sub3(p, c, cp);
+  const double d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+  if (d6 >= 0.0 && d5 <= d6) {
+    memcpy(q, c, 3 * sizeof *q);
+    *feat = MX_FEATURE_VERTEX + 2;
+    return dot3(cp, cp);
+  }
+  const double vb = d5 * d2 - d1 * d6; /* area coordinate of b */
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    const double den = d2 - d6, s = den > 0.0 ? d2 / den : 0.0;
+    for (int i = 0; i < 3; i++) q[i] = a[i] + s * ac[i];
+    *feat = MX_FEATURE_EDGE + 2;
+    sub3(p, q, d);
+    return dot3(d, d);
+  }
+  const double va = d3 * d6 - d5 * d4; /* area coordinate of a */
+  const double e43 = d4 - d3, e56 = d5 - d6;
+  if (va <= 0.0 && e43 >= 0.0 && e56 >= 0.0) {
+    const double den = e43 + e56, s = den > 0.0 ? e43 / den : 0.0;
+    for (int i = 0; i < 3; i++) q[i] = b[i] + s * (c[i] - b[i]);
+    *feat = MX_FEATURE_EDGE + 1;
+    sub3(p, q, d);
+    return dot3(d, d);
+  }
+  const double den = va + vb + vc;
+  if (den > 0.0) {
+    const double v = vb / den, w = vc / den;
+    for (int i = 0; i < 3; i++) q[i] = a[i] + v * ab[i] + w * ac[i];
+    *feat = MX_FEATURE_FACE;
+    sub3(p, q, d);
+    return dot3(d, d);
+  }
+  /* Degenerate (zero-area) triangle: the best of its three edges. */
+  double best = INFINITY;
+  for (int k = 0; k < 3; k++) {
+    double qk[3];
+    int where;
+    const double dk =
+        closest_on_segment(p, t + 3 * k, t + 3 * ((k + 1) % 3), qk, &where);
+    if (dk < best) {
+      best = dk;
+      memcpy(q, qk, sizeof qk);
+      *feat = where == 0    ? MX_FEATURE_EDGE + k
+              : where < 0   ? MX_FEATURE_VERTEX + k
+                            : MX_FEATURE_VERTEX + (k + 1) % 3;
+    }
+  }
+  return best;
+}
+
+/* Sorting keys: the bits of a non-negative float (ordered as the floats)
+ * above a lane number. */
+static inline uint64_t lane_key(float d, int lane) {
+  uint32_t u;
+  memcpy(&u, &d, sizeof u);
+  return (uint64_t)u << 32 | (uint32_t)lane;
+}
+static inline float key_value(uint64_t k) {
+  const uint32_t u = (uint32_t)(k >> 32);
+  float d;
+  memcpy(&d, &u, sizeof d);
+  return d;
+}
+static inline void order2(uint64_t *a, uint64_t *b) {
+  const uint64_t x = *a, y = *b;
+  *a = x > y ? x : y;
+  *b = x > y ? y : x;
+}
+/* Four keys in decreasing order, without branches. */
+static inline void sort4_down(uint64_t k[4]) {
+  order2(&k[0], &k[1]);
+  order2(&k[2], &k[3]);
+  order2(&k[0], &k[2]);
+  order2(&k[1], &k[3]);
+  order2(&k[1], &k[2]);
+}
+
+double mx_closest_on_triangle(const double t[9], const double p[3], double q[3]) {
+  int feat;
+  return closest_on_triangle(t, p, q, &feat);
+}
+
+/* Closest point over all triangles: squared distance, slot and feature.
+ * Descends the 4-wide BVH, nearest child first. A subtree or a triangle is
+ * skipped when a lower bound of its squared distance, computed in single
+ * precision (float boxes, leaf packs), is not below thr = (best + delta)^2,
+ * best the smallest exact distance so far and delta a rounding allowance,
+ * 2^-17 of the coordinates' magnitude, far above the float errors; the
+ * exact test runs in double. */
+double mx_index_closest_slot(const mx_surface_index *S, const double p[3],
+                           double q[3], uint32_t *slot, int *feat, double rmax) {
+  double best = INFINITY, thr = INFINITY;
+  if (!S->nt) return best;
+  const double pm = mx_max(fabs(p[0]), mx_max(fabs(p[1]), fabs(p[2])));
+  if (!(pm + S->coord_max < 1e15 && S->coord_max > 1e-15)) {
+    /* Beyond the range where the float bounds (squared distances) are safe,
+     * or NaN: every triangle. */
+    for (uint32_t i = 0; i < S->nt; i++) {
+      double qi[3];
+      int f = MX_FEATURE_FACE;
+      const double e = closest_on_triangle(S->tv + 9 * (size_t)i, p, qi, &f);
+      if (e < best || i == 0) {
+        best = e;
+        memcpy(q, qi, sizeof qi);
+        *slot = i;
+        *feat = f;
+      }
+    }
+    return best;
+  }
+  const double delta = 0x1p-17 * (pm + S->coord_max);
+  const float px = (float)p[0], py = (float)p[1], pz = (float)p[2];
+  if (S->hint) {
+    size_t cell = 0;
+    for (int a = 2; a >= 0; a--) {
+      const double f = (p[a] - S->hint_lo[a]) * S->hint_inv[a];
+      const int n = S->hint_n[a];
+      const int c = !(f > 0.0) ? 0 : f >= n - 1 ? n - 1 : (int)f;
+      cell = cell * (size_t)n + (size_t)c;
+    }
+    const uint32_t i = S->hint[cell];
+    int f = MX_FEATURE_FACE;
+    best = closest_on_triangle(S->tv + 9 * (size_t)i, p, q, &f);
+    const double r = sqrt(best) + delta;
+    thr = r * r;
+    *slot = i;
+    *feat = f;
+    if (best == 0.0) return best;
+  }
+  if (rmax < INFINITY) { /* only a point within rmax is wanted */
+    const double r = rmax + delta;
+    thr = fmin(thr, r * r);
+  }
+  uint32_t stack[4 * STACK_MAX];
+  uint8_t scnt[4 * STACK_MAX];
+  float sd[4 * STACK_MAX];
+  int sp = 0;
+  stack[sp] = 0;
+  scnt[sp] = 0;
+  sd[sp++] = 0.0f;
+  while (sp) {
+    sp--;
+    if (!(sd[sp] < thr)) continue;
+    const uint32_t idx = stack[sp];
+    const int cnt = scnt[sp];
+    float d[4];
+    uint64_t k[4];
+    if (cnt) { /* a leaf: pack idx, lanes 0 .. cnt-1 */
+      const mx_leaf_pack *P = &S->packs[idx];
+#pragma omp simd
+      for (int l = 0; l < 4; l++) {
+        const float h = P->v[0][l] * px + P->v[1][l] * py + P->v[2][l] * pz -
+                        P->v[3][l];
+        const float g0 = P->v[4][l] * px + P->v[5][l] * py +
+                         P->v[6][l] * pz - P->v[7][l];
+        const float g1 = P->v[8][l] * px + P->v[9][l] * py +
+                         P->v[10][l] * pz - P->v[11][l];
+        const float g2 = P->v[12][l] * px + P->v[13][l] * py +
+                         P->v[14][l] * pz - P->v[15][l];
+        const float g = fmax_f(fmax_f(g0, g1), fmax_f(g2, 0.0f));
+        d[l] = h * h + g * g;
+      }
+      for (int l = 0; l < 4; l++)
+        k[l] = lane_key(l < cnt ? d[l] : INFINITY, l);
+      sort4_down(k);
+      const uint32_t first = S->leaf_first[idx];
+      for (int j = 3; j >= 0 && key_value(k[j]) < thr; j--) {
+        const uint32_t i = first + (uint32_t)k[j];
+        double qi[3];
+        int f = MX_FEATURE_FACE;
+        const double e = closest_on_triangle(S->tv + 9 * (size_t)i, p, qi, &f);
+        if (e < best) {
+          best = e;
+          const double r = sqrt(e) + delta;
+          thr = r * r;
+          memcpy(q, qi, sizeof qi);
+          *slot = i;
+          *feat = f;
+        }
+      }
+      if (best == 0.0) break;
+      continue;
+    }
+    const mx_bvh4_node *W = &S->wide[idx];
+#pragma omp simd
+    for (int c = 0; c < 4; c++) {
+      const float dx = px - W->c[0][c], dy = py - W->c[1][c],
+                  dz = pz - W->c[2][c];
+      const float ux = W->a[0][c], uy = W->a[1][c], uz = W->a[2][c];
+      const float vx = W->a[3][c], vy = W->a[4][c], vz = W->a[5][c];
+      const float wx = uy * vz - uz * vy, wy = uz * vx - ux * vz,
+                  wz = ux * vy - uy * vx;
+      /* excess over the half extents; max(x, 0) = (x + |x|) / 2 exactly,
+       * written so that the loop vectorizes */
+      const float x0 = fabsf(ux * dx + uy * dy + uz * dz) - W->h[0][c];
+      const float x1 = fabsf(vx * dx + vy * dy + vz * dz) - W->h[1][c];
+      const float x2 = fabsf(wx * dx + wy * dy + wz * dz) - W->h[2][c];
+      const float e0 = 0.5f * (x0 + fabsf(x0)), e1 = 0.5f * (x1 + fabsf(x1)),
+                  e2 = 0.5f * (x2 + fabsf(x2));
+      d[c] = e0 * e0 + e1 * e1 + e2 * e2;
+    }
+    for (int c = 0; c < 4; c++) k[c] = lane_key(d[c], c);
+    sort4_down(k);
+    /* Push the children within the bound, farthest first, so that the
+     * nearest is popped next (unused children have infinite distance). */
+    for (int j = 0; j < 4; j++) {
+      const int c = (int)(uint32_t)k[j];
+      stack[sp] = W->child[c];
+      scnt[sp] = W->count[c];
+      sd[sp] = d[c];
+      sp += d[c] < thr;
+    }
+  }
+  return best;
+}
+
+double mx_closest_point(const mx_surface_index *S, const double p[3],
+                        double q[3], uint32_t *tri, int *feature) {
+  double qq[3] = {INFINITY, INFINITY, INFINITY};
+  uint32_t slot = 0;
+  int f = MX_FEATURE_FACE;
+  const double d2 = mx_index_closest_slot(S, p, qq, &slot, &f, INFINITY);
+  if (q) memcpy(q, qq, sizeof qq);
+  if (tri) *tri = S->nt ? S->tri_id[slot] : UINT32_MAX;
+  if (feature) *feature = f;
+  return sqrt(d2);
+}
+
+double mx_closest_point_within(const mx_surface_index *S, const double p[3],
+                               double rmax, double q[3]) {
+  double qq[3] = {INFINITY, INFINITY, INFINITY};
+  uint32_t slot = 0;
+  int f = MX_FEATURE_FACE;
+  const double d2 = mx_index_closest_slot(S, p, qq, &slot, &f, rmax);
+  if (q) memcpy(q, qq, sizeof qq);
+  return sqrt(d2);
+}
+
+static const double *pseudonormal(const mx_surface_index *S, uint32_t slot,
+                                  int feat) {
+  if (feat == MX_FEATURE_FACE) return S->fn + 3 * (size_t)slot;
+  if (feat < MX_FEATURE_VERTEX)
+    return S->en + 9 * (size_t)slot + 3 * (size_t)(feat - MX_FEATURE_EDGE);
+  const uint32_t v =
+      S->soup->tri[3 * (size_t)S->tri_id[slot] + (feat - MX_FEATURE_VERTEX)];
+  return S->vn + 3 * (size_t)v;
+}
+
+double mx_signed_distance(const mx_surface_index *S, const double p[3],
+                          double q[3]) {
+  double qq[3] = {INFINITY, INFINITY, INFINITY};
+  uint32_t slot = 0;
+  int f = MX_FEATURE_FACE;
+  const double d2 = mx_index_closest_slot(S, p, qq, &slot, &f, INFINITY);
+  if (q) memcpy(q, qq, sizeof qq);
+  if (d2 == 0.0) return 0.0;
+  const double d = sqrt(d2);
+  if (S->side) return mx_winding_number(S->side, p) > 0.5 ? -d : d;
+  if (!S->nt) return d;
+  if (S->closed) {
+    const double *n = pseudonormal(S, slot, f);
+    double r[3];
+    sub3(p, qq, r);
+    const double g = dot3(r, n);
+    if (g > 0.0) return d;
+    if (g < 0.0) return -d;
+  }
+  return mx_winding_number(S, p) > 0.5 ? -d : d;
+}
+
+int mx_inside(const mx_surface_index *S, const double p[3]) {
+  if (S->side) return mx_winding_number(S->side, p) > 0.5;
+  if (!S->closed) return mx_winding_number(S, p) > 0.5;
+  return mx_signed_distance(S, p, NULL) <= 0.0;
+}
+
+/* Face normals, edge pseudonormals (sum of the normals of the faces of the
+ * edge), vertex pseudonormals (angle-weighted sum). */
+int mx_index_pseudonormals(mx_surface_index *S, const mx_edge_table *E) {
+  const uint32_t nt = S->nt;
+  const size_t nv = S->soup->nv;
+#pragma omp parallel for schedule(static) if (nt > 10000)
+  for (uint32_t i = 0; i < nt; i++) {
+    const double *t = S->tv + 9 * (size_t)i;
+    double ab[3], ac[3], n[3];
+    sub3(t + 3, t, ab);
+    sub3(t + 6, t, ac);
+    cross3(ab, ac, n);
+    const double l = sqrt(dot3(n, n));
+    const double f = l > 0.0 ? S->tsign[i] / l : 0.0;
+    for (int a = 0; a < 3; a++) S->fn[3 * (size_t)i + a] = f * n[a];
+  }
+#pragma omp parallel for schedule(static) if (nt > 10000)
+  for (size_t j = 0; j < E->n; j++) {
+    if (j && E->key[j] == E->key[j - 1]) continue;
+    const size_t end = mx_edge_run_end(E, j);
+    double n[3] = {0.0, 0.0, 0.0};
+    for (size_t k = j; k < end; k++) {
+      const double *f = S->fn + 3 * (size_t)(E->half[k] / 3);
+      for (int a = 0; a < 3; a++) n[a] += f[a];
+    }
+    for (size_t k = j; k < end; k++)
+      memcpy(S->en + 3 * (size_t)E->half[k], n, sizeof n);
+  }
+  S->vn = mx_calloc(3 * nv * sizeof *S->vn + 8);
+  if (!S->vn) return MX_ENOMEM;
+  for (uint32_t i = 0; i < nt; i++) {
+    const double *t = S->tv + 9 * (size_t)i, *f = S->fn + 3 * (size_t)i;
+    const uint32_t *v = S->soup->tri + 3 * (size_t)S->tri_id[i];
+    for (int k = 0; k < 3; k++) {
+      double u[3], w[3], uw[3];
+      sub3(t + 3 * ((k + 1) % 3), t + 3 * k, u);
+      sub3(t + 3 * ((k + 2) % 3), t + 3 * k, w);
+      cross3(u, w, uw);
+      const double angle = atan2(sqrt(dot3(uw, uw)), dot3(u, w));
+      for (int a = 0; a < 3; a++) S->vn[3 * (size_t)v[k] + a] += angle * f[a];
+    }
+  }
+  return MX_OK;
+}
