@@ -8,7 +8,6 @@
 #include "base/common.h"
 #include "base/morton.h"
 #include "base/scan.h"
-#include "soa/key_index.h"
 
 #include <stdio.h>
 
@@ -138,9 +137,10 @@ static inline int leaves_out_of_order(uint64_t ka, int la, uint64_t kb) {
 static int order_message(const mx_octree *T, uint32_t a, uint32_t b, const char *where) {
   char msg[MSG];
   snprintf(msg, sizeof msg,
-           "leaves %u (key %#llx, level %d) and %u (key %#llx, level %d) %s in Morton order",
+           "leaves %u (key %#llx, level %d) and %u (key %#llx, level %d), in this order, %s",
            a, (unsigned long long)T->key[a], T->level[a], b, (unsigned long long)T->key[b],
-           T->level[b], T->key[a] == T->key[b] ? "have the same key" : "overlap");
+           T->level[b], T->key[a] == T->key[b] ? "have the same key"
+                        : T->key[b] < T->key[a] ? "are not in Morton order" : "overlap");
   return broken(where, msg);
 }
 
@@ -213,6 +213,45 @@ int mx_leaves_valid(const mx_tree *t, const uint32_t *leaves, size_t n, const ch
 
 /* ---- (c) the 2:1 balance across faces and edges ------------------------- */
 
+/* The leaves' keys in a sparse table (load at most 1/4, so that a lookup of
+ * a key not there, the common case, reads about one slot): slot -> place
+ * in the sorted leaf arrays + 1, 0 empty. */
+typedef struct {
+  uint32_t *slot;
+  const uint64_t *keys;
+  size_t mask;
+} leaf_table;
+
+static inline size_t leaf_slot(uint64_t key, size_t mask) {
+  uint64_t h = key * 0x9E3779B97F4A7C15ULL;
+  h ^= h >> 32;
+  return (size_t)h & mask;
+}
+
+static int leaf_table_build(leaf_table *H, const uint64_t *keys, size_t n) {
+  size_t cap = 64;
+  while (cap < 4 * n) cap *= 2;
+  H->slot = mx_calloc(cap * sizeof *H->slot);
+  if (!H->slot) return MX_ENOMEM;
+  H->keys = keys;
+  H->mask = cap - 1;
+  for (size_t i = 0; i < n; i++) {
+    size_t j = leaf_slot(keys[i], H->mask);
+    while (H->slot[j]) j = (j + 1) & H->mask;
+    H->slot[j] = (uint32_t)i + 1;
+  }
+  return MX_OK;
+}
+
+/* The place of key among the sorted leaves, or UINT32_MAX. */
+static inline uint32_t leaf_table_find(const leaf_table *H, uint64_t key) {
+  for (size_t j = leaf_slot(key, H->mask);; j = (j + 1) & H->mask) {
+    const uint32_t i = H->slot[j];
+    if (!i) return UINT32_MAX;
+    if (H->keys[i - 1] == key) return i - 1;
+  }
+}
+
 /* The face and edge neighbours: (dx, dy, dz) with one or two non-zero. */
 static const int8_t near18[18][3] = {
     {-1, 0, 0},  {1, 0, 0},   {0, -1, 0}, {0, 1, 0},  {0, 0, -1},  {0, 0, 1},
@@ -220,17 +259,39 @@ static const int8_t near18[18][3] = {
     {1, 0, -1},  {1, 0, 1},   {0, -1, -1}, {0, -1, 1}, {0, 1, -1},  {0, 1, 1}};
 
 /* The leaf of level l-2 holding a face or edge neighbour cell of octant o
- * (level l), or MX_NONE; *dir its direction. */
-static uint32_t coarse_neighbour(const mx_octree *T, const int dims[3], const mx_key_index *H,
+ * (level l), or MX_NONE; *dir its direction. Only the cells outside o's
+ * own ancestor of level l-2 (split, so no leaf) are looked up: on each
+ * axis a step of -1 leaves it from the ancestor's first quarter, +1 from
+ * its last. */
+static uint32_t coarse_neighbour(const mx_octree *T, const int dims[3], const leaf_table *H,
                                  const uint32_t *ids, size_t o, int *dir) {
   const int l = T->level[o];
   if (l < 2) return MX_NONE;
-  const uint64_t up = ~below(l - 2), own = T->key[o] & up;
+  uint32_t c[3];
+  mx_morton_decode(T->key[o], c);
+  const uint32_t s = mx_octant_size(l), up = ~(4 * s - 1);
+  int leaves[3][3]; /* [axis][step + 1]: the step leaves the ancestor */
+  for (int a = 0; a < 3; a++) {
+    const uint32_t q = (c[a] >> (MX_MAX_LEVEL - l)) & 3;
+    leaves[a][0] = q == 0 && c[a] > 0;
+    leaves[a][1] = 0;
+    leaves[a][2] = q == 3 && c[a] + s < ((uint32_t)dims[a] << MX_MAX_LEVEL);
+  }
   for (int k = 0; k < 18; k++) {
-    const uint64_t nk = mx_morton_neighbor(T->key[o], l, near18[k][0], near18[k][1],
-                                           near18[k][2], dims);
-    if (nk == UINT64_MAX || (nk & up) == own) continue; /* off the grid; inside o's own */
-    const uint32_t i = mx_key_index_find(H, nk & up);
+    int out = 0;
+    uint32_t n[3];
+    for (int a = 0; a < 3; a++) {
+      out |= leaves[a][near18[k][a] + 1];
+      n[a] = (c[a] + (uint32_t)near18[k][a] * s) & up;
+    }
+    if (!out) continue;
+    /* a step off the grid on another axis: no cell there */
+    int off = 0;
+    for (int a = 0; a < 3; a++)
+      off |= (near18[k][a] < 0 && c[a] == 0) ||
+             (near18[k][a] > 0 && c[a] + s >= ((uint32_t)dims[a] << MX_MAX_LEVEL));
+    if (off) continue;
+    const uint32_t i = leaf_table_find(H, mx_morton_encode(n[0], n[1], n[2]));
     if (i != UINT32_MAX && T->level[ids[i]] == l - 2) {
       *dir = k;
       return ids[i];
@@ -241,8 +302,8 @@ static uint32_t coarse_neighbour(const mx_octree *T, const int dims[3], const mx
 
 static int check_balance(const mx_octree *T, const int dims[3], const uint64_t *keys,
                          const uint32_t *ids, size_t nleaves, const char *where) {
-  mx_key_index H;
-  MX_CHECK(mx_key_index_build(&H, keys, nleaves, 0));
+  leaf_table H;
+  MX_CHECK(leaf_table_build(&H, keys, nleaves));
   size_t first = SIZE_MAX;
   const size_t n = T->n;
 #pragma omp parallel for schedule(static) reduction(min : first) if (n > MX_PAR_MIN / 16)
@@ -263,7 +324,7 @@ static int check_balance(const mx_octree *T, const int dims[3], const uint64_t *
              near18[k][2]);
     st = broken(where, msg);
   }
-  mx_key_index_free(&H);
+  mx_free(H.slot);
   return st;
 }
 
@@ -316,15 +377,15 @@ static int entry_bad(const edge_ctx *c, int l, int a, size_t i, char *msg) {
   return 0;
 }
 
-/* 1 when octant o is missing from one of its 12 edges (or flagged beyond
- * the levels the edge infos are restored for). */
-static int registration_bad(const edge_ctx *c, size_t o, char *msg) {
+/* 1 when octant o is flagged MX_OCT_EDGES beyond the levels the edge infos
+ * are restored for, or (with lookups) missing from one of its 12 edges. */
+static int registration_bad(const edge_ctx *c, size_t o, int lookups, char *msg) {
   const mx_octree *T = c->T;
   const int l = T->level[o];
   if ((T->flags[o] & MX_OCT_EDGES) && l > c->edge_levels && l > c->edge_lazy_top)
     BAD("octant %zu of level %d is flagged with edge infos, deeper than the deepest such "
         "level %d", o, l, c->edge_lazy_top);
-  if (!edges_required(c, o)) return 0;
+  if (!lookups || !edges_required(c, o)) return 0;
   uint32_t anchor[3];
   mx_octant_anchor(T->key[o], l, anchor);
   for (int a = 0; a < 3; a++)
@@ -335,27 +396,43 @@ static int registration_bad(const edge_ctx *c, size_t o, char *msg) {
       if (i == SIZE_MAX)
         BAD("octant %zu (key %#llx, level %d): its edge %d of axis %d (%#llx) has no info", o,
             (unsigned long long)T->key[o], l, j, a, (unsigned long long)ek);
-      if (E->e[i].slot[mx_edge_slot(j)] != o)
+      const uint32_t in = E->e[i].slot[mx_edge_slot(j)];
+      if (in == MX_NONE)
+        BAD("octant %zu (key %#llx, level %d): its edge %d of axis %d (%#llx) has its slot %d "
+            "empty", o, (unsigned long long)T->key[o], l, j, a, (unsigned long long)ek,
+            mx_edge_slot(j));
+      if (in != o)
         BAD("octant %zu (key %#llx, level %d): its edge %d of axis %d (%#llx) holds octant %u "
             "in its slot %d", o, (unsigned long long)T->key[o], l, j, a, (unsigned long long)ek,
-            E->e[i].slot[mx_edge_slot(j)], mx_edge_slot(j));
+            in, mx_edge_slot(j));
     }
   return 0;
 }
 
+/* Every slot checked (entry_bad) and no key twice in a table, an octant
+ * fills at most 12 slots, one per edge of its own; so the octants that
+ * must be registered are, all 12 times each, exactly when the slots
+ * holding them number 12 per such octant: counted, no lookup. Only when the
+ * count is short are the octants looked up, for the message. */
 static int check_edges(const edge_ctx *c, const char *where) {
   char msg[MSG];
+  size_t filled = 0; /* slots holding an octant that must be registered */
   for (int l = 0; l <= MX_MAX_LEVEL; l++)
     for (int a = 0; a < 3; a++) {
       const mx_edge_table *E = &c->E->t[l][a];
-      size_t used = 0, first = SIZE_MAX;
+      size_t used = 0, first = SIZE_MAX, req = 0;
       const size_t cap = E->cap;
-#pragma omp parallel for schedule(static) reduction(+ : used) reduction(min : first) \
+#pragma omp parallel for schedule(static) reduction(+ : used, req) reduction(min : first) \
     if (cap > MX_PAR_MIN)
       for (size_t i = 0; i < cap; i++) {
         if (!E->e[i].kw) continue;
         used++;
-        if (entry_bad(c, l, a, i, NULL) && i < first) first = i;
+        if (entry_bad(c, l, a, i, NULL)) {
+          if (i < first) first = i;
+          continue;
+        }
+        for (int q = 0; q < 4; q++)
+          req += E->e[i].slot[q] != MX_NONE && edges_required(c, E->e[i].slot[q]);
       }
       if (first != SIZE_MAX) {
         entry_bad(c, l, a, first, msg);
@@ -366,14 +443,26 @@ static int check_edges(const edge_ctx *c, const char *where) {
                                   "holds %zu", l, a, E->count, used);
         return broken(where, msg);
       }
+      filled += req;
     }
-  size_t first = SIZE_MAX;
+  size_t first = SIZE_MAX, required = 0;
   const size_t n = c->T->n;
-#pragma omp parallel for schedule(static) reduction(min : first) if (n > MX_PAR_MIN)
-  for (size_t o = 0; o < n; o++)
-    if (registration_bad(c, o, NULL) && o < first) first = o;
+#pragma omp parallel for schedule(static) reduction(min : first) reduction(+ : required) \
+    if (n > MX_PAR_MIN)
+  for (size_t o = 0; o < n; o++) {
+    if (registration_bad(c, o, 0, NULL) && o < first) first = o;
+    required += edges_required(c, o);
+  }
+  if (first == SIZE_MAX && filled != 12 * required)
+    for (size_t o = 0; o < n && first == SIZE_MAX; o++)
+      if (registration_bad(c, o, 1, NULL)) first = o;
   if (first != SIZE_MAX) {
-    registration_bad(c, first, msg);
+    registration_bad(c, first, 1, msg);
+    return broken(where, msg);
+  }
+  if (filled != 12 * required) { /* cannot be, given the checks above */
+    snprintf(msg, sizeof msg, "%zu octants must be in the edge infos, which hold them %zu "
+                              "times (12 each)", required, filled);
     return broken(where, msg);
   }
   return MX_OK;
