@@ -52,11 +52,8 @@ static const char *data(const char *rel) {
 
 /* The checks of the octree as it is now, every promise made. */
 static int tree_ok(const mx_mesher *m) {
-  const mx_builder *B = &m->B;
-  return mx_tree_valid(&B->oct, B->grid.dims,
-                       B->use_edges && !B->edges_released ? &B->edges : NULL, B->edge_levels,
-                       B->edge_lazy_top, MX_TREE_BALANCED, "the test") == MX_OK &&
-         mx_leaves_valid(&B->oct, m->leaves, m->nleaves, "the test") == MX_OK;
+  return mx_tree_valid(&m->B.tree, MX_TREE_BALANCED, "the test") == MX_OK &&
+         mx_leaves_valid(&m->B.tree, m->leaves, m->nleaves, "the test") == MX_OK;
 }
 
 static mx_mesher *new_mesher(int s, int stage, int balance) {
@@ -94,7 +91,7 @@ static uint64_t cortex_reg(int balance, int release) {
   m->release_edges = release;
   CHECK(mx_mesher_build_octree(m) == MX_OK);
   CHECK(tree_ok(m));
-  const uint64_t h = mx_leaves_hash(&m->B, m->leaves, m->nleaves);
+  const uint64_t h = mx_leaves_hash(&m->B.tree, m->leaves, m->nleaves);
   const size_t n0 = m->nleaves;
   CHECK(ok_or_invalid(mx_mesher_mesh(m)));
   CHECK(tree_ok(m));
@@ -121,13 +118,13 @@ static void test_restart(void) {
   CHECK(m && mx_mesher_add_surface(m, data("surfaces/cortex.off")) == MX_OK);
   CHECK(mx_mesher_mesh(m) == MX_OK);
   CHECK(mx_mesher_save_restart(m, path) == MX_OK);
-  const uint64_t h0 = mx_leaves_hash(&m->B, m->leaves, m->nleaves);
+  const uint64_t h0 = mx_leaves_hash(&m->B.tree, m->leaves, m->nleaves);
   mx_mesher_free(m);
   const size_t before = mx_tree_valid_runs();
   m = new_mesher(5, MX_STAGE_FULL, MX_BALANCE_EDGES);
   CHECK(m && mx_mesher_add_surface(m, data("surfaces/cortex.off")) == MX_OK);
   CHECK(mx_mesher_load_restart(m, path) == MX_OK);
-  CHECK(mx_leaves_hash(&m->B, m->leaves, m->nleaves) == h0);
+  CHECK(mx_leaves_hash(&m->B.tree, m->leaves, m->nleaves) == h0);
   CHECK(tree_ok(m));
   const size_t ne = mx_mesher_restart_elements(m);
   uint64_t list[64];
@@ -162,13 +159,11 @@ static void test_published(void) {
 /* 5. Broken octrees: each must fail with MX_EINTERNAL, and be whole again
  * once repaired. */
 static int tree_status(const mx_mesher *m) {
-  const mx_builder *B = &m->B;
-  return mx_tree_valid(&B->oct, B->grid.dims, B->use_edges ? &B->edges : NULL, B->edge_levels,
-                       B->edge_lazy_top, MX_TREE_BALANCED, "breaking it on purpose");
+  return mx_tree_valid(&m->B.tree, MX_TREE_BALANCED, "breaking it on purpose");
 }
 
 static uint32_t some_leaf(const mx_mesher *m, int min_level) {
-  const mx_octree *T = &m->B.oct;
+  const mx_octree *T = &m->B.tree.oct;
   for (size_t i = 0; i < m->nleaves; i++) {
     const uint32_t o = m->leaves[m->nleaves / 2 + i < m->nleaves ? m->nleaves / 2 + i : i];
     if (T->level[o] >= min_level && T->parent[o] != MX_NONE) return o;
@@ -181,7 +176,8 @@ static void test_broken(void) {
   CHECK(m && mx_mesher_add_demo_surface(m) == MX_OK);
   CHECK(mx_mesher_mesh(m) == MX_OK);
   mx_builder *B = &m->B;
-  mx_octree *T = &B->oct;
+  mx_tree *tr = &B->tree;
+  mx_octree *T = &tr->oct;
   CHECK(tree_status(m) == MX_OK);
   printf("-- broken on purpose (one message each expected):\n");
   fflush(stdout);
@@ -190,7 +186,7 @@ static void test_broken(void) {
   const uint32_t o = some_leaf(m, 3);
   CHECK(o != MX_NONE);
   const uint64_t key = T->key[o];
-  T->key[o] = mx_morton_neighbor(key, T->level[o], 1, 0, 0, B->grid.dims);
+  T->key[o] = mx_morton_neighbor(key, T->level[o], 1, 0, 0, tr->grid.dims);
   CHECK(tree_status(m) == MX_EINTERNAL);
   T->key[o] ^= 1; /* off its level's lattice as well */
   CHECK(tree_status(m) == MX_EINTERNAL);
@@ -206,8 +202,8 @@ static void test_broken(void) {
   /* (d) an edge slot emptied, then given another octant */
   mx_edge_table *E = NULL;
   size_t ei = SIZE_MAX;
-  for (int l = B->edge_levels; l >= 0 && ei == SIZE_MAX; l--) {
-    E = &B->edges.t[l][0];
+  for (int l = tr->edge_levels; l >= 0 && ei == SIZE_MAX; l--) {
+    E = &tr->edges.t[l][0];
     for (size_t i = 0; i < E->cap && ei == SIZE_MAX; i++)
       if (E->e[i].kw && E->e[i].slot[0] != MX_NONE && E->e[i].slot[1] != MX_NONE) ei = i;
   }
@@ -230,11 +226,11 @@ static void test_broken(void) {
     uint32_t t = m->leaves[1];
     m->leaves[1] = m->leaves[2];
     m->leaves[2] = t;
-    CHECK(mx_leaves_valid(T, m->leaves, m->nleaves, "the test") == MX_EINTERNAL);
+    CHECK(mx_leaves_valid(tr, m->leaves, m->nleaves, "the test") == MX_EINTERNAL);
     m->leaves[2] = m->leaves[1];
     m->leaves[1] = t;
-    CHECK(mx_leaves_valid(T, m->leaves, m->nleaves - 1, "the test") == MX_EINTERNAL);
-    CHECK(mx_leaves_valid(T, m->leaves, m->nleaves, "the test") == MX_OK);
+    CHECK(mx_leaves_valid(tr, m->leaves, m->nleaves - 1, "the test") == MX_EINTERNAL);
+    CHECK(mx_leaves_valid(tr, m->leaves, m->nleaves, "the test") == MX_OK);
   }
 
   /* (c) two face-neighbour leaves z, w of one level, w inside the domain
@@ -246,7 +242,7 @@ static void test_broken(void) {
     z = m->leaves[i];
     const int l = T->level[z];
     if (l < 2 || l > 4) continue;
-    const uint64_t wk = mx_morton_neighbor(T->key[z], l, 1, 0, 0, B->grid.dims);
+    const uint64_t wk = mx_morton_neighbor(T->key[z], l, 1, 0, 0, tr->grid.dims);
     if (wk == UINT64_MAX) continue;
     size_t lo = 0, hi = m->nleaves;
     while (lo < hi) {
@@ -266,8 +262,7 @@ static void test_broken(void) {
     uint32_t y = T->child0[w]; /* child 0: on z's side (-x) */
     CHECK(mx_split_octants(B, &y, 1, 0) == MX_OK);
     CHECK(tree_status(m) == MX_EINTERNAL);
-    CHECK(mx_tree_valid(T, B->grid.dims, &B->edges, B->edge_levels, B->edge_lazy_top, 0,
-                        "the test (no balance promised)") == MX_OK);
+    CHECK(mx_tree_valid(tr, 0, "the test (no balance promised)") == MX_OK);
   }
   printf("-- end of the broken octrees\n");
   mx_mesher_free(m);

@@ -28,7 +28,7 @@
  *     every leaf once, in that order (mx_leaves_valid).
  * (c) balanced (when promised): no leaf is two or more levels coarser than
  *     a stored octant (leaf or split) touching it along a face or an edge
- *     (mx_octants_touch, kernels/refine.h; the rule of balance.c and
+ *     (mx_octants_touch, kernels/leaves.h; the rule of balance.c and
  *     balance_recursive.c). Found with a hash of the leaves' keys: for each
  *     octant of level l >= 2 and each of its 18 face and edge neighbour
  *     cells of level l, the cell's ancestor of level l-2 must not be a
