@@ -52,7 +52,7 @@ static int octant_bad(const mx_octree *T, const int dims[3], const uint32_t *roo
   const uint64_t key = T->key[o];
   const uint32_t p = T->parent[o];
   if (l > MX_MAX_LEVEL) BAD("octant %zu has level %d (finest %d)", o, l, MX_MAX_LEVEL);
-  if (key & below(l))
+  if ((key & below(l)) || (key >> 63))
     BAD("octant %zu (level %d) has key %#llx, not on its level's lattice", o, l,
         (unsigned long long)key);
   const size_t cube = root_cube(key, dims);
