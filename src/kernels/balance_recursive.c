@@ -17,6 +17,7 @@
 #include "kernels/refine.h"
 
 #include "base/common.h"
+#include "soa/tree_valid.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -190,5 +191,6 @@ int mx_balance_recursive(mx_builder *B) {
   mx_free(work);
   rtree_free(&R);
   B->stats.t_balance += mx_wtime() - t0;
+  if (!st) MX_TREE_INVARIANTS(&B->tree, MX_TREE_BALANCED, "the recursive balance");
   return st;
 }

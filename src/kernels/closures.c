@@ -5,6 +5,7 @@
 
 #include "base/common.h"
 #include "kernels/edges_lazy.h"
+#include "soa/tree_valid.h"
 
 #include <string.h>
 
@@ -93,6 +94,7 @@ int mx_resolve_closures(mx_builder *B) {
     for (size_t i = 0; i < n; i++) T->flags[list[i]] &= (uint8_t)~MX_OCT_QUEUED;
     if (st || n == 0) {
       mx_free(list);
+      if (!st) MX_TREE_INVARIANTS(&B->tree, MX_TREE_BALANCED, "refinement and its closures");
       return st;
     }
     /* split them, coarsest first, one level at a time, with balance */

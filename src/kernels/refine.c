@@ -4,6 +4,7 @@
 #include "base/common.h"
 #include "geom/intersect.h"
 #include "base/scan.h"
+#include "soa/tree_valid.h"
 
 #include <math.h>
 #include <omp.h>
@@ -564,5 +565,13 @@ static int refine_levels(mx_builder *B, int balance_now) {
   return MX_OK;
 }
 
-int mx_refine_balanced(mx_builder *B) { return refine_levels(B, 1); }
-int mx_refine_unbalanced(mx_builder *B) { return refine_levels(B, 0); }
+int mx_refine_balanced(mx_builder *B) {
+  MX_CHECK(refine_levels(B, 1));
+  MX_TREE_INVARIANTS(&B->tree, MX_TREE_BALANCED, "refinement with balance");
+  return MX_OK;
+}
+int mx_refine_unbalanced(mx_builder *B) {
+  MX_CHECK(refine_levels(B, 0));
+  MX_TREE_INVARIANTS(&B->tree, 0, "refinement without balance");
+  return MX_OK;
+}

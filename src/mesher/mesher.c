@@ -18,6 +18,7 @@
 #include "kernels/refine_list.h"
 #include "kernels/splice.h"
 #include "soa/mesh.h"
+#include "soa/tree_valid.h"
 
 #include <math.h>
 #include <omp.h>
@@ -192,7 +193,9 @@ int mx_update_leaves(mx_mesher *m) {
   m->leaves = NULL;
   m->nleaves = 0;
   MX_CHECK(mx_leaves(&m->B.tree, &m->leaves, &m->nleaves));
-  return mx_leaves_sorted(&m->B.tree, m->leaves, m->nleaves);
+  MX_CHECK(mx_leaves_sorted(&m->B.tree, m->leaves, m->nleaves));
+  MX_LEAVES_INVARIANTS(&m->B.tree, m->leaves, m->nleaves, "sorting the leaves");
+  return MX_OK;
 }
 
 static int winding_inside(const void *ctx, const double p[3]) {

@@ -10,9 +10,12 @@
 #include "mpi/p4est_octree.h"
 
 #include "base/common.h"
+#include "soa/tree_valid.h"
 
+#include <p8est_algorithms.h>
 #include <p8est_bits.h>
 #include <p8est_extended.h>
+#include <p8est_ghost.h>
 
 static void balance_replace(p8est_t *p8, p4est_topidx_t t, int nout, p8est_quadrant_t *out[],
                             int nin, p8est_quadrant_t *in[]) {
@@ -48,6 +51,12 @@ int mx_p4est_balance(mx_p4est_octree *P) {
   p8est_balance_ext(P->p8, P8EST_CONNECT_EDGE, NULL, balance_replace);
   int st = P->status, all = st;
   MPI_Allreduce(&st, &all, 1, MPI_INT, MPI_MAX, P->comm);
+  /* debug builds (soa/tree_valid.h): p4est's own invariants, collective */
+  if (MX_INVARIANTS && !all &&
+      !(p8est_is_valid(P->p8) && p8est_is_balanced(P->p8, P8EST_CONNECT_EDGE))) {
+    mx_error(NULL, 0, "internal: the forest is not valid and balanced after p8est_balance");
+    all = MX_EINTERNAL;
+  }
   P->t.balance += mx_wtime() - t0;
   return all;
 }
