@@ -20,7 +20,6 @@
 _Thread_local int mx_quiet = 0;
 _Thread_local mx_message_fn mx_msg_fn = NULL;
 _Thread_local void *mx_msg_user = NULL;
-_Thread_local int mx_oom_seen = 0;
 _Thread_local unsigned long mx_msg_errors = 0;
 
 _Thread_local int mx_msg_level = 0;
@@ -31,12 +30,6 @@ int mx_msg_worker(void) {
     if (omp_get_ancestor_thread_num(l) != 0) return 1;
 #endif
   return 0;
-}
-
-int mx_status_refine(int status) {
-  if (status == MX_EINPUT && mx_oom_seen) status = MX_ENOMEM;
-  mx_oom_seen = 0;
-  return status;
 }
 
 /* The length of the valid UTF-8 character at p (at most n bytes, n >= 1,
@@ -225,7 +218,6 @@ static int hook_fails(void) {
 
 /* NULL after the message (on the calling thread only: see mx_msg_fn). */
 static void *out_of_memory(size_t bytes) {
-  mx_oom_seen = 1;
   if (!mx_msg_worker()) mx_error(NULL, 0, "out of memory (asked for %zu bytes)", bytes);
   return NULL;
 }
@@ -247,6 +239,13 @@ void *mx_alloc(size_t bytes) {
   }
   size_t rounded = (bytes + 63) & ~(size_t)63;
   void *p = aligned_alloc(64, rounded);
+  return p ? p : out_of_memory(bytes);
+}
+
+void *mx_alloc_aligned(size_t align, size_t bytes) {
+  if (hook_fails()) return out_of_memory(bytes);
+  const size_t rounded = (bytes + align - 1) / align * align;
+  void *p = aligned_alloc(align, rounded ? rounded : align);
   return p ? p : out_of_memory(bytes);
 }
 

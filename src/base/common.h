@@ -67,23 +67,15 @@ extern _Thread_local unsigned long mx_msg_errors;
  * loops (the letter A at -s 8: 140 of its 344 regions). */
 enum { MX_PAR_MIN = 16384 };
 
-/* Set (on the thread that asked) when an allocation failed, so that a
- * caller that received MX_EINPUT from the code not yet converted to
- * MX_ENOMEM can tell "out of memory" apart; cleared by mx_status_refine.
- * Transitional: every allocation failure returns MX_ENOMEM where it
- * happens (`if (!p) return MX_ENOMEM;`, after freeing what the function
- * owns); the flag goes once no site returns MX_EINPUT for it. */
-extern _Thread_local int mx_oom_seen;
-/* MX_EINPUT turned into MX_ENOMEM when an allocation failed since the flag
- * was last cleared; clears the flag. */
-int mx_status_refine(int status);
-
 /* Allocation in one place (the library and the programs use only these):
  * 64-byte aligned, zeroed on request. Failure returns NULL, after a message
  * "out of memory (asked for N bytes)" on the calling thread (none from a
  * worker thread, see mx_msg_fn); the caller returns MX_ENOMEM. */
 void *mx_alloc(size_t bytes);
 void *mx_calloc(size_t bytes);
+/* The same aligned to `align` (a power of two, a multiple of
+ * sizeof(void *)): buffers for direct I/O. */
+void *mx_alloc_aligned(size_t align, size_t bytes);
 void *mx_realloc(void *p, size_t bytes);
 /* A copy of string s (mx_free), NULL when out of memory. */
 char *mx_strdup(const char *s);

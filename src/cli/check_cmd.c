@@ -468,7 +468,7 @@ static int read_domain(const char *path, const char *mesh, mx_poly *P) {
 
 static int unused_nodes(const mx_qmesh *M, size_t *n) {
   uint8_t *used = mx_calloc(M->nnodes + 1);
-  if (!used) return MX_EINPUT;
+  if (!used) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) if (M->ncells > 65536)
   for (size_t c = 0; c < M->ncells; c++)
     for (int j = 0; j < (M->type[c] == MX_QQUAD ? 4 : 3); j++) {

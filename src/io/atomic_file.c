@@ -188,10 +188,7 @@ int mx_afile_open(mx_afile *f, const char *path) {
   afile_reset(f);
   f->path = dup_string(path);
   f->real = f->path ? through_links(path) : NULL;
-  if (!f->path || !f->real) {
-    f->failed = 1;
-    return MX_EINPUT;
-  }
+  if (!f->path || !f->real) return afile_fail_quiet(f, MX_ENOMEM); /* frees both */
   if (target_is_special(f->real)) return open_in_place(f);
   return open_temporary(f);
 }
@@ -202,7 +199,7 @@ int mx_afile_from_stream(mx_afile *f, FILE *fp, const char *name) {
   if (!f->path) {
     if (fp) fclose(fp);
     f->failed = 1;
-    return MX_EINPUT;
+    return MX_ENOMEM;
   }
   f->fp = fp;
   if (!fp) return afile_fail(f, EBADF);

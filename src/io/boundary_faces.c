@@ -190,7 +190,7 @@ static int count_uses(const mx_mesh_view *m, const uint64_t *end,
 #pragma omp parallel
   {
     size_t cap = 64;
-    face_key *keys = malloc(cap * sizeof *keys);
+    face_key *keys = mx_alloc(cap * sizeof *keys);
     if (!keys) {
 #pragma omp atomic write
       failed = 1;
@@ -202,9 +202,9 @@ static int count_uses(const mx_mesh_view *m, const uint64_t *end,
       const size_t k = (size_t)(hi - lo);
       if (k == 0) continue;
       if (k > cap) {
-        face_key *grown = realloc(keys, k * sizeof *keys);
+        face_key *grown = mx_realloc(keys, k * sizeof *keys);
         if (!grown) {
-          free(keys);
+          mx_free(keys);
           keys = NULL;
 #pragma omp atomic write
           failed = 1;
@@ -229,13 +229,9 @@ static int count_uses(const mx_mesh_view *m, const uint64_t *end,
         i = j;
       }
     }
-    free(keys);
+    mx_free(keys);
   }
-  if (failed) {
-    mx_error(NULL, 0, "out of memory");
-    return MX_EINPUT;
-  }
-  return MX_OK;
+  return failed ? MX_ENOMEM : MX_OK; /* said by the call (mesher/call.h) */
 }
 
 /* ---- gathering, element by element ----------------------------------------

@@ -54,14 +54,7 @@ void mx_chunk_out_testing(size_t bytes, int synchronous) {
 }
 
 /* Buffers aligned for direct I/O. */
-static char *buffer_alloc(size_t n) {
-  void *p = aligned_alloc(BLOCK, (n + BLOCK - 1) / BLOCK * BLOCK);
-  if (!p) {
-    mx_oom_seen = 1;
-    mx_error(NULL, 0, "out of memory (asked for %zu bytes)", n);
-  }
-  return p;
-}
+static char *buffer_alloc(size_t n) { return mx_alloc_aligned(BLOCK, n); }
 
 /* Turns O_DIRECT on or off; 0 when done. */
 static int set_direct(int fd, int on) {

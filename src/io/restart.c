@@ -219,7 +219,7 @@ void mx_restart_free(mx_restart *r) {
 }
 
 /* Allocates the fixed-size arrays for nv, ne, no entries (nsub when
- * with_nsub). Returns MX_EINPUT when out of memory (reported). */
+ * with_nsub). Returns MX_ENOMEM when out of memory. */
 static int alloc_arrays(mx_restart *r, size_t nv, size_t ne, size_t no,
                         int with_nsub) {
   r->xyz = mx_alloc(24 * nv);

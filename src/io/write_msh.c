@@ -329,9 +329,9 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
   const mx_boundary_faces *bf = m->bfaces;
   L->tagged = bf && bf->tri_tag && bf->quad_tag && m->ntags > 0 && m->cell_body && m->nbodies > 0;
   if (!L->tagged) {
-    if (block_ranges(m, L) == MX_OK) return MX_OK;
-    layout_free(L);
-    return MX_EINPUT;
+    const int st = block_ranges(m, L);
+    if (st) layout_free(L);
+    return st;
   }
   L->ntags = m->ntags;
   L->nbodies = m->nbodies;
@@ -388,9 +388,9 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
     const int32_t b = m->cell_body[c];
     if (b >= 1 && b <= L->nbodies) cnt[4 * (size_t)b + (m->type[c] & 3)]++;
   }
-  if (block_ranges(m, L) == MX_OK) return MX_OK;
-  layout_free(L);
-  return MX_EINPUT;
+  const int st = block_ranges(m, L);
+  if (st) layout_free(L);
+  return st;
 }
 
 static int write_header(mx_afile *f, const mx_mesh_view *m, const msh_layout *L, int binary) {

@@ -19,7 +19,6 @@ void mx_call_enter(mx_call *c, mx_message_fn collect, void *user, int threads) {
   c->outer_default = call_default;
   mx_msg_fn = collect;
   mx_msg_user = user;
-  mx_oom_seen = 0;
   c->errors = mx_msg_errors;
   c->level = mx_msg_level;
   mx_msg_level = omp_get_level(); /* the caller may be a thread of a team */
@@ -38,7 +37,6 @@ void mx_call_recheck(void) {
 }
 
 int mx_call_leave(mx_call *c, int status) {
-  status = mx_status_refine(status);
   if (status == MX_ENOMEM && mx_msg_errors == c->errors) mx_error(NULL, 0, "out of memory");
   mx_msg_fn = c->fn;
   mx_msg_user = c->user;

@@ -4,8 +4,7 @@
  * the handler is thread-local, omp_set_num_threads sets the thread's own
  * nthreads-var), then both restored. A call that fails with MX_ENOMEM and
  * said nothing (the allocation failed in a worker thread) says "out of
- * memory"; the status is refined (MX_EINPUT after a failed allocation
- * becomes MX_ENOMEM: transitional, for the sites not yet converted). */
+ * memory" (every allocation failure returns MX_ENOMEM where it happens). */
 #ifndef MX_CALL_H
 #define MX_CALL_H
 

@@ -1,5 +1,5 @@
 /* Shared by the files of src/mesher: one public call's set-up and tear-down
- * (the mesher's message handler installed, the status refined), and the
+ * (the mesher's message handler installed, then restored), and the
  * steps the calls share. */
 #ifndef MX_MESHER_IMPL_H
 #define MX_MESHER_IMPL_H
@@ -9,8 +9,8 @@
 #include "mesher/mesher.h"
 
 void mx_call_begin(mx_mesher *m, mx_call *c);
-/* Restores what mx_call_begin changed; MX_EINPUT after a failed allocation
- * becomes MX_ENOMEM. Returns the status to give the caller. */
+/* Restores what mx_call_begin changed. Returns the status to give the
+ * caller. */
 int mx_call_end(mx_mesher *m, mx_call *c, int status);
 
 void mx_mesh_clear(mx_mesher *m);   /* drop the mesh */

@@ -735,5 +735,5 @@ int mx_mesher_load_restart(mx_mesher *m, const char *path) {
 int mx_read_element_list(const char *path, uint64_t limit, uint64_t **out, size_t *n) {
   *out = NULL;
   *n = 0;
-  return mx_status_refine(mx_read_index_list(path, limit, out, n));
+  return mx_read_index_list(path, limit, out, n);
 }
