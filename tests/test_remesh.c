@@ -110,7 +110,7 @@ static void test_list_vs_scratch(void) {
   CHECK(mx_mesher_refine_leaves(a, list, n) == MX_OK);
   CHECK(a->nleaves > n0);
   CHECK(balanced(a));
-  CHECK(a->S.refined_listed == n - 1);
+  CHECK(a->rec->S.refined_listed == n - 1);
 
   mx_mesher *b = cortex_mesher(4, MX_STAGE_TRANSITION);
   for (int l = 0; l <= MX_MAX_LEVEL; l++) {
@@ -257,7 +257,7 @@ static void test_local_vs_full(void) {
     CHECK(sl.remesh_patch_leaves > 0 && sl.remesh_patch_leaves < sl.leaves);
     printf("round %d: %zu elements listed, a patch of %zu leaves (%d attempt(s) with the "
            "repair rounds, %d repair round(s)) for %zu leaves\n", round + 1, n, sl.remesh_patch_leaves,
-           loc->S.local_attempts, sl.repair_rounds, sl.leaves);
+           loc->rec->S.local_attempts, sl.repair_rounds, sl.leaves);
   }
   printf("local re-mesh, 4 rounds at -s 5: the full re-mesh's mesh each time, the same on "
          "1 thread\n");
@@ -624,11 +624,11 @@ static void test_invalid_messages(void) {
   CHECK(mx_mesh_finish(m) == MX_EINVALID);
   CHECK(starts_with(last_msg, "box_a.off: 3 element(s) with J_ENS < 1e-6 remain"));
   m->M.invalid = 0;
-  m->S.contacts.nodes = 2;
+  m->rec->S.contacts.nodes = 2;
   last_msg[0] = '\0';
   CHECK(mx_mesh_finish(m) == MX_EINVALID);
   CHECK(starts_with(last_msg, "box_a.off: 2 node(s) lie on a face or an edge"));
-  m->S.contacts.nodes = 0;
+  m->rec->S.contacts.nodes = 0;
   CHECK(mx_mesh_finish(m) == MX_OK);
   last_msg[0] = '\0';
   CHECK(mx_volume_verdict(m, 0.5 * mx_mesh_volume(&m->M), m->M.ncells) == MX_EINVALID);
@@ -643,7 +643,7 @@ static void test_invalid_messages(void) {
   CHECK(mx_mesh_finish(m) == MX_EINVALID);
   CHECK(starts_with(last_msg, "the inputs box_a.off, box_b.stl: 1 element(s) with J_ENS"));
   m->M.invalid = 0;
-  m->S.contacts.nodes = 1;
+  m->rec->S.contacts.nodes = 1;
   last_msg[0] = '\0';
   CHECK(mx_mesh_finish(m) == MX_EINVALID);
   CHECK(starts_with(last_msg, "the inputs box_a.off, box_b.stl: 1 node(s) lie on a face"));

@@ -547,8 +547,8 @@ static void print_json(const m2_options *o, const m2_run *r) {
   if (r->m && r->m->checked) json_check(f, r);
   fputs(", \"phases\": {", f);
   for (int p = 0; p < M2_NPH; p++)
-    fprintf(f, "%s\"%s\": %.6f", p ? ", " : "", phase_name[p], r->m ? r->m->t[p] : 0.0);
-  fprintf(f, ", \"restart\": %.6f", r->m ? r->m->t_restart : 0.0); /* reading or writing */
+    fprintf(f, "%s\"%s\": %.6f", p ? ", " : "", phase_name[p], r->m ? r->m->rec->t[p] : 0.0);
+  fprintf(f, ", \"restart\": %.6f", r->m ? r->m->rec->t_restart : 0.0); /* reading or writing */
   fprintf(f, "}, \"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"threads\": %d}\n", r->total,
           mx_peak_rss_mb(), omp_get_max_threads());
   fflush(f);
@@ -595,8 +595,8 @@ static void print_summary(const m2_options *o, const m2_run *r) {
            r->status == MX_EINVALID ? "FAILED" : "conforming, valid", r->m->cr.area,
            r->m->cr.domain_area, 100.0 * r->m->cr.area_error);
   printf("  time (s)     %12.3f total:", r->total);
-  for (int p = 0; p < M2_NPH; p++) printf(" %s %.3f", phase_name[p], r->m ? r->m->t[p] : 0.0);
-  if (r->m && r->m->t_restart > 0) printf(" restart %.3f", r->m->t_restart);
+  for (int p = 0; p < M2_NPH; p++) printf(" %s %.3f", phase_name[p], r->m ? r->m->rec->t[p] : 0.0);
+  if (r->m && r->m->rec->t_restart > 0) printf(" restart %.3f", r->m->rec->t_restart);
   printf("\n  peak memory  %12.0f MB\n", mx_peak_rss_mb());
   for (int k = 0; k < r->nwritten; k++)
     printf("  written      %s (%lld bytes)\n", r->outputs[k], r->bytes[k]);

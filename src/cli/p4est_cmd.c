@@ -90,8 +90,8 @@ static int compare_single(mx_mesher *m, const mx_p4est_octree *P, mx_leaf_diff *
         mx_leaf_diff_causes(qa, qla, qin, nq, kb, lb, nb, P->B->tree.grid.dims, why);
       }
       *hash = mx_leaves_hash(&m->B.tree, m->leaves, m->nleaves);
-      *t_refine = m->S.ph.refine;
-      *t_balance = m->S.ph.balance;
+      *t_refine = m->rec->S.ph.refine;
+      *t_balance = m->rec->S.ph.balance;
     }
   }
   mx_free(qa);

@@ -107,7 +107,7 @@ int mx_mesher_add_surface(mx_mesher *m, const char *path) {
   if (!st) st = add_domain(m, &s, path);
   if (!st) mx_mesher_note_read(m, path, 0);
   mx_trisoup_free(&s);
-  m->S.ph.read += mx_wtime() - t;
+  m->rec->S.ph.read += mx_wtime() - t;
   return mx_call_end(m, &c, st);
 }
 
@@ -159,7 +159,7 @@ int mx_mesher_add_demo_surface(mx_mesher *m) {
   int st = mx_demo_surface(&s, 4);
   if (!st) st = add_domain(m, &s, "--demo");
   mx_trisoup_free(&s);
-  m->S.ph.read += mx_wtime() - t;
+  m->rec->S.ph.read += mx_wtime() - t;
   return mx_call_end(m, &c, st);
 }
 
@@ -318,7 +318,7 @@ static int input_policy(mx_mesher *m) {
                  "inside out", flipped, m->ndomain == 1 ? " was" : "s were");
       MX_CHECK(mx_surface_defects_find(d, &r));
     }
-    m->S.reoriented = flipped;
+    m->rec->S.reoriented = flipped;
   }
   const size_t bad = r.boundary_edges + r.nonmanifold_edges + r.misoriented_edges +
                      r.intersecting_pairs + r.crossing_pairs;
@@ -345,7 +345,7 @@ static int input_policy(mx_mesher *m) {
   }
   mx_warning(name, 0, "the input has no well-defined inside: %s. The domain is where its "
                       "generalized winding number is above 1/2 (--repair-input)", what);
-  m->S.input_repaired = 1;
+  m->rec->S.input_repaired = 1;
   return MX_OK;
 }
 
@@ -369,7 +369,7 @@ int mx_mesher_assemble_inputs(mx_mesher *m) {
     MX_CHECK(mx_grid_build(lo, hi, m->domain_name[0], &g));
   }
   MX_CHECK(input_policy(m));
-  if (m->S.input_repaired) {
+  if (m->rec->S.input_repaired) {
     /* the boundary of the winding number's domain instead of the input */
     mx_trisoup b;
     int st = mx_winding_domain(m, &b);

@@ -32,22 +32,22 @@
 /* ---- calls, messages, status ------------------------------------------ */
 
 static void collect_message(void *user, int level, const char *text) {
-  mx_mesher *m = user;
-  if (level == MX_MSG_ERROR && !m->last_error[0])
-    snprintf(m->last_error, sizeof m->last_error, "%s", text);
-  if (m->fn)
-    m->fn(m->user, level, text);
+  mx_mesher_record *r = user;
+  if (level == MX_MSG_ERROR && !r->last_error[0])
+    snprintf(r->last_error, sizeof r->last_error, "%s", text);
+  if (r->fn)
+    r->fn(r->user, level, text);
   else if (level == MX_MSG_ERROR || !mx_quiet)
     fprintf(stderr, "mixoct: %s%s\n", level == MX_MSG_ERROR ? "error: " : "warning: ",
             text);
 }
 
-void mx_call_begin(mx_mesher *m, mx_call *c) {
-  mx_call_enter(c, collect_message, m, m->p.threads);
-  m->last_error[0] = 0;
+void mx_call_begin(const mx_mesher *m, mx_call *c) {
+  mx_call_enter(c, collect_message, m->rec, m->p.threads);
+  m->rec->last_error[0] = 0;
 }
 
-int mx_call_end(mx_mesher *m, mx_call *c, int status) {
+int mx_call_end(const mx_mesher *m, mx_call *c, int status) {
   (void)m;
   return mx_call_leave(c, status);
 }
@@ -76,6 +76,11 @@ void mx_params_default(mx_params *p) {
 mx_mesher *mx_mesher_new(const mx_params *p) {
   mx_mesher *m = mx_calloc(sizeof *m);
   if (!m) return NULL;
+  m->rec = mx_calloc(sizeof *m->rec);
+  if (!m->rec) {
+    mx_free(m);
+    return NULL;
+  }
   if (p)
     m->p = *p;
   else
@@ -93,8 +98,8 @@ void mx_mesh_clear(mx_mesher *m) {
   mx_free(m->states);
   mx_free(m->bnd);
   m->states = m->bnd = NULL;
-  if (m->have_hex) mx_hexmesh_free(&m->hex);
-  m->have_hex = 0;
+  if (m->rec->have_hex) mx_hexmesh_free(&m->rec->hex);
+  m->rec->have_hex = 0;
   m->mesh_stage = -1;
 }
 
@@ -125,12 +130,13 @@ void mx_mesher_free(mx_mesher *m) {
   }
   mx_free(m->boxes);
   for (int l = 0; l <= MX_MAX_LEVEL; l++) mx_free(m->split_keys[l]);
+  mx_free(m->rec);
   mx_free(m);
 }
 
 void mx_mesher_set_message_handler(mx_mesher *m, mx_message_fn fn, void *user) {
-  m->fn = fn;
-  m->user = user;
+  m->rec->fn = fn;
+  m->rec->user = user;
 }
 
 void mx_mesher_set_progress(mx_mesher *m, const mx_progress *hooks) {
@@ -140,9 +146,9 @@ void mx_mesher_set_progress(mx_mesher *m, const mx_progress *hooks) {
 
 void mx_mesher_release_edges_early(mx_mesher *m, int early) { m->release_edges = early != 0; }
 
-const char *mx_mesher_last_error(const mx_mesher *m) { return m->last_error; }
+const char *mx_mesher_last_error(const mx_mesher *m) { return m->rec->last_error; }
 
-const mx_summary *mx_mesher_summary(const mx_mesher *m) { return &m->S; }
+const mx_summary *mx_mesher_summary(const mx_mesher *m) { return &m->rec->S; }
 
 void mx_free_array(void *p) { mx_free(p); }
 
@@ -155,7 +161,7 @@ static void stage(const mx_mesher *m, const char *name) { mx_mesher_stage(m, nam
 static int check_memory(mx_mesher *m, const mx_requests *req) {
   const double need = mx_estimate_bytes(&m->soup, m->nt_domain, m->region_t0, req,
                                         &m->B.tree.grid, m->p.stage);
-  m->S.memory_estimate_mb = m->S.memory_prior_mb = need / 1048576.0;
+  m->rec->S.memory_estimate_mb = m->rec->S.memory_prior_mb = need / 1048576.0;
   const double avail = mx_available_bytes();
   const double limit = m->p.max_memory_mb > 0 ? m->p.max_memory_mb * 1048576.0 : avail;
   if (limit > 0.0 && need > limit) {
@@ -174,7 +180,7 @@ static int check_memory(mx_mesher *m, const mx_requests *req) {
 static int check_memory_leaves(mx_mesher *m) {
   double need = mx_estimate_bytes_leaves(m->nleaves, m->soup.nt, m->p.stage);
   if (!m->release_edges) need += 90.0 * (double)m->nleaves; /* the edge infos kept */
-  m->S.memory_estimate_mb = need / 1048576.0;
+  m->rec->S.memory_estimate_mb = need / 1048576.0;
   const double avail = mx_available_bytes() + mx_peak_rss_mb() * 1048576.0;
   const double limit = m->p.max_memory_mb > 0 ? m->p.max_memory_mb * 1048576.0 : avail;
   if (limit > 0.0 && need > limit) {
@@ -232,7 +238,7 @@ int mx_build_tree(mx_mesher *m) {
   }
   MX_CHECK(check_memory(m, &req));
   MX_CHECK(mx_build_roots(&m->B));
-  m->S.ph.grid += mx_wtime() - t0;
+  m->rec->S.ph.grid += mx_wtime() - t0;
   stage(m, "refine");
   if (use_edges) {
     MX_CHECK(mx_refine_balanced(&m->B));
@@ -250,22 +256,22 @@ int mx_build_tree(mx_mesher *m) {
     MX_CHECK(mx_balance_recursive(&m->B));
     MX_CHECK(mx_resolve_closures(&m->B));
   }
-  m->S.ph.refine += m->B.stats.t_refine;
-  m->S.ph.balance += m->B.stats.t_balance;
-  m->S.max_level = mx_max_requested_level(&req);
+  m->rec->S.ph.refine += m->B.stats.t_refine;
+  m->rec->S.ph.balance += m->B.stats.t_balance;
+  m->rec->S.max_level = mx_max_requested_level(&req);
   const double tl = mx_wtime();
   MX_CHECK(mx_update_leaves(m));
-  m->S.ph.balance += mx_wtime() - tl; /* the leaf list: the octree's last step */
+  m->rec->S.ph.balance += mx_wtime() - tl; /* the leaf list: the octree's last step */
   return check_memory_leaves(m);
 }
 
 int mx_mesher_build_octree(mx_mesher *m) {
   mx_call c;
   mx_call_begin(m, &c);
-  memset(&m->S, 0, sizeof m->S);
+  memset(&m->rec->S, 0, sizeof m->rec->S);
   int st = mx_build_tree(m);
   if (st) mx_tree_clear(m);
-  else m->S.leaves = m->nleaves;
+  else m->rec->S.leaves = m->nleaves;
   return mx_call_end(m, &c, st);
 }
 
@@ -292,7 +298,7 @@ static int boundary_flags(mx_mesher *m) {
 }
 
 static void count_mesh(mx_mesher *m) {
-  mx_summary *S = &m->S;
+  mx_summary *S = &m->rec->S;
   mx_mesh_out *M = &m->M;
   /* rows padded with UINT32_MAX past each type's node count (the API's
    * promise; the kernels leave 0 or stale ids there) */
@@ -323,7 +329,7 @@ static int transition(mx_mesher *m) {
    * memory goes to the mesh (rebuilt by the next split) */
   MX_CHECK(mx_pipeline_transition(m, m->leaves, m->nleaves, m->release_edges, &m->M));
   m->mesh_stage = MX_STAGE_TRANSITION;
-  m->S.ph.transition += mx_wtime() - t;
+  m->rec->S.ph.transition += mx_wtime() - t;
   return MX_OK;
 }
 
@@ -344,11 +350,11 @@ static int boundary_once(mx_mesher *m) {
   stage(m, "boundary");
   mx_boundary_stats bs;
   MX_CHECK(mx_pipeline_boundary(m, m->leaves, m->nleaves, &m->M, &m->states, &bs));
-  m->S.boundary = bs;
-  m->S.full = 1;
+  m->rec->S.boundary = bs;
+  m->rec->S.full = 1;
   MX_CHECK(mx_mesh_renumber_first_use(&m->M, &m->states));
   m->mesh_stage = MX_STAGE_FULL;
-  m->S.ph.boundary += mx_wtime() - t;
+  m->rec->S.ph.boundary += mx_wtime() - t;
   return MX_OK;
 }
 
@@ -375,7 +381,7 @@ int mx_volume_verdict(mx_mesher *m, double vm, size_t ncells) {
   const char *what = "the input encloses";
   if (m->have_winding) {
     vs = mx_winding_domain_volume(m);
-    area = m->S.winding.area;
+    area = m->rec->S.winding.area;
     what = "the input's winding number domain holds (--repair-input)";
   } else {
     if (m->ndomain != 1 || m->p.repair_input) return MX_OK;
@@ -386,7 +392,7 @@ int mx_volume_verdict(mx_mesher *m, double vm, size_t ncells) {
   if (!(vs > 0.0)) return MX_OK;
   const double h = cbrt(fabs(vm) / (double)ncells);
   const double tol = fmax(0.05, 0.5 * area * h / vs), err = (vm - vs) / vs;
-  m->S.volume_error = err;
+  m->rec->S.volume_error = err;
   if (fabs(err) <= tol) return MX_OK;
   char inputs[MX_INPUTS_LABEL];
   mx_error(mx_inputs_label(m, inputs, sizeof inputs), 0, "the mesh holds %.1f%% of the volume %s "
@@ -429,27 +435,27 @@ int mx_mesh_finish(mx_mesher *m) {
   /* the boundary flags and the volume check count as verification */
   const double t = mx_wtime();
   int st = boundary_flags(m);
-  m->S.ph.verify += mx_wtime() - t;
+  m->rec->S.ph.verify += mx_wtime() - t;
   MX_CHECK(st);
-  m->S.leaves = m->nleaves;
+  m->rec->S.leaves = m->nleaves;
   count_mesh(m);
   if (m->M.invalid > 0) {
     mx_error(name, 0, "%zu element(s) with J_ENS < 1e-6 remain after %d repair round(s)",
-             m->M.invalid, m->S.repair_rounds);
+             m->M.invalid, m->rec->S.repair_rounds);
     return MX_EINVALID;
   }
-  if (m->S.contacts.nodes > 0) {
-    const mx_contacts *k = &m->S.contacts;
+  if (m->rec->S.contacts.nodes > 0) {
+    const mx_contacts *k = &m->rec->S.contacts;
     mx_error(name, 0, "%zu node(s) lie on a face or an edge of an element they are not a "
              "node of (two parts of the boundary meet: a non-conforming mesh) after %d "
              "repair round(s); the first, node %u, at (%.17g, %.17g, %.17g); ask for finer "
-             "levels there (-s, -b, -r)", k->nodes, m->S.repair_rounds, k->first_node,
+             "levels there (-s, -b, -r)", k->nodes, m->rec->S.repair_rounds, k->first_node,
              k->first[0], k->first[1], k->first[2]);
     return MX_EINVALID;
   }
   const double tv = mx_wtime();
   st = volume_check(m);
-  m->S.ph.verify += mx_wtime() - tv;
+  m->rec->S.ph.verify += mx_wtime() - tv;
   return st;
 }
 
@@ -462,9 +468,12 @@ int mx_mesh_stages(mx_mesher *m) {
       return st;
     }
   }
-  m->S.leaves = m->nleaves;
+  m->rec->S.leaves = m->nleaves;
   if (m->p.stage == MX_STAGE_OCTREE) {
     mx_mesh_clear(m);
+    /* a single run (the program): the hexahedra written next do not read
+     * the edge infos, their memory goes back (a split rebuilds them) */
+    if (m->release_edges) mx_edges_release(&m->B);
     m->mesh_stage = MX_STAGE_OCTREE;
     return MX_OK;
   }
@@ -493,7 +502,7 @@ int mx_mesher_boundary(mx_mesher *m) {
 }
 
 void mx_fill_tree_stats(mx_mesher *m) {
-  mx_summary *S = &m->S;
+  mx_summary *S = &m->rec->S;
   if (!m->have_tree) return;
   S->leaves = m->nleaves;
   S->leaves_hash = mx_leaves_hash(&m->B.tree, m->leaves, m->nleaves);
@@ -513,16 +522,16 @@ int mx_mesher_mesh(mx_mesher *m) {
   mx_call c;
   mx_call_begin(m, &c);
   const double t0 = mx_wtime();
-  const double read = m->S.ph.read, restart = m->S.t_restart;
+  const double read = m->rec->S.ph.read, restart = m->rec->S.t_restart;
   const int keep = m->have_tree; /* a restart file was read: keep its figures */
   if (!keep) {
-    memset(&m->S, 0, sizeof m->S);
-    m->S.ph.read = read;
+    memset(&m->rec->S, 0, sizeof m->rec->S);
+    m->rec->S.ph.read = read;
   }
-  m->S.t_restart = restart;
+  m->rec->S.t_restart = restart;
   int st = mx_mesh_stages(m);
   mx_fill_tree_stats(m);
-  m->S.ph.total += mx_wtime() - t0;
+  m->rec->S.ph.total += mx_wtime() - t0;
   if (st && st != MX_EINVALID) mx_mesh_clear(m);
   return mx_call_end(m, &c, st);
 }
@@ -533,9 +542,9 @@ int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a) {
   memset(a, 0, sizeof *a);
   if (m->mesh_stage < MX_STAGE_TRANSITION) {
     mx_call c;
-    mx_call_begin((mx_mesher *)m, &c);
+    mx_call_begin(m, &c);
     mx_error(NULL, 0, "no mesh yet: call mx_mesher_mesh first");
-    return mx_call_end((mx_mesher *)m, &c, MX_EINPUT);
+    return mx_call_end(m, &c, MX_EINPUT);
   }
   const mx_mesh_out *M = &m->M;
   a->nnodes = M->nnodes;
@@ -556,7 +565,7 @@ int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a) {
 
 
 void mx_mesher_stats(const mx_mesher *m, mx_stats *s) {
-  const mx_summary *S = &m->S;
+  const mx_summary *S = &m->rec->S;
   memset(s, 0, sizeof *s);
   s->leaves = m->nleaves;
   s->octants = m->have_tree ? m->B.tree.oct.n : 0;

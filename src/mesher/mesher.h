@@ -61,6 +61,18 @@ typedef struct {
   mx_splice_stats splice;
 } mx_summary;
 
+/* What a call records even when it only reads the mesher: the last error,
+ * the figures of the run (the timers of writing and of the restart file
+ * among them) and the octree stage's hexahedra, made by its first write. */
+typedef struct {
+  mx_message_fn fn;         /* the user's message handler (NULL: stderr) */
+  void *user;
+  char last_error[1024];
+  mx_summary S;
+  mx_hexmesh hex;           /* MX_STAGE_OCTREE: the leaves as hexahedra */
+  int have_hex;
+} mx_mesher_record;
+
 
 /* Remembers a file the mesher read (restart: 1 for the restart file). */
 void mx_mesher_note_read(mx_mesher *m, const char *path, int restart);
@@ -70,9 +82,6 @@ int mx_mesher_spares_inputs(const mx_mesher *m, const char *path, int restart_ou
 
 struct mx_mesher {
   mx_params p;
-  mx_message_fn fn;
-  void *user;
-  char last_error[1024];
 
   /* inputs: the domain's shells; region surfaces apart until the octree is
    * first built, then appended after the domain's triangles in soup */
@@ -122,10 +131,9 @@ struct mx_mesher {
   mx_mesh_out M;
   uint8_t *states;          /* per node (boundary stage), or NULL */
   uint8_t *bnd;             /* per node: 1 on the boundary */
-  mx_hexmesh hex;           /* MX_STAGE_OCTREE: the leaves as hexahedra */
-  int have_hex;
-
-  mx_summary S;
+  /* What calls record: behind a pointer, so that the calls that take the
+   * mesher const (writing, the arrays) record without casting const away */
+  mx_mesher_record *rec;
   /* 1: free the edge infos once the transition has read them (the program:
    * one mesh, its memory to the mesh; a split rebuilds them). 0 (the
    * library's default): keep them for the refinements of a re-meshing loop
@@ -134,6 +142,7 @@ struct mx_mesher {
   /* hooks for the program's progress line (NULL: none) */
   mx_progress progress;     /* mx_mesher_set_progress */
 };
+
 
 /* The figures of the last run (counts, phases, boundary steps). */
 const mx_summary *mx_mesher_summary(const mx_mesher *m);

@@ -37,22 +37,22 @@
 /* ---- calls and messages ---------------------------------------------------- */
 
 static void collect_message(void *user, int level, const char *text) {
-  mx_mesher2d *m = user;
-  if (level == MX_MSG_ERROR && !m->last_error[0])
-    snprintf(m->last_error, sizeof m->last_error, "%s", text);
-  if (m->fn)
-    m->fn(m->user, level, text);
+  mx_mesher2d_record *r = user;
+  if (level == MX_MSG_ERROR && !r->last_error[0])
+    snprintf(r->last_error, sizeof r->last_error, "%s", text);
+  if (r->fn)
+    r->fn(r->user, level, text);
   else if (level == MX_MSG_ERROR || !mx_quiet)
     fprintf(stderr, "mesher2d: %s%s\n", level == MX_MSG_ERROR ? "error: " : "warning: ", text);
 }
 
-/* A const call (save, write) still reports through the mesher's handler. */
+/* One call: the mesher's handler installed (a const call, save or write,
+ * too: the record is behind a pointer). */
 #define CALL(m, expr)                                                   \
   do {                                                                  \
     mx_call c_;                                                         \
-    mx_mesher2d *m_ = (mx_mesher2d *)(m);                               \
-    mx_call_enter(&c_, collect_message, m_, m_->p.threads);             \
-    m_->last_error[0] = 0;                                              \
+    mx_call_enter(&c_, collect_message, (m)->rec, (m)->p.threads);      \
+    (m)->rec->last_error[0] = 0;                                        \
     return mx_call_leave(&c_, (expr));                                  \
   } while (0)
 
@@ -68,6 +68,11 @@ void mx_params2d_default(mx_params2d *p) {
 mx_mesher2d *mx_mesher2d_new(const mx_params2d *p) {
   mx_mesher2d *m = mx_calloc(sizeof *m);
   if (!m) return NULL;
+  m->rec = mx_calloc(sizeof *m->rec);
+  if (!m->rec) {
+    mx_free(m);
+    return NULL;
+  }
   if (p) m->p = *p;
   else mx_params2d_default(&m->p);
   if (!(m->p.close_ratio > 0)) m->p.close_ratio = 0.3;
@@ -107,15 +112,16 @@ void mx_mesher2d_free(mx_mesher2d *m) {
   mx_free(m->boxes);
   mx_free(m->funs);
   mx_free(m->features);
+  mx_free(m->rec);
   mx_free(m);
 }
 
 void mx_mesher2d_set_message_handler(mx_mesher2d *m, mx_message_fn fn, void *user) {
-  m->fn = fn;
-  m->user = user;
+  m->rec->fn = fn;
+  m->rec->user = user;
 }
 
-const char *mx_mesher2d_last_error(const mx_mesher2d *m) { return m->last_error; }
+const char *mx_mesher2d_last_error(const mx_mesher2d *m) { return m->rec->last_error; }
 
 /* ---- inputs and requests ------------------------------------------------------ */
 
@@ -149,7 +155,7 @@ static int set_domain(mx_mesher2d *m, const char *path) {
     mx_poly_index_free(&m->index);
     mx_poly_free(&m->domain);
   }
-  m->t[M2_READ] += mx_wtime() - t;
+  m->rec->t[M2_READ] += mx_wtime() - t;
   return st;
 }
 
@@ -458,8 +464,8 @@ static int check_mesh(mx_mesher2d *m) {
   }
   const double t = mx_wtime();
   const int st = mx_qmesh_check(&m->M, &m->domain, CHECK_TOL, &m->cr);
-  m->t[M2_CHECK] = mx_wtime() - t;
-  if (st == MX_EINTERNAL && !m->last_error[0])
+  m->rec->t[M2_CHECK] = mx_wtime() - t;
+  if (st == MX_EINTERNAL && !m->rec->last_error[0])
     mx_error(NULL, 0, "internal failure in the check stage");
   MX_CHECK(st);
   m->checked = 1;
@@ -495,7 +501,7 @@ static int check_mesh(mx_mesher2d *m) {
 /* After a stage: its status, and the thread count measured again for the
  * next one (call.h). */
 static int stage(mx_mesher2d *m, int st, const char *name) {
-  if (st == MX_EINTERNAL && !m->last_error[0])
+  if (st == MX_EINTERNAL && !m->rec->last_error[0])
     mx_error(NULL, 0, "internal failure in the %s stage", name);
   mx_call_recheck();
   return st;
@@ -507,7 +513,7 @@ int mx_mesher2d_run(mx_mesher2d *m) {
     return MX_EINPUT;
   }
   free_mesh(m);
-  for (int p = M2_REFINE; p < M2_NPH; p++) m->t[p] = 0;
+  for (int p = M2_REFINE; p < M2_NPH; p++) m->rec->t[p] = 0;
   MX_CHECK(check_memory(m));
   mx_qbox *boxes = m->boxes;
   size_t nboxes = m->nboxes;
@@ -529,21 +535,21 @@ int mx_mesher2d_run(mx_mesher2d *m) {
   if (boxes != m->boxes) mx_free(boxes);
   if (!st) st = mx_qtree_leaves(&m->T, &m->leaves, &m->nleaves);
   const double wall = mx_wtime() - t;
-  m->t[M2_BALANCE] = m->qs.t_balance;
-  m->t[M2_REFINE] = m->qs.t_refine > 0 ? wall - m->qs.t_balance : wall;
+  m->rec->t[M2_BALANCE] = m->qs.t_balance;
+  m->rec->t[M2_REFINE] = m->qs.t_refine > 0 ? wall - m->qs.t_balance : wall;
   MX_CHECK(stage(m, st, "refine"));
   t = mx_wtime();
   st = mx_qtransition(&m->T, m->leaves, m->nleaves, &m->M);
-  m->t[M2_TRANSITION] = mx_wtime() - t;
+  m->rec->t[M2_TRANSITION] = mx_wtime() - t;
   MX_CHECK(stage(m, st, "transition"));
   t = mx_wtime();
   st = mx_qboundary(&m->domain, &m->index, &m->T, m->leaves, m->p.close_ratio, &m->M, &m->bs);
-  m->t[M2_BOUNDARY] = mx_wtime() - t;
+  m->rec->t[M2_BOUNDARY] = mx_wtime() - t;
   MX_CHECK(stage(m, st, "boundary"));
   m->meshed = 1;
   t = mx_wtime();
   mx_qquality_measure(&m->M, &m->q);
-  m->t[M2_QUALITY] = mx_wtime() - t;
+  m->rec->t[M2_QUALITY] = mx_wtime() - t;
   return check_mesh(m);
 }
 
@@ -671,7 +677,7 @@ static int save_restart(const mx_mesher2d *m, const char *path) {
   int st = mx_qrestart_from_mesher(m, &r);
   if (!st) st = mx_restart_write_text(path, &r);
   mx_restart_free(&r);
-  ((mx_mesher2d *)m)->t_restart += mx_wtime() - t;
+  m->rec->t_restart += mx_wtime() - t;
   return st;
 }
 
@@ -695,7 +701,7 @@ static int load_restart(mx_mesher2d *m, const char *path) {
     if (st) free_keep(m);
   }
   mx_restart_free(&r);
-  m->t_restart = mx_wtime() - t;
+  m->rec->t_restart = mx_wtime() - t;
   return st;
 }
 
@@ -716,7 +722,7 @@ static int write_mesh(const mx_mesher2d *m, const char *path, int ascii) {
   }
   const double t = mx_wtime();
   const int st = mx_write_qmesh(path, &m->M, ascii);
-  ((mx_mesher2d *)m)->t[M2_WRITE] += mx_wtime() - t;
+  m->rec->t[M2_WRITE] += mx_wtime() - t;
   return st;
 }
 
@@ -743,7 +749,7 @@ void mx_mesher2d_stats(const mx_mesher2d *m, mx_stats2d *s) {
   s->valid = m->valid;
   s->sj_min = fmin(m->q.count[0] ? m->q.min[0] : 1, m->q.count[1] ? m->q.min[1] : 1);
   s->min_angle = m->q.min_angle;
-  s->t_read = m->t[M2_READ], s->t_refine = m->t[M2_REFINE], s->t_balance = m->t[M2_BALANCE];
-  s->t_transition = m->t[M2_TRANSITION], s->t_boundary = m->t[M2_BOUNDARY];
-  s->t_quality = m->t[M2_QUALITY], s->t_check = m->t[M2_CHECK], s->t_restart = m->t_restart;
+  s->t_read = m->rec->t[M2_READ], s->t_refine = m->rec->t[M2_REFINE], s->t_balance = m->rec->t[M2_BALANCE];
+  s->t_transition = m->rec->t[M2_TRANSITION], s->t_boundary = m->rec->t[M2_BOUNDARY];
+  s->t_quality = m->rec->t[M2_QUALITY], s->t_check = m->rec->t[M2_CHECK], s->t_restart = m->rec->t_restart;
 }

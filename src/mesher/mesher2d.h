@@ -17,11 +17,19 @@
 enum { M2_READ, M2_REFINE, M2_BALANCE, M2_TRANSITION, M2_BOUNDARY, M2_QUALITY, M2_CHECK,
        M2_WRITE, M2_NPH };
 
-struct mx_mesher2d {
-  mx_params2d p;
+/* What a call records even when it only reads the mesher (saving, writing
+ * take it const): the handler, the last error, the phases' seconds. Behind
+ * a pointer, so those calls record without casting const away. */
+typedef struct {
   mx_message_fn fn;
   void *user;
   char last_error[1024];
+  double t[M2_NPH], t_restart;
+} mx_mesher2d_record;
+
+struct mx_mesher2d {
+  mx_params2d p;
+  mx_mesher2d_record *rec;
   /* inputs */
   int has_domain;
   mx_poly domain;
@@ -57,7 +65,6 @@ struct mx_mesher2d {
   int meshed, checked, valid;
   size_t refined_listed, feature_boxes;
   double estimate_mb;
-  double t[M2_NPH], t_restart;
 };
 
 /* restart_quadtree.c */

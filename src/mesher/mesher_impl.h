@@ -8,10 +8,10 @@
 #include "mesher/call.h"
 #include "mesher/mesher.h"
 
-void mx_call_begin(mx_mesher *m, mx_call *c);
+void mx_call_begin(const mx_mesher *m, mx_call *c);
 /* Restores what mx_call_begin changed. Returns the status to give the
  * caller. */
-int mx_call_end(mx_mesher *m, mx_call *c, int status);
+int mx_call_end(const mx_mesher *m, mx_call *c, int status);
 
 void mx_mesh_clear(mx_mesher *m);   /* drop the mesh */
 void mx_tree_clear(mx_mesher *m);   /* drop the octree and the mesh */
@@ -68,10 +68,10 @@ int mx_mesher_set_split_keys(mx_mesher *m, const uint64_t *key, const uint8_t *l
 mx_requests mx_mesher_requests(const mx_mesher *m);
 /* Write the mixed mesh (src/mesher/output.c): written order, boundary tags
  * and bodies, fields. */
-int mx_write_mixed(mx_mesher *m, const char *path, int ascii);
+int mx_write_mixed(const mx_mesher *m, const char *path, int ascii);
 /* The order the mesh files list the cells in (src/mesher/output.c). */
 int mx_written_order(const mx_mesher *m, uint32_t *order);
-/* The octree's figures (leaves, hash, octants, edges, splits) into m->S. */
+/* The octree's figures (leaves, hash, octants, edges, splits) into m->rec->S. */
 void mx_fill_tree_stats(mx_mesher *m);
 
 #endif

@@ -48,7 +48,7 @@ static void tags_free(tags *T) {
   for (size_t i = 0; i < sizeof T->names / sizeof *T->names; i++) mx_free(T->names[i]);
 }
 
-static int make_tags(mx_mesher *m, const mx_mesh_view *v, tags *T) {
+static int make_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T) {
   memset(T, 0, sizeof *T);
   const mx_mesh_out *M = &m->M;
   /* The boundary faces lie on the surface: their nodes are outside nodes
@@ -113,7 +113,7 @@ static void release(prepared *P) {
   mx_free(P->order);
 }
 
-static int prepare(mx_mesher *m, prepared *P) {
+static int prepare(const mx_mesher *m, prepared *P) {
   memset(P, 0, sizeof *P);
   const mx_mesh_out *M = &m->M;
   P->order = mx_alloc((M->ncells + 1) * sizeof *P->order);
@@ -146,7 +146,7 @@ static int prepare(mx_mesher *m, prepared *P) {
   return MX_OK;
 }
 
-int mx_write_mixed(mx_mesher *m, const char *path, int ascii) {
+int mx_write_mixed(const mx_mesher *m, const char *path, int ascii) {
   prepared P;
   int st = prepare(m, &P);
   if (!st) st = mx_write_mesh(path, &P.v, ascii);
@@ -154,8 +154,7 @@ int mx_write_mixed(mx_mesher *m, const char *path, int ascii) {
   return st;
 }
 
-int mx_mesher_write_boundary(const mx_mesher *cm, const char *path) {
-  mx_mesher *m = (mx_mesher *)cm; /* the surface index may be built */
+int mx_mesher_write_boundary(const mx_mesher *m, const char *path) {
   mx_call c;
   mx_call_begin(m, &c);
   const double t = mx_wtime();
@@ -171,7 +170,7 @@ int mx_mesher_write_boundary(const mx_mesher *cm, const char *path) {
   if (!st) st = prepare(m, &P);
   if (!st) st = mx_write_boundary_vtu(path, &P.v);
   release(&P);
-  m->S.ph.write += mx_wtime() - t;
+  m->rec->S.ph.write += mx_wtime() - t;
   return mx_call_end(m, &c, st);
 }
 
@@ -192,26 +191,24 @@ int mx_mesher_written_order(const mx_mesher *m, uint32_t *order) {
   return mx_written_order(m, order);
 }
 
-static int write_octree(mx_mesher *m, const char *path, int ascii) {
-  if (!m->have_hex) {
-    if (m->release_edges) mx_edges_release(&m->B); /* not read by the hexahedra */
-    MX_CHECK(mx_leaf_hex_mesh(&m->B.tree, m->leaves, m->nleaves, &m->hex));
-    m->have_hex = 1;
+static int write_octree(const mx_mesher *m, const char *path, int ascii) {
+  if (!m->rec->have_hex) {
+    MX_CHECK(mx_leaf_hex_mesh(&m->B.tree, m->leaves, m->nleaves, &m->rec->hex));
+    m->rec->have_hex = 1;
   }
-  m->S.nodes = m->hex.nnodes;
-  m->S.nodes_counted = 1;
+  m->rec->S.nodes = m->rec->hex.nnodes;
+  m->rec->S.nodes_counted = 1;
   uint8_t *type = mx_alloc(m->nleaves + 1);
   if (!type) return MX_ENOMEM;
   memset(type, MX_HEX, m->nleaves);
-  mx_field level = {.name = "level", .ivalues = m->hex.level};
-  mx_mesh_view v = {.nnodes = m->hex.nnodes, .xyz = m->hex.xyz, .ncells = m->nleaves, .type = type, .conn = m->hex.conn, .ncell_fields = 1, .cell_fields = &level, .npoint_fields = 0, .point_fields = NULL};
+  mx_field level = {.name = "level", .ivalues = m->rec->hex.level};
+  mx_mesh_view v = {.nnodes = m->rec->hex.nnodes, .xyz = m->rec->hex.xyz, .ncells = m->nleaves, .type = type, .conn = m->rec->hex.conn, .ncell_fields = 1, .cell_fields = &level, .npoint_fields = 0, .point_fields = NULL};
   int st = mx_write_mesh(path, &v, ascii);
   mx_free(type);
   return st;
 }
 
-int mx_mesher_write(const mx_mesher *cm, const char *path, int ascii) {
-  mx_mesher *m = (mx_mesher *)cm; /* the octree stage's hex mesh is cached */
+int mx_mesher_write(const mx_mesher *m, const char *path, int ascii) {
   mx_call c;
   mx_call_begin(m, &c);
   const double t = mx_wtime();
@@ -231,6 +228,6 @@ int mx_mesher_write(const mx_mesher *cm, const char *path, int ascii) {
     mx_mesher_stage(m, "write");
     st = mx_write_mixed(m, path, ascii);
   }
-  m->S.ph.write += mx_wtime() - t;
+  m->rec->S.ph.write += mx_wtime() - t;
   return mx_call_end(m, &c, st);
 }

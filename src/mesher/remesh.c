@@ -17,10 +17,10 @@ static int refine_and_mesh(mx_mesher *m, uint32_t *octs, size_t n) {
   const size_t s0 = B->stats.split_requested + B->stats.split_balance;
   const double tr = B->stats.t_refine, tb = B->stats.t_balance;
   /* the summary of this run, the octree's figures kept */
-  const double read = m->S.ph.read, restart = m->S.t_restart;
-  memset(&m->S, 0, sizeof m->S);
-  m->S.ph.read = read;
-  m->S.t_restart = restart;
+  const double read = m->rec->S.ph.read, restart = m->rec->S.t_restart;
+  memset(&m->rec->S, 0, sizeof m->rec->S);
+  m->rec->S.ph.read = read;
+  m->rec->S.t_restart = restart;
   const double t0 = mx_wtime();
   B->req = mx_mesher_requests(m); /* m->boxes may have moved */
   size_t listed = 0;
@@ -32,7 +32,7 @@ static int refine_and_mesh(mx_mesher *m, uint32_t *octs, size_t n) {
   }
   for (size_t i = 0; i < listed; i++) B->tree.oct.flags[octs[i]] &= (uint8_t)~MX_OCT_QUEUED;
   int st = mx_refine_list(B, octs, listed);
-  m->S.refined_listed = listed;
+  m->rec->S.refined_listed = listed;
   /* Algorithm 2's requests on top (boxes, levels, regions) */
   if (!st) mx_retarget_leaves(B);
   if (!st) st = mx_refine_leaves_to_target(B);
@@ -40,9 +40,9 @@ static int refine_and_mesh(mx_mesher *m, uint32_t *octs, size_t n) {
     mx_tree_clear(m);
     return st;
   }
-  m->S.remesh_splits = B->stats.split_requested + B->stats.split_balance - s0;
-  m->S.ph.refine += B->stats.t_refine - tr;
-  m->S.ph.balance += B->stats.t_balance - tb;
+  m->rec->S.remesh_splits = B->stats.split_requested + B->stats.split_balance - s0;
+  m->rec->S.ph.refine += B->stats.t_refine - tr;
+  m->rec->S.ph.balance += B->stats.t_balance - tb;
   mx_free(m->file_leaf);
   m->file_leaf = NULL;
   m->file_nelem = 0;
@@ -57,7 +57,7 @@ static int refine_and_mesh(mx_mesher *m, uint32_t *octs, size_t n) {
   }
   if (st && !m->leaves) mx_tree_clear(m); /* the leaves could not be listed */
   mx_fill_tree_stats(m);
-  m->S.ph.total = mx_wtime() - t0;
+  m->rec->S.ph.total = mx_wtime() - t0;
   return st;
 }
 

@@ -120,7 +120,7 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
   }
   mx_free(pos);
   mx_free(mark);
-  m->S.ph.grid += mx_wtime() - t0; /* finding the patch */
+  m->rec->S.ph.grid += mx_wtime() - t0; /* finding the patch */
   /* lost: a leaf outside the core that is not an old leaf (cannot happen:
    * new leaves are in ring 1); the caller meshes everything */
   if (!st && !lost) {
@@ -131,7 +131,7 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
     const double t1 = mx_wtime();
     st = mx_pipeline_transition(m, P, np, 0, &Mp);
     const double t2 = mx_wtime();
-    m->S.ph.transition += t2 - t1;
+    m->rec->S.ph.transition += t2 - t1;
     if (!st) {
       st = mx_pipeline_boundary(m, P, np, &Mp, &pstates, &bs);
       mx_mesh_out Mn;
@@ -154,17 +154,17 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
         m->M = Mn;
         m->states = nstates;
         m->mesh_stage = MX_STAGE_FULL;
-        m->S.boundary = bs;
-        m->S.full = 1;
-        if (!m->S.patch_leaves) { /* the refinement's, not the repair rounds' */
-          m->S.patch_leaves = np;
-          m->S.core_leaves = ncore;
+        m->rec->S.boundary = bs;
+        m->rec->S.full = 1;
+        if (!m->rec->S.patch_leaves) { /* the refinement's, not the repair rounds' */
+          m->rec->S.patch_leaves = np;
+          m->rec->S.core_leaves = ncore;
         }
-        m->S.splice = ss;
+        m->rec->S.splice = ss;
         *done = 1;
       }
     }
-    m->S.ph.boundary += mx_wtime() - t2;
+    m->rec->S.ph.boundary += mx_wtime() - t2;
   }
   mx_free(from_old);
   mx_free(from_patch);
@@ -174,16 +174,16 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
 
 int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold) {
   int done = 0;
-  if (m->S.local_attempts == 0) m->S.local = 1; /* until a re-mesh is not */
+  if (m->rec->S.local_attempts == 0) m->rec->S.local = 1; /* until a re-mesh is not */
   if (!m->p.remesh_full && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states &&
       old_leaves)
     for (int a = 0; a < 2 && !done; a++) {
-      m->S.local_attempts++;
+      m->rec->S.local_attempts++;
       MX_CHECK(remesh_local(m, old_leaves, nold, attempt_rings[a][0], attempt_rings[a][1], 0,
                             &done));
     }
   if (done) return MX_OK;
-  m->S.local = 0;
+  m->rec->S.local = 0;
   return mx_mesh_full(m);
 }
 

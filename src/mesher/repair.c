@@ -22,7 +22,7 @@
  * J_ENS < 1e-6, or elements a node lies on without being one of their nodes
  * (kernels/contacts.h: two sheets of the boundary meeting), are split once
  * by list refinement (Algorithm 3), and the octree is meshed again around
- * them (remesh_patch.c), up to repair_rounds times. m->S.contacts holds the
+ * them (remesh_patch.c), up to repair_rounds times. m->rec->S.contacts holds the
  * contacts of the final mesh.
  *
  * When to go on: a round is worse when it does not lower the count of the
@@ -55,18 +55,18 @@ int mx_repair(mx_mesher *m) {
     if (!flag) return MX_ENOMEM;
     const double t = mx_wtime();
     mx_mesher_stage(m, "verify");
-    int st = mx_find_contacts(&m->M, &m->B.tree.grid, m->states, flag, &m->S.contacts);
-    m->S.ph.verify += mx_wtime() - t;
+    int st = mx_find_contacts(&m->M, &m->B.tree.grid, m->states, flag, &m->rec->S.contacts);
+    m->rec->S.ph.verify += mx_wtime() - t;
     if (st) {
       mx_free(flag);
       return st;
     }
-    if (!mx_repair_go_on(round, m->M.invalid + m->S.contacts.nodes, m->p.repair_rounds,
+    if (!mx_repair_go_on(round, m->M.invalid + m->rec->S.contacts.nodes, m->p.repair_rounds,
                          &progress))
       break;
     if (m->progress.on_round) m->progress.on_round(m->progress.user, round + 1);
     size_t n = 0;
-    uint32_t *octs = mx_alloc((m->M.invalid + m->S.contacts.elements + 1) * sizeof *octs);
+    uint32_t *octs = mx_alloc((m->M.invalid + m->rec->S.contacts.elements + 1) * sizeof *octs);
     if (!octs) {
       mx_free(flag);
       return MX_ENOMEM;
@@ -78,12 +78,12 @@ int mx_repair(mx_mesher *m) {
     }
     if (n == 0) break;
     const size_t before = m->M.invalid;
-    m->S.contacts_repaired += m->S.contacts.elements;
+    m->rec->S.contacts_repaired += m->rec->S.contacts.elements;
     st = mx_refine_list(&m->B, octs, n);
     mx_free(octs);
     if (!st) {
-      m->S.repaired += before;
-      m->S.repair_rounds++;
+      m->rec->S.repaired += before;
+      m->rec->S.repair_rounds++;
       st = mx_remesh_after_refine(m);
     }
     if (st) {

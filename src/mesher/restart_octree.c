@@ -426,8 +426,7 @@ static int ends_with(const char *s, const char *suffix) {
   return n >= k && strcmp(s + n - k, suffix) == 0;
 }
 
-int mx_mesher_save_restart(const mx_mesher *cm, const char *path) {
-  mx_mesher *m = (mx_mesher *)cm;
+int mx_mesher_save_restart(const mx_mesher *m, const char *path) {
   mx_call c;
   mx_call_begin(m, &c);
   const double t = mx_wtime();
@@ -468,7 +467,7 @@ int mx_mesher_save_restart(const mx_mesher *cm, const char *path) {
   r.mesh_conn = r.mesh_leaf = NULL;
   mx_restart_free(&r);
   restart_gen_free(&g);
-  m->S.t_restart += mx_wtime() - t;
+  m->rec->S.t_restart += mx_wtime() - t;
   return mx_call_end(m, &c, st);
 }
 
@@ -588,7 +587,7 @@ static int adopt_mesh(mx_mesher *m, mx_restart *r, const uint64_t *key) {
   for (size_t c = 0; c < M->ncells; c++) M->level[c] = r->oct_level[M->leaf[c]];
   mx_mesh_summarize(M);
   m->mesh_stage = MX_STAGE_FULL;
-  m->S.full = 1;
+  m->rec->S.full = 1;
   /* a full-stage mesh that did not come through the pipeline: its surface
    * index (the boundary tags and the next re-mesh read it) */
   MX_CHECK(mx_mesher_index(m));
@@ -722,13 +721,13 @@ int mx_mesher_load_restart(mx_mesher *m, const char *path) {
   mx_call c;
   mx_call_begin(m, &c);
   const double t = mx_wtime();
-  const double read = m->S.ph.read;
-  memset(&m->S, 0, sizeof m->S);
-  m->S.ph.read = read;
+  const double read = m->rec->S.ph.read;
+  memset(&m->rec->S, 0, sizeof m->rec->S);
+  m->rec->S.ph.read = read;
   int st = load_restart(m, path);
   if (st) mx_tree_clear(m);
   else mx_mesher_note_read(m, path, 1);
-  m->S.t_restart = mx_wtime() - t;
+  m->rec->S.t_restart = mx_wtime() - t;
   return mx_call_end(m, &c, st);
 }
 

@@ -22,7 +22,7 @@ int mx_winding_domain(mx_mesher *m, mx_trisoup *boundary) {
   memset(boundary, 0, sizeof *boundary);
   MX_CHECK(mx_surface_index_build_given(&m->WI, &m->domain, 0, (uint32_t)m->domain.nt));
   m->have_winding = 1;
-  mx_winding_boundary_stats *ws = &m->S.winding;
+  mx_winding_boundary_stats *ws = &m->rec->S.winding;
   MX_CHECK(mx_winding_boundary(&m->domain, &m->WI, boundary, ws));
   if (ws->kept == 0) {
     mx_error(m->domain_name[0], 0, "the generalized winding number of the input is above 1/2 "
