@@ -20,7 +20,7 @@
  *    triangle ids per split octant, edge entries registered, points of the
  *    transition's node hash, close-to-boundary candidates, shrink pairs, the
  *    elements the verification files. The probe reads the library's own
- *    structures (mx_mesher, mx_builder, mx_mesh_out), not their copies;
+ *    structures (mx_mesher, mx_builder, mx_mesh), not their copies;
  *    with --no-probe those counts are 0 (the model is then a lower bound).
  * 4. The model: per phase, bytes read + bytes written = sum over the arrays
  *    the phase streams of count x bytes per item, plus one cache line (64 B)
@@ -92,14 +92,14 @@
 #define OCT_ROW                                                                            \
   (O_KEY + O_LEVEL + O_FLAGS + O_TARGET + O_KEPT + O_RMEET + O_RIN + O_PARENT + O_CHILD0 + \
    O_TRIOFF + O_TRICNT)
-/* the mesh (src/kernels/transition.h: mx_mesh_out), one element / node */
-#define M_TYPE FSZ(mx_mesh_out, type)
-#define M_CONN (8.0 * FSZ(mx_mesh_out, conn)) /* a row of 8 node ids */
-#define M_LEVEL FSZ(mx_mesh_out, level)
-#define M_LEAF FSZ(mx_mesh_out, leaf)
-#define M_JENS FSZ(mx_mesh_out, jens)
-#define M_XYZ (3.0 * FSZ(mx_mesh_out, xyz))
-#define M_NKEY FSZ(mx_mesh_out, nkey)
+/* the mesh (src/kernels/transition.h: mx_mesh), one element / node */
+#define M_TYPE FSZ(mx_mesh, type)
+#define M_CONN (8.0 * FSZ(mx_mesh, conn)) /* a row of 8 node ids */
+#define M_LEVEL FSZ(mx_mesh, level)
+#define M_LEAF FSZ(mx_mesh, leaf)
+#define M_JENS FSZ(mx_mesh, jens)
+#define M_XYZ (3.0 * FSZ(mx_mesh, xyz))
+#define M_NKEY FSZ(mx_mesh, nkey)
 #define CELL_ROW (M_TYPE + M_CONN + M_LEVEL + M_LEAF + M_JENS)
 /* the optional elements of the surface patterns (kernels/surface_patterns.h) */
 #define OPT_ROW                                                                    \
@@ -662,7 +662,7 @@ static int probe(const char *input, int level, int threads, double *K, double fi
     return 1;
   }
   {
-    const mx_mesh_out *M = &m->M;
+    const mx_mesh *M = &m->M;
     K[K_NODE_T] = (double)M->nnodes;
     K[K_ELEM_T] = (double)M->ncells;
     for (size_t c = 0; c < M->ncells;) {
@@ -728,7 +728,7 @@ static int probe(const char *input, int level, int threads, double *K, double fi
     return 1;
   }
   {
-    const mx_mesh_out *M = &m->M;
+    const mx_mesh *M = &m->M;
     const uint8_t *S = m->states;
     final[0] = (double)M->nnodes;
     final[1] = (double)M->ncells;

@@ -16,7 +16,7 @@ typedef struct {
   mx_builder B;
   uint32_t *leaves;
   size_t n;
-  mx_mesh_out M;
+  mx_mesh M;
 } built;
 
 static int build(const mx_trisoup *s, int level, built *b) {
@@ -34,7 +34,7 @@ static int build(const mx_trisoup *s, int level, built *b) {
 }
 
 static void release(built *b) {
-  mx_mesh_out_free(&b->M);
+  mx_mesh_free(&b->M);
   mx_free(b->leaves);
   mx_builder_free(&b->B);
 }
@@ -43,7 +43,7 @@ static void release(built *b) {
  * the close nodes moved (mx_move_close_nodes), then the elements left with
  * no inside node removed and the nodes no element uses dropped (the
  * pipeline removes them within the surface patterns' pass). */
-static int remove_close_to_boundary(mx_mesh_out *M, uint8_t **states_io,
+static int remove_close_to_boundary(mx_mesh *M, uint8_t **states_io,
                                 const mx_surface_index *S, double ratio,
                                 size_t *moved, size_t *removed) {
   const size_t nc = M->ncells;
@@ -150,7 +150,7 @@ int main(void) {
     mx_trisoup_bbox(&s, lo, hi);
     const double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                              (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    mx_mesh_out keep[2];
+    mx_mesh keep[2];
     for (int th = 1; th <= 2; th++) {
       omp_set_num_threads(th);
       built b;
@@ -220,8 +220,8 @@ int main(void) {
       CHECK(memcmp(keep[0].xyz, keep[1].xyz, 3 * keep[0].nnodes * sizeof(double)) == 0);
       CHECK(memcmp(keep[0].conn, keep[1].conn, 8 * keep[0].ncells * sizeof(uint32_t)) == 0);
     }
-    mx_mesh_out_free(&keep[0]);
-    mx_mesh_out_free(&keep[1]);
+    mx_mesh_free(&keep[0]);
+    mx_mesh_free(&keep[1]);
     mx_surface_index_free(&S);
     mx_trisoup_free(&s);
   }

@@ -1148,7 +1148,7 @@ static void grid_around(const double *xyz, size_t nn, mx_grid *G) {
 static size_t contacts_of(const tm *t, uint8_t state, uint8_t *eflag, mx_contacts *k) {
   uint8_t *st = xrealloc(NULL, t->nn + 1);
   memset(st, state, t->nn);
-  mx_mesh_out M;
+  mx_mesh M;
   memset(&M, 0, sizeof M);
   M.nnodes = t->nn;
   M.ncells = t->nc;

@@ -41,7 +41,7 @@ static void quiet(void *user, int level, const char *text) {
 
 /* Both searches on M (its surface nodes: states MX_NODE_OUTSIDE); 1 when
  * they agree. */
-static int compare(const char *name, const mx_mesh_out *M, const mx_grid *G,
+static int compare(const char *name, const mx_mesh *M, const mx_grid *G,
                    const uint8_t *states) {
   const size_t nc = M->ncells, nn = M->nnodes;
   /* the mesher's */
@@ -136,7 +136,7 @@ static void grid_around(const small_mesh *t, mx_grid *G) {
 }
 
 static void compare_small(const char *name, small_mesh *t, size_t expect_nodes) {
-  mx_mesh_out M;
+  mx_mesh M;
   memset(&M, 0, sizeof M);
   M.nnodes = t->nn;
   M.ncells = t->nc;
@@ -186,7 +186,7 @@ static void test_small(void) {
     memset(st, MX_NODE_INSIDE, sizeof st);
     st[node_at(&t, 1 + off[i], 0.25, 0.25)] = MX_NODE_OUTSIDE;
     for (size_t v = 0; v < 8; v++) st[v] = MX_NODE_OUTSIDE; /* the hexahedron's */
-    mx_mesh_out M;
+    mx_mesh M;
     memset(&M, 0, sizeof M);
     M.nnodes = t.nn;
     M.ncells = t.nc;

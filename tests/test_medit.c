@@ -619,7 +619,7 @@ static void test_hex_blocks(void) {
 }
 
 /* The conforming mixed mesh of a transition stage (demo surface). */
-static int transition_mesh(mx_mesh_out *M, int s_level) {
+static int transition_mesh(mx_mesh *M, int s_level) {
   mx_trisoup demo;
   memset(&demo, 0, sizeof demo);
   int st = mx_demo_surface(&demo, 3);
@@ -710,7 +710,7 @@ static void round_trip(const mx_mesh_view *v, const char *name) {
 }
 
 static void test_mixed_round_trip(void) {
-  mx_mesh_out M;
+  mx_mesh M;
   CHECK(transition_mesh(&M, 4) == MX_OK);
   mx_mesh_view v = {.nnodes = M.nnodes, .xyz = M.xyz, .ncells = M.ncells, .type = M.type, .conn = M.conn, .ncell_fields = 0, .cell_fields = NULL, .npoint_fields = 0, .point_fields = NULL};
   round_trip(&v, "mixed");
@@ -749,7 +749,7 @@ static void test_mixed_round_trip(void) {
   mx_boundary_faces_free(&bf);
   free(type);
   free(conn);
-  mx_mesh_out_free(&M);
+  mx_mesh_free(&M);
 }
 
 /* Coordinates of every magnitude read back bit for bit from ASCII. */
@@ -823,7 +823,7 @@ static void test_threads_identical(void) {
   /* irrational-looking coordinates for the ASCII reals */
   for (size_t i = 0; i < 3 * big.nnodes; i++)
     big.xyz[i] = big.xyz[i] * 1.2345678901 + 0.1 * sin((double)i);
-  mx_mesh_out M;
+  mx_mesh M;
   CHECK(transition_mesh(&M, 5) == MX_OK);
   mx_mesh_view mv = {.nnodes = M.nnodes, .xyz = M.xyz, .ncells = M.ncells, .type = M.type, .conn = M.conn, .ncell_fields = 0, .cell_fields = NULL, .npoint_fields = 0, .point_fields = NULL};
   const mx_mesh_view *views[2] = {&big.v, &mv};
@@ -865,7 +865,7 @@ static void test_threads_identical(void) {
     mx_boundary_faces_free(&a);
     mx_boundary_faces_free(&b);
   }
-  mx_mesh_out_free(&M);
+  mx_mesh_free(&M);
   tmesh_free(&big);
 }
 

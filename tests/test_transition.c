@@ -13,7 +13,7 @@
 #include "io/write_mesh.h"
 
 static int run_mesh(const mx_trisoup *s, uint32_t ntd, const uint32_t *rt0,
-                    const mx_requests *req, int threads, mx_mesh_out *M,
+                    const mx_requests *req, int threads, mx_mesh *M,
                     double *leaf_volume) {
   omp_set_num_threads(threads);
   mx_builder B;
@@ -41,7 +41,7 @@ static int run_mesh(const mx_trisoup *s, uint32_t ntd, const uint32_t *rt0,
 /* Check one configuration; returns the element count. */
 static size_t check_case(const char *what, const mx_trisoup *s, uint32_t ntd,
                          const uint32_t *rt0, const mx_requests *req) {
-  mx_mesh_out A, C;
+  mx_mesh A, C;
   double va = 0, vc = 0;
   CHECK(run_mesh(s, ntd, rt0, req, 1, &A, &va) == MX_OK);
   CHECK(run_mesh(s, ntd, rt0, req, 2, &C, &vc) == MX_OK);
@@ -71,8 +71,8 @@ static size_t check_case(const char *what, const mx_trisoup *s, uint32_t ntd,
   CHECK(fabs(r.volume - va) <= 1e-9 * va);
   CHECK(r.invalid == 0 && A.invalid == 0);
   const size_t ne = A.ncells;
-  mx_mesh_out_free(&A);
-  mx_mesh_out_free(&C);
+  mx_mesh_free(&A);
+  mx_mesh_free(&C);
   return ne;
 }
 

@@ -17,7 +17,7 @@
 
 static int id(int i, int j, int k) { return i + 3 * j + 9 * k; }
 
-static void block(mx_mesh_out *M, uint8_t *states) {
+static void block(mx_mesh *M, uint8_t *states) {
   memset(M, 0, sizeof *M);
   M->nnodes = 27;
   M->ncells = 8;
@@ -50,7 +50,7 @@ static void block(mx_mesh_out *M, uint8_t *states) {
       }
 }
 
-static double volume(const mx_mesh_out *M) {
+static double volume(const mx_mesh *M) {
   double v = 0.0;
   for (size_t c = 0; c < M->ncells; c++) {
     double x[8][3];
@@ -70,7 +70,7 @@ int main(void) {
   CHECK(mx_surface_index_build(&S, &cube, 0, (uint32_t)cube.nt) == MX_OK);
   double first[27 * 3];
   for (int run = 0; run < 2; run++) {
-    mx_mesh_out M;
+    mx_mesh M;
     uint8_t states[27];
     block(&M, states);
     /* the centre goes past the corner (0.8, 0.8, 0.8): the hexahedra around
@@ -100,7 +100,7 @@ int main(void) {
     }
     if (run == 0) memcpy(first, M.xyz, sizeof first);
     else CHECK(memcmp(first, M.xyz, sizeof first) == 0);
-    mx_mesh_out_free(&M);
+    mx_mesh_free(&M);
   }
   mx_surface_index_free(&S);
   mx_trisoup_free(&cube);

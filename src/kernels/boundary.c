@@ -10,7 +10,7 @@
 #include <string.h>
 
 int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
-                   const mx_mesh_out *M, const mx_surface_index *S,
+                   const mx_mesh *M, const mx_surface_index *S,
                    uint8_t *states, size_t *queries) {
   const mx_octree *T = &tr->oct;
   enum { UNKNOWN = 2 };
@@ -47,7 +47,7 @@ static const int8_t edges_of[4][12][2] = {
 static const int nedges_of[4] = {6, 8, 9, 12};
 
 
-int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index *S,
+int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
                         double ratio, size_t *moved, uint8_t **moved_flags) {
   const size_t nn = M->nnodes, nc = M->ncells;
   /* Candidates: inside nodes of surface elements. */
@@ -152,7 +152,7 @@ int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index 
 
 /* Distinct outside nodes of the elements [c0, c1) (one leaf's), in order of
  * first use. */
-static int leaf_outside_nodes(const mx_mesh_out *M, size_t c0, size_t c1,
+static int leaf_outside_nodes(const mx_mesh *M, size_t c0, size_t c1,
                               const uint8_t *states, uint32_t out[64]) {
   int n = 0;
   for (size_t c = c0; c < c1; c++)
@@ -191,7 +191,7 @@ static inline uint64_t dbits(double d) {
 }
 
 int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
-                          mx_mesh_out *M, const uint8_t *states, size_t *moved) {
+                          mx_mesh *M, const uint8_t *states, size_t *moved) {
   const size_t nn = M->nnodes, nc = M->ncells;
   /* Elements are in leaf order: each leaf's elements form one run. */
   uint64_t *run = mx_alloc((nc + 2) * sizeof *run);

@@ -25,7 +25,7 @@ enum { MX_NODE_OUTSIDE = 0, MX_NODE_INSIDE = 1 };
  * for a surface that is not closed). *queries receives the number of
  * located nodes. */
 int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
-                   const mx_mesh_out *M, const mx_surface_index *S,
+                   const mx_mesh *M, const mx_surface_index *S,
                    uint8_t *states, size_t *queries);
 
 /* Line 11 of Algorithm 1 (2015 paper), "remove close to boundary": every
@@ -38,7 +38,7 @@ int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
  * pass. With moved_flags NULL, J_ENS is
  * recomputed here; otherwise *moved_flags receives (mx_alloc) one byte per
  * node, 1 where it moved, and the caller recomputes. */
-int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index *S,
+int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
                         double ratio, size_t *moved, uint8_t **moved_flags);
 
 /* Line 13 of Algorithm 1, "shrink outside nodes": every outside node moves
@@ -47,6 +47,6 @@ int mx_move_close_nodes(mx_mesh_out *M, uint8_t *states, const mx_surface_index 
  * for the elements that moved. Deterministic. *moved receives the number of
  * nodes moved. */
 int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
-                          mx_mesh_out *M, const uint8_t *states, size_t *moved);
+                          mx_mesh *M, const uint8_t *states, size_t *moved);
 
 #endif

@@ -10,7 +10,7 @@
 #include "kernels/untangle.h"
 
 int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
-                      const mx_surface_index *S, mx_mesh_out *M,
+                      const mx_surface_index *S, mx_mesh *M,
                       double close_ratio, double staircase_q,
                       mx_boundary_stats *stats, uint8_t **states_out) {
   memset(stats, 0, sizeof *stats);

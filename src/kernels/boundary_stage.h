@@ -32,7 +32,7 @@ typedef struct {
  * target of the untangling/smoothing step. M is edited in place. */
 #define MX_CLOSE_RATIO 0.5
 int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
-                      const mx_surface_index *S, mx_mesh_out *M,
+                      const mx_surface_index *S, mx_mesh *M,
                       double close_ratio, double staircase_q,
                       mx_boundary_stats *stats, uint8_t **states_out);
 

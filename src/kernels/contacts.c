@@ -43,7 +43,7 @@ static const double contact_tol = 1e-9;
  * surface are interior, and those the lattice puts exactly on a flat part
  * of the surface were never moved, so the transition patterns' conformity
  * holds for them). */
-int mx_surface_face(const mx_mesh_out *M, const uint8_t *states, size_t c) {
+int mx_surface_face(const mx_mesh *M, const uint8_t *states, size_t c) {
   const int t = M->type[c];
   const uint32_t *row = M->conn + 8 * c;
   uint32_t out = 0;
@@ -86,7 +86,7 @@ static int within_triangle(const double p[3], const double *a, const double *b,
 /* 1 when the point p of node v lies on a face of element c (see the head of
  * the file); 0 when not, when v is one of its nodes, or p exactly one of
  * their points. */
-static int lies_on(const mx_mesh_out *M, size_t c, uint32_t v, const double p[3]) {
+static int lies_on(const mx_mesh *M, size_t c, uint32_t v, const double p[3]) {
   const int t = M->type[c], nn = mx_cell_nodes[t];
   const uint32_t *row = M->conn + 8 * c;
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -227,7 +227,7 @@ static uint64_t cells_met(const mx_grid *G, const double ulo[3], const double uh
  * every point lies_on accepts (the tolerance twice, and the rounding of the
  * relative coordinates) in lattice units, and the largest pad in lattice
  * units. */
-static int element_cells(const mx_grid *G, const mx_mesh_out *M, uint32_t c, double b[6],
+static int element_cells(const mx_grid *G, const mx_mesh *M, uint32_t c, double b[6],
                          uint32_t c0[3], uint32_t c1[3], double *pad_max) {
   const int t = M->type[c];
   const uint32_t *row = M->conn + 8 * (size_t)c;
@@ -275,7 +275,7 @@ static int element_cells(const mx_grid *G, const mx_mesh_out *M, uint32_t c, dou
 }
 
 /* Files the n elements of cand, grouped by level, sorted by cell. */
-static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh_out *M,
+static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh *M,
                                const uint32_t *cand, size_t n) {
   memset(L, 0, sizeof *L);
   L->G = G;
@@ -399,7 +399,7 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
  * level's reach of the point (one, unless it is that close to a cell
  * boundary): an element whose padded box holds the point was filed in one
  * of them. */
-static int node_contacts(const lattice_cells *L, const mx_mesh_out *M, uint32_t v,
+static int node_contacts(const lattice_cells *L, const mx_mesh *M, uint32_t v,
                          uint8_t *elem_hit) {
   const double *p = M->xyz + 3 * (size_t)v;
   double u[3];
@@ -447,7 +447,7 @@ static int node_contacts(const lattice_cells *L, const mx_mesh_out *M, uint32_t 
 
 /* ---- the search ------------------------------------------------------------ */
 
-int mx_find_contacts(const mx_mesh_out *M, const mx_grid *G, const uint8_t *states,
+int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
                      uint8_t *elem_flag, mx_contacts *out) {
   memset(out, 0, sizeof *out);
   out->first_node = UINT32_MAX;

@@ -36,10 +36,10 @@ typedef struct {
  * elem_flag (M->ncells bytes, or NULL): set to 1 for the elements involved,
  * 0 elsewhere. Deterministic, parallel, O(elements near the surface).
  * MX_OK, or MX_ENOMEM. */
-int mx_find_contacts(const mx_mesh_out *M, const mx_grid *G, const uint8_t *states,
+int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
                      uint8_t *elem_flag, mx_contacts *out);
 /* 1 when a face of element c has surface (outside) nodes only: the
  * elements the search looks at. */
-int mx_surface_face(const mx_mesh_out *M, const uint8_t *states, size_t c);
+int mx_surface_face(const mx_mesh *M, const uint8_t *states, size_t c);
 
 #endif

@@ -3,6 +3,8 @@
 #include "base/common.h"
 #include "base/scan.h"
 
+#include <string.h>
+
 int mx_leaves_sorted(const mx_tree *tr, uint32_t *leaves, size_t n) {
   uint64_t *k = mx_alloc((n + 1) * sizeof *k);
   if (!k) return MX_ENOMEM;
@@ -71,16 +73,17 @@ uint64_t mx_leaves_hash(const mx_tree *tr, const uint32_t *leaves,
   return mx_leaf_hash_finish(h, (uint64_t)n);
 }
 
-int mx_leaf_hex_mesh(const mx_tree *tr, const uint32_t *leaves, size_t n,
-                     mx_hexmesh *out) {
+int mx_leaf_hex_mesh(const mx_tree *tr, const uint32_t *leaves, size_t n, mx_mesh *out) {
+  memset(out, 0, sizeof *out);
   const mx_octree *T = &tr->oct;
   const size_t m = 8 * n;
   uint64_t *k = mx_alloc((m + 1) * sizeof *k);
   uint32_t *slot = mx_alloc((m + 1) * sizeof *slot);
   out->conn = mx_alloc((m + 1) * sizeof *out->conn);
   out->level = mx_alloc((n + 1) * sizeof *out->level);
-  out->xyz = NULL;
-  if (!k || !slot || !out->conn || !out->level) goto oom;
+  out->type = mx_alloc(n + 1);
+  out->leaf = mx_alloc((n + 1) * sizeof *out->leaf);
+  if (!k || !slot || !out->conn || !out->level || !out->type || !out->leaf) goto oom;
   /* VTK hexahedron corner order. */
   static const int corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
                                    {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
@@ -96,6 +99,8 @@ int mx_leaf_hex_mesh(const mx_tree *tr, const uint32_t *leaves, size_t n,
       slot[8 * i + j] = (uint32_t)(8 * i + j);
     }
     out->level[i] = T->level[leaves[i]];
+    out->type[i] = MX_HEX;
+    out->leaf[i] = (uint32_t)i;
   }
   if (mx_sort_u64(k, slot, m)) goto oom;
   /* Nodes numbered in Morton order of their lattice points. */
@@ -106,9 +111,11 @@ int mx_leaf_hex_mesh(const mx_tree *tr, const uint32_t *leaves, size_t n,
   }
   nn = m ? nn + 1 : 0;
   out->xyz = mx_alloc((3 * nn + 1) * sizeof *out->xyz);
-  if (!out->xyz) goto oom;
+  out->nkey = mx_alloc((nn + 1) * sizeof *out->nkey);
+  if (!out->xyz || !out->nkey) goto oom;
   for (size_t i = 0, id = 0; i < m; i++) {
     if (i > 0 && k[i] == k[i - 1]) continue;
+    out->nkey[id] = k[i];
     uint32_t c[3];
     mx_morton_decode(k[i], c);
     for (int a = 0; a < 3; a++)
@@ -117,21 +124,15 @@ int mx_leaf_hex_mesh(const mx_tree *tr, const uint32_t *leaves, size_t n,
   }
   out->nnodes = nn;
   out->ncells = n;
+  out->by_type[MX_HEX] = n;
+  out->jens_min = n ? 1.0 : 0.0; /* cubes */
   mx_free(k);
   mx_free(slot);
   return MX_OK;
 oom:
   mx_free(k);
   mx_free(slot);
-  mx_hexmesh_free(out);
+  mx_mesh_free(out);
   return MX_ENOMEM;
 }
 
-void mx_hexmesh_free(mx_hexmesh *h) {
-  mx_free(h->xyz);
-  mx_free(h->conn);
-  mx_free(h->level);
-  h->xyz = NULL;
-  h->conn = NULL;
-  h->level = NULL;
-}

@@ -6,6 +6,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "soa/mesh.h"
 #include "soa/tree.h"
 
 /* Indices of the octants not split, in index
@@ -27,14 +28,6 @@ int mx_octants_touch(uint64_t ka, int la, uint64_t kb, int lb);
 /* The leaves as hexahedra (the octree stage's output, hanging nodes and
  * all): nodes numbered in Morton order of their lattice points, corners in
  * VTK order, level per cell. */
-typedef struct {
-  size_t nnodes, ncells;
-  double *xyz;      /* 3 * nnodes */
-  uint32_t *conn;   /* 8 * ncells */
-  int32_t *level;   /* ncells */
-} mx_hexmesh;
-int mx_leaf_hex_mesh(const mx_tree *tr, const uint32_t *leaves, size_t n,
-                     mx_hexmesh *out);
-void mx_hexmesh_free(mx_hexmesh *h);
+int mx_leaf_hex_mesh(const mx_tree *tr, const uint32_t *leaves, size_t n, mx_mesh *out);
 
 #endif

@@ -10,7 +10,7 @@
 #include "soa/mesh.h"
 #include "base/scan.h"
 
-int mx_mesh_keep_cells(mx_mesh_out *M, const uint8_t *keep) {
+int mx_mesh_keep_cells(mx_mesh *M, const uint8_t *keep) {
   const size_t nc = M->ncells;
   uint64_t *dst = mx_alloc((nc + 1) * sizeof *dst);
   if (!dst) return MX_ENOMEM;
@@ -44,7 +44,7 @@ int mx_mesh_keep_cells(mx_mesh_out *M, const uint8_t *keep) {
   return MX_OK;
 }
 
-int mx_mesh_apply_node_ids(mx_mesh_out *M, uint8_t **states, const uint32_t *newid,
+int mx_mesh_apply_node_ids(mx_mesh *M, uint8_t **states, const uint32_t *newid,
                            size_t nu) {
   double *xyz = mx_alloc((3 * nu + 3) * sizeof *xyz);
   uint8_t *st2 = states ? mx_alloc(nu + 1) : NULL;
@@ -77,7 +77,7 @@ int mx_mesh_apply_node_ids(mx_mesh_out *M, uint8_t **states, const uint32_t *new
   return MX_OK;
 }
 
-int mx_mesh_drop_unused_nodes(mx_mesh_out *M, uint8_t **states, uint32_t **newid_out) {
+int mx_mesh_drop_unused_nodes(mx_mesh *M, uint8_t **states, uint32_t **newid_out) {
   const size_t nn = M->nnodes;
   uint64_t *id = mx_calloc((nn + 1) * sizeof *id);
   uint32_t *newid = mx_alloc((nn + 1) * sizeof *newid);
@@ -104,7 +104,7 @@ int mx_mesh_drop_unused_nodes(mx_mesh_out *M, uint8_t **states, uint32_t **newid
   return st;
 }
 
-void mx_mesh_summarize(mx_mesh_out *M) {
+void mx_mesh_summarize(mx_mesh *M) {
   size_t bt[4] = {0, 0, 0, 0}, invalid = 0;
   double jmin = INFINITY;
 #pragma omp parallel for schedule(static) reduction(+ : bt[:4], invalid) reduction(min : jmin)
@@ -118,7 +118,7 @@ void mx_mesh_summarize(mx_mesh_out *M) {
   M->jens_min = M->ncells ? jmin : 1.0;
 }
 
-void mx_mesh_update_jens(mx_mesh_out *M, const uint8_t *moved) {
+void mx_mesh_update_jens(mx_mesh *M, const uint8_t *moved) {
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < M->ncells; c++) {
     const int nv = mx_cell_nodes[M->type[c]];
@@ -138,7 +138,7 @@ static int cmp_u64(const void *a, const void *b) {
 }
 
 /* Element c of src becomes element w of dst (the per-element arrays). */
-static inline void cell_copy(mx_mesh_out *dst, size_t w, const mx_mesh_out *src, size_t c) {
+static inline void cell_copy(mx_mesh *dst, size_t w, const mx_mesh *src, size_t c) {
   dst->type[w] = src->type[c];
   dst->level[w] = src->level[c];
   dst->leaf[w] = src->leaf[c];
@@ -147,7 +147,7 @@ static inline void cell_copy(mx_mesh_out *dst, size_t w, const mx_mesh_out *src,
 }
 
 /* Per-element arrays for n elements, to hold elements aside. */
-static int cells_alloc(mx_mesh_out *B, size_t n) {
+static int cells_alloc(mx_mesh *B, size_t n) {
   memset(B, 0, sizeof *B);
   B->type = mx_alloc(n + 1);
   B->level = mx_alloc(n + 1);
@@ -161,7 +161,7 @@ static int cells_alloc(mx_mesh_out *B, size_t n) {
  * appends the few elements it restores), the tail is sorted apart and merged
  * in place: no second copy of the mesh. Returns MX_OK, or 1 when the general
  * sort is needed. */
-static int merge_short_tail(mx_mesh_out *M, size_t p) {
+static int merge_short_tail(mx_mesh *M, size_t p) {
   const size_t n = M->ncells, k = n - p;
   if (k > 4096 || k > n / 16) return 1;
   /* The prefix moves in parallel chunks, each from its back: a chunk
@@ -171,7 +171,7 @@ static int merge_short_tail(mx_mesh_out *M, size_t p) {
   const size_t csz = (p + nch - 1) / nch;
   const size_t save = k < csz ? k : csz;
   uint64_t *ord = mx_alloc((k + 1) * sizeof *ord); /* leaf << 32 | element, then ins */
-  mx_mesh_out tail, saved;
+  mx_mesh tail, saved;
   memset(&saved, 0, sizeof saved);
   int st = cells_alloc(&tail, k);
   if (!st) st = cells_alloc(&saved, nch * save);
@@ -219,12 +219,12 @@ static int merge_short_tail(mx_mesh_out *M, size_t p) {
     for (size_t t = 0; t < k; t++) cell_copy(M, ins[t] + t, &tail, t);
   }
   mx_free(ord);
-  mx_mesh_out_free(&tail);
-  mx_mesh_out_free(&saved);
+  mx_mesh_free(&tail);
+  mx_mesh_free(&saved);
   return st;
 }
 
-int mx_mesh_sort_by_leaf(mx_mesh_out *M, size_t nleaves) {
+int mx_mesh_sort_by_leaf(mx_mesh *M, size_t nleaves) {
   const size_t n = M->ncells;
   size_t bad = 0, first = n;
 #pragma omp parallel for schedule(static) reduction(+ : bad) reduction(min : first)

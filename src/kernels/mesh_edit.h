@@ -10,28 +10,28 @@
 #include "soa/mesh.h"
 
 /* Keep the elements c with keep[c] != 0, in order. */
-int mx_mesh_keep_cells(mx_mesh_out *M, const uint8_t *keep);
+int mx_mesh_keep_cells(mx_mesh *M, const uint8_t *keep);
 
 /* Renumber the nodes: node v becomes newid[v] (UINT32_MAX: dropped; the
  * others take the ids 0 .. nu-1); coordinates, lattice keys and *states
  * (may be NULL) follow, connectivity is rewritten. */
-int mx_mesh_apply_node_ids(mx_mesh_out *M, uint8_t **states, const uint32_t *newid,
+int mx_mesh_apply_node_ids(mx_mesh *M, uint8_t **states, const uint32_t *newid,
                            size_t nu);
 
 /* Drop the nodes no element uses, renumbering the others in order; *states
  * (one byte per node, may be NULL) follows. When newid is not NULL it
  * receives (mx_alloc) the new id of every old node, UINT32_MAX if dropped. */
-int mx_mesh_drop_unused_nodes(mx_mesh_out *M, uint8_t **states, uint32_t **newid);
+int mx_mesh_drop_unused_nodes(mx_mesh *M, uint8_t **states, uint32_t **newid);
 
 /* Recount by_type, invalid (J_ENS < 1e-6) and jens_min from M->jens. */
-void mx_mesh_summarize(mx_mesh_out *M);
+void mx_mesh_summarize(mx_mesh *M);
 
 /* Recompute J_ENS of the elements with a node flagged in `moved` (all
  * elements when moved is NULL). */
-void mx_mesh_update_jens(mx_mesh_out *M, const uint8_t *moved);
+void mx_mesh_update_jens(mx_mesh *M, const uint8_t *moved);
 
 /* Elements grouped by leaf, in leaf order, keeping the order inside each
  * leaf (a stable counting sort; nothing moves when already grouped). */
-int mx_mesh_sort_by_leaf(mx_mesh_out *M, size_t nleaves);
+int mx_mesh_sort_by_leaf(mx_mesh *M, size_t nleaves);
 
 #endif

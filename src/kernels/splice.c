@@ -155,7 +155,7 @@ static int first_use_ids(const uint8_t *type, const uint32_t *conn, size_t nc, s
   return MX_OK;
 }
 
-int mx_mesh_renumber_first_use(mx_mesh_out *M, uint8_t **states) {
+int mx_mesh_renumber_first_use(mx_mesh *M, uint8_t **states) {
   uint32_t *newid = NULL;
   size_t nu = 0;
   MX_CHECK(first_use_ids(M->type, M->conn, M->ncells, M->nnodes, &newid, &nu));
@@ -167,7 +167,7 @@ int mx_mesh_renumber_first_use(mx_mesh_out *M, uint8_t **states) {
 /* ---- splice ------------------------------------------------------------- */
 
 /* Where each leaf's elements start and end in a mesh sorted by leaf. */
-static int leaf_ranges(const mx_mesh_out *M, size_t nleaves, uint64_t **lo_out,
+static int leaf_ranges(const mx_mesh *M, size_t nleaves, uint64_t **lo_out,
                        uint64_t **hi_out) {
   uint64_t *lo = mx_alloc((nleaves + 1) * sizeof *lo);
   uint64_t *hi = mx_alloc((nleaves + 1) * sizeof *hi);
@@ -221,10 +221,10 @@ static uint32_t km_find(const key_map *H, uint64_t k) {
   }
 }
 
-int mx_mesh_splice(const mx_mesh_out *O, const uint8_t *ostates, size_t nold_leaves,
-                   const mx_mesh_out *P, const uint8_t *pstates, size_t npatch_leaves,
+int mx_mesh_splice(const mx_mesh *O, const uint8_t *ostates, size_t nold_leaves,
+                   const mx_mesh *P, const uint8_t *pstates, size_t npatch_leaves,
                    const uint32_t *from_old, const uint32_t *from_patch, size_t nleaves,
-                   mx_mesh_out *out, uint8_t **states_out, mx_splice_stats *stats) {
+                   mx_mesh *out, uint8_t **states_out, mx_splice_stats *stats) {
   memset(out, 0, sizeof *out);
   memset(stats, 0, sizeof *stats);
   *states_out = NULL;
@@ -308,7 +308,7 @@ int mx_mesh_splice(const mx_mesh_out *O, const uint8_t *ostates, size_t nold_lea
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : kept, patched)
     for (size_t i = 0; i < nleaves; i++) {
       const int patch = from_patch[i] != MX_NONE;
-      const mx_mesh_out *S = patch ? P : O;
+      const mx_mesh *S = patch ? P : O;
       uint64_t lo = 0, hi = 0;
       if (patch) {
         lo = plo[from_patch[i]];
@@ -376,7 +376,7 @@ int mx_mesh_splice(const mx_mesh_out *O, const uint8_t *ostates, size_t nold_lea
       if (u == UINT32_MAX) continue;
       const int old = v < O->nnodes;
       const size_t s = old ? v : v - O->nnodes;
-      const mx_mesh_out *S = old ? O : P;
+      const mx_mesh *S = old ? O : P;
       memcpy(out->xyz + 3 * (size_t)u, S->xyz + 3 * s, 3 * sizeof(double));
       out->nkey[u] = S->nkey[s];
       states[u] = old ? ostates[s] : pstates[s];
@@ -392,7 +392,7 @@ int mx_mesh_splice(const mx_mesh_out *O, const uint8_t *ostates, size_t nold_lea
   mx_free(H.key); mx_free(H.val);
   if (st) {
     mx_free(states);
-    mx_mesh_out_free(out);
+    mx_mesh_free(out);
     return st;
   }
   *states_out = states;

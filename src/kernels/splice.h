@@ -32,7 +32,7 @@ int mx_leaves_touching(const mx_tree *tr, const uint32_t *pos, const uint32_t *o
 
 /* Renumber the nodes of M by first use (see above); *states (may be NULL)
  * and M->nkey follow; nodes no element uses are dropped. */
-int mx_mesh_renumber_first_use(mx_mesh_out *M, uint8_t **states);
+int mx_mesh_renumber_first_use(mx_mesh *M, uint8_t **states);
 
 typedef struct {
   size_t kept_cells, patch_cells;  /* elements taken from each mesh */
@@ -46,9 +46,9 @@ typedef struct {
  * States of both meshes given per node; out and *states_out are allocated.
  * The J_ENS of patch elements using a shared node that moved is recomputed.
  * Nodes are numbered by first use. */
-int mx_mesh_splice(const mx_mesh_out *O, const uint8_t *ostates, size_t nold_leaves,
-                   const mx_mesh_out *P, const uint8_t *pstates, size_t npatch_leaves,
+int mx_mesh_splice(const mx_mesh *O, const uint8_t *ostates, size_t nold_leaves,
+                   const mx_mesh *P, const uint8_t *pstates, size_t npatch_leaves,
                    const uint32_t *from_old, const uint32_t *from_patch, size_t nleaves,
-                   mx_mesh_out *out, uint8_t **states_out, mx_splice_stats *stats);
+                   mx_mesh *out, uint8_t **states_out, mx_splice_stats *stats);
 
 #endif

@@ -11,7 +11,7 @@
 #include "kernels/mesh_edit.h"
 #include "soa/mesh.h"
 
-int mx_staircase(mx_mesh_out *M, const mx_optional *opt, double q_min,
+int mx_staircase(mx_mesh *M, const mx_optional *opt, double q_min,
                  mx_surface_stats *stats) {
   uint8_t *ok = mx_alloc(opt->n + 1);
   double *q = mx_alloc((opt->n + 1) * sizeof *q);

@@ -7,7 +7,7 @@
 /* Staircase reduction: put back the optional elements with J_ENS > q_min
  * (0.2 in the paper), computed at the current node positions (after the
  * shrink). They are appended to M. */
-int mx_staircase(mx_mesh_out *M, const mx_optional *opt, double q_min,
+int mx_staircase(mx_mesh *M, const mx_optional *opt, double q_min,
                  mx_surface_stats *stats);
 
 #endif

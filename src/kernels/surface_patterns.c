@@ -17,7 +17,7 @@ static const mx_surface_case gone = {0, 0, 0, 0, 0};
 
 /* The table case of element c: NULL when it stays as it is, &gone when it
  * has no inside node (it is removed). */
-static const mx_surface_case *case_of(const mx_mesh_out *M, const uint8_t *states, size_t c) {
+static const mx_surface_case *case_of(const mx_mesh *M, const uint8_t *states, size_t c) {
   const int t = M->type[c];
   const int nv = mx_cell_nodes[t];
   unsigned m = 0;
@@ -50,7 +50,7 @@ static int sub_kept(const mx_surface_case *sc, const mx_pattern_elem *e, int *ce
  * is, 0 for one removed), *optional dropped ones, *centre 1 when the kept
  * ones use the element centre; returns the case (NULL: as it is, &gone:
  * removed). */
-static const mx_surface_case *element_counts(const mx_mesh_out *M, const uint8_t *states,
+static const mx_surface_case *element_counts(const mx_mesh *M, const uint8_t *states,
                                              size_t c, uint32_t *kept, uint32_t *optional,
                                              uint32_t *centre) {
   const mx_surface_case *sc = case_of(M, states, c);
@@ -75,7 +75,7 @@ static const mx_surface_case *element_counts(const mx_mesh_out *M, const uint8_t
 enum { SP_BLOCK = 2048, SP_WINDOW = 128 };
 
 /* Elements [from, to) of M are read for good: their pages go. */
-static void release_cells(const mx_mesh_out *M, size_t from, size_t to) {
+static void release_cells(const mx_mesh *M, size_t from, size_t to) {
   mx_release_range(M->type, from, to);
   mx_release_range(M->level, from, to);
   mx_release_range(M->conn, 8 * from * sizeof *M->conn, 8 * to * sizeof *M->conn);
@@ -83,7 +83,7 @@ static void release_cells(const mx_mesh_out *M, size_t from, size_t to) {
   mx_release_range(M->jens, from * sizeof *M->jens, to * sizeof *M->jens);
 }
 
-int mx_surface_patterns(mx_mesh_out *M, uint8_t **states_io, const uint8_t *moved,
+int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
                         mx_optional *opt, mx_surface_stats *stats) {
   const size_t nc = M->ncells, nn = M->nnodes;
   const uint8_t *states = *states_io;

@@ -55,7 +55,7 @@ static inline int mx_surface_diagonal(int ia, int ib, int ic, int id) {
  * (allocated here, node ids of the final mesh). moved (may be NULL): nodes
  * moved since J_ENS was computed; the elements kept as they are and using
  * one get their J_ENS recomputed. */
-int mx_surface_patterns(mx_mesh_out *M, uint8_t **states, const uint8_t *moved,
+int mx_surface_patterns(mx_mesh *M, uint8_t **states, const uint8_t *moved,
                         mx_optional *opt, mx_surface_stats *stats);
 
 void mx_optional_free(mx_optional *opt);

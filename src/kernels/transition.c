@@ -230,7 +230,7 @@ int mx_transition_masks(const mx_tree *tr, const uint32_t *leaves, size_t n,
 }
 
 int mx_transition(const mx_tree *tr, const uint32_t *leaves, size_t n,
-                  mx_mesh_out *out) {
+                  mx_mesh *out) {
   mx_leaf_masks lm;
   memset(out, 0, sizeof *out);
   MX_CHECK(mx_transition_masks(tr, leaves, n, &lm));
@@ -238,7 +238,7 @@ int mx_transition(const mx_tree *tr, const uint32_t *leaves, size_t n,
 }
 
 int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
-                        mx_leaf_masks *lm, mx_mesh_out *out) {
+                        mx_leaf_masks *lm, mx_mesh *out) {
   memset(out, 0, sizeof *out);
   uint32_t *mask = lm->mask;
   const size_t closures = lm->closures;
@@ -440,6 +440,6 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
   mx_free(ref);
   mx_free(noff);
   mx_free(eoff);
-  if (st) mx_mesh_out_free(out);
+  if (st) mx_mesh_free(out);
   return st;
 }

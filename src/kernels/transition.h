@@ -26,7 +26,7 @@
 
 /* leaves: the balanced leaves, in Morton order (mx_leaves_sorted). */
 int mx_transition(const mx_tree *tr, const uint32_t *leaves, size_t n,
-                  mx_mesh_out *out);
+                  mx_mesh *out);
 /* The same in two steps, so that the caller can free the edge infos in
  * between (only step 1 reads them): the masks (with the closures), then
  * everything else; mx_transition_build takes over lm->mask (freed). */
@@ -37,6 +37,6 @@ typedef struct {
 int mx_transition_masks(const mx_tree *tr, const uint32_t *leaves, size_t n,
                         mx_leaf_masks *lm);
 int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
-                        mx_leaf_masks *lm, mx_mesh_out *out);
+                        mx_leaf_masks *lm, mx_mesh *out);
 
 #endif

@@ -16,7 +16,7 @@ static int cmp_u32(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
-static double elem_jens(const mx_mesh_out *M, uint32_t c) {
+static double elem_jens(const mx_mesh *M, uint32_t c) {
   double x[8][3];
   const int nv = mx_cell_nodes[M->type[c]];
   for (int k = 0; k < nv; k++) memcpy(x[k], M->xyz + 3 * (size_t)M->conn[8 * (size_t)c + k], sizeof x[k]);
@@ -30,7 +30,7 @@ static double elem_jens(const mx_mesh_out *M, uint32_t c) {
  * overlaps, that is the same face). An inside node can lie on the boundary
  * (a lattice node exactly on a flat part of the surface); it must stay
  * there like a surface node. */
-static int on_mesh_boundary(const mx_mesh_out *M, const uint32_t *inc, size_t e0, size_t e1,
+static int on_mesh_boundary(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1,
                             uint32_t v) {
   for (size_t e = e0; e < e1; e++) {
     const uint32_t c = inc[e];
@@ -64,7 +64,7 @@ static int on_mesh_boundary(const mx_mesh_out *M, const uint32_t *inc, size_t e0
 }
 
 /* Worst J_ENS of the elements [e0, e1) of list `inc`. */
-static double worst_of(const mx_mesh_out *M, const uint32_t *inc, size_t e0, size_t e1) {
+static double worst_of(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1) {
   double w = INFINITY;
   for (size_t i = e0; i < e1; i++) w = fmin(w, elem_jens(M, inc[i]));
   return w;
@@ -92,7 +92,7 @@ static uint64_t mix64(uint64_t h) {
  * its position for a node off the lattice), not of its number, so that a
  * local re-mesh, whose patch numbers its nodes its own way, colours the same
  * nodes alike. */
-static uint64_t node_priority(const mx_mesh_out *M, uint32_t v) {
+static uint64_t node_priority(const mx_mesh *M, uint32_t v) {
   if (M->nkey && M->nkey[v] != MX_NKEY_NONE) return mix64(M->nkey[v]);
   uint64_t h = 0x9E3779B97F4A7C15ull, b;
   for (int a = 0; a < 3; a++) {
@@ -107,7 +107,7 @@ static int before(const uint64_t *prio, size_t i, size_t j) {
   return prio[i] != prio[j] ? prio[i] > prio[j] : i < j;
 }
 
-static int colour_work(const mx_mesh_out *M, const uint32_t *inc, const uint64_t *off,
+static int colour_work(const mx_mesh *M, const uint32_t *inc, const uint64_t *off,
                        const uint32_t *work, size_t nw, const uint32_t *widx,
                        int16_t *colour) {
   uint8_t *pick = mx_alloc(nw + 1);
@@ -184,7 +184,7 @@ static int colour_work(const mx_mesh_out *M, const uint32_t *inc, const uint64_t
  * J_ENS of its elements; then their J_ENS and the marks of their nodes.
  * Touches only v's position and v's elements: nodes of one colour move at
  * once. Returns 1 when v moved. */
-static int move_node(mx_mesh_out *M, const mx_surface_index *S, const uint32_t *inc,
+static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
                      const uint64_t *off, uint8_t *mark, uint32_t v, int on_surface,
                      double q_target) {
   static const double steps[] = {1.0, 0.5, 0.25, 0.125};
@@ -231,7 +231,7 @@ static int move_node(mx_mesh_out *M, const mx_surface_index *S, const uint32_t *
   return 1;
 }
 
-int mx_untangle(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S,
+int mx_untangle(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
                     double q_target, int sweeps, size_t *moved) {
   const size_t nn = M->nnodes, nc = M->ncells;
   *moved = 0;

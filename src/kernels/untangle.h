@@ -20,7 +20,7 @@
  * colours in turn and the nodes of one colour in parallel (their moves touch
  * disjoint elements): deterministic, whatever the threads. *moved: node
  * moves accepted. */
-int mx_untangle(mx_mesh_out *M, const uint8_t *states, const mx_surface_index *S,
+int mx_untangle(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
                     double q_target, int sweeps, size_t *moved);
 
 #endif

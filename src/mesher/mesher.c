@@ -93,12 +93,12 @@ mx_mesher *mx_mesher_new(const mx_params *p) {
 }
 
 void mx_mesh_clear(mx_mesher *m) {
-  mx_mesh_out_free(&m->M);
+  mx_mesh_free(&m->M);
   memset(&m->M, 0, sizeof m->M);
   mx_free(m->states);
   mx_free(m->bnd);
   m->states = m->bnd = NULL;
-  if (m->rec->have_hex) mx_hexmesh_free(&m->rec->hex);
+  if (m->rec->have_hex) mx_mesh_free(&m->rec->hex);
   m->rec->have_hex = 0;
   m->mesh_stage = -1;
 }
@@ -278,7 +278,7 @@ int mx_mesher_build_octree(mx_mesher *m) {
 /* Per node: 1 on the boundary (the surface nodes of the boundary stage, else
  * the nodes of faces used by one element). */
 static int boundary_flags(mx_mesher *m) {
-  const mx_mesh_out *M = &m->M;
+  const mx_mesh *M = &m->M;
   mx_free(m->bnd);
   m->bnd = mx_alloc(M->nnodes + 1);
   if (!m->bnd) return MX_ENOMEM;
@@ -299,7 +299,7 @@ static int boundary_flags(mx_mesher *m) {
 
 static void count_mesh(mx_mesher *m) {
   mx_summary *S = &m->rec->S;
-  mx_mesh_out *M = &m->M;
+  mx_mesh *M = &m->M;
   /* rows padded with UINT32_MAX past each type's node count (the API's
    * promise; the kernels leave 0 or stale ids there) */
 #pragma omp parallel for schedule(static)
@@ -402,7 +402,7 @@ int mx_volume_verdict(mx_mesher *m, double vm, size_t ncells) {
   return MX_EINVALID;
 }
 
-double mx_mesh_volume(const mx_mesh_out *M) {
+double mx_mesh_volume(const mx_mesh *M) {
   double vm = 0.0;
 #pragma omp parallel for schedule(static) reduction(+ : vm)
   for (size_t c = 0; c < M->ncells; c++) {
@@ -546,7 +546,7 @@ int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a) {
     mx_error(NULL, 0, "no mesh yet: call mx_mesher_mesh first");
     return mx_call_end(m, &c, MX_EINPUT);
   }
-  const mx_mesh_out *M = &m->M;
+  const mx_mesh *M = &m->M;
   a->nnodes = M->nnodes;
   a->nelements = M->ncells;
   a->nleaves = m->nleaves;

@@ -69,7 +69,7 @@ typedef struct {
   void *user;
   char last_error[1024];
   mx_summary S;
-  mx_hexmesh hex;           /* MX_STAGE_OCTREE: the leaves as hexahedra */
+  mx_mesh hex;              /* MX_STAGE_OCTREE: the leaves as hexahedra */
   int have_hex;
 } mx_mesher_record;
 
@@ -128,7 +128,7 @@ struct mx_mesher {
 
   /* the mesh: the stage reached (-1: none) */
   int mesh_stage;
-  mx_mesh_out M;
+  mx_mesh M;
   uint8_t *states;          /* per node (boundary stage), or NULL */
   uint8_t *bnd;             /* per node: 1 on the boundary */
   /* What calls record: behind a pointer, so that the calls that take the

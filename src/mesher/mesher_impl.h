@@ -36,7 +36,7 @@ int mx_mesh_finish(mx_mesher *m);   /* flags, counts; MX_EINVALID if invalid */
 /* The sum of the elements' signed volumes; the domain volume check on a
  * mesh of that volume and ncells elements (MX_EINVALID, message given,
  * when it holds much more or less than the input encloses). */
-double mx_mesh_volume(const mx_mesh_out *M);
+double mx_mesh_volume(const mx_mesh *M);
 int mx_volume_verdict(mx_mesher *m, double vm, size_t ncells);
 /* After a refinement of the octree (old_leaves: the leaves before it, in
  * Morton order): the transition and boundary stages again, only on the

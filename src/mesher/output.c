@@ -50,7 +50,7 @@ static void tags_free(tags *T) {
 
 static int make_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T) {
   memset(T, 0, sizeof *T);
-  const mx_mesh_out *M = &m->M;
+  const mx_mesh *M = &m->M;
   /* The boundary faces lie on the surface: their nodes are outside nodes
    * (projected) or lattice nodes on the surface, which belong to leaves
    * meeting the input (a leaf meeting none has its closed box inside the
@@ -115,7 +115,7 @@ static void release(prepared *P) {
 
 static int prepare(const mx_mesher *m, prepared *P) {
   memset(P, 0, sizeof *P);
-  const mx_mesh_out *M = &m->M;
+  const mx_mesh *M = &m->M;
   P->order = mx_alloc((M->ncells + 1) * sizeof *P->order);
   if (!P->order) return MX_ENOMEM;
   /* The fields read the mesh's own arrays: 8-bit types, levels and
@@ -175,7 +175,7 @@ int mx_mesher_write_boundary(const mx_mesher *m, const char *path) {
 }
 
 int mx_written_order(const mx_mesher *m, uint32_t *order) {
-  const mx_mesh_out *M = &m->M;
+  const mx_mesh *M = &m->M;
   if (m->mesh_stage != MX_STAGE_FULL || m->ndomain == 0)
     return mx_cells_by_type(M->type, M->ncells, order, NULL);
   const mx_mesh_view v = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
@@ -198,14 +198,10 @@ static int write_octree(const mx_mesher *m, const char *path, int ascii) {
   }
   m->rec->S.nodes = m->rec->hex.nnodes;
   m->rec->S.nodes_counted = 1;
-  uint8_t *type = mx_alloc(m->nleaves + 1);
-  if (!type) return MX_ENOMEM;
-  memset(type, MX_HEX, m->nleaves);
-  mx_field level = {.name = "level", .ivalues = m->rec->hex.level};
-  mx_mesh_view v = {.nnodes = m->rec->hex.nnodes, .xyz = m->rec->hex.xyz, .ncells = m->nleaves, .type = type, .conn = m->rec->hex.conn, .ncell_fields = 1, .cell_fields = &level, .npoint_fields = 0, .point_fields = NULL};
-  int st = mx_write_mesh(path, &v, ascii);
-  mx_free(type);
-  return st;
+  const mx_mesh *H = &m->rec->hex;
+  mx_field level = {.name = "level", .u8values = H->level};
+  mx_mesh_view v = {.nnodes = H->nnodes, .xyz = H->xyz, .ncells = H->ncells, .type = H->type, .conn = H->conn, .ncell_fields = 1, .cell_fields = &level, .npoint_fields = 0, .point_fields = NULL};
+  return mx_write_mesh(path, &v, ascii);
 }
 
 int mx_mesher_write(const mx_mesher *m, const char *path, int ascii) {

@@ -30,7 +30,7 @@ int mx_mesher_index(mx_mesher *m) {
 }
 
 int mx_pipeline_transition(mx_mesher *m, const uint32_t *leaves, size_t n, int release_edges,
-                           mx_mesh_out *M) {
+                           mx_mesh *M) {
   MX_CHECK(mx_edges_restore(&m->B));
   mx_leaf_masks lm;
   MX_CHECK(mx_transition_masks(&m->B.tree, leaves, n, &lm));
@@ -38,7 +38,7 @@ int mx_pipeline_transition(mx_mesher *m, const uint32_t *leaves, size_t n, int r
   return mx_transition_build(&m->B.tree, leaves, n, &lm, M);
 }
 
-int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh_out *M,
+int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh *M,
                          uint8_t **states, mx_boundary_stats *bs) {
   if (!m->have_index) {
     mx_mesher_stage(m, "index");

@@ -26,8 +26,8 @@
 #include "mesher/mesher.h"
 
 int mx_pipeline_transition(mx_mesher *m, const uint32_t *leaves, size_t n, int release_edges,
-                           mx_mesh_out *M);
-int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh_out *M,
+                           mx_mesh *M);
+int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh *M,
                          uint8_t **states, mx_boundary_stats *bs);
 /* m->SI over the soup's domain triangles, built the first time it is
  * asked for and kept (the only place it is built): with --repair-input the

@@ -114,7 +114,7 @@ static int refine_indices(mx_mesher *m, const uint64_t *idx, size_t n, const uin
 static int by_type_map(mx_mesher *m, uint32_t **map) {
   *map = NULL;
   if (m->mesh_stage != MX_STAGE_FULL) MX_CHECK(mx_mesh_stages(m));
-  const mx_mesh_out *M = &m->M;
+  const mx_mesh *M = &m->M;
   const size_t n = M->ncells;
   uint32_t *order = mx_alloc((n + 1) * sizeof *order);
   uint32_t *cnt = mx_calloc((m->nleaves + 1) * sizeof *cnt);

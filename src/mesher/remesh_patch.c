@@ -124,7 +124,7 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
   /* lost: a leaf outside the core that is not an old leaf (cannot happen:
    * new leaves are in ring 1); the caller meshes everything */
   if (!st && !lost) {
-    mx_mesh_out Mp;
+    mx_mesh Mp;
     uint8_t *pstates = NULL;
     mx_boundary_stats bs;
     memset(&bs, 0, sizeof bs);
@@ -134,22 +134,22 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
     m->rec->S.ph.transition += t2 - t1;
     if (!st) {
       st = mx_pipeline_boundary(m, P, np, &Mp, &pstates, &bs);
-      mx_mesh_out Mn;
+      mx_mesh Mn;
       uint8_t *nstates = NULL;
       mx_splice_stats ss;
       if (!st)
         st = mx_mesh_splice(&m->M, m->states, nold, &Mp, pstates, np, from_old, from_patch, nl,
                             &Mn, &nstates, &ss);
-      mx_mesh_out_free(&Mp);
+      mx_mesh_free(&Mp);
       mx_free(pstates);
       if (!st && ss.shared_moved && !last) {
-        mx_mesh_out_free(&Mn); /* the change reached the kept part: more rings */
+        mx_mesh_free(&Mn); /* the change reached the kept part: more rings */
         mx_free(nstates);
       } else if (!st) {
         mx_mesh_summarize(&Mn);
         Mn.closures = m->M.closures;
         Mn.centre_leaves = m->M.centre_leaves;
-        mx_mesh_out_free(&m->M);
+        mx_mesh_free(&m->M);
         mx_free(m->states);
         m->M = Mn;
         m->states = nstates;

@@ -558,7 +558,7 @@ static int adopt_mesh(mx_mesher *m, mx_restart *r, const uint64_t *key) {
     differ += m->B.tree.oct.key[m->leaves[i]] != key[i] ||
               m->B.tree.oct.level[m->leaves[i]] != r->oct_level[i];
   if (differ) return MX_OK; /* meshed again from the octree when refined */
-  mx_mesh_out *M = &m->M;
+  mx_mesh *M = &m->M;
   memset(M, 0, sizeof *M);
   M->level = mx_alloc((r->mesh_nc + 1) * sizeof *M->level);
   M->jens = mx_alloc((r->mesh_nc + 1) * sizeof *M->jens);

@@ -113,7 +113,7 @@ static int patch_tree(mx_mesher *m, const patch_set *s, uint32_t **pl, int32_t *
 
 /* The keys of this rank's leaves holding an element with a defect (not
  * those as fine as the lattice allows), sorted, in D. */
-static int defect_leaves(const mx_mesher *m, const uint32_t *pl, const mx_mesh_out *M,
+static int defect_leaves(const mx_mesher *m, const uint32_t *pl, const mx_mesh *M,
                          const uint8_t *core, const uint8_t *flag, mx_p4est_mesh *D) {
   mx_free(D->defect_key);
   D->defect_key = NULL;
@@ -152,7 +152,7 @@ static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4e
   D->tree_leaves = m->nleaves;
   const size_t np = s.n;
   patch_free(&s);
-  mx_mesh_out M;
+  mx_mesh M;
   memset(&M, 0, sizeof M);
   uint8_t *states = NULL;
   t = mx_wtime();
@@ -204,12 +204,12 @@ static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4e
   mx_free(powner);
   mx_tree_clear(m); /* the patch's octree: rebuilt by the next attempt */
   if (st) {
-    mx_mesh_out_free(&M);
+    mx_mesh_free(&M);
     mx_free(states);
     return st;
   }
   mx_mesh_summarize(&M);
-  mx_mesh_out_free(&D->M);
+  mx_mesh_free(&D->M);
   mx_free(D->states);
   D->M = M;
   D->states = states;
@@ -381,7 +381,7 @@ int mx_p4est_mesh_verdict(const mx_p4est_octree *P, mx_mesher *m, const mx_p4est
 }
 
 void mx_p4est_mesh_free(mx_p4est_mesh *D) {
-  mx_mesh_out_free(&D->M);
+  mx_mesh_free(&D->M);
   mx_free(D->defect_key);
   mx_free(D->states);
   mx_free(D->gid);

@@ -35,7 +35,7 @@
 
 typedef struct {
   /* this rank's part: its leaves' elements, nodes in first-use order */
-  mx_mesh_out M;
+  mx_mesh M;
   uint8_t *states;        /* per node, kernels/boundary.h */
   uint64_t *gid;          /* per node: global number, 0-based */
   uint8_t *owned;         /* per node: 1 when this rank owns it */

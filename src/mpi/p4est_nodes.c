@@ -26,7 +26,7 @@ void mx_shared_free(mx_shared *sh) {
   memset(sh, 0, sizeof *sh);
 }
 
-int mx_shared_collect(const mx_mesh_out *M, const uint8_t *states, const uint8_t *core,
+int mx_shared_collect(const mx_mesh *M, const uint8_t *states, const uint8_t *core,
                       const int32_t *leaf_owner, int rank, mx_shared *sh) {
   memset(sh, 0, sizeof *sh);
   uint8_t *used = mx_calloc(M->nnodes + 1);
@@ -178,7 +178,7 @@ int mx_shared_agree(const mx_p4est_octree *P, mx_p4est_mesh *D, const mx_shared 
 }
 
 int mx_shared_number(const mx_p4est_octree *P, mx_p4est_mesh *D, const mx_shared *sh) {
-  const mx_mesh_out *M = &D->M;
+  const mx_mesh *M = &D->M;
   const size_t nn = M->nnodes;
   mx_free(D->gid);
   mx_free(D->owned);

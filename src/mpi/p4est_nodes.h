@@ -22,7 +22,7 @@ typedef struct {
 /* From the patch mesh M (states per node; core[c]: element c is this
  * rank's; leaf_owner: the owner rank of each patch leaf, M->leaf indexing
  * it). Not collective. */
-int mx_shared_collect(const mx_mesh_out *M, const uint8_t *states, const uint8_t *core,
+int mx_shared_collect(const mx_mesh *M, const uint8_t *states, const uint8_t *core,
                       const int32_t *leaf_owner, int rank, mx_shared *sh);
 /* Sends each peer its list, compares what comes back; *differ: entries
  * that differ over all ranks. last: a difference is an error (message

@@ -13,7 +13,7 @@
 #include <string.h>
 
 /* This rank's elements as the writers and the hash take them. */
-static mx_mesh_view rank_view(const mx_mesh_out *M) {
+static mx_mesh_view rank_view(const mx_mesh *M) {
   mx_mesh_view v;
   memset(&v, 0, sizeof v);
   v.nnodes = M->nnodes;
@@ -33,7 +33,7 @@ uint64_t mx_p4est_mesh_hash(const mx_p4est_octree *P, const mx_p4est_mesh *D) {
 
 /* Every rank its piece, rank 0 the master: all of them or nothing. */
 static int write_pvtu(const mx_p4est_octree *P, const mx_p4est_mesh *D, const char *path) {
-  const mx_mesh_out *M = &D->M;
+  const mx_mesh *M = &D->M;
   mx_mesh_view v = rank_view(M);
   const mx_field cf[2] = {{.name = "level", .u8values = M->level},
                           {.name = "jens", .is_double = 1, .fvalues = M->jens}};
@@ -58,7 +58,7 @@ static int write_pvtu(const mx_p4est_octree *P, const mx_p4est_mesh *D, const ch
 }
 
 static int write_msh(const mx_p4est_octree *P, const mx_p4est_mesh *D, const char *path) {
-  const mx_mesh_out *M = &D->M;
+  const mx_mesh *M = &D->M;
   mx_dist_mesh dm;
   memset(&dm, 0, sizeof dm);
   dm.nnodes = M->nnodes;

@@ -5,7 +5,7 @@
 
 #include "base/common.h"
 
-void mx_mesh_out_free(mx_mesh_out *m) {
+void mx_mesh_free(mx_mesh *m) {
   mx_free(m->xyz);
   mx_free(m->type);
   mx_free(m->conn);

@@ -58,10 +58,10 @@ typedef struct {
   size_t by_type[4];
   double jens_min;
   size_t invalid;   /* elements with J_ENS < 1e-6 */
-} mx_mesh_out;
+} mx_mesh;
 #define MX_NKEY_NONE UINT64_MAX
 /* Frees every array and zeroes *m (src/soa/mesh.c). */
-void mx_mesh_out_free(mx_mesh_out *m);
+void mx_mesh_free(mx_mesh *m);
 
 /* A cell or point field. is_double says how it is written: 0 as int32
  * (legacy VTK "int", VTU Int32 or UInt8 when every value fits, ...), 1 as
