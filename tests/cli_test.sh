@@ -65,6 +65,15 @@ expect_exit 4 "unwritable output" "$MIXOCT" --demo -s 3 --stage octree -o "$T/no
 "$MIXOCT" --demo -s 5 --stage octree -o "$T/r2.vtk" --threads 2 --quiet --balance recursive
 cmp -s "$T/t1.vtk" "$T/t2.vtk" && ok "1 and 2 threads: identical bytes" || bad "threads differ"
 cmp -s "$T/t1.vtk" "$T/r2.vtk" && ok "edges and recursive: identical bytes" || bad "balances differ"
+# ... and the same mixed meshes: the transition after the recursive balance
+# reads edge infos built for the balanced tree (it once had none: hexahedra
+# with hanging nodes, exit 0)
+for s in transition full; do
+  "$MIXOCT" --demo -s 5 --stage $s -o "$T/e_$s.vtk" --quiet
+  "$MIXOCT" --demo -s 5 --stage $s -o "$T/r_$s.vtk" --quiet --balance recursive
+  cmp -s "$T/e_$s.vtk" "$T/r_$s.vtk" && ok "--stage $s: edges and recursive, identical bytes" \
+    || bad "--stage $s: the balances give different meshes"
+done
 
 # Memory budget and output names are checked before any meshing.
 expect_exit 3 "a run that cannot fit is refused" "$MIXOCT" --demo -s 15
