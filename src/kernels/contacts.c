@@ -348,6 +348,15 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
             unsorted[e].elem = cand[i];
           }
     }
+  }
+  /* the elements' cells and boxes are in the entries now: their memory
+   * goes back before the sort (the peak of the verify phase) */
+  mx_free(cells);
+  mx_free(box);
+  mx_free(pad);
+  cells = NULL;
+  box = pad = NULL;
+  if (st == MX_OK) {
     /* per level: entries sorted by cell, the distinct cells indexed */
     size_t k = 0;
     for (int l = 0; l < NLEV && st == MX_OK; l++) {
@@ -378,12 +387,13 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
       st = mx_key_index_build(&L->index[l], L->ukey[l], nu, 3 * (MX_MAX_LEVEL - l));
     }
   }
+  mx_free(key); /* the distinct cells are indexed */
+  key = NULL;
   if (st == MX_OK) {
 #pragma omp parallel for schedule(static) if (total > CHUNK)
     for (size_t e = 0; e < (size_t)total; e++) L->ent[e] = unsorted[idx[e]];
   }
   mx_free(unsorted);
-  mx_free(key);
   mx_free(idx);
   mx_free(lev);
   mx_free(cnt);
