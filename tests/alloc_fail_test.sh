@@ -61,35 +61,15 @@ if [ "$(cat "$out/flags" 2>/dev/null)" != "$stamp" ]; then
   printf '%s\n' "$stamp" >"$out/flags"
 fi
 
-# up_to_date OUT DEPFILE: OUT exists and no file DEPFILE lists is newer.
-up_to_date() {
-  [ -f "$1" ] && [ -f "$2" ] || return 1
-  local f
-  for f in $(sed -e 's/^[^:]*://' -e 's/\\$//' "$2"); do
-    [ "$f" -nt "$1" ] && return 1
-  done
-  return 0
-}
-compile() {
-  local src=$1 o
-  o=$out/obj/$(printf '%s' "${src#"$root"/}" | tr / _).o
-  up_to_date "$o" "${o%.o}.d" && return 0
-  # shellcheck disable=SC2086
-  if $cc $flags -MMD -MF "${o%.o}.d.tmp" -c "$src" -o "$o.tmp" 2>"$o.err"; then
-    mv "$o.tmp" "$o" && mv "${o%.o}.d.tmp" "${o%.o}.d" && rm -f "$o.err"
-  else
-    cat "$o.err" >&2
-    rm -f "$o.tmp" "${o%.o}.d.tmp"
-    return 1
-  fi
-}
-export -f compile up_to_date
-export out cc flags root
+# compile_obj, obj_path, up_to_date (shared with tools/fuzz.sh)
+. "$root/tools/obj_build.sh"
+OBJ_ROOT=$root OBJ_DIR=$out OBJ_CC=$cc OBJ_FLAGS=$flags
+export OBJ_ROOT OBJ_DIR OBJ_CC OBJ_FLAGS
 
 t0=$(date +%s)
-printf '%s\n' $srcs | xargs -P "$jobs" -I{} bash -c 'compile "$1"' _ {} ||
+printf '%s\n' $srcs | xargs -P "$jobs" -I{} bash -c 'compile_obj "$1"' _ {} ||
   { echo "alloc_fail_asan: FAIL: the library did not compile"; exit 1; }
-objs=$(for s in $srcs; do printf '%s\n' "$out/obj/$(printf '%s' "${s#"$root"/}" | tr / _).o"; done)
+objs=$(for s in $srcs; do obj_path "$s"; echo; done)
 bin=$out/test_alloc_fail
 if ! up_to_date "$bin" "$bin.d" || [ -n "$(find $objs -newer "$bin" 2>/dev/null | head -1)" ]; then
   # shellcheck disable=SC2086

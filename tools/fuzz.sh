@@ -68,31 +68,10 @@ if [ "$(cat "$build/flags" 2>/dev/null)" != "$stamp" ]; then
   printf '%s\n' "$stamp" >"$build/flags"
 fi
 
-# up_to_date OUT DEPFILE: OUT exists and no file DEPFILE lists is newer.
-up_to_date() {
-  [ -f "$1" ] && [ -f "$2" ] || return 1
-  local f
-  for f in $(sed -e 's/^[^:]*://' -e 's/\\$//' "$2"); do
-    [ "$f" -nt "$1" ] && return 1
-  done
-  return 0
-}
-
-# compile SRC: one object of the library (run in parallel by xargs).
-compile() {
-  local src=$1 o
-  o=$build/obj/$(printf '%s' "${src#src/}" | tr / _).o
-  up_to_date "$o" "${o%.o}.d" && return 0
-  # shellcheck disable=SC2086
-  if $cc $obj_flags -MMD -MF "${o%.o}.d.tmp" -c "$root/$src" -o "$o.tmp" 2>"$o.err"; then
-    mv "$o.tmp" "$o" && mv "${o%.o}.d.tmp" "${o%.o}.d" && rm -f "$o.err"
-  else
-    cat "$o.err" >&2
-    rm -f "$o.tmp" "${o%.o}.d.tmp"
-    return 1
-  fi
-}
-export -f compile up_to_date
+# compile_obj, obj_path, up_to_date (shared with tests/alloc_fail_test.sh)
+. "$root/tools/obj_build.sh"
+OBJ_ROOT=$root OBJ_DIR=$build OBJ_CC=$cc OBJ_FLAGS=$obj_flags
+export OBJ_ROOT OBJ_DIR OBJ_CC OBJ_FLAGS
 export build cc obj_flags root
 
 # build_lib SOURCES: compiles them and archives the objects in $lib (an
@@ -100,10 +79,10 @@ export build cc obj_flags root
 # compile is left out with a warning: the fuzzers that need it fail to link.
 lib=$build/libmixoct_fuzz.a
 build_lib() {
-  printf '%s\n' $1 | xargs -P "$njobs" -I{} bash -c 'compile "$1"' _ {}
+  printf '%s\n' $1 | xargs -P "$njobs" -I{} bash -c 'compile_obj "$1"' _ {}
   local objs s o rebuild=0 ar=ar
   objs=$(for s in $1; do
-    o=$build/obj/$(printf '%s' "${s#src/}" | tr / _).o
+    o=$(obj_path "$s")
     if [ -f "$o.err" ]; then
       echo "fuzz.sh: warning: $s did not compile (above): left out" >&2
       rm -f "$o"
