@@ -49,6 +49,7 @@ static int setup(const mx_options *o, mx_mesher **out) {
   p.stage = o->stage == MX_STAGE_OCTREE ? MX_STAGE_OCTREE : MX_STAGE_FULL;
   p.threads = o->threads;
   p.max_memory_mb = o->max_memory_mb;
+  p.repair_input = o->repair_input; /* refused by mx_p4est_inputs_init */
   mx_mesher *m = mx_mesher_new(&p);
   if (!m) return MX_ENOMEM; /* said by mx_alloc */
   *out = m;
@@ -261,11 +262,7 @@ int mx_p4est_main(int argc, char **argv) {
                       "meshes from the surfaces and levels only)");
     st = MX_EINPUT;
   }
-  if (!st && !exit_now && o.repair_input) {
-    mx_error(NULL, 0, "--p4est: no --repair-input (the distributed octree locates octants "
-                      "by ray parity: it needs a closed, manifold input)");
-    st = MX_EINPUT;
-  }
+
   if (!st && !exit_now) st = mx_p4est_check_outputs(&o);
   if (!st && !exit_now) {
     mx_quiet = o.quiet;

@@ -154,7 +154,6 @@ void mx_free_array(void *p) { mx_free(p); }
 
 /* ---- stages ------------------------------------------------------------ */
 
-static void stage(const mx_mesher *m, const char *name) { mx_mesher_stage(m, name); }
 
 /* Refuse a run that cannot fit: the estimate (kernels/estimate.h) against
  * max_memory_mb, or else the memory available now. */
@@ -211,7 +210,7 @@ static int winding_inside(const void *ctx, const double p[3]) {
 int mx_build_tree(mx_mesher *m) {
   mx_tree_clear(m);
   const double t0 = mx_wtime();
-  stage(m, "grid");
+  mx_mesher_stage(m, "grid");
   MX_CHECK(mx_mesher_assemble_inputs(m));
   const mx_requests req = mx_mesher_requests(m);
   const int use_edges = m->p.balance == MX_BALANCE_EDGES;
@@ -239,7 +238,7 @@ int mx_build_tree(mx_mesher *m) {
   MX_CHECK(check_memory(m, &req));
   MX_CHECK(mx_build_roots(&m->B));
   m->rec->S.ph.grid += mx_wtime() - t0;
-  stage(m, "refine");
+  mx_mesher_stage(m, "refine");
   if (use_edges) {
     MX_CHECK(mx_refine_balanced(&m->B));
     MX_CHECK(mx_resolve_closures(&m->B));
@@ -252,7 +251,7 @@ int mx_build_tree(mx_mesher *m) {
     }
   } else {
     MX_CHECK(mx_refine_unbalanced(&m->B));
-    stage(m, "balance");
+    mx_mesher_stage(m, "balance");
     MX_CHECK(mx_balance_recursive(&m->B));
     /* the baseline balances without edge infos; the closures and the
      * transition masks read them: registered once for the balanced tree,
@@ -324,7 +323,7 @@ static void count_mesh(mx_mesher *m) {
   S->centre_leaves = M->centre_leaves;
   S->mesh = 1;
   const double t = mx_wtime();
-  stage(m, "quality");
+  mx_mesher_stage(m, "quality");
   mx_quality_tabulate(M->type, M->jens, M->ncells, &S->quality);
   S->ph.quality += mx_wtime() - t;
 }
@@ -333,7 +332,7 @@ static int transition(mx_mesher *m) {
   if (!m->have_tree) MX_CHECK(mx_build_tree(m));
   mx_mesh_clear(m);
   const double t = mx_wtime();
-  stage(m, "transition");
+  mx_mesher_stage(m, "transition");
   /* nothing reads the edge infos again until the octree is split: their
    * memory goes to the mesh (rebuilt by the next split) */
   MX_CHECK(mx_pipeline_transition(m, m->leaves, m->nleaves, m->release_edges, &m->M));
@@ -356,7 +355,7 @@ int mx_mesher_transition(mx_mesher *m) {
  * (the restart file's element -> octant map). */
 static int boundary_once(mx_mesher *m) {
   const double t = mx_wtime();
-  stage(m, "boundary");
+  mx_mesher_stage(m, "boundary");
   mx_boundary_stats bs;
   MX_CHECK(mx_pipeline_boundary(m, m->leaves, m->nleaves, &m->M, &m->states, &bs));
   m->rec->S.boundary = bs;
