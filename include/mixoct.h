@@ -401,6 +401,76 @@ typedef struct {
 } mx_stats2d;
 void mx_mesher2d_stats(const mx_mesher2d *m, mx_stats2d *s);
 
+/* ---- For programs built on the library ----------------------------------
+ * What the mixoct, mesher2d and mesher_roi programs (src/cli/) need besides
+ * the mesher calls; they include only this header. */
+
+#define MX_MAX_LEVEL 16  /* the deepest octree level */
+#define MX_MAX_REGIONS 8 /* region surfaces per mesher */
+
+/* Wall-clock seconds, and the peak resident set size of this process. */
+double mx_wtime(void);
+double mx_peak_rss_mb(void);
+
+/* A message of the program, through the calling thread's handler (stderr,
+ * "mixoct: FILE:LINE: text", by default; file NULL or line 0 leave them
+ * out). Warnings are dropped while the thread is quiet. */
+#if defined(__GNUC__)
+#define MX_PRINTF_(a, b) __attribute__((format(printf, a, b)))
+#else
+#define MX_PRINTF_(a, b)
+#endif
+void mx_error(const char *file, long line, const char *fmt, ...) MX_PRINTF_(3, 4);
+void mx_warning(const char *file, long line, const char *fmt, ...) MX_PRINTF_(3, 4);
+/* The calling thread's handler for messages outside a mesher's calls (a
+ * mesher's calls use its own, mx_mesher_set_message_handler), and whether
+ * its warnings are dropped. */
+void mx_set_thread_message_handler(mx_message_fn fn, void *user);
+void mx_set_thread_quiet(int quiet);
+
+/* The library's allocator: NULL after saying "out of memory" (the size
+ * asked); mx_calloc clears; mx_free(NULL) does nothing. */
+void *mx_alloc(size_t bytes);
+void *mx_calloc(size_t bytes);
+char *mx_strdup(const char *s);
+void mx_free(void *p);
+
+/* Removes the temporary files of the outputs being written (they are
+ * renamed to their names only once complete). Async-signal-safe: for a
+ * program's SIGINT / SIGTERM handler. */
+void mx_remove_temporaries(void);
+
+/* The files of a run, checked before anything is read or written: no
+ * output may be an input or another output (the same file, whatever the
+ * spelling: device and inode, or the directory's for a file to be
+ * written); the restart file written may replace the one read. */
+enum { MX_FILE_INPUT, MX_FILE_OUTPUT, MX_FILE_RESTART_IN, MX_FILE_RESTART_OUT };
+typedef struct {
+  const char *path; /* NULL: not used by this run (skipped) */
+  const char *what; /* for the message: "the mesh output" */
+  int use;          /* MX_FILE_* */
+} mx_file_use;
+/* MX_OK, or MX_EINPUT with a message naming both paths. */
+int mx_check_file_uses(const mx_file_use *u, int n);
+
+/* 1 when the extension of path names a 3D mesh format mx_mesher_write
+ * writes (mx_mesh_format_known) or a 2D one mx_mesher2d_write writes
+ * (mx_plane_format_known); else 0. */
+int mx_mesh_format_known(const char *path);
+int mx_plane_format_known(const char *path);
+/* The file of piece `piece` of a parallel VTU "DIR/BASE.pvtu":
+ * "DIR/BASE_<piece>.vtu" in buf (at most n bytes; empty when it does not
+ * fit). */
+void mx_pvtu_piece_path(const char *pvtu_path, int piece, char *buf, size_t n);
+
+/* ---- The run's report (the mixoct program's summary and --json) --------- */
+
+/* ---- Checking a mesh file (mixoct check) -------------------------------- */
+
+/* ---- The mixoct program's other commands (patterns, 2D report) ---------- */
+
+/* ---- The distributed path (mixoct --p4est; MPI builds) ------------------ */
+
 #ifdef __cplusplus
 }
 #endif

@@ -20,6 +20,13 @@
 _Thread_local int mx_quiet = 0;
 _Thread_local mx_message_fn mx_msg_fn = NULL;
 _Thread_local void *mx_msg_user = NULL;
+
+void mx_set_thread_message_handler(mx_message_fn fn, void *user) {
+  mx_msg_fn = fn;
+  mx_msg_user = user;
+}
+void mx_set_thread_quiet(int quiet) { mx_quiet = quiet != 0; }
+
 _Thread_local unsigned long mx_msg_errors = 0;
 
 _Thread_local int mx_msg_level = 0;

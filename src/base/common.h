@@ -17,10 +17,7 @@
 
 /* Messages go to stderr, prefixed "mixoct: ". A message about a file names it
  * and, when known (line > 0), the line: "mixoct: FILE:LINE: text". */
-void mx_error(const char *file, long line, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-void mx_warning(const char *file, long line, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
+/* mx_error, mx_warning: mixoct.h */
 /* when set, warnings are not printed; per thread (see mx_msg_fn) */
 extern _Thread_local int mx_quiet;
 
@@ -71,15 +68,10 @@ enum { MX_PAR_MIN = 16384 };
  * 64-byte aligned, zeroed on request. Failure returns NULL, after a message
  * "out of memory (asked for N bytes)" on the calling thread (none from a
  * worker thread, see mx_msg_fn); the caller returns MX_ENOMEM. */
-void *mx_alloc(size_t bytes);
-void *mx_calloc(size_t bytes);
-/* The same aligned to `align` (a power of two, a multiple of
+/* mx_alloc, mx_calloc, mx_strdup, mx_free: mixoct.h. The same aligned to `align` (a power of two, a multiple of
  * sizeof(void *)): buffers for direct I/O. */
 void *mx_alloc_aligned(size_t align, size_t bytes);
 void *mx_realloc(void *p, size_t bytes);
-/* A copy of string s (mx_free), NULL when out of memory. */
-char *mx_strdup(const char *s);
-void mx_free(void *p);
 
 /* Test hook (not in the public API; tests/test_alloc_fail.c): k > 0 makes
  * the k-th allocation from now (mx_alloc, mx_calloc, mx_realloc,
@@ -101,8 +93,7 @@ void mx_release_range(void *p, size_t from, size_t to);
 static inline double mx_min(double a, double b) { return a < b ? a : b; }
 static inline double mx_max(double a, double b) { return a > b ? a : b; }
 
-double mx_wtime(void);        /* wall clock seconds */
-double mx_peak_rss_mb(void);  /* peak resident set size of this process */
+/* mx_wtime, mx_peak_rss_mb: mixoct.h */
 /* With MX_MEMTRACE set in the environment: one stderr line with the
  * current and peak resident set and the wall clock, labelled (a debugging
  * aid for the memory budget; nothing otherwise). */

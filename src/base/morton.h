@@ -11,7 +11,7 @@
 
 #include <stdint.h>
 
-#define MX_MAX_LEVEL 16
+#include "mixoct.h" /* MX_MAX_LEVEL */
 #define MX_COORD_BITS 21
 #define MX_MAX_ROOTS_PER_AXIS 31
 

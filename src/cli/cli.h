@@ -6,7 +6,6 @@
 #include <stdint.h>
 
 #include "mesher/mesher.h"
-#include "kernels/requests.h"
 
 #include "mixoct.h" /* MX_STAGE_*, MX_BALANCE_* */
 
@@ -25,7 +24,8 @@ typedef struct {
   const char *regions_file;
   const char *region_surf[MX_MAX_REGIONS];
   int nregion_surf;
-  mx_requests req;       /* levels; boxes filled after reading */
+  int s_level, a_level;  /* -s, -a: -1 none */
+  int rlevel[MX_MAX_REGIONS]; /* -r SURF LEVEL */
   int threads;           /* 0: OpenMP default */
   int json, quiet;
   int ascii;             /* --ascii: the ASCII variant of .vtk / .msh */

@@ -41,7 +41,7 @@ static void on_message(void *user, int level, const char *text) {
 
 /* Ctrl-C or a scheduler's time limit: no temporary output is left. */
 static void on_signal(int sig) {
-  mx_afile_remove_temporaries();
+  mx_remove_temporaries();
   signal(sig, SIG_DFL);
   raise(sig);
 }
@@ -54,8 +54,8 @@ static void on_round(void *user, int round) { (void)user, mx_progress_round(roun
 static int setup(const mx_options *o, mx_mesher **out) {
   mx_params p;
   mx_params_default(&p);
-  p.surface_level = o->req.s_level;
-  p.all_level = o->req.a_level;
+  p.surface_level = o->s_level;
+  p.all_level = o->a_level;
   p.stage = o->stage;
   p.balance = o->balance;
   p.max_memory_mb = o->max_memory_mb;
@@ -77,7 +77,7 @@ int mx_add_inputs(const mx_options *o, mx_mesher *m) {
   if (o->demo) MX_CHECK(mx_mesher_add_demo_surface(m));
   for (int i = 0; i < o->ninputs; i++) MX_CHECK(mx_mesher_add_surface(m, o->inputs[i]));
   for (int r = 0; r < o->nregion_surf; r++)
-    MX_CHECK(mx_mesher_add_region_surface(m, o->region_surf[r], o->req.rlevel[r]));
+    MX_CHECK(mx_mesher_add_region_surface(m, o->region_surf[r], o->rlevel[r]));
   if (o->regions_file) MX_CHECK(mx_mesher_read_boxes(m, o->regions_file));
   return MX_OK;
 }

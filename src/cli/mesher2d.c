@@ -162,7 +162,7 @@ static void on_message(void *user, int level, const char *text) {
 
 /* Ctrl-C or a time limit: no temporary output is left. */
 static void on_signal(int sig) {
-  mx_afile_remove_temporaries();
+  mx_remove_temporaries();
   signal(sig, SIG_DFL);
   raise(sig);
 }

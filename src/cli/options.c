@@ -273,8 +273,8 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
   char **argv = split_attached(argc0, argv0, &argc);
   if (!argv) return MX_ENOMEM;
   memset(o, 0, sizeof *o);
-  o->req.s_level = -1;
-  o->req.a_level = -1;
+  o->s_level = -1;
+  o->a_level = -1;
   o->stage = MX_STAGE_FULL;
   o->balance = MX_BALANCE_EDGES;
   *exit_now = 0;
@@ -300,10 +300,10 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       o->demo = 1;
     } else if (IS("-s", "--surface-level")) {
       MX_CHECK(need_arg(i, argc, a));
-      MX_CHECK(parse_level(a, argv[++i], &o->req.s_level));
+      MX_CHECK(parse_level(a, argv[++i], &o->s_level));
     } else if (IS("-a", "--all-level")) {
       MX_CHECK(need_arg(i, argc, a));
-      MX_CHECK(parse_level(a, argv[++i], &o->req.a_level));
+      MX_CHECK(parse_level(a, argv[++i], &o->a_level));
     } else if (IS("-b", "--regions")) {
       MX_CHECK(need_arg(i, argc, a));
       o->regions_file = argv[++i];
@@ -317,7 +317,7 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
         return MX_EINPUT;
       }
       o->region_surf[o->nregion_surf] = argv[++i];
-      MX_CHECK(parse_level(a, argv[++i], &o->req.rlevel[o->nregion_surf]));
+      MX_CHECK(parse_level(a, argv[++i], &o->rlevel[o->nregion_surf]));
       o->nregion_surf++;
     } else if (IS("-o", "--output")) {
       MX_CHECK(need_arg(i, argc, a));
@@ -405,13 +405,12 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
     mx_error(NULL, 0, "--demo and -i exclude each other");
     return MX_EINPUT;
   }
-  o->req.nregions = o->nregion_surf;
   if (o->list_in && !o->restart_in) {
     mx_error(NULL, 0, "-l LIST refers to the elements of a mesh written with a "
                       "restart file: give that file with -c FILE.oct");
     return MX_EINPUT;
   }
-  if (o->req.s_level < 0 && o->req.a_level < 0 && !o->regions_file && !o->nregion_surf &&
+  if (o->s_level < 0 && o->a_level < 0 && !o->regions_file && !o->nregion_surf &&
       !o->restart_in) {
     mx_error(NULL, 0, "no refinement request: the mesh would be empty; give a level on "
                       "the surface (-s RL, e.g. -s 5), everywhere (-a RL), boxes (-b FILE.reg) "

@@ -43,8 +43,8 @@ static void on_message(void *user, int level, const char *text) {
 static int setup(const mx_options *o, mx_mesher **out) {
   mx_params p;
   mx_params_default(&p);
-  p.surface_level = o->req.s_level;
-  p.all_level = o->req.a_level;
+  p.surface_level = o->s_level;
+  p.all_level = o->a_level;
   /* the octree, or the mesh (the transition stage alone is not offered) */
   p.stage = o->stage == MX_STAGE_OCTREE ? MX_STAGE_OCTREE : MX_STAGE_FULL;
   p.threads = o->threads;

@@ -36,7 +36,7 @@ static void afile_reset(mx_afile *f) {
 /* ---- temporaries left by a signal ---------------------------------------- */
 
 /* The temporaries being written, so that a signal handler can remove them
- * (mx_afile_remove_temporaries). Fixed storage: the handler must not
+ * (mx_remove_temporaries). Fixed storage: the handler must not
  * allocate. */
 enum { TMP_SLOTS = 16, TMP_PATH = 4096 };
 static char tmp_path[TMP_SLOTS][TMP_PATH];
@@ -62,7 +62,7 @@ static void tmp_unregister(const char *path) {
     }
 }
 
-void mx_afile_remove_temporaries(void) {
+void mx_remove_temporaries(void) {
   for (int k = 0; k < TMP_SLOTS; k++)
     if (tmp_used[k]) {
       unlink(tmp_path[k]);

@@ -36,6 +36,8 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#include "mixoct.h"
+
 struct mx_chunk_out;
 
 typedef struct {
@@ -48,9 +50,8 @@ typedef struct {
 } mx_afile;
 
 int mx_afile_open(mx_afile *f, const char *path);
-/* Removes the temporaries of the files being written; async-signal-safe:
- * for a SIGINT / SIGTERM handler (the program's). */
-void mx_afile_remove_temporaries(void);
+/* mx_remove_temporaries (mixoct.h): the temporaries of the files being
+ * written removed, from a signal handler. */
 /* Takes ownership of fp (closed by commit/abort). name is for messages. */
 int mx_afile_from_stream(mx_afile *f, FILE *fp, const char *name);
 int mx_afile_write(mx_afile *f, const void *data, size_t bytes);

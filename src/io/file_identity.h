@@ -13,13 +13,7 @@
  * file read (the re-meshing loop of the 2021 paper: it is read whole before
  * and written under a temporary name); nothing else may share a file with
  * an output. */
-enum { MX_FILE_INPUT, MX_FILE_OUTPUT, MX_FILE_RESTART_IN, MX_FILE_RESTART_OUT };
-
-typedef struct {
-  const char *path; /* NULL: not used by this run (skipped) */
-  const char *what; /* for the message: "the mesh (-o)", "the input (-i)" */
-  int use;          /* MX_FILE_* */
-} mx_file_use;
+#include "mixoct.h" /* MX_FILE_*, mx_file_use, mx_check_file_uses */
 
 /* A file's identity, to compare with paths later (the library remembers
  * the files a mesher read). */
@@ -31,9 +25,5 @@ int mx_file_id_of(const char *path, mx_file_id *id);
 
 /* 1 when a and b name the same file (existing or to be written), else 0. */
 int mx_same_file(const char *a, const char *b);
-
-/* MX_OK, or MX_EINPUT with a message naming both paths when an output is
- * the same file as an input or as another output. */
-int mx_check_file_uses(const mx_file_use *u, int n);
 
 #endif

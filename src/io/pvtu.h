@@ -24,12 +24,11 @@
 
 #include "soa/mesh.h"
 
-/* The file of piece `piece` of pvtu_path: "DIR/BASE_<piece>.vtu" for
- * "DIR/BASE.pvtu" (the extension compared without case; a path not ending
- * in .pvtu gets "_<piece>.vtu" appended). buf receives at most n bytes,
- * NUL-terminated; a name that does not fit leaves buf empty (n > 0), so that
- * writing to it fails instead of writing a truncated name. */
-void mx_pvtu_piece_path(const char *pvtu_path, int piece, char *buf, size_t n);
+/* mx_pvtu_piece_path (mixoct.h): the file of piece `piece` of pvtu_path,
+ * "DIR/BASE_<piece>.vtu" for "DIR/BASE.pvtu" (the extension compared
+ * without case; a path not ending in .pvtu gets "_<piece>.vtu" appended);
+ * a name that does not fit leaves buf empty (n > 0), so that writing to it
+ * fails instead of writing a truncated name. */
 
 /* One piece: the view as mx_write_vtu writes it (fields typed as above),
  * plus, when global_id is not NULL, the point array GlobalNodeId (Int64,

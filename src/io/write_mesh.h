@@ -32,9 +32,7 @@ int mx_write_boundary_vtu(const char *path, const mx_mesh_view *m);
  * (.vtk, .msh). A 2D view (soa/mesh.h: dim 2) goes to .vtu, .vtk, .msh,
  * .off, .getfem or .m3d. */
 int mx_write_mesh(const char *path, const mx_mesh_view *m, int ascii);
-/* 1 if the extension of path names a format mx_write_mesh knows. */
-int mx_mesh_format_known(const char *path);
-/* The same for a 2D view. */
-int mx_plane_format_known(const char *path);
+/* mx_mesh_format_known, mx_plane_format_known (mixoct.h): whether the
+ * extension of a path names a format mx_write_mesh knows for a 3D / 2D view. */
 
 #endif

@@ -12,7 +12,7 @@
 
 #include "soa/regions.h"
 
-#define MX_MAX_REGIONS 8
+#include "mixoct.h" /* MX_MAX_REGIONS */
 
 typedef struct {
   int s_level; /* -1 when absent */
