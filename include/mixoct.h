@@ -406,6 +406,15 @@ void mx_mesher2d_stats(const mx_mesher2d *m, mx_stats2d *s);
  * the mesher calls; they include only this header. */
 
 #define MX_MAX_LEVEL 16  /* the deepest octree level */
+
+/* Returns from the calling function the status of expr when it is not
+ * MX_OK (statuses travel up from where a failure happens). */
+#define MX_CHECK(expr)                                                        \
+  do {                                                                        \
+    int mx_status_ = (expr);                                                  \
+    if (mx_status_ != MX_OK) return mx_status_;                               \
+  } while (0)
+
 #define MX_MAX_REGIONS 8 /* region surfaces per mesher */
 
 /* Wall-clock seconds, and the peak resident set size of this process. */
@@ -464,6 +473,35 @@ int mx_plane_format_known(const char *path);
 void mx_pvtu_piece_path(const char *pvtu_path, int piece, char *buf, size_t n);
 
 /* ---- The run's report (the mixoct program's summary and --json) --------- */
+
+/* What a run of the program did besides meshing, for its report: the
+ * outcome, the files written, the warnings, and the machine. */
+#define MX_RUN_FILES 18    /* meshes, the boundary, the restart file */
+#define MX_RUN_WARNINGS 64 /* warnings kept; the rest counted */
+typedef struct {
+  int status;                      /* the exit code */
+  int valid;                       /* exit 0's promise: a valid mesh */
+  int stage;                       /* MX_STAGE_*: full unless --stage */
+  int noutputs;
+  const char *outputs[MX_RUN_FILES]; /* written, in order */
+  long long bytes[MX_RUN_FILES];   /* their sizes (-1: unknown) */
+  int dry_run;                     /* nothing was asked to be written */
+  int nwarnings;
+  size_t warnings_dropped;         /* beyond MX_RUN_WARNINGS */
+  char *warnings[MX_RUN_WARNINGS]; /* the caller's strings */
+  char error[1024];                /* the first error, "" if none */
+  double total_s;                  /* seconds since the run started */
+  const char *wait_policy;         /* the OpenMP wait policy, as said */
+  const char *topology;            /* one line on the machine (or NULL) */
+} mx_run_info;
+
+/* Prints the report of the run on stdout: the summary (json 0: what was
+ * built, the J_ENS table of the 2015 paper's Tables IV and V, the boundary
+ * steps, seconds per stage, peak memory, the files written, the outcome)
+ * or one line of JSON (json 1; always valid JSON, non-finite numbers null).
+ * m may be NULL for a run that stopped before meshing: then only the
+ * JSON's outcome members are printed (json 1), nothing otherwise. */
+void mx_mesher_print_report(const mx_mesher *m, const mx_run_info *ri, int json);
 
 /* ---- Checking a mesh file (mixoct check) -------------------------------- */
 

@@ -7,17 +7,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "mixoct.h" /* mx_status: MX_OK, MX_EINPUT, MX_ENOMEM, MX_EIO, ... */
+#include "mixoct.h" /* mx_status, MX_CHECK, messages, the allocator */
 
-#define MX_CHECK(expr)                                                        \
-  do {                                                                        \
-    int mx_status_ = (expr);                                                  \
-    if (mx_status_ != MX_OK) return mx_status_;                               \
-  } while (0)
-
-/* Messages go to stderr, prefixed "mixoct: ". A message about a file names it
- * and, when known (line > 0), the line: "mixoct: FILE:LINE: text". */
-/* mx_error, mx_warning: mixoct.h */
+/* mx_error, mx_warning (mixoct.h): messages go to stderr, prefixed
+ * "mixoct: ". A message about a file names it and, when known (line > 0),
+ * the line: "mixoct: FILE:LINE: text". */
 /* when set, warnings are not printed; per thread (see mx_msg_fn) */
 extern _Thread_local int mx_quiet;
 

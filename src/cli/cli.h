@@ -5,12 +5,12 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "mesher/mesher.h"
-
-#include "mixoct.h" /* MX_STAGE_*, MX_BALANCE_* */
+#include "mixoct.h"
 
 #define MX_MAX_INPUTS 64
-#define MX_MAX_OUTPUTS 16
+#define MX_MAX_OUTPUTS 16 /* meshes; with the boundary and the restart file:
+                          * MX_RUN_FILES (mixoct.h) */
+_Static_assert(MX_MAX_OUTPUTS + 2 <= MX_RUN_FILES, "the report lists every file");
 
 typedef struct {
   const char *inputs[MX_MAX_INPUTS];
@@ -76,27 +76,5 @@ int mx_mesher2d_main(int argc, char **argv);
 int mx_check_main(int argc, char **argv);
 /* `mixoct patterns [--json]` (src/cli/patterns_cmd.c). */
 int mx_patterns_main(int argc, char **argv);
-
-/* What a run did besides meshing, for the report: the files written, the
- * warnings, the outcome (src/cli/main.c fills it). */
-#define MX_MAX_WARNINGS 64
-typedef struct {
-  int status;                          /* the exit code */
-  int valid;                           /* exit 0's promise: a valid mesh */
-  int stage;                           /* MX_STAGE_*: full unless --stage */
-  int noutputs;
-  const char *outputs[MX_MAX_OUTPUTS + 2]; /* written: meshes, boundary, restart */
-  long long bytes[MX_MAX_OUTPUTS + 2];
-  int dry_run;                         /* no -o */
-  int nwarnings;
-  size_t warnings_dropped;             /* beyond MX_MAX_WARNINGS */
-  char *warnings[MX_MAX_WARNINGS];
-  char error[1024];                    /* the first error, "" if none */
-} mx_run_info;
-
-/* --json: one line, always valid JSON (non-finite numbers are null); s may
- * be NULL when the run stopped before meshing. */
-void mx_print_json(const mx_summary *s, const mx_run_info *ri);
-void mx_print_summary(const mx_summary *s, const mx_run_info *ri);
 
 #endif

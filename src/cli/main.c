@@ -6,8 +6,6 @@
  * 3 out of memory, 4 output failure, 5 invalid elements left). */
 #include "cli/cli.h"
 #include "cli/progress.h"
-#include "base/common.h"
-#include "io/atomic_file.h"
 #include "mixoct.h"
 
 #include <signal.h>
@@ -30,7 +28,7 @@ static void on_message(void *user, int level, const char *text) {
     fprintf(stderr, "mixoct: error: %s\n", text);
     return;
   }
-  if (ri->nwarnings < MX_MAX_WARNINGS) {
+  if (ri->nwarnings < MX_RUN_WARNINGS) {
     ri->warnings[ri->nwarnings] = mx_strdup(text);
     if (ri->warnings[ri->nwarnings]) ri->nwarnings++;
   } else {
@@ -108,14 +106,19 @@ static int write_outputs(const mx_options *o, mx_mesher *m) {
   return MX_OK;
 }
 
+/* The machine, for the report. */
+static char topology[256];
+
 static void report(const mx_options *o, mx_mesher *m, double t_start) {
-  mx_summary S = *mx_mesher_summary(m);
-  S.ph.total = mx_wtime() - t_start;
-  S.peak_rss_mb = mx_peak_rss_mb();
-  S.threads = omp_get_max_threads();
+  run_info.total_s = mx_wtime() - t_start;
+  run_info.wait_policy = mx_wait_policy_name();
+  if (o->json) { /* hwloc's topology takes a few MB: not before the summary's peak */
+    mx_topology_string(topology, sizeof topology);
+    run_info.topology = topology;
+  }
   mx_progress_done(); /* before the summary, on the same terminal */
-  if (!o->quiet && !o->json) mx_print_summary(&S, &run_info);
-  if (o->json) mx_print_json(&S, &run_info);
+  if (!o->quiet && !o->json) mx_mesher_print_report(m, &run_info, 0);
+  if (o->json) mx_mesher_print_report(m, &run_info, 1);
 }
 
 int mx_run(const mx_options *o) {
@@ -148,7 +151,7 @@ int mx_run(const mx_options *o) {
     report(o, m, t_start);
   } else if (o->json) {
     mx_progress_done();
-    mx_print_json(NULL, &run_info); /* the outcome, even without a mesh */
+    mx_mesher_print_report(NULL, &run_info, 1); /* the outcome, even without a mesh */
   }
   mx_mesher_free(m);
   mx_progress_done();
@@ -190,8 +193,7 @@ int main(int argc, char **argv) {
   passive_wait_policy(argv);
   /* every message goes through on_message: --json keeps the warnings and
    * the first error */
-  mx_msg_fn = on_message;
-  mx_msg_user = &run_info;
+  mx_set_thread_message_handler(on_message, &run_info);
   if (argc >= 2 && strcmp(argv[1], "check") == 0)
     return mx_check_main(argc - 1, argv + 1);
   if (argc >= 2 && strcmp(argv[1], "patterns") == 0)
@@ -220,7 +222,7 @@ int main(int argc, char **argv) {
   if (st) {
     if (!exit_now && argc > 1 && o.json) { /* the outcome as JSON all the same */
       run_info.status = st;
-      mx_print_json(NULL, &run_info);
+      mx_mesher_print_report(NULL, &run_info, 1);
     }
     return st;
   }

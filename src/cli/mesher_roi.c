@@ -39,7 +39,6 @@
 #include <string.h>
 
 #include "cli/cli.h"
-#include "base/common.h"
 
 static const char *roi_usage =
     "usage: mesher_roi (-d in.mdl | -o in.off) [requests] [-u outname -v|-g|-m|-i]\n"
@@ -228,7 +227,7 @@ int mx_mesher_roi_main(int argc, char **argv) {
   o.ascii = 1; /* the published mesher writes ASCII legacy VTK */
   if (!st) st = mx_check_run_files(&o);
   if (!st) {
-    if (o.quiet) mx_quiet = 1;
+    if (o.quiet) mx_set_thread_quiet(1);
     if (o.threads > 0) omp_set_num_threads(o.threads);
     st = mx_run(&o);
   }

@@ -1,10 +1,4 @@
 #include "cli/cli.h"
-#include "io/file_identity.h"
-#include "io/pvtu.h"
-#include "soa/mesh.h"
-
-#include "base/common.h"
-#include "base/morton.h"
 
 #include <errno.h>
 #include <omp.h>
@@ -14,7 +8,6 @@
 #include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include "io/write_mesh.h"
 
 static const char *usage_text =
     "mixoct: a parallel mixed-element octree mesher (hexahedra, prisms,\n"

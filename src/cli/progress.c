@@ -3,7 +3,6 @@
 #include "cli/progress.h"
 
 #include "cli/cli.h"
-#include "base/common.h"
 
 #include <pthread.h>
 #include <stdio.h>

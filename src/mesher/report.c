@@ -1,6 +1,11 @@
-#include "cli/cli.h"
+/* The report of a run of the mixoct program (mx_mesher_print_report,
+ * include/mixoct.h): the summary printed after a run, or its --json line,
+ * from the mesher's figures (mx_summary) and what the program did besides
+ * meshing (mx_run_info: files written, warnings, outcome). */
+#include "mesher/mesher.h"
 
 #include <inttypes.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -96,9 +101,11 @@ static void json_outcome(FILE *f, const mx_run_info *ri) {
   fputs("]", f);
 }
 
-static void print_mesh_json(FILE *out, const mx_summary *s);
+static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *ri);
 
-void mx_print_json(const mx_summary *s, const mx_run_info *ri) {
+/* --json: one line, always valid JSON (non-finite numbers are null); s may
+ * be NULL when the run stopped before meshing. */
+static void print_json(const mx_summary *s, const mx_run_info *ri) {
   char *buf = NULL;
   size_t len = 0;
   FILE *f = open_memstream(&buf, &len);
@@ -108,7 +115,7 @@ void mx_print_json(const mx_summary *s, const mx_run_info *ri) {
   if (s) {
     fprintf(f, ", \"defects\": {\"invalid_elements\": %zu, \"contact_nodes\": %zu}, ",
             s->mesh ? s->invalid : 0, s->mesh ? s->contacts.nodes : 0);
-    print_mesh_json(f, s);
+    print_mesh_json(f, s, ri);
   } else {
     fputs("}\n", f);
   }
@@ -120,11 +127,9 @@ void mx_print_json(const mx_summary *s, const mx_run_info *ri) {
 }
 
 /* The mesh's figures, the rest of the object (from '"leaves"' to '}'). */
-static void print_mesh_json(FILE *out, const mx_summary *s) {
+static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *ri) {
   char nodes[32] = "null";
   if (s->nodes_counted) snprintf(nodes, sizeof nodes, "%zu", s->nodes);
-  char topo[256];
-  mx_topology_string(topo, sizeof topo);
   const size_t elements = s->mesh ? s->elements : s->leaves;
   char qual[1024] = "null";
   if (s->mesh) quality_json(&s->quality, qual, sizeof qual);
@@ -172,9 +177,9 @@ static void print_mesh_json(FILE *out, const mx_summary *s) {
          s->ph.boundary, s->ph.verify, s->ph.quality, s->ph.write, s->t_restart,
          s->refined_listed, s->repaired, s->repair_rounds, s->local ? "true" : "false",
          s->local ? s->patch_leaves : 0, s->local ? s->core_leaves : 0, s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->memory_prior_mb, s->threads,
-         mx_wait_policy_name(),
+         ri->wait_policy ? ri->wait_policy : "default",
          s->mesh ? s->jens_min : 1.0,
-         s->mesh ? s->invalid : 0, qual, bnd, topo);
+         s->mesh ? s->invalid : 0, qual, bnd, ri->topology ? ri->topology : "");
 }
 
 /* The summary printed after a run (unless --quiet or --json): what was
@@ -206,7 +211,7 @@ static void quality_summary(const mx_summary *s) {
   printf("\n");
 }
 
-void mx_print_summary(const mx_summary *s, const mx_run_info *ri) {
+static void print_summary(const mx_summary *s, const mx_run_info *ri) {
   printf("mixoct: %s; %d thread(s), %s balance, levels up to %d\n",
          s->full ? "mesh of the domain" :
          s->mesh ? "conforming mesh of the whole octree (transition stage)"
@@ -289,4 +294,19 @@ void mx_print_summary(const mx_summary *s, const mx_run_info *ri) {
   else if (ri->status == MX_EINVALID)
     printf("  result       INVALID: the mesh's volume is %+.1f%% off the input's (exit 5)\n",
            100.0 * s->volume_error);
+}
+
+void mx_mesher_print_report(const mx_mesher *m, const mx_run_info *ri, int json) {
+  if (!m) {
+    if (json) print_json(NULL, ri); /* the outcome, even without a mesh */
+    return;
+  }
+  mx_summary S = m->rec->S;
+  S.ph.total = ri->total_s;
+  S.peak_rss_mb = mx_peak_rss_mb();
+  S.threads = omp_get_max_threads();
+  if (json)
+    print_json(&S, ri);
+  else
+    print_summary(&S, ri);
 }
