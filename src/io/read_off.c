@@ -9,6 +9,7 @@
 #include "base/common.h"
 #include "soa/trisoup.h"
 
+#include "io/off_header.h"
 #include "io/polygon_split.h"
 #include "io/text_scan.h"
 #include "io/read_surface.h"
@@ -19,68 +20,14 @@ typedef struct {
   size_t nv, nf;
 } off_file;
 
-/* "OFF", or a variant whose extra per-vertex data we ignore (COFF, NOFF,
- * CNOFF, STOFF...); not 4OFF or nOFF, which change the dimension. */
-static int header_ok(const char *tok, int n) {
-  if (n < 3 || memcmp(tok + n - 3, "OFF", 3) != 0) return 0;
-  for (int i = 0; i < n - 3; i++)
-    if (!strchr("CNST", tok[i])) return 0;
-  return 1;
-}
-
 /* Moves to the next content line; error if the file ends first. */
 static int next_item(off_file *f, const char *what, size_t i, size_t n) {
-  f->p = mx_io_next_line(f->p, f->end, &f->line);
-  f->p = mx_io_content(f->p, f->end, &f->line, '#');
-  if (f->p < f->end) return MX_OK;
-  mx_error(f->path, f->line,
-           "unexpected end of file: %zu of %zu %s read (truncated file or "
-           "wrong counts in the header)",
-           i, n, what);
-  return MX_EINPUT;
-}
-
-static int read_count(off_file *f, const char **q, size_t *v, size_t max,
-                      const char *name) {
-  int64_t x;
-  const char *s = mx_io_blank(*q);
-  const char *e = mx_io_int(s, &x);
-  if (!e || !mx_io_delim(e, '#') || x < 0 || (uint64_t)x > max) {
-    mx_error(f->path, f->line,
-             "bad header: expected the counts 'nv nf ne', found '%.*s' for "
-             "%s",
-             mx_io_toklen(s, '#'), s, name);
-    return MX_EINPUT;
-  }
-  *v = (size_t)x;
-  *q = e;
-  return MX_OK;
+  return mx_off_next(f->path, &f->p, f->end, &f->line, what, i, n);
 }
 
 static int read_header(off_file *f) {
-  f->p = mx_io_content(f->p, f->end, &f->line, '#');
-  if (f->p == f->end) {
-    mx_error(f->path, f->line, "no 'OFF' header: the file has no content");
-    return MX_EINPUT;
-  }
-  int n = mx_io_toklen(f->p, '#');
-  if (!header_ok(f->p, n)) {
-    mx_error(f->path, f->line, "bad header: expected 'OFF', found '%.*s'", n,
-             f->p);
-    return MX_EINPUT;
-  }
-  const char *q = mx_io_blank(f->p + n);
-  if (mx_io_eol(q, '#')) {
-    f->p = mx_io_next_line(q, f->end, &f->line);
-    f->p = mx_io_content(f->p, f->end, &f->line, '#');
-    q = f->p;
-    if (q == f->end) {
-      mx_error(f->path, f->line, "bad header: missing counts 'nv nf ne'");
-      return MX_EINPUT;
-    }
-  }
-  MX_CHECK(read_count(f, &q, &f->nv, UINT32_MAX, "nv"));
-  MX_CHECK(read_count(f, &q, &f->nf, SIZE_MAX / 64, "nf"));
+  MX_CHECK(mx_off_counts(f->path, &f->p, f->end, &f->line, UINT32_MAX, SIZE_MAX / 64, &f->nv,
+                         &f->nf));
   if (f->nf == 0) {
     mx_error(f->path, f->line, "the header declares no faces");
     return MX_EINPUT;

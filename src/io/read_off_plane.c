@@ -8,6 +8,7 @@
 
 #include "base/common.h"
 #include "io/mesh_reader.h"
+#include "io/off_header.h"
 #include "io/text_scan.h"
 
 typedef struct {
@@ -15,63 +16,17 @@ typedef struct {
   long line;
 } off_rd;
 
-/* "OFF", or a variant whose extra per-vertex data is ignored (COFF, NOFF,
- * CNOFF, STOFF...), as io/read_off.c. */
-static int off_keyword(const char *tok, int n) {
-  if (n < 3 || memcmp(tok + n - 3, "OFF", 3) != 0) return 0;
-  for (int i = 0; i < n - 3; i++)
-    if (!strchr("CNST", tok[i])) return 0;
-  return 1;
-}
-
 /* The next content line; an error if the file ends first. */
 static int off_next(off_rd *f, const char *what, size_t i, size_t n) {
-  f->p = mx_io_next_line(f->p, f->end, &f->line);
-  f->p = mx_io_content(f->p, f->end, &f->line, '#');
-  if (f->p < f->end) return MX_OK;
-  mx_error(f->path, f->line,
-           "unexpected end of file: %zu of %zu %s read (truncated file or wrong counts in "
-           "the header)",
-           i, n, what);
-  return MX_EINPUT;
-}
-
-static int off_count(off_rd *f, const char **q, size_t max, size_t *v, const char *name) {
-  int64_t x;
-  const char *s = mx_io_blank(*q);
-  const char *e = mx_io_int(s, &x);
-  if (!e || !mx_io_delim(e, '#') || x < 0 || (uint64_t)x > max) {
-    mx_error(f->path, f->line, "bad header: expected the counts 'nv nf ne', found '%.*s' for %s",
-             mx_io_toklen(s, '#'), s, name);
-    return MX_EINPUT;
-  }
-  *v = (size_t)x;
-  *q = e;
-  return MX_OK;
+  return mx_off_next(f->path, &f->p, f->end, &f->line, what, i, n);
 }
 
 static int off_header(off_rd *f, size_t *nv, size_t *nf) {
-  f->p = mx_io_content(f->p, f->end, &f->line, '#');
-  const int n = f->p < f->end ? mx_io_toklen(f->p, '#') : 0;
-  if (!off_keyword(f->p, n)) {
-    mx_error(f->path, f->line, "bad header: expected 'OFF', found '%.*s'", n, f->p);
-    return MX_EINPUT;
-  }
-  const char *q = mx_io_blank(f->p + n);
-  if (mx_io_eol(q, '#')) {
-    f->p = mx_io_next_line(q, f->end, &f->line);
-    f->p = mx_io_content(f->p, f->end, &f->line, '#');
-    if (f->p == f->end) {
-      mx_error(f->path, f->line, "bad header: missing counts 'nv nf ne'");
-      return MX_EINPUT;
-    }
-    q = f->p;
-  }
+  MX_CHECK(mx_off_counts(f->path, &f->p, f->end, &f->line, UINT32_MAX - 1, UINT32_MAX / 4, nv,
+                         nf));
   /* counts checked against the bytes left before anything is allocated:
    * "0 0 0\n" at least per vertex, "3 0 1 2\n" per face */
   const size_t left = (size_t)(f->end - f->p);
-  MX_CHECK(off_count(f, &q, UINT32_MAX - 1, nv, "nv"));
-  MX_CHECK(off_count(f, &q, UINT32_MAX / 4, nf, "nf"));
   if ((uint64_t)*nv * 6 + (uint64_t)*nf * 8 > (uint64_t)left + 16) {
     mx_error(f->path, f->line,
              "%zu vertices and %zu faces announced but the file is too short (truncated file "
@@ -182,5 +137,5 @@ int mx_rd_is_off(const char *path) {
   }
   int k = 0;
   while (p + k < end && p[k] && !strchr(" \t\r\n#", p[k])) k++;
-  return off_keyword(p, k);
+  return mx_off_keyword(p, k);
 }

@@ -32,6 +32,7 @@
 #include <strings.h>
 
 #include "base/common.h"
+#include "io/off_header.h"
 #include "io/read_poly.h"
 
 #include "io/mdl_sections.h"
@@ -354,18 +355,10 @@ int mx_read_poly(const char *path, mx_poly *P) { return read_with(path, P, '#', 
 
 /* ---- .off ------------------------------------------------------------- */
 
-/* "OFF", or a variant whose extra data is ignored (COFF, NOFF, STOFF..). */
-static int off_keyword(const char *tok, int n) {
-  if (n < 3 || memcmp(tok + n - 3, "OFF", 3) != 0) return 0;
-  for (int i = 0; i < n - 3; i++)
-    if (!strchr("CNST", tok[i])) return 0;
-  return 1;
-}
-
 static int off_header(rd *f, mx_poly *P, size_t *nf) {
   f->p = mx_io_content(f->p, f->end, &f->line, '#');
   const int n = f->p < f->end ? mx_io_toklen(f->p, '#') : 0;
-  if (!off_keyword(f->p, n)) {
+  if (!mx_off_keyword(f->p, n)) {
     mx_error(f->path, f->line, "bad header: expected 'OFF', found '%.*s'", n, f->p);
     return MX_EINPUT;
   }
