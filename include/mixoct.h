@@ -505,6 +505,38 @@ void mx_mesher_print_report(const mx_mesher *m, const mx_run_info *ri, int json)
 
 /* ---- Checking a mesh file (mixoct check) -------------------------------- */
 
+/* The independent checker on a mesh file, as `mixoct check` runs it
+ * (src/mesher/check_file.c): the mesh read -- a 3D one (legacy VTK, VTU,
+ * Gmsh MSH 4.1, Medit .mesh/.meshb, GetFEM, M3D, MVM) or a 2D one
+ * (triangles and quadrilaterals at z = 0 in VTK, VTU, MSH or OFF) --,
+ * checked (3D: against the closed surface it should fill, when given; 2D:
+ * against its domain's polylines, when given) and the report printed to
+ * stdout: readable, or one JSON object on one line; messages through the
+ * calling thread's handler (mx_set_thread_message_handler). */
+typedef struct {
+  const char *mesh;    /* the mesh file */
+  const char *surface; /* 3D: the surface (.off .stl .obj .mdl .ply); 2D:
+                        * the domain as poly; NULL: none */
+  const char *poly;    /* 2D: the domain's closed polylines (.poly, or a 2D
+                        * .off or .mdl); NULL: none; not with surface */
+  double volume_tol;   /* largest relative |volume error| (2D: area error)
+                        * accepted; 0 (default): from the mesh */
+  double dist_tol;     /* largest distance of a boundary node to the
+                        * surface (2D: the polylines), relative to its
+                        * bounding box diagonal (2D: diameter); 1e-6 */
+  int threads;         /* OpenMP threads for the call; 0 (default): as set */
+  int json;            /* 1: the JSON object instead of the report */
+  int quiet;           /* 1: no report (the JSON object still with json),
+                        * no warnings */
+} mx_check_params;
+
+/* The defaults above, no file. */
+void mx_check_params_default(mx_check_params *p);
+/* Returns the exit status of `mixoct check`: 0 no defect, 3 defects found,
+ * 2 bad input or usage (a message names the file), 1 internal failure
+ * (out of memory included). Nothing to free. */
+int mx_check_file(const mx_check_params *p);
+
 /* ---- The mixoct program's other commands (patterns, 2D report) ---------- */
 
 /* ---- The distributed path (mixoct --p4est; MPI builds) ------------------ */

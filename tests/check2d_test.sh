@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 HERE=$(cd "$(dirname "$0")" && pwd) # before any cd: tests/lib.sh
 # `mixoct check` on 2D meshes (io/read_mesh.h: mx_read_mesh_dim,
-# src/cli/check_cmd.c): the shared polylines a, box and pie meshed by mesher2d at two levels into VTU,
+# src/mesher/check_file.c): the shared polylines a, box and pie meshed by mesher2d at two levels into VTU,
 # legacy VTK (ASCII and binary), MSH 4.1 (ASCII and binary) and OFF; each
 # file checked with and without its domain (exit 0, the node, cell and type
 # counts of mesher2d's --json, the same edge count and Euler number in every

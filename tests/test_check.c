@@ -1,5 +1,5 @@
 /* Tests of the mesh reader (src/io/read_mesh.c), the independent checker
- * (src/verify/check.c) and `mixoct check` (src/cli/check_cmd.c).
+ * (src/verify/check.c) and `mixoct check` (src/mesher/check_file.c).
  *
  * Meshes are built by hand: one cube as a hexahedron, two prisms, six
  * tetrahedra, six pyramids; conforming blocks; and defects made on purpose

@@ -72,7 +72,8 @@ int mx_mesher_roi_main(int argc, char **argv);
  * (src/cli/mesher2d.c, src/quad/quad.h). Returns the exit code. */
 int mx_mesher2d_main(int argc, char **argv);
 
-/* `mixoct check MESH [--surface FILE] [--json]` (src/cli/check_cmd.c). */
+/* `mixoct check MESH [--surface FILE] [--json]` (src/cli/check_cmd.c: the
+ * options; include/mixoct.h: mx_check_file does the rest). */
 int mx_check_main(int argc, char **argv);
 /* `mixoct patterns [--json]` (src/cli/patterns_cmd.c). */
 int mx_patterns_main(int argc, char **argv);
