@@ -43,21 +43,16 @@ static void add_box(mx_trisoup *s, const double lo[3], const double hi[3],
   mx_trisoup_free(&b);
 }
 
-/* Read a surface of ../shared/data (MIXOCT_DATA, set by meson, or the
- * usual places); 0 with "SKIP ..." printed when it is not there. */
+/* Read a surface of ../shared/data (test_data_dir); 0 with "SKIP ..."
+ * printed when it is not there. */
 static inline int load_shared_surface(const char *name, mx_trisoup *s) {
-  const char *dirs[] = {getenv("MIXOCT_DATA"), "../../shared/data",
-                        "../../../shared/data", MIXOCT_TEST_DATA};
-  char path[512];
-  for (int i = 0; i < 4; i++) {
-    if (!dirs[i]) continue;
-    snprintf(path, sizeof path, "%s/surfaces/%s", dirs[i], name);
-    FILE *f = fopen(path, "rb");
-    if (!f) continue;
-    fclose(f);
+  char probe[256], path[1400];
+  snprintf(probe, sizeof probe, "surfaces/%s", name);
+  const char *dir = test_data_dir(probe);
+  if (dir) {
+    snprintf(path, sizeof path, "%s/%s", dir, probe);
     memset(s, 0, sizeof *s);
-    return mx_read_surface(path, s) == MX_OK &&
-           mx_trisoup_check(s, path, NULL) == MX_OK;
+    return mx_read_surface(path, s) == MX_OK && mx_trisoup_check(s, path, NULL) == MX_OK;
   }
   TEST_DATA_MISSING("../shared/data/surfaces/%s not found", name);
   return 0;

@@ -235,20 +235,7 @@ static void compare_mesher(const char *name, const char *const *paths, int n, in
   mx_mesher_free(m);
 }
 
-static const char *find_data(void) {
-  static char dir[600];
-  const char *dirs[] = {getenv("MIXOCT_DATA"), "../../shared/data", "../../../shared/data",
-                        MIXOCT_TEST_DATA};
-  for (int i = 0; i < 4; i++) {
-    if (!dirs[i]) continue;
-    snprintf(dir, sizeof dir, "%s/surfaces/cortex.off", dirs[i]);
-    if (access(dir, R_OK) == 0) {
-      snprintf(dir, sizeof dir, "%s", dirs[i]);
-      return dir;
-    }
-  }
-  return NULL;
-}
+static const char *find_data(void) { return test_data_dir("surfaces/cortex.off"); }
 
 static void test_mesher(void) {
   char tmp[] = "/tmp/mx_contacts_XXXXXX";

@@ -53,18 +53,11 @@ static void write_text(const char *path, const char *text) {
 }
 
 static void find_data(void) {
-  const char *dirs[] = {getenv("MIXOCT_DATA"), "../../shared/data", "../../../shared/data",
-                        MIXOCT_TEST_DATA};
-  for (int i = 0; i < 4; i++) {
-    if (!dirs[i]) continue;
-    char p[600];
-    snprintf(p, sizeof p, "%s/polylines/box.poly", dirs[i]);
-    if (access(p, R_OK) == 0) {
-      snprintf(data, sizeof data, "%s/polylines", dirs[i]);
-      return;
-    }
-  }
-  data[0] = '\0';
+  const char *d = test_data_dir("polylines/box.poly");
+  if (d)
+    snprintf(data, sizeof data, "%s/polylines", d);
+  else
+    data[0] = '\0';
 }
 
 /* Reads data/name (any format) into P; 0 (SKIP printed) when absent. */

@@ -631,8 +631,8 @@ static void test_masks(void) {
 /* ---- the measurement ---------------------------------------------------------- */
 
 static int bench(int level, int threads) {
-  const char *dir = getenv("MIXOCT_DATA");
-  char path[1024];
+  const char *dir = test_data_dir("polylines/a.poly");
+  char path[1200];
   snprintf(path, sizeof path, "%s/polylines/a.poly", dir ? dir : MIXOCT_TEST_DATA);
   domain D;
   if (mx_read_poly_any(path, &D.P) != MX_OK) return 1;

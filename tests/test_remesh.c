@@ -32,18 +32,9 @@ static int cmp_u64(const void *a, const void *b) {
 }
 
 static int find_data(void) {
-  const char *dirs[] = {getenv("MIXOCT_DATA"), "../../shared/data", "../../../shared/data",
-                        MIXOCT_TEST_DATA};
-  for (int i = 0; i < 4; i++) {
-    if (!dirs[i]) continue;
-    char p[600];
-    snprintf(p, sizeof p, "%s/surfaces/cortex.off", dirs[i]);
-    if (access(p, R_OK) == 0) {
-      snprintf(data_dir, sizeof data_dir, "%s", dirs[i]);
-      return 1;
-    }
-  }
-  return 0;
+  const char *d = test_data_dir("surfaces/cortex.off");
+  if (d) snprintf(data_dir, sizeof data_dir, "%s", d);
+  return d != NULL;
 }
 
 static char *data(const char *rel) {

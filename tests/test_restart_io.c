@@ -764,29 +764,16 @@ static void test_bad_binary(void) {
 
 /* $MIXOCT_DATA, else ../shared/data beside the source root (found from
  * this file's path). */
-static const char *data_dir(char *buf, size_t n) {
-  const char *env = getenv("MIXOCT_DATA");
-  if (env && *env) return env;
-  const char *slash = strrchr(__FILE__, '/');
-  int dir = slash ? (int)(slash - __FILE__) : 1;
-  snprintf(buf, n, "%.*s/../../shared/data", dir, slash ? __FILE__ : ".");
-  return buf;
-}
-
 /* Runs every group in a temporary folder under the working directory. */
 int main(void) {
   if (!mkdtemp(tmpdir)) {
     perror("mkdtemp");
     return 1;
   }
-  char dbuf[4096], c5[4200];
-  const char *data = data_dir(dbuf, sizeof dbuf);
-  snprintf(c5, sizeof c5, "%s/remesh/c5.oct", data);
-  if (access(c5, R_OK) != 0) { /* a clone elsewhere: the usual place */
-    data = MIXOCT_TEST_DATA;
-    snprintf(c5, sizeof c5, "%s/remesh/c5.oct", data);
-  }
-  int have_c5 = access(c5, R_OK) == 0;
+  char c5[1200];
+  const char *data = test_data_dir("remesh/c5.oct");
+  snprintf(c5, sizeof c5, "%s/remesh/c5.oct", data ? data : MIXOCT_TEST_DATA);
+  int have_c5 = data != NULL;
   if (have_c5)
     test_c5(c5);
   else

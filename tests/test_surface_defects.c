@@ -709,7 +709,7 @@ static void test_threads(void) {
  * vertices, opposite orientation), so as two inputs every triangle lies on
  * its copy. */
 static void test_samples(void) {
-  const char *data = getenv("MIXOCT_DATA");
+  const char *data = test_data_dir("surfaces/cortex.off");
   char dir[512];
   snprintf(dir, sizeof dir, "%s/surfaces", data ? data : MIXOCT_TEST_DATA);
   static const char *clean[] = {"cortex.off", "femur.mdl", "hex.off",
