@@ -541,6 +541,57 @@ int mx_check_file(const mx_check_params *p);
 
 /* ---- The distributed path (mixoct --p4est; MPI builds) ------------------ */
 
+/* The octree, and unless stopped there the mesh, built by p4est over the
+ * ranks of MPI_COMM_WORLD (src/mpi/): every rank reads the same inputs,
+ * refines and balances its part of the forest, meshes its leaves; rank 0
+ * reports. Only in the mixoct program of a build that found MPI and p4est
+ * (MX_HAVE_MPI; compiled with src/mpi/, not part of libmixoct). Every call
+ * is collective: every rank of MPI_COMM_WORLD makes it, with the same
+ * arguments.
+ *
+ *   mx_p4est_init(&argc, &argv);   // before anything may print
+ *   ... the program's options into an mx_p4est_run_params ...
+ *   int st = mx_p4est_run(&p);
+ *   mx_p4est_finalize();
+ */
+#ifdef MX_HAVE_MPI
+typedef struct {
+  const char *const *surfaces; /* -i: the domain's surfaces */
+  int nsurfaces;
+  int demo;                    /* --demo: the built-in surface, added first */
+  const char *const *region_surfaces; /* -r SURF LEVEL */
+  const int *region_levels;
+  int nregions;
+  const char *boxes_file;      /* -b: box regions; NULL none */
+  int surface_level, all_level; /* -s, -a: -1 none */
+  int stage;                   /* MX_STAGE_OCTREE, else the full mesh */
+  int threads;                 /* per rank; 0: the OpenMP default */
+  double max_memory_mb;        /* 0: the memory available */
+  int repair_input;            /* refused (MX_EINPUT): p4est needs closed inputs */
+  const char *const *outputs;  /* .pvtu (a piece per rank) or .msh (binary) */
+  int noutputs;
+  int ascii;                   /* refused with a .msh output (MX_EINPUT) */
+  int json, quiet;             /* rank 0's report: one JSON line, or no text */
+  int compare;                 /* --p4est-compare: rank 0 also builds the
+                                * single-process octree and compares leaves */
+} mx_p4est_run_params;
+
+/* MPI (MPI_THREAD_FUNNELED; argc and argv are MPI_Init_thread's), sc and
+ * p4est set up, and the calling thread's messages printed by rank 0 only
+ * ("mixoct: error: ...", warnings unless quiet). MPI's errors abort. */
+void mx_p4est_init(int *argc, char ***argv);
+/* Checks the outputs, sets the thread count and quiet flag, adds the inputs
+ * (demo, surfaces, region surfaces, boxes), builds and reports: on stdout
+ * by rank 0, the text lines unless quiet, or with json one line (on a
+ * failure after the outputs' check, {"p4est": true, "exit_code", "error"}).
+ * Returns MX_OK or the status of the failure, the same on every rank (the
+ * message printed). The strings of p are the caller's, read during the
+ * call. */
+int mx_p4est_run(const mx_p4est_run_params *p);
+/* p4est's and MPI's end (MPI_Finalize): call once, after the last run. */
+void mx_p4est_finalize(void);
+#endif
+
 #ifdef __cplusplus
 }
 #endif

@@ -31,8 +31,9 @@
  * (p4est_mesh.c each rank's patch, p4est_halo.c the rings of other ranks'
  * leaves, p4est_nodes.c the shared nodes, p4est_output.c the files,
  * exchange.c the all-to-all),
- * write_msh_mpi.h (one Gmsh file from every rank). Every function taking the forest is
- * collective over its communicator unless said otherwise. */
+ * write_msh_mpi.h (one Gmsh file from every rank); the run behind
+ * mx_p4est_run (include/mixoct.h): p4est_run.h. Every function taking the
+ * forest is collective over its communicator unless said otherwise. */
 #ifndef MX_P4EST_OCTREE_H
 #define MX_P4EST_OCTREE_H
 
