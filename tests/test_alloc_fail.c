@@ -41,6 +41,7 @@
  * allocation there failed (AddressSanitizer). */
 #include "base/common.h"
 #include "check.h"
+#include "mesh_hash.h"
 #include "mixoct.h"
 
 #include <dirent.h>
@@ -48,12 +49,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-
-static uint64_t fnv(uint64_t h, const void *p, size_t n) {
-  const unsigned char *b = p;
-  for (size_t i = 0; i < n; i++) h = (h ^ b[i]) * 1099511628211ull;
-  return h;
-}
 
 /* ---- messages ---------------------------------------------------------- */
 
@@ -89,34 +84,13 @@ static mx_mesher *demo_mesher(msgs *g) {
   return m;
 }
 
-static uint64_t mesh_hash(const mx_mesher *m) {
-  mx_mesh_arrays a;
-  if (mx_mesher_mesh_arrays(m, &a) != MX_OK) return 0;
-  uint64_t h = 14695981039346656037ull;
-  h = fnv(h, a.xyz, 3 * a.nnodes * sizeof *a.xyz);
-  h = fnv(h, a.type, a.nelements);
-  h = fnv(h, a.conn, 8 * a.nelements * sizeof *a.conn);
-  h = fnv(h, a.leaf, a.nelements * sizeof *a.leaf);
-  return h;
-}
-
-static uint64_t mesh2d_hash(const mx_mesher2d *m) {
-  mx_mesh2d_arrays a;
-  if (mx_mesher2d_mesh_arrays(m, &a) != MX_OK) return 0;
-  uint64_t h = 14695981039346656037ull;
-  h = fnv(h, a.xy, 2 * a.nnodes * sizeof *a.xy);
-  h = fnv(h, a.type, a.ncells);
-  h = fnv(h, a.conn, 4 * a.ncells * sizeof *a.conn);
-  return h;
-}
-
 static uint64_t file_hash(const char *path) {
   FILE *f = fopen(path, "rb");
   if (!f) return 0;
-  uint64_t h = 14695981039346656037ull;
+  uint64_t h = TEST_FNV_START;
   char buf[65536];
   size_t n;
-  while ((n = fread(buf, 1, sizeof buf, f)) > 0) h = fnv(h, buf, n);
+  while ((n = fread(buf, 1, sizeof buf, f)) > 0) h = test_fnv(h, buf, n);
   fclose(f);
   return h;
 }
@@ -164,7 +138,7 @@ static uint64_t demo_go_on(void *obj, msgs *g) {
   /* the surface is there unless its call failed (then it is not) */
   if (mx_mesher_mesh(m) == MX_OK ||
       (mx_mesher_add_demo_surface(m) == MX_OK && mx_mesher_mesh(m) == MX_OK))
-    h = mesh_hash(m);
+    h = test_mesh_hash(m);
   if (m != obj) mx_mesher_free(m);
   return h;
 }
@@ -190,7 +164,7 @@ static uint64_t remesh_go_on(void *obj, msgs *g) {
   mx_mesher *m = obj;
   const int st = mx_mesher_mesh(m);
   if (st != MX_OK) return 0;
-  return mesh_hash(m) != 0;
+  return test_mesh_hash(m) != 0;
 }
 
 /* 2d: an L at -s 5 */
@@ -213,16 +187,16 @@ static uint64_t l_go_on(void *obj, msgs *g) {
   mx_mesher2d *m = obj;
   if (!m) {
     void *o = NULL;
-    uint64_t h = l_step(&o, g) == MX_OK ? mesh2d_hash(o) : 0;
+    uint64_t h = l_step(&o, g) == MX_OK ? test_mesh2d_hash(o) : 0;
     mx_mesher2d_free(o);
     return h;
   }
   /* the domain may not be set when its call failed */
-  if (mx_mesher2d_mesh(m) == MX_OK) return mesh2d_hash(m);
+  if (mx_mesher2d_mesh(m) == MX_OK) return test_mesh2d_hash(m);
   static const double xy[] = {0, 0, 2, 0, 2, 1, 1, 1, 1, 2, 0, 2};
   static const uint32_t seg[] = {0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 0};
   if (mx_mesher2d_set_domain_arrays(m, "L", 6, xy, 6, seg) || mx_mesher2d_mesh(m)) return 0;
-  return mesh2d_hash(m);
+  return test_mesh2d_hash(m);
 }
 
 /* vtu, msh: one meshed demo for all k */

@@ -7,6 +7,7 @@
  * same bytes as with the caller's 2 threads, which the limit leaves alone,
  * while mx_last_call_threads tells which count each call ran with. */
 #include "check.h"
+#include "mesh_hash.h"
 #include "mesher/load_limit.h"
 #include "mixoct.h"
 
@@ -21,12 +22,6 @@ static double now(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static uint64_t fnv(uint64_t h, const void *p, size_t n) {
-  const unsigned char *b = p;
-  for (size_t i = 0; i < n; i++) h = (h ^ b[i]) * 1099511628211ull;
-  return h;
 }
 
 static void test_rule(void) {
@@ -67,19 +62,13 @@ static uint64_t mesh3d(int threads, int *used) {
   mx_mesher *m = mx_mesher_new(&p);
   CHECK(m != NULL);
   if (!m) return 0;
-  uint64_t h = 14695981039346656037ull;
   CHECK(mx_mesher_add_demo_surface(m) == MX_OK);
   CHECK(mx_mesher_mesh(m) == MX_OK);
   *used = mx_last_call_threads();
   mx_mesh_arrays a;
   CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
   CHECK(a.nelements > 1000);
-  h = fnv(h, a.xyz, 3 * a.nnodes * sizeof *a.xyz);
-  h = fnv(h, a.type, a.nelements);
-  h = fnv(h, a.conn, 8 * a.nelements * sizeof *a.conn);
-  h = fnv(h, a.jens, a.nelements * sizeof *a.jens);
-  h = fnv(h, a.leaf, a.nelements * sizeof *a.leaf);
-  h = fnv(h, a.boundary, a.nnodes);
+  const uint64_t h = test_mesh_hash(m);
   mx_mesher_free(m);
   return h;
 }
@@ -95,17 +84,13 @@ static uint64_t mesh2d(int threads, int *used) {
   mx_mesher2d *m = mx_mesher2d_new(&p);
   CHECK(m != NULL);
   if (!m) return 0;
-  uint64_t h = 14695981039346656037ull;
   CHECK(mx_mesher2d_set_domain_arrays(m, "L", 6, xy, 6, seg) == MX_OK);
   CHECK(mx_mesher2d_mesh(m) == MX_OK);
   *used = mx_last_call_threads();
   mx_mesh2d_arrays a;
   CHECK(mx_mesher2d_mesh_arrays(m, &a) == MX_OK);
   CHECK(a.ncells > 100);
-  h = fnv(h, a.xy, 2 * a.nnodes * sizeof *a.xy);
-  h = fnv(h, a.type, a.ncells);
-  h = fnv(h, a.conn, 4 * a.ncells * sizeof *a.conn);
-  h = fnv(h, a.leaf, a.ncells * sizeof *a.leaf);
+  const uint64_t h = test_mesh2d_hash(m);
   mx_mesher2d_free(m);
   return h;
 }
