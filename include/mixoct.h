@@ -469,6 +469,13 @@ void mx_pvtu_piece_path(const char *pvtu_path, int piece, char *buf, size_t n);
 
 /* ---- The mixoct program's other commands (patterns, 2D report) ---------- */
 
+/* `mixoct patterns`: the statistics of the compiled transition-pattern
+ * table (configurations, classes, elements by type and their J_ENS, the
+ * rows of Table II of the 2015 paper) on stdout, as text or (json != 0) one
+ * JSON line. MX_OK, or MX_EINTERNAL (nothing printed) when the table does
+ * not cover every legal configuration. */
+int mx_patterns_print(int json);
+
 /* ---- The distributed path (mixoct --p4est; MPI builds) ------------------ */
 
 #ifdef __cplusplus
