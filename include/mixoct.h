@@ -539,6 +539,47 @@ int mx_check_file(const mx_check_params *p);
 
 /* ---- The mixoct program's other commands (patterns, 2D report) ---------- */
 
+/* The deepest level of the 2D mesher's quadtree (levels 0 to 27; the
+ * octree's is MX_MAX_LEVEL). */
+#define MX_MAX_LEVEL2D 27
+
+/* How many numbers the 2D refinement function `name` takes ("circle" 3,
+ * "line" 4, "sine" 4: see mx_mesher2d_add_function); -1 when no function
+ * has that name (or name is NULL). */
+int mx_mesher2d_function_args(const char *name);
+
+/* What a 2D run did besides meshing, for its report (the mesher2d program
+ * fills it). The pointers are the caller's; the report only reads them. */
+typedef struct {
+  const char *domain;       /* the domain file, as given */
+  int status;               /* the run's status, its exit code */
+  const char *error;        /* the run's first error message; NULL or "": none */
+  int nwarnings;
+  int noutputs;             /* mesh files asked for; 0: a dry run */
+  int nwritten;             /* of which written: outputs[0 .. nwritten-1] */
+  const char *const *outputs;
+  const long long *bytes;   /* the size of each written (-1: unknown) */
+  const char *restart;      /* the restart file written; NULL: none */
+  size_t listed;            /* elements listed for re-meshing (-l) */
+  double total;             /* seconds, the whole run */
+} mx_run2d_info;
+
+/* The report of a 2D run on stdout. json != 0: one JSON line (numbers that
+ * are not finite are null): the outcome, the files written, the mesh's
+ * figures when there is a mesh, the check's when it ran, the phases'
+ * seconds, peak memory and threads. json == 0: the text summary, printed
+ * only for a run that succeeded or made a mesh (nothing otherwise: the
+ * error message said it). m may be NULL (the run stopped before making the
+ * mesher): the run's figures only. */
+void mx_mesher2d_print_report(const mx_mesher2d *m, const mx_run2d_info *ri, int json);
+
+/* `mixoct patterns`: the statistics of the compiled transition-pattern
+ * table (configurations, classes, elements by type and their J_ENS, the
+ * rows of Table II of the 2015 paper) on stdout, as text or (json != 0) one
+ * JSON line. MX_OK, or MX_EINTERNAL (nothing printed) when the table does
+ * not cover every legal configuration. */
+int mx_patterns_print(int json);
+
 /* ---- The distributed path (mixoct --p4est; MPI builds) ------------------ */
 
 /* The octree, and unless stopped there the mesh, built by p4est over the

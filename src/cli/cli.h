@@ -7,6 +7,13 @@
 
 #include "mixoct.h"
 
+/* A status travels up (as in the library: return the first failure). */
+#define MX_CHECK(expr)                                                        \
+  do {                                                                        \
+    int mx_status_ = (expr);                                                  \
+    if (mx_status_ != MX_OK) return mx_status_;                               \
+  } while (0)
+
 #define MX_MAX_INPUTS 64
 #define MX_MAX_OUTPUTS 16 /* meshes; with the boundary and the restart file:
                           * MX_RUN_FILES (mixoct.h) */
@@ -69,7 +76,7 @@ int mx_run(const mx_options *o);
  * (src/cli/mesher_roi.c). Returns the exit code. */
 int mx_mesher_roi_main(int argc, char **argv);
 /* The program invoked as `mesher2d`: the 2D mixed quadtree mesher
- * (src/cli/mesher2d.c, src/quad/quad.h). Returns the exit code. */
+ * (src/cli/mesher2d.c, over mixoct.h's mx_mesher2d_*). Returns the exit code. */
 int mx_mesher2d_main(int argc, char **argv);
 
 /* `mixoct check MESH [--surface FILE] [--json]` (src/cli/check_cmd.c: the

@@ -3,7 +3,8 @@
  * program's flags and mixoct's conventions (exit codes, --json, files
  * written whole or not at all). A thin front over the library's 2D mesher
  * (include/mixoct.h, mx_mesher2d_*; src/mesher/mesher2d.c): options in,
- * library calls, the report out.
+ * library calls, the report out (mx_mesher2d_print_report,
+ * src/mesher/mesher2d_report.c).
  *
  * The mesh is written only when the independent check passes (conforming,
  * no inverted cell, boundary on the polylines, features as vertices, area
@@ -17,15 +18,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 #include <sys/stat.h>
 
 #include "cli/cli.h"
-#include "base/common.h"
-#include "io/atomic_file.h"
-#include "io/file_identity.h"
-#include "mesher/mesher2d.h"
-#include "mesher/qmesh_output.h"
+#include "mixoct.h"
 
 #ifndef MX_VERSION
 #define MX_VERSION "0.1.0"
@@ -103,18 +99,17 @@ static const struct {
 } formats[NFMT] = {{"-v", ".vtk"}, {"-x", ".msh"}, {"-o", ".off"}, {"-g", ".getfem"},
                    {"-m", ".m3d"}};
 
-/* The check's tolerances: boundary nodes within CHECK_TOL of the domain's
- * diameter from the polylines; the area within half a layer of cells along
- * the boundary, AREA_TOL at least (as the 3D volume check). */
-#define CHECK_TOL 1e-6
-#define AREA_TOL 0.05
-#define AREA_TOL_MAX 0.25 /* beyond: the domain is not represented at all */
+/* -f NAME ARGS RL */
+typedef struct {
+  const char *name;
+  double a[4];
+  size_t nargs;
+  int level;
+} m2_function;
 
 typedef struct {
   const char *domain, *outname, *boxes_file, *restart_in, *list;
   int no_restart;
-  const char *fun_name[MAXREQ];
-  size_t fun_nargs[MAXREQ];
   int want[NFMT];
   const char *extra[MAXOUT];
   int nextra;
@@ -122,14 +117,11 @@ typedef struct {
   const char *region_path[MAXREQ], *drawing_path[MAXREQ];
   int region_level[MAXREQ], drawing_level[MAXREQ];
   int nregions, ndrawings;
-  mx_qfun funs[MAXREQ];
+  m2_function funs[MAXREQ];
   int nfuns;
   int threads, balance, json, quiet, ascii;
   int keep_invalid; /* write a mesh that fails the check (exit 5 all the same) */
 } m2_options;
-
-static const char *const phase_name[M2_NPH] = {"read",     "refine",  "balance", "transition",
-                                            "boundary", "quality", "check",   "write"};
 
 typedef struct {
   mx_mesher2d *m;
@@ -144,8 +136,6 @@ typedef struct {
   char error[1024];
   int nwarnings, quiet, status;
 } m2_run;
-
-static m2_run run2;
 
 /* ---- messages and signals ------------------------------------------------- */
 
@@ -184,8 +174,8 @@ static int need(int i, int argc, int n, const char *opt) {
 static int parse_level(const char *opt, const char *s, int *out) {
   char *end;
   const long v = strtol(s, &end, 10);
-  if (*s == '\0' || *end || v < 0 || v > MX_QMAX_LEVEL - 1) {
-    mx_error(NULL, 0, "%s wants a level between 0 and %d, got '%s'", opt, MX_QMAX_LEVEL - 1, s);
+  if (*s == '\0' || *end || v < 0 || v > MX_MAX_LEVEL2D) {
+    mx_error(NULL, 0, "%s wants a level between 0 and %d, got '%s'", opt, MX_MAX_LEVEL2D, s);
     return MX_EINPUT;
   }
   *out = (int)v;
@@ -204,27 +194,20 @@ static int parse_real(const char *opt, const char *s, double *out) {
 
 /* -f NAME ARGS RL at argv[i]; advances *i past it. */
 static int parse_fun(int argc, char **argv, int *i, m2_options *o) {
-  static const struct {
-    const char *name;
-    int kind, nargs;
-  } kinds[3] = {{"circle", MX_QFUN_CIRCLE, 3}, {"line", MX_QFUN_LINE, 4},
-                {"sine", MX_QFUN_SINE, 4}};
   MX_CHECK(need(*i, argc, 1, "-f"));
   const char *name = argv[++*i];
-  int k = 0;
-  while (k < 3 && strcmp(name, kinds[k].name) != 0) k++;
-  if (k == 3) return usage_error("-f wants circle, line or sine, got '%s'", name);
+  const int nargs = mx_mesher2d_function_args(name);
+  if (nargs < 0) return usage_error("-f wants circle, line or sine, got '%s'", name);
   if (o->nfuns == MAXREQ) return usage_error("too many -f functions", NULL);
-  o->fun_name[o->nfuns] = kinds[k].name;
-  o->fun_nargs[o->nfuns] = (size_t)kinds[k].nargs;
-  mx_qfun *f = &o->funs[o->nfuns++];
+  m2_function *f = &o->funs[o->nfuns++];
   memset(f, 0, sizeof *f);
-  f->kind = kinds[k].kind;
-  MX_CHECK(need(*i, argc, kinds[k].nargs + 1, "-f"));
-  for (int a = 0; a < kinds[k].nargs; a++) MX_CHECK(parse_real("-f", argv[++*i], &f->a[a]));
-  if (f->kind == MX_QFUN_CIRCLE && !(f->a[2] > 0))
+  f->name = name;
+  f->nargs = (size_t)nargs;
+  MX_CHECK(need(*i, argc, nargs + 1, "-f"));
+  for (int a = 0; a < nargs; a++) MX_CHECK(parse_real("-f", argv[++*i], &f->a[a]));
+  if (!strcmp(name, "circle") && !(f->a[2] > 0))
     return usage_error("-f circle wants a positive radius, got '%s'", argv[*i]);
-  if (f->kind == MX_QFUN_LINE && f->a[2] == 0 && f->a[3] == 0)
+  if (!strcmp(name, "line") && f->a[2] == 0 && f->a[3] == 0)
     return usage_error("-f line wants a non-zero normal", NULL);
   return parse_level("-f", argv[++*i], &f->level);
 }
@@ -301,7 +284,7 @@ static int parse_one(int argc, char **argv, int *i, m2_options *o, int *exit_now
     const char *s = argv[++*i];
     if (strcmp(s, "edges") && strcmp(s, "recursive"))
       return usage_error("--balance wants edges or recursive, got '%s'", s);
-    o->balance = strcmp(s, "edges") ? MX_QBALANCE_RECURSIVE : MX_QBALANCE_EDGES;
+    o->balance = strcmp(s, "edges") ? MX_BALANCE_RECURSIVE : MX_BALANCE_EDGES;
   } else if (!strcmp(a, "--json")) {
     o->json = 1;
   } else if (!strcmp(a, "--quiet")) {
@@ -322,7 +305,7 @@ static int parse_one(int argc, char **argv, int *i, m2_options *o, int *exit_now
 static int parse_options(int argc, char **argv, m2_options *o, int *exit_now) {
   memset(o, 0, sizeof *o);
   o->ascii = 1;
-  o->balance = MX_QBALANCE_EDGES;
+  o->balance = MX_BALANCE_EDGES;
   *exit_now = 0;
   for (int i = 1; i < argc; i++) { /* known even when the line is refused */
     o->json |= !strcmp(argv[i], "--json");
@@ -369,7 +352,7 @@ static int output_list(const m2_options *o, m2_run *r) {
     MX_CHECK(mx_check_output_path(r->restart_out, 0));
   }
   for (int k = 0; k < r->noutputs; k++) {
-    if (!mx_qmesh_format_known(r->outputs[k])) {
+    if (!mx_plane_format_known(r->outputs[k])) {
       mx_error(r->outputs[k], 0, "unknown 2D output format (use .vtu, .vtk, .msh, .off, "
                                  ".getfem or .m3d)");
       return MX_EINPUT;
@@ -410,7 +393,7 @@ static int add_requests(const m2_options *o, mx_mesher2d *m) {
   for (int k = 0; k < o->ndrawings; k++)
     MX_CHECK(mx_mesher2d_add_drawing(m, o->drawing_path[k], o->drawing_level[k]));
   for (int k = 0; k < o->nfuns; k++)
-    MX_CHECK(mx_mesher2d_add_function(m, o->fun_name[k], o->funs[k].a, o->fun_nargs[k],
+    MX_CHECK(mx_mesher2d_add_function(m, o->funs[k].name, o->funs[k].a, o->funs[k].nargs,
                                       o->funs[k].level));
   return MX_OK;
 }
@@ -448,7 +431,7 @@ static int write_outputs(const m2_options *o, m2_run *r) {
 static int pipeline(const m2_options *o, m2_run *r) {
   mx_params2d p;
   mx_params2d_default(&p);
-  p.balance = o->balance == MX_QBALANCE_RECURSIVE ? MX_BALANCE_RECURSIVE : MX_BALANCE_EDGES;
+  p.balance = o->balance;
   p.threads = o->threads;
   mx_mesher2d *m = r->m = mx_mesher2d_new(&p);
   if (!m) return MX_ENOMEM;
@@ -456,165 +439,44 @@ static int pipeline(const m2_options *o, m2_run *r) {
   int st = mx_mesher2d_set_domain(m, o->domain);
   if (!st) st = add_requests(o, m);
   if (!st) st = o->restart_in ? remesh(o, m, r) : mx_mesher2d_mesh(m);
-  if (!st || (st == MX_EINVALID && o->keep_invalid && m->checked)) {
+  /* --keep-invalid writes a mesh that fails the check: MX_EINVALID with a
+   * mesh kept (the check is the only stage that returns it after making
+   * the mesh; the boundary stage returns it without one). */
+  mx_mesh2d_arrays a;
+  if (!st || (st == MX_EINVALID && o->keep_invalid && mx_mesher2d_mesh_arrays(m, &a) == MX_OK)) {
     const int wst = write_outputs(o, r);
     if (wst) st = wst;
   }
   return st;
 }
 
-/* ---- report ------------------------------------------------------------------ */
+/* ---- the report (the library's: src/mesher/mesher2d_report.c) --------------- */
 
-static void json_string(FILE *f, const char *s) {
-  fputc('"', f);
-  for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
-    if (*p == '"' || *p == '\\') fprintf(f, "\\%c", *p);
-    else if (*p < 0x20 || *p == 0x7f) fprintf(f, "\\u%04x", *p);
-    else fputc(*p, f);
-  }
-  fputc('"', f);
-}
-
-/* A number, or null when it is not finite (JSON has no inf / nan). */
-static void json_num(FILE *f, const char *key, double v) {
-  if (isfinite(v)) fprintf(f, "\"%s\": %.9g", key, v);
-  else fprintf(f, "\"%s\": null", key);
-}
-
-static void json_mesh(FILE *f, const m2_options *o, const m2_run *r) {
-  const mx_mesher2d *m = r->m;
-  const mx_qquality *q = &m->q;
-  fprintf(f, ", \"nodes\": %zu, \"elements\": %zu, \"by_type\": {\"tri\": %zu, \"quad\": %zu}, "
-          "\"leaves\": %zu, \"quadrants\": %zu, \"splits\": %zu, \"balance_splits\": %zu, "
-          "\"edges\": %zu, \"balance\": \"%s\", ",
-          r->m->M.nnodes, r->m->M.ncells, q->count[0], q->count[1], r->m->nleaves, r->m->T.n, r->m->qs.splits,
-          r->m->qs.balance_splits, r->m->qs.edges, o->balance ? "recursive" : "edges");
-  json_num(f, "sj_min", fmin(q->count[0] ? q->min[0] : 1, q->count[1] ? q->min[1] : 1));
-  fputs(", ", f);
-  json_num(f, "min_angle", q->min_angle);
-  fprintf(f, ", \"invalid\": %zu, \"quality\": {\"bins\": {\"lt_0.03\": %zu, \"lt_0.2\": %zu, "
-          "\"lt_0.4\": %zu, \"lt_0.6\": %zu, \"lt_0.8\": %zu, \"le_1\": %zu}",
-          q->invalid, q->bins[0], q->bins[1], q->bins[2], q->bins[3], q->bins[4], q->bins[5]);
-  static const char *tname[2] = {"tri", "quad"};
-  for (int t = 0; t < 2; t++) {
-    fprintf(f, ", \"%s\": {\"count\": %zu, ", tname[t], q->count[t]);
-    json_num(f, "min", q->count[t] ? q->min[t] : 0), fputs(", ", f);
-    json_num(f, "mean", q->count[t] ? q->mean[t] : 0), fputs(", ", f);
-    json_num(f, "max", q->count[t] ? q->max[t] : 0), fputs("}", f);
-  }
-  const mx_qboundary_stats *b = &r->m->bs;
-  fprintf(f, "}, \"boundary\": {\"features\": %zu, \"moved_close\": %zu, \"removed\": %zu, "
-          "\"shrunk\": %zu, \"patterned\": %zu, \"inverted\": %zu}",
-          b->features, b->moved_close, b->removed, b->shrunk, b->patterned, b->inverted);
-}
-
-static void json_check(FILE *f, const m2_run *r) {
-  const mx_qcheck_report *c = &r->m->cr;
-  fprintf(f, ", \"check\": {\"bad_edges\": %zu, \"hanging\": %zu, \"inverted\": %zu, "
-          "\"off_boundary\": %zu, \"missing_features\": %zu, ",
-          c->bad_edges, c->hanging, c->inverted, c->off_boundary, c->missing_features);
-  json_num(f, "area", c->area), fputs(", ", f);
-  json_num(f, "domain_area", c->domain_area), fputs(", ", f);
-  json_num(f, "area_error", c->area_error), fputs(", ", f);
-  json_num(f, "area_tolerance", r->m->area_tol);
-  fprintf(f, ", \"edges\": %zu, \"boundary_edges\": %zu, \"euler\": %ld, \"domain_euler\": %ld}",
-          c->edges, c->boundary_edges, c->euler, c->domain_euler);
-}
-
-static void print_json(const m2_options *o, const m2_run *r) {
-  FILE *f = stdout;
-  fprintf(f, "{\"valid\": %s, \"exit_code\": %d, \"error\": ", r->status ? "false" : "true",
-          r->status);
-  if (r->error[0]) json_string(f, r->error);
-  else fputs("null", f);
-  fprintf(f, ", \"warnings\": %d, \"outputs\": [", r->nwarnings);
-  for (int k = 0; k < r->nwritten; k++) {
-    fputs(k ? ", {\"path\": " : "{\"path\": ", f);
-    json_string(f, r->outputs[k]);
-    fprintf(f, ", \"bytes\": %lld}", r->bytes[k]);
-  }
-  fputs("]", f);
-  if (r->restart_written) {
-    fputs(", \"restart\": ", f);
-    json_string(f, r->restart_out);
-  }
-  if (r->m && r->m->meshed) {
-    json_mesh(f, o, r);
-    fprintf(f, ", \"refined_listed\": %zu, \"listed\": %zu, \"feature_boxes\": %zu, "
-            "\"memory_estimate_mb\": %.1f", r->m->refined_listed, r->listed,
-            r->m->feature_boxes, r->m->estimate_mb);
-  }
-  if (r->m && r->m->checked) json_check(f, r);
-  fputs(", \"phases\": {", f);
-  for (int p = 0; p < M2_NPH; p++)
-    fprintf(f, "%s\"%s\": %.6f", p ? ", " : "", phase_name[p], r->m ? r->m->rec->t[p] : 0.0);
-  fprintf(f, ", \"restart\": %.6f", r->m ? r->m->rec->t_restart : 0.0); /* reading or writing */
-  fprintf(f, "}, \"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"threads\": %d}\n", r->total,
-          mx_peak_rss_mb(), omp_get_max_threads());
-  fflush(f);
-}
-
-static void print_quality(const m2_run *r) {
-  const mx_mesher2d *m = r->m;
-  const mx_qquality *q = &m->q;
-  static const char *tname[2] = {"tri", "quad"};
-  printf("  scaled J     %12s %9s %9s %9s\n", "count", "min", "mean", "max");
-  for (int t = 1; t >= 0; t--)
-    if (q->count[t])
-      printf("    %-10s %12zu %9.3f %9.3f %9.3f\n", tname[t], q->count[t], q->min[t], q->mean[t],
-             q->max[t]);
-  printf("    min angle  %12.2f degrees; %zu invalid (scaled Jacobian <= 0)\n", q->min_angle,
-         q->invalid);
-  static const char *bin[MX_QBINS] = {"<0.03", "<0.2", "<0.4", "<0.6", "<0.8", "<=1"};
-  printf("  sJ bins     ");
-  for (int b = 0; b < MX_QBINS; b++) printf(" %9s", bin[b]);
-  printf("\n    cells     ");
-  for (int b = 0; b < MX_QBINS; b++) printf(" %9zu", q->bins[b]);
-  printf("\n");
-}
-
-static void print_summary(const m2_options *o, const m2_run *r) {
-  printf("mesher2d: %s; %d thread(s), %s balance\n",
-         o->domain, omp_get_max_threads(),
-         o->balance ? "recursive" : "edges");
-  const int meshed = r->m && r->m->meshed;
-  if (meshed) {
-    printf("  quadtree     %12zu leaves (%zu quadrants, %zu splits, %zu for balance)\n",
-           r->m->nleaves, r->m->T.n, r->m->qs.splits, r->m->qs.balance_splits);
-    printf("  nodes        %12zu\n  cells        %12zu (quad %zu, tri %zu)\n", r->m->M.nnodes,
-           r->m->M.ncells, r->m->q.count[1], r->m->q.count[0]);
-    print_quality(r);
-    printf("  boundary     %zu features, %zu moved close, %zu removed, %zu shrunk, %zu patterned\n",
-           r->m->bs.features, r->m->bs.moved_close, r->m->bs.removed, r->m->bs.shrunk, r->m->bs.patterned);
-  }
-  if (meshed && r->listed)
-    printf("  re-meshed    %zu element(s) listed: %zu quadrant(s) split once\n", r->listed,
-           r->m->refined_listed);
-  if (r->m && r->m->checked)
-    printf("  check        %s; area %.6g (domain %.6g, %.3f%% off)\n",
-           r->status == MX_EINVALID ? "FAILED" : "conforming, valid", r->m->cr.area,
-           r->m->cr.domain_area, 100.0 * r->m->cr.area_error);
-  printf("  time (s)     %12.3f total:", r->total);
-  for (int p = 0; p < M2_NPH; p++) printf(" %s %.3f", phase_name[p], r->m ? r->m->rec->t[p] : 0.0);
-  if (r->m && r->m->rec->t_restart > 0) printf(" restart %.3f", r->m->rec->t_restart);
-  printf("\n  peak memory  %12.0f MB\n", mx_peak_rss_mb());
-  for (int k = 0; k < r->nwritten; k++)
-    printf("  written      %s (%lld bytes)\n", r->outputs[k], r->bytes[k]);
-  if (r->restart_written) printf("  restart      %s\n", r->restart_out);
-  if (!r->noutputs) printf("  written      nothing: a dry run (give -u NAME -v, or -O FILE)\n");
+static void print_report(const m2_options *o, const m2_run *r) {
+  const mx_run2d_info ri = {.domain = o->domain,
+                            .status = r->status,
+                            .error = r->error,
+                            .nwarnings = r->nwarnings,
+                            .noutputs = r->noutputs,
+                            .nwritten = r->nwritten,
+                            .outputs = r->outputs,
+                            .bytes = r->bytes,
+                            .restart = r->restart_written ? r->restart_out : NULL,
+                            .listed = r->listed,
+                            .total = r->total};
+  mx_mesher2d_print_report(r->m, &ri, o->json);
 }
 
 int mx_mesher2d_main(int argc, char **argv) {
-  m2_run *r = &run2;
-  mx_msg_fn = on_message;
-  mx_msg_user = r;
+  m2_run run = {0}, *r = &run;
+  mx_set_thread_message_handler(on_message, r);
   m2_options o;
   int exit_now = 0;
   const double t0 = mx_wtime();
   int st = parse_options(argc, argv, &o, &exit_now);
   if (exit_now && !st) return 0;
   r->quiet = o.quiet;
-  mx_quiet = o.quiet;
+  mx_set_thread_quiet(o.quiet);
   if (!st) st = output_list(&o, r);
   if (!st) {
     if (o.threads > 0) omp_set_num_threads(o.threads);
@@ -625,9 +487,9 @@ int mx_mesher2d_main(int argc, char **argv) {
   }
   r->status = st;
   r->total = mx_wtime() - t0;
-  if (o.json) print_json(&o, r);
-  else if (!o.quiet && ((r->m && r->m->meshed) || !st)) print_summary(&o, r);
+  if (o.json || !o.quiet) print_report(&o, r);
   mx_mesher2d_free(r->m);
   for (int f = 0; f <= NFMT; f++) mx_free(r->owned[f]);
+  mx_set_thread_message_handler(NULL, NULL); /* r lives no longer */
   return st;
 }

@@ -276,26 +276,39 @@ int mx_mesher2d_add_drawing(mx_mesher2d *m, const char *path, int level) {
   CALL(m, add_poly(m, path, level, 0));
 }
 
+/* The functions of the "function" refinement, by name. */
+static const struct {
+  const char *name;
+  int kind;
+  size_t nargs;
+} fun_kinds[3] = {{"circle", MX_QFUN_CIRCLE, 3}, {"line", MX_QFUN_LINE, 4},
+                  {"sine", MX_QFUN_SINE, 4}};
+
+/* The index in fun_kinds of the function called name; 3 when none is. */
+static int fun_kind(const char *name) {
+  int k = 0;
+  while (k < 3 && (!name || strcmp(name, fun_kinds[k].name) != 0)) k++;
+  return k;
+}
+
+int mx_mesher2d_function_args(const char *name) {
+  const int k = fun_kind(name);
+  return k < 3 ? (int)fun_kinds[k].nargs : -1;
+}
+
 static int add_function(mx_mesher2d *m, const char *name, const double *args, size_t nargs,
                         int level) {
-  static const struct {
-    const char *name;
-    int kind;
-    size_t nargs;
-  } kinds[3] = {{"circle", MX_QFUN_CIRCLE, 3}, {"line", MX_QFUN_LINE, 4},
-                {"sine", MX_QFUN_SINE, 4}};
-  int k = 0;
-  while (k < 3 && (!name || strcmp(name, kinds[k].name) != 0)) k++;
+  const int k = fun_kind(name);
   if (k == 3) {
     mx_error(NULL, 0, "function: circle, line or sine, not '%s'", name ? name : "(null)");
     return MX_EINPUT;
   }
-  if (nargs != kinds[k].nargs) {
-    mx_error(NULL, 0, "function %s takes %zu numbers, got %zu", name, kinds[k].nargs, nargs);
+  if (nargs != fun_kinds[k].nargs) {
+    mx_error(NULL, 0, "function %s takes %zu numbers, got %zu", name, fun_kinds[k].nargs, nargs);
     return MX_EINPUT;
   }
   MX_CHECK(level_ok(level, "function"));
-  mx_qfun f = {.kind = kinds[k].kind, .level = level};
+  mx_qfun f = {.kind = fun_kinds[k].kind, .level = level};
   for (size_t a = 0; a < nargs; a++) {
     if (!isfinite(args[a])) {
       mx_error(NULL, 0, "function %s: argument %zu is not finite", name, a + 1);

@@ -1,6 +1,8 @@
 /* The 2D mesher object behind include/mixoct.h (mx_mesher2d): what it keeps
- * between calls and the figures of a run, read by the mesher2d program
- * (src/cli/mesher2d.c). Only the library and src/cli include this header.
+ * between calls and the figures of a run, read by the report of a run
+ * (src/mesher/mesher2d_report.c). Private to the library (programs use
+ * mixoct.h; src/cli/check_cmd.c still includes it until `mixoct check`
+ * moves behind mixoct.h too).
  *
  * The pipeline, one call each (mesher2d.c):
  *   mx_poly_check_domain -> mx_poly_index_build -> mx_qtree_build (requests,

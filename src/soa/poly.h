@@ -7,7 +7,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define MX_QMAX_LEVEL 28 /* lattice: 2^28 units per root side, levels 0 to 27 */
+#include "mixoct.h" /* MX_MAX_LEVEL2D */
+
+/* The lattice: 2^MX_QMAX_LEVEL (2^28) units per root side, levels 0 to
+ * MX_MAX_LEVEL2D (27, mixoct.h). */
+#define MX_QMAX_LEVEL (MX_MAX_LEVEL2D + 1)
 
 /* A set of polylines. For a domain every polyline is closed and oriented so
  * that the domain lies on the left of each segment (outer boundaries
