@@ -1,18 +1,12 @@
-/* The mixoct program: options, pipeline, report. */
+/* The mixoct program: options, the run, the commands (src/cli/). It uses
+ * the library through include/mixoct.h only. */
 #ifndef MX_CLI_H
 #define MX_CLI_H
 
 #include <stddef.h>
 #include <stdint.h>
 
-#include "mixoct.h"
-
-/* A status travels up (as in the library: return the first failure). */
-#define MX_CHECK(expr)                                                        \
-  do {                                                                        \
-    int mx_status_ = (expr);                                                  \
-    if (mx_status_ != MX_OK) return mx_status_;                               \
-  } while (0)
+#include "mixoct.h" /* the only header of the library the programs use */
 
 #define MX_MAX_INPUTS 64
 #define MX_MAX_OUTPUTS 16 /* meshes; with the boundary and the restart file:
@@ -82,6 +76,9 @@ int mx_mesher2d_main(int argc, char **argv);
 /* `mixoct check MESH [--surface FILE] [--json]` (src/cli/check_cmd.c: the
  * options; include/mixoct.h: mx_check_file does the rest). */
 int mx_check_main(int argc, char **argv);
+/* `mpirun -n N mixoct ... --p4est`: the distributed path (src/cli/p4est_cmd.c;
+ * builds with MPI only). Returns the exit code. */
+int mx_p4est_main(int argc, char **argv);
 /* `mixoct patterns [--json]` (src/cli/patterns_cmd.c). */
 int mx_patterns_main(int argc, char **argv);
 

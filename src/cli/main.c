@@ -159,9 +159,6 @@ int mx_run(const mx_options *o) {
   return st;
 }
 
-#ifdef MX_HAVE_MPI
-int mx_p4est_main(int argc, char **argv); /* src/cli/p4est_cmd.c */
-#endif
 
 /* OpenMP threads that wait for each other sleep instead of spinning
  * (issue 24): libgomp's default spins at every barrier, and when another

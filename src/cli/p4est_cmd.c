@@ -9,7 +9,6 @@
 
 #include <string.h>
 
-int mx_p4est_main(int argc, char **argv);
 
 /* The options the distributed path reads (it refuses the others). */
 static void run_params(const mx_options *o, int compare, mx_p4est_run_params *p) {

@@ -1,6 +1,7 @@
 /* The mesher object behind include/mixoct.h: what it keeps between calls,
- * and the figures of a run (mx_summary, printed by the programs). Only the
- * library and the programs in src/cli include this header. */
+ * and the figures of a run (mx_summary, printed by mx_mesher_print_report,
+ * src/mesher/report.c). Private to the library: the programs in src/cli
+ * include only mixoct.h. */
 #ifndef MX_MESHER_H
 #define MX_MESHER_H
 

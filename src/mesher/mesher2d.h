@@ -1,8 +1,7 @@
 /* The 2D mesher object behind include/mixoct.h (mx_mesher2d): what it keeps
  * between calls and the figures of a run, read by the report of a run
- * (src/mesher/mesher2d_report.c). Private to the library (programs use
- * mixoct.h; src/cli/check_cmd.c still includes it until `mixoct check`
- * moves behind mixoct.h too).
+ * (src/mesher/mesher2d_report.c) and by the checker of 2D mesh files
+ * (src/mesher/check_file.c). Private to the library: programs use mixoct.h.
  *
  * The pipeline, one call each (mesher2d.c):
  *   mx_poly_check_domain -> mx_poly_index_build -> mx_qtree_build (requests,
