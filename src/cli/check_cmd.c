@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cli/cli.h"
+#include "cli.h"
 #include "mixoct.h"
 
 enum { EXIT_USAGE = 2 };

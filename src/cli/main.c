@@ -4,8 +4,8 @@
  * `-c FILE.oct [-l LIST]` re-meshes from a restart file. Exit codes: the
  * library's status (0 success, 1 internal failure, 2 bad input or usage,
  * 3 out of memory, 4 output failure, 5 invalid elements left). */
-#include "cli/cli.h"
-#include "cli/progress.h"
+#include "cli.h"
+#include "progress.h"
 #include "mixoct.h"
 
 #include <signal.h>

@@ -38,7 +38,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cli/cli.h"
+#include "cli.h"
 
 static const char *roi_usage =
     "usage: mesher_roi (-d in.mdl | -o in.off) [requests] [-u outname -v|-g|-m|-i]\n"

@@ -4,7 +4,7 @@
  * --p4est-compare, become an mx_p4est_run_params; the library does the rest
  * (include/mixoct.h, "The distributed path"; src/mpi/p4est_run.c). MPI is
  * set up first, so that only rank 0 prints the usage errors. */
-#include "cli/cli.h"
+#include "cli.h"
 #include "mixoct.h"
 
 #include <string.h>

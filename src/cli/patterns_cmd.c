@@ -3,7 +3,7 @@
  * (src/patterns/patterns_report.c); here only the arguments. */
 #include <string.h>
 
-#include "cli/cli.h"
+#include "cli.h"
 #include "mixoct.h"
 
 int mx_patterns_main(int argc, char **argv) {

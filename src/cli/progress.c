@@ -1,8 +1,8 @@
 /* mixoct: the progress line on stderr (see progress.h). The main thread only
  * records where the run is, under a mutex; a helper thread draws. */
-#include "cli/progress.h"
+#include "progress.h"
 
-#include "cli/cli.h"
+#include "cli.h"
 
 #include <pthread.h>
 #include <stdio.h>

@@ -3,7 +3,7 @@
  * process may run on (fewer under Slurm's --cpus-per-task, taskset or
  * numactl), and the OpenMP thread count. Printed by --version and in the
  * JSON summary (so it never holds a double quote or a backslash). */
-#include "cli/cli.h"
+#include "cli.h"
 
 #include <omp.h>
 #include <stdio.h>
