@@ -571,12 +571,73 @@ static void test_empty(void) {
   mx_trisoup_free(&s);
 }
 
+/* Nested shells turned outward (several materials, issue 26): three nested
+ * boxes, one of them given inward, and a box beside the middle one inside
+ * the outer one. Each shell's depth is the number of boxes around it; a
+ * point's region depth the number of boxes it is in (direct count below);
+ * the domain is the outer box whole (the nested boxes are not holes). */
+static void test_region_depth(void) {
+  static const double box[4][6] = {{0, 0, 0, 10, 10, 10},
+                                   {2, 2, 2, 7, 8, 8},
+                                   {4, 4, 4, 6, 6, 6},
+                                   {8, 1, 1, 9.5, 3, 2}};
+  mx_trisoup s;
+  memset(&s, 0, sizeof s);
+  for (int b = 0; b < 4; b++) add_box(&s, box[b], box[b] + 3, b == 1);
+  mx_surface_index S;
+  CHECK(mx_surface_index_build_outward(&S, &s, 0, (uint32_t)s.nt) == MX_OK);
+  CHECK(S.nshells == 4);
+  CHECK(S.closed == 0);
+  /* the depth of each box's shell: boxes 1 and 3 inside box 0, 2 inside 1 */
+  static const uint32_t want_depth[4] = {0, 1, 2, 1};
+  for (uint32_t t = 0; t < S.nt; t++) {
+    const uint32_t b = S.tri_id[t] / 12, c = S.shell_of[t];
+    CHECK(S.shell_depth[c] == want_depth[b]);
+  }
+  uint64_t seed = 7;
+  int wrong = 0, wrong_inside = 0;
+  for (int i = 0; i < 4000; i++) {
+    double p[3];
+    for (int a = 0; a < 3; a++) {
+      seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+      p[a] = -1.0 + 12.0 * (double)(seed >> 11) / 9007199254740992.0;
+    }
+    int n = 0, on = 0;
+    for (int b = 0; b < 4; b++) {
+      int in = 1;
+      for (int a = 0; a < 3; a++) {
+        in &= p[a] > box[b][a] && p[a] < box[b][3 + a];
+        on |= fabs(p[a] - box[b][a]) < 1e-9 || fabs(p[a] - box[b][3 + a]) < 1e-9;
+      }
+      n += in;
+    }
+    if (on) continue;
+    wrong += mx_region_depth(&S, p) != n;
+    wrong_inside += mx_inside(&S, p) != (n > 0);
+  }
+  CHECK(wrong == 0);
+  CHECK(wrong_inside == 0);
+  /* the nesting index keeps its meaning: the middle box is a hole */
+  mx_surface_index P;
+  CHECK(mx_surface_index_build(&P, &s, 0, (uint32_t)s.nt) == MX_OK);
+  const double in_middle[3] = {3, 3, 3}, in_inner[3] = {5, 5, 5};
+  CHECK(mx_inside(&P, in_middle) == 0);
+  CHECK(mx_inside(&P, in_inner) == 1);
+  CHECK(mx_region_depth(&S, in_middle) == 2 && mx_region_depth(&S, in_inner) == 3);
+  printf("region depth: 4 shells of depths 0 1 2 1, %d point(s) wrong, %d wrongly located\n",
+         wrong, wrong_inside);
+  mx_surface_index_free(&P);
+  mx_surface_index_free(&S);
+  mx_trisoup_free(&s);
+}
+
 int main(int argc, char **argv) {
   quick = argc > 1 && strcmp(argv[1], "quick") == 0;
   (void)no_requests; /* from octree_util.h, unused here */
   test_unit_cube();
   test_demo_surface();
   test_shells();
+  test_region_depth();
   test_open_cube();
   test_empty();
   test_scales();

@@ -22,6 +22,7 @@ void mx_surface_index_free(mx_surface_index *S) {
   mx_free(S->fn);
   mx_free(S->en);
   mx_free(S->vn);
+  mx_free(S->shell_depth);
   mx_free(S->cap_off);
   mx_free(S->cap_cnt);
   mx_free(S->cap_u);
@@ -32,8 +33,11 @@ void mx_surface_index_free(mx_surface_index *S) {
 
 /* Orientation of the shells (see distance.h): seeds' centroids, signed
  * volumes, nesting depths by the winding number, then the final signs. */
+enum { ORIENT_NESTING = 0, ORIENT_GIVEN = 1, ORIENT_OUTWARD = 2 };
+
 static int orient_shells(mx_surface_index *S, const uint8_t *fix,
-                         const uint32_t *seed, const uint32_t *cap_shell, int given) {
+                         const uint32_t *seed, const uint32_t *cap_shell, int mode) {
+  const int given = mode == ORIENT_GIVEN;
   const uint32_t nt = S->nt, nc = S->nshells;
   const size_t ncap = S->ncap;
   double *rep = mx_alloc(3 * (size_t)nc * sizeof *rep + 8);
@@ -119,7 +123,8 @@ static int orient_shells(mx_surface_index *S, const uint8_t *fix,
       /* w = depth + 1/2 */
       long depth = lround(w - 0.5);
       if (depth < 0) depth = 0;
-      if (depth % 2) csign[c] = (int8_t)-csign[c];
+      S->shell_depth[c] = (uint32_t)depth;
+      if (depth % 2 && mode != ORIENT_OUTWARD) csign[c] = (int8_t)-csign[c];
     }
   }
   for (uint32_t i = 0; i < nt; i++) {
@@ -150,7 +155,7 @@ static int orient_shells(mx_surface_index *S, const uint8_t *fix,
 }
 
 static int index_build(mx_surface_index *S, const mx_trisoup *soup, uint32_t t0,
-                       uint32_t t1, int given) {
+                       uint32_t t1, int mode) {
   memset(S, 0, sizeof *S);
   if (t0 > t1 || t1 > soup->nt) {
     mx_error(NULL, 0, "surface index: triangle range [%u, %u) outside [0, %zu)",
@@ -247,11 +252,17 @@ static int index_build(mx_surface_index *S, const mx_trisoup *soup, uint32_t t0,
                            &S->conflict_edges);
   }
   if (st == MX_OK) {
+    S->shell_depth = mx_calloc(((size_t)S->nshells + 1) * sizeof *S->shell_depth);
+    if (!S->shell_depth) st = MX_ENOMEM;
+  }
+  if (st == MX_OK) {
     S->closed = S->open_edges == 0 && S->conflict_edges == 0;
     st = mx_index_build_caps(S, fix, &cap_shell);
   }
-  if (st == MX_OK) st = orient_shells(S, fix, seed, cap_shell, given);
-  if (given) S->closed = 0;
+  if (st == MX_OK) st = orient_shells(S, fix, seed, cap_shell, mode);
+  /* the pseudonormal sign tells a point's side only where the shells turn
+   * their outside to the domain's outside: not as given, not all outward */
+  if (mode != ORIENT_NESTING) S->closed = 0;
   if (st == MX_OK) st = mx_index_pseudonormals(S, &E);
   if (st == MX_OK) st = mx_index_hints(S);
   mx_edge_table_free(&E);
@@ -264,11 +275,21 @@ static int index_build(mx_surface_index *S, const mx_trisoup *soup, uint32_t t0,
 
 int mx_surface_index_build(mx_surface_index *S, const mx_trisoup *soup,
                            uint32_t t0, uint32_t t1) {
-  return index_build(S, soup, t0, t1, 0);
+  return index_build(S, soup, t0, t1, ORIENT_NESTING);
+}
+
+int mx_surface_index_build_outward(mx_surface_index *S, const mx_trisoup *soup,
+                                   uint32_t t0, uint32_t t1) {
+  return index_build(S, soup, t0, t1, ORIENT_OUTWARD);
+}
+
+int mx_region_depth(const mx_surface_index *S, const double p[3]) {
+  const long d = lround(mx_winding_number(S, p));
+  return d < 0 ? 0 : (int)d;
 }
 
 int mx_surface_index_build_given(mx_surface_index *S, const mx_trisoup *soup,
                                  uint32_t t0, uint32_t t1) {
-  return index_build(S, soup, t0, t1, 1);
+  return index_build(S, soup, t0, t1, ORIENT_GIVEN);
 }
 

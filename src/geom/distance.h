@@ -158,6 +158,8 @@ typedef struct mx_surface_index {
   size_t conflict_edges;    /* manifold edges left inconsistently oriented
                                (non-orientable shell) */
   uint32_t nshells;         /* connected shells */
+  uint32_t *shell_depth;    /* per shell: how many other shells enclose it
+                               (0 for every shell as given, or for one) */
   uint32_t nflipped;        /* shells whose orientation was reversed */
   size_t nreoriented;       /* triangles flipped to agree with their shell */
   int closed;               /* 1: no open, non-manifold or conflicting edge;
@@ -184,6 +186,16 @@ int mx_surface_index_build(mx_surface_index *S, const mx_trisoup *soup,
  * --repair-input. */
 int mx_surface_index_build_given(mx_surface_index *S, const mx_trisoup *soup,
                                  uint32_t t0, uint32_t t1);
+/* The same with every shell turned outward (several materials, issue 26):
+ * the winding number of a point counts the shells around it, its nesting
+ * depth (mx_region_depth), and the domain (mx_inside, the sign of the
+ * distance: winding number above 1/2) is the union of the outermost
+ * shells' insides, the nested shells inside it not holes; closed is 0. */
+int mx_surface_index_build_outward(mx_surface_index *S, const mx_trisoup *soup,
+                                   uint32_t t0, uint32_t t1);
+/* Of an index built outward: the number of shells around p (0 outside
+ * every shell); a point on a shell gets either side's count. */
+int mx_region_depth(const mx_surface_index *S, const double p[3]);
 void mx_surface_index_free(mx_surface_index *S);
 
 /* Exact closest point q of p on the triangles (Voronoi regions of the
