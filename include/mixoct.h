@@ -110,6 +110,15 @@ typedef struct {
   int remesh_full;     /* 1: after a refinement, mesh the whole octree again;
                         * 0 (default): only the leaves around what was split
                         * (the rest of the mesh is kept as it was) */
+  int materials;       /* 1: several materials (--materials): the shells
+                        * nested in the outermost are not holes; each
+                        * element gets the material of the region it is in,
+                        * numbered by nesting depth (1: inside one shell, 2:
+                        * inside two, ...; 0: outside every shell). This
+                        * version labels the transition stage's elements by
+                        * their centroid (MX_STAGE_TRANSITION; the full stage
+                        * and re-meshing refuse it, MX_EINPUT); 0 (default):
+                        * a nested shell is a hole */
 } mx_params;
 
 void mx_params_default(mx_params *p);
@@ -247,6 +256,9 @@ typedef struct {
   size_t by_type[4];
   double jens_min;
   size_t invalid;         /* elements with J_ENS < 1e-6 */
+  const uint16_t *material; /* params.materials: each element's material
+                           * (its nesting depth, 0 outside every shell);
+                           * NULL: one material */
 } mx_mesh_arrays;
 
 /* Valid until the next call that changes the mesh. MX_EINPUT without a

@@ -335,5 +335,21 @@ has "$T/ph.txt" " restart [0-9]" "the summary shows the restart phase"
 "$MIXOCT" --demo -s 4 -o "$T/ph2.vtu" --restart "$T/ph2.oct" --json >"$T/ph.json" 2>/dev/null
 json_ok "$T/ph.json" "d['phases']['restart'] > 0 and d['phases']['write'] > 0" "--json: restart and write phases"
 
+# Several materials, first part (issue 26): the full stage refuses them
+# (exit 2, saying what this version does); at the transition stage each
+# element carries its material (the demo surface is one shell: material 1,
+# and 0 for the transition mesh's elements outside it), written as a VTU
+# field and as Gmsh physical volumes, and the files pass the checker.
+expect_exit 2 "--materials at the full stage" "$MIXOCT" --demo -s 3 --materials -o "$T/mat.vtu"
+[ ! -e "$T/mat.vtu" ] && ok "no file written for a refused --materials" || bad "a file for a refused --materials"
+expect_exit 2 "--materials with --p4est" "$MIXOCT" --demo -s 3 --materials --p4est
+expect_exit 0 "--materials --stage transition" "$MIXOCT" --demo -s 3 --materials --stage transition \
+  -o "$T/mat.vtu" -o "$T/mat.msh" --quiet
+has "$T/mat.vtu" 'Name="material"' "the VTU has the material field"
+has "$T/mat.msh" '"material 1"' "the .msh names material 1"
+has "$T/mat.msh" '"outside the inputs"' "the .msh names the elements outside the input"
+expect_exit 0 "check of the materials' .msh" "$MIXOCT" check "$T/mat.msh"
+expect_exit 0 "check of the materials' .vtu" "$MIXOCT" check "$T/mat.vtu"
+
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]

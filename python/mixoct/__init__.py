@@ -198,7 +198,8 @@ class _Params(ctypes.Structure):
                 ("staircase_quality", ctypes.c_double),
                 ("repair_rounds", ctypes.c_int),
                 ("repair_input", ctypes.c_int),
-                ("remesh_full", ctypes.c_int)]
+                ("remesh_full", ctypes.c_int),
+                ("materials", ctypes.c_int)]
 
 
 class _MeshArrays(ctypes.Structure):
@@ -214,7 +215,8 @@ class _MeshArrays(ctypes.Structure):
                 ("boundary", ctypes.POINTER(ctypes.c_uint8)),
                 ("by_type", ctypes.c_size_t * 4),
                 ("jens_min", ctypes.c_double),
-                ("invalid", ctypes.c_size_t)]
+                ("invalid", ctypes.c_size_t),
+                ("material", ctypes.POINTER(ctypes.c_uint16))]
 
 
 _STAT_SIZES = ("leaves", "octants", "nodes", "elements", "invalid",

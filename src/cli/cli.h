@@ -39,6 +39,7 @@ typedef struct {
   const char *list_in;     /* -l LIST: elements to refine */
   int keep_invalid;        /* write a mesh with invalid elements (exit 5) */
   int repair_input;        /* --repair-input: winding-number domain */
+  int materials;           /* --materials: nested shells are materials */
 } mx_options;
 
 /* Parses argv; on --help/--version prints and sets *exit_now = 1. Returns

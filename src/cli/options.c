@@ -33,6 +33,16 @@ static const char *usage_text =
     "                              the defect.\n"
     "                              Inconsistently oriented closed surfaces are\n"
     "                              re-oriented (a warning) either way\n"
+    "      --materials             several materials: a shell inside another is\n"
+    "                              not a hole; each element gets the material of\n"
+    "                              its region, numbered by nesting depth (1: inside\n"
+    "                              one shell, 2: inside two, ...), written as the\n"
+    "                              cell field material, Gmsh physical volumes and\n"
+    "                              Medit references, the interfaces as physical\n"
+    "                              surfaces. This version: with --stage transition\n"
+    "                              only (elements labelled by their centroid; the\n"
+    "                              interfaces are element faces, not yet moved onto\n"
+    "                              the input surfaces)\n"
     "\n"
     "Refinement requests (an octant takes the largest level asked; levels 0 to\n"
     "15, each one halves the octant size):\n"
@@ -354,6 +364,8 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       o->keep_invalid = 1;
     } else if (strcmp(a, "--repair-input") == 0) {
       o->repair_input = 1;
+    } else if (strcmp(a, "--materials") == 0) {
+      o->materials = 1;
     } else if (strcmp(a, "--json") == 0) {
       o->json = 1;
     } else if (strcmp(a, "--quiet") == 0) {

@@ -181,10 +181,18 @@ static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint64_t **end
 
 /* ---- pass 3: multiplicity of every face ---------------------------------- */
 
-/* mult[slot] = number of elements using that face (capped at 255), for
- * every slot that is a face. */
+/* The multiplicity given to the two sides of an interface face (a face of
+ * two elements of different labels): the side of the lower label keeps
+ * the face, the other does not. */
+enum { MULT_INTERFACE = 254, MULT_INTERFACE_OTHER = 253 };
+
+/* mult[slot] = number of elements using that face (capped at 252), for
+ * every slot that is a face; with labels (per element, or NULL), a face of
+ * two elements of different labels is an interface face: MULT_INTERFACE
+ * on the lower label's side, whose other[slot] receives the other label. */
 static int count_uses(const mx_mesh_view *m, const uint64_t *end,
-                      const uint32_t *list, uint8_t *mult) {
+                      const uint32_t *list, const int32_t *label, uint8_t *mult,
+                      int32_t *other) {
   const size_t nn = m->nnodes;
   int failed = 0;
 #pragma omp parallel
@@ -224,8 +232,18 @@ static int count_uses(const mx_mesh_view *m, const uint64_t *end,
       for (size_t i = 0; i < k;) {
         size_t j = i + 1;
         while (j < k && same_face(&keys[j], &keys[i])) j++;
-        const uint8_t uses = (uint8_t)(j - i > 255 ? 255 : j - i);
+        const uint8_t uses = (uint8_t)(j - i > 252 ? 252 : j - i);
         for (size_t r = i; r < j; r++) mult[(uint32_t)keys[r].lo] = uses;
+        if (label && j - i == 2) {
+          const uint32_t s0 = (uint32_t)keys[i].lo, s1 = (uint32_t)keys[i + 1].lo;
+          const int32_t l0 = label[s0 / SLOTS], l1 = label[s1 / SLOTS];
+          if (l0 != l1) {
+            const uint32_t keep = l0 < l1 ? s0 : s1, give = l0 < l1 ? s1 : s0;
+            mult[keep] = MULT_INTERFACE;
+            mult[give] = MULT_INTERFACE_OTHER;
+            other[keep] = l0 < l1 ? l1 : l0;
+          }
+        }
         i = j;
       }
     }
@@ -237,7 +255,9 @@ static int count_uses(const mx_mesh_view *m, const uint64_t *end,
 /* ---- gathering, element by element ----------------------------------------
  */
 
-static int gather(const mx_mesh_view *m, const uint8_t *mult,
+static inline int gathered(uint8_t mult) { return mult == 1 || mult == MULT_INTERFACE; }
+
+static int gather(const mx_mesh_view *m, const uint8_t *mult, const int32_t *other,
                   mx_boundary_faces *bf) {
   const size_t nc = m->ncells;
   const size_t nchunks = (nc + OUT_CHUNK - 1) / OUT_CHUNK;
@@ -255,7 +275,7 @@ static int gather(const mx_mesh_view *m, const uint8_t *mult,
     for (size_t c = k * OUT_CHUNK; c < c1; c++) {
       const unsigned t = m->type[c];
       for (int f = 0; f < mx_cell_nfaces[t]; f++) {
-        if (mult[c * SLOTS + (size_t)f] != 1) continue;
+        if (!gathered(mult[c * SLOTS + (size_t)f])) continue;
         if (face_size(t, f) == 3)
           a++;
         else
@@ -271,12 +291,14 @@ static int gather(const mx_mesh_view *m, const uint8_t *mult,
   if (bf->ntri) {
     bf->tri = mx_alloc(3 * bf->ntri * sizeof *bf->tri);
     bf->tri_src = mx_alloc(bf->ntri * sizeof *bf->tri_src);
-    if (!bf->tri || !bf->tri_src) st = MX_ENOMEM;
+    if (other) bf->tri_pair = mx_alloc(bf->ntri * sizeof *bf->tri_pair);
+    if (!bf->tri || !bf->tri_src || (other && !bf->tri_pair)) st = MX_ENOMEM;
   }
   if (bf->nquad) {
     bf->quad = mx_alloc(4 * bf->nquad * sizeof *bf->quad);
     bf->quad_src = mx_alloc(bf->nquad * sizeof *bf->quad_src);
-    if (!bf->quad || !bf->quad_src) st = MX_ENOMEM;
+    if (other) bf->quad_pair = mx_alloc(bf->nquad * sizeof *bf->quad_pair);
+    if (!bf->quad || !bf->quad_src || (other && !bf->quad_pair)) st = MX_ENOMEM;
   }
   if (st == MX_OK) {
 #pragma omp parallel for schedule(static)
@@ -286,13 +308,17 @@ static int gather(const mx_mesh_view *m, const uint8_t *mult,
       for (size_t c = k * OUT_CHUNK; c < c1; c++) {
         const unsigned t = m->type[c];
         for (int f = 0; f < mx_cell_nfaces[t]; f++) {
-          if (mult[c * SLOTS + (size_t)f] != 1) continue;
+          const size_t slot = c * SLOTS + (size_t)f;
+          if (!gathered(mult[slot])) continue;
+          const int32_t pair = mult[slot] == MULT_INTERFACE ? other[slot] : 0;
           uint32_t v[4];
           if (face_nodes(m, c, f, v) == 3) {
             memcpy(bf->tri + 3 * a, v, 3 * sizeof *v);
+            if (bf->tri_pair) bf->tri_pair[a] = pair;
             bf->tri_src[a++] = 8 * (uint64_t)c + (uint64_t)f;
           } else {
             memcpy(bf->quad + 4 * b, v, 4 * sizeof *v);
+            if (bf->quad_pair) bf->quad_pair[b] = pair;
             bf->quad_src[b++] = 8 * (uint64_t)c + (uint64_t)f;
           }
         }
@@ -314,6 +340,8 @@ void mx_boundary_faces_free(mx_boundary_faces *bf) {
   mx_free(bf->quad_src);
   mx_free(bf->tri_tag);
   mx_free(bf->quad_tag);
+  mx_free(bf->tri_pair);
+  mx_free(bf->quad_pair);
   memset(bf, 0, sizeof *bf);
 }
 
@@ -321,8 +349,8 @@ int mx_boundary_faces_extract(const mx_mesh_view *m, mx_boundary_faces *bf) {
   return mx_boundary_faces_extract_masked(m, NULL, bf);
 }
 
-int mx_boundary_faces_extract_masked(const mx_mesh_view *m, const uint8_t *mask,
-                                     mx_boundary_faces *bf) {
+static int extract(const mx_mesh_view *m, const uint8_t *mask, const int32_t *label,
+                   mx_boundary_faces *bf) {
   memset(bf, 0, sizeof *bf);
   if (m->ncells == 0) return MX_OK;
   if (too_large(m)) return MX_EINPUT;
@@ -333,13 +361,25 @@ int mx_boundary_faces_extract_masked(const mx_mesh_view *m, const uint8_t *mask,
   /* faces left out keep multiplicity 0: not boundary faces */
   uint8_t *mult = mask ? mx_calloc(m->ncells * SLOTS * sizeof *mult)
                        : mx_alloc(m->ncells * SLOTS * sizeof *mult);
-  int st = mult ? count_uses(m, end, list, mult) : MX_ENOMEM;
+  int32_t *other = label ? mx_alloc(m->ncells * SLOTS * sizeof *other) : NULL;
+  int st = mult && (!label || other) ? count_uses(m, end, list, label, mult, other) : MX_ENOMEM;
   mx_free(end);
   mx_free(list);
-  if (st == MX_OK) st = gather(m, mult, bf);
+  if (st == MX_OK) st = gather(m, mult, other, bf);
   mx_free(mult);
+  mx_free(other);
   if (st != MX_OK) mx_boundary_faces_free(bf);
   return st;
+}
+
+int mx_boundary_faces_extract_masked(const mx_mesh_view *m, const uint8_t *mask,
+                                     mx_boundary_faces *bf) {
+  return extract(m, mask, NULL, bf);
+}
+
+int mx_interface_faces_extract(const mx_mesh_view *m, const int32_t *label,
+                               mx_boundary_faces *bf) {
+  return extract(m, NULL, label, bf);
 }
 
 int mx_boundary_node_flags(const mx_mesh_view *m, int32_t *flags) {

@@ -30,6 +30,9 @@ typedef struct mx_boundary_faces {
   uint64_t *quad_src; /* per quadrilateral: the same */
   int32_t *tri_tag;   /* per triangle: its boundary tag (1..), or NULL */
   int32_t *quad_tag;  /* per quadrilateral: the same */
+  /* mx_interface_faces_extract only: per face, the label of the element on
+   * its other side (0: a boundary face, no other side) */
+  int32_t *tri_pair, *quad_pair;
 } mx_boundary_faces;
 
 /* Fills *bf (zeroed first; free with mx_boundary_faces_free). The view must
@@ -44,6 +47,13 @@ int mx_boundary_faces_extract(const mx_mesh_view *m, mx_boundary_faces *bf);
  * sparse. */
 int mx_boundary_faces_extract_masked(const mx_mesh_view *m, const uint8_t *mask,
                                      mx_boundary_faces *bf);
+/* The boundary faces and the interface faces of a mesh whose elements carry
+ * labels (materials, issue 26; label per element): an interface face is a
+ * face of two elements of different labels, listed once, oriented outward
+ * of the element of the lower label (its source), with the other label in
+ * tri_pair / quad_pair; boundary faces have pair 0. */
+int mx_interface_faces_extract(const mx_mesh_view *m, const int32_t *label,
+                               mx_boundary_faces *bf);
 void mx_boundary_faces_free(mx_boundary_faces *bf);
 
 /* flags[i] = 1 when node i lies on a boundary face, 0 otherwise (nnodes

@@ -3,6 +3,7 @@
  * (mx_mesh_finish), the mesh as arrays. Inputs and requests are in
  * inputs.c, the repair in repair.c, re-meshing in remesh.c, the restart
  * file in restart_octree.c, the files in output.c. */
+#include "mesher/materials.h"
 #include "mesher/mesher_impl.h"
 #include "mesher/pipeline.h"
 
@@ -223,9 +224,11 @@ int mx_build_tree(mx_mesher *m) {
   m->have_tree = 1;
   m->B.on_level = m->progress.on_level;
   m->B.on_level_user = m->progress.user;
-  if (m->p.repair_input) {
+  if (m->p.repair_input || m->p.materials) {
     /* the domain: where the generalized winding number is above 1/2, for
-     * the octants (instead of the ray parity) and the nodes alike */
+     * the octants (instead of the ray parity) and the nodes alike; with
+     * materials, of the index with every shell outward: the outermost
+     * shells' insides whole */
     MX_CHECK(mx_mesher_index(m));
     m->B.loc_domain.inside_fn = winding_inside;
     m->B.loc_domain.inside_ctx = m->have_winding ? &m->WI : &m->SI;
@@ -469,6 +472,7 @@ int mx_mesh_finish(mx_mesher *m) {
 
 /* Mesh the current octree up to params.stage. */
 int mx_mesh_stages(mx_mesher *m) {
+  MX_CHECK(mx_materials_allowed(m, NULL));
   if (!m->have_tree) {
     const int st = mx_build_tree(m);
     if (st) { /* no half-built tree left for the next call to take */
@@ -490,6 +494,7 @@ int mx_mesh_stages(mx_mesher *m) {
     MX_CHECK(boundary_once(m));
     MX_CHECK(mx_repair(m));
   }
+  if (m->p.materials) MX_CHECK(mx_label_materials(m));
   return mx_mesh_finish(m);
 }
 
@@ -568,6 +573,7 @@ int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a) {
   memcpy(a->by_type, M->by_type, sizeof a->by_type);
   a->jens_min = M->jens_min;
   a->invalid = M->invalid;
+  a->material = M->material;
   return MX_OK;
 }
 

@@ -140,6 +140,7 @@ struct mx_mesher {
    * library's default): keep them for the refinements of a re-meshing loop
    * (about 90 B per leaf). */
   int release_edges;
+  int nmaterials;           /* materials: the deepest nesting (M.material) */
   /* hooks for the program's progress line (NULL: none) */
   mx_progress progress;     /* mx_mesher_set_progress */
 };

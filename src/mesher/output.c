@@ -35,6 +35,7 @@ static char *tag_name(const char *path, const char *suffix) {
 typedef struct {
   mx_boundary_faces bf;
   int32_t *cell_body, *body_tag, *node_tag;
+  int32_t *material; /* materials: the cell field (0: outside every shell) */
   int nbodies, ntags;
   char *names[2 * 66];
   const char *tag_names[66], *body_names[66];
@@ -45,6 +46,7 @@ static void tags_free(tags *T) {
   mx_free(T->cell_body);
   mx_free(T->body_tag);
   mx_free(T->node_tag);
+  mx_free(T->material);
   for (size_t i = 0; i < sizeof T->names / sizeof *T->names; i++) mx_free(T->names[i]);
 }
 
@@ -99,11 +101,77 @@ static int make_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T) {
   return MX_OK;
 }
 
+/* The faces of the list with pair 0 (boundary faces) kept, in order; the
+ * interface faces counted in *ninterface. */
+static void boundary_only(size_t *n, int k, uint32_t *nodes, uint64_t *src, int32_t *pair,
+                          size_t *ninterface) {
+  size_t w = 0;
+  for (size_t i = 0; i < *n; i++) {
+    if (pair[i]) continue;
+    memmove(nodes + (size_t)k * w, nodes + (size_t)k * i, (size_t)k * sizeof *nodes);
+    src[w] = src[i];
+    pair[w++] = 0;
+  }
+  *ninterface += *n - w;
+  *n = w;
+}
+
+/* With several materials (issue 26; the transition stage's mesh, labelled
+ * by mesher/materials.c): each material a body, numbered by its depth
+ * (material 0, outside every shell, the body after the deepest, "outside
+ * the inputs"), and the mesh's boundary faces tagged 1 ("boundary"). The
+ * interfaces between materials are found (io/boundary_faces.h) but not
+ * yet written as groups of faces: `mixoct check` reads no element labels
+ * yet, so it would take them for tagged faces inside the mesh. More than
+ * 64 materials: no groups (the material field stays). */
+static int make_material_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T) {
+  memset(T, 0, sizeof *T);
+  const mx_mesh *M = &m->M;
+  const int nmat = m->nmaterials;
+  T->material = mx_alloc((M->ncells + 1) * sizeof *T->material);
+  T->cell_body = mx_alloc((M->ncells + 1) * sizeof *T->cell_body);
+  T->node_tag = mx_alloc((M->nnodes + 1) * sizeof *T->node_tag);
+  if (!T->material || !T->cell_body || !T->node_tag) return MX_ENOMEM;
+  int outside = 0;
+  for (size_t c = 0; c < M->ncells; c++) {
+    T->material[c] = M->material[c];
+    T->cell_body[c] = M->material[c] ? M->material[c] : nmat + 1;
+    outside |= M->material[c] == 0;
+  }
+  mx_boundary_faces *bf = &T->bf;
+  MX_CHECK(mx_interface_faces_extract(v, T->cell_body, bf));
+  size_t ninterface = 0;
+  boundary_only(&bf->ntri, 3, bf->tri, bf->tri_src, bf->tri_pair, &ninterface);
+  boundary_only(&bf->nquad, 4, bf->quad, bf->quad_src, bf->quad_pair, &ninterface);
+  bf->tri_tag = mx_alloc((bf->ntri + 1) * sizeof *bf->tri_tag);
+  bf->quad_tag = mx_alloc((bf->nquad + 1) * sizeof *bf->quad_tag);
+  if (!bf->tri_tag || !bf->quad_tag) return MX_ENOMEM;
+  for (size_t i = 0; i < bf->ntri; i++) bf->tri_tag[i] = 1;
+  for (size_t i = 0; i < bf->nquad; i++) bf->quad_tag[i] = 1;
+  mx_boundary_node_tags(bf, M->nnodes, T->node_tag);
+  const int nb = nmat + outside;
+  int k = 0;
+  for (int b = 1; b <= nb && b <= 64; b++) {
+    char name[48];
+    if (b > nmat)
+      snprintf(name, sizeof name, "outside the inputs");
+    else
+      snprintf(name, sizeof name, "material %d", b);
+    T->body_names[b - 1] = T->names[k++] = tag_name(name, "");
+  }
+  T->tag_names[0] = T->names[k++] = tag_name("boundary", "");
+  for (int i = 0; i < k; i++)
+    if (!T->names[i]) return MX_ENOMEM;
+  T->nbodies = nb <= 64 ? nb : 0;
+  T->ntags = 1;
+  return MX_OK;
+}
+
 /* The view the writers get, and what it points to. */
 typedef struct {
   uint32_t *order;
   tags T;
-  mx_field f[4], pf[2];
+  mx_field f[5], pf[2];
   mx_mesh_view v;
   int tagged;
 } prepared;
@@ -129,13 +197,20 @@ static int prepare(const mx_mesher *m, prepared *P) {
                         .type = M->type, .conn = M->conn, .ncell_fields = 3,
                         .cell_fields = P->f, .npoint_fields = 1, .point_fields = P->pf,
                         .order = P->order};
-  P->tagged = m->mesh_stage == MX_STAGE_FULL && m->ndomain > 0;
+  P->tagged = (m->mesh_stage == MX_STAGE_FULL && m->ndomain > 0) || M->material;
   if (!P->tagged) return mx_cells_by_type(M->type, M->ncells, P->order, NULL);
-  MX_CHECK(make_tags(m, &P->v, &P->T));
+  if (M->material)
+    MX_CHECK(make_material_tags(m, &P->v, &P->T));
+  else
+    MX_CHECK(make_tags(m, &P->v, &P->T));
   MX_CHECK(mx_cells_in_order(M->type, P->T.cell_body, P->T.nbodies, M->ncells, P->order));
   P->f[3] = (mx_field){.name = "body", .is_double = 0, .ivalues = P->T.cell_body};
   P->pf[1] = (mx_field){.name = "surface_tag", .is_double = 0, .ivalues = P->T.node_tag};
   P->v.ncell_fields = 4;
+  if (P->T.material) {
+    P->f[4] = (mx_field){.name = "material", .is_double = 0, .ivalues = P->T.material};
+    P->v.ncell_fields = 5;
+  }
   P->v.npoint_fields = 2;
   P->v.bfaces = &P->T.bf;
   P->v.ntags = P->T.ntags;

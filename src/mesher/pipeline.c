@@ -21,6 +21,8 @@ int mx_mesher_index(mx_mesher *m) {
    * their own, each a winding number query) */
   if (m->have_winding)
     MX_CHECK(mx_surface_index_build_given(&m->SI, &m->soup, 0, m->nt_domain));
+  else if (m->p.materials) /* nested shells are materials, not holes */
+    MX_CHECK(mx_surface_index_build_outward(&m->SI, &m->soup, 0, m->nt_domain));
   else
     MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
   m->have_index = 1;

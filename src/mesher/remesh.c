@@ -2,6 +2,7 @@
  * elements' leaves are split by list refinement (Algorithm 3,
  * kernels/remesh.c), the requests applied to the refined octree, and the
  * octree meshed again. */
+#include "mesher/materials.h"
 #include "mesher/mesher_impl.h"
 
 #include "kernels/closures.h"
@@ -62,6 +63,7 @@ static int refine_and_mesh(mx_mesher *m, uint32_t *octs, size_t n) {
 }
 
 static int need_tree(mx_mesher *m) {
+  MX_CHECK(mx_materials_allowed(m, "refining"));
   if (m->have_tree) return MX_OK;
   mx_error(NULL, 0, "nothing to refine: mesh first or load a restart file");
   return MX_EINPUT;

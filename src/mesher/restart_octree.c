@@ -17,6 +17,7 @@
  * requests apply on top), exactly the octree of the run that wrote it when
  * the file is ours. Elements of the file's mesh map to the leaf holding
  * their octant's centre. */
+#include "mesher/materials.h"
 #include "mesher/mesher_impl.h"
 #include "mesher/pipeline.h"
 
@@ -431,6 +432,7 @@ int mx_mesher_save_restart(const mx_mesher *m, const char *path) {
   mx_call_begin(m, &c);
   const double t = mx_wtime();
   int st = path ? mx_mesher_spares_inputs(m, path, 1) : MX_OK;
+  if (!st) st = mx_materials_allowed(m, "a restart file");
   if (!st && (!m->have_tree || m->mesh_stage < MX_STAGE_TRANSITION)) {
     mx_error(path, 0, "no mesh to write a restart file for: mesh first");
     st = MX_EINPUT;
@@ -724,7 +726,8 @@ int mx_mesher_load_restart(mx_mesher *m, const char *path) {
   const double read = m->rec->S.ph.read;
   memset(&m->rec->S, 0, sizeof m->rec->S);
   m->rec->S.ph.read = read;
-  int st = load_restart(m, path);
+  int st = mx_materials_allowed(m, "a restart file");
+  if (!st) st = load_restart(m, path);
   if (st) mx_tree_clear(m);
   else mx_mesher_note_read(m, path, 1);
   m->rec->S.t_restart = mx_wtime() - t;

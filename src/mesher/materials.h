@@ -1,0 +1,18 @@
+/* Several materials (issue 26), first part: each element of the transition
+ * stage's mesh gets the material of the region its centroid lies in, the
+ * region's nesting depth in the input's shells (mesher/materials.c). */
+#ifndef MX_MATERIALS_H
+#define MX_MATERIALS_H
+
+#include "mesher/mesher.h"
+
+/* MX_OK, or MX_EINPUT with a message when params.materials asks for what
+ * this version does not do yet: the full stage (interfaces on the input
+ * surfaces), re-meshing (`what`: the re-meshing call's name; NULL for
+ * meshing), the winding-number domain of repair_input. */
+int mx_materials_allowed(const mx_mesher *m, const char *what);
+/* M.material of every element (the depth of its centroid in the index
+ * built outward) and m->nmaterials (the deepest). MX_ENOMEM. */
+int mx_label_materials(mx_mesher *m);
+
+#endif

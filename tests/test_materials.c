@@ -1,0 +1,254 @@
+/* Several materials, first part (issue 26; src/mesher/materials.c): two
+ * concentric spheres meshed with params.materials at the transition stage.
+ *
+ * Derived, not recorded:
+ *  - each element's material is the number of spheres around its centroid,
+ *    counted here from the centroid's radius (elements whose centroid lies
+ *    within the tessellation's chordal error of a sphere are skipped);
+ *  - the materials' volumes add up to the mesh's, and the inner sphere's
+ *    material holds its volume within the staircase's error (each element
+ *    straddling the sphere counts whole on one side): below 10% at -s 5;
+ *  - every face between two materials is found once by the interface
+ *    extraction, each between elements of different materials, against
+ *    an independent face map here;
+ *  - the same arrays with 1 and 2 threads;
+ *  - the full stage and a restart file refuse materials (MX_EINPUT), and
+ *    without materials the inner sphere is a hole (no element inside). */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "io/boundary_faces.h"
+#include "mixoct.h"
+#include "soa/mesh.h"
+
+/* A UV sphere of radius r: n rings, 2n segments, outward. */
+static void sphere(double r, int n, double **xyz, size_t *nv, uint32_t **tri, size_t *nt) {
+  const int m = 2 * n;
+  *nv = 2 + (size_t)(n - 1) * m;
+  *nt = 2 * (size_t)m * (n - 1);
+  double *x = malloc(3 * *nv * sizeof *x);
+  uint32_t *t = malloc(3 * *nt * sizeof *t);
+  size_t k = 0;
+  x[k++] = 0, x[k++] = 0, x[k++] = r;
+  for (int i = 1; i < n; i++)
+    for (int j = 0; j < m; j++) {
+      const double th = M_PI * i / n, ph = 2 * M_PI * j / m;
+      x[k++] = r * sin(th) * cos(ph), x[k++] = r * sin(th) * sin(ph), x[k++] = r * cos(th);
+    }
+  x[k++] = 0, x[k++] = 0, x[k++] = -r;
+  size_t f = 0;
+  const uint32_t last = (uint32_t)*nv - 1;
+  for (int j = 0; j < m; j++)
+    t[f++] = 0, t[f++] = (uint32_t)(1 + j), t[f++] = (uint32_t)(1 + (j + 1) % m);
+  for (int i = 0; i < n - 2; i++)
+    for (int j = 0; j < m; j++) {
+      const uint32_t a = (uint32_t)(1 + i * m + j), b = (uint32_t)(1 + i * m + (j + 1) % m);
+      t[f++] = a, t[f++] = a + (uint32_t)m, t[f++] = b + (uint32_t)m;
+      t[f++] = a, t[f++] = b + (uint32_t)m, t[f++] = b;
+    }
+  const uint32_t base = (uint32_t)(1 + (n - 2) * m);
+  for (int j = 0; j < m; j++)
+    t[f++] = last, t[f++] = base + (uint32_t)((j + 1) % m), t[f++] = base + (uint32_t)j;
+  *xyz = x;
+  *tri = t;
+}
+
+static mx_mesher *two_spheres(int materials, int stage, int threads) {
+  mx_params p;
+  mx_params_default(&p);
+  p.surface_level = 5;
+  p.stage = stage;
+  p.materials = materials;
+  p.threads = threads;
+  mx_mesher *m = mx_mesher_new(&p);
+  double *x;
+  uint32_t *t;
+  size_t nv, nt;
+  sphere(1.0, 32, &x, &nv, &t, &nt);
+  CHECK(mx_mesher_add_surface_arrays(m, "outer", nv, x, nt, t) == MX_OK);
+  free(x);
+  free(t);
+  sphere(0.5, 24, &x, &nv, &t, &nt);
+  CHECK(mx_mesher_add_surface_arrays(m, "inner", nv, x, nt, t) == MX_OK);
+  free(x);
+  free(t);
+  return m;
+}
+
+/* Signed volume of element c (tetrahedra of its node fan from node 0 over
+ * its faces' triangles, faces split at their centroid). */
+static double volume(const mx_mesh_arrays *a, size_t c) {
+  const int t = a->type[c];
+  const uint32_t *row = a->conn + 8 * c;
+  const double *o = a->xyz + 3 * (size_t)row[0];
+  double v = 0;
+  for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+    const int8_t *fv = mx_cell_faces[t][f];
+    const int n = fv[3] < 0 ? 3 : 4;
+    double cen[3] = {0, 0, 0};
+    for (int k = 0; k < n; k++)
+      for (int d = 0; d < 3; d++) cen[d] += a->xyz[3 * (size_t)row[fv[k]] + d] / n;
+    for (int k = 0; k < n; k++) {
+      const double *p = a->xyz + 3 * (size_t)row[fv[k]], *q = a->xyz + 3 * (size_t)row[fv[(k + 1) % n]];
+      double u[3], w[3], z[3];
+      for (int d = 0; d < 3; d++) u[d] = p[d] - o[d], w[d] = q[d] - o[d], z[d] = cen[d] - o[d];
+      v += (u[0] * (w[1] * z[2] - w[2] * z[1]) - u[1] * (w[0] * z[2] - w[2] * z[0]) +
+            u[2] * (w[0] * z[1] - w[1] * z[0])) / 6.0;
+    }
+  }
+  return v;
+}
+
+/* Faces of the mesh keyed by their sorted nodes, with their elements. */
+typedef struct {
+  uint32_t v[4];
+  uint32_t cell;
+} face_rec;
+
+static int cmp_face(const void *x, const void *y) {
+  const face_rec *a = x, *b = y;
+  return memcmp(a->v, b->v, sizeof a->v);
+}
+
+static void test_two_spheres(void) {
+  mx_mesher *m = two_spheres(1, MX_STAGE_TRANSITION, 2);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  mx_mesh_arrays a;
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  CHECK(a.material != NULL);
+  if (!a.material) {
+    mx_mesher_free(m);
+    return;
+  }
+  size_t wrong = 0, checked = 0, count[3] = {0, 0, 0};
+  double vol[3] = {0, 0, 0}, total = 0;
+  for (size_t c = 0; c < a.nelements; c++) {
+    const int nv = mx_cell_nodes[a.type[c]];
+    double p[3] = {0, 0, 0};
+    for (int k = 0; k < nv; k++)
+      for (int d = 0; d < 3; d++) p[d] += a.xyz[3 * (size_t)a.conn[8 * c + k] + d] / nv;
+    const double r = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    const double v = volume(&a, c);
+    total += v;
+    CHECK(a.material[c] <= 2);
+    if (a.material[c] <= 2) {
+      vol[a.material[c]] += v;
+      count[a.material[c]]++;
+    }
+    if (fabs(r - 1.0) < 0.01 || fabs(r - 0.5) < 0.01) continue;
+    checked++;
+    wrong += a.material[c] != (r < 0.5) + (r < 1.0);
+  }
+  CHECK(wrong == 0);
+  CHECK(count[1] > 0 && count[2] > 0);
+  CHECK(fabs(vol[0] + vol[1] + vol[2] - total) < 1e-9 * total);
+  const double inner = 4.0 / 3.0 * M_PI * 0.125;
+  CHECK(fabs(vol[2] - inner) < 0.1 * inner);
+  printf("two spheres, -s 5, transition stage: %zu elements (%zu outside, %zu between, %zu "
+         "inside); %zu of them checked against their centroid's radius, %zu wrong; inner "
+         "volume %.4f (sphere %.4f)\n",
+         a.nelements, count[0], count[1], count[2], checked, wrong, vol[2], inner);
+
+  /* interface faces against an independent map of the faces */
+  const mx_mesh_view view = {.nnodes = a.nnodes, .xyz = a.xyz, .ncells = a.nelements,
+                             .type = a.type, .conn = a.conn};
+  int32_t *label = malloc(a.nelements * sizeof *label);
+  for (size_t c = 0; c < a.nelements; c++) label[c] = a.material[c] + 1;
+  mx_boundary_faces bf;
+  CHECK(mx_interface_faces_extract(&view, label, &bf) == MX_OK);
+  size_t nrec = 0;
+  face_rec *rec = malloc(6 * a.nelements * sizeof *rec);
+  for (size_t c = 0; c < a.nelements; c++) {
+    const int t = a.type[c];
+    for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+      const int8_t *fv = mx_cell_faces[t][f];
+      face_rec r = {{UINT32_MAX, UINT32_MAX, UINT32_MAX, UINT32_MAX}, (uint32_t)c};
+      const int n = fv[3] < 0 ? 3 : 4;
+      for (int k = 0; k < n; k++) r.v[k] = a.conn[8 * c + fv[k]];
+      for (int i = 1; i < n; i++) /* sorted */
+        for (int j = i; j > 0 && r.v[j] < r.v[j - 1]; j--) {
+          const uint32_t s = r.v[j];
+          r.v[j] = r.v[j - 1], r.v[j - 1] = s;
+        }
+      rec[nrec++] = r;
+    }
+  }
+  qsort(rec, nrec, sizeof *rec, cmp_face);
+  size_t want_interface = 0, want_boundary = 0;
+  for (size_t i = 0; i < nrec;) {
+    size_t j = i + 1;
+    while (j < nrec && !memcmp(rec[j].v, rec[i].v, sizeof rec[i].v)) j++;
+    want_boundary += j - i == 1;
+    want_interface += j - i == 2 && label[rec[i].cell] != label[rec[i + 1].cell];
+    i = j;
+  }
+  size_t got_interface = 0, got_boundary = 0, bad_pair = 0;
+  for (int q = 0; q < 2; q++) {
+    const size_t n = q ? bf.nquad : bf.ntri;
+    const uint64_t *src = q ? bf.quad_src : bf.tri_src;
+    const int32_t *pair = q ? bf.quad_pair : bf.tri_pair;
+    for (size_t i = 0; i < n; i++) {
+      got_interface += pair[i] != 0;
+      got_boundary += pair[i] == 0;
+      bad_pair += pair[i] != 0 && pair[i] <= label[src[i] >> 3]; /* from the lower label */
+    }
+  }
+  CHECK(want_interface > 0);
+  CHECK(got_interface == want_interface);
+  CHECK(got_boundary == want_boundary);
+  CHECK(bad_pair == 0);
+  printf("interface faces: %zu found, %zu in the face map; boundary faces %zu / %zu\n",
+         got_interface, want_interface, got_boundary, want_boundary);
+  mx_boundary_faces_free(&bf);
+  free(rec);
+  free(label);
+
+  /* one thread: the same materials */
+  mx_mesher *m1 = two_spheres(1, MX_STAGE_TRANSITION, 1);
+  CHECK(mx_mesher_mesh(m1) == MX_OK);
+  mx_mesh_arrays a1;
+  CHECK(mx_mesher_mesh_arrays(m1, &a1) == MX_OK);
+  CHECK(a1.nelements == a.nelements && a1.material &&
+        !memcmp(a1.material, a.material, a.nelements * sizeof *a.material));
+  mx_mesher_free(m1);
+  /* no restart file with materials */
+  CHECK(mx_mesher_save_restart(m, "/tmp/mx_materials_never.oct") == MX_EINPUT);
+  mx_mesher_free(m);
+}
+
+static void test_refusals_and_holes(void) {
+  mx_mesher *m = two_spheres(1, MX_STAGE_FULL, 0);
+  CHECK(mx_mesher_mesh(m) == MX_EINPUT);
+  mx_mesher_free(m);
+  /* without materials the inner sphere is a hole */
+  m = two_spheres(0, MX_STAGE_TRANSITION, 0);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  mx_mesh_arrays a;
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  CHECK(a.material == NULL);
+  size_t deep = 0;
+  for (size_t c = 0; c < a.nelements; c++) {
+    const int nv = mx_cell_nodes[a.type[c]];
+    double p[3] = {0, 0, 0};
+    for (int k = 0; k < nv; k++)
+      for (int d = 0; d < 3; d++) p[d] += a.xyz[3 * (size_t)a.conn[8 * c + k] + d] / nv;
+    deep += sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) < 0.4;
+  }
+  CHECK(deep == 0);
+  mx_mesher_free(m);
+}
+
+static void quiet(void *user, int level, const char *text) {
+  (void)user, (void)level, (void)text;
+}
+
+int main(void) {
+  mx_set_thread_message_handler(quiet, NULL);
+  test_two_spheres();
+  test_refusals_and_holes();
+  return TEST_DONE();
+}
