@@ -28,6 +28,11 @@ typedef struct {
   /* The point field surface_tag of a VTK or VTU file (nnodes values), or
    * NULL. */
   int32_t *node_tag;
+  /* Each cell's label when the file gives one (several materials, issue
+   * 26): the physical tag of a Gmsh volume entity, the cell field
+   * "material" of a VTK or VTU file, a Medit element reference; ncells
+   * values in the cells' order here, or NULL. */
+  int32_t *cell_tag;
 } mx_mesh_data;
 
 /* Frees every array (the new fields too) and zeroes *m. */
