@@ -174,6 +174,14 @@ void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64
     printf("]}");
   }
   printf("],\"tagged_faces\":%zu,", r->tagged_faces);
+  if (r->nlabels) { /* several materials: the cells' labels */
+    printf("\"materials\":[");
+    for (size_t i = 0; i < r->nlabels; i++)
+      printf("%s{\"label\":%d,\"elements\":%zu,\"volume\":%.17g}", i ? "," : "",
+             r->labels[i].label, r->labels[i].cells, r->labels[i].volume);
+    printf("],\"materials_dropped\":%zu,\"interface_faces\":%zu,\"tagged_interface\":%zu,",
+           r->labels_dropped, r->interface_faces, r->tagged_interface);
+  }
   json_tags(t);
   printf("\"defective_faces\":{");
   json_ids("tagged_not_boundary", &r->not_boundary_ids, 1);
@@ -203,8 +211,21 @@ static void text_name(const char *s) {
   printf("\"");
 }
 
+/* The "materials" block: the cells' labels, when the file gives them. */
+static void print_labels(const mx_check_report *r) {
+  if (!r->nlabels) return;
+  printf("  materials              %zu label%s (cell labels of the file)%s\n", r->nlabels,
+         r->nlabels == 1 ? "" : "s", r->labels_dropped ? ", more not listed" : "");
+  for (size_t i = 0; i < r->nlabels; i++)
+    printf("    label %d: %zu elements, volume %.10g\n", r->labels[i].label,
+           r->labels[i].cells, r->labels[i].volume);
+  printf("  interfaces             %zu faces between elements of two labels, %zu of them "
+         "tagged\n", r->interface_faces, r->tagged_interface);
+}
+
 /* The "boundary tags" block. */
 static void print_tags(const mx_check_report *r, const mx_check_tags *t) {
+  print_labels(r);
   if (r->has_tagged_faces) {
     size_t tri = 0, quad = 0;
     for (size_t i = 0; i < t->nface_tags; i++) {

@@ -178,6 +178,7 @@ static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
   r->hanging_nodes = hang;
   MX_CHECK(mx_ck_boundary_pass(m, &w->F, flags, w->ef, fc.boundary, r));
   MX_CHECK(mx_ck_tag_pass(m, &w->F, r, tags));
+  MX_CHECK(mx_ck_label_pass(m, &w->F, r));
   mx_free(H->slot); /* memory for the next passes */
   mx_free(H->seg);
   H->slot = H->seg = NULL;

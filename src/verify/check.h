@@ -102,7 +102,14 @@
 #include "soa/mesh_data.h"
 #include "soa/trisoup.h"
 
-enum { MX_CHECK_LIST = 20, MX_CHECK_SHOWN = 5 };
+enum { MX_CHECK_LIST = 20, MX_CHECK_SHOWN = 5, MX_CHECK_LABELS = 64 };
+
+/* One label of the cells (a material): its elements and their volume. */
+typedef struct {
+  int32_t label;
+  size_t cells;
+  double volume;
+} mx_check_label;
 
 /* Kinds of defective elements (bit k of the per-element flags). */
 enum {
@@ -183,6 +190,11 @@ typedef struct {
   /* boundary tags */
   int has_tagged_faces, has_node_tags;
   size_t tagged_faces, tagged_not_boundary, boundary_untagged;
+  size_t tagged_interface; /* tagged faces between cells of two labels */
+  /* cell labels (several materials), when the file gives them */
+  size_t nlabels, labels_dropped; /* beyond MX_CHECK_LABELS */
+  mx_check_label labels[MX_CHECK_LABELS];
+  size_t interface_faces;  /* faces between cells of two labels */
   mx_check_ids untagged_ids;     /* elements with an untagged boundary face */
   mx_check_ids not_boundary_ids; /* tagged faces that are not boundary faces */
 } mx_check_report;

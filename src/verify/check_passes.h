@@ -304,6 +304,9 @@ int mx_ck_chash_build(chash *H, const mx_mesh_data *m, size_t *dups);
 int mx_ck_faces_bucket(const mx_mesh_data *m, faces *F);
 int mx_ck_faces_match(const mx_mesh_data *m, faces *F, const chash *H,
                       uint8_t *flags, uint8_t *ef, face_counts *fc);
+/* The second slot of the face with sorted nodes v (n of them), after the one
+ * mx_ck_find_slot gives; -1 when the face has one use only. */
+int64_t mx_ck_find_second(const mx_mesh_data *m, const faces *F, const uint32_t *v, int n);
 /* The first slot of a face with the sorted nodes v (n of them), or -1. */
 int64_t mx_ck_find_slot(const mx_mesh_data *m, const faces *F,
                         const uint32_t *v, int n);
@@ -315,6 +318,9 @@ void mx_ck_edge_midpoints(const mx_mesh_data *m, const chash *H,
 int mx_ck_boundary_pass(const mx_mesh_data *m, const faces *F, uint8_t *flags,
                         uint8_t *ef, size_t nbnd, mx_check_report *r);
 /* Boundary tags (check_tags.c). */
+/* check_labels.c: the labels' elements and volumes, the faces between two
+ * labels. */
+int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r);
 int mx_ck_tag_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r,
                    mx_check_tags *tags);
 /* Geometric hanging nodes (check_contacts.c). */

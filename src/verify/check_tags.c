@@ -1,7 +1,9 @@
 /* Pass 5b of the checker, boundary tags: every tagged face of the mesh
  * (its list of tagged faces, io/read_mesh.h) is looked up among the faces
  * of the elements (the buckets of check_faces.c): a tagged face that is not
- * a boundary face, a boundary face that no tagged face names. When asked,
+ * a boundary face (unless the cells carry labels and it lies between two
+ * cells of different labels: an interface between materials), a boundary
+ * face that no tagged face names. When asked,
  * the tags one by one: faces sorted by tag, each tag's edges sorted and
  * counted (its open edges), and the node tags' values with their counts;
  * names from the file's list. */
@@ -185,8 +187,8 @@ int mx_ck_tag_pass(const mx_mesh_data *m, const faces *F,
     mx_free(bad);
     return MX_ENOMEM;
   }
-  size_t nb = 0;
-#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : nb) \
+  size_t nb = 0, ni = 0;
+#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : nb, ni) \
     if (nf > SMALL)
   for (size_t i = 0; i < nf; i++) {
     uint32_t v[4];
@@ -195,11 +197,20 @@ int mx_ck_tag_pass(const mx_mesh_data *m, const faces *F,
     sort4(v, n);
     const int64_t s = mx_ck_find_slot(m, F, v, n);
     const int ok = s >= 0 && F->use[s] == 1;
-    bad[i] = (uint8_t)!ok;
-    nb += !ok;
+    /* with cell labels (several materials), a face of two cells of
+     * different labels is an interface: tagged rightly */
+    int between = 0;
+    if (!ok && s >= 0 && F->use[s] == 2 && m->cell_tag) {
+      const int64_t s2 = mx_ck_find_second(m, F, v, n);
+      between = s2 >= 0 && m->cell_tag[s / 6] != m->cell_tag[s2 / 6];
+    }
+    bad[i] = (uint8_t)!(ok || between);
+    nb += !(ok || between);
+    ni += between;
     if (ok) __atomic_store_n(&named[s], 1, __ATOMIC_RELAXED);
   }
   r->tagged_not_boundary = nb;
+  r->tagged_interface = ni;
   size_t un = 0;
   if (nf) {
 #pragma omp parallel for schedule(static) reduction(+ : un) \
