@@ -335,14 +335,16 @@ has "$T/ph.txt" " restart [0-9]" "the summary shows the restart phase"
 "$MIXOCT" --demo -s 4 -o "$T/ph2.vtu" --restart "$T/ph2.oct" --json >"$T/ph.json" 2>/dev/null
 json_ok "$T/ph.json" "d['phases']['restart'] > 0 and d['phases']['write'] > 0" "--json: restart and write phases"
 
-# Several materials, first part (issue 26): the full stage refuses them
-# (exit 2, saying what this version does); at the transition stage each
-# element carries its material (the demo surface is one shell: material 1,
-# and 0 for the transition mesh's elements outside it), written as a VTU
-# field and as Gmsh physical volumes, and the files pass the checker.
-expect_exit 2 "--materials at the full stage" "$MIXOCT" --demo -s 3 --materials -o "$T/mat.vtu"
-[ ! -e "$T/mat.vtu" ] && ok "no file written for a refused --materials" || bad "a file for a refused --materials"
+# Several materials, first part (issue 26): each element carries its
+# material (the demo surface is one shell: material 1; at the transition
+# stage 0 for the elements outside it), written as a VTU field and as Gmsh
+# physical volumes, and the files pass the checker; --p4est and restart
+# files refuse them (exit 2).
+expect_exit 0 "--materials at the full stage" "$MIXOCT" --demo -s 3 --materials -o "$T/matf.msh" --quiet
+has "$T/matf.msh" '"material 1"' "the full stage's .msh names material 1"
+expect_exit 0 "check of the full stage's materials" "$MIXOCT" check "$T/matf.msh"
 expect_exit 2 "--materials with --p4est" "$MIXOCT" --demo -s 3 --materials --p4est
+expect_exit 2 "--materials with --restart" "$MIXOCT" --demo -s 3 --materials -o "$T/matr.vtu" --restart "$T/matr.oct"
 expect_exit 0 "--materials --stage transition" "$MIXOCT" --demo -s 3 --materials --stage transition \
   -o "$T/mat.vtu" -o "$T/mat.msh" --quiet
 has "$T/mat.vtu" 'Name="material"' "the VTU has the material field"

@@ -12,8 +12,12 @@
  *    extraction, each between elements of different materials, against
  *    an independent face map here;
  *  - the same arrays with 1 and 2 threads;
- *  - the full stage and a restart file refuse materials (MX_EINPUT), and
- *    without materials the inner sphere is a hole (no element inside). */
+ *  - at the full stage (outer boundary on the outer sphere, interfaces on
+ *    element faces): the same rule for every element away from the
+ *    spheres, and the inner material's volume error smaller at -s 5 than
+ *    at -s 4 (the staircase shrinks with the level);
+ *  - a restart file refuses materials (MX_EINPUT), and without materials
+ *    the inner sphere is a hole (no element inside). */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -57,10 +61,10 @@ static void sphere(double r, int n, double **xyz, size_t *nv, uint32_t **tri, si
   *tri = t;
 }
 
-static mx_mesher *two_spheres(int materials, int stage, int threads) {
+static mx_mesher *two_spheres_at(int level, int materials, int stage, int threads) {
   mx_params p;
   mx_params_default(&p);
-  p.surface_level = 5;
+  p.surface_level = level;
   p.stage = stage;
   p.materials = materials;
   p.threads = threads;
@@ -77,6 +81,10 @@ static mx_mesher *two_spheres(int materials, int stage, int threads) {
   free(x);
   free(t);
   return m;
+}
+
+static mx_mesher *two_spheres(int materials, int stage, int threads) {
+  return two_spheres_at(5, materials, stage, threads);
 }
 
 /* Signed volume of element c (tetrahedra of its node fan from node 0 over
@@ -220,12 +228,44 @@ static void test_two_spheres(void) {
   mx_mesher_free(m);
 }
 
-static void test_refusals_and_holes(void) {
-  mx_mesher *m = two_spheres(1, MX_STAGE_FULL, 0);
-  CHECK(mx_mesher_mesh(m) == MX_EINPUT);
+/* The full stage at a level: elements checked against their centroid's
+ * radius (wrong ones counted), and the inner material's volume. */
+static double full_stage(int level, size_t *wrong, size_t *n) {
+  mx_mesher *m = two_spheres_at(level, 1, MX_STAGE_FULL, 0);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  mx_mesh_arrays a;
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  double inner = 0;
+  *wrong = *n = 0;
+  for (size_t c = 0; a.material && c < a.nelements; c++) {
+    const int nv = mx_cell_nodes[a.type[c]];
+    double p[3] = {0, 0, 0};
+    for (int k = 0; k < nv; k++)
+      for (int d = 0; d < 3; d++) p[d] += a.xyz[3 * (size_t)a.conn[8 * c + k] + d] / nv;
+    const double r = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    if (a.material[c] == 2) inner += volume(&a, c);
+    if (fabs(r - 1.0) < 0.01 || fabs(r - 0.5) < 0.01) continue;
+    (*n)++;
+    *wrong += a.material[c] != (r < 0.5) + (r < 1.0);
+  }
+  CHECK(a.material != NULL && a.invalid == 0);
   mx_mesher_free(m);
+  return inner;
+}
+
+static void test_full_stage(void) {
+  const double exact = 4.0 / 3.0 * M_PI * 0.125;
+  size_t w4, n4, w5, n5;
+  const double v4 = full_stage(4, &w4, &n4), v5 = full_stage(5, &w5, &n5);
+  CHECK(w4 == 0 && w5 == 0);
+  CHECK(fabs(v5 - exact) < fabs(v4 - exact));
+  printf("full stage: inner material's volume %.4f at -s 4, %.4f at -s 5 (sphere %.4f); "
+         "%zu + %zu elements checked, %zu + %zu wrong\n", v4, v5, exact, n4, n5, w4, w5);
+}
+
+static void test_refusals_and_holes(void) {
   /* without materials the inner sphere is a hole */
-  m = two_spheres(0, MX_STAGE_TRANSITION, 0);
+  mx_mesher *m = two_spheres(0, MX_STAGE_TRANSITION, 0);
   CHECK(mx_mesher_mesh(m) == MX_OK);
   mx_mesh_arrays a;
   CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
@@ -249,6 +289,7 @@ static void quiet(void *user, int level, const char *text) {
 int main(void) {
   mx_set_thread_message_handler(quiet, NULL);
   test_two_spheres();
+  test_full_stage();
   test_refusals_and_holes();
   return TEST_DONE();
 }

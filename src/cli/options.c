@@ -39,10 +39,11 @@ static const char *usage_text =
     "                              one shell, 2: inside two, ...), written as the\n"
     "                              cell field material, Gmsh physical volumes and\n"
     "                              Medit references, the interfaces as physical\n"
-    "                              surfaces. This version: with --stage transition\n"
-    "                              only (elements labelled by their centroid; the\n"
-    "                              interfaces are element faces, not yet moved onto\n"
-    "                              the input surfaces)\n"
+    "                              surfaces. This version labels each element by\n"
+    "                              its centroid: the interfaces are element faces\n"
+    "                              (a staircase at the octree's resolution, counted\n"
+    "                              in a warning), not yet the input surfaces; no\n"
+    "                              restart file, no --p4est\n"
     "\n"
     "Refinement requests (an octant takes the largest level asked; levels 0 to\n"
     "15, each one halves the octant size):\n"
@@ -408,6 +409,11 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
   }
   if (o->ninputs > 0 && o->demo) {
     mx_error(NULL, 0, "--demo and -i exclude each other");
+    return MX_EINPUT;
+  }
+  if (o->materials && (o->restart_in || o->restart_out)) {
+    mx_error(NULL, 0, "--materials: restart files (-c, --restart) do not keep materials in "
+                      "this version");
     return MX_EINPUT;
   }
   if (o->list_in && !o->restart_in) {

@@ -60,6 +60,8 @@ typedef struct {
   size_t core_leaves;       /* the refinement (before repair rounds); of them,
                              * those whose elements were kept */
   mx_splice_stats splice;
+  int nmaterials;           /* materials: the deepest region (0: one material) */
+  size_t materials_across;  /* elements with corners in two regions */
 } mx_summary;
 
 /* What a call records even when it only reads the mesher: the last error,

@@ -150,6 +150,10 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              s->repair_rounds, b->t_states, b->t_close, b->t_patterns, b->t_shrink,
              b->t_smooth, b->t_staircase, b->smoothed);
   }
+  char mat[128] = "";
+  if (s->nmaterials)
+    snprintf(mat, sizeof mat, "\"materials\": {\"regions\": %d, \"across_interfaces\": %zu}, ",
+             s->nmaterials, s->materials_across);
   fprintf(out, "\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
          "\"nodes\": %s, \"elements\": %zu, "
          "\"by_type\": {\"hex\": %zu, \"prism\": %zu, \"pyramid\": %zu, \"tet\": %zu}, "
@@ -165,7 +169,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
          "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"memory_estimate_mb\": %.1f, "
          "\"memory_estimate_prior_mb\": %.1f, "
          "\"threads\": %d, \"wait_policy\": \"%s\", "
-         "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, %s"
+         "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, %s%s"
          "\"topology\": \"%s\"}\n",
          s->leaves, s->leaves_hash, nodes, elements, hex,
          s->mesh ? s->by_type[2] : 0, s->mesh ? s->by_type[1] : 0,
@@ -179,7 +183,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
          s->local ? s->patch_leaves : 0, s->local ? s->core_leaves : 0, s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->memory_prior_mb, s->threads,
          ri->wait_policy ? ri->wait_policy : "default",
          s->mesh ? s->jens_min : 1.0,
-         s->mesh ? s->invalid : 0, qual, bnd, ri->topology ? ri->topology : "");
+         s->mesh ? s->invalid : 0, qual, bnd, mat, ri->topology ? ri->topology : "");
 }
 
 /* The summary printed after a run (unless --quiet or --json): what was
@@ -232,6 +236,10 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
     printf("  elements     %12zu hexahedra (the leaves, hanging nodes kept)\n",
            s->leaves);
   }
+  if (s->nmaterials)
+    printf("  materials    %12d regions by nesting depth; %zu element(s) across an interface\n"
+           "               (interfaces on element faces, not yet on the input surfaces)\n",
+           s->nmaterials, s->materials_across);
   if (s->full) {
     const mx_boundary_stats *b = &s->boundary;
     printf("  boundary     %zu nodes located; %zu moved close, %zu shrunk onto the surface\n"
