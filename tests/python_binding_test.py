@@ -62,6 +62,65 @@ def cube(h=10.0):
     return xyz, np.array(tri, dtype=np.uint32)
 
 
+def uv_sphere(r, n=24):
+    """A UV sphere of radius r about the origin: n rings, 2n segments,
+    outward triangles (the right hand)."""
+    k = 2 * n
+    th = np.pi * np.arange(1, n) / n
+    ph = 2 * np.pi * np.arange(k) / k
+    ring = np.stack([np.outer(np.sin(th), np.cos(ph)),
+                     np.outer(np.sin(th), np.sin(ph)),
+                     np.repeat(np.cos(th)[:, None], k, axis=1)], axis=-1)
+    xyz = r * np.vstack([[0, 0, 1], ring.reshape(-1, 3), [0, 0, -1]])
+    south = len(xyz) - 1
+
+    def v(i, j):                            # ring i (1 .. n-1), segment j
+        return 1 + (i - 1) * k + j % k
+
+    tri = []
+    for j in range(k):
+        tri.append((0, v(1, j), v(1, j + 1)))
+        tri.append((south, v(n - 1, j + 1), v(n - 1, j)))
+        for i in range(1, n - 1):
+            tri.append((v(i, j), v(i + 1, j), v(i + 1, j + 1)))
+            tri.append((v(i, j), v(i + 1, j + 1), v(i, j + 1)))
+    return xyz, np.array(tri, dtype=np.uint32)
+
+
+def signed_volume(xyz, tri):
+    a, b, c = xyz[tri[:, 0]], xyz[tri[:, 1]], xyz[tri[:, 2]]
+    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6.0
+
+
+#: the radii of the concentric spheres of the materials checks
+RADII = (1.0, 0.5)
+
+
+def two_spheres(stage="transition", level=5, **kw):
+    """A mesher of two concentric spheres (radii RADII, outward), not yet
+    meshed."""
+    m = mixoct.Mesher(surface_level=level, stage=stage, **kw)
+    for r in RADII:
+        xyz, tri = uv_sphere(r)
+        # the input itself: outward, the sphere's volume within the
+        # tessellation's loss
+        vol = signed_volume(xyz, tri)
+        exact = 4.0 / 3.0 * np.pi * r ** 3
+        assert 0.97 * exact < vol < exact, (r, vol, exact)
+        m.add_surface_arrays(xyz, tri, name="sphere_%g" % r)
+    return m
+
+
+def centroids(m):
+    """Each element's centroid (the mean of its nodes)."""
+    nn = np.array(mixoct.NODES_PER_TYPE)[m.types]
+    conn = m.conn
+    pad = conn == mixoct.NO_NODE
+    xyz = m.nodes[np.where(pad, 0, conn)]
+    xyz[pad] = 0.0
+    return xyz.sum(axis=1) / nn[:, None]
+
+
 M = demo(3)
 
 
@@ -464,6 +523,95 @@ def handle_freed():
     del v
     gc.collect()
     assert h() is None                      # the last view gone: freed
+
+
+@check
+def materials_by_radius():
+    """Two concentric spheres at the transition stage with materials: an
+    element's material is the number of spheres around its centroid,
+    counted here from the centroid's radius; elements whose centroid lies
+    within 0.02 of a sphere (the tessellation moves a sphere by 0.005 at
+    most) are not judged."""
+    m = two_spheres(materials=True)
+    m.mesh()
+    assert m.params["materials"] == 1
+    mat, e = m.material, m.nelements
+    assert mat is not None and mat.dtype == np.uint16 and mat.shape == (e,)
+    assert not mat.flags.writeable and not mat.flags.owndata
+    a = m._arrays()
+    assert mat.ctypes.data == ctypes.cast(a.material, ctypes.c_void_p).value
+    assert m.is_current(mat) and m.material is mat
+    r = np.linalg.norm(centroids(m), axis=1)
+    depth = sum((r < R).astype(int) for R in RADII)
+    far = np.all([np.abs(r - R) > 0.02 for R in RADII], axis=0)
+    wrong = np.flatnonzero(far & (mat != depth))
+    assert wrong.size == 0, ("%d of %d elements with the wrong material, "
+                             "e.g. element %d: radius %.4f, material %d"
+                             % (wrong.size, far.sum(), wrong[0],
+                                r[wrong[0]], mat[wrong[0]]))
+    # most elements are judged, and each of the three regions has some
+    assert far.sum() > 0.8 * e, (far.sum(), e)
+    for d in range(len(RADII) + 1):
+        assert np.count_nonzero(far & (depth == d)) > 0, d
+    counts = {int(k): int(np.count_nonzero(mat == k)) for k in np.unique(mat)}
+    assert set(counts) <= set(range(len(RADII) + 1)), counts
+    assert sum(counts.values()) == e, (counts, e)
+    # arrays(): the view, and a copy that outlives the mesher
+    assert m.arrays()["material"] is mat
+    c = m.arrays(copy=True)["material"]
+    assert c.flags.owndata and np.array_equal(c, mat)
+    # re-meshing and restart files are refused (the module doc), with the
+    # library's message
+    for call, args in ((m.refine_elements, ([0],)),
+                       (m.save_restart, (os.path.join(TMP, "mat.oct"),))):
+        e = raises(mixoct.InputError, call, *args)
+        assert str(e) == m.last_error and "materials" in str(e), str(e)
+    m.close()
+
+
+@check
+def materials_off_is_none():
+    """Without materials the view is None (the C pointer NULL), and the
+    inner sphere is a hole: the transition stage keeps the leaves that meet
+    the spheres whole, so no element's centroid lies deeper inside it than
+    the diagonal of a leaf of the finest level."""
+    m = two_spheres()
+    m.mesh()
+    assert m.params["materials"] == 0
+    assert m.material is None
+    assert m.arrays()["material"] is None
+    assert m.arrays(copy=True)["material"] is None
+    r = np.linalg.norm(centroids(m), axis=1)
+    fine = m.conn[(m.level == m.level.max()) & (m.types == mixoct.HEX)]
+    box = m.nodes[fine]
+    diag = float(np.linalg.norm(box.max(axis=1) - box.min(axis=1),
+                                axis=1).max())
+    assert 0 < diag < 0.5 * RADII[1], diag
+    assert np.count_nonzero(r < RADII[1] - diag) == 0
+    assert np.count_nonzero((r > RADII[1] + diag)
+                            & (r < RADII[0] - diag)) > 0
+    m.close()
+    assert M.material is None               # the full stage, no materials
+
+
+@check
+def materials_at_full_stage():
+    """At the full stage too: the outer boundary on the outer sphere, every
+    element away from the spheres labelled by the spheres around its
+    centroid; the elements are all inside the outer sphere (no material
+    0); a restart file is refused with the library's message."""
+    m = two_spheres(stage="full", materials=True)
+    m.mesh()
+    mat = m.material
+    assert mat is not None and mat.dtype == np.uint16
+    r = np.linalg.norm(centroids(m), axis=1)
+    away = np.all(np.abs(r[:, None] - np.array(RADII)[None, :]) > 0.02, axis=1)
+    want = (r[:, None] < np.array(RADII)[None, :]).sum(axis=1)
+    assert np.array_equal(mat[away], want[away]), int((mat[away] != want[away]).sum())
+    assert set(np.unique(mat).tolist()) == {1, 2}, np.unique(mat)
+    e = raises(mixoct.InputError, lambda: m.save_restart("/tmp/mx_never_written.oct"))
+    assert str(e) == m.last_error != "", (str(e), m.last_error)
+    m.close()
 
 
 M.close()

@@ -31,20 +31,34 @@ install time; the library on the linker's path (``ctypes.util``).
 
 Mesh arrays are views, not copies
 ---------------------------------
-``Mesher.nodes``, ``conn``, ``types``, ``jens``, ``leaf``, ``level`` and
-``boundary`` (and ``Mesher2D.nodes``, ``cells``, ``types``, ``leaf`` and
-``level``) are read-only numpy arrays over the library's own memory (no
-copy). They are valid until the next call that changes the mesh: ``mesh``,
-``build_octree``, ``transition``, ``boundary_stage``, ``refine``,
-``refine_elements``, ``refine_leaves``, ``load_restart`` (successful or not).
-After such a call the library may have freed that memory, and reading an old
-view gives garbage or crashes the process. Each view's ``.base`` chain ends
+``Mesher.nodes``, ``conn``, ``types``, ``jens``, ``leaf``, ``level``,
+``boundary`` and ``material`` (and ``Mesher2D.nodes``, ``cells``,
+``types``, ``leaf`` and ``level``) are read-only numpy arrays over the
+library's own memory (no copy). They are valid until the next call that
+changes the mesh: ``mesh``, ``build_octree``, ``transition``,
+``boundary_stage``, ``refine``, ``refine_elements``, ``refine_leaves``,
+``load_restart`` (successful or not). After such a call the library may have
+freed that memory, and reading an old view gives garbage or crashes the
+process. Each view's ``.base`` chain ends
 in a :class:`MeshBuffer` that records the mesh generation it was taken from:
 ``Mesher.is_current(array)`` tells whether it still is valid, and
 ``Mesher.generation`` counts the mesh changes. Take ``.copy()`` of whatever
 must outlive a re-mesh. ``close()`` (or leaving the ``with`` block) is safe
 with views alive: the C object is freed when the last view of it is gone.
 All of this holds for ``Mesher2D`` alike.
+
+Several materials
+-----------------
+``Mesher(..., materials=True)`` (``mx_params.materials``, the program's
+``--materials``) makes the shells nested in the outermost one materials
+instead of holes: ``Mesher.material`` gives each element's material, a
+uint16 view numbered by nesting depth (1 inside one shell, 2 inside two,
+...; at the transition stage 0 outside every shell), the region of the
+element's centroid. Without ``materials`` it is None. In this version the
+interfaces between materials are element faces (a staircase at the
+octree's resolution, counted in a warning), not yet the input surfaces;
+re-meshing (``refine_elements``, ``refine``, ...) and restart files raise
+:class:`InputError` with the library's message.
 
 Errors
 ------
@@ -868,9 +882,12 @@ class _MesherBase:
         return (idx, rows) if return_indices else rows
 
     def arrays(self, copy=False):
-        """All mesh arrays in a dict (views, or copies that outlive re-meshes)."""
+        """All mesh arrays in a dict (views, or copies that outlive re-meshes;
+        an array the mesh lacks, as Mesher's material without materials, is
+        None)."""
         v = self._get_views()
-        return {k: (v[k].copy() if copy else v[k]) for k in self._VIEW_KEYS}
+        return {k: (v[k].copy() if copy and v[k] is not None else v[k])
+                for k in self._VIEW_KEYS}
 
     def is_current(self, array):
         """Whether a mesh view (or an array derived from one without copying)
@@ -891,19 +908,21 @@ class Mesher(_MesherBase):
     ``all_level`` (-a), ``stage`` ("octree", "transition", "full" or 0..2),
     ``threads`` (0: OpenMP's default), ``max_memory_mb`` (0: the memory
     available), ``repair_rounds``, and, as keywords, ``balance`` ("edges" or
-    "recursive"), ``close_ratio`` and ``staircase_quality`` (0: defaults).
+    "recursive"), ``close_ratio`` and ``staircase_quality`` (0: defaults),
+    ``materials`` (``--materials``: nested shells become materials, not
+    holes, given by the ``material`` view; see the module doc).
     """
 
     _PREFIX = "mx_mesher"
     _ARRAYS = _MeshArrays
     _STATS = _Stats
     _VIEW_KEYS = ("nodes", "conn", "types", "jens", "leaf", "level",
-                  "boundary")
+                  "boundary", "material")
 
     def __init__(self, surface_level=-1, all_level=-1, stage="full",
                  threads=0, max_memory_mb=0, repair_rounds=3, *,
                  balance="edges", close_ratio=0.0, staircase_quality=0.0,
-                 library=None):
+                 materials=False, library=None):
         lib = load_library(library)
         p = _Params()
         lib.mx_params_default(ctypes.byref(p))
@@ -918,6 +937,7 @@ class Mesher(_MesherBase):
             p.close_ratio = float(close_ratio)
         if staircase_quality:
             p.staircase_quality = float(staircase_quality)
+        p.materials = 1 if materials else 0
         self._start(lib, p)
 
     # ---- inputs ------------------------------------------------------------------
@@ -998,6 +1018,9 @@ class Mesher(_MesherBase):
         n, e = a.nnodes, a.nelements
         v.update(jens=_view(a.jens, e, np.float32, (e,), owner),
                  boundary=_view(a.boundary, n, np.uint8, (n,), owner),
+                 # NULL without materials: None, not an array of zeros
+                 material=(_view(a.material, e, np.uint16, (e,), owner)
+                           if a.material else None),
                  counts={TYPE_NAMES[t]: int(a.by_type[t]) for t in range(4)},
                  jens_min=float(a.jens_min), invalid=int(a.invalid))
         return v
@@ -1016,6 +1039,10 @@ class Mesher(_MesherBase):
     level = _mesh_view("level", "(nelements,) uint8 level of that leaf")
     boundary = _mesh_view("boundary",
                           "(nnodes,) uint8, 1 on the domain boundary")
+    material = _mesh_view("material",
+                          "(nelements,) uint16 material of each element "
+                          "(nesting depth of its centroid, 0 outside every "
+                          "shell); None without materials=True")
     jens_min = _mesh_view("jens_min", "the smallest J_ENS of the mesh")
     invalid = _mesh_view("invalid", "how many elements have J_ENS <= 0")
 
