@@ -261,8 +261,10 @@ static int index_build(mx_surface_index *S, const mx_trisoup *soup, uint32_t t0,
   }
   if (st == MX_OK) st = orient_shells(S, fix, seed, cap_shell, mode);
   /* the pseudonormal sign tells a point's side only where the shells turn
-   * their outside to the domain's outside: not as given, not all outward */
-  if (mode != ORIENT_NESTING) S->closed = 0;
+   * their outside to the domain's outside: not as given, not all outward
+   * when a shell nests in another */
+  if (mode == ORIENT_GIVEN) S->closed = 0;
+  if (mode == ORIENT_OUTWARD && mx_surface_index_nested(S)) S->closed = 0;
   if (st == MX_OK) st = mx_index_pseudonormals(S, &E);
   if (st == MX_OK) st = mx_index_hints(S);
   mx_edge_table_free(&E);
@@ -281,6 +283,12 @@ int mx_surface_index_build(mx_surface_index *S, const mx_trisoup *soup,
 int mx_surface_index_build_outward(mx_surface_index *S, const mx_trisoup *soup,
                                    uint32_t t0, uint32_t t1) {
   return index_build(S, soup, t0, t1, ORIENT_OUTWARD);
+}
+
+int mx_surface_index_nested(const mx_surface_index *S) {
+  for (uint32_t c = 0; S->shell_depth && c < S->nshells; c++)
+    if (S->shell_depth[c] > 0) return 1;
+  return 0;
 }
 
 int mx_region_depth(const mx_surface_index *S, const double p[3]) {

@@ -190,9 +190,12 @@ int mx_surface_index_build_given(mx_surface_index *S, const mx_trisoup *soup,
  * the winding number of a point counts the shells around it, its nesting
  * depth (mx_region_depth), and the domain (mx_inside, the sign of the
  * distance: winding number above 1/2) is the union of the outermost
- * shells' insides, the nested shells inside it not holes; closed is 0. */
+ * shells' insides, the nested shells inside it not holes; closed is 0 when
+ * a shell nests in another (no shell does: the same index as above). */
 int mx_surface_index_build_outward(mx_surface_index *S, const mx_trisoup *soup,
                                    uint32_t t0, uint32_t t1);
+/* 1 when a shell of the index lies inside another (shell_depth > 0). */
+int mx_surface_index_nested(const mx_surface_index *S);
 /* Of an index built outward: the number of shells around p (0 outside
  * every shell); a point on a shell gets either side's count. */
 int mx_region_depth(const mx_surface_index *S, const double p[3]);

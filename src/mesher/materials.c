@@ -32,56 +32,97 @@ int mx_materials_allowed(const mx_mesher *m, const char *what) {
   return MX_OK;
 }
 
+/* The region of each element and the elements across an interface. An
+ * element of a leaf that meets no triangle lies in one region, its leaf's
+ * (one query per leaf); elsewhere the regions of the element's nodes (one
+ * query per node) give it when they agree, and its centroid when they do
+ * not (those with nodes in two regions inside the outermost shell lie
+ * across an interface). Nodes on the domain's boundary (full stage) tell
+ * no region and are left out. With no shell
+ * nested in another, the full stage's elements all lie in region 1. */
 int mx_label_materials(mx_mesher *m) {
+  enum { NONE = UINT16_MAX }; /* a node on the domain's boundary */
   mx_mesh *M = &m->M;
   if (!m->have_index) MX_CHECK(mx_mesher_index(m));
+  const double t0 = mx_wtime();
   mx_free(M->material);
   M->material = mx_alloc((M->ncells + 1) * sizeof *M->material);
   if (!M->material) return MX_ENOMEM;
   const mx_surface_index *S = &m->SI;
+  const size_t nc = M->ncells, nn = M->nnodes;
+  if (m->mesh_stage == MX_STAGE_FULL && !mx_surface_index_nested(S)) {
+    for (size_t c = 0; c < nc; c++) M->material[c] = 1;
+    m->nmaterials = 1;
+    m->rec->S.nmaterials = 1;
+    m->rec->S.materials_across = 0;
+    m->rec->S.t_materials = mx_wtime() - t0;
+    return MX_OK;
+  }
+  const mx_octree *O = &m->B.tree.oct;
+  int32_t *leaf_depth = mx_alloc((m->nleaves + 1) * sizeof *leaf_depth);
+  uint16_t *depth = mx_alloc((nn + 1) * sizeof *depth);
+  uint8_t *need = mx_calloc(nn + 1);
+  if (!leaf_depth || !depth || !need) {
+    mx_free(leaf_depth);
+    mx_free(depth);
+    mx_free(need);
+    return MX_ENOMEM;
+  }
+  for (size_t l = 0; l < m->nleaves; l++) leaf_depth[l] = -1;
+  const uint8_t *states = m->states;
+  /* the nodes to locate: those of the elements in leaves meeting triangles */
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++) {
+    if (O->tri_cnt[m->leaves[M->leaf[c]]] == 0) continue;
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+      __atomic_store_n(&need[M->conn[8 * c + k]], 1, __ATOMIC_RELAXED);
+  }
+#pragma omp parallel for schedule(dynamic, 1024)
+  for (size_t v = 0; v < nn; v++) {
+    int d = NONE;
+    if (need[v] && !(states && states[v] == MX_NODE_OUTSIDE))
+      d = mx_region_depth(S, M->xyz + 3 * v);
+    depth[v] = (uint16_t)(d > NONE ? NONE : d);
+  }
   int deepest = 0;
-#pragma omp parallel for schedule(dynamic, 1024) reduction(max : deepest)
-  for (size_t c = 0; c < M->ncells; c++) {
+  size_t across = 0;
+#pragma omp parallel for schedule(dynamic, 1024) reduction(max : deepest) reduction(+ : across)
+  for (size_t c = 0; c < nc; c++) {
     const int nv = mx_cell_nodes[M->type[c]];
     const uint32_t *row = M->conn + 8 * c;
+    const uint32_t leaf = M->leaf[c];
     double p[3] = {0, 0, 0};
     for (int k = 0; k < nv; k++)
-      for (int a = 0; a < 3; a++) p[a] += M->xyz[3 * (size_t)row[k] + a];
-    for (int a = 0; a < 3; a++) p[a] /= nv;
-    int d = mx_region_depth(S, p);
+      for (int a = 0; a < 3; a++) p[a] += M->xyz[3 * (size_t)row[k] + a] / nv;
+    int d;
+    if (O->tri_cnt[m->leaves[leaf]] == 0) { /* one region: the leaf's */
+      d = __atomic_load_n(&leaf_depth[leaf], __ATOMIC_RELAXED);
+      if (d < 0) {
+        d = mx_region_depth(S, p);
+        __atomic_store_n(&leaf_depth[leaf], d, __ATOMIC_RELAXED);
+      }
+    } else {
+      int lo = INT_MAX, hi = -1;
+      for (int k = 0; k < nv; k++) {
+        const int g = depth[row[k]];
+        if (g == NONE) continue; /* on the boundary */
+        lo = g < lo ? g : lo;
+        hi = g > hi ? g : hi;
+      }
+      across += hi > lo && lo >= 1; /* an inner interface */
+      d = hi == lo ? hi : mx_region_depth(S, p);
+    }
     if (d > UINT16_MAX - 1) d = UINT16_MAX - 1;
     M->material[c] = (uint16_t)d;
     if (d > deepest) deepest = d;
   }
-  m->nmaterials = deepest;
-  /* the elements across an interface: corners in two regions inside the
-   * outermost shell (a node on the domain's boundary, or outside it, has
-   * no inner region to tell) */
-  const size_t nn = M->nnodes;
-  uint16_t *depth = mx_alloc((nn + 1) * sizeof *depth);
-  if (!depth) return MX_ENOMEM;
-  const uint8_t *states = m->states;
-#pragma omp parallel for schedule(dynamic, 1024)
-  for (size_t v = 0; v < nn; v++) {
-    int d = states && states[v] == MX_NODE_OUTSIDE ? 0 : mx_region_depth(S, M->xyz + 3 * v);
-    depth[v] = (uint16_t)(d > UINT16_MAX ? UINT16_MAX : d);
-  }
-  size_t across = 0;
-#pragma omp parallel for schedule(static) reduction(+ : across)
-  for (size_t c = 0; c < M->ncells; c++) {
-    const uint32_t *row = M->conn + 8 * c;
-    int lo = UINT16_MAX, hi = 0;
-    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
-      const int d = depth[row[k]];
-      if (d == 0) continue;
-      lo = d < lo ? d : lo;
-      hi = d > hi ? d : hi;
-    }
-    across += hi > lo;
-  }
+  mx_free(leaf_depth);
   mx_free(depth);
+  mx_free(need);
+  m->nmaterials = deepest;
   m->rec->S.nmaterials = deepest;
   m->rec->S.materials_across = across;
+  m->rec->S.t_materials = mx_wtime() - t0;
   if (across)
     mx_warning(NULL, 0, "materials: %zu element(s) lie across an interface between two "
                         "materials (each takes the material of its centroid): in this version "

@@ -224,11 +224,12 @@ int mx_build_tree(mx_mesher *m) {
   m->have_tree = 1;
   m->B.on_level = m->progress.on_level;
   m->B.on_level_user = m->progress.user;
-  if (m->p.repair_input || m->p.materials) {
+  if (m->p.materials) MX_CHECK(mx_mesher_index(m));
+  if (m->p.repair_input || (m->p.materials && mx_surface_index_nested(&m->SI))) {
     /* the domain: where the generalized winding number is above 1/2, for
      * the octants (instead of the ray parity) and the nodes alike; with
      * materials, of the index with every shell outward: the outermost
-     * shells' insides whole */
+     * shells' insides whole (with no shell nested, the parity's domain) */
     MX_CHECK(mx_mesher_index(m));
     m->B.loc_domain.inside_fn = winding_inside;
     m->B.loc_domain.inside_ctx = m->have_winding ? &m->WI : &m->SI;

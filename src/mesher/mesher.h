@@ -62,6 +62,7 @@ typedef struct {
   mx_splice_stats splice;
   int nmaterials;           /* materials: the deepest region (0: one material) */
   size_t materials_across;  /* elements with corners in two regions */
+  double t_materials;       /* seconds labelling the elements */
 } mx_summary;
 
 /* What a call records even when it only reads the mesher: the last error,
