@@ -220,12 +220,15 @@ static void fuzz_file(void) {
 static void fuzz_file(void) {
   mx_mesh_data m;
   if (mx_read_mesh(path, &m) != MX_OK) {
-    REQUIRE(m.nnodes == 0 && m.ncells == 0 && !m.xyz && !m.type && !m.conn);
+    REQUIRE(m.nnodes == 0 && m.ncells == 0 && !m.xyz && !m.type && !m.conn && !m.cell_tag);
     return;
   }
   REQUIRE(m.nnodes == 0 || m.xyz);
   REQUIRE(m.ncells == 0 || (m.type && m.conn));
   for (size_t i = 0; i < 3 * m.nnodes; i++) REQUIRE(isfinite(m.xyz[i]));
+  REQUIRE(!m.cell_tag || m.ncells > 0);
+  static volatile int32_t labels; /* every label read: a short array is caught */
+  for (size_t c = 0; m.cell_tag && c < m.ncells; c++) labels = m.cell_tag[c];
   for (size_t c = 0; c < m.ncells; c++) {
     REQUIRE(m.type[c] <= MX_HEX);
     const int k = mx_cell_nodes[m.type[c]];

@@ -14,7 +14,12 @@
  * after; integers int32 up to version 3, int64 in 4. Unknown keywords are
  * skipped through their next position; "End" (54) stops. Node orders are
  * mixoct's (see io/write_medit.c); cells come grouped by keyword, in file
- * order. */
+ * order.
+ *
+ * Cell labels (cell_tag, several materials): each volume element's
+ * reference, when the references are not all the same (every element with
+ * one reference, as a plain mesh is written: NULL). References that differ
+ * must fit an int32. */
 #include "io/mesh_reader.h"
 
 #include <math.h>
@@ -75,6 +80,45 @@ static int medit_indices(rd *r, mx_mesh_data *out) {
   return MX_OK;
 }
 
+/* The elements' references as they are read (into out->cell_tag, grown
+ * with the cells), whether they differ, and the first that does not fit an
+ * int32. */
+typedef struct {
+  int64_t first;
+  int varies;
+  const char *bad_at; /* or NULL */
+  int64_t bad;
+} medit_refs;
+
+/* Room for the references of the cells c0.. c0 + n - 1. */
+static int refs_room(mx_mesh_data *out, size_t c0, size_t n) {
+  int32_t *t = mx_realloc(out->cell_tag, (c0 + n + 1) * sizeof *t);
+  if (!t) return MX_ENOMEM;
+  out->cell_tag = t;
+  return MX_OK;
+}
+
+/* The reference v of cell c, read at `at`. */
+static void ref_add(medit_refs *R, mx_mesh_data *out, size_t c, int64_t v, const char *at) {
+  if (c == 0) R->first = v;
+  R->varies |= v != R->first;
+  if ((v < INT32_MIN || v > INT32_MAX) && !R->bad_at) {
+    R->bad_at = at;
+    R->bad = v;
+  }
+  out->cell_tag[c] = (int32_t)v;
+}
+
+/* cell_tag kept when the references differ (and fit), else NULL. */
+static int refs_end(rd *r, const medit_refs *R, mx_mesh_data *out) {
+  if (R->varies && R->bad_at) return mx_rd_tag_range(r, R->bad_at, R->bad, "element reference");
+  if (!R->varies || out->ncells == 0) {
+    mx_free(out->cell_tag);
+    out->cell_tag = NULL;
+  }
+  return MX_OK;
+}
+
 static int medit_kw_type(const char *t, size_t n) {
   static const struct {
     const char *name;
@@ -93,6 +137,7 @@ int mx_rd_medit_ascii(rd *r, const char *p, mx_mesh_data *out) {
   cur c = {r, p, 1, 0};
   int have_vert = 0;
   size_t fcap = 0;
+  medit_refs R = {0, 0, NULL, 0};
   for (;;) {
     size_t n;
     const char *t = cur_tok(&c, &n);
@@ -192,13 +237,17 @@ int mx_rd_medit_ascii(rd *r, const char *p, mx_mesh_data *out) {
                         shown(n), t, (unsigned long long)cnt);
     const size_t c0 = out->ncells;
     MX_CHECK(mx_rd_grow_cells(r, out, (size_t)cnt));
+    MX_CHECK(refs_room(out, c0, (size_t)cnt));
     for (size_t i = 0; i < cnt; i++) {
       uint32_t *row = out->conn + 8 * (c0 + i);
       for (int j = 0; j <= k; j++) {
         const char *vat = cur_skip(&c);
         int64_t v = 0;
         MX_CHECK(cur_int(&c, &v, "element"));
-        if (j == k) break; /* the reference */
+        if (j == k) { /* the reference */
+          ref_add(&R, out, c0 + i, v, vat);
+          break;
+        }
         if (v < 1 || v >= (int64_t)UINT32_MAX)
           return mx_rd_fail(r, vat, "%.*s %zu: vertex %lld out of range",
                             shown(n), t, i + 1, (long long)v);
@@ -209,7 +258,8 @@ int mx_rd_medit_ascii(rd *r, const char *p, mx_mesh_data *out) {
     out->ncells = c0 + (size_t)cnt;
   }
   if (!have_vert) return mx_rd_fail(r, NULL, "no Vertices");
-  return medit_indices(r, out);
+  MX_CHECK(medit_indices(r, out));
+  return refs_end(r, &R, out);
 }
 
 int mx_rd_meshb(rd *r, mx_mesh_data *out) {
@@ -225,6 +275,7 @@ int mx_rd_meshb(rd *r, mx_mesh_data *out) {
             real_size = ver == 1 ? 4 : 8, int_size = ver >= 4 ? 8 : 4;
   int have_vert = 0;
   size_t fcap = 0;
+  medit_refs R = {0, 0, NULL, 0};
   const size_t len = (size_t)(r->end - r->buf);
   for (;;) {
     if (cur_left(&c) == 0) return mx_rd_fail(r, NULL, "no End (truncated file?)");
@@ -302,6 +353,7 @@ int mx_rd_meshb(rd *r, mx_mesh_data *out) {
         const int k = mx_cell_nodes[vt];
         const size_t c0 = out->ncells;
         MX_CHECK(mx_rd_grow_cells(r, out, (size_t)cnt));
+        MX_CHECK(refs_room(out, c0, (size_t)cnt));
         for (size_t i = 0; i < cnt; i++) {
           uint32_t *row = out->conn + 8 * (c0 + i);
           for (int j = 0; j < k; j++) {
@@ -314,7 +366,9 @@ int mx_rd_meshb(rd *r, mx_mesh_data *out) {
                                 (long long)sv);
             row[j] = (uint32_t)sv;
           }
-          c.p += int_size; /* reference */
+          const uint64_t u = bin_u(&c, int_size); /* the reference */
+          ref_add(&R, out, c0 + i, int_size == 4 ? (int32_t)(uint32_t)u : (int64_t)u,
+                  c.p - int_size);
           out->type[c0 + i] = (uint8_t)vt;
         }
         out->ncells = c0 + (size_t)cnt;
@@ -330,7 +384,8 @@ int mx_rd_meshb(rd *r, mx_mesh_data *out) {
     }
   }
   if (!have_vert) return mx_rd_fail(r, NULL, "no Vertices");
-  return medit_indices(r, out);
+  MX_CHECK(medit_indices(r, out));
+  return refs_end(r, &R, out);
 }
 
 /* Whether the text at p starts with "MeshVersionFormatted" (after blanks

@@ -8,7 +8,8 @@
  *    DATASET UNSTRUCTURED_GRID: POINTS float|double, CELLS as the classic
  *    count-prefixed list or, from version 5, as OFFSETS + CONNECTIVITY
  *    (vtktypeint32/int64), CELL_TYPES; FIELD and METADATA blocks are
- *    skipped; of CELL_DATA / POINT_DATA only surface_tag is read (below);
+ *    skipped; of CELL_DATA / POINT_DATA only surface_tag and material are
+ *    read (below);
  *  - VTK XML UnstructuredGrid (.vtu), one Piece, byte_order Little- or
  *    BigEndian, header_type UInt32 or UInt64, arrays format="appended" with
  *    <AppendedData encoding="raw"> or format="ascii"; points Float32 or
@@ -67,6 +68,21 @@
  *    node_tag. Other attributes are skipped; an attribute the legacy reader
  *    does not know ends the attributes (its values are not read).
  * M3D and MVM files have none.
+ *
+ * Cell labels (several materials, issue 26), cell_tag, one per cell in the
+ * cells' order as returned, or NULL:
+ *  - MSH: the first physical tag of the element's volume entity in
+ *    $Entities (the entity tag when it has none, or is not listed, or the
+ *    file has no $Entities); NULL when every volume element has the same
+ *    label (one volume, or one physical volume: a plain mesh);
+ *  - Medit: the elements' references, NULL when they are all equal;
+ *  - VTK, VTU (and the pieces of a .pvtu, which must all have it or none):
+ *    the cell field material (legacy: SCALARS or a FIELD array in
+ *    CELL_DATA; VTU: a DataArray of <CellData>), one component, one value
+ *    per cell, integers or floats that are whole numbers; NULL without it.
+ * A label must fit an int32; a material field of the wrong count,
+ * components or type, or with a fraction, is an error.
+ * Other formats give none.
  *
  * Every count is checked against the bytes left in the file before
  * anything is allocated for it, and binary values are read only after the

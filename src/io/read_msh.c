@@ -22,7 +22,17 @@
  * order; points, lines and other triangles and quadrangles are skipped;
  * any other type is refused. Node orders are Gmsh's, which are
  * mixoct's (soa/mesh.h). Node tags are mapped to indices by a direct table
- * when they are dense, else by a sorted one. */
+ * when they are dense, else by a sorted one.
+ *
+ * Cell labels (cell_tag, several materials): a volume element's label is
+ * the first physical tag of its volume entity in $Entities, or the entity
+ * tag itself when that entity has no physical tag or is not listed (no
+ * $Entities: every label is an entity tag). The labels follow the cells
+ * into the order of their tags. cell_tag stays NULL when every volume
+ * element has the same label (one volume entity, or one physical volume):
+ * a single label tells no material from another, and a plain mesh (one
+ * volume entity in one physical group, as mixoct writes it) stays
+ * unlabelled, as in the other formats. A label must fit an int32. */
 #include "io/mesh_reader.h"
 
 #include <math.h>
@@ -128,9 +138,11 @@ typedef struct {
   uint64_t *sorted; /* or: tags sorted, with */
   uint32_t *sidx;   /* their indices */
   uint64_t *etag;   /* per volume element */
+  int32_t *cent;    /* per volume element, its entity's tag */
   int have_entities;
-  size_t nsurf;
+  size_t nsurf, nvol;
   int64_t *surf;    /* $Entities: per surface, its tag and its face tag */
+  int64_t *vol;     /* per volume, its tag and its label (cell_tag) */
   size_t fcap, ncap; /* capacities of out's faces and names */
   mx_mesh_data *out;
 } msh;
@@ -147,7 +159,9 @@ static void msh_free(msh *M) {
   mx_free(M->sorted);
   mx_free(M->sidx);
   mx_free(M->etag);
+  mx_free(M->cent);
   mx_free(M->surf);
+  mx_free(M->vol);
 }
 
 /* A size_t (binary) or a count (text). */
@@ -373,7 +387,8 @@ static int msh_entities(msh *M) {
                         "the file is too short (truncated file or wrong count)",
                         (unsigned long long)n[d], d);
   M->surf = mx_alloc((2 * (size_t)n[2] + 1) * sizeof *M->surf);
-  if (!M->surf) return MX_ENOMEM;
+  M->vol = mx_alloc((2 * (size_t)n[3] + 1) * sizeof *M->vol);
+  if (!M->surf || !M->vol) return MX_ENOMEM;
   for (int d = 0; d < 4; d++)
     for (uint64_t i = 0; i < n[d]; i++) {
       int64_t tag = 0, first = 0;
@@ -408,10 +423,17 @@ static int msh_entities(msh *M) {
         MX_CHECK(mx_rd_tag_range(r, at, face_tag, "$Entities: surface tag"));
         M->surf[2 * i] = tag;
         M->surf[2 * i + 1] = face_tag;
+      } else if (d == 3) {
+        const int64_t label = np ? first : tag;
+        MX_CHECK(mx_rd_tag_range(r, at, label, "$Entities: volume tag"));
+        M->vol[2 * i] = tag;
+        M->vol[2 * i + 1] = label;
       }
     }
   M->nsurf = (size_t)n[2];
+  M->nvol = (size_t)n[3];
   qsort(M->surf, M->nsurf, 2 * sizeof *M->surf, surf_cmp);
+  qsort(M->vol, M->nvol, 2 * sizeof *M->vol, surf_cmp);
   return msh_end(M, "Entities");
 }
 
@@ -447,22 +469,44 @@ static int msh_names(msh *M) {
   return msh_end(M, "PhysicalNames");
 }
 
+/* The entry of tag e in the (tag, value) pairs of tab, sorted by tag, or
+ * -1. */
+static int64_t pair_find(const int64_t *tab, size_t n, int64_t e) {
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (tab[2 * mid] < e)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo < n && tab[2 * lo] == e ? (int64_t)lo : -1;
+}
+
 /* The faces' entity tags to their entities' physical tags. */
 static void msh_face_tags(msh *M) {
   mx_mesh_data *out = M->out;
   for (size_t f = 0; f < out->nfaces && M->nsurf; f++) {
-    const int64_t e = out->face_tag[f];
-    size_t lo = 0, hi = M->nsurf;
-    while (lo < hi) {
-      const size_t mid = lo + (hi - lo) / 2;
-      if (M->surf[2 * mid] < e)
-        lo = mid + 1;
-      else
-        hi = mid;
-    }
-    if (lo < M->nsurf && M->surf[2 * lo] == e)
-      out->face_tag[f] = (int32_t)M->surf[2 * lo + 1];
+    const int64_t i = pair_find(M->surf, M->nsurf, out->face_tag[f]);
+    if (i >= 0) out->face_tag[f] = (int32_t)M->surf[2 * i + 1];
   }
+}
+
+/* The volume elements' entity tags to their labels (see the top): the
+ * cell_tag of out, unless every label is the same. */
+static void msh_cell_tags(msh *M) {
+  mx_mesh_data *out = M->out;
+  const size_t nc = out->ncells;
+  int32_t *lab = M->cent;
+  int varies = 0;
+  for (size_t c = 0; c < nc; c++) {
+    const int64_t i = pair_find(M->vol, M->nvol, lab[c]);
+    if (i >= 0) lab[c] = (int32_t)M->vol[2 * i + 1];
+    varies |= lab[c] != lab[0];
+  }
+  if (!varies) return;
+  out->cell_tag = lab;
+  M->cent = NULL;
 }
 
 static int msh_elements(msh *M) {
@@ -508,7 +552,8 @@ static int msh_elements(msh *M) {
                         "(linear tetrahedra 4, hexahedra 5, prisms 6, pyramids 7; "
                         "points, lines, triangles and quadrangles are skipped)",
                         (unsigned long long)b, (long long)type);
-    if (face) MX_CHECK(mx_rd_tag_range(r, at, etag, "$Elements block: entity tag"));
+    if (face || vt >= 0)
+      MX_CHECK(mx_rd_tag_range(r, at, etag, "$Elements block: entity tag"));
     const uint64_t line_bytes = (uint64_t)(k + 1) * (uint64_t)M->dsize;
     if (M->binary)
       MX_CHECK(cur_need(&M->c, n * line_bytes, "$Elements block"));
@@ -524,6 +569,10 @@ static int msh_elements(msh *M) {
                                              sizeof *M->etag);
       if (!et) return MX_ENOMEM;
       M->etag = et;
+      int32_t *ce = mx_realloc(M->cent, ((size_t)(c0 + n) + 1) * sizeof *M->cent);
+      if (!ce) return MX_ENOMEM;
+      M->cent = ce;
+      for (uint64_t i = 0; i < n; i++) ce[c0 + (size_t)i] = (int32_t)etag;
     }
     if (face) MX_CHECK(mx_rd_face_room(r, out, &M->fcap, (size_t)n));
     for (uint64_t i = 0; i < n; i++) {
@@ -570,7 +619,8 @@ static int msh_elements(msh *M) {
   return msh_end(M, "Elements");
 }
 
-/* Volume elements in the order of their tags (unique). */
+/* Volume elements (and their entity tags) in the order of their tags
+ * (unique). */
 static int msh_order(msh *M) {
   mx_mesh_data *out = M->out;
   const size_t nc = out->ncells;
@@ -581,7 +631,8 @@ static int msh_order(msh *M) {
   uint32_t *idx = mx_alloc((nc + 1) * sizeof *idx);
   uint8_t *t = mx_alloc(nc + 1);
   uint32_t *cn = mx_alloc((8 * nc + 1) * sizeof *cn);
-  int st = k && idx && t && cn ? MX_OK : MX_ENOMEM;
+  int32_t *ce = mx_alloc((nc + 1) * sizeof *ce);
+  int st = k && idx && t && cn && ce ? MX_OK : MX_ENOMEM;
   if (st == MX_OK) {
     for (size_t c = 0; c < nc; c++) {
       k[c] = M->etag[c];
@@ -597,18 +648,23 @@ static int msh_order(msh *M) {
     for (size_t c = 0; c < nc; c++) {
       t[c] = out->type[idx[c]];
       memcpy(cn + 8 * c, out->conn + 8 * (size_t)idx[c], 8 * sizeof *cn);
+      ce[c] = M->cent[idx[c]];
     }
     mx_free(out->type);
     mx_free(out->conn);
+    mx_free(M->cent);
     out->type = t;
     out->conn = cn;
+    M->cent = ce;
     t = NULL;
     cn = NULL;
+    ce = NULL;
   }
   mx_free(k);
   mx_free(idx);
   mx_free(t);
   mx_free(cn);
+  mx_free(ce);
   return st;
 }
 
@@ -676,6 +732,7 @@ int mx_rd_msh(rd *r, const char *p, mx_mesh_data *out) {
   if (st == MX_OK && !M.etag) st = mx_rd_fail(r, NULL, "no $Elements section");
   if (st == MX_OK) st = msh_order(&M);
   if (st == MX_OK) msh_face_tags(&M);
+  if (st == MX_OK) msh_cell_tags(&M);
   if (st == MX_OK) st = sort_names(out);
   msh_free(&M);
   return st;

@@ -13,7 +13,9 @@
  * they first appear. Both merges sort 64-bit keys (the ids, or a hash of
  * the coordinates), so time and memory are O(total size). Cells (and the
  * faces of a planar read) are concatenated in piece order; surface_tag
- * follows the node and must agree between the pieces sharing it. */
+ * follows the node and must agree between the pieces sharing it; the cell
+ * field material (cell_tag) follows the cells, and every piece with cells
+ * must have it if one has. */
 #include "io/mesh_reader.h"
 
 #include <errno.h>
@@ -44,6 +46,7 @@ typedef struct {
   uint64_t *gid;           /* their GlobalNodeId, or NULL */
   uint32_t *map, *node_rep; /* point -> merged node; node -> one of its points */
   size_t npoints, nnodes;
+  const pvtu_piece *labelled_from; /* the first piece with cells */
 } pvtu;
 
 static void pvtu_free(pvtu *V) {
@@ -150,6 +153,14 @@ static int pvtu_read_pieces(rd *r, pvtu *V) {
                         "piece 0's", i, pc->path);
     faces |= pc->m.nfaces > 0;
     cells |= pc->m.ncells > 0;
+    if (pc->m.ncells) {
+      if (!V->labelled_from) V->labelled_from = pc;
+      else if (!pc->m.cell_tag != !V->labelled_from->m.cell_tag)
+        return mx_rd_fail(r, pc->tag, "piece %zu ('%s') has %s material cell field, piece %zu "
+                          "('%s') %s", i, pc->path, pc->m.cell_tag ? "a" : "no",
+                          (size_t)(V->labelled_from - V->pc), V->labelled_from->path,
+                          V->labelled_from->m.cell_tag ? "has one" : "has none");
+    }
     if (V->npoints + pc->m.nnodes >= UINT32_MAX)
       return mx_rd_fail(r, pc->tag, "the pieces have more than %u points together", UINT32_MAX - 1);
     V->npoints += pc->m.nnodes;
@@ -368,6 +379,10 @@ static int pvtu_assemble(rd *r, pvtu *V, mx_mesh_data *out) {
   out->type = mx_alloc(C + 1);
   out->conn = mx_alloc((8 * C + 1) * sizeof *out->conn);
   if (!out->type || !out->conn) return MX_ENOMEM;
+  if (V->labelled_from && V->labelled_from->m.cell_tag) {
+    out->cell_tag = mx_alloc((C + 1) * sizeof *out->cell_tag);
+    if (!out->cell_tag) return MX_ENOMEM;
+  }
   if (F) {
     out->nfaces = F;
     out->face_nn = mx_alloc(F);
@@ -381,6 +396,7 @@ static int pvtu_assemble(rd *r, pvtu *V, mx_mesh_data *out) {
     const uint32_t *map = V->map + V->poff[i];
     const size_t nc = m->ncells, nf = m->nfaces;
     if (nc) memcpy(out->type + c0, m->type, nc);
+    if (nc && out->cell_tag) memcpy(out->cell_tag + c0, m->cell_tag, nc * sizeof *out->cell_tag);
 #pragma omp parallel for schedule(static) if (nc > 65536)
     for (size_t c = 0; c < nc; c++) {
       const uint32_t *row = m->conn + 8 * c;

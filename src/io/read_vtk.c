@@ -4,7 +4,8 @@
  * (legacy) or as offsets + connectivity (legacy 5.x), and the cell types;
  * io/vtk_cells.c then assembles them. Binary values are only read after the
  * block holding them was checked to lie in the file. Of the attributes,
- * only the point field surface_tag is read. */
+ * only the point field surface_tag and the cell field material (one value
+ * per cell, of any type, whole numbers: cell_tag) are read. */
 #include "io/mesh_reader.h"
 
 #include <math.h>
@@ -23,8 +24,9 @@ typedef struct {
   const char *p;
   parts P;
   int have_points, have_cells, have_types;
-  int have_node_tags;
+  int have_node_tags, have_material;
   rawarr node_tags; /* the point field surface_tag */
+  rawarr material;  /* the cell field material */
   mx_mesh_data *out;
 } legacy;
 
@@ -333,6 +335,28 @@ static int leg_node_tags(legacy *L, const char *at, size_t n, vtype t) {
   return leg_array(L, n, t, &L->node_tags, "surface_tag");
 }
 
+/* The values of material: n numbers of type t with ncomp components for
+ * the cells. */
+static int leg_material(legacy *L, const char *at, size_t n, size_t ncomp,
+                        vtype t) {
+  if (L->have_material) return mx_rd_fail(L->r, at, "material given twice");
+  if (ncomp != 1)
+    return mx_rd_fail(L->r, at, "material: %zu components, expected 1 (one label per cell)",
+                      ncomp);
+  if (L->have_cells && n != L->P.ncells)
+    return mx_rd_fail(L->r, at, "material: %zu values for %zu cells", n, L->P.ncells);
+  L->have_material = 1;
+  return leg_array(L, n, t, &L->material, "material");
+}
+
+static int is_material(int point, const char *name, size_t nl) {
+  return !point && tok_eq(name, nl, "material");
+}
+
+static int bad_material_type(legacy *L, const char *ty, size_t yl) {
+  return mx_rd_fail(L->r, ty, "material: type '%.*s' is not a number type", shown(yl), ty);
+}
+
 /* Whether the attribute `name` of type t with ncomp components is the
  * point field surface_tag. */
 static int is_surface_tag(int point, const char *name, size_t nl, vtype t,
@@ -343,9 +367,9 @@ static int is_surface_tag(int point, const char *name, size_t nl, vtype t,
 
 /* The attribute sections from the keyword t on (CELL_DATA n or POINT_DATA
  * n, then SCALARS, VECTORS, NORMALS, FIELD, METADATA): skipped but for
- * surface_tag. Any other keyword, or a malformed header, ends them
- * silently (they used to be ignored whole); surface_tag itself must be
- * well formed. */
+ * surface_tag and material. Any other keyword, or a malformed header, ends
+ * them silently (they used to be ignored whole); surface_tag and material
+ * themselves must be well formed. */
 static int leg_attributes(legacy *L, const char *t, size_t tl) {
   int point = 0;
   size_t count = 0;
@@ -358,6 +382,7 @@ static int leg_attributes(legacy *L, const char *t, size_t tl) {
       const char *name = leg_token(L, &nl);
       const char *ty = leg_token(L, &yl);
       const vtype vt = legacy_type(ty, yl);
+      if (vt == T_NONE && is_material(point, name, nl)) return bad_material_type(L, ty, yl);
       if (vt == T_NONE) return MX_OK;
       const char *save = L->p, *q = L->p; /* a count on the same line */
       while (q < L->r->end && (*q == ' ' || *q == '\t')) q++;
@@ -374,6 +399,8 @@ static int leg_attributes(legacy *L, const char *t, size_t tl) {
         L->p = save;
       if (is_surface_tag(point, name, nl, vt, ncomp)) {
         MX_CHECK(leg_node_tags(L, name, count, vt));
+      } else if (is_material(point, name, nl)) {
+        MX_CHECK(leg_material(L, name, count, ncomp, vt));
       } else if (count > SIZE_MAX / 16 / ncomp ||
                  !leg_skip_values(L, count * ncomp, vt)) {
         return MX_OK;
@@ -397,9 +424,12 @@ static int leg_attributes(legacy *L, const char *t, size_t tl) {
         if (!leg_count_q(L, &nc) || !leg_count_q(L, &nt)) return MX_OK;
         const char *ty = leg_token(L, &yl);
         const vtype vt = legacy_type(ty, yl);
+        if (vt == T_NONE && is_material(point, name, nl)) return bad_material_type(L, ty, yl);
         if (vt == T_NONE) return MX_OK;
         if (is_surface_tag(point, name, nl, vt, nc)) {
           MX_CHECK(leg_node_tags(L, name, nt, vt));
+        } else if (is_material(point, name, nl)) {
+          MX_CHECK(leg_material(L, name, nt, nc, vt));
         } else if ((nt && nc > SIZE_MAX / 16 / nt) ||
                    !leg_skip_values(L, nc * nt, vt)) {
           return MX_OK;
@@ -485,5 +515,6 @@ int mx_rd_vtk_legacy(rd *r, mx_mesh_data *out) {
   if (!L.have_cells) return mx_rd_fail(r, NULL, "no CELLS section");
   if (!L.have_types) return mx_rd_fail(r, NULL, "no CELL_TYPES section");
   MX_CHECK(mx_rd_assemble(r, &L.P, out));
+  if (L.have_material) MX_CHECK(mx_rd_cell_tags(r, &L.material, out));
   return L.have_node_tags ? mx_rd_node_tags(r, &L.node_tags, out) : MX_OK;
 }

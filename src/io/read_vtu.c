@@ -1,8 +1,9 @@
 /* mixoct: reading VTK XML unstructured grids, .vtu (see read_mesh.h): the
  * points, the cells as offsets + connectivity and the cell types, ASCII or
  * appended raw, cut into parts that io/vtk_cells.c assembles; the point
- * fields surface_tag and (in a piece of a .pvtu) GlobalNodeId. A .pvtu
- * master goes to read_pvtu.c. */
+ * fields surface_tag and (in a piece of a .pvtu) GlobalNodeId, and the cell
+ * field material (cell_tag: one component, one value per cell, of any type,
+ * whole numbers). A .pvtu master goes to read_pvtu.c. */
 #include "io/mesh_reader.h"
 
 #include <math.h>
@@ -163,7 +164,7 @@ int mx_rd_vtu(rd *r, mx_mesh_data *out) {
   const char *p = r->buf, *end = r->end;
   int seen = 0, pieces = 0, in_points = 0, in_cells = 0, in_pdata = 0, in_cdata = 0;
   vtu_layout lay = {0, 4, NULL};
-  xarr pts = {0}, con = {0}, offs = {0}, typ = {0}, ntag = {0}, gidx = {0};
+  xarr pts = {0}, con = {0}, offs = {0}, typ = {0}, ntag = {0}, gidx = {0}, mat = {0};
   uint64_t npts = 0, ncells = 0;
   const char *piece_tag = NULL;
   for (;;) {
@@ -229,6 +230,9 @@ int mx_rd_vtu(rd *r, mx_mesh_data *out) {
         if (ntag.present)
           return mx_rd_fail(r, t.start, "surface_tag given twice");
         x = &ntag;
+      } else if (in_cdata && mx_rd_attr_eq(&t, "Name", "material")) {
+        if (mat.present) return mx_rd_fail(r, t.start, "material given twice");
+        x = &mat;
       } else if (in_points && !pts.present)
         x = &pts;
       else if (in_cells && mx_rd_attr_eq(&t, "Name", "connectivity"))
@@ -293,11 +297,18 @@ int mx_rd_vtu(rd *r, mx_mesh_data *out) {
     }
     MX_CHECK(resolve(r, &con, &lay, want, &P.cn, "connectivity"));
   }
-  rawarr tags;
+  rawarr tags, labels;
   const int with_tags = ntag.present && !is_float(ntag.t) && ntag.ncomp == 1;
   if (with_tags)
     MX_CHECK(resolve(r, &ntag, &lay, P.nnodes, &tags, "surface_tag"));
+  if (mat.present) {
+    if (mat.ncomp != 1)
+      return mx_rd_fail(r, mat.tag, "material: %llu components, expected 1 (one label per cell)",
+                        (unsigned long long)mat.ncomp);
+    MX_CHECK(resolve(r, &mat, &lay, P.ncells, &labels, "material"));
+  }
   MX_CHECK(mx_rd_assemble(r, &P, out));
+  if (mat.present) MX_CHECK(mx_rd_cell_tags(r, &labels, out));
   if (gidx.present) MX_CHECK(piece_ids(r, &gidx, &lay, P.nnodes));
   return with_tags ? mx_rd_node_tags(r, &tags, out) : MX_OK;
 }

@@ -1,7 +1,8 @@
 /* The assembly step of the VTK readers (declared in io/vtk_cells.h): points,
  * cell types and connectivity (a count-prefixed list, or offsets +
  * connectivity) converted and validated in parallel; the triangles and
- * quadrilaterals of a planar read turned into faces; surface_tag. */
+ * quadrilaterals of a planar read turned into faces; surface_tag and
+ * material. */
 #include "io/vtk_cells.h"
 
 #include <math.h>
@@ -235,6 +236,35 @@ int mx_rd_node_tags(rd *r, const rawarr *a, mx_mesh_data *out) {
                         "surface_tag: value %zu is out of range (32-bit integers)",
                         i);
     out->node_tag[i] = (int32_t)v;
+  }
+  return MX_OK;
+}
+
+/* The cell field material from its raw values (one per cell). */
+int mx_rd_cell_tags(rd *r, const rawarr *a, mx_mesh_data *out) {
+  const size_t n = out->ncells;
+  if (n == 0) return MX_OK; /* no cells (or, in a planar read, faces) */
+  if (a->n != n) /* the readers check it first */
+    return mx_rd_fail(r, NULL, "material: %zu values for %zu cells", a->n, n);
+  out->cell_tag = mx_alloc((n + 1) * sizeof *out->cell_tag);
+  if (!out->cell_tag) return MX_ENOMEM;
+  for (size_t i = 0; i < n; i++) {
+    int64_t v;
+    if (is_float(a->t)) {
+      const double d = raw_double(a, i);
+      if (!(d >= INT32_MIN && d <= INT32_MAX && d == floor(d)))
+        return mx_rd_fail(r, mx_rd_arr_at(r, a, i),
+                          "material: value %zu (%g) is not a whole number in the range of "
+                          "32-bit integers",
+                          i, d);
+      v = (int64_t)d;
+    } else {
+      v = raw_int(a, i);
+      if (v < INT32_MIN || v > INT32_MAX || (a->t == T_U64 && v < 0))
+        return mx_rd_fail(r, mx_rd_arr_at(r, a, i),
+                          "material: value %zu is out of range (32-bit integers)", i);
+    }
+    out->cell_tag[i] = (int32_t)v;
   }
   return MX_OK;
 }
