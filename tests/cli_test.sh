@@ -341,17 +341,30 @@ json_ok "$T/ph.json" "d['phases']['restart'] > 0 and d['phases']['write'] > 0" "
 # physical volumes, and the files pass the checker; --p4est and restart
 # files refuse them (exit 2).
 expect_exit 0 "--materials at the full stage" "$MIXOCT" --demo -s 3 --materials -o "$T/matf.msh" --quiet
-has "$T/matf.msh" '"material 1"' "the full stage's .msh names material 1"
+has "$T/matf.msh" '3 1 "demo"' "the full stage's .msh names material 1 after its input"
 expect_exit 0 "check of the full stage's materials" "$MIXOCT" check "$T/matf.msh"
 expect_exit 2 "--materials with --p4est" "$MIXOCT" --demo -s 3 --materials --p4est
 expect_exit 2 "--materials with --restart" "$MIXOCT" --demo -s 3 --materials -o "$T/matr.vtu" --restart "$T/matr.oct"
 expect_exit 0 "--materials --stage transition" "$MIXOCT" --demo -s 3 --materials --stage transition \
   -o "$T/mat.vtu" -o "$T/mat.msh" --quiet
 has "$T/mat.vtu" 'Name="material"' "the VTU has the material field"
-has "$T/mat.msh" '"material 1"' "the .msh names material 1"
+has "$T/mat.msh" '3 1 "demo"' "the .msh names material 1 after its input"
 has "$T/mat.msh" '"outside the inputs"' "the .msh names the elements outside the input"
 expect_exit 0 "check of the materials' .msh" "$MIXOCT" check "$T/mat.msh"
 expect_exit 0 "check of the materials' .vtu" "$MIXOCT" check "$T/mat.vtu"
+
+# Two materials in one file (tests/make_surfaces.py's shell.off: a sphere of
+# radius 1 with one of radius 0.5 inside, given inward): the file has
+# shells at two depths, so the materials keep their numbers as names; the
+# interface is a physical surface; mixoct check reads the labels back, takes
+# the tagged interface faces for interfaces (no defect) and finds the inner
+# ball's volume within the staircase's error (10% at -s 4) of 4/3 pi 0.5^3.
+python3 "$HERE/make_surfaces.py" "$T" >/dev/null 2>&1
+expect_exit 0 "--materials on a hollow ball" "$MIXOCT" -i "$T/shell.off" -s 4 --materials -o "$T/sh.msh" --quiet
+has "$T/sh.msh" '3 2 "material 2"' "the inner ball is material 2"
+has "$T/sh.msh" '"interface material 1 | material 2"' "the interface is a physical surface"
+"$MIXOCT" check "$T/sh.msh" --json >"$T/sh.json" 2>/dev/null
+json_ok "$T/sh.json" "d['defects'] == 0 and [m['label'] for m in d['materials']] == [1, 2] and d['interface_faces'] == d['tagged_interface'] > 0 and abs(d['materials'][1]['volume'] - 4.1887902 / 8) < 0.1 * 4.1887902 / 8" "check: two materials, the interface tagged, the inner volume"
 
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]

@@ -11,6 +11,8 @@
 #include "mesher/materials.h"
 
 #include <limits.h>
+#include <stdio.h>
+#include <string.h>
 
 #include "base/common.h"
 #include "kernels/boundary.h"
@@ -129,5 +131,32 @@ int mx_label_materials(mx_mesher *m) {
                         "the interfaces follow element faces, a staircase at the octree's "
                         "resolution, not yet the input surfaces; finer levels (-s) shrink it",
                across);
+  return MX_OK;
+}
+
+int mx_material_name(const mx_mesher *m, int d, char *buf, size_t n) {
+  snprintf(buf, n, "material %d", d);
+  const mx_surface_index *S = &m->SI;
+  if (!m->have_index || d < 1 || !S->shell_depth) return MX_OK;
+  /* the input files with a shell at depth d - 1; each file's depths */
+  int file = -1, several = 0;
+  for (uint32_t i = 0; i < S->nt && !several; i++) {
+    if (S->shell_depth[S->shell_of[i]] != (uint32_t)(d - 1)) continue;
+    const int f = m->soup.shell[S->tri_id[i]];
+    if (file >= 0 && f != file) several = 1;
+    file = f;
+  }
+  if (file < 0 || several || file >= m->ndomain) return MX_OK;
+  for (uint32_t i = 0; i < S->nt; i++) /* that file's shells all at depth d - 1 */
+    if (m->soup.shell[S->tri_id[i]] == file &&
+        S->shell_depth[S->shell_of[i]] != (uint32_t)(d - 1))
+      return MX_OK;
+  const char *path = m->domain_name[file];
+  const char *slash = strrchr(path, '/');
+  const char *base = slash ? slash + 1 : path;
+  while (*base == '-') base++; /* "--demo" */
+  const char *dot = strrchr(base, '.');
+  const int len = dot && dot > base ? (int)(dot - base) : (int)strlen(base);
+  snprintf(buf, n, "%.*s", len, base);
   return MX_OK;
 }

@@ -15,4 +15,10 @@ int mx_materials_allowed(const mx_mesher *m, const char *what);
  * built outward) and m->nmaterials (the deepest). MX_ENOMEM. */
 int mx_label_materials(mx_mesher *m);
 
+/* The name of material d (its region at nesting depth d): the input file
+ * whose shells bound it from outside (all of them at depth d - 1, and no
+ * other file's there), without its folder and extension; "material d"
+ * otherwise. */
+int mx_material_name(const mx_mesher *m, int d, char *buf, size_t n);
+
 #endif

@@ -9,6 +9,7 @@
 
 #include "kernels/boundary.h"
 #include "kernels/boundary_tags.h"
+#include "mesher/materials.h"
 #include "mesher/mesher_impl.h"
 #include "mesher/pipeline.h"
 
@@ -101,29 +102,47 @@ static int make_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T) {
   return MX_OK;
 }
 
-/* The faces of the list with pair 0 (boundary faces) kept, in order; the
- * interface faces counted in *ninterface. */
-static void boundary_only(size_t *n, int k, uint32_t *nodes, uint64_t *src, int32_t *pair,
-                          size_t *ninterface) {
-  size_t w = 0;
-  for (size_t i = 0; i < *n; i++) {
-    if (pair[i]) continue;
-    memmove(nodes + (size_t)k * w, nodes + (size_t)k * i, (size_t)k * sizeof *nodes);
-    src[w] = src[i];
-    pair[w++] = 0;
+/* The n faces of k nodes each (nodes, src, tag, pair arrays) ordered by
+ * tag, in their order within a tag (a counting sort), as the writers want
+ * them (kernels/boundary_tags.h). MX_ENOMEM. */
+static int faces_by_tag(size_t n, int k, uint32_t *nodes, uint64_t *src, int32_t *tag,
+                        int32_t *pair, int ntags) {
+  size_t *at = mx_calloc(((size_t)ntags + 2) * sizeof *at);
+  uint32_t *nn = mx_alloc(((size_t)k * n + 1) * sizeof *nn);
+  uint64_t *ns = mx_alloc((n + 1) * sizeof *ns);
+  int32_t *nt = mx_alloc((n + 1) * sizeof *nt), *np = mx_alloc((n + 1) * sizeof *np);
+  const int st = at && nn && ns && nt && np ? MX_OK : MX_ENOMEM;
+  if (!st) {
+    for (size_t i = 0; i < n; i++) at[tag[i] + 1]++;
+    for (int t = 1; t <= ntags + 1; t++) at[t] += at[t - 1];
+    for (size_t i = 0; i < n; i++) {
+      const size_t j = at[tag[i]]++;
+      memcpy(nn + (size_t)k * j, nodes + (size_t)k * i, (size_t)k * sizeof *nn);
+      ns[j] = src[i];
+      nt[j] = tag[i];
+      np[j] = pair[i];
+    }
+    memcpy(nodes, nn, (size_t)k * n * sizeof *nn);
+    memcpy(src, ns, n * sizeof *ns);
+    memcpy(tag, nt, n * sizeof *nt);
+    memcpy(pair, np, n * sizeof *np);
   }
-  *ninterface += *n - w;
-  *n = w;
+  mx_free(at);
+  mx_free(nn);
+  mx_free(ns);
+  mx_free(nt);
+  mx_free(np);
+  return st;
 }
 
 /* With several materials (issue 26; the transition stage's mesh, labelled
  * by mesher/materials.c): each material a body, numbered by its depth
  * (material 0, outside every shell, the body after the deepest, "outside
- * the inputs"), and the mesh's boundary faces tagged 1 ("boundary"). The
- * interfaces between materials are found (io/boundary_faces.h) but not
- * yet written as groups of faces: `mixoct check` reads no element labels
- * yet, so it would take them for tagged faces inside the mesh. More than
- * 64 materials: no groups (the material field stays). */
+ * the inputs"); the faces tagged 1 ("boundary") on the mesh's boundary and
+ * one tag per pair of materials ("interface A-B") on the faces between
+ * them, each such face written once, oriented out of the lower material
+ * (io/boundary_faces.h). More than 64 materials or 63 pairs: no groups
+ * (the material field stays). */
 static int make_material_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T) {
   memset(T, 0, sizeof *T);
   const mx_mesh *M = &m->M;
@@ -140,30 +159,64 @@ static int make_material_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T
   }
   mx_boundary_faces *bf = &T->bf;
   MX_CHECK(mx_interface_faces_extract(v, T->cell_body, bf));
-  size_t ninterface = 0;
-  boundary_only(&bf->ntri, 3, bf->tri, bf->tri_src, bf->tri_pair, &ninterface);
-  boundary_only(&bf->nquad, 4, bf->quad, bf->quad_src, bf->quad_pair, &ninterface);
   bf->tri_tag = mx_alloc((bf->ntri + 1) * sizeof *bf->tri_tag);
   bf->quad_tag = mx_alloc((bf->nquad + 1) * sizeof *bf->quad_tag);
   if (!bf->tri_tag || !bf->quad_tag) return MX_ENOMEM;
-  for (size_t i = 0; i < bf->ntri; i++) bf->tri_tag[i] = 1;
-  for (size_t i = 0; i < bf->nquad; i++) bf->quad_tag[i] = 1;
+  /* the pairs met, in order of first face: tags 2, 3, ... */
+  int32_t pa[63], pb[63];
+  int npairs = 0, over = 0;
+  for (int q = 0; q < 2; q++) {
+    const size_t n = q ? bf->nquad : bf->ntri;
+    const uint64_t *src = q ? bf->quad_src : bf->tri_src;
+    const int32_t *pair = q ? bf->quad_pair : bf->tri_pair;
+    int32_t *tag = q ? bf->quad_tag : bf->tri_tag;
+    for (size_t i = 0; i < n; i++) {
+      if (!pair[i]) {
+        tag[i] = 1;
+        continue;
+      }
+      const int32_t a = T->cell_body[src[i] >> 3], b = pair[i];
+      int k = 0;
+      while (k < npairs && !(pa[k] == a && pb[k] == b)) k++;
+      if (k == npairs && npairs < 63) {
+        pa[k] = a;
+        pb[k] = b;
+        npairs++;
+      } else if (k == npairs) {
+        over = 1;
+        k = 62;
+      }
+      tag[i] = 2 + k;
+    }
+  }
+  const int ntags = 1 + npairs;
+  MX_CHECK(faces_by_tag(bf->ntri, 3, bf->tri, bf->tri_src, bf->tri_tag, bf->tri_pair, ntags));
+  MX_CHECK(faces_by_tag(bf->nquad, 4, bf->quad, bf->quad_src, bf->quad_tag, bf->quad_pair,
+                        ntags));
   mx_boundary_node_tags(bf, M->nnodes, T->node_tag);
   const int nb = nmat + outside;
   int k = 0;
+  char name[256], na[120], nb2[120];
   for (int b = 1; b <= nb && b <= 64; b++) {
-    char name[48];
     if (b > nmat)
       snprintf(name, sizeof name, "outside the inputs");
     else
-      snprintf(name, sizeof name, "material %d", b);
+      MX_CHECK(mx_material_name(m, b, name, sizeof name));
     T->body_names[b - 1] = T->names[k++] = tag_name(name, "");
   }
   T->tag_names[0] = T->names[k++] = tag_name("boundary", "");
+  for (int p = 0; p < npairs; p++) {
+    if (pa[p] > nmat) snprintf(na, sizeof na, "outside");
+    else MX_CHECK(mx_material_name(m, pa[p], na, sizeof na));
+    if (pb[p] > nmat) snprintf(nb2, sizeof nb2, "outside");
+    else MX_CHECK(mx_material_name(m, pb[p], nb2, sizeof nb2));
+    snprintf(name, sizeof name, "interface %s | %s", na, nb2);
+    T->tag_names[1 + p] = T->names[k++] = tag_name(name, "");
+  }
   for (int i = 0; i < k; i++)
     if (!T->names[i]) return MX_ENOMEM;
-  T->nbodies = nb <= 64 ? nb : 0;
-  T->ntags = 1;
+  T->nbodies = nb <= 64 && !over ? nb : 0;
+  T->ntags = ntags;
   return MX_OK;
 }
 
