@@ -165,6 +165,15 @@ int mx_mesher_add_surface_arrays(mx_mesher *m, const char *name, size_t nv,
 int mx_mesher_add_demo_surface(mx_mesher *m);
 /* -r: octants meeting or inside a region surface go to `level`. */
 int mx_mesher_add_region_surface(mx_mesher *m, const char *path, int level);
+/* With params.materials: the number (1 .. 65535) and name (NULL: the
+ * input file's) of the material inside domain input `input` (0 for the
+ * first surface added, in order): the region its shells bound from
+ * outside, which must all nest at one depth. Written as the Gmsh physical
+ * group, the Medit reference and the VTK/VTU field material, and given by
+ * mx_mesh_arrays.material. MX_EINPUT for a bad input index or number;
+ * two materials given one number, or an input whose shells nest at
+ * several depths, are refused when meshing. */
+int mx_mesher_set_material(mx_mesher *m, int input, int number, const char *name);
 /* -b: a box [lo, hi] whose octants go to `level` (also after meshing: see
  * mx_mesher_refine). */
 int mx_mesher_add_box(mx_mesher *m, const double lo[3], const double hi[3],

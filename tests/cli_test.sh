@@ -366,5 +366,21 @@ has "$T/sh.msh" '"interface material 1 | material 2"' "the interface is a physic
 "$MIXOCT" check "$T/sh.msh" --json >"$T/sh.json" 2>/dev/null
 json_ok "$T/sh.json" "d['defects'] == 0 and [m['label'] for m in d['materials']] == [1, 2] and d['interface_faces'] == d['tagged_interface'] > 0 and abs(d['materials'][1]['volume'] - 4.1887902 / 8) < 0.1 * 4.1887902 / 8" "check: two materials, the interface tagged, the inner volume"
 
+# Materials numbered and named by the user (--material ID[:NAME] after
+# -i): make_surfaces.py's sphere numbered 5 and named grey, as the Gmsh
+# physical volume and the VTU field, which mixoct check reads back; a file
+# whose shells nest at two depths (shell.off) and bad specs are refused
+# (exit 2).
+"$MIXOCT" -i "$T/shell.off" --material 5:grey -s 4 --materials -o "$T/num.msh" -o "$T/num.mesh" -o "$T/num.vtu" --quiet 2>/dev/null
+[ $? -eq 2 ] && ok "--material on a file with shells at two depths: exit 2" || bad "--material on nested shells of one file"
+"$MIXOCT" -i "$T/sphere.off" --material 5:grey -s 4 --materials -o "$T/num.msh" -o "$T/num.mesh" -o "$T/num.vtu" --quiet
+has "$T/num.msh" '3 5 "grey"' "the .msh's physical volume 5 named grey"
+"$MIXOCT" check "$T/num.vtu" --json >"$T/num.json" 2>/dev/null
+json_ok "$T/num.json" "[m['label'] for m in d['materials']] == [5] or d.get('materials') is None" "check of the .vtu: label 5 (or one label: none listed)"
+grep -aq 'Name="material"' "$T/num.vtu" && ok "the VTU carries the material field" || bad "no material field"
+expect_exit 2 "--material without --materials" "$MIXOCT" -i "$T/sphere.off" --material 5 -s 3
+expect_exit 2 "--material before any -i" "$MIXOCT" --material 5 -i "$T/sphere.off" -s 3 --materials
+expect_exit 2 "--material 0" "$MIXOCT" -i "$T/sphere.off" --material 0 -s 3 --materials
+
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]

@@ -40,6 +40,8 @@ typedef struct {
   int keep_invalid;        /* write a mesh with invalid elements (exit 5) */
   int repair_input;        /* --repair-input: winding-number domain */
   int materials;           /* --materials: nested shells are materials */
+  int material_id[MX_MAX_INPUTS];            /* --material ID[:NAME] after -i */
+  const char *material_name[MX_MAX_INPUTS]; /* (0 / NULL: not given) */
 } mx_options;
 
 /* Parses argv; on --help/--version prints and sets *exit_now = 1. Returns

@@ -74,7 +74,11 @@ static int setup(const mx_options *o, mx_mesher **out) {
 /* The options' inputs and requests, shared with the --p4est front. */
 int mx_add_inputs(const mx_options *o, mx_mesher *m) {
   if (o->demo) MX_CHECK(mx_mesher_add_demo_surface(m));
-  for (int i = 0; i < o->ninputs; i++) MX_CHECK(mx_mesher_add_surface(m, o->inputs[i]));
+  for (int i = 0; i < o->ninputs; i++) {
+    MX_CHECK(mx_mesher_add_surface(m, o->inputs[i]));
+    if (o->material_id[i])
+      MX_CHECK(mx_mesher_set_material(m, i, o->material_id[i], o->material_name[i]));
+  }
   for (int r = 0; r < o->nregion_surf; r++)
     MX_CHECK(mx_mesher_add_region_surface(m, o->region_surf[r], o->rlevel[r]));
   if (o->regions_file) MX_CHECK(mx_mesher_read_boxes(m, o->regions_file));

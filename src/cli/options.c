@@ -44,6 +44,9 @@ static const char *usage_text =
     "                              (a staircase at the octree's resolution, counted\n"
     "                              in a warning), not yet the input surfaces; no\n"
     "                              restart file, no --p4est\n"
+    "      --material ID[:NAME]    after -i FILE: the number (1..65535) and name\n"
+    "                              of the material inside FILE (default: its\n"
+    "                              nesting depth, named after FILE)\n"
     "\n"
     "Refinement requests (an octant takes the largest level asked; levels 0 to\n"
     "15, each one halves the octant size):\n"
@@ -367,6 +370,23 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       o->repair_input = 1;
     } else if (strcmp(a, "--materials") == 0) {
       o->materials = 1;
+    } else if (strcmp(a, "--material") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      const char *spec = argv[++i];
+      char *end = NULL;
+      errno = 0;
+      const long id = strtol(spec, &end, 10);
+      if (!o->ninputs) {
+        mx_error(NULL, 0, "--material %s: give it after the input it names (-i FILE "
+                          "--material ID[:NAME])", spec);
+        return MX_EINPUT;
+      }
+      if (end == spec || errno || id < 1 || id > 65535 || (*end && *end != ':')) {
+        mx_error(NULL, 0, "--material %s: expected ID[:NAME], ID from 1 to 65535", spec);
+        return MX_EINPUT;
+      }
+      o->material_id[o->ninputs - 1] = (int)id;
+      o->material_name[o->ninputs - 1] = *end == ':' && end[1] ? end + 1 : NULL;
     } else if (strcmp(a, "--json") == 0) {
       o->json = 1;
     } else if (strcmp(a, "--quiet") == 0) {
@@ -411,6 +431,11 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
     mx_error(NULL, 0, "--demo and -i exclude each other");
     return MX_EINPUT;
   }
+  for (int k = 0; k < o->ninputs && !o->materials; k++)
+    if (o->material_id[k]) {
+      mx_error(NULL, 0, "--material: only with --materials (several materials)");
+      return MX_EINPUT;
+    }
   if (o->materials && (o->restart_in || o->restart_out)) {
     mx_error(NULL, 0, "--materials: restart files (-c, --restart) do not keep materials in "
                       "this version");

@@ -102,7 +102,10 @@ typedef struct {
 
 /* References: a cell's body (1 without bodies), a face's tag (1 without). */
 static inline int32_t cell_ref(const medit_ctx *ctx, uint32_t c) {
-  return ctx->m->cell_body ? ctx->m->cell_body[c] : ELEMENT_REF;
+  const mx_mesh_view *m = ctx->m;
+  if (!m->cell_body) return ELEMENT_REF;
+  const int32_t b = m->cell_body[c];
+  return m->body_physical && b >= 1 && b <= m->nbodies ? m->body_physical[b - 1] : b;
 }
 
 static inline int32_t face_ref(const medit_ctx *ctx, size_t i) {

@@ -409,7 +409,8 @@ static int write_header(mx_afile *f, const mx_mesh_view *m, const msh_layout *L,
     if (L->ntri[t] + L->nquad[t] > 0)
       MX_CHECK(mx_afile_printf(f, "2 %d \"%s\"\n", t, m->tag_names[t - 1]));
   for (int b = 1; b <= L->nbodies; b++)
-    MX_CHECK(mx_afile_printf(f, "3 %d \"%s\"\n", b, m->body_names[b - 1]));
+    MX_CHECK(mx_afile_printf(f, "3 %d \"%s\"\n", m->body_physical ? m->body_physical[b - 1] : b,
+                             m->body_names[b - 1]));
   return mx_afile_printf(f, "$EndPhysicalNames\n");
 }
 
@@ -456,7 +457,8 @@ static int write_entities(mx_afile *f, const mx_mesh_view *m, const msh_layout *
       if (L->ntri[t] + L->nquad[t] > 0) MX_CHECK(write_entity(f, t, L->tbox + 6 * t, t, binary));
     for (int b = 1; b <= L->nbodies; b++) {
       const double *bb = L->bbox + 6 * b;
-      MX_CHECK(write_entity(f, b, bb[0] <= bb[3] ? bb : box, b, binary));
+      MX_CHECK(write_entity(f, b, bb[0] <= bb[3] ? bb : box,
+                            m->body_physical ? m->body_physical[b - 1] : b, binary));
     }
   }
   if (binary) MX_CHECK(mx_afile_write(f, "\n", 1));

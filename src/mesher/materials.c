@@ -16,6 +16,7 @@
 
 #include "base/common.h"
 #include "kernels/boundary.h"
+#include "mesher/mesher_impl.h"
 #include "mesher/pipeline.h"
 #include "soa/mesh.h"
 
@@ -33,6 +34,8 @@ int mx_materials_allowed(const mx_mesher *m, const char *what) {
   }
   return MX_OK;
 }
+
+static int material_numbers(mx_mesher *m, int deepest);
 
 /* The region of each element and the elements across an interface. An
  * element of a leaf that meets no triangle lies in one region, its leaf's
@@ -53,7 +56,8 @@ int mx_label_materials(mx_mesher *m) {
   const mx_surface_index *S = &m->SI;
   const size_t nc = M->ncells, nn = M->nnodes;
   if (m->mesh_stage == MX_STAGE_FULL && !mx_surface_index_nested(S)) {
-    for (size_t c = 0; c < nc; c++) M->material[c] = 1;
+    MX_CHECK(material_numbers(m, 1));
+    for (size_t c = 0; c < nc; c++) M->material[c] = (uint16_t)m->depth_material[1];
     m->nmaterials = 1;
     m->rec->S.nmaterials = 1;
     m->rec->S.materials_across = 0;
@@ -121,6 +125,10 @@ int mx_label_materials(mx_mesher *m) {
   mx_free(leaf_depth);
   mx_free(depth);
   mx_free(need);
+  MX_CHECK(material_numbers(m, deepest));
+  for (size_t c = 0; c < nc; c++) /* the numbers the user gave */
+    if (M->material[c] >= 1 && M->material[c] <= 64)
+      M->material[c] = (uint16_t)m->depth_material[M->material[c]];
   m->nmaterials = deepest;
   m->rec->S.nmaterials = deepest;
   m->rec->S.materials_across = across;
@@ -135,7 +143,11 @@ int mx_label_materials(mx_mesher *m) {
 }
 
 int mx_material_name(const mx_mesher *m, int d, char *buf, size_t n) {
-  snprintf(buf, n, "material %d", d);
+  if (d >= 1 && d <= 64 && m->depth_material_name[d]) {
+    snprintf(buf, n, "%s", m->depth_material_name[d]);
+    return MX_OK;
+  }
+  snprintf(buf, n, "material %d", d >= 1 && d <= 64 ? m->depth_material[d] : d);
   const mx_surface_index *S = &m->SI;
   if (!m->have_index || d < 1 || !S->shell_depth) return MX_OK;
   /* the input files with a shell at depth d - 1; each file's depths */
@@ -158,5 +170,73 @@ int mx_material_name(const mx_mesher *m, int d, char *buf, size_t n) {
   const char *dot = strrchr(base, '.');
   const int len = dot && dot > base ? (int)(dot - base) : (int)strlen(base);
   snprintf(buf, n, "%.*s", len, base);
+  return MX_OK;
+}
+
+int mx_mesher_set_material(mx_mesher *m, int input, int number, const char *name) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  int st = MX_OK;
+  if (input < 0 || input >= m->ndomain) {
+    mx_error(NULL, 0, "material: no input %d (%d surface(s) added)", input, m->ndomain);
+    st = MX_EINPUT;
+  } else if (number < 1 || number > 65535) {
+    mx_error(NULL, 0, "material: number %d for %s out of 1 .. 65535", number,
+             m->domain_name[input]);
+    st = MX_EINPUT;
+  }
+  char *copy = NULL;
+  if (!st && name && !(copy = mx_strdup(name))) st = MX_ENOMEM;
+  if (!st) {
+    mx_free(m->input_material_name[input]);
+    m->input_material_name[input] = copy;
+    m->input_material[input] = number;
+  }
+  return mx_call_end(m, &c, st);
+}
+
+/* The numbers and names of the materials by depth (m->depth_material*):
+ * the user's for the inputs given one, the depth otherwise. MX_EINPUT when
+ * an input's shells nest at several depths, two inputs at one depth are
+ * given different numbers, or two materials end with one number. */
+static int material_numbers(mx_mesher *m, int deepest) {
+  const mx_surface_index *S = &m->SI;
+  for (int d = 0; d <= 64; d++) {
+    m->depth_material[d] = d;
+    m->depth_material_name[d] = NULL;
+  }
+  for (int k = 0; k < m->ndomain && k < 64; k++) {
+    if (!m->input_material[k]) continue;
+    int depth = -1;
+    for (uint32_t i = 0; i < S->nt; i++) {
+      if (m->soup.shell[S->tri_id[i]] != k) continue;
+      const int e = (int)S->shell_depth[S->shell_of[i]];
+      if (depth >= 0 && e != depth) {
+        mx_error(m->domain_name[k], 0, "material %d: the shells of this input nest at "
+                                       "several depths (%d and %d): the material inside it is "
+                                       "not one region", m->input_material[k], depth, e);
+        return MX_EINPUT;
+      }
+      depth = e;
+    }
+    const int d = depth + 1;
+    if (d < 1 || d > 64) continue;
+    if (m->depth_material[d] != d && m->depth_material[d] != m->input_material[k]) {
+      mx_error(m->domain_name[k], 0, "material %d: this input bounds the same region depth as "
+                                     "another input given material %d (regions at one depth "
+                                     "are one material in this version)",
+               m->input_material[k], m->depth_material[d]);
+      return MX_EINPUT;
+    }
+    m->depth_material[d] = m->input_material[k];
+    if (m->input_material_name[k]) m->depth_material_name[d] = m->input_material_name[k];
+  }
+  for (int a = 1; a <= deepest && a <= 64; a++)
+    for (int b = a + 1; b <= deepest && b <= 64; b++)
+      if (m->depth_material[a] == m->depth_material[b]) {
+        mx_error(NULL, 0, "materials: the regions at depths %d and %d are both numbered %d; "
+                          "give each its own number", a, b, m->depth_material[a]);
+        return MX_EINPUT;
+      }
   return MX_OK;
 }

@@ -125,6 +125,7 @@ void mx_mesher_free(mx_mesher *m) {
   mx_trisoup_free(&m->domain);
   mx_trisoup_free(&m->soup);
   for (int i = 0; i < m->ndomain; i++) mx_free(m->domain_name[i]);
+  for (int i = 0; i < 64; i++) mx_free(m->input_material_name[i]);
   for (int r = 0; r < m->nregions; r++) {
     mx_trisoup_free(&m->region[r]);
     mx_free(m->region_name[r]);

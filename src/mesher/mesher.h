@@ -144,6 +144,14 @@ struct mx_mesher {
    * (about 90 B per leaf). */
   int release_edges;
   int nmaterials;           /* materials: the deepest nesting (M.material) */
+  /* materials as the user numbers and names them (mx_mesher_set_material):
+   * per domain input, the number (0: not given) and name of the material
+   * inside it; per depth 1..nmaterials, the number and name given it (the
+   * depth and no name by default), set when the elements are labelled */
+  int32_t input_material[64];
+  char *input_material_name[64];
+  int32_t depth_material[65];
+  const char *depth_material_name[65];
   /* hooks for the program's progress line (NULL: none) */
   mx_progress progress;     /* mx_mesher_set_progress */
 };

@@ -40,6 +40,7 @@ typedef struct {
   int nbodies, ntags;
   char *names[2 * 66];
   const char *tag_names[66], *body_names[66];
+  int32_t body_physical[66];
 } tags;
 
 static void tags_free(tags *T) {
@@ -151,12 +152,24 @@ static int make_material_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T
   T->cell_body = mx_alloc((M->ncells + 1) * sizeof *T->cell_body);
   T->node_tag = mx_alloc((M->nnodes + 1) * sizeof *T->node_tag);
   if (!T->material || !T->cell_body || !T->node_tag) return MX_ENOMEM;
+  /* a cell's body: its material's depth (materials hold the numbers the
+   * user gave, mesher/materials.c), the outside after the deepest */
   int outside = 0;
   for (size_t c = 0; c < M->ncells; c++) {
-    T->material[c] = M->material[c];
-    T->cell_body[c] = M->material[c] ? M->material[c] : nmat + 1;
-    outside |= M->material[c] == 0;
+    const int id = M->material[c];
+    int b = nmat + 1;
+    for (int d = 1; d <= nmat && d <= 64 && id; d++)
+      if (m->depth_material[d] == id) b = d;
+    T->material[c] = id;
+    T->cell_body[c] = b;
+    outside |= b == nmat + 1;
   }
+  int32_t top = 0;
+  for (int d = 1; d <= nmat && d <= 64; d++) {
+    T->body_physical[d - 1] = m->depth_material[d];
+    top = m->depth_material[d] > top ? m->depth_material[d] : top;
+  }
+  if (nmat < 65) T->body_physical[nmat] = top + 1; /* outside the inputs */
   mx_boundary_faces *bf = &T->bf;
   MX_CHECK(mx_interface_faces_extract(v, T->cell_body, bf));
   bf->tri_tag = mx_alloc((bf->ntri + 1) * sizeof *bf->tri_tag);
@@ -271,6 +284,7 @@ static int prepare(const mx_mesher *m, prepared *P) {
   P->v.cell_body = P->T.cell_body;
   P->v.nbodies = P->T.nbodies;
   P->v.body_names = P->T.body_names;
+  if (P->T.material) P->v.body_physical = P->T.body_physical;
   return MX_OK;
 }
 

@@ -117,6 +117,9 @@ typedef struct {
   const int32_t *cell_body;
   int nbodies;
   const char *const *body_names;
+  const int32_t *body_physical; /* the number body b is written with
+                                 * (body_physical[b - 1]: Gmsh physical
+                                 * group, Medit reference); NULL: b */
   /* The dimension: 3 (or 0, as in a plain view) a volume mesh as above; 2
    * a planar mesh (mx_view_is_2d): xyz holds x y per node (written with
    * z = 0), type MX_CELL_TRI / MX_CELL_QUAD, conn 4 per cell (a triangle's
