@@ -280,6 +280,42 @@ def patch_test(name, m, dirichlet, neumann):
     (ok if err < TOL else bad)(msg + ("" if err < TOL else ", limit %g" % TOL))
 
 
+def materials_case(mixoct, work, spheres):
+    """Several materials (issue 26): the sphere and the inner sphere with
+    --materials, numbered 3 and 8 (--material): GetFEM loads a region of
+    whole convexes per material (1000 + its number), which together are
+    every convex once, the interface as a face region (tag 2), and the
+    inner material's volume (GetFEM's convex_area) within the staircase's
+    error (15% at -s 4) of the inner sphere's."""
+    out = os.path.join(work, "materials.getfem")
+    cmd = [mixoct, "-i", os.path.join(work, "sphere.off"), "--material", "3:outer",
+           "-i", os.path.join(work, "inner.off"), "--material", "8:inner", "-s", "4",
+           "--materials", "-o", out, "--quiet"]
+    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    if p.returncode != 0:
+        bad("%s: exit %d\n%s" % (" ".join(cmd), p.returncode, p.stderr[-2000:]))
+        return
+    m = gf.Mesh("load", out)
+    regions = list(m.regions())
+    if 1003 not in regions or 1008 not in regions or 2 not in regions:
+        bad("materials: regions %s, wanted 1003, 1008 and the interface 2" % regions)
+        return
+    a, b = m.region(1003), m.region(1008)
+    whole = bool(np.all(a[1] == 65535)) and bool(np.all(b[1] == 65535))
+    cvs = np.sort(np.concatenate([a[0], b[0]]))
+    every = cvs.size == m.nbcvs() and bool(np.all(cvs == np.arange(m.nbcvs())))
+    (ok if whole and every else bad)(
+        "materials: regions 1003 (%d convexes) and 1008 (%d) whole convexes, every convex "
+        "once" % (a.shape[1], b.shape[1]))
+    vin = float(np.sum(m.convex_area(b[0])))
+    c, r = spheres["inner.off"]
+    exact = 4.0 / 3.0 * np.pi * r ** 3
+    (ok if abs(vin - exact) < 0.15 * exact else bad)(
+        "materials: inner material's volume %.4f, the inner sphere's %.4f" % (vin, exact))
+    nif = m.region(2).shape[1]
+    (ok if nif > 0 else bad)("materials: the interface region holds %d faces" % nif)
+
+
 def main():
     if len(sys.argv) < 3:
         print(__doc__)
@@ -316,6 +352,7 @@ def main():
                        spheres if name != "cortex" else None, boundary)
         if m is not None:
             patch_test(name, m, dirichlet, neumann)
+    materials_case(mixoct, work, spheres)
     print("getfem tags: %s" % ("all checks passed" if not fails else "%d check(s) failed" % fails))
     return 1 if fails else 0
 

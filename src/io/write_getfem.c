@@ -177,9 +177,40 @@ static int region_run(mx_afile *f, region_ctx *c, const uint64_t *src, const int
   return mx_afile_emit(f, e - b, 2 * MX_U64_CHARS + 2, fill_region, c);
 }
 
+/* The convexes of body b (in written order), a line each. */
+typedef struct {
+  const mx_mesh_view *m;
+  int32_t body;
+} body_ctx;
+
+static size_t fill_body(const void *vctx, size_t b, size_t e, char *out) {
+  const body_ctx *c = vctx;
+  size_t n = 0;
+  for (size_t k = b; k < e; k++) {
+    if (c->m->cell_body[mx_view_cell(c->m, k)] != c->body) continue;
+    n += mx_put_u64(out + n, k);
+    out[n++] = '\n';
+  }
+  return n;
+}
+
+/* Several materials (view.body_physical set): a region of convexes per
+ * body, numbered MX_GETFEM_MATERIAL_REGION + its physical number. */
+static int write_material_regions(mx_afile *f, const mx_mesh_view *m) {
+  if (!m->body_physical || !m->cell_body || m->nbodies <= 0) return MX_OK;
+  for (int32_t b = 1; b <= m->nbodies; b++) {
+    const int r = MX_GETFEM_MATERIAL_REGION + m->body_physical[b - 1];
+    const body_ctx c = {m, b};
+    MX_CHECK(mx_afile_printf(f, "BEGIN REGION %d\n", r));
+    MX_CHECK(mx_afile_emit(f, m->ncells, MX_U64_CHARS + 1, fill_body, &c));
+    MX_CHECK(mx_afile_printf(f, "END REGION %d\n", r));
+  }
+  return MX_OK;
+}
+
 static int write_regions(mx_afile *f, const mx_mesh_view *m) {
   const struct mx_boundary_faces *bf = m->bfaces;
-  if (!bf || !bf->tri_tag || !bf->quad_tag || m->ntags <= 0) return MX_OK;
+  if (!bf || !bf->tri_tag || !bf->quad_tag || m->ntags <= 0) return write_material_regions(f, m);
   uint32_t *cv = mx_alloc((m->ncells + 1) * sizeof *cv);
   if (!cv) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
@@ -193,7 +224,7 @@ static int write_regions(mx_afile *f, const mx_mesh_view *m) {
     if (!st) st = mx_afile_printf(f, "END REGION %d\n", t);
   }
   mx_free(cv);
-  return st;
+  return st ? st : write_material_regions(f, m);
 }
 
 /* ---- file ----------------------------------------------------------------- */
@@ -201,9 +232,16 @@ static int write_regions(mx_afile *f, const mx_mesh_view *m) {
 static int write_body(mx_afile *f, const mx_mesh_view *m) {
   MX_CHECK(mx_afile_printf(f,
                            "%% GETFEM MESH FILE\n%% GETFEM VERSION 5.4\n"
-                           "%% mixoct: %zu points, %zu convexes\n\n"
-                           "BEGIN POINTS LIST\n\n",
+                           "%% mixoct: %zu points, %zu convexes\n",
                            m->nnodes, m->ncells));
+  /* several materials: what the regions hold, as comments */
+  for (int t = 1; m->body_physical && m->tag_names && t <= m->ntags; t++)
+    MX_CHECK(mx_afile_printf(f, "%% region %d: faces \"%s\"\n", t, m->tag_names[t - 1]));
+  for (int b = 1; m->body_physical && m->body_names && b <= m->nbodies; b++)
+    MX_CHECK(mx_afile_printf(f, "%% region %d: convexes of material %d \"%s\"\n",
+                             MX_GETFEM_MATERIAL_REGION + m->body_physical[b - 1],
+                             m->body_physical[b - 1], m->body_names[b - 1]));
+  MX_CHECK(mx_afile_printf(f, "\nBEGIN POINTS LIST\n\n"));
   MX_CHECK(mx_afile_emit(f, m->nnodes, POINT_LINE_MAX, fill_points, m));
   MX_CHECK(mx_afile_printf(f, "\nEND POINTS LIST\n\n\n\n"
                               "BEGIN MESH STRUCTURE DESCRIPTION\n\n"));

@@ -20,6 +20,10 @@ int mx_write_medit(const char *path, const mx_mesh_view *m, int binary);
 /* The published mesher's GetFEM and M3D files (src/io/write_getfem.c,
  * src/io/write_m3d.c). */
 int mx_write_getfem(const char *path, const mx_mesh_view *m);
+/* With several materials (view.body_physical), the .getfem file's region
+ * of the convexes of material N is MX_GETFEM_MATERIAL_REGION + N (the
+ * face regions keep the boundary tags' numbers, 1 .. ntags). */
+enum { MX_GETFEM_MATERIAL_REGION = 1000 };
 int mx_write_m3d(const char *path, const mx_mesh_view *m);
 int mx_write_mvm(const char *path, const mx_mesh_view *m);
 /* OFF, for a 2D view only (src/io/write_off.c). */
