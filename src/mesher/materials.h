@@ -15,6 +15,9 @@ int mx_materials_allowed(const mx_mesher *m, const char *what);
  * built outward) and m->nmaterials (the deepest). MX_ENOMEM. */
 int mx_label_materials(mx_mesher *m);
 
+/* The volume the outermost shells of the index (built outward) enclose,
+ * the domain of several materials; *area (may be NULL) their area. */
+double mx_materials_domain_volume(const mx_mesher *m, double *area);
 /* The name of material d (its region at nesting depth d): the input file
  * whose shells bound it from outside (all of them at depth d - 1, and no
  * other file's there), without its folder and extension; "material d"

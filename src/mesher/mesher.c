@@ -396,6 +396,11 @@ int mx_volume_verdict(mx_mesher *m, double vm, size_t ncells) {
     vs = mx_winding_domain_volume(m);
     area = m->rec->S.winding.area;
     what = "the input's winding number domain holds (--repair-input)";
+  } else if (m->p.materials) {
+    /* the domain: the outermost shells' insides whole */
+    if (m->ndomain != 1 || !m->have_index) return MX_OK;
+    vs = mx_materials_domain_volume(m, &area);
+    what = "the input's outermost shells enclose (--materials)";
   } else {
     if (m->ndomain != 1 || m->p.repair_input) return MX_OK;
     const mx_trisoup *d = &m->domain;

@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# Several materials (issue 26), the targets that can be measured today, on
+# tests/make_surfaces.py's hollow ball shell.off (a sphere of radius 1 with
+# one of radius 0.5 inside: two materials with --materials) against the
+# same file without --materials (the inner ball a hole) and the outer
+# sphere alone (sphere.off: one material), at each LEVEL:
+#   - each material's volume (mixoct check --json of the .msh) against the
+#     volume its shells enclose (the tessellations', from make_surfaces.py):
+#     the target is 0.5% at -s 6;
+#   - the elements across the interface (the target: none) and the worst
+#     J_ENS (the target: no lower than the one-material mesh's);
+#   - the wall time, median of REPEAT runs, against the hollow ball without
+#     materials (5.6% fewer leaves at -s 6) and the outer sphere alone.
+# Last line: one JSON object.
+#
+#   bench/materials_bench.sh MIXOCT [LEVELS] [REPEAT]     (default "5 6", 3)
+set -u
+BIN=${1:?usage: materials_bench.sh MIXOCT [LEVELS] [REPEAT]}
+LEVELS=${2:-5 6}
+REPEAT=${3:-3}
+HERE=$(cd "$(dirname "$0")" && pwd)
+T=$(mktemp -d "${TMPDIR:-/tmp}/mixoct_materials_bench.XXXXXX") || exit 1
+trap 'rm -rf "$T"' EXIT
+python3 "$HERE/../tests/make_surfaces.py" "$T" >"$T/volumes.json" || exit 1
+
+run() { # name level args...: appends one JSON line per run to $T/runs
+  local name=$1 level=$2
+  shift 2
+  for ((r = 0; r < REPEAT; r++)); do
+    "$BIN" "$@" -s "$level" --json --quiet >"$T/out.json" 2>/dev/null
+    python3 - "$name" "$level" "$T/out.json" >>"$T/runs" <<'EOF'
+import json, sys
+name, level, path = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+d = json.loads(open(path).read().strip().splitlines()[-1])
+print(json.dumps({"name": name, "level": level, "wall": d["total_s"], "leaves": d["leaves"],
+                  "elements": d["elements"], "jens_min": d["jens_min"], "valid": d["valid"],
+                  "materials": d.get("materials")}))
+EOF
+  done
+}
+
+for L in $LEVELS; do
+  run materials "$L" -i "$T/shell.off" --materials -o "$T/m$L.msh"
+  "$BIN" check "$T/m$L.msh" --json >"$T/check$L.json" 2>/dev/null
+  run hole "$L" -i "$T/shell.off"
+  run sphere "$L" -i "$T/sphere.off"
+done
+
+python3 - "$T" "$LEVELS" <<'EOF'
+import json, math, statistics, sys
+T, levels = sys.argv[1], [int(x) for x in sys.argv[2].split()]
+vol = json.load(open(T + "/volumes.json"))
+# the tessellated shells: the outer sphere's volume (sphere.off, the same
+# icosphere) less the hollow ball's gives the inner ball's
+inner = vol["sphere"] - vol["shell"]
+exact = {1: vol["shell"], 2: inner}
+runs = [json.loads(l) for l in open(T + "/runs")]
+out = {"bench": "materials", "levels": {}}
+for L in levels:
+    by = {n: [r for r in runs if r["name"] == n and r["level"] == L] for n in ("materials", "hole", "sphere")}
+    med = {n: statistics.median(r["wall"] for r in v) for n, v in by.items() if v}
+    m = by["materials"][0]
+    c = json.loads(open("%s/check%d.json" % (T, L)).read())
+    mats = {x["label"]: x for x in c.get("materials", [])}
+    err = {k: (mats[k]["volume"] - exact[k]) / exact[k] for k in exact if k in mats}
+    res = {"leaves": {n: v[0]["leaves"] for n, v in by.items()},
+           "elements": {n: v[0]["elements"] for n, v in by.items()},
+           "wall_median_s": med,
+           "materials_over_hole": med["materials"] / med["hole"],
+           "materials_over_sphere": med["materials"] / med["sphere"],
+           "volume_error": err,
+           "across_interfaces": (m["materials"] or {}).get("across_interfaces"),
+           "jens_min": {n: v[0]["jens_min"] for n, v in by.items()},
+           "valid": {n: all(r["valid"] for r in v) for n, v in by.items()},
+           "check_defects": c.get("defects")}
+    out["levels"][L] = res
+    print("-s %d: leaves %s; wall (median of %d) materials %.3f s, hole %.3f s (x%.2f), sphere "
+          "%.3f s (x%.2f)" % (L, res["leaves"], len(by["materials"]), med["materials"], med["hole"],
+                               res["materials_over_hole"], med["sphere"], res["materials_over_sphere"]))
+    print("       material volumes off the shells' by %s; %s elements across the interface; "
+          "worst J_ENS %s; check defects %s"
+          % ({k: "%+.2f%%" % (100 * e) for k, e in err.items()}, res["across_interfaces"],
+             {k: round(v, 3) for k, v in res["jens_min"].items()}, res["check_defects"]))
+print(json.dumps(out))
+EOF
