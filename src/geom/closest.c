@@ -317,8 +317,47 @@ static const double *pseudonormal(const mx_surface_index *S, uint32_t slot,
   return S->vn + 3 * (size_t)v;
 }
 
+/* An index built outward over closed, consistently oriented shells
+ * (outward_closed): the nesting depth of p from its closest point, whose
+ * shell c bounds p's region (the segment to it crosses no other shell):
+ * c's depth, plus one when p lies inside c (the side of c's outward
+ * pseudonormal). -1 when that side is not told (p on c, or at a right
+ * angle to the pseudonormal): the caller counts with the winding number. */
+static int depth_by_closest(const mx_surface_index *S, const double p[3], double *dist,
+                            double q[3]) {
+  double qq[3];
+  uint32_t slot = 0;
+  int f = MX_FEATURE_FACE;
+  const double d2 = mx_index_closest_slot(S, p, qq, &slot, &f, INFINITY);
+  if (dist) *dist = sqrt(d2);
+  if (q) memcpy(q, qq, sizeof qq);
+  if (d2 == 0.0) return -1;
+  const double *n = pseudonormal(S, slot, f);
+  double r[3];
+  sub3(p, qq, r);
+  const double g = dot3(r, n);
+  if (g == 0.0) return -1;
+  return (int)S->shell_depth[S->shell_of[slot]] + (g < 0.0);
+}
+
+int mx_region_depth(const mx_surface_index *S, const double p[3]) {
+  if (S->outward_closed && S->nt) {
+    const int d = depth_by_closest(S, p, NULL, NULL);
+    if (d >= 0) return d;
+  }
+  const long d = lround(mx_winding_number(S, p));
+  return d < 0 ? 0 : (int)d;
+}
+
 double mx_signed_distance(const mx_surface_index *S, const double p[3],
                           double q[3]) {
+  if (S->outward_closed && S->nt && !S->side) { /* inside: within a shell */
+    double d;
+    const int depth = depth_by_closest(S, p, &d, q);
+    if (d == 0.0) return 0.0;
+    if (depth >= 0) return depth >= 1 ? -d : d;
+    return mx_winding_number(S, p) > 0.5 ? -d : d;
+  }
   double qq[3] = {INFINITY, INFINITY, INFINITY};
   uint32_t slot = 0;
   int f = MX_FEATURE_FACE;
@@ -341,6 +380,7 @@ double mx_signed_distance(const mx_surface_index *S, const double p[3],
 
 int mx_inside(const mx_surface_index *S, const double p[3]) {
   if (S->side) return mx_winding_number(S->side, p) > 0.5;
+  if (S->outward_closed) return mx_signed_distance(S, p, NULL) <= 0.0;
   if (!S->closed) return mx_winding_number(S, p) > 0.5;
   return mx_signed_distance(S, p, NULL) <= 0.0;
 }

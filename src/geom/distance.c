@@ -264,7 +264,12 @@ static int index_build(mx_surface_index *S, const mx_trisoup *soup, uint32_t t0,
    * their outside to the domain's outside: not as given, not all outward
    * when a shell nests in another */
   if (mode == ORIENT_GIVEN) S->closed = 0;
-  if (mode == ORIENT_OUTWARD && mx_surface_index_nested(S)) S->closed = 0;
+  if (mode == ORIENT_OUTWARD && mx_surface_index_nested(S)) {
+    /* closed, manifold, oriented shells: their sides from the closest
+     * point all the same (closest.c, depth_by_closest) */
+    S->outward_closed = S->closed;
+    S->closed = 0;
+  }
   if (st == MX_OK) st = mx_index_pseudonormals(S, &E);
   if (st == MX_OK) st = mx_index_hints(S);
   mx_edge_table_free(&E);
@@ -291,10 +296,6 @@ int mx_surface_index_nested(const mx_surface_index *S) {
   return 0;
 }
 
-int mx_region_depth(const mx_surface_index *S, const double p[3]) {
-  const long d = lround(mx_winding_number(S, p));
-  return d < 0 ? 0 : (int)d;
-}
 
 int mx_surface_index_build_given(mx_surface_index *S, const mx_trisoup *soup,
                                  uint32_t t0, uint32_t t1) {

@@ -164,6 +164,9 @@ typedef struct mx_surface_index {
   size_t nreoriented;       /* triangles flipped to agree with their shell */
   int closed;               /* 1: no open, non-manifold or conflicting edge;
                                the pseudonormal sign is used */
+  int outward_closed;       /* built outward with nested shells that would be
+                               closed: a point's depth and side from its
+                               closest shell's pseudonormal (closest.c) */
   /* Set by the caller after the build (NULL by default): the side of a
    * point (mx_inside, the sign of mx_signed_distance) is then the winding
    * number of this other index above 1/2, closed or not (an index over the

@@ -209,6 +209,12 @@ static int winding_inside(const void *ctx, const double p[3]) {
   return mx_winding_number((const mx_surface_index *)ctx, p) > 0.5;
 }
 
+/* The index's own side of p (materials: from the closest shell when the
+ * shells are closed, else the winding number). */
+static int index_inside(const void *ctx, const double p[3]) {
+  return mx_inside((const mx_surface_index *)ctx, p);
+}
+
 int mx_build_tree(mx_mesher *m) {
   mx_tree_clear(m);
   const double t0 = mx_wtime();
@@ -232,7 +238,7 @@ int mx_build_tree(mx_mesher *m) {
      * materials, of the index with every shell outward: the outermost
      * shells' insides whole (with no shell nested, the parity's domain) */
     MX_CHECK(mx_mesher_index(m));
-    m->B.loc_domain.inside_fn = winding_inside;
+    m->B.loc_domain.inside_fn = m->p.repair_input ? winding_inside : index_inside;
     m->B.loc_domain.inside_ctx = m->have_winding ? &m->WI : &m->SI;
   }
   for (int l = 0; l <= MX_MAX_LEVEL; l++) {
