@@ -63,6 +63,7 @@ typedef struct {
   int nmaterials;           /* materials: the deepest region (0: one material) */
   size_t materials_across;  /* elements with corners in two regions */
   double t_materials;       /* seconds labelling the elements */
+  size_t materials_snapped; /* interface nodes moved onto (or towards) the shells */
 } mx_summary;
 
 /* What a call records even when it only reads the mesher: the last error,

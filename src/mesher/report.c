@@ -153,8 +153,9 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
   char mat[128] = "";
   if (s->nmaterials)
     snprintf(mat, sizeof mat,
-             "\"materials\": {\"regions\": %d, \"across_interfaces\": %zu, \"seconds\": %.6f}, ",
-             s->nmaterials, s->materials_across, s->t_materials);
+             "\"materials\": {\"regions\": %d, \"across_interfaces\": %zu, "
+             "\"interface_nodes_moved\": %zu, \"seconds\": %.6f}, ",
+             s->nmaterials, s->materials_across, s->materials_snapped, s->t_materials);
   fprintf(out, "\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
          "\"nodes\": %s, \"elements\": %zu, "
          "\"by_type\": {\"hex\": %zu, \"prism\": %zu, \"pyramid\": %zu, \"tet\": %zu}, "
