@@ -275,8 +275,8 @@ int mx_label_materials(mx_mesher *m) {
   if (across)
     mx_warning(NULL, 0, "materials: %zu element(s) lie across an interface between two "
                         "materials (each takes the material of its centroid): in this version "
-                        "the interfaces follow element faces, a staircase at the octree's "
-                        "resolution, not yet the input surfaces; finer levels (-s) shrink it",
+                        "the interfaces follow element faces, whose nodes move onto the input "
+                        "surfaces only where the elements allow; finer levels (-s) shrink it",
                across);
   return MX_OK;
 }
