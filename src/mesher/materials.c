@@ -5,9 +5,11 @@
  * outermost shell and the next, 2 inside two shells, ... and 0 outside
  * every shell. The elements take the region of their centroid; the
  * interfaces are then made of element faces (a staircase at the octree's
- * resolution, which a later version will move onto the input surfaces),
- * and the elements whose corners lie in two regions (both inside the
- * outermost shell) are counted: those across an interface. */
+ * resolution), whose nodes the full stage moves onto the shells where the
+ * elements around allow (snap_interfaces), and the elements whose corners
+ * still lie in two regions (both inside the outermost shell) are counted:
+ * those across an interface. Cutting them by the surface patterns, as the
+ * outer boundary is, is the part still to come (issue 26). */
 #include "mesher/materials.h"
 
 #include <limits.h>
