@@ -245,6 +245,7 @@ static double full_stage(int level, size_t *wrong, size_t *n) {
       for (int d = 0; d < 3; d++) p[d] += a.xyz[3 * (size_t)a.conn[8 * c + k] + d] / nv;
     const double r = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
     if (a.material[c] == 2) inner += volume(&a, c);
+    CHECK(a.material[c] == 1 || a.material[c] == 2); /* the domain's: none outside */
     if (fabs(r - 1.0) < 0.01 || fabs(r - 0.5) < 0.01) continue;
     (*n)++;
     *wrong += a.material[c] != (r < 0.5) + (r < 1.0);

@@ -119,6 +119,9 @@ int mx_label_materials(mx_mesher *m) {
       d = hi == lo ? hi : mx_region_depth(S, p);
     }
     if (d > UINT16_MAX - 1) d = UINT16_MAX - 1;
+    /* the full stage's elements are the domain's: a few nodes the shrink
+     * left just outside the outermost shell do not make one outside */
+    if (d < 1 && m->mesh_stage == MX_STAGE_FULL) d = 1;
     M->material[c] = (uint16_t)d;
     if (d > deepest) deepest = d;
   }
