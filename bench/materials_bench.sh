@@ -46,6 +46,41 @@ for L in $LEVELS; do
   run sphere "$L" -i "$T/sphere.off"
 done
 
+# The cortex with a sphere of radius 12 inside (a "tumour": two materials
+# in the brain case) at -s 7, against the cortex alone, when the data is
+# there (MIXOCT_DATA or ../shared/data).
+DATA=${MIXOCT_DATA:-$HERE/../../shared/data}
+if [ -f "$DATA/surfaces/cortex.off" ]; then
+  python3 - "$T/tumour.off" <<'EOF2'
+import math, sys
+c, r, n = (140.4, 131.1, 85.0), 12.0, 24
+V = [(c[0], c[1], c[2] + r)]
+for i in range(1, n):
+    th = math.pi * i / n
+    for j in range(2 * n):
+        ph = math.pi * j / n
+        V.append((c[0] + r * math.sin(th) * math.cos(ph), c[1] + r * math.sin(th) * math.sin(ph),
+                  c[2] + r * math.cos(th)))
+V.append((c[0], c[1], c[2] - r))
+m, F = 2 * n, []
+for j in range(m):
+    F.append((0, 1 + j, 1 + (j + 1) % m))
+for i in range(n - 2):
+    for j in range(m):
+        a, b = 1 + i * m + j, 1 + i * m + (j + 1) % m
+        F += [(a, a + m, b + m), (a, b + m, b)]
+last, base = len(V) - 1, 1 + (n - 2) * m
+for j in range(m):
+    F.append((last, base + (j + 1) % m, base + j))
+with open(sys.argv[1], "w") as f:
+    f.write("OFF\n%d %d 0\n" % (len(V), len(F)))
+    f.writelines("%.17g %.17g %.17g\n" % v for v in V)
+    f.writelines("3 %d %d %d\n" % t for t in F)
+EOF2
+  run cortex_tumour 7 -i "$DATA/surfaces/cortex.off" -i "$T/tumour.off" --materials
+  run cortex 7 -i "$DATA/surfaces/cortex.off"
+fi
+
 python3 - "$T" "$LEVELS" <<'EOF'
 import json, math, statistics, sys
 T, levels = sys.argv[1], [int(x) for x in sys.argv[2].split()]
@@ -81,5 +116,17 @@ for L in levels:
           "worst J_ENS %s; check defects %s"
           % ({k: "%+.2f%%" % (100 * e) for k, e in err.items()}, res["across_interfaces"],
              {k: round(v, 3) for k, v in res["jens_min"].items()}, res["check_defects"]))
+ct = [r for r in runs if r["name"] == "cortex_tumour"]
+cx = [r for r in runs if r["name"] == "cortex"]
+if ct and cx:
+    a, b = statistics.median(r["wall"] for r in ct), statistics.median(r["wall"] for r in cx)
+    out["cortex_tumour"] = {"leaves": [ct[0]["leaves"], cx[0]["leaves"]], "wall_median_s": [a, b],
+                            "over_cortex": a / b, "materials": ct[0]["materials"],
+                            "jens_min": [ct[0]["jens_min"], cx[0]["jens_min"]],
+                            "valid": all(r["valid"] for r in ct)}
+    print("cortex + tumour -s 7: %d leaves, %.3f s against %.3f s for the cortex alone (%d leaves; "
+          "x%.2f); %s; worst J_ENS %.3f (cortex alone %.3f)"
+          % (ct[0]["leaves"], a, b, cx[0]["leaves"], a / b, ct[0]["materials"], ct[0]["jens_min"],
+             cx[0]["jens_min"]))
 print(json.dumps(out))
 EOF
