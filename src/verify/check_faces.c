@@ -161,35 +161,40 @@ int mx_ck_faces_match(const mx_mesh_data *m, faces *F, const chash *H,
 
 /* The first slot (in its sorted bucket) of a face with the sorted nodes v
  * (n of them), or -1. */
-int64_t mx_ck_find_second(const mx_mesh_data *m, const faces *F, const uint32_t *v, int n) {
-  const fkey want = key_of((uint32_t)n, v, 0);
+/* The first position of bucket v[0] whose key is not below that of the
+ * sorted face v (n nodes), and that key's wanted value. */
+static uint64_t first_not_below(const mx_mesh_data *m, const faces *F, const uint32_t *v, int n,
+                                fkey *want) {
+  *want = key_of((uint32_t)n, v, 0);
   uint64_t lo = bucket_begin(F, v[0]), hi = F->end[v[0]];
-  while (lo < hi) { /* first entry not below want */
+  while (lo < hi) {
     const uint64_t mid = lo + (hi - lo) / 2;
     const fkey k = slot_key(m, F->slot[mid]);
-    if (key_cmp(&k, &want) < 0)
+    if (key_cmp(&k, want) < 0)
       lo = mid + 1;
     else
       hi = mid;
   }
-  if (lo + 1 >= F->end[v[0]]) return -1;
-  const fkey k = slot_key(m, F->slot[lo + 1]);
-  return key_cmp(&k, &want) == 0 ? (int64_t)F->slot[lo + 1] : -1;
+  return lo;
+}
+
+/* The slot at position `at` of bucket v[0] when its key is want's, else -1. */
+static int64_t slot_if(const mx_mesh_data *m, const faces *F, const uint32_t *v, uint64_t at,
+                       const fkey *want) {
+  if (at >= F->end[v[0]]) return -1;
+  const fkey k = slot_key(m, F->slot[at]);
+  return key_cmp(&k, want) == 0 ? (int64_t)F->slot[at] : -1;
+}
+
+int64_t mx_ck_find_second(const mx_mesh_data *m, const faces *F, const uint32_t *v, int n) {
+  fkey want;
+  const uint64_t at = first_not_below(m, F, v, n, &want);
+  return slot_if(m, F, v, at + 1, &want);
 }
 
 int64_t mx_ck_find_slot(const mx_mesh_data *m, const faces *F,
                          const uint32_t *v, int n) {
-  const fkey want = key_of((uint32_t)n, v, 0);
-  uint64_t lo = bucket_begin(F, v[0]), hi = F->end[v[0]];
-  while (lo < hi) { /* first entry not below want */
-    const uint64_t mid = lo + (hi - lo) / 2;
-    const fkey k = slot_key(m, F->slot[mid]);
-    if (key_cmp(&k, &want) < 0)
-      lo = mid + 1;
-    else
-      hi = mid;
-  }
-  if (lo == F->end[v[0]]) return -1;
-  const fkey k = slot_key(m, F->slot[lo]);
-  return key_cmp(&k, &want) == 0 ? (int64_t)F->slot[lo] : -1;
+  fkey want;
+  const uint64_t at = first_not_below(m, F, v, n, &want);
+  return slot_if(m, F, v, at, &want);
 }
