@@ -20,7 +20,6 @@
 #include "base/common.h"
 #include "kernels/boundary.h"
 #include "kernels/mesh_edit.h"
-#include "mesher/mesher_impl.h"
 #include "mesher/pipeline.h"
 #include "soa/mesh.h"
 
