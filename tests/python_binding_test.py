@@ -612,6 +612,16 @@ def materials_at_full_stage():
     e = raises(mixoct.InputError, lambda: m.save_restart("/tmp/mx_never_written.oct"))
     assert str(e) == m.last_error != "", (str(e), m.last_error)
     m.close()
+    # numbered by the user: the inner sphere's material 9, the outer's 4
+    n = two_spheres(stage="full", materials=True)
+    n.set_material(0, 4, "outer")
+    n.set_material(1, 9, "inner")
+    n.mesh()
+    want9 = (r < RADII[1])
+    assert np.array_equal(n.material[away] == 9, want9[away])
+    assert set(np.unique(n.material).tolist()) == {4, 9}, np.unique(n.material)
+    raises(mixoct.InputError, lambda: n.set_material(5, 1))   # no input 5
+    n.close()
 
 
 M.close()

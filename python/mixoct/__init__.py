@@ -329,6 +329,7 @@ def _declare(lib):
         "mx_mesher_add_surface_arrays": (I, [P, S, sz, dblp, sz, u32p]),
         "mx_mesher_add_demo_surface": (I, [P]),
         "mx_mesher_add_region_surface": (I, [P, S, I]),
+        "mx_mesher_set_material": (I, [P, I, I, S]),
         "mx_mesher_build_octree": (I, [P]),
         "mx_mesher_transition": (I, [P]),
         "mx_mesher_boundary": (I, [P]),
@@ -956,6 +957,14 @@ class Mesher(_MesherBase):
     def add_demo_surface(self):
         """The built-in demo surface (a brain-like closed surface)."""
         self._call("mx_mesher_add_demo_surface")
+
+    def set_material(self, input, number, name=None):
+        """With materials=True: the number (1..65535) and name of the
+        material inside surface `input` (0 for the first added), written as
+        the Gmsh physical volume, the Medit reference and the field
+        material, and given by the material view (--material ID:NAME)."""
+        self._call("mx_mesher_set_material", int(input), int(number),
+                   None if name is None else str(name).encode())
 
     def add_region_surface(self, path, level):
         """-r: octants meeting or inside this surface go to `level`."""
