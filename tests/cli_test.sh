@@ -368,6 +368,13 @@ has "$T/sh.msh" '3 2 "material 2"' "the inner ball is material 2"
 has "$T/sh.msh" '"interface material 1 | material 2"' "the interface is a physical surface"
 "$MIXOCT" check "$T/sh.msh" --json >"$T/sh.json" 2>/dev/null
 json_ok "$T/sh.json" "d['defects'] == 0 and [m['label'] for m in d['materials']] == [1, 2] and d['interface_faces'] == d['tagged_interface'] > 0 and abs(d['materials'][1]['volume'] - 4.1887902 / 8) < 0.1 * 4.1887902 / 8" "check: two materials, the interface tagged, the inner volume"
+# with the surface: each material against the region of shell.off its
+# elements lie in (1: between the spheres, 2: the inner ball), within the
+# volume tolerance; a tolerance of 1e-6 makes both volumes defects
+"$MIXOCT" check "$T/sh.msh" --surface "$T/shell.off" --json >"$T/shs.json" 2>/dev/null
+json_ok "$T/shs.json" "d['defects'] == 0 and [m['region'] for m in d['materials']] == [1, 2] and d['materials_volume_off'] == 0 and abs(d['volume_error']) < 0.05" "check --surface: each material in its region, volumes within the tolerance"
+"$MIXOCT" check "$T/sh.msh" --surface "$T/shell.off" --volume-tol 1e-6 --json >"$T/shs.json" 2>/dev/null
+json_ok "$T/shs.json" "d['materials_volume_off'] == 2" "check --surface --volume-tol 1e-6: both material volumes off"
 
 # Materials numbered and named by the user (--material ID[:NAME] after
 # -i): make_surfaces.py's sphere numbered 5 and named grey, as the Gmsh

@@ -176,11 +176,18 @@ void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64
   printf("],\"tagged_faces\":%zu,", r->tagged_faces);
   if (r->nlabels) { /* several materials: the cells' labels */
     printf("\"materials\":[");
-    for (size_t i = 0; i < r->nlabels; i++)
-      printf("%s{\"label\":%d,\"elements\":%zu,\"volume\":%.17g}", i ? "," : "",
-             r->labels[i].label, r->labels[i].cells, r->labels[i].volume);
-    printf("],\"materials_dropped\":%zu,\"interface_faces\":%zu,\"tagged_interface\":%zu,",
-           r->labels_dropped, r->interface_faces, r->tagged_interface);
+    for (size_t i = 0; i < r->nlabels; i++) {
+      const mx_check_label *L = &r->labels[i];
+      printf("%s{\"label\":%d,\"elements\":%zu,\"volume\":%.17g", i ? "," : "", L->label,
+             L->cells, L->volume);
+      if (L->region >= 0)
+        printf(",\"region\":%d,\"region_volume\":%.17g,\"volume_error\":%.17g", L->region,
+               L->region_volume, L->volume_error);
+      printf("}");
+    }
+    printf("],\"materials_dropped\":%zu,\"interface_faces\":%zu,\"tagged_interface\":%zu,"
+           "\"materials_volume_off\":%zu,",
+           r->labels_dropped, r->interface_faces, r->tagged_interface, r->labels_off);
   }
   json_tags(t);
   printf("\"defective_faces\":{");
@@ -216,9 +223,15 @@ static void print_labels(const mx_check_report *r) {
   if (!r->nlabels) return;
   printf("  materials              %zu label%s (cell labels of the file)%s\n", r->nlabels,
          r->nlabels == 1 ? "" : "s", r->labels_dropped ? ", more not listed" : "");
-  for (size_t i = 0; i < r->nlabels; i++)
-    printf("    label %d: %zu elements, volume %.10g\n", r->labels[i].label,
-           r->labels[i].cells, r->labels[i].volume);
+  for (size_t i = 0; i < r->nlabels; i++) {
+    const mx_check_label *L = &r->labels[i];
+    printf("    label %d: %zu elements, volume %.10g", L->label, L->cells, L->volume);
+    if (L->region >= 0)
+      printf(" (the surface's region %d holds %.10g: %+.3f%%%s)", L->region, L->region_volume,
+             100.0 * L->volume_error,
+             fabs(L->volume_error) <= r->opt.volume_tol ? "" : "  <-- defect");
+    printf("\n");
+  }
   printf("  interfaces             %zu faces between elements of two labels, %zu of them "
          "tagged\n", r->interface_faces, r->tagged_interface);
 }
@@ -345,6 +358,9 @@ void mx_check_file_text(const char *mesh, const char *surf, const mx_check_repor
     if (closed) {
       snprintf(why, sizeof why, "(|volume error| > %g)", r->opt.volume_tol);
       defect_line("volume off", r->volume_off, why);
+      if (r->nlabels)
+        defect_line("material volumes off", r->labels_off,
+                    "(labels whose volume is off their region's beyond the same tolerance)");
       snprintf(why, sizeof why,
                "(boundary nodes farther than %g of the diagonal)",
                r->opt.boundary_tol);

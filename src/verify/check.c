@@ -194,7 +194,9 @@ static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
     MX_CHECK(mx_ck_surface_volume(surface, r));
     MX_CHECK(mx_ck_surface_distance(m, surface, flags, o->boundary_tol, r));
     if (r->surface_open_edges == 0) {
+      if (m->cell_tag) MX_CHECK(mx_ck_label_regions(m, surface, r));
       mx_ck_volume_verdict(m, surface, o, r);
+      if (m->cell_tag) mx_ck_label_verdict(r);
     } else { /* an open surface: indicative only */
       r->boundary_off_surface = 0;
     }
@@ -236,7 +238,7 @@ int mx_check_mesh_tags(const mx_mesh_data *m, const mx_trisoup *surface,
                r->open_boundary_edges + r->hanging_nodes +
                r->geometric_hanging_nodes + r->unused_nodes +
                r->duplicate_nodes + r->volume_off + r->boundary_off_surface +
-               r->tagged_not_boundary + r->boundary_untagged;
+               r->tagged_not_boundary + r->boundary_untagged + r->labels_off;
   return MX_OK;
 }
 

@@ -109,6 +109,11 @@ typedef struct {
   int32_t label;
   size_t cells;
   double volume;
+  /* with a surface: the region of the surface most of the label's element
+   * centroids lie in (its nesting depth, -1 unknown), what that region
+   * holds, and the relative difference */
+  int region;
+  double region_volume, volume_error;
 } mx_check_label;
 
 /* Kinds of defective elements (bit k of the per-element flags). */
@@ -195,6 +200,8 @@ typedef struct {
   size_t nlabels, labels_dropped; /* beyond MX_CHECK_LABELS */
   mx_check_label labels[MX_CHECK_LABELS];
   size_t interface_faces;  /* faces between cells of two labels */
+  size_t labels_off;       /* labels whose volume is off their region's
+                            * beyond volume_tol (a defect) */
   mx_check_ids untagged_ids;     /* elements with an untagged boundary face */
   mx_check_ids not_boundary_ids; /* tagged faces that are not boundary faces */
 } mx_check_report;

@@ -6,6 +6,9 @@
  * buckets of check_faces.c. */
 #include "verify/check_passes.h"
 
+#include <math.h>
+
+#include "geom/distance.h"
 #include "geom/quality.h"
 
 int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r) {
@@ -25,7 +28,7 @@ int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r) 
       continue;
     }
     memmove(r->labels + k + 1, r->labels + k, (r->nlabels - k) * sizeof *r->labels);
-    r->labels[k] = (mx_check_label){t, 0, 0.0};
+    r->labels[k] = (mx_check_label){t, 0, 0.0, -1, NAN, NAN};
     r->nlabels++;
   }
   for (size_t c = 0; c < nc; c++) {
@@ -59,4 +62,78 @@ int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r) 
   }
   r->interface_faces = between;
   return MX_OK;
+}
+
+int mx_ck_label_regions(const mx_mesh_data *m, const mx_trisoup *surface, mx_check_report *r) {
+  if (!m->cell_tag || !r->nlabels || !surface->nt) return MX_OK;
+  mx_surface_index S;
+  MX_CHECK(mx_surface_index_build_outward(&S, surface, 0, (uint32_t)surface->nt));
+  /* each shell's volume (outward), about the centre of the surface's box */
+  double lo[3], hi[3], o[3];
+  mx_trisoup_bbox(surface, lo, hi);
+  for (int a = 0; a < 3; a++) o[a] = 0.5 * (lo[a] + hi[a]);
+  double *vol = mx_calloc(((size_t)S.nshells + 1) * sizeof *vol);
+  if (!vol) {
+    mx_surface_index_free(&S);
+    return MX_ENOMEM;
+  }
+  for (uint32_t i = 0; i < S.nt; i++) {
+    const double *t = S.tv + 9 * (size_t)i;
+    double p[3], q[3], w[3];
+    for (int a = 0; a < 3; a++) p[a] = t[a] - o[a], q[a] = t[3 + a] - o[a], w[a] = t[6 + a] - o[a];
+    vol[S.shell_of[i]] += S.tsign[i] * (p[0] * (q[1] * w[2] - q[2] * w[1]) -
+                                         p[1] * (q[0] * w[2] - q[2] * w[0]) +
+                                         p[2] * (q[0] * w[1] - q[1] * w[0])) / 6.0;
+  }
+  /* region d (depth d: inside d shells): the shells at depth d - 1 less
+   * those at depth d; the whole mesh: the outermost shells' */
+  double region[66], outer = 0.0;
+  for (int d = 0; d < 66; d++) region[d] = 0.0;
+  for (uint32_t c = 0; c < S.nshells; c++) {
+    const uint32_t e = S.shell_depth[c];
+    if (e < 65) region[e + 1] += vol[c];
+    if (e >= 1 && e < 66) region[e] -= vol[c];
+    if (e == 0) outer += vol[c];
+  }
+  mx_free(vol);
+  r->surface_volume = fabs(outer);
+  r->volume_error = r->surface_volume > 0.0 ? (r->volume - r->surface_volume) / r->surface_volume
+                                            : NAN;
+  /* each label's region: where most of its elements' centroids lie */
+  size_t (*count)[66] = mx_calloc((r->nlabels + 1) * sizeof *count);
+  if (!count) {
+    mx_surface_index_free(&S);
+    return MX_ENOMEM;
+  }
+  for (size_t c = 0; c < m->ncells; c++) {
+    size_t k = 0;
+    while (k < r->nlabels && r->labels[k].label != m->cell_tag[c]) k++;
+    if (k == r->nlabels) continue;
+    const int nv = mx_cell_nodes[m->type[c]];
+    double p[3] = {0, 0, 0};
+    for (int j = 0; j < nv; j++)
+      for (int a = 0; a < 3; a++) p[a] += m->xyz[3 * (size_t)m->conn[8 * c + j] + a] / nv;
+    const int d = mx_region_depth(&S, p);
+    count[k][d < 65 ? d : 65]++;
+  }
+  mx_surface_index_free(&S);
+  for (size_t k = 0; k < r->nlabels; k++) {
+    int best = 0;
+    for (int d = 1; d < 66; d++)
+      if (count[k][d] > count[k][best]) best = d;
+    mx_check_label *L = &r->labels[k];
+    L->region = best;
+    L->region_volume = region[best];
+    L->volume_error = fabs(region[best]) > 0.0 ? (L->volume - region[best]) / fabs(region[best])
+                                               : NAN;
+  }
+  mx_free(count);
+  return MX_OK;
+}
+
+void mx_ck_label_verdict(mx_check_report *r) {
+  r->labels_off = 0;
+  for (size_t k = 0; k < r->nlabels; k++)
+    if (r->labels[k].region >= 0 && !(fabs(r->labels[k].volume_error) <= r->opt.volume_tol))
+      r->labels_off++;
 }

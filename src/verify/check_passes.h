@@ -321,6 +321,13 @@ int mx_ck_boundary_pass(const mx_mesh_data *m, const faces *F, uint8_t *flags,
 /* check_labels.c: the labels' elements and volumes, the faces between two
  * labels. */
 int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r);
+/* With a closed surface: the volume of each region it cuts out (its
+ * shells' nesting), each label's region (where most of its centroids lie)
+ * and volume error; the whole mesh's volume then compared with the
+ * outermost shells' (surface_volume, volume_error). The verdict (after the
+ * whole mesh's, which sets volume_tol): labels_off. */
+int mx_ck_label_regions(const mx_mesh_data *m, const mx_trisoup *surface, mx_check_report *r);
+void mx_ck_label_verdict(mx_check_report *r);
 int mx_ck_tag_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r,
                    mx_check_tags *tags);
 /* Geometric hanging nodes (check_contacts.c). */
