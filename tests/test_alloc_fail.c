@@ -143,6 +143,63 @@ static uint64_t demo_go_on(void *obj, msgs *g) {
   return h;
 }
 
+/* materials: a cube of side 1 with a cube of side 0.4 inside, one input,
+ * meshed with params.materials (the index built outward, the labels, the
+ * interface nodes' moves) */
+static int add_cubes(mx_mesher *m) {
+  static const uint32_t f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6},
+                                    {0, 1, 4}, {1, 5, 4}, {2, 6, 3}, {3, 6, 7},
+                                    {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  double xyz[48];
+  uint32_t tri[72];
+  for (int b = 0; b < 2; b++) {
+    const double lo = b ? 0.31 : 0.01, hi = b ? 0.69 : 0.99;
+    for (int i = 0; i < 8; i++) {
+      xyz[24 * b + 3 * i] = (i & 1) ? hi : lo;
+      xyz[24 * b + 3 * i + 1] = (i & 2) ? hi : lo;
+      xyz[24 * b + 3 * i + 2] = (i & 4) ? hi : lo;
+    }
+    for (int t = 0; t < 12; t++)
+      for (int k = 0; k < 3; k++) tri[36 * b + 3 * t + k] = f[t][k] + 8u * (uint32_t)b;
+  }
+  return mx_mesher_add_surface_arrays(m, "cubes", 16, xyz, 24, tri);
+}
+static int cubes_step(void **obj, msgs *g) {
+  mx_params p;
+  mx_params_default(&p);
+  p.surface_level = 3;
+  p.threads = 2;
+  p.materials = 1;
+  mx_mesher *m = mx_mesher_new(&p);
+  *obj = m;
+  if (!m) return MX_ENOMEM;
+  mx_mesher_set_message_handler(m, on_message, g);
+  int st = add_cubes(m);
+  if (!st) st = mx_mesher_mesh(m);
+  return st;
+}
+static uint64_t cubes_hash(mx_mesher *m) {
+  mx_mesh_arrays a;
+  uint64_t h = test_mesh_hash(m);
+  if (mx_mesher_mesh_arrays(m, &a) == MX_OK && a.material)
+    h = test_fnv(h, a.material, a.nelements * sizeof *a.material);
+  return h;
+}
+static uint64_t cubes_go_on(void *obj, msgs *g) {
+  mx_mesher *m = obj;
+  if (!m) { /* the mesher itself failed: a new one */
+    void *o = NULL;
+    const int st = cubes_step(&o, g);
+    const uint64_t h = st ? 0 : cubes_hash(o);
+    mx_mesher_free(o);
+    return h;
+  }
+  /* the surface is there unless its call failed (then it is not) */
+  if (mx_mesher_mesh(m) != MX_OK && (add_cubes(m) != MX_OK || mx_mesher_mesh(m) != MX_OK))
+    return 0;
+  return cubes_hash(m);
+}
+
 /* remesh: a meshed demo; refine four elements */
 static void *meshed_demo(msgs *g) {
   mx_mesher *m = demo_mesher(g);
@@ -323,6 +380,7 @@ int main(void) {
       {"demo", NULL, demo_step, demo_go_on, free3, 0},
       {"remesh", meshed_demo, remesh_step, remesh_go_on, free3, 0},
       {"2d", NULL, l_step, l_go_on, free2, 0},
+      {"materials", NULL, cubes_step, cubes_go_on, free3, 0},
       {"vtu", get_shared, vtu_step, vtu_go_on, keep, 0},
       {"msh", get_shared, msh_step, msh_go_on, keep, 0},
   };
