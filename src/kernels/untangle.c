@@ -6,6 +6,7 @@
 
 #include "base/common.h"
 #include "kernels/boundary.h"
+#include "kernels/colouring.h"
 #include "kernels/mesh_edit.h"
 #include "geom/quality.h"
 #include "soa/mesh.h"
@@ -68,115 +69,6 @@ static double worst_of(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t 
   double w = INFINITY;
   for (size_t i = e0; i < e1; i++) w = fmin(w, elem_jens(M, inc[i]));
   return w;
-}
-
-/* Colours of the work nodes such that two nodes of one element never share
- * a colour (Jones-Plassmann: in each round, every uncoloured node whose
- * priority beats its uncoloured neighbours takes the smallest colour its
- * neighbours lack; the priorities are a hash of the node's lattice key, so
- * the colours depend neither on the threads nor on the numbering). widx: work index of each node, UINT32_MAX
- * outside the work set. Returns the number of colours, or -1 (memory, or
- * more than MAX_COLOURS). */
-enum { MAX_COLOURS = 256 };
-
-static uint64_t mix64(uint64_t h) {
-  h ^= h >> 33;
-  h *= 0xFF51AFD7ED558CCDull;
-  h ^= h >> 33;
-  h *= 0xC4CEB9FE1A85EC53ull;
-  h ^= h >> 33;
-  return h;
-}
-
-/* The priority of node v: a hash of what the node is (its lattice key, or
- * its position for a node off the lattice), not of its number, so that a
- * local re-mesh, whose patch numbers its nodes its own way, colours the same
- * nodes alike. */
-static uint64_t node_priority(const mx_mesh *M, uint32_t v) {
-  if (M->nkey && M->nkey[v] != MX_NKEY_NONE) return mix64(M->nkey[v]);
-  uint64_t h = 0x9E3779B97F4A7C15ull, b;
-  for (int a = 0; a < 3; a++) {
-    memcpy(&b, M->xyz + 3 * (size_t)v + a, sizeof b);
-    h = mix64(h ^ b);
-  }
-  return h;
-}
-
-/* 1 when work node i goes before work node j */
-static int before(const uint64_t *prio, size_t i, size_t j) {
-  return prio[i] != prio[j] ? prio[i] > prio[j] : i < j;
-}
-
-static int colour_work(const mx_mesh *M, const uint32_t *inc, const uint64_t *off,
-                       const uint32_t *work, size_t nw, const uint32_t *widx,
-                       int16_t *colour) {
-  uint8_t *pick = mx_alloc(nw + 1);
-  uint64_t *prio = mx_alloc((nw + 1) * sizeof *prio);
-  if (!pick || !prio) {
-    mx_free(pick);
-    mx_free(prio);
-    return -2; /* out of memory */
-  }
-#pragma omp parallel for schedule(static) if (nw > MX_PAR_MIN)
-  for (size_t i = 0; i < nw; i++) {
-    colour[i] = -1;
-    prio[i] = node_priority(M, work[i]);
-  }
-  size_t left = nw;
-  int ncol = 0, overflow = 0;
-  while (left && !overflow) {
-#pragma omp parallel for schedule(dynamic, 256) if (nw >= 4096)
-    for (size_t i = 0; i < nw; i++) {
-      pick[i] = 0;
-      if (colour[i] >= 0) continue;
-      const uint32_t v = work[i];
-      int best = 1;
-      for (uint64_t e = off[v]; e < off[v + 1] && best; e++) {
-        const uint32_t *row = M->conn + 8 * (size_t)inc[e];
-        for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++) {
-          const uint32_t j = widx[row[k]];
-          if (j == UINT32_MAX || j == i || colour[j] >= 0) continue;
-          if (before(prio, j, i)) {
-            best = 0;
-            break;
-          }
-        }
-      }
-      pick[i] = (uint8_t)best;
-    }
-    size_t got = 0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(+ : got) reduction(| : overflow) \
-    if (nw >= 4096)
-    for (size_t i = 0; i < nw; i++) {
-      if (!pick[i]) continue;
-      uint64_t used[MAX_COLOURS / 64] = {0, 0, 0, 0};
-      const uint32_t v = work[i];
-      for (uint64_t e = off[v]; e < off[v + 1]; e++) {
-        const uint32_t *row = M->conn + 8 * (size_t)inc[e];
-        for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++) {
-          const uint32_t j = widx[row[k]];
-          if (j == UINT32_MAX || j == i) continue;
-          const int cj = colour[j];
-          if (cj >= 0) used[cj / 64] |= 1ull << (cj % 64);
-        }
-      }
-      int c = 0;
-      while (c < MAX_COLOURS && ((used[c / 64] >> (c % 64)) & 1)) c++;
-      if (c == MAX_COLOURS) {
-        overflow = 1;
-        c = 0;
-      }
-      colour[i] = (int16_t)c;
-      got++;
-    }
-    left -= got;
-  }
-  mx_free(pick);
-  mx_free(prio);
-  if (overflow) return -1;
-  for (size_t i = 0; i < nw; i++)
-    if (colour[i] + 1 > ncol) ncol = colour[i] + 1;
-  return ncol;
 }
 
 /* One move of work node v (index i): the best of a few points between its
@@ -333,28 +225,28 @@ int mx_untangle(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
   uint32_t *widx = mx_alloc((nn + 1) * sizeof *widx);
   int16_t *colour = mx_alloc((nw + 1) * sizeof *colour);
   uint32_t *byc = mx_alloc((nw + 1) * sizeof *byc);
-  size_t cstart[MAX_COLOURS + 1];
+  size_t cstart[MX_MAX_COLOURS + 1];
   int ncol = -2; /* -2: out of memory; -1: too many colours */
   if (widx && colour && byc) {
 #pragma omp parallel for schedule(static)
     for (size_t v = 0; v < nn; v++) widx[v] = UINT32_MAX;
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < nw; i++) widx[work[i]] = (uint32_t)i;
-    ncol = colour_work(M, inc, off, work, nw, widx, colour);
+    ncol = mx_colour_nodes(M, inc, off, work, nw, widx, colour);
   }
   mx_free(widx);
   if (ncol < 0) {
     mx_free(colour); mx_free(byc); mx_free(onsurf);
     mx_free(inc); mx_free(work); mx_free(off); mx_free(mark);
     if (ncol == -2) return MX_ENOMEM;
-    mx_error(NULL, 0, "more than %d colours in the untangling", MAX_COLOURS);
+    mx_error(NULL, 0, "more than %d colours in the untangling", MX_MAX_COLOURS);
     return MX_EINPUT;
   }
   memset(cstart, 0, sizeof cstart);
   for (size_t i = 0; i < nw; i++) cstart[colour[i] + 1]++;
   for (int c = 0; c < ncol; c++) cstart[c + 1] += cstart[c];
   {
-    size_t fill[MAX_COLOURS];
+    size_t fill[MX_MAX_COLOURS];
     memcpy(fill, cstart, sizeof fill);
     for (size_t i = 0; i < nw; i++) byc[fill[colour[i]]++] = (uint32_t)i;
   }
