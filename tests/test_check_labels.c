@@ -7,7 +7,9 @@
  * 16 tagged, plus one tagged face inside label 1: the 16 are interfaces,
  * the one inside is "tagged not boundary", no boundary face is untagged;
  * without labels all 17 are "tagged not boundary"; with one label only,
- * no interface. */
+ * no interface. Each label's boundary is closed (a union of cells of a
+ * conforming mesh), and only a checkerboard makes a label touch itself
+ * along edges (each label's inner edges of the board used 4 times). */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -108,6 +110,8 @@ int main(void) {
   CHECK(r.tagged_interface == (size_t)N * N);
   CHECK(r.tagged_not_boundary == 1);
   CHECK(r.boundary_untagged == 0);
+  CHECK(r.labels_open == 0 && r.labels[0].open_edges == 0 && r.labels[1].open_edges == 0);
+  CHECK(r.labels[0].nonmanifold_edges == 0 && r.labels[1].nonmanifold_edges == 0);
   printf("labels: %zu, volumes %.3f %.3f; interface faces %zu (%zu tagged), tagged not "
          "boundary %zu\n", r.nlabels, r.labels[0].volume, r.labels[1].volume,
          r.interface_faces, r.tagged_interface, r.tagged_not_boundary);
@@ -116,6 +120,19 @@ int main(void) {
   CHECK(mx_check_mesh(&d, NULL, &r) == MX_OK);
   CHECK(r.nlabels == 0 && r.interface_faces == 0 && r.tagged_interface == 0);
   CHECK(r.tagged_not_boundary == (size_t)N * N + 1);
+  /* a checkerboard: every inner edge of the board is shared by four cells,
+   * two of each label, so each label touches itself along it */
+  for (size_t k = 0; k < N; k++)
+    for (size_t j = 0; j < N; j++)
+      for (size_t i = 0; i < N; i++) label[(k * N + j) * N + i] = 1 + (int32_t)((i + j + k) % 2);
+  d.cell_tag = label;
+  CHECK(mx_check_mesh(&d, NULL, &r) == MX_OK);
+  CHECK(r.nlabels == 2 && r.labels_open == 0);
+  /* the edges inside the cube: 3 directions x N x (N - 1)^2 */
+  CHECK(r.labels[0].nonmanifold_edges == 3 * N * (N - 1) * (N - 1));
+  CHECK(r.labels[1].nonmanifold_edges == 3 * N * (N - 1) * (N - 1));
+  printf("checkerboard: %zu and %zu edges where a label touches itself\n",
+         r.labels[0].nonmanifold_edges, r.labels[1].nonmanifold_edges);
   /* one label: no interface, the 17 are wrong again */
   for (c = 0; c < nc; c++) label[c] = 7;
   d.cell_tag = label;

@@ -178,8 +178,9 @@ void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64
     printf("\"materials\":[");
     for (size_t i = 0; i < r->nlabels; i++) {
       const mx_check_label *L = &r->labels[i];
-      printf("%s{\"label\":%d,\"elements\":%zu,\"volume\":%.17g", i ? "," : "", L->label,
-             L->cells, L->volume);
+      printf("%s{\"label\":%d,\"elements\":%zu,\"volume\":%.17g,\"open_edges\":%zu,"
+             "\"nonmanifold_edges\":%zu", i ? "," : "", L->label, L->cells, L->volume,
+             L->open_edges, L->nonmanifold_edges);
       if (L->region >= 0)
         printf(",\"region\":%d,\"region_volume\":%.17g,\"volume_error\":%.17g", L->region,
                L->region_volume, L->volume_error);
@@ -225,7 +226,10 @@ static void print_labels(const mx_check_report *r) {
          r->nlabels == 1 ? "" : "s", r->labels_dropped ? ", more not listed" : "");
   for (size_t i = 0; i < r->nlabels; i++) {
     const mx_check_label *L = &r->labels[i];
-    printf("    label %d: %zu elements, volume %.10g", L->label, L->cells, L->volume);
+    printf("    label %d: %zu elements, volume %.10g, boundary %s", L->label, L->cells, L->volume,
+           L->open_edges ? "not closed" : "closed");
+    if (L->open_edges) printf(" (%zu open edges)  <-- defect", L->open_edges);
+    if (L->nonmanifold_edges) printf(", touching itself along %zu edges", L->nonmanifold_edges);
     if (L->region >= 0)
       printf(" (the surface's region %d holds %.10g: %+.3f%%%s)", L->region, L->region_volume,
              100.0 * L->volume_error,

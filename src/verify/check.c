@@ -179,6 +179,7 @@ static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
   MX_CHECK(mx_ck_boundary_pass(m, &w->F, flags, w->ef, fc.boundary, r));
   MX_CHECK(mx_ck_tag_pass(m, &w->F, r, tags));
   MX_CHECK(mx_ck_label_pass(m, &w->F, r));
+  MX_CHECK(mx_ck_label_boundaries(m, &w->F, r));
   mx_free(H->slot); /* memory for the next passes */
   mx_free(H->seg);
   H->slot = H->seg = NULL;
@@ -238,7 +239,7 @@ int mx_check_mesh_tags(const mx_mesh_data *m, const mx_trisoup *surface,
                r->open_boundary_edges + r->hanging_nodes +
                r->geometric_hanging_nodes + r->unused_nodes +
                r->duplicate_nodes + r->volume_off + r->boundary_off_surface +
-               r->tagged_not_boundary + r->boundary_untagged + r->labels_off;
+               r->tagged_not_boundary + r->boundary_untagged + r->labels_off + r->labels_open;
   return MX_OK;
 }
 

@@ -114,6 +114,10 @@ typedef struct {
    * holds, and the relative difference */
   int region;
   double region_volume, volume_error;
+  /* the label's boundary (its faces used once, or shared with another
+   * label): edges used an odd number of times (open: a defect) and more
+   * than twice (where the label touches itself along an edge) */
+  size_t open_edges, nonmanifold_edges;
 } mx_check_label;
 
 /* Kinds of defective elements (bit k of the per-element flags). */
@@ -200,6 +204,7 @@ typedef struct {
   size_t nlabels, labels_dropped; /* beyond MX_CHECK_LABELS */
   mx_check_label labels[MX_CHECK_LABELS];
   size_t interface_faces;  /* faces between cells of two labels */
+  size_t labels_open;      /* labels whose boundary is not closed (a defect) */
   size_t labels_off;       /* labels whose volume is off their region's
                             * beyond volume_tol (a defect) */
   mx_check_ids untagged_ids;     /* elements with an untagged boundary face */

@@ -8,12 +8,14 @@
 
 #include <math.h>
 
+#include "base/scan.h"
 #include "geom/distance.h"
 #include "geom/quality.h"
 
 int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r) {
   r->nlabels = 0;
   r->labels_dropped = 0;
+  r->labels_open = 0;
   r->interface_faces = 0;
   if (!m->cell_tag) return MX_OK;
   const size_t nc = m->ncells;
@@ -28,7 +30,7 @@ int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r) 
       continue;
     }
     memmove(r->labels + k + 1, r->labels + k, (r->nlabels - k) * sizeof *r->labels);
-    r->labels[k] = (mx_check_label){t, 0, 0.0, -1, NAN, NAN};
+    r->labels[k] = (mx_check_label){t, 0, 0.0, -1, NAN, NAN, 0, 0};
     r->nlabels++;
   }
   for (size_t c = 0; c < nc; c++) {
@@ -136,4 +138,68 @@ void mx_ck_label_verdict(mx_check_report *r) {
   for (size_t k = 0; k < r->nlabels; k++)
     if (r->labels[k].region >= 0 && !(fabs(r->labels[k].volume_error) <= r->opt.volume_tol))
       r->labels_off++;
+}
+
+int mx_ck_label_boundaries(const mx_mesh_data *m, const faces *F, mx_check_report *r) {
+  if (!m->cell_tag || !r->nlabels) return MX_OK;
+  const size_t nc = m->ncells;
+  size_t cap = 0;
+  uint64_t *key = NULL;
+  for (size_t k = 0; k < r->nlabels; k++) {
+    const int32_t L = r->labels[k].label;
+    /* the edges of the faces that bound the label: used once, or shared
+     * with a cell of another label */
+    size_t n = 0;
+    for (size_t c = 0; c < nc; c++) {
+      if (m->cell_tag[c] != L) continue;
+      const int t = m->type[c];
+      for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+        const int8_t *fv = mx_cell_faces[t][f];
+        const int nv = fv[3] < 0 ? 3 : 4;
+        const uint8_t use = F->use[6 * c + (size_t)f];
+        if (use == 2) {
+          uint32_t v[4] = {0, 0, 0, 0};
+          for (int j = 0; j < nv; j++) v[j] = m->conn[8 * c + (size_t)fv[j]];
+          sort4(v, nv);
+          const int64_t s = mx_ck_find_slot(m, F, v, nv), s2 = mx_ck_find_second(m, F, v, nv);
+          const int64_t other = s == (int64_t)(6 * c + (size_t)f) ? s2 : s;
+          if (other >= 0 && m->cell_tag[other / 6] == L) continue;
+        } else if (use != 1) {
+          continue;
+        }
+        if (n + 4 > cap) {
+          const size_t nc2 = cap ? 2 * cap : 4096;
+          uint64_t *grown = mx_realloc(key, nc2 * sizeof *key);
+          if (!grown) {
+            mx_free(key);
+            return MX_ENOMEM;
+          }
+          key = grown;
+          cap = nc2;
+        }
+        for (int j = 0; j < nv; j++) {
+          const uint32_t a = m->conn[8 * c + (size_t)fv[j]], b = m->conn[8 * c + (size_t)fv[(j + 1) % nv]];
+          key[n++] = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+        }
+      }
+    }
+    const int st = n ? mx_sort_u64(key, NULL, n) : MX_OK;
+    if (st) {
+      mx_free(key);
+      return st;
+    }
+    size_t open = 0, over = 0;
+    for (size_t i = 0; i < n;) {
+      size_t j = i + 1;
+      while (j < n && key[j] == key[i]) j++;
+      open += (j - i) % 2;
+      over += j - i > 2;
+      i = j;
+    }
+    r->labels[k].open_edges = open;
+    r->labels[k].nonmanifold_edges = over;
+    r->labels_open += open > 0;
+  }
+  mx_free(key);
+  return MX_OK;
 }

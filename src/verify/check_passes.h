@@ -321,6 +321,9 @@ int mx_ck_boundary_pass(const mx_mesh_data *m, const faces *F, uint8_t *flags,
 /* check_labels.c: the labels' elements and volumes, the faces between two
  * labels. */
 int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r);
+/* Each label's boundary closed (labels_open) and its edges used more than
+ * twice, from the faces that bound it. */
+int mx_ck_label_boundaries(const mx_mesh_data *m, const faces *F, mx_check_report *r);
 /* With a closed surface: the volume of each region it cuts out (its
  * shells' nesting), each label's region (where most of its centroids lie)
  * and volume error; the whole mesh's volume then compared with the
