@@ -317,6 +317,17 @@ static const double *pseudonormal(const mx_surface_index *S, uint32_t slot,
   return S->vn + 3 * (size_t)v;
 }
 
+/* Which side of the closest feature (slot, f; closest point q) p lies on:
+ * the dot product of p - q with the feature's pseudonormal (positive
+ * outside, negative inside, 0 untold). */
+static double side_of(const mx_surface_index *S, const double p[3], const double q[3],
+                      uint32_t slot, int f) {
+  const double *n = pseudonormal(S, slot, f);
+  double r[3];
+  sub3(p, q, r);
+  return dot3(r, n);
+}
+
 /* An index built outward over closed, consistently oriented shells
  * (outward_closed): the nesting depth of p from its closest point, whose
  * shell c bounds p's region (the segment to it crosses no other shell):
@@ -332,10 +343,7 @@ static int depth_by_closest(const mx_surface_index *S, const double p[3], double
   if (dist) *dist = sqrt(d2);
   if (q) memcpy(q, qq, sizeof qq);
   if (d2 == 0.0) return -1;
-  const double *n = pseudonormal(S, slot, f);
-  double r[3];
-  sub3(p, qq, r);
-  const double g = dot3(r, n);
+  const double g = side_of(S, p, qq, slot, f);
   if (g == 0.0) return -1;
   return (int)S->shell_depth[S->shell_of[slot]] + (g < 0.0);
 }
@@ -368,10 +376,7 @@ double mx_signed_distance(const mx_surface_index *S, const double p[3],
   if (S->side) return mx_winding_number(S->side, p) > 0.5 ? -d : d;
   if (!S->nt) return d;
   if (S->closed) {
-    const double *n = pseudonormal(S, slot, f);
-    double r[3];
-    sub3(p, qq, r);
-    const double g = dot3(r, n);
+    const double g = side_of(S, p, qq, slot, f);
     if (g > 0.0) return d;
     if (g < 0.0) return -d;
   }
@@ -380,8 +385,7 @@ double mx_signed_distance(const mx_surface_index *S, const double p[3],
 
 int mx_inside(const mx_surface_index *S, const double p[3]) {
   if (S->side) return mx_winding_number(S->side, p) > 0.5;
-  if (S->outward_closed) return mx_signed_distance(S, p, NULL) <= 0.0;
-  if (!S->closed) return mx_winding_number(S, p) > 0.5;
+  if (!S->closed && !S->outward_closed) return mx_winding_number(S, p) > 0.5;
   return mx_signed_distance(S, p, NULL) <= 0.0;
 }
 
