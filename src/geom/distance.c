@@ -302,3 +302,31 @@ int mx_surface_index_build_given(mx_surface_index *S, const mx_trisoup *soup,
   return index_build(S, soup, t0, t1, ORIENT_GIVEN);
 }
 
+
+void mx_surface_index_shell_volumes(const mx_surface_index *S, double *vol, double *area) {
+  for (uint32_t c = 0; c < S->nshells; c++) {
+    vol[c] = 0.0;
+    if (area) area[c] = 0.0;
+  }
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (size_t i = 0; i < 9 * (size_t)S->nt; i++) {
+    lo[i % 3] = fmin(lo[i % 3], S->tv[i]);
+    hi[i % 3] = fmax(hi[i % 3], S->tv[i]);
+  }
+  double o[3];
+  for (int k = 0; k < 3; k++) o[k] = 0.5 * (lo[k] + hi[k]);
+  for (uint32_t i = 0; i < S->nt; i++) {
+    const double *t = S->tv + 9 * (size_t)i;
+    double p[3], q[3], r[3];
+    for (int k = 0; k < 3; k++) p[k] = t[k] - o[k], q[k] = t[3 + k] - o[k], r[k] = t[6 + k] - o[k];
+    const uint32_t c = S->shell_of[i];
+    vol[c] += S->tsign[i] * (p[0] * (q[1] * r[2] - q[2] * r[1]) - p[1] * (q[0] * r[2] - q[2] * r[0]) +
+                             p[2] * (q[0] * r[1] - q[1] * r[0])) / 6.0;
+    if (!area) continue;
+    const double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+    const double w[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+    const double x[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                         u[0] * w[1] - u[1] * w[0]};
+    area[c] += 0.5 * sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+  }
+}

@@ -197,6 +197,9 @@ int mx_surface_index_build_given(mx_surface_index *S, const mx_trisoup *soup,
  * a shell nests in another (no shell does: the same index as above). */
 int mx_surface_index_build_outward(mx_surface_index *S, const mx_trisoup *soup,
                                    uint32_t t0, uint32_t t1);
+/* Each shell's enclosed volume, signed as the index orients it (vol, nshells
+ * values), and its area (area, nshells values, or NULL). */
+void mx_surface_index_shell_volumes(const mx_surface_index *S, double *vol, double *area);
 /* 1 when a shell of the index lies inside another (shell_depth > 0). */
 int mx_surface_index_nested(const mx_surface_index *S);
 /* Of an index built outward: the number of shells around p (0 outside

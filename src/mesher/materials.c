@@ -169,28 +169,16 @@ int mx_label_materials(mx_mesher *m) {
   return MX_OK;
 }
 
-double mx_materials_domain_volume(const mx_mesher *m, double *area) {
+int mx_materials_domain_volume(const mx_mesher *m, double *volume, double *area) {
   const mx_surface_index *S = &m->SI;
-  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (size_t i = 0; i < 9 * (size_t)S->nt; i++) {
-    lo[i % 3] = fmin(lo[i % 3], S->tv[i]);
-    hi[i % 3] = fmax(hi[i % 3], S->tv[i]);
-  }
-  double o[3], v = 0.0, a = 0.0;
-  for (int k = 0; k < 3; k++) o[k] = 0.5 * (lo[k] + hi[k]);
-  for (uint32_t i = 0; i < S->nt; i++) {
-    if (S->shell_depth && S->shell_depth[S->shell_of[i]] != 0) continue;
-    const double *t = S->tv + 9 * (size_t)i;
-    double p[3], q[3], r[3];
-    for (int k = 0; k < 3; k++) p[k] = t[k] - o[k], q[k] = t[3 + k] - o[k], r[k] = t[6 + k] - o[k];
-    v += S->tsign[i] * (p[0] * (q[1] * r[2] - q[2] * r[1]) - p[1] * (q[0] * r[2] - q[2] * r[0]) +
-                        p[2] * (q[0] * r[1] - q[1] * r[0])) / 6.0;
-    const double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
-    const double w[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
-    const double c[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                         u[0] * w[1] - u[1] * w[0]};
-    a += 0.5 * sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-  }
-  if (area) *area = a;
-  return fabs(v);
+  double *vol = mx_alloc(2 * ((size_t)S->nshells + 1) * sizeof *vol);
+  if (!vol) return MX_ENOMEM;
+  double *ar = vol + S->nshells + 1, v = 0.0, a = 0.0;
+  mx_surface_index_shell_volumes(S, vol, ar);
+  for (uint32_t c = 0; c < S->nshells; c++)
+    if (!S->shell_depth || S->shell_depth[c] == 0) v += vol[c], a += ar[c];
+  mx_free(vol);
+  *volume = fabs(v);
+  *area = a;
+  return MX_OK;
 }

@@ -29,8 +29,8 @@ int mx_snap_interfaces(mx_mesher *m, uint8_t *snapped, size_t *moved);
  * with one number (src/mesher/material_names.c). */
 int mx_material_numbers(mx_mesher *m, int deepest);
 /* The volume the outermost shells of the index (built outward) enclose,
- * the domain of several materials; *area (may be NULL) their area. */
-double mx_materials_domain_volume(const mx_mesher *m, double *area);
+ * the domain of several materials, and their area. MX_ENOMEM. */
+int mx_materials_domain_volume(const mx_mesher *m, double *volume, double *area);
 /* The name of material d (its region at nesting depth d): the input file
  * whose shells bound it from outside (all of them at depth d - 1, and no
  * other file's there), without its folder and extension; "material d"

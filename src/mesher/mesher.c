@@ -405,7 +405,7 @@ int mx_volume_verdict(mx_mesher *m, double vm, size_t ncells) {
   } else if (m->p.materials) {
     /* the domain: the outermost shells' insides whole */
     if (m->ndomain != 1 || !m->have_index) return MX_OK;
-    vs = mx_materials_domain_volume(m, &area);
+    MX_CHECK(mx_materials_domain_volume(m, &vs, &area));
     what = "the input's outermost shells enclose (--materials)";
   } else {
     if (m->ndomain != 1 || m->p.repair_input) return MX_OK;

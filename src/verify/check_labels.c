@@ -70,23 +70,13 @@ int mx_ck_label_regions(const mx_mesh_data *m, const mx_trisoup *surface, mx_che
   if (!m->cell_tag || !r->nlabels || !surface->nt) return MX_OK;
   mx_surface_index S;
   MX_CHECK(mx_surface_index_build_outward(&S, surface, 0, (uint32_t)surface->nt));
-  /* each shell's volume (outward), about the centre of the surface's box */
-  double lo[3], hi[3], o[3];
-  mx_trisoup_bbox(surface, lo, hi);
-  for (int a = 0; a < 3; a++) o[a] = 0.5 * (lo[a] + hi[a]);
-  double *vol = mx_calloc(((size_t)S.nshells + 1) * sizeof *vol);
+  /* each shell's volume (outward) */
+  double *vol = mx_alloc(((size_t)S.nshells + 1) * sizeof *vol);
   if (!vol) {
     mx_surface_index_free(&S);
     return MX_ENOMEM;
   }
-  for (uint32_t i = 0; i < S.nt; i++) {
-    const double *t = S.tv + 9 * (size_t)i;
-    double p[3], q[3], w[3];
-    for (int a = 0; a < 3; a++) p[a] = t[a] - o[a], q[a] = t[3 + a] - o[a], w[a] = t[6 + a] - o[a];
-    vol[S.shell_of[i]] += S.tsign[i] * (p[0] * (q[1] * w[2] - q[2] * w[1]) -
-                                         p[1] * (q[0] * w[2] - q[2] * w[0]) +
-                                         p[2] * (q[0] * w[1] - q[1] * w[0])) / 6.0;
-  }
+  mx_surface_index_shell_volumes(&S, vol, NULL);
   /* region d (depth d: inside d shells): the shells at depth d - 1 less
    * those at depth d; the whole mesh: the outermost shells' */
   double region[66], outer = 0.0;
