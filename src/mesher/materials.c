@@ -31,8 +31,9 @@ int mx_materials_allowed(const mx_mesher *m, const char *what) {
     return MX_EINPUT;
   }
   if (what) {
-    mx_error(NULL, 0, "materials (--materials): %s is not offered yet with several materials "
-                      "(the restart file does not keep them)", what);
+    mx_error(NULL, 0, "materials (--materials): %s is not offered yet with several "
+                      "materials (restart files do not keep them, and re-meshing would lose "
+                      "them)", what);
     return MX_EINPUT;
   }
   return MX_OK;
