@@ -181,10 +181,10 @@ static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint64_t **end
 
 /* ---- pass 3: multiplicity of every face ---------------------------------- */
 
-/* The multiplicity given to the two sides of an interface face (a face of
- * two elements of different labels): the side of the lower label keeps
- * the face, the other does not. */
-enum { MULT_INTERFACE = 254, MULT_INTERFACE_OTHER = 253 };
+/* The multiplicity given to the lower label's side of an interface face (a
+ * face of two elements of different labels), which keeps the face; the
+ * other side keeps 2, not gathered. */
+enum { MULT_INTERFACE = 254 };
 
 /* mult[slot] = number of elements using that face (capped at 252), for
  * every slot that is a face; with labels (per element, or NULL), a face of
@@ -238,9 +238,8 @@ static int count_uses(const mx_mesh_view *m, const uint64_t *end,
           const uint32_t s0 = (uint32_t)keys[i].lo, s1 = (uint32_t)keys[i + 1].lo;
           const int32_t l0 = label[s0 / SLOTS], l1 = label[s1 / SLOTS];
           if (l0 != l1) {
-            const uint32_t keep = l0 < l1 ? s0 : s1, give = l0 < l1 ? s1 : s0;
+            const uint32_t keep = l0 < l1 ? s0 : s1;
             mult[keep] = MULT_INTERFACE;
-            mult[give] = MULT_INTERFACE_OTHER;
             other[keep] = l0 < l1 ? l1 : l0;
           }
         }
