@@ -37,14 +37,6 @@ int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
   return MX_OK;
 }
 
-/* Element edges by type, VTK order. */
-static const int8_t edges_of[4][12][2] = {
-    {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}},
-    {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}},
-    {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5}, {5, 3}, {0, 3}, {1, 4}, {2, 5}},
-    {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}, {7, 4}, {0, 4},
-     {1, 5}, {2, 6}, {3, 7}}};
-static const int nedges_of[4] = {6, 8, 9, 12};
 
 
 int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
@@ -87,8 +79,8 @@ int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
   for (size_t c = 0; c < nc; c++) {
     const uint32_t *v = M->conn + 8 * c;
     const int t = M->type[c];
-    for (int e = 0; e < nedges_of[t]; e++) {
-      const uint32_t a = v[edges_of[t][e][0]], b = v[edges_of[t][e][1]];
+    for (int e = 0; e < mx_cell_nedges[t]; e++) {
+      const uint32_t a = v[mx_cell_edge[t][e][0]], b = v[mx_cell_edge[t][e][1]];
       if (!cand[a] && !cand[b]) continue;
       double d2 = 0.0;
       for (int x = 0; x < 3; x++) {

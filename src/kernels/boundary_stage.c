@@ -11,7 +11,7 @@
 
 int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
                       const mx_surface_index *S, mx_mesh *M,
-                      double close_ratio, double staircase_q,
+                      const mx_interfaces *I, double close_ratio, double staircase_q,
                       mx_boundary_stats *stats, uint8_t **states_out) {
   memset(stats, 0, sizeof *stats);
   uint8_t *states = mx_alloc(M->nnodes + 1);
@@ -40,6 +40,13 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
   mx_mem_mark("b.shrink");
   stats->t_shrink = t - t1;
   t1 = t;
+  if (!st && I) {
+    st = mx_interface_stage(tr, leaves, S, I, M, &states, MX_CLEAVE_ALPHA, &stats->ifs);
+    t = mx_wtime();
+    mx_mem_mark("b.interfaces");
+    stats->t_interfaces = t - t1;
+    t1 = t;
+  }
   if (!st) stats->inverted = M->invalid; /* counted by the shrink */
   /* untangle what the shrink inverted, and lift the worst elements */
   if (!st) st = mx_untangle(M, states, S, staircase_q, 20, &stats->smoothed);

@@ -7,6 +7,7 @@
 #define MX_BOUNDARY_STAGE_H
 
 #include "kernels/boundary.h"
+#include "kernels/interfaces.h"
 #include "kernels/surface_patterns.h"
 
 typedef struct {
@@ -17,7 +18,8 @@ typedef struct {
   size_t shrunk;         /* outside nodes moved onto the surface (line 13) */
   size_t inverted;       /* elements with J_ENS < 1e-6 right after the shrink */
   size_t smoothed;       /* node moves by the untangling and smoothing */
-  double t_states, t_close, t_patterns, t_shrink, t_smooth, t_staircase;
+  mx_interface_stats ifs; /* the interfaces between materials */
+  double t_states, t_close, t_patterns, t_shrink, t_interfaces, t_smooth, t_staircase;
 } mx_boundary_stats;
 
 /* states_out (may be NULL) receives (mx_alloc) the final state of every
@@ -29,11 +31,14 @@ typedef struct {
  * here. MX_CLOSE_RATIO = 0.5 is the one that reproduces the published
  * mesher's node and element counts on the cortex (within 1% at -s 4..6,
  * against +10% for 0.3). staircase_q: 0.2 (the paper); it is also the
- * target of the untangling/smoothing step. M is edited in place. */
+ * target of the untangling/smoothing step. M is edited in place.
+ * I (NULL: none): the interfaces between nested materials, meshed after
+ * the outer boundary's shrink and before the untangling
+ * (kernels/interfaces.h). */
 #define MX_CLOSE_RATIO 0.5
 int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
                       const mx_surface_index *S, mx_mesh *M,
-                      double close_ratio, double staircase_q,
+                      const mx_interfaces *I, double close_ratio, double staircase_q,
                       mx_boundary_stats *stats, uint8_t **states_out);
 
 #endif

@@ -10,6 +10,52 @@
 #include "soa/mesh.h"
 #include "base/scan.h"
 
+static int cmp_u32(const void *a, const void *b) {
+  const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+  return (x > y) - (x < y);
+}
+
+int mx_mesh_incidence(const mx_mesh *M, const uint8_t *mark, uint64_t **off_out,
+                      uint32_t **inc_out) {
+  const size_t nn = M->nnodes, nc = M->ncells;
+  *off_out = NULL;
+  *inc_out = NULL;
+  uint64_t *off = mx_calloc((nn + 1) * sizeof *off);
+  if (!off) return MX_ENOMEM;
+  /* count, prefix sum, fill, then sort each list (the fill order depends
+   * on the threads) */
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++)
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
+      const uint32_t v = M->conn[8 * c + k];
+      if (mark[v]) __atomic_fetch_add(&off[v], 1, __ATOMIC_RELAXED);
+    }
+  const uint64_t total = mx_scan_u64(off, nn);
+  off[nn] = total;
+  uint32_t *inc = mx_alloc((total + 1) * sizeof *inc);
+  uint64_t *cur = mx_alloc((nn + 1) * sizeof *cur);
+  if (!inc || !cur) {
+    mx_free(inc);
+    mx_free(cur);
+    mx_free(off);
+    return MX_ENOMEM;
+  }
+  memcpy(cur, off, nn * sizeof *cur);
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < nc; c++)
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
+      const uint32_t v = M->conn[8 * c + k];
+      if (mark[v]) inc[__atomic_fetch_add(&cur[v], 1, __ATOMIC_RELAXED)] = (uint32_t)c;
+    }
+  mx_free(cur);
+#pragma omp parallel for schedule(dynamic, 1024)
+  for (size_t v = 0; v < nn; v++)
+    if (off[v + 1] - off[v] > 1) qsort(inc + off[v], off[v + 1] - off[v], sizeof *inc, cmp_u32);
+  *off_out = off;
+  *inc_out = inc;
+  return MX_OK;
+}
+
 int mx_mesh_keep_cells(mx_mesh *M, const uint8_t *keep) {
   const size_t nc = M->ncells;
   uint64_t *dst = mx_alloc((nc + 1) * sizeof *dst);

@@ -23,6 +23,11 @@ int mx_mesh_apply_node_ids(mx_mesh *M, uint8_t **states, const uint32_t *newid,
  * receives (mx_alloc) the new id of every old node, UINT32_MAX if dropped. */
 int mx_mesh_drop_unused_nodes(mx_mesh *M, uint8_t **states, uint32_t **newid);
 
+/* The elements of each marked node (mark[v] != 0) in increasing order:
+ * those of v are inc[off[v] .. off[v + 1]) (off: nnodes + 1 entries; an
+ * unmarked node has none). Both allocated here (mx_alloc). MX_ENOMEM. */
+int mx_mesh_incidence(const mx_mesh *M, const uint8_t *mark, uint64_t **off, uint32_t **inc);
+
 /* Recount by_type, invalid (J_ENS < 1e-6) and jens_min from M->jens. */
 void mx_mesh_summarize(mx_mesh *M);
 

@@ -12,10 +12,6 @@
 #include "soa/mesh.h"
 #include "base/scan.h"
 
-static int cmp_u32(const void *a, const void *b) {
-  const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-  return (x > y) - (x < y);
-}
 
 static double elem_jens(const mx_mesh *M, uint32_t c) {
   double x[8][3];
@@ -78,8 +74,10 @@ static double worst_of(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t 
  * once. Returns 1 when v moved. */
 static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
                      const uint64_t *off, uint8_t *mark, uint32_t v, int on_surface,
-                     double q_target) {
+                     const mx_untangle_opts *o) {
   static const double steps[] = {1.0, 0.5, 0.25, 0.125};
+  static const double along[] = {0.25, 0.1, 0.04};
+  const double q_target = o->q_target;
   const size_t e0 = off[v], e1 = off[v + 1];
   double *x = M->xyz + 3 * (size_t)v;
   const double w0 = worst_of(M, inc, e0, e1);
@@ -97,13 +95,34 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
   }
   if (!n) return 0;
   const double x0[3] = {x[0], x[1], x[2]};
+  double h = 0.0; /* the mean distance to the other nodes, for the axis moves */
+  if (o->axis_moves)
+    for (size_t e = e0; e < e1; e++) {
+      const uint32_t *cv = M->conn + 8 * (size_t)inc[e];
+      for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++) {
+        if (cv[k] == v) continue;
+        const double *y = M->xyz + 3 * (size_t)cv[k];
+        h += sqrt((y[0] - x0[0]) * (y[0] - x0[0]) + (y[1] - x0[1]) * (y[1] - x0[1]) +
+                  (y[2] - x0[2]) * (y[2] - x0[2])) / (double)n;
+      }
+    }
+  const int nsteps = (int)(sizeof steps / sizeof *steps);
+  const int ntrials = nsteps + (o->axis_moves ? 6 * (int)(sizeof along / sizeof *along) : 0);
   double best = w0, bx[3] = {x0[0], x0[1], x0[2]};
-  for (size_t t = 0; t < sizeof steps / sizeof *steps; t++) {
-    for (int a = 0; a < 3; a++) x[a] = x0[a] + steps[t] * (c[a] / (double)n - x0[a]);
+  for (int t = 0; t < ntrials; t++) {
+    if (t < nsteps) {
+      for (int a = 0; a < 3; a++) x[a] = x0[a] + steps[t] * (c[a] / (double)n - x0[a]);
+    } else { /* along an axis, both ways, three lengths */
+      const int d = (t - nsteps) % 6, l = (t - nsteps) / 6;
+      memcpy(x, x0, sizeof x0);
+      x[d / 2] += (d & 1 ? -1.0 : 1.0) * along[l] * h;
+    }
     if (on_surface) { /* a boundary node stays on the surface */
       double q[3];
       mx_closest_point(S, x, q, NULL, NULL);
       memcpy(x, q, sizeof q);
+    } else if (o->regions && mx_region_depth(o->regions, x) != o->region[v]) {
+      continue; /* an inside node stays in its region */
     }
     const double w = worst_of(M, inc, e0, e1);
     if (w > best + 1e-12) {
@@ -125,7 +144,15 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
 
 int mx_untangle(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
                     double q_target, int sweeps, size_t *moved) {
+  const mx_untangle_opts o = {q_target, sweeps, 0, NULL, NULL, NULL};
+  return mx_untangle_with(M, states, S, &o, moved);
+}
+
+int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
+                     const mx_untangle_opts *o, size_t *moved) {
   const size_t nn = M->nnodes, nc = M->ncells;
+  const double q_target = o->q_target;
+  const int sweeps = o->sweeps;
   *moved = 0;
   /* The work set: the nodes of the elements below the target. */
   uint8_t *mark = mx_calloc(nn + 1);
@@ -137,52 +164,35 @@ int mx_untangle(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
     bad++;
     for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
       const uint32_t v = M->conn[8 * c + k];
-      __atomic_store_n(&mark[v], 1, __ATOMIC_RELAXED);
+      if (!o->movable || o->movable[v]) __atomic_store_n(&mark[v], 1, __ATOMIC_RELAXED);
     }
   }
   if (!bad) {
     mx_free(mark);
     return MX_OK;
   }
-  /* Incident elements of the marked nodes: count, prefix sum, fill, then
-   * sort each list (the fill order depends on the threads). */
-  uint64_t *off = mx_calloc((nn + 1) * sizeof *off);
-  if (!off) {
+  /* Incident elements of the marked nodes */
+  uint64_t *off;
+  uint32_t *inc;
+  if (mx_mesh_incidence(M, mark, &off, &inc)) {
     mx_free(mark);
     return MX_ENOMEM;
   }
-#pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < nc; c++)
-    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
-      const uint32_t v = M->conn[8 * c + k];
-      if (mark[v]) __atomic_fetch_add(&off[v], 1, __ATOMIC_RELAXED);
-    }
-  const uint64_t total = mx_scan_u64(off, nn);
-  off[nn] = total;
-  uint32_t *inc = mx_alloc((total + 1) * sizeof *inc);
-  uint64_t *cur = mx_alloc((nn + 1) * sizeof *cur);
   size_t nw = 0;
 #pragma omp parallel for schedule(static) reduction(+ : nw)
   for (size_t v = 0; v < nn; v++) nw += mark[v];
   uint32_t *work = mx_alloc((nw + 1) * sizeof *work);
-  if (!inc || !cur || !work) {
-    mx_free(inc); mx_free(cur); mx_free(work); mx_free(off); mx_free(mark);
+  if (!work) {
+    mx_free(inc); mx_free(off); mx_free(mark);
     return MX_ENOMEM;
   }
-  memcpy(cur, off, nn * sizeof *cur);
-#pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < nc; c++)
-    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
-      const uint32_t v = M->conn[8 * c + k];
-      if (mark[v]) inc[__atomic_fetch_add(&cur[v], 1, __ATOMIC_RELAXED)] = (uint32_t)c;
-    }
   /* the work set in id order: counted per block, prefix-summed, filled */
   {
     enum { WB = 1 << 16 };
     const size_t nb = (nn + WB - 1) / WB;
     uint64_t *boff = mx_alloc((nb + 1) * sizeof *boff);
     if (!boff) {
-      mx_free(inc); mx_free(cur); mx_free(work); mx_free(off); mx_free(mark);
+      mx_free(inc); mx_free(work); mx_free(off); mx_free(mark);
       return MX_ENOMEM;
     }
 #pragma omp parallel for schedule(static)
@@ -200,12 +210,6 @@ int mx_untangle(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
     }
     mx_free(boff);
   }
-#pragma omp parallel for schedule(dynamic, 256)
-  for (size_t i = 0; i < nw; i++) {
-    const uint32_t v = work[i];
-    qsort(inc + off[v], off[v + 1] - off[v], sizeof *inc, cmp_u32);
-  }
-  mx_free(cur);
   /* Which work nodes stay on the surface: the outside ones, and the inside
    * ones on the mesh boundary (the topology does not change below). */
   uint8_t *onsurf = mx_alloc(nw + 1);
@@ -266,7 +270,7 @@ int mx_untangle(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
         const uint32_t v = work[i];
         if (!__atomic_load_n(&mark[v], __ATOMIC_RELAXED)) continue;
         mark[v] = 0;
-        changed += (size_t)move_node(M, S, inc, off, mark, v, onsurf[i], q_target);
+        changed += (size_t)move_node(M, S, inc, off, mark, v, onsurf[i], o);
       }
     }
     nm += changed;

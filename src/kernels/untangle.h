@@ -23,4 +23,20 @@
 int mx_untangle(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
                     double q_target, int sweeps, size_t *moved);
 
+/* The same with options: axis_moves adds trial points along the axes (a
+ * quarter, a tenth and a twenty-fifth of the mean distance to the node's
+ * neighbours, both ways) to those towards the centroid; movable (NULL: all)
+ * limits the work set; regions (NULL: none) keeps an inside node v where
+ * mx_region_depth(regions, x) is region[v] (several materials). */
+typedef struct {
+  double q_target;
+  int sweeps;
+  int axis_moves;
+  const uint8_t *movable;
+  const mx_surface_index *regions;
+  const uint16_t *region;
+} mx_untangle_opts;
+int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
+                     const mx_untangle_opts *o, size_t *moved);
+
 #endif

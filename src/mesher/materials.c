@@ -1,15 +1,15 @@
-/* Several materials, first part (mesher/materials.h). The region of a
- * point is its nesting depth among the input's closed shells, which the
- * surface index built with every shell outward counts
- * (mx_surface_index_build_outward, mx_region_depth): 1 between the
- * outermost shell and the next, 2 inside two shells, ... and 0 outside
- * every shell. The elements take the region of their centroid; the
- * interfaces are then made of element faces (a staircase at the octree's
- * resolution), whose nodes the full stage moves onto the shells where the
- * elements around allow (snap_interfaces), and the elements whose corners
- * still lie in two regions (both inside the outermost shell) are counted:
- * those across an interface. Cutting them by the surface patterns, as the
- * outer boundary is, is the part still to come (issue 26). */
+/* Several materials (mesher/materials.h). The region of a point is its
+ * nesting depth among the input's closed shells, which the surface index
+ * built with every shell outward counts (mx_surface_index_build_outward,
+ * mx_region_depth): 1 between the outermost shell and the next, 2 inside
+ * two shells, ... and 0 outside every shell. The full stage has cleaved
+ * the mesh along every interface (kernels/interfaces.h), so the nodes of
+ * an element that are not on a shell lie in one region, which is the
+ * element's; here each element gets it, from fresh queries (its centroid's
+ * when all its nodes are on shells), and the elements whose nodes still lie
+ * in two regions are counted: those across an interface (none after the
+ * full stage unless the untangling pulled a node across; the transition
+ * stage's mesh, not cleaved, has them). */
 #include "mesher/materials.h"
 
 #include <limits.h>
@@ -130,13 +130,6 @@ int mx_label_materials(mx_mesher *m) {
   for (size_t c = 0; !st && c < nc; c++) /* the numbers the user gave */
     if (M->material[c] >= 1 && M->material[c] <= 64)
       M->material[c] = (uint16_t)m->depth_material[M->material[c]];
-  /* the full stage: the staircase's nodes onto the interfaces, where the
-   * elements allow; they then tell no side */
-  size_t snapped_nodes = 0;
-  if (!st && m->mesh_stage == MX_STAGE_FULL) {
-    st = mx_snap_interfaces(m, need, &snapped_nodes);
-    if (!st) mx_mesh_summarize(M);
-  }
   /* the elements across an interface: nodes (not on a shell) in two
    * regions inside the outermost shell */
   size_t across = 0;
@@ -147,7 +140,7 @@ int mx_label_materials(mx_mesher *m) {
     int lo = INT_MAX, hi = -1;
     for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
       const uint32_t w = row[k];
-      if (depth[w] == NONE || need[w] == MX_SNAPPED) continue;
+      if (depth[w] == NONE) continue;
       lo = depth[w] < lo ? depth[w] : lo;
       hi = depth[w] > hi ? depth[w] : hi;
     }
@@ -156,17 +149,15 @@ int mx_label_materials(mx_mesher *m) {
   mx_free(depth);
   mx_free(need);
   MX_CHECK(st);
-  m->rec->S.materials_snapped = snapped_nodes;
   m->nmaterials = deepest;
   m->rec->S.nmaterials = deepest;
   m->rec->S.materials_across = across;
   m->rec->S.t_materials = mx_wtime() - t0;
   if (across)
     mx_warning(NULL, 0, "materials: %zu element(s) lie across an interface between two "
-                        "materials (each takes the material of its centroid): in this version "
-                        "the interfaces follow element faces, whose nodes move onto the input "
-                        "surfaces only where the elements allow; finer levels (-s) shrink it",
-               across);
+                        "materials (each takes the material of its centroid)%s", across,
+               m->mesh_stage == MX_STAGE_FULL ? "" : ": the transition stage does not cut "
+                                                     "the elements along the interfaces");
   return MX_OK;
 }
 

@@ -15,13 +15,6 @@ int mx_materials_allowed(const mx_mesher *m, const char *what);
  * built outward) and m->nmaterials (the deepest). MX_ENOMEM. */
 int mx_label_materials(mx_mesher *m);
 
-/* The nodes of the faces between two materials (full stage) moved onto
- * the shells, each to its closest point, else half-way, when every element
- * around it keeps a J_ENS no lower than its own or the mesh's worst before;
- * snapped[v] = MX_SNAPPED for the nodes moved onto a shell; *moved the
- * nodes moved (src/mesher/material_snap.c). MX_ENOMEM. */
-enum { MX_SNAPPED = 2 };
-int mx_snap_interfaces(mx_mesher *m, uint8_t *snapped, size_t *moved);
 /* The numbers and names of the materials by depth 1 .. deepest
  * (m->depth_material*): the user's for the inputs given one, the depth
  * otherwise. MX_EINPUT when an input's shells nest at several depths, two

@@ -121,6 +121,7 @@ void mx_mesher_free(mx_mesher *m) {
   if (!m) return;
   mx_tree_clear(m);
   if (m->have_index) mx_surface_index_free(&m->SI);
+  mx_interfaces_free(&m->IF);
   if (m->have_winding) mx_surface_index_free(&m->WI);
   mx_trisoup_free(&m->domain);
   mx_trisoup_free(&m->soup);

@@ -63,7 +63,6 @@ typedef struct {
   int nmaterials;           /* materials: the deepest region (0: one material) */
   size_t materials_across;  /* elements with corners in two regions */
   double t_materials;       /* seconds labelling the elements */
-  size_t materials_snapped; /* interface nodes moved onto (or towards) the shells */
 } mx_summary;
 
 /* What a call records even when it only reads the mesher: the last error,
@@ -122,6 +121,9 @@ struct mx_mesher {
 
   int have_index;
   mx_surface_index SI;
+  /* --materials with nested shells: an index per interface depth, for the
+   * boundary stage (kernels/interfaces.h); deepest 0 when not built */
+  mx_interfaces IF;
   /* --repair-input on an input with no well-defined inside
    * (winding_domain.c): the input's index, orientation as given, whose
    * winding number decides the sides; the soup's domain triangles are then

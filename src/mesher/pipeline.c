@@ -25,6 +25,13 @@ int mx_mesher_index(mx_mesher *m) {
     MX_CHECK(mx_surface_index_build_outward(&m->SI, &m->soup, 0, m->nt_domain));
   else
     MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
+  if (m->p.materials && mx_surface_index_nested(&m->SI)) {
+    const int st = mx_interfaces_build(&m->IF, &m->SI);
+    if (st) { /* built whole or not at all */
+      mx_surface_index_free(&m->SI);
+      return st;
+    }
+  }
   m->have_index = 1;
   if (m->p.repair_input) m->SI.closed = 0;
   if (m->have_winding) m->SI.side = &m->WI;
@@ -47,7 +54,8 @@ int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh
     MX_CHECK(mx_mesher_index(m));
     mx_mesher_stage(m, "boundary");
   }
-  MX_CHECK(mx_boundary_stage(&m->B.tree, leaves, &m->SI, M, m->p.close_ratio,
+  MX_CHECK(mx_boundary_stage(&m->B.tree, leaves, &m->SI, M,
+                             m->IF.deepest >= 2 ? &m->IF : NULL, m->p.close_ratio,
                              m->p.staircase_quality, bs, states));
   return mx_mesh_sort_by_leaf(M, n);
 }

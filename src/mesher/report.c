@@ -150,12 +150,17 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              s->repair_rounds, b->t_states, b->t_close, b->t_patterns, b->t_shrink,
              b->t_smooth, b->t_staircase, b->smoothed);
   }
-  char mat[128] = "";
-  if (s->nmaterials)
+  char mat[320] = "";
+  if (s->nmaterials) {
+    const mx_cleave_stats *cv = &s->boundary.ifs.cleave;
     snprintf(mat, sizeof mat,
              "\"materials\": {\"regions\": %d, \"across_interfaces\": %zu, "
-             "\"interface_nodes_moved\": %zu, \"seconds\": %.6f}, ",
-             s->nmaterials, s->materials_across, s->materials_snapped, s->t_materials);
+             "\"interfaces\": {\"warped\": %zu, \"cut\": %zu, \"neighbours_split\": %zu, "
+             "\"centres\": %zu, \"cut_nodes\": %zu, \"seconds\": %.6f}, "
+             "\"seconds\": %.6f}, ",
+             s->nmaterials, s->materials_across, cv->warped, cv->cut, cv->neighbours,
+             cv->centres, cv->cut_nodes, s->boundary.t_interfaces, s->t_materials);
+  }
   fprintf(out, "\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
          "\"nodes\": %s, \"elements\": %zu, "
          "\"by_type\": {\"hex\": %zu, \"prism\": %zu, \"pyramid\": %zu, \"tet\": %zu}, "
@@ -238,10 +243,15 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
     printf("  elements     %12zu hexahedra (the leaves, hanging nodes kept)\n",
            s->leaves);
   }
-  if (s->nmaterials)
-    printf("  materials    %12d regions by nesting depth; %zu element(s) across an interface\n"
-           "               (interfaces on element faces, not yet on the input surfaces)\n",
+  if (s->nmaterials) {
+    const mx_cleave_stats *cv = &s->boundary.ifs.cleave;
+    printf("  materials    %12d regions by nesting depth; %zu element(s) across an interface\n",
            s->nmaterials, s->materials_across);
+    if (s->full && cv->cut + cv->warped)
+      printf("               interfaces cleaved: %zu nodes moved onto them, %zu elements cut"
+             " (%zu neighbours split),\n               %zu nodes added on them, %zu centres\n",
+             cv->warped, cv->cut, cv->neighbours, cv->cut_nodes, cv->centres);
+  }
   if (s->full) {
     const mx_boundary_stats *b = &s->boundary;
     printf("  boundary     %zu nodes located; %zu moved close, %zu shrunk onto the surface\n"

@@ -14,6 +14,14 @@
 
 #include "mixoct.h" /* MX_TET, MX_PYRAMID, MX_PRISM, MX_HEX */
 static const int mx_cell_nodes[4] = {4, 5, 6, 8};
+/* The edges of each type (our node numbering), and their count. */
+static const int8_t mx_cell_edge[4][12][2] = {
+    {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}},
+    {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}},
+    {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5}, {5, 3}, {0, 3}, {1, 4}, {2, 5}},
+    {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}, {7, 4}, {0, 4},
+     {1, 5}, {2, 6}, {3, 7}}};
+static const int mx_cell_nedges[4] = {6, 8, 9, 12};
 static const int mx_vtk_cell_type[4] = {10, 14, 13, 12};
 /* Node j of a VTK cell is node mx_vtk_order[type][j] of ours (an
  * involution: the same table converts back). */
