@@ -9,6 +9,14 @@
 #include "kernels/staircase.h"
 #include "kernels/untangle.h"
 
+static int piece_of(const void *ctx, const double x[3]) {
+  return mx_interfaces_piece(ctx, x);
+}
+
+static double clearance_of(const void *ctx, const double x[3]) {
+  return mx_interfaces_clearance(ctx, x);
+}
+
 int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
                       const mx_surface_index *S, mx_mesh *M,
                       const mx_interfaces *I, double close_ratio, double staircase_q,
@@ -40,8 +48,16 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
   mx_mem_mark("b.shrink");
   stats->t_shrink = t - t1;
   t1 = t;
+  uint16_t *piece = NULL; /* with interfaces: each node's piece, kept by the untangling */
+  uint8_t *movable = NULL; /* and the nodes it may move: not those on an interface */
   if (!st && I) {
-    st = mx_interface_stage(tr, leaves, S, I, M, &states, MX_CLEAVE_ALPHA, &stats->ifs);
+    const size_t n0 = M->nnodes;
+    movable = mx_alloc(n0 + 1);
+    if (!movable) st = MX_ENOMEM;
+    for (size_t v = 0; v < n0 && !st; v++) movable[v] = states[v];
+  }
+  if (!st && I) {
+    st = mx_interface_stage(tr, leaves, I, M, &states, MX_CLEAVE_ALPHA, &piece, &stats->ifs);
     t = mx_wtime();
     mx_mem_mark("b.interfaces");
     stats->t_interfaces = t - t1;
@@ -49,7 +65,27 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
   }
   if (!st) stats->inverted = M->invalid; /* counted by the shrink */
   /* untangle what the shrink inverted, and lift the worst elements */
-  if (!st) st = mx_untangle(M, states, S, staircase_q, 20, &stats->smoothed);
+  if (!st && piece) {
+    /* the nodes on the outer boundary move on it (the domain's index), the
+     * free ones in their piece; those the interfaces put on a shell stay
+     * (their shell is not the domain's surface) */
+    const size_t n0 = M->nnodes;
+    uint8_t *mv = mx_realloc(movable, n0 + 1);
+    if (!mv) st = MX_ENOMEM;
+    else movable = mv;
+    for (size_t v = 0; v < n0 && !st; v++) {
+      const int before = v < n0 && v < stats->ifs.nodes_before ? movable[v] : MX_NODE_INSIDE;
+      movable[v] = !(piece[v] == MX_REGION_ON && before == MX_NODE_INSIDE);
+    }
+  }
+  if (!st && piece) {
+    const mx_untangle_opts o = {staircase_q, 20, 0, movable, piece_of, I, piece, clearance_of};
+    st = mx_untangle_with(M, states, S, &o, &stats->smoothed);
+  } else if (!st) {
+    st = mx_untangle(M, states, S, staircase_q, 20, &stats->smoothed);
+  }
+  mx_free(piece);
+  mx_free(movable);
   t = mx_wtime();
   mx_mem_mark("b.smooth");
   stats->t_smooth = t - t1;

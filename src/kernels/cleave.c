@@ -7,14 +7,11 @@
 #include "base/common.h"
 #include "geom/quality.h"
 #include "kernels/boundary.h"
+#include "kernels/interfaces.h"
 #include "kernels/mesh_edit.h"
 #include "kernels/untangle.h"
 
 enum { SIDE_ON = 0, SIDE_A = 1, SIDE_B = 2 };
-
-static inline int side_of(uint16_t d, int k) {
-  return d == MX_REGION_ON ? SIDE_ON : d >= k ? SIDE_A : SIDE_B;
-}
 
 static inline uint64_t dbits(double d) {
   uint64_t u;
@@ -237,10 +234,12 @@ static void quad_key(const uint32_t *q, uint64_t *k1, uint64_t *k2) {
 
 typedef struct {
   mx_mesh *M;
-  const mx_surface_index *S, *Sk;
-  int k;
+  const mx_interfaces *I;
+  uint32_t piece;    /* the pass: inside this piece is side A */
+  const mx_surface_index *Sk; /* its index */
+  const uint8_t *inA; /* per piece value (piece + 1): 1 when within the pass's piece */
   double alpha;
-  uint16_t *depth;   /* the old nodes' */
+  uint16_t *depth;   /* the old nodes' piece values (kernels/interfaces.h) */
   uint8_t *moved;    /* the old nodes warped */
   double *sd;        /* the old nodes' signed distances (nodes of cut elements) */
   table edges;       /* (lo, hi) -> cut node id */
@@ -248,6 +247,10 @@ typedef struct {
   cells C;
   size_t nn;
 } cleaver;
+
+static inline int side_of(const cleaver *W, uint16_t d) {
+  return d == MX_REGION_ON ? SIDE_ON : W->inA[d] ? SIDE_A : SIDE_B;
+}
 
 static uint16_t node_depth(const cleaver *W, uint32_t v) {
   return v < W->nn ? W->depth[v] : W->N.depth[v - W->nn];
@@ -291,7 +294,7 @@ static int emit(cleaver *W, int type, const uint32_t *v, uint8_t level, uint32_t
 static int cut_tet(cleaver *W, const uint32_t t[4], uint8_t level, uint32_t leaf) {
   int s[4], na = 0, nb = 0;
   for (int i = 0; i < 4; i++) {
-    s[i] = side_of(node_depth(W, t[i]), W->k);
+    s[i] = side_of(W, node_depth(W, t[i]));
     na += s[i] == SIDE_A;
     nb += s[i] == SIDE_B;
   }
@@ -399,7 +402,6 @@ static int face_pieces(cleaver *W, const uint32_t *row, const int8_t *f, uint32_
 static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
   mx_mesh *M = W->M;
   const size_t nn = W->nn, nc = M->ncells;
-  const int k = W->k;
   uint64_t *best = mx_alloc((nn + 1) * sizeof *best);
   uint32_t *bto = mx_alloc((nn + 1) * sizeof *bto);
   uint8_t *lock = mx_calloc(nn + 1);
@@ -413,7 +415,7 @@ static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
     const uint32_t *row = M->conn + 8 * c;
     const int nv = mx_cell_nodes[M->type[c]];
     int sides = 0;
-    for (int i = 0; i < nv; i++) sides |= 1 << side_of(W->depth[row[i]], k);
+    for (int i = 0; i < nv; i++) sides |= 1 << side_of(W, W->depth[row[i]]);
     if ((sides & 6) != 6) continue;
     for (int i = 0; i < nv; i++) __atomic_store_n(&flag[row[i]], 1, __ATOMIC_RELAXED);
   }
@@ -437,7 +439,7 @@ static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
     for (int e = 0; e < nv * nv; e++) {
       if (e / nv >= e % nv) continue;
       uint32_t a = row[e / nv], b = row[e % nv];
-      int sa = side_of(W->depth[a], k), sb = side_of(W->depth[b], k);
+      int sa = side_of(W, W->depth[a]), sb = side_of(W, W->depth[b]);
       if (sa == SIDE_B && sb == SIDE_A) {
         const uint32_t x = a;
         a = b;
@@ -483,7 +485,7 @@ static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
   for (size_t v = 0; v < nn; v++) {
     if (bto[v] == UINT32_MAX) continue;
     const uint32_t o = bto[v];
-    const int va = side_of(W->depth[v], k) == SIDE_A;
+    const int va = side_of(W, W->depth[v]) == SIDE_A;
     const double *p = M->xyz + 3 * (va ? v : o), *q = M->xyz + 3 * (size_t)(va ? o : v);
     crossing(W->Sk, p, q, W->sd[va ? v : o], W->sd[va ? o : v], target + 3 * v);
   }
@@ -523,7 +525,7 @@ static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
   mx_free(inc);
   mx_free(target);
   mx_free(bto);
-  *warped = n;
+  *warped += n;
   return st;
 }
 
@@ -545,23 +547,23 @@ static uint16_t cut_centre(const cleaver *W, const uint32_t *row, int t, double 
     const double f = W->alpha * near / gap;
     for (int a = 0; a < 3; a++) x[a] = q[a] + f * (x[a] - q[a]);
   }
-  int r = mx_region_depth(W->S, x);
-  if (g < 0.0 && r < W->k) r = W->k;
-  if (g >= 0.0 && r >= W->k) r = W->k - 1;
-  return (uint16_t)(r > MX_REGION_ON - 1 ? MX_REGION_ON - 1 : r);
+  int r = mx_interfaces_piece(W->I, x); /* on the side the signed distance says */
+  if (g < 0.0 && !W->inA[r]) r = (int)W->piece + 1;
+  if (g >= 0.0 && W->inA[r]) r = W->I->parent[W->piece] + 1;
+  return (uint16_t)r;
 }
 
 /* Which quad faces of cut element row (centre region cd) are split into
  * triangles: those holding a node on a side other than the centre's (the
  * pyramid on the face would cross the interface); bit f for face f. */
 static uint8_t split_faces(const cleaver *W, const uint32_t *row, int t, uint16_t cd) {
-  const int cs = side_of(cd, W->k);
+  const int cs = side_of(W, cd);
   uint8_t m = 0;
   for (int f = 0; f < mx_cell_nfaces[t]; f++) {
     const int8_t *fv = mx_cell_faces[t][f];
     if (fv[3] < 0) continue;
     int sides = 0;
-    for (int i = 0; i < 4; i++) sides |= 1 << side_of(W->depth[row[fv[i]]], W->k);
+    for (int i = 0; i < 4; i++) sides |= 1 << side_of(W, W->depth[row[fv[i]]]);
     sides &= (1 << SIDE_A) | (1 << SIDE_B);
     if (t == MX_PYRAMID || sides == ((1 << SIDE_A) | (1 << SIDE_B)) ||
         (sides & ~(1 << cs)))
@@ -573,7 +575,6 @@ static uint8_t split_faces(const cleaver *W, const uint32_t *row, int t, uint16_
 static int cleave(cleaver *W, mx_cleave_stats *stats) {
   mx_mesh *M = W->M;
   const size_t nn = W->nn, nc = M->ncells;
-  const int k = W->k;
   uint8_t *flag = mx_calloc(nn + 1);
   W->sd = mx_alloc((nn + 1) * sizeof *W->sd);
   W->moved = mx_calloc(nn + 1);
@@ -596,7 +597,7 @@ static int cleave(cleaver *W, mx_cleave_stats *stats) {
     const uint32_t *row = M->conn + 8 * c;
     const int nv = mx_cell_nodes[M->type[c]];
     int sides = 0;
-    for (int i = 0; i < nv; i++) sides |= 1 << side_of(W->depth[row[i]], k);
+    for (int i = 0; i < nv; i++) sides |= 1 << side_of(W, W->depth[row[i]]);
     slot[c] = UINT32_MAX;
     if ((sides & 6) == 6) {
       what[c] = 1;
@@ -698,7 +699,7 @@ static int cleave(cleaver *W, mx_cleave_stats *stats) {
         d = 0;
         for (int i = 0; i < nv; i++)
           if (W->depth[row[i]] != MX_REGION_ON) d = W->depth[row[i]];
-        if (d == 0) d = (uint16_t)mx_region_depth(W->S, x);
+        if (d == 0) d = (uint16_t)mx_interfaces_piece(W->I, x);
       }
       st = added_push(&W->N, x, d, UINT32_MAX, UINT32_MAX);
       if (st) break;
@@ -768,10 +769,19 @@ static int finish(cleaver *W, mx_cleave_stats *stats) {
   return MX_OK;
 }
 
+static int piece_of(const void *ctx, const double x[3]) {
+  return mx_interfaces_piece(ctx, x);
+}
+
+static double clearance_of(const void *ctx, const double x[3]) {
+  return mx_interfaces_clearance(ctx, x);
+}
+
 /* After the cut: the untangling (kernels/untangle.h, with moves along the
- * axes too) on the elements below the floor, moving the free nodes (each
- * kept in its region) and the nodes the cleaving put on the interface
- * (kept on it); the nodes on other shells stay. */
+ * axes too) on the elements below the floor, moving the nodes of the band
+ * the cleaving changed: the free ones (each kept in its region) and those
+ * the cleaving put on the interface (kept on it); the nodes on other shells
+ * stay. */
 static int smooth_band(cleaver *W, size_t *moves) {
   mx_mesh *M = W->M;
   const size_t nn = M->nnodes, n0 = W->nn;
@@ -781,34 +791,50 @@ static int smooth_band(cleaver *W, size_t *moves) {
     mx_free(movable);
     return MX_ENOMEM;
   }
+  /* the band: the nodes of the elements with a node the cleaving made or
+   * moved */
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < nn; v++) movable[v] = 0;
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++) {
+    const uint32_t *row = M->conn + 8 * c;
+    const int nv = mx_cell_nodes[M->type[c]];
+    int band = 0;
+    for (int i = 0; i < nv && !band; i++) band = row[i] >= n0 || W->moved[row[i]];
+    if (band)
+      for (int i = 0; i < nv; i++) __atomic_store_n(&movable[row[i]], 1, __ATOMIC_RELAXED);
+  }
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < nn; v++) {
     const int on = W->depth[v] == MX_REGION_ON;
     states[v] = on ? MX_NODE_OUTSIDE : MX_NODE_INSIDE;
-    movable[v] = !on || v >= n0 || W->moved[v];
+    movable[v] = movable[v] && (!on || v >= n0 || W->moved[v]);
   }
-  const mx_untangle_opts o = {MX_CLEAVE_FLOOR, 8, 1, movable, W->S, W->depth};
+  const mx_untangle_opts o = {MX_CLEAVE_FLOOR, 8, 3, movable, piece_of, W->I, W->depth, clearance_of};
   const int st = mx_untangle_with(M, states, W->Sk, &o, moves);
   mx_free(states);
   mx_free(movable);
   return st;
 }
 
-int mx_cleave_interface(mx_mesh *M, uint16_t **depth, const mx_surface_index *S,
-                        const mx_surface_index *Sk, int k, double alpha,
-                        mx_cleave_stats *stats) {
+int mx_cleave_interface(mx_mesh *M, uint16_t **piece, const mx_interfaces *I, uint32_t p,
+                        double alpha, mx_cleave_stats *stats) {
   cleaver W;
   memset(&W, 0, sizeof W);
+  uint8_t *inA = mx_alloc(I->npieces + 2);
+  if (!inA) return MX_ENOMEM;
+  for (uint32_t q = 0; q <= I->npieces; q++) inA[q] = (uint8_t)mx_interfaces_within(I, (int)q, p);
   W.M = M;
-  W.S = S;
-  W.Sk = Sk;
-  W.k = k;
+  W.I = I;
+  W.piece = p;
+  W.Sk = &I->index[p];
+  W.inA = inA;
   W.alpha = alpha;
-  W.depth = *depth;
+  W.depth = *piece;
   W.nn = M->nnodes;
   int st = cleave(&W, stats);
   if (!st) st = finish(&W, stats);
-  *depth = W.depth;
+  *piece = W.depth;
   /* J_ENS of the pieces and of the elements with a warped node */
   if (!st) {
 #pragma omp parallel for schedule(dynamic, 1024)
@@ -834,5 +860,6 @@ int mx_cleave_interface(mx_mesh *M, uint16_t **depth, const mx_surface_index *S,
   mx_free(W.N.ea);
   mx_free(W.N.eb);
   cells_free(&W.C);
+  mx_free(inA);
   return st;
 }

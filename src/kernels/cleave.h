@@ -50,13 +50,13 @@ typedef struct {
   size_t smoothed;   /* node moves of the smoothing after the cut */
 } mx_cleave_stats;
 
-/* Steps 1 to 3 for interface k (Sk: the index of its shells, inside them
- * side A; S: the index of every shell, for the regions of new centres).
- * *depth: the region of every node (MX_REGION_ON on a shell), grown with
- * the new nodes; M keeps its elements in their order, each replaced by its
- * pieces in place, with J_ENS. alpha in (0, 0.5). MX_ENOMEM. */
-int mx_cleave_interface(mx_mesh *M, uint16_t **depth, const mx_surface_index *S,
-                        const mx_surface_index *Sk, int k, double alpha,
-                        mx_cleave_stats *stats);
+/* Steps 1 to 3 for the pass of piece p of I (kernels/interfaces.h): side A
+ * inside p, the interface p's surface. *piece: the piece value of every
+ * node (MX_REGION_ON on a shell), grown with the new nodes; M keeps its
+ * elements in their order, each replaced by its pieces in place, with
+ * J_ENS. alpha in (0, 0.5). MX_ENOMEM. */
+struct mx_interfaces_s;
+int mx_cleave_interface(mx_mesh *M, uint16_t **piece, const struct mx_interfaces_s *I,
+                        uint32_t p, double alpha, mx_cleave_stats *stats);
 
 #endif

@@ -53,7 +53,10 @@ double mx_estimate_bytes(const mx_trisoup *soup, uint32_t nt_domain,
   }
   for (int r = 0; r < req->nregions; r++) {
     const double h = ldexp(g->side, -req->rlevel[r]);
-    leaves += fmin(bbox_volume(soup, region_t0[r], region_t0[r + 1]), vol) / (h * h * h);
+    if ((req->meet_only >> r) & 1) /* a surface: as the input surface's */
+      leaves += 3.2 * area(soup, region_t0[r], region_t0[r + 1]) / (h * h);
+    else
+      leaves += fmin(bbox_volume(soup, region_t0[r], region_t0[r + 1]), vol) / (h * h * h);
   }
   /* bytes per leaf at the peak (mx_estimate_bytes_leaves), on this
    * estimate of the leaves */

@@ -1,6 +1,8 @@
-/* The interfaces between nested materials: see kernels/interfaces.h. */
+/* The interfaces between materials: see kernels/interfaces.h. */
 #include "kernels/interfaces.h"
 
+#include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "base/common.h"
@@ -9,110 +11,283 @@
 
 enum { ON = MX_REGION_ON }; /* a node on a shell: no region */
 
-int mx_interfaces_build(mx_interfaces *I, const mx_surface_index *S) {
+static int cmp_u32(const void *a, const void *b) {
+  const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+  return (x > y) - (x < y);
+}
+
+/* The triangles tris[0 .. n) of src as a soup of their own, with the
+ * vertices they use (in order of first use). map: src->nv entries of
+ * UINT32_MAX, left so. */
+static int sub_soup(const mx_trisoup *src, const uint32_t *tris, size_t n, uint32_t *map,
+                    mx_trisoup *d) {
+  memset(d, 0, sizeof *d);
+  int st = mx_trisoup_reserve(d, 0, n);
+  size_t nv = 0;
+  for (size_t i = 0; i < n && !st; i++) {
+    const uint32_t *t = src->tri + 3 * (size_t)tris[i];
+    uint32_t w[3];
+    for (int k = 0; k < 3 && !st; k++) {
+      if (map[t[k]] == UINT32_MAX) {
+        const double c[3] = {src->x[t[k]], src->y[t[k]], src->z[t[k]]};
+        map[t[k]] = (uint32_t)nv;
+        st = mx_trisoup_set_vertex(d, nv++, c);
+      }
+      w[k] = map[t[k]];
+    }
+    if (!st) st = mx_trisoup_add_triangle(d, w[0], w[1], w[2]);
+  }
+  for (size_t i = 0; i < n; i++)
+    for (int k = 0; k < 3; k++) map[src->tri[3 * (size_t)tris[i] + k]] = UINT32_MAX;
+  if (st) mx_trisoup_free(d);
+  return st == MX_EINPUT ? MX_ENOMEM : st; /* reserve's "too large" */
+}
+
+void mx_interfaces_free(mx_interfaces *I) {
+  for (uint32_t p = 0; I->index && p < I->npieces; p++)
+    if (I->index[p].tri_id) mx_surface_index_free(&I->index[p]);
+  for (uint32_t p = 0; I->soup && p < I->npieces; p++) mx_trisoup_free(&I->soup[p]);
+  mx_free(I->index);
+  mx_free(I->soup);
+  mx_free(I->parent);
+  mx_free(I->depth);
+  mx_free(I->file);
+  mx_free(I->region);
+  mx_free(I->pass);
   memset(I, 0, sizeof *I);
-  uint32_t dmax = 0;
-  for (uint32_t c = 0; S->shell_depth && c < S->nshells; c++)
-    if (S->shell_depth[c] > dmax) dmax = S->shell_depth[c];
-  I->deepest = (int)dmax + 1;
-  if (I->deepest < 2) return MX_OK;
-  I->soup = mx_calloc((size_t)(I->deepest + 1) * sizeof *I->soup);
-  I->level = mx_calloc((size_t)(I->deepest + 1) * sizeof *I->level);
-  if (!I->soup || !I->level) {
-    mx_interfaces_free(I);
-    return MX_ENOMEM;
+}
+
+/* The pieces of one file: its shells (connected through manifold edges,
+ * as an index finds them), appended to I with their triangles. */
+static int file_pieces(mx_interfaces *I, const mx_trisoup *src, const uint32_t *tris, size_t n,
+                       uint16_t file, const uint8_t *shared, uint8_t *shares, uint32_t *map) {
+  mx_trisoup fs;
+  int st = sub_soup(src, tris, n, map, &fs);
+  mx_surface_index S;
+  memset(&S, 0, sizeof S);
+  if (!st) st = mx_surface_index_build(&S, &fs, 0, (uint32_t)fs.nt);
+  if (!st && I->npieces + S.nshells > MX_MAX_PIECES) {
+    mx_error(NULL, 0, "materials: more than %d closed shells in the inputs", MX_MAX_PIECES);
+    st = MX_EINPUT;
   }
-  const mx_trisoup *src = S->soup;
-  int st = MX_OK;
-  for (int k = 2; k <= I->deepest && !st; k++) {
-    mx_trisoup *d = &I->soup[k];
-    /* every vertex (their ids kept), the triangles of the shells at depth k - 1 */
-    st = mx_trisoup_reserve(d, src->nv, 0);
-    for (size_t v = 0; v < src->nv && !st; v++) {
-      const double c[3] = {src->x[v], src->y[v], src->z[v]};
-      st = mx_trisoup_set_vertex(d, v, c);
-    }
-    for (uint32_t i = 0; i < S->nt && !st; i++) {
-      if (S->shell_depth[S->shell_of[i]] != (uint32_t)(k - 1)) continue;
-      const uint32_t *t = src->tri + 3 * (size_t)S->tri_id[i];
-      st = mx_trisoup_add_triangle(d, t[0], t[1], t[2]);
-    }
-    if (!st) st = mx_surface_index_build(&I->level[k], d, 0, (uint32_t)d->nt);
-    if (st) st = st == MX_EINPUT ? MX_ENOMEM : st; /* reserve's "too large" */
+  /* each shell's triangles, in the file's order: bucketed by shell */
+  uint32_t *list = st ? NULL : mx_alloc((n + 1) * sizeof *list);
+  size_t *off = st ? NULL : mx_calloc(((size_t)S.nshells + 2) * sizeof *off);
+  if (!st && (!list || !off)) st = MX_ENOMEM;
+  if (!st) {
+    for (uint32_t i = 0; i < S.nt; i++) off[S.shell_of[i] + 1]++;
+    for (uint32_t c = 0; c < S.nshells; c++) off[c + 1] += off[c];
+    for (uint32_t i = 0; i < S.nt; i++) list[off[S.shell_of[i]]++] = tris[S.tri_id[i]];
+    for (uint32_t c = S.nshells; c > 0; c--) off[c] = off[c - 1];
+    off[0] = 0;
   }
+  for (uint32_t c = 0; c < S.nshells && !st; c++) {
+    const size_t k = off[c + 1] - off[c];
+    uint32_t *mine = list + off[c];
+    qsort(mine, k, sizeof *mine, cmp_u32);
+    const uint32_t p = I->npieces;
+    shares[p] = 0;
+    for (size_t i = 0; shared && i < k; i++) shares[p] |= shared[mine[i]];
+    st = sub_soup(src, mine, k, map, &I->soup[p]);
+    if (!st) st = mx_surface_index_build(&I->index[p], &I->soup[p], 0, (uint32_t)k);
+    if (st) { /* this piece's part: the caller frees the pieces counted */
+      mx_trisoup_free(&I->soup[p]);
+      break;
+    }
+    I->file[p] = file;
+    I->npieces++;
+  }
+  mx_free(list);
+  mx_free(off);
+  if (S.tri_id) mx_surface_index_free(&S);
+  mx_trisoup_free(&fs);
+  return st;
+}
+
+/* 1 when piece q lies inside piece p: the first vertex of q off p's
+ * surface (beyond a hair of the box) is inside p. */
+static int piece_inside(const mx_interfaces *I, uint32_t q, uint32_t p) {
+  const mx_trisoup *s = &I->soup[q];
+  double lo[3], hi[3];
+  mx_trisoup_bbox(&I->soup[p], lo, hi);
+  const double hair = 1e-9 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
+                                  (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                  (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  for (size_t t = 0; t < s->nt; t++)
+    for (int k = 0; k < 3; k++) {
+      const uint32_t v = s->tri[3 * t + k];
+      const double x[3] = {s->x[v], s->y[v], s->z[v]};
+      const double d = mx_signed_distance(&I->index[p], x, NULL);
+      if (fabs(d) > hair) return d < 0.0;
+    }
+  return 0;
+}
+
+int mx_interfaces_build(mx_interfaces *I, const mx_trisoup *src, uint32_t nt,
+                        const uint8_t *shared) {
+  memset(I, 0, sizeof *I);
+  I->soup = mx_calloc((MX_MAX_PIECES + 1) * sizeof *I->soup);
+  I->index = mx_calloc((MX_MAX_PIECES + 1) * sizeof *I->index);
+  I->parent = mx_alloc((MX_MAX_PIECES + 1) * sizeof *I->parent);
+  I->depth = mx_alloc((MX_MAX_PIECES + 1) * sizeof *I->depth);
+  I->file = mx_alloc((MX_MAX_PIECES + 1) * sizeof *I->file);
+  I->region = mx_alloc((MX_MAX_PIECES + 1) * sizeof *I->region);
+  I->pass = mx_alloc((MX_MAX_PIECES + 1) * sizeof *I->pass);
+  uint32_t *tris = mx_alloc(((size_t)nt + 1) * sizeof *tris);
+  uint8_t *shares = mx_alloc(MX_MAX_PIECES + 1);
+  uint32_t *map = mx_alloc((src->nv + 1) * sizeof *map);
+  if (map)
+    for (size_t v = 0; v < src->nv; v++) map[v] = UINT32_MAX;
+  int st = !I->soup || !I->index || !I->parent || !I->depth || !I->file || !I->region ||
+                   !I->pass || !tris || !shares || !map
+               ? MX_ENOMEM
+               : MX_OK;
+  /* the files' shells */
+  uint16_t nfiles = 0;
+  for (uint32_t t = 0; t < nt; t++)
+    if (src->shell[t] + 1 > nfiles) nfiles = (uint16_t)(src->shell[t] + 1);
+  for (uint16_t f = 0; f < nfiles && !st; f++) {
+    size_t n = 0;
+    for (uint32_t t = 0; t < nt; t++)
+      if (src->shell[t] == f) tris[n++] = t;
+    if (n) st = file_pieces(I, src, tris, n, f, shared, shares, map);
+  }
+  mx_free(tris);
+  mx_free(map);
+  const uint32_t np = I->npieces;
+  /* the forest: each piece's parent is the innermost piece containing it
+   * (the one containing it that the most others contain) */
+  uint8_t *in = st ? NULL : mx_calloc((size_t)np * np + 1);
+  if (!st && !in) st = MX_ENOMEM;
+  for (uint32_t q = 0; q < np && !st; q++)
+    for (uint32_t p = 0; p < np; p++)
+      if (p != q) in[(size_t)q * np + p] = (uint8_t)piece_inside(I, q, p);
+  for (uint32_t q = 0; q < np && !st; q++) {
+    int depth = 0;
+    for (uint32_t p = 0; p < np; p++) depth += in[(size_t)q * np + p];
+    I->depth[q] = (uint16_t)depth;
+  }
+  for (uint32_t q = 0; q < np && !st; q++) {
+    I->parent[q] = -1;
+    for (uint32_t p = 0; p < np; p++)
+      if (in[(size_t)q * np + p] && I->depth[p] + 1 == I->depth[q]) I->parent[q] = (int32_t)p;
+  }
+  mx_free(in);
+  /* regions by (depth, file) */
+  int deepest = 0;
+  for (uint32_t q = 0; q < np; q++) deepest = I->depth[q] > deepest ? I->depth[q] : deepest;
+  int next = deepest + 2;
+  for (int d = 0; d <= deepest && !st; d++) {
+    int first = -1;
+    for (uint16_t f = 0; f < nfiles; f++) {
+      int has = 0;
+      for (uint32_t q = 0; q < np; q++) has |= I->depth[q] == d && I->file[q] == f;
+      if (!has) continue;
+      const int r = first < 0 ? d + 1 : next++;
+      if (first < 0) first = f;
+      for (uint32_t q = 0; q < np; q++)
+        if (I->depth[q] == d && I->file[q] == f) I->region[q] = (uint16_t)r;
+    }
+  }
+  I->nregions = next - 1;
+  /* the passes: nested pieces, and pieces with a shared triangle */
+  for (int d = 0; d <= deepest && !st; d++)
+    for (uint32_t q = 0; q < np; q++) {
+      if (I->depth[q] != d) continue;
+      if (d > 0 || shares[q]) I->pass[I->npasses++] = q;
+    }
+  mx_free(shares);
   if (st) mx_interfaces_free(I);
   return st;
 }
 
-void mx_interfaces_free(mx_interfaces *I) {
-  for (int k = 2; I->level && k <= I->deepest; k++)
-    if (I->level[k].nodes || I->level[k].tri_id) mx_surface_index_free(&I->level[k]);
-  for (int k = 2; I->soup && k <= I->deepest; k++) mx_trisoup_free(&I->soup[k]);
-  mx_free(I->level);
-  mx_free(I->soup);
-  memset(I, 0, sizeof *I);
+int mx_interfaces_piece(const mx_interfaces *I, const double p[3]) {
+  int at = -1; /* descend from the roots */
+  for (;;) {
+    int found = -1;
+    for (uint32_t q = 0; q < I->npieces && found < 0; q++)
+      if (I->parent[q] == at && mx_inside(&I->index[q], p)) found = (int)q;
+    if (found < 0) return at + 1;
+    at = found;
+  }
 }
 
-/* The region of every node of M: ON for the nodes on a shell (state
+double mx_interfaces_clearance(const mx_interfaces *I, const double p[3]) {
+  double best = INFINITY, q[3];
+  for (uint32_t k = 0; k < I->npieces; k++) {
+    const double d = mx_closest_point_within(&I->index[k], p, best, q);
+    if (d < best) best = d;
+  }
+  return best;
+}
+
+int mx_interfaces_within(const mx_interfaces *I, int q, uint32_t p) {
+  for (int x = q - 1; x >= 0; x = I->parent[x])
+    if ((uint32_t)x == p) return 1;
+  return 0;
+}
+
+/* The piece of every node of M: ON for the nodes on a shell (state
  * outside), the leaf's for the nodes of a leaf meeting no triangle (one
  * query per leaf, at an element's centroid), a query per node otherwise. */
-static int node_regions(const mx_tree *tr, const uint32_t *leaves, const mx_surface_index *S,
-                        const mx_mesh *M, const uint8_t *states, uint16_t *depth,
-                        size_t *located) {
+static int node_pieces(const mx_tree *tr, const uint32_t *leaves, const mx_interfaces *I,
+                       const mx_mesh *M, const uint8_t *states, uint16_t *piece,
+                       size_t *located) {
   const size_t nn = M->nnodes, nc = M->ncells;
   enum { UNKNOWN = ON - 1 };
   size_t nl = 0;
   for (size_t c = 0; c < nc; c++)
     if (M->leaf[c] + (size_t)1 > nl) nl = M->leaf[c] + (size_t)1;
-  int32_t *leaf_depth = mx_alloc((nl + 1) * sizeof *leaf_depth);
-  if (!leaf_depth) return MX_ENOMEM;
+  int32_t *leaf_piece = mx_alloc((nl + 1) * sizeof *leaf_piece);
+  if (!leaf_piece) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
-  for (size_t l = 0; l < nl; l++) leaf_depth[l] = -1;
+  for (size_t l = 0; l < nl; l++) leaf_piece[l] = -1;
 #pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < nn; v++) depth[v] = states[v] == MX_NODE_OUTSIDE ? ON : UNKNOWN;
-  /* nodes of leaves meeting no triangle: their leaf's region (the same
-   * value from every such leaf: writes may race benignly) */
+  for (size_t v = 0; v < nn; v++) piece[v] = states[v] == MX_NODE_OUTSIDE ? ON : UNKNOWN;
+  /* nodes of leaves meeting no triangle (the domain's, the interfaces',
+   * the region surfaces'): their leaf's piece (the same value from every
+   * such leaf: writes may race benignly) */
 #pragma omp parallel for schedule(dynamic, 1024)
   for (size_t c = 0; c < nc; c++) {
-    if (tr->oct.flags[leaves[M->leaf[c]]] & MX_OCT_SURFACE) continue;
+    if (tr->oct.tri_cnt[leaves[M->leaf[c]]]) continue;
     const uint32_t *row = M->conn + 8 * c;
     const int nv = mx_cell_nodes[M->type[c]];
-    int32_t d = __atomic_load_n(&leaf_depth[M->leaf[c]], __ATOMIC_RELAXED);
+    int32_t d = __atomic_load_n(&leaf_piece[M->leaf[c]], __ATOMIC_RELAXED);
     if (d < 0) {
       double p[3] = {0, 0, 0};
       for (int k = 0; k < nv; k++)
         for (int a = 0; a < 3; a++) p[a] += M->xyz[3 * (size_t)row[k] + a] / nv;
-      d = mx_region_depth(S, p);
-      if (d > ON - 2) d = ON - 2;
-      __atomic_store_n(&leaf_depth[M->leaf[c]], d, __ATOMIC_RELAXED);
+      d = mx_interfaces_piece(I, p);
+      __atomic_store_n(&leaf_piece[M->leaf[c]], d, __ATOMIC_RELAXED);
     }
     for (int k = 0; k < nv; k++)
-      if (__atomic_load_n(&depth[row[k]], __ATOMIC_RELAXED) == UNKNOWN)
-        __atomic_store_n(&depth[row[k]], (uint16_t)d, __ATOMIC_RELAXED);
+      if (__atomic_load_n(&piece[row[k]], __ATOMIC_RELAXED) == UNKNOWN)
+        __atomic_store_n(&piece[row[k]], (uint16_t)d, __ATOMIC_RELAXED);
   }
-  mx_free(leaf_depth);
+  mx_free(leaf_piece);
   size_t q = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : q)
   for (size_t v = 0; v < nn; v++) {
-    if (depth[v] != UNKNOWN) continue;
-    int d = mx_region_depth(S, M->xyz + 3 * v);
-    depth[v] = (uint16_t)(d > ON - 2 ? ON - 2 : d);
+    if (piece[v] != UNKNOWN) continue;
+    piece[v] = (uint16_t)mx_interfaces_piece(I, M->xyz + 3 * v);
     q++;
   }
   *located += q;
   return MX_OK;
 }
 
-int mx_interface_stage(const mx_tree *tr, const uint32_t *leaves, const mx_surface_index *S,
-                       const mx_interfaces *I, mx_mesh *M, uint8_t **states,
-                       double alpha, mx_interface_stats *stats) {
+int mx_interface_stage(const mx_tree *tr, const uint32_t *leaves, const mx_interfaces *I,
+                       mx_mesh *M, uint8_t **states, double alpha, uint16_t **piece_out,
+                       mx_interface_stats *stats) {
   memset(stats, 0, sizeof *stats);
-  if (!I || I->deepest < 2) return MX_OK;
-  uint16_t *depth = mx_alloc((M->nnodes + 1) * sizeof *depth);
-  if (!depth) return MX_ENOMEM;
-  int rc = node_regions(tr, leaves, S, M, *states, depth, &stats->located);
-  for (int k = 2; k <= I->deepest && !rc; k++)
-    rc = mx_cleave_interface(M, &depth, S, &I->level[k], k, alpha, &stats->cleave);
+  stats->nodes_before = M->nnodes;
+  if (piece_out) *piece_out = NULL;
+  if (!I || !I->npasses) return MX_OK;
+  uint16_t *piece = mx_alloc((M->nnodes + 1) * sizeof *piece);
+  if (!piece) return MX_ENOMEM;
+  int rc = node_pieces(tr, leaves, I, M, *states, piece, &stats->located);
+  for (uint32_t k = 0; k < I->npasses && !rc; k++)
+    rc = mx_cleave_interface(M, &piece, I, I->pass[k], alpha, &stats->cleave);
   if (!rc) {
     uint8_t *s2 = mx_realloc(*states, M->nnodes + 1);
     if (!s2) {
@@ -121,10 +296,14 @@ int mx_interface_stage(const mx_tree *tr, const uint32_t *leaves, const mx_surfa
       *states = s2;
 #pragma omp parallel for schedule(static)
       for (size_t v = 0; v < M->nnodes; v++)
-        s2[v] = depth[v] == ON ? MX_NODE_OUTSIDE : MX_NODE_INSIDE;
+        s2[v] = piece[v] == ON ? MX_NODE_OUTSIDE : MX_NODE_INSIDE;
     }
   }
-  mx_free(depth);
+  if (!rc && piece_out) {
+    *piece_out = piece;
+    piece = NULL;
+  }
+  mx_free(piece);
   if (!rc) mx_mesh_summarize(M);
   return rc;
 }

@@ -24,29 +24,59 @@
 #include "soa/trisoup.h"
 #include "soa/tree.h"
 
-typedef struct {
-  int deepest;             /* the deepest region; interfaces 2 .. deepest */
-  mx_trisoup *soup;        /* deepest + 1 entries, [k] for k >= 2 */
-  mx_surface_index *level; /* [k]: the shells around region k (depth k - 1) */
+/* The pieces of the materials' inputs: each closed shell of each input file
+ * is a piece, with its own index; a piece lies inside another (its parent,
+ * the innermost containing it) or is a root. A point's piece is the
+ * innermost containing it. The region (material index 1 ..) of a piece is
+ * keyed by (depth, file): the first file at depth d gives region d + 1 (so
+ * nested shells number their regions by depth, as the depth of one index
+ * would), the other files at that depth get the next numbers after the
+ * deepest. A piece is cleaved (an interface pass) when it is nested, or
+ * shares triangles with another piece (touching inputs: two cubes glued on a
+ * face); passes go by depth, then piece. */
+typedef struct mx_interfaces_s {
+  uint32_t npieces;
+  int32_t *parent;         /* npieces: the parent piece, -1 for a root */
+  uint16_t *depth;         /* npieces: 0 for a root */
+  uint16_t *file;          /* npieces: the input file (the soup's shell id) */
+  uint16_t *region;        /* npieces: region index, 1 .. nregions */
+  uint32_t *pass;          /* npasses pieces to cleave, in order */
+  uint32_t npasses;
+  int nregions;
+  mx_trisoup *soup;        /* npieces */
+  mx_surface_index *index; /* npieces */
 } mx_interfaces;
 
-/* The interfaces of S, an index built outward (mx_surface_index_build_outward)
- * whose shells nest: one index per depth over the shells there. With no
- * shell nested, deepest = 1 and nothing is allocated. MX_ENOMEM. */
-int mx_interfaces_build(mx_interfaces *I, const mx_surface_index *S);
+/* The pieces of the triangles [0, nt) of src (soup shell ids: the files);
+ * shared (NULL: none; one byte per triangle): 1 for the triangles two
+ * files have in common. At most MX_MAX_PIECES pieces (MX_EINPUT, with a
+ * message). MX_ENOMEM. */
+enum { MX_MAX_PIECES = 1024 };
+int mx_interfaces_build(mx_interfaces *I, const mx_trisoup *src, uint32_t nt,
+                        const uint8_t *shared);
 void mx_interfaces_free(mx_interfaces *I);
+/* The innermost piece containing p, plus one; 0 outside every piece. */
+int mx_interfaces_piece(const mx_interfaces *I, const double p[3]);
+/* The distance from p to the nearest piece's surface: within it, the
+ * piece of a point is p's. */
+double mx_interfaces_clearance(const mx_interfaces *I, const double p[3]);
+/* 1 when piece q (a piece plus one, as above) lies in piece p's subtree. */
+int mx_interfaces_within(const mx_interfaces *I, int q, uint32_t p);
 
 typedef struct {
   size_t located;         /* nodes whose region was queried */
+  size_t nodes_before;    /* the mesh's nodes before (the new ones follow) */
   mx_cleave_stats cleave; /* summed over the interfaces */
 } mx_interface_stats;
 
-/* Every interface of I cleaved, on M after the outer boundary's shrink (tr, leaves: the octree M was built from; S: the index
- * of every shell). *states (one per node, grown with the new centres): on
- * entry MX_NODE_OUTSIDE for the nodes on the outer boundary, on return
- * also for those on an interface; M->jens is kept up to date. MX_ENOMEM. */
-int mx_interface_stage(const mx_tree *tr, const uint32_t *leaves, const mx_surface_index *S,
-                       const mx_interfaces *I, mx_mesh *M, uint8_t **states,
-                       double alpha, mx_interface_stats *stats);
+/* Every pass of I cleaved, on M after the outer boundary's shrink (tr,
+ * leaves: the octree M was built from). *states (one per node, grown with
+ * the new nodes): on entry MX_NODE_OUTSIDE for the nodes on the outer
+ * boundary, on return also for those on an interface. piece_out (may be
+ * NULL) receives (mx_alloc) each node's piece plus one (0 outside every
+ * piece, MX_REGION_ON on a shell). M->jens is kept up to date. MX_ENOMEM. */
+int mx_interface_stage(const mx_tree *tr, const uint32_t *leaves, const mx_interfaces *I,
+                       mx_mesh *M, uint8_t **states, double alpha, uint16_t **piece_out,
+                       mx_interface_stats *stats);
 
 #endif

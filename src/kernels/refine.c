@@ -199,7 +199,9 @@ static void classify_children(const mx_builder *B, uint32_t o, uint8_t *mask,
       if (si->rmeet[c] & bit) meets |= (uint8_t)(1u << c);
     const uint8_t rest = si->kept & (uint8_t)~meets;
     uint8_t in;
-    if (T->rmeet[o] & bit)
+    if (B->req.meet_only & bit)
+      in = 0;
+    else if (T->rmeet[o] & bit)
       in = locate_children(&B->loc_region[r], rest, cc, &si->nlocated);
     else
       in = (T->rin[o] & bit) ? rest : 0;
@@ -461,7 +463,7 @@ int mx_build_roots(mx_builder *B) {
           }
         }
         for (int g2 = 0; g2 < B->req.nregions; g2++)
-          if (!((rmeet >> g2) & 1)) {
+          if (!((rmeet >> g2) & 1) && !((B->req.meet_only >> g2) & 1)) {
             B->stats.located++;
             if (mx_locate(&B->loc_region[g2], c)) rin |= (uint8_t)(1u << g2);
           }

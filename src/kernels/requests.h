@@ -21,6 +21,9 @@ typedef struct {
   size_t nboxes;
   int nregions;
   int rlevel[MX_MAX_REGIONS];
+  /* bit r: region r is refined where its triangles meet an octant only,
+   * never inside (an interface between two materials: not closed) */
+  unsigned meet_only;
 } mx_requests;
 
 /* Target level of the octant with world box [lo, hi]; surf: it meets the

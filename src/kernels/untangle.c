@@ -74,7 +74,7 @@ static double worst_of(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t 
  * once. Returns 1 when v moved. */
 static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
                      const uint64_t *off, uint8_t *mark, uint32_t v, int on_surface,
-                     const mx_untangle_opts *o) {
+                     const mx_untangle_opts *o, const double *x_init, double clear) {
   static const double steps[] = {1.0, 0.5, 0.25, 0.125};
   static const double along[] = {0.25, 0.1, 0.04};
   const double q_target = o->q_target;
@@ -107,7 +107,8 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
       }
     }
   const int nsteps = (int)(sizeof steps / sizeof *steps);
-  const int ntrials = nsteps + (o->axis_moves ? 6 * (int)(sizeof along / sizeof *along) : 0);
+  const int nal = o->axis_moves > 3 ? 3 : o->axis_moves;
+  const int ntrials = nsteps + 6 * nal;
   double best = w0, bx[3] = {x0[0], x0[1], x0[2]};
   for (int t = 0; t < ntrials; t++) {
     if (t < nsteps) {
@@ -121,8 +122,12 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
       double q[3];
       mx_closest_point(S, x, q, NULL, NULL);
       memcpy(x, q, sizeof q);
-    } else if (o->regions && mx_region_depth(o->regions, x) != o->region[v]) {
-      continue; /* an inside node stays in its region */
+    } else if (o->region_of) { /* an inside node stays in its region */
+      /* (no query within the clearance of where it started: no shell there) */
+      const double dx = x[0] - x_init[0], dy = x[1] - x_init[1], dz = x[2] - x_init[2];
+      if (!(dx * dx + dy * dy + dz * dz < clear * clear) &&
+          o->region_of(o->region_ctx, x) != o->region[v])
+        continue;
     }
     const double w = worst_of(M, inc, e0, e1);
     if (w > best + 1e-12) {
@@ -144,7 +149,7 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
 
 int mx_untangle(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
                     double q_target, int sweeps, size_t *moved) {
-  const mx_untangle_opts o = {q_target, sweeps, 0, NULL, NULL, NULL};
+  const mx_untangle_opts o = {q_target, sweeps, 0, NULL, NULL, NULL, NULL, NULL};
   return mx_untangle_with(M, states, S, &o, moved);
 }
 
@@ -223,6 +228,24 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
     onsurf[i] = (uint8_t)(states[v] != MX_NODE_INSIDE ||
                           on_mesh_boundary(M, inc, off[v], off[v + 1], v));
   }
+  /* With regions: where each free work node starts, and its clearance (the
+   * distance within which no shell lies) */
+  double *x_init = NULL, *clear = NULL;
+  if (o->region_of) {
+    x_init = mx_alloc((3 * nw + 3) * sizeof *x_init);
+    clear = mx_alloc((nw + 1) * sizeof *clear);
+    if (!x_init || !clear) {
+      mx_free(x_init); mx_free(clear); mx_free(onsurf);
+      mx_free(inc); mx_free(work); mx_free(off); mx_free(mark);
+      return MX_ENOMEM;
+    }
+#pragma omp parallel for schedule(dynamic, 256)
+    for (size_t i = 0; i < nw; i++) {
+      const double *x = M->xyz + 3 * (size_t)work[i];
+      memcpy(x_init + 3 * i, x, 3 * sizeof *x);
+      clear[i] = onsurf[i] || !o->clearance_of ? 0.0 : o->clearance_of(o->region_ctx, x);
+    }
+  }
   /* Colours (kernels of the sweep run one colour at a time, its nodes in
    * parallel: no two of them share an element), and the work nodes grouped
    * by colour, in id order within one. */
@@ -240,6 +263,7 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
   }
   mx_free(widx);
   if (ncol < 0) {
+    mx_free(x_init); mx_free(clear);
     mx_free(colour); mx_free(byc); mx_free(onsurf);
     mx_free(inc); mx_free(work); mx_free(off); mx_free(mark);
     if (ncol == -2) return MX_ENOMEM;
@@ -270,7 +294,8 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
         const uint32_t v = work[i];
         if (!__atomic_load_n(&mark[v], __ATOMIC_RELAXED)) continue;
         mark[v] = 0;
-        changed += (size_t)move_node(M, S, inc, off, mark, v, onsurf[i], o);
+        changed += (size_t)move_node(M, S, inc, off, mark, v, onsurf[i], o,
+                                     x_init ? x_init + 3 * i : NULL, clear ? clear[i] : 0.0);
       }
     }
     nm += changed;
@@ -278,6 +303,8 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
   }
   mx_free(byc);
   mx_free(onsurf);
+  mx_free(x_init);
+  mx_free(clear);
   mx_free(inc);
   mx_free(off);
   mx_free(work);

@@ -23,18 +23,23 @@
 int mx_untangle(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
                     double q_target, int sweeps, size_t *moved);
 
-/* The same with options: axis_moves adds trial points along the axes (a
- * quarter, a tenth and a twenty-fifth of the mean distance to the node's
- * neighbours, both ways) to those towards the centroid; movable (NULL: all)
- * limits the work set; regions (NULL: none) keeps an inside node v where
- * mx_region_depth(regions, x) is region[v] (several materials). */
+/* The same with options: axis_moves (0 to 3) adds trial points along the
+ * axes, both ways, at that many of the lengths a quarter, a tenth and a
+ * twenty-fifth of the mean distance to the node's neighbours, to those
+ * towards the centroid; movable (NULL: all)
+ * limits the work set; region_of (NULL: none) keeps an inside node v where
+ * region_of(region_ctx, x) is region[v] (several materials), asked only
+ * beyond clearance_of(region_ctx, x) (NULL: always) of where the node was:
+ * the distance from x within which region_of cannot change. */
 typedef struct {
   double q_target;
   int sweeps;
   int axis_moves;
   const uint8_t *movable;
-  const mx_surface_index *regions;
+  int (*region_of)(const void *ctx, const double x[3]);
+  const void *region_ctx;
   const uint16_t *region;
+  double (*clearance_of)(const void *ctx, const double x[3]);
 } mx_untangle_opts;
 int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
                      const mx_untangle_opts *o, size_t *moved);

@@ -5,6 +5,7 @@
  * inconsistent orientation fixed), the domain's triangles first, then each
  * region's. The single-process mesher and the distributed path
  * (mpi/p4est_inputs.c) both take it. */
+#include "mesher/materials.h"
 #include "mesher/mesher_impl.h"
 
 #include "io/demo_surface.h"
@@ -258,6 +259,7 @@ mx_requests mx_mesher_requests(const mx_mesher *m) {
   r.nboxes = m->nboxes;
   r.nregions = m->nregions;
   for (int i = 0; i < m->nregions; i++) r.rlevel[i] = m->region_level[i];
+  r.meet_only = m->region_meet_only;
   return r;
 }
 
@@ -357,6 +359,7 @@ int mx_mesher_assemble_inputs(mx_mesher *m) {
   }
   /* two inputs with a triangle in common are refused, but for the winding
    * number's domain (a face two touching bodies share bounds nothing) */
+  if (m->p.materials && !m->p.repair_input) MX_CHECK(mx_materials_split_shared(m));
   if (!m->p.repair_input)
     MX_CHECK(mx_trisoup_check_shells(&m->domain, (uint32_t)m->domain.nt,
                                      (const char *const *)m->domain_name));

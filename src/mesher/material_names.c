@@ -13,21 +13,15 @@ int mx_material_name(const mx_mesher *m, int d, char *buf, size_t n) {
     return MX_OK;
   }
   snprintf(buf, n, "material %d", d >= 1 && d <= 64 ? m->depth_material[d] : d);
-  const mx_surface_index *S = &m->SI;
-  if (!m->have_index || d < 1 || !S->shell_depth) return MX_OK;
-  /* the input files with a shell at depth d - 1; each file's depths */
-  int file = -1, several = 0;
-  for (uint32_t i = 0; i < S->nt && !several; i++) {
-    if (S->shell_depth[S->shell_of[i]] != (uint32_t)(d - 1)) continue;
-    const int f = m->soup.shell[S->tri_id[i]];
-    if (file >= 0 && f != file) several = 1;
-    file = f;
-  }
-  if (file < 0 || several || file >= m->ndomain) return MX_OK;
-  for (uint32_t i = 0; i < S->nt; i++) /* that file's shells all at depth d - 1 */
-    if (m->soup.shell[S->tri_id[i]] == file &&
-        S->shell_depth[S->shell_of[i]] != (uint32_t)(d - 1))
-      return MX_OK;
+  /* the input file whose pieces bound region d (one region per file and
+   * depth: the pieces of region d are one file's) */
+  const mx_interfaces *I = &m->IF;
+  int file = -1;
+  for (uint32_t q = 0; q < I->npieces && file < 0; q++)
+    if (I->region[q] == d) file = I->file[q];
+  if (file < 0 || file >= m->ndomain) return MX_OK;
+  for (uint32_t q = 0; q < I->npieces; q++) /* that file's pieces all bound region d */
+    if (I->file[q] == file && I->region[q] != d) return MX_OK;
   const char *path = m->domain_name[file];
   const char *slash = strrchr(path, '/');
   const char *base = slash ? slash + 1 : path;
@@ -60,46 +54,39 @@ int mx_mesher_set_material(mx_mesher *m, int input, int number, const char *name
   return mx_call_end(m, &c, st);
 }
 
-/* The numbers and names of the materials by depth (m->depth_material*):
- * the user's for the inputs given one, the depth otherwise. MX_EINPUT when
- * an input's shells nest at several depths, two inputs at one depth are
- * given different numbers, or two materials end with one number. */
+/* The numbers and names of the materials by region index
+ * (m->depth_material*): the user's for the inputs given one, the index
+ * otherwise. MX_EINPUT when an input's pieces bound several regions (its
+ * shells nest at several depths) or two materials end with one number. */
 int mx_material_numbers(mx_mesher *m, int deepest) {
-  const mx_surface_index *S = &m->SI;
+  const mx_interfaces *I = &m->IF;
   for (int d = 0; d <= 64; d++) {
     m->depth_material[d] = d;
     m->depth_material_name[d] = NULL;
   }
   for (int k = 0; k < m->ndomain && k < 64; k++) {
     if (!m->input_material[k]) continue;
-    int depth = -1;
-    for (uint32_t i = 0; i < S->nt; i++) {
-      if (m->soup.shell[S->tri_id[i]] != k) continue;
-      const int e = (int)S->shell_depth[S->shell_of[i]];
-      if (depth >= 0 && e != depth) {
+    int region = -1, depth = -1;
+    for (uint32_t q = 0; q < I->npieces; q++) {
+      if (I->file[q] != k) continue;
+      if (region >= 0 && I->region[q] != region) {
         mx_error(m->domain_name[k], 0, "material %d: the shells of this input nest at "
                                        "several depths (%d and %d): the material inside it is "
-                                       "not one region", m->input_material[k], depth, e);
+                                       "not one region", m->input_material[k], depth,
+                 (int)I->depth[q]);
         return MX_EINPUT;
       }
-      depth = e;
+      region = I->region[q];
+      depth = I->depth[q];
     }
-    const int d = depth + 1;
-    if (d < 1 || d > 64) continue;
-    if (m->depth_material[d] != d && m->depth_material[d] != m->input_material[k]) {
-      mx_error(m->domain_name[k], 0, "material %d: this input bounds the same region depth as "
-                                     "another input given material %d (regions at one depth "
-                                     "are one material in this version)",
-               m->input_material[k], m->depth_material[d]);
-      return MX_EINPUT;
-    }
-    m->depth_material[d] = m->input_material[k];
-    if (m->input_material_name[k]) m->depth_material_name[d] = m->input_material_name[k];
+    if (region < 1 || region > 64) continue;
+    m->depth_material[region] = m->input_material[k];
+    if (m->input_material_name[k]) m->depth_material_name[region] = m->input_material_name[k];
   }
   for (int a = 1; a <= deepest && a <= 64; a++)
     for (int b = a + 1; b <= deepest && b <= 64; b++)
       if (m->depth_material[a] == m->depth_material[b]) {
-        mx_error(NULL, 0, "materials: the regions at depths %d and %d are both numbered %d; "
+        mx_error(NULL, 0, "materials: the regions %d and %d are both numbered %d; "
                           "give each its own number", a, b, m->depth_material[a]);
         return MX_EINPUT;
       }

@@ -47,6 +47,12 @@ int mx_materials_allowed(const mx_mesher *m, const char *what) {
  * across an interface). Nodes on the domain's boundary (full stage) tell
  * no region and are left out. With no shell
  * nested in another, the full stage's elements all lie in region 1. */
+/* The region index of point p: its piece's (0 outside every piece). */
+static int region_at(const mx_mesher *m, const double p[3]) {
+  const int q = mx_interfaces_piece(&m->IF, p);
+  return q ? m->IF.region[q - 1] : 0;
+}
+
 int mx_label_materials(mx_mesher *m) {
   enum { NONE = UINT16_MAX }; /* a node on the domain's boundary */
   mx_mesh *M = &m->M;
@@ -55,9 +61,13 @@ int mx_label_materials(mx_mesher *m) {
   mx_free(M->material);
   M->material = mx_alloc((M->ncells + 1) * sizeof *M->material);
   if (!M->material) return MX_ENOMEM;
-  const mx_surface_index *S = &m->SI;
   const size_t nc = M->ncells, nn = M->nnodes;
-  if (m->mesh_stage == MX_STAGE_FULL && !mx_surface_index_nested(S)) {
+  if (m->IF.nregions > 64) {
+    mx_error(NULL, 0, "materials: %d regions (depths and input files), at most 64 in this "
+                      "version", m->IF.nregions);
+    return MX_EINPUT;
+  }
+  if (m->mesh_stage == MX_STAGE_FULL && m->IF.nregions <= 1) {
     MX_CHECK(mx_material_numbers(m, 1));
     for (size_t c = 0; c < nc; c++) M->material[c] = (uint16_t)m->depth_material[1];
     m->nmaterials = 1;
@@ -89,7 +99,7 @@ int mx_label_materials(mx_mesher *m) {
   for (size_t v = 0; v < nn; v++) {
     int d = NONE;
     if (need[v] && !(states && states[v] == MX_NODE_OUTSIDE))
-      d = mx_region_depth(S, M->xyz + 3 * v);
+      d = region_at(m, M->xyz + 3 * v);
     depth[v] = (uint16_t)(d > NONE ? NONE : d);
   }
   int deepest = 0;
@@ -105,7 +115,7 @@ int mx_label_materials(mx_mesher *m) {
     if (O->tri_cnt[m->leaves[leaf]] == 0) { /* one region: the leaf's */
       d = __atomic_load_n(&leaf_depth[leaf], __ATOMIC_RELAXED);
       if (d < 0) {
-        d = mx_region_depth(S, p);
+        d = region_at(m, p);
         __atomic_store_n(&leaf_depth[leaf], d, __ATOMIC_RELAXED);
       }
     } else {
@@ -116,11 +126,12 @@ int mx_label_materials(mx_mesher *m) {
         lo = g < lo ? g : lo;
         hi = g > hi ? g : hi;
       }
-      d = hi == lo ? hi : mx_region_depth(S, p);
+      d = hi == lo ? hi : region_at(m, p);
+      /* the full stage's elements are the domain's: a few nodes the shrink
+       * left just outside the outermost shell do not make one outside */
+      if (d < 1 && m->mesh_stage == MX_STAGE_FULL) d = hi >= 1 ? hi : 1;
     }
     if (d > UINT16_MAX - 1) d = UINT16_MAX - 1;
-    /* the full stage's elements are the domain's: a few nodes the shrink
-     * left just outside the outermost shell do not make one outside */
     if (d < 1 && m->mesh_stage == MX_STAGE_FULL) d = 1;
     M->material[c] = (uint16_t)d;
     if (d > deepest) deepest = d;

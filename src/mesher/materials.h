@@ -21,6 +21,13 @@ int mx_label_materials(mx_mesher *m);
  * inputs at one depth are given different numbers, or two materials end
  * with one number (src/mesher/material_names.c). */
 int mx_material_numbers(mx_mesher *m, int deepest);
+/* Touching inputs (src/mesher/material_inputs.c): the triangles two input
+ * files have in common (the same three corners) leave the domain's soup;
+ * one copy of each becomes a region surface refined where met, at the
+ * surface level; the inputs as given stay in m->material_src with
+ * m->material_shared flagging the common triangles, for the pieces.
+ * Nothing changes when there are none. MX_ENOMEM, MX_EINPUT. */
+int mx_materials_split_shared(mx_mesher *m);
 /* The volume the outermost shells of the index (built outward) enclose,
  * the domain of several materials, and their area. MX_ENOMEM. */
 int mx_materials_domain_volume(const mx_mesher *m, double *volume, double *area);

@@ -122,6 +122,8 @@ void mx_mesher_free(mx_mesher *m) {
   mx_tree_clear(m);
   if (m->have_index) mx_surface_index_free(&m->SI);
   mx_interfaces_free(&m->IF);
+  mx_trisoup_free(&m->material_src);
+  mx_free(m->material_shared);
   if (m->have_winding) mx_surface_index_free(&m->WI);
   mx_trisoup_free(&m->domain);
   mx_trisoup_free(&m->soup);

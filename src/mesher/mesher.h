@@ -61,6 +61,7 @@ typedef struct {
                              * those whose elements were kept */
   mx_splice_stats splice;
   int nmaterials;           /* materials: the deepest region (0: one material) */
+  size_t materials_shared;  /* materials: triangles two inputs have in common (pairs) */
   size_t materials_across;  /* elements with corners in two regions */
   double t_materials;       /* seconds labelling the elements */
 } mx_summary;
@@ -96,6 +97,7 @@ struct mx_mesher {
   mx_trisoup region[MX_MAX_REGIONS];
   char *region_name[MX_MAX_REGIONS];
   int region_level[MX_MAX_REGIONS];
+  unsigned region_meet_only; /* bit r: refined where met only (mx_requests) */
   uint32_t nt_domain, region_t0[MX_MAX_REGIONS + 1];
   int assembled;            /* soup holds domain + regions */
   mx_box_region *boxes;
@@ -121,9 +123,13 @@ struct mx_mesher {
 
   int have_index;
   mx_surface_index SI;
-  /* --materials with nested shells: an index per interface depth, for the
-   * boundary stage (kernels/interfaces.h); deepest 0 when not built */
+  /* --materials: the inputs' pieces (kernels/interfaces.h), built with the
+   * index; material_src: the inputs as given when they share triangles
+   * (the domain's soup has neither copy of those), material_shared: one
+   * byte per triangle of it, 1 for the shared ones */
   mx_interfaces IF;
+  mx_trisoup material_src;
+  uint8_t *material_shared;
   /* --repair-input on an input with no well-defined inside
    * (winding_domain.c): the input's index, orientation as given, whose
    * winding number decides the sides; the soup's domain triangles are then

@@ -25,8 +25,11 @@ int mx_mesher_index(mx_mesher *m) {
     MX_CHECK(mx_surface_index_build_outward(&m->SI, &m->soup, 0, m->nt_domain));
   else
     MX_CHECK(mx_surface_index_build(&m->SI, &m->soup, 0, m->nt_domain));
-  if (m->p.materials && mx_surface_index_nested(&m->SI)) {
-    const int st = mx_interfaces_build(&m->IF, &m->SI);
+  if (m->p.materials) { /* the pieces: the inputs as given, shared triangles included */
+    const int st = m->material_src.nt
+                       ? mx_interfaces_build(&m->IF, &m->material_src,
+                                             (uint32_t)m->material_src.nt, m->material_shared)
+                       : mx_interfaces_build(&m->IF, &m->soup, m->nt_domain, NULL);
     if (st) { /* built whole or not at all */
       mx_surface_index_free(&m->SI);
       return st;
@@ -55,7 +58,7 @@ int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh
     mx_mesher_stage(m, "boundary");
   }
   MX_CHECK(mx_boundary_stage(&m->B.tree, leaves, &m->SI, M,
-                             m->IF.deepest >= 2 ? &m->IF : NULL, m->p.close_ratio,
+                             m->IF.npasses ? &m->IF : NULL, m->p.close_ratio,
                              m->p.staircase_quality, bs, states));
   return mx_mesh_sort_by_leaf(M, n);
 }

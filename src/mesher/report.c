@@ -154,11 +154,12 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
   if (s->nmaterials) {
     const mx_cleave_stats *cv = &s->boundary.ifs.cleave;
     snprintf(mat, sizeof mat,
-             "\"materials\": {\"regions\": %d, \"across_interfaces\": %zu, "
+             "\"materials\": {\"regions\": %d, \"across_interfaces\": %zu, \"shared_triangles\": %zu, "
              "\"interfaces\": {\"warped\": %zu, \"cut\": %zu, \"neighbours_split\": %zu, "
              "\"centres\": %zu, \"cut_nodes\": %zu, \"seconds\": %.6f}, "
              "\"seconds\": %.6f}, ",
-             s->nmaterials, s->materials_across, cv->warped, cv->cut, cv->neighbours,
+             s->nmaterials, s->materials_across, s->materials_shared, cv->warped, cv->cut,
+             cv->neighbours,
              cv->centres, cv->cut_nodes, s->boundary.t_interfaces, s->t_materials);
   }
   fprintf(out, "\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
@@ -245,8 +246,11 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
   }
   if (s->nmaterials) {
     const mx_cleave_stats *cv = &s->boundary.ifs.cleave;
-    printf("  materials    %12d regions by nesting depth; %zu element(s) across an interface\n",
-           s->nmaterials, s->materials_across);
+    printf("  materials    %12d regions (by nesting depth and input); %zu element(s) across an "
+           "interface\n", s->nmaterials, s->materials_across);
+    if (s->materials_shared)
+      printf("               %zu triangle(s) two inputs have in common: an interface\n",
+             s->materials_shared);
     if (s->full && cv->cut + cv->warped)
       printf("               interfaces cleaved: %zu nodes moved onto them, %zu elements cut"
              " (%zu neighbours split),\n               %zu nodes added on them, %zu centres\n",
