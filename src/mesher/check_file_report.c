@@ -14,6 +14,20 @@
  * the point field surface_tag of VTK files; tag 0, inside, is left out),
  * and "defective_faces" ("tagged_not_boundary": indices in the file's
  * list of tagged faces); every array empty without tags.
+ * Cell labels (materials), when the mesh has them: a "materials" block
+ * (per label its elements, volume, boundary, and with a surface its region,
+ * the region's volume and the elements lying in another region) and, with
+ * a closed surface, the defects "interface off the surface", "across an
+ * interface" and "off their label's region" (ids; for the elements the
+ * first one's centroid and regions); in JSON, after "tagged_faces":
+ * "materials" (objects "label", "elements", "volume", "open_edges",
+ * "nonmanifold_edges", and with a surface "region", "region_volume",
+ * "volume_error", "off_region"), "materials_dropped", "interface_faces",
+ * "tagged_interface", "materials_volume_off", "interface_nodes",
+ * "interface_max_dist", "interface_off_surface" and "interface_off_nodes"
+ * (null and [] without a closed surface), "across_interface" and
+ * "off_label_region" (objects "elements", "ids", "first_at",
+ * "first_regions"; null without the regions).
  * A 3D mesh's hash is printed as 16 hex digits: "mesh hash" in the report,
  * "mesh_hash" (a string) in JSON.
  * A 2D mesh has a report of its own, and in JSON "dimension":2 with the
@@ -114,6 +128,44 @@ static void json_tags(const mx_check_tags *t) {
   printf("],");
 }
 
+/* With a surface, elements of a label defect: count, first ids, the first
+ * one's centroid and regions; null without a surface. */
+static void json_elems_at(const char *key, const mx_check_elems_at *e, int on) {
+  if (!on) {
+    printf("\"%s\":null,", key);
+    return;
+  }
+  printf("\"%s\":{\"elements\":%zu,", key, e->n);
+  json_ids("ids", &e->ids, 0);
+  printf("\"first_at\":");
+  if (e->n) {
+    printf("[");
+    for (int a = 0; a < 3; a++) {
+      if (a) printf(",");
+      json_val(e->at[a]);
+    }
+    printf("],\"first_regions\":[%d,%d]}", e->region[0], e->region[1]);
+  } else {
+    printf("null,\"first_regions\":null}");
+  }
+  printf(",");
+}
+
+/* The materials' interfaces and regions against the surface. */
+static void json_label_defects(const mx_check_report *r) {
+  const int closed = r->has_surface && r->surface_open_edges == 0;
+  printf("\"interface_nodes\":%zu,", r->interface_nodes);
+  json_num("interface_max_dist", r->interface_max_dist, 0);
+  if (closed) {
+    printf("\"interface_off_surface\":%zu,", r->interface_off_surface);
+    json_ids("interface_off_nodes", &r->interface_off_ids, 0);
+  } else {
+    printf("\"interface_off_surface\":null,\"interface_off_nodes\":[],");
+  }
+  json_elems_at("across_interface", &r->across_interface, r->has_regions);
+  json_elems_at("off_label_region", &r->off_label_region, r->has_regions);
+}
+
 void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64_t hash) {
   printf("{\"nodes\":%zu,\"elements\":%zu,", r->nodes, r->elements);
   printf("\"by_type\":{\"hex\":%zu,\"prism\":%zu,\"pyramid\":%zu,\"tet\":%zu},",
@@ -181,14 +233,18 @@ void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64
       printf("%s{\"label\":%d,\"elements\":%zu,\"volume\":%.17g,\"open_edges\":%zu,"
              "\"nonmanifold_edges\":%zu", i ? "," : "", L->label, L->cells, L->volume,
              L->open_edges, L->nonmanifold_edges);
-      if (L->region >= 0)
-        printf(",\"region\":%d,\"region_volume\":%.17g,\"volume_error\":%.17g", L->region,
-               L->region_volume, L->volume_error);
+      if (L->region >= 0) {
+        printf(",\"region\":%d,", L->region);
+        json_num("region_volume", L->region_volume, 0);
+        json_num("volume_error", L->volume_error, 0);
+        printf("\"off_region\":%zu", L->off_region);
+      }
       printf("}");
     }
     printf("],\"materials_dropped\":%zu,\"interface_faces\":%zu,\"tagged_interface\":%zu,"
            "\"materials_volume_off\":%zu,",
            r->labels_dropped, r->interface_faces, r->tagged_interface, r->labels_off);
+    json_label_defects(r);
   }
   json_tags(t);
   printf("\"defective_faces\":{");
@@ -234,10 +290,39 @@ static void print_labels(const mx_check_report *r) {
       printf(" (the surface's region %d holds %.10g: %+.3f%%%s)", L->region, L->region_volume,
              100.0 * L->volume_error,
              fabs(L->volume_error) <= r->opt.volume_tol ? "" : "  <-- defect");
+    else if (r->has_regions)
+      printf(" (none of its elements lies in one region of the surface)");
+    if (L->off_region)
+      printf(", %zu elements in another region  <-- defect", L->off_region);
     printf("\n");
   }
   printf("  interfaces             %zu faces between elements of two labels, %zu of them "
          "tagged\n", r->interface_faces, r->tagged_interface);
+}
+
+/* The first element of a label defect: where, and in which regions. */
+static void first_line(const mx_check_elems_at *e, const char *a, const char *b) {
+  if (!e->n) return;
+  printf("      first: element %u at (%.17g, %.17g, %.17g), %s %d, %s %d\n", e->ids.id[0],
+         e->at[0], e->at[1], e->at[2], a, e->region[0], b, e->region[1]);
+}
+
+/* The materials' defects against a closed surface. */
+static void print_label_defects(const mx_check_report *r) {
+  char why[160];
+  snprintf(why, sizeof why, "(interface nodes farther than %g of the diagonal)",
+           r->opt.boundary_tol);
+  defect_line("interface off the surface", r->interface_off_surface, why);
+  id_line("nodes", &r->interface_off_ids, r->interface_off_surface);
+  if (!r->has_regions) return;
+  defect_line("across an interface", r->across_interface.n,
+              "(elements whose centroid and corners off the shells are not in one region)");
+  id_line("elements", &r->across_interface.ids, r->across_interface.n);
+  first_line(&r->across_interface, "region", "and region");
+  defect_line("off their label's region", r->off_label_region.n,
+              "(elements in another region than most of their label's)");
+  id_line("elements", &r->off_label_region.ids, r->off_label_region.n);
+  first_line(&r->off_label_region, "in region", "its label's");
 }
 
 /* The "boundary tags" block. */
@@ -312,6 +397,10 @@ void mx_check_file_text(const char *mesh, const char *surf, const mx_check_repor
     printf("  boundary max distance  %.3e of the surface's bounding box "
            "diagonal (tolerance %g)\n",
            r->boundary_max_dist, r->opt.boundary_tol);
+    if (r->nlabels)
+      printf("  interface max distance %.3e of the diagonal, over %zu interface nodes "
+             "(tolerance %g)\n",
+             r->interface_max_dist, r->interface_nodes, r->opt.boundary_tol);
   }
   printf("  non-manifold edges     %zu (parts of the domain touching along an "
          "edge; not a defect)\n", r->nonmanifold_edges);
@@ -370,6 +459,7 @@ void mx_check_file_text(const char *mesh, const char *surf, const mx_check_repor
                r->opt.boundary_tol);
       defect_line("boundary off the surface", r->boundary_off_surface, why);
       id_line("nodes", &N[MX_CK_N_OFF_SURFACE], r->boundary_off_surface);
+      if (r->nlabels) print_label_defects(r);
     } else {
       printf("    %-24s -   (the surface is not closed: not checked)\n",
              "volume off");

@@ -10,8 +10,11 @@
  *  5. the closed boundary (check_boundary.c) and the boundary tags
  *     (check_tags.c);
  *  6. geometric hanging nodes (check_contacts.c);
- *  7. with a surface: the enclosed volume (check_volume.c) and
- *  8. the distance of the boundary nodes to it (check_distance.c).
+ *  7. with a surface: the enclosed volume (check_volume.c), with cell
+ *     labels the regions of the labels and of the elements (check_labels.c,
+ *     check_regions.c), and
+ *  8. the distance of the boundary and interface nodes to it
+ *     (check_distance.c).
  * It depends on base/, soa/ and geom/ (J_ENS) only, never on the mesher.
  * Coordinates enter the grids as (x/2 - lo/2) / (extent/2): finite for any
  * finite input (extents up to 2 * DBL_MAX, down to 1e-300).
@@ -105,6 +108,7 @@ typedef struct {
   uint8_t *flags, *ef;
   chash H;
   faces F;
+  uint32_t *other; /* with cell labels: the slot across each face */
 } work;
 
 static void work_free(work *w) {
@@ -113,6 +117,7 @@ static void work_free(work *w) {
   mx_free(w->H.slot);
   mx_free(w->H.seg);
   faces_free(&w->F);
+  mx_free(w->other);
   memset(w, 0, sizeof *w);
 }
 
@@ -131,6 +136,8 @@ static void collect_lists(const mx_mesh_data *m, const work *w,
   const int closed = r->has_surface && r->surface_open_edges == 0;
   for (size_t v = 0; v < m->nnodes; v++) {
     const uint8_t f = w->flags[v];
+    mx_check_ids *io = &r->interface_off_ids;
+    if (closed && (f & F_IOFF) && io->n < MX_CHECK_LIST) io->id[io->n++] = (uint32_t)v;
     if ((f & (F_USED | F_DUP | F_HANG | F_GHANG | F_OFF)) == F_USED) continue;
     const int kind[MX_CK_NODE_KINDS] = {!(f & F_USED), (f & F_DUP) != 0,
                                         (f & F_HANG) != 0, (f & F_GHANG) != 0,
@@ -178,8 +185,14 @@ static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
   r->hanging_nodes = hang;
   MX_CHECK(mx_ck_boundary_pass(m, &w->F, flags, w->ef, fc.boundary, r));
   MX_CHECK(mx_ck_tag_pass(m, &w->F, r, tags));
-  MX_CHECK(mx_ck_label_pass(m, &w->F, r));
-  MX_CHECK(mx_ck_label_boundaries(m, &w->F, r));
+  if (m->cell_tag) {
+    w->other = mx_alloc((6 * m->ncells + 1) * sizeof *w->other);
+    if (!w->other) return MX_ENOMEM;
+  }
+  MX_CHECK(mx_ck_label_pass(m, &w->F, flags, w->other, r));
+  MX_CHECK(mx_ck_label_boundaries(m, &w->F, w->other, r));
+  mx_free(w->other);
+  w->other = NULL;
   mx_free(H->slot); /* memory for the next passes */
   mx_free(H->seg);
   H->slot = H->seg = NULL;
@@ -200,6 +213,7 @@ static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
       if (m->cell_tag) mx_ck_label_verdict(r);
     } else { /* an open surface: indicative only */
       r->boundary_off_surface = 0;
+      r->interface_off_surface = 0;
     }
   }
   collect_lists(m, w, r);
@@ -224,6 +238,8 @@ int mx_check_mesh_tags(const mx_mesh_data *m, const mx_trisoup *surface,
   if (opt) o = *opt;
   r->opt = o;
   r->surface_volume = r->volume_error = r->boundary_max_dist = NAN;
+  r->interface_max_dist = NAN;
+  for (int a = 0; a < 3; a++) r->across_interface.at[a] = r->off_label_region.at[a] = NAN;
   r->jens_min = r->jens_mean = NAN;
   MX_CHECK(validate(m));
   r->nodes = m->nnodes;
@@ -239,7 +255,8 @@ int mx_check_mesh_tags(const mx_mesh_data *m, const mx_trisoup *surface,
                r->open_boundary_edges + r->hanging_nodes +
                r->geometric_hanging_nodes + r->unused_nodes +
                r->duplicate_nodes + r->volume_off + r->boundary_off_surface +
-               r->tagged_not_boundary + r->boundary_untagged + r->labels_off + r->labels_open;
+               r->tagged_not_boundary + r->boundary_untagged + r->labels_off + r->labels_open +
+               r->interface_off_surface + r->across_interface.n + r->off_label_region.n;
   return MX_OK;
 }
 

@@ -69,6 +69,29 @@
  *                      distance is more than boundary_tol (1e-6) times the
  *                      diagonal. With an open surface (a hole) both
  *                      measures are reported but count as no defect.
+ Cell labels (several materials: mx_mesh_data.cell_tag), when the mesh has
+ * them (check_labels.c, check_regions.c):
+ *  interface_faces     faces used by two elements of different labels;
+ *  labels_open*        labels whose boundary (their faces used once, or
+ *                      shared with another label) has an edge used an odd
+ *                      number of times;
+ * and with a closed surface (its shells nested: region d = inside d of
+ * them, the nesting depth, from an index with every shell turned outward):
+ *  labels_off*         labels whose volume is off their region's beyond
+ *                      volume_tol (a label's region: the one most of its
+ *                      elements lie in);
+ *  interface_max_dist  the largest distance from a node of an interface face
+ *                      to the nearest surface triangle, over the diagonal
+ *                      (as boundary_max_dist); NAN without interface;
+ *  interface_off_surface* the interface nodes farther than boundary_tol
+ *                      times the diagonal;
+ *  across_interface*   elements whose centroid and corners off the shells
+ *                      (farther than boundary_tol times the diagonal from
+ *                      every triangle) are not all in one region (each
+ *                      point's region counted independently of the mesher:
+ *                      geom/distance.h, mx_region_depth or mx_inside);
+ *  off_label_region*   the other elements whose region is not their label's
+ *                      (the labels are then no function of the regions).
  * Boundary tags (io/read_mesh.h: the tagged faces of MSH, Medit and GetFEM
  * files, the point field surface_tag of VTK files), when the mesh has them:
  *  tagged_faces        faces in the mesh's list of tagged faces;
@@ -118,7 +141,11 @@ typedef struct {
    * label): edges used an odd number of times (open: a defect) and more
    * than twice (where the label touches itself along an edge) */
   size_t open_edges, nonmanifold_edges;
+  /* with a surface: its elements lying in another region than its own
+   * (elements across an interface not counted) */
+  size_t off_region;
 } mx_check_label;
+
 
 /* Kinds of defective elements (bit k of the per-element flags). */
 enum {
@@ -149,6 +176,16 @@ typedef struct {
   uint32_t n;                   /* ids listed (<= MX_CHECK_LIST) */
   uint32_t id[MX_CHECK_LIST];   /* ascending */
 } mx_check_ids;
+
+/* Elements of one kind of label defect: how many, the first ids and the
+ * first one's centroid. */
+typedef struct {
+  size_t n;
+  mx_check_ids ids;
+  double at[3]; /* the first element's centroid (NAN: none) */
+  int region[2]; /* across: two regions met in the first element; off:
+                  * its region and its label's */
+} mx_check_elems_at;
 
 /* Where a geometric hanging node lies. */
 enum { MX_CK_ON_VERTEX = 1, MX_CK_ON_EDGE = 2, MX_CK_ON_FACE = 3 };
@@ -207,6 +244,13 @@ typedef struct {
   size_t labels_open;      /* labels whose boundary is not closed (a defect) */
   size_t labels_off;       /* labels whose volume is off their region's
                             * beyond volume_tol (a defect) */
+  /* with a closed surface: interface nodes (nodes of interface faces) and
+   * the elements' regions (check.h's definitions above) */
+  double interface_max_dist;
+  size_t interface_nodes, interface_off_surface;
+  mx_check_ids interface_off_ids; /* first interface nodes off the surface */
+  int has_regions;                /* the regions were looked at */
+  mx_check_elems_at across_interface, off_label_region;
   mx_check_ids untagged_ids;     /* elements with an untagged boundary face */
   mx_check_ids not_boundary_ids; /* tagged faces that are not boundary faces */
 } mx_check_report;

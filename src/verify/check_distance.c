@@ -2,7 +2,9 @@
  * distance to the nearest surface triangle, through a uniform grid of the
  * triangles' boxes searched in rings of cells around the node's cell until
  * no triangle beyond them can be nearer; the largest, over the diagonal of
- * the surface's box, and the nodes beyond boundary_tol times it. */
+ * the surface's box, and the nodes beyond boundary_tol times it. The nodes
+ * of the faces between two labels (F_IFACE: the interfaces between
+ * materials, which lie on the surface's inner shells) the same way, apart. */
 #include "verify/check_passes.h"
 
 #include <stdlib.h>
@@ -163,11 +165,17 @@ int mx_ck_surface_distance(const mx_mesh_data *m, const mx_trisoup *s,
   mx_trisoup_bbox(s, lo, hi);
   double diag2 = 0.0;
   for (int a = 0; a < 3; a++) diag2 += (hi[a] - lo[a]) * (hi[a] - lo[a]);
-  /* Distance of the boundary nodes. */
+  /* Distance of the boundary and interface nodes. */
   r->boundary_max_dist = NAN;
+  r->interface_max_dist = NAN;
   if (s->nt == 0 || !(diag2 > 0.0)) return MX_OK;
-  size_t nb = 0;
-  for (size_t v = 0; v < m->nnodes; v++) nb += (flags[v] & F_BND) != 0;
+  size_t nb = 0, nbnd = 0, ni = 0;
+  for (size_t v = 0; v < m->nnodes; v++) {
+    nb += (flags[v] & (F_BND | F_IFACE)) != 0;
+    nbnd += (flags[v] & F_BND) != 0;
+    ni += (flags[v] & F_IFACE) != 0;
+  }
+  r->interface_nodes = ni;
   if (nb == 0) return MX_OK;
   uint32_t *bn = mx_alloc(nb * sizeof *bn);
   tgrid g;
@@ -179,12 +187,12 @@ int mx_ck_surface_distance(const mx_mesh_data *m, const mx_trisoup *s,
   }
   nb = 0;
   for (size_t v = 0; v < m->nnodes; v++)
-    if (flags[v] & F_BND) bn[nb++] = (uint32_t)v;
-  double worst = 0.0;
+    if (flags[v] & (F_BND | F_IFACE)) bn[nb++] = (uint32_t)v;
+  double worst = 0.0, iworst = 0.0;
   int oom = 0;
-  size_t off = 0;
+  size_t off = 0, ioff = 0;
   const double sdiag = sqrt(diag2);
-#pragma omp parallel reduction(max : worst) reduction(+ : off) \
+#pragma omp parallel reduction(max : worst, iworst) reduction(+ : off, ioff) \
     if (nb > SMALL / 4)
   {
     uint32_t *stamp = mx_calloc(s->nt * sizeof *stamp);
@@ -197,10 +205,21 @@ int mx_ck_surface_distance(const mx_mesh_data *m, const mx_trisoup *s,
       if (!stamp) continue;
       const double d2 =
           tgrid_d2(&g, m->xyz + 3 * (size_t)bn[i], stamp, (uint32_t)i + 1);
-      worst = mx_max(worst, d2);
-      if (!(sqrt(d2) / sdiag <= tol)) {
-        flag_or(&flags[bn[i]], F_OFF);
-        off++;
+      const uint8_t f = flag_get(&flags[bn[i]]);
+      const int far = !(sqrt(d2) / sdiag <= tol);
+      if (f & F_BND) {
+        worst = mx_max(worst, d2);
+        if (far) {
+          flag_or(&flags[bn[i]], F_OFF);
+          off++;
+        }
+      }
+      if (f & F_IFACE) {
+        iworst = mx_max(iworst, d2);
+        if (far) {
+          flag_or(&flags[bn[i]], F_IOFF);
+          ioff++;
+        }
       }
     }
     mx_free(stamp);
@@ -208,7 +227,9 @@ int mx_ck_surface_distance(const mx_mesh_data *m, const mx_trisoup *s,
   tgrid_free(&g);
   mx_free(bn);
   if (oom) return MX_ENOMEM;
-  r->boundary_max_dist = sqrt(worst) / sdiag;
+  if (nbnd) r->boundary_max_dist = sqrt(worst) / sdiag;
   r->boundary_off_surface = off;
+  if (ni) r->interface_max_dist = sqrt(iworst) / sdiag;
+  r->interface_off_surface = ioff;
   return MX_OK;
 }

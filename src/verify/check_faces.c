@@ -192,6 +192,14 @@ int64_t mx_ck_find_second(const mx_mesh_data *m, const faces *F, const uint32_t 
   return slot_if(m, F, v, at + 1, &want);
 }
 
+void mx_ck_find_pair(const mx_mesh_data *m, const faces *F, const uint32_t *v, int n,
+                     int64_t *first, int64_t *second) {
+  fkey want;
+  const uint64_t at = first_not_below(m, F, v, n, &want);
+  *first = slot_if(m, F, v, at, &want);
+  *second = *first < 0 ? -1 : slot_if(m, F, v, at + 1, &want);
+}
+
 int64_t mx_ck_find_slot(const mx_mesh_data *m, const faces *F,
                          const uint32_t *v, int n) {
   fkey want;

@@ -3,7 +3,10 @@
  * physical volume, the VTK/VTU field "material", a Medit reference), the
  * elements and the volume of each label, and the faces between cells of
  * two labels (the interfaces between materials), found with the face
- * buckets of check_faces.c. */
+ * buckets of check_faces.c, whose nodes are flagged as interface nodes
+ * (check_distance.c measures them against the surface); each label's
+ * boundary closed; with a surface, each label's region (check_regions.c
+ * finds each element's) and its volume against the region's. */
 #include "verify/check_passes.h"
 
 #include <math.h>
@@ -12,7 +15,21 @@
 #include "geom/distance.h"
 #include "geom/quality.h"
 
-int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r) {
+/* The index of label t in the report's ascending table, or -1. */
+static int label_index(const mx_check_report *r, int32_t t) {
+  size_t lo = 0, hi = r->nlabels;
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (r->labels[mid].label < t)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo < r->nlabels && r->labels[lo].label == t ? (int)lo : -1;
+}
+
+int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, uint8_t *flags, uint32_t *other,
+                     mx_check_report *r) {
   r->nlabels = 0;
   r->labels_dropped = 0;
   r->labels_open = 0;
@@ -30,13 +47,12 @@ int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r) 
       continue;
     }
     memmove(r->labels + k + 1, r->labels + k, (r->nlabels - k) * sizeof *r->labels);
-    r->labels[k] = (mx_check_label){t, 0, 0.0, -1, NAN, NAN, 0, 0};
+    r->labels[k] = (mx_check_label){t, 0, 0.0, -1, NAN, NAN, 0, 0, 0};
     r->nlabels++;
   }
   for (size_t c = 0; c < nc; c++) {
-    size_t k = 0;
-    while (k < r->nlabels && r->labels[k].label != m->cell_tag[c]) k++;
-    if (k == r->nlabels) continue;
+    const int k = label_index(r, m->cell_tag[c]);
+    if (k < 0) continue;
     double p[8][3];
     const int nv = mx_cell_nodes[m->type[c]];
     for (int j = 0; j < nv; j++)
@@ -44,22 +60,29 @@ int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r) 
     r->labels[k].cells++;
     r->labels[k].volume += mx_element_volume(m->type[c], (const double(*)[3])p);
   }
-  /* the faces between two labels: each counted from its first slot */
+  /* the other slot of each face used twice; the faces between two labels,
+   * each counted from its smaller slot, their nodes flagged */
   size_t between = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : between) if (nc > SMALL)
   for (size_t c = 0; c < nc; c++) {
     const int t = m->type[c];
+    for (int f = 0; f < 6; f++) other[6 * c + (size_t)f] = UINT32_MAX;
     for (int f = 0; f < mx_cell_nfaces[t]; f++) {
-      if (F->use[6 * c + (size_t)f] != 2) continue;
+      const size_t slot = 6 * c + (size_t)f;
+      if (F->use[slot] != 2) continue;
       const int8_t *fv = mx_cell_faces[t][f];
       const int n = fv[3] < 0 ? 3 : 4;
       uint32_t v[4] = {0, 0, 0, 0};
       for (int j = 0; j < n; j++) v[j] = m->conn[8 * c + (size_t)fv[j]];
       sort4(v, n);
-      const int64_t s = mx_ck_find_slot(m, F, v, n);
-      const int64_t s2 = mx_ck_find_second(m, F, v, n);
-      if (s != (int64_t)(6 * c + (size_t)f) || s2 < 0) continue;
-      between += m->cell_tag[s / 6] != m->cell_tag[s2 / 6];
+      int64_t s, s2;
+      mx_ck_find_pair(m, F, v, n, &s, &s2);
+      if (s2 < 0) continue;
+      const size_t o = (size_t)(s == (int64_t)slot ? s2 : s);
+      other[slot] = (uint32_t)o;
+      if (o < slot || m->cell_tag[c] == m->cell_tag[o / 6]) continue;
+      between++;
+      for (int j = 0; j < n; j++) flag_or(&flags[v[j]], F_IFACE);
     }
   }
   r->interface_faces = between;
@@ -70,13 +93,20 @@ int mx_ck_label_regions(const mx_mesh_data *m, const mx_trisoup *surface, mx_che
   if (!m->cell_tag || !r->nlabels || !surface->nt) return MX_OK;
   mx_surface_index S;
   MX_CHECK(mx_surface_index_build_outward(&S, surface, 0, (uint32_t)surface->nt));
-  /* each shell's volume (outward) */
+  /* each shell's volume (outward), and each element's region */
   double *vol = mx_alloc(((size_t)S.nshells + 1) * sizeof *vol);
-  if (!vol) {
-    mx_surface_index_free(&S);
-    return MX_ENOMEM;
+  int16_t *reg = mx_alloc((m->ncells + 1) * sizeof *reg);
+  int st = vol && reg ? MX_OK : MX_ENOMEM;
+  if (st == MX_OK) {
+    mx_surface_index_shell_volumes(&S, vol, NULL);
+    st = mx_ck_element_regions(m, surface, &S, reg, r);
   }
-  mx_surface_index_shell_volumes(&S, vol, NULL);
+  if (st != MX_OK) {
+    mx_surface_index_free(&S);
+    mx_free(vol);
+    mx_free(reg);
+    return st;
+  }
   /* region d (depth d: inside d shells): the shells at depth d - 1 less
    * those at depth d; the whole mesh: the outermost shells' */
   double region[66], outer = 0.0;
@@ -88,38 +118,52 @@ int mx_ck_label_regions(const mx_mesh_data *m, const mx_trisoup *surface, mx_che
     if (e == 0) outer += vol[c];
   }
   mx_free(vol);
+  mx_surface_index_free(&S);
   r->surface_volume = fabs(outer);
   r->volume_error = r->surface_volume > 0.0 ? (r->volume - r->surface_volume) / r->surface_volume
                                             : NAN;
-  /* each label's region: where most of its elements' centroids lie */
+  /* each label's region: the one most of its elements lie in (elements
+   * across an interface, or with no point off the shells, left out) */
   size_t (*count)[66] = mx_calloc((r->nlabels + 1) * sizeof *count);
   if (!count) {
-    mx_surface_index_free(&S);
+    mx_free(reg);
     return MX_ENOMEM;
   }
   for (size_t c = 0; c < m->ncells; c++) {
-    size_t k = 0;
-    while (k < r->nlabels && r->labels[k].label != m->cell_tag[c]) k++;
-    if (k == r->nlabels) continue;
-    const int nv = mx_cell_nodes[m->type[c]];
-    double p[3] = {0, 0, 0};
-    for (int j = 0; j < nv; j++)
-      for (int a = 0; a < 3; a++) p[a] += m->xyz[3 * (size_t)m->conn[8 * c + j] + a] / nv;
-    const int d = mx_region_depth(&S, p);
-    count[k][d < 65 ? d : 65]++;
+    const int k = label_index(r, m->cell_tag[c]);
+    if (k < 0 || reg[c] < 0) continue;
+    count[k][reg[c] < 65 ? reg[c] : 65]++;
   }
-  mx_surface_index_free(&S);
   for (size_t k = 0; k < r->nlabels; k++) {
     int best = 0;
     for (int d = 1; d < 66; d++)
       if (count[k][d] > count[k][best]) best = d;
     mx_check_label *L = &r->labels[k];
+    if (!count[k][best]) continue; /* no element in a region: unknown */
     L->region = best;
     L->region_volume = region[best];
     L->volume_error = fabs(region[best]) > 0.0 ? (L->volume - region[best]) / fabs(region[best])
                                                : NAN;
   }
   mx_free(count);
+  /* the labels a function of the regions: the elements lying in another
+   * region than their label's */
+  mx_check_elems_at *o = &r->off_label_region;
+  for (size_t c = 0; c < m->ncells; c++) {
+    const int k = label_index(r, m->cell_tag[c]);
+    if (k < 0 || reg[c] < 0 || r->labels[k].region < 0) continue;
+    const int e = reg[c] < 65 ? reg[c] : 65;
+    if (e == r->labels[k].region) continue;
+    r->labels[k].off_region++;
+    if (o->n == 0) {
+      mx_ck_centroid(m, c, o->at);
+      o->region[0] = reg[c];
+      o->region[1] = r->labels[k].region;
+    }
+    if (o->ids.n < MX_CHECK_LIST) o->ids.id[o->ids.n++] = (uint32_t)c;
+    o->n++;
+  }
+  mx_free(reg);
   return MX_OK;
 }
 
@@ -130,66 +174,103 @@ void mx_ck_label_verdict(mx_check_report *r) {
       r->labels_off++;
 }
 
-int mx_ck_label_boundaries(const mx_mesh_data *m, const faces *F, mx_check_report *r) {
+/* Which faces of cell c bound its label (bit f: used once, or shared with
+ * a cell of another label), and their edges in *nedges. */
+static unsigned bounding_faces(const mx_mesh_data *m, const faces *F, const uint32_t *other,
+                               size_t c, size_t *nedges) {
+  const int t = m->type[c];
+  unsigned bits = 0;
+  size_t n = 0;
+  for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+    const int8_t *fv = mx_cell_faces[t][f];
+    const int nv = fv[3] < 0 ? 3 : 4;
+    const uint8_t use = F->use[6 * c + (size_t)f];
+    if (use == 2) {
+      const uint32_t o = other[6 * c + (size_t)f];
+      if (o != UINT32_MAX && m->cell_tag[o / 6] == m->cell_tag[c]) continue;
+    } else if (use != 1) {
+      continue;
+    }
+    bits |= 1u << f;
+    n += (size_t)nv;
+  }
+  *nedges = n;
+  return bits;
+}
+
+/* One pass over the faces for every label: each face that bounds its
+ * cell's label gives its edges, keyed by the edge with the label's index
+ * beside; sorted once, each run of one edge (the few bounding faces around
+ * it) is counted label by label. O(cells) keys, whatever the number of
+ * labels. */
+int mx_ck_label_boundaries(const mx_mesh_data *m, const faces *F, const uint32_t *other,
+                           mx_check_report *r) {
   if (!m->cell_tag || !r->nlabels) return MX_OK;
   const size_t nc = m->ncells;
-  size_t cap = 0;
-  uint64_t *key = NULL;
-  for (size_t k = 0; k < r->nlabels; k++) {
-    const int32_t L = r->labels[k].label;
-    /* the edges of the faces that bound the label: used once, or shared
-     * with a cell of another label */
+  uint64_t *start = mx_alloc((nc + 1) * sizeof *start);
+  uint8_t *bits = mx_alloc(nc + 1);
+  if (!start || !bits) {
+    mx_free(start);
+    mx_free(bits);
+    return MX_ENOMEM;
+  }
+#pragma omp parallel for schedule(dynamic, 1024) if (nc > SMALL)
+  for (size_t c = 0; c < nc; c++) {
     size_t n = 0;
-    for (size_t c = 0; c < nc; c++) {
-      if (m->cell_tag[c] != L) continue;
-      const int t = m->type[c];
-      for (int f = 0; f < mx_cell_nfaces[t]; f++) {
-        const int8_t *fv = mx_cell_faces[t][f];
-        const int nv = fv[3] < 0 ? 3 : 4;
-        const uint8_t use = F->use[6 * c + (size_t)f];
-        if (use == 2) {
-          uint32_t v[4] = {0, 0, 0, 0};
-          for (int j = 0; j < nv; j++) v[j] = m->conn[8 * c + (size_t)fv[j]];
-          sort4(v, nv);
-          const int64_t s = mx_ck_find_slot(m, F, v, nv), s2 = mx_ck_find_second(m, F, v, nv);
-          const int64_t other = s == (int64_t)(6 * c + (size_t)f) ? s2 : s;
-          if (other >= 0 && m->cell_tag[other / 6] == L) continue;
-        } else if (use != 1) {
-          continue;
-        }
-        if (n + 4 > cap) {
-          const size_t nc2 = cap ? 2 * cap : 4096;
-          uint64_t *grown = mx_realloc(key, nc2 * sizeof *key);
-          if (!grown) {
-            mx_free(key);
-            return MX_ENOMEM;
-          }
-          key = grown;
-          cap = nc2;
-        }
-        for (int j = 0; j < nv; j++) {
-          const uint32_t a = m->conn[8 * c + (size_t)fv[j]], b = m->conn[8 * c + (size_t)fv[(j + 1) % nv]];
-          key[n++] = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
-        }
+    bits[c] = 0;
+    if (label_index(r, m->cell_tag[c]) >= 0) bits[c] = (uint8_t)bounding_faces(m, F, other, c, &n);
+    start[c] = n;
+  }
+  start[nc] = 0;
+  const size_t n = (size_t)mx_scan_u64(start, nc + 1);
+  uint64_t *key = mx_alloc((n + 1) * sizeof *key);
+  uint32_t *lab = mx_alloc((n + 1) * sizeof *lab);
+  if (!key || !lab) {
+    mx_free(start), mx_free(bits), mx_free(key), mx_free(lab);
+    return MX_ENOMEM;
+  }
+#pragma omp parallel for schedule(dynamic, 1024) if (nc > SMALL)
+  for (size_t c = 0; c < nc; c++) {
+    if (!bits[c]) continue;
+    const uint32_t k = (uint32_t)label_index(r, m->cell_tag[c]);
+    const int t = m->type[c];
+    size_t i = start[c];
+    for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+      if (!(bits[c] >> f & 1)) continue;
+      const int8_t *fv = mx_cell_faces[t][f];
+      const int nv = fv[3] < 0 ? 3 : 4;
+      for (int j = 0; j < nv; j++) {
+        const uint32_t a = m->conn[8 * c + (size_t)fv[j]], b = m->conn[8 * c + (size_t)fv[(j + 1) % nv]];
+        key[i] = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+        lab[i++] = k;
       }
     }
-    const int st = n ? mx_sort_u64(key, NULL, n) : MX_OK;
-    if (st) {
-      mx_free(key);
-      return st;
+  }
+  mx_free(start);
+  mx_free(bits);
+  const int st = n ? mx_sort_u64(key, lab, n) : MX_OK;
+  if (st) {
+    mx_free(key), mx_free(lab);
+    return st;
+  }
+  for (size_t k = 0; k < r->nlabels; k++) r->labels[k].open_edges = r->labels[k].nonmanifold_edges = 0;
+  for (size_t i = 0; i < n;) {
+    size_t j = i + 1;
+    while (j < n && key[j] == key[i]) j++;
+    /* each label of the run once, at its first place */
+    for (size_t x = i; x < j; x++) {
+      size_t y = i, uses = 0;
+      while (y < x && lab[y] != lab[x]) y++;
+      if (y < x) continue;
+      for (y = x; y < j; y++) uses += lab[y] == lab[x];
+      r->labels[lab[x]].open_edges += uses % 2;
+      r->labels[lab[x]].nonmanifold_edges += uses > 2;
     }
-    size_t open = 0, over = 0;
-    for (size_t i = 0; i < n;) {
-      size_t j = i + 1;
-      while (j < n && key[j] == key[i]) j++;
-      open += (j - i) % 2;
-      over += j - i > 2;
-      i = j;
-    }
-    r->labels[k].open_edges = open;
-    r->labels[k].nonmanifold_edges = over;
-    r->labels_open += open > 0;
+    i = j;
   }
   mx_free(key);
+  mx_free(lab);
+  r->labels_open = 0;
+  for (size_t k = 0; k < r->nlabels; k++) r->labels_open += r->labels[k].open_edges > 0;
   return MX_OK;
 }

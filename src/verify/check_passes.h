@@ -29,6 +29,8 @@ enum {
   F_DUP = 8,
   F_GHANG = 16,
   F_OFF = 32,
+  F_IFACE = 64, /* a node of a face between two labels */
+  F_IOFF = 128, /* an interface node off the surface */
 };
 
 /* Faces of each element type, outward (the same as soa/mesh.h's). */
@@ -307,6 +309,10 @@ int mx_ck_faces_match(const mx_mesh_data *m, faces *F, const chash *H,
 /* The second slot of the face with sorted nodes v (n of them), after the one
  * mx_ck_find_slot gives; -1 when the face has one use only. */
 int64_t mx_ck_find_second(const mx_mesh_data *m, const faces *F, const uint32_t *v, int n);
+/* Both at once (one search): *first as mx_ck_find_slot, *second as
+ * mx_ck_find_second. */
+void mx_ck_find_pair(const mx_mesh_data *m, const faces *F, const uint32_t *v, int n,
+                     int64_t *first, int64_t *second);
 /* The first slot of a face with the sorted nodes v (n of them), or -1. */
 int64_t mx_ck_find_slot(const mx_mesh_data *m, const faces *F,
                         const uint32_t *v, int n);
@@ -319,16 +325,21 @@ int mx_ck_boundary_pass(const mx_mesh_data *m, const faces *F, uint8_t *flags,
                         uint8_t *ef, size_t nbnd, mx_check_report *r);
 /* Boundary tags (check_tags.c). */
 /* check_labels.c: the labels' elements and volumes, the faces between two
- * labels. */
-int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r);
+ * labels (their nodes flagged F_IFACE); other (6 ncells): the slot across
+ * each face slot used twice, UINT32_MAX for the others. */
+int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, uint8_t *flags, uint32_t *other,
+                     mx_check_report *r);
 /* Each label's boundary closed (labels_open) and its edges used more than
- * twice, from the faces that bound it. */
-int mx_ck_label_boundaries(const mx_mesh_data *m, const faces *F, mx_check_report *r);
+ * twice, from the faces that bound it (other: mx_ck_label_pass's). */
+int mx_ck_label_boundaries(const mx_mesh_data *m, const faces *F, const uint32_t *other,
+                           mx_check_report *r);
 /* With a closed surface: the volume of each region it cuts out (its
- * shells' nesting), each label's region (where most of its centroids lie)
- * and volume error; the whole mesh's volume then compared with the
- * outermost shells' (surface_volume, volume_error). The verdict (after the
- * whole mesh's, which sets volume_tol): labels_off. */
+ * shells' nesting), each element's region (mx_ck_element_regions), each
+ * label's region (where most of its elements lie) and volume error, the
+ * elements in another region than their label's (off_label_region); the
+ * whole mesh's volume then compared with the outermost shells'
+ * (surface_volume, volume_error). The verdict (after the whole mesh's,
+ * which sets volume_tol): labels_off. */
 int mx_ck_label_regions(const mx_mesh_data *m, const mx_trisoup *surface, mx_check_report *r);
 void mx_ck_label_verdict(mx_check_report *r);
 int mx_ck_tag_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r,
@@ -337,6 +348,21 @@ int mx_ck_tag_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r,
 int mx_ck_geometric_pass(const mx_mesh_data *m, const faces *F, const ubox *U,
                          uint8_t *flags, uint8_t *ef, double tol,
                          mx_check_report *r);
+/* Regions (check_regions.c): of an index S built outward over the
+ * surface, each element's region (its nesting depth) in reg: the one its
+ * centroid and its corners off the shells all lie in, -1 when none of them
+ * is off the shells, -2 when they lie in two regions (across_interface). */
+struct mx_surface_index;
+int mx_ck_element_regions(const mx_mesh_data *m, const mx_trisoup *surface,
+                          const struct mx_surface_index *S, int16_t *reg,
+                          mx_check_report *r);
+/* The mean of cell c's nodes. */
+static inline void mx_ck_centroid(const mx_mesh_data *m, size_t c, double g[3]) {
+  const int nv = mx_cell_nodes[m->type[c]];
+  g[0] = g[1] = g[2] = 0.0;
+  for (int j = 0; j < nv; j++)
+    for (int a = 0; a < 3; a++) g[a] += m->xyz[3 * (size_t)m->conn[8 * c + (size_t)j] + a] / nv;
+}
 /* Volume (check_volume.c): whether the surface is closed, the volume it
  * encloses, the mesh's volume error; then, with a closed surface, whether
  * that error is beyond the tolerance. */
