@@ -51,33 +51,18 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
   uint16_t *piece = NULL; /* with interfaces: each node's piece, kept by the untangling */
   uint8_t *movable = NULL; /* and the nodes it may move: not those on an interface */
   if (!st && I) {
-    const size_t n0 = M->nnodes;
-    movable = mx_alloc(n0 + 1);
-    if (!movable) st = MX_ENOMEM;
-    for (size_t v = 0; v < n0 && !st; v++) movable[v] = states[v];
-  }
-  if (!st && I) {
-    st = mx_interface_stage(tr, leaves, I, M, &states, MX_CLEAVE_ALPHA, &piece, &stats->ifs);
+    st = mx_interface_stage(tr, leaves, S, I, M, &states, MX_CLEAVE_ALPHA, &piece, &movable,
+                            &stats->ifs);
     t = mx_wtime();
     mx_mem_mark("b.interfaces");
     stats->t_interfaces = t - t1;
     t1 = t;
+    /* the nodes on the outer boundary move on it (the domain's index), the
+     * free ones in their piece; those on an interface stay (their shell is
+     * not the domain's surface) */
+    for (size_t v = 0; !st && movable && v < M->nnodes; v++) movable[v] = !movable[v];
   }
   if (!st) stats->inverted = M->invalid; /* counted by the shrink */
-  /* untangle what the shrink inverted, and lift the worst elements */
-  if (!st && piece) {
-    /* the nodes on the outer boundary move on it (the domain's index), the
-     * free ones in their piece; those the interfaces put on a shell stay
-     * (their shell is not the domain's surface) */
-    const size_t n0 = M->nnodes;
-    uint8_t *mv = mx_realloc(movable, n0 + 1);
-    if (!mv) st = MX_ENOMEM;
-    else movable = mv;
-    for (size_t v = 0; v < n0 && !st; v++) {
-      const int before = v < n0 && v < stats->ifs.nodes_before ? movable[v] : MX_NODE_INSIDE;
-      movable[v] = !(piece[v] == MX_REGION_ON && before == MX_NODE_INSIDE);
-    }
-  }
   if (!st && piece) {
     const mx_untangle_opts o = {staircase_q, 20, 0, movable, piece_of, I, piece, clearance_of};
     st = mx_untangle_with(M, states, S, &o, &stats->smoothed);

@@ -238,6 +238,10 @@ typedef struct {
   uint32_t piece;    /* the pass: inside this piece is side A */
   const mx_surface_index *Sk; /* its index */
   const uint8_t *inA; /* per piece value (piece + 1): 1 when within the pass's piece */
+  const mx_surface_index *Sd; /* the domain's surface (the outer boundary) */
+  uint8_t *outer;    /* the old nodes on the outer boundary and no interface */
+  uint8_t *side;     /* the old nodes' sides in this pass */
+  uint8_t *rim;      /* per node (old, then new): on the interface and the outer boundary */
   double alpha;
   uint16_t *depth;   /* the old nodes' piece values (kernels/interfaces.h) */
   uint8_t *moved;    /* the old nodes warped */
@@ -248,13 +252,29 @@ typedef struct {
   size_t nn;
 } cleaver;
 
+/* The side of a piece value (a new node's). */
 static inline int side_of(const cleaver *W, uint16_t d) {
   return d == MX_REGION_ON ? SIDE_ON : W->inA[d] ? SIDE_A : SIDE_B;
 }
 
-static uint16_t node_depth(const cleaver *W, uint32_t v) {
-  return v < W->nn ? W->depth[v] : W->N.depth[v - W->nn];
+/* The side of node v: an old node's from W->side (a node on the outer
+ * boundary has the side its position is on), a new node's from its piece. */
+static inline int side_node(const cleaver *W, uint32_t v) {
+  return v < W->nn ? W->side[v] : side_of(W, W->N.depth[v - W->nn]);
 }
+
+/* A point on the interface and the outer boundary near x (alternating
+ * projections: the two surfaces cross there). */
+static void rim_point(const cleaver *W, double x[3]) {
+  double q[3];
+  for (int it = 0; it < 24; it++) {
+    mx_closest_point(W->Sd, x, q, NULL, NULL);
+    mx_closest_point(W->Sk, q, x, NULL, NULL);
+    const double d = dist(x, q);
+    if (d <= 1e-14 * (fabs(x[0]) + fabs(x[1]) + fabs(x[2]) + 1e-300)) break;
+  }
+}
+
 
 static const double *node_xyz(const cleaver *W, uint32_t v) {
   return v < W->nn ? W->M->xyz + 3 * (size_t)v : W->N.xyz + 3 * (size_t)(v - W->nn);
@@ -294,7 +314,7 @@ static int emit(cleaver *W, int type, const uint32_t *v, uint8_t level, uint32_t
 static int cut_tet(cleaver *W, const uint32_t t[4], uint8_t level, uint32_t leaf) {
   int s[4], na = 0, nb = 0;
   for (int i = 0; i < 4; i++) {
-    s[i] = side_of(W, node_depth(W, t[i]));
+    s[i] = side_node(W, t[i]);
     na += s[i] == SIDE_A;
     nb += s[i] == SIDE_B;
   }
@@ -415,7 +435,7 @@ static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
     const uint32_t *row = M->conn + 8 * c;
     const int nv = mx_cell_nodes[M->type[c]];
     int sides = 0;
-    for (int i = 0; i < nv; i++) sides |= 1 << side_of(W, W->depth[row[i]]);
+    for (int i = 0; i < nv; i++) sides |= 1 << W->side[row[i]];
     if ((sides & 6) != 6) continue;
     for (int i = 0; i < nv; i++) __atomic_store_n(&flag[row[i]], 1, __ATOMIC_RELAXED);
   }
@@ -423,9 +443,10 @@ static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
   for (size_t v = 0; v < nn; v++) {
     best[v] = UINT64_MAX;
     bto[v] = UINT32_MAX;
-    W->sd[v] = flag[v] && W->depth[v] != MX_REGION_ON
-                   ? mx_signed_distance(W->Sk, M->xyz + 3 * v, NULL)
-                   : 0.0;
+    if (flag[v] && W->depth[v] != MX_REGION_ON)
+      W->sd[v] = mx_signed_distance(W->Sk, M->xyz + 3 * v, NULL);
+    else if (!W->outer[v])
+      W->sd[v] = 0.0; /* (an outer node's is there: its side) */
   }
   /* each A-B pair of nodes of a cut element (an edge, or a diagonal that
    * the split may make an edge): its crossing (estimated from the two
@@ -439,7 +460,7 @@ static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
     for (int e = 0; e < nv * nv; e++) {
       if (e / nv >= e % nv) continue;
       uint32_t a = row[e / nv], b = row[e % nv];
-      int sa = side_of(W, W->depth[a]), sb = side_of(W, W->depth[b]);
+      int sa = W->side[a], sb = W->side[b];
       if (sa == SIDE_B && sb == SIDE_A) {
         const uint32_t x = a;
         a = b;
@@ -485,9 +506,10 @@ static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
   for (size_t v = 0; v < nn; v++) {
     if (bto[v] == UINT32_MAX) continue;
     const uint32_t o = bto[v];
-    const int va = side_of(W, W->depth[v]) == SIDE_A;
+    const int va = W->side[v] == SIDE_A;
     const double *p = M->xyz + 3 * (va ? v : o), *q = M->xyz + 3 * (size_t)(va ? o : v);
     crossing(W->Sk, p, q, W->sd[va ? v : o], W->sd[va ? o : v], target + 3 * v);
+    if (W->outer[v]) rim_point(W, target + 3 * v); /* it stays on the boundary */
   }
   /* the moves, in id order, each kept when no element around it drops
    * below min(floor, its J_ENS before) */
@@ -518,6 +540,9 @@ static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
     }
     W->depth[v] = MX_REGION_ON;
     W->moved[v] = 1;
+    W->rim[v] = W->outer[v];
+    W->outer[v] = 0; /* on the interface now */
+    W->side[v] = SIDE_ON;
     n++;
   }
   mx_free(mark);
@@ -563,7 +588,7 @@ static uint8_t split_faces(const cleaver *W, const uint32_t *row, int t, uint16_
     const int8_t *fv = mx_cell_faces[t][f];
     if (fv[3] < 0) continue;
     int sides = 0;
-    for (int i = 0; i < 4; i++) sides |= 1 << side_of(W, W->depth[row[fv[i]]]);
+    for (int i = 0; i < 4; i++) sides |= 1 << W->side[row[fv[i]]];
     sides &= (1 << SIDE_A) | (1 << SIDE_B);
     if (t == MX_PYRAMID || sides == ((1 << SIDE_A) | (1 << SIDE_B)) ||
         (sides & ~(1 << cs)))
@@ -576,9 +601,8 @@ static int cleave(cleaver *W, mx_cleave_stats *stats) {
   mx_mesh *M = W->M;
   const size_t nn = W->nn, nc = M->ncells;
   uint8_t *flag = mx_calloc(nn + 1);
-  W->sd = mx_alloc((nn + 1) * sizeof *W->sd);
   W->moved = mx_calloc(nn + 1);
-  int st = !flag || !W->sd || !W->moved ? MX_ENOMEM : warp(W, flag, &stats->warped);
+  int st = !flag || !W->moved ? MX_ENOMEM : warp(W, flag, &stats->warped);
   if (st) {
     mx_free(flag);
     return st;
@@ -597,7 +621,7 @@ static int cleave(cleaver *W, mx_cleave_stats *stats) {
     const uint32_t *row = M->conn + 8 * c;
     const int nv = mx_cell_nodes[M->type[c]];
     int sides = 0;
-    for (int i = 0; i < nv; i++) sides |= 1 << side_of(W, W->depth[row[i]]);
+    for (int i = 0; i < nv; i++) sides |= 1 << W->side[row[i]];
     slot[c] = UINT32_MAX;
     if ((sides & 6) == 6) {
       what[c] = 1;
@@ -727,6 +751,10 @@ static int cleave(cleaver *W, mx_cleave_stats *stats) {
 static int finish(cleaver *W, mx_cleave_stats *stats) {
   mx_mesh *M = W->M;
   const size_t nn = W->nn, na = W->N.n;
+  uint8_t *rim = mx_realloc(W->rim, nn + na + 1);
+  if (!rim) return MX_ENOMEM;
+  W->rim = rim;
+  memset(rim + nn, 0, na);
   size_t ncut = 0;
 #pragma omp parallel for schedule(dynamic, 64) reduction(+ : ncut)
   for (size_t i = 0; i < na; i++) {
@@ -736,6 +764,10 @@ static int finish(cleaver *W, mx_cleave_stats *stats) {
     const double ga = a < nn ? W->sd[a] : mx_signed_distance(W->Sk, p, NULL);
     const double gb = b < nn ? W->sd[b] : mx_signed_distance(W->Sk, q, NULL);
     crossing(W->Sk, p, q, ga, gb, W->N.xyz + 3 * i);
+    if (a < nn && b < nn && W->outer[a] && W->outer[b]) {
+      rim_point(W, W->N.xyz + 3 * i);
+      W->rim[nn + i] = 1;
+    }
     ncut++;
   }
   stats->cut_nodes += ncut;
@@ -752,6 +784,10 @@ static int finish(cleaver *W, mx_cleave_stats *stats) {
   uint16_t *d2 = mx_realloc(W->depth, (nn + na + 1) * sizeof *d2);
   if (!d2) return MX_ENOMEM;
   W->depth = d2;
+  uint8_t *o2 = mx_realloc(W->outer, nn + na + 1);
+  if (!o2) return MX_ENOMEM;
+  W->outer = o2;
+  memset(o2 + nn, 0, na);
   memcpy(d2 + nn, W->N.depth, na * sizeof *d2);
   M->nnodes = nn + na;
   mx_free(M->type);
@@ -808,7 +844,7 @@ static int smooth_band(cleaver *W, size_t *moves) {
   for (size_t v = 0; v < nn; v++) {
     const int on = W->depth[v] == MX_REGION_ON;
     states[v] = on ? MX_NODE_OUTSIDE : MX_NODE_INSIDE;
-    movable[v] = movable[v] && (!on || v >= n0 || W->moved[v]);
+    movable[v] = movable[v] && !W->rim[v] && (!on || v >= n0 || W->moved[v]);
   }
   const mx_untangle_opts o = {MX_CLEAVE_FLOOR, 8, 3, movable, piece_of, W->I, W->depth, clearance_of};
   const int st = mx_untangle_with(M, states, W->Sk, &o, moves);
@@ -817,24 +853,53 @@ static int smooth_band(cleaver *W, size_t *moves) {
   return st;
 }
 
-int mx_cleave_interface(mx_mesh *M, uint16_t **piece, const mx_interfaces *I, uint32_t p,
-                        double alpha, mx_cleave_stats *stats) {
+int mx_cleave_interface(mx_mesh *M, uint16_t **piece, uint8_t **outer, const mx_interfaces *I,
+                        uint32_t p, const mx_surface_index *Sd, double alpha,
+                        mx_cleave_stats *stats) {
   cleaver W;
   memset(&W, 0, sizeof W);
+  const size_t nn = M->nnodes;
   uint8_t *inA = mx_alloc(I->npieces + 2);
-  if (!inA) return MX_ENOMEM;
+  W.side = mx_alloc(nn + 1);
+  W.sd = mx_alloc((nn + 1) * sizeof *W.sd);
+  W.rim = mx_calloc(nn + 1);
+  if (!inA || !W.side || !W.sd || !W.rim) {
+    mx_free(inA);
+    mx_free(W.side);
+    mx_free(W.sd);
+    mx_free(W.rim);
+    return MX_ENOMEM;
+  }
   for (uint32_t q = 0; q <= I->npieces; q++) inA[q] = (uint8_t)mx_interfaces_within(I, (int)q, p);
   W.M = M;
   W.I = I;
   W.piece = p;
   W.Sk = &I->index[p];
+  W.Sd = Sd;
   W.inA = inA;
   W.alpha = alpha;
   W.depth = *piece;
-  W.nn = M->nnodes;
+  W.outer = *outer;
+  W.nn = nn;
+  /* the sides: a free node's from its piece, a node of the outer boundary
+   * (on no interface) from where it lies (on p's surface: inside p) */
+  const double hair = 1e-12 * W.Sk->coord_max;
+#pragma omp parallel for schedule(dynamic, 1024)
+  for (size_t v = 0; v < nn; v++) {
+    W.sd[v] = 0.0;
+    if (W.depth[v] != MX_REGION_ON) {
+      W.side[v] = (uint8_t)side_of(&W, W.depth[v]);
+    } else if (W.outer[v]) {
+      W.sd[v] = mx_signed_distance(W.Sk, M->xyz + 3 * v, NULL);
+      W.side[v] = W.sd[v] > hair ? SIDE_B : SIDE_A; /* on p's own surface: p's */
+    } else {
+      W.side[v] = SIDE_ON;
+    }
+  }
   int st = cleave(&W, stats);
   if (!st) st = finish(&W, stats);
   *piece = W.depth;
+  *outer = W.outer;
   /* J_ENS of the pieces and of the elements with a warped node */
   if (!st) {
 #pragma omp parallel for schedule(dynamic, 1024)
@@ -854,6 +919,8 @@ int mx_cleave_interface(mx_mesh *M, uint16_t **piece, const mx_interfaces *I, ui
   }
   mx_free(W.moved);
   mx_free(W.sd);
+  mx_free(W.side);
+  mx_free(W.rim);
   table_free(&W.edges);
   mx_free(W.N.xyz);
   mx_free(W.N.depth);

@@ -52,11 +52,16 @@ typedef struct {
 
 /* Steps 1 to 3 for the pass of piece p of I (kernels/interfaces.h): side A
  * inside p, the interface p's surface. *piece: the piece value of every
- * node (MX_REGION_ON on a shell), grown with the new nodes; M keeps its
- * elements in their order, each replaced by its pieces in place, with
- * J_ENS. alpha in (0, 0.5). MX_ENOMEM. */
+ * node (MX_REGION_ON on a shell), grown with the new nodes; *outer: 1 for
+ * the nodes on the outer boundary (Sd, the domain's surface) and on no
+ * interface, grown with the new nodes (0) and cleared for those moved onto
+ * the interface: such a node has the side it lies on, and a node the cut
+ * puts between two of them, or one moved, goes where the interface meets
+ * the boundary. M keeps its elements in their order, each replaced by its
+ * pieces in place, with J_ENS. alpha in (0, 0.5). MX_ENOMEM. */
 struct mx_interfaces_s;
-int mx_cleave_interface(mx_mesh *M, uint16_t **piece, const struct mx_interfaces_s *I,
-                        uint32_t p, double alpha, mx_cleave_stats *stats);
+int mx_cleave_interface(mx_mesh *M, uint16_t **piece, uint8_t **outer,
+                        const struct mx_interfaces_s *I, uint32_t p, const mx_surface_index *Sd,
+                        double alpha, mx_cleave_stats *stats);
 
 #endif

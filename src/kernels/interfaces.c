@@ -276,18 +276,25 @@ static int node_pieces(const mx_tree *tr, const uint32_t *leaves, const mx_inter
   return MX_OK;
 }
 
-int mx_interface_stage(const mx_tree *tr, const uint32_t *leaves, const mx_interfaces *I,
-                       mx_mesh *M, uint8_t **states, double alpha, uint16_t **piece_out,
-                       mx_interface_stats *stats) {
+int mx_interface_stage(const mx_tree *tr, const uint32_t *leaves, const mx_surface_index *S,
+                       const mx_interfaces *I, mx_mesh *M, uint8_t **states, double alpha,
+                       uint16_t **piece_out, uint8_t **fixed_out, mx_interface_stats *stats) {
   memset(stats, 0, sizeof *stats);
+  if (fixed_out) *fixed_out = NULL;
   stats->nodes_before = M->nnodes;
   if (piece_out) *piece_out = NULL;
   if (!I || !I->npasses) return MX_OK;
   uint16_t *piece = mx_alloc((M->nnodes + 1) * sizeof *piece);
-  if (!piece) return MX_ENOMEM;
+  uint8_t *outer = mx_alloc(M->nnodes + 1);
+  if (!piece || !outer) {
+    mx_free(piece);
+    mx_free(outer);
+    return MX_ENOMEM;
+  }
+  for (size_t v = 0; v < M->nnodes; v++) outer[v] = (*states)[v] == MX_NODE_OUTSIDE;
   int rc = node_pieces(tr, leaves, I, M, *states, piece, &stats->located);
   for (uint32_t k = 0; k < I->npasses && !rc; k++)
-    rc = mx_cleave_interface(M, &piece, I, I->pass[k], alpha, &stats->cleave);
+    rc = mx_cleave_interface(M, &piece, &outer, I, I->pass[k], S, alpha, &stats->cleave);
   if (!rc) {
     uint8_t *s2 = mx_realloc(*states, M->nnodes + 1);
     if (!s2) {
@@ -299,10 +306,16 @@ int mx_interface_stage(const mx_tree *tr, const uint32_t *leaves, const mx_inter
         s2[v] = piece[v] == ON ? MX_NODE_OUTSIDE : MX_NODE_INSIDE;
     }
   }
+  if (!rc && fixed_out) { /* the nodes on an interface */
+    for (size_t v = 0; v < M->nnodes; v++) outer[v] = piece[v] == ON && !outer[v];
+    *fixed_out = outer;
+    outer = NULL;
+  }
   if (!rc && piece_out) {
     *piece_out = piece;
     piece = NULL;
   }
+  mx_free(outer);
   mx_free(piece);
   if (!rc) mx_mesh_summarize(M);
   return rc;

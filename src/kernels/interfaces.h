@@ -70,13 +70,15 @@ typedef struct {
 } mx_interface_stats;
 
 /* Every pass of I cleaved, on M after the outer boundary's shrink (tr,
- * leaves: the octree M was built from). *states (one per node, grown with
- * the new nodes): on entry MX_NODE_OUTSIDE for the nodes on the outer
- * boundary, on return also for those on an interface. piece_out (may be
- * NULL) receives (mx_alloc) each node's piece plus one (0 outside every
- * piece, MX_REGION_ON on a shell). M->jens is kept up to date. MX_ENOMEM. */
-int mx_interface_stage(const mx_tree *tr, const uint32_t *leaves, const mx_interfaces *I,
-                       mx_mesh *M, uint8_t **states, double alpha, uint16_t **piece_out,
-                       mx_interface_stats *stats);
+ * leaves: the octree M was built from; S: the domain's surface). *states
+ * (one per node, grown with the new nodes): on entry MX_NODE_OUTSIDE for
+ * the nodes on the outer boundary, on return also for those on an
+ * interface. piece_out (may be NULL) receives (mx_alloc) each node's piece
+ * plus one (0 outside every piece, MX_REGION_ON on a shell), fixed_out (may
+ * be NULL) 1 for the nodes on an interface (to stay there). M->jens is kept
+ * up to date. MX_ENOMEM. */
+int mx_interface_stage(const mx_tree *tr, const uint32_t *leaves, const mx_surface_index *S,
+                       const mx_interfaces *I, mx_mesh *M, uint8_t **states, double alpha,
+                       uint16_t **piece_out, uint8_t **fixed_out, mx_interface_stats *stats);
 
 #endif

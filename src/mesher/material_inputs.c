@@ -48,10 +48,8 @@ static uint64_t key_hash(const double k[9]) {
   return h ^ (h >> 31);
 }
 
-/* Vertices of equal coordinates made one (the first), in the triangles:
- * the inputs' own copies along the rim of their common faces join, so the
- * union's boundary is closed. */
-static int weld(mx_trisoup *d) {
+/* to[v]: the first vertex with v's coordinates (mx_alloc). */
+static int weld_map(const mx_trisoup *d, uint32_t **to_out) {
   size_t cap = 1024;
   while (cap < 2 * d->nv + 2) cap *= 2;
   uint32_t *slot = mx_alloc(cap * sizeof *slot), *to = mx_alloc((d->nv + 1) * sizeof *to);
@@ -75,10 +73,43 @@ static int weld(mx_trisoup *d) {
     }
     if (to[v] == v) slot[i] = (uint32_t)v;
   }
-  for (size_t t = 0; t < 3 * d->nt; t++) d->tri[t] = to[d->tri[t]];
   mx_free(slot);
-  mx_free(to);
+  *to_out = to;
   return MX_OK;
+}
+
+/* Two inputs may meet only on common faces: a point of two inputs that is
+ * not a corner of a common triangle (they touch at a point, or along an
+ * edge) is refused, named. to: weld_map's. */
+static int touch_check(const mx_mesher *m, const mx_trisoup *d, const uint8_t *shared,
+                       const uint32_t *to) {
+  uint64_t *files = mx_calloc((d->nv + 1) * sizeof *files);
+  uint8_t *on = mx_calloc(d->nv + 1);
+  if (!files || !on) {
+    mx_free(files);
+    mx_free(on);
+    return MX_ENOMEM;
+  }
+  for (size_t t = 0; t < d->nt; t++)
+    for (int k = 0; k < 3; k++) {
+      const uint32_t w = to[d->tri[3 * t + k]];
+      files[w] |= (uint64_t)1 << (d->shell[t] & 63);
+      on[w] |= shared[t];
+    }
+  int st = MX_OK;
+  for (size_t v = 0; v < d->nv && !st; v++) {
+    if (on[v] || !(files[v] & (files[v] - 1))) continue;
+    const int a = __builtin_ctzll(files[v]), b = 63 - __builtin_clzll(files[v]);
+    mx_error(m->domain_name[a], 0, "materials: this input and %s touch at (%.17g, %.17g, "
+                                   "%.17g) without a common face (at a point or along an "
+                                   "edge): refused; inputs may meet only along triangles "
+                                   "they both have", b < m->ndomain ? m->domain_name[b] : "another",
+             d->x[v], d->y[v], d->z[v]);
+    st = MX_EINPUT;
+  }
+  mx_free(files);
+  mx_free(on);
+  return st;
 }
 
 static int drop_shared(const mx_trisoup *s, size_t t, void *ctx) {
@@ -119,8 +150,10 @@ int mx_materials_split_shared(mx_mesher *m) {
     }
   }
   mx_free(slot);
-  int st = MX_OK;
-  if (nshared && m->nregions >= MX_MAX_REGIONS) {
+  uint32_t *to = NULL;
+  int st = weld_map(d, &to);
+  if (!st) st = touch_check(m, d, shared, to);
+  if (!st && nshared && m->nregions >= MX_MAX_REGIONS) {
     mx_error(NULL, 0, "materials: the inputs' common faces need a region surface's place, "
                       "and %d are taken", MX_MAX_REGIONS);
     st = MX_EINPUT;
@@ -147,8 +180,11 @@ int mx_materials_split_shared(mx_mesher *m) {
       m->region_level[r] = m->p.surface_level > 0 ? m->p.surface_level : 0;
       m->region_meet_only |= 1u << r;
       m->nregions++;
+      /* the vertices of equal coordinates made one: the inputs' own
+       * copies along the rim of their common faces join, so the union's
+       * boundary is closed */
+      for (size_t t = 0; t < 3 * d->nt; t++) d->tri[t] = to[d->tri[t]];
       mx_trisoup_remove_if(d, drop_shared, shared);
-      st = weld(d);
       m->material_shared = shared;
       shared = NULL;
       m->rec->S.materials_shared = nshared;
@@ -157,6 +193,7 @@ int mx_materials_split_shared(mx_mesher *m) {
       mx_trisoup_free(s);
     }
   }
+  mx_free(to);
   mx_free(shared);
   mx_free(first);
   return st;
