@@ -549,6 +549,14 @@ typedef struct {
   int json;            /* 1: the JSON object instead of the report */
   int quiet;           /* 1: no report (the JSON object still with json),
                         * no warnings */
+  /* 3D: the surface as several files (nsurfaces > 0; surface NULL then),
+   * one per input as the mesher was given them (-i A -i B ...: touching or
+   * nested inputs meshed with --materials): the regions are those of each
+   * file's closed shells (verify/check.h), the volume their union's, the
+   * triangles two files share interfaces, not boundary. One file here is
+   * the same as surface. */
+  const char *const *surfaces;
+  int nsurfaces;
 } mx_check_params;
 
 /* The defaults above, no file. */

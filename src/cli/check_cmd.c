@@ -1,6 +1,7 @@
-/* `mixoct check MESH [--surface FILE | --poly FILE] [--volume-tol X]
+/* `mixoct check MESH [--surface FILE ... | --poly FILE] [--volume-tol X]
  * [--dist-tol X] [--threads N] [--json] [--quiet]`: the options read into
- * mx_check_params, then mx_check_file (include/mixoct.h,
+ * mx_check_params (--surface repeated: one file per input of the run, the
+ * list in surfaces; once: surface, as before), then mx_check_file (include/mixoct.h,
  * src/mesher/check_file.c) reads the mesh (3D, or 2D: triangles and
  * quadrilaterals at z = 0), runs the independent checker against the
  * surface or polylines when given, and prints the report, or with --json
@@ -20,7 +21,7 @@ enum { EXIT_USAGE = 2 };
 
 static void usage(FILE *f) {
   fprintf(f,
-          "usage: mixoct check MESH [--surface FILE | --poly FILE] "
+          "usage: mixoct check MESH [--surface FILE ... | --poly FILE] "
           "[--volume-tol X]\n"
           "                    [--dist-tol X] [--threads N] [--json] "
           "[--quiet]\n"
@@ -33,7 +34,13 @@ static void usage(FILE *f) {
           "  --surface FILE    the closed surface the mesh should fill (.off,\n"
           "                    .stl, .obj, .mdl, .ply): volume error and\n"
           "                    distance of the boundary nodes to it; for a\n"
-          "                    2D mesh, its polylines as --poly\n"
+          "                    2D mesh, its polylines as --poly. Repeated\n"
+          "                    (at most %d): one file per input as the\n"
+          "                    mesher was given them (-i A -i B\n"
+          "                    --materials: touching or nested inputs); the\n"
+          "                    regions are each file's closed shells', the\n"
+          "                    volume their union's, the triangles two files\n"
+          "                    share interfaces, not boundary\n"
           "  --poly FILE       the domain of a 2D mesh: closed polylines\n"
           "                    (.poly, or a 2D .off or .mdl): boundary on\n"
           "                    them, features as vertices, area, topology\n"
@@ -49,7 +56,8 @@ static void usage(FILE *f) {
           "  --threads N       OpenMP threads (default: all)\n"
           "  --json            one JSON object on the last line of stdout\n"
           "  --quiet           no report (errors only; JSON if --json)\n"
-          "exit: 0 no defect, 3 defects found, 2 bad input or usage\n");
+          "exit: 0 no defect, 3 defects found, 2 bad input or usage\n",
+          MX_MAX_INPUTS);
 }
 
 /* A number option's value: finite and >= 0. */
@@ -65,9 +73,21 @@ static int number_arg(const char *opt, const char *v, double *out) {
   return MX_OK;
 }
 
+/* One more surface file: MX_OK, or MX_EINPUT beyond MX_MAX_INPUTS. */
+static int add_surface(const char **list, int *n, const char *file) {
+  if (*n == MX_MAX_INPUTS) {
+    mx_error(NULL, 0, "check: at most %d surface files", MX_MAX_INPUTS);
+    return MX_EINPUT;
+  }
+  list[(*n)++] = file;
+  return MX_OK;
+}
+
 int mx_check_main(int argc, char **argv) {
   mx_check_params p;
   mx_check_params_default(&p);
+  const char *surfaces[MX_MAX_INPUTS];
+  int nsurfaces = 0;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
     if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -82,9 +102,9 @@ int mx_check_main(int argc, char **argv) {
         mx_error(NULL, 0, "check: --surface needs a file");
         return EXIT_USAGE;
       }
-      p.surface = argv[++i];
+      if (add_surface(surfaces, &nsurfaces, argv[++i]) != MX_OK) return EXIT_USAGE;
     } else if (!strncmp(a, "--surface=", 10)) {
-      p.surface = a + 10;
+      if (add_surface(surfaces, &nsurfaces, a + 10) != MX_OK) return EXIT_USAGE;
     } else if (!strcmp(a, "--poly")) {
       if (i + 1 >= argc) {
         mx_error(NULL, 0, "check: --poly needs a file");
@@ -133,6 +153,12 @@ int mx_check_main(int argc, char **argv) {
     mx_error(NULL, 0, "check: no mesh file given");
     usage(stderr);
     return EXIT_USAGE;
+  }
+  if (nsurfaces == 1) { /* one file: as it always was */
+    p.surface = surfaces[0];
+  } else if (nsurfaces > 1) {
+    p.surfaces = surfaces;
+    p.nsurfaces = nsurfaces;
   }
   /* --poly with --surface is refused there */
   return mx_check_file(&p);

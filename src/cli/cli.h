@@ -76,7 +76,7 @@ int mx_mesher_roi_main(int argc, char **argv);
  * (src/cli/mesher2d.c, over mixoct.h's mx_mesher2d_*). Returns the exit code. */
 int mx_mesher2d_main(int argc, char **argv);
 
-/* `mixoct check MESH [--surface FILE] [--json]` (src/cli/check_cmd.c: the
+/* `mixoct check MESH [--surface FILE ...] [--json]` (src/cli/check_cmd.c: the
  * options; include/mixoct.h: mx_check_file does the rest). */
 int mx_check_main(int argc, char **argv);
 /* `mpirun -n N mixoct ... --p4est`: the distributed path (src/cli/p4est_cmd.c;

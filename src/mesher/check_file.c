@@ -1,7 +1,10 @@
 /* mx_check_file (include/mixoct.h), what `mixoct check` runs: reads a
  * volume mesh (legacy VTK, VTU, Gmsh MSH 4.1, Medit .mesh/.meshb, GetFEM,
- * M3D, MVM) and, optionally, the surface it should fill, runs the
- * independent checker (verify/check.h) and reports (check_file_report.c).
+ * M3D, MVM) and, optionally, the surface it should fill -- one file, or
+ * several (the inputs of a run, touching or nested: appended in order, each
+ * triangle's shell naming its file, which the checker's regions need) --,
+ * runs the independent checker (verify/check.h) and reports
+ * (check_file_report.c).
  *
  * A 2D mesh (io/read_mesh.h: mx_read_mesh_dim; triangles and
  * quadrilaterals in the plane z = 0, as mesher2d writes them to .vtu, .vtk,
@@ -155,12 +158,31 @@ static int read_surface(const char *path, mx_trisoup *s) {
   return st;
 }
 
-/* The check and report of the mesh read in m (freed here). */
-static int check_file_3d(const mx_check_params *p, mx_mesh_data *m, double t0) {
-  const char *surf = p->surface;
+/* Several surface files, each read and checked as above, appended in
+ * order into s: triangle t's shell is the number of its file. */
+static int read_surfaces(const char *const *list, int n, mx_trisoup *s) {
+  int st = MX_OK;
+  for (int i = 0; i < n && st == MX_OK; i++) {
+    mx_trisoup one;
+    memset(&one, 0, sizeof one);
+    st = read_surface(list[i], &one);
+    if (st == MX_OK) {
+      st = mx_trisoup_append(s, &one); /* its message says why it fails */
+      if (st == MX_EINPUT) mx_error(list[i], 0, "check: this surface file not added");
+    }
+    mx_trisoup_free(&one);
+  }
+  return st;
+}
+
+/* The check and report of the mesh read in m (freed here); the surface
+ * files list[0 .. n). */
+static int check_file_3d(const mx_check_params *p, const char *const *list, int n,
+                         mx_mesh_data *m, double t0) {
+  const char *surf = n ? list[0] : NULL;
   mx_trisoup s;
   memset(&s, 0, sizeof s);
-  int st = surf ? read_surface(surf, &s) : MX_OK;
+  int st = n == 1 ? read_surface(surf, &s) : n > 1 ? read_surfaces(list, n, &s) : MX_OK;
   const double t1 = mx_wtime();
   mx_check_options opt;
   mx_check_defaults(&opt);
@@ -182,7 +204,7 @@ static int check_file_3d(const mx_check_params *p, mx_mesh_data *m, double t0) {
   if (p->json)
     mx_check_file_json(&r, &tags, hash);
   else if (!p->quiet)
-    mx_check_file_text(p->mesh, surf, &r, &tags, hash, t1 - t0, t2 - t1);
+    mx_check_file_text(p->mesh, list, n, &r, &tags, hash, t1 - t0, t2 - t1);
   fflush(stdout);
   mx_check_tags_free(&tags);
   return r.defects ? EXIT_DEFECTS : 0;
@@ -193,11 +215,24 @@ static int check_file_3d(const mx_check_params *p, mx_mesh_data *m, double t0) {
 /* The file read; a 2D mesh and its domain, or a 3D mesh and its surface,
  * checked and reported. */
 static int check_file(const mx_check_params *p) {
-  const char *poly = p->poly, *surf = p->surface;
+  const char *poly = p->poly;
   if (!p->mesh) {
     mx_error(NULL, 0, "check: no mesh file given");
     return EXIT_USAGE;
   }
+  /* the surface files: one (surface) or several (surfaces) */
+  const char *const *list = p->nsurfaces > 0 ? p->surfaces : p->surface ? &p->surface : NULL;
+  const int nsurf = p->nsurfaces > 0 ? p->nsurfaces : p->surface ? 1 : 0;
+  if (p->nsurfaces > 0 && p->surface) {
+    mx_error(NULL, 0, "check: a surface and a list of surfaces both given: one or the other");
+    return EXIT_USAGE;
+  }
+  for (int i = 0; i < nsurf; i++)
+    if (!list[i]) {
+      mx_error(NULL, 0, "check: surface file %d of %d not named", i + 1, nsurf);
+      return EXIT_USAGE;
+    }
+  const char *surf = nsurf ? list[0] : NULL;
   if (poly && surf) {
     mx_error(NULL, 0, "check: --poly and --surface both given: one domain at most");
     return EXIT_USAGE;
@@ -211,10 +246,19 @@ static int check_file(const mx_check_params *p) {
     memset(&q, 0, sizeof q);
     st = mx_qmesh_from_faces(&m, &q);
     mx_mesh_data_free(&m);
+    if (st == MX_OK && nsurf > 1) {
+      mx_error(list[1], 0, "check: %s is a 2D mesh: one domain (--poly FILE), not several "
+               "surfaces", p->mesh);
+      mx_qmesh_free(&q);
+      return EXIT_USAGE;
+    }
     if (st == MX_OK) return check_file_2d(p, &q, poly ? poly : surf, t0);
   }
-  if (st == MX_OK && (poly || has_ext(surf ? surf : "", ".poly"))) {
-    mx_error(poly ? poly : surf, 0, "check: polylines, but %s is a 3D mesh: give the closed "
+  const char *polys = poly;
+  for (int i = 0; i < nsurf && !polys; i++)
+    if (has_ext(list[i], ".poly")) polys = list[i];
+  if (st == MX_OK && polys) {
+    mx_error(polys, 0, "check: polylines, but %s is a 3D mesh: give the closed "
              "surface it fills (--surface FILE: .off, .stl, .obj, .mdl, .ply)", p->mesh);
     mx_mesh_data_free(&m);
     return EXIT_USAGE;
@@ -223,7 +267,7 @@ static int check_file(const mx_check_params *p) {
     mx_mesh_data_free(&m); /* what a failed reader left, if anything */
     return st == MX_EINPUT ? EXIT_USAGE : 1;
   }
-  return check_file_3d(p, &m, t0);
+  return check_file_3d(p, list, nsurf, &m, t0);
 }
 
 int mx_check_file(const mx_check_params *p) {

@@ -22,11 +22,12 @@ typedef struct {
 } mx_check_file_2d;
 
 /* A 3D mesh's report: one JSON object on one line, or the readable report
- * (surf: the surface's file, or NULL; the reading and checking times in
- * seconds). */
+ * (surfs: the surface's files, nsurfs of them, 0 without; the reading and
+ * checking times in seconds). */
 void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64_t hash);
-void mx_check_file_text(const char *mesh, const char *surf, const mx_check_report *r,
-                        const mx_check_tags *t, uint64_t hash, double t_read, double t_check);
+void mx_check_file_text(const char *mesh, const char *const *surfs, int nsurfs,
+                        const mx_check_report *r, const mx_check_tags *t, uint64_t hash,
+                        double t_read, double t_check);
 /* The same for a 2D mesh. */
 void mx_check_file_json_2d(const mx_qmesh *M, const mx_check_file_2d *k);
 void mx_check_file_text_2d(const char *mesh, const mx_qmesh *M, const mx_check_file_2d *k,

@@ -28,6 +28,12 @@
  * (null and [] without a closed surface), "across_interface" and
  * "off_label_region" (objects "elements", "ids", "first_at",
  * "first_regions"; null without the regions).
+ * A surface of several files (the inputs of a run, touching or nested):
+ * each file named ("surfaces"), the closed shells, files and triangles two
+ * files share ("surface pieces"), the volume their union's; in JSON after
+ * "surface_open_edges": "surface_files", "surface_pieces" and
+ * "shared_triangles" (the last two null for a surface that is not closed),
+ * none of the three with one file.
  * A 3D mesh's hash is printed as 16 hex digits: "mesh hash" in the report,
  * "mesh_hash" (a string) in JSON.
  * A 2D mesh has a report of its own, and in JSON "dimension":2 with the
@@ -194,6 +200,14 @@ void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64
     printf("\"surface_open_edges\":%zu,", r->surface_open_edges);
   else
     printf("\"surface_open_edges\":null,");
+  if (r->surface_files > 1) { /* several surface files */
+    printf("\"surface_files\":%zu,", r->surface_files);
+    if (r->surface_open_edges == 0)
+      printf("\"surface_pieces\":%zu,\"shared_triangles\":%zu,", r->surface_pieces,
+             r->shared_triangles);
+    else
+      printf("\"surface_pieces\":null,\"shared_triangles\":null,");
+  }
   printf("\"volume_off\":%zu,\"boundary_off_surface\":%zu,", r->volume_off,
          r->boundary_off_surface);
   printf("\"tagged_not_boundary\":%zu,\"boundary_untagged\":%zu,",
@@ -365,9 +379,11 @@ static void print_tags(const mx_check_report *r, const mx_check_tags *t) {
   }
 }
 
-void mx_check_file_text(const char *mesh, const char *surf, const mx_check_report *r,
-                        const mx_check_tags *t, uint64_t hash, double t_read, double t_check) {
+void mx_check_file_text(const char *mesh, const char *const *surfs, int nsurfs,
+                        const mx_check_report *r, const mx_check_tags *t, uint64_t hash,
+                        double t_read, double t_check) {
   char why[160];
+  const char *surf = nsurfs ? surfs[0] : NULL;
   printf("mixoct check %s\n", mesh);
   printf("  nodes                  %zu\n", r->nodes);
   printf("  elements               %zu (hex %zu, prism %zu, pyramid %zu, "
@@ -382,8 +398,16 @@ void mx_check_file_text(const char *mesh, const char *surf, const mx_check_repor
   printf("  mesh hash              %016llx\n", (unsigned long long)hash);
   const int closed = r->has_surface && r->surface_open_edges == 0;
   if (surf) {
-    printf("  surface                %s\n", surf);
-    printf("  surface volume         %.15g\n", r->surface_volume);
+    printf("  %-23s%s\n", nsurfs > 1 ? "surfaces" : "surface", surf);
+    for (int i = 1; i < nsurfs; i++) printf("                         %s\n", surfs[i]);
+    if (nsurfs > 1 && closed)
+      printf("  surface pieces         %zu closed shells in %zu files; %zu triangles lie on "
+             "another file's (interfaces, not boundary)\n", r->surface_pieces,
+             r->surface_files, r->shared_triangles);
+    printf("  surface volume         %.15g%s\n", r->surface_volume,
+           nsurfs > 1 && closed ? r->nlabels ? " (their union)"
+                                             : " (odd nesting depth: nested shells are holes)"
+                                : "");
     if (closed)
       printf("  surface open edges     0 (closed)\n");
     else

@@ -12,7 +12,8 @@
  *  6. geometric hanging nodes (check_contacts.c);
  *  7. with a surface: the enclosed volume (check_volume.c), with cell
  *     labels the regions of the labels and of the elements (check_labels.c,
- *     check_regions.c), and
+ *     check_regions.c; a surface of several files, touching inputs: the
+ *     regions of its pieces, check_pieces.c), and
  *  8. the distance of the boundary and interface nodes to it
  *     (check_distance.c).
  * It depends on base/, soa/ and geom/ (J_ENS) only, never on the mesher.
@@ -149,6 +150,56 @@ static void collect_lists(const mx_mesh_data *m, const work *w,
   }
 }
 
+/* A closed surface of several files (touching inputs: check_pieces.c):
+ * the volume is the union of its pieces with cell labels (materials), the
+ * points of odd nesting depth without (nested pieces are holes); the area
+ * that sets the volume tolerance leaves out the triangles two files share,
+ * the labels are judged against the pieces' regions. */
+static int several_files(const mx_mesh_data *m, const mx_trisoup *surface,
+                         const mx_check_options *o, mx_check_report *r) {
+  uint8_t *shared = mx_alloc(surface->nt + 1);
+  if (!shared) return MX_ENOMEM;
+  ck_pieces P;
+  int st = mx_ck_shared_triangles(surface, shared, &r->shared_triangles);
+  if (!st) st = mx_ck_pieces_build(&P, surface);
+  if (st) {
+    mx_free(shared);
+    return st;
+  }
+  r->surface_pieces = P.n;
+  r->surface_volume = m->cell_tag ? P.union_volume : P.parity_volume;
+  r->volume_error = r->surface_volume > 0.0
+                        ? (r->volume - r->surface_volume) / r->surface_volume
+                        : NAN;
+  if (m->cell_tag) st = mx_ck_label_regions(m, surface, &P, r);
+  mx_ck_pieces_free(&P);
+  if (!st) {
+    mx_ck_volume_verdict(m, surface, shared, o, r);
+    if (m->cell_tag) mx_ck_label_verdict(r);
+  }
+  mx_free(shared);
+  return st;
+}
+
+/* Pass 7 and 8: against the surface. */
+static int surface_passes(const mx_mesh_data *m, const mx_trisoup *surface,
+                          const mx_check_options *o, mx_check_report *r, uint8_t *flags) {
+  r->has_surface = 1;
+  r->surface_files = mx_ck_surface_files(surface);
+  MX_CHECK(mx_ck_surface_volume(surface, r));
+  MX_CHECK(mx_ck_surface_distance(m, surface, flags, o->boundary_tol, r));
+  if (r->surface_open_edges) { /* an open surface: indicative only */
+    r->boundary_off_surface = 0;
+    r->interface_off_surface = 0;
+    return MX_OK;
+  }
+  if (r->surface_files > 1) return several_files(m, surface, o, r);
+  if (m->cell_tag) MX_CHECK(mx_ck_label_regions(m, surface, NULL, r));
+  mx_ck_volume_verdict(m, surface, NULL, o, r);
+  if (m->cell_tag) mx_ck_label_verdict(r);
+  return MX_OK;
+}
+
 static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
                       const mx_check_options *o, mx_check_report *r,
                       mx_check_tags *tags, work *w) {
@@ -203,19 +254,7 @@ static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
   MX_CHECK(mx_ck_geometric_pass(m, &w->F, &H->U, flags, w->ef, o->hang_tol, r));
   faces_free(&w->F);
   memset(&w->F, 0, sizeof w->F);
-  if (surface) {
-    r->has_surface = 1;
-    MX_CHECK(mx_ck_surface_volume(surface, r));
-    MX_CHECK(mx_ck_surface_distance(m, surface, flags, o->boundary_tol, r));
-    if (r->surface_open_edges == 0) {
-      if (m->cell_tag) MX_CHECK(mx_ck_label_regions(m, surface, r));
-      mx_ck_volume_verdict(m, surface, o, r);
-      if (m->cell_tag) mx_ck_label_verdict(r);
-    } else { /* an open surface: indicative only */
-      r->boundary_off_surface = 0;
-      r->interface_off_surface = 0;
-    }
-  }
+  if (surface) MX_CHECK(surface_passes(m, surface, o, r, flags));
   collect_lists(m, w, r);
   return MX_OK;
 }

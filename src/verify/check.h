@@ -92,6 +92,30 @@
  *                      geom/distance.h, mx_region_depth or mx_inside);
  *  off_label_region*   the other elements whose region is not their label's
  *                      (the labels are then no function of the regions).
+ * A surface of several files (the inputs of a mesher's run, each a file,
+ * touching or nested: surface->shell[t] is the file of triangle t, as
+ * mx_trisoup_append numbers them; one file: today's definitions above):
+ *  surface_files       the files (1 + the largest shell; 0 without surface);
+ *  surface_open_edges  each file's edges apart;
+ *  the regions         those of the pieces, each closed shell of each file
+ *                      (its triangles connected through the file's manifold
+ *                      edges): a point's region is the innermost piece
+ *                      around it, keyed by (the piece's nesting depth, its
+ *                      file), the first file at depth d numbered d + 1, the
+ *                      others after (verify/check_pieces.c); each region
+ *                      holds its pieces' volumes less their children's;
+ *  surface_pieces      the pieces;
+ *  surface_volume      with cell labels, the union of the pieces: the
+ *                      outermost ones' volumes summed (touching pieces
+ *                      share faces, no volume); without, the points of odd
+ *                      nesting depth (the pieces' volumes, those at odd
+ *                      depths subtracted: nested pieces are holes, as
+ *                      without --materials);
+ *  shared_triangles    the triangles whose three points are those of a
+ *                      triangle of another file (interfaces between inputs,
+ *                      not the domain's boundary: left out of the area that
+ *                      sets the default volume_tol); the boundary and the
+ *                      interface nodes are measured against every triangle.
  * Boundary tags (io/read_mesh.h: the tagged faces of MSH, Medit and GetFEM
  * files, the point field surface_tag of VTK files), when the mesh has them:
  *  tagged_faces        faces in the mesh's list of tagged faces;
@@ -251,6 +275,8 @@ typedef struct {
   mx_check_ids interface_off_ids; /* first interface nodes off the surface */
   int has_regions;                /* the regions were looked at */
   mx_check_elems_at across_interface, off_label_region;
+  /* a surface of several files (check.h's definitions above) */
+  size_t surface_files, surface_pieces, shared_triangles;
   mx_check_ids untagged_ids;     /* elements with an untagged boundary face */
   mx_check_ids not_boundary_ids; /* tagged faces that are not boundary faces */
 } mx_check_report;

@@ -6,7 +6,8 @@
  * buckets of check_faces.c, whose nodes are flagged as interface nodes
  * (check_distance.c measures them against the surface); each label's
  * boundary closed; with a surface, each label's region (check_regions.c
- * finds each element's) and its volume against the region's. */
+ * finds each element's; with a surface of several files the regions are
+ * its pieces', check_pieces.c) and its volume against the region's. */
 #include "verify/check_passes.h"
 
 #include <math.h>
@@ -89,70 +90,63 @@ int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, uint8_t *flags, uint
   return MX_OK;
 }
 
-int mx_ck_label_regions(const mx_mesh_data *m, const mx_trisoup *surface, mx_check_report *r) {
-  if (!m->cell_tag || !r->nlabels || !surface->nt) return MX_OK;
-  mx_surface_index S;
-  MX_CHECK(mx_surface_index_build_outward(&S, surface, 0, (uint32_t)surface->nt));
-  /* each shell's volume (outward), and each element's region */
-  double *vol = mx_alloc(((size_t)S.nshells + 1) * sizeof *vol);
-  int16_t *reg = mx_alloc((m->ncells + 1) * sizeof *reg);
-  int st = vol && reg ? MX_OK : MX_ENOMEM;
-  if (st == MX_OK) {
-    mx_surface_index_shell_volumes(&S, vol, NULL);
-    st = mx_ck_element_regions(m, surface, &S, reg, r);
-  }
-  if (st != MX_OK) {
-    mx_surface_index_free(&S);
-    mx_free(vol);
-    mx_free(reg);
-    return st;
-  }
-  /* region d (depth d: inside d shells): the shells at depth d - 1 less
-   * those at depth d; the whole mesh: the outermost shells' */
-  double region[66], outer = 0.0;
-  for (int d = 0; d < 66; d++) region[d] = 0.0;
-  for (uint32_t c = 0; c < S.nshells; c++) {
-    const uint32_t e = S.shell_depth[c];
-    if (e < 65) region[e + 1] += vol[c];
-    if (e >= 1 && e < 66) region[e] -= vol[c];
-    if (e == 0) outer += vol[c];
-  }
-  mx_free(vol);
-  mx_surface_index_free(&S);
-  r->surface_volume = fabs(outer);
-  r->volume_error = r->surface_volume > 0.0 ? (r->volume - r->surface_volume) / r->surface_volume
-                                            : NAN;
-  /* each label's region: the one most of its elements lie in (elements
-   * across an interface, or with no point off the shells, left out) */
-  size_t (*count)[66] = mx_calloc((r->nlabels + 1) * sizeof *count);
-  if (!count) {
-    mx_free(reg);
+/* The regions of a surface of one file: region d (depth d, inside d
+ * shells) holds the shells at depth d - 1 less those at depth d (depths
+ * beyond 64 in column 65); *outer: the outermost shells' volume. The
+ * index S built outward, vol[66]. */
+static int depth_regions(const mx_trisoup *surface, mx_surface_index *S, double region[66],
+                         double *outer) {
+  MX_CHECK(mx_surface_index_build_outward(S, surface, 0, (uint32_t)surface->nt));
+  double *vol = mx_alloc(((size_t)S->nshells + 1) * sizeof *vol);
+  if (!vol) {
+    mx_surface_index_free(S);
     return MX_ENOMEM;
   }
+  mx_surface_index_shell_volumes(S, vol, NULL);
+  for (int d = 0; d < 66; d++) region[d] = 0.0;
+  *outer = 0.0;
+  for (uint32_t c = 0; c < S->nshells; c++) {
+    const uint32_t e = S->shell_depth[c];
+    if (e < 65) region[e + 1] += vol[c];
+    if (e >= 1 && e < 66) region[e] -= vol[c];
+    if (e == 0) *outer += vol[c];
+  }
+  mx_free(vol);
+  return MX_OK;
+}
+
+/* Each label's region (the one most of its elements lie in: elements
+ * across an interface, or with no point off the shells, left out), its
+ * region's volume (region[0 .. nreg), element regions beyond in the last
+ * column) and the elements lying in another region than their label's. */
+static int judge_labels(const mx_mesh_data *m, const int16_t *reg, const double *region, int nreg,
+                        mx_check_report *r) {
+  size_t *count = mx_calloc((r->nlabels * (size_t)nreg + 1) * sizeof *count);
+  if (!count) return MX_ENOMEM;
   for (size_t c = 0; c < m->ncells; c++) {
     const int k = label_index(r, m->cell_tag[c]);
     if (k < 0 || reg[c] < 0) continue;
-    count[k][reg[c] < 65 ? reg[c] : 65]++;
+    count[(size_t)k * (size_t)nreg + (size_t)(reg[c] < nreg ? reg[c] : nreg - 1)]++;
   }
   for (size_t k = 0; k < r->nlabels; k++) {
+    const size_t *n = count + k * (size_t)nreg;
     int best = 0;
-    for (int d = 1; d < 66; d++)
-      if (count[k][d] > count[k][best]) best = d;
+    for (int d = 1; d < nreg; d++)
+      if (n[d] > n[best]) best = d;
     mx_check_label *L = &r->labels[k];
-    if (!count[k][best]) continue; /* no element in a region: unknown */
+    if (!n[best]) continue; /* no element in a region: unknown */
     L->region = best;
     L->region_volume = region[best];
     L->volume_error = fabs(region[best]) > 0.0 ? (L->volume - region[best]) / fabs(region[best])
                                                : NAN;
   }
   mx_free(count);
-  /* the labels a function of the regions: the elements lying in another
-   * region than their label's */
+  /* the labels a function of the regions */
   mx_check_elems_at *o = &r->off_label_region;
   for (size_t c = 0; c < m->ncells; c++) {
     const int k = label_index(r, m->cell_tag[c]);
     if (k < 0 || reg[c] < 0 || r->labels[k].region < 0) continue;
-    const int e = reg[c] < 65 ? reg[c] : 65;
+    const int e = reg[c] < nreg ? reg[c] : nreg - 1;
     if (e == r->labels[k].region) continue;
     r->labels[k].off_region++;
     if (o->n == 0) {
@@ -163,8 +157,33 @@ int mx_ck_label_regions(const mx_mesh_data *m, const mx_trisoup *surface, mx_che
     if (o->ids.n < MX_CHECK_LIST) o->ids.id[o->ids.n++] = (uint32_t)c;
     o->n++;
   }
-  mx_free(reg);
   return MX_OK;
+}
+
+int mx_ck_label_regions(const mx_mesh_data *m, const mx_trisoup *surface, const ck_pieces *P,
+                        mx_check_report *r) {
+  if (!m->cell_tag || !r->nlabels || !surface->nt) return MX_OK;
+  mx_surface_index S;
+  double depth_region[66], outer = 0.0;
+  const double *region = depth_region;
+  int nreg = 66;
+  if (P) { /* several files: the pieces' regions */
+    region = P->region_volume;
+    nreg = P->nregions + 1;
+    outer = P->union_volume;
+  } else {
+    MX_CHECK(depth_regions(surface, &S, depth_region, &outer));
+  }
+  const ck_locate L = {P ? NULL : &S, P};
+  int16_t *reg = mx_alloc((m->ncells + 1) * sizeof *reg);
+  int st = reg ? mx_ck_element_regions(m, surface, &L, reg, r) : MX_ENOMEM;
+  if (!P) mx_surface_index_free(&S);
+  r->surface_volume = fabs(outer);
+  r->volume_error = r->surface_volume > 0.0 ? (r->volume - r->surface_volume) / r->surface_volume
+                                            : NAN;
+  if (!st) st = judge_labels(m, reg, region, nreg, r);
+  mx_free(reg);
+  return st;
 }
 
 void mx_ck_label_verdict(mx_check_report *r) {

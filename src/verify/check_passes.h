@@ -333,29 +333,73 @@ int mx_ck_label_pass(const mx_mesh_data *m, const faces *F, uint8_t *flags, uint
  * twice, from the faces that bound it (other: mx_ck_label_pass's). */
 int mx_ck_label_boundaries(const mx_mesh_data *m, const faces *F, const uint32_t *other,
                            mx_check_report *r);
-/* With a closed surface: the volume of each region it cuts out (its
- * shells' nesting), each element's region (mx_ck_element_regions), each
- * label's region (where most of its elements lie) and volume error, the
- * elements in another region than their label's (off_label_region); the
- * whole mesh's volume then compared with the outermost shells'
- * (surface_volume, volume_error). The verdict (after the whole mesh's,
- * which sets volume_tol): labels_off. */
-int mx_ck_label_regions(const mx_mesh_data *m, const mx_trisoup *surface, mx_check_report *r);
-void mx_ck_label_verdict(mx_check_report *r);
 int mx_ck_tag_pass(const mx_mesh_data *m, const faces *F, mx_check_report *r,
                    mx_check_tags *tags);
 /* Geometric hanging nodes (check_contacts.c). */
 int mx_ck_geometric_pass(const mx_mesh_data *m, const faces *F, const ubox *U,
                          uint8_t *flags, uint8_t *ef, double tol,
                          mx_check_report *r);
-/* Regions (check_regions.c): of an index S built outward over the
- * surface, each element's region (its nesting depth) in reg: the one its
+/* A surface given as several files (check_pieces.c, whose head defines
+ * the pieces and their regions): its pieces, the forest of their nesting,
+ * and the regions they cut out. */
+enum { MX_CK_MAX_PIECES = 4096 };
+struct mx_surface_index;
+typedef struct {
+  uint32_t n;                      /* pieces */
+  mx_trisoup *soup;                /* n: each piece's triangles */
+  struct mx_surface_index *index;  /* n: over each soup, turned outward */
+  double (*box)[6];                /* n: lo x y z, hi x y z */
+  int32_t *parent;                 /* n: the innermost piece around it, -1 */
+  uint32_t *depth;                 /* n: the pieces around it */
+  uint16_t *file;                  /* n: its file (soa/trisoup.h shell) */
+  int *region;                     /* n: the region inside it (>= 1) */
+  double *volume;                  /* n: the volume it encloses */
+  uint32_t *child_off, *child;     /* the children of piece p:
+                                    * child[child_off[p + 1] .. child_off[p + 2]),
+                                    * the roots at p = -1 */
+  int nregions;                    /* regions 1 .. nregions (0: outside) */
+  double *region_volume;           /* nregions + 1 */
+  double union_volume;             /* the roots' volumes summed */
+  double parity_volume;            /* the pieces' volumes, those at odd
+                                    * depths subtracted (nested pieces as
+                                    * holes) */
+} ck_pieces;
+/* The files of a surface: 1 + its largest shell (0 without triangles). */
+uint32_t mx_ck_surface_files(const mx_trisoup *s);
+/* MX_OK, MX_ENOMEM, or MX_EINPUT (message printed) beyond MX_CK_MAX_PIECES
+ * pieces; P freed on failure. */
+int mx_ck_pieces_build(ck_pieces *P, const mx_trisoup *s);
+void mx_ck_pieces_free(ck_pieces *P);
+/* p's region (0 outside every piece); whether p lies within `on` of a
+ * piece's triangle. */
+int mx_ck_pieces_region(const ck_pieces *P, const double p[3]);
+int mx_ck_pieces_on(const ck_pieces *P, const double p[3], double on);
+/* shared[t] (nt bytes) = 1 for the triangles whose three points are those
+ * of a triangle of another file, *nshared of them. MX_OK or MX_ENOMEM. */
+int mx_ck_shared_triangles(const mx_trisoup *s, uint8_t *shared, size_t *nshared);
+/* How a point's region is told: from an index S built outward over a
+ * surface of one file (the nesting depth), or from the pieces P of several
+ * files (the other NULL). */
+typedef struct {
+  const struct mx_surface_index *S;
+  const ck_pieces *P;
+} ck_locate;
+/* Regions (check_regions.c): each element's region in reg: the one its
  * centroid and its corners off the shells all lie in, -1 when none of them
  * is off the shells, -2 when they lie in two regions (across_interface). */
-struct mx_surface_index;
 int mx_ck_element_regions(const mx_mesh_data *m, const mx_trisoup *surface,
-                          const struct mx_surface_index *S, int16_t *reg,
-                          mx_check_report *r);
+                          const ck_locate *L, int16_t *reg, mx_check_report *r);
+/* With a closed surface: the volume of each region it cuts out (its
+ * shells' nesting; with several files, P's regions: check_pieces.c, NULL
+ * with one file), each element's region (mx_ck_element_regions), each
+ * label's region (where most of its elements lie) and volume error, the
+ * elements in another region than their label's (off_label_region); the
+ * whole mesh's volume then compared with the outermost shells' (several
+ * files: the union of the pieces; surface_volume, volume_error). The
+ * verdict (after the whole mesh's, which sets volume_tol): labels_off. */
+int mx_ck_label_regions(const mx_mesh_data *m, const mx_trisoup *surface, const ck_pieces *P,
+                        mx_check_report *r);
+void mx_ck_label_verdict(mx_check_report *r);
 /* The mean of cell c's nodes. */
 static inline void mx_ck_centroid(const mx_mesh_data *m, size_t c, double g[3]) {
   const int nv = mx_cell_nodes[m->type[c]];
@@ -367,7 +411,9 @@ static inline void mx_ck_centroid(const mx_mesh_data *m, size_t c, double g[3]) 
  * encloses, the mesh's volume error; then, with a closed surface, whether
  * that error is beyond the tolerance. */
 int mx_ck_surface_volume(const mx_trisoup *s, mx_check_report *r);
-void mx_ck_volume_verdict(const mx_mesh_data *m, const mx_trisoup *s,
+/* skip (NULL: none): the triangles left out of the surface's area (those
+ * two files share: interfaces, not the boundary). */
+void mx_ck_volume_verdict(const mx_mesh_data *m, const mx_trisoup *s, const uint8_t *skip,
                           const mx_check_options *o, mx_check_report *r);
 /* Distance to the surface (check_distance.c): of every boundary node. */
 int mx_ck_surface_distance(const mx_mesh_data *m, const mx_trisoup *s,

@@ -1,10 +1,12 @@
 /* Pass 7 of the checker, volume, with a surface: whether the surface is
- * closed (its edges not used by exactly two of its triangles), the volume
- * it encloses (divergence theorem: signed tetrahedra from the centre of its
- * bounding box, in fixed chunks), and the mesh's volume error against it;
- * with a closed surface, the error is a defect beyond volume_tol (chosen
- * from the mesh when 0: half a layer of elements along the surface, 5% at
- * least). */
+ * closed (its edges not used by exactly two of its triangles; with several
+ * files, each file's edges apart), the volume it encloses (divergence
+ * theorem: signed tetrahedra from the centre of its bounding box, in fixed
+ * chunks; several files: their pieces' union, check_pieces.c), and the
+ * mesh's volume error against it; with a closed surface, the error is a
+ * defect beyond volume_tol (chosen from the mesh when 0: half a layer of
+ * elements along the surface -- the triangles two files share are inside
+ * the domain, not along its surface --, 5% at least). */
 #include "verify/check_passes.h"
 
 #include "base/scan.h"
@@ -73,7 +75,7 @@ int mx_ck_surface_volume(const mx_trisoup *s, mx_check_report *r) {
   return MX_OK;
 }
 
-void mx_ck_volume_verdict(const mx_mesh_data *m, const mx_trisoup *surface,
+void mx_ck_volume_verdict(const mx_mesh_data *m, const mx_trisoup *surface, const uint8_t *skip,
                           const mx_check_options *o, mx_check_report *r) {
   double tol = o->volume_tol;
   if (!(tol > 0.0)) {
@@ -81,6 +83,7 @@ void mx_ck_volume_verdict(const mx_mesh_data *m, const mx_trisoup *surface,
      * along the surface: half of one is allowed, 5% at least */
     double area = 0.0;
     for (size_t t = 0; t < surface->nt; t++) {
+      if (skip && skip[t]) continue;
       const uint32_t *v = surface->tri + 3 * t;
       const double ux = surface->x[v[1]] - surface->x[v[0]],
                    uy = surface->y[v[1]] - surface->y[v[0]],
