@@ -13,6 +13,10 @@ static int piece_of(const void *ctx, const double x[3]) {
   return mx_interfaces_piece(ctx, x);
 }
 
+static int surface_piece_of(const void *ctx, const double x[3]) {
+  return mx_interfaces_surface_piece(ctx, x);
+}
+
 static double clearance_of(const void *ctx, const double x[3]) {
   return mx_interfaces_clearance(ctx, x);
 }
@@ -61,10 +65,17 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
      * free ones in their piece; those on an interface stay (their shell is
      * not the domain's surface) */
     for (size_t v = 0; !st && movable && v < M->nnodes; v++) movable[v] = !movable[v];
+    /* the outer boundary's nodes: the piece their surface bounds, which
+     * they keep (they slide on the boundary, not across an interface) */
+#pragma omp parallel for schedule(dynamic, 1024)
+    for (size_t v = 0; v < M->nnodes; v++)
+      if (!st && movable && movable[v] && piece[v] == MX_REGION_ON)
+        piece[v] = (uint16_t)mx_interfaces_surface_piece(I, M->xyz + 3 * v);
   }
   if (!st) stats->inverted = M->invalid; /* counted by the shrink */
   if (!st && piece) {
-    const mx_untangle_opts o = {staircase_q, 20, 0, movable, piece_of, I, piece, clearance_of};
+    const mx_untangle_opts o = {staircase_q, 20, 0, movable, piece_of, I, piece, clearance_of,
+                                surface_piece_of};
     st = mx_untangle_with(M, states, S, &o, &stats->smoothed);
   } else if (!st) {
     st = mx_untangle(M, states, S, staircase_q, 20, &stats->smoothed);

@@ -24,53 +24,6 @@ static double dist(const double *a, const double *b) {
   return sqrt(x * x + y * y + z * z);
 }
 
-/* Where the interface crosses the segment from p (side A, signed distance
- * gp <= 0) to q (side B, gq >= 0): the fraction t from p (Illinois
- * iterations on the signed distance along the segment), x the point. */
-static double crossing(const mx_surface_index *Sk, const double *p, const double *q, double gp,
-                       double gq, double x[3]) {
-  double a = 0.0, b = 1.0, fa = gp < 0.0 ? gp : 0.0, fb = gq > 0.0 ? gq : 0.0;
-  const double tol = 1e-13 * (dist(p, q) + 1e-300);
-  double t = 0.5;
-  if (fa == 0.0 && fb == 0.0) {
-    t = 0.5;
-  } else if (fa == 0.0) {
-    t = 0.0;
-  } else if (fb == 0.0) {
-    t = 1.0;
-  } else {
-    int last = 0;
-    for (int it = 0; it < 60; it++) {
-      t = (a * fb - b * fa) / (fb - fa);
-      if (!(t > a && t < b)) t = 0.5 * (a + b);
-      double y[3];
-      for (int i = 0; i < 3; i++) y[i] = p[i] + t * (q[i] - p[i]);
-      const double ft = mx_signed_distance(Sk, y, NULL);
-      if (fabs(ft) <= tol || b - a <= 1e-15) break;
-      if (ft > 0.0) {
-        b = t;
-        fb = ft;
-        if (last == 1) fa *= 0.5;
-        last = 1;
-      } else {
-        a = t;
-        fa = ft;
-        if (last == -1) fb *= 0.5;
-        last = -1;
-      }
-    }
-  }
-  for (int i = 0; i < 3; i++) x[i] = p[i] + t * (q[i] - p[i]);
-  return t;
-}
-
-static double elem_jens(const mx_mesh *M, size_t c) {
-  double x[8][3];
-  const int nv = mx_cell_nodes[M->type[c]];
-  for (int i = 0; i < nv; i++) memcpy(x[i], M->xyz + 3 * (size_t)M->conn[8 * c + i], sizeof x[i]);
-  return mx_jens(M->type[c], (const double(*)[3])x);
-}
-
 /* ---- growing arrays for the new elements and nodes ---- */
 
 typedef struct {
@@ -237,6 +190,8 @@ typedef struct {
   const mx_interfaces *I;
   uint32_t piece;    /* the pass: inside this piece is side A */
   const mx_surface_index *Sk; /* its index */
+  const mx_surface_index *Si; /* its triangles on an interface (Sk when nested) */
+  double hair;       /* within it of Sk: on it */
   const uint8_t *inA; /* per piece value (piece + 1): 1 when within the pass's piece */
   const mx_surface_index *Sd; /* the domain's surface (the outer boundary) */
   uint8_t *outer;    /* the old nodes on the outer boundary and no interface */
@@ -263,16 +218,72 @@ static inline int side_node(const cleaver *W, uint32_t v) {
   return v < W->nn ? W->side[v] : side_of(W, W->N.depth[v - W->nn]);
 }
 
+/* The distance from x to the interface, negative on side A (inside the
+ * pass's piece, or on its own surface), positive on side B. */
+static double iface_g(const cleaver *W, const double x[3]) {
+  double q[3];
+  const double d = mx_closest_point(W->Si, x, q, NULL, NULL);
+  if (W->Si == W->Sk) return mx_signed_distance(W->Sk, x, NULL);
+  return mx_signed_distance(W->Sk, x, NULL) > W->hair ? d : -d;
+}
+
 /* A point on the interface and the outer boundary near x (alternating
  * projections: the two surfaces cross there). */
 static void rim_point(const cleaver *W, double x[3]) {
   double q[3];
   for (int it = 0; it < 24; it++) {
     mx_closest_point(W->Sd, x, q, NULL, NULL);
-    mx_closest_point(W->Sk, q, x, NULL, NULL);
+    mx_closest_point(W->Si, q, x, NULL, NULL);
     const double d = dist(x, q);
     if (d <= 1e-14 * (fabs(x[0]) + fabs(x[1]) + fabs(x[2]) + 1e-300)) break;
   }
+}
+
+/* Where the interface crosses the segment from p (side A, iface_g gp <= 0)
+ * to q (side B, gq >= 0): the fraction t from p (Illinois iterations on
+ * iface_g along the segment), x the point. */
+static double crossing(const cleaver *W, const double *p, const double *q, double gp,
+                       double gq, double x[3]) {
+  double a = 0.0, b = 1.0, fa = gp < 0.0 ? gp : 0.0, fb = gq > 0.0 ? gq : 0.0;
+  const double tol = 1e-13 * (dist(p, q) + 1e-300);
+  double t = 0.5;
+  if (fa == 0.0 && fb == 0.0) {
+    t = 0.5;
+  } else if (fa == 0.0) {
+    t = 0.0;
+  } else if (fb == 0.0) {
+    t = 1.0;
+  } else {
+    int last = 0;
+    for (int it = 0; it < 60; it++) {
+      t = (a * fb - b * fa) / (fb - fa);
+      if (!(t > a && t < b)) t = 0.5 * (a + b);
+      double y[3];
+      for (int i = 0; i < 3; i++) y[i] = p[i] + t * (q[i] - p[i]);
+      const double ft = iface_g(W, y);
+      if (fabs(ft) <= tol || b - a <= 1e-15) break;
+      if (ft > 0.0) {
+        b = t;
+        fb = ft;
+        if (last == 1) fa *= 0.5;
+        last = 1;
+      } else {
+        a = t;
+        fa = ft;
+        if (last == -1) fb *= 0.5;
+        last = -1;
+      }
+    }
+  }
+  for (int i = 0; i < 3; i++) x[i] = p[i] + t * (q[i] - p[i]);
+  return t;
+}
+
+static double elem_jens(const mx_mesh *M, size_t c) {
+  double x[8][3];
+  const int nv = mx_cell_nodes[M->type[c]];
+  for (int i = 0; i < nv; i++) memcpy(x[i], M->xyz + 3 * (size_t)M->conn[8 * c + i], sizeof x[i]);
+  return mx_jens(M->type[c], (const double(*)[3])x);
 }
 
 
@@ -444,7 +455,7 @@ static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
     best[v] = UINT64_MAX;
     bto[v] = UINT32_MAX;
     if (flag[v] && W->depth[v] != MX_REGION_ON)
-      W->sd[v] = mx_signed_distance(W->Sk, M->xyz + 3 * v, NULL);
+      W->sd[v] = iface_g(W, M->xyz + 3 * v);
     else if (!W->outer[v])
       W->sd[v] = 0.0; /* (an outer node's is there: its side) */
   }
@@ -508,7 +519,7 @@ static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
     const uint32_t o = bto[v];
     const int va = W->side[v] == SIDE_A;
     const double *p = M->xyz + 3 * (va ? v : o), *q = M->xyz + 3 * (size_t)(va ? o : v);
-    crossing(W->Sk, p, q, W->sd[va ? v : o], W->sd[va ? o : v], target + 3 * v);
+    crossing(W, p, q, W->sd[va ? v : o], W->sd[va ? o : v], target + 3 * v);
     if (W->outer[v]) rim_point(W, target + 3 * v); /* it stays on the boundary */
   }
   /* the moves, in id order, each kept when no element around it drops
@@ -566,7 +577,8 @@ static uint16_t cut_centre(const cleaver *W, const uint32_t *row, int t, double 
     for (int a = 0; a < 3; a++) x[a] += M->xyz[3 * (size_t)row[i] + a] / nv;
   double near = INFINITY, q[3];
   for (int i = 0; i < nv; i++) near = fmin(near, dist(x, M->xyz + 3 * (size_t)row[i]));
-  const double g = mx_signed_distance(W->Sk, x, q);
+  const double g = iface_g(W, x);
+  mx_closest_point(W->Si, x, q, NULL, NULL);
   const double gap = dist(x, q);
   if (fabs(g) < W->alpha * near && gap > 0.0) {
     const double f = W->alpha * near / gap;
@@ -761,12 +773,18 @@ static int finish(cleaver *W, mx_cleave_stats *stats) {
     if (W->N.ea[i] == UINT32_MAX) continue;
     const uint32_t a = W->N.ea[i], b = W->N.eb[i];
     const double *p = node_xyz(W, a), *q = node_xyz(W, b);
-    const double ga = a < nn ? W->sd[a] : mx_signed_distance(W->Sk, p, NULL);
-    const double gb = b < nn ? W->sd[b] : mx_signed_distance(W->Sk, q, NULL);
-    crossing(W->Sk, p, q, ga, gb, W->N.xyz + 3 * i);
+    const double ga = a < nn ? W->sd[a] : iface_g(W, p);
+    const double gb = b < nn ? W->sd[b] : iface_g(W, q);
     if (a < nn && b < nn && W->outer[a] && W->outer[b]) {
-      rim_point(W, W->N.xyz + 3 * i);
+      /* both on the outer boundary: where the interface meets it, from the
+       * estimate on the edge */
+      const double da = fabs(ga), db = fabs(gb), f = da + db > 0 ? da / (da + db) : 0.5;
+      double *x = W->N.xyz + 3 * i;
+      for (int c = 0; c < 3; c++) x[c] = p[c] + f * (q[c] - p[c]);
+      rim_point(W, x);
       W->rim[nn + i] = 1;
+    } else {
+      crossing(W, p, q, ga, gb, W->N.xyz + 3 * i);
     }
     ncut++;
   }
@@ -846,8 +864,8 @@ static int smooth_band(cleaver *W, size_t *moves) {
     states[v] = on ? MX_NODE_OUTSIDE : MX_NODE_INSIDE;
     movable[v] = movable[v] && !W->rim[v] && (!on || v >= n0 || W->moved[v]);
   }
-  const mx_untangle_opts o = {MX_CLEAVE_FLOOR, 8, 3, movable, piece_of, W->I, W->depth, clearance_of};
-  const int st = mx_untangle_with(M, states, W->Sk, &o, moves);
+  const mx_untangle_opts o = {MX_CLEAVE_FLOOR, 8, 3, movable, piece_of, W->I, W->depth, clearance_of, NULL};
+  const int st = mx_untangle_with(M, states, W->Si, &o, moves);
   mx_free(states);
   mx_free(movable);
   return st;
@@ -875,6 +893,7 @@ int mx_cleave_interface(mx_mesh *M, uint16_t **piece, uint8_t **outer, const mx_
   W.I = I;
   W.piece = p;
   W.Sk = &I->index[p];
+  W.Si = I->iface[p] ? I->iface[p] : W.Sk;
   W.Sd = Sd;
   W.inA = inA;
   W.alpha = alpha;
@@ -884,14 +903,15 @@ int mx_cleave_interface(mx_mesh *M, uint16_t **piece, uint8_t **outer, const mx_
   /* the sides: a free node's from its piece, a node of the outer boundary
    * (on no interface) from where it lies (on p's surface: inside p) */
   const double hair = 1e-12 * W.Sk->coord_max;
+  W.hair = hair;
 #pragma omp parallel for schedule(dynamic, 1024)
   for (size_t v = 0; v < nn; v++) {
     W.sd[v] = 0.0;
     if (W.depth[v] != MX_REGION_ON) {
       W.side[v] = (uint8_t)side_of(&W, W.depth[v]);
     } else if (W.outer[v]) {
-      W.sd[v] = mx_signed_distance(W.Sk, M->xyz + 3 * v, NULL);
-      W.side[v] = W.sd[v] > hair ? SIDE_B : SIDE_A; /* on p's own surface: p's */
+      W.sd[v] = iface_g(&W, M->xyz + 3 * v);
+      W.side[v] = W.sd[v] > 0.0 ? SIDE_B : SIDE_A; /* on p's own surface: p's */
     } else {
       W.side[v] = SIDE_ON;
     }

@@ -44,6 +44,14 @@ static int sub_soup(const mx_trisoup *src, const uint32_t *tris, size_t n, uint3
 }
 
 void mx_interfaces_free(mx_interfaces *I) {
+  for (uint32_t p = 0; I->iface && p < I->npieces; p++)
+    if (I->iface[p]) {
+      mx_surface_index_free(I->iface[p]);
+      mx_free(I->iface[p]);
+    }
+  for (uint32_t p = 0; I->iface_soup && p < I->npieces; p++) mx_trisoup_free(&I->iface_soup[p]);
+  mx_free(I->iface);
+  mx_free(I->iface_soup);
   for (uint32_t p = 0; I->index && p < I->npieces; p++)
     if (I->index[p].tri_id) mx_surface_index_free(&I->index[p]);
   for (uint32_t p = 0; I->soup && p < I->npieces; p++) mx_trisoup_free(&I->soup[p]);
@@ -90,7 +98,21 @@ static int file_pieces(mx_interfaces *I, const mx_trisoup *src, const uint32_t *
     for (size_t i = 0; shared && i < k; i++) shares[p] |= shared[mine[i]];
     st = sub_soup(src, mine, k, map, &I->soup[p]);
     if (!st) st = mx_surface_index_build(&I->index[p], &I->soup[p], 0, (uint32_t)k);
+    if (!st && shares[p]) { /* its interface: the shared triangles */
+      size_t ns = 0;
+      for (size_t i = 0; i < k; i++)
+        if (shared[mine[i]]) mine[ns++] = mine[i]; /* (the list is not needed after) */
+      I->iface[p] = mx_calloc(sizeof *I->iface[p]);
+      st = I->iface[p] ? sub_soup(src, mine, ns, map, &I->iface_soup[p]) : MX_ENOMEM;
+      if (!st) st = mx_surface_index_build(I->iface[p], &I->iface_soup[p], 0, (uint32_t)ns);
+      if (st) {
+        mx_free(I->iface[p]);
+        I->iface[p] = NULL;
+        mx_trisoup_free(&I->iface_soup[p]);
+      }
+    }
     if (st) { /* this piece's part: the caller frees the pieces counted */
+      if (I->index[p].tri_id) mx_surface_index_free(&I->index[p]);
       mx_trisoup_free(&I->soup[p]);
       break;
     }
@@ -133,13 +155,15 @@ int mx_interfaces_build(mx_interfaces *I, const mx_trisoup *src, uint32_t nt,
   I->file = mx_alloc((MX_MAX_PIECES + 1) * sizeof *I->file);
   I->region = mx_alloc((MX_MAX_PIECES + 1) * sizeof *I->region);
   I->pass = mx_alloc((MX_MAX_PIECES + 1) * sizeof *I->pass);
+  I->iface = mx_calloc((MX_MAX_PIECES + 1) * sizeof *I->iface);
+  I->iface_soup = mx_calloc((MX_MAX_PIECES + 1) * sizeof *I->iface_soup);
   uint32_t *tris = mx_alloc(((size_t)nt + 1) * sizeof *tris);
   uint8_t *shares = mx_alloc(MX_MAX_PIECES + 1);
   uint32_t *map = mx_alloc((src->nv + 1) * sizeof *map);
   if (map)
     for (size_t v = 0; v < src->nv; v++) map[v] = UINT32_MAX;
   int st = !I->soup || !I->index || !I->parent || !I->depth || !I->file || !I->region ||
-                   !I->pass || !tris || !shares || !map
+                   !I->pass || !I->iface || !I->iface_soup || !tris || !shares || !map
                ? MX_ENOMEM
                : MX_OK;
   /* the files' shells */
@@ -199,6 +223,16 @@ int mx_interfaces_build(mx_interfaces *I, const mx_trisoup *src, uint32_t nt,
   mx_free(shares);
   if (st) mx_interfaces_free(I);
   return st;
+}
+
+int mx_interfaces_surface_piece(const mx_interfaces *I, const double p[3]) {
+  double best = INFINITY, q[3];
+  int at = 0;
+  for (uint32_t k = 0; k < I->npieces; k++) {
+    const double d = mx_closest_point_within(&I->index[k], p, best, q);
+    if (d < best) best = d, at = (int)k + 1;
+  }
+  return at;
 }
 
 int mx_interfaces_piece(const mx_interfaces *I, const double p[3]) {

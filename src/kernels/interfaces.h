@@ -45,6 +45,11 @@ typedef struct mx_interfaces_s {
   int nregions;
   mx_trisoup *soup;        /* npieces */
   mx_surface_index *index; /* npieces */
+  /* npieces: the index of a touching piece's triangles shared with another
+   * (its interface), NULL for the others (a nested piece's interface is
+   * all of it) */
+  mx_surface_index **iface;
+  mx_trisoup *iface_soup;
 } mx_interfaces;
 
 /* The pieces of the triangles [0, nt) of src (soup shell ids: the files);
@@ -57,6 +62,9 @@ int mx_interfaces_build(mx_interfaces *I, const mx_trisoup *src, uint32_t nt,
 void mx_interfaces_free(mx_interfaces *I);
 /* The innermost piece containing p, plus one; 0 outside every piece. */
 int mx_interfaces_piece(const mx_interfaces *I, const double p[3]);
+/* The piece (plus one) whose surface is nearest p: a point of the outer
+ * boundary's own piece (the first at equal distances). */
+int mx_interfaces_surface_piece(const mx_interfaces *I, const double p[3]);
 /* The distance from p to the nearest piece's surface: within it, the
  * piece of a point is p's. */
 double mx_interfaces_clearance(const mx_interfaces *I, const double p[3]);

@@ -122,6 +122,11 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
       double q[3];
       mx_closest_point(S, x, q, NULL, NULL);
       memcpy(x, q, sizeof q);
+      /* and in its region when it has one (the outer boundary's nodes
+       * between two materials) */
+      if (o->surface_region_of && o->region[v] != MX_REGION_NONE &&
+          o->surface_region_of(o->region_ctx, x) != o->region[v])
+        continue;
     } else if (o->region_of) { /* an inside node stays in its region */
       /* (no query within the clearance of where it started: no shell there) */
       const double dx = x[0] - x_init[0], dy = x[1] - x_init[1], dz = x[2] - x_init[2];
@@ -149,7 +154,7 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
 
 int mx_untangle(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
                     double q_target, int sweeps, size_t *moved) {
-  const mx_untangle_opts o = {q_target, sweeps, 0, NULL, NULL, NULL, NULL, NULL};
+  const mx_untangle_opts o = {q_target, sweeps, 0, NULL, NULL, NULL, NULL, NULL, NULL};
   return mx_untangle_with(M, states, S, &o, moved);
 }
 

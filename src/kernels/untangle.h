@@ -30,7 +30,9 @@ int mx_untangle(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
  * limits the work set; region_of (NULL: none) keeps an inside node v where
  * region_of(region_ctx, x) is region[v] (several materials), asked only
  * beyond clearance_of(region_ctx, x) (NULL: always) of where the node was:
- * the distance from x within which region_of cannot change. */
+ * the distance from x within which region_of cannot change; a boundary
+ * node too, unless its region is MX_REGION_NONE, by surface_region_of. */
+#define MX_REGION_NONE UINT16_MAX
 typedef struct {
   double q_target;
   int sweeps;
@@ -40,6 +42,7 @@ typedef struct {
   const void *region_ctx;
   const uint16_t *region;
   double (*clearance_of)(const void *ctx, const double x[3]);
+  int (*surface_region_of)(const void *ctx, const double x[3]);
 } mx_untangle_opts;
 int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
                      const mx_untangle_opts *o, size_t *moved);
