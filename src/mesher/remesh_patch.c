@@ -175,8 +175,11 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
 int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold) {
   int done = 0;
   if (m->rec->S.local_attempts == 0) m->rec->S.local = 1; /* until a re-mesh is not */
+  /* not with interfaces between materials: the nodes the cleaving adds
+   * have no lattice key, so the splice could not match those on the
+   * patch's border (a crack); the whole octree is meshed again */
   if (!m->p.remesh_full && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states &&
-      old_leaves)
+      old_leaves && !m->IF.npasses)
     for (int a = 0; a < 2 && !done; a++) {
       m->rec->S.local_attempts++;
       MX_CHECK(remesh_local(m, old_leaves, nold, attempt_rings[a][0], attempt_rings[a][1], 0,
