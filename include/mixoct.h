@@ -174,6 +174,13 @@ int mx_mesher_add_region_surface(mx_mesher *m, const char *path, int level);
  * two materials given one number, or an input whose shells nest at
  * several depths, are refused when meshing. */
 int mx_mesher_set_material(mx_mesher *m, int input, int number, const char *name);
+/* A level of one domain input (0 for the first surface added): octants
+ * meeting its triangles go to surface_level, octants meeting or inside it
+ * to inside_level (0: none; the largest request wins, as for -s and -a).
+ * With params.materials, inside_level is a level everywhere in the
+ * material(s) it holds. Each level given takes a region surface's place
+ * (MX_MAX_REGIONS in all). MX_EINPUT for a bad index or level. */
+int mx_mesher_set_input_level(mx_mesher *m, int input, int surface_level, int inside_level);
 /* -b: a box [lo, hi] whose octants go to `level` (also after meshing: see
  * mx_mesher_refine). */
 int mx_mesher_add_box(mx_mesher *m, const double lo[3], const double hi[3],

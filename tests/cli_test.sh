@@ -392,5 +392,18 @@ expect_exit 2 "--material without --materials" "$MIXOCT" -i "$T/sphere.off" --ma
 expect_exit 2 "--material before any -i" "$MIXOCT" --material 5 -i "$T/sphere.off" -s 3 --materials
 expect_exit 2 "--material 0" "$MIXOCT" -i "$T/sphere.off" --material 0 -s 3 --materials
 
+# A level per input (--level / --inside-level after -i): the sphere at -s 3
+# with its surface at level 5 has more leaves than at -s 3 alone and its
+# deepest level is 5; misplaced or bad levels are refused (exit 2).
+"$MIXOCT" -i "$T/sphere.off" -s 3 --json --quiet >"$T/lv3.json" 2>/dev/null
+"$MIXOCT" -i "$T/sphere.off" --level 5 -s 3 --json --quiet >"$T/lv5.json" 2>/dev/null
+python3 - "$T/lv3.json" "$T/lv5.json" <<'EOF2' && ok "--level 5 after -i refines that input's surface" || bad "--level after -i"
+import json, sys
+a, b = (json.loads(open(p).read().strip().splitlines()[-1]) for p in sys.argv[1:])
+sys.exit(0 if b['leaves'] > 2 * a['leaves'] and b['max_level'] == 5 and a['max_level'] == 3 else 1)
+EOF2
+expect_exit 2 "--level before any -i" "$MIXOCT" --level 5 -i "$T/sphere.off" -s 3
+expect_exit 2 "--inside-level with a bad level" "$MIXOCT" -i "$T/sphere.off" --inside-level x -s 3
+
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]

@@ -16,6 +16,13 @@
  *    nodes exactly on the common face (|x - 0.37| < 1e-12), each material's
  *    volume within 3% of its box's (the corners are rounded off: no sharp
  *    features yet);
+ *  - a level of one input (mx_mesher_set_input_level): two spheres at -s 3
+ *    with the inner one's surface at level 5: every element with a face
+ *    on the interface comes from a leaf of level 5, every one with a face
+ *    on the boundary from one below 5 (the spheres lie 0.4 apart,
+ *    more than the balance's grading from 5 to 3); with the inner one's
+ *    inside at level 4 instead, every element of its material is of level
+ *    4 or more;
  *  - refused (MX_EINPUT): two boxes that overlap, two that touch along an
  *    edge only (a non-manifold union), two that touch at one corner. */
 #include <math.h>
@@ -452,6 +459,63 @@ static void test_refused(void) {
   }
 }
 
+typedef struct {
+  const mx_mesh_arrays *a;
+  uint8_t *mark; /* 1: at the interface, 2: at the boundary */
+} level_marks;
+
+static void mark_face(void *ctx, const uint32_t *v, int n, uint32_t c1, uint32_t c2) {
+  level_marks *L = ctx;
+  (void)v, (void)n;
+  if (c2 == UINT32_MAX) {
+    L->mark[c1] |= 2;
+  } else if (L->a->material[c1] != L->a->material[c2]) {
+    L->mark[c1] |= 1;
+    L->mark[c2] |= 1;
+  }
+}
+
+static void test_input_levels(void) {
+  for (int inside = 0; inside < 2; inside++) {
+    mx_mesher *m = new_mesher(3, 2);
+    for (int i = 0; i < 2; i++) {
+      double *x;
+      uint32_t *t;
+      size_t nv, nt;
+      sphere(R[i], 24, &x, &nv, &t, &nt);
+      CHECK(mx_mesher_add_surface_arrays(m, i ? "inner" : "outer", nv, x, nt, t) == MX_OK);
+      free(x);
+      free(t);
+    }
+    CHECK(mx_mesher_set_input_level(m, 2, 5, 0) == MX_EINPUT); /* no input 2 */
+    CHECK(mx_mesher_set_input_level(m, 1, inside ? 0 : 5, inside ? 4 : 0) == MX_OK);
+    CHECK(mx_mesher_mesh(m) == MX_OK);
+    mx_mesh_arrays a;
+    CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+    CHECK(a.material != NULL && a.invalid == 0);
+    /* the elements at the interface (a face between the two materials)
+     * and at the boundary (a face of one element only) */
+    level_marks L = {&a, calloc(a.nelements + 1, 1)};
+    if (a.material) CHECK(each_face(&a, mark_face, &L) == 0);
+    size_t inner_low = 0, outer_high = 0, inner_n = 0, mat2_low = 0;
+    for (size_t c = 0; a.material && c < a.nelements; c++) {
+      inner_n += L.mark[c] & 1;
+      inner_low += (L.mark[c] & 1) && a.level[c] < 5;
+      outer_high += (L.mark[c] & 2) && a.level[c] >= 5;
+      mat2_low += a.material[c] == 2 && a.level[c] < 4;
+    }
+    free(L.mark);
+    if (!inside) {
+      CHECK(inner_n > 0 && inner_low == 0 && outer_high == 0);
+    } else {
+      CHECK(mat2_low == 0 && outer_high == 0);
+    }
+    printf("input level: inner sphere's %s at level %d, %zu elements\n",
+           inside ? "inside" : "surface", inside ? 4 : 5, a.nelements);
+    mx_mesher_free(m);
+  }
+}
+
 static void quiet(void *user, int level, const char *text) {
   (void)user, (void)level, (void)text;
 }
@@ -463,6 +527,7 @@ int main(void) {
   test_boxes(&glued, "two boxes glued at x = 0.37");
   const boxes ell = {3, {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{1, 1, 1}, {2, 1, 1}, {1, 2, 1}}};
   test_boxes(&ell, "an L of three boxes");
+  test_input_levels();
   test_refused();
   return TEST_DONE();
 }

@@ -42,6 +42,8 @@ typedef struct {
   int materials;           /* --materials: nested shells are materials */
   int material_id[MX_MAX_INPUTS];            /* --material ID[:NAME] after -i */
   const char *material_name[MX_MAX_INPUTS]; /* (0 / NULL: not given) */
+  int input_slevel[MX_MAX_INPUTS];          /* --level L after -i (0: none) */
+  int input_ilevel[MX_MAX_INPUTS];          /* --inside-level L after -i (0: none) */
 } mx_options;
 
 /* Parses argv; on --help/--version prints and sets *exit_now = 1. Returns

@@ -78,6 +78,8 @@ int mx_add_inputs(const mx_options *o, mx_mesher *m) {
     MX_CHECK(mx_mesher_add_surface(m, o->inputs[i]));
     if (o->material_id[i])
       MX_CHECK(mx_mesher_set_material(m, i, o->material_id[i], o->material_name[i]));
+    if (o->input_slevel[i] || o->input_ilevel[i])
+      MX_CHECK(mx_mesher_set_input_level(m, i, o->input_slevel[i], o->input_ilevel[i]));
   }
   for (int r = 0; r < o->nregion_surf; r++)
     MX_CHECK(mx_mesher_add_region_surface(m, o->region_surf[r], o->rlevel[r]));

@@ -45,6 +45,12 @@ static const char *usage_text =
     "                              the elements allow (those left across one are\n"
     "                              counted in a warning); no restart file, no\n"
     "                              --p4est\n"
+    "      --level L               after -i FILE: octants meeting FILE's surface\n"
+    "                              go to level L (a level per input, with -s the\n"
+    "                              others')\n"
+    "      --inside-level L        after -i FILE: octants meeting or inside FILE\n"
+    "                              go to level L (with --materials: a level\n"
+    "                              everywhere in the material(s) FILE holds)\n"
     "      --material ID[:NAME]    after -i FILE: the number (1..65535) and name\n"
     "                              of the material inside FILE (default: its\n"
     "                              nesting depth, named after FILE)\n"
@@ -388,6 +394,16 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       }
       o->material_id[o->ninputs - 1] = (int)id;
       o->material_name[o->ninputs - 1] = *end == ':' && end[1] ? end + 1 : NULL;
+    } else if (strcmp(a, "--level") == 0 || strcmp(a, "--inside-level") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      if (!o->ninputs) {
+        mx_error(NULL, 0, "%s: give it after the input it refines (-i FILE %s L)", a, a);
+        return MX_EINPUT;
+      }
+      int lv = 0;
+      MX_CHECK(parse_level(a, argv[++i], &lv));
+      if (a[2] == 'l') o->input_slevel[o->ninputs - 1] = lv;
+      else o->input_ilevel[o->ninputs - 1] = lv;
     } else if (strcmp(a, "--json") == 0) {
       o->json = 1;
     } else if (strcmp(a, "--quiet") == 0) {

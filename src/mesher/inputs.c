@@ -263,6 +263,62 @@ mx_requests mx_mesher_requests(const mx_mesher *m) {
   return r;
 }
 
+int mx_mesher_set_input_level(mx_mesher *m, int input, int surface_level, int inside_level) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  int st = refuse_after_build(m, "input levels");
+  if (!st && (input < 0 || input >= m->ndomain)) {
+    mx_error(NULL, 0, "input level: no input %d (%d surface(s) added)", input, m->ndomain);
+    st = MX_EINPUT;
+  }
+  if (!st) st = check_level("input surface", surface_level, 0);
+  if (!st) st = check_level("input inside", inside_level, 0);
+  if (!st) {
+    m->input_slevel[input] = (int8_t)surface_level;
+    m->input_ilevel[input] = (int8_t)inside_level;
+  }
+  return mx_call_end(m, &c, st);
+}
+
+/* The inputs given a level of their own (mx_mesher_set_input_level): each
+ * level a region surface of the input's triangles (as given: src, shell
+ * ids the inputs), refined where met for a surface level, where met or
+ * inside for an inside level. */
+static int input_level_regions(mx_mesher *m, const mx_trisoup *src) {
+  for (int k = 0; k < m->ndomain && k < 64; k++)
+    for (int inside = 0; inside < 2; inside++) {
+      const int level = inside ? m->input_ilevel[k] : m->input_slevel[k];
+      if (level <= 0) continue;
+      if (m->nregions >= MX_MAX_REGIONS) {
+        mx_error(m->domain_name[k], 0, "input level %d: the region surfaces' places (%d) "
+                                       "are all taken", level, MX_MAX_REGIONS);
+        return MX_EINPUT;
+      }
+      const int r = m->nregions;
+      mx_trisoup *s = &m->region[r];
+      memset(s, 0, sizeof *s);
+      int st = MX_OK;
+      for (size_t v = 0; v < src->nv && !st; v++) {
+        const double c[3] = {src->x[v], src->y[v], src->z[v]};
+        st = mx_trisoup_set_vertex(s, v, c);
+      }
+      for (size_t t = 0; t < src->nt && !st; t++)
+        if (src->shell[t] == k)
+          st = mx_trisoup_add_triangle(s, src->tri[3 * t], src->tri[3 * t + 1], src->tri[3 * t + 2]);
+      char *name = st ? NULL : mx_strdup(m->domain_name[k]);
+      if (!st && !name) st = MX_ENOMEM;
+      if (st) {
+        mx_trisoup_free(s);
+        return st;
+      }
+      m->region_name[r] = name;
+      m->region_level[r] = level;
+      if (!inside) m->region_meet_only |= 1u << r;
+      m->nregions++;
+    }
+  return MX_OK;
+}
+
 /* Domain then region triangles in one soup, checked once. */
 /* The signed volume the triangles enclose (their orientation counts: holes
  * oriented inward subtract); *area (may be NULL) gets their area. */
@@ -359,6 +415,19 @@ int mx_mesher_assemble_inputs(mx_mesher *m) {
   }
   /* two inputs with a triangle in common are refused, but for the winding
    * number's domain (a face two touching bodies share bounds nothing) */
+  int levels = 0;
+  for (int k = 0; k < m->ndomain && k < 64; k++) levels |= m->input_slevel[k] | m->input_ilevel[k];
+  if (levels) {
+    /* the inputs' own levels, from their triangles as given (a copy: the
+     * domain's soup may lose its common faces below) */
+    mx_trisoup given;
+    memset(&given, 0, sizeof given);
+    int st = mx_trisoup_append(&given, &m->domain);
+    if (!st) memcpy(given.shell, m->domain.shell, m->domain.nt * sizeof *given.shell);
+    if (!st) st = input_level_regions(m, &given);
+    mx_trisoup_free(&given);
+    MX_CHECK(st);
+  }
   if (m->p.materials && !m->p.repair_input) MX_CHECK(mx_materials_split_shared(m));
   if (!m->p.repair_input)
     MX_CHECK(mx_trisoup_check_shells(&m->domain, (uint32_t)m->domain.nt,

@@ -158,6 +158,7 @@ struct mx_mesher {
    * inside it; per depth 1..nmaterials, the number and name given it (the
    * depth and no name by default), set when the elements are labelled */
   int32_t input_material[64];
+  int8_t input_slevel[64], input_ilevel[64]; /* mx_mesher_set_input_level (0: none) */
   char *input_material_name[64];
   int32_t depth_material[65];
   const char *depth_material_name[65];
