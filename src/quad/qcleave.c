@@ -704,7 +704,13 @@ static int warp(cl *C) {
     }
   }
 #pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < m; c++) sj0[c] = sj_ids(C, M->conn + 4 * c, nv_of(M, c));
+  for (size_t c = 0; c < m; c++) {
+    const uint32_t *r = M->conn + 4 * c;
+    const int nv = nv_of(M, c);
+    int any = 0;
+    for (int k = 0; k < nv; k++) any |= go[r[k]];
+    sj0[c] = any ? sj_ids(C, r, nv) : 1.0;
+  }
   memcpy(xy0, M->xy, 2 * n * sizeof *xy0);
   size_t moved = 0;
 #pragma omp parallel for schedule(static) reduction(+ : moved)
@@ -896,11 +902,18 @@ static int ptkey_cmp(const void *a, const void *b) {
   return (p->key > q->key) - (p->key < q->key);
 }
 
+/* What the cut knows: the points' keys (sorted) and their first node; per
+ * cell the slices of its events and points (CSR, ev_off and pt_off: m + 1
+ * entries, empty for the cells the loops do not meet) and whether they
+ * meet it (1) or could not be listed (2). */
 typedef struct {
   const ptkey *pk;
   size_t np;
   uint32_t first;
-  const uint8_t *hit; /* per cell: the loops meet it */
+  const uint8_t *hit;
+  const uint64_t *ev_off, *pt_off;
+  const event *ev;
+  const epoint *pt;
 } cut_ctx;
 
 static uint32_t point_node(const cut_ctx *X, uint64_t edge, uint64_t key) {
@@ -929,13 +942,17 @@ static int event_cmp(const event *a, const event *b) {
 static void fill_cut(const cl *C, size_t c, const void *ctx, parts *P) {
   const cut_ctx *X = ctx;
   if (!X->hit[c]) return;
-  meeting E;
-  const int got = cell_meeting(C, c, &E);
-  if (got == 0) return;
-  if (got < 0) {
+  if (X->hit[c] == 2) {
     P->bad = 1;
     return;
   }
+  meeting E;
+  E.nv = nv_of(C->M, c);
+  for (int k = 0; k < E.nv; k++) E.v[k] = C->M->conn[4 * c + k];
+  E.nev = (int)(X->ev_off[c + 1] - X->ev_off[c]);
+  E.npt = (int)(X->pt_off[c + 1] - X->pt_off[c]);
+  memcpy(E.ev, X->ev + X->ev_off[c], (size_t)E.nev * sizeof *E.ev);
+  memcpy(E.pt, X->pt + X->pt_off[c], (size_t)E.npt * sizeof *E.pt);
   const int nv = E.nv;
   /* the boundary: corners and points along each side */
   uint32_t cyc[4 + MAXE];
@@ -1045,37 +1062,44 @@ static void fill_cut(const cl *C, size_t c, const void *ctx, parts *P) {
 static int cut(cl *C) {
   mx_qmesh *M = C->M;
   const size_t m = M->ncells;
-  /* the points inside the sides, from every cell: numbered by key */
-  uint64_t *cnt = mx_alloc((m + 1) * sizeof *cnt);
+  /* which cells the loops meet, and how much */
+  uint64_t *ev_off = mx_alloc((m + 1) * sizeof *ev_off);
+  uint64_t *pt_off = mx_alloc((m + 1) * sizeof *pt_off);
   uint8_t *hit = mx_alloc(m + 1);
-  if (!cnt || !hit) return mx_free(cnt), mx_free(hit), MX_ENOMEM;
-  size_t over = 0;
-#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : over)
-  for (size_t c = 0; c < m; c++) {
-    meeting E;
-    const int got = cell_meeting(C, c, &E);
-    over += got < 0;
-    hit[c] = got != 0;
-    cnt[c] = got > 0 ? (uint64_t)E.npt : 0;
-  }
-  const size_t tot = (size_t)mx_scan_u64(cnt, m);
-  ptkey *pk = mx_alloc((tot + 1) * sizeof *pk);
-  if (!pk) return mx_free(cnt), mx_free(hit), MX_ENOMEM;
+  if (!ev_off || !pt_off || !hit) return mx_free(ev_off), mx_free(pt_off), mx_free(hit), MX_ENOMEM;
 #pragma omp parallel for schedule(dynamic, 1024)
   for (size_t c = 0; c < m; c++) {
     meeting E;
-    if (!hit[c] || cell_meeting(C, c, &E) <= 0) continue;
-    for (int i = 0; i < E.npt; i++)
-      pk[cnt[c] + (size_t)i] =
-          (ptkey){edge_key(E.v[E.pt[i].edge], E.v[(E.pt[i].edge + 1) % E.nv]), E.pt[i].key};
+    const int got = cell_meeting(C, c, &E);
+    hit[c] = got < 0 ? 2 : got > 0;
+    ev_off[c] = got > 0 ? (uint64_t)E.nev : 0;
+    pt_off[c] = got > 0 ? (uint64_t)E.npt : 0;
   }
-  mx_free(cnt);
-  qsort(pk, tot, sizeof *pk, ptkey_cmp);
+  const size_t nev = (size_t)mx_scan_u64(ev_off, m), tot = (size_t)mx_scan_u64(pt_off, m);
+  ev_off[m] = nev, pt_off[m] = tot;
+  /* their events and points, kept; the points' keys, from every cell */
+  event *ev = mx_alloc((nev + 1) * sizeof *ev);
+  epoint *pt = mx_alloc((tot + 1) * sizeof *pt);
+  ptkey *pk = mx_alloc((tot + 1) * sizeof *pk);
+  int st = ev && pt && pk ? MX_OK : MX_ENOMEM;
+  if (st == MX_OK) {
+#pragma omp parallel for schedule(dynamic, 1024)
+    for (size_t c = 0; c < m; c++) {
+      meeting E;
+      if (hit[c] != 1 || cell_meeting(C, c, &E) <= 0) continue;
+      memcpy(ev + ev_off[c], E.ev, (size_t)E.nev * sizeof *ev);
+      memcpy(pt + pt_off[c], E.pt, (size_t)E.npt * sizeof *pt);
+      for (int i = 0; i < E.npt; i++)
+        pk[pt_off[c] + (size_t)i] =
+            (ptkey){edge_key(E.v[E.pt[i].edge], E.v[(E.pt[i].edge + 1) % E.nv]), E.pt[i].key};
+    }
+    qsort(pk, tot, sizeof *pk, ptkey_cmp);
+  }
   size_t np = 0;
-  for (size_t i = 0; i < tot; i++)
+  for (size_t i = 0; st == MX_OK && i < tot; i++)
     if (!np || ptkey_cmp(&pk[np - 1], &pk[i])) pk[np++] = pk[i];
   const size_t n0 = M->nnodes;
-  int st = grow_nodes(C, n0 + np);
+  if (st == MX_OK) st = grow_nodes(C, n0 + np);
   if (st == MX_OK) {
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < np; i++) {
@@ -1092,13 +1116,13 @@ static int cut(cl *C) {
       C->reg[n0 + i] = -1;
     }
     C->st->crossings = np;
-    const cut_ctx X = {pk, np, (uint32_t)n0, hit};
+    const cut_ctx X = {pk, np, (uint32_t)n0, hit, ev_off, pt_off, ev, pt};
     size_t rep = 0, bad = 0;
     st = rebuild(C, fill_cut, &X, &rep, &bad);
     C->st->cut = rep;
-    C->st->unresolved = bad + over;
+    C->st->unresolved = bad;
   }
-  mx_free(pk), mx_free(hit);
+  mx_free(pk), mx_free(hit), mx_free(ev), mx_free(pt), mx_free(ev_off), mx_free(pt_off);
   return st;
 }
 
@@ -1109,8 +1133,8 @@ static int label(cl *C, uint16_t **region) {
   const size_t m = M->ncells;
   uint16_t *lab = mx_alloc((m + 1) * sizeof *lab);
   if (!lab) return MX_ENOMEM;
-  size_t across = 0, worst = 0;
-#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : across, worst)
+  size_t across = 0;
+#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : across)
   for (size_t c = 0; c < m; c++) {
     const uint32_t *r = M->conn + 4 * c;
     const int nv = nv_of(M, c);
@@ -1131,10 +1155,8 @@ static int label(cl *C, uint16_t **region) {
     }
     if (d < 1) d = 1; /* the boundary step's cells are the domain's */
     lab[c] = (uint16_t)(d > UINT16_MAX ? UINT16_MAX : d);
-    worst += !(sj_ids(C, r, nv) > SJ_OK);
   }
   C->st->across = across;
-  C->st->invalid = worst;
   *region = lab;
   return MX_OK;
 }

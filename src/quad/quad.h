@@ -337,7 +337,6 @@ typedef struct {
   size_t cut;               /* cells cut */
   size_t unresolved;        /* cells a loop meets in a way they cannot be cut along */
   size_t across;            /* cells left with free nodes in two regions */
-  size_t invalid;           /* cells with a scaled Jacobian <= 1e-6 after */
 } mx_qcleave_stats;
 
 int mx_qcleave(mx_qmesh *M, const mx_qregions *R, uint16_t **region, mx_qcleave_stats *stats);
