@@ -63,6 +63,7 @@
 #define MAXP 64         /* parts of one cell */
 #define MAXE 48         /* points of one cell on the loops */
 #define MAXS 256        /* interface segments near one cell */
+#define SMOOTH_SWEEPS 3 /* rounds of smoothing along the interfaces */
 
 typedef struct {
   mx_qmesh *M;
@@ -1126,6 +1127,81 @@ static int cut(cl *C) {
   return st;
 }
 
+/* ---- smoothing --------------------------------------------------------------------- */
+
+/* The least scaled Jacobian of the cells around v with v at p. */
+static double sj_at(cl *C, uint32_t v, const double p[2]) {
+  double *q = C->M->xy + 2 * (size_t)v;
+  const double o[2] = {q[0], q[1]};
+  q[0] = p[0], q[1] = p[1];
+  const double s = sj_around(C, v);
+  q[0] = o[0], q[1] = o[1];
+  return s;
+}
+
+/* The nodes of the cells along the interfaces move, one after the other in
+ * the order of their ids (a short sequential loop: the result does not
+ * depend on the threads), SMOOTH_SWEEPS times, to the mean of the corners
+ * of their cells, or half-way, when that raises the least scaled Jacobian
+ * around them: free nodes anywhere (their cells stay valid, so they stay in
+ * their region), nodes on an interface segment along it (projected, kept
+ * inside the segment). Nodes on a loop vertex or an outer loop stay. */
+static int smooth(cl *C) {
+  const mx_qmesh *M = C->M;
+  const size_t n = M->nnodes;
+  uint8_t *band = mx_calloc(n + 1);
+  if (!band) return MX_ENOMEM;
+  for (size_t v = 0; v < n; v++) {
+    const uint32_t s = C->on_seg[v];
+    if (!(s != NONE && C->R->seg_depth[s] >= 1) && C->on_vert[v] == NONE) continue;
+    if (C->on_vert[v] != NONE && C->R->seg_depth[C->vout[C->on_vert[v]]] < 1) continue;
+    for (uint64_t i = C->off[v]; i < C->off[v + 1]; i++) {
+      const size_t c = C->ids[i];
+      for (int k = 0; k < nv_of(M, c); k++) band[M->conn[4 * c + k]] = 1;
+    }
+  }
+  size_t moved = 0;
+  for (int sweep = 0; sweep < SMOOTH_SWEEPS; sweep++)
+    for (size_t v = 0; v < n; v++) {
+      if (!band[v] || C->on_vert[v] != NONE || C->off[v] == C->off[v + 1]) continue;
+      const uint32_t s = C->on_seg[v];
+      if (s != NONE && C->R->seg_depth[s] < 1) continue; /* on an outer loop */
+      double g[2] = {0, 0};
+      int k = 0;
+      for (uint64_t i = C->off[v]; i < C->off[v + 1]; i++) {
+        const size_t c = C->ids[i];
+        for (int j = 0; j < nv_of(M, c); j++) {
+          const uint32_t u = M->conn[4 * c + j];
+          if (u == v) continue;
+          g[0] += pxy(C, u)[0], g[1] += pxy(C, u)[1], k++;
+        }
+      }
+      g[0] /= k, g[1] /= k;
+      const double *p = pxy(C, (uint32_t)v);
+      double best = sj_around(C, (uint32_t)v), to[2] = {p[0], p[1]};
+      for (int h = 0; h < 2; h++) {
+        double q[2] = {h ? 0.5 * (p[0] + g[0]) : g[0], h ? 0.5 * (p[1] + g[1]) : g[1]};
+        if (s != NONE) { /* along the segment, inside it */
+          const double *a = vxy(C, seg_from(C, s)), *b = vxy(C, seg_to(C, s));
+          const double d0 = b[0] - a[0], d1 = b[1] - a[1], l2 = d0 * d0 + d1 * d1;
+          double l = ((q[0] - a[0]) * d0 + (q[1] - a[1]) * d1) / l2;
+          l = l < 0.01 ? 0.01 : l > 0.99 ? 0.99 : l;
+          q[0] = a[0] + l * d0, q[1] = a[1] + l * d1;
+        }
+        const double t = sj_at(C, (uint32_t)v, q);
+        if (t > best + 1e-9) best = t, to[0] = q[0], to[1] = q[1];
+      }
+      if (to[0] != p[0] || to[1] != p[1]) {
+        C->M->xy[2 * v] = to[0], C->M->xy[2 * v + 1] = to[1];
+        if (M->nkey) M->nkey[v] = MX_QNKEY_NONE;
+        moved++;
+      }
+    }
+  C->st->smoothed = moved;
+  mx_free(band);
+  return MX_OK;
+}
+
 /* ---- regions of the cells ---------------------------------------------------------- */
 
 static int label(cl *C, uint16_t **region) {
@@ -1177,6 +1253,7 @@ int mx_qcleave(mx_qmesh *M, const mx_qregions *R, uint16_t **region, mx_qcleave_
   if (st == MX_OK && R->deepest > 1) st = features(&C);
   if (st == MX_OK && R->deepest > 1) st = warp(&C);
   if (st == MX_OK && R->deepest > 1) st = cut(&C);
+  if (st == MX_OK && R->deepest > 1) st = smooth(&C);
   if (st == MX_OK) st = label(&C, region);
   mx_free(C.on_seg), mx_free(C.on_vert), mx_free(C.reg), mx_free(C.off), mx_free(C.ids);
   mx_free(C.seg_loop), mx_free(C.seg_rank), mx_free(C.vin), mx_free(C.vout);

@@ -337,6 +337,7 @@ typedef struct {
   size_t cut;               /* cells cut */
   size_t unresolved;        /* cells a loop meets in a way they cannot be cut along */
   size_t across;            /* cells left with free nodes in two regions */
+  size_t smoothed;          /* moves of the smoothing along the interfaces */
 } mx_qcleave_stats;
 
 int mx_qcleave(mx_qmesh *M, const mx_qregions *R, uint16_t **region, mx_qcleave_stats *stats);
