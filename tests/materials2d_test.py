@@ -19,7 +19,9 @@ computed from the written cells and the input's own polylines.
    file's field sj, and the corners' cross products here); the .msh has a
    physical surface per material, the boundary and "interface material 1 |
    material 2" as physical curves, the latter with as many lines as there
-   are edges between the materials; the same bytes with 1 and 2 threads.
+   are edges between the materials; the .getfem regions 1001 and 1002
+   (GetFEM's integral of 1 over each equals the areas, when python3-getfem
+   is there); the same bytes with 1 and 2 threads.
 2. Three nested loops written here (a square, a diamond in it, a triangle
    in that): three materials, the same checks, areas from the loops.
 3. Numbers and names: --material 7:matrix --material 3:inclusion gives the
@@ -213,6 +215,13 @@ def judge(tag, pts, cells, fields, outer, loops, region_of, numbers):
     return area, iface
 
 
+try:  # python3-getfem (Debian), optional: the .getfem regions read by GetFEM
+    import getfem
+    getfem.util_trace_level(0)
+except Exception:  # noqa: BLE001 (any failure to load it: not there)
+    getfem = None
+
+
 def run(cmd, env=None):
     return subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                           env=env, universal_newlines=True)
@@ -266,6 +275,12 @@ def main():
         gf = open("m%d_1.getfem" % s).read()
         check("BEGIN REGION 1001" in gf and "BEGIN REGION 1002" in gf,
               "square -s %d: .getfem regions 1001 and 1002" % s)
+        if getfem:  # GetFEM itself integrates 1 over each region
+            g = getfem.Mesh("load", "m%d_1.getfem" % s)
+            mim = getfem.MeshIm(g, 4)
+            ga = [getfem.asm("generic", mim, 0, "1", r) for r in (1001, 1002)]
+            check(abs(ga[0] - (a_out - a_in)) <= 1e-9 and abs(ga[1] - a_in) <= 1e-9,
+                  "square -s %d: GetFEM's areas of regions 1001, 1002: %s" % (s, ga))
 
     # ---- 2. three nested loops ------------------------------------------------------
     sq = [(0, 0), (4, 0), (4, 4), (0, 4)]

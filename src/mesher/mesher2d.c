@@ -496,6 +496,13 @@ static int check_mesh(mx_mesher2d *m) {
   m->checked = 1;
   const mx_qcheck_report *c = &m->cr;
   m->area_tol = mx_qarea_tolerance(dom, c, m->M.ncells);
+  if (m->p.materials && (m->cs.unresolved || m->cs.features_missed)) {
+    mx_error(name, 0, "materials: %zu cell(s) that the interfaces meet could not be cut along "
+             "them and %zu sharp vertex(es) of theirs found no node (a loop meets a cell more "
+             "often than it can tell): ask for a finer level there", m->cs.unresolved,
+             m->cs.features_missed);
+    return MX_EINVALID;
+  }
   if (c->bad_edges || c->hanging || c->inverted || m->q.invalid) {
     mx_error(name, 0, "the mesh is not valid: %zu bad edge(s), %zu hanging node(s), %zu "
              "inverted cell(s) (%zu with scaled Jacobian <= 0)", c->bad_edges, c->hanging,

@@ -96,9 +96,9 @@ static void json_materials(FILE *f, const mx_mesher2d *m) {
   }
   fprintf(f, "], \"features\": %zu, \"features_moved\": %zu, \"features_inserted\": %zu, "
           "\"features_missed\": %zu, \"warped\": %zu, \"crossings\": %zu, \"cut\": %zu, "
-          "\"unresolved\": %zu, \"across\": %zu, \"seconds\": %.6f}",
+          "\"unresolved\": %zu, \"across\": %zu, \"smoothed\": %zu, \"seconds\": %.6f}",
           c->features, c->features_moved, c->features_inserted, c->features_missed, c->warped,
-          c->crossings, c->cut, c->unresolved, c->across, m->t_materials);
+          c->crossings, c->cut, c->unresolved, c->across, c->smoothed, m->t_materials);
 }
 
 static void print_json(const mx_mesher2d *m, const mx_run2d_info *ri) {
