@@ -12,11 +12,14 @@
  *               or, when none may move, becomes a node of its own: the
  *               cell (and the one across, when it lies on a side) is
  *               fanned around it;
- *   warp        a free node whose edge meets an interface within ALPHA of
- *               the edge's length from it goes onto that point (the
- *               nearest), unless a cell around it would get worse than
- *               WARP_SJ or than it was (the moves are made together, then
- *               undone cell by cell until none is);
+ *   warp        a free node of a cell an interface comes near goes onto
+ *               the interface's closest point when that is within ALPHA of
+ *               its shortest edge, else onto the nearest point where an
+ *               interface meets one of its edges when that is within ALPHA
+ *               of the edge's length, unless a cell around it would get
+ *               worse than WARP_SJ or than it was (the moves are made
+ *               together, then undone cell by cell until none is): no part
+ *               of the cut is thinner than ALPHA of its cell;
  *   points      every point where an interface crosses the inside of an
  *               edge becomes a node, shared by the edge's two cells (keyed
  *               by the edge's ends and the segment, or the loop vertex, it
@@ -34,7 +37,10 @@
  *               it has four corners and a scaled Jacobian of QUAD_SJ or
  *               more (see put_piece). A cell where the pairs do not match
  *               (a loop met more often than the cell can tell) is left
- *               whole and counted as unresolved.
+ *               whole and counted as unresolved;
+ *   smooth      the nodes of the cells along the interfaces move to the
+ *               mean of their cells' corners (or half-way) when that lifts
+ *               the worst of their cells (see smooth).
  * Last, each cell's region: that of its free nodes, or of its centroid when
  * all its nodes lie on loops; a cell whose free nodes disagree counts as
  * across.
@@ -55,7 +61,7 @@
 #include "quad/quad.h"
 
 #define NONE UINT32_MAX
-#define ALPHA 0.3       /* warp: a node this close to an edge's crossing, along the edge */
+#define ALPHA 0.3       /* warp: a node this close to an interface, in its edges' lengths */
 #define WARP_SJ 0.2     /* a warp never leaves a cell below this (or below what it was) */
 #define FEATURE_SJ 0.05 /* the same for a node taking a feature */
 #define QUAD_SJ 0.3     /* a part with four corners stays a quadrilateral from this */
@@ -64,6 +70,7 @@
 #define MAXE 48         /* points of one cell on the loops */
 #define MAXS 256        /* interface segments near one cell */
 #define SMOOTH_SWEEPS 3 /* rounds of smoothing along the interfaces */
+#define SMOOTH_SJ 0.6   /* a node whose cells are all at least this good stays */
 
 typedef struct {
   mx_qmesh *M;
@@ -342,8 +349,9 @@ static inline uint32_t grid_cell(double x, double lo, double h, uint32_t n) {
   return (uint32_t)s;
 }
 
-/* The interface segments (depth >= 1) the index lists around [lo, hi],
- * ascending, at most MAXS (-1 beyond). */
+/* The interface segments (depth >= 1) whose boxes meet [lo, hi] (within
+ * the index's margin), from the index's cells there, ascending, at most
+ * MAXS (-1 beyond). */
 static int near_segments(const cl *C, const double lo[2], const double hi[2], uint32_t *out) {
   const mx_poly_index *I = &C->R->I;
   const double mg = I->margin;
@@ -358,6 +366,10 @@ static int near_segments(const cl *C, const double lo[2], const double hi[2], ui
       for (uint32_t k = I->off[cell]; k < I->off[cell + 1]; k++) {
         const uint32_t s = I->ids[k];
         if (C->R->seg_depth[s] < 1) continue;
+        const double *u = vxy(C, seg_from(C, s)), *w = vxy(C, seg_to(C, s));
+        if (mx_max(u[0], w[0]) < lo[0] - mg || mx_min(u[0], w[0]) > hi[0] + mg ||
+            mx_max(u[1], w[1]) < lo[1] - mg || mx_min(u[1], w[1]) > hi[1] + mg)
+          continue; /* its box is apart from this one */
         int at = n;
         while (at > 0 && out[at - 1] > s) at--;
         if (at > 0 && out[at - 1] == s) continue;
@@ -666,6 +678,21 @@ static int closest_point(const cl *C, uint32_t v, double x[2], uint32_t *s, uint
   return 1;
 }
 
+/* Segment a-b meets the box [lo, hi] (closed): their boxes meet and the
+ * box's corners are not all strictly on one side of its line. */
+static int seg_meets_box(const double *a, const double *b, const double lo[2], const double hi[2]) {
+  if (mx_max(a[0], b[0]) < lo[0] || mx_min(a[0], b[0]) > hi[0] || mx_max(a[1], b[1]) < lo[1] ||
+      mx_min(a[1], b[1]) > hi[1])
+    return 0;
+  int pos = 0, neg = 0;
+  for (int c = 0; c < 4; c++) {
+    const double q[2] = {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1]};
+    const double v = cross3(a, b, q);
+    pos += v > 0, neg += v < 0;
+  }
+  return pos < 4 && neg < 4;
+}
+
 /* Free nodes near a crossing go onto it; then, cell by cell, the moves that
  * leave a cell worse than WARP_SJ (or than it was) are undone. */
 static int warp(cl *C) {
@@ -679,7 +706,8 @@ static int warp(cl *C) {
     mx_free(to), mx_free(xy0), mx_free(ts), mx_free(tw), mx_free(go), mx_free(back), mx_free(sj0);
     return MX_ENOMEM;
   }
-  /* the nodes of the cells an interface comes near (go: 2) */
+  /* the nodes of the cells an interface comes near, within ALPHA of their
+   * size (go: 2) */
 #pragma omp parallel for schedule(dynamic, 1024)
   for (size_t c = 0; c < m; c++) {
     const uint32_t *r = M->conn + 4 * c;
@@ -688,8 +716,14 @@ static int warp(cl *C) {
     for (int k = 0; k < nv; k++)
       for (int a = 0; a < 2; a++)
         lo[a] = mx_min(lo[a], pxy(C, r[k])[a]), hi[a] = mx_max(hi[a], pxy(C, r[k])[a]);
+    const double e = ALPHA * mx_max(hi[0] - lo[0], hi[1] - lo[1]);
+    lo[0] -= e, lo[1] -= e, hi[0] += e, hi[1] += e;
     uint32_t segs[MAXS];
-    if (near_segments(C, lo, hi, segs) != 0)
+    const int ns = near_segments(C, lo, hi, segs);
+    int near = ns < 0;
+    for (int j = 0; j < ns && !near; j++)
+      near = seg_meets_box(vxy(C, seg_from(C, segs[j])), vxy(C, seg_to(C, segs[j])), lo, hi);
+    if (near)
       for (int k = 0; k < nv; k++) __atomic_store_n(&go[r[k]], 2, __ATOMIC_RELAXED);
   }
 #pragma omp parallel for schedule(dynamic, 1024)
@@ -1140,12 +1174,13 @@ static double sj_at(cl *C, uint32_t v, const double p[2]) {
 }
 
 /* The nodes of the cells along the interfaces move, one after the other in
- * the order of their ids (a short sequential loop: the result does not
- * depend on the threads), SMOOTH_SWEEPS times, to the mean of the corners
- * of their cells, or half-way, when that raises the least scaled Jacobian
- * around them: free nodes anywhere (their cells stay valid, so they stay in
- * their region), nodes on an interface segment along it (projected, kept
- * inside the segment). Nodes on a loop vertex or an outer loop stay. */
+ * the order of their ids (a sequential loop: the result does not depend on
+ * the threads), SMOOTH_SWEEPS times, to the mean of the corners of their
+ * cells, or half-way, when that raises the least scaled Jacobian around
+ * them (below SMOOTH_SJ; above, they stay): free nodes anywhere (their
+ * cells stay valid, so they stay in their region), nodes on an interface
+ * segment along it (projected, kept inside the segment). Nodes on a loop
+ * vertex or an outer loop stay. */
 static int smooth(cl *C) {
   const mx_qmesh *M = C->M;
   const size_t n = M->nnodes;
@@ -1166,6 +1201,9 @@ static int smooth(cl *C) {
       if (!band[v] || C->on_vert[v] != NONE || C->off[v] == C->off[v + 1]) continue;
       const uint32_t s = C->on_seg[v];
       if (s != NONE && C->R->seg_depth[s] < 1) continue; /* on an outer loop */
+      const double *p = pxy(C, (uint32_t)v);
+      double best = sj_around(C, (uint32_t)v), to[2] = {p[0], p[1]};
+      if (best >= SMOOTH_SJ) continue; /* its cells need nothing */
       double g[2] = {0, 0};
       int k = 0;
       for (uint64_t i = C->off[v]; i < C->off[v + 1]; i++) {
@@ -1177,8 +1215,6 @@ static int smooth(cl *C) {
         }
       }
       g[0] /= k, g[1] /= k;
-      const double *p = pxy(C, (uint32_t)v);
-      double best = sj_around(C, (uint32_t)v), to[2] = {p[0], p[1]};
       for (int h = 0; h < 2; h++) {
         double q[2] = {h ? 0.5 * (p[0] + g[0]) : g[0], h ? 0.5 * (p[1] + g[1]) : g[1]};
         if (s != NONE) { /* along the segment, inside it */

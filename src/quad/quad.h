@@ -323,9 +323,10 @@ int mx_qboundary(const mx_poly *P, const mx_poly_index *I, const mx_qtree *T,
 
 /* The loops nested in the outer ones as interfaces between materials, on
  * the mesh the boundary step fitted to the outer loops: the interfaces'
- * sharp vertices become nodes, nodes near a crossing move onto it, the
+ * sharp vertices become nodes, nodes near an interface move onto it, the
  * cells a loop passes through are cut along its chords (new nodes where
- * it crosses an edge, shared by the cells on both sides). *region (allocated, one per cell) gets each cell's region (its
+ * it crosses an edge, shared by the cells on both sides), and the nodes
+ * along the interfaces are smoothed (on an interface, along it). *region (allocated, one per cell) gets each cell's region (its
  * nesting depth, mx_qregion_of), 1 at least. MX_ENOMEM. */
 typedef struct {
   size_t features;          /* the interfaces' sharp vertices */
