@@ -60,6 +60,13 @@ octree's resolution, counted in a warning), not yet the input surfaces;
 re-meshing (``refine_elements``, ``refine``, ...) and restart files raise
 :class:`InputError` with the library's message.
 
+``Mesher2D(..., materials=True)`` does the same in 2D (``mesher2d
+--materials``): a loop nested in an outer one is the interface between two
+materials; the cells are cut along it (no cell lies across it, its edges
+have both nodes on the loop) and ``Mesher2D.material`` gives each cell's
+material number (by default its nesting depth; ``set_material(depth,
+number, name)`` chooses them). Re-meshing keeps them.
+
 Errors
 ------
 Every non-zero status of the library raises a subclass of :class:`Error`
