@@ -357,6 +357,15 @@ typedef struct {
                         * at most half its distance to the nearest other);
                         * 0: not (two features may then claim one
                         * node: the mesh is refused, naming both) */
+  int materials;       /* 1: several materials (--materials): a loop nested
+                        * in an outer one is not a hole but the interface
+                        * between two materials; each cell gets the
+                        * material of the region it lies in, numbered by
+                        * nesting depth (1: inside an outer loop only, 2:
+                        * inside one more, ...; mx_mesher2d_set_material),
+                        * and no cell lies across an interface (the cells
+                        * are cut along it, its sharp vertices are nodes);
+                        * 0 (default): a nested loop is a hole */
 } mx_params2d;
 
 void mx_params2d_default(mx_params2d *p);
@@ -384,6 +393,14 @@ int mx_mesher2d_add_drawing(mx_mesher2d *m, const char *path, int level);
  * y0: y = y0 + amp sin(freq x + phase)); nargs must match. */
 int mx_mesher2d_add_function(mx_mesher2d *m, const char *name, const double *args,
                              size_t nargs, int level);
+/* With params.materials: the number (1 .. 65535) and name (NULL: "material
+ * NUMBER") of the material at nesting depth `depth` (1: the region inside
+ * the outer loops only, 2: inside the loops nested in them, ...; default
+ * number: the depth). Written as the Gmsh physical group and the VTK/VTU
+ * cell field material, and given by mx_mesh2d_arrays.material. MX_EINPUT
+ * for a depth out of 1 .. 64 or a number out of range; two materials
+ * given one number are refused when meshing. */
+int mx_mesher2d_set_material(mx_mesher2d *m, int depth, int number, const char *name);
 
 /* Mesh from the requests (and the quadtree of a loaded restart file). */
 int mx_mesher2d_mesh(mx_mesher2d *m);
@@ -415,6 +432,8 @@ typedef struct {
   const uint32_t *conn;   /* 4 * ncells, a triangle's 4th is UINT32_MAX */
   const uint32_t *leaf;   /* the quadrant (0 .. nleaves-1) of each cell */
   const uint8_t *level;   /* its level */
+  const uint16_t *material; /* params.materials: each cell's material's
+                           * number; NULL: one material */
 } mx_mesh2d_arrays;
 int mx_mesher2d_mesh_arrays(const mx_mesher2d *m, mx_mesh2d_arrays *a);
 
@@ -426,6 +445,7 @@ typedef struct {
   double sj_min, min_angle;
   double t_read, t_refine, t_balance, t_transition, t_boundary, t_quality,
       t_check, t_restart; /* seconds, last run */
+  int materials;          /* params.materials: the materials (regions) meshed; 0 without */
 } mx_stats2d;
 void mx_mesher2d_stats(const mx_mesher2d *m, mx_stats2d *s);
 

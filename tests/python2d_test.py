@@ -215,7 +215,8 @@ def views_read_only_and_zero_copy():
     idx, tri = M.cells_of_type(mixoct.TRI, return_indices=True)
     assert idx.size == 0 and tri.shape == (0, 3)
     a = M.arrays(copy=True)
-    assert set(a) == {"nodes", "cells", "types", "leaf", "level"}
+    assert set(a) == {"nodes", "cells", "types", "leaf", "level", "material"}
+    assert a["material"] is None and M.material is None  # no materials=True
     assert not M.is_current(a["nodes"]) and np.array_equal(a["nodes"], M.nodes)
 
 
@@ -451,6 +452,30 @@ def threads_deterministic():
     assert np.array_equal(a.cells, b.cells)
     assert a.params["threads"] == 1 and b.params["threads"] == 2
     check_mesh(a, BOX_AREA, BOX_LENGTH)
+
+
+@check
+def box_materials():
+    """materials=True: the hole of the box is material 2 (the square
+    [1,2]^2, area 1, on the lattice of no level: its sides cut cells),
+    the rest material 1 (area 8); set_material renumbers and names."""
+    m = box(4, materials=True)
+    mat = m.material
+    assert mat.dtype == np.uint16 and mat.shape == (m.ncells,)
+    assert not mat.flags.writeable and m.is_current(mat)
+    rows = cell_rows(m)
+    areas = signed_areas(m.nodes, rows)
+    assert np.all(areas > 0)
+    a = {int(k): float(areas[mat == k].sum()) for k in np.unique(mat)}
+    assert set(a) == {1, 2} and abs(a[1] - 8) < 1e-12 and abs(a[2] - 1) < 1e-12, a
+    assert m.stats()["materials"] == 2
+    with mixoct.Mesher2D(surface_level=4, materials=True) as n:
+        n.set_material(2, 9, "inclusion")
+        n.set_domain(BOX)
+        n.mesh()
+        assert set(np.unique(n.material).tolist()) == {1, 9}
+        e = raises(mixoct.Error, n.set_material, 0, 3)
+        assert e.status == mixoct.EINPUT, e.status
 
 
 # ---- output ---------------------------------------------------------------------------------

@@ -7,6 +7,7 @@
  *   remesh   a re-mesh: elements of that mesh refined (the setup, made
  *            without failures, is not counted);
  *   2d       an L-shaped domain at -s 5 (mx_mesher2d);
+ *   2dmat    a square with a quadrilateral inside at -s 4, two materials;
  *   vtu, msh the demo mesh written as .vtu, then as .msh, into an empty
  *            temporary directory (one mesher for all k).
  * Each k must give MX_ENOMEM with an error message through the mesher's
@@ -256,6 +257,51 @@ static uint64_t l_go_on(void *obj, msgs *g) {
   return test_mesh2d_hash(m);
 }
 
+/* 2dmat: a square with a quadrilateral inside at -s 4, two materials
+ * (mx_params2d.materials: regions, cleave, each material's check) */
+static const double q_xy[] = {0, 0, 1, 0, 1, 1, 0, 1, 0.4, 0.3, 0.6, 0.1, 0.7, 0.7, 0.3, 0.6};
+static const uint32_t q_seg[] = {0, 1, 1, 2, 2, 3, 3, 0, 7, 6, 6, 5, 5, 4, 4, 7};
+static int q_inputs(mx_mesher2d *m) {
+  int st = mx_mesher2d_set_material(m, 2, 7, "core");
+  if (!st) st = mx_mesher2d_set_domain_arrays(m, "Q", 8, q_xy, 8, q_seg);
+  return st;
+}
+static int q_step(void **obj, msgs *g) {
+  mx_params2d p;
+  mx_params2d_default(&p);
+  p.surface_level = 4;
+  p.threads = 2;
+  p.materials = 1;
+  mx_mesher2d *m = mx_mesher2d_new(&p);
+  *obj = m;
+  if (!m) return MX_ENOMEM;
+  mx_mesher2d_set_message_handler(m, on_message, g);
+  int st = q_inputs(m);
+  if (!st) st = mx_mesher2d_mesh(m);
+  return st;
+}
+static uint64_t q_hash(const mx_mesher2d *m) {
+  mx_mesh2d_arrays a;
+  uint64_t h = test_mesh2d_hash(m);
+  if (h && mx_mesher2d_mesh_arrays(m, &a) == MX_OK && a.material)
+    h = test_fnv(h, a.material, a.ncells * sizeof *a.material);
+  return h;
+}
+static uint64_t q_go_on(void *obj, msgs *g) {
+  mx_mesher2d *m = obj;
+  if (!m) {
+    void *o = NULL;
+    uint64_t h = q_step(&o, g) == MX_OK ? q_hash(o) : 0;
+    mx_mesher2d_free(o);
+    return h;
+  }
+  if (mx_mesher2d_mesh(m) == MX_OK) return q_hash(m);
+  /* the material or the domain may not be set when their call failed (a
+   * domain set already is refused: then the mesh call is what failed) */
+  if (q_inputs(m) != MX_OK && mx_mesher2d_set_material(m, 2, 7, "core") != MX_OK) return 0;
+  return mx_mesher2d_mesh(m) == MX_OK ? q_hash(m) : 0;
+}
+
 /* vtu, msh: one meshed demo for all k */
 static mx_mesher *shared_demo;
 static void *get_shared(msgs *g) {
@@ -380,6 +426,7 @@ int main(void) {
       {"demo", NULL, demo_step, demo_go_on, free3, 0},
       {"remesh", meshed_demo, remesh_step, remesh_go_on, free3, 0},
       {"2d", NULL, l_step, l_go_on, free2, 0},
+      {"2dmat", NULL, q_step, q_go_on, free2, 0},
       {"materials", NULL, cubes_step, cubes_go_on, free3, 0},
       {"vtu", get_shared, vtu_step, vtu_go_on, keep, 0},
       {"msh", get_shared, msh_step, msh_go_on, keep, 0},

@@ -60,6 +60,13 @@ octree's resolution, counted in a warning), not yet the input surfaces;
 re-meshing (``refine_elements``, ``refine``, ...) and restart files raise
 :class:`InputError` with the library's message.
 
+``Mesher2D(..., materials=True)`` does the same in 2D (``mesher2d
+--materials``): a loop nested in an outer one is the interface between two
+materials; the cells are cut along it (no cell lies across it, its edges
+have both nodes on the loop) and ``Mesher2D.material`` gives each cell's
+material number (by default its nesting depth; ``set_material(depth,
+number, name)`` chooses them). Re-meshing keeps them.
+
 Errors
 ------
 Every non-zero status of the library raises a subclass of :class:`Error`
@@ -267,13 +274,14 @@ class _Params2D(ctypes.Structure):
     _fields_ = _fields(
         (ctypes.c_int, "surface_level all_level balance threads"),
         (ctypes.c_double, "close_ratio max_memory_mb"),
-        (ctypes.c_int, "feature_levels"))
+        (ctypes.c_int, "feature_levels materials"))
 
 
 class _MeshArrays2D(ctypes.Structure):
     _fields_ = _fields((ctypes.c_size_t, "nnodes ncells nleaves"),
                        (ctypes.POINTER(ctypes.c_double), "xy"),
-                       (_u8p, "type"), (_u32p, "conn leaf"), (_u8p, "level"))
+                       (_u8p, "type"), (_u32p, "conn leaf"), (_u8p, "level"),
+                       (ctypes.POINTER(ctypes.c_uint16), "material"))
 
 
 class _Stats2D(ctypes.Structure):
@@ -283,7 +291,8 @@ class _Stats2D(ctypes.Structure):
         (ctypes.c_int, "valid"),
         (ctypes.c_double, "sj_min min_angle t_read t_refine t_balance "
                           "t_transition t_boundary t_quality t_check "
-                          "t_restart"))
+                          "t_restart"),
+        (ctypes.c_int, "materials"))
 
 
 # ---- the library -------------------------------------------------------------
@@ -349,6 +358,7 @@ def _declare(lib):
         "mx_mesher2d_add_region": (I, [P, S, I]),
         "mx_mesher2d_add_drawing": (I, [P, S, I]),
         "mx_mesher2d_add_function": (I, [P, S, dblp, sz, I]),
+        "mx_mesher2d_set_material": (I, [P, I, I, S]),
         "mx_mesher2d_restart_elements": (sz, [P]),
         "mx_mesher2d_mesh_arrays": (I, [P, ctypes.POINTER(_MeshArrays2D)]),
         "mx_mesher2d_stats": (None, [P, ctypes.POINTER(_Stats2D)]),
@@ -1067,7 +1077,10 @@ class Mesher2D(_MesherBase):
     ``threads`` (0: OpenMP's default), ``close_ratio`` (the projection of
     close inside nodes), ``max_memory_mb`` (0: the memory available) and
     ``feature_levels`` (refine the quadrants holding a feature until the
-    features keep apart). Every mesh is checked by the library's
+    features keep apart), ``materials`` (``--materials``: a loop nested in
+    an outer one is the interface between two materials, not a hole; the
+    cells are cut along it and ``material`` gives each cell's material).
+    Every mesh is checked by the library's
     independent routine: a mesh that fails it raises InvalidMeshError
     (kept: it can be read and written).
     """
@@ -1081,13 +1094,13 @@ class Mesher2D(_MesherBase):
     _WIDTH = 4
     _CONN = "cells"
     _NOUN = "cells"
-    _VIEW_KEYS = ("nodes", "cells", "types", "leaf", "level")
+    _VIEW_KEYS = ("nodes", "cells", "types", "leaf", "level", "material")
     TYPE_NAMES = ("tri", "quad")
     NODES_PER_TYPE = (3, 4)
 
     def __init__(self, surface_level=-1, all_level=-1, balance="edges",
                  threads=0, close_ratio=0.3, max_memory_mb=0,
-                 feature_levels=True, *, library=None):
+                 feature_levels=True, materials=False, *, library=None):
         lib = load_library(library)
         p = _Params2D()
         _function(lib, "mx_params2d_default")(ctypes.byref(p))
@@ -1098,6 +1111,7 @@ class Mesher2D(_MesherBase):
         p.close_ratio = float(close_ratio)
         p.max_memory_mb = float(max_memory_mb)
         p.feature_levels = 1 if feature_levels else 0
+        p.materials = 1 if materials else 0
         self._start(lib, p)
 
     # ---- the domain and the requests -------------------------------------------
@@ -1116,6 +1130,15 @@ class Mesher2D(_MesherBase):
         library copies them."""
         self._call("mx_mesher2d_set_domain_arrays", str(name).encode(),
                    *_input_arrays(name, xy, 2, "xy", seg, 2, "seg"))
+
+    def set_material(self, depth, number, name=None):
+        """With materials=True: the number (1..65535) and name of the
+        material at nesting depth `depth` (1: inside the outer loops only,
+        2: inside one more loop, ...), written as the Gmsh physical surface
+        and the field material, and given by the material view
+        (--material ID:NAME, the k-th for depth k)."""
+        self._call("mx_mesher2d_set_material", int(depth), int(number),
+                   None if name is None else str(name).encode())
 
     def add_region(self, path, level):
         """Quadrants meeting or inside this closed polyline go to `level`."""
@@ -1158,6 +1181,10 @@ class Mesher2D(_MesherBase):
         v = super()._make_views(a, owner)
         v["counts"] = {name: int(np.count_nonzero(v["types"] == t))
                        for t, name in enumerate(self.TYPE_NAMES)}
+        e = a.ncells
+        # NULL without materials: None, not an array of zeros
+        v["material"] = (_view(a.material, e, np.uint16, (e,), owner)
+                         if a.material else None)
         return v
 
     nodes = _mesh_view("nodes",
@@ -1169,6 +1196,10 @@ class Mesher2D(_MesherBase):
     types = _mesh_view("types", "(ncells,) uint8: TRI 0, QUAD 1")
     leaf = _mesh_view("leaf", "(ncells,) uint32 quadtree leaf of each cell")
     level = _mesh_view("level", "(ncells,) uint8 level of that leaf")
+    material = _mesh_view("material",
+                          "(ncells,) uint16 material of each cell (its "
+                          "number: by default the nesting depth of its "
+                          "region); None without materials=True")
 
     @property
     def ncells(self):

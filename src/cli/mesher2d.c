@@ -50,6 +50,20 @@ static const char *usage2d =
     "                     amp sin(freq x + phase))\n"
     "  (-r, -w and -f are repeatable)\n"
     "\n"
+    "Several materials:\n"
+    "      --materials    a loop nested in an outer one is the interface between\n"
+    "                     two materials, not a hole: each cell gets the material\n"
+    "                     of the region it lies in (1 inside the outer loops, 2\n"
+    "                     inside one more loop, ...), the cells are cut along the\n"
+    "                     interfaces; written as the cell field material (.vtu,\n"
+    "                     .vtk), Gmsh physical surfaces with the interfaces as\n"
+    "                     physical curves \"interface A | B\" (.msh), GetFEM\n"
+    "                     regions 1000 + the material's number (.getfem)\n"
+    "      --material ID[:NAME]\n"
+    "                     the number (1..65535) and name of a material: the\n"
+    "                     first --material the region at depth 1, the second at\n"
+    "                     depth 2, ... (default: its depth, \"material ID\")\n"
+    "\n"
     "Output (one mesh, one file per flag; none: a dry run that meshes and\n"
     "reports):\n"
     "  -u NAME            base name of the files of the flags below\n"
@@ -121,6 +135,10 @@ typedef struct {
   int nfuns;
   int threads, balance, json, quiet, ascii;
   int keep_invalid; /* write a mesh that fails the check (exit 5 all the same) */
+  int materials;    /* --materials */
+  int nmaterial;    /* --material ID[:NAME], by depth 1, 2, ... */
+  int material_id[MAXREQ];
+  const char *material_name[MAXREQ];
 } m2_options;
 
 typedef struct {
@@ -289,6 +307,18 @@ static int parse_one(int argc, char **argv, int *i, m2_options *o, int *exit_now
     o->json = 1;
   } else if (!strcmp(a, "--quiet")) {
     o->quiet = 1;
+  } else if (!strcmp(a, "--materials")) {
+    o->materials = 1;
+  } else if (!strcmp(a, "--material")) {
+    MX_CHECK(need(*i, argc, 1, a));
+    const char *spec = argv[++*i];
+    char *end;
+    const long id = strtol(spec, &end, 10);
+    if (end == spec || id < 1 || id > 65535 || (*end && *end != ':'))
+      return usage_error("--material %s: expected ID[:NAME], ID from 1 to 65535", spec);
+    if (o->nmaterial == MAXREQ) return usage_error("too many --material", NULL);
+    o->material_id[o->nmaterial] = (int)id;
+    o->material_name[o->nmaterial++] = *end == ':' && end[1] ? end + 1 : NULL;
   } else if (!strcmp(a, "--keep-invalid")) {
     o->keep_invalid = 1;
   } else if (!strcmp(a, "--binary")) {
@@ -320,6 +350,8 @@ static int parse_options(int argc, char **argv, m2_options *o, int *exit_now) {
     return usage_error("-v, -x, -o, -g and -m need the output name: add -u NAME", NULL);
   if (!nfmt && o->outname)
     return usage_error("-u %s names no format: add -v, -x, -o, -g and/or -m", o->outname);
+  if (o->nmaterial && !o->materials)
+    return usage_error("--material: only with --materials (several materials)", NULL);
   if (o->list && !o->restart_in)
     return usage_error("-l lists elements of the mesh of a restart file: add -c FILE.oct", NULL);
   if (!o->restart_in && !o->s_level && !o->a_level && !o->boxes_file && !o->nregions &&
@@ -433,10 +465,14 @@ static int pipeline(const m2_options *o, m2_run *r) {
   mx_params2d_default(&p);
   p.balance = o->balance;
   p.threads = o->threads;
+  p.materials = o->materials;
   mx_mesher2d *m = r->m = mx_mesher2d_new(&p);
   if (!m) return MX_ENOMEM;
   mx_mesher2d_set_message_handler(m, on_message, r);
-  int st = mx_mesher2d_set_domain(m, o->domain);
+  int st = MX_OK;
+  for (int k = 0; k < o->nmaterial && !st; k++)
+    st = mx_mesher2d_set_material(m, k + 1, o->material_id[k], o->material_name[k]);
+  if (!st) st = mx_mesher2d_set_domain(m, o->domain);
   if (!st) st = add_requests(o, m);
   if (!st) st = o->restart_in ? remesh(o, m, r) : mx_mesher2d_mesh(m);
   /* --keep-invalid writes a mesh that fails the check: MX_EINVALID with a

@@ -80,6 +80,20 @@ static int check_2d(const char *path, const mx_mesh_view *m) {
     mx_error(path, 0, "internal error: cell %zu has a bad type or node index", bad);
     return MX_EINTERNAL;
   }
+  if (m->cell_body && m->nbodies > 0) { /* bodies: each cell's among them, all named */
+    if (!m->body_names || m->nbodies > 255) {
+      mx_error(path, 0, "internal error: %d bodies without names or beyond 255", m->nbodies);
+      return MX_EINTERNAL;
+    }
+#pragma omp parallel for reduction(min : bad) schedule(static) if (m->ncells > 65536)
+    for (size_t c = 0; c < m->ncells; c++)
+      if ((m->cell_body[c] < 1 || m->cell_body[c] > m->nbodies) && c < bad) bad = c;
+    if (bad < m->ncells) {
+      mx_error(path, 0, "internal error: cell %zu has body %d (of %d)", bad, m->cell_body[bad],
+               m->nbodies);
+      return MX_EINTERNAL;
+    }
+  }
   MX_CHECK(check_fields(path, m->ncell_fields, m->cell_fields, m->ncells, "cell"));
   return check_fields(path, m->npoint_fields, m->point_fields, m->nnodes, "point");
 }

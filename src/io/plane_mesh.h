@@ -40,5 +40,11 @@ static inline size_t mx_plane_put_ids(char *o, const uint32_t *v, int n, uint64_
  * (side s joins nodes s and s + 1 of the cell), in cell then side order
  * (src/io/boundary_edges.c). *out allocated; MX_OK or MX_ENOMEM. */
 int mx_plane_boundary_edges(const mx_mesh_view *m, uint64_t **out, size_t *nb);
+/* The edges between two bodies (body: per cell, 1 .. 255), each once, as
+ * 4 * cell + side of its cell of the lower body, sorted by pair (lower,
+ * higher body), then by cell and side; pair[i] = lower << 8 | higher
+ * (src/io/boundary_edges.c). *out, *pair allocated; MX_OK or MX_ENOMEM. */
+int mx_plane_interface_edges(const mx_mesh_view *m, const int32_t *body, uint64_t **out,
+                             uint32_t **pair, size_t *n);
 
 #endif

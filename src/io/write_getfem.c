@@ -254,7 +254,10 @@ static int write_body(mx_afile *f, const mx_mesh_view *m) {
  *
  * 2D points; 'GT_PK(2,1)' triangles, 'GT_QK(2,1)' quadrilaterals, whose
  * reference order is the tensor one, (0,0) (1,0) (0,1) (1,1): our
- * counter-clockwise a b c d is written a b d c. No regions. */
+ * counter-clockwise a b c d is written a b d c. With bodies (several
+ * materials), a region of the convexes of each, numbered
+ * MX_GETFEM_MATERIAL_REGION + its number and listed in the comments, as
+ * in 3D; no other region. */
 
 typedef struct {
   const mx_mesh_view *M;
@@ -302,13 +305,18 @@ static size_t fill_plane_convexes(const void *v, size_t b, size_t e, char *o) {
 static int write_plane_body(mx_afile *f, const mx_mesh_view *M) {
   plane_ctx x = {.M = M};
   MX_CHECK(mx_afile_printf(f, "%% GETFEM MESH FILE\n%% GETFEM VERSION 5.4\n"
-                              "%% mixoct: %zu points, %zu convexes\n\nBEGIN POINTS LIST\n\n",
-                           M->nnodes, M->ncells));
+                              "%% mixoct: %zu points, %zu convexes\n", M->nnodes, M->ncells));
+  for (int b = 1; M->body_physical && M->body_names && b <= M->nbodies; b++)
+    MX_CHECK(mx_afile_printf(f, "%% region %d: convexes of material %d \"%s\"\n",
+                             MX_GETFEM_MATERIAL_REGION + M->body_physical[b - 1],
+                             M->body_physical[b - 1], M->body_names[b - 1]));
+  MX_CHECK(mx_afile_printf(f, "\nBEGIN POINTS LIST\n\n"));
   MX_CHECK(mx_afile_emit(f, M->nnodes, 10 + MX_U64_CHARS + 2 * (2 + MX_DOUBLE_CHARS), fill_plane_points,
                          &x));
   MX_CHECK(mx_afile_printf(f, "\nEND POINTS LIST\n\n\n\nBEGIN MESH STRUCTURE DESCRIPTION\n\n"));
   MX_CHECK(mx_afile_emit(f, M->ncells, 32 + 5 * (MX_U64_CHARS + 1), fill_plane_convexes, &x));
-  return mx_afile_printf(f, "\nEND MESH STRUCTURE DESCRIPTION\n");
+  MX_CHECK(mx_afile_printf(f, "\nEND MESH STRUCTURE DESCRIPTION\n"));
+  return write_material_regions(f, M); /* 2D: a convex's number is its index */
 }
 
 int mx_write_getfem(const char *path, const mx_mesh_view *m) {

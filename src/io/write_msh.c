@@ -643,9 +643,12 @@ typedef struct {
   const mx_mesh_view *M;
   const mx_field *fd;     /* the cell field being written */
   int type;               /* the cells of this block's type */
+  int body;               /* and of this body (0: any) */
   int data;               /* $ElementData lines instead of elements */
   int binary;
-  const uint64_t *bedge;  /* boundary edges, 4 * cell + side */
+  const uint64_t *bedge;  /* boundary edges, 4 * cell + side (then, with
+                           * bodies, the interface edges) */
+  size_t base;            /* the first line of this block in bedge */
 } plane_ctx;
 
 enum { PLANE_SURF = 1, PLANE_CURVE = 1, PHYS_DOMAIN = 1, PHYS_BOUNDARY = 2 };
@@ -721,7 +724,7 @@ static size_t fill_plane_cells(const void *v, size_t b, size_t e, char *o) {
   const plane_ctx *x = v;
   size_t n = 0;
   for (size_t c = b; c < e; c++)
-    if (x->M->type[c] == x->type)
+    if (x->M->type[c] == x->type && (!x->body || x->M->cell_body[c] == x->body))
       n += plane_item(x, c + 1, c, x->M->conn + 4 * c, mx_view_nv2(x->M, c), o + n);
   return n;
 }
@@ -729,7 +732,7 @@ static size_t fill_plane_cells(const void *v, size_t b, size_t e, char *o) {
 static size_t fill_plane_lines(const void *v, size_t b, size_t e, char *o) {
   const plane_ctx *x = v;
   size_t n = 0;
-  for (size_t i = b; i < e; i++) {
+  for (size_t i = b + x->base; i < e + x->base; i++) {
     const size_t c = (size_t)(x->bedge[i] >> 2);
     const int s = (int)(x->bedge[i] & 3), nv = mx_view_nv2(x->M, c);
     const uint32_t ab[2] = {x->M->conn[4 * c + s], x->M->conn[4 * c + (s + 1) % nv]};
@@ -867,7 +870,161 @@ static int plane_elements(mx_afile *f, const mx_mesh_view *M, size_t nb, plane_c
   return MX_OK;
 }
 
+/* ---- a 2D view with bodies (several materials) ----------------------------
+ *
+ * One surface entity per body (tag b, in the physical group of the body's
+ * number, named after it), the cells of each body in one block per type;
+ * curve entities: tag 1 (physical 1 "boundary") the boundary edges, then
+ * one per pair of bodies that touch (tags 2, 3, ..., physical the same,
+ * "interface A | B" after their names) holding the edges between them,
+ * each once, oriented as in the cell of the lower body. The nodes in one
+ * block on surface 1. Element tags as above: a cell's index + 1, the lines
+ * after, in the order written. */
+
+enum { MAX_PAIRS = 4096 };
+
+typedef struct {
+  size_t nb, ni;      /* boundary lines, interface lines (after them in bedge) */
+  int npairs;
+  uint32_t pair[MAX_PAIRS]; /* lower << 8 | higher */
+  size_t p0[MAX_PAIRS + 1]; /* the first line of each pair in bedge (and the end) */
+} plane_tags;
+
+static int plane_tag_entity(mx_afile *f, int tag, const double box[6], int phys, int binary) {
+  if (binary) {
+    MX_CHECK(plane_bin_int(f, tag));
+    MX_CHECK(mx_afile_write(f, box, 6 * sizeof *box));
+    MX_CHECK(plane_bin_size(f, 1));
+    MX_CHECK(plane_bin_int(f, phys));
+    return plane_bin_size(f, 0);
+  }
+  char line[6 * (MX_DOUBLE_CHARS + 1) + 48];
+  size_t n = (size_t)snprintf(line, sizeof line, "%d", tag);
+  for (int k = 0; k < 6; k++) {
+    line[n++] = ' ';
+    n += mx_put_double(line + n, box[k]);
+  }
+  n += (size_t)snprintf(line + n, sizeof line - n, " 1 %d 0\n", phys);
+  return mx_afile_write(f, line, n);
+}
+
+static int plane_tag_head(mx_afile *f, const mx_mesh_view *M, const plane_tags *T, int binary) {
+  MX_CHECK(mx_afile_printf(f, "$MeshFormat\n4.1 %d 8\n", binary));
+  if (binary) {
+    MX_CHECK(plane_bin_int(f, 1));
+    MX_CHECK(mx_afile_write(f, "\n", 1));
+  }
+  MX_CHECK(mx_afile_printf(f, "$EndMeshFormat\n$PhysicalNames\n%d\n",
+                           M->nbodies + 1 + T->npairs));
+  for (int b = 1; b <= M->nbodies; b++)
+    MX_CHECK(mx_afile_printf(f, "2 %d \"%s\"\n", M->body_physical ? M->body_physical[b - 1] : b,
+                             M->body_names[b - 1]));
+  MX_CHECK(mx_afile_printf(f, "1 1 \"boundary\"\n"));
+  for (int p = 0; p < T->npairs; p++)
+    MX_CHECK(mx_afile_printf(f, "1 %d \"interface %s | %s\"\n", p + 2,
+                             M->body_names[(T->pair[p] >> 8) - 1],
+                             M->body_names[(T->pair[p] & 0xff) - 1]));
+  MX_CHECK(mx_afile_printf(f, "$EndPhysicalNames\n$Entities\n"));
+  double box[6];
+  plane_box(M, box);
+  const uint64_t counts[4] = {0, (uint64_t)(1 + T->npairs), (uint64_t)M->nbodies, 0};
+  if (binary) MX_CHECK(mx_afile_write(f, counts, sizeof counts));
+  else MX_CHECK(plane_four(f, counts, 0));
+  for (int t = 1; t <= 1 + T->npairs; t++) MX_CHECK(plane_tag_entity(f, t, box, t, binary));
+  for (int b = 1; b <= M->nbodies; b++)
+    MX_CHECK(plane_tag_entity(f, b, box, M->body_physical ? M->body_physical[b - 1] : b, binary));
+  if (binary) MX_CHECK(mx_afile_write(f, "\n", 1));
+  return mx_afile_printf(f, "$EndEntities\n");
+}
+
+/* Every block (per body and type, then the lines per curve), as elements
+ * or as one field's data lines (x->data). */
+static int plane_tag_blocks(mx_afile *f, const size_t *count, const plane_tags *T, plane_ctx *x) {
+  const size_t line = MX_U64_CHARS + MX_DOUBLE_CHARS + 2 > 5 * (MX_U64_CHARS + 1)
+                          ? MX_U64_CHARS + MX_DOUBLE_CHARS + 2
+                          : 5 * (MX_U64_CHARS + 1);
+  for (int b = 1; b <= x->M->nbodies; b++)
+    for (int t = MX_CELL_TRI; t <= MX_CELL_QUAD; t++) {
+      const size_t n = count[2 * (size_t)b + (size_t)t];
+      if (!n) continue;
+      if (!x->data) MX_CHECK(plane_block_head(f, 2, b, t == MX_CELL_TRI ? 2 : 3, n, x->binary));
+      x->type = t, x->body = b;
+      MX_CHECK(mx_afile_emit(f, x->M->ncells, line, fill_plane_cells, x));
+    }
+  x->body = 0;
+  for (int g = 0; g <= T->npairs; g++) {
+    const size_t a = g ? T->p0[g - 1] : 0, e = g ? T->p0[g] : T->nb;
+    if (a == e) continue;
+    if (!x->data) MX_CHECK(plane_block_head(f, 1, g + 1, 1, e - a, x->binary));
+    x->base = a;
+    MX_CHECK(mx_afile_emit(f, e - a, line, fill_plane_lines, x));
+  }
+  x->base = 0;
+  return MX_OK;
+}
+
+static int plane_tag_elements(mx_afile *f, const mx_mesh_view *M, const plane_tags *T,
+                              plane_ctx *x) {
+  const size_t nbk = 2 * ((size_t)M->nbodies + 1);
+  size_t *count = mx_calloc(nbk * sizeof *count);
+  if (!count) return MX_ENOMEM;
+  for (size_t c = 0; c < M->ncells; c++) count[2 * (size_t)M->cell_body[c] + M->type[c]]++;
+  uint64_t nblocks = 0;
+  for (size_t i = 2; i < nbk; i++) nblocks += count[i] > 0;
+  for (int g = 0; g <= T->npairs; g++) nblocks += (g ? T->p0[g] - T->p0[g - 1] : T->nb) > 0;
+  const uint64_t ne = M->ncells + T->nb + T->ni, head[4] = {nblocks, ne, ne > 0, ne};
+  int st = mx_afile_printf(f, "$Elements\n");
+  if (!st) st = plane_four(f, head, x->binary);
+  x->data = 0;
+  if (!st) st = plane_tag_blocks(f, count, T, x);
+  if (!st && x->binary) st = mx_afile_write(f, "\n", 1);
+  if (!st) st = mx_afile_printf(f, "$EndElements\n");
+  x->data = 1;
+  for (int k = 0; !st && k < M->ncell_fields; k++) {
+    x->fd = &M->cell_fields[k];
+    st = mx_afile_printf(f, "$ElementData\n1\n\"%s\"\n1\n0\n3\n0\n1\n%llu\n", x->fd->name,
+                         (unsigned long long)ne);
+    if (!st) st = plane_tag_blocks(f, count, T, x);
+    if (!st && x->binary) st = mx_afile_write(f, "\n", 1);
+    if (!st) st = mx_afile_printf(f, "$EndElementData\n");
+  }
+  mx_free(count);
+  return st;
+}
+
+static int write_plane_tagged(mx_afile *f, const mx_mesh_view *M, int binary) {
+  uint64_t *bedge = NULL, *iedge = NULL, *all = NULL;
+  uint32_t *pair = NULL;
+  size_t nb = 0, ni = 0;
+  plane_tags *T = mx_calloc(sizeof *T);
+  int st = T ? mx_plane_boundary_edges(M, &bedge, &nb) : MX_ENOMEM;
+  if (!st) st = mx_plane_interface_edges(M, M->cell_body, &iedge, &pair, &ni);
+  if (!st && !(all = mx_alloc((nb + ni + 1) * sizeof *all))) st = MX_ENOMEM;
+  if (!st) {
+    memcpy(all, bedge, nb * sizeof *all);
+    memcpy(all + nb, iedge, ni * sizeof *all);
+    T->nb = nb, T->ni = ni;
+    for (size_t i = 0; i < ni; i++) {
+      if (T->npairs && T->pair[T->npairs - 1] == pair[i]) continue;
+      if (T->npairs == MAX_PAIRS) {
+        st = MX_EINTERNAL;
+        break;
+      }
+      T->p0[T->npairs] = nb + i;
+      T->pair[T->npairs++] = pair[i];
+    }
+    T->p0[T->npairs] = nb + ni;
+  }
+  plane_ctx x = {.M = M, .binary = binary, .bedge = all};
+  if (!st) st = plane_tag_head(f, M, T, binary);
+  if (!st) st = plane_nodes(f, M, &x);
+  if (!st) st = plane_tag_elements(f, M, T, &x);
+  mx_free(bedge), mx_free(iedge), mx_free(all), mx_free(pair), mx_free(T);
+  return st;
+}
+
 static int write_plane_body(mx_afile *f, const mx_mesh_view *M, int binary) {
+  if (M->cell_body && M->nbodies > 0 && M->body_names) return write_plane_tagged(f, M, binary);
   uint64_t *bedge = NULL;
   size_t nb = 0;
   MX_CHECK(mx_plane_boundary_edges(M, &bedge, &nb));

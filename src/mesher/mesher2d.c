@@ -81,6 +81,11 @@ mx_mesher2d *mx_mesher2d_new(const mx_params2d *p) {
 
 static void free_mesh(mx_mesher2d *m) {
   mx_qmesh_free(&m->M);
+  mx_free(m->material);
+  mx_free(m->mat_report);
+  m->material = NULL;
+  m->mat_report = NULL;
+  m->nmaterials = 0;
   mx_free(m->leaves);
   m->leaves = NULL;
   m->nleaves = 0;
@@ -101,6 +106,8 @@ void mx_mesher2d_free(mx_mesher2d *m) {
   if (!m) return;
   free_mesh(m);
   free_keep(m);
+  mx_mesher2d_materials_free(m);
+  mx_mesher2d_materials_names_free(m);
   mx_poly_index_free(&m->index);
   mx_poly_free(&m->domain);
   for (size_t k = 0; k < m->nregions; k++) mx_poly_free(&m->regions[k]);
@@ -334,6 +341,10 @@ int mx_mesher2d_add_function(mx_mesher2d *m, const char *name, const double *arg
   CALL(m, add_function(m, name, args, nargs, level));
 }
 
+int mx_mesher2d_set_material(mx_mesher2d *m, int depth, int number, const char *name) {
+  CALL(m, mx_mesher2d_set_material_(m, depth, number, name));
+}
+
 /* ---- feature levels ------------------------------------------------------------ */
 
 static int cmp_x(const void *a, const void *b) {
@@ -471,19 +482,27 @@ double mx_qarea_tolerance(const mx_poly *P, const mx_qcheck_report *c, size_t nc
 /* The independent check, and what it means: MX_EINVALID naming what failed. */
 static int check_mesh(mx_mesher2d *m) {
   const char *name = m->domain.path;
+  const mx_poly *dom = mx_mesher2d_outer(m);
   if (m->M.ncells == 0) {
     mx_error(name, 0, "the mesh is empty: no cell lies in the domain; ask for finer levels");
     return MX_EINPUT;
   }
   const double t = mx_wtime();
-  const int st = mx_qmesh_check(&m->M, &m->domain, CHECK_TOL, &m->cr);
+  const int st = mx_qmesh_check(&m->M, dom, CHECK_TOL, &m->cr);
   m->rec->t[M2_CHECK] = mx_wtime() - t;
   if (st == MX_EINTERNAL && !m->rec->last_error[0])
     mx_error(NULL, 0, "internal failure in the check stage");
   MX_CHECK(st);
   m->checked = 1;
   const mx_qcheck_report *c = &m->cr;
-  m->area_tol = mx_qarea_tolerance(&m->domain, c, m->M.ncells);
+  m->area_tol = mx_qarea_tolerance(dom, c, m->M.ncells);
+  if (m->p.materials && (m->cs.unresolved || m->cs.features_missed)) {
+    mx_error(name, 0, "materials: %zu cell(s) that the interfaces meet could not be cut along "
+             "them and %zu sharp vertex(es) of theirs found no node (a loop meets a cell more "
+             "often than it can tell): ask for a finer level there", m->cs.unresolved,
+             m->cs.features_missed);
+    return MX_EINVALID;
+  }
   if (c->bad_edges || c->hanging || c->inverted || m->q.invalid) {
     mx_error(name, 0, "the mesh is not valid: %zu bad edge(s), %zu hanging node(s), %zu "
              "inverted cell(s) (%zu with scaled Jacobian <= 0)", c->bad_edges, c->hanging,
@@ -507,6 +526,14 @@ static int check_mesh(mx_mesher2d *m) {
              c->domain_area, 100.0 * c->area_error, 100.0 * m->area_tol);
     return MX_EINVALID;
   }
+  if (m->p.materials) {
+    const double t2 = mx_wtime();
+    const int ms = mx_mesher2d_materials_check(m, CHECK_TOL);
+    m->rec->t[M2_CHECK] += mx_wtime() - t2;
+    if (ms == MX_EINTERNAL && !m->rec->last_error[0])
+      mx_error(NULL, 0, "internal failure in the materials' check");
+    MX_CHECK(ms);
+  }
   m->valid = 1;
   return MX_OK;
 }
@@ -527,10 +554,36 @@ int mx_mesher2d_run(mx_mesher2d *m) {
   }
   free_mesh(m);
   for (int p = M2_REFINE; p < M2_NPH; p++) m->rec->t[p] = 0;
+  m->t_materials = 0;
   MX_CHECK(check_memory(m));
+  if (m->p.materials) MX_CHECK(mx_mesher2d_materials_prepare(m));
+  /* with nested materials the quadtree and the boundary step see the
+   * outer loops; the interfaces refine as the domain's polylines do */
+  const int nested = mx_mesher2d_nested(m);
+  const mx_poly *dom = nested ? &m->outer : &m->domain;
+  const mx_poly_index *idx = nested ? &m->outer_index : &m->index;
+  mx_poly *drawings = m->drawings;
+  int *drawing_level = m->drawing_level;
+  size_t ndrawings = m->ndrawings;
+  if (nested && m->p.surface_level > 0) {
+    drawings = mx_alloc((ndrawings + 1) * sizeof *drawings);
+    drawing_level = mx_alloc((ndrawings + 1) * sizeof *drawing_level);
+    if (!drawings || !drawing_level) {
+      mx_free(drawings), mx_free(drawing_level);
+      return MX_ENOMEM;
+    }
+    for (size_t k = 0; k < ndrawings; k++)
+      drawings[k] = m->drawings[k], drawing_level[k] = m->drawing_level[k];
+    drawings[ndrawings] = m->interfaces;
+    drawing_level[ndrawings++] = m->p.surface_level;
+  }
   mx_qbox *boxes = m->boxes;
   size_t nboxes = m->nboxes;
-  MX_CHECK(feature_boxes(m, &boxes, &nboxes));
+  int fst = feature_boxes(m, &boxes, &nboxes);
+  if (fst) {
+    if (drawings != m->drawings) mx_free(drawings), mx_free(drawing_level);
+    return fst;
+  }
   m->feature_boxes = nboxes - m->nboxes;
   const mx_qrequests req = {
       /* level 0 asks for nothing either: the quadtree's requests take 0 */
@@ -538,14 +591,15 @@ int mx_mesher2d_run(mx_mesher2d *m) {
       .a_level = m->p.all_level > 0 ? m->p.all_level : 0,
       .nboxes = nboxes, .boxes = boxes,
       .nregions = m->nregions, .regions = m->regions, .region_level = m->region_level,
-      .ndrawings = m->ndrawings, .drawings = m->drawings, .drawing_level = m->drawing_level,
+      .ndrawings = ndrawings, .drawings = drawings, .drawing_level = drawing_level,
       .nfuns = m->nfuns, .funs = m->funs,
       .nkeep = m->nkeep, .keep_key = m->keep_key, .keep_level = m->keep_level};
   const int balance = m->p.balance == MX_BALANCE_RECURSIVE ? MX_QBALANCE_RECURSIVE
                                                            : MX_QBALANCE_EDGES;
   double t = mx_wtime();
-  int st = mx_qtree_build(&m->domain, &m->index, &req, balance, &m->T, &m->qs);
+  int st = mx_qtree_build(dom, idx, &req, balance, &m->T, &m->qs);
   if (boxes != m->boxes) mx_free(boxes);
+  if (drawings != m->drawings) mx_free(drawings), mx_free(drawing_level);
   if (!st) st = mx_qtree_leaves(&m->T, &m->leaves, &m->nleaves);
   const double wall = mx_wtime() - t;
   m->rec->t[M2_BALANCE] = m->qs.t_balance;
@@ -556,9 +610,15 @@ int mx_mesher2d_run(mx_mesher2d *m) {
   m->rec->t[M2_TRANSITION] = mx_wtime() - t;
   MX_CHECK(stage(m, st, "transition"));
   t = mx_wtime();
-  st = mx_qboundary(&m->domain, &m->index, &m->T, m->leaves, m->p.close_ratio, &m->M, &m->bs);
+  st = mx_qboundary(dom, idx, &m->T, m->leaves, m->p.close_ratio, &m->M, &m->bs);
   m->rec->t[M2_BOUNDARY] = mx_wtime() - t;
   MX_CHECK(stage(m, st, "boundary"));
+  if (m->p.materials) {
+    t = mx_wtime();
+    st = mx_mesher2d_materials_label(m);
+    m->rec->t[M2_BOUNDARY] += mx_wtime() - t;
+    MX_CHECK(stage(m, st, "materials"));
+  }
   m->meshed = 1;
   t = mx_wtime();
   mx_qquality_measure(&m->M, &m->q);
@@ -734,7 +794,8 @@ static int write_mesh(const mx_mesher2d *m, const char *path, int ascii) {
     return MX_EINPUT;
   }
   const double t = mx_wtime();
-  const int st = mx_write_qmesh(path, &m->M, ascii);
+  const int st = m->material ? mx_mesher2d_write_materials(m, path, ascii)
+                              : mx_write_qmesh(path, &m->M, ascii);
   m->rec->t[M2_WRITE] += mx_wtime() - t;
   return st;
 }
@@ -749,6 +810,7 @@ int mx_mesher2d_mesh_arrays(const mx_mesher2d *m, mx_mesh2d_arrays *a) {
   a->nnodes = m->M.nnodes, a->ncells = m->M.ncells, a->nleaves = m->nleaves;
   a->xy = m->M.xy, a->type = m->M.type, a->conn = m->M.conn;
   a->leaf = m->M.leaf, a->level = m->M.level;
+  a->material = m->material;
   return MX_OK;
 }
 
@@ -760,6 +822,7 @@ void mx_mesher2d_stats(const mx_mesher2d *m, mx_stats2d *s) {
   s->refined_listed = m->refined_listed;
   s->split_balance = m->qs.balance_splits;
   s->valid = m->valid;
+  s->materials = m->material ? m->nmaterials : 0;
   s->sj_min = fmin(m->q.count[0] ? m->q.min[0] : 1, m->q.count[1] ? m->q.min[1] : 1);
   s->min_angle = m->q.min_angle;
   s->t_read = m->rec->t[M2_READ], s->t_refine = m->rec->t[M2_REFINE], s->t_balance = m->rec->t[M2_BALANCE];

@@ -28,6 +28,16 @@ typedef struct {
   double t[M2_NPH], t_restart;
 } mx_mesher2d_record;
 
+/* Several materials: at most this many (regions nested this deep). */
+#define MX_MAT2D_MAX 64
+
+/* The check of one material's cells against its own loops. */
+typedef struct {
+  size_t cells;
+  mx_qcheck_report cr;
+  double area_tol;
+} mx_mat2d_report;
+
 struct mx_mesher2d {
   mx_params2d p;
   mx_mesher2d_record *rec;
@@ -66,6 +76,23 @@ struct mx_mesher2d {
   int meshed, checked, valid;
   size_t refined_listed, feature_boxes;
   double estimate_mb;
+  /* several materials (params.materials; mesher2d_materials.c): the
+   * regions of the domain's loops; with nested loops, the outer loops
+   * (the domain the quadtree and the boundary step see) and the
+   * interfaces; per cell its material's number; by depth the user's
+   * numbers and names (0 / NULL: the defaults); the cleave's figures and
+   * each material's check (1 .. nmaterials) */
+  int mat_ready;
+  mx_qregions nest;
+  mx_poly outer, interfaces;
+  mx_poly_index outer_index;
+  uint16_t *material;
+  int nmaterials;
+  int mat_number[MX_MAT2D_MAX + 1];
+  char *mat_name[MX_MAT2D_MAX + 1];
+  mx_qcleave_stats cs;
+  mx_mat2d_report *mat_report;
+  double t_materials;
 };
 
 /* restart_quadtree.c */
@@ -85,5 +112,33 @@ int mx_mesher2d_run(mx_mesher2d *m);
  * layer of cells of the mean size along the polylines, relative to the
  * domain's area, 5% at least, 25% at most. */
 double mx_qarea_tolerance(const mx_poly *P, const mx_qcheck_report *c, size_t ncells);
+
+/* mesher2d_materials.c */
+/* The regions of the domain's loops, and with nested loops the outer ones
+ * (indexed) and the interfaces; once per domain. MX_EINPUT beyond
+ * MX_MAT2D_MAX materials. */
+int mx_mesher2d_materials_prepare(mx_mesher2d *m);
+void mx_mesher2d_materials_free(mx_mesher2d *m);
+void mx_mesher2d_materials_names_free(mx_mesher2d *m);
+/* Several materials with nested loops (prepared). */
+int mx_mesher2d_nested(const mx_mesher2d *m);
+/* The loops the quadtree, the boundary step and the whole mesh's check
+ * see: the outer ones with nested materials, else the domain. */
+const mx_poly *mx_mesher2d_outer(const mx_mesher2d *m);
+/* After the boundary step: the mesh cleaved along the interfaces (nested
+ * loops) and m->material, m->nmaterials set. MX_EINPUT when two materials
+ * end with one number. */
+int mx_mesher2d_materials_label(mx_mesher2d *m);
+/* Each material's cells checked against its loops (m->mat_report);
+ * MX_EINVALID naming the first that fails. */
+int mx_mesher2d_materials_check(mx_mesher2d *m, double tol);
+/* The number and name of the material at depth d (the user's or the
+ * defaults: d, "material <number>"); the depth of a number (0: none). */
+int mx_mesher2d_material_number(const mx_mesher2d *m, int d);
+void mx_mesher2d_material_name(const mx_mesher2d *m, int d, char *buf, size_t n);
+int mx_mesher2d_material_depth(const mx_mesher2d *m, int number);
+int mx_mesher2d_set_material_(mx_mesher2d *m, int depth, int number, const char *name);
+/* The mesh written with its materials (mesher/qmesh_output.h). */
+int mx_mesher2d_write_materials(const mx_mesher2d *m, const char *path, int ascii);
 
 #endif

@@ -74,6 +74,33 @@ static void json_check(FILE *f, const mx_mesher2d *m) {
           c->edges, c->boundary_edges, c->euler, c->domain_euler);
 }
 
+/* Several materials: each one's number, name, cells and area against its
+ * region's (when checked), and what the cleave did. */
+static void json_materials(FILE *f, const mx_mesher2d *m) {
+  const mx_qcleave_stats *c = &m->cs;
+  fprintf(f, ", \"materials\": {\"count\": %d, \"list\": [", m->nmaterials);
+  for (int d = 1; d <= m->nmaterials; d++) {
+    char name[128];
+    mx_mesher2d_material_name(m, d, name, sizeof name);
+    fprintf(f, "%s{\"depth\": %d, \"number\": %d, \"name\": ", d > 1 ? ", " : "", d,
+            mx_mesher2d_material_number(m, d));
+    json_string(f, name);
+    if (m->mat_report) {
+      const mx_mat2d_report *R = &m->mat_report[d];
+      fprintf(f, ", \"cells\": %zu, ", R->cells);
+      json_num(f, "area", R->cr.area), fputs(", ", f);
+      json_num(f, "region_area", R->cr.domain_area), fputs(", ", f);
+      json_num(f, "area_error", R->cr.area_error);
+    }
+    fputs("}", f);
+  }
+  fprintf(f, "], \"features\": %zu, \"features_moved\": %zu, \"features_inserted\": %zu, "
+          "\"features_missed\": %zu, \"warped\": %zu, \"crossings\": %zu, \"cut\": %zu, "
+          "\"unresolved\": %zu, \"across\": %zu, \"smoothed\": %zu, \"seconds\": %.6f}",
+          c->features, c->features_moved, c->features_inserted, c->features_missed, c->warped,
+          c->crossings, c->cut, c->unresolved, c->across, c->smoothed, m->t_materials);
+}
+
 static void print_json(const mx_mesher2d *m, const mx_run2d_info *ri) {
   FILE *f = stdout;
   fprintf(f, "{\"valid\": %s, \"exit_code\": %d, \"error\": ", ri->status ? "false" : "true",
@@ -98,6 +125,7 @@ static void print_json(const mx_mesher2d *m, const mx_run2d_info *ri) {
             m->feature_boxes, m->estimate_mb);
   }
   if (m && m->checked) json_check(f, m);
+  if (m && m->meshed && m->material) json_materials(f, m);
   fputs(", \"phases\": {", f);
   for (int p = 0; p < M2_NPH; p++)
     fprintf(f, "%s\"%s\": %.6f", p ? ", " : "", phase_name[p], m ? m->rec->t[p] : 0.0);
@@ -139,6 +167,23 @@ static void print_summary(const mx_mesher2d *m, const mx_run2d_info *ri) {
     print_quality(m);
     printf("  boundary     %zu features, %zu moved close, %zu removed, %zu shrunk, %zu patterned\n",
            m->bs.features, m->bs.moved_close, m->bs.removed, m->bs.shrunk, m->bs.patterned);
+  }
+  if (meshed && m->material) {
+    printf("  materials    %d:", m->nmaterials);
+    for (int d = 1; d <= m->nmaterials; d++) {
+      char name[128];
+      mx_mesher2d_material_name(m, d, name, sizeof name);
+      printf("%s %d \"%s\"", d > 1 ? "," : "", mx_mesher2d_material_number(m, d), name);
+      if (m->mat_report)
+        printf(" (%zu cells, area %.6g, region %.6g)", m->mat_report[d].cells,
+               m->mat_report[d].cr.area, m->mat_report[d].cr.domain_area);
+    }
+    printf("\n");
+    if (mx_mesher2d_nested(m))
+      printf("  interfaces   %zu features (%zu moved onto, %zu inserted), %zu nodes warped, %zu "
+             "crossings, %zu cells cut\n",
+             m->cs.features, m->cs.features_moved, m->cs.features_inserted, m->cs.warped,
+             m->cs.crossings, m->cs.cut);
   }
   if (meshed && ri->listed)
     printf("  re-meshed    %zu element(s) listed: %zu quadrant(s) split once\n", ri->listed,

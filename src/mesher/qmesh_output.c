@@ -3,7 +3,8 @@
  * (int), "level" (its quadrant's, 8-bit; 0 without levels) and "sj" (the
  * scaled Jacobian, mx_qcell_sj). The fields are only computed on a
  * consistent mesh: an inconsistent one goes to the writers without them,
- * and their check names the bad cell. */
+ * and their check names the bad cell. With several materials, the cell
+ * field "material" and the materials as the view's bodies. */
 #include "mesher/qmesh_output.h"
 
 #include "base/common.h"
@@ -17,7 +18,8 @@ static int consistent(const mx_qmesh *M) {
   return mx_qmesh_bad_cell(M) == M->ncells;
 }
 
-int mx_write_qmesh(const char *path, const mx_qmesh *M, int ascii) {
+int mx_write_qmesh_tagged(const char *path, const mx_qmesh *M, int ascii,
+                          const mx_qmesh_tags *T) {
   mx_mesh_view v = {.nnodes = M->nnodes, .xyz = M->xy, .ncells = M->ncells,
                     .type = M->type, .conn = M->conn, .dim = 2};
   if (!consistent(M)) return mx_write_mesh(path, &v, ascii);
@@ -34,14 +36,26 @@ int mx_write_qmesh(const char *path, const mx_qmesh *M, int ascii) {
     type[c] = M->type[c];
     sj[c] = mx_qcell_sj(M, c);
   }
-  const mx_field fields[3] = {{.name = "type", .ivalues = type},
-                              {.name = "level", .u8values = M->level ? M->level : level},
-                              {.name = "sj", .is_double = 1, .dvalues = sj}};
+  mx_field fields[4] = {{.name = "type", .ivalues = type},
+                        {.name = "level", .u8values = M->level ? M->level : level},
+                        {.name = "sj", .is_double = 1, .dvalues = sj}};
   v.ncell_fields = 3;
+  if (T) {
+    fields[3] = (mx_field){.name = "material", .ivalues = T->material};
+    v.ncell_fields = 4;
+    v.cell_body = T->body;
+    v.nbodies = T->nbodies;
+    v.body_names = T->names;
+    v.body_physical = T->physical;
+  }
   v.cell_fields = fields;
   const int st = mx_write_mesh(path, &v, ascii);
   mx_free(type), mx_free(level), mx_free(sj);
   return st;
+}
+
+int mx_write_qmesh(const char *path, const mx_qmesh *M, int ascii) {
+  return mx_write_qmesh_tagged(path, M, ascii, NULL);
 }
 
 int mx_qmesh_format_known(const char *path) { return mx_plane_format_known(path); }

@@ -12,6 +12,17 @@
  * name and renamed (io/atomic_file.h). Cell fields: type, level, sj (scaled
  * Jacobian). */
 int mx_write_qmesh(const char *path, const mx_qmesh *M, int ascii);
+/* Several materials: per cell its material's number (the cell field
+ * "material") and its body 1 .. nbodies, each body's name and number
+ * (the .msh writer's physical surfaces, the .getfem writer's regions). */
+typedef struct {
+  const int32_t *material;
+  const int32_t *body;
+  int nbodies;
+  const char *const *names;
+  const int32_t *physical;
+} mx_qmesh_tags;
+int mx_write_qmesh_tagged(const char *path, const mx_qmesh *M, int ascii, const mx_qmesh_tags *T);
 int mx_qmesh_format_known(const char *path);
 
 #endif

@@ -74,6 +74,33 @@ uint32_t mx_poly_closest(const mx_poly_index *I, const double p[2], double rmax,
  * their vertex ids, ascending, to *out (allocated, mx_free). */
 int mx_poly_features(const mx_poly *P, uint32_t **out, size_t *n);
 
+/* ---- nested loops as regions (qregions.c) -------------------------------- */
+
+/* The regions a checked domain's loops cut out (several materials): region
+ * d of a point is the number of loops around it (0 outside the domain, 1
+ * between an outer loop and the loops inside it, ...). `all` holds the
+ * domain's loops (same vertices, same segment ids) each turned
+ * counter-clockwise, so that its winding number is the region; I indexes
+ * it. A loop at depth t (t loops around it) separates regions t and t + 1;
+ * the outer loops are at depth 0. */
+typedef struct {
+  mx_poly all;
+  mx_poly_index I;
+  uint32_t *seg_depth; /* per segment: its loop's depth */
+  uint32_t deepest;    /* the deepest region (1 + the deepest loop's depth) */
+} mx_qregions;
+
+int mx_qregions_build(const mx_poly *P, mx_qregions *R);
+void mx_qregions_free(mx_qregions *R);
+/* The region of p (>= 0), or -1 when p lies within the index's eps of a
+ * segment (*seg: that segment of `all`, else UINT32_MAX; seg may be NULL). */
+long mx_qregion_of(const mx_qregions *R, const double p[2], uint32_t *seg);
+/* The loops at depths lo .. hi as a domain of their own (vertices
+ * renumbered, lines kept, nloops set): those at depth lo counter-clockwise,
+ * the deeper ones clockwise. For lo + 1 == hi: region hi's own boundary,
+ * oriented as mx_poly_check_domain would. MX_ENOMEM. */
+int mx_qregions_select(const mx_qregions *R, uint32_t lo, uint32_t hi, mx_poly *out);
+
 /* ---- requests (qrefine.c) ------------------------------------------------ */
 
 /* The functions of the "function" refinement: a quadrant is refined to the
@@ -291,6 +318,30 @@ typedef struct {
 int mx_qboundary(const mx_poly *P, const mx_poly_index *I, const mx_qtree *T,
                  const uint32_t *leaves, double close_ratio, mx_qmesh *M,
                  mx_qboundary_stats *stats);
+
+/* ---- several materials (qcleave.c) ----------------------------------------- */
+
+/* The loops nested in the outer ones as interfaces between materials, on
+ * the mesh the boundary step fitted to the outer loops: the interfaces'
+ * sharp vertices become nodes, nodes near an interface move onto it, the
+ * cells a loop passes through are cut along its chords (new nodes where
+ * it crosses an edge, shared by the cells on both sides), and the nodes
+ * along the interfaces are smoothed (on an interface, along it). *region (allocated, one per cell) gets each cell's region (its
+ * nesting depth, mx_qregion_of), 1 at least. MX_ENOMEM. */
+typedef struct {
+  size_t features;          /* the interfaces' sharp vertices */
+  size_t features_moved;    /*   taken by a node moved onto them */
+  size_t features_inserted; /*   made nodes of their own (cells fanned about them) */
+  size_t features_missed;   /*   neither (in no cell, or two in one cell) */
+  size_t warped;            /* nodes moved onto an interface */
+  size_t crossings;         /* nodes made where an interface crosses an edge */
+  size_t cut;               /* cells cut */
+  size_t unresolved;        /* cells a loop meets in a way they cannot be cut along */
+  size_t across;            /* cells left with free nodes in two regions */
+  size_t smoothed;          /* moves of the smoothing along the interfaces */
+} mx_qcleave_stats;
+
+int mx_qcleave(mx_qmesh *M, const mx_qregions *R, uint16_t **region, mx_qcleave_stats *stats);
 
 /* ---- quality (qquality.c) ------------------------------------------------ */
 

@@ -132,7 +132,10 @@ typedef struct {
    * a planar mesh (mx_view_is_2d): xyz holds x y per node (written with
    * z = 0), type MX_CELL_TRI / MX_CELL_QUAD, conn 4 per cell (a triangle's
    * 4th entry unused), cells counter-clockwise and written in index order
-   * (order, bfaces, tags and bodies unused). */
+   * (order, bfaces and tags unused). Bodies, when given (several
+   * materials: cell_body, nbodies, body_names, body_physical), are the
+   * .msh writer's surfaces and physical groups (with the edges between two
+   * bodies as curves "interface A | B") and the .getfem writer's regions. */
   int dim;
 } mx_mesh_view;
 
