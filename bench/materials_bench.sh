@@ -10,7 +10,13 @@
 #   - the elements across the interface (the target: none) and the worst
 #     J_ENS (the target: no lower than the one-material mesh's);
 #   - the wall time, median of REPEAT runs, against the hollow ball without
-#     materials (5.6% fewer leaves at -s 6) and the outer sphere alone.
+#     materials (5.6% fewer leaves at -s 6) and the outer sphere alone, and
+#     per leaf (the target: 1.3x the one-material run with the same leaves).
+# Measured 2026-12-04 (2 cores, idle): -s 6 materials 0.85 s against 0.083
+# s for the hole (x10.2, x9.7 per leaf): the cleaving (0.67 s, of which
+# the band's smoothing 0.35 s) splits ~5000 elements into ~60000 and
+# evaluates J_ENS for every trial move; volumes -0.06%/-0.11%, 0 across,
+# worst J_ENS 0.197 (one material 0.205). Cortex + tumour -s 7: x3.2.
 # Last line: one JSON object.
 #
 #   bench/materials_bench.sh MIXOCT [LEVELS] [REPEAT]     (default "5 6", 3)
@@ -102,6 +108,8 @@ for L in levels:
            "elements": {n: v[0]["elements"] for n, v in by.items()},
            "wall_median_s": med,
            "materials_over_hole": med["materials"] / med["hole"],
+           "per_leaf_over_hole": (med["materials"] / by["materials"][0]["leaves"]) /
+                                 (med["hole"] / by["hole"][0]["leaves"]),
            "materials_over_sphere": med["materials"] / med["sphere"],
            "volume_error": err,
            "across_interfaces": (m["materials"] or {}).get("across_interfaces"),
@@ -112,6 +120,7 @@ for L in levels:
     print("-s %d: leaves %s; wall (median of %d) materials %.3f s, hole %.3f s (x%.2f), sphere "
           "%.3f s (x%.2f)" % (L, res["leaves"], len(by["materials"]), med["materials"], med["hole"],
                                res["materials_over_hole"], med["sphere"], res["materials_over_sphere"]))
+    print("       per leaf x%.2f the hole's" % res["per_leaf_over_hole"])
     print("       material volumes off the shells' by %s; %s elements across the interface; "
           "worst J_ENS %s; check defects %s"
           % ({k: "%+.2f%%" % (100 * e) for k, e in err.items()}, res["across_interfaces"],
