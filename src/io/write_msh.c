@@ -890,24 +890,6 @@ typedef struct {
   size_t p0[MAX_PAIRS + 1]; /* the first line of each pair in bedge (and the end) */
 } plane_tags;
 
-static int plane_tag_entity(mx_afile *f, int tag, const double box[6], int phys, int binary) {
-  if (binary) {
-    MX_CHECK(plane_bin_int(f, tag));
-    MX_CHECK(mx_afile_write(f, box, 6 * sizeof *box));
-    MX_CHECK(plane_bin_size(f, 1));
-    MX_CHECK(plane_bin_int(f, phys));
-    return plane_bin_size(f, 0);
-  }
-  char line[6 * (MX_DOUBLE_CHARS + 1) + 48];
-  size_t n = (size_t)snprintf(line, sizeof line, "%d", tag);
-  for (int k = 0; k < 6; k++) {
-    line[n++] = ' ';
-    n += mx_put_double(line + n, box[k]);
-  }
-  n += (size_t)snprintf(line + n, sizeof line - n, " 1 %d 0\n", phys);
-  return mx_afile_write(f, line, n);
-}
-
 static int plane_tag_head(mx_afile *f, const mx_mesh_view *M, const plane_tags *T, int binary) {
   MX_CHECK(mx_afile_printf(f, "$MeshFormat\n4.1 %d 8\n", binary));
   if (binary) {
@@ -930,9 +912,9 @@ static int plane_tag_head(mx_afile *f, const mx_mesh_view *M, const plane_tags *
   const uint64_t counts[4] = {0, (uint64_t)(1 + T->npairs), (uint64_t)M->nbodies, 0};
   if (binary) MX_CHECK(mx_afile_write(f, counts, sizeof counts));
   else MX_CHECK(plane_four(f, counts, 0));
-  for (int t = 1; t <= 1 + T->npairs; t++) MX_CHECK(plane_tag_entity(f, t, box, t, binary));
+  for (int t = 1; t <= 1 + T->npairs; t++) MX_CHECK(write_entity(f, t, box, t, binary));
   for (int b = 1; b <= M->nbodies; b++)
-    MX_CHECK(plane_tag_entity(f, b, box, M->body_physical ? M->body_physical[b - 1] : b, binary));
+    MX_CHECK(write_entity(f, b, box, M->body_physical ? M->body_physical[b - 1] : b, binary));
   if (binary) MX_CHECK(mx_afile_write(f, "\n", 1));
   return mx_afile_printf(f, "$EndEntities\n");
 }
