@@ -7,7 +7,7 @@
 #include "base/common.h"
 #include "geom/quality.h"
 #include "kernels/boundary.h"
-#include "kernels/interfaces.h"
+#include "kernels/pieces.h"
 #include "kernels/mesh_edit.h"
 #include "kernels/untangle.h"
 
