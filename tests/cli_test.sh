@@ -344,7 +344,9 @@ expect_exit 0 "--materials at the full stage" "$MIXOCT" --demo -s 3 --materials 
 has "$T/matf.msh" '3 1 "demo"' "the full stage's .msh names material 1 after its input"
 expect_exit 0 "check of the full stage's materials" "$MIXOCT" check "$T/matf.msh"
 expect_exit 2 "--materials with --p4est" "$MIXOCT" --demo -s 3 --materials --p4est
-expect_exit 2 "--materials with --restart" "$MIXOCT" --demo -s 3 --materials -o "$T/matr.vtu" --restart "$T/matr.oct"
+expect_exit 0 "--materials with --restart" "$MIXOCT" --demo -s 3 --materials -o "$T/matr.vtu" --restart "$T/matr.oct" --quiet
+expect_exit 0 "--materials re-meshing a restart file" "$MIXOCT" --demo --materials -c "$T/matr.oct" -o "$T/matr2.msh" --quiet
+has "$T/matr2.msh" '3 1 "demo"' "the re-mesh from a restart file keeps the material"
 expect_exit 0 "--materials --stage transition" "$MIXOCT" --demo -s 3 --materials --stage transition \
   -o "$T/mat.vtu" -o "$T/mat.msh" --quiet
 has "$T/mat.vtu" 'Name="material"' "the VTU has the material field"

@@ -23,6 +23,12 @@
  *    more than the balance's grading from 5 to 3); with the inner one's
  *    inside at level 4 instead, every element of its material is of level
  *    4 or more;
+ *  - re-meshing keeps the materials: three spheres at -s 4, the elements of
+ *    the middle material within 0.05 of the middle sphere split once (the
+ *    whole octree meshed again, the interfaces cleaved), then written as a
+ *    restart file and read back into a new mesher with the same inputs and
+ *    meshed again: every element still in one region, its material the
+ *    region's, and the same materials' volumes within 2% as before;
  *  - refused (MX_EINPUT): two boxes that overlap, two that touch along an
  *    edge only (a non-manifold union), two that touch at one corner. */
 #include <math.h>
@@ -30,6 +36,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "check.h"
 #include "test_shapes.h"
@@ -461,6 +468,78 @@ static void test_input_levels(void) {
   }
 }
 
+/* Elements across a region and elements whose material is not their
+ * region's (by the spheres' radii), and each material's volume. */
+static void judge_spheres(const mx_mesh_arrays *a, size_t *across, size_t *wrong, double vol[4]) {
+  *across = *wrong = 0;
+  vol[0] = vol[1] = vol[2] = vol[3] = 0;
+  for (size_t c = 0; c < a->nelements; c++) {
+    int region = -1, two = 0;
+    for (int k = 0; k < mx_cell_nodes[a->type[c]]; k++) {
+      const int r = sphere_region(a->xyz + 3 * (size_t)a->conn[8 * c + k]);
+      if (r < 0) continue;
+      if (region >= 0 && r != region) two = 1;
+      region = r;
+    }
+    *across += two;
+    *wrong += region >= 1 && !two && region != a->material[c];
+    if (a->material[c] <= 3) vol[a->material[c]] += volume(a, c);
+  }
+}
+
+static void test_remesh(void) {
+  double inside[3], v0[4], v1[4], v2[4];
+  size_t across, wrong;
+  mx_mesher *m = three_spheres(4, 2, inside);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  mx_mesh_arrays a;
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  CHECK(a.material != NULL);
+  if (!a.material) {
+    mx_mesher_free(m);
+    return;
+  }
+  judge_spheres(&a, &across, &wrong, v0);
+  uint64_t *list = malloc(a.nelements * sizeof *list);
+  size_t n = 0;
+  for (size_t c = 0; c < a.nelements; c++) {
+    double p[3] = {0, 0, 0};
+    const int nv = mx_cell_nodes[a.type[c]];
+    for (int k = 0; k < nv; k++)
+      for (int d = 0; d < 3; d++) p[d] += a.xyz[3 * (size_t)a.conn[8 * c + k] + d] / nv;
+    if (a.material[c] == 2 && fabs(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - R[1]) < 0.05)
+      list[n++] = c;
+  }
+  const size_t before = a.nelements;
+  CHECK(n > 0 && mx_mesher_refine_elements(m, list, n) == MX_OK);
+  free(list);
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  CHECK(a.material != NULL && a.invalid == 0 && a.nelements > before);
+  judge_spheres(&a, &across, &wrong, v1);
+  CHECK(across == 0 && wrong == 0);
+  for (int i = 1; i <= 3; i++) CHECK(fabs(v1[i] - v0[i]) < 0.02 * v0[i]);
+  char path[64];
+  snprintf(path, sizeof path, "/tmp/mx_material_remesh_%d.oct", (int)getpid());
+  CHECK(mx_mesher_save_restart(m, path) == MX_OK);
+  const size_t after = a.nelements;
+  mx_mesher_free(m);
+  /* the restart file with the same inputs: the same mesh, the same materials */
+  m = three_spheres(4, 1, inside);
+  CHECK(mx_mesher_load_restart(m, path) == MX_OK);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  CHECK(a.material != NULL && a.nelements == after);
+  if (a.material) {
+    judge_spheres(&a, &across, &wrong, v2);
+    CHECK(across == 0 && wrong == 0);
+    for (int i = 1; i <= 3; i++) CHECK(fabs(v2[i] - v1[i]) < 1e-9 * v1[i]);
+  }
+  printf("re-mesh with materials: %zu elements, then %zu; from the restart file %zu\n", before,
+         after, a.nelements);
+  remove(path);
+  mx_mesher_free(m);
+}
+
 static void quiet(void *user, int level, const char *text) {
   (void)user, (void)level, (void)text;
 }
@@ -473,6 +552,7 @@ int main(void) {
   const boxes ell = {3, {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{1, 1, 1}, {2, 1, 1}, {1, 2, 1}}};
   test_boxes(&ell, "an L of three boxes");
   test_input_levels();
+  test_remesh();
   test_refused();
   return TEST_DONE();
 }

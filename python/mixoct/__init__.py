@@ -51,14 +51,14 @@ Several materials
 -----------------
 ``Mesher(..., materials=True)`` (``mx_params.materials``, the program's
 ``--materials``) makes the shells nested in the outermost one materials
-instead of holes: ``Mesher.material`` gives each element's material, a
-uint16 view numbered by nesting depth (1 inside one shell, 2 inside two,
-...; at the transition stage 0 outside every shell), the region of the
-element's centroid. Without ``materials`` it is None. In this version the
-interfaces between materials are element faces (a staircase at the
-octree's resolution, counted in a warning), not yet the input surfaces;
-re-meshing (``refine_elements``, ``refine``, ...) and restart files raise
-:class:`InputError` with the library's message.
+instead of holes, and surfaces added as several inputs that share faces
+materials glued along them: ``Mesher.material`` gives each element's
+material, a uint16 view numbered by nesting depth (1 inside one shell, 2
+inside two, ...; at the transition stage 0 outside every shell) and input.
+Without ``materials`` it is None. At the full stage the interfaces are cut
+along the input surfaces: no element lies across one. Re-meshing
+(``refine_elements``, ``refine``, ...) keeps the materials; a restart file
+read back gets them from the same inputs with ``materials=True`` again.
 
 ``Mesher2D(..., materials=True)`` does the same in 2D (``mesher2d
 --materials``): a loop nested in an outer one is the interface between two

@@ -453,11 +453,6 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       mx_error(NULL, 0, "--material: only with --materials (several materials)");
       return MX_EINPUT;
     }
-  if (o->materials && (o->restart_in || o->restart_out)) {
-    mx_error(NULL, 0, "--materials: restart files (-c, --restart) do not keep materials in "
-                      "this version");
-    return MX_EINPUT;
-  }
   if (o->list_in && !o->restart_in) {
     mx_error(NULL, 0, "-l LIST refers to the elements of a mesh written with a "
                       "restart file: give that file with -c FILE.oct");

@@ -30,12 +30,7 @@ int mx_materials_allowed(const mx_mesher *m, const char *what) {
                       "from closed shells that nest");
     return MX_EINPUT;
   }
-  if (what) {
-    mx_error(NULL, 0, "materials (--materials): %s is not offered yet with several "
-                      "materials (restart files do not keep them, and re-meshing would lose "
-                      "them)", what);
-    return MX_EINPUT;
-  }
+  (void)what; /* restart files and re-meshing: the materials come from the inputs */
   return MX_OK;
 }
 

@@ -459,6 +459,9 @@ int mx_mesh_finish(mx_mesher *m) {
              "levels (-s, -a, -b, -r)", m->nleaves);
     return MX_EINPUT;
   }
+  /* several materials: each element's, whatever path made the mesh (a
+   * first mesh, a re-mesh, a restart file's mesh) */
+  if (m->p.materials) MX_CHECK(mx_label_materials(m));
   /* the boundary flags and the volume check count as verification */
   const double t = mx_wtime();
   int st = boundary_flags(m);
@@ -510,7 +513,6 @@ int mx_mesh_stages(mx_mesher *m) {
     MX_CHECK(boundary_once(m));
     MX_CHECK(mx_repair(m));
   }
-  if (m->p.materials) MX_CHECK(mx_label_materials(m));
   return mx_mesh_finish(m);
 }
 
