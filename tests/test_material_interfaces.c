@@ -16,6 +16,9 @@
  *    nodes exactly on the common face (|x - 0.37| < 1e-12), each material's
  *    volume within 3% of its box's (the corners are rounded off: no sharp
  *    features yet);
+ *  - one input with internal faces (the two glued boxes as one surface,
+ *    their common face once: edges of three triangles): the same checks,
+ *    its regions told apart (src/mesher/material_complex.c);
  *  - a level of one input (mx_mesher_set_input_level): two spheres at -s 3
  *    with the inner one's surface at level 5: every element with a face
  *    on the interface comes from a leaf of level 5, every one with a face
@@ -342,9 +345,50 @@ static void box_face(void *ctx, const uint32_t *v, int n, uint32_t c1, uint32_t 
     S->interface_off += axis < 0 || fabs(a->xyz[3 * (size_t)v[i] + axis] - at) > 1e-12;
 }
 
-static void test_boxes(const boxes *B, const char *what) {
-  mx_mesher *m = new_mesher(4, 2);
+/* The boxes as one surface with internal faces: their triangles together,
+ * the vertices of equal coordinates welded and each common triangle once. */
+static int add_complex(mx_mesher *m, const boxes *B) {
+  double *X = malloc(3 * 4096 * sizeof *X);
+  uint32_t *T = malloc(3 * 8192 * sizeof *T);
+  size_t nv = 0, nt = 0;
   for (int b = 0; b < B->n; b++) {
+    double *x;
+    uint32_t *t;
+    size_t bv, bt;
+    box(B->lo[b], B->hi[b], 4, &x, &bv, &t, &bt);
+    uint32_t *id = malloc(bv * sizeof *id);
+    for (size_t v = 0; v < bv; v++) {
+      size_t e = 0;
+      while (e < nv && memcmp(X + 3 * e, x + 3 * v, 3 * sizeof *X)) e++;
+      if (e == nv) memcpy(X + 3 * nv++, x + 3 * v, 3 * sizeof *X);
+      id[v] = (uint32_t)e;
+    }
+    for (size_t f = 0; f < bt; f++) {
+      uint32_t g[3] = {id[t[3 * f]], id[t[3 * f + 1]], id[t[3 * f + 2]]}, s1[3], s2[3];
+      memcpy(s1, g, sizeof g);
+      sort4(s1, 3);
+      int seen = 0;
+      for (size_t e = 0; e < nt && !seen; e++) {
+        memcpy(s2, T + 3 * e, sizeof s2);
+        sort4(s2, 3);
+        seen = !memcmp(s1, s2, sizeof s1);
+      }
+      if (!seen) memcpy(T + 3 * nt++, g, sizeof g);
+    }
+    free(id);
+    free(x);
+    free(t);
+  }
+  const int st = mx_mesher_add_surface_arrays(m, "complex", nv, X, nt, T);
+  free(X);
+  free(T);
+  return st;
+}
+
+static void test_boxes(const boxes *B, const char *what, int one_input) {
+  mx_mesher *m = new_mesher(4, 2);
+  if (one_input) CHECK(add_complex(m, B) == MX_OK);
+  for (int b = 0; b < B->n && !one_input; b++) {
     char name[16];
     snprintf(name, sizeof name, "box%d", b + 1);
     CHECK(add_box(m, name, B->lo[b], B->hi[b]) == MX_OK);
@@ -548,9 +592,10 @@ int main(void) {
   mx_set_thread_message_handler(quiet, NULL);
   test_three_spheres();
   const boxes glued = {2, {{0, 0, 0}, {0.37, 0, 0}}, {{0.37, 1, 1}, {1, 1, 1}}};
-  test_boxes(&glued, "two boxes glued at x = 0.37");
+  test_boxes(&glued, "two boxes glued at x = 0.37", 0);
+  test_boxes(&glued, "one box split at x = 0.37 by an internal face", 1);
   const boxes ell = {3, {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{1, 1, 1}, {2, 1, 1}, {1, 2, 1}}};
-  test_boxes(&ell, "an L of three boxes");
+  test_boxes(&ell, "an L of three boxes", 0);
   test_input_levels();
   test_remesh();
   test_refused();

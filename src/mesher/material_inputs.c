@@ -119,6 +119,14 @@ static int drop_shared(const mx_trisoup *s, size_t t, void *ctx) {
 
 int mx_materials_split_shared(mx_mesher *m) {
   mx_trisoup *d = &m->domain;
+  {
+    /* an input holding several regions first becomes an input per region */
+    uint32_t *to0 = NULL;
+    int st0 = weld_map(d, &to0);
+    if (!st0) st0 = mx_materials_split_complex(m, to0);
+    mx_free(to0);
+    MX_CHECK(st0);
+  }
   const size_t nt = d->nt;
   size_t cap = 1024;
   while (cap < 2 * nt + 2) cap *= 2;

@@ -26,9 +26,14 @@ int mx_material_name(const mx_mesher *m, int d, char *buf, size_t n) {
   const char *slash = strrchr(path, '/');
   const char *base = slash ? slash + 1 : path;
   while (*base == '-') base++; /* "--demo" */
-  const char *dot = strrchr(base, '.');
-  const int len = dot && dot > base ? (int)(dot - base) : (int)strlen(base);
-  snprintf(buf, n, "%.*s", len, base);
+  /* the extension goes; a region of one file ("brain.off region 2",
+   * material_complex.c) keeps what follows it */
+  const char *space = strchr(base, ' ');
+  const char *dot = base;
+  for (const char *c = base; *c && (!space || c < space); c++)
+    if (*c == '.') dot = c;
+  const int len = dot > base ? (int)(dot - base) : space ? (int)(space - base) : (int)strlen(base);
+  snprintf(buf, n, "%.*s%s", len, base, space ? space : "");
   return MX_OK;
 }
 

@@ -28,6 +28,12 @@ int mx_material_numbers(mx_mesher *m, int deepest);
  * m->material_shared flagging the common triangles, for the pieces.
  * Nothing changes when there are none. MX_ENOMEM, MX_EINPUT. */
 int mx_materials_split_shared(mx_mesher *m);
+/* An input with edges of three triangles or more (a surface with internal
+ * faces) split into an input per region it bounds, each its region's outer
+ * shell turned outward, named "FILE region k" (the first keeps the file's
+ * place); to: the domain's welded vertex of each vertex
+ * (src/mesher/material_complex.c). MX_ENOMEM, MX_EINPUT. */
+int mx_materials_split_complex(mx_mesher *m, const uint32_t *to);
 /* The volume the outermost shells of the index (built outward) enclose,
  * the domain of several materials, and their area. MX_ENOMEM. */
 int mx_materials_domain_volume(const mx_mesher *m, double *volume, double *area);
