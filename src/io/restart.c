@@ -35,6 +35,7 @@ enum {
   BIN_NSUB = 2u,
   BIN_MESH = 4u,   /* a mesh section: 16 more header bytes (nodes, elements) */
   BIN_BYTYPE = 8u, /* element lists refer to the elements grouped by type */
+  BIN_MATERIALS = 16u, /* written with several materials */
   TOK_SHOW = 40, /* at most this many characters of a token in messages */
 };
 static const uint8_t bin_magic[8] = {0x89, 'M', 'X', 'O', 'C', 'T', '\r', '\n'};
@@ -879,7 +880,7 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
              BIN_VERSION);
     return MX_EINPUT;
   }
-  if (flags & ~(uint32_t)(BIN_TRANSFORM | BIN_NSUB | BIN_MESH | BIN_BYTYPE)) {
+  if (flags & ~(uint32_t)(BIN_TRANSFORM | BIN_NSUB | BIN_MESH | BIN_BYTYPE | BIN_MATERIALS)) {
     mx_error(name, 0, "corrupted: unknown flags 0x%x", flags);
     return MX_EINPUT;
   }
@@ -931,6 +932,7 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
   r->nv = (size_t)nv, r->ne = (size_t)ne, r->no = (size_t)no;
   r->has_transform = (flags & BIN_TRANSFORM) != 0;
   r->by_type = (flags & BIN_BYTYPE) != 0;
+  r->materials = (flags & BIN_MATERIALS) != 0;
   uint32_t *count = mx_alloc(4 * no);
   int st = count ? alloc_arrays(r, r->nv, r->ne, r->no, flags & BIN_NSUB)
                  : MX_ENOMEM;
@@ -989,12 +991,11 @@ static int bin_parse(const char *name, const uint8_t *b, size_t len,
 
 /* ---- reading: entry points ----------------------------------------------- */
 
-/* Whether one of the last lines of the text starts with MX_RESTART_BY_TYPE
- * (the writer puts it last). */
-static int text_by_type(const char *buf, size_t len) {
-  static const char mark[] = MX_RESTART_BY_TYPE;
-  const size_t k = sizeof mark - 1;
-  for (size_t i = len > 4 * k ? len - 4 * k : 0; i + k <= len; i++)
+/* Whether one of the last lines of the text starts with mark (the writer
+ * puts MX_RESTART_BY_TYPE and MX_RESTART_MATERIALS last). */
+static int text_mark(const char *buf, size_t len, const char *mark) {
+  const size_t k = strlen(mark), tail = 4 * (sizeof MX_RESTART_BY_TYPE + sizeof MX_RESTART_MATERIALS);
+  for (size_t i = len > tail ? len - tail : 0; i + k <= len; i++)
     if ((i == 0 || buf[i - 1] == '\n') && buf[i] == '#' && memcmp(buf + i, mark, k) == 0)
       return 1;
   return 0;
@@ -1023,7 +1024,10 @@ int mx_restart_parse_dim(const char *name, const uint8_t *buf, size_t len, int d
     st = bin_parse(name, buf, len, r);
   else
     st = text_parse(name, (const char *)buf, len, r);
-  if (st == MX_OK && buf[0] != bin_magic[0]) r->by_type = text_by_type((const char *)buf, len);
+  if (st == MX_OK && buf[0] != bin_magic[0]) {
+    r->by_type = text_mark((const char *)buf, len, MX_RESTART_BY_TYPE);
+    r->materials = text_mark((const char *)buf, len, MX_RESTART_MATERIALS);
+  }
   if (st != MX_OK) mx_restart_free(r);
   return st;
 }
@@ -1179,6 +1183,7 @@ static int text_body(mx_afile *f, const mx_restart *r) {
     MX_CHECK(mx_afile_write(f, "\n", 1));
   }
   if (r->by_type) MX_CHECK(mx_afile_printf(f, "%s\n", MX_RESTART_BY_TYPE));
+  if (r->materials) MX_CHECK(mx_afile_printf(f, "%s\n", MX_RESTART_MATERIALS));
   return MX_OK;
 }
 
@@ -1223,6 +1228,7 @@ static int bin_body(bin_out *o, const mx_restart *r, const uint32_t *count) {
   if (r->nsub) flags |= BIN_NSUB;
   if (r->has_mesh) flags |= BIN_MESH;
   if (r->by_type) flags |= BIN_BYTYPE;
+  if (r->materials) flags |= BIN_MATERIALS;
   memcpy(head, bin_magic, 8);
   memcpy(head + 8, &version, 4);
   memcpy(head + 12, &flags, 4);

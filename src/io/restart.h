@@ -65,7 +65,7 @@
  *   xyz f64[3 nv], edge u32[3 ne], oct_node u32[8 no], oct_level u8[no],
  *   per-octant face counts u32[no], oct_tri u32[ntri],
  *   transform f64[6] (flag bit 0), nsub u32[no] (flag bit 1), the mesh
- *   (flag bit 2, see below), flag bit 3: by_type,
+ *   (flag bit 2, see below), flag bit 3: by_type, flag bit 4: materials,
  *   and last a u64 checksum of every byte before it (4-lane multiply-xorshift
  *   over 8-byte words: any change confined to one word is always detected).
  * The reader checks the magic, version and flags, then the file size
@@ -84,6 +84,7 @@
 
 enum { MX_RESTART_MAX_LEVEL = 16, MX_RESTART_MAX_LEVEL2D = 27 };
 #define MX_RESTART_BY_TYPE "# mixoct: element indices grouped by type"
+#define MX_RESTART_MATERIALS "# mixoct: several materials (--materials)"
 
 typedef struct mx_restart {
   int dim;               /* 3 (0 also means 3): octants of 8 corners, nodes
@@ -106,6 +107,10 @@ typedef struct mx_restart {
                           * order; 0: octant by octant (the published
                           * program's). Text: the last line is the comment
                           * MX_RESTART_BY_TYPE; binary: flag bit 3. */
+  int materials;         /* written by a mesher with several materials (a
+                          * shell inside another is a material, not a
+                          * hole): text, the comment MX_RESTART_MATERIALS
+                          * after the last section; binary: flag bit 4 */
   /* Text writing only, optional: rows made while the file is written
    * instead of stored, block by block by the writer's threads (a mesher's
    * restart file: the lookups that give the edges' ends and mid-nodes and

@@ -412,6 +412,7 @@ static int restart_from_mesher(const mx_mesher *m, int text, mx_restart *r, rest
       }
     }
     r->has_transform = 1; /* zeros: no transform */
+    r->materials = m->p.materials; /* re-meshing from the file keeps them */
   }
   if (!st && m->mesh_stage >= MX_STAGE_TRANSITION) {
     r->nsub = mx_calloc((no + 1) * sizeof *r->nsub);
@@ -643,6 +644,18 @@ static int load_restart(mx_mesher *m, const char *path) {
   memset(&r, 0, sizeof r);
   MX_CHECK(mx_restart_read(path, &r));
   int st = MX_OK;
+  if (r.materials && !m->p.materials) {
+    /* the file's mesh had several materials: so has its re-mesh, when the
+     * inputs have not been assembled as one material yet */
+    if (m->assembled) {
+      mx_error(path, 0, "written with several materials: set materials before the inputs "
+                        "are used (mixoct: --materials)");
+      st = MX_EINPUT;
+    } else {
+      m->p.materials = 1;
+      st = mx_materials_allowed(m, "a restart file");
+    }
+  }
   /* the grid of the input surfaces */
   mx_tree_clear(m);
   for (int l = 0; l <= MX_MAX_LEVEL; l++) {
