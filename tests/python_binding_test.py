@@ -623,6 +623,48 @@ def materials_at_full_stage():
     n.close()
 
 
+def largest(m, which):
+    """The largest distance from an element of material `which` to its
+    nodes' centroid."""
+    conn = m.conn
+    pad = conn == mixoct.NO_NODE
+    xyz = m.nodes[np.where(pad, 0, conn)]
+    c = centroids(m)
+    d = np.linalg.norm(xyz - c[:, None, :], axis=2)
+    d[pad] = 0.0
+    return float(d.max(axis=1)[m.material == which].max())
+
+
+@check
+def level_per_input():
+    """A level for the inner sphere only (set_input_level): the elements
+    around it are smaller than around the outer sphere, and a level
+    everywhere inside the inner material makes its elements smaller than
+    the outer material's; bad indices and levels are refused."""
+    base = two_spheres(stage="full", materials=True, level=3)
+    base.mesh()
+    n0 = np.bincount(base.material)
+    base.close()
+    m = two_spheres(stage="full", materials=True, level=3)
+    m.set_input_level(1, surface_level=5)
+    m.mesh()
+    n1 = np.bincount(m.material)
+    # the inner sphere's surface finer: more elements on both of its sides
+    assert n1[2] > 2 * n0[2] and n1[1] > n0[1], (n0, n1)
+    big1 = largest(m, 2)
+    m.close()
+    k = two_spheres(stage="full", materials=True, level=3)
+    k.set_input_level(1, inside_level=5)
+    k.mesh()
+    # everywhere inside, not only at the surface: the inner material's
+    # largest element is smaller (the ball's centre at level 5, not 3)
+    big2 = largest(k, 2)
+    assert big2 < 0.8 * big1, (big1, big2)
+    raises(mixoct.InputError, lambda: k.set_input_level(7, 5))
+    raises(mixoct.InputError, lambda: k.set_input_level(0, 99))
+    k.close()
+
+
 M.close()
 npass = sum(1 for _, ok in RESULTS if ok)
 nfail = len(RESULTS) - npass

@@ -339,6 +339,7 @@ def _declare(lib):
         "mx_mesher_add_demo_surface": (I, [P]),
         "mx_mesher_add_region_surface": (I, [P, S, I]),
         "mx_mesher_set_material": (I, [P, I, I, S]),
+        "mx_mesher_set_input_level": (I, [P, I, I, I]),
         "mx_mesher_build_octree": (I, [P]),
         "mx_mesher_transition": (I, [P]),
         "mx_mesher_boundary": (I, [P]),
@@ -975,6 +976,16 @@ class Mesher(_MesherBase):
         material, and given by the material view (--material ID:NAME)."""
         self._call("mx_mesher_set_material", int(input), int(number),
                    None if name is None else str(name).encode())
+
+    def set_input_level(self, input, surface_level=0, inside_level=0):
+        """A level for one surface (`input`: 0 for the first added):
+        octants meeting its triangles go to `surface_level`, those meeting
+        or inside it to `inside_level` (0: none; the largest request wins).
+        With materials=True, `inside_level` is a level everywhere in the
+        material(s) the surface holds (--level L / --inside-level L after
+        -i FILE). Each level takes a region surface's place."""
+        self._call("mx_mesher_set_input_level", int(input), int(surface_level),
+                   int(inside_level))
 
     def add_region_surface(self, path, level):
         """-r: octants meeting or inside this surface go to `level`."""
