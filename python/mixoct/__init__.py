@@ -58,7 +58,10 @@ inside two, ...; at the transition stage 0 outside every shell) and input.
 Without ``materials`` it is None. At the full stage the interfaces are cut
 along the input surfaces: no element lies across one. Re-meshing
 (``refine_elements``, ``refine``, ...) keeps the materials; a restart file
-read back gets them from the same inputs with ``materials=True`` again.
+written with materials turns them on when read back with the same inputs
+(before anything else used the inputs). ``set_material(input, number,
+name)`` numbers and names them, ``set_input_level(input, surface_level,
+inside_level)`` refines one surface or one material.
 
 ``Mesher2D(..., materials=True)`` does the same in 2D (``mesher2d
 --materials``): a loop nested in an outer one is the interface between two
