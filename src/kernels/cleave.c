@@ -936,7 +936,7 @@ static int smooth_band(cleaver *W, size_t *moves) {
     states[v] = on ? MX_NODE_OUTSIDE : MX_NODE_INSIDE;
     movable[v] = movable[v] && !W->rim[v] && (!on || v >= n0 || W->moved[v]);
   }
-  const mx_untangle_opts o = {MX_CLEAVE_FLOOR, 8, 3, movable, piece_of, W->I, W->depth, clearance_of, NULL};
+  const mx_untangle_opts o = {MX_CLEAVE_SMOOTH, 8, 3, movable, piece_of, W->I, W->depth, clearance_of, NULL};
   const int st = mx_untangle_with(M, states, W->Si, &o, moves);
   mx_free(states);
   mx_free(movable);

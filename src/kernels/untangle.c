@@ -316,7 +316,7 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
       /* a small colour on one thread: no fork and barrier for a few nodes
        * (the same result: its nodes do not interact) */
 #pragma omp parallel for schedule(dynamic, 32) reduction(+ : changed) \
-    if (cstart[c + 1] - cstart[c] >= 4096)
+    if (cstart[c + 1] - cstart[c] >= 64)
       for (size_t k = cstart[c]; k < cstart[c + 1]; k++) {
         const size_t i = byc[k];
         const uint32_t v = work[i];
