@@ -7,6 +7,7 @@
 #include "base/common.h"
 #include "geom/quality.h"
 #include "kernels/boundary.h"
+#include "kernels/colouring.h"
 #include "kernels/pieces.h"
 #include "kernels/mesh_edit.h"
 #include "kernels/untangle.h"
@@ -291,6 +292,13 @@ static const double *node_xyz(const cleaver *W, uint32_t v) {
   return v < W->nn ? W->M->xyz + 3 * (size_t)v : W->N.xyz + 3 * (size_t)(v - W->nn);
 }
 
+/* Whether node a goes before node b: by what they are, then (the same
+ * identity: never for two lattice nodes) by number. */
+static int before_node(const mx_mesh *M, uint32_t a, uint32_t b) {
+  const uint64_t ia = mx_node_identity(M, a), ib = mx_node_identity(M, b);
+  return ia != ib ? ia < ib : a < b;
+}
+
 /* The cut node of edge (a, b), a on side A and b on side B: made once. Its
  * position is found later (fill_cut_nodes). */
 static int cut_node(cleaver *W, uint32_t a, uint32_t b, uint32_t *id) {
@@ -407,9 +415,9 @@ static int face_pieces(cleaver *W, const uint32_t *row, const int8_t *f, uint32_
     const uint32_t py[5] = {q[0], q[3], q[2], q[1], c};
     return emit(W, MX_PYRAMID, py, level, leaf);
   }
-  int lo = 0;
+  int lo = 0; /* the least node by what it is: a neighbour's split agrees */
   for (int i = 1; i < 4; i++)
-    if (q[i] < q[lo]) lo = i;
+    if (before_node(W->M, q[i], q[lo])) lo = i;
   uint32_t t1[4], t2[4];
   if (lo == 0 || lo == 2) {
     const uint32_t a[4] = {q[0], q[2], q[1], c}, b[4] = {q[0], q[3], q[2], c};
@@ -498,7 +506,10 @@ static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
       const uint64_t mine = dbits(d);
       while (__atomic_test_and_set(&lock[v], __ATOMIC_ACQUIRE)) {
       }
-      if (mine < best[v] || (mine == best[v] && other < bto[v])) {
+      /* ties: the other end that is least, by what it is (not by its
+       * number, which a rank's patch gives otherwise) */
+      if (mine < best[v] ||
+          (mine == best[v] && (bto[v] == UINT32_MAX || before_node(M, other, bto[v])))) {
         best[v] = mine;
         bto[v] = other;
       }
@@ -522,40 +533,83 @@ static int warp(cleaver *W, uint8_t *flag, size_t *warped) {
     crossing(W, p, q, W->sd[va ? v : o], W->sd[va ? o : v], target + 3 * v);
     if (W->outer[v]) rim_point(W, target + 3 * v); /* it stays on the boundary */
   }
-  /* the moves, in id order, each kept when no element around it drops
-   * below min(floor, its J_ENS before) */
+  /* the moves, each kept when no element around it drops below
+   * min(floor, its J_ENS before): colour by colour (no two nodes of a
+   * colour share an element), so that what is kept depends neither on the
+   * numbering nor on the threads */
   uint8_t *mark = mx_alloc(nn + 1);
   uint64_t *off = NULL;
-  uint32_t *inc = NULL;
+  uint32_t *inc = NULL, *work = NULL, *widx = NULL, *byc = NULL;
+  int16_t *colour = NULL;
+  size_t nw = 0;
   int st = mark ? MX_OK : MX_ENOMEM;
   if (!st) {
 #pragma omp parallel for schedule(static)
     for (size_t v = 0; v < nn; v++) mark[v] = bto[v] != UINT32_MAX;
     st = mx_mesh_incidence(M, mark, &off, &inc);
   }
-  n = 0;
-  for (size_t v = 0; v < nn && !st; v++) {
-    if (!mark[v]) continue;
-    double *x = M->xyz + 3 * v, x0[3];
-    memcpy(x0, x, sizeof x0);
-    double before[64];
-    const uint64_t e0 = off[v], ne = off[v + 1] - e0 < 64 ? off[v + 1] - e0 : 64;
-    for (uint64_t e = 0; e < ne; e++) before[e] = elem_jens(M, inc[e0 + e]);
-    memcpy(x, target + 3 * v, sizeof x0);
-    int ok = off[v + 1] - e0 <= 64;
-    for (uint64_t e = 0; e < ne && ok; e++)
-      ok = elem_jens(M, inc[e0 + e]) >= fmin(MX_CLEAVE_FLOOR, before[e]);
-    if (!ok) {
-      memcpy(x, x0, sizeof x0);
-      continue;
-    }
-    W->depth[v] = MX_REGION_ON;
-    W->moved[v] = 1;
-    W->rim[v] = W->outer[v];
-    W->outer[v] = 0; /* on the interface now */
-    W->side[v] = SIDE_ON;
-    n++;
+  for (size_t v = 0; v < nn && !st; v++) nw += mark[v];
+  if (!st) {
+    work = mx_alloc((nw + 1) * sizeof *work);
+    widx = mx_alloc((nn + 1) * sizeof *widx);
+    byc = mx_alloc((nw + 1) * sizeof *byc);
+    colour = mx_alloc((nw + 1) * sizeof *colour);
+    if (!work || !widx || !byc || !colour) st = MX_ENOMEM;
   }
+  int ncol = 0;
+  size_t cstart[MX_MAX_COLOURS + 1];
+  if (!st) {
+    size_t k = 0;
+    for (size_t v = 0; v < nn; v++) {
+      widx[v] = mark[v] ? (uint32_t)k : UINT32_MAX;
+      if (mark[v]) work[k++] = (uint32_t)v;
+    }
+    ncol = mx_colour_nodes(M, inc, off, work, nw, widx, colour);
+    if (ncol == -2) st = MX_ENOMEM;
+    if (ncol == -1) {
+      mx_error(NULL, 0, "more than %d colours in the cleaving", MX_MAX_COLOURS);
+      st = MX_EINTERNAL;
+    }
+  }
+  if (!st) {
+    memset(cstart, 0, sizeof cstart);
+    for (size_t i = 0; i < nw; i++) cstart[colour[i] + 1]++;
+    for (int c = 0; c < ncol; c++) cstart[c + 1] += cstart[c];
+    size_t fill[MX_MAX_COLOURS];
+    memcpy(fill, cstart, sizeof fill);
+    for (size_t i = 0; i < nw; i++) byc[fill[colour[i]]++] = work[i];
+  }
+  n = 0;
+  for (int c = 0; c < ncol && !st; c++) {
+#pragma omp parallel for schedule(dynamic, 32) reduction(+ : n) \
+    if (cstart[c + 1] - cstart[c] >= 4096)
+    for (size_t k = cstart[c]; k < cstart[c + 1]; k++) {
+      const uint32_t v = byc[k];
+      double *x = M->xyz + 3 * (size_t)v, x0[3];
+      memcpy(x0, x, sizeof x0);
+      double before[64];
+      const uint64_t e0 = off[v], ne = off[v + 1] - e0 < 64 ? off[v + 1] - e0 : 64;
+      for (uint64_t e = 0; e < ne; e++) before[e] = elem_jens(M, inc[e0 + e]);
+      memcpy(x, target + 3 * (size_t)v, sizeof x0);
+      int ok = off[v + 1] - e0 <= 64;
+      for (uint64_t e = 0; e < ne && ok; e++)
+        ok = elem_jens(M, inc[e0 + e]) >= fmin(MX_CLEAVE_FLOOR, before[e]);
+      if (!ok) {
+        memcpy(x, x0, sizeof x0);
+        continue;
+      }
+      W->depth[v] = MX_REGION_ON;
+      W->moved[v] = 1;
+      W->rim[v] = W->outer[v];
+      W->outer[v] = 0; /* on the interface now */
+      W->side[v] = SIDE_ON;
+      n++;
+    }
+  }
+  mx_free(work);
+  mx_free(widx);
+  mx_free(byc);
+  mx_free(colour);
   mx_free(mark);
   mx_free(off);
   mx_free(inc);
@@ -797,7 +851,21 @@ static int finish(cleaver *W, mx_cleave_stats *stats) {
     uint64_t *nk = mx_realloc(M->nkey, (nn + na + 1) * sizeof *nk);
     if (!nk) return MX_ENOMEM;
     M->nkey = nk;
-    for (size_t i = 0; i < na; i++) nk[nn + i] = MX_NKEY_NONE;
+    /* a cut node between two lattice nodes: a key from theirs (top bit set:
+     * never a lattice key), so that the ranks of the distributed path and a
+     * re-mesh's patch, which number nodes their own way, match it; a centre
+     * stays off the lattice (one element's only) */
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < na; i++) {
+      const uint32_t a = W->N.ea[i], b = W->N.eb[i];
+      uint64_t k = MX_NKEY_NONE;
+      if (a < nn && b < nn && nk[a] != MX_NKEY_NONE && nk[b] != MX_NKEY_NONE) {
+        const uint64_t lo = nk[a] < nk[b] ? nk[a] : nk[b], hi = nk[a] ^ nk[b] ^ lo;
+        k = (uint64_t)1 << 63 | mix64(mix64(lo) ^ hi) >> 1;
+        if (k == MX_NKEY_NONE) k--;
+      }
+      nk[nn + i] = k;
+    }
   }
   uint16_t *d2 = mx_realloc(W->depth, (nn + na + 1) * sizeof *d2);
   if (!d2) return MX_ENOMEM;

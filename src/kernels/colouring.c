@@ -20,7 +20,7 @@ static uint64_t mix64(uint64_t h) {
  * its position for a node off the lattice), not of its number, so that a
  * local re-mesh, whose patch numbers its nodes its own way, colours the same
  * nodes alike. */
-static uint64_t node_priority(const mx_mesh *M, uint32_t v) {
+uint64_t mx_node_identity(const mx_mesh *M, uint32_t v) {
   if (M->nkey && M->nkey[v] != MX_NKEY_NONE) return mix64(M->nkey[v]);
   uint64_t h = 0x9E3779B97F4A7C15ull, b;
   for (int a = 0; a < 3; a++) {
@@ -48,7 +48,7 @@ int mx_colour_nodes(const mx_mesh *M, const uint32_t *inc, const uint64_t *off,
 #pragma omp parallel for schedule(static) if (nw > MX_PAR_MIN)
   for (size_t i = 0; i < nw; i++) {
     colour[i] = -1;
-    prio[i] = node_priority(M, work[i]);
+    prio[i] = mx_node_identity(M, work[i]);
   }
   size_t left = nw;
   int ncol = 0, overflow = 0;

@@ -21,6 +21,10 @@ enum { MX_MAX_COLOURS = 256 };
  * off[v + 1]) (at least for the work nodes). colour[i] receives work node
  * i's colour. Returns the number of colours, -1 for more than
  * MX_MAX_COLOURS, -2 out of memory. */
+/* What node v is, as a number independent of the numbering: a hash of its
+ * lattice key, or of its position off the lattice (the colours' priority;
+ * the cleaving's tie-breaks). */
+uint64_t mx_node_identity(const mx_mesh *M, uint32_t v);
 int mx_colour_nodes(const mx_mesh *M, const uint32_t *inc, const uint64_t *off,
                     const uint32_t *work, size_t nw, const uint32_t *widx, int16_t *colour);
 
