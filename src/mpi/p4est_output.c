@@ -35,13 +35,21 @@ uint64_t mx_p4est_mesh_hash(const mx_p4est_octree *P, const mx_p4est_mesh *D) {
 static int write_pvtu(const mx_p4est_octree *P, const mx_p4est_mesh *D, const char *path) {
   const mx_mesh *M = &D->M;
   mx_mesh_view v = rank_view(M);
-  const mx_field cf[2] = {{.name = "level", .u8values = M->level},
-                          {.name = "jens", .is_double = 1, .fvalues = M->jens}};
-  v.ncell_fields = 2;
+  /* with several materials the field `material` (int32, as the
+   * single-process .vtu writes it) */
+  int32_t *mat = NULL;
+  if (M->material) {
+    mat = mx_alloc((M->ncells + 1) * sizeof *mat);
+    for (size_t c = 0; mat && c < M->ncells; c++) mat[c] = M->material[c];
+  }
+  const mx_field cf[3] = {{.name = "level", .u8values = M->level},
+                          {.name = "jens", .is_double = 1, .fvalues = M->jens},
+                          {.name = "material", .ivalues = mat}};
+  v.ncell_fields = mat ? 3 : 2;
   v.cell_fields = cf;
   char piece[4096];
   mx_pvtu_piece_path(path, P->rank, piece, sizeof piece);
-  const int mine = mx_write_vtu_piece(piece, &v, D->gid);
+  const int mine = M->material && !mat ? MX_ENOMEM : mx_write_vtu_piece(piece, &v, D->gid);
   int st = mx_mpi_agree(P->comm, mine);
   /* messages are printed by rank 0: name the first rank that failed */
   int who = mine ? P->rank : P->size, first = who;
@@ -52,6 +60,7 @@ static int write_pvtu(const mx_p4est_octree *P, const mx_p4est_mesh *D, const ch
     mx_error(other, 0, "rank %d could not write its piece (see its file system)", first);
   }
   if (!st && P->rank == 0) st = mx_write_pvtu_master(path, P->size, &v, 1);
+  mx_free(mat);
   st = mx_mpi_agree(P->comm, st);
   if (st && !mine) remove(piece);
   return st;
