@@ -80,7 +80,34 @@ static int write_msh(const mx_p4est_octree *P, const mx_p4est_mesh *D, const cha
   dm.ncells = M->ncells;
   dm.type = M->type;
   dm.conn = M->conn;
-  return mx_write_msh_mpi(path, P->comm, &dm);
+  /* several materials: a body per material, numbered and named as the
+   * single-process .msh numbers and names them (mesher/output.c: the
+   * body of a material is its region, 1 .. nmaterials) */
+  int32_t *body = NULL, phys[64];
+  const char *names[64];
+  int st = MX_OK;
+  if (M->material && D->nmaterials >= 1 && D->nmaterials <= 64) {
+    body = mx_alloc((M->ncells + 1) * sizeof *body);
+    if (!body) st = MX_ENOMEM;
+    for (size_t c = 0; body && c < M->ncells; c++) {
+      int b = 1;
+      for (int d = 1; d <= D->nmaterials; d++)
+        if (D->material_id[d] == M->material[c]) b = d;
+      body[c] = b;
+    }
+    for (int d = 1; d <= D->nmaterials; d++) {
+      phys[d - 1] = D->material_id[d];
+      names[d - 1] = D->material_name[d];
+    }
+    dm.nbodies = D->nmaterials;
+    dm.cell_body = body;
+    dm.body_physical = phys;
+    dm.body_names = names;
+  }
+  st = mx_mpi_agree(P->comm, st);
+  if (!st) st = mx_write_msh_mpi(path, P->comm, &dm);
+  mx_free(body);
+  return st;
 }
 
 int mx_p4est_output_kind(const char *path) {
