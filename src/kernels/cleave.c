@@ -292,9 +292,11 @@ static const double *node_xyz(const cleaver *W, uint32_t v) {
   return v < W->nn ? W->M->xyz + 3 * (size_t)v : W->N.xyz + 3 * (size_t)(v - W->nn);
 }
 
-/* Whether node a goes before node b: by what they are, then (the same
- * identity: never for two lattice nodes) by number. */
+/* Whether node a goes before node b: by lattice key (Morton order, as the
+ * numbering of a whole mesh goes, but not a patch's), then, off the
+ * lattice, by what they are, then (never for two lattice nodes) by number. */
 static int before_node(const mx_mesh *M, uint32_t a, uint32_t b) {
+  if (M->nkey && M->nkey[a] != M->nkey[b]) return M->nkey[a] < M->nkey[b];
   const uint64_t ia = mx_node_identity(M, a), ib = mx_node_identity(M, b);
   return ia != ib ? ia < ib : a < b;
 }
@@ -668,7 +670,9 @@ static int cleave(cleaver *W, mx_cleave_stats *stats) {
   const size_t nn = W->nn, nc = M->ncells;
   uint8_t *flag = mx_calloc(nn + 1);
   W->moved = mx_calloc(nn + 1);
+  const double t0 = mx_wtime();
   int st = !flag || !W->moved ? MX_ENOMEM : warp(W, flag, &stats->warped);
+  stats->t_warp += mx_wtime() - t0;
   if (st) {
     mx_free(flag);
     return st;
@@ -984,6 +988,7 @@ int mx_cleave_interface(mx_mesh *M, uint16_t **piece, uint8_t **outer, const mx_
       W.side[v] = SIDE_ON;
     }
   }
+  const double t0 = mx_wtime();
   int st = cleave(&W, stats);
   if (!st) st = finish(&W, stats);
   *piece = W.depth;
@@ -1002,7 +1007,10 @@ int mx_cleave_interface(mx_mesh *M, uint16_t **piece, uint8_t **outer, const mx_
         M->jens[c] = (float)mx_jens(M->type[c], (const double(*)[3])x);
       }
     }
+    const double t1 = mx_wtime();
+    stats->t_cut += t1 - t0;
     st = smooth_band(&W, &stats->smoothed);
+    stats->t_smooth += mx_wtime() - t1;
     mx_mesh_summarize(M);
   }
   mx_free(W.moved);

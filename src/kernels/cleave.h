@@ -9,7 +9,8 @@
  *    end moves onto the crossing (the nearest such crossing of the node).
  * 2. Split: every element still holding A and B nodes (a cut element) is
  *    split into tetrahedra about its centre (a pyramid about its apex),
- *    each quad face along the diagonal from its lowest node id; an element
+ *    each quad face along the diagonal from its least node (by what the
+ *    node is, mx_node_identity: not by its number); an element
  *    that shares a quad face with a cut element but is not cut itself is
  *    split about its centre too, into pyramids on its other quad faces and
  *    tetrahedra on the shared ones, so that both sides of every face agree.
@@ -48,6 +49,9 @@ typedef struct {
   size_t centres;    /* centres added */
   size_t cut_nodes;  /* nodes added on the interface (step 3) */
   size_t smoothed;   /* node moves of the smoothing after the cut */
+  double t_warp, t_cut, t_smooth; /* seconds: step 1; steps 2 and 3 (the
+                                   * cut nodes placed, J_ENS); the band's
+                                   * smoothing after the cut */
 } mx_cleave_stats;
 
 /* Steps 1 to 3 for the pass of piece p of I (kernels/interfaces.h): side A

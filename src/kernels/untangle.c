@@ -67,6 +67,25 @@ static double worst_of(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t 
   return w;
 }
 
+/* The same, or any value <= floor once one element is there (a trial that
+ * cannot win stops at its first element that bad); *first: the element
+ * looked at first, which becomes the one that stopped it (the worst one
+ * of a trial is often the next trial's). */
+static double worst_above(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1,
+                          double floor, size_t *first) {
+  double w = elem_jens(M, inc[*first]);
+  if (w <= floor) return w;
+  for (size_t i = e0; i < e1; i++) {
+    if (i == *first) continue;
+    w = fmin(w, elem_jens(M, inc[i]));
+    if (w <= floor) {
+      *first = i;
+      return w;
+    }
+  }
+  return w;
+}
+
 /* One move of work node v (index i): the best of a few points between its
  * position and the centroid of its neighbours, kept when it raises the worst
  * J_ENS of its elements; then their J_ENS and the marks of their nodes.
@@ -110,6 +129,7 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
   const int nal = o->axis_moves > 3 ? 3 : o->axis_moves;
   const int ntrials = nsteps + 6 * nal;
   double best = w0, bx[3] = {x0[0], x0[1], x0[2]};
+  size_t first = e0;
   for (int t = 0; t < ntrials; t++) {
     if (t < nsteps) {
       for (int a = 0; a < 3; a++) x[a] = x0[a] + steps[t] * (c[a] / (double)n - x0[a]);
@@ -122,6 +142,12 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
       double q[3];
       mx_closest_point(S, x, q, NULL, NULL);
       memcpy(x, q, sizeof q);
+    }
+    /* the quality first: a trial that does not beat the best is dropped
+     * before the region's query (the same trials win either way) */
+    const double w = worst_above(M, inc, e0, e1, best + 1e-12, &first);
+    if (!(w > best + 1e-12)) continue;
+    if (on_surface) {
       /* and in its region when it has one (the outer boundary's nodes
        * between two materials) */
       if (o->surface_region_of && o->region[v] != MX_REGION_NONE &&
@@ -134,11 +160,8 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
           o->region_of(o->region_ctx, x) != o->region[v])
         continue;
     }
-    const double w = worst_of(M, inc, e0, e1);
-    if (w > best + 1e-12) {
-      best = w;
-      memcpy(bx, x, sizeof bx);
-    }
+    best = w;
+    memcpy(bx, x, sizeof bx);
   }
   memcpy(x, bx, sizeof bx);
   if (!(best > w0)) return 0;

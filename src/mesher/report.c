@@ -150,17 +150,18 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              s->repair_rounds, b->t_states, b->t_close, b->t_patterns, b->t_shrink,
              b->t_smooth, b->t_staircase, b->smoothed);
   }
-  char mat[320] = "";
+  char mat[448] = "";
   if (s->nmaterials) {
     const mx_cleave_stats *cv = &s->boundary.ifs.cleave;
     snprintf(mat, sizeof mat,
              "\"materials\": {\"regions\": %d, \"across_interfaces\": %zu, \"shared_triangles\": %zu, "
              "\"interfaces\": {\"warped\": %zu, \"cut\": %zu, \"neighbours_split\": %zu, "
-             "\"centres\": %zu, \"cut_nodes\": %zu, \"seconds\": %.6f}, "
+             "\"centres\": %zu, \"cut_nodes\": %zu, \"smoothed\": %zu, \"seconds\": %.6f, "
+             "\"warp_s\": %.6f, \"cut_s\": %.6f, \"smooth_s\": %.6f}, "
              "\"seconds\": %.6f}, ",
              s->nmaterials, s->materials_across, s->materials_shared, cv->warped, cv->cut,
-             cv->neighbours,
-             cv->centres, cv->cut_nodes, s->boundary.t_interfaces, s->t_materials);
+             cv->neighbours, cv->centres, cv->cut_nodes, cv->smoothed,
+             s->boundary.t_interfaces, cv->t_warp, cv->t_cut, cv->t_smooth, s->t_materials);
   }
   fprintf(out, "\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
          "\"nodes\": %s, \"elements\": %zu, "
