@@ -181,6 +181,13 @@ int mx_mesher_set_material(mx_mesher *m, int input, int number, const char *name
  * material(s) it holds. Each level given takes a region surface's place
  * (MX_MAX_REGIONS in all). MX_EINPUT for a bad index or level. */
 int mx_mesher_set_input_level(mx_mesher *m, int input, int surface_level, int inside_level);
+/* A surface file and its own options, as `-i FILE` with `--material`,
+ * `--level`, `--inside-level` after it (the program and its --p4est front
+ * share it): mx_mesher_add_surface, then mx_mesher_set_material when
+ * material is not 0 and mx_mesher_set_input_level when a level is not 0,
+ * on the input just added. */
+int mx_mesher_add_input(mx_mesher *m, const char *path, int material, const char *material_name,
+                        int surface_level, int inside_level);
 /* -b: a box [lo, hi] whose octants go to `level` (also after meshing: see
  * mx_mesher_refine). */
 int mx_mesher_add_box(mx_mesher *m, const double lo[3], const double hi[3],
@@ -655,6 +662,14 @@ int mx_patterns_print(int json);
 typedef struct {
   const char *const *surfaces; /* -i: the domain's surfaces */
   int nsurfaces;
+  /* per surface, parallel to surfaces (NULL: none given; 0 / NULL entries:
+   * not given): --material ID[:NAME], --level L, --inside-level L after -i
+   * (mx_mesher_add_input) */
+  const int *material_ids;
+  const char *const *material_names;
+  const int *surface_levels, *inside_levels;
+  int materials;               /* --materials: nested shells and touching
+                                * inputs are materials (mx_params.materials) */
   int demo;                    /* --demo: the built-in surface, added first */
   const char *const *region_surfaces; /* -r SURF LEVEL */
   const int *region_levels;

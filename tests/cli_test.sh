@@ -338,12 +338,13 @@ json_ok "$T/ph.json" "d['phases']['restart'] > 0 and d['phases']['write'] > 0" "
 # Several materials, first part (issue 26): each element carries its
 # material (the demo surface is one shell: material 1; at the transition
 # stage 0 for the elements outside it), written as a VTU field and as Gmsh
-# physical volumes, and the files pass the checker; --p4est and restart
-# files refuse them (exit 2).
+# physical volumes, and the files pass the checker; --p4est takes them but
+# not with a restart file (exit 2); restart
+# files keep them.
 expect_exit 0 "--materials at the full stage" "$MIXOCT" --demo -s 3 --materials -o "$T/matf.msh" --quiet
 has "$T/matf.msh" '3 1 "demo"' "the full stage's .msh names material 1 after its input"
 expect_exit 0 "check of the full stage's materials" "$MIXOCT" check "$T/matf.msh"
-expect_exit 2 "--materials with --p4est" "$MIXOCT" --demo -s 3 --materials --p4est
+expect_exit 2 "--materials with --p4est and --restart" "$MIXOCT" --demo -s 3 --materials --p4est --restart "$T/matp.oct"
 expect_exit 0 "--materials with --restart" "$MIXOCT" --demo -s 3 --materials -o "$T/matr.vtu" --restart "$T/matr.oct" --quiet
 expect_exit 0 "--materials re-meshing a restart file" "$MIXOCT" --demo --materials -c "$T/matr.oct" -o "$T/matr2.msh" --quiet
 has "$T/matr2.msh" '3 1 "demo"' "the re-mesh from a restart file keeps the material"

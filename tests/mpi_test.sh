@@ -43,7 +43,7 @@ mpi() { # ranks, args...
 field() { # json file, key: the value (numbers, strings, booleans)
   python3 -c 'import json,sys
 j=json.loads(open(sys.argv[1]).read().strip().splitlines()[-1])
-for k in sys.argv[2].split("."): j=j[k]
+for k in sys.argv[2].split("."): j=j[int(k)] if isinstance(j,list) else j[k]
 print(str(j).lower() if isinstance(j,bool) else j)' "$1" "$2"
 }
 
@@ -290,10 +290,108 @@ printf '3 0 2 1\n3 1 2 3\n3 4 5 6\n3 5 7 6\n3 0 1 4\n3 1 5 4\n3 2 6 3\n3 3 6 7\n
 expect_exit 5 "--p4est, a cube at -s 1: the volume rule" mpi 1 -i "$T/vcube.off" -s 1 --p4est --quiet
 has "$T/err" "error: $T/vcube.off: the mesh holds" "--p4est: the exit-5 message names the input"
 
+# ---- several materials (--materials) -----------------------------------------
+# Two nested spheres (radius 1 and 0.5, icospheres of 1280 triangles) given
+# as two files, the inner one numbered and named (--material 7:core): on 1
+# and 2 ranks the single-process mesh (counts and hash: the cleaving's cut
+# nodes carry keys from their edges' lattice keys and its choices do not
+# depend on the node numbering, so the ranks agree on them and each patch
+# cuts as the whole mesh does), each material's elements and volume as
+# `mixoct check` finds them in the single-process file, and both files:
+# the .pvtu with the cell field material (two values), the .msh with the
+# single-process physical volumes (1 "outer", 7 "core"); checked against
+# both surfaces, no defect.
+python3 - "$T/outer.off" "$T/inner.off" <<'EOS'
+import math, sys
+t = (1 + 5 ** 0.5) / 2
+V0 = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t),
+      (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+F0 = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
+      (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
+      (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+def unit(p):
+    n = math.sqrt(sum(x * x for x in p))
+    return tuple(x / n for x in p)
+V, F = [unit(v) for v in V0], F0
+for _ in range(3):
+    mid, G = {}, []
+    def m(a, b):
+        k = (min(a, b), max(a, b))
+        if k not in mid:
+            V.append(unit([(V[a][i] + V[b][i]) / 2 for i in range(3)]))
+            mid[k] = len(V) - 1
+        return mid[k]
+    for a, b, c in F:
+        ab, bc, ca = m(a, b), m(b, c), m(c, a)
+        G += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+    F = G
+c = (0.013, 0.021, -0.017)  # off the octree's planes
+for path, r in ((sys.argv[1], 1.0), (sys.argv[2], 0.5)):
+    with open(path, "w") as f:
+        f.write("OFF\n%d %d 0\n" % (len(V), len(F)))
+        f.writelines("%.17g %.17g %.17g\n" % tuple(c[i] + r * v[i] for i in range(3)) for v in V)
+        f.writelines("3 %d %d %d\n" % t for t in F)
+EOS
+mat=(-i "$T/outer.off" -i "$T/inner.off" --material 7:core --materials -s 4)
+materials() { # check's or the run's JSON: "number elements volume" per material
+  python3 - "$1" <<'EOS'
+import json, sys
+j = json.loads(open(sys.argv[1]).read().strip().splitlines()[-1])
+if "mesh" in j:
+    ms = [(m["number"], m["elements"], m["volume"]) for m in j["mesh"]["materials"]["each"]]
+else:
+    ms = [(m["label"], m["elements"], m["volume"]) for m in j["materials"]]
+print(" ".join("%d:%d:%.9f" % m for m in ms))
+EOS
+}
+if "$MIXOCT" "${mat[@]}" -o "$T/sm.vtu" -o "$T/sm.msh" --json >"$T/sm.json" 2>"$T/err"; then
+  "$MIXOCT" check "$T/sm.vtu" --json >"$T/smc.json" 2>/dev/null
+  want="$(field "$T/sm.json" nodes) $(field "$T/sm.json" elements) $(field "$T/smc.json" mesh_hash)"
+  wmat=$(materials "$T/smc.json")
+  same "$(echo "$wmat" | tr ' ' '\n' | cut -d: -f1 | tr '\n' ' ')" "1 7 " \
+    "materials: the single-process mesh has materials 1 and 7"
+  for n in 1 2; do
+    rm -f "$T"/mm.pvtu "$T"/mm_*.vtu "$T"/mm.msh
+    if ! mpi "$n" "${mat[@]}" --p4est --json -o "$T/mm.pvtu" -o "$T/mm.msh" >"$T/mm.json" 2>"$T/err"; then
+      bad "materials: mpirun -n $n failed"; cat "$T/err"; continue
+    fi
+    same "$(field "$T/mm.json" mesh.nodes) $(field "$T/mm.json" mesh.elements) $(field "$T/mm.json" mesh.mesh_hash)" \
+      "$want" "materials: $n rank(s) give the single-process mesh (nodes, elements, hash)"
+    same "$(field "$T/mm.json" valid) $(field "$T/mm.json" mesh.materials.count) $(field "$T/mm.json" mesh.materials.across_interfaces)" \
+      "true 2 0" "materials: $n rank(s): valid, two materials, none across an interface"
+    same "$(materials "$T/mm.json")" "$wmat" \
+      "materials: $n rank(s): each material's elements and volume (reduced over the ranks) as in one process"
+    same "$(field "$T/mm.json" mesh.materials.each.1.name)" core "materials: $n rank(s): material 7 named core"
+    has "$T/mm.pvtu" 'Name="material"' "materials: $n rank(s): the .pvtu lists the field material"
+    same "$(grep -l 'Name="material"' "$T"/mm_*.vtu | wc -l)" "$n" "materials: $n rank(s): every piece has it"
+    has "$T/mm.msh" '3 7 "core"' "materials: $n rank(s): the .msh has the physical volume 7 \"core\""
+    has "$T/mm.msh" '3 1 "outer"' "materials: $n rank(s): and 1 \"outer\", as the single-process .msh"
+    for f in mm.pvtu mm.msh; do
+      if "$MIXOCT" check "$T/$f" --surface "$T/outer.off" --surface "$T/inner.off" --json \
+        >"$T/c.json" 2>"$T/err"; then
+        same "$(field "$T/c.json" defects) $(field "$T/c.json" mesh_hash) $(materials "$T/c.json")" \
+          "0 $(cut -d' ' -f3 <<<"$want") $wmat" \
+          "materials: $n rank(s): $f checked against both surfaces, no defect, the materials read back"
+      else
+        bad "materials: $n rank(s): mixoct check $f failed"; head -5 "$T/err"
+      fi
+    done
+  done
+else
+  bad "materials: the single-process run failed"; cat "$T/err"
+fi
+
 # ---- usage ------------------------------------------------------------------
 expect_exit 2 "--p4est writes .pvtu or .msh only" mpi 1 --demo -s 3 --p4est -o "$T/x.vtu"
 expect_exit 2 "--p4est: no ASCII .msh" mpi 1 --demo -s 3 --p4est --ascii -o "$T/x.msh"
 expect_exit 2 "--p4est: no restart file" mpi 1 --demo -s 3 --p4est --restart "$T/x.oct"
+expect_exit 2 "--p4est --materials: no restart file" mpi 1 --demo -s 3 --materials --p4est \
+  --restart "$T/x.oct"
+has "$T/err" "no -c, --restart or --boundary" "--p4est: the usage message names -c, --restart, --boundary"
+expect_exit 2 "--p4est --materials: no -c" mpi 1 --demo --materials --p4est -c "$T/x.oct"
+expect_exit 2 "--p4est --materials: no --boundary" mpi 1 --demo -s 3 --materials --p4est \
+  --boundary "$T/b.vtu"
+expect_exit 0 "--p4est takes --materials" mpi 1 --demo -s 3 --materials --p4est --quiet
 expect_exit 2 "--p4est: no --repair-input" mpi 1 --demo -s 3 --p4est --repair-input
 
 fi # mesh part

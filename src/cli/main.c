@@ -71,16 +71,13 @@ static int setup(const mx_options *o, mx_mesher **out) {
   return mx_add_inputs(o, m);
 }
 
-/* The options' inputs and requests, shared with the --p4est front. */
+/* The options' inputs and requests (the --p4est front passes the same
+ * through mx_p4est_run_params to src/mpi/p4est_run.c). */
 int mx_add_inputs(const mx_options *o, mx_mesher *m) {
   if (o->demo) MX_CHECK(mx_mesher_add_demo_surface(m));
-  for (int i = 0; i < o->ninputs; i++) {
-    MX_CHECK(mx_mesher_add_surface(m, o->inputs[i]));
-    if (o->material_id[i])
-      MX_CHECK(mx_mesher_set_material(m, i, o->material_id[i], o->material_name[i]));
-    if (o->input_slevel[i] || o->input_ilevel[i])
-      MX_CHECK(mx_mesher_set_input_level(m, i, o->input_slevel[i], o->input_ilevel[i]));
-  }
+  for (int i = 0; i < o->ninputs; i++)
+    MX_CHECK(mx_mesher_add_input(m, o->inputs[i], o->material_id[i], o->material_name[i],
+                                 o->input_slevel[i], o->input_ilevel[i]));
   for (int r = 0; r < o->nregion_surf; r++)
     MX_CHECK(mx_mesher_add_region_surface(m, o->region_surf[r], o->rlevel[r]));
   if (o->regions_file) MX_CHECK(mx_mesher_read_boxes(m, o->regions_file));

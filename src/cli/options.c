@@ -44,7 +44,7 @@ static const char *usage_text =
     "                              inputs share their common triangles; one surface\n"
     "                              with internal faces is split into its regions. A\n"
     "                              restart file written with --materials turns it\n"
-    "                              on. Not with --p4est\n"
+    "                              on. With --p4est: no physical surfaces in .msh\n"
     "      --level L               after -i FILE: octants meeting FILE's surface\n"
     "                              go to level L (a level per input, with -s the\n"
     "                              others')\n"

@@ -1,5 +1,5 @@
 /* `mpirun -n N mixoct -i SURF -s L --p4est [-o OUT.pvtu|OUT.msh] [--json]
- * [--p4est-compare] [--stage octree]`: the distributed path (MPI builds
+ * [--materials] [--p4est-compare] [--stage octree]`: the distributed path (MPI builds
  * only, meson -Dmpi). The program's options, without --p4est and
  * --p4est-compare, become an mx_p4est_run_params; the library does the rest
  * (include/mixoct.h, "The distributed path"; src/mpi/p4est_run.c). MPI is
@@ -15,6 +15,11 @@ static void run_params(const mx_options *o, int compare, mx_p4est_run_params *p)
   memset(p, 0, sizeof *p);
   p->surfaces = o->inputs;
   p->nsurfaces = o->ninputs;
+  p->material_ids = o->material_id;
+  p->material_names = o->material_name;
+  p->surface_levels = o->input_slevel;
+  p->inside_levels = o->input_ilevel;
+  p->materials = o->materials;
   p->demo = o->demo;
   p->region_surfaces = o->region_surf;
   p->region_levels = o->rlevel;
@@ -50,9 +55,9 @@ int mx_p4est_main(int argc, char **argv) {
   mx_options o;
   int exit_now = 0;
   int st = av ? mx_parse_options(ac, av, &o, &exit_now) : MX_ENOMEM;
-  if (!st && !exit_now && (o.restart_out || o.restart_in || o.boundary_out || o.materials)) {
-    mx_error(NULL, 0, "--p4est: no -c, --restart, --boundary or --materials (the distributed "
-                      "path meshes one material from the surfaces and levels only)");
+  if (!st && !exit_now && (o.restart_out || o.restart_in || o.boundary_out)) {
+    mx_error(NULL, 0, "--p4est: no -c, --restart or --boundary (the distributed path meshes "
+                      "from the surfaces and levels only)");
     st = MX_EINPUT;
   }
   if (!st && !exit_now) {

@@ -112,6 +112,17 @@ int mx_mesher_add_surface(mx_mesher *m, const char *path) {
   return mx_call_end(m, &c, st);
 }
 
+int mx_mesher_add_input(mx_mesher *m, const char *path, int material, const char *material_name,
+                        int surface_level, int inside_level) {
+  MX_CHECK(mx_mesher_add_surface(m, path));
+  /* the input just added: the last one (after --demo too) */
+  const int input = m->ndomain - 1;
+  if (material) MX_CHECK(mx_mesher_set_material(m, input, material, material_name));
+  if (surface_level || inside_level)
+    MX_CHECK(mx_mesher_set_input_level(m, input, surface_level, inside_level));
+  return MX_OK;
+}
+
 int mx_mesher_add_surface_arrays(mx_mesher *m, const char *name, size_t nv,
                                  const double *xyz, size_t nt,
                                  const uint32_t *tri) {

@@ -48,11 +48,12 @@ static int region_at(const mx_mesher *m, const double p[3]) {
   return q ? m->IF.region[q - 1] : 0;
 }
 
-int mx_label_materials(mx_mesher *m) {
+int mx_material_depths(mx_mesher *m, mx_mesh *M, const uint32_t *leaves, size_t nleaves,
+                       const uint8_t *states, int stage, int *deepest_out, size_t *across_out) {
   enum { NONE = UINT16_MAX }; /* a node on the domain's boundary */
-  mx_mesh *M = &m->M;
   if (!m->have_index) MX_CHECK(mx_mesher_index(m));
-  const double t0 = mx_wtime();
+  *deepest_out = 0;
+  *across_out = 0;
   mx_free(M->material);
   M->material = mx_alloc((M->ncells + 1) * sizeof *M->material);
   if (!M->material) return MX_ENOMEM;
@@ -62,17 +63,13 @@ int mx_label_materials(mx_mesher *m) {
                       "version", m->IF.nregions);
     return MX_EINPUT;
   }
-  if (m->mesh_stage == MX_STAGE_FULL && m->IF.nregions <= 1) {
-    MX_CHECK(mx_material_numbers(m, 1));
-    for (size_t c = 0; c < nc; c++) M->material[c] = (uint16_t)m->depth_material[1];
-    m->nmaterials = 1;
-    m->rec->S.nmaterials = 1;
-    m->rec->S.materials_across = 0;
-    m->rec->S.t_materials = mx_wtime() - t0;
+  if (stage == MX_STAGE_FULL && m->IF.nregions <= 1) {
+    for (size_t c = 0; c < nc; c++) M->material[c] = 1;
+    *deepest_out = 1;
     return MX_OK;
   }
   const mx_octree *O = &m->B.tree.oct;
-  int32_t *leaf_depth = mx_alloc((m->nleaves + 1) * sizeof *leaf_depth);
+  int32_t *leaf_depth = mx_alloc((nleaves + 1) * sizeof *leaf_depth);
   uint16_t *depth = mx_alloc((nn + 1) * sizeof *depth);
   uint8_t *need = mx_calloc(nn + 1);
   if (!leaf_depth || !depth || !need) {
@@ -81,12 +78,11 @@ int mx_label_materials(mx_mesher *m) {
     mx_free(need);
     return MX_ENOMEM;
   }
-  for (size_t l = 0; l < m->nleaves; l++) leaf_depth[l] = -1;
-  const uint8_t *states = m->states;
+  for (size_t l = 0; l < nleaves; l++) leaf_depth[l] = -1;
   /* the nodes to locate: those of the elements in leaves meeting triangles */
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
-    if (O->tri_cnt[m->leaves[M->leaf[c]]] == 0) continue;
+    if (O->tri_cnt[leaves[M->leaf[c]]] == 0) continue;
     for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
       __atomic_store_n(&need[M->conn[8 * c + k]], 1, __ATOMIC_RELAXED);
   }
@@ -107,7 +103,7 @@ int mx_label_materials(mx_mesher *m) {
     for (int k = 0; k < nv; k++)
       for (int a = 0; a < 3; a++) p[a] += M->xyz[3 * (size_t)row[k] + a] / nv;
     int d;
-    if (O->tri_cnt[m->leaves[leaf]] == 0) { /* one region: the leaf's */
+    if (O->tri_cnt[leaves[leaf]] == 0) { /* one region: the leaf's */
       d = __atomic_load_n(&leaf_depth[leaf], __ATOMIC_RELAXED);
       if (d < 0) {
         d = region_at(m, p);
@@ -124,24 +120,20 @@ int mx_label_materials(mx_mesher *m) {
       d = hi == lo ? hi : region_at(m, p);
       /* the full stage's elements are the domain's: a few nodes the shrink
        * left just outside the outermost shell do not make one outside */
-      if (d < 1 && m->mesh_stage == MX_STAGE_FULL) d = hi >= 1 ? hi : 1;
+      if (d < 1 && stage == MX_STAGE_FULL) d = hi >= 1 ? hi : 1;
     }
     if (d > UINT16_MAX - 1) d = UINT16_MAX - 1;
-    if (d < 1 && m->mesh_stage == MX_STAGE_FULL) d = 1;
+    if (d < 1 && stage == MX_STAGE_FULL) d = 1;
     M->material[c] = (uint16_t)d;
     if (d > deepest) deepest = d;
   }
   mx_free(leaf_depth);
-  int st = mx_material_numbers(m, deepest);
-  for (size_t c = 0; !st && c < nc; c++) /* the numbers the user gave */
-    if (M->material[c] >= 1 && M->material[c] <= 64)
-      M->material[c] = (uint16_t)m->depth_material[M->material[c]];
   /* the elements across an interface: nodes (not on a shell) in two
    * regions inside the outermost shell */
   size_t across = 0;
 #pragma omp parallel for schedule(static) reduction(+ : across)
   for (size_t c = 0; c < nc; c++) {
-    if (st || O->tri_cnt[m->leaves[M->leaf[c]]] == 0) continue;
+    if (O->tri_cnt[leaves[M->leaf[c]]] == 0) continue;
     const uint32_t *row = M->conn + 8 * c;
     int lo = INT_MAX, hi = -1;
     for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
@@ -154,7 +146,26 @@ int mx_label_materials(mx_mesher *m) {
   }
   mx_free(depth);
   mx_free(need);
-  MX_CHECK(st);
+  *deepest_out = deepest;
+  *across_out = across;
+  return MX_OK;
+}
+
+int mx_material_relabel(mx_mesher *m, mx_mesh *M, int deepest) {
+  MX_CHECK(mx_material_numbers(m, deepest));
+  for (size_t c = 0; c < M->ncells; c++) /* the numbers the user gave */
+    if (M->material[c] >= 1 && M->material[c] <= 64)
+      M->material[c] = (uint16_t)m->depth_material[M->material[c]];
+  return MX_OK;
+}
+
+int mx_label_materials(mx_mesher *m) {
+  const double t0 = mx_wtime();
+  int deepest = 0;
+  size_t across = 0;
+  MX_CHECK(mx_material_depths(m, &m->M, m->leaves, m->nleaves, m->states, m->mesh_stage,
+                              &deepest, &across));
+  MX_CHECK(mx_material_relabel(m, &m->M, deepest));
   m->nmaterials = deepest;
   m->rec->S.nmaterials = deepest;
   m->rec->S.materials_across = across;

@@ -14,6 +14,19 @@ int mx_materials_allowed(const mx_mesher *m, const char *what);
 /* M.material of every element (the depth of its centroid in the index
  * built outward) and m->nmaterials (the deepest). MX_ENOMEM. */
 int mx_label_materials(mx_mesher *m);
+/* Its two halves, for a mesh that is not m->M (a rank's part of the
+ * distributed mesh, src/mpi/p4est_mesh.c), whose deepest region may need
+ * the other parts' first. mx_material_depths: M->material of each element
+ * its region (nesting depth and file, 1 ..), from M's geometry alone
+ * (leaves: the octree leaves M->leaf indexes, nleaves of them, in m's
+ * octree; states per node or NULL; stage: the stage that made M), the
+ * deepest region met and the elements across an interface.
+ * mx_material_relabel: the regions 1 .. deepest (the deepest over every
+ * part) numbered as the user asked (mx_material_numbers). MX_ENOMEM,
+ * MX_EINPUT. */
+int mx_material_depths(mx_mesher *m, mx_mesh *M, const uint32_t *leaves, size_t nleaves,
+                       const uint8_t *states, int stage, int *deepest, size_t *across);
+int mx_material_relabel(mx_mesher *m, mx_mesh *M, int deepest);
 
 /* The numbers and names of the materials by depth 1 .. deepest
  * (m->depth_material*): the user's for the inputs given one, the depth

@@ -218,6 +218,20 @@ static int index_inside(const void *ctx, const double p[3]) {
   return mx_inside((const mx_surface_index *)ctx, p);
 }
 
+int mx_mesher_domain_side(mx_mesher *m, mx_builder *B) {
+  if (m->p.materials) MX_CHECK(mx_mesher_index(m));
+  if (m->p.repair_input || (m->p.materials && mx_surface_index_nested(&m->SI))) {
+    /* the domain: where the generalized winding number is above 1/2, for
+     * the octants (instead of the ray parity) and the nodes alike; with
+     * materials, of the index with every shell outward: the outermost
+     * shells' insides whole (with no shell nested, the parity's domain) */
+    MX_CHECK(mx_mesher_index(m));
+    B->loc_domain.inside_fn = m->p.repair_input ? winding_inside : index_inside;
+    B->loc_domain.inside_ctx = m->have_winding ? &m->WI : &m->SI;
+  }
+  return MX_OK;
+}
+
 int mx_build_tree(mx_mesher *m) {
   mx_tree_clear(m);
   const double t0 = mx_wtime();
@@ -234,16 +248,7 @@ int mx_build_tree(mx_mesher *m) {
   m->have_tree = 1;
   m->B.on_level = m->progress.on_level;
   m->B.on_level_user = m->progress.user;
-  if (m->p.materials) MX_CHECK(mx_mesher_index(m));
-  if (m->p.repair_input || (m->p.materials && mx_surface_index_nested(&m->SI))) {
-    /* the domain: where the generalized winding number is above 1/2, for
-     * the octants (instead of the ray parity) and the nodes alike; with
-     * materials, of the index with every shell outward: the outermost
-     * shells' insides whole (with no shell nested, the parity's domain) */
-    MX_CHECK(mx_mesher_index(m));
-    m->B.loc_domain.inside_fn = m->p.repair_input ? winding_inside : index_inside;
-    m->B.loc_domain.inside_ctx = m->have_winding ? &m->WI : &m->SI;
-  }
+  MX_CHECK(mx_mesher_domain_side(m, &m->B));
   for (int l = 0; l <= MX_MAX_LEVEL; l++) {
     m->B.split_keys[l] = m->split_keys[l];
     m->B.nsplit[l] = m->nsplit[l];

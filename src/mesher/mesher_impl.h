@@ -53,6 +53,12 @@ int mx_mesher_assemble_inputs(mx_mesher *m);
  * in *area (may be NULL) its area (inputs.c). */
 double mx_enclosed_volume(const mx_trisoup *d, double *area);
 int mx_build_tree(mx_mesher *m);    /* grid, refine, balance, leaves */
+/* The side of the domain the builder B (over m's soup) locates octants
+ * by: the ray parity, or with repair_input the winding number and with
+ * materials (shells nested) the index built outward (the outermost shells'
+ * insides whole, nested shells not holes). mx_build_tree and the
+ * distributed forest (src/mpi/p4est_inputs.c) both set it here. */
+int mx_mesher_domain_side(mx_mesher *m, mx_builder *B);
 /* --repair-input on an input with no well-defined inside (winding_domain.c):
  * m->WI, and in *boundary (empty on entry) the boundary of the winding
  * number's domain, which replaces the input in the soup; MX_EINPUT when the

@@ -95,7 +95,9 @@ void mx_pq_classify(const mx_builder *B, uint64_t key, int level, const mx_pq *d
       if (rmeet[c] & bit) meets |= (uint8_t)(1u << c);
     const uint8_t rest = kept & (uint8_t)~meets;
     uint8_t in;
-    if (d->rmeet & bit)
+    if (B->req.meet_only & bit) /* refined where met only (a --level input) */
+      in = 0;
+    else if (d->rmeet & bit)
       in = side_of_children(&B->loc_region[r], rest, cc, &f->located);
     else
       in = (d->rin & bit) ? rest : 0;

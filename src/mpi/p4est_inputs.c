@@ -18,8 +18,11 @@ int mx_p4est_inputs_init(mx_p4est_inputs *I, mx_mesher *m) {
   MX_CHECK(mx_mesher_assemble_inputs(m));
   const mx_requests req = mx_mesher_requests(m);
   I->have_builder = 1; /* mx_builder_free undoes a partial init too */
-  return mx_builder_init(&I->B, &m->soup, m->nt_domain, m->region_t0, &req, 0,
-                         m->domain_name[0]);
+  MX_CHECK(mx_builder_init(&I->B, &m->soup, m->nt_domain, m->region_t0, &req, 0,
+                           m->domain_name[0]));
+  /* with materials, nested shells are not holes: the single-process
+   * octree's side of the domain (mx_build_tree) */
+  return mx_mesher_domain_side(m, &I->B);
 }
 
 void mx_p4est_inputs_free(mx_p4est_inputs *I) {

@@ -13,6 +13,7 @@
 #include "kernels/edges_lazy.h"
 #include "kernels/refine_list.h"
 #include "kernels/splice.h"
+#include "mesher/materials.h"
 #include "mesher/mesher_impl.h"
 #include "mesher/pipeline.h"
 #include "mpi/exchange.h"
@@ -197,6 +198,14 @@ static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4e
   if (!st) st = mx_shared_collect(&M, states, core, powner, P->rank, sh);
   if (!st) st = mx_mesh_keep_cells(&M, core);
   if (!st) st = mx_mesh_renumber_first_use(&M, &states);
+  /* the core's materials by region, numbered once every rank's are known
+   * (reduce_figures) */
+  int deepest = 0;
+  size_t across = 0;
+  if (!st && m->p.materials)
+    st = mx_material_depths(m, &M, pl, np, states, MX_STAGE_FULL, &deepest, &across);
+  D->nmaterials = deepest;
+  D->across = across;
   D->t_boundary += mx_wtime() - t;
   mx_free(flag);
   mx_free(core);
@@ -232,6 +241,37 @@ static void reduce_figures(const mx_p4est_octree *P, mx_p4est_mesh *D) {
   double jmin = D->M.ncells ? D->M.jens_min : 2.0, vol = mx_mesh_volume(&D->M);
   MPI_Allreduce(&jmin, &D->jens_min, 1, MPI_DOUBLE, MPI_MIN, P->comm);
   MPI_Allreduce(&vol, &D->volume, 1, MPI_DOUBLE, MPI_SUM, P->comm);
+}
+
+/* Several materials: per region its elements and volume, summed over the
+ * ranks, the deepest region and the elements across an interface; then
+ * each element's number (the user's, mx_material_relabel), the same
+ * numbering on every rank. Collective; the same status everywhere. */
+static int reduce_materials(const mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D) {
+  const mx_mesh *M = &D->M;
+  uint64_t cells[65] = {0};
+  double vol[65] = {0};
+  for (size_t c = 0; c < M->ncells; c++) {
+    const int d = M->material[c] <= 64 ? M->material[c] : 0;
+    double p[8][3];
+    const int nv = mx_cell_nodes[M->type[c]];
+    for (int k = 0; k < nv; k++) memcpy(p[k], M->xyz + 3 * (size_t)M->conn[8 * c + k], sizeof p[k]);
+    cells[d]++;
+    vol[d] += mx_element_volume(M->type[c], (const double(*)[3])p);
+  }
+  MPI_Allreduce(cells, D->material_cells, 65, MPI_UINT64_T, MPI_SUM, P->comm);
+  MPI_Allreduce(vol, D->material_volume, 65, MPI_DOUBLE, MPI_SUM, P->comm);
+  int deepest = 0;
+  MPI_Allreduce(&D->nmaterials, &deepest, 1, MPI_INT, MPI_MAX, P->comm);
+  D->nmaterials = deepest;
+  uint64_t across = D->across;
+  MPI_Allreduce(&across, &D->across, 1, MPI_UINT64_T, MPI_SUM, P->comm);
+  int st = mx_mpi_agree(P->comm, mx_material_relabel(m, &D->M, deepest));
+  for (int d = 1; !st && d <= deepest && d <= 64; d++) {
+    D->material_id[d] = m->depth_material[d];
+    st = mx_material_name(m, d, D->material_name[d], sizeof D->material_name[d]);
+  }
+  return st;
 }
 
 /* Memory: the patch's octree and mesh estimated from its leaves as the
@@ -315,6 +355,7 @@ static int mesh_once(mx_p4est_octree *P, mx_mesher *m, mx_p4est_mesh *D) {
   if (H.largest_message > D->largest_message) D->largest_message = H.largest_message;
   mx_halo_free(&H);
   if (!st) reduce_figures(P, D);
+  if (!st && m->p.materials) st = reduce_materials(P, m, D);
   return st;
 }
 
@@ -373,6 +414,12 @@ static int verdict_local(mx_mesher *m, const mx_p4est_mesh *D) {
              D->repair_rounds);
     return MX_EINVALID;
   }
+  /* as the single-process labels do: elements across an interface are
+   * said, each labelled by its centroid (none after the cleaving unless
+   * the untangling pulled a node across) */
+  if (D->across)
+    mx_warning(NULL, 0, "materials: %" PRIu64 " element(s) lie across an interface between "
+               "two materials (each takes the material of its centroid)", D->across);
   return mx_volume_verdict(m, D->volume, (size_t)D->cells);
 }
 

@@ -21,6 +21,13 @@
  * node another rank owns differently: the shared nodes are computed alike
  * on both sides, and checked to be.
  *
+ * Materials. With several materials the patch is cleaved along the
+ * interfaces as the single-process mesh is (kernels/cleave.c: the cut
+ * nodes between two lattice nodes carry a key made from theirs, so the
+ * ranks match them as lattice nodes, and its choices do not depend on the
+ * node numbering, which differs between a patch and the whole mesh); each
+ * core element is labelled from the geometry alone (mesher/materials.h).
+ *
  * Numbering. A shared node is owned by the lowest rank using it; each rank
  * numbers its owned nodes in its order (elements grouped by leaf in Morton
  * order, nodes by first use), offset by an exclusive scan of the owned
@@ -44,6 +51,16 @@ typedef struct {
   uint64_t nodes, cells, by_type[4], invalid, contact_cells, leaves;
   double jens_min, volume;
   uint64_t hash_sum;      /* sum of the elements' hash terms (io/mesh_hash.h) */
+  /* several materials (m->p.materials): M.material per element, labelled
+   * on each rank's core elements as the single-process mesher labels its
+   * own (mx_material_depths, then the numbers once the deepest region is
+   * known over every rank); per region 1 .. nmaterials its elements and
+   * volume, the elements across an interface (global) */
+  int nmaterials;
+  uint64_t material_cells[65], across;
+  double material_volume[65];
+  int32_t material_id[65];       /* per region: its number and name */
+  char material_name[65][128];   /* (mx_material_name) */
   /* this rank */
   int rings;              /* halo rings of the accepted attempt */
   int attempts;

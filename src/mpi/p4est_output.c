@@ -35,13 +35,21 @@ uint64_t mx_p4est_mesh_hash(const mx_p4est_octree *P, const mx_p4est_mesh *D) {
 static int write_pvtu(const mx_p4est_octree *P, const mx_p4est_mesh *D, const char *path) {
   const mx_mesh *M = &D->M;
   mx_mesh_view v = rank_view(M);
-  const mx_field cf[2] = {{.name = "level", .u8values = M->level},
-                          {.name = "jens", .is_double = 1, .fvalues = M->jens}};
-  v.ncell_fields = 2;
+  /* with several materials the field `material` (int32, as the
+   * single-process .vtu writes it) */
+  int32_t *mat = NULL;
+  if (M->material) {
+    mat = mx_alloc((M->ncells + 1) * sizeof *mat);
+    for (size_t c = 0; mat && c < M->ncells; c++) mat[c] = M->material[c];
+  }
+  const mx_field cf[3] = {{.name = "level", .u8values = M->level},
+                          {.name = "jens", .is_double = 1, .fvalues = M->jens},
+                          {.name = "material", .ivalues = mat}};
+  v.ncell_fields = mat ? 3 : 2;
   v.cell_fields = cf;
   char piece[4096];
   mx_pvtu_piece_path(path, P->rank, piece, sizeof piece);
-  const int mine = mx_write_vtu_piece(piece, &v, D->gid);
+  const int mine = M->material && !mat ? MX_ENOMEM : mx_write_vtu_piece(piece, &v, D->gid);
   int st = mx_mpi_agree(P->comm, mine);
   /* messages are printed by rank 0: name the first rank that failed */
   int who = mine ? P->rank : P->size, first = who;
@@ -52,6 +60,7 @@ static int write_pvtu(const mx_p4est_octree *P, const mx_p4est_mesh *D, const ch
     mx_error(other, 0, "rank %d could not write its piece (see its file system)", first);
   }
   if (!st && P->rank == 0) st = mx_write_pvtu_master(path, P->size, &v, 1);
+  mx_free(mat);
   st = mx_mpi_agree(P->comm, st);
   if (st && !mine) remove(piece);
   return st;
@@ -71,7 +80,34 @@ static int write_msh(const mx_p4est_octree *P, const mx_p4est_mesh *D, const cha
   dm.ncells = M->ncells;
   dm.type = M->type;
   dm.conn = M->conn;
-  return mx_write_msh_mpi(path, P->comm, &dm);
+  /* several materials: a body per material, numbered and named as the
+   * single-process .msh numbers and names them (mesher/output.c: the
+   * body of a material is its region, 1 .. nmaterials) */
+  int32_t *body = NULL, phys[64];
+  const char *names[64];
+  int st = MX_OK;
+  if (M->material && D->nmaterials >= 1 && D->nmaterials <= 64) {
+    body = mx_alloc((M->ncells + 1) * sizeof *body);
+    if (!body) st = MX_ENOMEM;
+    for (size_t c = 0; body && c < M->ncells; c++) {
+      int b = 1;
+      for (int d = 1; d <= D->nmaterials; d++)
+        if (D->material_id[d] == M->material[c]) b = d;
+      body[c] = b;
+    }
+    for (int d = 1; d <= D->nmaterials; d++) {
+      phys[d - 1] = D->material_id[d];
+      names[d - 1] = D->material_name[d];
+    }
+    dm.nbodies = D->nmaterials;
+    dm.cell_body = body;
+    dm.body_physical = phys;
+    dm.body_names = names;
+  }
+  st = mx_mpi_agree(P->comm, st);
+  if (!st) st = mx_write_msh_mpi(path, P->comm, &dm);
+  mx_free(body);
+  return st;
 }
 
 int mx_p4est_output_kind(const char *path) {

@@ -145,7 +145,7 @@ static int build_root_table(const mx_builder *B, root_table *R, size_t *nlocated
           if (!mx_locate(&B->loc_domain, c)) continue; /* outside: flags 0 */
         }
         for (int s = 0; s < B->req.nregions; s++)
-          if (!((rmeet >> s) & 1)) {
+          if (!((rmeet >> s) & 1) && !((B->req.meet_only >> s) & 1)) {
             (*nlocated)++;
             if (mx_locate(&B->loc_region[s], c)) rin |= (uint8_t)(1u << s);
           }

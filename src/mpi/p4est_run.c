@@ -31,11 +31,16 @@ static void on_message(void *user, int level, const char *text) {
     fprintf(stderr, "mixoct: %s%s\n", level == MX_MSG_ERROR ? "error: " : "warning: ", text);
 }
 
-/* The surfaces, region surfaces and boxes, in the order the single-process
- * program adds them (src/cli/main.c). */
+/* The surfaces with their own options, region surfaces and boxes, in the
+ * order the single-process program adds them (src/cli/main.c,
+ * mx_add_inputs; the per-surface options through the same library call). */
 static int add_inputs(const mx_p4est_run_params *p, mx_mesher *m) {
   if (p->demo) MX_CHECK(mx_mesher_add_demo_surface(m));
-  for (int i = 0; i < p->nsurfaces; i++) MX_CHECK(mx_mesher_add_surface(m, p->surfaces[i]));
+  for (int i = 0; i < p->nsurfaces; i++)
+    MX_CHECK(mx_mesher_add_input(m, p->surfaces[i], p->material_ids ? p->material_ids[i] : 0,
+                                 p->material_names ? p->material_names[i] : NULL,
+                                 p->surface_levels ? p->surface_levels[i] : 0,
+                                 p->inside_levels ? p->inside_levels[i] : 0));
   for (int r = 0; r < p->nregions; r++)
     MX_CHECK(mx_mesher_add_region_surface(m, p->region_surfaces[r], p->region_levels[r]));
   if (p->boxes_file) MX_CHECK(mx_mesher_read_boxes(m, p->boxes_file));
@@ -53,6 +58,7 @@ static int setup(const mx_p4est_run_params *p, mx_mesher **out) {
   mp.threads = p->threads;
   mp.max_memory_mb = p->max_memory_mb;
   mp.repair_input = p->repair_input; /* refused by mx_p4est_inputs_init */
+  mp.materials = p->materials;
   mx_mesher *m = mx_mesher_new(&mp);
   if (!m) return MX_ENOMEM; /* said by mx_alloc */
   *out = m;

@@ -24,6 +24,35 @@ static void print_pair(const char *name, const double *v, int last) {
   printf("\"%s\": [%.6g, %.6g]%s", name, v[0], v[1], last ? "" : ", ");
 }
 
+/* A JSON string: quotes, backslashes and control characters escaped (the
+ * material names come from file names). */
+static void json_string(const char *t) {
+  putchar('"');
+  for (const unsigned char *p = (const unsigned char *)t; *p; p++) {
+    if (*p == '"' || *p == '\\')
+      printf("\\%c", *p);
+    else if (*p < 0x20 || *p == 0x7f)
+      printf("\\u%04x", *p);
+    else
+      putchar(*p);
+  }
+  putchar('"');
+}
+
+/* Several materials: per region its number, name, elements and volume
+ * (summed over the ranks), and the elements across an interface. */
+static void materials_json(const mx_p4est_mesh *D) {
+  printf("\"materials\": {\"count\": %d, \"across_interfaces\": %" PRIu64 ", \"each\": [",
+         D->nmaterials, D->across);
+  for (int d = 1; d <= D->nmaterials && d <= 64; d++) {
+    printf("%s{\"number\": %d, \"name\": ", d > 1 ? ", " : "", (int)D->material_id[d]);
+    json_string(D->material_name[d]);
+    printf(", \"elements\": %" PRIu64 ", \"volume\": %.17g}", D->material_cells[d],
+           D->material_volume[d]);
+  }
+  printf("]}, ");
+}
+
 static void mesh_json(const mx_p4est_mesh_report *rep) {
   const mx_p4est_mesh *D = &rep->D;
   const double *phmax = rep->phmax;
@@ -39,6 +68,7 @@ static void mesh_json(const mx_p4est_mesh_report *rep) {
          D->jens_min, D->invalid, D->contact_cells, D->volume, rep->hash, D->rings,
          D->attempts, D->differ_first, D->repair_rounds, D->repaired, rep->sent_bytes,
          rep->largest_message);
+  if (D->nmaterials) materials_json(D);
   printf("\"phases_max\": {\"halo\": %.6f, \"tree\": %.6f, \"transition\": %.6f, "
          "\"boundary\": %.6f, \"exchange\": %.6f, \"mesh\": %.6f, \"write\": %.6f}, ",
          phmax[0], phmax[1], phmax[2], phmax[3], phmax[4], phmax[5], phmax[6]);
@@ -64,6 +94,12 @@ static void mesh_text(const mx_p4est_mesh_report *rep) {
          "elements %.0f..%.0f, peak memory %.1f..%.1f MB\n", D->rings, D->attempts,
          rep->phmax[5], rep->phmax[6], rep->cells[0], rep->cells[1], rep->rss[0],
          rep->rss[1]);
+  if (!D->nmaterials) return;
+  printf("  materials: %d; %" PRIu64 " element(s) across an interface\n", D->nmaterials,
+         D->across);
+  for (int d = 1; d <= D->nmaterials && d <= 64; d++)
+    printf("    %d \"%s\": %" PRIu64 " elements, volume %.6g\n", (int)D->material_id[d],
+           D->material_name[d], D->material_cells[d], D->material_volume[d]);
 }
 
 void mx_p4est_report(const mx_p4est_run_params *p, const mx_p4est_octree *P,

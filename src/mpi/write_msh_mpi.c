@@ -59,7 +59,11 @@ size_t mx_write_msh_mpi_chunk = (size_t)16 << 20;
 
 enum {
   MSG_MAX = 320,
-  HEAD_MAX = 512,       /* the longest header part (the prefix: ~260 bytes) */
+  HEAD_MAX = 512,       /* the longest header part but the prefix */
+  MAX_BODIES = 64,
+  NAME_MAX_LEN = 160,   /* a body's name in $PhysicalNames (longer: cut) */
+  /* the prefix: ~260 bytes, and per body a name line and an entity */
+  PREFIX_MAX = HEAD_MAX + MAX_BODIES * (NAME_MAX_LEN + 32 + 80),
   NAME_LEN = PATH_MAX + 64, /* the file's name, broadcast from rank 0 */
   BLOCK_HEAD = 20,      /* element block head: dim, tag, type (int), count */
   MAX_RECORD = 8 * 9,   /* a hexahedron: its tag and 8 node tags */
@@ -169,10 +173,21 @@ static int check_local(wctx *W, const mx_dist_mesh *D, uint32_t **pos_out) {
          (unsigned long long)D->nowned);
     goto bad;
   }
+  if (D->nbodies < 0 || D->nbodies > MAX_BODIES ||
+      (D->nbodies && (!D->body_physical || !D->body_names || (D->ncells && !D->cell_body)))) {
+    fail(W, "invalid distributed mesh: %d bodies (at most %d, with their numbers, names and "
+            "cells)", D->nbodies, MAX_BODIES);
+    goto bad;
+  }
   for (size_t c = 0; c < D->ncells; c++) {
     const int t = D->type[c];
     if (t < MX_TET || t > MX_HEX) {
       fail(W, "invalid distributed mesh: cell %zu: type %d", c, t);
+      goto bad;
+    }
+    if (D->nbodies && (D->cell_body[c] < 1 || D->cell_body[c] > D->nbodies)) {
+      fail(W, "invalid distributed mesh: cell %zu: body %d of %d", c, (int)D->cell_body[c],
+           D->nbodies);
       goto bad;
     }
     for (int j = 0; j < mx_cell_nodes[t]; j++)
@@ -204,22 +219,33 @@ static void put_int(char **p, int v) {
 
 /* $MeshFormat .. the node block's head: everything before the first node
  * tag. */
-static size_t head_prefix(char *h, const double box[6], uint64_t nn) {
+static size_t head_prefix(char *h, const mx_dist_mesh *D, const double *box, uint64_t nn) {
   char *p = h;
   put_str(&p, "$MeshFormat\n4.1 1 8\n");
   put_int(&p, 1);
   put_str(&p, "\n$EndMeshFormat\n$PhysicalNames\n");
-  char line[64];
-  snprintf(line, sizeof line, "1\n3 %d \"domain\"\n$EndPhysicalNames\n", PHYSICAL_TAG);
+  char line[NAME_MAX_LEN + 64];
+  const int nb = D->nbodies ? D->nbodies : 1;
+  snprintf(line, sizeof line, "%d\n", nb);
   put_str(&p, line);
-  put_str(&p, "$Entities\n");
-  const uint64_t ent[4] = {0, 0, 0, 1};
+  for (int b = 1; b <= nb; b++) {
+    if (D->nbodies)
+      snprintf(line, sizeof line, "3 %d \"%.*s\"\n", (int)D->body_physical[b - 1],
+               (int)NAME_MAX_LEN, D->body_names[b - 1]);
+    else
+      snprintf(line, sizeof line, "3 %d \"domain\"\n", PHYSICAL_TAG);
+    put_str(&p, line);
+  }
+  put_str(&p, "$EndPhysicalNames\n$Entities\n");
+  const uint64_t ent[4] = {0, 0, 0, (uint64_t)nb};
   put(&p, ent, sizeof ent);
-  put_int(&p, ENTITY_TAG);
-  put(&p, box, 6 * sizeof *box);
-  put_u64(&p, 1);
-  put_int(&p, PHYSICAL_TAG);
-  put_u64(&p, 0);
+  for (int b = 1; b <= nb; b++) { /* one body: box[6 * 0], the whole box */
+    put_int(&p, D->nbodies ? b : ENTITY_TAG);
+    put(&p, box + 6 * (b - 1), 6 * sizeof *box);
+    put_u64(&p, 1);
+    put_int(&p, D->nbodies ? (int)D->body_physical[b - 1] : PHYSICAL_TAG);
+    put_u64(&p, 0);
+  }
   put_str(&p, "\n$EndEntities\n$Nodes\n");
   const uint64_t nodes[4] = {nn > 0, nn, nn > 0, nn};
   put(&p, nodes, sizeof nodes);
@@ -241,10 +267,10 @@ static size_t head_mid(char *h, uint64_t nblocks, uint64_t ne) {
   return (size_t)(p - h);
 }
 
-static size_t head_block(char *h, int t, uint64_t count) {
+static size_t head_block(char *h, int entity, int t, uint64_t count) {
   char *p = h;
   put_int(&p, 3);
-  put_int(&p, ENTITY_TAG);
+  put_int(&p, entity);
   put_int(&p, mx_msh_type[t]);
   put_u64(&p, count);
   return (size_t)(p - h);
@@ -271,11 +297,17 @@ static void write_part(wctx *W, MPI_Offset off, const void *data, size_t bytes) 
          bytes);
 }
 
+/* Blocks r = 4 * (b - 1) + type, b the body (1 without bodies). */
 typedef struct {
-  uint64_t total[4], before[4]; /* cells per type: all ranks, ranks before */
-  MPI_Offset tags, coords, mid, block[4], end;
+  int nb;
+  uint64_t total[4 * MAX_BODIES], before[4 * MAX_BODIES]; /* cells: all ranks, ranks before */
+  MPI_Offset tags, coords, mid, block[4 * MAX_BODIES], end;
   uint64_t nblocks, ncells;
 } layout;
+
+static int cell_block(const mx_dist_mesh *D, size_t c) {
+  return 4 * (D->nbodies ? D->cell_body[c] - 1 : 0) + D->type[c];
+}
 
 /* The owned nodes' tags, then their coordinates, in global-id order, a
  * chunk at a time. */
@@ -297,70 +329,92 @@ static void write_nodes(wctx *W, const mx_dist_mesh *D, const uint32_t *pos,
   }
 }
 
-/* This rank's cells of type t in local order, a chunk at a time, a cursor
- * running over the cells. */
-static void write_cells(wctx *W, const mx_dist_mesh *D, const layout *L, int t) {
+/* This rank's cells of block r (a body's cells of one type) in local
+ * order, a chunk at a time, a cursor running over the cells. */
+static void write_cells(wctx *W, const mx_dist_mesh *D, const layout *L, int r) {
+  const int t = r % 4;
   const int nn = mx_cell_nodes[t];
   const int8_t *perm = mx_msh_perm[t];
   const size_t rec = 8 * ((size_t)nn + 1);
   const uint64_t per = W->chunk / rec;
   uint64_t tag0 = 0; /* element tags before this block */
-  for (int u = 0; u < t; u++) tag0 += L->total[u];
+  for (int u = 0; u < r; u++) tag0 += L->total[u];
   size_t c = 0;   /* cursor over the local cells */
-  uint64_t k = 0; /* this rank's cells of type t written so far */
+  uint64_t k = 0; /* this rank's cells of block r written so far */
   while (c < D->ncells && !W->failed) {
     char *p = W->buf;
     const uint64_t k0 = k;
     for (; c < D->ncells && k - k0 < per; c++) {
-      if (D->type[c] != t) continue;
+      if (cell_block(D, c) != r) continue;
       const uint32_t *row = D->conn + 8 * c;
-      put_u64(&p, tag0 + L->before[t] + k + 1);
+      put_u64(&p, tag0 + L->before[r] + k + 1);
       for (int j = 0; j < nn; j++) put_u64(&p, D->gid[row[perm[j]]] + 1);
       k++;
     }
-    const MPI_Offset off = L->block[t] + BLOCK_HEAD + (MPI_Offset)(rec * (L->before[t] + k0));
+    const MPI_Offset off = L->block[r] + BLOCK_HEAD + (MPI_Offset)(rec * (L->before[r] + k0));
     write_part(W, off, W->buf, (size_t)(p - W->buf));
   }
 }
 
-/* Global counts, the box and the offsets (collective). */
-static void make_layout(wctx *W, const mx_dist_mesh *D, layout *L, double box[6],
+/* Global counts, the boxes and the offsets (collective). box: 6 per body
+ * (one without bodies: the owned nodes' box, as before). */
+static void make_layout(wctx *W, const mx_dist_mesh *D, layout *L, double *box,
                         size_t *prefix_len, char *prefix) {
-  uint64_t cnt[4] = {0, 0, 0, 0};
-  for (size_t c = 0; c < D->ncells; c++) cnt[D->type[c]]++;
-  MPI_Allreduce(cnt, L->total, 4, MPI_UINT64_T, MPI_SUM, W->comm);
-  MPI_Exscan(cnt, L->before, 4, MPI_UINT64_T, MPI_SUM, W->comm);
+  L->nb = D->nbodies ? D->nbodies : 1;
+  const int nr = 4 * L->nb;
+  uint64_t cnt[4 * MAX_BODIES];
+  memset(cnt, 0, sizeof cnt);
+  for (size_t c = 0; c < D->ncells; c++) cnt[cell_block(D, c)]++;
+  MPI_Allreduce(cnt, L->total, nr, MPI_UINT64_T, MPI_SUM, W->comm);
+  MPI_Exscan(cnt, L->before, nr, MPI_UINT64_T, MPI_SUM, W->comm);
   if (W->rank == 0) memset(L->before, 0, sizeof L->before);
 
-  /* the box: minima of (x, y, z, -x, -y, -z) over the owned nodes */
-  double lo[6] = {INFINITY, INFINITY, INFINITY, INFINITY, INFINITY, INFINITY}, all[6];
-  for (size_t i = 0; i < D->nnodes; i++) {
-    if (!D->owned[i]) continue;
-    const double *q = D->xyz + 3 * i;
-    for (int a = 0; a < 3; a++) {
-      lo[a] = q[a] < lo[a] ? q[a] : lo[a];
-      lo[3 + a] = -q[a] < lo[3 + a] ? -q[a] : lo[3 + a];
+  /* the boxes: minima of (x, y, z, -x, -y, -z), without bodies over the
+   * owned nodes, with bodies over each body's cells' nodes */
+  double lo[6 * MAX_BODIES], all[6 * MAX_BODIES];
+  for (int i = 0; i < 6 * L->nb; i++) lo[i] = INFINITY;
+  if (!D->nbodies) {
+    for (size_t i = 0; i < D->nnodes; i++) {
+      if (!D->owned[i]) continue;
+      const double *q = D->xyz + 3 * i;
+      for (int a = 0; a < 3; a++) {
+        lo[a] = q[a] < lo[a] ? q[a] : lo[a];
+        lo[3 + a] = -q[a] < lo[3 + a] ? -q[a] : lo[3 + a];
+      }
+    }
+  } else {
+    for (size_t c = 0; c < D->ncells; c++) {
+      double *l = lo + 6 * (D->cell_body[c] - 1);
+      for (int j = 0; j < mx_cell_nodes[D->type[c]]; j++) {
+        const double *q = D->xyz + 3 * (size_t)D->conn[8 * c + (size_t)j];
+        for (int a = 0; a < 3; a++) {
+          l[a] = q[a] < l[a] ? q[a] : l[a];
+          l[3 + a] = -q[a] < l[3 + a] ? -q[a] : l[3 + a];
+        }
+      }
     }
   }
-  MPI_Allreduce(lo, all, 6, MPI_DOUBLE, MPI_MIN, W->comm);
-  for (int a = 0; a < 3; a++) {
-    box[a] = D->nglobal ? all[a] : 0.0;
-    box[3 + a] = D->nglobal ? -all[3 + a] : 0.0;
-  }
+  MPI_Allreduce(lo, all, 6 * L->nb, MPI_DOUBLE, MPI_MIN, W->comm);
+  for (int b = 0; b < L->nb; b++)
+    for (int a = 0; a < 3; a++) {
+      const int some = all[6 * b + a] <= -all[6 * b + 3 + a]; /* a body with no cell: 0s */
+      box[6 * b + a] = some ? all[6 * b + a] : 0.0;
+      box[6 * b + 3 + a] = some ? -all[6 * b + 3 + a] : 0.0;
+    }
 
   const uint64_t n = D->nglobal;
-  *prefix_len = head_prefix(prefix, box, n);
+  *prefix_len = head_prefix(prefix, D, box, n);
   L->tags = (MPI_Offset)*prefix_len;
   L->coords = L->tags + (MPI_Offset)(8 * n);
   L->mid = L->coords + (MPI_Offset)(24 * n);
   L->nblocks = L->ncells = 0;
-  for (int t = 0; t < 4; t++) L->nblocks += L->total[t] > 0, L->ncells += L->total[t];
+  for (int r = 0; r < nr; r++) L->nblocks += L->total[r] > 0, L->ncells += L->total[r];
   char mid[HEAD_MAX];
   MPI_Offset at = L->mid + (MPI_Offset)head_mid(mid, L->nblocks, L->ncells);
-  for (int t = 0; t < 4; t++) {
-    L->block[t] = at;
-    if (L->total[t])
-      at += BLOCK_HEAD + (MPI_Offset)(8 * ((uint64_t)mx_cell_nodes[t] + 1) * L->total[t]);
+  for (int r = 0; r < nr; r++) {
+    L->block[r] = at;
+    if (L->total[r])
+      at += BLOCK_HEAD + (MPI_Offset)(8 * ((uint64_t)mx_cell_nodes[r % 4] + 1) * L->total[r]);
   }
   L->end = at;
 }
@@ -414,8 +468,8 @@ static int choose_names(wctx *W, const char *path, char name[NAME_LEN], char **f
  * and the cells. */
 static void write_file(wctx *W, const mx_dist_mesh *D, const uint32_t *pos) {
   layout L;
-  double box[6];
-  char prefix[HEAD_MAX], mid[HEAD_MAX], bh[BLOCK_HEAD];
+  double box[6 * MAX_BODIES];
+  char prefix[PREFIX_MAX], mid[HEAD_MAX], bh[BLOCK_HEAD];
   size_t plen = 0;
   make_layout(W, D, &L, box, &plen, prefix);
   W->buf = mx_alloc(W->chunk);
@@ -423,16 +477,19 @@ static void write_file(wctx *W, const mx_dist_mesh *D, const uint32_t *pos) {
     W->oom = 1;
     fail(W, "out of memory");
   }
+  const int nr = 4 * L.nb;
   if (W->rank == 0) {
     write_part(W, 0, prefix, plen);
     write_part(W, L.mid, mid, head_mid(mid, L.nblocks, L.ncells));
-    for (int t = 0; t < 4; t++)
-      if (L.total[t]) write_part(W, L.block[t], bh, head_block(bh, t, L.total[t]));
+    for (int r = 0; r < nr; r++)
+      if (L.total[r])
+        write_part(W, L.block[r], bh,
+                   head_block(bh, D->nbodies ? r / 4 + 1 : ENTITY_TAG, r % 4, L.total[r]));
     write_part(W, L.end, tail, sizeof tail - 1);
   }
   write_nodes(W, D, pos, &L);
-  for (int t = 0; t < 4; t++)
-    if (L.total[t]) write_cells(W, D, &L, t);
+  for (int r = 0; r < nr; r++)
+    if (L.total[r]) write_cells(W, D, &L, r);
   mx_free(W->buf);
   W->buf = NULL;
   const int rc = MPI_File_sync(W->fh); /* a late write error shows here */

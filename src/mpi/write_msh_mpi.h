@@ -5,7 +5,10 @@
  * and without cell fields (no $ElementData), given a view whose nodes are
  * in global-id order and whose cells are grouped by type (tetrahedra,
  * pyramids, prisms, hexahedra), each type rank 0's cells then rank 1's ...
- * in local order: element tags run 1..N through the file. */
+ * in local order: element tags run 1..N through the file. With bodies
+ * (several materials) a volume entity and physical group per body, the
+ * cells grouped by body then type; the boundary and interface faces the
+ * single-process writer adds as physical surfaces are not written. */
 #ifndef MX_WRITE_MSH_MPI_H
 #define MX_WRITE_MSH_MPI_H
 
@@ -27,6 +30,16 @@ typedef struct {
   size_t ncells;
   const uint8_t *type;     /* MX_TET, MX_PYRAMID, MX_PRISM, MX_HEX (include/mixoct.h) */
   const uint32_t *conn;    /* 8 * ncells local node indices, mixoct's node order (src/soa/mesh.h) */
+  /* bodies (several materials), as src/io/write_msh.c writes them: nbodies
+   * 0, one volume "domain"; else 1..nbodies (at most 64) volume entities,
+   * entity b in the physical group body_physical[b - 1] named
+   * body_names[b - 1], cell c in body cell_body[c], the elements in one
+   * block per (body, type), bodies in order, each block rank 0's cells then
+   * rank 1's ... The same nbodies, numbers and names on every rank. */
+  int nbodies;
+  const int32_t *cell_body;
+  const int32_t *body_physical;
+  const char *const *body_names;
 } mx_dist_mesh;
 
 /* Collective. Writes a binary MSH 4.1 file, MPI-IO, every rank writing its
