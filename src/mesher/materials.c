@@ -49,7 +49,8 @@ static int region_at(const mx_mesher *m, const double p[3]) {
 }
 
 int mx_material_depths(mx_mesher *m, mx_mesh *M, const uint32_t *leaves, size_t nleaves,
-                       const uint8_t *states, int stage, int *deepest_out, size_t *across_out) {
+                       const uint8_t *states, int stage, int *deepest_out, size_t *across_out,
+                       double where[3]) {
   enum { NONE = UINT16_MAX }; /* a node on the domain's boundary */
   if (!m->have_index) MX_CHECK(mx_mesher_index(m));
   *deepest_out = 0;
@@ -130,8 +131,8 @@ int mx_material_depths(mx_mesher *m, mx_mesh *M, const uint32_t *leaves, size_t 
   mx_free(leaf_depth);
   /* the elements across an interface: nodes (not on a shell) in two
    * regions inside the outermost shell */
-  size_t across = 0;
-#pragma omp parallel for schedule(static) reduction(+ : across)
+  size_t across = 0, first = SIZE_MAX;
+#pragma omp parallel for schedule(static) reduction(+ : across) reduction(min : first)
   for (size_t c = 0; c < nc; c++) {
     if (O->tri_cnt[leaves[M->leaf[c]]] == 0) continue;
     const uint32_t *row = M->conn + 8 * c;
@@ -142,7 +143,16 @@ int mx_material_depths(mx_mesher *m, mx_mesh *M, const uint32_t *leaves, size_t 
       lo = depth[w] < lo ? depth[w] : lo;
       hi = depth[w] > hi ? depth[w] : hi;
     }
-    across += hi > lo && lo >= 1;
+    if (hi > lo && lo >= 1) {
+      across++;
+      first = c < first ? c : first;
+    }
+  }
+  if (where && across) { /* the first one's centroid */
+    const int nv = mx_cell_nodes[M->type[first]];
+    where[0] = where[1] = where[2] = 0.0;
+    for (int k = 0; k < nv; k++)
+      for (int a = 0; a < 3; a++) where[a] += M->xyz[3 * (size_t)M->conn[8 * first + k] + a] / nv;
   }
   mx_free(depth);
   mx_free(need);
@@ -163,18 +173,19 @@ int mx_label_materials(mx_mesher *m) {
   const double t0 = mx_wtime();
   int deepest = 0;
   size_t across = 0;
+  double *where = m->rec->S.materials_across_at;
   MX_CHECK(mx_material_depths(m, &m->M, m->leaves, m->nleaves, m->states, m->mesh_stage,
-                              &deepest, &across));
+                              &deepest, &across, where));
   MX_CHECK(mx_material_relabel(m, &m->M, deepest));
   m->nmaterials = deepest;
   m->rec->S.nmaterials = deepest;
   m->rec->S.materials_across = across;
   m->rec->S.t_materials = mx_wtime() - t0;
-  if (across)
+  /* the full stage's are a defect (mx_mesh_finish) */
+  if (across && m->mesh_stage != MX_STAGE_FULL)
     mx_warning(NULL, 0, "materials: %zu element(s) lie across an interface between two "
-                        "materials (each takes the material of its centroid)%s", across,
-               m->mesh_stage == MX_STAGE_FULL ? "" : ": the transition stage does not cut "
-                                                     "the elements along the interfaces");
+                        "materials (each takes the material of its centroid): the transition "
+                        "stage does not cut the elements along the interfaces", across);
   return MX_OK;
 }
 

@@ -20,12 +20,14 @@ int mx_label_materials(mx_mesher *m);
  * its region (nesting depth and file, 1 ..), from M's geometry alone
  * (leaves: the octree leaves M->leaf indexes, nleaves of them, in m's
  * octree; states per node or NULL; stage: the stage that made M), the
- * deepest region met and the elements across an interface.
+ * deepest region met and the elements across an interface (where: the
+ * first one's centroid when there are, or NULL).
  * mx_material_relabel: the regions 1 .. deepest (the deepest over every
  * part) numbered as the user asked (mx_material_numbers). MX_ENOMEM,
  * MX_EINPUT. */
 int mx_material_depths(mx_mesher *m, mx_mesh *M, const uint32_t *leaves, size_t nleaves,
-                       const uint8_t *states, int stage, int *deepest, size_t *across);
+                       const uint8_t *states, int stage, int *deepest, size_t *across,
+                       double where[3]);
 int mx_material_relabel(mx_mesher *m, mx_mesh *M, int deepest);
 
 /* The numbers and names of the materials by depth 1 .. deepest

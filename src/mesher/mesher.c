@@ -488,6 +488,13 @@ int mx_mesh_finish(mx_mesher *m) {
              k->first[0], k->first[1], k->first[2]);
     return MX_EINVALID;
   }
+  if (m->p.materials && m->mesh_stage == MX_STAGE_FULL && m->rec->S.materials_across > 0) {
+    const double *w = m->rec->S.materials_across_at;
+    mx_error(name, 0, "%zu element(s) lie across an interface between two materials "
+             "(nodes in two regions); the first, centred at (%.17g, %.17g, %.17g); ask for "
+             "finer levels there (-s, --level)", m->rec->S.materials_across, w[0], w[1], w[2]);
+    return MX_EINVALID;
+  }
   const double tv = mx_wtime();
   st = volume_check(m);
   m->rec->S.ph.verify += mx_wtime() - tv;

@@ -63,6 +63,7 @@ typedef struct {
   int nmaterials;           /* materials: the deepest region (0: one material) */
   size_t materials_shared;  /* materials: triangles two inputs have in common (pairs) */
   size_t materials_across;  /* elements with corners in two regions */
+  double materials_across_at[3]; /* the first one's centroid */
   double t_materials;       /* seconds labelling the elements */
 } mx_summary;
 

@@ -203,7 +203,7 @@ static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4e
   int deepest = 0;
   size_t across = 0;
   if (!st && m->p.materials)
-    st = mx_material_depths(m, &M, pl, np, states, MX_STAGE_FULL, &deepest, &across);
+    st = mx_material_depths(m, &M, pl, np, states, MX_STAGE_FULL, &deepest, &across, NULL);
   D->nmaterials = deepest;
   D->across = across;
   D->t_boundary += mx_wtime() - t;
@@ -414,12 +414,13 @@ static int verdict_local(mx_mesher *m, const mx_p4est_mesh *D) {
              D->repair_rounds);
     return MX_EINVALID;
   }
-  /* as the single-process labels do: elements across an interface are
-   * said, each labelled by its centroid (none after the cleaving unless
-   * the untangling pulled a node across) */
-  if (D->across)
-    mx_warning(NULL, 0, "materials: %" PRIu64 " element(s) lie across an interface between "
-               "two materials (each takes the material of its centroid)", D->across);
+  /* as the single-process verdict: an element across an interface is a
+   * defect (none after the cleaving unless a node was pulled across) */
+  if (D->across) {
+    mx_error(name, 0, "%" PRIu64 " element(s) lie across an interface between two "
+             "materials", D->across);
+    return MX_EINVALID;
+  }
   return mx_volume_verdict(m, D->volume, (size_t)D->cells);
 }
 
