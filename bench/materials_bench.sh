@@ -12,11 +12,13 @@
 #   - the wall time, median of REPEAT runs, against the hollow ball without
 #     materials (5.6% fewer leaves at -s 6) and the outer sphere alone, and
 #     per leaf (the target: 1.3x the one-material run with the same leaves).
-# Measured 2026-12-04 (2 cores, idle): -s 6 materials 0.85 s against 0.083
-# s for the hole (x10.2, x9.7 per leaf): the cleaving (0.67 s, of which
-# the band's smoothing 0.35 s) splits ~5000 elements into ~60000 and
-# evaluates J_ENS for every trial move; volumes -0.06%/-0.11%, 0 across,
-# worst J_ENS 0.197 (one material 0.205). Cortex + tumour -s 7: x3.2.
+# Measured 2026-12-05 (2 cores, idle, median of 5): -s 6 materials 0.79 s
+# against 0.16 s for the hole (x4.9, x4.6 per leaf; x10.2 on 2026-12-04
+# before the untangling's early exit and threads on small colours): the
+# cleaving 0.6 s, half of it the band's smoothing; volumes -0.06%/-0.11%,
+# 0 across, worst J_ENS 0.205 (the sphere alone 0.205, the hole 0.200);
+# -s 5 x4.0, worst 0.214 (hole 0.196). Cortex + tumour -s 7: x2.2, worst
+# J_ENS 0.126 as the cortex alone.
 # Last line: one JSON object.
 #
 #   bench/materials_bench.sh MIXOCT [LEVELS] [REPEAT]     (default "5 6", 3)
