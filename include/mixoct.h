@@ -600,6 +600,69 @@ void mx_check_params_default(mx_check_params *p);
  * (out of memory included). Nothing to free. */
 int mx_check_file(const mx_check_params *p);
 
+/* ---- Size fields: the control space (issue 27) ------------------------- */
+
+/* A size field h(x) = (h1, h2, h3), the element lengths along x, y, z (the
+ * metric diag(h1^-2, h2^-2, h3^-2) of Jurczyk & Glut 2016, eq. 8; an
+ * isotropic field has h1 = h2 = h3), stored adaptively in one of the
+ * paper's tree structures (src/sizing/). A source is a function of a block
+ * of points: f(user, n, xyz, h) writes h[3i..3i+2] for the point
+ * xyz[3i..3i+2], i < n; it is called from several threads at once. */
+typedef void (*mx_size_fn)(void *user, size_t n, const double *xyz, double *h);
+
+/* The structures: kd-trees with values in the leaves (K_L) or in the
+ * vertices with trilinear interpolation (K_V), and octrees with values in
+ * the leaves, unbalanced (K_oL) or 2:1 balanced across faces (K_oLB). */
+enum { MX_CS_KD_LEAF = 0, MX_CS_KD_VERTEX = 1, MX_CS_OCT_LEAF = 2, MX_CS_OCT_BALANCED = 3 };
+/* The kd-trees' split rules (section 2.2): the longest axis in its middle
+ * (s_L), the largest gradient between sub-box faces (s_G), the largest sum
+ * of gradients, split where it reaches half (s_S). */
+enum { MX_SPLIT_LONGEST = 0, MX_SPLIT_GRADIENT = 1, MX_SPLIT_SUM = 2 };
+
+typedef struct {
+  int structure;     /* MX_CS_* */
+  int split;         /* MX_SPLIT_* (kd-trees) */
+  double lo[3], hi[3]; /* the box the field covers (a query outside is clamped) */
+  double delta;      /* the tolerance on the metric non-conformity (eq. 1) */
+  int samples;       /* N_s: the N_s^3 sample grid of a node's error; 5 */
+  int max_depth;     /* splits from the root (a kd-tree needs 3 for an octree's
+                      * 1); 0: 24 / 8 (256 cells a side) */
+} mx_cspace_params;
+
+typedef struct {
+  size_t nodes, leaves, values; /* tree nodes (internal and leaves), stored sizes */
+  size_t bytes;      /* the structure's memory */
+  int depth;         /* the deepest leaf */
+  int capped;        /* leaves left above delta at max_depth */
+  double seconds;    /* building */
+} mx_cspace_info;
+
+typedef struct mx_cspace_s mx_cspace;
+
+void mx_cspace_params_default(mx_cspace_params *p);
+/* Builds the structure for f to tolerance p->delta: a node is split while
+ * the largest non-conformity between f and the structure over its N_s^3
+ * sample points exceeds delta (level by level, the nodes of a level in
+ * parallel; the same tree for any thread count). MX_EINPUT for bad
+ * parameters or a size that is not finite and positive (a message names
+ * the point), MX_ENOMEM. */
+int mx_cspace_build(const mx_cspace_params *p, mx_size_fn f, void *user, mx_cspace **out);
+/* The field at p (clamped into the box): no allocation, any thread. */
+void mx_cspace_query(const mx_cspace *c, const double p[3], double h[3]);
+/* The smallest size the structure holds anywhere in the box [lo, hi] (the
+ * least component of every leaf value, or vertex value, meeting it): what
+ * an octant of that box must not exceed. */
+double mx_cspace_min_box(const mx_cspace *c, const double lo[3], const double hi[3]);
+void mx_cspace_info_get(const mx_cspace *c, mx_cspace_info *info);
+void mx_cspace_free(mx_cspace *c);
+/* The metric non-conformity of two diagonal metrics of lengths a and b:
+ * || Ma^-1 Mb + Mb^-1 Ma - 2 I ||_F = sqrt(sum_i (a_i/b_i - b_i/a_i)^4)
+ * (0 for equal sizes; 4.0 about a factor 2.4 apart on one axis). */
+double mx_metric_nonconformity(const double a[3], const double b[3]);
+/* The paper's test functions F1..F5 (section 3.1) by name ("F1".."F5"),
+ * with their domains: the function, or NULL for another name. */
+mx_size_fn mx_size_builtin(const char *name, double lo[3], double hi[3]);
+
 /* ---- The mixoct program's other commands (patterns, 2D report) ---------- */
 
 /* The deepest level of the 2D mesher's quadtree (levels 0 to 27; the

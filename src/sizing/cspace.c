@@ -1,0 +1,147 @@
+/* The control space: parameters, the metric non-conformity, evaluation of a
+ * source, and the calls of include/mixoct.h dispatched to the structures
+ * (src/sizing/cspace.h). */
+#include "sizing/cspace.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "base/common.h"
+
+void mx_cspace_params_default(mx_cspace_params *p) {
+  memset(p, 0, sizeof *p);
+  p->structure = MX_CS_KD_LEAF;
+  p->split = MX_SPLIT_GRADIENT;
+  p->hi[0] = p->hi[1] = p->hi[2] = 1.0;
+  p->delta = 0.5;
+  p->samples = 5;
+}
+
+double mx_metric_nonconformity(const double a[3], const double b[3]) {
+  double s = 0.0;
+  for (int i = 0; i < 3; i++) {
+    const double r = a[i] / b[i], t = r - 1.0 / r, t2 = t * t;
+    s += t2 * t2;
+  }
+  return sqrt(s);
+}
+
+void mx_cs_samples(const double lo[3], const double hi[3], int ns, double *xyz) {
+  size_t w = 0;
+  for (int k = 0; k < ns; k++)
+    for (int j = 0; j < ns; j++)
+      for (int i = 0; i < ns; i++) {
+        const int ijk[3] = {i, j, k};
+        for (int a = 0; a < 3; a++)
+          xyz[w++] = ns == 1 ? 0.5 * (lo[a] + hi[a])
+                             : lo[a] + (hi[a] - lo[a]) * (double)ijk[a] / (double)(ns - 1);
+      }
+}
+
+int mx_cs_eval(mx_size_fn f, void *user, size_t n, const double *xyz, double *h) {
+  enum { BLOCK = 256 };
+  const size_t nb = (n + BLOCK - 1) / BLOCK;
+#pragma omp parallel for schedule(dynamic, 4) if (nb > 1)
+  for (size_t b = 0; b < nb; b++) {
+    const size_t i0 = b * BLOCK, m = n - i0 < BLOCK ? n - i0 : BLOCK;
+    f(user, m, xyz + 3 * i0, h + 3 * i0);
+  }
+  size_t bad = SIZE_MAX;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > MX_PAR_MIN)
+  for (size_t i = 0; i < 3 * n; i++)
+    if (!(h[i] > 0.0 && h[i] < INFINITY) && i / 3 < bad) bad = i / 3;
+  if (bad != SIZE_MAX) {
+    const double *p = xyz + 3 * bad, *q = h + 3 * bad;
+    mx_error(NULL, 0, "size field: the size at (%.9g, %.9g, %.9g) is (%g, %g, %g): sizes must "
+                      "be finite and positive", p[0], p[1], p[2], q[0], q[1], q[2]);
+    return MX_EINPUT;
+  }
+  return MX_OK;
+}
+
+int mx_cspace_build(const mx_cspace_params *p, mx_size_fn f, void *user, mx_cspace **out) {
+  *out = NULL;
+  const int kd = p->structure == MX_CS_KD_LEAF || p->structure == MX_CS_KD_VERTEX;
+  if (p->structure < MX_CS_KD_LEAF || p->structure > MX_CS_OCT_BALANCED ||
+      (kd && (p->split < MX_SPLIT_LONGEST || p->split > MX_SPLIT_SUM)) || !f) {
+    mx_error(NULL, 0, "size field: no structure %d with split rule %d", p->structure, p->split);
+    return MX_EINPUT;
+  }
+  for (int a = 0; a < 3; a++)
+    if (!(p->hi[a] > p->lo[a]) || !isfinite(p->lo[a]) || !isfinite(p->hi[a])) {
+      mx_error(NULL, 0, "size field: an empty or infinite box ([%g, %g] along axis %d)",
+               p->lo[a], p->hi[a], a);
+      return MX_EINPUT;
+    }
+  if (!(p->delta > 0.0) || !isfinite(p->delta)) {
+    mx_error(NULL, 0, "size field: the tolerance must be positive (%g)", p->delta);
+    return MX_EINPUT;
+  }
+  const int ns = p->samples ? p->samples : 5;
+  const int maxd = p->max_depth ? p->max_depth : kd ? 24 : 8;
+  if (ns < 1 || ns > 16 || maxd < 0 || maxd > (kd ? 60 : 20)) {
+    mx_error(NULL, 0, "size field: samples %d (1 to 16) or depth %d (up to %d) out of range",
+             ns, maxd, kd ? 60 : 20);
+    return MX_EINPUT;
+  }
+  mx_cspace *c = mx_calloc(sizeof *c);
+  if (!c) return MX_ENOMEM;
+  c->structure = p->structure;
+  c->split = kd ? p->split : MX_SPLIT_LONGEST;
+  c->ns = ns;
+  c->max_depth = maxd;
+  c->delta = p->delta;
+  memcpy(c->lo, p->lo, sizeof c->lo);
+  memcpy(c->hi, p->hi, sizeof c->hi);
+  const double t0 = mx_wtime();
+  const int st = kd ? mx_cs_build_kd(c, f, user) : mx_cs_build_octree(c, f, user);
+  c->seconds = mx_wtime() - t0;
+  if (st) {
+    mx_cspace_free(c);
+    return st;
+  }
+  *out = c;
+  return MX_OK;
+}
+
+void mx_cspace_query(const mx_cspace *c, const double p[3], double h[3]) {
+  if (c->structure <= MX_CS_KD_VERTEX) mx_cs_query_kd(c, p, h);
+  else mx_cs_query_octree(c, p, h);
+}
+
+double mx_cspace_min_box(const mx_cspace *c, const double lo[3], const double hi[3]) {
+  return c->structure <= MX_CS_KD_VERTEX ? mx_cs_min_box_kd(c, lo, hi)
+                                         : mx_cs_min_box_octree(c, lo, hi);
+}
+
+void mx_cspace_info_get(const mx_cspace *c, mx_cspace_info *info) {
+  memset(info, 0, sizeof *info);
+  info->values = c->nvalues;
+  info->depth = c->depth;
+  info->capped = c->capped;
+  info->seconds = c->seconds;
+  info->bytes = sizeof *c + 24 * c->nvalues;
+  if (c->structure <= MX_CS_KD_VERTEX) {
+    info->nodes = c->nnodes;
+    info->leaves = c->nleaves;
+    /* axis 1, coord 8, child 4, val 4 a node; K_V 8 corner indices a leaf */
+    info->bytes += 17 * c->nnodes + (c->vid ? 32 * c->nleaves : 0);
+  } else {
+    info->leaves = c->nleaves;
+    info->nodes = c->nleaves + (c->nleaves - 1) / 7; /* a complete octree's */
+    info->bytes += 9 * c->nleaves;
+  }
+}
+
+void mx_cspace_free(mx_cspace *c) {
+  if (!c) return;
+  mx_free(c->axis);
+  mx_free(c->coord);
+  mx_free(c->child);
+  mx_free(c->val);
+  mx_free(c->vid);
+  mx_free(c->key);
+  mx_free(c->level);
+  mx_free(c->h);
+  mx_free(c);
+}
