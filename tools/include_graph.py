@@ -15,7 +15,8 @@ Prints:
     of ../shared/DESIGN.md does not allow:
       cli -> mesher -> kernels -> patterns -> geom -> soa -> base,
       io and verify -> soa, geom, base only; quad (2D kernels) -> patterns,
-      geom, soa, base, io (its view); mpi -> mesher and below; cli -> its
+      geom, soa, base, io (its view); sizing (size fields) -> base only
+      for now; mpi -> mesher and below; cli -> its
       own headers and include/mixoct.h only.
 The last line: "H header circles, N module circles, M directory circles, K layer
 violations".
@@ -32,8 +33,8 @@ src = os.path.abspath(src)
 # rank: a directory may include directories of lower or equal rank only,
 # except where `extra` says otherwise; `only` restricts some directories.
 rank = {"base": 0, "morton": 0, "soa": 1, "geom": 2, "patterns": 3, "kernels": 4, "io": 2.5,
-        "verify": 2.5, "quad": 4, "mesher": 5, "mpi": 6, "cli": 7}
-only = {"io": {"io", "soa", "geom", "base"}, "verify": {"verify", "soa", "geom", "base"},
+        "verify": 2.5, "sizing": 2, "quad": 4, "mesher": 5, "mpi": 6, "cli": 7}
+only = {"io": {"io", "soa", "geom", "base"}, "sizing": {"sizing", "base"}, "verify": {"verify", "soa", "geom", "base"},
         "cli": {"cli"}}  # the programs: include/mixoct.h and their own headers
 
 inc_re = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)

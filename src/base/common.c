@@ -107,7 +107,7 @@ const char *mx_show_word(const void *word, size_t len, char *out) {
 /* Control characters and bytes that are not valid UTF-8 (from a file name
  * or bytes of an input echoed in a message) are shown as \xNN: a message
  * never drives the terminal, and is valid UTF-8. */
-static void escape_controls(const char *in, char *out, size_t n) {
+static void escape_controls(const char *in, char *out, size_t n, int lines) {
   size_t w = 0, len = strlen(in);
   const unsigned char *p = (const unsigned char *)in;
   for (size_t i = 0; i < len && w + 5 < n;) {
@@ -117,7 +117,7 @@ static void escape_controls(const char *in, char *out, size_t n) {
       memcpy(out + w, p + i, k);
       w += k;
       i += k;
-    } else if (p[i] < 0x20 || p[i] >= 0x7f) {
+    } else if ((p[i] < 0x20 || p[i] >= 0x7f) && !(lines && p[i] == '\n')) {
       snprintf(out + w, n - w, "\\x%02x", p[i]);
       w += 4;
       i++;
@@ -142,7 +142,7 @@ static void elide_middle(char *s, size_t max) {
   memcpy(s + head, " ... ", 5);
 }
 
-static void vreport(const char *kind, const char *file, long line,
+static void vreport(const char *kind, const char *file, long line, int lines,
                     const char *fmt, va_list ap) {
   char msg[8192], name[1024], full[2600], safe[4 * 2600 + 1];
   vsnprintf(msg, sizeof msg, fmt, ap);
@@ -157,7 +157,7 @@ static void vreport(const char *kind, const char *file, long line,
     snprintf(full, sizeof full, "%.600s: %.1500s", name, msg);
   else
     snprintf(full, sizeof full, "%.1500s", msg);
-  escape_controls(full, safe, sizeof safe);
+  escape_controls(full, safe, sizeof safe, lines);
   if (mx_msg_fn && !mx_msg_worker()) {
     mx_msg_fn(mx_msg_user, kind[0] == 'e' ? MX_MSG_ERROR : MX_MSG_WARNING, safe);
     return;
@@ -175,7 +175,15 @@ void mx_error(const char *file, long line, const char *fmt, ...) {
   mx_msg_errors++;
   va_list ap;
   va_start(ap, fmt);
-  vreport("error: ", file, line, fmt, ap);
+  vreport("error: ", file, line, 0, fmt, ap);
+  va_end(ap);
+}
+
+void mx_error_lines(const char *file, long line, const char *fmt, ...) {
+  mx_msg_errors++;
+  va_list ap;
+  va_start(ap, fmt);
+  vreport("error: ", file, line, 1, fmt, ap);
   va_end(ap);
 }
 
@@ -183,7 +191,7 @@ void mx_warning(const char *file, long line, const char *fmt, ...) {
   if (mx_quiet || mx_msg_worker()) return; /* a worker's: not the caller's to see */
   va_list ap;
   va_start(ap, fmt);
-  vreport("warning: ", file, line, fmt, ap);
+  vreport("warning: ", file, line, 0, fmt, ap);
   va_end(ap);
 }
 

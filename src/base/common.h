@@ -12,6 +12,13 @@
 /* mx_error, mx_warning (mixoct.h): messages go to stderr, prefixed
  * "mixoct: ". A message about a file names it and, when known (line > 0),
  * the line: "mixoct: FILE:LINE: text". */
+/* mx_error for a message of several lines (an expression of the user's
+ * and a caret under the column at fault, sizing/expr.c): newlines in file
+ * or text are kept, where mx_error shows them as \x0a like any control
+ * byte so that a file name cannot start a line of its own. So file must be
+ * a label of the program's (an option's name), and the caller escapes any
+ * text of the user's it shows, a newline in it included. */
+void mx_error_lines(const char *file, long line, const char *fmt, ...) MX_PRINTF_(3, 4);
 /* when set, warnings are not printed; per thread (see mx_msg_fn) */
 extern _Thread_local int mx_quiet;
 
