@@ -9,7 +9,7 @@
  *
  *   build/bench/mixoct-cspace-bench [F1..F5 ...] [--delta D ...] [--grid N]
  *
- * One line per case, then one JSON object on the last line. Kd-trees to 24
+ * One line per case, then one JSON object on the last line. Kd-trees to 40
  * splits, octrees to 8 levels (F1: 15 and 5, reached: "capped"). */
 #include <math.h>
 #include <stdio.h>

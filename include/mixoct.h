@@ -626,7 +626,7 @@ typedef struct {
   double delta;      /* the tolerance on the metric non-conformity (eq. 1) */
   int samples;       /* N_s: the N_s^3 sample grid of a node's error; 5 */
   int max_depth;     /* splits from the root (a kd-tree needs 3 for an octree's
-                      * 1); 0: 24 / 8 (256 cells a side) */
+                      * 1); 0: 40 / 8 (256 cells a side) */
 } mx_cspace_params;
 
 typedef struct {

@@ -78,7 +78,7 @@ int mx_cspace_build(const mx_cspace_params *p, mx_size_fn f, void *user, mx_cspa
     return MX_EINPUT;
   }
   const int ns = p->samples ? p->samples : 5;
-  const int maxd = p->max_depth ? p->max_depth : kd ? 24 : 8;
+  const int maxd = p->max_depth ? p->max_depth : kd ? 40 : 8;
   if (ns < 1 || ns > 16 || maxd < 0 || maxd > (kd ? 60 : 20)) {
     mx_error(NULL, 0, "size field: samples %d (1 to 16) or depth %d (up to %d) out of range",
              ns, maxd, kd ? 60 : 20);

@@ -221,6 +221,8 @@ int mx_cs_build_kd(mx_cspace *c, mx_size_fn f, void *user) {
   if (!st) {
     c->nnodes = 1;
     c->axis[0] = MX_KD_LEAF;
+    c->coord[0] = 0.0;
+    c->child[0] = 0;
     c->val[0] = 0;
     double p[24];
     const int nv = vertex ? 8 : 1;
@@ -303,6 +305,8 @@ int mx_cs_build_kd(mx_cspace *c, mx_size_fn f, void *user) {
       lo1[a] = at;
       for (int s = 0; s < 2; s++) {
         c->axis[ch + s] = MX_KD_LEAF;
+        c->coord[ch + s] = 0.0; /* (a leaf's: unused, but defined) */
+        c->child[ch + s] = 0;
         c->val[ch + s] = vertex ? ch + s : (uint32_t)(c->nvalues + np / 3 + s);
       }
       if (!vertex) {
