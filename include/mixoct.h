@@ -663,6 +663,23 @@ double mx_metric_nonconformity(const double a[3], const double b[3]);
  * with their domains: the function, or NULL for another name. */
 mx_size_fn mx_size_builtin(const char *name, double lo[3], double hi[3]);
 
+/* A size field for the octree: an octant is split while its side exceeds
+ * the least size the field takes over it (the smallest of h1, h2, h3 of
+ * the control space's leaves meeting the octant), with the other requests
+ * (the largest level wins; levels up to MX_MAX_LEVEL - 1). f is sampled
+ * into a control space over the domain's box when the octree is built;
+ * p: its structure and tolerance (NULL: K_L kd-tree, split s_S, delta 0.5,
+ * the default: mx_cspace_params_default and the bench's figures). f NULL
+ * removes the field. MX_EINPUT after the octree is built. */
+int mx_mesher_set_size_function(mx_mesher *m, mx_size_fn f, void *user,
+                                const mx_cspace_params *p);
+/* The same from text (the program's --size): one of the paper's test
+ * functions by name ("F1".."F5") or an expression of x, y, z (numbers,
+ * + - * / ^, exp log sqrt abs sin cos min max, pi, e: src/sizing/expr.h),
+ * the size the same along every axis. MX_EINPUT with a message giving the
+ * column of a bad expression. */
+int mx_mesher_set_size_expr(mx_mesher *m, const char *text);
+
 /* ---- The mixoct program's other commands (patterns, 2D report) ---------- */
 
 /* The deepest level of the 2D mesher's quadtree (levels 0 to 27; the

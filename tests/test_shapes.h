@@ -1,17 +1,58 @@
-/* Shapes and measures shared by the materials tests (test_materials.c,
- * test_material_interfaces.c): a UV sphere, an element's signed volume. */
+/* Shapes and measures shared by the tests (test_materials.c,
+ * test_material_interfaces.c, test_size_field.c): a UV sphere, a box, an
+ * element's signed volume. */
 #ifndef MX_TEST_SHAPES_H
 #define MX_TEST_SHAPES_H
 
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "mixoct.h"
 #include "soa/mesh.h"
 
+/* A box [lo, hi], each face an n x n grid of quads split in two triangles
+ * (the same split on both sides of a common face), outward. */
+static inline void box(const double lo[3], const double hi[3], int n, double **xyz, size_t *nv,
+                uint32_t **tri, size_t *nt) {
+  const size_t per = (size_t)(n + 1) * (n + 1);
+  double *x = malloc(6 * per * 3 * sizeof *x);
+  uint32_t *t = malloc(6 * (size_t)n * n * 6 * sizeof *t);
+  size_t k = 0, f = 0;
+  for (int ax = 0; ax < 3; ax++)
+    for (int side = 0; side < 2; side++) {
+      const int u = (ax + 1) % 3, w = (ax + 2) % 3;
+      uint32_t id[17][17]; /* the face's grid points: one vertex per position */
+      for (int i = 0; i <= n; i++)
+        for (int j = 0; j <= n; j++) {
+          double p[3];
+          p[ax] = side ? hi[ax] : lo[ax];
+          p[u] = lo[u] + (hi[u] - lo[u]) * i / n;
+          p[w] = lo[w] + (hi[w] - lo[w]) * j / n;
+          size_t e = 0;
+          while (e < k / 3 && memcmp(x + 3 * e, p, sizeof p)) e++;
+          if (e == k / 3) x[k++] = p[0], x[k++] = p[1], x[k++] = p[2];
+          id[i][j] = (uint32_t)e;
+        }
+      for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+          const uint32_t a = id[i][j], b = id[i + 1][j], c = id[i + 1][j + 1], d = id[i][j + 1];
+          /* (u, w, ax) is right-handed: a b c d turns about +ax */
+          if (side)
+            t[f++] = a, t[f++] = b, t[f++] = c, t[f++] = a, t[f++] = c, t[f++] = d;
+          else
+            t[f++] = a, t[f++] = c, t[f++] = b, t[f++] = a, t[f++] = d, t[f++] = c;
+        }
+    }
+  *nv = k / 3;
+  *nt = f / 3;
+  *xyz = x;
+  *tri = t;
+}
+
 /* A UV sphere of radius r: n rings, 2n segments, outward. */
-static void sphere(double r, int n, double **xyz, size_t *nv, uint32_t **tri, size_t *nt) {
+static inline void sphere(double r, int n, double **xyz, size_t *nv, uint32_t **tri, size_t *nt) {
   const int m = 2 * n;
   *nv = 2 + (size_t)(n - 1) * m;
   *nt = 2 * (size_t)m * (n - 1);
@@ -44,7 +85,7 @@ static void sphere(double r, int n, double **xyz, size_t *nv, uint32_t **tri, si
 
 /* Signed volume of element c (tetrahedra of its node fan from node 0 over
  * its faces' triangles, faces split at their centroid). */
-static double volume(const mx_mesh_arrays *a, size_t c) {
+static inline double volume(const mx_mesh_arrays *a, size_t c) {
   const int t = a->type[c];
   const uint32_t *row = a->conn + 8 * c;
   const double *o = a->xyz + 3 * (size_t)row[0];

@@ -23,6 +23,7 @@ typedef struct {
   const char *outputs[MX_MAX_OUTPUTS];
   int noutputs;
   const char *regions_file;
+  const char *size;      /* --size EXPR|F1..F5: a size field (NULL: none) */
   const char *region_surf[MX_MAX_REGIONS];
   int nregion_surf;
   int s_level, a_level;  /* -s, -a: -1 none */

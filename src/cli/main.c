@@ -81,6 +81,7 @@ int mx_add_inputs(const mx_options *o, mx_mesher *m) {
   for (int r = 0; r < o->nregion_surf; r++)
     MX_CHECK(mx_mesher_add_region_surface(m, o->region_surf[r], o->rlevel[r]));
   if (o->regions_file) MX_CHECK(mx_mesher_read_boxes(m, o->regions_file));
+  if (o->size) MX_CHECK(mx_mesher_set_size_expr(m, o->size));
   return MX_OK;
 }
 

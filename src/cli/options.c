@@ -61,6 +61,13 @@ static const char *usage_text =
     "  -a, --all-level RL          every octant of the domain\n"
     "  -b, --regions FILE.reg      boxes with levels\n"
     "  -r, --region-surface S RL   octants meeting or inside surface S\n"
+    "      --size EXPR             a size field: octants are split while larger\n"
+    "                              than the least size over them; EXPR of x, y,\n"
+    "                              z (+ - * / ^, exp log sqrt abs sin cos min\n"
+    "                              max, pi, e; e.g. \"0.02 + 0.1*abs(x)\") or one\n"
+    "                              of the test functions F1..F5 of Jurczyk &\n"
+    "                              Glut 2016; with the other requests, the\n"
+    "                              finest wins\n"
     "\n"
     "Output:\n"
     "  -o, --output OUT            .vtk (legacy), .vtu, .pvtu (parallel VTU: one\n"
@@ -321,6 +328,9 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
     } else if (IS("-b", "--regions")) {
       MX_CHECK(need_arg(i, argc, a));
       o->regions_file = argv[++i];
+    } else if (strcmp(a, "--size") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      o->size = argv[++i];
     } else if (IS("-r", "--region-surface")) {
       if (i + 2 >= argc) {
         mx_error(NULL, 0, "%s needs a surface and a level", a);
@@ -459,10 +469,10 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
     return MX_EINPUT;
   }
   if (o->s_level < 0 && o->a_level < 0 && !o->regions_file && !o->nregion_surf &&
-      !o->restart_in) {
+      !o->restart_in && !o->size) {
     mx_error(NULL, 0, "no refinement request: the mesh would be empty; give a level on "
                       "the surface (-s RL, e.g. -s 5), everywhere (-a RL), boxes (-b FILE.reg) "
-                      "or a region surface (-r S RL)");
+                      "a region surface (-r S RL) or a size field (--size EXPR)");
     return MX_EINPUT;
   }
   /* fail before meshing, not after a long run */

@@ -54,6 +54,9 @@ int mx_builder_init(mx_builder *B, const mx_trisoup *soup, uint32_t nt_domain,
       }
     }
   MX_CHECK(mx_grid_build(lo, hi, name, &B->tree.grid));
+  /* a size field's levels come from the root cubes' side */
+  B->req.root_side = B->tree.grid.side;
+  if (B->req.size_field) B->tree.edge_levels = mx_max_requested_level(&B->req) - 1;
   const size_t nt = soup->nt;
   B->tree.tri_xyz = mx_alloc(9 * nt * sizeof *B->tree.tri_xyz);
   B->tri_region = mx_alloc(nt + 1);

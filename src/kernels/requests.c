@@ -1,5 +1,18 @@
 #include "kernels/requests.h"
 
+#include <math.h>
+
+/* The level whose octants are no larger than the least size of the field
+ * over [lo, hi] (the whole field's box when lo is NULL); 0 without one. */
+static int field_level(const mx_requests *R, const double lo[3], const double hi[3]) {
+  if (!R->size_field || !(R->root_side > 0.0)) return 0;
+  const double h = lo ? mx_cspace_min_box(R->size_field, lo, hi)
+                      : mx_cspace_min_box(R->size_field, R->size_lo, R->size_hi);
+  if (!(h > 0.0)) return MX_MAX_LEVEL - 1;
+  const double t = ceil(log2(R->root_side / h) - 1e-9);
+  return t <= 0.0 ? 0 : t >= MX_MAX_LEVEL - 1 ? MX_MAX_LEVEL - 1 : (int)t;
+}
+
 static int box_overlaps(const mx_box_region *b, const double lo[3],
                         const double hi[3]) {
   for (int a = 0; a < 3; a++)
@@ -17,7 +30,8 @@ int mx_target_level(const mx_requests *R, const double lo[3],
       t = R->boxes[i].level;
   for (int r = 0; r < R->nregions; r++)
     if ((rmask >> r) & 1u && R->rlevel[r] > t) t = R->rlevel[r];
-  return t;
+  const int f = field_level(R, lo, hi);
+  return f > t ? f : t;
 }
 
 int mx_max_requested_level(const mx_requests *R) {
@@ -28,5 +42,6 @@ int mx_max_requested_level(const mx_requests *R) {
     if (R->boxes[i].level > t) t = R->boxes[i].level;
   for (int r = 0; r < R->nregions; r++)
     if (R->rlevel[r] > t) t = R->rlevel[r];
-  return t;
+  const int f = field_level(R, NULL, NULL);
+  return f > t ? f : t;
 }

@@ -3,6 +3,9 @@
  *   -a RL  every octant of the domain
  *   -b reg boxes with levels (an octant overlapping a box's interior)
  *   -r S RL octants meeting region surface S or inside it
+ *   --size  a size field (issue 27, src/sizing/): an octant is split while
+ *          its side exceeds the field's least size over its box (the
+ *          control space's box query: no small size slips between samples)
  * An octant asked by several requests takes the largest level. */
 #ifndef MX_REQUESTS_H
 #define MX_REQUESTS_H
@@ -24,6 +27,11 @@ typedef struct {
   /* bit r: region r is refined where its triangles meet an octant only,
    * never inside (an interface between two materials: not closed) */
   unsigned meet_only;
+  /* the size field (NULL: none) and the side of a root cube (set with the
+   * grid: mx_builder_init; 0 before, when the field asks nothing) */
+  const mx_cspace *size_field;
+  double size_lo[3], size_hi[3]; /* the field's box */
+  double root_side;
 } mx_requests;
 
 /* Target level of the octant with world box [lo, hi]; surf: it meets the

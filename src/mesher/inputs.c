@@ -6,6 +6,7 @@
  * region's. The single-process mesher and the distributed path
  * (mpi/p4est_inputs.c) both take it. */
 #include "mesher/materials.h"
+#include "sizing/cspace.h"
 #include "mesher/mesher_impl.h"
 
 #include "io/demo_surface.h"
@@ -271,6 +272,11 @@ mx_requests mx_mesher_requests(const mx_mesher *m) {
   r.nregions = m->nregions;
   for (int i = 0; i < m->nregions; i++) r.rlevel[i] = m->region_level[i];
   r.meet_only = m->region_meet_only;
+  if (m->size_cs) {
+    r.size_field = m->size_cs;
+    memcpy(r.size_lo, m->size_cs->lo, sizeof r.size_lo);
+    memcpy(r.size_hi, m->size_cs->hi, sizeof r.size_hi);
+  }
   return r;
 }
 

@@ -134,6 +134,7 @@ void mx_mesher_free(mx_mesher *m) {
     mx_free(m->region_name[r]);
   }
   mx_free(m->boxes);
+  mx_mesher_size_free(m);
   for (int l = 0; l <= MX_MAX_LEVEL; l++) mx_free(m->split_keys[l]);
   mx_free(m->rec);
   mx_free(m);
@@ -237,6 +238,19 @@ int mx_build_tree(mx_mesher *m) {
   const double t0 = mx_wtime();
   mx_mesher_stage(m, "grid");
   MX_CHECK(mx_mesher_assemble_inputs(m));
+  MX_CHECK(mx_mesher_size_space(m));
+  if (m->size_cs) {
+    mx_cspace_info in;
+    mx_cspace_info_get(m->size_cs, &in);
+    m->rec->S.size_field = 1;
+    m->rec->S.size_structure = m->size_params.structure;
+    m->rec->S.size_split = m->size_params.split;
+    m->rec->S.size_leaves = in.leaves;
+    m->rec->S.size_depth = in.depth;
+    m->rec->S.size_capped = in.capped;
+    m->rec->S.size_kb = (double)in.bytes / 1024.0;
+    m->rec->S.size_seconds = in.seconds;
+  }
   const mx_requests req = mx_mesher_requests(m);
   const int use_edges = m->p.balance == MX_BALANCE_EDGES;
   const int st = mx_builder_init(&m->B, &m->soup, m->nt_domain, m->region_t0, &req, use_edges,
@@ -285,7 +299,7 @@ int mx_build_tree(mx_mesher *m) {
   }
   m->rec->S.ph.refine += m->B.stats.t_refine;
   m->rec->S.ph.balance += m->B.stats.t_balance;
-  m->rec->S.max_level = mx_max_requested_level(&req);
+  m->rec->S.max_level = mx_max_requested_level(&m->B.req);
   const double tl = mx_wtime();
   MX_CHECK(mx_update_leaves(m));
   m->rec->S.ph.balance += mx_wtime() - tl; /* the leaf list: the octree's last step */

@@ -65,6 +65,11 @@ typedef struct {
   size_t materials_across;  /* elements with corners in two regions */
   double materials_across_at[3]; /* the first one's centroid */
   double t_materials;       /* seconds labelling the elements */
+  /* the size field's control space (issue 27), when there is one */
+  int size_field, size_structure, size_split;
+  size_t size_leaves;
+  int size_depth, size_capped;
+  double size_kb, size_seconds;
 } mx_summary;
 
 /* What a call records even when it only reads the mesher: the last error,
@@ -99,6 +104,14 @@ struct mx_mesher {
   char *region_name[MX_MAX_REGIONS];
   int region_level[MX_MAX_REGIONS];
   unsigned region_meet_only; /* bit r: refined where met only (mx_requests) */
+  /* the size field (issue 27, mesher/size_field.c): its source, the
+   * control space's parameters, and the control space built from it over
+   * the domain's box with the octree (kept until the source changes) */
+  mx_size_fn size_fn;
+  void *size_user;
+  struct mx_expr *size_expr; /* a source given as text: owned */
+  mx_cspace_params size_params;
+  mx_cspace *size_cs;
   uint32_t nt_domain, region_t0[MX_MAX_REGIONS + 1];
   int assembled;            /* soup holds domain + regions */
   mx_box_region *boxes;

@@ -72,6 +72,10 @@ double mx_winding_domain_volume(const mx_mesher *m);
  * (restart_octree.c). MX_OK or MX_ENOMEM. */
 int mx_mesher_set_split_keys(mx_mesher *m, const uint64_t *key, const uint8_t *level, size_t n);
 mx_requests mx_mesher_requests(const mx_mesher *m);
+/* The size field's control space over the domain's box, built once per
+ * source (mesher/size_field.c); and freeing it with the source. */
+int mx_mesher_size_space(mx_mesher *m);
+void mx_mesher_size_free(mx_mesher *m);
 /* Write the mixed mesh (src/mesher/output.c): written order, boundary tags
  * and bodies, fields. */
 int mx_write_mixed(const mx_mesher *m, const char *path, int ascii);

@@ -1,0 +1,85 @@
+/* The size field of a mesher (issue 27): its source (a function, the
+ * paper's test functions, an expression) and the control space built from
+ * it over the domain's box when the octree is (mx_mesher_size_space), read
+ * by the refinement requests (kernels/requests.h). */
+#include <string.h>
+
+#include "base/common.h"
+#include "mesher/mesher_impl.h"
+#include "sizing/cspace.h"
+#include "sizing/expr.h"
+
+static void drop(mx_mesher *m) {
+  mx_cspace_free(m->size_cs);
+  m->size_cs = NULL;
+  mx_expr_free(m->size_expr);
+  m->size_expr = NULL;
+  m->size_fn = NULL;
+  m->size_user = NULL;
+}
+
+void mx_mesher_size_free(mx_mesher *m) { drop(m); }
+
+int mx_mesher_set_size_function(mx_mesher *m, mx_size_fn f, void *user,
+                                const mx_cspace_params *p) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  int st = MX_OK;
+  mx_cspace_params q;
+  mx_cspace_params_default(&q);
+  q.split = MX_SPLIT_SUM;
+  if (p) q = *p;
+  if (q.structure < MX_CS_KD_LEAF || q.structure > MX_CS_OCT_BALANCED || q.split < 0 ||
+      q.split > MX_SPLIT_SUM || !(q.delta > 0.0) || q.samples < 0 || q.samples > 16 ||
+      q.max_depth < 0 || q.max_depth > 60) {
+    mx_error(NULL, 0, "size field: bad control space parameters (structure %d, split %d, "
+                      "delta %g, samples %d, depth %d)", q.structure, q.split, q.delta,
+             q.samples, q.max_depth);
+    st = MX_EINPUT;
+  }
+  if (!st) {
+    drop(m);
+    m->size_fn = f;
+    m->size_user = user;
+    m->size_params = q;
+  }
+  return mx_call_end(m, &c, st);
+}
+
+/* An expression's sizes: the same along the three axes. */
+static void expr_sizes(void *user, size_t n, const double *xyz, double *h) {
+  mx_expr_eval_many((const mx_expr *)user, n, xyz, h);
+  for (size_t i = n; i-- > 0;) h[3 * i] = h[3 * i + 1] = h[3 * i + 2] = h[i];
+}
+
+int mx_mesher_set_size_expr(mx_mesher *m, const char *text) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  mx_size_fn f = text ? mx_size_builtin(text, NULL, NULL) : NULL;
+  mx_expr *e = NULL;
+  int st = MX_OK;
+  if (!f) st = mx_expr_compile(text, "size field", &e);
+  if (!st) {
+    mx_cspace_params q;
+    mx_cspace_params_default(&q);
+    q.split = MX_SPLIT_SUM;
+    drop(m);
+    m->size_fn = f ? f : expr_sizes;
+    m->size_user = f ? NULL : e;
+    m->size_expr = e;
+    m->size_params = q;
+  }
+  return mx_call_end(m, &c, st);
+}
+
+int mx_mesher_size_space(mx_mesher *m) {
+  if (!m->size_fn || m->size_cs) return MX_OK;
+  mx_cspace_params q = m->size_params;
+  mx_trisoup_bbox(&m->domain, q.lo, q.hi);
+  for (int a = 0; a < 3; a++)
+    if (!(q.hi[a] > q.lo[a])) { /* a flat domain: the field over a slab */
+      q.lo[a] -= 0.5;
+      q.hi[a] += 0.5;
+    }
+  return mx_cspace_build(&q, m->size_fn, m->size_user, &m->size_cs);
+}

