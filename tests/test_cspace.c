@@ -24,15 +24,7 @@
 #include "mixoct.h"
 #include "sizing/cspace.h"
 
-static int failures, checks;
-#define CHECK(c)                                                              \
-  do {                                                                        \
-    checks++;                                                                 \
-    if (!(c)) {                                                               \
-      failures++;                                                             \
-      fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #c);  \
-    }                                                                         \
-  } while (0)
+#include "check.h"
 
 /* a smooth anisotropic field on [0, 2] x [0, 1] x [0, 1] */
 static void smooth(void *user, size_t n, const double *xyz, double *h) {
@@ -347,6 +339,6 @@ int main(void) {
   mx_cspace_params_default(&p);
   p.samples = 40;
   CHECK(mx_cspace_build(&p, smooth, NULL, &c) == MX_EINPUT);
-  printf("%d checks, %d failed\n", checks, failures);
-  return failures != 0;
+  printf("%d failed\n", mx_test_failures);
+  return mx_test_failures != 0;
 }

@@ -19,15 +19,7 @@
 #include "mixoct.h"
 #include "test_shapes.h"
 
-static int failures, checks;
-#define CHECK(c)                                                              \
-  do {                                                                        \
-    checks++;                                                                 \
-    if (!(c)) {                                                               \
-      failures++;                                                             \
-      fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #c);  \
-    }                                                                         \
-  } while (0)
+#include "check.h"
 
 static double h_of(const double p[3]) { return 0.02 + 0.3 * p[0]; }
 
@@ -142,6 +134,6 @@ int main(void) {
     CHECK(mx_mesher_mesh(m) == MX_EINPUT);
     mx_mesher_free(m);
   }
-  printf("%d checks, %d failed\n", checks, failures);
-  return failures != 0;
+  printf("%d failed\n", mx_test_failures);
+  return mx_test_failures != 0;
 }
