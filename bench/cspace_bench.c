@@ -9,8 +9,15 @@
  *
  *   build/bench/mixoct-cspace-bench [F1..F5 ...] [--delta D ...] [--grid N]
  *
+ * Measured 2026-12-05 (2 cores, --grid 40): access 11-400 ns against the
+ * paper's 11-83 us (80x to 2000x; the least for 60 MB octrees at 0.06);
+ * on F3, F4 (s_G, s_S) the trees are the paper's size or a few times it,
+ * built in 0.3-40 ms; on F5, F1, F2 ours are larger (F5 K_L s_S at 0.5:
+ * 758 kB against 10.8 kB): our non-conformity sums the three axes and the
+ * samples include the corners, and F1/F2 change without bound (capped).
+ *
  * One line per case, then one JSON object on the last line. Kd-trees to 40
- * splits, octrees to 8 levels (F1: 15 and 5, reached: "capped"). */
+ * splits, octrees to 8 levels (F1: 15 and 5, F2: 24 and 8, reached: "capped"). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -124,6 +131,8 @@ int main(int argc, char **argv) {
          * refines all but its centre to the depth limit, which is kept
          * small (the paper's tree sizes for F1 suggest a limit too) */
         if (F == 0) p.max_depth = r < 6 ? 15 : 5;
+        /* F2 is singular on its line (h = max(d^2, 1e-10)): capped too */
+        if (F == 1) p.max_depth = r < 6 ? 24 : 8;
         mx_cspace *c = NULL;
         if (mx_cspace_build(&p, f, NULL, &c)) return 1;
         mx_cspace_info in;
