@@ -665,6 +665,23 @@ def level_per_input():
     k.close()
 
 
+
+@check
+def size_field():
+    """set_size: a field finer near x = -1 than x = 1 gives smaller
+    elements there; a bad expression raises InputError naming the column."""
+    m = mixoct.Mesher(stage="full")
+    xyz, tri = uv_sphere(1.0)
+    m.add_surface_arrays(xyz, tri, name="sphere")
+    m.set_size("0.05 + 0.3*(x + 1)")
+    m.mesh()
+    c = centroids(m)
+    left, right = (c[:, 0] < -0.5).sum(), (c[:, 0] > 0.5).sum()
+    assert left > 3 * right, (left, right)
+    e = raises(mixoct.InputError, m.set_size, "0.05 + sqr(x)")
+    assert "column 8" in str(e), str(e)
+    m.close()
+
 M.close()
 npass = sum(1 for _, ok in RESULTS if ok)
 nfail = len(RESULTS) - npass

@@ -343,6 +343,7 @@ def _declare(lib):
         "mx_mesher_add_region_surface": (I, [P, S, I]),
         "mx_mesher_set_material": (I, [P, I, I, S]),
         "mx_mesher_set_input_level": (I, [P, I, I, I]),
+        "mx_mesher_set_size_expr": (I, [P, S]),
         "mx_mesher_build_octree": (I, [P]),
         "mx_mesher_transition": (I, [P]),
         "mx_mesher_boundary": (I, [P]),
@@ -989,6 +990,14 @@ class Mesher(_MesherBase):
         -i FILE). Each level takes a region surface's place."""
         self._call("mx_mesher_set_input_level", int(input), int(surface_level),
                    int(inside_level))
+
+    def set_size(self, text):
+        """A size field (the program's --size): an expression of x, y, z
+        (numbers, + - * / ^, exp log sqrt abs sin cos min max, pi, e) or
+        one of the test functions "F1".."F5"; octants are split while
+        larger than the least size over them. Raises InputError with the
+        column of a bad expression."""
+        self._call("mx_mesher_set_size_expr", str(text).encode())
 
     def add_region_surface(self, path, level):
         """-r: octants meeting or inside this surface go to `level`."""
