@@ -387,7 +387,8 @@ expect_exit 2 "--p4est: no ASCII .msh" mpi 1 --demo -s 3 --p4est --ascii -o "$T/
 expect_exit 2 "--p4est: no restart file" mpi 1 --demo -s 3 --p4est --restart "$T/x.oct"
 expect_exit 2 "--p4est --materials: no restart file" mpi 1 --demo -s 3 --materials --p4est \
   --restart "$T/x.oct"
-has "$T/err" "no -c, --restart or --boundary" "--p4est: the usage message names -c, --restart, --boundary"
+has "$T/err" "no -c, --restart, --boundary or --size" "--p4est: the usage message names -c, --restart, --boundary, --size"
+expect_exit 2 "--p4est: no --size (a size field)" mpi 1 --demo --p4est --size "0.1"
 expect_exit 2 "--p4est --materials: no -c" mpi 1 --demo --materials --p4est -c "$T/x.oct"
 expect_exit 2 "--p4est --materials: no --boundary" mpi 1 --demo -s 3 --materials --p4est \
   --boundary "$T/b.vtu"
