@@ -679,6 +679,11 @@ int mx_mesher_set_size_function(mx_mesher *m, mx_size_fn f, void *user,
  * the size the same along every axis. MX_EINPUT with a message giving the
  * column of a bad expression. */
 int mx_mesher_set_size_expr(mx_mesher *m, const char *text);
+/* Bounds on the field's sizes (--size-min, --size-max): each size is
+ * raised to hmin and lowered to hmax before the control space is built (0:
+ * no bound). With no field, hmax alone is a field of that size. MX_EINPUT
+ * for a negative, non-finite or crossed pair. */
+int mx_mesher_set_size_limits(mx_mesher *m, double hmin, double hmax);
 
 /* ---- The mixoct program's other commands (patterns, 2D report) ---------- */
 

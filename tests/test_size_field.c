@@ -10,7 +10,9 @@
  *    the field's least size there;
  *  - far fewer leaves than the uniform octree of the least size;
  *  - the full stage valid, and the same leaves for 1 and 2 threads;
- *  - a bad expression, a field with NaN or with 0: MX_EINPUT. */
+ *  - bounds on the sizes (--size-min, --size-max);
+ *  - a bad expression, a field with NaN or with 0, bad bounds: MX_EINPUT;
+ *    a field finer than memory allows: MX_ENOMEM before refining. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -60,6 +62,32 @@ static mx_mesher *cube(int stage, int threads, mx_size_fn f) {
   free(t);
   if (f) CHECK(mx_mesher_set_size_function(m, f, NULL, NULL) == MX_OK);
   return m;
+}
+
+/* The least and largest side of the leaves (the bounding boxes of their
+ * elements' nodes). */
+static void leaf_sides(const mx_mesh_arrays *a, double *smin, double *smax) {
+  double *lo = malloc((a->nleaves + 1) * sizeof *lo), *hi = malloc((a->nleaves + 1) * sizeof *hi);
+  for (size_t l = 0; l < a->nleaves; l++) lo[l] = INFINITY, hi[l] = -INFINITY;
+  for (size_t c = 0; c < a->nelements; c++)
+    for (int k = 0; k < 8 && a->conn[8 * c + k] != UINT32_MAX; k++) {
+      const double x = a->xyz[3 * (size_t)a->conn[8 * c + k]];
+      lo[a->leaf[c]] = fmin(lo[a->leaf[c]], x);
+      hi[a->leaf[c]] = fmax(hi[a->leaf[c]], x);
+    }
+  for (size_t l = 0; l < a->nleaves; l++) {
+    *smin = fmin(*smin, hi[l] - lo[l]);
+    *smax = fmax(*smax, hi[l] - lo[l]);
+  }
+  free(lo);
+  free(hi);
+}
+
+/* sizes down to 1e-9 on the plane x = 0.5: far more octants than memory */
+static void tiny(void *user, size_t n, const double *xyz, double *h) {
+  (void)user;
+  for (size_t i = 0; i < n; i++)
+    h[3 * i] = h[3 * i + 1] = h[3 * i + 2] = fabs(xyz[3 * i] - 0.5) + 1e-9;
 }
 
 static void quiet(void *user, int level, const char *text) {
@@ -123,11 +151,41 @@ int main(void) {
   CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
   CHECK(a.nleaves == n2);
   mx_mesher_free(m);
+  /* bounds: the least size raised to 0.05 (no leaf of side 0.025 or less:
+   * the level of 0.0158 is not needed), the largest lowered to 0.06 */
+  m = cube(MX_STAGE_TRANSITION, 2, field);
+  CHECK(mx_mesher_set_size_limits(m, 0.05, 0.06) == MX_OK);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  {
+    double smin = INFINITY, smax = 0.0;
+    leaf_sides(&a, &smin, &smax);
+    CHECK(smin > 0.025 && smax <= 0.06 * 1.35);
+    printf("bounds 0.05 .. 0.06: leaf sides %.4f .. %.4f, %zu leaves\n", smin, smax, a.nleaves);
+  }
+  mx_mesher_free(m);
+  /* --size-max alone: a field of that size */
+  m = cube(MX_STAGE_TRANSITION, 2, NULL);
+  CHECK(mx_mesher_set_size_limits(m, 0.0, 0.1) == MX_OK);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  {
+    double smin = INFINITY, smax = 0.0;
+    leaf_sides(&a, &smin, &smax);
+    CHECK(smax <= 0.1 && smin > 0.05 - 1e-9);
+  }
+  mx_mesher_free(m);
   /* bad fields */
   mx_set_thread_message_handler(quiet, NULL);
   m = cube(MX_STAGE_OCTREE, 2, NULL);
   CHECK(mx_mesher_set_size_expr(m, "0.02 + 0.3*") == MX_EINPUT);
   CHECK(mx_mesher_set_size_expr(m, "F7(x)") == MX_EINPUT);
+  CHECK(mx_mesher_set_size_limits(m, -1.0, 0.0) == MX_EINPUT);
+  CHECK(mx_mesher_set_size_limits(m, 0.2, 0.1) == MX_EINPUT);
+  mx_mesher_free(m);
+  /* refused before refining, from the field's own estimate */
+  m = cube(MX_STAGE_TRANSITION, 2, tiny);
+  CHECK(mx_mesher_mesh(m) == MX_ENOMEM);
   mx_mesher_free(m);
   for (bad = 0; bad < 2; bad++) {
     m = cube(MX_STAGE_OCTREE, 2, bad_field);

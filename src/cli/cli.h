@@ -24,6 +24,7 @@ typedef struct {
   int noutputs;
   const char *regions_file;
   const char *size;      /* --size EXPR|F1..F5: a size field (NULL: none) */
+  double size_min, size_max; /* --size-min, --size-max (0: none) */
   const char *region_surf[MX_MAX_REGIONS];
   int nregion_surf;
   int s_level, a_level;  /* -s, -a: -1 none */

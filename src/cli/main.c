@@ -82,6 +82,8 @@ int mx_add_inputs(const mx_options *o, mx_mesher *m) {
     MX_CHECK(mx_mesher_add_region_surface(m, o->region_surf[r], o->rlevel[r]));
   if (o->regions_file) MX_CHECK(mx_mesher_read_boxes(m, o->regions_file));
   if (o->size) MX_CHECK(mx_mesher_set_size_expr(m, o->size));
+  if (o->size_min > 0.0 || o->size_max > 0.0)
+    MX_CHECK(mx_mesher_set_size_limits(m, o->size_min, o->size_max));
   return MX_OK;
 }
 

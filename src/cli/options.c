@@ -3,6 +3,7 @@
 #include <errno.h>
 #include <omp.h>
 #include <stdio.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -68,6 +69,9 @@ static const char *usage_text =
     "                              of the test functions F1..F5 of Jurczyk &\n"
     "                              Glut 2016; with the other requests, the\n"
     "                              finest wins\n"
+    "      --size-min H, --size-max H\n"
+    "                              bounds on the field's sizes (--size-max\n"
+    "                              alone: a field of that size everywhere)\n"
     "\n"
     "Output:\n"
     "  -o, --output OUT            .vtk (legacy), .vtu, .pvtu (parallel VTU: one\n"
@@ -331,6 +335,16 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
     } else if (strcmp(a, "--size") == 0) {
       MX_CHECK(need_arg(i, argc, a));
       o->size = argv[++i];
+    } else if (strcmp(a, "--size-min") == 0 || strcmp(a, "--size-max") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      char *end = NULL;
+      const double v = strtod(argv[++i], &end);
+      if (end == argv[i] || *end || !(v > 0.0) || !isfinite(v)) {
+        mx_error(NULL, 0, "%s needs a positive size, not '%s'", a, argv[i]);
+        return MX_EINPUT;
+      }
+      if (strcmp(a, "--size-min") == 0) o->size_min = v;
+      else o->size_max = v;
     } else if (IS("-r", "--region-surface")) {
       if (i + 2 >= argc) {
         mx_error(NULL, 0, "%s needs a surface and a level", a);
@@ -469,7 +483,7 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
     return MX_EINPUT;
   }
   if (o->s_level < 0 && o->a_level < 0 && !o->regions_file && !o->nregion_surf &&
-      !o->restart_in && !o->size) {
+      !o->restart_in && !o->size && !(o->size_max > 0.0)) {
     mx_error(NULL, 0, "no refinement request: the mesh would be empty; give a level on "
                       "the surface (-s RL, e.g. -s 5), everywhere (-a RL), boxes (-b FILE.reg) "
                       "a region surface (-r S RL) or a size field (--size EXPR)");

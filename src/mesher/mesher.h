@@ -111,6 +111,7 @@ struct mx_mesher {
   void *size_user;
   struct mx_expr *size_expr; /* a source given as text: owned */
   mx_cspace_params size_params;
+  double size_min, size_max; /* clamps of the field's sizes (0: none) */
   mx_cspace *size_cs;
   uint32_t nt_domain, region_t0[MX_MAX_REGIONS + 1];
   int assembled;            /* soup holds domain + regions */

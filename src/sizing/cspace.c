@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "base/common.h"
+#include "base/morton.h"
 
 void mx_cspace_params_default(mx_cspace_params *p) {
   memset(p, 0, sizeof *p);
@@ -144,4 +145,75 @@ void mx_cspace_free(mx_cspace *c) {
   mx_free(c->level);
   mx_free(c->h);
   mx_free(c);
+}
+
+/* One leaf's share of mx_cspace_cells. */
+static void add_cells(const double lo[3], const double hi[3], double h, double floor, double f,
+                      double *sum, double *hmin, double at[3]) {
+  if (h < *hmin) {
+    *hmin = h;
+    for (int a = 0; a < 3; a++) at[a] = 0.5 * (lo[a] + hi[a]);
+  }
+  const double s = f * (h > floor ? h : floor);
+  *sum += (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]) / (s * s * s);
+}
+
+double mx_cspace_cells(const mx_cspace *c, double floor, double f, double *hmin, double at[3]) {
+  double sum = 0.0;
+  *hmin = INFINITY;
+  memcpy(at, c->lo, 3 * sizeof *at);
+  if (c->structure > MX_CS_KD_VERTEX) {
+    const double n = ldexp(1.0, c->max_depth);
+    for (size_t i = 0; i < c->nleaves; i++) {
+      uint32_t p[3];
+      double lo[3], hi[3];
+      mx_morton_decode(c->key[i], p);
+      const double side = ldexp(1.0, c->max_depth - c->level[i]);
+      for (int a = 0; a < 3; a++) {
+        lo[a] = c->lo[a] + (c->hi[a] - c->lo[a]) * (double)p[a] / n;
+        hi[a] = c->lo[a] + (c->hi[a] - c->lo[a]) * ((double)p[a] + side) / n;
+      }
+      const double *h = c->h + 3 * i;
+      add_cells(lo, hi, fmin(h[0], fmin(h[1], h[2])), floor, f, &sum, hmin, at);
+    }
+    return sum;
+  }
+  /* the kd-tree's leaves with their boxes: a walk with an explicit stack */
+  struct {
+    uint32_t node;
+    double lo[3], hi[3];
+  } st[128];
+  int top = 0;
+  st[0].node = 0;
+  memcpy(st[0].lo, c->lo, sizeof st[0].lo);
+  memcpy(st[0].hi, c->hi, sizeof st[0].hi);
+  top = 1;
+  while (top) {
+    top--;
+    const uint32_t i = st[top].node;
+    double lo[3], hi[3];
+    memcpy(lo, st[top].lo, sizeof lo);
+    memcpy(hi, st[top].hi, sizeof hi);
+    if (c->axis[i] == MX_KD_LEAF) {
+      const int nv = c->structure == MX_CS_KD_LEAF ? 1 : 8;
+      double h = INFINITY;
+      for (int k = 0; k < nv; k++) {
+        const uint32_t v = nv == 1 ? c->val[i] : c->vid[8 * (size_t)c->val[i] + k];
+        for (int a = 0; a < 3; a++) h = fmin(h, c->h[3 * (size_t)v + a]);
+      }
+      add_cells(lo, hi, h, floor, f, &sum, hmin, at);
+      continue;
+    }
+    if (top + 2 > 128) continue; /* deeper than any build goes */
+    const int a = c->axis[i];
+    for (int s = 0; s < 2; s++) {
+      st[top].node = c->child[i] + (uint32_t)s;
+      memcpy(st[top].lo, lo, sizeof lo);
+      memcpy(st[top].hi, hi, sizeof hi);
+      if (s) st[top].lo[a] = c->coord[i];
+      else st[top].hi[a] = c->coord[i];
+      top++;
+    }
+  }
+  return sum;
 }

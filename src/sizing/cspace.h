@@ -60,6 +60,11 @@ int mx_cs_eval(mx_size_fn f, void *user, size_t n, const double *xyz, double *h)
  * monotone field; the centre too for an odd ns), x fastest. */
 void mx_cs_samples(const double lo[3], const double hi[3], int ns, double *xyz);
 
+/* About how many cubes of side f * max(h, floor) fill the field's box, h
+ * the least size of each leaf (K_V: of its corners): what an octree that
+ * follows the field would hold, for the memory estimate. *hmin, *at: the
+ * least size and a point where it is. */
+double mx_cspace_cells(const mx_cspace *c, double floor, double f, double *hmin, double at[3]);
 int mx_cs_build_kd(mx_cspace *c, mx_size_fn f, void *user);
 int mx_cs_build_octree(mx_cspace *c, mx_size_fn f, void *user);
 void mx_cs_query_kd(const mx_cspace *c, const double p[3], double h[3]);
