@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "mixoct.h"
 #include "test_shapes.h"
@@ -143,6 +144,34 @@ int main(void) {
   CHECK(mx_mesher_mesh(m) == MX_OK);
   CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
   CHECK(a.nleaves == n2 && a.invalid == 0 && a.jens_min > 0);
+  {
+    /* the cell field target_size: the field at each cell (a legacy VTK
+     * file read back: every value between the field's least and largest) */
+    char path[64];
+    snprintf(path, sizeof path, "/tmp/mx_size_field_%d.vtk", (int)getpid());
+    CHECK(mx_mesher_write(m, path, 1) == MX_OK);
+    FILE *f = fopen(path, "r");
+    char line[256];
+    size_t n = 0, out = 0;
+    int in = 0;
+    while (f && fgets(line, sizeof line, f)) {
+      if (!strncmp(line, "target_size", 11) || !strncmp(line, "SCALARS target_size", 19)) {
+        in = 1;
+        continue;
+      }
+      if (in && !strncmp(line, "LOOKUP_TABLE", 12)) continue;
+      if (in) {
+        char *end;
+        const double v = strtod(line, &end);
+        if (end == line) break;
+        n++;
+        out += !(v >= 0.02 / 1.35 && v <= 0.32 * 1.35);
+      }
+    }
+    if (f) fclose(f);
+    remove(path);
+    CHECK(n == a.nelements && out == 0);
+  }
   mx_mesher_free(m);
   /* an expression: the same field written as text gives the same leaves */
   m = cube(MX_STAGE_TRANSITION, 2, NULL);

@@ -4,6 +4,7 @@
  * the cell fields type, level, jens and body, the point fields boundary and
  * surface_tag. Tags need the full stage (a boundary on the input); the
  * transition stage's mesh is written plain. */
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -237,14 +238,37 @@ static int make_material_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T
 typedef struct {
   uint32_t *order;
   tags T;
-  mx_field f[5], pf[2];
+  mx_field f[6], pf[2];
   mx_mesh_view v;
   int tagged;
+  double *size; /* a size field's: each cell's target size */
 } prepared;
 
 static void release(prepared *P) {
   tags_free(&P->T);
   mx_free(P->order);
+  mx_free(P->size);
+}
+
+/* With a size field (issue 27): the cell field target_size, the least of
+ * the field's sizes at the cell's centroid, to see the field in a viewer. */
+static int add_size_field(const mx_mesher *m, prepared *P) {
+  if (!m->size_cs) return MX_OK;
+  const mx_mesh *M = &m->M;
+  P->size = mx_alloc((M->ncells + 1) * sizeof *P->size);
+  if (!P->size) return MX_ENOMEM;
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++) {
+    const int nv = mx_cell_nodes[M->type[c]];
+    double p[3] = {0.0, 0.0, 0.0}, h[3];
+    for (int k = 0; k < nv; k++)
+      for (int a = 0; a < 3; a++) p[a] += M->xyz[3 * (size_t)M->conn[8 * c + k] + a] / nv;
+    mx_cspace_query(m->size_cs, p, h);
+    P->size[c] = fmin(h[0], fmin(h[1], h[2]));
+  }
+  P->f[P->v.ncell_fields++] = (mx_field){.name = "target_size", .is_double = 1,
+                                         .dvalues = P->size};
+  return MX_OK;
 }
 
 static int prepare(const mx_mesher *m, prepared *P) {
@@ -264,7 +288,10 @@ static int prepare(const mx_mesher *m, prepared *P) {
                         .cell_fields = P->f, .npoint_fields = 1, .point_fields = P->pf,
                         .order = P->order};
   P->tagged = (m->mesh_stage == MX_STAGE_FULL && m->ndomain > 0) || M->material;
-  if (!P->tagged) return mx_cells_by_type(M->type, M->ncells, P->order, NULL);
+  if (!P->tagged) {
+    MX_CHECK(add_size_field(m, P));
+    return mx_cells_by_type(M->type, M->ncells, P->order, NULL);
+  }
   if (M->material)
     MX_CHECK(make_material_tags(m, &P->v, &P->T));
   else
@@ -285,7 +312,7 @@ static int prepare(const mx_mesher *m, prepared *P) {
   P->v.nbodies = P->T.nbodies;
   P->v.body_names = P->T.body_names;
   if (P->T.material) P->v.body_physical = P->T.body_physical;
-  return MX_OK;
+  return add_size_field(m, P);
 }
 
 int mx_write_mixed(const mx_mesher *m, const char *path, int ascii) {
