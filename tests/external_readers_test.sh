@@ -31,9 +31,7 @@
 MIXOCT=${1:?usage: external_readers_test.sh path/to/mixoct}
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
-fails=0
-ok() { echo "ok   $*"; }
-bad() { echo "FAIL $*"; fails=$((fails + 1)); }
+. "$(cd "$(dirname "$0")" && pwd)/lib.sh"
 missing() { # reader description
   if [ -n "${CI:-}" ]; then
     bad "$1 not installed (CI is set: every reader is required)"
@@ -42,19 +40,6 @@ missing() { # reader description
   fi
 }
 
-# A python3 that can import the given modules ($PYTHON first, then the
-# system's, then the one on PATH).
-find_python() {
-  local py
-  for py in ${PYTHON:-} /usr/bin/python3 python3; do
-    command -v "$py" >/dev/null 2>&1 || continue
-    if "$py" -c "import $1" >/dev/null 2>&1; then
-      echo "$py"
-      return 0
-    fi
-  done
-  return 1
-}
 JSON_PY=$(find_python json) || { echo "FAIL no python3 to read the JSON summary"; exit 1; }
 
 # ---- 1. mesh the demo into every format ---------------------------------------

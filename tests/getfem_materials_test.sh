@@ -25,14 +25,8 @@ export PYTHONDONTWRITEBYTECODE=1                    # no __pycache__ in the tree
 
 [ -x "$MIXOCT" ] || { echo "FAIL: $MIXOCT not built"; exit 1; }
 
-PY=""
-for py in ${PYTHON:-} /usr/bin/python3 python3; do
-  command -v "$py" >/dev/null 2>&1 || continue
-  if "$py" -c 'import numpy, scipy.sparse, getfem' >/dev/null 2>&1; then
-    PY=$py
-    break
-  fi
-done
+. "$HERE/lib.sh"
+PY=$(find_python "numpy, scipy.sparse, getfem") || PY=""
 if [ -z "$PY" ]; then
   if [ -n "${CI:-}" ]; then
     echo "FAIL: no python3 with numpy, scipy and getfem (CI is set: the GetFEM test must run)"

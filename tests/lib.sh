@@ -9,6 +9,19 @@ expect_exit() { # code, description, command...
   if [ "$got" -eq "$want" ]; then ok "$what (exit $got)"; else bad "$what: exit $got, wanted $want"; cat "$T/err"; fi
 }
 has() { if grep -q -- "$2" "$1"; then ok "$3"; else bad "$3: '$2' not in $(cat "$1")"; fi; }
+# A python3 that can import the given modules (comma-separated, as import
+# takes them): $PYTHON first, then the system's, then the one on PATH.
+find_python() {
+  local py
+  for py in ${PYTHON:-} /usr/bin/python3 python3; do
+    command -v "$py" >/dev/null 2>&1 || continue
+    if "$py" -c "import $1" >/dev/null 2>&1; then
+      echo "$py"
+      return 0
+    fi
+  done
+  return 1
+}
 same() { if [ "$1" == "$2" ]; then ok "$3"; else bad "$3: '$1' != '$2'"; fi; }
 exists() { if [ -s "$1" ]; then ok "$1 written"; else bad "$1 missing"; fi; }
 absent() { if [ ! -e "$1" ]; then ok "$2"; else bad "$2: $1 exists"; fi; }
