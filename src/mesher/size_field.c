@@ -11,6 +11,13 @@
 #include "sizing/cspace.h"
 #include "sizing/expr.h"
 
+/* The mesher's control space unless told otherwise: a K_L kd-tree split by
+ * s_S (the smallest leaf-valued trees in bench/cspace_bench.c). */
+static void default_params(mx_cspace_params *q) {
+  mx_cspace_params_default(q);
+  q->split = MX_SPLIT_SUM;
+}
+
 static void drop(mx_mesher *m) {
   mx_cspace_free(m->size_cs);
   m->size_cs = NULL;
@@ -26,19 +33,10 @@ int mx_mesher_set_size_function(mx_mesher *m, mx_size_fn f, void *user,
                                 const mx_cspace_params *p) {
   mx_call c;
   mx_call_begin(m, &c);
-  int st = MX_OK;
   mx_cspace_params q;
-  mx_cspace_params_default(&q);
-  q.split = MX_SPLIT_SUM;
+  default_params(&q);
   if (p) q = *p;
-  if (q.structure < MX_CS_KD_LEAF || q.structure > MX_CS_OCT_BALANCED || q.split < 0 ||
-      q.split > MX_SPLIT_SUM || !(q.delta > 0.0) || q.samples < 0 || q.samples > 16 ||
-      q.max_depth < 0 || q.max_depth > 60) {
-    mx_error(NULL, 0, "size field: bad control space parameters (structure %d, split %d, "
-                      "delta %g, samples %d, depth %d)", q.structure, q.split, q.delta,
-             q.samples, q.max_depth);
-    st = MX_EINPUT;
-  }
+  const int st = mx_cs_params_check(&q, 0);
   if (!st) {
     drop(m);
     m->size_fn = f;
@@ -63,8 +61,7 @@ int mx_mesher_set_size_expr(mx_mesher *m, const char *text) {
   if (!f) st = mx_expr_compile(text, "size field", &e);
   if (!st) {
     mx_cspace_params q;
-    mx_cspace_params_default(&q);
-    q.split = MX_SPLIT_SUM;
+    default_params(&q);
     drop(m);
     m->size_fn = f ? f : expr_sizes;
     m->size_user = f ? NULL : e;
@@ -138,10 +135,7 @@ static int budget(mx_mesher *m, const mx_cspace_params *q) {
 int mx_mesher_size_space(mx_mesher *m) {
   if ((!m->size_fn && !(m->size_max > 0.0)) || m->size_cs) return MX_OK;
   mx_cspace_params q = m->size_params;
-  if (!m->size_fn) {
-    mx_cspace_params_default(&q);
-    q.split = MX_SPLIT_SUM;
-  }
+  if (!m->size_fn) default_params(&q);
   mx_trisoup_bbox(&m->domain, q.lo, q.hi);
   for (int a = 0; a < 3; a++)
     if (!(q.hi[a] > q.lo[a])) { /* a flat domain: the field over a slab */

@@ -39,6 +39,19 @@ void mx_cs_samples(const double lo[3], const double hi[3], int ns, double *xyz) 
       }
 }
 
+int mx_cs_sizes_ok(const double *h, size_t n) {
+  for (size_t i = 0; i < 3 * n; i++)
+    if (!(h[i] > 0.0 && h[i] < INFINITY)) return 0;
+  return 1;
+}
+
+int mx_cs_bad_sizes(const mx_cspace *c) {
+  mx_error(NULL, 0, "size field: a size that is not finite and positive in the box "
+                    "[%g, %g] x [%g, %g] x [%g, %g]", c->lo[0], c->hi[0], c->lo[1], c->hi[1],
+           c->lo[2], c->hi[2]);
+  return MX_EINPUT;
+}
+
 int mx_cs_eval(mx_size_fn f, void *user, size_t n, const double *xyz, double *h) {
   enum { BLOCK = 256 };
   const size_t nb = (n + BLOCK - 1) / BLOCK;
@@ -60,15 +73,14 @@ int mx_cs_eval(mx_size_fn f, void *user, size_t n, const double *xyz, double *h)
   return MX_OK;
 }
 
-int mx_cspace_build(const mx_cspace_params *p, mx_size_fn f, void *user, mx_cspace **out) {
-  *out = NULL;
+int mx_cs_params_check(const mx_cspace_params *p, int box) {
   const int kd = p->structure == MX_CS_KD_LEAF || p->structure == MX_CS_KD_VERTEX;
   if (p->structure < MX_CS_KD_LEAF || p->structure > MX_CS_OCT_BALANCED ||
-      (kd && (p->split < MX_SPLIT_LONGEST || p->split > MX_SPLIT_SUM)) || !f) {
+      (kd && (p->split < MX_SPLIT_LONGEST || p->split > MX_SPLIT_SUM))) {
     mx_error(NULL, 0, "size field: no structure %d with split rule %d", p->structure, p->split);
     return MX_EINPUT;
   }
-  for (int a = 0; a < 3; a++)
+  for (int a = 0; box && a < 3; a++)
     if (!(p->hi[a] > p->lo[a]) || !isfinite(p->lo[a]) || !isfinite(p->hi[a])) {
       mx_error(NULL, 0, "size field: an empty or infinite box ([%g, %g] along axis %d)",
                p->lo[a], p->hi[a], a);
@@ -85,6 +97,19 @@ int mx_cspace_build(const mx_cspace_params *p, mx_size_fn f, void *user, mx_cspa
              ns, maxd, kd ? 60 : 20);
     return MX_EINPUT;
   }
+  return MX_OK;
+}
+
+int mx_cspace_build(const mx_cspace_params *p, mx_size_fn f, void *user, mx_cspace **out) {
+  *out = NULL;
+  if (!f) {
+    mx_error(NULL, 0, "size field: no source function");
+    return MX_EINPUT;
+  }
+  MX_CHECK(mx_cs_params_check(p, 1));
+  const int kd = p->structure == MX_CS_KD_LEAF || p->structure == MX_CS_KD_VERTEX;
+  const int ns = p->samples ? p->samples : 5;
+  const int maxd = p->max_depth ? p->max_depth : kd ? 40 : 8;
   mx_cspace *c = mx_calloc(sizeof *c);
   if (!c) return MX_ENOMEM;
   c->structure = p->structure;

@@ -55,6 +55,14 @@ struct mx_cspace_s {
 /* Evaluates f at n points in parallel blocks, checking every size is
  * finite and positive (MX_EINPUT naming the first bad point otherwise). */
 int mx_cs_eval(mx_size_fn f, void *user, size_t n, const double *xyz, double *h);
+/* The parameters' checks of mx_cspace_build (box: the box's too), with a
+ * message: MX_EINPUT. */
+int mx_cs_params_check(const mx_cspace_params *p, int box);
+/* Whether the n sizes (3 a point) are all finite and positive. */
+int mx_cs_sizes_ok(const double *h, size_t n);
+/* The message for a source that gave a size not finite and positive
+ * somewhere in c's box: MX_EINPUT. */
+int mx_cs_bad_sizes(const mx_cspace *c);
 /* The sample points of a node box: the regular ns^3 grid on the closed box
  * (its corners included: where a leaf's constant value is farthest from a
  * monotone field; the centre too for an odd ns), x fastest. */

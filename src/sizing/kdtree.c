@@ -96,12 +96,6 @@ static void approx(const mx_cspace *c, uint32_t i, const double lo[3], const dou
   }
 }
 
-static int sizes_ok(const double *h, size_t n) {
-  for (size_t i = 0; i < 3 * n; i++)
-    if (!(h[i] > 0.0 && h[i] < INFINITY)) return 0;
-  return 1;
-}
-
 /* Scratch of one thread. */
 typedef struct {
   double xyz[3 * MAX_NS * MAX_NS * MAX_NS], h[3 * MAX_NS * MAX_NS * MAX_NS];
@@ -130,7 +124,7 @@ static int gradient_split(const mx_cspace *c, mx_size_fn f, void *user, scratch 
         }
   }
   f(user, 3 * per, S->gx, S->gh);
-  if (!sizes_ok(S->gh, 3 * per)) {
+  if (!mx_cs_sizes_ok(S->gh, 3 * per)) {
     *bad = 1;
     return 0;
   }
@@ -185,7 +179,7 @@ static void judge(const mx_cspace *c, mx_size_fn f, void *user, scratch *S, uint
   *axis = -1;
   mx_cs_samples(lo, hi, ns, S->xyz);
   f(user, n, S->xyz, S->h);
-  if (!sizes_ok(S->h, n)) {
+  if (!mx_cs_sizes_ok(S->h, n)) {
     *bad = 1;
     return;
   }
@@ -215,7 +209,7 @@ int mx_cs_build_kd(mx_cspace *c, mx_size_fn f, void *user) {
   size_t ncap = 0, vcap = 0;
   frontier F = {0, 0, NULL, NULL}, G = {0, 0, NULL, NULL};
   int *split_axis = NULL;
-  double *split_at = NULL, *pts = NULL, *vals = NULL;
+  double *split_at = NULL, *pts = NULL;
   int st = reserve(c, &ncap, &vcap, 1, vertex ? 8 : 1, vertex);
   /* the root and its value(s) */
   if (!st) {
@@ -268,10 +262,7 @@ int mx_cs_build_kd(mx_cspace *c, mx_size_fn f, void *user) {
       break;
     }
     if (bad) {
-      mx_error(NULL, 0, "size field: a size that is not finite and positive in the box "
-                        "[%g, %g] x [%g, %g] x [%g, %g]", c->lo[0], c->hi[0], c->lo[1], c->hi[1],
-               c->lo[2], c->hi[2]);
-      st = MX_EINPUT;
+      st = mx_cs_bad_sizes(c);
       break;
     }
     capped |= cap;
@@ -353,7 +344,6 @@ int mx_cs_build_kd(mx_cspace *c, mx_size_fn f, void *user) {
   mx_free(split_axis);
   mx_free(split_at);
   mx_free(pts);
-  mx_free(vals);
   if (st) return st;
   /* keep the leaves' values only (K_L) and the leaves' corner lists (K_V) */
   size_t nl = 0;

@@ -61,15 +61,12 @@ static int too_far(const mx_cspace *c, mx_size_fn f, void *user, const double lo
   const size_t n = (size_t)c->ns * c->ns * c->ns;
   mx_cs_samples(lo, hi, c->ns, xyz);
   f(user, n, xyz, fh);
-  for (size_t s = 0; s < n; s++) {
-    const double *q = fh + 3 * s;
-    if (!(q[0] > 0.0 && q[0] < INFINITY && q[1] > 0.0 && q[1] < INFINITY && q[2] > 0.0 &&
-          q[2] < INFINITY)) {
-      *bad = 1;
-      return 0;
-    }
-    if (mx_metric_nonconformity(q, h) > c->delta) return 1;
+  if (!mx_cs_sizes_ok(fh, n)) {
+    *bad = 1;
+    return 0;
   }
+  for (size_t s = 0; s < n; s++)
+    if (mx_metric_nonconformity(fh + 3 * s, h) > c->delta) return 1;
   return 0;
 }
 
@@ -138,11 +135,7 @@ static int adapt(mx_cspace *c, mx_size_fn f, void *user, leaves *work, leaves *d
       mx_free(xyz);
     }
     if (nomem || bad) {
-      if (bad)
-        mx_error(NULL, 0, "size field: a size that is not finite and positive in the box "
-                          "[%g, %g] x [%g, %g] x [%g, %g]", c->lo[0], c->hi[0], c->lo[1],
-                 c->hi[1], c->lo[2], c->hi[2]);
-      st = nomem ? MX_ENOMEM : MX_EINPUT;
+      st = nomem ? MX_ENOMEM : mx_cs_bad_sizes(c);
       break;
     }
     c->capped |= cap;
