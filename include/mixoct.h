@@ -684,6 +684,28 @@ int mx_mesher_set_size_expr(mx_mesher *m, const char *text);
  * no bound). With no field, hmax alone is a field of that size. MX_EINPUT
  * for a negative, non-finite or crossed pair. */
 int mx_mesher_set_size_limits(mx_mesher *m, double hmin, double hmax);
+/* Discrete sources, combined with the function's field by the minimum
+ * (src/sizing/sources.h): each gives sizes at points, and the field grows
+ * from them by at most the gradation ratio beta between neighbouring sizes
+ * (h(x) = min_i h_i + (beta - 1) |x - x_i|).
+ * Curvature (--curvature DEG): an element spans at most `degrees` of the
+ * input surface's curvature (the angle between neighbouring triangles'
+ * normals over the distance between their centroids); 0: none. */
+int mx_mesher_set_size_curvature(mx_mesher *m, double degrees);
+/* Thickness (--thickness N): at least `elements` (1 to 64; 0: none)
+ * elements across every part of the domain and every gap between its
+ * sides, measured by rays from the surface along its normals. */
+int mx_mesher_set_size_thickness(mx_mesher *m, double elements);
+/* The gradation ratio (--gradation BETA, above 1; 0: the default, 2 for
+ * the discrete sources and none for the function). Given, it applies to the
+ * function's control space too: its leaves become sources. */
+int mx_mesher_set_size_gradation(mx_mesher *m, double beta);
+/* A size map: n points (xyz, 3 each) with sizes h (finite, positive),
+ * copied; they must lie in the domain's box (grown by 5% of its diagonal)
+ * when the octree is built. name: where they came from, for messages (or
+ * NULL). n = 0 removes the map. */
+int mx_mesher_set_size_points(mx_mesher *m, const double *xyz, const double *h, size_t n,
+                              const char *name);
 
 /* ---- The mixoct program's other commands (patterns, 2D report) ---------- */
 

@@ -25,6 +25,9 @@ typedef struct {
   const char *regions_file;
   const char *size;      /* --size EXPR|F1..F5: a size field (NULL: none) */
   double size_min, size_max; /* --size-min, --size-max (0: none) */
+  double curvature, thickness, gradation; /* --curvature DEG, --thickness N,
+                                             --gradation BETA (0: none) */
+  const char *size_field;  /* --size-field NAME: the field of a size map file */
   const char *region_surf[MX_MAX_REGIONS];
   int nregion_surf;
   int s_level, a_level;  /* -s, -a: -1 none */

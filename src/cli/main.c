@@ -84,6 +84,9 @@ int mx_add_inputs(const mx_options *o, mx_mesher *m) {
   if (o->size) MX_CHECK(mx_mesher_set_size_expr(m, o->size));
   if (o->size_min > 0.0 || o->size_max > 0.0)
     MX_CHECK(mx_mesher_set_size_limits(m, o->size_min, o->size_max));
+  if (o->curvature > 0.0) MX_CHECK(mx_mesher_set_size_curvature(m, o->curvature));
+  if (o->thickness > 0.0) MX_CHECK(mx_mesher_set_size_thickness(m, o->thickness));
+  if (o->gradation > 0.0) MX_CHECK(mx_mesher_set_size_gradation(m, o->gradation));
   return MX_OK;
 }
 

@@ -72,6 +72,14 @@ static const char *usage_text =
     "      --size-min H, --size-max H\n"
     "                              bounds on the field's sizes (--size-max\n"
     "                              alone: a field of that size everywhere)\n"
+    "      --curvature DEG         a size field from the surface's curvature:\n"
+    "                              an element spans at most DEG degrees of it\n"
+    "      --thickness N           at least N elements across every part and\n"
+    "                              every gap (rays along the surface normals)\n"
+    "      --gradation BETA        neighbouring sizes differ by at most BETA\n"
+    "                              (default 2 for --curvature, --thickness and\n"
+    "                              size maps; given, for --size too)\n"
+    "                              (all sources together: the least size wins)\n"
     "\n"
     "Output:\n"
     "  -o, --output OUT            .vtk (legacy), .vtu, .pvtu (parallel VTU: one\n"
@@ -244,7 +252,9 @@ static const char *const with_arg[][2] = {
     {"-b", "--regions"}, {"-o", "--output"},        {"-c", "--from-restart"},
     {"-l", "--list"},    {"-r", "--region-surface"}, {NULL, "--threads"},
     {NULL, "--max-memory"}, {NULL, "--restart"},    {NULL, "--stage"},
-    {NULL, "--balance"}, {NULL, "--boundary"}};
+    {NULL, "--balance"}, {NULL, "--boundary"},     {NULL, "--size"},
+    {NULL, "--size-min"}, {NULL, "--size-max"},    {NULL, "--size-field"},
+    {NULL, "--curvature"}, {NULL, "--thickness"},  {NULL, "--gradation"}};
 
 /* argv with the forms getopt users expect split in two: `--output=x.vtu`
  * and `-s5` / `-ox.vtu` become `--output x.vtu`, `-s 5`, `-o x.vtu`. The
@@ -345,6 +355,27 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       }
       if (strcmp(a, "--size-min") == 0) o->size_min = v;
       else o->size_max = v;
+    } else if (strcmp(a, "--curvature") == 0 || strcmp(a, "--thickness") == 0 ||
+               strcmp(a, "--gradation") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      char *end = NULL;
+      const double v = strtod(argv[++i], &end);
+      const int cu = a[2] == 'c', th = a[2] == 't';
+      const int ok = end != argv[i] && !*end && isfinite(v) &&
+                     (cu ? v > 0.0 && v < 180.0 : th ? v >= 1.0 && v <= 64.0 : v > 1.0 && v <= 100.0);
+      if (!ok) {
+        mx_error(NULL, 0, "%s needs %s, not '%s'", a,
+                 cu ? "an angle in degrees between 0 and 180 (e.g. 10)"
+                    : th ? "a number of elements from 1 to 64 (e.g. 2)"
+                         : "a ratio above 1 and at most 100 (e.g. 1.5)", argv[i]);
+        return MX_EINPUT;
+      }
+      if (cu) o->curvature = v;
+      else if (th) o->thickness = v;
+      else o->gradation = v;
+    } else if (strcmp(a, "--size-field") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      o->size_field = argv[++i];
     } else if (IS("-r", "--region-surface")) {
       if (i + 2 >= argc) {
         mx_error(NULL, 0, "%s needs a surface and a level", a);
@@ -483,10 +514,12 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
     return MX_EINPUT;
   }
   if (o->s_level < 0 && o->a_level < 0 && !o->regions_file && !o->nregion_surf &&
-      !o->restart_in && !o->size && !(o->size_max > 0.0)) {
+      !o->restart_in && !o->size && !(o->size_max > 0.0) && !(o->curvature > 0.0) &&
+      !(o->thickness > 0.0)) {
     mx_error(NULL, 0, "no refinement request: the mesh would be empty; give a level on "
                       "the surface (-s RL, e.g. -s 5), everywhere (-a RL), boxes (-b FILE.reg) "
-                      "a region surface (-r S RL) or a size field (--size EXPR)");
+                      "a region surface (-r S RL) or a size field (--size EXPR, --curvature DEG, "
+                      "--thickness N)");
     return MX_EINPUT;
   }
   /* fail before meshing, not after a long run */

@@ -56,8 +56,9 @@ int mx_p4est_main(int argc, char **argv) {
   int exit_now = 0;
   int st = av ? mx_parse_options(ac, av, &o, &exit_now) : MX_ENOMEM;
   if (!st && !exit_now && (o.restart_out || o.restart_in || o.boundary_out || o.size || o.size_min > 0.0 ||
-                            o.size_max > 0.0)) {
-    mx_error(NULL, 0, "--p4est: no -c, --restart, --boundary or --size (the distributed path "
+                            o.size_max > 0.0 || o.curvature > 0.0 || o.thickness > 0.0 ||
+                            o.gradation > 0.0)) {
+    mx_error(NULL, 0, "--p4est: no -c, --restart, --boundary or size field (the distributed path "
                       "meshes from the surfaces and levels only)");
     st = MX_EINPUT;
   }

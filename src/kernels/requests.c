@@ -6,8 +6,8 @@
  * over [lo, hi] (the whole field's box when lo is NULL); 0 without one. */
 static int field_level(const mx_requests *R, const double lo[3], const double hi[3]) {
   if (!R->size_field || !(R->root_side > 0.0)) return 0;
-  const double h = lo ? mx_cspace_min_box(R->size_field, lo, hi)
-                      : mx_cspace_min_box(R->size_field, R->size_lo, R->size_hi);
+  const mx_size_field *F = R->size_field;
+  const double h = lo ? mx_size_field_min_box(F, lo, hi) : mx_size_field_min_box(F, F->lo, F->hi);
   if (!(h > 0.0)) return MX_MAX_LEVEL - 1;
   const double t = ceil(log2(R->root_side / h) - 1e-9);
   return t <= 0.0 ? 0 : t >= MX_MAX_LEVEL - 1 ? MX_MAX_LEVEL - 1 : (int)t;

@@ -13,6 +13,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "sizing/sources.h"
 #include "soa/regions.h"
 
 #include "mixoct.h" /* MX_MAX_REGIONS */
@@ -27,10 +28,10 @@ typedef struct {
   /* bit r: region r is refined where its triangles meet an octant only,
    * never inside (an interface between two materials: not closed) */
   unsigned meet_only;
-  /* the size field (NULL: none) and the side of a root cube (set with the
+  /* the size field (NULL: none: its control space, discrete sources and
+   * clamps, sizing/sources.h) and the side of a root cube (set with the
    * grid: mx_builder_init; 0 before, when the field asks nothing) */
-  const mx_cspace *size_field;
-  double size_lo[3], size_hi[3]; /* the field's box */
+  const mx_size_field *size_field;
   double root_side;
 } mx_requests;
 

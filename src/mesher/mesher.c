@@ -238,11 +238,31 @@ int mx_build_tree(mx_mesher *m) {
   const double t0 = mx_wtime();
   mx_mesher_stage(m, "grid");
   MX_CHECK(mx_mesher_assemble_inputs(m));
+  const double ts = mx_wtime();
   MX_CHECK(mx_mesher_size_space(m));
+  m->rec->S.size_field = m->size_cs || m->size_src;
+  if (m->size_src) {
+    const mx_size_sources *z = m->size_src;
+    m->rec->S.size_sources = z->n;
+    m->rec->S.size_curvature_n = m->size_src_curvature;
+    m->rec->S.size_thickness_n = m->size_src_thickness;
+    m->rec->S.size_map_n = m->size_src_map;
+    m->rec->S.size_graded_n = m->size_src_graded;
+    m->rec->S.size_beta = 1.0 + z->slope;
+    m->rec->S.size_src_kb = (double)(z->n * (7 * sizeof(double) + (z->dim ? 1 : 0)) +
+                                     z->nnodes * (7 * sizeof(double) + 2 * sizeof(uint32_t))) /
+                            1024.0;
+    double cs_s = 0.0;
+    if (m->size_cs) {
+      mx_cspace_info in;
+      mx_cspace_info_get(m->size_cs, &in);
+      cs_s = in.seconds;
+    }
+    m->rec->S.size_src_seconds = mx_wtime() - ts - cs_s;
+  }
   if (m->size_cs) {
     mx_cspace_info in;
     mx_cspace_info_get(m->size_cs, &in);
-    m->rec->S.size_field = 1;
     m->rec->S.size_structure = m->size_params.structure;
     m->rec->S.size_split = m->size_params.split;
     m->rec->S.size_leaves = in.leaves;

@@ -18,6 +18,7 @@
 #include "kernels/winding_boundary.h"
 #include "soa/regions.h"
 #include "soa/trisoup.h"
+#include "sizing/sources.h"
 
 typedef struct {
   double read, grid, refine, balance, transition, boundary, verify, quality, write, total;
@@ -70,6 +71,10 @@ typedef struct {
   size_t size_leaves;
   int size_depth, size_capped;
   double size_kb, size_seconds;
+  /* its discrete sources (sizing/sources.h): how many of each kind, the
+   * gradation ratio, the tree's memory and build time (sampling included) */
+  size_t size_sources, size_curvature_n, size_thickness_n, size_map_n, size_graded_n;
+  double size_beta, size_src_kb, size_src_seconds;
 } mx_summary;
 
 /* What a call records even when it only reads the mesher: the last error,
@@ -113,6 +118,18 @@ struct mx_mesher {
   mx_cspace_params size_params;
   double size_min, size_max; /* clamps of the field's sizes (0: none) */
   mx_cspace *size_cs;
+  /* the discrete sources (sizing/sources.h): curvature (radians, 0: none),
+   * elements across parts and gaps (0: none), the gradation ratio (0: the
+   * default, 2, applied to the discrete sources only; set: to the
+   * function's control space too), points with sizes (a size map: owned,
+   * 3 coordinates and 1 size each), and the tree built with the octree */
+  double size_curvature, size_thickness, size_gradation;
+  double *size_map_xyz, *size_map_h;
+  size_t size_map_n;
+  char *size_map_name; /* where the points came from, for messages */
+  struct mx_size_sources *size_src;
+  size_t size_src_curvature, size_src_thickness, size_src_map, size_src_graded;
+  mx_size_field size_F;      /* the whole field, read by the requests */
   uint32_t nt_domain, region_t0[MX_MAX_REGIONS + 1];
   int assembled;            /* soup holds domain + regions */
   mx_box_region *boxes;

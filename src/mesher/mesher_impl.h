@@ -76,6 +76,8 @@ mx_requests mx_mesher_requests(const mx_mesher *m);
  * source (mesher/size_field.c); and freeing it with the source. */
 int mx_mesher_size_space(mx_mesher *m);
 void mx_mesher_size_free(mx_mesher *m);
+/* Whether any source of a size field is set. */
+int mx_mesher_has_size(const mx_mesher *m);
 /* Write the mixed mesh (src/mesher/output.c): written order, boundary tags
  * and bodies, fields. */
 int mx_write_mixed(const mx_mesher *m, const char *path, int ascii);

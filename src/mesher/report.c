@@ -135,6 +135,18 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
   if (s->mesh) quality_json(&s->quality, qual, sizeof qual);
   const size_t hex = s->mesh ? s->by_type[3] : s->leaves;
   char bnd[1024] = "";
+  if (s->size_field) {
+    static const char *tree[4] = {"K_L", "K_V", "K_oL", "K_oLB"};
+    if (s->size_leaves && !s->size_graded_n)
+      printf("  size field   %12zu leaves of a %s control space (depth %d, %.0f kB, %.3f s)\n",
+             s->size_leaves, tree[s->size_structure & 3], s->size_depth, s->size_kb,
+             s->size_seconds);
+    if (s->size_sources)
+      printf("  size field   %12zu sources (curvature %zu, thickness %zu, map %zu, graded "
+             "leaves %zu), gradation %.3g; %.0f kB, %.3f s\n", s->size_sources,
+             s->size_curvature_n, s->size_thickness_n, s->size_map_n, s->size_graded_n,
+             s->size_beta, s->size_src_kb, s->size_src_seconds);
+  }
   if (s->full) {
     const mx_boundary_stats *b = &s->boundary;
     snprintf(bnd, sizeof bnd,
@@ -150,7 +162,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              s->repair_rounds, b->t_states, b->t_close, b->t_patterns, b->t_shrink,
              b->t_smooth, b->t_staircase, b->smoothed);
   }
-  char mat[640] = "";
+  char mat[1024] = "";
   if (s->nmaterials) {
     const mx_cleave_stats *cv = &s->boundary.ifs.cleave;
     snprintf(mat, sizeof mat,
@@ -171,6 +183,15 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              "\"size_field\": {\"structure\": \"%s%s%s\", \"leaves\": %zu, \"depth\": %d, "
              "\"capped\": %d, \"kb\": %.1f, \"seconds\": %.6f}, ",
              tree[st], st <= 1 ? " " : "", st <= 1 ? rule[sp] : "", s->size_leaves, s->size_depth, s->size_capped, s->size_kb, s->size_seconds);
+    if (s->size_sources) { /* inside size_field: replace its closing "}, " */
+      const size_t e = strlen(mat) - 3;
+      snprintf(mat + e, sizeof mat - e,
+               ", \"sources\": {\"count\": %zu, \"curvature\": %zu, \"thickness\": %zu, "
+               "\"map\": %zu, \"graded_leaves\": %zu, \"gradation\": %.6g, \"kb\": %.1f, "
+               "\"seconds\": %.6f}}, ",
+               s->size_sources, s->size_curvature_n, s->size_thickness_n, s->size_map_n,
+               s->size_graded_n, s->size_beta, s->size_src_kb, s->size_src_seconds);
+    }
   }
   fprintf(out, "\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
          "\"nodes\": %s, \"elements\": %zu, "
@@ -265,6 +286,18 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
       printf("               interfaces cleaved: %zu nodes moved onto them, %zu elements cut"
              " (%zu neighbours split),\n               %zu nodes added on them, %zu centres\n",
              cv->warped, cv->cut, cv->neighbours, cv->cut_nodes, cv->centres);
+  }
+  if (s->size_field) {
+    static const char *tree[4] = {"K_L", "K_V", "K_oL", "K_oLB"};
+    if (s->size_leaves && !s->size_graded_n)
+      printf("  size field   %12zu leaves of a %s control space (depth %d, %.0f kB, %.3f s)\n",
+             s->size_leaves, tree[s->size_structure & 3], s->size_depth, s->size_kb,
+             s->size_seconds);
+    if (s->size_sources)
+      printf("  size field   %12zu sources (curvature %zu, thickness %zu, map %zu, graded "
+             "leaves %zu), gradation %.3g; %.0f kB, %.3f s\n", s->size_sources,
+             s->size_curvature_n, s->size_thickness_n, s->size_map_n, s->size_graded_n,
+             s->size_beta, s->size_src_kb, s->size_src_seconds);
   }
   if (s->full) {
     const mx_boundary_stats *b = &s->boundary;

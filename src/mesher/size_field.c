@@ -10,6 +10,8 @@
 #include "mesher/mesher_impl.h"
 #include "sizing/cspace.h"
 #include "sizing/expr.h"
+#include "geom/surface_sizes.h"
+#include "sizing/sources.h"
 
 /* The mesher's control space unless told otherwise: a K_L kd-tree split by
  * s_S (the smallest leaf-valued trees in bench/cspace_bench.c). */
@@ -18,16 +20,32 @@ static void default_params(mx_cspace_params *q) {
   q->split = MX_SPLIT_SUM;
 }
 
-static void drop(mx_mesher *m) {
+/* The built field (rebuilt with the octree when a source changes). */
+static void drop_built(mx_mesher *m) {
   mx_cspace_free(m->size_cs);
   m->size_cs = NULL;
+  mx_size_sources_free(m->size_src);
+  m->size_src = NULL;
+  memset(&m->size_F, 0, sizeof m->size_F);
+}
+
+static void drop(mx_mesher *m) {
+  drop_built(m);
   mx_expr_free(m->size_expr);
   m->size_expr = NULL;
   m->size_fn = NULL;
   m->size_user = NULL;
 }
 
-void mx_mesher_size_free(mx_mesher *m) { drop(m); }
+void mx_mesher_size_free(mx_mesher *m) {
+  drop(m);
+  mx_free(m->size_map_xyz);
+  mx_free(m->size_map_h);
+  mx_free(m->size_map_name);
+  m->size_map_xyz = m->size_map_h = NULL;
+  m->size_map_name = NULL;
+  m->size_map_n = 0;
+}
 
 int mx_mesher_set_size_function(mx_mesher *m, mx_size_fn f, void *user,
                                 const mx_cspace_params *p) {
@@ -82,8 +100,7 @@ int mx_mesher_set_size_limits(mx_mesher *m, double hmin, double hmax) {
     st = MX_EINPUT;
   }
   if (!st) {
-    mx_cspace_free(m->size_cs); /* rebuilt with the bounds */
-    m->size_cs = NULL;
+    drop_built(m); /* rebuilt with the bounds */
     m->size_min = hmin;
     m->size_max = hmax;
   }
@@ -104,17 +121,123 @@ static void clamped(void *user, size_t n, const double *xyz, double *h) {
   }
 }
 
+int mx_mesher_set_size_curvature(mx_mesher *m, double degrees) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  int st = MX_OK;
+  if (!(degrees >= 0.0 && degrees < 180.0)) {
+    mx_error(NULL, 0, "size field: the curvature angle must be in (0, 180) degrees (0: none), "
+                      "not %g", degrees);
+    st = MX_EINPUT;
+  }
+  if (!st) {
+    drop_built(m);
+    m->size_curvature = degrees * (3.14159265358979323846 / 180.0);
+  }
+  return mx_call_end(m, &c, st);
+}
+
+int mx_mesher_set_size_thickness(mx_mesher *m, double elements) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  int st = MX_OK;
+  if (!(elements == 0.0 || (elements >= 1.0 && elements <= 64.0))) {
+    mx_error(NULL, 0, "size field: the elements across a part or a gap must be 1 to 64 "
+                      "(0: none), not %g", elements);
+    st = MX_EINPUT;
+  }
+  if (!st) {
+    drop_built(m);
+    m->size_thickness = elements;
+  }
+  return mx_call_end(m, &c, st);
+}
+
+int mx_mesher_set_size_gradation(mx_mesher *m, double beta) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  int st = MX_OK;
+  if (!(beta == 0.0 || (beta > 1.0 && beta <= 100.0))) {
+    mx_error(NULL, 0, "size field: the gradation is the largest ratio of neighbouring sizes, "
+                      "above 1 and at most 100 (0: the default), not %g", beta);
+    st = MX_EINPUT;
+  }
+  if (!st) {
+    drop_built(m);
+    m->size_gradation = beta;
+  }
+  return mx_call_end(m, &c, st);
+}
+
+int mx_mesher_set_size_points(mx_mesher *m, const double *xyz, const double *h, size_t n,
+                              const char *name) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  int st = MX_OK;
+  for (size_t i = 0; i < n && !st; i++) {
+    const double *p = xyz + 3 * i;
+    if (!(h[i] > 0.0 && h[i] < INFINITY) || !isfinite(p[0]) || !isfinite(p[1]) ||
+        !isfinite(p[2])) {
+      mx_error(name, 0, "size map: point %zu (%g, %g, %g) has the size %g: sizes must be "
+                        "finite and positive, points finite", i + 1, p[0], p[1], p[2], h[i]);
+      st = MX_EINPUT;
+    }
+  }
+  double *x2 = NULL, *h2 = NULL;
+  char *nm = NULL;
+  if (!st && n) {
+    x2 = mx_alloc(3 * n * sizeof *x2);
+    h2 = mx_alloc(n * sizeof *h2);
+    nm = mx_strdup(name ? name : "size map");
+    if (!x2 || !h2 || !nm) st = MX_ENOMEM;
+  }
+  if (!st) {
+    if (n) {
+      memcpy(x2, xyz, 3 * n * sizeof *x2);
+      memcpy(h2, h, n * sizeof *h2);
+    }
+    drop_built(m);
+    mx_free(m->size_map_xyz);
+    mx_free(m->size_map_h);
+    mx_free(m->size_map_name);
+    m->size_map_xyz = x2;
+    m->size_map_h = h2;
+    m->size_map_name = nm;
+    m->size_map_n = n;
+    x2 = h2 = NULL;
+    nm = NULL;
+  }
+  mx_free(x2);
+  mx_free(h2);
+  mx_free(nm);
+  return mx_call_end(m, &c, st);
+}
+
+/* Whether the mesher has a size field at all. */
+int mx_mesher_has_size(const mx_mesher *m) {
+  return m->size_fn || m->size_max > 0.0 || m->size_curvature > 0.0 ||
+         m->size_thickness > 0.0 || m->size_map_n;
+}
+
 /* The octree the field asks for, against the memory there is: before
  * refining (an octree refined to a tiny size would fill the machine
  * first). Octants of level L have side root / 2^L; the root about the
  * domain's largest extent; a size h asks for a side in (h/2, h], about
  * 0.7 h; none finer than the deepest level. */
-static int budget(mx_mesher *m, const mx_cspace_params *q) {
+static int budget(mx_mesher *m, const double lo[3], const double hi[3]) {
   double root = 0.0;
-  for (int a = 0; a < 3; a++) root = fmax(root, q->hi[a] - q->lo[a]);
-  double hmin, at[3];
-  const double floor = ldexp(root, -(MX_MAX_LEVEL - 1));
-  const double cells = mx_cspace_cells(m->size_cs, floor, 0.7, &hmin, at);
+  for (int a = 0; a < 3; a++) root = fmax(root, hi[a] - lo[a]);
+  double hmin = INFINITY, at[3] = {0, 0, 0}, h2, at2[3];
+  const double floor = ldexp(root, -(MX_MAX_LEVEL - 1)), f = 0.7;
+  double cells = 0.0;
+  if (m->size_cs) cells += mx_cspace_cells(m->size_cs, floor, f, &hmin, at);
+  if (m->size_src) {
+    cells += mx_size_sources_cells(m->size_src, fmax(floor, m->size_min), f, &h2, at2);
+    if (h2 < hmin) {
+      hmin = h2;
+      memcpy(at, at2, sizeof at);
+    }
+  }
   const double need = mx_estimate_bytes_leaves((size_t)fmin(cells, 1e18), m->domain.nt,
                                                m->p.stage);
   const double avail = mx_available_bytes();
@@ -122,18 +245,135 @@ static int budget(mx_mesher *m, const mx_cspace_params *q) {
   if (limit > 0.0 && need > limit) {
     mx_error(NULL, 0, "the size field asks for about %.3g octants (its least size %.3g, at "
                       "(%.6g, %.6g, %.6g)): about %.0f MB, but %s %.0f MB; raise the sizes "
-                      "(--size-min) or --max-memory", cells, hmin, at[0], at[1], at[2],
-             need / 1048576.0, m->p.max_memory_mb > 0 ? "--max-memory allows" : "the machine has",
+                      "(--size-min) or --max-memory", cells, fmax(hmin, m->size_min), at[0],
+             at[1], at[2], need / 1048576.0,
+             m->p.max_memory_mb > 0 ? "--max-memory allows" : "the machine has",
              limit / 1048576.0);
-    mx_cspace_free(m->size_cs);
-    m->size_cs = NULL;
+    drop_built(m);
     return MX_ENOMEM;
   }
   return MX_OK;
 }
 
+/* The sources from the input surface: an index of the domain's triangles
+ * of its own (the mesher's is built later, with the policies of the
+ * boundary stage), every shell outward when there are materials. */
+static int surface_sources(mx_mesher *m, mx_point_sizes *P) {
+  if (!(m->size_curvature > 0.0) && !(m->size_thickness > 0.0)) return MX_OK;
+  mx_surface_index S;
+  MX_CHECK(m->p.materials ? mx_surface_index_build_outward(&S, &m->soup, 0, m->nt_domain)
+                          : mx_surface_index_build(&S, &m->soup, 0, m->nt_domain));
+  int st = MX_OK;
+  size_t n0 = P->n;
+  if (m->size_curvature > 0.0) st = mx_surface_curvature_sizes(&S, m->size_curvature, P);
+  m->size_src_curvature = P->n - n0;
+  n0 = P->n;
+  if (!st && m->size_thickness > 0.0) st = mx_surface_thickness_sizes(&S, m->size_thickness, P);
+  m->size_src_thickness = P->n - n0;
+  mx_surface_index_free(&S);
+  return st;
+}
+
+/* The size map's points, which must lie in the domain's box (grown by a
+ * twentieth of its diagonal): a map in other units or of another part is
+ * refused rather than read as sizes far away. */
+static int map_sources(mx_mesher *m, const double lo[3], const double hi[3],
+                       mx_point_sizes *P) {
+  if (!m->size_map_n) return MX_OK;
+  double diag = 0.0;
+  for (int a = 0; a < 3; a++) diag += (hi[a] - lo[a]) * (hi[a] - lo[a]);
+  const double g = 0.05 * sqrt(diag);
+  double vol = 1.0;
+  for (int a = 0; a < 3; a++) vol *= hi[a] - lo[a] + 2.0 * g;
+  for (size_t i = 0; i < m->size_map_n; i++) {
+    const double *p = m->size_map_xyz + 3 * i;
+    for (int a = 0; a < 3; a++)
+      if (p[a] < lo[a] - g || p[a] > hi[a] + g) {
+        mx_error(m->size_map_name, 0, "size map: point %zu (%g, %g, %g) lies outside the "
+                                      "domain's box [%g, %g] x [%g, %g] x [%g, %g] (grown by "
+                                      "%g): another part, or other units?", i + 1, p[0], p[1],
+                 p[2], lo[0], hi[0], lo[1], hi[1], lo[2], hi[2], g);
+        return MX_EINPUT;
+      }
+  }
+  if (P->n + m->size_map_n > P->cap) {
+    const size_t cap = P->n + m->size_map_n;
+    double *x = mx_realloc(P->xyz, 3 * cap * sizeof *x);
+    if (!x) return MX_ENOMEM;
+    P->xyz = x;
+    double *h = mx_realloc(P->h, cap * sizeof *h);
+    if (!h) return MX_ENOMEM;
+    P->h = h;
+    double *w = mx_realloc(P->w, cap * sizeof *w);
+    if (!w) return MX_ENOMEM;
+    P->w = w;
+    P->cap = cap;
+  }
+  memcpy(P->xyz + 3 * P->n, m->size_map_xyz, 3 * m->size_map_n * sizeof *P->xyz);
+  memcpy(P->h + P->n, m->size_map_h, m->size_map_n * sizeof *P->h);
+  /* each point stands for an equal share of the box's volume */
+  for (size_t i = 0; i < m->size_map_n; i++) P->w[P->n + i] = vol / (double)m->size_map_n;
+  P->n += m->size_map_n;
+  m->size_src_map = m->size_map_n;
+  return MX_OK;
+}
+
+/* The discrete sources' tree: the surface's, the map's, and with an
+ * explicit gradation the leaves of the function's control space (which
+ * the graded field then replaces: it is no larger anywhere). */
+static int build_sources(mx_mesher *m, const double lo[3], const double hi[3]) {
+  m->size_src_curvature = m->size_src_thickness = m->size_src_map = m->size_src_graded = 0;
+  const int graded_cs = m->size_gradation > 0.0 && m->size_cs;
+  if (!(m->size_curvature > 0.0) && !(m->size_thickness > 0.0) && !m->size_map_n && !graded_cs)
+    return MX_OK;
+  mx_point_sizes P;
+  memset(&P, 0, sizeof P);
+  int st = surface_sources(m, &P);
+  if (!st) st = map_sources(m, lo, hi, &P);
+  const size_t npts = P.n;
+  size_t nleaves = graded_cs ? mx_cspace_leaves(m->size_cs, NULL, NULL) : 0;
+  const size_t n = npts + nleaves;
+  double *box = NULL, *h = NULL, *w = NULL;
+  uint8_t *dim = NULL;
+  if (!st && n) {
+    box = mx_alloc(6 * n * sizeof *box);
+    h = mx_alloc(n * sizeof *h);
+    w = mx_alloc(n * sizeof *w);
+    dim = mx_alloc(n * sizeof *dim);
+    if (!box || !h || !w || !dim) st = MX_ENOMEM;
+  }
+  if (!st && n) {
+    for (size_t i = 0; i < npts; i++) {
+      memcpy(box + 6 * i, P.xyz + 3 * i, 3 * sizeof *box);
+      memcpy(box + 6 * i + 3, P.xyz + 3 * i, 3 * sizeof *box);
+      h[i] = P.h[i];
+      w[i] = P.w[i];
+      dim[i] = (uint8_t)(i >= npts - m->size_src_map ? 3 : 2);
+    }
+    if (nleaves) {
+      mx_cspace_leaves(m->size_cs, box + 6 * npts, h + npts);
+      for (size_t i = npts; i < n; i++) {
+        const double *b = box + 6 * i;
+        w[i] = (b[3] - b[0]) * (b[4] - b[1]) * (b[5] - b[2]);
+        dim[i] = 3;
+        if (m->size_min > 0.0 && h[i] < m->size_min) h[i] = m->size_min;
+        if (m->size_max > 0.0 && h[i] > m->size_max) h[i] = m->size_max;
+      }
+      m->size_src_graded = nleaves;
+    }
+    const double beta = m->size_gradation > 0.0 ? m->size_gradation : 2.0;
+    st = mx_size_sources_build(box, h, w, dim, n, beta, &m->size_src);
+  }
+  mx_free(box);
+  mx_free(h);
+  mx_free(w);
+  mx_free(dim);
+  mx_point_sizes_free(&P);
+  return st;
+}
+
 int mx_mesher_size_space(mx_mesher *m) {
-  if ((!m->size_fn && !(m->size_max > 0.0)) || m->size_cs) return MX_OK;
+  if (!mx_mesher_has_size(m) || m->size_cs || m->size_src) return MX_OK;
   mx_cspace_params q = m->size_params;
   if (!m->size_fn) default_params(&q);
   mx_trisoup_bbox(&m->domain, q.lo, q.hi);
@@ -143,8 +383,20 @@ int mx_mesher_size_space(mx_mesher *m) {
       q.hi[a] += 0.5;
     }
   if (!m->size_fn) m->size_params = q;
-  MX_CHECK(m->size_min > 0.0 || m->size_max > 0.0
-               ? mx_cspace_build(&q, clamped, m, &m->size_cs)
-               : mx_cspace_build(&q, m->size_fn, m->size_user, &m->size_cs));
-  return budget(m, &q);
+  if (m->size_fn || m->size_max > 0.0)
+    MX_CHECK(m->size_min > 0.0 || m->size_max > 0.0
+                 ? mx_cspace_build(&q, clamped, m, &m->size_cs)
+                 : mx_cspace_build(&q, m->size_fn, m->size_user, &m->size_cs));
+  int st = build_sources(m, q.lo, q.hi);
+  if (st) {
+    drop_built(m);
+    return st;
+  }
+  m->size_F.cs = m->size_src && m->size_src_graded ? NULL : m->size_cs;
+  m->size_F.src = m->size_src;
+  m->size_F.hmin = m->size_min;
+  m->size_F.hmax = m->size_max;
+  memcpy(m->size_F.lo, q.lo, sizeof q.lo);
+  memcpy(m->size_F.hi, q.hi, sizeof q.hi);
+  return budget(m, q.lo, q.hi);
 }

@@ -242,3 +242,8 @@ double mx_cspace_cells(const mx_cspace *c, double floor, double f, double *hmin,
   }
   return sum;
 }
+
+size_t mx_cspace_leaves(const mx_cspace *c, double *box, double *h) {
+  const int kd = c->structure == MX_CS_KD_LEAF || c->structure == MX_CS_KD_VERTEX;
+  return kd ? mx_cs_leaves_kd(c, box, h) : mx_cs_leaves_octree(c, box, h);
+}

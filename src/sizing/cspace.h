@@ -79,5 +79,10 @@ void mx_cs_query_kd(const mx_cspace *c, const double p[3], double h[3]);
 void mx_cs_query_octree(const mx_cspace *c, const double p[3], double h[3]);
 double mx_cs_min_box_kd(const mx_cspace *c, const double lo[3], const double hi[3]);
 double mx_cs_min_box_octree(const mx_cspace *c, const double lo[3], const double hi[3]);
+/* The leaves' boxes (6 each: lo, hi) and least sizes (K_V: of the
+ * corners), into box and h when not NULL; returns how many. */
+size_t mx_cs_leaves_kd(const mx_cspace *c, double *box, double *h);
+size_t mx_cs_leaves_octree(const mx_cspace *c, double *box, double *h);
+size_t mx_cspace_leaves(const mx_cspace *c, double *box, double *h);
 
 #endif

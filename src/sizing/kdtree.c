@@ -425,3 +425,48 @@ double mx_cs_min_box_kd(const mx_cspace *c, const double lo[3], const double hi[
   }
   return best;
 }
+
+size_t mx_cs_leaves_kd(const mx_cspace *c, double *box, double *h) {
+  struct { uint32_t i; double lo[3], hi[3]; } stack[128];
+  int top = 0;
+  size_t n = 0;
+  stack[0].i = 0;
+  memcpy(stack[0].lo, c->lo, sizeof c->lo);
+  memcpy(stack[0].hi, c->hi, sizeof c->hi);
+  top = 1;
+  while (top) {
+    const int s = --top;
+    const uint32_t i = stack[s].i;
+    double lo[3], hi[3];
+    memcpy(lo, stack[s].lo, sizeof lo);
+    memcpy(hi, stack[s].hi, sizeof hi);
+    if (c->axis[i] == MX_KD_LEAF) {
+      if (box) {
+        memcpy(box + 6 * n, lo, sizeof lo);
+        memcpy(box + 6 * n + 3, hi, sizeof hi);
+        const int nv = c->structure == MX_CS_KD_LEAF ? 1 : 8;
+        double m = INFINITY;
+        for (int k = 0; k < nv; k++) {
+          const uint32_t v = nv == 1 ? c->val[i] : c->vid[8 * (size_t)c->val[i] + k];
+          for (int a = 0; a < 3; a++) m = fmin(m, c->h[3 * (size_t)v + a]);
+        }
+        h[n] = m;
+      }
+      n++;
+      continue;
+    }
+    if (top + 2 > 128) continue;
+    const int a = c->axis[i];
+    stack[top].i = c->child[i] + 1;
+    memcpy(stack[top].lo, lo, sizeof lo);
+    memcpy(stack[top].hi, hi, sizeof hi);
+    stack[top].lo[a] = c->coord[i];
+    top++;
+    stack[top].i = c->child[i];
+    memcpy(stack[top].lo, lo, sizeof lo);
+    memcpy(stack[top].hi, hi, sizeof hi);
+    stack[top].hi[a] = c->coord[i];
+    top++;
+  }
+  return n;
+}

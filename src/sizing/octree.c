@@ -336,3 +336,11 @@ double mx_cs_min_box_octree(const mx_cspace *c, const double lo[3], const double
   }
   return best;
 }
+
+size_t mx_cs_leaves_octree(const mx_cspace *c, double *box, double *h) {
+  for (size_t i = 0; box && i < c->nleaves; i++) {
+    cell_box(c, c->key[i], c->level[i], box + 6 * i, box + 6 * i + 3);
+    h[i] = fmin(c->h[3 * i], fmin(c->h[3 * i + 1], c->h[3 * i + 2]));
+  }
+  return c->nleaves;
+}
