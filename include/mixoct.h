@@ -706,6 +706,11 @@ int mx_mesher_set_size_gradation(mx_mesher *m, double beta);
  * NULL). n = 0 removes the map. */
 int mx_mesher_set_size_points(mx_mesher *m, const double *xyz, const double *h, size_t n,
                               const char *name);
+/* A size per element of the current mesh (a solver's estimate: n, the
+ * mesh's element count, in the order of mx_mesher_mesh_arrays): a size map
+ * at the elements' centroids. Then mx_mesher_refine_elements(m, NULL, 0)
+ * refines the octree to it (or the next mesh from a restart file). */
+int mx_mesher_set_size_elements(mx_mesher *m, const double *h, size_t n);
 
 /* ---- The mixoct program's other commands (patterns, 2D report) ---------- */
 

@@ -301,8 +301,61 @@ static void check_gradation(void) {
   mx_mesher_free(m);
 }
 
+/* A solver's size per element handed back: the elements left of x = 0.5
+ * ask for 0.06, the others nothing finer than they are; the re-mesh
+ * follows (the octree refined, not rebuilt). */
+static void check_elements(void) {
+  mx_params p;
+  mx_params_default(&p);
+  p.surface_level = 2;
+  mx_mesher *m = mx_mesher_new(&p);
+  mx_mesher_set_message_handler(m, quiet, NULL);
+  const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  double *x;
+  uint32_t *t;
+  size_t nv, nt;
+  box(lo, hi, 2, &x, &nv, &t, &nt);
+  CHECK(mx_mesher_add_surface_arrays(m, "cube", nv, x, nt, t) == MX_OK);
+  free(x);
+  free(t);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  mx_mesh_arrays a;
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  const size_t n0 = a.nelements;
+  double *h = malloc(n0 * sizeof *h);
+  for (size_t c = 0; c < n0; c++) {
+    double cx = 0.0;
+    int k = 0;
+    for (; k < 8 && a.conn[8 * c + k] != UINT32_MAX; k++) cx += a.xyz[3 * (size_t)a.conn[8 * c + k]];
+    h[c] = cx / k < 0.5 ? 0.06 : 10.0;
+  }
+  CHECK(mx_mesher_set_size_elements(m, h, n0 - 1) == MX_EINPUT);
+  CHECK(mx_mesher_set_size_elements(m, h, n0) == MX_OK);
+  free(h);
+  CHECK(mx_mesher_refine_elements(m, NULL, 0) == MX_OK);
+  CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
+  size_t big = 0;
+  double wmax = 0.0;
+  for (size_t c = 0; c < a.nelements; c++) {
+    double x0 = INFINITY, x1 = -INFINITY;
+    for (int k = 0; k < 8 && a.conn[8 * c + k] != UINT32_MAX; k++) {
+      x0 = fmin(x0, a.xyz[3 * (size_t)a.conn[8 * c + k]]);
+      x1 = fmax(x1, a.xyz[3 * (size_t)a.conn[8 * c + k]]);
+    }
+    if (x1 < 0.4) {
+      big += x1 - x0 > 0.06 * 1.0001;
+      wmax = fmax(wmax, x1 - x0);
+    }
+  }
+  printf("size per element: %zu elements, then %zu; widest left of x = 0.4: %.4f\n", n0,
+         a.nelements, wmax);
+  CHECK(a.nelements > n0 && big == 0 && a.invalid == 0);
+  mx_mesher_free(m);
+}
+
 int main(void) {
   mx_set_thread_message_handler(quiet, NULL);
+  check_elements();
   check_queries();
   check_thickness();
   check_curvature();

@@ -271,7 +271,12 @@ int mx_build_tree(mx_mesher *m) {
     m->rec->S.size_kb = (double)in.bytes / 1024.0;
     m->rec->S.size_seconds = in.seconds;
   }
-  const mx_requests req = mx_mesher_requests(m);
+  mx_requests req = mx_mesher_requests(m);
+  /* a restart file's octree is made again as it was: a size field applies
+   * after it, with the re-mesh's other requests (mesher/remesh.c) */
+  int from_keys = 0;
+  for (int l = 0; l <= MX_MAX_LEVEL; l++) from_keys |= m->nsplit[l] != 0;
+  if (from_keys) req.size_field = NULL;
   const int use_edges = m->p.balance == MX_BALANCE_EDGES;
   const int st = mx_builder_init(&m->B, &m->soup, m->nt_domain, m->region_t0, &req, use_edges,
                                  m->ndomain ? m->domain_name[0] : NULL);

@@ -121,10 +121,12 @@ struct mx_mesher {
   /* the discrete sources (sizing/sources.h): curvature (radians, 0: none),
    * elements across parts and gaps (0: none), the gradation ratio (0: the
    * default, 2, applied to the discrete sources only; set: to the
-   * function's control space too), points with sizes (a size map: owned,
-   * 3 coordinates and 1 size each), and the tree built with the octree */
+   * function's control space too), boxes with sizes (a size map's points,
+   * boxes of zero extent, or a size per element over its box: owned, 6
+   * coordinates, lo and hi, and 1 size each), and the tree built with the
+   * octree */
   double size_curvature, size_thickness, size_gradation;
-  double *size_map_xyz, *size_map_h;
+  double *size_map_box, *size_map_h;
   size_t size_map_n;
   char *size_map_name; /* where the points came from, for messages */
   struct mx_size_sources *size_src;

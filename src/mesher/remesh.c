@@ -23,7 +23,10 @@ static int refine_and_mesh(mx_mesher *m, uint32_t *octs, size_t n) {
   m->rec->S.ph.read = read;
   m->rec->S.t_restart = restart;
   const double t0 = mx_wtime();
+  MX_CHECK(mx_mesher_size_space(m)); /* a size field given since the octree was built */
+  const double root_side = B->req.root_side;
   B->req = mx_mesher_requests(m); /* m->boxes may have moved */
+  B->req.root_side = root_side;   /* a size field's levels: from the grid */
   size_t listed = 0;
   for (size_t i = 0; i < n; i++) {
     /* a leaf listed through several elements is split once */

@@ -12,6 +12,7 @@
 #include "sizing/expr.h"
 #include "geom/surface_sizes.h"
 #include "sizing/sources.h"
+#include "soa/mesh.h"
 
 /* The mesher's control space unless told otherwise: a K_L kd-tree split by
  * s_S (the smallest leaf-valued trees in bench/cspace_bench.c). */
@@ -39,10 +40,10 @@ static void drop(mx_mesher *m) {
 
 void mx_mesher_size_free(mx_mesher *m) {
   drop(m);
-  mx_free(m->size_map_xyz);
+  mx_free(m->size_map_box);
   mx_free(m->size_map_h);
   mx_free(m->size_map_name);
-  m->size_map_xyz = m->size_map_h = NULL;
+  m->size_map_box = m->size_map_h = NULL;
   m->size_map_name = NULL;
   m->size_map_n = 0;
 }
@@ -169,47 +170,93 @@ int mx_mesher_set_size_gradation(mx_mesher *m, double beta) {
   return mx_call_end(m, &c, st);
 }
 
-int mx_mesher_set_size_points(mx_mesher *m, const double *xyz, const double *h, size_t n,
-                              const char *name) {
-  mx_call c;
-  mx_call_begin(m, &c);
+/* The map of n boxes (6 each: lo, hi) with sizes h, copied. */
+static int set_map(mx_mesher *m, const double *box, const double *h, size_t n,
+                   const char *name) {
   int st = MX_OK;
   for (size_t i = 0; i < n && !st; i++) {
-    const double *p = xyz + 3 * i;
-    if (!(h[i] > 0.0 && h[i] < INFINITY) || !isfinite(p[0]) || !isfinite(p[1]) ||
-        !isfinite(p[2])) {
+    const double *p = box + 6 * i;
+    int ok = h[i] > 0.0 && h[i] < INFINITY;
+    for (int a = 0; a < 6; a++) ok = ok && isfinite(p[a]);
+    if (!ok) {
       mx_error(name, 0, "size map: point %zu (%g, %g, %g) has the size %g: sizes must be "
                         "finite and positive, points finite", i + 1, p[0], p[1], p[2], h[i]);
       st = MX_EINPUT;
     }
   }
-  double *x2 = NULL, *h2 = NULL;
+  double *b2 = NULL, *h2 = NULL;
   char *nm = NULL;
   if (!st && n) {
-    x2 = mx_alloc(3 * n * sizeof *x2);
+    b2 = mx_alloc(6 * n * sizeof *b2);
     h2 = mx_alloc(n * sizeof *h2);
     nm = mx_strdup(name ? name : "size map");
-    if (!x2 || !h2 || !nm) st = MX_ENOMEM;
+    if (!b2 || !h2 || !nm) st = MX_ENOMEM;
   }
   if (!st) {
     if (n) {
-      memcpy(x2, xyz, 3 * n * sizeof *x2);
+      memcpy(b2, box, 6 * n * sizeof *b2);
       memcpy(h2, h, n * sizeof *h2);
     }
     drop_built(m);
-    mx_free(m->size_map_xyz);
+    mx_free(m->size_map_box);
     mx_free(m->size_map_h);
     mx_free(m->size_map_name);
-    m->size_map_xyz = x2;
+    m->size_map_box = b2;
     m->size_map_h = h2;
     m->size_map_name = nm;
     m->size_map_n = n;
-    x2 = h2 = NULL;
+    b2 = h2 = NULL;
     nm = NULL;
   }
-  mx_free(x2);
+  mx_free(b2);
   mx_free(h2);
   mx_free(nm);
+  return st;
+}
+
+int mx_mesher_set_size_points(mx_mesher *m, const double *xyz, const double *h, size_t n,
+                              const char *name) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  double *box = mx_alloc((6 * n + 1) * sizeof *box);
+  int st = box ? MX_OK : MX_ENOMEM;
+  for (size_t i = 0; !st && i < n; i++) {
+    memcpy(box + 6 * i, xyz + 3 * i, 3 * sizeof *box);
+    memcpy(box + 6 * i + 3, xyz + 3 * i, 3 * sizeof *box);
+  }
+  if (!st) st = set_map(m, box, h, n, name);
+  mx_free(box);
+  return mx_call_end(m, &c, st);
+}
+
+int mx_mesher_set_size_elements(mx_mesher *m, const double *h, size_t n) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  const mx_mesh *M = &m->M;
+  const int have = m->mesh_stage >= MX_STAGE_TRANSITION;
+  if (!have || n != M->ncells) {
+    mx_error(NULL, 0, "size per element: %zu sizes for a mesh of %zu elements", n,
+             have ? M->ncells : (size_t)0);
+    return mx_call_end(m, &c, MX_EINPUT);
+  }
+  double *box = mx_alloc((6 * n + 1) * sizeof *box);
+  if (!box) return mx_call_end(m, &c, MX_ENOMEM);
+#pragma omp parallel for schedule(static)
+  for (size_t e = 0; e < n; e++) {
+    const int nv = mx_cell_nodes[M->type[e]];
+    for (int a = 0; a < 3; a++) {
+      double lo = INFINITY, hi = -INFINITY;
+      for (int k = 0; k < nv; k++) {
+        const double v = M->xyz[3 * (size_t)M->conn[8 * e + k] + a];
+        lo = fmin(lo, v);
+        hi = fmax(hi, v);
+      }
+      box[6 * e + a] = lo;
+      box[6 * e + 3 + a] = hi;
+    }
+  }
+  const int st = set_map(m, box, h, n, "size per element");
+  mx_free(box);
   return mx_call_end(m, &c, st);
 }
 
@@ -274,21 +321,17 @@ static int surface_sources(mx_mesher *m, mx_point_sizes *P) {
   return st;
 }
 
-/* The size map's points, which must lie in the domain's box (grown by a
+/* The size map's boxes, which must lie in the domain's box (grown by a
  * twentieth of its diagonal): a map in other units or of another part is
  * refused rather than read as sizes far away. */
-static int map_sources(mx_mesher *m, const double lo[3], const double hi[3],
-                       mx_point_sizes *P) {
-  if (!m->size_map_n) return MX_OK;
+static int map_check(const mx_mesher *m, const double lo[3], const double hi[3]) {
   double diag = 0.0;
   for (int a = 0; a < 3; a++) diag += (hi[a] - lo[a]) * (hi[a] - lo[a]);
   const double g = 0.05 * sqrt(diag);
-  double vol = 1.0;
-  for (int a = 0; a < 3; a++) vol *= hi[a] - lo[a] + 2.0 * g;
   for (size_t i = 0; i < m->size_map_n; i++) {
-    const double *p = m->size_map_xyz + 3 * i;
+    const double *p = m->size_map_box + 6 * i;
     for (int a = 0; a < 3; a++)
-      if (p[a] < lo[a] - g || p[a] > hi[a] + g) {
+      if (p[a] < lo[a] - g || p[3 + a] > hi[a] + g) {
         mx_error(m->size_map_name, 0, "size map: point %zu (%g, %g, %g) lies outside the "
                                       "domain's box [%g, %g] x [%g, %g] x [%g, %g] (grown by "
                                       "%g): another part, or other units?", i + 1, p[0], p[1],
@@ -296,25 +339,6 @@ static int map_sources(mx_mesher *m, const double lo[3], const double hi[3],
         return MX_EINPUT;
       }
   }
-  if (P->n + m->size_map_n > P->cap) {
-    const size_t cap = P->n + m->size_map_n;
-    double *x = mx_realloc(P->xyz, 3 * cap * sizeof *x);
-    if (!x) return MX_ENOMEM;
-    P->xyz = x;
-    double *h = mx_realloc(P->h, cap * sizeof *h);
-    if (!h) return MX_ENOMEM;
-    P->h = h;
-    double *w = mx_realloc(P->w, cap * sizeof *w);
-    if (!w) return MX_ENOMEM;
-    P->w = w;
-    P->cap = cap;
-  }
-  memcpy(P->xyz + 3 * P->n, m->size_map_xyz, 3 * m->size_map_n * sizeof *P->xyz);
-  memcpy(P->h + P->n, m->size_map_h, m->size_map_n * sizeof *P->h);
-  /* each point stands for an equal share of the box's volume */
-  for (size_t i = 0; i < m->size_map_n; i++) P->w[P->n + i] = vol / (double)m->size_map_n;
-  P->n += m->size_map_n;
-  m->size_src_map = m->size_map_n;
   return MX_OK;
 }
 
@@ -329,10 +353,10 @@ static int build_sources(mx_mesher *m, const double lo[3], const double hi[3]) {
   mx_point_sizes P;
   memset(&P, 0, sizeof P);
   int st = surface_sources(m, &P);
-  if (!st) st = map_sources(m, lo, hi, &P);
-  const size_t npts = P.n;
-  size_t nleaves = graded_cs ? mx_cspace_leaves(m->size_cs, NULL, NULL) : 0;
-  const size_t n = npts + nleaves;
+  if (!st) st = map_check(m, lo, hi);
+  const size_t npts = P.n, nmap = m->size_map_n;
+  const size_t nleaves = graded_cs ? mx_cspace_leaves(m->size_cs, NULL, NULL) : 0;
+  const size_t n = npts + nmap + nleaves;
   double *box = NULL, *h = NULL, *w = NULL;
   uint8_t *dim = NULL;
   if (!st && n) {
@@ -343,16 +367,30 @@ static int build_sources(mx_mesher *m, const double lo[3], const double hi[3]) {
     if (!box || !h || !w || !dim) st = MX_ENOMEM;
   }
   if (!st && n) {
-    for (size_t i = 0; i < npts; i++) {
+    for (size_t i = 0; i < npts; i++) { /* the surface's: points standing for an area */
       memcpy(box + 6 * i, P.xyz + 3 * i, 3 * sizeof *box);
       memcpy(box + 6 * i + 3, P.xyz + 3 * i, 3 * sizeof *box);
       h[i] = P.h[i];
       w[i] = P.w[i];
-      dim[i] = (uint8_t)(i >= npts - m->size_src_map ? 3 : 2);
+      dim[i] = 2;
     }
+    /* the map's: each point an equal share of the box's volume, each box
+     * its own volume */
+    double vol = 1.0;
+    for (int a = 0; a < 3; a++) vol *= hi[a] - lo[a];
+    for (size_t i = 0; i < nmap; i++) {
+      const double *b = m->size_map_box + 6 * i;
+      memcpy(box + 6 * (npts + i), b, 6 * sizeof *box);
+      h[npts + i] = m->size_map_h[i];
+      const double bv = (b[3] - b[0]) * (b[4] - b[1]) * (b[5] - b[2]);
+      w[npts + i] = bv > 0.0 ? bv : vol / (double)nmap;
+      dim[npts + i] = 3;
+    }
+    m->size_src_map = nmap;
     if (nleaves) {
-      mx_cspace_leaves(m->size_cs, box + 6 * npts, h + npts);
-      for (size_t i = npts; i < n; i++) {
+      const size_t o = npts + nmap;
+      mx_cspace_leaves(m->size_cs, box + 6 * o, h + o);
+      for (size_t i = o; i < n; i++) {
         const double *b = box + 6 * i;
         w[i] = (b[3] - b[0]) * (b[4] - b[1]) * (b[5] - b[2]);
         dim[i] = 3;
