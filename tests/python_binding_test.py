@@ -682,6 +682,60 @@ def size_field():
     assert "column 8" in str(e), str(e)
     m.close()
 
+@check
+def size_sources():
+    """set_size with a Python function (vectorised), set_thickness on a
+    plate (two elements across), set_size_points, set_size_elements then
+    refine: the elements follow each; bad values raise InputError."""
+    # a function of the points: finer near x = -1
+    m = mixoct.Mesher(stage="full")
+    xyz, tri = uv_sphere(1.0)
+    m.add_surface_arrays(xyz, tri, name="sphere")
+    calls = []
+
+    def f(p):
+        calls.append(len(p))
+        return 0.05 + 0.3 * (p[:, 0] + 1.0)
+    m.set_size(f)
+    m.mesh()
+    c = centroids(m)
+    left, right = (c[:, 0] < -0.5).sum(), (c[:, 0] > 0.5).sum()
+    assert calls and left > 3 * right, (left, right)
+    # a size per element: the right half asks for 0.08
+    n0 = m.nelements
+    h = np.where(centroids(m)[:, 0] > 0.0, 0.08, 10.0)
+    m.set_size_elements(h)
+    m.refine()
+    c = centroids(m)
+    assert m.nelements > n0 and (c[:, 0] > 0.5).sum() > right, (m.nelements, n0)
+    raises(mixoct.InputError, m.set_size_elements, np.ones(3))
+    m.close()
+    # a plate 0.05 thick: two elements across with set_thickness
+    m = mixoct.Mesher(stage="full", surface_level=0)
+    xyz, tri = cube(1.0)
+    xyz = np.asarray(xyz, dtype=float) * [1.0, 1.0, 0.05]
+    m.add_surface_arrays(xyz, tri, name="plate")
+    m.set_thickness(2)
+    m.mesh()
+    x = m.nodes[:, 2]
+    assert ((x > 0.001 * 0.05) & (x < 0.999 * 0.05)).any()  # nodes inside the plate
+    raises(mixoct.InputError, m.set_thickness, 0.5)
+    raises(mixoct.InputError, m.set_gradation, 1.0)
+    raises(mixoct.InputError, m.set_size_points, [[0, 0, 0]], [-1.0])
+    m.close()
+    # points with sizes: finer around (0.5, 0, 0)
+    m = mixoct.Mesher(stage="full", surface_level=2)
+    xyz, tri = uv_sphere(1.0)
+    m.add_surface_arrays(xyz, tri, name="sphere")
+    m.set_size_points([[0.5, 0.0, 0.0]], [0.03])
+    m.mesh()
+    c = centroids(m)
+    near = (np.linalg.norm(c - [0.5, 0, 0], axis=1) < 0.2).sum()
+    far = (np.linalg.norm(c - [-0.5, 0, 0], axis=1) < 0.2).sum()
+    assert near > 4 * far, (near, far)
+    m.close()
+
+
 M.close()
 npass = sum(1 for _, ok in RESULTS if ok)
 nfail = len(RESULTS) - npass

@@ -324,6 +324,12 @@ def _candidates():
     return names, False
 
 
+# mx_size_fn: f(user, n, xyz, h), called from the library's threads
+_SIZE_FN = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_size_t,
+                            ctypes.POINTER(ctypes.c_double),
+                            ctypes.POINTER(ctypes.c_double))
+
+
 def _declare(lib):
     P = ctypes.c_void_p
     I = ctypes.c_int
@@ -344,6 +350,13 @@ def _declare(lib):
         "mx_mesher_set_material": (I, [P, I, I, S]),
         "mx_mesher_set_input_level": (I, [P, I, I, I]),
         "mx_mesher_set_size_expr": (I, [P, S]),
+        "mx_mesher_set_size_function": (I, [P, _SIZE_FN, P, P]),
+        "mx_mesher_set_size_limits": (I, [P, ctypes.c_double, ctypes.c_double]),
+        "mx_mesher_set_size_curvature": (I, [P, ctypes.c_double]),
+        "mx_mesher_set_size_thickness": (I, [P, ctypes.c_double]),
+        "mx_mesher_set_size_gradation": (I, [P, ctypes.c_double]),
+        "mx_mesher_set_size_points": (I, [P, dblp, dblp, sz, S]),
+        "mx_mesher_set_size_elements": (I, [P, dblp, sz]),
         "mx_mesher_build_octree": (I, [P]),
         "mx_mesher_transition": (I, [P]),
         "mx_mesher_boundary": (I, [P]),
@@ -991,13 +1004,79 @@ class Mesher(_MesherBase):
         self._call("mx_mesher_set_input_level", int(input), int(surface_level),
                    int(inside_level))
 
-    def set_size(self, text):
+    def set_size(self, field, size_min=0.0, size_max=0.0):
         """A size field (the program's --size): an expression of x, y, z
-        (numbers, + - * / ^, exp log sqrt abs sin cos min max, pi, e) or
-        one of the test functions "F1".."F5"; octants are split while
-        larger than the least size over them. Raises InputError with the
-        column of a bad expression."""
-        self._call("mx_mesher_set_size_expr", str(text).encode())
+        (numbers, + - * / ^, exp log sqrt abs sin cos min max, pi, e), one
+        of the test functions "F1".."F5", or a Python function of the
+        points, vectorised: f(xyz) with xyz an (n, 3) float64 array returns
+        the n sizes (or an (n, 3) array of sizes along x, y, z; the octree
+        uses the least). Octants are split while larger than the least size
+        over them (sampled into a control space when the octree is built).
+        size_min, size_max (> 0): bounds on the sizes (--size-min,
+        --size-max). Raises InputError with the column of a bad expression,
+        or naming the point of a size that is not finite and positive."""
+        if callable(field):
+            def call(user, n, xyz, h, f=field):
+                try:
+                    p = np.ctypeslib.as_array(xyz, shape=(n, 3))
+                    out = np.ctypeslib.as_array(h, shape=(n, 3))
+                    v = np.asarray(f(p.copy()), dtype=np.float64)
+                    if v.shape == (n,):
+                        v = v[:, None]
+                    out[:] = np.broadcast_to(v, (n, 3))
+                except Exception as e:  # noqa: BLE001 (reported as a bad size)
+                    self._size_error = e
+                    np.ctypeslib.as_array(h, shape=(n, 3))[:] = np.nan
+            self._size_error = None
+            self._size_cb = _SIZE_FN(call)  # kept alive with the mesher
+            self._call("mx_mesher_set_size_function", self._size_cb, None, None)
+        else:
+            self._size_cb = None
+            self._call("mx_mesher_set_size_expr", str(field).encode())
+        if size_min or size_max:
+            self.set_size_limits(size_min, size_max)
+
+    def set_size_limits(self, size_min=0.0, size_max=0.0):
+        """Bounds on the size field's sizes (0: none); size_max alone is a
+        field of that size everywhere (--size-min, --size-max)."""
+        self._call("mx_mesher_set_size_limits", float(size_min), float(size_max))
+
+    def set_curvature(self, degrees):
+        """A size field from the surface's curvature: an element spans at
+        most `degrees` of it (--curvature; 0: none)."""
+        self._call("mx_mesher_set_size_curvature", float(degrees))
+
+    def set_thickness(self, elements):
+        """At least `elements` (1 to 64) elements across every part and
+        every gap of the domain (--thickness; 0: none)."""
+        self._call("mx_mesher_set_size_thickness", float(elements))
+
+    def set_gradation(self, beta):
+        """Neighbouring sizes differ by at most the ratio beta > 1
+        (--gradation; 0: the default, 2 for curvature, thickness and size
+        maps; given, for set_size's field too)."""
+        self._call("mx_mesher_set_size_gradation", float(beta))
+
+    def set_size_points(self, points, sizes, name="size map"):
+        """A size map: points (n, 3) with sizes (n,) (a solver's estimate,
+        interpolated by the graded minimum of the sources; the points must
+        lie in the domain's box). An empty array removes it."""
+        x = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+        h = np.ascontiguousarray(sizes, dtype=np.float64).ravel()
+        if h.size != x.shape[0]:
+            raise InputError("set_size_points: %d points but %d sizes"
+                             % (x.shape[0], h.size))
+        dp = ctypes.POINTER(ctypes.c_double)
+        self._call("mx_mesher_set_size_points", x.ctypes.data_as(dp),
+                   h.ctypes.data_as(dp), h.size, str(name).encode())
+
+    def set_size_elements(self, sizes):
+        """A size per element of the current mesh (a solver's estimate, in
+        the order of the mesh's arrays), over each element's box; then
+        refine() meshes again to it."""
+        h = np.ascontiguousarray(sizes, dtype=np.float64).ravel()
+        self._call("mx_mesher_set_size_elements",
+                   h.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), h.size)
 
     def add_region_surface(self, path, level):
         """-r: octants meeting or inside this surface go to `level`."""
