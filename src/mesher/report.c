@@ -135,18 +135,6 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
   if (s->mesh) quality_json(&s->quality, qual, sizeof qual);
   const size_t hex = s->mesh ? s->by_type[3] : s->leaves;
   char bnd[1024] = "";
-  if (s->size_field) {
-    static const char *tree[4] = {"K_L", "K_V", "K_oL", "K_oLB"};
-    if (s->size_leaves && !s->size_graded_n)
-      printf("  size field   %12zu leaves of a %s control space (depth %d, %.0f kB, %.3f s)\n",
-             s->size_leaves, tree[s->size_structure & 3], s->size_depth, s->size_kb,
-             s->size_seconds);
-    if (s->size_sources)
-      printf("  size field   %12zu sources (curvature %zu, thickness %zu, map %zu, graded "
-             "leaves %zu), gradation %.3g; %.0f kB, %.3f s\n", s->size_sources,
-             s->size_curvature_n, s->size_thickness_n, s->size_map_n, s->size_graded_n,
-             s->size_beta, s->size_src_kb, s->size_src_seconds);
-  }
   if (s->full) {
     const mx_boundary_stats *b = &s->boundary;
     snprintf(bnd, sizeof bnd,
@@ -182,7 +170,9 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
     snprintf(mat + k, sizeof mat - k,
              "\"size_field\": {\"structure\": \"%s%s%s\", \"leaves\": %zu, \"depth\": %d, "
              "\"capped\": %d, \"kb\": %.1f, \"seconds\": %.6f}, ",
-             tree[st], st <= 1 ? " " : "", st <= 1 ? rule[sp] : "", s->size_leaves, s->size_depth, s->size_capped, s->size_kb, s->size_seconds);
+             s->size_leaves ? tree[st] : "none", s->size_leaves && st <= 1 ? " " : "",
+             s->size_leaves && st <= 1 ? rule[sp] : "", s->size_leaves, s->size_depth,
+             s->size_capped, s->size_kb, s->size_seconds);
     if (s->size_sources) { /* inside size_field: replace its closing "}, " */
       const size_t e = strlen(mat) - 3;
       snprintf(mat + e, sizeof mat - e,
