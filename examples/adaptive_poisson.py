@@ -22,6 +22,15 @@ the squared error (--mark elements: the same over the elements), and
 Mesher.refine_elements, given every element of the marked leaves, splits
 those leaves once (Algorithm 3), restores balance and meshes again.
 
+--refine sizemap turns the estimate into a size field instead (issue 27): an
+element's error goes as h^2.5 (P1, 3D), so each element above the target
+error (--reduction times the root mean square of the elements' errors) gets
+the size that would bring it there, and Mesher.set_size_elements (each size
+over its element's box; --at centroids: set_size_points at the centroids)
+with Mesher.refine refines the octree to the field, several levels at once
+where the error asks for it (bench/adaptive_sizemap_bench.sh compares the
+two ways).
+
 The meshes of successive rounds are not nested (transition elements are
 re-patterned, surface nodes move), so the error is not bound to fall every
 round while the bump is under-resolved; with the defaults (-s 4, theta 0.7)
@@ -229,6 +238,38 @@ def solve_and_estimate(pb, problem):
     return U, e[:, 0], e[:, 1], float(np.sum(e[:, 2]))
 
 
+def element_centroids(nodes, conn, types):
+    """Each element's centroid (the mean of its nodes)."""
+    nn = np.array(mixoct.NODES_PER_TYPE)[types]
+    pad = conn == mixoct.NO_NODE
+    xyz = nodes[np.where(pad, 0, conn)]
+    xyz[pad] = 0.0
+    return xyz.sum(axis=1) / nn[:, None]
+
+
+def size_map(nodes, conn, types, err2, reduction):
+    """A size per element from the estimate: an element's error goes as
+    h^(p + d/2) = h^2.5 (P1, 3D), so an element of size h (its box's
+    largest side) and squared error e2 reaches the target error t =
+    reduction * rms(error) at the size h (t / sqrt(e2))^0.4; elements
+    already below the target keep their size (1e300: no request). The
+    octree is refined, never coarsened, by the field (graded: sizes grow by
+    at most 2 between neighbours)."""
+    nn = np.array(mixoct.NODES_PER_TYPE)[types]
+    pad = conn == mixoct.NO_NODE
+    xyz = nodes[np.where(pad, 0, conn)]
+    lo = np.where(pad[:, :, None], np.inf, xyz).min(axis=1)
+    hi = np.where(pad[:, :, None], -np.inf, xyz).max(axis=1)
+    h = (hi - lo).max(axis=1)
+    del nn
+    e = np.sqrt(np.maximum(err2, 0.0))
+    t = reduction * np.sqrt(np.mean(err2))
+    out = np.full(len(h), 1e300)
+    big = e > t
+    out[big] = h[big] * (t / e[big]) ** 0.4
+    return out
+
+
 def doerfler(err2, theta):
     """The fewest elements whose squared errors add up to theta of the total."""
     order = np.argsort(-err2, kind="stable")
@@ -257,6 +298,19 @@ def parse_args(argv):
     ap.add_argument("--theta", type=float, default=0.7,
                     help="Doerfler bulk fraction of the squared error to "
                          "refine (0.7)")
+    ap.add_argument("--refine", choices=("mark", "sizemap"), default="mark",
+                    help="mark: Doerfler marking, the marked leaves split once "
+                         "(default); sizemap: a size per element from the "
+                         "error estimate, handed to mixoct as a size field")
+    ap.add_argument("--reduction", type=float, default=0.5,
+                    help="sizemap: each element's target error, this times "
+                         "the root mean square of the elements' errors (0.5)")
+    ap.add_argument("--at", choices=("elements", "centroids"), default="elements",
+                    help="sizemap: each size over its element's box "
+                         "(set_size_elements) or at its centroid (set_size_points)")
+    ap.add_argument("--gradation", type=float, default=0.0,
+                    help="sizemap: the field's gradation ratio (0: mixoct's "
+                         "default, 2)")
     ap.add_argument("--mark", choices=("leaves", "elements"), default="leaves",
                     help="Doerfler over the octree leaves (each leaf's error "
                          "the sum of its elements') or over the elements "
@@ -334,7 +388,17 @@ def main(argv=None):
         for rnd in range(args.rounds):
             if rnd > 0:
                 t0 = time.perf_counter()
-                mx.refine_elements(marked)
+                if args.refine == "sizemap":
+                    if args.gradation:
+                        mx.set_gradation(args.gradation)
+                    if args.at == "centroids":
+                        ok = target < 1e300
+                        mx.set_size_points(cen[ok], target[ok])
+                    else:
+                        mx.set_size_elements(target)
+                    mx.refine()
+                else:
+                    mx.refine_elements(marked)
                 t_mesh = time.perf_counter() - t0
             if args.check:
                 mx.write(os.path.join(args.check, "round%d.vtu" % rnd))
@@ -363,7 +427,12 @@ def main(argv=None):
                 else None
 
             err = e_h1 if args.estimator == "h1" else e_l2
-            if args.mark == "leaves":
+            if args.refine == "sizemap":
+                target = size_map(nodes, conn, types, err, args.reduction)
+                cen = element_centroids(nodes, conn, types)
+                marked = np.flatnonzero(np.isfinite(target) & (target < 1e300))
+                nmarked_leaves = int(np.unique(mx.leaf[marked]).size)
+            elif args.mark == "leaves":
                 # a leaf is what gets split: mark leaves by their total error
                 # and pass every element of a marked leaf
                 leaf = mx.leaf

@@ -101,9 +101,28 @@ else
   fail=$((fail + 1))
 fi
 
+# ---- 2b. the same refined by a size map from the estimate (issue 27) -----------
+echo "== examples/adaptive_poisson.py --rounds 2 -s 4 --refine sizemap --reduction 3"
+if "$PY" "$SRC/examples/adaptive_poisson.py" --rounds 2 -s 4 --refine sizemap --reduction 3 \
+    --check "$TMP/rounds_sizemap" --json >"$TMP/sizemap.out" 2>&1 &&
+  "$PY" - "$TMP/sizemap.out" <<'EOF'
+import json, sys
+rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
+ok = len(rows) == 2 and rows[1]["h1"] < 0.7 * rows[0]["h1"] and rows[1]["leaves"] > rows[0]["leaves"]
+print("sizemap rounds: %s" % [(r["elements"], round(r["rel_h1"], 4)) for r in rows])
+sys.exit(0 if ok else 1)
+EOF
+then
+  pass=$((pass + 1))
+else
+  cat "$TMP/sizemap.out"
+  echo "FAIL: the size-map round did not refine or the H1 error did not fall by 30%"
+  fail=$((fail + 1))
+fi
+
 # ---- 3. every round's mesh passes mixoct check ----------------------------------
 n=0
-for f in "$TMP"/rounds/round*.vtu; do
+for f in "$TMP"/rounds/round*.vtu "$TMP"/rounds_sizemap/round*.vtu; do
   [ -e "$f" ] || continue
   n=$((n + 1))
   "$MIXOCT" check "$f" >"$TMP/check.out" 2>&1
@@ -117,8 +136,8 @@ for f in "$TMP"/rounds/round*.vtu; do
     fail=$((fail + 1))
   fi
 done
-if [ "$n" -ne 3 ]; then
-  echo "FAIL: 3 round meshes expected in --check DIR, found $n"
+if [ "$n" -ne 5 ]; then
+  echo "FAIL: 5 round meshes expected in the --check DIRs (3 marked, 2 size map), found $n"
   fail=$((fail + 1))
 fi
 
