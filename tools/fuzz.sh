@@ -7,7 +7,9 @@
 # poly: the 2D readers .poly/.off/.mdl and the domain check),
 # mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d
 # mesh_mvm (mx_read_mesh of `mixoct check`, the input written under that
-# extension; tools/fuzz_readers.c)
+# extension; tools/fuzz_readers.c), sizemap_txt sizemap_vtk sizemap_vtu
+# sizemap_pos (mx_sizemap_read, the format named by that extension;
+# tools/fuzz_readers.c),
 # restart (tools/fuzz_restart.c) and list (the element index lists of -l,
 # tools/fuzz_list.c). Each runs SECONDS_PER_TARGET seconds
 # (default 60) from its seeds tools/fuzz_seeds/TARGET plus a corpus kept
@@ -32,7 +34,7 @@ set -u
 export LC_ALL=C
 
 root=$(cd "$(dirname "$0")/.." && pwd)
-all_targets="off mdl stl obj ply reg poly mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d mesh_mvm restart list"
+all_targets="off mdl stl obj ply reg poly mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d mesh_mvm sizemap_txt sizemap_vtk sizemap_vtu sizemap_pos restart list"
 
 secs=60
 case ${1:-} in
@@ -108,6 +110,7 @@ link_target() {
     restart) src=tools/fuzz_restart.c; def= ;;
     list) src=tools/fuzz_list.c; def= ;;
     mesh_*) def="-DFUZZ_FORMAT=mesh -DFUZZ_EXT=${t#mesh_}" ;;
+    sizemap_*) def="-DFUZZ_FORMAT=sizemap -DFUZZ_EXT=${t#sizemap_}" ;;
     *) def="-DFUZZ_FORMAT=$t" ;;
   esac
   if up_to_date "$bin" "$bin.d" && [ ! "$lib" -nt "$bin" ]; then return 0; fi

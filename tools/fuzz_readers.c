@@ -15,6 +15,11 @@
  *                        bytes, then what the 2D mesher does with a poly
  *                        read: mx_poly_check_domain, the point-location
  *                        index, features (src/quad/poly.c)
+ *   sizemap              mx_sizemap_read (src/io/read_sizemap.c) with the
+ *                        default field and with the field "h"; every point
+ *                        and size read checked finite (sizes > 0);
+ *                        -DFUZZ_EXT=txt|vtk|vtu|pos picks the extension,
+ *                        which picks the format (default txt)
  *
  * The readers take a path: each input is written to a file of this process
  * under $TMPDIR (/dev/shm when writable and TMPDIR is unset, else /tmp),
@@ -51,6 +56,7 @@
 #include "soa/trisoup.h"
 #include "io/read_surface.h"
 #include "io/read_poly.h"
+#include "io/read_sizemap.h"
 
 /* FUZZ_FORMAT as a number, by token pasting: FMT_off and so on. */
 #define FMT_off 1
@@ -61,23 +67,26 @@
 #define FMT_reg 6
 #define FMT_mesh 7
 #define FMT_poly 8
+#define FMT_sizemap 9
 #define FUZZ_CAT2(a, b) a##b
 #define FUZZ_CAT(a, b) FUZZ_CAT2(a, b)
 #define FUZZ_STR2(a) #a
 #define FUZZ_STR(a) FUZZ_STR2(a)
 
 #ifndef FUZZ_FORMAT
-#error "compile with -DFUZZ_FORMAT=off|mdl|stl|obj|ply|reg|mesh|poly"
+#error "compile with -DFUZZ_FORMAT=off|mdl|stl|obj|ply|reg|mesh|poly|sizemap"
 #endif
 #define FUZZ_ID FUZZ_CAT(FMT_, FUZZ_FORMAT)
-#if FUZZ_ID < 1 || FUZZ_ID > 8
+#if FUZZ_ID < 1 || FUZZ_ID > 9
 #error "unknown FUZZ_FORMAT"
 #endif
 
-#if FUZZ_ID == FMT_mesh && defined(FUZZ_EXT)
+#if (FUZZ_ID == FMT_mesh || FUZZ_ID == FMT_sizemap) && defined(FUZZ_EXT)
 #define EXT FUZZ_STR(FUZZ_EXT)
 #elif FUZZ_ID == FMT_mesh
 #define EXT "vtk"
+#elif FUZZ_ID == FMT_sizemap
+#define EXT "txt"
 #else
 #define EXT FUZZ_STR(FUZZ_FORMAT)
 #endif
@@ -212,6 +221,29 @@ static void fuzz_file(void) {
     poly_promises(&P);
     poly_use(&P);
     mx_poly_free(&P);
+  }
+}
+
+#elif FUZZ_ID == FMT_sizemap
+
+/* The promises of io/read_sizemap.h: on failure no arrays, else n > 0
+ * points with finite coordinates and finite sizes > 0. */
+static void fuzz_file(void) {
+  const char *const fields[2] = {NULL, "h"};
+  for (int k = 0; k < 2; k++) {
+    double *xyz = (double *)&xyz, *h = (double *)&h; /* must be overwritten */
+    size_t n = 7;
+    if (mx_sizemap_read(path, fields[k], &xyz, &h, &n) != MX_OK) {
+      REQUIRE(xyz == NULL && h == NULL && n == 0);
+      continue;
+    }
+    REQUIRE(n > 0 && xyz && h);
+    for (size_t i = 0; i < n; i++) {
+      REQUIRE(isfinite(h[i]) && h[i] > 0);
+      REQUIRE(isfinite(xyz[3 * i]) && isfinite(xyz[3 * i + 1]) && isfinite(xyz[3 * i + 2]));
+    }
+    mx_free(xyz);
+    mx_free(h);
   }
 }
 

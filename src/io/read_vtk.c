@@ -5,7 +5,11 @@
  * io/vtk_cells.c then assembles them. Binary values are only read after the
  * block holding them was checked to lie in the file. Of the attributes,
  * only the point field surface_tag and the cell field material (one value
- * per cell, of any type, whole numbers: cell_tag) are read. */
+ * per cell, of any type, whole numbers: cell_tag) are read.
+ *
+ * mx_rd_vtk_legacy_fields reads one field instead of the mesh (for size
+ * maps, io/vtk_fields.h): the same sections, POLYDATA's too, every array of
+ * the attributes listed, the cells kept as the file gives them. */
 #include "io/mesh_reader.h"
 
 #include <math.h>
@@ -17,6 +21,7 @@
 #include "base/common.h"
 #include "io/text_scan.h"
 #include "io/vtk_cells.h"
+#include "io/vtk_fields.h"
 
 typedef struct {
   rd *r;
@@ -28,6 +33,7 @@ typedef struct {
   rawarr node_tags; /* the point field surface_tag */
   rawarr material;  /* the cell field material */
   mx_mesh_data *out;
+  rd_fields *fields; /* reading one field instead of the mesh (vtk_fields.h) */
 } legacy;
 
 /* The next blank-separated token (may be empty at the end of the file). */
@@ -200,10 +206,11 @@ static int leg_cell_list(legacy *L, size_t size) {
   return MX_OK;
 }
 
-/* Version 5: CELLS noffsets nconn, then OFFSETS and CONNECTIVITY arrays. */
-static int leg_cell_arrays(legacy *L, size_t noff, size_t nconn) {
+/* Version 5: after CELLS noffsets nconn (or a POLYDATA section's header),
+ * the OFFSETS and CONNECTIVITY arrays. */
+static int leg_offsets(legacy *L, size_t noff, size_t nconn, rawarr *off, rawarr *cn) {
   static const char *const kw[2] = {"OFFSETS", "CONNECTIVITY"};
-  rawarr *dst[2] = {&L->P.off, &L->P.cn};
+  rawarr *dst[2] = {off, cn};
   const size_t n[2] = {noff, nconn};
   for (int i = 0; i < 2; i++) {
     size_t tl;
@@ -217,6 +224,12 @@ static int leg_cell_arrays(legacy *L, size_t noff, size_t nconn) {
                         shown(tl), t);
     MX_CHECK(leg_array(L, n[i], vt, dst[i], kw[i]));
   }
+  return MX_OK;
+}
+
+/* Version 5: CELLS noffsets nconn, then OFFSETS and CONNECTIVITY arrays. */
+static int leg_cell_arrays(legacy *L, size_t noff, size_t nconn) {
+  MX_CHECK(leg_offsets(L, noff, nconn, &L->P.off, &L->P.cn));
   L->P.ncells = noff ? noff - 1 : 0;
   L->P.vtu_offsets = 0;
   if (noff == 0) { /* no cells at all */
@@ -365,9 +378,21 @@ static int is_surface_tag(int point, const char *name, size_t nl, vtype t,
          tok_eq(name, nl, "surface_tag");
 }
 
+/* Reading a field (vtk_fields.h): an array of the attributes listed, its
+ * values starting at L->p. */
+static int leg_listed(legacy *L, const char *name, size_t nl, int point, size_t count,
+                      size_t ncomp, vtype t) {
+  rd_fields *f = L->fields;
+  if (f->narr == RD_MAX_ARRAYS)
+    return mx_rd_fail(L->r, name, "more than %d arrays of point and cell data", RD_MAX_ARRAYS);
+  f->arr[f->narr++] = (rd_array){name, nl, point, ncomp, name, t, count, L->p};
+  return MX_OK;
+}
+
 /* The attribute sections from the keyword t on (CELL_DATA n or POINT_DATA
  * n, then SCALARS, VECTORS, NORMALS, FIELD, METADATA): skipped but for
- * surface_tag and material. Any other keyword, or a malformed header, ends
+ * surface_tag and material (reading a field: every SCALARS and FIELD array
+ * listed, and the keyword that ended them kept). Any other keyword, or a malformed header, ends
  * them silently (they used to be ignored whole); surface_tag and material
  * themselves must be well formed. */
 static int leg_attributes(legacy *L, const char *t, size_t tl) {
@@ -382,7 +407,8 @@ static int leg_attributes(legacy *L, const char *t, size_t tl) {
       const char *name = leg_token(L, &nl);
       const char *ty = leg_token(L, &yl);
       const vtype vt = legacy_type(ty, yl);
-      if (vt == T_NONE && is_material(point, name, nl)) return bad_material_type(L, ty, yl);
+      if (vt == T_NONE && !L->fields && is_material(point, name, nl))
+        return bad_material_type(L, ty, yl);
       if (vt == T_NONE) return MX_OK;
       const char *save = L->p, *q = L->p; /* a count on the same line */
       while (q < L->r->end && (*q == ' ' || *q == '\t')) q++;
@@ -397,7 +423,11 @@ static int leg_attributes(legacy *L, const char *t, size_t tl) {
         leg_token(L, &k);
       else
         L->p = save;
-      if (is_surface_tag(point, name, nl, vt, ncomp)) {
+      if (L->fields) {
+        MX_CHECK(leg_listed(L, name, nl, point, count, ncomp, vt));
+        if (count > SIZE_MAX / 16 / ncomp || !leg_skip_values(L, count * ncomp, vt))
+          return MX_OK;
+      } else if (is_surface_tag(point, name, nl, vt, ncomp)) {
         MX_CHECK(leg_node_tags(L, name, count, vt));
       } else if (is_material(point, name, nl)) {
         MX_CHECK(leg_material(L, name, count, ncomp, vt));
@@ -424,9 +454,13 @@ static int leg_attributes(legacy *L, const char *t, size_t tl) {
         if (!leg_count_q(L, &nc) || !leg_count_q(L, &nt)) return MX_OK;
         const char *ty = leg_token(L, &yl);
         const vtype vt = legacy_type(ty, yl);
-        if (vt == T_NONE && is_material(point, name, nl)) return bad_material_type(L, ty, yl);
+        if (vt == T_NONE && !L->fields && is_material(point, name, nl))
+          return bad_material_type(L, ty, yl);
         if (vt == T_NONE) return MX_OK;
-        if (is_surface_tag(point, name, nl, vt, nc)) {
+        if (L->fields) {
+          MX_CHECK(leg_listed(L, name, nl, point, nt, nc, vt));
+          if ((nt && nc > SIZE_MAX / 16 / nt) || !leg_skip_values(L, nc * nt, vt)) return MX_OK;
+        } else if (is_surface_tag(point, name, nl, vt, nc)) {
           MX_CHECK(leg_node_tags(L, name, nt, vt));
         } else if (is_material(point, name, nl)) {
           MX_CHECK(leg_material(L, name, nt, nc, vt));
@@ -444,16 +478,16 @@ static int leg_attributes(legacy *L, const char *t, size_t tl) {
     } else if (tok_eq(t, tl, "METADATA")) {
       leg_skip_metadata(L);
     } else {
+      if (L->fields && tl) L->fields->stopped = t;
       return MX_OK; /* the end, or an attribute not read */
     }
   }
 }
 
-int mx_rd_vtk_legacy(rd *r, mx_mesh_data *out) {
-  legacy L;
-  memset(&L, 0, sizeof L);
-  L.r = r;
-  L.out = out;
+/* Lines 1 to 3 ("# vtk DataFile Version x.y", the title, ASCII or BINARY)
+ * and DATASET: its type's word in *ds (*dsl bytes). */
+static int leg_header(legacy *L, const char **ds, size_t *dsl) {
+  rd *r = L->r;
   const char *end = r->end;
   /* Line 1: "# vtk DataFile Version x.y". */
   const char *p = skip_ws(r->buf, end);
@@ -466,22 +500,34 @@ int mx_rd_vtk_legacy(rd *r, mx_mesh_data *out) {
   int major = 0;
   while (v < end && *v >= '0' && *v <= '9' && major < 1000)
     major = 10 * major + (*v++ - '0');
-  L.v5 = major >= 5;
+  L->v5 = major >= 5;
   /* Line 2: the title; line 3: ASCII or BINARY. */
   const char *nl = memchr(p, '\n', (size_t)(end - p));
   nl = nl ? memchr(nl + 1, '\n', (size_t)(end - nl - 1)) : NULL;
   if (!nl) return mx_rd_fail(r, p, "truncated header (no title line)");
-  L.p = nl + 1;
+  L->p = nl + 1;
   size_t tl;
-  const char *t = leg_token(&L, &tl);
+  const char *t = leg_token(L, &tl);
   if (tok_eq(t, tl, "BINARY"))
-    L.binary = 1;
+    L->binary = 1;
   else if (!tok_eq(t, tl, "ASCII"))
     return mx_rd_fail(r, t, "expected ASCII or BINARY, found '%.*s'", shown(tl), t);
-  t = leg_token(&L, &tl);
+  t = leg_token(L, &tl);
   if (!tok_eq(t, tl, "DATASET"))
     return mx_rd_fail(r, t, "expected DATASET, found '%.*s'", shown(tl), t);
-  t = leg_token(&L, &tl);
+  *ds = leg_token(L, dsl);
+  return MX_OK;
+}
+
+int mx_rd_vtk_legacy(rd *r, mx_mesh_data *out) {
+  legacy L;
+  memset(&L, 0, sizeof L);
+  L.r = r;
+  L.out = out;
+  const char *end = r->end;
+  size_t tl;
+  const char *t;
+  MX_CHECK(leg_header(&L, &t, &tl));
   if (!tok_eq(t, tl, "UNSTRUCTURED_GRID"))
     return mx_rd_fail(r, t, "DATASET %.*s: only UNSTRUCTURED_GRID is supported",
                       shown(tl), t);
@@ -517,4 +563,106 @@ int mx_rd_vtk_legacy(rd *r, mx_mesh_data *out) {
   MX_CHECK(mx_rd_assemble(r, &L.P, out));
   if (L.have_material) MX_CHECK(mx_rd_cell_tags(r, &L.material, out));
   return L.have_node_tags ? mx_rd_node_tags(r, &L.node_tags, out) : MX_OK;
+}
+
+/* ---- one field instead of the mesh (vtk_fields.h) ------------------------ */
+
+/* A block of cells (CELLS, or a POLYDATA section), kept as the file gives
+ * it: block b of the field's cells. */
+static int leg_field_cells(legacy *L, int b, const char *kw) {
+  size_t a, s;
+  const char *at = skip_ws(L->p, L->r->end);
+  MX_CHECK(leg_count(L, &a, kw));
+  MX_CHECK(leg_count(L, &s, kw));
+  rd_fields *f = L->fields;
+  rd_cells *c = &f->cells[b];
+  if (c->at) return mx_rd_fail(L->r, at, "%s given twice", kw);
+  c->at = at;
+  if (L->v5) {
+    MX_CHECK(leg_offsets(L, a, s, &c->off, &c->cn));
+    c->ncells = a ? a - 1 : 0;
+  } else {
+    if (a > s / 2) /* each cell takes its count and at least one node */
+      return mx_rd_fail(L->r, at, "%s: %zu cells cannot fit in %zu values", kw, a, s);
+    MX_CHECK(leg_array(L, s, T_I32, &c->list, kw));
+    c->ncells = a;
+    c->list_form = 1;
+  }
+  f->ncells += c->ncells; /* each block is bounded by the file's size */
+  if (b == 0) { /* CELL_TYPES checks its count against it */
+    L->have_cells = 1;
+    L->P.ncells = c->ncells;
+  }
+  return MX_OK;
+}
+
+/* The array picked, and its values. */
+static int leg_field_values(legacy *L) {
+  rd *r = L->r;
+  rd_fields *f = L->fields;
+  if (!L->have_points) return mx_rd_fail(r, NULL, "no POINTS section");
+  f->npts = L->P.nnodes;
+  f->pts = L->P.pts;
+  MX_CHECK(f->pick(r, f, &f->which));
+  const rd_array *a = &f->arr[f->which];
+  char what[64];
+  snprintf(what, sizeof what, "%.*s", shown(a->nlen), a->name);
+  if (a->ncomp != 1)
+    return mx_rd_fail(r, a->at, "%s: %llu components, expected 1", what,
+                      (unsigned long long)a->ncomp);
+  const size_t want = a->point ? f->npts : f->ncells;
+  if (a->count != want)
+    return mx_rd_fail(r, a->at, "%s: %zu values for %zu %s", what, a->count, want,
+                      a->point ? "points" : "cells");
+  L->p = a->data;
+  return leg_array(L, want, a->t, &f->values, what);
+}
+
+int mx_rd_vtk_legacy_fields(rd *r, rd_fields *f) {
+  legacy L;
+  memset(&L, 0, sizeof L);
+  L.r = r;
+  L.fields = f;
+  const char *end = r->end;
+  size_t tl;
+  const char *t;
+  MX_CHECK(leg_header(&L, &t, &tl));
+  const int poly = tok_eq(t, tl, "POLYDATA");
+  if (!poly && !tok_eq(t, tl, "UNSTRUCTURED_GRID"))
+    return mx_rd_fail(r, t, "DATASET %.*s: only UNSTRUCTURED_GRID and POLYDATA are supported",
+                      shown(tl), t);
+  /* POLYDATA's sections, as blocks in VTK's cell order */
+  static const char *const poly_kw[RD_MAX_BLOCKS] = {"VERTICES", "LINES", "POLYGONS",
+                                                     "TRIANGLE_STRIPS"};
+  for (;;) {
+    t = leg_token(&L, &tl);
+    if (tl == 0) {
+      if (t < end)
+        return mx_rd_fail(r, t, "unexpected NUL byte (binary data in an ASCII "
+                          "file, or a wrong count)");
+      break;
+    }
+    int block = -1;
+    for (int b = 0; b < RD_MAX_BLOCKS; b++)
+      if (poly ? tok_eq(t, tl, poly_kw[b]) : b == 0 && tok_eq(t, tl, "CELLS")) block = b;
+    if (tok_eq(t, tl, "POINTS")) {
+      MX_CHECK(leg_points(&L));
+    } else if (block >= 0) {
+      MX_CHECK(leg_field_cells(&L, block, poly ? poly_kw[block] : "CELLS"));
+    } else if (!poly && tok_eq(t, tl, "CELL_TYPES")) {
+      MX_CHECK(leg_types(&L));
+    } else if (tok_eq(t, tl, "FIELD")) {
+      MX_CHECK(leg_skip_field(&L));
+    } else if (tok_eq(t, tl, "METADATA")) {
+      leg_skip_metadata(&L);
+    } else if (tok_eq(t, tl, "CELL_DATA") || tok_eq(t, tl, "POINT_DATA")) {
+      MX_CHECK(leg_attributes(&L, t, tl));
+      break;
+    } else {
+      return mx_rd_fail(r, t, "unexpected '%.*s' (expected POINTS, %s, POINT_DATA or CELL_DATA)",
+                        shown(tl), t,
+                        poly ? "VERTICES, LINES, POLYGONS, TRIANGLE_STRIPS" : "CELLS, CELL_TYPES");
+    }
+  }
+  return leg_field_values(&L);
 }

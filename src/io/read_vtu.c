@@ -3,7 +3,12 @@
  * appended raw, cut into parts that io/vtk_cells.c assembles; the point
  * fields surface_tag and (in a piece of a .pvtu) GlobalNodeId, and the cell
  * field material (cell_tag: one component, one value per cell, of any type,
- * whole numbers). A .pvtu master goes to read_pvtu.c. */
+ * whole numbers). A .pvtu master goes to read_pvtu.c.
+ *
+ * mx_rd_vtu_fields reads one field instead of the mesh (for size maps,
+ * io/vtk_fields.h): an UnstructuredGrid or a PolyData (.vtp), every array
+ * of <PointData> and <CellData> listed, the picked one's values and, for a
+ * cell array, the cells' offsets and connectivity. */
 #include "io/mesh_reader.h"
 
 #include <math.h>
@@ -14,6 +19,7 @@
 
 #include "base/common.h"
 #include "io/vtk_cells.h"
+#include "io/vtk_fields.h"
 #include "io/vtk_xml.h"
 
 static const char *const vtu_type_name[T_NONE] = {
@@ -160,8 +166,41 @@ static int vtkfile_closed(const rd *r) {
                        "interrupted write or copy?)");
 }
 
+/* The byte order, header type and compressor of the <VTKFile> tag t. */
+static int vtkfile_layout(const rd *r, const xtag *t, vtu_layout *lay) {
+  const int big = mx_rd_attr_eq(t, "byte_order", "BigEndian");
+  lay->swap = big == HOST_LE;
+  if (mx_rd_attr_eq(t, "header_type", "UInt64"))
+    lay->hsize = 8;
+  else if (mx_rd_xml_attr(t, "header_type", &(const char *){0}, &(size_t){0}) &&
+           !mx_rd_attr_eq(t, "header_type", "UInt32"))
+    return mx_rd_fail(r, t->start, "header_type must be UInt32 or UInt64");
+  const char *cv;
+  size_t cn;
+  if (mx_rd_xml_attr(t, "compressor", &cv, &cn) && cn > 0)
+    return mx_rd_fail(r, t->start,
+                      "compressed data (%.*s) is not supported: write the file "
+                      "uncompressed",
+                      shown(cn), cv);
+  return MX_OK;
+}
+
+/* The '_' that starts the raw appended data after the tag t into lay. */
+static int appended_start(rd *r, const xtag *t, vtu_layout *lay) {
+  if (!mx_rd_attr_eq(t, "encoding", "raw"))
+    return mx_rd_fail(r, t->start,
+                      "<AppendedData> encoding must be \"raw\" (base64 is not "
+                      "supported)");
+  const char *q = skip_ws(t->after, r->end);
+  if (q >= r->end || *q != '_')
+    return mx_rd_fail(r, q, "expected '_' at the start of the appended data");
+  lay->base = q + 1;
+  r->bin_from = lay->base;
+  return MX_OK;
+}
+
 int mx_rd_vtu(rd *r, mx_mesh_data *out) {
-  const char *p = r->buf, *end = r->end;
+  const char *p = r->buf;
   int seen = 0, pieces = 0, in_points = 0, in_cells = 0, in_pdata = 0, in_cdata = 0;
   vtu_layout lay = {0, 4, NULL};
   xarr pts = {0}, con = {0}, offs = {0}, typ = {0}, ntag = {0}, gidx = {0}, mat = {0};
@@ -186,20 +225,7 @@ int mx_rd_vtu(rd *r, mx_mesh_data *out) {
       if (!mx_rd_attr_eq(&t, "type", "UnstructuredGrid"))
         return mx_rd_fail(r, t.start,
                           "not an UnstructuredGrid VTK XML file (type attribute)");
-      const int big = mx_rd_attr_eq(&t, "byte_order", "BigEndian");
-      lay.swap = big == HOST_LE;
-      if (mx_rd_attr_eq(&t, "header_type", "UInt64"))
-        lay.hsize = 8;
-      else if (mx_rd_xml_attr(&t, "header_type", &(const char *){0}, &(size_t){0}) &&
-               !mx_rd_attr_eq(&t, "header_type", "UInt32"))
-        return mx_rd_fail(r, t.start, "header_type must be UInt32 or UInt64");
-      const char *cv;
-      size_t cn;
-      if (mx_rd_xml_attr(&t, "compressor", &cv, &cn) && cn > 0)
-        return mx_rd_fail(r, t.start,
-                          "compressed data (%.*s) is not supported: write the file "
-                          "uncompressed",
-                          shown(cn), cv);
+      MX_CHECK(vtkfile_layout(r, &t, &lay));
       MX_CHECK(vtkfile_closed(r));
     } else if (!seen) {
       return mx_rd_fail(r, t.start, "expected <VTKFile>, found <%.*s>",
@@ -243,15 +269,7 @@ int mx_rd_vtu(rd *r, mx_mesh_data *out) {
         x = &typ;
       if (x) MX_CHECK(parse_data_array(r, &t, x));
     } else if (mx_rd_tag_is(&t, "AppendedData") && !t.closing) {
-      if (!mx_rd_attr_eq(&t, "encoding", "raw"))
-        return mx_rd_fail(r, t.start,
-                          "<AppendedData> encoding must be \"raw\" (base64 is not "
-                          "supported)");
-      const char *q = skip_ws(t.after, end);
-      if (q >= end || *q != '_')
-        return mx_rd_fail(r, q, "expected '_' at the start of the appended data");
-      lay.base = q + 1;
-      r->bin_from = lay.base;
+      MX_CHECK(appended_start(r, &t, &lay));
       break;
     }
   }
@@ -311,4 +329,166 @@ int mx_rd_vtu(rd *r, mx_mesh_data *out) {
   if (mat.present) MX_CHECK(mx_rd_cell_tags(r, &labels, out));
   if (gidx.present) MX_CHECK(piece_ids(r, &gidx, &lay, P.nnodes));
   return with_tags ? mx_rd_node_tags(r, &tags, out) : MX_OK;
+}
+
+/* ---- one field instead of the mesh (vtk_fields.h) ------------------------ */
+
+/* The block of cells a section tag t holds: <Cells> of an UnstructuredGrid
+ * (0); <Verts>, <Lines>, <Polys>, <Strips> of a PolyData, in VTK's cell
+ * order (0 to 3); -1 for any other tag. */
+static int cell_block(const xtag *t, int poly) {
+  static const char *const sections[RD_MAX_BLOCKS] = {"Verts", "Lines", "Polys", "Strips"};
+  if (!poly) return mx_rd_tag_is(t, "Cells") ? 0 : -1;
+  for (int b = 0; b < RD_MAX_BLOCKS; b++)
+    if (mx_rd_tag_is(t, sections[b])) return b;
+  return -1;
+}
+
+/* An array of <PointData> or <CellData> listed: its name and components
+ * (0 when NumberOfComponents is not a count); its type and format are only
+ * read if it is picked. */
+static int vtu_listed(const rd *r, const xtag *t, int point, rd_fields *f) {
+  if (f->narr == RD_MAX_ARRAYS)
+    return mx_rd_fail(r, t->start, "more than %d arrays of point and cell data", RD_MAX_ARRAYS);
+  rd_array *a = &f->arr[f->narr++];
+  memset(a, 0, sizeof *a);
+  if (!mx_rd_xml_attr(t, "Name", &a->name, &a->nlen)) a->name = "";
+  a->point = point;
+  a->at = t->start;
+  a->t = T_NONE;
+  a->ncomp = 1;
+  const char *v;
+  size_t n;
+  if (mx_rd_xml_attr(t, "NumberOfComponents", &v, &n)) {
+    uint64_t c = 0;
+    for (size_t i = 0; i < n && c <= 1000000; i++)
+      c = v[i] >= '0' && v[i] <= '9' ? 10 * c + (uint64_t)(v[i] - '0') : 1000001;
+    a->ncomp = n > 0 && c <= 1000000 ? c : 0;
+  }
+  return MX_OK;
+}
+
+/* The offsets and connectivity of a block of ncells cells (its section at
+ * piece_tag when absent). */
+static int vtu_block(rd *r, const vtu_layout *lay, const xarr *offs, const xarr *con,
+                     size_t ncells, const char *piece_tag, rd_cells *c) {
+  c->ncells = ncells;
+  c->vtu_offsets = 1;
+  c->at = offs->present ? offs->tag : piece_tag;
+  const char *names[2] = {"offsets", "connectivity"};
+  const xarr *xs[2] = {offs, con};
+  for (int i = 0; i < 2; i++) {
+    if (!xs[i]->present)
+      return mx_rd_fail(r, piece_tag, "%zu cells but no DataArray Name=\"%s\"", ncells, names[i]);
+    if (is_float(xs[i]->t) || xs[i]->ncomp != 1)
+      return mx_rd_fail(r, xs[i]->tag, "%s: expected one component of an integer type", names[i]);
+  }
+  MX_CHECK(resolve(r, offs, lay, ncells, &c->off, "offsets"));
+  size_t want = SIZE_MAX;
+  if (!con->appended) {
+    const int64_t last = raw_int(&c->off, ncells - 1);
+    if (last < 0)
+      return mx_rd_fail(r, offs->tag, "offsets: the last offset %lld is invalid", (long long)last);
+    want = (size_t)last;
+  }
+  return resolve(r, con, lay, want, &c->cn, "connectivity");
+}
+
+int mx_rd_vtu_fields(rd *r, rd_fields *f) {
+  const char *p = r->buf;
+  int seen = 0, poly = 0, pieces = 0, in_points = 0, block = -1, data = -1;
+  vtu_layout lay = {0, 4, NULL};
+  xarr pts = {0}, con[RD_MAX_BLOCKS], offs[RD_MAX_BLOCKS];
+  memset(con, 0, sizeof con);
+  memset(offs, 0, sizeof offs);
+  uint64_t npts = 0, nb[RD_MAX_BLOCKS] = {0};
+  const char *piece_tag = NULL;
+  for (;;) {
+    xtag t;
+    int found, b;
+    MX_CHECK(mx_rd_xml_next(r, p, &t, &found));
+    if (!found) break;
+    p = t.after;
+    const int opens = !t.closing && !t.selfclose;
+    if (mx_rd_tag_is(&t, "VTKFile")) {
+      if (t.closing) break;
+      seen = 1;
+      if (mx_rd_attr_eq(&t, "type", "PUnstructuredGrid") || mx_rd_attr_eq(&t, "type", "PPolyData"))
+        return mx_rd_fail(r, t.start, "a parallel VTK XML file (.pvtu, .pvtp) is not read here: "
+                          "give one of its pieces");
+      poly = mx_rd_attr_eq(&t, "type", "PolyData");
+      if (!poly && !mx_rd_attr_eq(&t, "type", "UnstructuredGrid"))
+        return mx_rd_fail(r, t.start,
+                          "not an UnstructuredGrid or PolyData VTK XML file (type attribute)");
+      MX_CHECK(vtkfile_layout(r, &t, &lay));
+      MX_CHECK(vtkfile_closed(r));
+    } else if (!seen) {
+      return mx_rd_fail(r, t.start, "expected <VTKFile>, found <%.*s>", shown(t.nlen), t.name);
+    } else if (mx_rd_tag_is(&t, "Piece")) {
+      if (t.closing) continue;
+      if (++pieces > 1) return mx_rd_fail(r, t.start, "more than one <Piece> is not supported");
+      piece_tag = t.start;
+      MX_CHECK(mx_rd_attr_size(r, &t, "NumberOfPoints", &npts, 1));
+      if (!poly) {
+        MX_CHECK(mx_rd_attr_size(r, &t, "NumberOfCells", &nb[0], 1));
+      } else {
+        static const char *const counts[RD_MAX_BLOCKS] = {"NumberOfVerts", "NumberOfLines",
+                                                          "NumberOfPolys", "NumberOfStrips"};
+        for (int k = 0; k < RD_MAX_BLOCKS; k++)
+          MX_CHECK(mx_rd_attr_size(r, &t, counts[k], &nb[k], 0));
+      }
+    } else if (mx_rd_tag_is(&t, "Points")) {
+      in_points = opens;
+    } else if (mx_rd_tag_is(&t, "PointData") || mx_rd_tag_is(&t, "CellData")) {
+      data = opens ? mx_rd_tag_is(&t, "PointData") : -1;
+    } else if ((b = cell_block(&t, poly)) >= 0) {
+      block = opens ? b : -1;
+    } else if (mx_rd_tag_is(&t, "DataArray") && !t.closing) {
+      xarr *x = NULL;
+      if (data >= 0)
+        MX_CHECK(vtu_listed(r, &t, data, f));
+      else if (in_points && !pts.present)
+        x = &pts;
+      else if (block >= 0 && mx_rd_attr_eq(&t, "Name", "connectivity"))
+        x = &con[block];
+      else if (block >= 0 && mx_rd_attr_eq(&t, "Name", "offsets"))
+        x = &offs[block];
+      if (x && x->present) return mx_rd_fail(r, t.start, "a cell array given twice");
+      if (x) MX_CHECK(parse_data_array(r, &t, x));
+    } else if (mx_rd_tag_is(&t, "AppendedData") && !t.closing) {
+      MX_CHECK(appended_start(r, &t, &lay));
+      break;
+    }
+  }
+  if (!seen) return mx_rd_fail(r, NULL, "no <VTKFile> element");
+  if (!pieces) return mx_rd_fail(r, NULL, "no <Piece> element");
+  if (!pts.present) return mx_rd_fail(r, piece_tag, "no <Points> DataArray");
+  if (!is_float(pts.t) || pts.ncomp != 3)
+    return mx_rd_fail(r, pts.tag, "Points: expected Float32 or Float64 with NumberOfComponents=\"3\"");
+  uint64_t total = 0;
+  for (int b = 0; b < RD_MAX_BLOCKS; b++) total += nb[b]; /* each < 2^57 */
+  if (npts > SIZE_MAX / 64 || total > SIZE_MAX / 64)
+    return mx_rd_fail(r, piece_tag, "too many points or cells");
+  f->npts = (size_t)npts;
+  f->ncells = (size_t)total;
+  MX_CHECK(resolve(r, &pts, &lay, 3 * f->npts, &f->pts, "Points"));
+  MX_CHECK(f->pick(r, f, &f->which));
+  const rd_array *a = &f->arr[f->which];
+  xtag t;
+  int found;
+  MX_CHECK(mx_rd_xml_next(r, a->at, &t, &found)); /* its tag, read again */
+  if (!found) return mx_rd_fail(r, a->at, "the array's tag is gone"); /* cannot happen */
+  xarr x = {0};
+  MX_CHECK(parse_data_array(r, &t, &x));
+  char what[64];
+  snprintf(what, sizeof what, "%.*s", shown(a->nlen), a->name);
+  if (x.ncomp != 1)
+    return mx_rd_fail(r, a->at, "%s: %llu components, expected 1", what,
+                      (unsigned long long)x.ncomp);
+  MX_CHECK(resolve(r, &x, &lay, a->point ? f->npts : f->ncells, &f->values, what));
+  if (a->point) return MX_OK;
+  for (int b = 0; b < RD_MAX_BLOCKS; b++)
+    if (nb[b] > 0)
+      MX_CHECK(vtu_block(r, &lay, &offs[b], &con[b], (size_t)nb[b], piece_tag, &f->cells[b]));
+  return MX_OK;
 }
