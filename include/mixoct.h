@@ -706,6 +706,13 @@ int mx_mesher_set_size_gradation(mx_mesher *m, double beta);
  * NULL). n = 0 removes the map. */
 int mx_mesher_set_size_points(mx_mesher *m, const double *xyz, const double *h, size_t n,
                               const char *name);
+/* A size map read from a file (--size FILE): a point field (or a cell field
+ * at the cells' centroids) of a .vtu, .vtp or legacy .vtk file, named
+ * `field` or (NULL) found by its name (size, h, target_size, sizes) or as
+ * the only one; a Gmsh .pos view (scalar elements: each node's value); or
+ * text lines "x y z h". MX_EINPUT with a message naming the file and the
+ * line (or the byte) of what is wrong. */
+int mx_mesher_set_size_map(mx_mesher *m, const char *path, const char *field);
 /* A size per element of the current mesh (a solver's estimate: n, the
  * mesh's element count, in the order of mx_mesher_mesh_arrays): a size map
  * at the elements' centroids. Then mx_mesher_refine_elements(m, NULL, 0)

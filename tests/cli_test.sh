@@ -408,5 +408,22 @@ EOF2
 expect_exit 2 "--level before any -i" "$MIXOCT" --level 5 -i "$T/sphere.off" -s 3
 expect_exit 2 "--inside-level with a bad level" "$MIXOCT" -i "$T/sphere.off" --inside-level x -s 3
 
+# Size fields (issue 27): a size map file (--size FILE: text x y z h), the
+# surface sources (--curvature, --thickness) with a valid --json; bad maps
+# and bad values refused (exit 2) naming the file and line.
+printf '# a size map\n0.3 0.2 0.1 0.05\n-0.4 0 0 0.4\n' >"$T/map.txt"
+"$MIXOCT" -i "$T/sphere.off" -s 2 --size "$T/map.txt" --curvature 20 --thickness 2 --json --quiet \
+  >"$T/sz.json" 2>/dev/null
+json_ok "$T/sz.json" "d['valid'] and d['size_field']['sources']['map'] == 2 and d['size_field']['sources']['curvature'] > 0 and d['size_field']['sources']['thickness'] > 0" "--size FILE, --curvature, --thickness: valid JSON with the sources"
+printf '0.3 0.2 0.1 0.05\n0 0 0 nan\n' >"$T/map_nan.txt"
+"$MIXOCT" -i "$T/sphere.off" -s 2 --size "$T/map_nan.txt" >"$T/out" 2>"$T/err"
+[ $? -eq 2 ] && has "$T/err" "map_nan.txt:2" "a NaN size in a size map: exit 2 naming the line" || bad "NaN size map"
+printf '30 0 0 0.1\n' >"$T/map_far.txt"
+expect_exit 2 "a size map's point outside the domain" "$MIXOCT" -i "$T/sphere.off" -s 2 --size "$T/map_far.txt"
+expect_exit 2 "--thickness 0.5" "$MIXOCT" -i "$T/sphere.off" -s 2 --thickness 0.5
+expect_exit 2 "--curvature 180" "$MIXOCT" -i "$T/sphere.off" -s 2 --curvature 180
+expect_exit 2 "--gradation 1" "$MIXOCT" -i "$T/sphere.off" -s 2 --thickness 2 --gradation 1
+expect_exit 0 "--thickness alone is a request" "$MIXOCT" -i "$T/sphere.off" --thickness 2 --quiet
+
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]

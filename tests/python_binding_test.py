@@ -9,6 +9,7 @@ import ctypes
 import gc
 import os
 import sys
+import tempfile
 import traceback
 import weakref
 
@@ -723,6 +724,24 @@ def size_sources():
     raises(mixoct.InputError, m.set_gradation, 1.0)
     raises(mixoct.InputError, m.set_size_points, [[0, 0, 0]], [-1.0])
     m.close()
+    # a size map file: the same as the arrays; a bad line raises InputError
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "map.txt")
+        with open(path, "w") as f:
+            f.write("# x y z h\n0.5 0 0 0.03\n")
+        m = mixoct.Mesher(stage="full", surface_level=2)
+        xyz, tri = uv_sphere(1.0)
+        m.add_surface_arrays(xyz, tri, name="sphere")
+        m.set_size_map(path)
+        m.mesh()
+        n_file = m.nelements
+        m.close()
+        with open(path, "w") as f:
+            f.write("0.5 0 0 0.03\n0.5 0 0\n")
+        m = mixoct.Mesher()
+        e = raises(mixoct.InputError, m.set_size_map, path)
+        assert "map.txt:2" in str(e), str(e)
+        m.close()
     # points with sizes: finer around (0.5, 0, 0)
     m = mixoct.Mesher(stage="full", surface_level=2)
     xyz, tri = uv_sphere(1.0)
@@ -733,6 +752,7 @@ def size_sources():
     near = (np.linalg.norm(c - [0.5, 0, 0], axis=1) < 0.2).sum()
     far = (np.linalg.norm(c - [-0.5, 0, 0], axis=1) < 0.2).sum()
     assert near > 4 * far, (near, far)
+    assert m.nelements == n_file, (m.nelements, n_file)
     m.close()
 
 

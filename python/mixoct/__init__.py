@@ -357,6 +357,7 @@ def _declare(lib):
         "mx_mesher_set_size_gradation": (I, [P, ctypes.c_double]),
         "mx_mesher_set_size_points": (I, [P, dblp, dblp, sz, S]),
         "mx_mesher_set_size_elements": (I, [P, dblp, sz]),
+        "mx_mesher_set_size_map": (I, [P, S, S]),
         "mx_mesher_build_octree": (I, [P]),
         "mx_mesher_transition": (I, [P]),
         "mx_mesher_boundary": (I, [P]),
@@ -1069,6 +1070,14 @@ class Mesher(_MesherBase):
         dp = ctypes.POINTER(ctypes.c_double)
         self._call("mx_mesher_set_size_points", x.ctypes.data_as(dp),
                    h.ctypes.data_as(dp), h.size, str(name).encode())
+
+    def set_size_map(self, path, field=None):
+        """A size map from a file (--size FILE): a point or cell field of a
+        .vtu/.vtp/.vtk file (`field`, or else size, h, target_size), a Gmsh
+        .pos view, or text lines "x y z h". Raises InputError naming the
+        file and line of what is wrong."""
+        self._call("mx_mesher_set_size_map", _fspath(path),
+                   None if field is None else str(field).encode())
 
     def set_size_elements(self, sizes):
         """A size per element of the current mesh (a solver's estimate, in

@@ -81,7 +81,14 @@ int mx_add_inputs(const mx_options *o, mx_mesher *m) {
   for (int r = 0; r < o->nregion_surf; r++)
     MX_CHECK(mx_mesher_add_region_surface(m, o->region_surf[r], o->rlevel[r]));
   if (o->regions_file) MX_CHECK(mx_mesher_read_boxes(m, o->regions_file));
-  if (o->size) MX_CHECK(mx_mesher_set_size_expr(m, o->size));
+  if (o->size) {
+    /* a file of that name: a size map; otherwise an expression or F1..F5 */
+    struct stat sb;
+    if (stat(o->size, &sb) == 0 && S_ISREG(sb.st_mode))
+      MX_CHECK(mx_mesher_set_size_map(m, o->size, o->size_field));
+    else
+      MX_CHECK(mx_mesher_set_size_expr(m, o->size));
+  }
   if (o->size_min > 0.0 || o->size_max > 0.0)
     MX_CHECK(mx_mesher_set_size_limits(m, o->size_min, o->size_max));
   if (o->curvature > 0.0) MX_CHECK(mx_mesher_set_size_curvature(m, o->curvature));

@@ -62,7 +62,7 @@ static const char *usage_text =
     "  -a, --all-level RL          every octant of the domain\n"
     "  -b, --regions FILE.reg      boxes with levels\n"
     "  -r, --region-surface S RL   octants meeting or inside surface S\n"
-    "      --size EXPR             a size field: octants are split while larger\n"
+    "      --size EXPR|FILE        a size field: octants are split while larger\n"
     "                              than the least size over them; EXPR of x, y,\n"
     "                              z (+ - * / ^, exp log sqrt abs sin cos min\n"
     "                              max, pi, e; e.g. \"0.02 + 0.1*abs(x)\") or one\n"
@@ -72,6 +72,11 @@ static const char *usage_text =
     "      --size-min H, --size-max H\n"
     "                              bounds on the field's sizes (--size-max\n"
     "                              alone: a field of that size everywhere)\n"
+    "                              FILE (an existing file): a size map, points\n"
+    "                              with sizes: a .vtu/.vtp/.vtk point or cell\n"
+    "                              field (--size-field NAME, default size, h or\n"
+    "                              target_size), a Gmsh .pos view, or lines\n"
+    "                              'x y z h'\n"
     "      --curvature DEG         a size field from the surface's curvature:\n"
     "                              an element spans at most DEG degrees of it\n"
     "      --thickness N           at least N elements across every part and\n"
@@ -543,7 +548,7 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
 }
 
 int mx_check_run_files(const mx_options *o) {
-  enum { N = MX_MAX_INPUTS + MX_MAX_REGIONS + 2 * MX_MAX_OUTPUTS + 5 };
+  enum { N = MX_MAX_INPUTS + MX_MAX_REGIONS + 2 * MX_MAX_OUTPUTS + 6 };
   mx_file_use u[N];
   char piece[MX_MAX_OUTPUTS][4096];
   int n = 0;
@@ -553,6 +558,8 @@ int mx_check_run_files(const mx_options *o) {
     u[n++] = (mx_file_use){o->region_surf[i], "the region surface", MX_FILE_INPUT};
   u[n++] = (mx_file_use){o->regions_file, "the boxes file", MX_FILE_INPUT};
   u[n++] = (mx_file_use){o->list_in, "the element list", MX_FILE_INPUT};
+  if (o->size && access(o->size, F_OK) == 0)
+    u[n++] = (mx_file_use){o->size, "the size map", MX_FILE_INPUT};
   u[n++] = (mx_file_use){o->restart_in, "the restart file read", MX_FILE_RESTART_IN};
   for (int k = 0; k < o->noutputs; k++) {
     u[n++] = (mx_file_use){o->outputs[k], "the mesh output", MX_FILE_OUTPUT};

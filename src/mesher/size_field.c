@@ -11,6 +11,7 @@
 #include "sizing/cspace.h"
 #include "sizing/expr.h"
 #include "geom/surface_sizes.h"
+#include "io/read_sizemap.h"
 #include "sizing/sources.h"
 #include "soa/mesh.h"
 
@@ -226,6 +227,29 @@ int mx_mesher_set_size_points(mx_mesher *m, const double *xyz, const double *h, 
   }
   if (!st) st = set_map(m, box, h, n, name);
   mx_free(box);
+  return mx_call_end(m, &c, st);
+}
+
+int mx_mesher_set_size_map(mx_mesher *m, const char *path, const char *field) {
+  mx_call c;
+  mx_call_begin(m, &c);
+  double *xyz = NULL, *h = NULL;
+  size_t n = 0;
+  int st = path ? mx_sizemap_read(path, field, &xyz, &h, &n) : MX_EINPUT;
+  double *box = NULL;
+  if (!st) {
+    box = mx_alloc((6 * n + 1) * sizeof *box);
+    if (!box) st = MX_ENOMEM;
+  }
+  for (size_t i = 0; !st && i < n; i++) {
+    memcpy(box + 6 * i, xyz + 3 * i, 3 * sizeof *box);
+    memcpy(box + 6 * i + 3, xyz + 3 * i, 3 * sizeof *box);
+  }
+  if (!st) st = set_map(m, box, h, n, path);
+  if (!st) mx_mesher_note_read(m, path, 0);
+  mx_free(box);
+  mx_free(xyz);
+  mx_free(h);
   return mx_call_end(m, &c, st);
 }
 
