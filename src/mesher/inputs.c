@@ -272,10 +272,10 @@ mx_requests mx_mesher_requests(const mx_mesher *m) {
   r.nregions = m->nregions;
   for (int i = 0; i < m->nregions; i++) r.rlevel[i] = m->region_level[i];
   r.meet_only = m->region_meet_only;
-  if (m->size_cs) {
-    r.size_field = m->size_cs;
-    memcpy(r.size_lo, m->size_cs->lo, sizeof r.size_lo);
-    memcpy(r.size_hi, m->size_cs->hi, sizeof r.size_hi);
+  if (m->size.cs) {
+    r.size_field = m->size.cs;
+    memcpy(r.size_lo, m->size.cs->lo, sizeof r.size_lo);
+    memcpy(r.size_hi, m->size.cs->hi, sizeof r.size_hi);
   }
   return r;
 }

@@ -239,12 +239,12 @@ int mx_build_tree(mx_mesher *m) {
   mx_mesher_stage(m, "grid");
   MX_CHECK(mx_mesher_assemble_inputs(m));
   MX_CHECK(mx_mesher_size_space(m));
-  if (m->size_cs) {
+  if (m->size.cs) {
     mx_cspace_info in;
-    mx_cspace_info_get(m->size_cs, &in);
+    mx_cspace_info_get(m->size.cs, &in);
     m->rec->S.size_field = 1;
-    m->rec->S.size_structure = m->size_params.structure;
-    m->rec->S.size_split = m->size_params.split;
+    m->rec->S.size_structure = m->size.params.structure;
+    m->rec->S.size_split = m->size.params.split;
     m->rec->S.size_leaves = in.leaves;
     m->rec->S.size_depth = in.depth;
     m->rec->S.size_capped = in.capped;

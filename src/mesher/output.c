@@ -253,18 +253,17 @@ static void release(prepared *P) {
 /* With a size field (issue 27): the cell field target_size, the least of
  * the field's sizes at the cell's centroid, to see the field in a viewer. */
 static int add_size_field(const mx_mesher *m, prepared *P) {
-  if (!m->size_cs) return MX_OK;
+  if (!m->size.cs) return MX_OK;
   const mx_mesh *M = &m->M;
   P->size = mx_alloc((M->ncells + 1) * sizeof *P->size);
   if (!P->size) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < M->ncells; c++) {
     const int nv = mx_cell_nodes[M->type[c]];
-    double p[3] = {0.0, 0.0, 0.0}, h[3];
+    double p[3] = {0.0, 0.0, 0.0};
     for (int k = 0; k < nv; k++)
       for (int a = 0; a < 3; a++) p[a] += M->xyz[3 * (size_t)M->conn[8 * c + k] + a] / nv;
-    mx_cspace_query(m->size_cs, p, h);
-    P->size[c] = fmin(h[0], fmin(h[1], h[2]));
+    P->size[c] = mx_size_source_at(&m->size, p);
   }
   P->f[P->v.ncell_fields++] = (mx_field){.name = "target_size", .is_double = 1,
                                          .dvalues = P->size};
