@@ -331,6 +331,125 @@ typedef struct {
 void mx_mesher_stats(const mx_mesher *m, mx_stats *s);
 
 
+/* ---- Size fields: the control space (issue 27) ------------------------- */
+
+/* A size field h(x) = (h1, h2, h3), the element lengths along x, y, z (the
+ * metric diag(h1^-2, h2^-2, h3^-2) of Jurczyk & Glut 2016, eq. 8; an
+ * isotropic field has h1 = h2 = h3), stored adaptively in one of the
+ * paper's tree structures (src/sizing/). A source is a function of a block
+ * of points: f(user, n, xyz, h) writes h[3i..3i+2] for the point
+ * xyz[3i..3i+2], i < n; it is called from several threads at once. */
+typedef void (*mx_size_fn)(void *user, size_t n, const double *xyz, double *h);
+
+/* The structures: kd-trees with values in the leaves (K_L) or in the
+ * vertices with trilinear interpolation (K_V), and octrees with values in
+ * the leaves, unbalanced (K_oL) or 2:1 balanced across faces (K_oLB). */
+enum { MX_CS_KD_LEAF = 0, MX_CS_KD_VERTEX = 1, MX_CS_OCT_LEAF = 2, MX_CS_OCT_BALANCED = 3 };
+/* The kd-trees' split rules (section 2.2): the longest axis in its middle
+ * (s_L), the largest gradient between sub-box faces (s_G), the largest sum
+ * of gradients, split where it reaches half (s_S). */
+enum { MX_SPLIT_LONGEST = 0, MX_SPLIT_GRADIENT = 1, MX_SPLIT_SUM = 2 };
+
+typedef struct {
+  int structure;     /* MX_CS_* */
+  int split;         /* MX_SPLIT_* (kd-trees) */
+  double lo[3], hi[3]; /* the box the field covers (a query outside is clamped) */
+  double delta;      /* the tolerance on the metric non-conformity (eq. 1) */
+  int samples;       /* N_s: the N_s^3 sample grid of a node's error; 5 */
+  int max_depth;     /* splits from the root (a kd-tree needs 3 for an octree's
+                      * 1); 0: 40 / 8 (256 cells a side) */
+} mx_cspace_params;
+
+typedef struct {
+  size_t nodes, leaves, values; /* tree nodes (internal and leaves), stored sizes */
+  size_t bytes;      /* the structure's memory */
+  int depth;         /* the deepest leaf */
+  int capped;        /* leaves left above delta at max_depth */
+  double seconds;    /* building */
+} mx_cspace_info;
+
+typedef struct mx_cspace_s mx_cspace;
+
+void mx_cspace_params_default(mx_cspace_params *p);
+/* Builds the structure for f to tolerance p->delta: a node is split while
+ * the largest non-conformity between f and the structure over its N_s^3
+ * sample points exceeds delta (level by level, the nodes of a level in
+ * parallel; the same tree for any thread count). MX_EINPUT for bad
+ * parameters or a size that is not finite and positive (a message names
+ * the point), MX_ENOMEM. */
+int mx_cspace_build(const mx_cspace_params *p, mx_size_fn f, void *user, mx_cspace **out);
+/* The field at p (clamped into the box): no allocation, any thread. */
+void mx_cspace_query(const mx_cspace *c, const double p[3], double h[3]);
+/* The smallest size the structure holds anywhere in the box [lo, hi] (the
+ * least component of every leaf value, or vertex value, meeting it): what
+ * an octant of that box must not exceed. */
+double mx_cspace_min_box(const mx_cspace *c, const double lo[3], const double hi[3]);
+void mx_cspace_info_get(const mx_cspace *c, mx_cspace_info *info);
+void mx_cspace_free(mx_cspace *c);
+/* The metric non-conformity of two diagonal metrics of lengths a and b:
+ * || Ma^-1 Mb + Mb^-1 Ma - 2 I ||_F = sqrt(sum_i (a_i/b_i - b_i/a_i)^4)
+ * (0 for equal sizes; 4.0 about a factor 2.4 apart on one axis). */
+double mx_metric_nonconformity(const double a[3], const double b[3]);
+/* The paper's test functions F1..F5 (section 3.1) by name ("F1".."F5"),
+ * with their domains: the function, or NULL for another name. */
+mx_size_fn mx_size_builtin(const char *name, double lo[3], double hi[3]);
+
+/* A size field for the octree: an octant is split while its side exceeds
+ * the least size the field takes over it (the smallest of h1, h2, h3 of
+ * the control space's leaves meeting the octant), with the other requests
+ * (the largest level wins; levels up to MX_MAX_LEVEL - 1). f is sampled
+ * into a control space over the domain's box when the octree is built;
+ * p: its structure and tolerance (NULL: K_L kd-tree, split s_S, delta 0.5,
+ * the default: mx_cspace_params_default and the bench's figures). f NULL
+ * removes the field. MX_EINPUT after the octree is built. */
+int mx_mesher_set_size_function(mx_mesher *m, mx_size_fn f, void *user,
+                                const mx_cspace_params *p);
+/* The same from text (the program's --size): one of the paper's test
+ * functions by name ("F1".."F5") or an expression of x, y, z (numbers,
+ * + - * / ^, exp log sqrt abs sin cos min max, pi, e: src/sizing/expr.h),
+ * the size the same along every axis. MX_EINPUT with a message giving the
+ * column of a bad expression. */
+int mx_mesher_set_size_expr(mx_mesher *m, const char *text);
+/* Bounds on the field's sizes (--size-min, --size-max): each size is
+ * raised to hmin and lowered to hmax before the control space is built (0:
+ * no bound). With no field, hmax alone is a field of that size. MX_EINPUT
+ * for a negative, non-finite or crossed pair. */
+int mx_mesher_set_size_limits(mx_mesher *m, double hmin, double hmax);
+/* Discrete sources, combined with the function's field by the minimum
+ * (src/sizing/sources.h): each gives sizes at points, and the field grows
+ * from them by at most the gradation ratio beta between neighbouring sizes
+ * (h(x) = min_i h_i + (beta - 1) |x - x_i|).
+ * Curvature (--curvature DEG): an element spans at most `degrees` of the
+ * input surface's curvature (the angle between neighbouring triangles'
+ * normals over the distance between their centroids); 0: none. */
+int mx_mesher_set_size_curvature(mx_mesher *m, double degrees);
+/* Thickness (--thickness N): at least `elements` (1 to 64; 0: none)
+ * elements across every part of the domain and every gap between its
+ * sides, measured by rays from the surface along its normals. */
+int mx_mesher_set_size_thickness(mx_mesher *m, double elements);
+/* The gradation ratio (--gradation BETA, above 1; 0: the default, 2 for
+ * the discrete sources and none for the function). Given, it applies to the
+ * function's control space too: its leaves become sources. */
+int mx_mesher_set_size_gradation(mx_mesher *m, double beta);
+/* A size map: n points (xyz, 3 each) with sizes h (finite, positive),
+ * copied; they must lie in the domain's box (grown by 5% of its diagonal)
+ * when the octree is built. name: where they came from, for messages (or
+ * NULL). n = 0 removes the map. */
+int mx_mesher_set_size_points(mx_mesher *m, const double *xyz, const double *h, size_t n,
+                              const char *name);
+/* A size map read from a file (--size FILE): a point field (or a cell field
+ * at the cells' centroids) of a .vtu, .vtp or legacy .vtk file, named
+ * `field` or (NULL) found by its name (size, h, target_size, sizes) or as
+ * the only one; a Gmsh .pos view (scalar elements: each node's value); or
+ * text lines "x y z h". MX_EINPUT with a message naming the file and the
+ * line (or the byte) of what is wrong. */
+int mx_mesher_set_size_map(mx_mesher *m, const char *path, const char *field);
+/* A size per element of the current mesh (a solver's estimate: n, the
+ * mesh's element count, in the order of mx_mesher_mesh_arrays): a size map
+ * at the elements' centroids. Then mx_mesher_refine_elements(m, NULL, 0)
+ * refines the octree to it (or the next mesh from a restart file). */
+int mx_mesher_set_size_elements(mx_mesher *m, const double *h, size_t n);
+
 /* ---- 2D: the mixed quadtree mesher (the `mesher2d` program) ------------
  *
  * Closed polylines (.poly, .off, 2D .mdl) in; counter-clockwise triangles
@@ -408,6 +527,23 @@ int mx_mesher2d_add_function(mx_mesher2d *m, const char *name, const double *arg
  * for a depth out of 1 .. 64 or a number out of range; two materials
  * given one number are refused when meshing. */
 int mx_mesher2d_set_material(mx_mesher2d *m, int depth, int number, const char *name);
+/* A size field (issue 27), as mx_mesher_set_size_function, _expr and
+ * _limits with the same checks and messages: a quadrant is split while its
+ * side exceeds the least size the field takes over it, with the other
+ * requests (the finest wins, levels up to 27) and the balance rule. The
+ * source is sampled at z = 0 (an expression of x and y) into a control
+ * space over the domain's box (the z axis a thin slab) when meshing. With
+ * a field, each -f curve of level RL is a source of it too: the side of
+ * level RL on the curve, growing by the distance to it (slope 1), the
+ * field the least of all its sources before the bounds; the quadrants
+ * the curve crosses still get level RL. The written meshes carry the cell
+ * field target_size (the field at each cell's centroid). A field that asks
+ * for more quadrants than memory allows is refused when meshing
+ * (MX_ENOMEM, naming its least size and where). */
+int mx_mesher2d_set_size_function(mx_mesher2d *m, mx_size_fn f, void *user,
+                                  const mx_cspace_params *p);
+int mx_mesher2d_set_size_expr(mx_mesher2d *m, const char *text);
+int mx_mesher2d_set_size_limits(mx_mesher2d *m, double hmin, double hmax);
 
 /* Mesh from the requests (and the quadtree of a loaded restart file). */
 int mx_mesher2d_mesh(mx_mesher2d *m);
@@ -599,125 +735,6 @@ void mx_check_params_default(mx_check_params *p);
  * 2 bad input or usage (a message names the file), 1 internal failure
  * (out of memory included). Nothing to free. */
 int mx_check_file(const mx_check_params *p);
-
-/* ---- Size fields: the control space (issue 27) ------------------------- */
-
-/* A size field h(x) = (h1, h2, h3), the element lengths along x, y, z (the
- * metric diag(h1^-2, h2^-2, h3^-2) of Jurczyk & Glut 2016, eq. 8; an
- * isotropic field has h1 = h2 = h3), stored adaptively in one of the
- * paper's tree structures (src/sizing/). A source is a function of a block
- * of points: f(user, n, xyz, h) writes h[3i..3i+2] for the point
- * xyz[3i..3i+2], i < n; it is called from several threads at once. */
-typedef void (*mx_size_fn)(void *user, size_t n, const double *xyz, double *h);
-
-/* The structures: kd-trees with values in the leaves (K_L) or in the
- * vertices with trilinear interpolation (K_V), and octrees with values in
- * the leaves, unbalanced (K_oL) or 2:1 balanced across faces (K_oLB). */
-enum { MX_CS_KD_LEAF = 0, MX_CS_KD_VERTEX = 1, MX_CS_OCT_LEAF = 2, MX_CS_OCT_BALANCED = 3 };
-/* The kd-trees' split rules (section 2.2): the longest axis in its middle
- * (s_L), the largest gradient between sub-box faces (s_G), the largest sum
- * of gradients, split where it reaches half (s_S). */
-enum { MX_SPLIT_LONGEST = 0, MX_SPLIT_GRADIENT = 1, MX_SPLIT_SUM = 2 };
-
-typedef struct {
-  int structure;     /* MX_CS_* */
-  int split;         /* MX_SPLIT_* (kd-trees) */
-  double lo[3], hi[3]; /* the box the field covers (a query outside is clamped) */
-  double delta;      /* the tolerance on the metric non-conformity (eq. 1) */
-  int samples;       /* N_s: the N_s^3 sample grid of a node's error; 5 */
-  int max_depth;     /* splits from the root (a kd-tree needs 3 for an octree's
-                      * 1); 0: 40 / 8 (256 cells a side) */
-} mx_cspace_params;
-
-typedef struct {
-  size_t nodes, leaves, values; /* tree nodes (internal and leaves), stored sizes */
-  size_t bytes;      /* the structure's memory */
-  int depth;         /* the deepest leaf */
-  int capped;        /* leaves left above delta at max_depth */
-  double seconds;    /* building */
-} mx_cspace_info;
-
-typedef struct mx_cspace_s mx_cspace;
-
-void mx_cspace_params_default(mx_cspace_params *p);
-/* Builds the structure for f to tolerance p->delta: a node is split while
- * the largest non-conformity between f and the structure over its N_s^3
- * sample points exceeds delta (level by level, the nodes of a level in
- * parallel; the same tree for any thread count). MX_EINPUT for bad
- * parameters or a size that is not finite and positive (a message names
- * the point), MX_ENOMEM. */
-int mx_cspace_build(const mx_cspace_params *p, mx_size_fn f, void *user, mx_cspace **out);
-/* The field at p (clamped into the box): no allocation, any thread. */
-void mx_cspace_query(const mx_cspace *c, const double p[3], double h[3]);
-/* The smallest size the structure holds anywhere in the box [lo, hi] (the
- * least component of every leaf value, or vertex value, meeting it): what
- * an octant of that box must not exceed. */
-double mx_cspace_min_box(const mx_cspace *c, const double lo[3], const double hi[3]);
-void mx_cspace_info_get(const mx_cspace *c, mx_cspace_info *info);
-void mx_cspace_free(mx_cspace *c);
-/* The metric non-conformity of two diagonal metrics of lengths a and b:
- * || Ma^-1 Mb + Mb^-1 Ma - 2 I ||_F = sqrt(sum_i (a_i/b_i - b_i/a_i)^4)
- * (0 for equal sizes; 4.0 about a factor 2.4 apart on one axis). */
-double mx_metric_nonconformity(const double a[3], const double b[3]);
-/* The paper's test functions F1..F5 (section 3.1) by name ("F1".."F5"),
- * with their domains: the function, or NULL for another name. */
-mx_size_fn mx_size_builtin(const char *name, double lo[3], double hi[3]);
-
-/* A size field for the octree: an octant is split while its side exceeds
- * the least size the field takes over it (the smallest of h1, h2, h3 of
- * the control space's leaves meeting the octant), with the other requests
- * (the largest level wins; levels up to MX_MAX_LEVEL - 1). f is sampled
- * into a control space over the domain's box when the octree is built;
- * p: its structure and tolerance (NULL: K_L kd-tree, split s_S, delta 0.5,
- * the default: mx_cspace_params_default and the bench's figures). f NULL
- * removes the field. MX_EINPUT after the octree is built. */
-int mx_mesher_set_size_function(mx_mesher *m, mx_size_fn f, void *user,
-                                const mx_cspace_params *p);
-/* The same from text (the program's --size): one of the paper's test
- * functions by name ("F1".."F5") or an expression of x, y, z (numbers,
- * + - * / ^, exp log sqrt abs sin cos min max, pi, e: src/sizing/expr.h),
- * the size the same along every axis. MX_EINPUT with a message giving the
- * column of a bad expression. */
-int mx_mesher_set_size_expr(mx_mesher *m, const char *text);
-/* Bounds on the field's sizes (--size-min, --size-max): each size is
- * raised to hmin and lowered to hmax before the control space is built (0:
- * no bound). With no field, hmax alone is a field of that size. MX_EINPUT
- * for a negative, non-finite or crossed pair. */
-int mx_mesher_set_size_limits(mx_mesher *m, double hmin, double hmax);
-/* Discrete sources, combined with the function's field by the minimum
- * (src/sizing/sources.h): each gives sizes at points, and the field grows
- * from them by at most the gradation ratio beta between neighbouring sizes
- * (h(x) = min_i h_i + (beta - 1) |x - x_i|).
- * Curvature (--curvature DEG): an element spans at most `degrees` of the
- * input surface's curvature (the angle between neighbouring triangles'
- * normals over the distance between their centroids); 0: none. */
-int mx_mesher_set_size_curvature(mx_mesher *m, double degrees);
-/* Thickness (--thickness N): at least `elements` (1 to 64; 0: none)
- * elements across every part of the domain and every gap between its
- * sides, measured by rays from the surface along its normals. */
-int mx_mesher_set_size_thickness(mx_mesher *m, double elements);
-/* The gradation ratio (--gradation BETA, above 1; 0: the default, 2 for
- * the discrete sources and none for the function). Given, it applies to the
- * function's control space too: its leaves become sources. */
-int mx_mesher_set_size_gradation(mx_mesher *m, double beta);
-/* A size map: n points (xyz, 3 each) with sizes h (finite, positive),
- * copied; they must lie in the domain's box (grown by 5% of its diagonal)
- * when the octree is built. name: where they came from, for messages (or
- * NULL). n = 0 removes the map. */
-int mx_mesher_set_size_points(mx_mesher *m, const double *xyz, const double *h, size_t n,
-                              const char *name);
-/* A size map read from a file (--size FILE): a point field (or a cell field
- * at the cells' centroids) of a .vtu, .vtp or legacy .vtk file, named
- * `field` or (NULL) found by its name (size, h, target_size, sizes) or as
- * the only one; a Gmsh .pos view (scalar elements: each node's value); or
- * text lines "x y z h". MX_EINPUT with a message naming the file and the
- * line (or the byte) of what is wrong. */
-int mx_mesher_set_size_map(mx_mesher *m, const char *path, const char *field);
-/* A size per element of the current mesh (a solver's estimate: n, the
- * mesh's element count, in the order of mx_mesher_mesh_arrays): a size map
- * at the elements' centroids. Then mx_mesher_refine_elements(m, NULL, 0)
- * refines the octree to it (or the next mesh from a restart file). */
-int mx_mesher_set_size_elements(mx_mesher *m, const double *h, size_t n);
 
 /* ---- The mixoct program's other commands (patterns, 2D report) ---------- */
 

@@ -445,6 +445,48 @@ def feature_levels_flag():
 
 
 @check
+def size_field():
+    # h = 0.02 + 0.2 x on the unit square (mesher2d --size): each cell's
+    # quadrant, of side 1.01 / 2^level (the root: 1.01 x the longest
+    # extent), no larger than the field at the cell's corners (h is
+    # linear) within the control space's factor 1.31 (its leaves hold the
+    # value at their centre); finer at x = 0 than at x = 1
+    square = os.path.join(POLY, "unit_square.poly")
+    with mixoct.Mesher2D() as m:
+        m.set_domain(square)
+        m.set_size("0.02 + 0.2*x")
+        m.mesh()
+        check_mesh(m, 1.0, 4.0)
+        rows = cell_rows(m)
+        side = 1.01 / 2.0 ** m.level.astype(np.float64)
+        least = np.array([np.min(0.02 + 0.2 * m.nodes[r, 0]) for r in rows])
+        assert np.all(side <= 1.31 * least), np.max(side / least)
+        x = np.array([np.mean(m.nodes[r, 0]) for r in rows])
+        assert side[x < 0.1].max() < side[x > 0.9].min()
+        n = m.nleaves
+        path = os.path.join(TMP, "size.vtk")
+        m.write(path, ascii=True)
+        assert "SCALARS target_size double" in open(path).read()
+        # the largest size bounded: finer where the field was above it
+        m.set_size("0.02 + 0.2*x", size_max=0.05)
+        m.mesh()
+        assert m.nleaves > n and np.all(1.01 / 2.0 ** m.level <= 0.05)
+        e = raises(mixoct.InputError, m.set_size, "0.02 + 0.2*")
+        assert "column 12" in e.message, e.message
+        e = raises(mixoct.InputError, m.set_size, "F3", size_min=0.2,
+                   size_max=0.1)
+        assert "bounds" in e.message, e.message
+        m.set_size("F4")
+        m.mesh()
+    with mixoct.Mesher2D(all_level=2) as m:
+        m.set_domain(square)
+        m.mesh()
+        path = os.path.join(TMP, "plain.vtk")
+        m.write(path, ascii=True)
+        assert "target_size" not in open(path).read()
+
+
+@check
 def threads_deterministic():
     a = box(6, threads=1)
     b = box(6, threads=2)

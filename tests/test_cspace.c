@@ -13,6 +13,10 @@
  *  - K_oLB: no two leaves sharing a face more than one level apart (all
  *    pairs);
  *  - the same arrays for 1 and 2 threads;
+ *  - a field with a narrow dip between the gradient rules' face planes
+ *    (min(0.05 + 0.2 |y - 0.5|, 0.0158 + |distance to a circle|), the 2D
+ *    mesher's -f curve as a source): s_G and s_S reach delta (they split
+ *    y into slivers to the depth cap before kdtree.c's MISSED rule);
  *  - bad sizes (NaN, 0, negative, infinite) and bad parameters: MX_EINPUT. */
 #include <math.h>
 #include <omp.h>
@@ -283,6 +287,17 @@ static void check_structure(const char *name, mx_size_fn f, const double lo[3],
   mx_cspace_free(c1);
 }
 
+/* the dip: a cone of slope 1 about the circle of radius 0.3 at (0.5, 0.5) */
+static void dip(void *user, size_t n, const double *xyz, double *h) {
+  (void)user;
+  for (size_t i = 0; i < n; i++) {
+    const double *p = xyz + 3 * i;
+    const double v = 0.05 + 0.2 * fabs(p[1] - 0.5),
+                 c = 1.01 / 64 + fabs(hypot(p[0] - 0.5, p[1] - 0.5) - 0.3);
+    h[3 * i] = h[3 * i + 1] = h[3 * i + 2] = c < v ? c : v;
+  }
+}
+
 static int bad_kind;
 static void bad_field(void *user, size_t n, const double *xyz, double *h) {
   (void)user;
@@ -315,6 +330,18 @@ int main(void) {
       check_structure(k < 3 ? names[k] : "smooth", f, lo, hi, structure, s < 6 ? s % 3 : 0,
                       k == 3 ? 0.1 : 0.5);
     }
+  }
+  for (int split = MX_SPLIT_GRADIENT; split <= MX_SPLIT_SUM; split++) {
+    mx_cspace_params p;
+    mx_cspace_params_default(&p);
+    p.split = split;
+    mx_cspace *c = NULL;
+    CHECK(mx_cspace_build(&p, dip, NULL, &c) == MX_OK);
+    mx_cspace_info in;
+    if (c) mx_cspace_info_get(c, &in);
+    CHECK(c && !in.capped && in.leaves < 10000);
+    if (c) printf("dip, split %d: %zu leaves, depth %d\n", split, in.leaves, in.depth);
+    mx_cspace_free(c);
   }
   CHECK(mx_size_builtin("F6", NULL, NULL) == NULL);
   /* bad sizes and parameters */

@@ -378,6 +378,9 @@ def _declare(lib):
         "mx_mesher2d_add_drawing": (I, [P, S, I]),
         "mx_mesher2d_add_function": (I, [P, S, dblp, sz, I]),
         "mx_mesher2d_set_material": (I, [P, I, I, S]),
+        "mx_mesher2d_set_size_expr": (I, [P, S]),
+        "mx_mesher2d_set_size_limits": (I, [P, ctypes.c_double,
+                                            ctypes.c_double]),
         "mx_mesher2d_restart_elements": (sz, [P]),
         "mx_mesher2d_mesh_arrays": (I, [P, ctypes.POINTER(_MeshArrays2D)]),
         "mx_mesher2d_stats": (None, [P, ctypes.POINTER(_Stats2D)]),
@@ -1267,6 +1270,24 @@ class Mesher2D(_MesherBase):
         self._call("mx_mesher2d_add_function", str(name).encode(),
                    a.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), a.size,
                    int(level))
+
+    def set_size(self, expr_or_name, size_min=None, size_max=None):
+        """A size field (the program's --size, --size-min, --size-max; as
+        Mesher.set_size): an expression of x and y (numbers, + - * / ^,
+        exp log sqrt abs sin cos min max, pi, e; z is 0) or one of the test
+        functions "F1".."F5"; quadrants are split while larger than the
+        least size over them, with the other requests (the finest wins).
+        size_min, size_max bound the field's sizes (None: no bound; the
+        bounds are set every call). The curves of add_function become
+        sources of the field (the side of their level on the curve, plus
+        the distance to it). The written meshes carry the cell field
+        target_size. Raises InputError with the column of a bad expression
+        (nothing changed), and for bounds that are negative or crossed (the
+        source set, the bounds as they were)."""
+        self._call("mx_mesher2d_set_size_expr", str(expr_or_name).encode())
+        self._call("mx_mesher2d_set_size_limits",
+                   0.0 if size_min is None else float(size_min),
+                   0.0 if size_max is None else float(size_max))
 
     # ---- restart files ---------------------------------------------------------
 

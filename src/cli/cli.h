@@ -54,6 +54,9 @@ typedef struct {
 /* Parses argv; on --help/--version prints and sets *exit_now = 1. Returns
  * MX_OK or MX_EINPUT (usage error, message printed). */
 int mx_parse_options(int argc, char **argv, mx_options *o, int *exit_now);
+/* The value of --size-min / --size-max (opt): a positive finite number,
+ * else MX_EINPUT with a message (mixoct and mesher2d alike). */
+int mx_parse_size_bound(const char *opt, const char *s, double *out);
 
 /* Before meshing: the output's format is known (mesh = 1), it is not a
  * directory, and its directory exists and is writable. MX_EINPUT / MX_EIO

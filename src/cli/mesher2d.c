@@ -47,8 +47,20 @@ static const char *usage2d =
     "  -w FILE.poly RL    quadrants crossed by a drawing's segments (open or not)\n"
     "  -f NAME ARGS RL    quadrants crossed by a curve: circle cx cy r,\n"
     "                     line px py nx ny, sine amp freq phase y0 (y = y0 +\n"
-    "                     amp sin(freq x + phase))\n"
+    "                     amp sin(freq x + phase)); with a size field also a\n"
+    "                     source of it: the side of level RL on the curve plus\n"
+    "                     the distance to it\n"
     "  (-r, -w and -f are repeatable)\n"
+    "      --size EXPR    a size field: quadrants are split while larger than\n"
+    "                     the least size over them; EXPR of x and y (+ - * /\n"
+    "                     ^, exp log sqrt abs sin cos min max, pi, e; e.g.\n"
+    "                     \"0.02 + 0.2*x\") or one of the test functions F1..F5\n"
+    "                     of Jurczyk & Glut 2016, taken at z = 0; with the\n"
+    "                     other requests, the finest wins; the meshes carry\n"
+    "                     the cell field target_size\n"
+    "      --size-min H, --size-max H\n"
+    "                     bounds on the field's sizes (--size-max alone: a\n"
+    "                     field of that size everywhere)\n"
     "\n"
     "Several materials:\n"
     "      --materials    a loop nested in an outer one is the interface between\n"
@@ -105,6 +117,7 @@ static const char *usage2d =
     "\n"
     "Examples:\n"
     "  mesher2d -p a.poly -s 8 -u a8 -v -x --json\n"
+    "  mesher2d -p a.poly -s 4 --size \"0.004 + 0.1*abs(y + 0.5)\" -u a -v\n"
     "  mesher2d -p a.poly -c a8.oct -l bad.txt -u a8r -v\n";
 
 enum { MAXREQ = 32, MAXOUT = 16, NFMT = 5 };
@@ -133,6 +146,8 @@ typedef struct {
   int nregions, ndrawings;
   m2_function funs[MAXREQ];
   int nfuns;
+  const char *size;           /* --size EXPR|F1..F5 (NULL: none) */
+  double size_min, size_max;  /* --size-min, --size-max (0: none) */
   int threads, balance, json, quiet, ascii;
   int keep_invalid; /* write a mesh that fails the check (exit 5 all the same) */
   int materials;    /* --materials */
@@ -273,6 +288,13 @@ static int parse_one(int argc, char **argv, int *i, m2_options *o, int *exit_now
     MX_CHECK(parse_poly_request(argc, argv, i, o->drawing_path, o->drawing_level, &o->ndrawings));
   } else if (!strcmp(a, "-f")) {
     MX_CHECK(parse_fun(argc, argv, i, o));
+  } else if (!strcmp(a, "--size")) {
+    MX_CHECK(need(*i, argc, 1, a));
+    o->size = argv[++*i];
+  } else if (!strcmp(a, "--size-min") || !strcmp(a, "--size-max")) {
+    MX_CHECK(need(*i, argc, 1, a));
+    double *bound = strcmp(a, "--size-min") ? &o->size_max : &o->size_min;
+    MX_CHECK(mx_parse_size_bound(a, argv[++*i], bound));
   } else if (!strcmp(a, "-u")) {
     MX_CHECK(need(*i, argc, 1, a));
     o->outname = argv[++*i];
@@ -355,9 +377,10 @@ static int parse_options(int argc, char **argv, m2_options *o, int *exit_now) {
   if (o->list && !o->restart_in)
     return usage_error("-l lists elements of the mesh of a restart file: add -c FILE.oct", NULL);
   if (!o->restart_in && !o->s_level && !o->a_level && !o->boxes_file && !o->nregions &&
-      !o->ndrawings && !o->nfuns)
+      !o->ndrawings && !o->nfuns && !o->size && !(o->size_max > 0.0))
     return usage_error("no refinement request: the mesh would be one quadrant; give -s RL, "
-                       "-a RL, -b FILE, -r FILE RL, -w FILE RL or -f NAME ARGS RL%s", NULL);
+                       "-a RL, -b FILE, -r FILE RL, -w FILE RL, -f NAME ARGS RL or --size "
+                       "EXPR%s", NULL);
   return MX_OK;
 }
 
@@ -427,6 +450,9 @@ static int add_requests(const m2_options *o, mx_mesher2d *m) {
   for (int k = 0; k < o->nfuns; k++)
     MX_CHECK(mx_mesher2d_add_function(m, o->funs[k].name, o->funs[k].a, o->funs[k].nargs,
                                       o->funs[k].level));
+  if (o->size) MX_CHECK(mx_mesher2d_set_size_expr(m, o->size));
+  if (o->size_min > 0.0 || o->size_max > 0.0)
+    MX_CHECK(mx_mesher2d_set_size_limits(m, o->size_min, o->size_max));
   return MX_OK;
 }
 

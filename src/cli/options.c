@@ -308,6 +308,17 @@ static char **split_attached(int argc, char **argv, int *nargc) {
   return v;
 }
 
+int mx_parse_size_bound(const char *opt, const char *s, double *out) {
+  char *end = NULL;
+  const double v = strtod(s, &end);
+  if (end == s || *end || !(v > 0.0) || !isfinite(v)) {
+    mx_error(NULL, 0, "%s needs a positive size, not '%s'", opt, s);
+    return MX_EINPUT;
+  }
+  *out = v;
+  return MX_OK;
+}
+
 int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
   int argc = argc0;
   char **argv = split_attached(argc0, argv0, &argc);
@@ -352,14 +363,8 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       o->size = argv[++i];
     } else if (strcmp(a, "--size-min") == 0 || strcmp(a, "--size-max") == 0) {
       MX_CHECK(need_arg(i, argc, a));
-      char *end = NULL;
-      const double v = strtod(argv[++i], &end);
-      if (end == argv[i] || *end || !(v > 0.0) || !isfinite(v)) {
-        mx_error(NULL, 0, "%s needs a positive size, not '%s'", a, argv[i]);
-        return MX_EINPUT;
-      }
-      if (strcmp(a, "--size-min") == 0) o->size_min = v;
-      else o->size_max = v;
+      MX_CHECK(mx_parse_size_bound(a, argv[++i], strcmp(a, "--size-min") == 0 ? &o->size_min
+                                                                               : &o->size_max));
     } else if (strcmp(a, "--curvature") == 0 || strcmp(a, "--thickness") == 0 ||
                strcmp(a, "--gradation") == 0) {
       MX_CHECK(need_arg(i, argc, a));

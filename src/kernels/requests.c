@@ -1,6 +1,6 @@
 #include "kernels/requests.h"
 
-#include <math.h>
+#include "sizing/cspace.h"
 
 /* The level whose octants are no larger than the least size of the field
  * over [lo, hi] (the whole field's box when lo is NULL); 0 without one. */
@@ -8,9 +8,7 @@ static int field_level(const mx_requests *R, const double lo[3], const double hi
   if (!R->size_field || !(R->root_side > 0.0)) return 0;
   const mx_size_field *F = R->size_field;
   const double h = lo ? mx_size_field_min_box(F, lo, hi) : mx_size_field_min_box(F, F->lo, F->hi);
-  if (!(h > 0.0)) return MX_MAX_LEVEL - 1;
-  const double t = ceil(log2(R->root_side / h) - 1e-9);
-  return t <= 0.0 ? 0 : t >= MX_MAX_LEVEL - 1 ? MX_MAX_LEVEL - 1 : (int)t;
+  return mx_cs_level(R->root_side, h, MX_MAX_LEVEL - 1);
 }
 
 static int box_overlaps(const mx_box_region *b, const double lo[3],

@@ -240,7 +240,7 @@ int mx_build_tree(mx_mesher *m) {
   MX_CHECK(mx_mesher_assemble_inputs(m));
   const double ts = mx_wtime();
   MX_CHECK(mx_mesher_size_space(m));
-  m->rec->S.size_field = m->size_cs || m->size_src;
+  m->rec->S.size_field = m->size.cs || m->size_src;
   if (m->size_src) {
     const mx_size_sources *z = m->size_src;
     m->rec->S.size_sources = z->n;
@@ -253,18 +253,18 @@ int mx_build_tree(mx_mesher *m) {
                                      z->nnodes * (7 * sizeof(double) + 2 * sizeof(uint32_t))) /
                             1024.0;
     double cs_s = 0.0;
-    if (m->size_cs) {
+    if (m->size.cs) {
       mx_cspace_info in;
-      mx_cspace_info_get(m->size_cs, &in);
+      mx_cspace_info_get(m->size.cs, &in);
       cs_s = in.seconds;
     }
     m->rec->S.size_src_seconds = mx_wtime() - ts - cs_s;
   }
-  if (m->size_cs) {
+  if (m->size.cs) {
     mx_cspace_info in;
-    mx_cspace_info_get(m->size_cs, &in);
-    m->rec->S.size_structure = m->size_params.structure;
-    m->rec->S.size_split = m->size_params.split;
+    mx_cspace_info_get(m->size.cs, &in);
+    m->rec->S.size_structure = m->size.params.structure;
+    m->rec->S.size_split = m->size.params.split;
     m->rec->S.size_leaves = in.leaves;
     m->rec->S.size_depth = in.depth;
     m->rec->S.size_capped = in.capped;

@@ -16,6 +16,7 @@
 #include "kernels/transition.h"
 #include "io/file_identity.h"
 #include "kernels/winding_boundary.h"
+#include "mesher/size_source.h"
 #include "soa/regions.h"
 #include "soa/trisoup.h"
 #include "sizing/sources.h"
@@ -109,15 +110,10 @@ struct mx_mesher {
   char *region_name[MX_MAX_REGIONS];
   int region_level[MX_MAX_REGIONS];
   unsigned region_meet_only; /* bit r: refined where met only (mx_requests) */
-  /* the size field (issue 27, mesher/size_field.c): its source, the
-   * control space's parameters, and the control space built from it over
-   * the domain's box with the octree (kept until the source changes) */
-  mx_size_fn size_fn;
-  void *size_user;
-  struct mx_expr *size_expr; /* a source given as text: owned */
-  mx_cspace_params size_params;
-  double size_min, size_max; /* clamps of the field's sizes (0: none) */
-  mx_cspace *size_cs;
+  /* the size field (issue 27, mesher/size_field.c): its source, bounds,
+   * the control space's parameters, and the control space built from them
+   * over the domain's box with the octree (kept until the source changes) */
+  mx_size_source size;
   /* the discrete sources (sizing/sources.h): curvature (radians, 0: none),
    * elements across parts and gaps (0: none), the gradation ratio (0: the
    * default, 2, applied to the discrete sources only; set: to the

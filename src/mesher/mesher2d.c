@@ -118,6 +118,7 @@ void mx_mesher2d_free(mx_mesher2d *m) {
   mx_free(m->drawing_level);
   mx_free(m->boxes);
   mx_free(m->funs);
+  mx_mesher2d_size_free(m);
   mx_free(m->features);
   mx_free(m->rec);
   mx_free(m);
@@ -333,6 +334,7 @@ static int add_function(mx_mesher2d *m, const char *name, const double *args, si
   }
   MX_CHECK(grow((void **)&m->funs, m->nfuns, sizeof *m->funs));
   m->funs[m->nfuns++] = f;
+  mx_mesher2d_size_reset(m); /* a source of the field, when there is one */
   return MX_OK;
 }
 
@@ -345,6 +347,20 @@ int mx_mesher2d_set_material(mx_mesher2d *m, int depth, int number, const char *
   CALL(m, mx_mesher2d_set_material_(m, depth, number, name));
 }
 
+/* The size field: mesher2d_size.c. */
+int mx_mesher2d_set_size_function(mx_mesher2d *m, mx_size_fn f, void *user,
+                                  const mx_cspace_params *p) {
+  CALL(m, mx_mesher2d_set_size_function_(m, f, user, p));
+}
+
+int mx_mesher2d_set_size_expr(mx_mesher2d *m, const char *text) {
+  CALL(m, mx_mesher2d_set_size_expr_(m, text));
+}
+
+int mx_mesher2d_set_size_limits(mx_mesher2d *m, double hmin, double hmax) {
+  CALL(m, mx_mesher2d_set_size_limits_(m, hmin, hmax));
+}
+
 /* ---- feature levels ------------------------------------------------------------ */
 
 static int cmp_x(const void *a, const void *b) {
@@ -352,15 +368,21 @@ static int cmp_x(const void *a, const void *b) {
   return (p[0] > q[0]) - (p[0] < q[0]);
 }
 
-int mx_mesher2d_grid(const mx_mesher2d *m, mx_qgrid *g) {
+void mx_mesher2d_box(const mx_mesher2d *m, double lo[2], double hi[2]) {
   const mx_poly *P = &m->domain;
-  double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+  lo[0] = lo[1] = INFINITY;
+  hi[0] = hi[1] = -INFINITY;
   for (size_t s = 0; s < 2 * P->ns; s++)
     for (int a = 0; a < 2; a++) {
       lo[a] = fmin(lo[a], P->xy[2 * (size_t)P->seg[s] + a]);
       hi[a] = fmax(hi[a], P->xy[2 * (size_t)P->seg[s] + a]);
     }
-  return mx_qgrid_build(lo, hi, P->path, g);
+}
+
+int mx_mesher2d_grid(const mx_mesher2d *m, mx_qgrid *g) {
+  double lo[2], hi[2];
+  mx_mesher2d_box(m, lo, hi);
+  return mx_qgrid_build(lo, hi, m->domain.path, g);
 }
 
 /* A degenerate box at each feature, at the level where its quadrant is at
@@ -459,12 +481,24 @@ static double estimate_leaves(const mx_mesher2d *m, const mx_qgrid *g) {
   return n;
 }
 
+/* With a size field, its control space is built first, and the quadrants
+ * it asks for are refused alone (naming its least size and where) or
+ * counted with the others. */
 static int check_memory(mx_mesher2d *m) {
   mx_qgrid g;
   MX_CHECK(mx_mesher2d_grid(m, &g));
-  const double bytes = BYTES_FIXED + BYTES_PER_LEAF * estimate_leaves(m, &g);
+  const double room =
+      m->p.max_memory_mb > 0 ? m->p.max_memory_mb * 1048576.0 : mx_available_bytes();
+  double field = 0.0;
+  if (mx_size_source_given(&m->size)) {
+    MX_CHECK(mx_mesher2d_size_space(m, &g));
+    field = m->size_cells;
+    MX_CHECK(mx_size_source_budget(&m->size, 2, field, m->size_hmin, m->size_at,
+                                   BYTES_FIXED + BYTES_PER_LEAF * field, room,
+                                   m->p.max_memory_mb > 0, NULL));
+  }
+  const double bytes = BYTES_FIXED + BYTES_PER_LEAF * (estimate_leaves(m, &g) + field);
   m->estimate_mb = bytes / 1048576.0;
-  const double room = m->p.max_memory_mb > 0 ? m->p.max_memory_mb * 1048576.0 : mx_available_bytes();
   if (room <= 0 || bytes <= room) return MX_OK;
   mx_error(m->domain.path, 0, "the requests would take about %.0f MB and %s %.0f MB: ask for "
            "lower levels or smaller regions", m->estimate_mb,
@@ -592,7 +626,7 @@ int mx_mesher2d_run(mx_mesher2d *m) {
       .nboxes = nboxes, .boxes = boxes,
       .nregions = m->nregions, .regions = m->regions, .region_level = m->region_level,
       .ndrawings = ndrawings, .drawings = drawings, .drawing_level = drawing_level,
-      .nfuns = m->nfuns, .funs = m->funs,
+      .nfuns = m->nfuns, .funs = m->funs, .size_field = m->size.cs,
       .nkeep = m->nkeep, .keep_key = m->keep_key, .keep_level = m->keep_level};
   const int balance = m->p.balance == MX_BALANCE_RECURSIVE ? MX_QBALANCE_RECURSIVE
                                                            : MX_QBALANCE_EDGES;
@@ -794,8 +828,12 @@ static int write_mesh(const mx_mesher2d *m, const char *path, int ascii) {
     return MX_EINPUT;
   }
   const double t = mx_wtime();
-  const int st = m->material ? mx_mesher2d_write_materials(m, path, ascii)
-                              : mx_write_qmesh(path, &m->M, ascii);
+  double *size = NULL; /* with a size field: target_size */
+  int st = mx_mesher2d_target_sizes(m, &size);
+  if (!st)
+    st = m->material ? mx_mesher2d_write_materials(m, path, ascii, size)
+                     : mx_write_qmesh_tagged(path, &m->M, ascii, NULL, size);
+  mx_free(size);
   m->rec->t[M2_WRITE] += mx_wtime() - t;
   return st;
 }

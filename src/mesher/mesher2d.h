@@ -13,6 +13,7 @@
 #define MX_MESHER2D_H
 
 #include "mixoct.h"
+#include "mesher/size_source.h"
 #include "quad/quad.h"
 
 enum { M2_READ, M2_REFINE, M2_BALANCE, M2_TRANSITION, M2_BOUNDARY, M2_QUALITY, M2_CHECK,
@@ -52,6 +53,12 @@ struct mx_mesher2d {
   size_t nboxes;
   mx_qfun *funs;
   size_t nfuns;
+  /* the size field (issue 27, mesher2d_size.c): its source and bounds, and
+   * the control space built from them and the -f curves over the domain's
+   * box when meshing (kept until one of them changes); the quadrants it
+   * asks for (the memory estimate), its least size and where */
+  mx_size_source size;
+  double size_cells, size_hmin, size_at[3];
   uint32_t *features; /* the domain's feature vertices */
   size_t nfeatures;
   /* the leaves to keep (a loaded restart file, or the last tree when
@@ -104,14 +111,33 @@ int mx_qrestart_from_mesher(const mx_mesher2d *m, struct mx_restart *r);
  * (m->keep_*, m->rs_*), each checked to lie on the lattice. */
 int mx_qrestart_to_keep(mx_mesher2d *m, const struct mx_restart *r);
 
-/* mesher2d.c: the root grid the domain's quadtree has (the box of its
- * segments' ends, mx_qgrid_build), and the whole pipeline from the requests and kept leaves. */
+/* mesher2d.c: the box of the domain's segments' ends, the root grid the
+ * domain's quadtree has over it (mx_qgrid_build), and the whole pipeline
+ * from the requests and kept leaves. */
+void mx_mesher2d_box(const mx_mesher2d *m, double lo[2], double hi[2]);
 int mx_mesher2d_grid(const mx_mesher2d *m, mx_qgrid *g);
 int mx_mesher2d_run(mx_mesher2d *m);
 /* The area tolerance of the check (mesher2d and `mixoct check`): half a
  * layer of cells of the mean size along the polylines, relative to the
  * domain's area, 5% at least, 25% at most. */
 double mx_qarea_tolerance(const mx_poly *P, const mx_qcheck_report *c, size_t ncells);
+
+/* mesher2d_size.c: the size field. The calls' work (mx_mesher2d_set_size_*
+ * wrap them); the control space dropped when a source of it changes (a -f
+ * curve added), or freed with the mesher. */
+int mx_mesher2d_set_size_function_(mx_mesher2d *m, mx_size_fn f, void *user,
+                                   const mx_cspace_params *p);
+int mx_mesher2d_set_size_expr_(mx_mesher2d *m, const char *text);
+int mx_mesher2d_set_size_limits_(mx_mesher2d *m, double hmin, double hmax);
+void mx_mesher2d_size_reset(mx_mesher2d *m);
+void mx_mesher2d_size_free(mx_mesher2d *m);
+/* With a field, its control space over the domain's box (the grid g's
+ * roots of side g->side give the -f curves' sizes), once per source; sets
+ * m->size_cells, size_hmin, size_at. MX_OK without a field. */
+int mx_mesher2d_size_space(mx_mesher2d *m, const mx_qgrid *g);
+/* The cell field target_size: the field at each cell's centroid (*out
+ * allocated, ncells values), *out NULL without a field. MX_ENOMEM. */
+int mx_mesher2d_target_sizes(const mx_mesher2d *m, double **out);
 
 /* mesher2d_materials.c */
 /* The regions of the domain's loops, and with nested loops the outer ones
@@ -138,7 +164,9 @@ int mx_mesher2d_material_number(const mx_mesher2d *m, int d);
 void mx_mesher2d_material_name(const mx_mesher2d *m, int d, char *buf, size_t n);
 int mx_mesher2d_material_depth(const mx_mesher2d *m, int number);
 int mx_mesher2d_set_material_(mx_mesher2d *m, int depth, int number, const char *name);
-/* The mesh written with its materials (mesher/qmesh_output.h). */
-int mx_mesher2d_write_materials(const mx_mesher2d *m, const char *path, int ascii);
+/* The mesh written with its materials (mesher/qmesh_output.h), and the
+ * cell field target_size when not NULL. */
+int mx_mesher2d_write_materials(const mx_mesher2d *m, const char *path, int ascii,
+                                const double *target_size);
 
 #endif

@@ -239,7 +239,8 @@ int mx_mesher2d_materials_check(mx_mesher2d *m, double tol) {
   return MX_OK;
 }
 
-int mx_mesher2d_write_materials(const mx_mesher2d *m, const char *path, int ascii) {
+int mx_mesher2d_write_materials(const mx_mesher2d *m, const char *path, int ascii,
+                                const double *target_size) {
   const size_t nc = m->M.ncells;
   const int nb = m->nmaterials;
   int32_t *mat = mx_alloc((nc + 1) * sizeof *mat), *body = mx_alloc((nc + 1) * sizeof *body);
@@ -262,7 +263,7 @@ int mx_mesher2d_write_materials(const mx_mesher2d *m, const char *path, int asci
     body[c] = b;
   }
   const mx_qmesh_tags T = {mat, body, nb, np, phys};
-  const int st = mx_write_qmesh_tagged(path, &m->M, ascii, &T);
+  const int st = mx_write_qmesh_tagged(path, &m->M, ascii, &T, target_size);
   mx_free(mat), mx_free(body);
   return st;
 }

@@ -9,6 +9,7 @@
 #include <stdio.h>
 
 #include "mesher/mesher2d.h"
+#include "sizing/cspace.h"
 
 static const char *const phase_name[M2_NPH] = {"read",     "refine",  "balance", "transition",
                                                "boundary", "quality", "check",   "write"};
@@ -101,6 +102,19 @@ static void json_materials(FILE *f, const mx_mesher2d *m) {
           c->crossings, c->cut, c->unresolved, c->across, c->smoothed, m->t_materials);
 }
 
+/* The size field's control space (as the 3D report's size_field), the
+ * curves among its sources, its least size and the quadrants it asks for. */
+static void json_size(FILE *f, const mx_mesher2d *m) {
+  mx_cspace_info in;
+  mx_cspace_info_get(m->size.cs, &in);
+  fprintf(f, ", \"size_field\": {\"structure\": \"%s\", \"leaves\": %zu, \"depth\": %d, "
+          "\"capped\": %d, \"kb\": %.1f, \"seconds\": %.6f, \"curves\": %zu, ",
+          mx_cs_structure_name(m->size.params.structure, m->size.params.split), in.leaves,
+          in.depth, in.capped, (double)in.bytes / 1024.0, in.seconds, m->nfuns);
+  json_num(f, "least", m->size_hmin), fputs(", ", f);
+  json_num(f, "quadrants_estimate", m->size_cells), fputs("}", f);
+}
+
 static void print_json(const mx_mesher2d *m, const mx_run2d_info *ri) {
   FILE *f = stdout;
   fprintf(f, "{\"valid\": %s, \"exit_code\": %d, \"error\": ", ri->status ? "false" : "true",
@@ -124,6 +138,7 @@ static void print_json(const mx_mesher2d *m, const mx_run2d_info *ri) {
             "\"memory_estimate_mb\": %.1f", m->refined_listed, ri->listed,
             m->feature_boxes, m->estimate_mb);
   }
+  if (m && m->size.cs) json_size(f, m);
   if (m && m->checked) json_check(f, m);
   if (m && m->meshed && m->material) json_materials(f, m);
   fputs(", \"phases\": {", f);
@@ -162,6 +177,15 @@ static void print_summary(const mx_mesher2d *m, const mx_run2d_info *ri) {
   if (meshed) {
     printf("  quadtree     %12zu leaves (%zu quadrants, %zu splits, %zu for balance)\n",
            m->nleaves, m->T.n, m->qs.splits, m->qs.balance_splits);
+    if (m->size.cs) {
+      mx_cspace_info in;
+      mx_cspace_info_get(m->size.cs, &in);
+      printf("  size field   %12zu leaves (%s, depth %d%s, %.1f kB), built in %.3f s\n"
+             "               least size %.4g%s\n",
+             in.leaves, mx_cs_structure_name(m->size.params.structure, m->size.params.split),
+             in.depth, in.capped ? ", capped" : "", (double)in.bytes / 1024.0, in.seconds,
+             m->size_hmin, m->nfuns ? "; the -f curves among its sources" : "");
+    }
     printf("  nodes        %12zu\n  cells        %12zu (quad %zu, tri %zu)\n", m->M.nnodes,
            m->M.ncells, m->q.count[1], m->q.count[0]);
     print_quality(m);

@@ -4,7 +4,8 @@
  * scaled Jacobian, mx_qcell_sj). The fields are only computed on a
  * consistent mesh: an inconsistent one goes to the writers without them,
  * and their check names the bad cell. With several materials, the cell
- * field "material" and the materials as the view's bodies. */
+ * field "material" and the materials as the view's bodies; with a size
+ * field, "target_size". */
 #include "mesher/qmesh_output.h"
 
 #include "base/common.h"
@@ -19,7 +20,7 @@ static int consistent(const mx_qmesh *M) {
 }
 
 int mx_write_qmesh_tagged(const char *path, const mx_qmesh *M, int ascii,
-                          const mx_qmesh_tags *T) {
+                          const mx_qmesh_tags *T, const double *target_size) {
   mx_mesh_view v = {.nnodes = M->nnodes, .xyz = M->xy, .ncells = M->ncells,
                     .type = M->type, .conn = M->conn, .dim = 2};
   if (!consistent(M)) return mx_write_mesh(path, &v, ascii);
@@ -36,7 +37,7 @@ int mx_write_qmesh_tagged(const char *path, const mx_qmesh *M, int ascii,
     type[c] = M->type[c];
     sj[c] = mx_qcell_sj(M, c);
   }
-  mx_field fields[4] = {{.name = "type", .ivalues = type},
+  mx_field fields[5] = {{.name = "type", .ivalues = type},
                         {.name = "level", .u8values = M->level ? M->level : level},
                         {.name = "sj", .is_double = 1, .dvalues = sj}};
   v.ncell_fields = 3;
@@ -48,6 +49,9 @@ int mx_write_qmesh_tagged(const char *path, const mx_qmesh *M, int ascii,
     v.body_names = T->names;
     v.body_physical = T->physical;
   }
+  if (target_size)
+    fields[v.ncell_fields++] = (mx_field){.name = "target_size", .is_double = 1,
+                                          .dvalues = target_size};
   v.cell_fields = fields;
   const int st = mx_write_mesh(path, &v, ascii);
   mx_free(type), mx_free(level), mx_free(sj);
@@ -55,7 +59,7 @@ int mx_write_qmesh_tagged(const char *path, const mx_qmesh *M, int ascii,
 }
 
 int mx_write_qmesh(const char *path, const mx_qmesh *M, int ascii) {
-  return mx_write_qmesh_tagged(path, M, ascii, NULL);
+  return mx_write_qmesh_tagged(path, M, ascii, NULL, NULL);
 }
 
 int mx_qmesh_format_known(const char *path) { return mx_plane_format_known(path); }

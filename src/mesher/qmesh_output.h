@@ -14,7 +14,9 @@
 int mx_write_qmesh(const char *path, const mx_qmesh *M, int ascii);
 /* Several materials: per cell its material's number (the cell field
  * "material") and its body 1 .. nbodies, each body's name and number
- * (the .msh writer's physical surfaces, the .getfem writer's regions). */
+ * (the .msh writer's physical surfaces, the .getfem writer's regions).
+ * T NULL: one material. target_size (NULL: none): a size field's value at
+ * each cell, the cell field "target_size" (issue 27). */
 typedef struct {
   const int32_t *material;
   const int32_t *body;
@@ -22,7 +24,8 @@ typedef struct {
   const char *const *names;
   const int32_t *physical;
 } mx_qmesh_tags;
-int mx_write_qmesh_tagged(const char *path, const mx_qmesh *M, int ascii, const mx_qmesh_tags *T);
+int mx_write_qmesh_tagged(const char *path, const mx_qmesh *M, int ascii, const mx_qmesh_tags *T,
+                          const double *target_size);
 int mx_qmesh_format_known(const char *path);
 
 #endif

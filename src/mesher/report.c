@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "geom/quality.h"
+#include "sizing/cspace.h"
 
 static const char *type_name[4] = {"tet", "pyramid", "prism", "hex"};
 
@@ -164,15 +165,12 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              s->boundary.t_interfaces, cv->t_warp, cv->t_cut, cv->t_smooth, s->t_materials);
   }
   if (s->size_field) {
-    static const char *tree[4] = {"K_L", "K_V", "K_oL", "K_oLB"}, *rule[3] = {"s_L", "s_G", "s_S"};
-    const int st = s->size_structure & 3, sp = s->size_split % 3;
     const size_t k = strlen(mat);
     snprintf(mat + k, sizeof mat - k,
-             "\"size_field\": {\"structure\": \"%s%s%s\", \"leaves\": %zu, \"depth\": %d, "
+             "\"size_field\": {\"structure\": \"%s\", \"leaves\": %zu, \"depth\": %d, "
              "\"capped\": %d, \"kb\": %.1f, \"seconds\": %.6f}, ",
-             s->size_leaves ? tree[st] : "none", s->size_leaves && st <= 1 ? " " : "",
-             s->size_leaves && st <= 1 ? rule[sp] : "", s->size_leaves, s->size_depth,
-             s->size_capped, s->size_kb, s->size_seconds);
+             s->size_leaves ? mx_cs_structure_name(s->size_structure, s->size_split) : "none",
+             s->size_leaves, s->size_depth, s->size_capped, s->size_kb, s->size_seconds);
     if (s->size_sources) { /* inside size_field: replace its closing "}, " */
       const size_t e = strlen(mat) - 3;
       snprintf(mat + e, sizeof mat - e,

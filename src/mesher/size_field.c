@@ -1,46 +1,34 @@
-/* The size field of a mesher (issue 27): its source (a function, the
- * paper's test functions, an expression) and the control space built from
- * it over the domain's box when the octree is (mx_mesher_size_space), read
- * by the refinement requests (kernels/requests.h). */
+/* The size field of the octree mesher (issue 27): the function source,
+ * its bounds and control space shared with the quadtree mesher
+ * (mesher/size_source.h), the discrete sources (curvature, thickness, size
+ * maps, sizes per element, the gradation: sizing/sources.h), and the whole
+ * field built over the domain's box when the octree is
+ * (mx_mesher_size_space), read by the refinement requests
+ * (kernels/requests.h). */
 #include <math.h>
 #include <string.h>
 
 #include "base/common.h"
+#include "geom/surface_sizes.h"
+#include "io/read_sizemap.h"
 #include "kernels/estimate.h"
 #include "mesher/mesher_impl.h"
 #include "sizing/cspace.h"
-#include "sizing/expr.h"
-#include "geom/surface_sizes.h"
-#include "io/read_sizemap.h"
 #include "sizing/sources.h"
 #include "soa/mesh.h"
 
-/* The mesher's control space unless told otherwise: a K_L kd-tree split by
- * s_S (the smallest leaf-valued trees in bench/cspace_bench.c). */
-static void default_params(mx_cspace_params *q) {
-  mx_cspace_params_default(q);
-  q->split = MX_SPLIT_SUM;
-}
-
 /* The built field (rebuilt with the octree when a source changes). */
 static void drop_built(mx_mesher *m) {
-  mx_cspace_free(m->size_cs);
-  m->size_cs = NULL;
+  mx_cspace_free(m->size.cs);
+  m->size.cs = NULL;
   mx_size_sources_free(m->size_src);
   m->size_src = NULL;
   memset(&m->size_F, 0, sizeof m->size_F);
 }
 
-static void drop(mx_mesher *m) {
-  drop_built(m);
-  mx_expr_free(m->size_expr);
-  m->size_expr = NULL;
-  m->size_fn = NULL;
-  m->size_user = NULL;
-}
-
 void mx_mesher_size_free(mx_mesher *m) {
-  drop(m);
+  drop_built(m);
+  mx_size_source_free(&m->size);
   mx_free(m->size_map_box);
   mx_free(m->size_map_h);
   mx_free(m->size_map_name);
@@ -53,74 +41,25 @@ int mx_mesher_set_size_function(mx_mesher *m, mx_size_fn f, void *user,
                                 const mx_cspace_params *p) {
   mx_call c;
   mx_call_begin(m, &c);
-  mx_cspace_params q;
-  default_params(&q);
-  if (p) q = *p;
-  const int st = mx_cs_params_check(&q, 0);
-  if (!st) {
-    drop(m);
-    m->size_fn = f;
-    m->size_user = user;
-    m->size_params = q;
-  }
+  const int st = mx_size_source_set_function(&m->size, f, user, p);
+  if (!st) drop_built(m);
   return mx_call_end(m, &c, st);
-}
-
-/* An expression's sizes: the same along the three axes. */
-static void expr_sizes(void *user, size_t n, const double *xyz, double *h) {
-  mx_expr_eval_many((const mx_expr *)user, n, xyz, h);
-  for (size_t i = n; i-- > 0;) h[3 * i] = h[3 * i + 1] = h[3 * i + 2] = h[i];
 }
 
 int mx_mesher_set_size_expr(mx_mesher *m, const char *text) {
   mx_call c;
   mx_call_begin(m, &c);
-  mx_size_fn f = text ? mx_size_builtin(text, NULL, NULL) : NULL;
-  mx_expr *e = NULL;
-  int st = MX_OK;
-  if (!f) st = mx_expr_compile(text, "size field", &e);
-  if (!st) {
-    mx_cspace_params q;
-    default_params(&q);
-    drop(m);
-    m->size_fn = f ? f : expr_sizes;
-    m->size_user = f ? NULL : e;
-    m->size_expr = e;
-    m->size_params = q;
-  }
+  const int st = mx_size_source_set_expr(&m->size, text);
+  if (!st) drop_built(m);
   return mx_call_end(m, &c, st);
 }
 
 int mx_mesher_set_size_limits(mx_mesher *m, double hmin, double hmax) {
   mx_call c;
   mx_call_begin(m, &c);
-  int st = MX_OK;
-  if (!(hmin >= 0.0) || !(hmax >= 0.0) || !isfinite(hmin) || !isfinite(hmax) ||
-      (hmin > 0.0 && hmax > 0.0 && hmin > hmax)) {
-    mx_error(NULL, 0, "size field: bad bounds (least %g, largest %g): finite, not negative, "
-                      "the least not above the largest", hmin, hmax);
-    st = MX_EINPUT;
-  }
-  if (!st) {
-    drop_built(m); /* rebuilt with the bounds */
-    m->size_min = hmin;
-    m->size_max = hmax;
-  }
+  const int st = mx_size_source_set_limits(&m->size, hmin, hmax);
+  if (!st) drop_built(m);
   return mx_call_end(m, &c, st);
-}
-
-/* The source clamped to the bounds (the mesher is the user). */
-static void clamped(void *user, size_t n, const double *xyz, double *h) {
-  const mx_mesher *m = user;
-  if (m->size_fn) {
-    m->size_fn(m->size_user, n, xyz, h);
-  } else {
-    for (size_t i = 0; i < 3 * n; i++) h[i] = m->size_max;
-  }
-  for (size_t i = 0; i < 3 * n; i++) {
-    if (m->size_min > 0.0 && h[i] < m->size_min) h[i] = m->size_min;
-    if (m->size_max > 0.0 && h[i] > m->size_max) h[i] = m->size_max;
-  }
 }
 
 int mx_mesher_set_size_curvature(mx_mesher *m, double degrees) {
@@ -286,26 +225,25 @@ int mx_mesher_set_size_elements(mx_mesher *m, const double *h, size_t n) {
 
 /* Whether the mesher has a size field at all. */
 int mx_mesher_has_size(const mx_mesher *m) {
-  return m->size_fn || m->size_max > 0.0 || m->size_curvature > 0.0 ||
+  return mx_size_source_given(&m->size) || m->size_curvature > 0.0 ||
          m->size_thickness > 0.0 || m->size_map_n;
 }
 
-/* The octree the field asks for, against the memory there is: before
+/* The octree the field asks for, against the memory there is, before
  * refining (an octree refined to a tiny size would fill the machine
- * first). Octants of level L have side root / 2^L; the root about the
- * domain's largest extent; a size h asks for a side in (h/2, h], about
- * 0.7 h; none finer than the deepest level. */
+ * first): the control space's cells and the sources', the root about the
+ * domain's largest extent, none finer than the deepest level. */
 static int budget(mx_mesher *m, const double lo[3], const double hi[3]) {
   double root = 0.0;
   for (int a = 0; a < 3; a++) root = fmax(root, hi[a] - lo[a]);
   double hmin = INFINITY, at[3] = {0, 0, 0}, h2, at2[3];
-  const double floor = ldexp(root, -(MX_MAX_LEVEL - 1)), f = 0.7;
   double cells = 0.0;
-  if (m->size_cs) cells += mx_cspace_cells(m->size_cs, floor, f, &hmin, at);
+  if (m->size.cs) cells += mx_size_source_cells(&m->size, 3, root, MX_MAX_LEVEL - 1, &hmin, at);
   if (m->size_src) {
-    cells += mx_size_sources_cells(m->size_src, fmax(floor, m->size_min), f, &h2, at2);
+    const double floor = ldexp(root, -(MX_MAX_LEVEL - 1));
+    cells += mx_size_sources_cells(m->size_src, fmax(floor, m->size.min), 0.7, &h2, at2);
     if (h2 < hmin) {
-      hmin = h2;
+      hmin = fmax(h2, m->size.min);
       memcpy(at, at2, sizeof at);
     }
   }
@@ -313,17 +251,10 @@ static int budget(mx_mesher *m, const double lo[3], const double hi[3]) {
                                                m->p.stage);
   const double avail = mx_available_bytes();
   const double limit = m->p.max_memory_mb > 0 ? m->p.max_memory_mb * 1048576.0 : avail;
-  if (limit > 0.0 && need > limit) {
-    mx_error(NULL, 0, "the size field asks for about %.3g octants (its least size %.3g, at "
-                      "(%.6g, %.6g, %.6g)): about %.0f MB, but %s %.0f MB; raise the sizes "
-                      "(--size-min) or --max-memory", cells, fmax(hmin, m->size_min), at[0],
-             at[1], at[2], need / 1048576.0,
-             m->p.max_memory_mb > 0 ? "--max-memory allows" : "the machine has",
-             limit / 1048576.0);
-    drop_built(m);
-    return MX_ENOMEM;
-  }
-  return MX_OK;
+  const int st = mx_size_source_budget(&m->size, 3, cells, hmin, at, need, limit,
+                                       m->p.max_memory_mb > 0, "--max-memory");
+  if (st) drop_built(m);
+  return st;
 }
 
 /* The sources from the input surface: an index of the domain's triangles
@@ -371,7 +302,7 @@ static int map_check(const mx_mesher *m, const double lo[3], const double hi[3])
  * the graded field then replaces: it is no larger anywhere). */
 static int build_sources(mx_mesher *m, const double lo[3], const double hi[3]) {
   m->size_src_curvature = m->size_src_thickness = m->size_src_map = m->size_src_graded = 0;
-  const int graded_cs = m->size_gradation > 0.0 && m->size_cs;
+  const int graded_cs = m->size_gradation > 0.0 && m->size.cs;
   if (!(m->size_curvature > 0.0) && !(m->size_thickness > 0.0) && !m->size_map_n && !graded_cs)
     return MX_OK;
   mx_point_sizes P;
@@ -379,7 +310,7 @@ static int build_sources(mx_mesher *m, const double lo[3], const double hi[3]) {
   int st = surface_sources(m, &P);
   if (!st) st = map_check(m, lo, hi);
   const size_t npts = P.n, nmap = m->size_map_n;
-  const size_t nleaves = graded_cs ? mx_cspace_leaves(m->size_cs, NULL, NULL) : 0;
+  const size_t nleaves = graded_cs ? mx_cspace_leaves(m->size.cs, NULL, NULL) : 0;
   const size_t n = npts + nmap + nleaves;
   double *box = NULL, *h = NULL, *w = NULL;
   uint8_t *dim = NULL;
@@ -413,13 +344,13 @@ static int build_sources(mx_mesher *m, const double lo[3], const double hi[3]) {
     m->size_src_map = nmap;
     if (nleaves) {
       const size_t o = npts + nmap;
-      mx_cspace_leaves(m->size_cs, box + 6 * o, h + o);
+      mx_cspace_leaves(m->size.cs, box + 6 * o, h + o);
       for (size_t i = o; i < n; i++) {
         const double *b = box + 6 * i;
         w[i] = (b[3] - b[0]) * (b[4] - b[1]) * (b[5] - b[2]);
         dim[i] = 3;
-        if (m->size_min > 0.0 && h[i] < m->size_min) h[i] = m->size_min;
-        if (m->size_max > 0.0 && h[i] > m->size_max) h[i] = m->size_max;
+        if (m->size.min > 0.0 && h[i] < m->size.min) h[i] = m->size.min;
+        if (m->size.max > 0.0 && h[i] > m->size.max) h[i] = m->size.max;
       }
       m->size_src_graded = nleaves;
     }
@@ -435,30 +366,30 @@ static int build_sources(mx_mesher *m, const double lo[3], const double hi[3]) {
 }
 
 int mx_mesher_size_space(mx_mesher *m) {
-  if (!mx_mesher_has_size(m) || m->size_cs || m->size_src) return MX_OK;
-  mx_cspace_params q = m->size_params;
-  if (!m->size_fn) default_params(&q);
-  mx_trisoup_bbox(&m->domain, q.lo, q.hi);
-  for (int a = 0; a < 3; a++)
-    if (!(q.hi[a] > q.lo[a])) { /* a flat domain: the field over a slab */
-      q.lo[a] -= 0.5;
-      q.hi[a] += 0.5;
-    }
-  if (!m->size_fn) m->size_params = q;
-  if (m->size_fn || m->size_max > 0.0)
-    MX_CHECK(m->size_min > 0.0 || m->size_max > 0.0
-                 ? mx_cspace_build(&q, clamped, m, &m->size_cs)
-                 : mx_cspace_build(&q, m->size_fn, m->size_user, &m->size_cs));
-  int st = build_sources(m, q.lo, q.hi);
+  if (!mx_mesher_has_size(m) || m->size.cs || m->size_src) return MX_OK;
+  double lo[3], hi[3];
+  mx_trisoup_bbox(&m->domain, lo, hi);
+  MX_CHECK(mx_size_source_build(&m->size, lo, hi, NULL, NULL));
+  if (m->size.cs) { /* its box: the domain's, a flat axis widened */
+    memcpy(lo, m->size.params.lo, sizeof lo);
+    memcpy(hi, m->size.params.hi, sizeof hi);
+  } else {
+    for (int a = 0; a < 3; a++)
+      if (!(hi[a] > lo[a])) {
+        lo[a] -= 0.5;
+        hi[a] += 0.5;
+      }
+  }
+  const int st = build_sources(m, lo, hi);
   if (st) {
     drop_built(m);
     return st;
   }
-  m->size_F.cs = m->size_src && m->size_src_graded ? NULL : m->size_cs;
+  m->size_F.cs = m->size_src && m->size_src_graded ? NULL : m->size.cs;
   m->size_F.src = m->size_src;
-  m->size_F.hmin = m->size_min;
-  m->size_F.hmax = m->size_max;
-  memcpy(m->size_F.lo, q.lo, sizeof q.lo);
-  memcpy(m->size_F.hi, q.hi, sizeof q.hi);
-  return budget(m, q.lo, q.hi);
+  m->size_F.hmin = m->size.min;
+  m->size_F.hmax = m->size.max;
+  memcpy(m->size_F.lo, lo, sizeof lo);
+  memcpy(m->size_F.hi, hi, sizeof hi);
+  return budget(m, lo, hi);
 }

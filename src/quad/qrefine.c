@@ -18,6 +18,7 @@
 #include "base/common.h"
 #include "quad/quad.h"
 #include "base/scan.h"
+#include "sizing/cspace.h"
 
 /* Small loops run on one thread: a parallel region costs more than them. */
 #define PAR(n) ((n) > 4096)
@@ -98,6 +99,12 @@ static double fun_value(const mx_qfun *f, double x, double y, double *dist) {
   return v;
 }
 
+double mx_qfun_distance(const mx_qfun *f, double x, double y) {
+  double d;
+  (void)fun_value(f, x, y, &d);
+  return d;
+}
+
 static int fun_crosses(const mx_qfun *f, const double lo[2], const double hi[2]) {
   const double cx = 0.5 * (lo[0] + hi[0]), cy = 0.5 * (lo[1] + hi[1]);
   double d, dc;
@@ -111,6 +118,15 @@ static int fun_crosses(const mx_qfun *f, const double lo[2], const double hi[2])
 }
 
 /* ---- targets ------------------------------------------------------------- */
+
+/* The level whose quadrants are no larger than the field's least size over
+ * the box [lo, hi] (roots of side `root`); 0 without a field. */
+static int field_level(const mx_qrequests *R, double root, const double lo[2],
+                       const double hi[2]) {
+  if (!R->size_field) return 0;
+  const double blo[3] = {lo[0], lo[1], 0.0}, bhi[3] = {hi[0], hi[1], 0.0};
+  return mx_cs_level(root, mx_cspace_min_box(R->size_field, blo, bhi), MX_QMAX_LEVEL - 1);
+}
 
 /* The highest level the kept leaves anchored in the quadrant (key, level)
  * ask for: a binary search for the first, then a walk over the quadrant's
@@ -149,6 +165,8 @@ static uint8_t target_of(const qbuild *B, uint32_t q, const double lo[2], const 
   if (B->rin && B->rin[q] > t) t = B->rin[q];
   for (size_t f = 0; f < R->nfuns; f++)
     if (R->funs[f].level > t && fun_crosses(&R->funs[f], lo, hi)) t = R->funs[f].level;
+  const int fl = field_level(R, T->grid.side, lo, hi);
+  if (fl > t) t = fl;
   if (R->nkeep) {
     const int k = keep_target(R, T->key[q], T->level[q]);
     if (k > t) t = k;
@@ -559,6 +577,14 @@ static int builder_init(qbuild *B, const mx_poly *dom, const mx_poly_index *I,
     }
   }
   MX_CHECK(mx_qgrid_build(lo, hi, dom->path, &T->grid));
+  if (req->size_field) { /* the finest level the field asks for, over all the roots */
+    const mx_qgrid *g = &T->grid;
+    const double rlo[2] = {g->origin[0], g->origin[1]},
+                 rhi[2] = {g->origin[0] + g->side * g->dims[0],
+                           g->origin[1] + g->side * g->dims[1]};
+    const int fl = field_level(req, g->side, rlo, rhi);
+    if (fl > maxlevel) maxlevel = fl;
+  }
   MX_CHECK(request_segments(B));
   if (balance == MX_QBALANCE_EDGES) MX_CHECK(mx_qedges_new(maxlevel - 2, &B->E));
   return MX_OK;

@@ -112,6 +112,12 @@ typedef struct {
   double a[4]; /* circle: cx cy r; line: px py nx ny; sine: amp freq phase y0 */
   int level;
 } mx_qfun;
+/* The distance from (x, y) to the function's zero set: exact for the
+ * circle and the line; for the sine a lower bound (|f| over its Lipschitz
+ * constant), which like the distance grows by at most 1 per unit of
+ * length. The size field's curve sources (mesher/mesher2d_size.c) read it;
+ * the crossing test above uses the same bound. */
+double mx_qfun_distance(const mx_qfun *f, double x, double y);
 
 typedef struct {
   int s_level;             /* quadrants meeting the domain's polylines; 0 none */
@@ -126,6 +132,11 @@ typedef struct {
   const int *drawing_level;
   size_t nfuns;
   const mx_qfun *funs;
+  /* A size field (issue 27; NULL: none): a quadrant is split while its
+   * side exceeds the least size of the field over its box (the control
+   * space's box query at z = 0, the field built over the domain's box
+   * with a thin slab in z: mesher/mesher2d_size.c). */
+  const mx_cspace *size_field;
   /* The leaves of an earlier quadtree (re-meshing from a restart file,
    * Algorithm 3): keep_key ascending (anchor keys), keep_level their
    * levels, plus one for the leaves listed for refinement. A quadrant is

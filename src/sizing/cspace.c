@@ -130,6 +130,20 @@ int mx_cspace_build(const mx_cspace_params *p, mx_size_fn f, void *user, mx_cspa
   return MX_OK;
 }
 
+int mx_cs_level(double root, double h, int max_level) {
+  if (!(h > 0.0)) return max_level;
+  const double t = ceil(log2(root / h) - 1e-9);
+  return t <= 0.0 ? 0 : t >= max_level ? max_level : (int)t;
+}
+
+const char *mx_cs_structure_name(int structure, int split) {
+  static const char *const kd[2][3] = {{"K_L s_L", "K_L s_G", "K_L s_S"},
+                                       {"K_V s_L", "K_V s_G", "K_V s_S"}};
+  if (structure == MX_CS_OCT_LEAF) return "K_oL";
+  if (structure == MX_CS_OCT_BALANCED) return "K_oLB";
+  return kd[structure == MX_CS_KD_VERTEX][split >= 0 && split <= 2 ? split : 0];
+}
+
 void mx_cspace_query(const mx_cspace *c, const double p[3], double h[3]) {
   if (c->structure <= MX_CS_KD_VERTEX) mx_cs_query_kd(c, p, h);
   else mx_cs_query_octree(c, p, h);
@@ -173,17 +187,19 @@ void mx_cspace_free(mx_cspace *c) {
 }
 
 /* One leaf's share of mx_cspace_cells. */
-static void add_cells(const double lo[3], const double hi[3], double h, double floor, double f,
-                      double *sum, double *hmin, double at[3]) {
+static void add_cells(int dim, const double lo[3], const double hi[3], double h, double floor,
+                      double f, double *sum, double *hmin, double at[3]) {
   if (h < *hmin) {
     *hmin = h;
     for (int a = 0; a < 3; a++) at[a] = 0.5 * (lo[a] + hi[a]);
   }
   const double s = f * (h > floor ? h : floor);
-  *sum += (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]) / (s * s * s);
+  if (dim == 2) *sum += (hi[0] - lo[0]) * (hi[1] - lo[1]) / (s * s);
+  else *sum += (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]) / (s * s * s);
 }
 
-double mx_cspace_cells(const mx_cspace *c, double floor, double f, double *hmin, double at[3]) {
+double mx_cspace_cells(const mx_cspace *c, int dim, double floor, double f, double *hmin,
+                       double at[3]) {
   double sum = 0.0;
   *hmin = INFINITY;
   memcpy(at, c->lo, 3 * sizeof *at);
@@ -199,7 +215,7 @@ double mx_cspace_cells(const mx_cspace *c, double floor, double f, double *hmin,
         hi[a] = c->lo[a] + (c->hi[a] - c->lo[a]) * ((double)p[a] + side) / n;
       }
       const double *h = c->h + 3 * i;
-      add_cells(lo, hi, fmin(h[0], fmin(h[1], h[2])), floor, f, &sum, hmin, at);
+      add_cells(dim, lo, hi, fmin(h[0], fmin(h[1], h[2])), floor, f, &sum, hmin, at);
     }
     return sum;
   }
@@ -226,7 +242,7 @@ double mx_cspace_cells(const mx_cspace *c, double floor, double f, double *hmin,
         const uint32_t v = nv == 1 ? c->val[i] : c->vid[8 * (size_t)c->val[i] + k];
         for (int a = 0; a < 3; a++) h = fmin(h, c->h[3 * (size_t)v + a]);
       }
-      add_cells(lo, hi, h, floor, f, &sum, hmin, at);
+      add_cells(dim, lo, hi, h, floor, f, &sum, hmin, at);
       continue;
     }
     if (top + 2 > 128) continue; /* deeper than any build goes */

@@ -68,11 +68,22 @@ int mx_cs_bad_sizes(const mx_cspace *c);
  * monotone field; the centre too for an odd ns), x fastest. */
 void mx_cs_samples(const double lo[3], const double hi[3], int ns, double *xyz);
 
-/* About how many cubes of side f * max(h, floor) fill the field's box, h
- * the least size of each leaf (K_V: of its corners): what an octree that
- * follows the field would hold, for the memory estimate. *hmin, *at: the
- * least size and a point where it is. */
-double mx_cspace_cells(const mx_cspace *c, double floor, double f, double *hmin, double at[3]);
+/* About how many cubes (dim 3) of side f * max(h, floor) fill the field's
+ * box, h the least size of each leaf (K_V: of its corners): what an octree
+ * that follows the field would hold, for the memory estimate; dim 2: the
+ * squares that fill its x-y face (a quadtree's; the z axis a slab the
+ * field does not vary along). *hmin, *at: the least size and a point where
+ * it is. */
+double mx_cspace_cells(const mx_cspace *c, int dim, double floor, double f, double *hmin,
+                       double at[3]);
+/* The level of a tree of root side `root` whose cells are no larger than
+ * the size h (side root / 2^level <= h, up to rounding), 0 to max_level;
+ * max_level when h is not positive. The octree and the quadtree ask the
+ * field's least size over a cell's box for this. */
+int mx_cs_level(double root, double h, int max_level);
+/* The structure's name as the reports print it: "K_L s_S", "K_V s_G",
+ * "K_oL", "K_oLB". */
+const char *mx_cs_structure_name(int structure, int split);
 int mx_cs_build_kd(mx_cspace *c, mx_size_fn f, void *user);
 int mx_cs_build_octree(mx_cspace *c, mx_size_fn f, void *user);
 void mx_cs_query_kd(const mx_cspace *c, const double p[3], double h[3]);
