@@ -276,10 +276,10 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
              cv->warped, cv->cut, cv->neighbours, cv->cut_nodes, cv->centres);
   }
   if (s->size_field) {
-    static const char *tree[4] = {"K_L", "K_V", "K_oL", "K_oLB"};
     if (s->size_leaves && !s->size_graded_n)
       printf("  size field   %12zu leaves of a %s control space (depth %d, %.0f kB, %.3f s)\n",
-             s->size_leaves, tree[s->size_structure & 3], s->size_depth, s->size_kb,
+             s->size_leaves, mx_cs_structure_name(s->size_structure, s->size_split),
+             s->size_depth, s->size_kb,
              s->size_seconds);
     if (s->size_sources)
       printf("  size field   %12zu sources (curvature %zu, thickness %zu, map %zu, graded "
