@@ -71,7 +71,7 @@ echo "# mixoct $MIXOCT ($("$MIXOCT" --version 2>&1 | head -1)), levels $LEVELS, 
 defect_counts() {
   printf '%s\n' "$1" | sed 's/"tolerances".*//; s/"by_type":{[^}]*}//' |
     tr ',{' '\n\n' | grep -E '^"[a-z_]+":[0-9]+$' |
-    grep -vE '^"(nodes|elements|faces_interior|faces_boundary|nonmanifold_edges|surface_open_edges|defects|volume|surface_volume|volume_error|boundary_max_dist|jens_min|jens_mean)":' |
+    grep -vE '^"(nodes|elements|faces_interior|faces_boundary|nonmanifold_edges|surface_open_edges|defects|volume|surface_volume|volume_error|boundary_max_dist|hausdorff_[a-z_]+|jens_min|jens_mean)":' |
     grep -v ':0$' | tr -d '"' | tr '\n' ' '
 }
 fidelity_only=0

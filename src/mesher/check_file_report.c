@@ -34,6 +34,13 @@
  * "surface_open_edges": "surface_files", "surface_pieces" and
  * "shared_triangles" (the last two null for a surface that is not closed),
  * none of the three with one file.
+ * With a closed surface, the distance between the mesh's skin (boundary and
+ * interface faces) and the surface both ways (verify/check.h): a line
+ * "boundary distance, both ways" (the maxima and means over the diagonal,
+ * then absolute, the samples and their spacings); in JSON after
+ * "boundary_max_dist": "hausdorff_mesh_to_surface_max", "..._mean",
+ * "hausdorff_surface_to_mesh_max", "..._mean" (over the diagonal) and the
+ * same four with "_abs" (absolute), null without a closed surface.
  * A 3D mesh's hash is printed as 16 hex digits: "mesh hash" in the report,
  * "mesh_hash" (a string) in JSON.
  * A 2D mesh has a report of its own, and in JSON "dimension":2 with the
@@ -172,6 +179,21 @@ static void json_label_defects(const mx_check_report *r) {
   json_elems_at("off_label_region", &r->off_label_region, r->has_regions);
 }
 
+/* The skin and the surface, both ways: relative to the surface's diagonal,
+ * then absolute. */
+static void json_two_sided(const mx_check_report *r) {
+  const double v[4] = {r->mesh_to_surface_max, r->mesh_to_surface_mean,
+                       r->surface_to_mesh_max, r->surface_to_mesh_mean};
+  static const char *const key[4] = {"mesh_to_surface_max", "mesh_to_surface_mean",
+                                     "surface_to_mesh_max", "surface_to_mesh_mean"};
+  char k[64];
+  for (int absolute = 0; absolute < 2; absolute++)
+    for (int i = 0; i < 4; i++) {
+      snprintf(k, sizeof k, "hausdorff_%s%s", key[i], absolute ? "_abs" : "");
+      json_num(k, absolute ? v[i] : v[i] / r->surface_diagonal, 0);
+    }
+}
+
 void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64_t hash) {
   printf("{\"nodes\":%zu,\"elements\":%zu,", r->nodes, r->elements);
   printf("\"by_type\":{\"hex\":%zu,\"prism\":%zu,\"pyramid\":%zu,\"tet\":%zu},",
@@ -196,6 +218,7 @@ void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64
   json_num("surface_volume", r->surface_volume, 0);
   json_num("volume_error", r->volume_error, 0);
   json_num("boundary_max_dist", r->boundary_max_dist, 0);
+  json_two_sided(r);
   if (r->has_surface)
     printf("\"surface_open_edges\":%zu,", r->surface_open_edges);
   else
@@ -421,6 +444,18 @@ void mx_check_file_text(const char *mesh, const char *const *surfs, int nsurfs,
     printf("  boundary max distance  %.3e of the surface's bounding box "
            "diagonal (tolerance %g)\n",
            r->boundary_max_dist, r->opt.boundary_tol);
+    if (closed) {
+      const double D = r->surface_diagonal;
+      printf("  boundary distance, both ways: mesh -> surface max %.3e, mean %.3e; "
+             "surface -> mesh max %.3e, mean %.3e of the diagonal (indicative)\n",
+             r->mesh_to_surface_max / D, r->mesh_to_surface_mean / D,
+             r->surface_to_mesh_max / D, r->surface_to_mesh_mean / D);
+      printf("                         absolute: max %.6g, mean %.6g; max %.6g, mean %.6g "
+             "(diagonal %.6g; samples %zu every %.3g and %zu every %.3g)\n",
+             r->mesh_to_surface_max, r->mesh_to_surface_mean, r->surface_to_mesh_max,
+             r->surface_to_mesh_mean, D, r->mesh_to_surface_samples, r->mesh_sample_spacing,
+             r->surface_to_mesh_samples, r->surface_sample_spacing);
+    }
     if (r->nlabels)
       printf("  interface max distance %.3e of the diagonal, over %zu interface nodes "
              "(tolerance %g)\n",

@@ -14,7 +14,8 @@
  *     labels the regions of the labels and of the elements (check_labels.c,
  *     check_regions.c; a surface of several files, touching inputs: the
  *     regions of its pieces, check_pieces.c), and
- *  8. the distance of the boundary and interface nodes to it
+ *  8. the distance of the boundary and interface nodes to it, and with a
+ *     closed surface between it and the mesh's skin both ways
  *     (check_distance.c).
  * It depends on base/, soa/ and geom/ (J_ENS) only, never on the mesher.
  * Coordinates enter the grids as (x/2 - lo/2) / (extent/2): finite for any
@@ -110,6 +111,9 @@ typedef struct {
   chash H;
   faces F;
   uint32_t *other; /* with cell labels: the slot across each face */
+  uint32_t *skin;  /* with a surface: the boundary and interface faces */
+  size_t nskin;
+  double *node_d2; /* with a closed surface: the skin nodes' squared distances */
 } work;
 
 static void work_free(work *w) {
@@ -119,6 +123,8 @@ static void work_free(work *w) {
   mx_free(w->H.seg);
   faces_free(&w->F);
   mx_free(w->other);
+  mx_free(w->skin);
+  mx_free(w->node_d2);
   memset(w, 0, sizeof *w);
 }
 
@@ -181,13 +187,43 @@ static int several_files(const mx_mesh_data *m, const mx_trisoup *surface,
   return st;
 }
 
+/* Whether face slot s is in the mesh's skin, the faces the surface should
+ * bound: those used by one element and, with cell labels, those between
+ * two labels (from the smaller slot). other: mx_ck_label_pass's. */
+static int in_skin(const mx_mesh_data *m, const faces *F, const uint32_t *other, size_t s) {
+  if (F->use[s] == 1) return 1;
+  return other && other[s] != UINT32_MAX && other[s] > s &&
+         m->cell_tag[s / 6] != m->cell_tag[other[s] / 6];
+}
+
+/* The skin's face slots, ascending. */
+static int skin_faces(const mx_mesh_data *m, const faces *F, const uint32_t *other, work *w) {
+  const size_t nslots = 6 * m->ncells;
+  size_t n = 0;
+  for (size_t s = 0; s < nslots; s++) n += (size_t)in_skin(m, F, other, s);
+  w->skin = mx_alloc((n + 1) * sizeof *w->skin);
+  if (!w->skin) return MX_ENOMEM;
+  w->nskin = n;
+  n = 0;
+  for (size_t s = 0; s < nslots; s++)
+    if (in_skin(m, F, other, s)) w->skin[n++] = (uint32_t)s;
+  return MX_OK;
+}
+
 /* Pass 7 and 8: against the surface. */
 static int surface_passes(const mx_mesh_data *m, const mx_trisoup *surface,
-                          const mx_check_options *o, mx_check_report *r, uint8_t *flags) {
+                          const mx_check_options *o, mx_check_report *r, uint8_t *flags,
+                          work *w) {
   r->has_surface = 1;
   r->surface_files = mx_ck_surface_files(surface);
   MX_CHECK(mx_ck_surface_volume(surface, r));
-  MX_CHECK(mx_ck_surface_distance(m, surface, flags, o->boundary_tol, r));
+  if (!r->surface_open_edges) { /* the skin nodes' distances kept for the skin's */
+    w->node_d2 = mx_alloc((m->nnodes + 1) * sizeof *w->node_d2);
+    if (!w->node_d2) return MX_ENOMEM;
+  }
+  MX_CHECK(mx_ck_surface_distance(m, surface, flags, o->boundary_tol, w->node_d2, r));
+  if (!r->surface_open_edges)
+    MX_CHECK(mx_ck_two_sided_distance(m, surface, w->skin, w->nskin, w->node_d2, r));
   if (r->surface_open_edges) { /* an open surface: indicative only */
     r->boundary_off_surface = 0;
     r->interface_off_surface = 0;
@@ -242,6 +278,7 @@ static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
   }
   MX_CHECK(mx_ck_label_pass(m, &w->F, flags, w->other, r));
   MX_CHECK(mx_ck_label_boundaries(m, &w->F, w->other, r));
+  if (surface) MX_CHECK(skin_faces(m, &w->F, w->other, w));
   mx_free(w->other);
   w->other = NULL;
   mx_free(H->slot); /* memory for the next passes */
@@ -254,7 +291,7 @@ static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
   MX_CHECK(mx_ck_geometric_pass(m, &w->F, &H->U, flags, w->ef, o->hang_tol, r));
   faces_free(&w->F);
   memset(&w->F, 0, sizeof w->F);
-  if (surface) MX_CHECK(surface_passes(m, surface, o, r, flags));
+  if (surface) MX_CHECK(surface_passes(m, surface, o, r, flags, w));
   collect_lists(m, w, r);
   return MX_OK;
 }
@@ -278,6 +315,9 @@ int mx_check_mesh_tags(const mx_mesh_data *m, const mx_trisoup *surface,
   r->opt = o;
   r->surface_volume = r->volume_error = r->boundary_max_dist = NAN;
   r->interface_max_dist = NAN;
+  r->surface_diagonal = r->mesh_sample_spacing = r->surface_sample_spacing = NAN;
+  r->mesh_to_surface_max = r->mesh_to_surface_mean = NAN;
+  r->surface_to_mesh_max = r->surface_to_mesh_mean = NAN;
   for (int a = 0; a < 3; a++) r->across_interface.at[a] = r->off_label_region.at[a] = NAN;
   r->jens_min = r->jens_mean = NAN;
   MX_CHECK(validate(m));

@@ -69,6 +69,33 @@
  *                      distance is more than boundary_tol (1e-6) times the
  *                      diagonal. With an open surface (a hole) both
  *                      measures are reported but count as no defect.
+ *  with a closed surface, the distance between the mesh's skin (its faces
+ *  used by one element, and with cell labels its interface faces; quads as
+ *  the triangles a-b-c and a-c-d) and the surface (every triangle), both
+ *  ways, sampled (verify/check_distance.c): each triangle of one side on a
+ *  sub-grid of k = ceil(longest edge / spacing) steps, 2 <= k <= kmax: the
+ *  points (i P1 + j P2 + (k-i-j) P0) / k (its vertices; its edge midpoints
+ *  when k is even) and the centroids of its k^2 small triangles (its own
+ *  centroid one of the two kinds), each sample's distance to the nearest
+ *  triangle of the other side. On the mesh side the spacing is the
+ *  surface's diagonal / 1000 (mesh_sample_spacing), kmax 8 (109 samples a
+ *  triangle at most); on the surface side the median of the skin faces'
+ *  longest sides (surface_sample_spacing), kmax 50 (3826 samples):
+ *  mesh_to_surface_max    the largest sample's distance (the mesh's nodes
+ *                      among the samples: at least boundary_max_dist times
+ *                      the diagonal);
+ *  mesh_to_surface_mean   the mean over the skin's area: each small
+ *                      triangle's mean taken as 1/12 of each of its
+ *                      vertices' distances plus 3/4 of its centroid's
+ *                      (exact for a distance linear, even quadratic, on it);
+ *  surface_to_mesh_max, surface_to_mesh_mean  the same from the surface's
+ *                      triangles to the skin;
+ *  surface_diagonal    the diagonal of the surface's bounding box;
+ *  mesh_to_surface_samples, surface_to_mesh_samples  the samples (a point
+ *                      shared by triangles counted for each);
+ *  all absolute (over surface_diagonal: relative), NAN without a closed
+ *  surface; indicative, no defect (the max of the two maxima is the
+ *  Hausdorff distance between the sampled skin and surface);
  Cell labels (several materials: mx_mesh_data.cell_tag), when the mesh has
  * them (check_labels.c, check_regions.c):
  *  interface_faces     faces used by two elements of different labels;
@@ -279,6 +306,13 @@ typedef struct {
   size_t surface_files, surface_pieces, shared_triangles;
   mx_check_ids untagged_ids;     /* elements with an untagged boundary face */
   mx_check_ids not_boundary_ids; /* tagged faces that are not boundary faces */
+  /* with a closed surface: the skin and the surface, both ways (check.h's
+   * definitions above; absolute) */
+  double surface_diagonal;
+  double mesh_to_surface_max, mesh_to_surface_mean;
+  double surface_to_mesh_max, surface_to_mesh_mean;
+  double mesh_sample_spacing, surface_sample_spacing; /* the spacings used */
+  size_t mesh_to_surface_samples, surface_to_mesh_samples;
 } mx_check_report;
 
 /* One boundary tag of the mesh (check.h's definitions above). */

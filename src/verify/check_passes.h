@@ -157,6 +157,66 @@ void mx_ck_cell_grid(const double ext[3], double target, int maxdim,
 double mx_ck_point_triangle_d2(const double p[3], const double a[3],
                                const double b[3], const double c[3]);
 
+/* ---- triangles and their tree (check_geometry.c) -------------------------
+ *
+ * Triangles given as index triples into coordinates read with a stride:
+ * vertex v is (x[stride v], y[stride v], z[stride v]) -- a surface's SoA
+ * arrays (stride 1) or a mesh's interleaved xyz (stride 3). */
+typedef struct {
+  const double *x, *y, *z;
+  size_t stride;
+  const uint32_t *tri; /* 3 * nt */
+  size_t nt;
+} ck_tris;
+
+static inline ck_tris ck_soup_tris(const mx_trisoup *s) {
+  return (ck_tris){s->x, s->y, s->z, 1, s->tri, s->nt};
+}
+
+static inline void ck_tri_vertex(const ck_tris *T, size_t t, int k, double p[3]) {
+  const size_t v = T->stride * T->tri[3 * t + (size_t)k];
+  p[0] = T->x[v];
+  p[1] = T->y[v];
+  p[2] = T->z[v];
+}
+
+/* A tree of triangles (check_geometry.c): the triangles in the tree's
+ * order, each as CK_TV numbers (its vertices, then its box: lo x y z, hi
+ * x y z), and the nodes, node 1 the root, i's children 2i and 2i + 1 over
+ * the two halves of its triangles; a leaf when it has CK_LEAF or fewer. */
+enum { CK_LEAF = 8, CK_TV = 15 };
+typedef struct {
+  double box[6];
+  uint32_t lo, hi; /* its triangles, [lo, hi) in the tree's order */
+} ck_node;
+typedef struct {
+  size_t nt;
+  double *tv;
+  ck_node *node;
+} ck_tree;
+
+/* MX_OK or MX_ENOMEM (R then freed). */
+int mx_ck_tree_build(ck_tree *R, const ck_tris *T);
+void mx_ck_tree_free(ck_tree *R);
+/* Squared distance from p to the nearest triangle when it is below
+ * `below` (INFINITY: any), else `below`; INFINITY without triangles. */
+double mx_ck_tree_d2(const ck_tree *R, const double p[3], double below);
+/* The triangles (their places in the tree's order) whose boxes lie within
+ * u of the box (lo x y z, hi x y z), into list; SIZE_MAX when more than
+ * cap, or u is not finite. */
+size_t mx_ck_tree_near_box(const ck_tree *R, const double box[6], double u, uint32_t *list,
+                           size_t cap);
+
+/* Squared distance from p to the box lo-hi (0 inside). */
+static inline double ck_box_d2(const double p[3], const double lo[3], const double hi[3]) {
+  double d2 = 0.0;
+  for (int a = 0; a < 3; a++) {
+    const double d = mx_max(mx_max(lo[a] - p[a], p[a] - hi[a]), 0.0);
+    d2 += d * d;
+  }
+  return d2;
+}
+
 /* ---- coordinate hash -----------------------------------------------------
  *
  * Exact coordinates -> smallest node id. To keep lookups cache-friendly the
@@ -415,8 +475,15 @@ int mx_ck_surface_volume(const mx_trisoup *s, mx_check_report *r);
  * two files share: interfaces, not the boundary). */
 void mx_ck_volume_verdict(const mx_mesh_data *m, const mx_trisoup *s, const uint8_t *skip,
                           const mx_check_options *o, mx_check_report *r);
-/* Distance to the surface (check_distance.c): of every boundary node. */
+/* Distance to the surface (check_distance.c): of every boundary and
+ * interface node, its square into node_d2[node] (NULL: not kept). */
 int mx_ck_surface_distance(const mx_mesh_data *m, const mx_trisoup *s,
-                           uint8_t *flags, double tol, mx_check_report *r);
+                           uint8_t *flags, double tol, double *node_d2, mx_check_report *r);
+/* The distance between the mesh's skin -- the face slots skin[0, nskin):
+ * its boundary faces and, with cell labels, its interface faces once -- and
+ * a closed surface, both ways, sampled (check_distance.c; the definitions
+ * in check.h); node_d2: mx_ck_surface_distance's. */
+int mx_ck_two_sided_distance(const mx_mesh_data *m, const mx_trisoup *s, const uint32_t *skin,
+                             size_t nskin, const double *node_d2, mx_check_report *r);
 
 #endif
