@@ -23,7 +23,7 @@ if [ $# -eq 0 ]; then
   set -- "-s 8" "-s 7" "-s 5 --curvature 10 --thickness 2" "-s 6 --curvature 5 --thickness 2" \
     "-s 5 --curvature 3 --size-min 0.66 --thickness 2" "-s 5 --curvature 1.5 --size-min 0.66 --thickness 2"
 fi
-printf '%-52s %9s %9s %7s %6s %10s %s\n' flags elements ratio wall_s mem_mb vol_err "distances (check --surface, relative to the diagonal)"
+printf '%-52s %9s %9s %7s %6s %10s %s\n' flags elements ratio wall_s mem_mb vol_err "boundary <-> surface distances over the diagonal (check --surface: mesh->surface, surface->mesh)"
 ref=
 for cfg in "$@"; do
   # shellcheck disable=SC2086
@@ -36,8 +36,9 @@ run = json.loads(open(sys.argv[1]).read().strip().splitlines()[-1])
 chk = json.loads(open(sys.argv[2]).read().strip().splitlines()[-1])
 wall, mem = open(sys.argv[3]).read().split()[-2:]
 ref = float(sys.argv[5]) or run["elements"]
-d = " ".join("%s=%.3g" % (k, v) for k, v in sorted(chk.items())
-             if "dist" in k and isinstance(v, (int, float)))
+names = (("hausdorff_mesh_to_surface_max", "m2s_max"), ("hausdorff_mesh_to_surface_mean", "m2s_mean"),
+         ("hausdorff_surface_to_mesh_max", "s2m_max"), ("hausdorff_surface_to_mesh_mean", "s2m_mean"))
+d = " ".join("%s=%.3g" % (short, chk[k]) for k, short in names if k in chk)
 print("%-52s %9d %9.3f %7.2f %6.0f %10.2e %s" % (sys.argv[4], run["elements"],
       run["elements"] / ref, float(wall), int(mem) / 1024, chk.get("volume_error", float("nan")), d))
 PY
