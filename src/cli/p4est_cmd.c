@@ -58,7 +58,7 @@ int mx_p4est_main(int argc, char **argv) {
   if (!st && !exit_now && (o.restart_out || o.restart_in || o.boundary_out || o.size || o.size_min > 0.0 ||
                             o.size_max > 0.0 || o.curvature > 0.0 || o.thickness > 0.0 ||
                             o.gradation > 0.0)) {
-    mx_error(NULL, 0, "--p4est: no -c, --restart, --boundary or size field (the distributed path "
+    mx_error(NULL, 0, "--p4est: no -c, --restart, --boundary or --size (nor --curvature, --thickness, --gradation: the distributed path "
                       "meshes from the surfaces and levels only)");
     st = MX_EINPUT;
   }
