@@ -104,7 +104,7 @@ static void check_thickness(void) {
   boxes_index(1, lo, hi, 2, &soup, &S);
   mx_point_sizes P;
   memset(&P, 0, sizeof P);
-  CHECK(mx_surface_thickness_sizes(&S, 2.0, &P) == MX_OK);
+  CHECK(mx_surface_thickness_sizes(&S, 2.0, 0.0, &P) == MX_OK);
   double hmin = INFINITY;
   size_t at_half = 0;
   for (size_t i = 0; i < P.n; i++) {
@@ -114,12 +114,18 @@ static void check_thickness(void) {
   CHECK(P.n > 0 && fabs(hmin - 0.025) < 1e-9 && at_half > P.n / 3);
   printf("thickness: plate 0.05: %zu sources, least %.6f (%zu at 0.025)\n", P.n, hmin, at_half);
   mx_point_sizes_free(&P);
+  /* a floor: no size below it (the knife edges' guard) */
+  CHECK(mx_surface_thickness_sizes(&S, 2.0, 0.03, &P) == MX_OK);
+  hmin = INFINITY;
+  for (size_t i = 0; i < P.n; i++) hmin = fmin(hmin, P.h[i]);
+  CHECK(P.n > 0 && hmin == 0.03);
+  mx_point_sizes_free(&P);
   mx_surface_index_free(&S);
   mx_trisoup_free(&soup);
   /* two boxes 0.2 thick, 0.04 apart: the gap's sources 0.02, the boxes' 0.1 */
   const double lo2[2][3] = {{0, 0, 0}, {0, 0, 0.24}}, hi2[2][3] = {{1, 1, 0.2}, {1, 1, 0.44}};
   boxes_index(2, lo2, hi2, 2, &soup, &S);
-  CHECK(mx_surface_thickness_sizes(&S, 2.0, &P) == MX_OK);
+  CHECK(mx_surface_thickness_sizes(&S, 2.0, 0.0, &P) == MX_OK);
   size_t gap = 0, part = 0, other = 0;
   for (size_t i = 0; i < P.n; i++) {
     if (fabs(P.h[i] - 0.02) < 1e-9) gap++;

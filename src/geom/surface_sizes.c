@@ -272,10 +272,12 @@ static size_t offsets(const int *k, size_t nt, size_t *off) {
   return sum;
 }
 
-int mx_surface_thickness_sizes(const mx_surface_index *S, double nacross, mx_point_sizes *out) {
+int mx_surface_thickness_sizes(const mx_surface_index *S, double nacross, double floor,
+                               mx_point_sizes *out) {
   if (!(nacross >= 1.0) || !S->nt) return MX_OK;
   const size_t nt = S->nt;
   const double diag = diagonal(S), spacing = diag / 64.0, eps = 1e-9 * diag;
+  if (!(floor > 0.0)) floor = diag / 256.0;
   int *k = mx_alloc(nt * sizeof *k);
   size_t *off = mx_alloc((nt + 1) * sizeof *off);
   if (!k || !off) {
@@ -313,7 +315,7 @@ int mx_surface_thickness_sizes(const mx_surface_index *S, double nacross, mx_poi
     for (size_t t = 0; t < nt; t++) {
       double least = INFINITY;
       for (size_t s = off[t]; s < off[t + 1]; s++) least = fmin(least, fmin(tin[s], tout[s]));
-      const double want = least / nacross, have = longest_edge(S->tv + 9 * t) / k[t];
+      const double want = fmax(least / nacross, floor), have = longest_edge(S->tv + 9 * t) / k[t];
       if (want < have && k[t] < KMAX) {
         const double c = ceil(longest_edge(S->tv + 9 * t) / want);
         k[t] = c > KMAX ? KMAX : (int)c;
@@ -335,12 +337,12 @@ int mx_surface_thickness_sizes(const mx_surface_index *S, double nacross, mx_poi
       for (int a = 0; a < 3; a++) p[a] = v[a] + u * (v[3 + a] - v[a]) + ww * (v[6 + a] - v[a]);
       for (int side = 0; side < 2 && !st; side++) {
         if (!isfinite(ts[side])) continue;
-        const double sg = side ? 1.0 : -1.0, h = ts[side] / nacross;
+        const double sg = side ? 1.0 : -1.0, h = fmax(ts[side] / nacross, floor);
         st = reserve(out, (size_t)m);
         for (int j = 0; j < m && !st; j++) {
           const double f = ts[side] * j / (m - 1);
           const double q[3] = {p[0] + sg * f * n[0], p[1] + sg * f * n[1], p[2] + sg * f * n[2]};
-          push(out, q, h, w);
+          push(out, q, h, w / m); /* the sample's area shared by its chord */
         }
       }
     }

@@ -18,8 +18,12 @@
  * chord gets points of size t / n along it, n + 1 of them: n elements
  * across. The points on a triangle are the centroids of its k x k
  * sub-triangles, k from the triangle's longest edge over a spacing (the
- * box's diagonal / 128), then again finer on the triangles whose thickness
- * is below that spacing (at most 128 x 128 per triangle). Rays in
+ * box's diagonal / 64), then again finer on the triangles whose thickness
+ * is below that spacing (at most 128 x 128 per triangle, and no finer than
+ * the floor). No size below the floor: where two faces meet at an acute
+ * edge (a knife edge: a cone's rim, a sphere cut by a plane) the thickness
+ * falls to zero towards the edge, and without a floor the octree would be
+ * refined to its deepest level along it. Rays in
  * parallel, the output in triangle order (the same for any thread count).
  *
  * Both need the index's orientation to be outward (mx_surface_index_build
@@ -43,8 +47,10 @@ void mx_point_sizes_free(mx_point_sizes *p);
 
 /* Appends the curvature sources of S for the angle theta (radians, > 0). */
 int mx_surface_curvature_sizes(const mx_surface_index *S, double theta, mx_point_sizes *out);
-/* Appends the thickness sources of S for n >= 1 elements across. */
-int mx_surface_thickness_sizes(const mx_surface_index *S, double n, mx_point_sizes *out);
+/* Appends the thickness sources of S for n >= 1 elements across, no size
+ * below floor (> 0; 0: the box's diagonal / 256). */
+int mx_surface_thickness_sizes(const mx_surface_index *S, double n, double floor,
+                               mx_point_sizes *out);
 
 /* The first triangle of S met by the ray o + t d, tmin < t < tmax, other
  * than the slot skip (UINT32_MAX: none): returns t (INFINITY when none)

@@ -270,7 +270,7 @@ static int surface_sources(mx_mesher *m, mx_point_sizes *P) {
   if (m->size_curvature > 0.0) st = mx_surface_curvature_sizes(&S, m->size_curvature, P);
   m->size_src_curvature = P->n - n0;
   n0 = P->n;
-  if (!st && m->size_thickness > 0.0) st = mx_surface_thickness_sizes(&S, m->size_thickness, P);
+  if (!st && m->size_thickness > 0.0) st = mx_surface_thickness_sizes(&S, m->size_thickness, m->size.min, P);
   m->size_src_thickness = P->n - n0;
   mx_surface_index_free(&S);
   return st;
