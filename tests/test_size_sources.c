@@ -250,11 +250,9 @@ static void check_mesher(void) {
   CHECK(across == 0 && fabs(vol - 0.4) < 0.02 * 0.4);
 }
 
-static mx_mesher *graded_cube(double beta) {
-  mx_params p;
-  mx_params_default(&p);
-  p.stage = MX_STAGE_TRANSITION;
-  mx_mesher *m = mx_mesher_new(&p);
+/* A mesher of the unit cube with the parameters p, quiet. */
+static mx_mesher *unit_cube(const mx_params *p) {
+  mx_mesher *m = mx_mesher_new(p);
   mx_mesher_set_message_handler(m, quiet, NULL);
   const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
   double *x;
@@ -264,6 +262,14 @@ static mx_mesher *graded_cube(double beta) {
   CHECK(mx_mesher_add_surface_arrays(m, "cube", nv, x, nt, t) == MX_OK);
   free(x);
   free(t);
+  return m;
+}
+
+static mx_mesher *graded_cube(double beta) {
+  mx_params p;
+  mx_params_default(&p);
+  p.stage = MX_STAGE_TRANSITION;
+  mx_mesher *m = unit_cube(&p);
   CHECK(mx_mesher_set_size_expr(m, "min(0.5, 0.02 + 40*abs(x-0.5)^2)") == MX_OK);
   if (beta > 0) CHECK(mx_mesher_set_size_gradation(m, beta) == MX_OK);
   return m;
@@ -314,16 +320,7 @@ static void check_elements(void) {
   mx_params p;
   mx_params_default(&p);
   p.surface_level = 2;
-  mx_mesher *m = mx_mesher_new(&p);
-  mx_mesher_set_message_handler(m, quiet, NULL);
-  const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
-  double *x;
-  uint32_t *t;
-  size_t nv, nt;
-  box(lo, hi, 2, &x, &nv, &t, &nt);
-  CHECK(mx_mesher_add_surface_arrays(m, "cube", nv, x, nt, t) == MX_OK);
-  free(x);
-  free(t);
+  mx_mesher *m = unit_cube(&p);
   CHECK(mx_mesher_mesh(m) == MX_OK);
   mx_mesh_arrays a;
   CHECK(mx_mesher_mesh_arrays(m, &a) == MX_OK);
