@@ -154,19 +154,25 @@ static int set_map(mx_mesher *m, const double *box, const double *h, size_t n,
   return st;
 }
 
+/* The map of n points (3 each) with sizes h: boxes of no extent. */
+static int set_points(mx_mesher *m, const double *xyz, const double *h, size_t n,
+                      const char *name) {
+  double *box = mx_alloc((6 * n + 1) * sizeof *box);
+  if (!box) return MX_ENOMEM;
+  for (size_t i = 0; i < n; i++) {
+    memcpy(box + 6 * i, xyz + 3 * i, 3 * sizeof *box);
+    memcpy(box + 6 * i + 3, xyz + 3 * i, 3 * sizeof *box);
+  }
+  const int st = set_map(m, box, h, n, name);
+  mx_free(box);
+  return st;
+}
+
 int mx_mesher_set_size_points(mx_mesher *m, const double *xyz, const double *h, size_t n,
                               const char *name) {
   mx_call c;
   mx_call_begin(m, &c);
-  double *box = mx_alloc((6 * n + 1) * sizeof *box);
-  int st = box ? MX_OK : MX_ENOMEM;
-  for (size_t i = 0; !st && i < n; i++) {
-    memcpy(box + 6 * i, xyz + 3 * i, 3 * sizeof *box);
-    memcpy(box + 6 * i + 3, xyz + 3 * i, 3 * sizeof *box);
-  }
-  if (!st) st = set_map(m, box, h, n, name);
-  mx_free(box);
-  return mx_call_end(m, &c, st);
+  return mx_call_end(m, &c, set_points(m, xyz, h, n, name));
 }
 
 int mx_mesher_set_size_map(mx_mesher *m, const char *path, const char *field) {
@@ -175,18 +181,8 @@ int mx_mesher_set_size_map(mx_mesher *m, const char *path, const char *field) {
   double *xyz = NULL, *h = NULL;
   size_t n = 0;
   int st = path ? mx_sizemap_read(path, field, &xyz, &h, &n) : MX_EINPUT;
-  double *box = NULL;
-  if (!st) {
-    box = mx_alloc((6 * n + 1) * sizeof *box);
-    if (!box) st = MX_ENOMEM;
-  }
-  for (size_t i = 0; !st && i < n; i++) {
-    memcpy(box + 6 * i, xyz + 3 * i, 3 * sizeof *box);
-    memcpy(box + 6 * i + 3, xyz + 3 * i, 3 * sizeof *box);
-  }
-  if (!st) st = set_map(m, box, h, n, path);
+  if (!st) st = set_points(m, xyz, h, n, path);
   if (!st) mx_mesher_note_read(m, path, 0);
-  mx_free(box);
   mx_free(xyz);
   mx_free(h);
   return mx_call_end(m, &c, st);
