@@ -188,6 +188,42 @@ int mx_mesher_set_input_level(mx_mesher *m, int input, int surface_level, int in
  * on the input just added. */
 int mx_mesher_add_input(mx_mesher *m, const char *path, int material, const char *material_name,
                         int surface_level, int inside_level);
+/* ---- Label images (issue 28) ------------------------------------------
+ * A segmented 3D image (0 background, 1, 2, ... the materials): NIfTI-1/2
+ * (.nii, .nii.gz), MetaImage (.mha, .mhd), INRIA (.inr, .inr.gz). Each
+ * label becomes a material of that number (params.materials is turned on),
+ * bounded by the interfaces found in the image: the voxel faces between two
+ * labels, smoothed (Taubin, each corner within 0.35 voxel of its place)
+ * unless `voxel` is set. Without a surface level (-s) the interfaces are
+ * refined to the image's resolution (octants of about one voxel). */
+typedef struct {
+  int voxel;             /* 1: the voxel faces as they are (a staircase) */
+  int smooth_rounds;     /* Taubin rounds; -1: the default (10) */
+  long long min_island;  /* parts of a label of fewer voxels take the label
+                          * around them; 0: all kept */
+  const int32_t *skip;   /* labels meshed as background (nskip of them) */
+  int nskip;
+  const int32_t *merge;  /* pairs (from, to): label `from` meshed as `to` */
+  int nmerge;
+  const char *label_names; /* a file of "LABEL NAME ..." lines (FreeSurfer's
+                            * lookup tables read as they are); NULL: "label L" */
+} mx_image_params;
+void mx_image_params_default(mx_image_params *ip);
+/* 1 when path names a label image by its extension. */
+int mx_is_label_image_path(const char *path);
+/* The options mx_mesher_add_surface uses for a label image (copied, the
+ * arrays too; NULL: the defaults). */
+int mx_mesher_set_image_params(mx_mesher *m, const mx_image_params *ip);
+/* A label image file (ip NULL: the mesher's image params). MX_EINPUT with
+ * a message naming the file for a bad image. */
+int mx_mesher_add_label_image(mx_mesher *m, const char *path, const mx_image_params *ip);
+/* The same from memory: labels[i + dims[0] (j + dims[1] k)], A the world
+ * of voxel (i, j, k)'s centre (x = A[0] i + A[1] j + A[2] k + A[3], y from
+ * A[4..7], z from A[8..11]); name is used in messages. */
+int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *labels,
+                              const int64_t dims[3], const double A[12],
+                              const mx_image_params *ip);
+
 /* -b: a box [lo, hi] whose octants go to `level` (also after meshing: see
  * mx_mesher_refine). */
 int mx_mesher_add_box(mx_mesher *m, const double lo[3], const double hi[3],

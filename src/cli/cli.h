@@ -49,6 +49,10 @@ typedef struct {
   const char *material_name[MX_MAX_INPUTS]; /* (0 / NULL: not given) */
   int input_slevel[MX_MAX_INPUTS];          /* --level L after -i (0: none) */
   int input_ilevel[MX_MAX_INPUTS];          /* --inside-level L after -i (0: none) */
+  /* label images: --voxel, --min-island N, --skip-labels, --merge-labels,
+   * --label-names FILE, --interface-smoothing N (the arrays below) */
+  mx_image_params image;
+  int32_t image_skip[64], image_merge[128];
 } mx_options;
 
 /* Parses argv; on --help/--version prints and sets *exit_now = 1. Returns

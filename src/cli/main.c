@@ -68,6 +68,7 @@ static int setup(const mx_options *o, mx_mesher **out) {
   mx_mesher_set_progress(m, &hooks);
   mx_mesher_release_edges_early(m, 1); /* one run: their memory goes to the mesh */
   mx_progress_stage("read");
+  MX_CHECK(mx_mesher_set_image_params(m, &o->image));
   return mx_add_inputs(o, m);
 }
 

@@ -325,6 +325,7 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
   if (!argv) return MX_ENOMEM;
   memset(o, 0, sizeof *o);
   o->s_level = -1;
+  mx_image_params_default(&o->image);
   o->a_level = -1;
   o->stage = MX_STAGE_FULL;
   o->balance = MX_BALANCE_EDGES;
@@ -442,6 +443,61 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       o->repair_input = 1;
     } else if (strcmp(a, "--materials") == 0) {
       o->materials = 1;
+    } else if (strcmp(a, "--voxel") == 0) {
+      o->image.voxel = 1;
+    } else if (strcmp(a, "--label-names") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      o->image.label_names = argv[++i];
+    } else if (strcmp(a, "--min-island") == 0 || strcmp(a, "--interface-smoothing") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      char *end = NULL;
+      const long long v = strtoll(argv[++i], &end, 10);
+      const int isl = a[2] == 'm';
+      if (end == argv[i] || *end || v < 0 || v > (isl ? (1LL << 40) : 1000)) {
+        mx_error(NULL, 0, "%s needs %s, not '%s'", a,
+                 isl ? "a number of voxels (0 keeps every island)"
+                     : "a number of smoothing rounds from 0 to 1000", argv[i]);
+        return MX_EINPUT;
+      }
+      if (isl)
+        o->image.min_island = v;
+      else
+        o->image.smooth_rounds = (int)v;
+    } else if (strcmp(a, "--skip-labels") == 0 || strcmp(a, "--merge-labels") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      const int merge = a[2] == 'm';
+      const char *c = argv[++i];
+      while (*c) {
+        char *end = NULL;
+        const long x = strtol(c, &end, 10);
+        long y = 0;
+        int ok = end != c && x >= 0 && x <= 2147483647L;
+        if (ok && merge) {
+          ok = *end == ':';
+          if (ok) {
+            c = end + 1;
+            y = strtol(c, &end, 10);
+            ok = end != c && y >= 0 && y <= 65535;
+          }
+        }
+        ok = ok && (*end == ',' || !*end);
+        if (ok && (merge ? o->image.nmerge == 64 : o->image.nskip == 64)) ok = 0;
+        if (!ok) {
+          mx_error(NULL, 0, "%s needs %s (at most 64), not '%s'", a,
+                   merge ? "pairs FROM:TO separated by commas, e.g. 4:3,5:3"
+                         : "labels separated by commas, e.g. 4,5", argv[i]);
+          return MX_EINPUT;
+        }
+        if (merge) {
+          o->image_merge[2 * o->image.nmerge] = (int32_t)x;
+          o->image_merge[2 * o->image.nmerge++ + 1] = (int32_t)y;
+        } else {
+          o->image_skip[o->image.nskip++] = (int32_t)x;
+        }
+        c = *end ? end + 1 : end;
+      }
+      o->image.skip = o->image_skip;
+      o->image.merge = o->image_merge;
     } else if (strcmp(a, "--material") == 0) {
       MX_CHECK(need_arg(i, argc, a));
       const char *spec = argv[++i];
@@ -523,7 +579,9 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
                       "restart file: give that file with -c FILE.oct");
     return MX_EINPUT;
   }
-  if (o->s_level < 0 && o->a_level < 0 && !o->regions_file && !o->nregion_surf &&
+  int images = 0;
+  for (int k = 0; k < o->ninputs; k++) images += mx_is_label_image_path(o->inputs[k]);
+  if (o->s_level < 0 && o->a_level < 0 && !o->regions_file && !o->nregion_surf && !images &&
       !o->restart_in && !o->size && !(o->size_max > 0.0) && !(o->curvature > 0.0) &&
       !(o->thickness > 0.0)) {
     mx_error(NULL, 0, "no refinement request: the mesh would be empty; give a level on "

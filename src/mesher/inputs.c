@@ -35,7 +35,7 @@ static int refuse_after_build(const mx_mesher *m, const char *what) {
   return MX_EINPUT;
 }
 
-static int add_domain(mx_mesher *m, mx_trisoup *s, const char *name) {
+int mx_mesher_add_domain(mx_mesher *m, mx_trisoup *s, const char *name) {
   MX_CHECK(refuse_after_build(m, "domain surfaces"));
   if (m->ndomain >= 64) {
     mx_error(name, 0, "too many input surfaces (at most 64)");
@@ -104,9 +104,14 @@ int mx_mesher_add_surface(mx_mesher *m, const char *path) {
   const double t = mx_wtime();
   int st = path ? MX_OK : MX_EINPUT;
   if (!path) mx_error(NULL, 0, "no surface file given");
+  if (!st && mx_is_label_image_path(path)) { /* a label image: its own inputs */
+    st = mx_mesher_add_label_image(m, path, NULL);
+    m->rec->S.ph.read += mx_wtime() - t;
+    return mx_call_end(m, &c, st);
+  }
   if (!st) st = mx_read_surface(path, &s);
   if (!st) st = mx_trisoup_check(&s, path, NULL);
-  if (!st) st = add_domain(m, &s, path);
+  if (!st) st = mx_mesher_add_domain(m, &s, path);
   if (!st) mx_mesher_note_read(m, path, 0);
   mx_trisoup_free(&s);
   m->rec->S.ph.read += mx_wtime() - t;
@@ -158,7 +163,7 @@ int mx_mesher_add_surface_arrays(mx_mesher *m, const char *name, size_t nv,
     }
   }
   if (!st) st = mx_trisoup_check(&s, name, NULL);
-  if (!st) st = add_domain(m, &s, name);
+  if (!st) st = mx_mesher_add_domain(m, &s, name);
   mx_trisoup_free(&s);
   return mx_call_end(m, &c, st);
 }
@@ -170,7 +175,7 @@ int mx_mesher_add_demo_surface(mx_mesher *m) {
   memset(&s, 0, sizeof s);
   const double t = mx_wtime();
   int st = mx_demo_surface(&s, 4);
-  if (!st) st = add_domain(m, &s, "--demo");
+  if (!st) st = mx_mesher_add_domain(m, &s, "--demo");
   mx_trisoup_free(&s);
   m->rec->S.ph.read += mx_wtime() - t;
   return mx_call_end(m, &c, st);

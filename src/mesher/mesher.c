@@ -90,6 +90,7 @@ mx_mesher *mx_mesher_new(const mx_params *p) {
   if (m->p.staircase_quality <= 0) m->p.staircase_quality = 0.2;
   if (m->p.repair_rounds < 0) m->p.repair_rounds = 0;
   m->mesh_stage = -1;
+  mx_image_params_default(&m->image_params);
   return m;
 }
 
@@ -129,6 +130,7 @@ void mx_mesher_free(mx_mesher *m) {
   mx_trisoup_free(&m->soup);
   for (int i = 0; i < m->ndomain; i++) mx_free(m->domain_name[i]);
   for (int i = 0; i < 64; i++) mx_free(m->input_material_name[i]);
+  mx_image_params_release(&m->image_params);
   for (int r = 0; r < m->nregions; r++) {
     mx_trisoup_free(&m->region[r]);
     mx_free(m->region_name[r]);

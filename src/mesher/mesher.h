@@ -20,6 +20,7 @@
 #include "soa/regions.h"
 #include "soa/trisoup.h"
 #include "sizing/sources.h"
+#include "geom/label_fix.h"
 
 typedef struct {
   double read, grid, refine, balance, transition, boundary, verify, quality, write, total;
@@ -96,6 +97,22 @@ void mx_mesher_note_read(mx_mesher *m, const char *path, int restart);
 /* MX_OK, or MX_EINPUT with a message when path is a file the mesher read
  * (restart_out: the restart file written, which may replace the one read). */
 int mx_mesher_spares_inputs(const mx_mesher *m, const char *path, int restart_out);
+
+/* The last label image added, for the report. */
+typedef struct {
+  char format[16];
+  int64_t dims[3];
+  double spacing[3];
+  int oblique;
+  size_t rounded;
+  int nlabels;          /* labels meshed */
+  int32_t labels[64];
+  size_t voxels[64];    /* their voxels, after the fixes */
+  mx_label_fix_stats fix;
+  size_t triangles;     /* of the interfaces */
+  double max_move;      /* the smoothing's largest move, voxels */
+  double seconds;
+} mx_image_info;
 
 struct mx_mesher {
   mx_params p;
@@ -194,6 +211,13 @@ struct mx_mesher {
   const char *depth_material_name[65];
   /* hooks for the program's progress line (NULL: none) */
   mx_progress progress;     /* mx_mesher_set_progress */
+  /* label images (mesher/image_input.c): the options (arrays owned), and
+   * what the images gave: image_inputs > 0 numbers each region by its
+   * input's label (mx_material_numbers), image_level the level of about
+   * one voxel (the surface level when none was asked) */
+  mx_image_params image_params;
+  int image_inputs, image_level;
+  mx_image_info image;
 };
 
 

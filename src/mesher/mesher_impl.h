@@ -46,6 +46,11 @@ int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold);
 /* The leaves of the refined octree, then mx_remesh_changed from the leaves
  * the mesher held. */
 int mx_remesh_after_refine(mx_mesher *m);
+/* The arrays and file name an mx_image_params holds (image_input.c). */
+void mx_image_params_release(mx_image_params *ip);
+/* One domain input appended to m->domain under name (copied; s is left
+ * as it was): MX_EINPUT past 64 inputs or after the octree was built. */
+int mx_mesher_add_domain(mx_mesher *m, mx_trisoup *s, const char *name);
 /* The inputs assembled into m->soup once (inputs.c): the input policy,
  * the domain's triangles, then each region's. */
 int mx_mesher_assemble_inputs(mx_mesher *m);
