@@ -190,13 +190,16 @@ static void block_of(const int64_t n[3], int64_t v, int64_t idx[8]) {
     idx[b] = v + (b & 1) + ((b >> 1) & 1) * n[0] + ((b >> 2) & 1) * n[0] * n[1];
 }
 
-/* Relabel one voxel of the block (not of the padding) so the block is
- * good: background first, then larger labels before smaller... the
- * candidates in that order, each to its in-block face neighbours' labels,
- * largest first. Failing that the block's most common label (ties: the
- * larger) on every voxel off the padding. Returns the voxels changed
- * (first changed into *first). */
-static int repair_block(int32_t *lab, const int64_t n[3], int64_t v, int64_t *first) {
+/* Relabel the block so it is good, raising labels only (rank: background
+ * lowest, then the labels of more voxels below those of fewer, so a thin
+ * layer wins where it is pierced and the repair ends: each voxel can only
+ * climb). One voxel first (lowest rank first, then index), to the
+ * highest-ranked of its in-block face neighbours' labels above its own that
+ * makes the block good; failing that every voxel off the padding to the
+ * block's highest-ranked label. Returns the voxels changed (the first into
+ * *first). */
+static int repair_block(int32_t *lab, const int64_t n[3], const uint32_t *rank, int64_t v,
+                        int64_t *first) {
   int64_t idx[8];
   block_of(n, v, idx);
   int32_t l[8];
@@ -206,9 +209,8 @@ static int repair_block(int32_t *lab, const int64_t n[3], int64_t v, int64_t *fi
     pad[b] = on_pad(n, idx[b]);
     order[b] = b;
   }
-  /* candidates: by label ascending, then index */
   for (int x = 1; x < 8; x++)
-    for (int y = x; y > 0 && l[order[y]] < l[order[y - 1]]; y--) {
+    for (int y = x; y > 0 && rank[l[order[y]]] < rank[l[order[y - 1]]]; y--) {
       const int t = order[y];
       order[y] = order[y - 1];
       order[y - 1] = t;
@@ -220,13 +222,13 @@ static int repair_block(int32_t *lab, const int64_t n[3], int64_t v, int64_t *fi
     int nc = 0;
     for (int a = 0; a < 3; a++) {
       const int32_t c = l[b ^ (1 << a)];
-      if (c == l[b]) continue;
+      if (rank[c] <= rank[l[b]]) continue;
       int dup = 0;
       for (int k = 0; k < nc; k++) dup |= cand[k] == c;
       if (!dup) cand[nc++] = c;
     }
-    for (int x = 1; x < nc; x++) /* largest first */
-      for (int y = x; y > 0 && cand[y] > cand[y - 1]; y--) {
+    for (int x = 1; x < nc; x++) /* highest rank first */
+      for (int y = x; y > 0 && rank[cand[y]] > rank[cand[y - 1]]; y--) {
         const int32_t t = cand[y];
         cand[y] = cand[y - 1];
         cand[y - 1] = t;
@@ -243,15 +245,8 @@ static int repair_block(int32_t *lab, const int64_t n[3], int64_t v, int64_t *fi
     }
   }
   int32_t best = l[0];
-  int bestc = 0;
-  for (int b = 0; b < 8; b++) {
-    int c = 0;
-    for (int d = 0; d < 8; d++) c += l[d] == l[b];
-    if (c > bestc || (c == bestc && l[b] > best)) {
-      best = l[b];
-      bestc = c;
-    }
-  }
+  for (int b = 1; b < 8; b++)
+    if (rank[l[b]] > rank[best]) best = l[b];
   int changed = 0;
   for (int b = 0; b < 8; b++)
     if (!pad[b] && lab[idx[b]] != best) {
@@ -269,7 +264,37 @@ int mx_labels_fix_contacts(int32_t *lab, const int64_t n[3], const char *name,
   const int64_t nb0 = n[0] - 1, nb1 = n[1] - 1, nb2 = n[2] - 1;
   size_t cap = 1024, nbad = 0;
   int64_t *bad = mx_alloc(cap * sizeof *bad);
-  if (!bad) return MX_ENOMEM;
+  uint32_t *rank = mx_calloc(65536 * sizeof *rank);
+  uint64_t *count = mx_calloc(65536 * sizeof *count);
+  if (!bad || !rank || !count) {
+    mx_free(bad);
+    mx_free(rank);
+    mx_free(count);
+    return MX_ENOMEM;
+  }
+  /* labels are 0 .. 65535 here (mesher/image_input.c) */
+  const int64_t total = n[0] * n[1] * n[2];
+  for (int64_t v = 0; v < total; v++) count[lab[v] & 0xffff]++;
+  {
+    uint32_t nl = 0;
+    int32_t *order = (int32_t *)rank; /* labels present, then ranked in place below */
+    for (int32_t L = 1; L < 65536; L++)
+      if (count[L]) order[nl++] = L;
+    /* fewer voxels rank higher; ties: the larger label higher */
+    for (uint32_t x = 1; x < nl; x++)
+      for (uint32_t y = x; y > 0; y--) {
+        const int32_t a = order[y - 1], b = order[y];
+        if (count[a] > count[b] || (count[a] == count[b] && a < b)) break;
+        order[y - 1] = b;
+        order[y] = a;
+      }
+    int32_t sorted[64 + 1];
+    const uint32_t keep = nl < 64 ? nl : 64;
+    memcpy(sorted, order, keep * sizeof *sorted);
+    memset(rank, 0, 65536 * sizeof *rank);
+    for (uint32_t x = 0; x < keep; x++) rank[sorted[x]] = x + 1;
+  }
+  mx_free(count);
   int st_ok = MX_OK;
   for (int round = 0;; round++) {
     nbad = 0;
@@ -348,7 +373,7 @@ int mx_labels_fix_contacts(int32_t *lab, const int64_t n[3], const char *name,
       for (int b = 0; b < 8; b++) l[b] = lab[idx[b]];
       if (block_good(l)) continue; /* mended by an earlier repair */
       int64_t first = -1;
-      const int c = repair_block(lab, n, bad[t], &first);
+      const int c = repair_block(lab, n, rank, bad[t], &first);
       if (c && st->contact_at[0] < 0 && first >= 0) {
         st->contact_at[0] = first % n[0] - 1;
         st->contact_at[1] = (first / n[0]) % n[1] - 1;
@@ -358,5 +383,6 @@ int mx_labels_fix_contacts(int32_t *lab, const int64_t n[3], const char *name,
     }
   }
   mx_free(bad);
+  mx_free(rank);
   return st_ok;
 }

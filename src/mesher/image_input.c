@@ -119,7 +119,7 @@ static int label_name(const char *path, int32_t L, char *buf, size_t n) {
 static int map_labels(const char *name, const int32_t *in, const int64_t d[3],
                       const mx_image_params *ip, int32_t *lab, const int64_t n[3]) {
   int st = MX_OK;
-  int64_t bad = -1;
+  int64_t bad = INT64_MAX;
 #pragma omp parallel for schedule(static) reduction(min : bad)
   for (int64_t k = 0; k < d[2]; k++)
     for (int64_t j = 0; j < d[1]; j++)
@@ -133,10 +133,10 @@ static int map_labels(const char *name, const int32_t *in, const int64_t d[3],
           }
         for (int t = 0; t < ip->nskip; t++)
           if (L == ip->skip[t]) L = 0;
-        if ((L < 0 || L > 65535) && (bad < 0 || v < bad)) bad = v;
+        if ((L < 0 || L > 65535) && v < bad) bad = v;
         lab[(i + 1) + n[0] * ((j + 1) + n[1] * (k + 1))] = L;
       }
-  if (bad >= 0) {
+  if (bad != INT64_MAX) {
     mx_error(name, 0, "voxel (%lld, %lld, %lld): label %d is not a material number (0 .. 65535); "
                       "map it with merge or skip",
              (long long)(bad % d[0]), (long long)((bad / d[0]) % d[1]),
