@@ -21,6 +21,8 @@ void mx_label_surface_free(mx_label_surface *S) {
   mx_free(S->tri);
   mx_free(S->label);
   mx_free(S->keep);
+  mx_free(S->corner);
+  mx_free(S->lat);
   memset(S, 0, sizeof *S);
 }
 
@@ -289,6 +291,10 @@ int mx_label_surface_build(const int32_t *lab, const int64_t n[3], const double 
       S->keep[2 * q + k] = keep;
     }
   }
+  S->corner = vcorner;
+  S->lat = p;
+  vcorner = NULL;
+  p = NULL;
   goto done;
 oom:
   st = MX_ENOMEM;

@@ -28,6 +28,9 @@ typedef struct {
   uint32_t *tri;  /* nt x 3; the normal points from label[2t] to label[2t+1] */
   int32_t *label; /* nt x 2 */
   uint8_t *keep;  /* nt: bit s set when side s is kept for label[2t+s] */
+  int64_t *corner; /* nv: each vertex's padded corner, ascending */
+  double *lat;     /* nv x 3: where the smoothing put it, in padded lattice
+                    * coordinates (corner (i, j, k) is at (i, j, k)) */
   size_t junction_vertices, fixed_vertices;
   double max_move; /* the largest move of a corner, in voxels */
 } mx_label_surface;

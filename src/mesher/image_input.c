@@ -15,9 +15,8 @@
 
 #include "base/common.h"
 #include "geom/label_fix.h"
-#include "geom/label_surface.h"
 #include "io/read_image.h"
-#include "kernels/grid.h"
+#include "base/morton.h"
 #include "mesher/mesher_impl.h"
 
 void mx_image_params_default(mx_image_params *ip) {
@@ -146,43 +145,117 @@ static int map_labels(const char *name, const int32_t *in, const int64_t d[3],
   return st;
 }
 
-/* One input per label: its kept sides, vertices renumbered. */
-static int add_label_inputs(mx_mesher *m, const char *name, const mx_label_surface *S,
-                            const mx_image_params *ip, const int32_t *labels, int nl) {
-  uint32_t *map = mx_alloc((S->nv + 1) * sizeof *map);
-  if (!map) return MX_ENOMEM;
+/* The octree of the image's lattice: grid (roots of 2^R voxels from the
+ * image's first corner, in voxel units: x = i - 0.5 at the voxel's low
+ * face), and the leaves whose ancestors must be split: blocks of one
+ * label, found by halving (a pyramid of "one label or -1" per level, from
+ * the voxels up). MX_ENOMEM. */
+static int lattice_leaves(const int32_t *lab, const int64_t n[3], int R, const int dims[3],
+                          uint64_t **key_out, uint8_t **level_out, size_t *nleaves) {
+  int64_t D[16][3];
+  int32_t *pyr[16] = {NULL};
   int st = MX_OK;
-  for (int l = 0; l < nl && !st; l++) {
-    const int32_t L = labels[l];
-    for (size_t v = 0; v < S->nv; v++) map[v] = UINT32_MAX;
-    mx_trisoup s;
-    memset(&s, 0, sizeof s);
-    size_t nv = 0, nt = 0;
-    for (size_t t = 0; t < S->nt; t++)
-      for (int side = 0; side < 2; side++)
-        if ((S->keep[t] >> side & 1) && S->label[2 * t + side] == L) {
-          nt++;
-          for (int c = 0; c < 3; c++)
-            if (map[S->tri[3 * t + c]] == UINT32_MAX) map[S->tri[3 * t + c]] = (uint32_t)nv++;
+  for (int l = 0; l <= R; l++)
+    for (int a = 0; a < 3; a++) D[l][a] = (int64_t)dims[a] << l;
+  /* level R: the voxels (outside the image: background) */
+  for (int l = R; l >= 0 && !st; l--) {
+    const size_t sz = (size_t)(D[l][0] * D[l][1] * D[l][2]);
+    pyr[l] = mx_alloc((sz + 1) * sizeof *pyr[l]);
+    if (!pyr[l]) {
+      st = MX_ENOMEM;
+      break;
+    }
+    int32_t *P = pyr[l];
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < D[l][2]; k++)
+      for (int64_t j = 0; j < D[l][1]; j++)
+        for (int64_t i = 0; i < D[l][0]; i++) {
+          int32_t v;
+          if (l == R) {
+            const int in = i < n[0] - 2 && j < n[1] - 2 && k < n[2] - 2;
+            v = in ? lab[(i + 1) + n[0] * ((j + 1) + n[1] * (k + 1))] : 0;
+          } else {
+            const int32_t *C = pyr[l + 1];
+            v = C[(2 * i) + D[l + 1][0] * ((2 * j) + D[l + 1][1] * (2 * k))];
+            for (int c = 1; c < 8 && v >= 0; c++) {
+              const int64_t x = 2 * i + (c & 1), y = 2 * j + ((c >> 1) & 1), z = 2 * k + (c >> 2);
+              if (C[x + D[l + 1][0] * (y + D[l + 1][1] * z)] != v) v = -1;
+            }
+          }
+          P[i + D[l][0] * (j + D[l][1] * k)] = v;
         }
-    st = mx_trisoup_reserve(&s, nv, nt);
-    for (size_t v = 0; !st && v < S->nv; v++)
-      if (map[v] != UINT32_MAX) st = mx_trisoup_set_vertex(&s, map[v], S->xyz + 3 * v);
-    for (size_t t = 0; !st && t < S->nt; t++)
-      for (int side = 0; side < 2 && !st; side++)
-        if ((S->keep[t] >> side & 1) && S->label[2 * t + side] == L) {
-          const uint32_t *c = S->tri + 3 * t;
-          st = side == 0 ? mx_trisoup_add_triangle(&s, map[c[0]], map[c[1]], map[c[2]])
-                         : mx_trisoup_add_triangle(&s, map[c[0]], map[c[2]], map[c[1]]);
-        }
-    char nm[256], input[4096 + 300];
-    if (!st) st = label_name(ip->label_names, L, nm, sizeof nm);
-    snprintf(input, sizeof input, "%s label %d", name, (int)L);
-    if (!st) st = mx_mesher_add_domain(m, &s, input);
-    if (!st) st = mx_mesher_set_material(m, m->ndomain - 1, L, nm);
-    mx_trisoup_free(&s);
   }
-  mx_free(map);
+  /* the leaves, depth first from each root */
+  size_t cap = 4096, nl = 0;
+  uint64_t *key = st ? NULL : mx_alloc(cap * sizeof *key);
+  uint8_t *lev = st ? NULL : mx_alloc(cap);
+  if (!st && (!key || !lev)) st = MX_ENOMEM;
+  typedef struct {
+    int64_t b[3];
+    int l;
+  } blk;
+  blk stack[16 * 8];
+  for (int64_t r = 0; !st && r < (int64_t)dims[0] * dims[1] * dims[2]; r++) {
+    int sp = 0;
+    stack[sp++] = (blk){{r % dims[0], (r / dims[0]) % dims[1], r / ((int64_t)dims[0] * dims[1])}, 0};
+    while (sp && !st) {
+      const blk q = stack[--sp];
+      const int32_t v = pyr[q.l][q.b[0] + D[q.l][0] * (q.b[1] + D[q.l][1] * q.b[2])];
+      if (v >= 0 || q.l == R) {
+        if (q.l == 0) continue; /* a root of one label: nothing to split */
+        if (nl == cap) {
+          uint64_t *k2 = mx_realloc(key, 2 * cap * sizeof *key);
+          uint8_t *l2 = k2 ? mx_realloc(lev, 2 * cap) : NULL;
+          if (k2) key = k2;
+          if (l2) lev = l2;
+          if (!k2 || !l2) {
+            st = MX_ENOMEM;
+            break;
+          }
+          cap *= 2;
+        }
+        const int sh = MX_MAX_LEVEL - q.l;
+        key[nl] = mx_morton_encode((uint32_t)(q.b[0] << sh), (uint32_t)(q.b[1] << sh),
+                                   (uint32_t)(q.b[2] << sh));
+        lev[nl++] = (uint8_t)q.l;
+        continue;
+      }
+      for (int c = 7; c >= 0; c--)
+        stack[sp++] = (blk){{2 * q.b[0] + (c & 1), 2 * q.b[1] + ((c >> 1) & 1), 2 * q.b[2] + (c >> 2)},
+                            q.l + 1};
+    }
+  }
+  for (int l = 0; l <= R; l++) mx_free(pyr[l]);
+  if (st) {
+    mx_free(key);
+    mx_free(lev);
+    return st;
+  }
+  *key_out = key;
+  *level_out = lev;
+  *nleaves = nl;
+  return MX_OK;
+}
+
+/* The image's box, [-0.5, d - 0.5] in voxel units, as the domain surface
+ * the octree is built in (outward triangles). */
+static int add_box(mx_mesher *m, const char *name, const int64_t d[3]) {
+  mx_trisoup s;
+  memset(&s, 0, sizeof s);
+  int st = mx_trisoup_reserve(&s, 8, 12);
+  for (int c = 0; c < 8 && !st; c++) {
+    const double p[3] = {(c & 1) ? (double)d[0] - 0.5 : -0.5, (c & 2) ? (double)d[1] - 0.5 : -0.5,
+                         (c & 4) ? (double)d[2] - 0.5 : -0.5};
+    st = mx_trisoup_set_vertex(&s, (size_t)c, p);
+  }
+  static const uint32_t q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                   {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (int f = 0; f < 6 && !st; f++) {
+    st = mx_trisoup_add_triangle(&s, q[f][0], q[f][1], q[f][2]);
+    if (!st) st = mx_trisoup_add_triangle(&s, q[f][0], q[f][2], q[f][3]);
+  }
+  if (!st) st = mx_mesher_add_domain(m, &s, name);
+  mx_trisoup_free(&s);
   return st;
 }
 
@@ -194,6 +267,10 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
   if (!name) name = "(label array)";
   if (!labels || !dims || !A) {
     mx_error(name, 0, "label image: no voxels or no transform given");
+    return MX_EINPUT;
+  }
+  if (m->ndomain > 0 || m->image_lattice) {
+    mx_error(name, 0, "a label image is meshed alone: no other image or surface with it");
     return MX_EINPUT;
   }
   for (int a = 0; a < 3; a++)
@@ -230,7 +307,6 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
   int st = map_labels(name, labels, dims, ip, lab, n);
   if (!st && ip->min_island > 1)
     st = mx_labels_drop_islands(lab, n, (size_t)ip->min_island, &info->fix);
-  if (!st) st = mx_labels_fill_cavities(lab, n, &info->fix);
   if (!st) st = mx_labels_fix_contacts(lab, n, name, &info->fix);
   /* the labels left and their voxels */
   int nl = 0;
@@ -264,62 +340,89 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
       cnt[y] = cnt[y - 1];
       cnt[y - 1] = c;
     }
-  if (!st && m->ndomain + nl > 64) {
-    mx_error(name, 0, "label image: %d labels and %d inputs before: at most 64 inputs", nl,
-             m->ndomain);
+  /* each label's voxel faces on an interface: the volume's tolerance */
+  memset(info->faces, 0, sizeof info->faces);
+  for (int64_t v = 0; !st && v < (int64_t)total; v++) {
+    const int64_t st3[3] = {1, n[0], n[0] * n[1]};
+    for (int a = 0; a < 3; a++) {
+      const int64_t w = v + st3[a];
+      if (w >= (int64_t)total || lab[v] == lab[w]) continue;
+      for (int k = 0; k < nl; k++) {
+        if (L[k] == lab[v]) info->faces[k]++;
+        if (L[k] == lab[w]) info->faces[k]++;
+      }
+    }
+  }
+  /* the lattice: roots of 2^R voxels, at most 4 along the longest axis */
+  int64_t dmax = dims[0] > dims[1] ? dims[0] : dims[1];
+  dmax = dmax > dims[2] ? dmax : dims[2];
+  int R = 0;
+  while (((int64_t)4 << R) < dmax) R++;
+  if (!st && R > MX_MAX_LEVEL - 2) {
+    mx_error(name, 0, "label image: too many voxels along an axis for the octree");
     st = MX_EINPUT;
   }
-  mx_label_surface S;
-  memset(&S, 0, sizeof S);
-  if (!st) {
-    const int rounds = ip->voxel ? 0 : ip->smooth_rounds < 0 ? 10 : ip->smooth_rounds;
-    st = mx_label_surface_build(lab, n, A, rounds, ip->voxel ? 0.0 : 0.35, &S);
+  mx_grid g;
+  memset(&g, 0, sizeof g);
+  g.side = (double)((int64_t)1 << R);
+  g.unit = g.side / (double)(1u << MX_MAX_LEVEL);
+  for (int a = 0; a < 3; a++) {
+    g.origin[a] = -0.5;
+    g.dims[a] = (int)((dims[a] + ((int64_t)1 << R) - 1) >> R);
   }
-  mx_free(lab);
-  if (!st) st = add_label_inputs(m, name, &S, ip, L, nl);
-  if (!st) {
-    /* the level of about one voxel: the root cube is 1.01 the box's shortest side */
-    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-    for (size_t v = 0; v < S.nv; v++)
-      for (int a = 0; a < 3; a++) {
-        const double x = S.xyz[3 * v + a];
-        lo[a] = x < lo[a] ? x : lo[a];
-        hi[a] = x > hi[a] ? x : hi[a];
-      }
-    double side = hi[0] - lo[0];
-    for (int a = 1; a < 3; a++) side = hi[a] - lo[a] < side ? hi[a] - lo[a] : side;
-    const double voxel = fmin(sp[0], fmin(sp[1], sp[2]));
-    int level = (int)lround(log2(1.01 * side / voxel));
-    level = level < 1 ? 1 : level > 12 ? 12 : level;
-    if (level > m->image_level) m->image_level = level;
-    if (m->p.surface_level < 0 && m->p.all_level < 0) m->p.surface_level = m->image_level;
-    m->p.materials = 1;
-    m->image_inputs += nl;
-    info->nlabels = nl;
-    for (int k = 0; k < nl; k++) {
-      info->labels[k] = L[k];
-      info->voxels[k] = cnt[k];
-    }
-    for (int a = 0; a < 3; a++) {
-      info->dims[a] = dims[a];
-      info->spacing[a] = sp[a];
-    }
-    info->triangles = S.nt;
-    info->max_move = S.max_move;
-    info->seconds = mx_wtime() - t0;
-    const mx_label_fix_stats *f = &info->fix;
-    if (f->cavities)
-      mx_warning(name, 0, "%zu enclosed background region(s) (%zu voxels) meshed as the label "
-                          "around them (several materials have no holes)",
-                 f->cavities, f->cavity_voxels);
-    if (f->contact_voxels)
-      mx_warning(name, 0, "%zu voxel(s) relabelled where labels met only along an edge or at "
-                          "a point (the first at voxel (%lld, %lld, %lld))",
-                 f->contact_voxels, (long long)f->contact_at[0], (long long)f->contact_at[1],
-                 (long long)f->contact_at[2]);
+  uint64_t *key = NULL;
+  uint8_t *lev = NULL;
+  size_t nleaves = 0;
+  if (!st) st = lattice_leaves(lab, n, R, g.dims, &key, &lev, &nleaves);
+  if (!st) st = add_box(m, name, dims);
+  if (!st && nleaves) st = mx_mesher_set_split_keys(m, key, lev, nleaves);
+  mx_free(key);
+  mx_free(lev);
+  if (st) {
+    mx_free(lab);
+    return st;
   }
-  mx_label_surface_free(&S);
-  return st;
+  /* materials: label k + 1 .. as the user's numbers and names */
+  for (int k = 0; k < nl && !st; k++) {
+    st = label_name(ip->label_names, L[k], info->names[k], sizeof info->names[k]);
+    m->depth_material[k + 1] = L[k];
+    m->depth_material_name[k + 1] = info->names[k];
+  }
+  if (st) {
+    mx_free(lab);
+    return st;
+  }
+  m->image_lattice = 1;
+  m->image_lab = lab;
+  for (int a = 0; a < 3; a++) m->image_n[a] = n[a];
+  memcpy(m->image_A, A, sizeof m->image_A);
+  m->image_R = R;
+  m->image_grid = g;
+  m->image_rounds = ip->voxel ? 0 : ip->smooth_rounds < 0 ? 10 : ip->smooth_rounds;
+  m->p.surface_level = -1; /* the image's lattice says where to split */
+  m->p.all_level = -1;
+  m->p.materials = 0;      /* labels, not the surfaces' regions */
+  m->nmaterials = nl;
+  info->nlabels = nl;
+  for (int k = 0; k < nl; k++) {
+    info->labels[k] = L[k];
+    info->voxels[k] = cnt[k];
+  }
+  for (int a = 0; a < 3; a++) {
+    info->dims[a] = dims[a];
+    info->spacing[a] = sp[a];
+  }
+  info->seconds = mx_wtime() - t0;
+  const mx_label_fix_stats *f = &info->fix;
+  if (f->contact_voxels)
+    mx_warning(name, 0, "%zu voxel(s) relabelled where labels met only along an edge or at "
+                        "a point (the first at voxel (%lld, %lld, %lld))",
+               f->contact_voxels, (long long)f->contact_at[0], (long long)f->contact_at[1],
+               (long long)f->contact_at[2]);
+  if (f->islands)
+    mx_warning(name, 0, "%zu island(s) of fewer than %lld voxels (%zu voxels) given the label "
+                        "around them", f->islands, ip->min_island, f->island_voxels);
+  return MX_OK;
 }
 
 int mx_mesher_add_label_image(mx_mesher *m, const char *path, const mx_image_params *ip) {

@@ -69,17 +69,6 @@ int mx_material_numbers(mx_mesher *m, int deepest) {
     m->depth_material[d] = d;
     m->depth_material_name[d] = NULL;
   }
-  if (m->image_inputs) {
-    /* label images: a label's parts may nest at several depths (CSF
-     * around the brain and in its ventricles), each region its label */
-    for (uint32_t q = 0; q < I->npieces; q++) {
-      const int r = I->region[q], k = I->file[q];
-      if (r < 1 || r > 64 || k >= m->ndomain || k >= 64 || !m->input_material[k]) continue;
-      m->depth_material[r] = m->input_material[k];
-      m->depth_material_name[r] = m->input_material_name[k];
-    }
-    return MX_OK;
-  }
   for (int k = 0; k < m->ndomain && k < 64; k++) {
     if (!m->input_material[k]) continue;
     int region = -1, depth = -1;

@@ -131,6 +131,7 @@ void mx_mesher_free(mx_mesher *m) {
   for (int i = 0; i < m->ndomain; i++) mx_free(m->domain_name[i]);
   for (int i = 0; i < 64; i++) mx_free(m->input_material_name[i]);
   mx_image_params_release(&m->image_params);
+  mx_free(m->image_lab);
   for (int r = 0; r < m->nregions; r++) {
     mx_trisoup_free(&m->region[r]);
     mx_free(m->region_name[r]);
@@ -287,6 +288,10 @@ int mx_build_tree(mx_mesher *m) {
     return st;
   }
   m->have_tree = 1;
+  if (m->image_lattice) { /* the image's lattice: roots of 2^R voxels */
+    m->B.tree.grid = m->image_grid;
+    m->B.req.root_side = m->image_grid.side;
+  }
   m->B.on_level = m->progress.on_level;
   m->B.on_level_user = m->progress.user;
   MX_CHECK(mx_mesher_domain_side(m, &m->B));
@@ -488,6 +493,7 @@ double mx_mesh_volume(const mx_mesh *M) {
 }
 
 static int volume_check(mx_mesher *m) {
+  if (m->image_lattice) return MX_OK; /* mx_image_finish judged it */
   if (m->p.stage != MX_STAGE_FULL || !m->M.ncells ||
       (!m->have_winding && (m->ndomain != 1 || m->p.repair_input)))
     return MX_OK;
@@ -507,7 +513,7 @@ int mx_mesh_finish(mx_mesher *m) {
   }
   /* several materials: each element's, whatever path made the mesh (a
    * first mesh, a re-mesh, a restart file's mesh) */
-  if (m->p.materials) MX_CHECK(mx_label_materials(m));
+  if (m->p.materials && !m->image_lattice) MX_CHECK(mx_label_materials(m));
   /* the boundary flags and the volume check count as verification */
   const double t = mx_wtime();
   int st = boundary_flags(m);
@@ -562,6 +568,10 @@ int mx_mesh_stages(mx_mesher *m) {
     return MX_OK;
   }
   MX_CHECK(transition(m));
+  if (m->image_lattice) { /* a label image: its labels, nodes onto its interfaces */
+    MX_CHECK(mx_image_finish(m));
+    return mx_mesh_finish(m);
+  }
   if (m->p.stage == MX_STAGE_FULL) {
     MX_CHECK(boundary_once(m));
     MX_CHECK(mx_repair(m));

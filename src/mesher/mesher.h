@@ -107,7 +107,12 @@ typedef struct {
   size_t rounded;
   int nlabels;          /* labels meshed */
   int32_t labels[64];
+  char names[64][64];   /* their materials' names */
   size_t voxels[64];    /* their voxels, after the fixes */
+  size_t faces[64];     /* their voxel faces on an interface */
+  double volume[64];    /* their volume in the mesh */
+  size_t moved;         /* nodes moved onto the smoothed interfaces */
+  double seconds_mesh;  /* labels, moves, world (mx_image_finish) */
   mx_label_fix_stats fix;
   size_t triangles;     /* of the interfaces */
   double max_move;      /* the smoothing's largest move, voxels */
@@ -212,12 +217,16 @@ struct mx_mesher {
   /* hooks for the program's progress line (NULL: none) */
   mx_progress progress;     /* mx_mesher_set_progress */
   /* label images (mesher/image_input.c): the options (arrays owned), and
-   * what the images gave: image_inputs > 0 numbers each region by its
-   * input's label (mx_material_numbers), image_level the level of about
-   * one voxel (the surface level when none was asked) */
+   * what the image gave */
   mx_image_params image_params;
-  int image_inputs, image_level;
   mx_image_info image;
+  /* a label image meshed on its voxel lattice (mesher/image_mesh.c): the
+   * padded labels made ready, the transform, the voxel level, the grid */
+  int image_lattice, image_R, image_rounds;
+  int32_t *image_lab;
+  int64_t image_n[3];
+  double image_A[12];
+  mx_grid image_grid;
 };
 
 

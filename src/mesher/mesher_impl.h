@@ -46,6 +46,12 @@ int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold);
 /* The leaves of the refined octree, then mx_remesh_changed from the leaves
  * the mesher held. */
 int mx_remesh_after_refine(mx_mesher *m);
+/* A label image's mesh after the transition stage (image_mesh.c): each
+ * element the label of its leaf, the background's dropped, the nodes on
+ * an interface moved onto the smoothed interface (as far as the elements
+ * stay valid), the world by the image's transform, the volume judged
+ * against the voxels'. MX_ENOMEM, MX_EINVALID. */
+int mx_image_finish(mx_mesher *m);
 /* The arrays and file name an mx_image_params holds (image_input.c). */
 void mx_image_params_release(mx_image_params *ip);
 /* One domain input appended to m->domain under name (copied; s is left

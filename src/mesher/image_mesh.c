@@ -1,0 +1,235 @@
+/* A label image's mesh (issue 28; mesher_impl.h, mx_image_finish). The
+ * octree was built on the image's lattice (mesher/image_input.c: every leaf
+ * a block of one label, voxels at the interfaces), so the transition
+ * stage's elements each lie in one label and every interface runs along
+ * their faces. Here:
+ *   1. each element takes its leaf's label (the voxel at the leaf's low
+ *      corner), the background's elements go;
+ *   2. the interfaces as one smoothed surface (geom/label_surface.h): a
+ *      node at a lattice corner of that surface moves where the smoothing
+ *      put it (within 0.35 voxel on each axis), unless --voxel; where an
+ *      element around a moved node would fall below J_ENS 0.1 (or its
+ *      unmoved value), the moves of its nodes are halved, six times, then
+ *      undone;
+ *   3. the voxel units to the world by the image's transform (a mirror
+ *      turns the elements' node order over);
+ *   4. each label's volume against its voxels': off by more than half a
+ *      voxel across its interface (its voxel faces) is a defect. */
+#include <math.h>
+#include <string.h>
+
+#include "base/common.h"
+#include "base/morton.h"
+#include "geom/label_surface.h"
+#include "geom/quality.h"
+#include "kernels/mesh_edit.h"
+#include "mesher/mesher_impl.h"
+
+/* The label of each element's leaf; 0 outside the image. */
+static int32_t leaf_label(const mx_mesher *m, uint32_t leaf) {
+  const uint32_t o = m->leaves[leaf];
+  uint32_t c[3];
+  mx_morton_decode(m->B.tree.oct.key[o], c);
+  const int64_t *n = m->image_n;
+  int64_t v[3];
+  for (int a = 0; a < 3; a++) {
+    v[a] = (int64_t)(c[a] >> (MX_MAX_LEVEL - m->image_R));
+    if (v[a] >= n[a] - 2) return 0;
+  }
+  return m->image_lab[(v[0] + 1) + n[0] * ((v[1] + 1) + n[1] * (v[2] + 1))];
+}
+
+static double cell_jens(const mx_mesh *M, size_t c, const double *xyz) {
+  double p[8][3];
+  const int nv = mx_cell_nodes[M->type[c]];
+  for (int k = 0; k < nv; k++)
+    for (int a = 0; a < 3; a++) p[k][a] = xyz[3 * (size_t)M->conn[8 * c + k] + a];
+  return mx_jens(M->type[c], (const double(*)[3])p);
+}
+
+/* Nodes onto the smoothed interfaces, as far as the elements allow. */
+static int move_nodes(mx_mesher *m, size_t *moved_out) {
+  mx_mesh *M = &m->M;
+  mx_label_surface S;
+  MX_CHECK(mx_label_surface_build(m->image_lab, m->image_n, m->image_A, m->image_rounds, 0.35,
+                                  &S));
+  const size_t nn = M->nnodes;
+  double *d = mx_calloc((3 * nn + 1) * sizeof *d);
+  double *x = mx_alloc((3 * nn + 1) * sizeof *x);
+  uint8_t *mv = mx_calloc(nn + 1);
+  uint8_t *bad = mx_alloc(M->ncells + 1);
+  float *j0 = mx_alloc((M->ncells + 1) * sizeof *j0);
+  if (!d || !x || !mv || !bad || !j0) {
+    mx_free(d);
+    mx_free(x);
+    mx_free(mv);
+    mx_free(bad);
+    mx_free(j0);
+    mx_label_surface_free(&S);
+    return MX_ENOMEM;
+  }
+  const int64_t *n = m->image_n;
+  size_t moved = 0;
+#pragma omp parallel for schedule(static) reduction(+ : moved)
+  for (size_t v = 0; v < nn; v++) {
+    /* voxel units: corner c of the padded lattice is at c - 1.5 */
+    double c[3];
+    int corner = 1;
+    for (int a = 0; a < 3; a++) {
+      c[a] = M->xyz[3 * v + a] + 1.5;
+      corner &= c[a] == floor(c[a]) && c[a] >= 1 && c[a] < (double)n[a];
+    }
+    if (!corner) continue;
+    const int64_t id = (int64_t)c[0] + n[0] * ((int64_t)c[1] + n[1] * (int64_t)c[2]);
+    size_t lo = 0, hi = S.nv;
+    while (lo < hi) {
+      const size_t mid = (lo + hi) / 2;
+      if (S.corner[mid] < id)
+        lo = mid + 1;
+      else
+        hi = mid;
+    }
+    if (lo == S.nv || S.corner[lo] != id) continue;
+    for (int a = 0; a < 3; a++) d[3 * v + a] = S.lat[3 * lo + a] - c[a];
+    mv[v] = 1;
+    moved++;
+  }
+  mx_label_surface_free(&S);
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++) j0[c] = (float)cell_jens(M, c, M->xyz);
+  /* halve the moves around elements that would be poor, then undo them */
+  for (int round = 0; round <= 6; round++) {
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < 3 * nn; i++) x[i] = M->xyz[i] + d[i];
+    size_t nbad = 0;
+#pragma omp parallel for schedule(static) reduction(+ : nbad)
+    for (size_t c = 0; c < M->ncells; c++) {
+      bad[c] = 0;
+      const int nv = mx_cell_nodes[M->type[c]];
+      int any = 0;
+      for (int k = 0; k < nv; k++) any |= mv[M->conn[8 * c + k]];
+      if (!any) continue;
+      const double floor_q = j0[c] < 0.1f ? 0.5 * j0[c] : 0.1;
+      if (cell_jens(M, c, x) < floor_q) {
+        bad[c] = 1;
+        nbad++;
+      }
+    }
+    if (!nbad) break;
+    const double f = round == 6 ? 0.0 : 0.5;
+    for (size_t c = 0; c < M->ncells; c++) /* serial: nodes shared */
+      if (bad[c])
+        for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
+          const uint32_t v = M->conn[8 * c + k];
+          if (mv[v] == 1) {
+            mv[v] = 2; /* once per round */
+            for (int a = 0; a < 3; a++) d[3 * (size_t)v + a] *= f;
+          }
+        }
+    for (size_t v = 0; v < nn; v++) mv[v] = mv[v] ? 1 : 0;
+  }
+  memcpy(M->xyz, x, 3 * nn * sizeof *x);
+  mx_free(d);
+  mx_free(x);
+  mx_free(mv);
+  mx_free(bad);
+  mx_free(j0);
+  *moved_out = moved;
+  return MX_OK;
+}
+
+/* Voxel units to the world; a mirror turns each element over. */
+static void to_world(mx_mesher *m) {
+  mx_mesh *M = &m->M;
+  const double *A = m->image_A;
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < M->nnodes; v++) {
+    const double u[3] = {M->xyz[3 * v], M->xyz[3 * v + 1], M->xyz[3 * v + 2]};
+    for (int r = 0; r < 3; r++)
+      M->xyz[3 * v + r] = A[4 * r] * u[0] + A[4 * r + 1] * u[1] + A[4 * r + 2] * u[2] + A[4 * r + 3];
+  }
+  const double det = A[0] * (A[5] * A[10] - A[6] * A[9]) - A[1] * (A[4] * A[10] - A[6] * A[8]) +
+                     A[2] * (A[4] * A[9] - A[5] * A[8]);
+  if (det > 0) return;
+  /* the mirrored order of each type (tet 0 2 1 3, pyramid 0 3 2 1 4, prism
+   * and hexahedron: the two end faces exchanged) */
+  static const int8_t perm[4][8] = {{0, 2, 1, 3}, {0, 3, 2, 1, 4}, {3, 4, 5, 0, 1, 2},
+                                    {4, 5, 6, 7, 0, 1, 2, 3}};
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++) {
+    const int t = M->type[c], nv = mx_cell_nodes[t];
+    const int ti = t == MX_TET ? 0 : t == MX_PYRAMID ? 1 : t == MX_PRISM ? 2 : 3;
+    uint32_t o[8];
+    for (int k = 0; k < nv; k++) o[k] = M->conn[8 * c + perm[ti][k]];
+    memcpy(M->conn + 8 * c, o, (size_t)nv * sizeof *o);
+  }
+}
+
+int mx_image_finish(mx_mesher *m) {
+  const double t0 = mx_wtime();
+  mx_mesh *M = &m->M;
+  const int nl = m->image.nlabels;
+  uint8_t *keep = mx_alloc(M->ncells + 1);
+  uint16_t *mat = mx_alloc((M->ncells + 1) * sizeof *mat);
+  if (!keep || !mat) {
+    mx_free(keep);
+    mx_free(mat);
+    return MX_ENOMEM;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++) {
+    const int32_t L = leaf_label(m, M->leaf[c]);
+    keep[c] = L != 0;
+    mat[c] = (uint16_t)L;
+  }
+  size_t k = 0;
+  for (size_t c = 0; c < M->ncells; c++)
+    if (keep[c]) mat[k++] = mat[c];
+  int st = mx_mesh_keep_cells(M, keep);
+  mx_free(keep);
+  if (!st) st = mx_mesh_drop_unused_nodes(M, NULL, NULL);
+  if (st) {
+    mx_free(mat);
+    return st;
+  }
+  mx_free(M->material);
+  M->material = mat;
+  mx_free(m->states);
+  m->states = NULL;
+  size_t moved = 0;
+  if (m->image_rounds > 0) MX_CHECK(move_nodes(m, &moved));
+  to_world(m);
+  mx_mesh_update_jens(M, NULL);
+  mx_mesh_summarize(M);
+  m->nmaterials = nl;
+  m->rec->S.nmaterials = nl;
+  m->rec->S.materials_across = 0;
+  m->image.moved = moved;
+  /* each label's volume against its voxels' */
+  double vol[64] = {0};
+  for (size_t c = 0; c < M->ncells; c++) {
+    double p[8][3];
+    const int nv = mx_cell_nodes[M->type[c]];
+    for (int q = 0; q < nv; q++)
+      for (int a = 0; a < 3; a++) p[q][a] = M->xyz[3 * (size_t)M->conn[8 * c + q] + a];
+    const double v = mx_element_volume(M->type[c], (const double(*)[3])p);
+    for (int l = 0; l < nl; l++)
+      if (m->image.labels[l] == M->material[c]) vol[l] += v;
+  }
+  const double *A = m->image_A;
+  const double vox = fabs(A[0] * (A[5] * A[10] - A[6] * A[9]) - A[1] * (A[4] * A[10] - A[6] * A[8]) +
+                          A[2] * (A[4] * A[9] - A[5] * A[8]));
+  for (int l = 0; l < nl; l++) {
+    m->image.volume[l] = vol[l];
+    const double want = (double)m->image.voxels[l] * vox;
+    const double band = 0.5 * (double)m->image.faces[l] * vox;
+    if (fabs(vol[l] - want) > band) {
+      mx_error(m->domain_name[0], 0, "label %d: the mesh holds %.6g against %.6g for its voxels, "
+                                     "beyond half a voxel across its interface (%.6g)",
+               (int)m->image.labels[l], vol[l], want, band);
+      return MX_EINVALID;
+    }
+  }
+  m->image.seconds_mesh = mx_wtime() - t0;
+  return MX_OK;
+}
