@@ -20,7 +20,7 @@ typedef struct {
   FILE *fp;
   uint64_t raw_size, raw_pos;
   /* inflating (gzip or zlib) from the raw bytes' current position */
-  int z, z_init, z_end, z_gzip;
+  int z, z_init, z_end, z_gzip, z_cut; /* z_cut: the input ended inside the stream */
   z_stream zs;
   unsigned char *zin; /* input chunk read from the file */
   uint64_t pos;       /* bytes delivered so far */
@@ -37,6 +37,9 @@ int mx_isrc_inflate(mx_isrc *s);
 /* Up to n bytes; *got fewer only at the end of the data. MX_EINPUT with a
  * message for a read error or corrupt compressed data. */
 int mx_isrc_read(mx_isrc *s, void *buf, size_t n, size_t *got);
+/* Compressed: inflates to the stream's end (its checksum), the bytes
+ * discarded; MX_EINPUT when the stream is cut short or corrupt. */
+int mx_isrc_check_end(mx_isrc *s);
 /* Steps over n bytes (fewer, *done, at the end of the data). */
 int mx_isrc_skip(mx_isrc *s, uint64_t n, uint64_t *done);
 /* The bytes left when known (not compressed), else -1. */

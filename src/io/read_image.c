@@ -139,7 +139,7 @@ static int z_read(mx_isrc *s, unsigned char *buf, size_t n, size_t *got) {
         const int more = z_refill(s, &st);
         if (st != MX_OK) return st;
         if (!more) {
-          s->z_end = 1; /* cut short: the caller counts the bytes */
+          s->z_end = s->z_cut = 1; /* cut short: the caller counts the bytes */
           break;
         }
       }
@@ -205,6 +205,20 @@ int mx_isrc_skip(mx_isrc *s, uint64_t n, uint64_t *done) {
     MX_CHECK(mx_isrc_read(s, tmp, (size_t)want, &got));
     *done += got;
     if (got < want) break;
+  }
+  return MX_OK;
+}
+
+int mx_isrc_check_end(mx_isrc *s) {
+  if (!s->z) return MX_OK;
+  unsigned char tmp[4096];
+  size_t got;
+  do MX_CHECK(mx_isrc_read(s, tmp, sizeof tmp, &got));
+  while (got > 0);
+  if (s->z_cut) {
+    mx_error(s->path, 0, "truncated: the compressed data ends before its end mark (after %llu "
+                         "inflated bytes)", (unsigned long long)s->pos);
+    return MX_EINPUT;
   }
   return MX_OK;
 }
@@ -334,7 +348,7 @@ int mx_image_voxels(mx_isrc *s, int type, int big, int scale, double slope, doub
   img->label = mx_alloc(cap * sizeof *img->label);
   if (!img->label) return MX_ENOMEM;
   enum { CHUNK = 1 << 20 };
-  unsigned char *buf = mx_alloc(CHUNK);
+  unsigned char *buf = mx_alloc(need < CHUNK ? (size_t)need : CHUNK);
   if (!buf) return MX_ENOMEM;
   int st = MX_OK;
   size_t done = 0;
@@ -361,6 +375,7 @@ int mx_image_voxels(mx_isrc *s, int type, int big, int scale, double slope, doub
     done += cnt;
   }
   mx_free(buf);
+  if (st == MX_OK) st = mx_isrc_check_end(s);
   if (st == MX_OK && img->rounded)
     mx_warning(s->path, 0, "%zu voxels were not integers: rounded to the nearest integer label",
                img->rounded);

@@ -83,7 +83,7 @@ int mx_read_inr(mx_isrc *s, mx_label_image *img) {
   int64_t dim[4] = {-1, -1, 1, 1}, pixsize = -1;
   double vox[3] = {1, 1, 1}, org[3] = {0, 0, 0};
   int kind = -1, big = 0; /* kind: 0 unsigned fixed, 1 signed fixed, 2 float */
-  long line = 1, type_line = 0, size_line = 0, dims_line = 0;
+  long line = 2, type_line = 0, size_line = 0, dims_line = 0;
   char word[MX_WORD_BUF];
   for (char *p = strchr(h, '\n') + 1; *p && st == MX_OK; line++) {
     char *nl = strchr(p, '\n');
