@@ -99,7 +99,7 @@ int mx_isrc_gzip_auto(mx_isrc *s, int *gz) {
     s->raw_pos -= got;
   } else {
     got = s->mem_len - s->mem_pos < 2 ? s->mem_len - s->mem_pos : 2;
-    memcpy(m, s->mem + s->mem_pos, got);
+    if (got) memcpy(m, s->mem + s->mem_pos, got);
   }
   if (got == 2 && m[0] == 0x1f && m[1] == 0x8b) {
     *gz = 1;
