@@ -9,7 +9,9 @@
 # mesh_mvm (mx_read_mesh of `mixoct check`, the input written under that
 # extension; tools/fuzz_readers.c), sizemap_txt sizemap_vtk sizemap_vtu
 # sizemap_pos (mx_sizemap_read, the format named by that extension;
-# tools/fuzz_readers.c),
+# tools/fuzz_readers.c), image_nii image_niigz image_mha image_inr
+# image_inrgz (mx_read_label_image_mem on the bytes named .nii, .nii.gz,
+# .mha, .inr, .inr.gz; tools/fuzz_readers.c),
 # restart (tools/fuzz_restart.c) and list (the element index lists of -l,
 # tools/fuzz_list.c). Each runs SECONDS_PER_TARGET seconds
 # (default 60) from its seeds tools/fuzz_seeds/TARGET plus a corpus kept
@@ -34,7 +36,7 @@ set -u
 export LC_ALL=C
 
 root=$(cd "$(dirname "$0")/.." && pwd)
-all_targets="off mdl stl obj ply reg poly mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d mesh_mvm sizemap_txt sizemap_vtk sizemap_vtu sizemap_pos restart list"
+all_targets="off mdl stl obj ply reg poly mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d mesh_mvm sizemap_txt sizemap_vtk sizemap_vtu sizemap_pos image_nii image_niigz image_mha image_inr image_inrgz restart list"
 
 secs=60
 case ${1:-} in
@@ -111,11 +113,14 @@ link_target() {
     list) src=tools/fuzz_list.c; def= ;;
     mesh_*) def="-DFUZZ_FORMAT=mesh -DFUZZ_EXT=${t#mesh_}" ;;
     sizemap_*) def="-DFUZZ_FORMAT=sizemap -DFUZZ_EXT=${t#sizemap_}" ;;
+    image_niigz) def="-DFUZZ_FORMAT=image -DFUZZ_EXT=nii.gz" ;;
+    image_inrgz) def="-DFUZZ_FORMAT=image -DFUZZ_EXT=inr.gz" ;;
+    image_*) def="-DFUZZ_FORMAT=image -DFUZZ_EXT=${t#image_}" ;;
     *) def="-DFUZZ_FORMAT=$t" ;;
   esac
   if up_to_date "$bin" "$bin.d" && [ ! "$lib" -nt "$bin" ]; then return 0; fi
   # shellcheck disable=SC2086
-  if $cc $bin_flags $def -MMD -MF "$bin.d.tmp" "$root/$src" "$lib" -lm -o "$bin.tmp" 2>"$bin.err"; then
+  if $cc $bin_flags $def -MMD -MF "$bin.d.tmp" "$root/$src" "$lib" -lm -lz -o "$bin.tmp" 2>"$bin.err"; then
     mv "$bin.tmp" "$bin" && mv "$bin.d.tmp" "$bin.d" && rm -f "$bin.err"
   else
     [ "${link_quiet:-0}" = 1 ] || cat "$bin.err" >&2

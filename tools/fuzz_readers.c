@@ -20,6 +20,12 @@
  *                        and size read checked finite (sizes > 0);
  *                        -DFUZZ_EXT=txt|vtk|vtu|pos picks the extension,
  *                        which picks the format (default txt)
+ *   image                mx_read_label_image_mem (src/io/read_image.c) on
+ *                        the input's bytes (no file), named fuzz.EXT with
+ *                        -DFUZZ_EXT=nii|nii.gz|mha|inr|inr.gz (default
+ *                        nii); an image read has dims >= 1, labels (every
+ *                        one read), a finite transform and sizes > 0; a
+ *                        failure leaves it empty
  *
  * The readers take a path: each input is written to a file of this process
  * under $TMPDIR (/dev/shm when writable and TMPDIR is unset, else /tmp),
@@ -57,6 +63,7 @@
 #include "io/read_surface.h"
 #include "io/read_poly.h"
 #include "io/read_sizemap.h"
+#include "io/read_image.h"
 
 /* FUZZ_FORMAT as a number, by token pasting: FMT_off and so on. */
 #define FMT_off 1
@@ -68,21 +75,24 @@
 #define FMT_mesh 7
 #define FMT_poly 8
 #define FMT_sizemap 9
+#define FMT_image 10
 #define FUZZ_CAT2(a, b) a##b
 #define FUZZ_CAT(a, b) FUZZ_CAT2(a, b)
 #define FUZZ_STR2(a) #a
 #define FUZZ_STR(a) FUZZ_STR2(a)
 
 #ifndef FUZZ_FORMAT
-#error "compile with -DFUZZ_FORMAT=off|mdl|stl|obj|ply|reg|mesh|poly|sizemap"
+#error "compile with -DFUZZ_FORMAT=off|mdl|stl|obj|ply|reg|mesh|poly|sizemap|image"
 #endif
 #define FUZZ_ID FUZZ_CAT(FMT_, FUZZ_FORMAT)
-#if FUZZ_ID < 1 || FUZZ_ID > 9
+#if FUZZ_ID < 1 || FUZZ_ID > 10
 #error "unknown FUZZ_FORMAT"
 #endif
 
-#if (FUZZ_ID == FMT_mesh || FUZZ_ID == FMT_sizemap) && defined(FUZZ_EXT)
+#if (FUZZ_ID == FMT_mesh || FUZZ_ID == FMT_sizemap || FUZZ_ID == FMT_image) && defined(FUZZ_EXT)
 #define EXT FUZZ_STR(FUZZ_EXT)
+#elif FUZZ_ID == FMT_image
+#define EXT "nii"
 #elif FUZZ_ID == FMT_mesh
 #define EXT "vtk"
 #elif FUZZ_ID == FMT_sizemap
@@ -135,6 +145,7 @@ int LLVMFuzzerInitialize(int *argc, char ***argv) {
   return 0;
 }
 
+#if FUZZ_ID != FMT_image
 static void write_input(const uint8_t *data, size_t size) {
   int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0) {
@@ -151,6 +162,7 @@ static void write_input(const uint8_t *data, size_t size) {
   }
   close(fd);
 }
+#endif
 
 #if FUZZ_ID == FMT_reg
 
@@ -245,6 +257,30 @@ static void fuzz_file(void) {
     mx_free(xyz);
     mx_free(h);
   }
+}
+
+#elif FUZZ_ID == FMT_image
+
+/* The promises of io/read_image.h, on the bytes themselves. */
+static void fuzz_mem(const uint8_t *data, size_t size) {
+  mx_label_image img;
+  memset(&img, 0x5a, sizeof img); /* must be overwritten */
+  if (mx_read_label_image_mem("fuzz." EXT, data, size, &img) != MX_OK) {
+    REQUIRE(img.label == NULL && img.nx == 0 && img.ny == 0 && img.nz == 0);
+    return;
+  }
+  REQUIRE(img.nx >= 1 && img.ny >= 1 && img.nz >= 1 && img.label);
+  REQUIRE(img.nx * img.ny * img.nz < ((int64_t)1 << 31));
+  for (int e = 0; e < 12; e++) REQUIRE(isfinite(img.A[e]));
+  for (int d = 0; d < 3; d++) REQUIRE(isfinite(img.spacing[d]) && img.spacing[d] > 0);
+  REQUIRE(img.oblique == 0 || img.oblique == 1);
+  REQUIRE(img.format[0] && memchr(img.format, '\0', sizeof img.format));
+  const size_t n = (size_t)img.nx * (size_t)img.ny * (size_t)img.nz;
+  REQUIRE(img.rounded <= n);
+  static volatile int32_t labels; /* every label read: a short array is caught */
+  for (size_t v = 0; v < n; v++) labels = img.label[v];
+  mx_label_image_free(&img);
+  REQUIRE(img.label == NULL);
 }
 
 #elif FUZZ_ID == FMT_mesh
@@ -349,7 +385,11 @@ static void fuzz_file(void) {
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+#if FUZZ_ID == FMT_image
+  fuzz_mem(data, size);
+#else
   write_input(data, size);
   fuzz_file();
+#endif
   return 0;
 }

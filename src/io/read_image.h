@@ -5,7 +5,31 @@
  * uint32 (values up to INT32_MAX) and float32/float64 (rounded to the
  * nearest integer, with a warning naming the file and the number of voxels
  * that were not integers). Every header is checked against the file's size
- * (or, gzip, the bytes it inflates to) before the voxels are allocated. */
+ * (or, gzip, the bytes it inflates to) before the voxels are allocated.
+ *
+ * Conventions (src/io/read_nifti.c, read_metaimage.c, read_inr.c):
+ *  - NIfTI: A from the sform when sform_code > 0, else from the qform
+ *    (quaternion, qoffset, |pixdim[1..3]| with 0 taken as 1, k flipped when
+ *    pixdim[0] = qfac < 0) when qform_code > 0, else diag(pixdim[1..3])
+ *    with the origin 0 (method 1 of nifti1.h). scl_slope/scl_inter are
+ *    applied (the values then rounded like floats) when both are finite,
+ *    the slope is not 0 and they are not (1, 0). Single files only
+ *    (magic n+1, n+2); .hdr/.img pairs (ni1, ni2) are refused. dim[0] is 3,
+ *    or up to 7 with the dims past the third equal to 1.
+ *  - MetaImage: world = Offset + D diag(ElementSpacing) (i, j, k), the
+ *    first three numbers of TransformMatrix (or Rotation, Orientation)
+ *    being D's first column (the direction of the i axis), as MetaIO
+ *    stores it and ITK reads it. ElementSize stands for a missing
+ *    ElementSpacing; Position and Origin for Offset. HeaderSize (-1: the
+ *    data at the end of its file) applies to a separate data file.
+ *  - INRIA: A = diag(VX, VY, VZ), the origin (XO, YO, ZO) when given (the
+ *    centre of voxel (0, 0, 0)), else 0. CPU absent: little-endian.
+ *  - Only regular files are read (no pipes or devices). A compressed
+ *    stream must reach its end mark (a cut checksum is a truncated file).
+ *  - oblique: some column of A has more than one component larger than
+ *    1e-6 times its norm (a permutation or flip of the axes is not). A
+ *    transform with a non-finite entry, a zero column or dependent columns
+ *    is refused. */
 #ifndef MX_READ_IMAGE_H
 #define MX_READ_IMAGE_H
 
@@ -34,7 +58,9 @@ int mx_read_label_image(const char *path, mx_label_image *img);
 /* The same from bytes in memory (name: what messages call the file, and
  * its extension picks the format; a .mhd's raw file is looked for beside
  * name on disk, so from memory only .mha with its data in the same bytes,
- * or ElementDataFile = LOCAL, is read). For the fuzzer and tests. */
+ * or ElementDataFile = LOCAL, is read). For the fuzzer and tests.
+ * (Implemented so: from memory a MetaImage whose ElementDataFile is not
+ * LOCAL is refused, MX_EINPUT, no file being opened.) */
 int mx_read_label_image_mem(const char *name, const unsigned char *data, size_t n,
                             mx_label_image *img);
 void mx_label_image_free(mx_label_image *img);
