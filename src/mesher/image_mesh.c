@@ -1,4 +1,4 @@
-/* A label image's mesh (issue 28; mesher_impl.h, mx_image_finish). The
+/* A label image's mesh (issue 28; mesher_impl.h, mx_image_mesh_finish). The
  * octree was built on the image's lattice (mesher/image_input.c: every leaf
  * a block of one label, voxels at the interfaces), so the transition
  * stage's elements each lie in one label and every interface runs along
@@ -165,7 +165,7 @@ static void to_world(mx_mesher *m) {
   }
 }
 
-int mx_image_finish(mx_mesher *m) {
+int mx_image_mesh_finish(mx_mesher *m) {
   const double t0 = mx_wtime();
   mx_mesh *M = &m->M;
   const int nl = m->image.nlabels;

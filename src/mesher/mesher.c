@@ -493,7 +493,7 @@ double mx_mesh_volume(const mx_mesh *M) {
 }
 
 static int volume_check(mx_mesher *m) {
-  if (m->image_lattice) return MX_OK; /* mx_image_finish judged it */
+  if (m->image_lattice) return MX_OK; /* mx_image_mesh_finish judged it */
   if (m->p.stage != MX_STAGE_FULL || !m->M.ncells ||
       (!m->have_winding && (m->ndomain != 1 || m->p.repair_input)))
     return MX_OK;
@@ -569,7 +569,7 @@ int mx_mesh_stages(mx_mesher *m) {
   }
   MX_CHECK(transition(m));
   if (m->image_lattice) { /* a label image: its labels, nodes onto its interfaces */
-    MX_CHECK(mx_image_finish(m));
+    MX_CHECK(mx_image_mesh_finish(m));
     return mx_mesh_finish(m);
   }
   if (m->p.stage == MX_STAGE_FULL) {

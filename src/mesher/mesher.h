@@ -112,7 +112,7 @@ typedef struct {
   size_t faces[64];     /* their voxel faces on an interface */
   double volume[64];    /* their volume in the mesh */
   size_t moved;         /* nodes moved onto the smoothed interfaces */
-  double seconds_mesh;  /* labels, moves, world (mx_image_finish) */
+  double seconds_mesh;  /* labels, moves, world (mx_image_mesh_finish) */
   mx_label_fix_stats fix;
   size_t triangles;     /* of the interfaces */
   double max_move;      /* the smoothing's largest move, voxels */

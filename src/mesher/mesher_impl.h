@@ -51,7 +51,7 @@ int mx_remesh_after_refine(mx_mesher *m);
  * an interface moved onto the smoothed interface (as far as the elements
  * stay valid), the world by the image's transform, the volume judged
  * against the voxels'. MX_ENOMEM, MX_EINVALID. */
-int mx_image_finish(mx_mesher *m);
+int mx_image_mesh_finish(mx_mesher *m);
 /* The arrays and file name an mx_image_params holds (image_input.c). */
 void mx_image_params_release(mx_image_params *ip);
 /* One domain input appended to m->domain under name (copied; s is left
