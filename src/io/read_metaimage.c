@@ -18,7 +18,7 @@
 enum { LINE_MAX_BYTES = 4096, HEADER_MAX_BYTES = 1 << 20 };
 
 typedef struct {
-  int ndims, type, msb, compressed, channels;
+  int ndims, type, msb, compressed;
   long ndims_line, dims_line, type_line;
   int64_t dims[3], header_size;
   double spacing[3], size[3], offset[3], tm[9];
@@ -294,7 +294,6 @@ int mx_read_metaimage(mx_isrc *s, int from_mem, mx_label_image *img) {
   meta_hdr m;
   memset(&m, 0, sizeof m);
   m.type = -1;
-  m.channels = 1;
   for (int k = 0; k < 3; k++) m.spacing[k] = m.size[k] = m.tm[4 * k] = 1;
   strcpy(img->format, "MetaImage");
   char *buf = mx_alloc(LINE_MAX_BYTES);
