@@ -261,16 +261,29 @@ static size_t bad_faces(const mx_mesh_arrays *a) {
   return bad;
 }
 
-/* Mesh img with A; per label 1..3 the volume and the centroid; returns
- * the status. */
-static int mesh_image(const int32_t *img, const double A[12], int level, double vol[4],
-                      double cen[4][3], size_t *nel) {
+/* Mesh img with A (voxel: the voxel faces kept); per label 1..3 the
+ * volume and the centroid, and a hash of the mesh's arrays; returns the
+ * status. With voxel faces, every element's centroid lies in a voxel of
+ * its label (nothing across an interface). */
+static uint64_t hash_bytes(uint64_t h, const void *p, size_t n) {
+  const unsigned char *b = p;
+  for (size_t i = 0; i < n; i++) h = (h ^ b[i]) * 1099511628211ULL;
+  return h;
+}
+
+static int image_as_given = 1; /* 0: the contacts' repair changed voxels */
+
+static int mesh_image_opt(const int32_t *img, const double A[12], int voxel, int threads,
+                          double vol[4], double cen[4][3], uint64_t *hash) {
   mx_params p;
   mx_params_default(&p);
-  p.surface_level = level;
+  p.threads = threads;
   mx_mesher *m = mx_mesher_new(&p);
   const int64_t dims[3] = {N, N, N};
-  int st = mx_mesher_add_label_array(m, "synthetic", img, dims, A, NULL);
+  mx_image_params ip;
+  mx_image_params_default(&ip);
+  ip.voxel = voxel;
+  int st = mx_mesher_add_label_array(m, "synthetic", img, dims, A, &ip);
   if (!st) st = mx_mesher_mesh(m);
   memset(vol, 0, 4 * sizeof *vol);
   memset(cen, 0, 4 * sizeof *cen);
@@ -280,7 +293,12 @@ static int mesh_image(const int32_t *img, const double A[12], int level, double 
     CHECK(a.material != NULL);
     CHECK(a.invalid == 0 && a.jens_min > 0);
     CHECK(bad_faces(&a) == 0);
-    *nel = a.nelements;
+    uint64_t h = 14695981039346656037ULL;
+    h = hash_bytes(h, a.xyz, 3 * a.nnodes * sizeof *a.xyz);
+    h = hash_bytes(h, a.conn, 8 * a.nelements * sizeof *a.conn);
+    h = hash_bytes(h, a.material, a.nelements * sizeof *a.material);
+    if (hash) *hash = h;
+    size_t across = 0;
     for (size_t e = 0; e < a.nelements; e++) {
       const int L = a.material[e];
       CHECK(L >= 1 && L <= 3);
@@ -288,14 +306,27 @@ static int mesh_image(const int32_t *img, const double A[12], int level, double 
       const double v = element_volume(&a, e);
       vol[L] += v;
       const int nv = a.type[e] == MX_TET ? 4 : a.type[e] == MX_PYRAMID ? 5 : a.type[e] == MX_PRISM ? 6 : 8;
+      double c[3] = {0, 0, 0};
       for (int k = 0; k < nv; k++)
-        for (int x = 0; x < 3; x++) cen[L][x] += v * a.xyz[3 * a.conn[8 * e + k] + x] / nv;
+        for (int x = 0; x < 3; x++) c[x] += a.xyz[3 * a.conn[8 * e + k] + x] / nv;
+      for (int x = 0; x < 3; x++) cen[L][x] += v * c[x];
+      if (image_as_given && voxel && A[1] == 0 && A[2] == 0 && A[4] == 0 && A[6] == 0 && A[8] == 0 && A[9] == 0) {
+        /* the voxel of the centroid (an axis-aligned transform) */
+        int q[3];
+        for (int x = 0; x < 3; x++) q[x] = (int)floor((c[x] - A[4 * x + 3]) / A[5 * x] + 0.5);
+        across += img[q[0] + N * (q[1] + N * q[2])] != L;
+      }
     }
+    CHECK(across == 0);
     for (int L = 1; L <= 3; L++)
       for (int x = 0; x < 3 && vol[L] > 0; x++) cen[L][x] /= vol[L];
   }
   mx_mesher_free(m);
   return st;
+}
+
+static int mesh_image(const int32_t *img, const double A[12], double vol[4], double cen[4][3]) {
+  return mesh_image_opt(img, A, 0, 0, vol, cen, NULL);
 }
 
 /* voxel counts and voxel faces per label (the band) */
@@ -335,8 +366,7 @@ static void check_volumes(const char *what, const int32_t *img, const double vol
 static void test_meshes(void) {
   const double I[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
   int32_t *img = calloc(N * N * N, sizeof *img);
-  double vol[4], cen[4][3];
-  size_t nel = 0;
+  double vol[4], cen[4][3], volV[4], cenV[4][3];
   /* three concentric balls */
   const double c = 11.3;
   for (int k = 0; k < N; k++)
@@ -345,49 +375,68 @@ static void test_meshes(void) {
         const double r = sqrt((i - c) * (i - c) + (j - c) * (j - c) + (k - c) * (k - c));
         img[i + N * (j + N * k)] = r < 3.5 ? 3 : r < 6.5 ? 2 : r < 10 ? 1 : 0;
       }
-  CHECK(mesh_image(img, I, -1, vol, cen, &nel) == MX_OK);
+  CHECK(mesh_image(img, I, vol, cen) == MX_OK);
   check_volumes("balls", img, vol, 1.0);
   for (int x = 0; x < 3; x++) CHECK(fabs(cen[3][x] - c) < 0.3);
-  /* the same under an oblique transform: 30 degrees about z, spacing
-   * 0.5 0.5 0.8, an offset */
+  /* voxel faces kept: the volumes are the voxels' exactly, every element
+   * in a voxel of its label */
+  uint64_t h1 = 0, h2 = 1;
+  CHECK(mesh_image_opt(img, I, 1, 1, volV, cenV, &h1) == MX_OK);
+  size_t cnt[4], faces[4];
+  counts(img, cnt, faces);
+  for (int L = 1; L <= 3; L++) CHECK(fabs(volV[L] - (double)cnt[L]) < 1e-9 * (double)cnt[L]);
+  /* the same arrays with 1 and 2 threads */
+  CHECK(mesh_image_opt(img, I, 0, 1, volV, cenV, &h1) == MX_OK);
+  CHECK(mesh_image_opt(img, I, 0, 2, volV, cenV, &h2) == MX_OK);
+  CHECK(h1 == h2);
+  /* the same under an oblique transform (30 degrees about z, spacing 0.5
+   * 0.5 0.8, an offset), and under a mirror (x negated) */
   const double t = M_PI / 6, sx = 0.5, sz = 0.8;
   const double B[12] = {cos(t) * sx, -sin(t) * sx, 0, 10, sin(t) * sx, cos(t) * sx, 0, -4,
                         0, 0, sz, 2};
-  double volB[4], cenB[4][3];
-  CHECK(mesh_image(img, B, -1, volB, cenB, &nel) == MX_OK);
-  check_volumes("oblique balls", img, volB, sx * sx * sz);
-  for (int r = 0; r < 3; r++) { /* the centroid of label 3 mapped by B */
-    const double want = B[4 * r] * c + B[4 * r + 1] * c + B[4 * r + 2] * c + B[4 * r + 3];
-    CHECK(fabs(cenB[3][r] - want) < 0.3);
+  for (int mirror = 0; mirror < 2; mirror++) {
+    double C[12];
+    memcpy(C, B, sizeof C);
+    if (mirror)
+      for (int r = 0; r < 3; r++) C[4 * r] = -C[4 * r];
+    double volB[4], cenB[4][3];
+    CHECK(mesh_image(img, C, volB, cenB) == MX_OK);
+    check_volumes(mirror ? "mirrored balls" : "oblique balls", img, volB, sx * sx * sz);
+    for (int r = 0; r < 3; r++) { /* the centroid of label 3 mapped by C */
+      const double want = C[4 * r] * c + C[4 * r + 1] * c + C[4 * r + 2] * c + C[4 * r + 3];
+      CHECK(fabs(cenB[3][r] - want) < 0.3);
+    }
   }
-  /* touching boxes */
+  /* touching boxes, with the voxel faces: exact */
   memset(img, 0, N * N * N * sizeof *img);
   for (int k = 3; k < 20; k++)
     for (int j = 3; j < 20; j++)
       for (int i = 3; i < 20; i++) img[i + N * (j + N * k)] = i < 11 ? 1 : 2;
-  CHECK(mesh_image(img, I, -1, vol, cen, &nel) == MX_OK);
+  CHECK(mesh_image(img, I, vol, cen) == MX_OK);
   check_volumes("boxes", img, vol, 1.0);
-  /* a plate one voxel thin (label 1) inside a box (label 2) */
+  CHECK(mesh_image_opt(img, I, 1, 0, vol, cen, NULL) == MX_OK);
+  CHECK(fabs(vol[1] - 8 * 17 * 17) < 1e-9 && fabs(vol[2] - 9 * 17 * 17) < 1e-9);
+  /* a plate one voxel thin (label 1) inside a box (label 2): kept whole */
   memset(img, 0, N * N * N * sizeof *img);
   for (int k = 3; k < 20; k++)
     for (int j = 3; j < 20; j++)
       for (int i = 3; i < 20; i++)
         img[i + N * (j + N * k)] = (k == 11 && i >= 6 && i < 17 && j >= 6 && j < 17) ? 1 : 2;
-  CHECK(mesh_image(img, I, -1, vol, cen, &nel) == MX_OK);
+  CHECK(mesh_image(img, I, vol, cen) == MX_OK);
   check_volumes("plate", img, vol, 1.0);
-  CHECK(vol[1] > 0.5 * 121);
-  /* a checkerboard of 4-voxel blocks (its edge contacts repaired) */
+  CHECK(vol[1] > 0.8 * 121);
+  /* a checkerboard of 4-voxel blocks: its edge contacts joined (a voxel
+   * raised at each), the whole volume the voxels' */
   memset(img, 0, N * N * N * sizeof *img);
   for (int k = 4; k < 20; k++)
     for (int j = 4; j < 20; j++)
       for (int i = 4; i < 20; i++) img[i + N * (j + N * k)] = ((i / 4 + j / 4 + k / 4) & 1) + 1;
-  /* at the voxel's level the bridged edges are too thin for the
-   * interfaces' cleaving: refused as elements across an interface (a known
-   * limit, issue 28's closing note); one level finer it meshes */
-  CHECK(mesh_image(img, I, -1, vol, cen, &nel) == MX_EINVALID);
-  const int st = mesh_image(img, I, 6, vol, cen, &nel);
-  CHECK(st == MX_OK);
-  if (st == MX_OK) CHECK(vol[1] > 0.8 * 2048 && vol[2] > 0.8 * 2048);
+  image_as_given = 0;
+  CHECK(mesh_image(img, I, vol, cen) == MX_OK);
+  CHECK(vol[1] > 0.5 * 2048 && vol[2] > 0.5 * 2048);
+  CHECK(fabs(vol[1] + vol[2] - 4096.0) < 0.5 * 6 * 256); /* the outer band */
+  CHECK(mesh_image_opt(img, I, 1, 0, vol, cen, NULL) == MX_OK);
+  CHECK(fabs(vol[1] + vol[2] - 4096.0) < 1e-9);
   free(img);
 }
 
