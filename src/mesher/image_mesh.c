@@ -231,5 +231,8 @@ int mx_image_mesh_finish(mx_mesher *m) {
     }
   }
   m->image.seconds_mesh = mx_wtime() - t0;
+  m->image.voxel_volume = vox;
+  m->rec->S.image = &m->image;
+  m->rec->S.max_level = m->image_R;
   return MX_OK;
 }

@@ -22,6 +22,28 @@
 #include "sizing/sources.h"
 #include "geom/label_fix.h"
 
+/* The last label image added, for the report. */
+typedef struct {
+  char format[16];
+  int64_t dims[3];
+  double spacing[3];
+  int oblique;
+  size_t rounded;
+  int nlabels;          /* labels meshed */
+  int32_t labels[64];
+  char names[64][64];   /* their materials' names */
+  size_t voxels[64];    /* their voxels, after the fixes */
+  size_t faces[64];     /* their voxel faces on an interface */
+  double volume[64];    /* their volume in the mesh */
+  size_t moved;         /* nodes moved onto the smoothed interfaces */
+  double seconds_mesh;  /* labels, moves, world (mx_image_mesh_finish) */
+  double voxel_volume;  /* |det A|: one voxel in the world */
+  mx_label_fix_stats fix;
+  size_t triangles;     /* of the interfaces */
+  double max_move;      /* the smoothing's largest move, voxels */
+  double seconds;
+} mx_image_info;
+
 typedef struct {
   double read, grid, refine, balance, transition, boundary, verify, quality, write, total;
 } mx_phases;
@@ -56,6 +78,7 @@ typedef struct {
   size_t reoriented;        /* input triangles flipped by the input policy */
   double volume_error;      /* (mesh - enclosed) / enclosed, one closed input */
   int input_repaired;       /* the domain is the winding number's (repair_input) */
+  const mx_image_info *image; /* a label image's mesh (image_mesh.c), NULL otherwise */
   mx_winding_boundary_stats winding; /* its boundary (input_repaired) */
   int local;                /* 1: every re-mesh of the call was local */
   int local_attempts;       /* patches tried (more rings when one fell short) */
@@ -98,26 +121,6 @@ void mx_mesher_note_read(mx_mesher *m, const char *path, int restart);
  * (restart_out: the restart file written, which may replace the one read). */
 int mx_mesher_spares_inputs(const mx_mesher *m, const char *path, int restart_out);
 
-/* The last label image added, for the report. */
-typedef struct {
-  char format[16];
-  int64_t dims[3];
-  double spacing[3];
-  int oblique;
-  size_t rounded;
-  int nlabels;          /* labels meshed */
-  int32_t labels[64];
-  char names[64][64];   /* their materials' names */
-  size_t voxels[64];    /* their voxels, after the fixes */
-  size_t faces[64];     /* their voxel faces on an interface */
-  double volume[64];    /* their volume in the mesh */
-  size_t moved;         /* nodes moved onto the smoothed interfaces */
-  double seconds_mesh;  /* labels, moves, world (mx_image_mesh_finish) */
-  mx_label_fix_stats fix;
-  size_t triangles;     /* of the interfaces */
-  double max_move;      /* the smoothing's largest move, voxels */
-  double seconds;
-} mx_image_info;
 
 struct mx_mesher {
   mx_params p;

@@ -181,6 +181,29 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
                s->size_graded_n, s->size_beta, s->size_src_kb, s->size_src_seconds);
     }
   }
+  char img[12288] = "";
+  if (s->image) {
+    const mx_image_info *g = s->image;
+    size_t w = (size_t)snprintf(
+        img, sizeof img,
+        "\"image\": {\"format\": \"%s\", \"dims\": [%lld, %lld, %lld], \"spacing\": [%.9g, "
+        "%.9g, %.9g], \"oblique\": %s, \"rounded_voxels\": %zu, \"contact_voxels\": %zu, "
+        "\"islands\": %zu, \"island_voxels\": %zu, \"moved_nodes\": %zu, \"seconds\": "
+        "{\"labels\": %.6f, \"mesh\": %.6f}, \"labels\": [",
+        g->format, (long long)g->dims[0], (long long)g->dims[1], (long long)g->dims[2],
+        g->spacing[0], g->spacing[1], g->spacing[2], g->oblique ? "true" : "false", g->rounded,
+        g->fix.contact_voxels, g->fix.islands, g->fix.island_voxels, g->moved, g->seconds,
+        g->seconds_mesh);
+    for (int l = 0; l < g->nlabels && w < sizeof img; l++) {
+      const double want = (double)g->voxels[l] * g->voxel_volume;
+      w += (size_t)snprintf(img + w, sizeof img - w,
+                            "%s{\"label\": %d, \"name\": \"%s\", \"voxels\": %zu, "
+                            "\"voxel_volume\": %.9g, \"volume\": %.9g, \"error\": %.6g}",
+                            l ? ", " : "", (int)g->labels[l], g->names[l], g->voxels[l], want,
+                            g->volume[l], want > 0 ? (g->volume[l] - want) / want : 0.0);
+    }
+    if (w < sizeof img) snprintf(img + w, sizeof img - w, "]}, ");
+  }
   fprintf(out, "\"leaves\": %zu, \"leaves_hash\": \"%016" PRIx64 "\", "
          "\"nodes\": %s, \"elements\": %zu, "
          "\"by_type\": {\"hex\": %zu, \"prism\": %zu, \"pyramid\": %zu, \"tet\": %zu}, "
@@ -196,7 +219,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
          "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"memory_estimate_mb\": %.1f, "
          "\"memory_estimate_prior_mb\": %.1f, "
          "\"threads\": %d, \"wait_policy\": \"%s\", "
-         "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, %s%s"
+         "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, %s%s%s"
          "\"topology\": \"%s\"}\n",
          s->leaves, s->leaves_hash, nodes, elements, hex,
          s->mesh ? s->by_type[2] : 0, s->mesh ? s->by_type[1] : 0,
@@ -210,7 +233,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
          s->local ? s->patch_leaves : 0, s->local ? s->core_leaves : 0, s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->memory_prior_mb, s->threads,
          ri->wait_policy ? ri->wait_policy : "default",
          s->mesh ? s->jens_min : 1.0,
-         s->mesh ? s->invalid : 0, qual, bnd, mat, ri->topology ? ri->topology : "");
+         s->mesh ? s->invalid : 0, qual, bnd, mat, img, ri->topology ? ri->topology : "");
 }
 
 /* The summary printed after a run (unless --quiet or --json): what was
@@ -244,7 +267,7 @@ static void quality_summary(const mx_summary *s) {
 
 static void print_summary(const mx_summary *s, const mx_run_info *ri) {
   printf("mixoct: %s; %d thread(s), %s balance, levels up to %d\n",
-         s->full ? "mesh of the domain" :
+         s->image ? "mesh of the label image" : s->full ? "mesh of the domain" :
          s->mesh ? "conforming mesh of the whole octree (transition stage)"
                  : "balanced octree (octree stage)",
          s->threads, s->balance ? "recursive" : "edges", s->max_level);
@@ -263,7 +286,25 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
     printf("  elements     %12zu hexahedra (the leaves, hanging nodes kept)\n",
            s->leaves);
   }
-  if (s->nmaterials) {
+  if (s->image) {
+    const mx_image_info *g = s->image;
+    printf("  image        %s, %lld x %lld x %lld voxels of %.4g x %.4g x %.4g%s; %.3f s "
+           "(labels), %.3f s (labels on the mesh, %zu nodes onto the interfaces)\n",
+           g->format, (long long)g->dims[0], (long long)g->dims[1], (long long)g->dims[2],
+           g->spacing[0], g->spacing[1], g->spacing[2], g->oblique ? ", oblique" : "",
+           g->seconds, g->seconds_mesh, g->moved);
+    if (g->fix.contact_voxels || g->fix.islands || g->rounded)
+      printf("               %zu voxel(s) relabelled at contacts, %zu island(s) dropped (%zu "
+             "voxels), %zu non-integer voxel(s) rounded\n",
+             g->fix.contact_voxels, g->fix.islands, g->fix.island_voxels, g->rounded);
+    printf("  labels          label      voxels       volume     voxels' volume    error  name\n");
+    for (int l = 0; l < g->nlabels; l++) {
+      const double want = (double)g->voxels[l] * g->voxel_volume;
+      printf("               %8d %11zu %12.6g %18.6g %+7.2f%%  %s\n", (int)g->labels[l],
+             g->voxels[l], g->volume[l], want,
+             want > 0 ? 100.0 * (g->volume[l] - want) / want : 0.0, g->names[l]);
+    }
+  } else if (s->nmaterials) {
     const mx_cleave_stats *cv = &s->boundary.ifs.cleave;
     printf("  materials    %12d regions (by nesting depth and input); %zu element(s) across an "
            "interface\n", s->nmaterials, s->materials_across);
