@@ -233,6 +233,7 @@ int mx_image_mesh_finish(mx_mesher *m) {
   m->image.seconds_mesh = mx_wtime() - t0;
   m->image.voxel_volume = vox;
   m->rec->S.image = &m->image;
+  m->mesh_stage = MX_STAGE_FULL; /* the domain's mesh: its boundary and interfaces are final */
   m->rec->S.max_level = m->image_R;
   return MX_OK;
 }
