@@ -140,6 +140,7 @@ wait_policy = _choose_wait_policy()
 import ctypes  # noqa: E402 (after the wait policy: see above)
 import ctypes.util  # noqa: E402
 import math  # noqa: E402
+import warnings  # noqa: E402
 import weakref  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -273,6 +274,17 @@ _u8p = ctypes.POINTER(ctypes.c_uint8)
 _u32p = ctypes.POINTER(ctypes.c_uint32)
 
 
+class _ImageParams(ctypes.Structure):
+    _fields_ = [("voxel", ctypes.c_int),
+                ("smooth_rounds", ctypes.c_int),
+                ("min_island", ctypes.c_longlong),
+                ("skip", ctypes.POINTER(ctypes.c_int32)),
+                ("nskip", ctypes.c_int),
+                ("merge", ctypes.POINTER(ctypes.c_int32)),
+                ("nmerge", ctypes.c_int),
+                ("label_names", ctypes.c_char_p)]
+
+
 class _Params2D(ctypes.Structure):
     _fields_ = _fields(
         (ctypes.c_int, "surface_level all_level balance threads"),
@@ -346,6 +358,11 @@ def _declare(lib):
         "mx_mesher_add_surface": (I, [P, S]),
         "mx_mesher_add_surface_arrays": (I, [P, S, sz, dblp, sz, u32p]),
         "mx_mesher_add_demo_surface": (I, [P]),
+        "mx_image_params_default": (None, [ctypes.POINTER(_ImageParams)]),
+        "mx_mesher_add_label_image": (I, [P, S, ctypes.POINTER(_ImageParams)]),
+        "mx_mesher_add_label_array": (I, [P, S, ctypes.POINTER(ctypes.c_int32),
+                                          ctypes.POINTER(ctypes.c_int64), dblp,
+                                          ctypes.POINTER(_ImageParams)]),
         "mx_mesher_add_region_surface": (I, [P, S, I]),
         "mx_mesher_set_material": (I, [P, I, I, S]),
         "mx_mesher_set_input_level": (I, [P, I, I, I]),
@@ -985,6 +1002,82 @@ class Mesher(_MesherBase):
         uint32 (copied only if needed); the library copies them."""
         self._call("mx_mesher_add_surface_arrays", str(name).encode(),
                    *_input_arrays(name, xyz, 3, "xyz", tri, 3, "tri"))
+
+    def add_label_image(self, labels, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0),
+                        affine=None, voxel=False, min_island=0, skip=(), merge=None,
+                        label_names=None, smoothing=None, name="labels"):
+        """A segmented 3D image to mesh (0 background, each other label a
+        material of that number): a file (.nii, .nii.gz, .mha, .mhd, .inr,
+        .inr.gz) or an integer array indexed [i, j, k] as nibabel gives it
+        (``img.get_fdata()``/``np.asarray(img.dataobj)``; a SimpleITK array
+        is [k, j, i]: pass ``arr.transpose()``). For an array, the world of
+        voxel (i, j, k)'s centre is ``affine @ (i, j, k, 1)`` (a 4x4 or 3x4
+        matrix, nibabel's ``img.affine``), or else origin + spacing * (i,
+        j, k). The image is meshed alone, on its voxel lattice: voxels at
+        the interfaces, the nodes there moved onto the smoothed interfaces
+        (``voxel=True`` keeps the voxel faces); ``min_island`` drops the
+        parts of a label of fewer voxels; ``skip`` labels are background;
+        ``merge`` maps labels ({from: to}); ``label_names`` a file of "LABEL
+        NAME" lines; ``smoothing`` the interfaces' smoothing rounds."""
+        ip = _ImageParams()
+        self._lib.mx_image_params_default(ctypes.byref(ip))
+        ip.voxel = 1 if voxel else 0
+        if smoothing is not None:
+            if int(smoothing) < 0 or int(smoothing) > 1000:
+                raise InputError("%s: smoothing must be 0 .. 1000 rounds" % name, EINPUT)
+            ip.smooth_rounds = int(smoothing)
+        if int(min_island) < 0:
+            raise InputError("%s: min_island must be 0 or more voxels" % name, EINPUT)
+        ip.min_island = int(min_island)
+        sk = np.ascontiguousarray(list(skip), dtype=np.int32)
+        pairs = sorted((merge or {}).items())
+        mg = np.ascontiguousarray([x for p in pairs for x in p], dtype=np.int32)
+        if sk.size > 64 or len(pairs) > 64:
+            raise InputError("%s: at most 64 labels to skip or merge" % name, EINPUT)
+        ip.skip = sk.ctypes.data_as(ctypes.POINTER(ctypes.c_int32))
+        ip.nskip = int(sk.size)
+        ip.merge = mg.ctypes.data_as(ctypes.POINTER(ctypes.c_int32))
+        ip.nmerge = len(pairs)
+        ip.label_names = None if label_names is None else _fspath(label_names)
+        if isinstance(labels, (str, bytes, os.PathLike)):
+            self._call("mx_mesher_add_label_image", _fspath(labels), ctypes.byref(ip))
+            return
+        a = np.asarray(labels)
+        if a.ndim != 3 or 0 in a.shape:
+            raise InputError("%s: labels must be a 3D array, not of shape %s"
+                             % (name, a.shape), EINPUT)
+        if a.dtype.kind == "f":
+            r = np.rint(a)
+            if not np.all(np.isfinite(a)):
+                raise InputError("%s: labels hold NaN or infinite values" % name, EINPUT)
+            if np.any(r != a):
+                warnings.warn("%s: %d non-integer label(s) rounded"
+                              % (name, int(np.count_nonzero(r != a))))
+            a = r
+        elif a.dtype.kind not in "iub":
+            raise InputError("%s: labels must be integers, not %s" % (name, a.dtype), EINPUT)
+        if a.size and (a.min() < -2**31 or a.max() > 2**31 - 1):
+            raise InputError("%s: labels must fit 32 bits" % name, EINPUT)
+        lab = np.asfortranarray(a, dtype=np.int32)  # i fastest
+        if affine is not None:
+            A = np.asarray(affine, dtype=np.float64)
+            if A.shape not in ((4, 4), (3, 4)):
+                raise InputError("%s: affine must be 4x4 or 3x4, not %s" % (name, A.shape),
+                                 EINPUT)
+            A = np.ascontiguousarray(A[:3, :4])
+        else:
+            sp = np.asarray(spacing, dtype=np.float64).reshape(-1)
+            org = np.asarray(origin, dtype=np.float64).reshape(-1)
+            if sp.size != 3 or org.size != 3:
+                raise InputError("%s: spacing and origin take 3 numbers each" % name, EINPUT)
+            A = np.zeros((3, 4))
+            A[0, 0], A[1, 1], A[2, 2] = sp
+            A[:, 3] = org
+        dims = np.ascontiguousarray(a.shape, dtype=np.int64)
+        self._call("mx_mesher_add_label_array", str(name).encode(),
+                   lab.ctypes.data_as(ctypes.POINTER(ctypes.c_int32)),
+                   dims.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
+                   A.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), ctypes.byref(ip))
 
     def add_demo_surface(self):
         """The built-in demo surface (a brain-like closed surface)."""
