@@ -48,7 +48,7 @@ static double cell_jens(const mx_mesh *M, size_t c, const double *xyz) {
 }
 
 /* Nodes onto the smoothed interfaces, as far as the elements allow. */
-static int move_nodes(mx_mesher *m, size_t *moved_out) {
+static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
   mx_mesh *M = &m->M;
   mx_label_surface S;
   MX_CHECK(mx_label_surface_build(m->image_lab, m->image_n, m->image_A, m->image_rounds, 0.35,
@@ -95,43 +95,62 @@ static int move_nodes(mx_mesher *m, size_t *moved_out) {
     moved++;
   }
   mx_label_surface_free(&S);
+  /* the elements around a moved node, once */
+  size_t nb = 0;
+  for (size_t c = 0; c < M->ncells; c++) {
+    int any = 0;
+    for (int q = 0; q < mx_cell_nodes[M->type[c]]; q++) any |= mv[M->conn[8 * c + q]];
+    bad[c] = (uint8_t)any;
+    nb += (size_t)any;
+  }
+  uint32_t *band = mx_alloc((nb + 1) * sizeof *band);
+  if (!band) {
+    mx_free(d);
+    mx_free(x);
+    mx_free(mv);
+    mx_free(bad);
+    mx_free(j0);
+    return MX_ENOMEM;
+  }
+  nb = 0;
+  for (size_t c = 0; c < M->ncells; c++)
+    if (bad[c]) band[nb++] = (uint32_t)c;
 #pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < M->ncells; c++) j0[c] = (float)cell_jens(M, c, M->xyz);
+  for (size_t b = 0; b < nb; b++) j0[b] = (float)cell_jens(M, band[b], M->xyz);
+  memcpy(x, M->xyz, 3 * nn * sizeof *x);
   /* halve the moves around elements that would be poor, then undo them */
   for (int round = 0; round <= 6; round++) {
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < 3 * nn; i++) x[i] = M->xyz[i] + d[i];
+    for (size_t v = 0; v < nn; v++)
+      if (mv[v])
+        for (int a = 0; a < 3; a++) x[3 * v + a] = M->xyz[3 * v + a] + d[3 * v + a];
     size_t nbad = 0;
 #pragma omp parallel for schedule(static) reduction(+ : nbad)
-    for (size_t c = 0; c < M->ncells; c++) {
-      bad[c] = 0;
-      const int nv = mx_cell_nodes[M->type[c]];
-      int any = 0;
-      for (int k = 0; k < nv; k++) any |= mv[M->conn[8 * c + k]];
-      if (!any) continue;
-      const double floor_q = j0[c] < 0.1f ? 0.5 * j0[c] : 0.1;
-      if (cell_jens(M, c, x) < floor_q) {
-        bad[c] = 1;
-        nbad++;
-      }
+    for (size_t b = 0; b < nb; b++) {
+      const double floor_q = j0[b] < 0.1f ? 0.5 * j0[b] : 0.1;
+      bad[b] = cell_jens(M, band[b], x) < floor_q;
+      nbad += bad[b];
     }
     if (!nbad) break;
     const double f = round == 6 ? 0.0 : 0.5;
-    for (size_t c = 0; c < M->ncells; c++) /* serial: nodes shared */
-      if (bad[c])
-        for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
-          const uint32_t v = M->conn[8 * c + k];
+    for (size_t b = 0; b < nb; b++) /* serial: nodes shared */
+      if (bad[b]) {
+        const size_t c = band[b];
+        for (int q = 0; q < mx_cell_nodes[M->type[c]]; q++) {
+          const uint32_t v = M->conn[8 * c + q];
           if (mv[v] == 1) {
             mv[v] = 2; /* once per round */
             for (int a = 0; a < 3; a++) d[3 * (size_t)v + a] *= f;
           }
         }
+      }
     for (size_t v = 0; v < nn; v++) mv[v] = mv[v] ? 1 : 0;
   }
+  mx_free(band);
   memcpy(M->xyz, x, 3 * nn * sizeof *x);
   mx_free(d);
   mx_free(x);
-  mx_free(mv);
+  *moved_mask = mv;
   mx_free(bad);
   mx_free(j0);
   *moved_out = moved;
@@ -197,9 +216,24 @@ int mx_image_mesh_finish(mx_mesher *m) {
   mx_free(m->states);
   m->states = NULL;
   size_t moved = 0;
-  if (m->image_rounds > 0) MX_CHECK(move_nodes(m, &moved));
+  uint8_t *mv = NULL;
+  if (m->image_rounds > 0) MX_CHECK(move_nodes(m, &moved, &mv));
   to_world(m);
-  mx_mesh_update_jens(M, NULL);
+  /* J_ENS does not change under a rotation, a uniform scaling and a shift:
+   * then only the elements around a moved node are measured again */
+  const double *T = m->image_A;
+  double col[3][3], nrm[3];
+  for (int a = 0; a < 3; a++) {
+    for (int r = 0; r < 3; r++) col[a][r] = T[4 * r + a];
+    nrm[a] = sqrt(col[a][0] * col[a][0] + col[a][1] * col[a][1] + col[a][2] * col[a][2]);
+  }
+  int similar = fabs(nrm[0] - nrm[1]) <= 1e-12 * nrm[0] && fabs(nrm[0] - nrm[2]) <= 1e-12 * nrm[0];
+  for (int a = 0; a < 3 && similar; a++)
+    for (int b = a + 1; b < 3; b++)
+      similar &= fabs(col[a][0] * col[b][0] + col[a][1] * col[b][1] + col[a][2] * col[b][2]) <=
+                 1e-12 * nrm[a] * nrm[b];
+  if (!similar || mv) mx_mesh_update_jens(M, similar ? mv : NULL);
+  mx_free(mv);
   mx_mesh_summarize(M);
   m->nmaterials = nl;
   m->rec->S.nmaterials = nl;
@@ -207,15 +241,18 @@ int mx_image_mesh_finish(mx_mesher *m) {
   m->image.moved = moved;
   /* each label's volume against its voxels' */
   double vol[64] = {0};
+  uint8_t *slot = mx_calloc(65536); /* label -> its index */
+  if (!slot) return MX_ENOMEM;
+  for (int l = 0; l < nl; l++) slot[m->image.labels[l]] = (uint8_t)l;
+#pragma omp parallel for schedule(static) reduction(+ : vol[:64])
   for (size_t c = 0; c < M->ncells; c++) {
     double p[8][3];
     const int nv = mx_cell_nodes[M->type[c]];
     for (int q = 0; q < nv; q++)
       for (int a = 0; a < 3; a++) p[q][a] = M->xyz[3 * (size_t)M->conn[8 * c + q] + a];
-    const double v = mx_element_volume(M->type[c], (const double(*)[3])p);
-    for (int l = 0; l < nl; l++)
-      if (m->image.labels[l] == M->material[c]) vol[l] += v;
+    vol[slot[M->material[c]]] += mx_element_volume(M->type[c], (const double(*)[3])p);
   }
+  mx_free(slot);
   const double *A = m->image_A;
   const double vox = fabs(A[0] * (A[5] * A[10] - A[6] * A[9]) - A[1] * (A[4] * A[10] - A[6] * A[8]) +
                           A[2] * (A[4] * A[9] - A[5] * A[8]));
@@ -231,6 +268,7 @@ int mx_image_mesh_finish(mx_mesher *m) {
     }
   }
   m->image.seconds_mesh = mx_wtime() - t0;
+  m->rec->S.ph.boundary += m->image.seconds_mesh; /* the interfaces' stage */
   m->image.voxel_volume = vox;
   m->rec->S.image = &m->image;
   m->mesh_stage = MX_STAGE_FULL; /* the domain's mesh: its boundary and interfaces are final */
