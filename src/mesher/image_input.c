@@ -269,6 +269,11 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
     mx_error(name, 0, "label image: no voxels or no transform given");
     return MX_EINPUT;
   }
+  if (m->p.surface_level >= 0 || m->p.all_level >= 0) {
+    mx_error(name, 0, "a label image is refined to its voxels at the interfaces and as coarse "
+                      "as balance allows inside: no surface or all level (-s, -a) with it");
+    return MX_EINPUT;
+  }
   if (m->ndomain > 0 || m->image_lattice) {
     mx_error(name, 0, "a label image is meshed alone: no other image or surface with it");
     return MX_EINPUT;
@@ -399,8 +404,6 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
   m->image_R = R;
   m->image_grid = g;
   m->image_rounds = ip->voxel ? 0 : ip->smooth_rounds < 0 ? 10 : ip->smooth_rounds;
-  m->p.surface_level = -1; /* the image's lattice says where to split */
-  m->p.all_level = -1;
   m->p.materials = 0;      /* labels, not the surfaces' regions */
   m->nmaterials = nl;
   info->nlabels = nl;

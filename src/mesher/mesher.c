@@ -275,6 +275,14 @@ int mx_build_tree(mx_mesher *m) {
     m->rec->S.size_seconds = in.seconds;
   }
   mx_requests req = mx_mesher_requests(m);
+  if (m->image_lattice && (req.s_level >= 0 || req.a_level >= 0 || req.nboxes || req.nregions ||
+                           req.size_field)) {
+    /* not yet: the image's own lattice decides every split */
+    mx_error(m->domain_name[0], 0, "a label image is refined to its voxels at the interfaces "
+                                   "and as coarse as balance allows inside; levels, boxes, "
+                                   "region surfaces and size fields do not apply to it yet");
+    return MX_EINPUT;
+  }
   /* a restart file's octree is made again as it was: a size field applies
    * after it, with the re-mesh's other requests (mesher/remesh.c) */
   int from_keys = 0;
