@@ -111,29 +111,6 @@ int mx_labels_drop_islands(int32_t *lab, const int64_t n[3], size_t min_voxels,
   return MX_OK;
 }
 
-int mx_labels_fill_cavities(int32_t *lab, const int64_t n[3], mx_label_fix_stats *st) {
-  const int64_t total = n[0] * n[1] * n[2];
-  uint8_t *mark = mx_calloc((size_t)total);
-  uint32_t *q = mx_alloc((size_t)total * sizeof *q);
-  if (!mark || !q) {
-    mx_free(mark);
-    mx_free(q);
-    return MX_ENOMEM;
-  }
-  flood(lab, n, mark, q, 0); /* the outside: voxel 0 is padding */
-  for (int64_t v = 0; v < total; v++) {
-    if (mark[v] || lab[v] != 0) continue;
-    const size_t len = flood(lab, n, mark, q, v);
-    const int32_t M = most_met(lab, n, q, len);
-    for (size_t t = 0; t < len; t++) lab[q[t]] = M;
-    st->cavity_voxels += len;
-    st->cavities++;
-  }
-  mx_free(mark);
-  mx_free(q);
-  return MX_OK;
-}
-
 /* ---- contacts ----------------------------------------------------------
  * The 8 voxels around a vertex, b = dx + 2 dy + 4 dz; face neighbours in
  * the block differ in one bit. */

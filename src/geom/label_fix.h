@@ -1,6 +1,5 @@
 /* A label image made ready for its interfaces (issue 28): the labels a
- * user skips or merges, small islands dropped, enclosed background filled,
- * and the contacts a surface cannot bound removed (src/geom/label_fix.c).
+ * user skips or merges, small islands dropped, and the contacts a surface cannot bound removed (src/geom/label_fix.c).
  *
  * The image is held padded: one voxel of background (label 0) all round,
  * n[3] the padded dims, voxel (i, j, k) at i + n[0] (j + n[1] k). The
@@ -14,8 +13,6 @@
 typedef struct {
   size_t island_voxels;   /* voxels of the islands dropped (min_island) */
   size_t islands;         /* islands dropped */
-  size_t cavity_voxels;   /* enclosed background voxels given a label */
-  size_t cavities;        /* enclosed background regions */
   size_t contact_voxels;  /* voxels relabelled at edge and point contacts */
   int contact_rounds;     /* passes of the contact repair */
   int64_t contact_at[3];  /* a voxel (unpadded) relabelled first, -1 none */
@@ -26,10 +23,6 @@ typedef struct {
  * meet most (ties: the smaller label). MX_OK, MX_ENOMEM. */
 int mx_labels_drop_islands(int32_t *lab, const int64_t n[3], size_t min_voxels,
                            mx_label_fix_stats *st);
-/* Background (label 0) not connected through faces to the padding takes
- * the label its faces meet most: the regions of several materials have no
- * holes. MX_OK, MX_ENOMEM. */
-int mx_labels_fill_cavities(int32_t *lab, const int64_t n[3], mx_label_fix_stats *st);
 /* Contacts: around every lattice vertex, the 8 voxels' labels must each be
  * face-connected among the 8, so must what is not that label, and no
  * lattice edge may have four different labels in turn around it (two

@@ -12,6 +12,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "base/union_find.h"
 #include "base/common.h"
 #include "base/scan.h"
 #include "geom/label_surface.h"
@@ -24,20 +25,6 @@ void mx_label_surface_free(mx_label_surface *S) {
   mx_free(S->corner);
   mx_free(S->lat);
   memset(S, 0, sizeof *S);
-}
-
-static uint32_t uf_find(uint32_t *up, uint32_t x) {
-  while (up[x] != x) {
-    up[x] = up[up[x]];
-    x = up[x];
-  }
-  return x;
-}
-
-static void uf_join(uint32_t *up, uint32_t x, uint32_t y) {
-  x = uf_find(up, x);
-  y = uf_find(up, y);
-  if (x != y) up[x > y ? x : y] = x < y ? x : y;
 }
 
 typedef struct {
@@ -175,7 +162,7 @@ int mx_label_surface_build(const int32_t *lab, const int64_t n[3], const double 
         for (size_t y = x + 1; y < e; y++)
           for (int sy = 0; sy < 2; sy++) {
             const uint32_t qy = rec[y] / 4;
-            if (Q.side[2 * qy + sy] == lx) uf_join(up, 2 * qx + sx, 2 * qy + sy);
+            if (Q.side[2 * qy + sy] == lx) mx_uf_join(up, 2 * qx + sx, 2 * qy + sy);
           }
       }
     g = e;
@@ -184,7 +171,7 @@ int mx_label_surface_build(const int32_t *lab, const int64_t n[3], const double 
   mx_free(rec);
   key = NULL;
   rec = NULL;
-  for (size_t h = 0; h < 2 * nq; h++) up[h] = uf_find(up, (uint32_t)h); /* read-only below */
+  for (size_t h = 0; h < 2 * nq; h++) up[h] = mx_uf_find(up, (uint32_t)h); /* read-only below */
 
   /* shells' signed volumes, 3 V = sum of +-(the plane's coordinate) */
   shellvol = mx_calloc((2 * nq + 1) * (sizeof *shellvol));

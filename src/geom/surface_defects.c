@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/union_find.h"
 #include "base/common.h"
 #include "base/morton.h"
 #include "base/scan.h"
@@ -543,26 +544,18 @@ static int edge_defects(const mx_trisoup *s, const mx_edge_table *E,
 
 /* Bodies: triangles connected through shared vertices (union-find over
  * the vertices); body[t] = the root of t's first vertex. */
-static uint32_t uf_find(uint32_t *p, uint32_t x) {
-  while (p[x] != x) {
-    p[x] = p[p[x]];
-    x = p[x];
-  }
-  return x;
-}
-
 static void bodies(const mx_trisoup *s, uint32_t *p, uint32_t *body) {
   for (size_t v = 0; v < s->nv; v++) p[v] = (uint32_t)v;
   for (size_t t = 0; t < s->nt; t++) {
-    uint32_t a = uf_find(p, s->tri[3 * t]);
+    uint32_t a = mx_uf_find(p, s->tri[3 * t]);
     for (int k = 1; k < 3; k++) {
-      uint32_t b = uf_find(p, s->tri[3 * t + k]);
+      uint32_t b = mx_uf_find(p, s->tri[3 * t + k]);
       if (a == b) continue;
       if (a < b) p[b] = a;
       else p[a] = b, a = b;
     }
   }
-  for (size_t t = 0; t < s->nt; t++) body[t] = uf_find(p, s->tri[3 * t]);
+  for (size_t t = 0; t < s->nt; t++) body[t] = mx_uf_find(p, s->tri[3 * t]);
 }
 
 /* ==== broad phase ========================================================

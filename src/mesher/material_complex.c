@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/union_find.h"
 #include "base/common.h"
 #include "mesher/materials.h"
 #include "mesher/mesher_impl.h"
@@ -31,20 +32,6 @@ static int cmp_use(const void *x, const void *y) {
   if (p->a != q->a) return p->a < q->a ? -1 : 1;
   if (p->b != q->b) return p->b < q->b ? -1 : 1;
   return (p->t > q->t) - (p->t < q->t);
-}
-
-static uint32_t uf_find(uint32_t *up, uint32_t x) {
-  while (up[x] != x) {
-    up[x] = up[up[x]];
-    x = up[x];
-  }
-  return x;
-}
-
-static void uf_join(uint32_t *up, uint32_t x, uint32_t y) {
-  x = uf_find(up, x);
-  y = uf_find(up, y);
-  if (x != y) up[x > y ? x : y] = x < y ? x : y;
 }
 
 static void sub(const double *p, const double *q, double *r) {
@@ -161,7 +148,7 @@ static int split_file(mx_mesher *m, int file, const uint32_t *to, mx_trisoup *ou
       /* the wedge from s to nx: s's side turning forward, nx's backward */
       const uint32_t hs = 2 * s->t + (s->side > 0 ? 0 : 1);
       const uint32_t hn = 2 * nx->t + (nx->side > 0 ? 1 : 0);
-      uf_join(up, hs, hn);
+      mx_uf_join(up, hs, hn);
     }
   }
   mx_free(R);
@@ -185,8 +172,8 @@ static int split_file(mx_mesher *m, int file, const uint32_t *to, mx_trisoup *ou
     double bc[3];
     cross(b, c, bc);
     const double v6 = dot(a, bc) / 6.0;
-    vol[uf_find(up, (uint32_t)(2 * t))] += v6;
-    vol[uf_find(up, (uint32_t)(2 * t + 1))] -= v6;
+    vol[mx_uf_find(up, (uint32_t)(2 * t))] += v6;
+    vol[mx_uf_find(up, (uint32_t)(2 * t + 1))] -= v6;
   }
   for (size_t h = 0; h < 2 * nt; h++) region[h] = -1;
   int nr = 0;
@@ -194,7 +181,7 @@ static int split_file(mx_mesher *m, int file, const uint32_t *to, mx_trisoup *ou
   for (size_t t = 0; t < nt && !st; t++) {
     if (d->shell[t] != file) continue;
     for (int s = 0; s < 2 && !st; s++) {
-      const uint32_t r = uf_find(up, (uint32_t)(2 * t + (size_t)s));
+      const uint32_t r = mx_uf_find(up, (uint32_t)(2 * t + (size_t)s));
       if (!(vol[r] < 0.0)) continue;
       if (region[r] < 0) region[r] = nr++;
       /* the side facing into the region, turned outward: the reverse */
