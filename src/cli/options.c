@@ -596,6 +596,11 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
   }
   int images = 0;
   for (int k = 0; k < o->ninputs; k++) images += mx_is_label_image_path(o->inputs[k]);
+  if (images && (o->restart_in || o->restart_out || o->list_in)) {
+    mx_error(NULL, 0, "label images are not re-meshed yet: no restart file (-c, --restart) or "
+                      "element list (-l) with one");
+    return MX_EINPUT;
+  }
   if (o->s_level < 0 && o->a_level < 0 && !o->regions_file && !o->nregion_surf && !images &&
       !o->restart_in && !o->size && !(o->size_max > 0.0) && !(o->curvature > 0.0) &&
       !(o->thickness > 0.0)) {

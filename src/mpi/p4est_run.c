@@ -37,6 +37,11 @@ static void on_message(void *user, int level, const char *text) {
 static int add_inputs(const mx_p4est_run_params *p, mx_mesher *m) {
   if (p->demo) MX_CHECK(mx_mesher_add_demo_surface(m));
   for (int i = 0; i < p->nsurfaces; i++)
+    if (mx_is_label_image_path(p->surfaces[i])) {
+      mx_error(p->surfaces[i], 0, "--p4est does not mesh label images yet: run without it");
+      return MX_EINPUT;
+    }
+  for (int i = 0; i < p->nsurfaces; i++)
     MX_CHECK(mx_mesher_add_input(m, p->surfaces[i], p->material_ids ? p->material_ids[i] : 0,
                                  p->material_names ? p->material_names[i] : NULL,
                                  p->surface_levels ? p->surface_levels[i] : 0,
