@@ -17,6 +17,7 @@
 #include "geom/label_fix.h"
 #include "io/read_image.h"
 #include "base/morton.h"
+#include "kernels/estimate.h"
 #include "mesher/mesher_impl.h"
 
 void mx_image_params_default(mx_image_params *ip) {
@@ -237,6 +238,21 @@ static int lattice_leaves(const int32_t *lab, const int64_t n[3], int R, const i
   return MX_OK;
 }
 
+/* The memory budget (--max-memory, or what the machine has): MX_ENOMEM
+ * with a message when need bytes do not fit. */
+static int image_budget(const mx_mesher *m, const char *name, double need, const char *what) {
+  const double avail = mx_available_bytes() + mx_peak_rss_mb() * 1048576.0;
+  const double limit = m->p.max_memory_mb > 0 ? m->p.max_memory_mb * 1048576.0 : avail;
+  if (limit > 0.0 && need > limit) {
+    mx_error(name, 0, "this image needs about %.0f MB (%s) but %s %.0f MB: crop it, merge "
+                      "labels, or raise --max-memory", need / 1048576.0, what,
+             m->p.max_memory_mb > 0 ? "--max-memory allows" : "the machine has",
+             limit / 1048576.0);
+    return MX_ENOMEM;
+  }
+  return MX_OK;
+}
+
 /* The image's box, [-0.5, d - 0.5] in voxel units, as the domain surface
  * the octree is built in (outward triangles). */
 static int add_box(mx_mesher *m, const char *name, const int64_t d[3]) {
@@ -305,6 +321,9 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
              (long long)dims[0], (long long)dims[1], (long long)dims[2]);
     return MX_EINPUT;
   }
+  /* the labels (4 bytes a voxel), the pyramid (about 4.6), the smoothing's
+   * corner map (4) */
+  MX_CHECK(image_budget(m, name, 13.0 * total, "its voxels"));
   int32_t *lab = mx_calloc((size_t)total * sizeof *lab);
   if (!lab) return MX_ENOMEM;
   mx_image_info *info = &m->image;
@@ -379,6 +398,13 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
   uint8_t *lev = NULL;
   size_t nleaves = 0;
   if (!st) st = lattice_leaves(lab, n, R, g.dims, &key, &lev, &nleaves);
+  /* the mesh from the leaves (balance adds about a sixth), the labels kept,
+   * with a fifth more (the brain of 256^3: 703 MB against 707 estimated) */
+  if (!st)
+    st = image_budget(m, name,
+                      1.2 * (mx_estimate_bytes_leaves((size_t)(1.2 * (double)nleaves), 12,
+                                                      MX_STAGE_FULL) + 8.0 * total),
+                      "its octree's leaves and voxels");
   if (!st) st = add_box(m, name, dims);
   if (!st && nleaves) st = mx_mesher_set_split_keys(m, key, lev, nleaves);
   mx_free(key);
