@@ -196,5 +196,15 @@ for path in (bad, junk, empty):
           "%s: exit 2 naming the file, nothing written (%d: %s)" % (os.path.basename(path), rc,
                                                                     se.strip()[:160]))
 
+# what does not apply to an image is refused, not ignored; the budget
+o = os.path.join(tmp, "r.vtu")
+rc, so, se = run("-i", nii, "-s", "5", "-o", o)
+check(rc == 2 and "label image" in se and not os.path.exists(o), "-s with an image: exit 2")
+rc, so, se = run("-i", nii, "--restart", os.path.join(tmp, "r.oct"), "-o", o)
+check(rc == 2 and not os.path.exists(o), "--restart with an image: exit 2")
+rc, so, se = run("-i", nii, "--max-memory", "1", "-o", o)
+check(rc == 3 and "balls.nii.gz" in se and "MB" in se and not os.path.exists(o),
+      "--max-memory 1: exit 3 with the estimate (%s)" % se.strip()[:120])
+
 print("%d failure(s)" % failures)
 sys.exit(1 if failures else 0)
