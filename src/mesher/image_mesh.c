@@ -22,6 +22,7 @@
 #include "base/morton.h"
 #include "geom/label_surface.h"
 #include "geom/quality.h"
+#include "kernels/boundary.h"
 #include "kernels/mesh_edit.h"
 #include "mesher/mesher_impl.h"
 
@@ -213,8 +214,34 @@ int mx_image_mesh_finish(mx_mesher *m) {
   }
   mx_free(M->material);
   M->material = mat;
+  /* the boundary nodes: lattice corners with background and a label among
+   * their 8 voxels (every face between the two runs along voxel faces, and
+   * its nodes are such corners) */
   mx_free(m->states);
-  m->states = NULL;
+  m->states = mx_alloc(M->nnodes + 1);
+  if (!m->states) return MX_ENOMEM;
+  {
+    const int64_t *n = m->image_n;
+    const int32_t *lab = m->image_lab;
+#pragma omp parallel for schedule(static)
+    for (size_t v = 0; v < M->nnodes; v++) {
+      int64_t c[3];
+      int corner = 1;
+      for (int a = 0; a < 3 && corner; a++) {
+        const double x = M->xyz[3 * v + a] + 1.5;
+        c[a] = (int64_t)x;
+        corner = x == (double)c[a] && c[a] >= 1 && c[a] < n[a];
+      }
+      int zero = 0, label = 0;
+      for (int b = 0; b < 8 && corner; b++) {
+        const int32_t L = lab[(c[0] - 1 + (b & 1)) + n[0] * ((c[1] - 1 + ((b >> 1) & 1)) +
+                                                              n[1] * (c[2] - 1 + (b >> 2)))];
+        zero |= L == 0;
+        label |= L != 0;
+      }
+      m->states[v] = zero && label ? MX_NODE_OUTSIDE : MX_NODE_INSIDE;
+    }
+  }
   size_t moved = 0;
   uint8_t *mv = NULL;
   if (m->image_rounds > 0) MX_CHECK(move_nodes(m, &moved, &mv));
