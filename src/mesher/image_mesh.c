@@ -117,23 +117,39 @@ static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
   for (size_t c = 0; c < M->ncells; c++)
     if (bad[c]) band[nb++] = (uint32_t)c;
 #pragma omp parallel for schedule(static)
-  for (size_t b = 0; b < nb; b++) j0[b] = (float)cell_jens(M, band[b], M->xyz);
+  for (size_t b = 0; b < nb; b++) j0[b] = M->jens[band[b]]; /* the transition's */
   memcpy(x, M->xyz, 3 * nn * sizeof *x);
-  /* halve the moves around elements that would be poor, then undo them */
-  for (int round = 0; round <= 6; round++) {
+  /* halve the moves around elements that would be poor (six times), then
+   * undo them until none is left (an undone move can leave a neighbour
+   * poor: its turn next round; each round undoes at least one, so this
+   * ends); each round measures again only the elements with a node just
+   * changed (mv 2), the others keep their verdict */
+  for (int round = 0;; round++) {
 #pragma omp parallel for schedule(static)
     for (size_t v = 0; v < nn; v++)
-      if (mv[v])
+      if (round == 0 ? mv[v] != 0 : mv[v] == 2)
         for (int a = 0; a < 3; a++) x[3 * v + a] = M->xyz[3 * v + a] + d[3 * v + a];
     size_t nbad = 0;
 #pragma omp parallel for schedule(static) reduction(+ : nbad)
     for (size_t b = 0; b < nb; b++) {
+      const size_t c = band[b];
+      if (round > 0) {
+        int changed = 0;
+        for (int q = 0; q < mx_cell_nodes[M->type[c]] && !changed; q++)
+          changed = mv[M->conn[8 * c + q]] == 2;
+        if (!changed) {
+          bad[b] = 0;
+          continue;
+        }
+      }
       const double floor_q = j0[b] < 0.1f ? 0.5 * j0[b] : 0.1;
-      bad[b] = cell_jens(M, band[b], x) < floor_q;
+      bad[b] = cell_jens(M, c, x) < floor_q;
       nbad += bad[b];
     }
+#pragma omp parallel for schedule(static)
+    for (size_t v = 0; v < nn; v++) mv[v] = mv[v] ? 1 : 0;
     if (!nbad) break;
-    const double f = round == 6 ? 0.0 : 0.5;
+    const double f = round >= 6 ? 0.0 : 0.5;
     for (size_t b = 0; b < nb; b++) /* serial: nodes shared */
       if (bad[b]) {
         const size_t c = band[b];
@@ -145,8 +161,12 @@ static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
           }
         }
       }
-    for (size_t v = 0; v < nn; v++) mv[v] = mv[v] ? 1 : 0;
   }
+  /* where the last round left the moves (its halvings and undoings) */
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < nn; v++)
+    if (mv[v])
+      for (int a = 0; a < 3; a++) x[3 * v + a] = M->xyz[3 * v + a] + d[3 * v + a];
   mx_free(band);
   memcpy(M->xyz, x, 3 * nn * sizeof *x);
   mx_free(d);
