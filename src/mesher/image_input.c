@@ -332,50 +332,60 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
   if (!st && ip->min_island > 1)
     st = mx_labels_drop_islands(lab, n, (size_t)ip->min_island, &info->fix);
   if (!st) st = mx_labels_fix_contacts(lab, n, name, &info->fix);
-  /* the labels left and their voxels */
+  /* the labels left, their voxels and their voxel faces on an interface
+   * (the volume's tolerance): per-thread histograms over the 65536 labels,
+   * summed (the same sums whatever the threads) */
   int nl = 0;
   int32_t L[64];
   size_t cnt[64];
-  for (size_t v = 0; !st && v < (size_t)total; v++) {
-    if (!lab[v]) continue;
-    int k = 0;
-    while (k < nl && L[k] != lab[v]) k++;
-    if (k == nl) {
-      if (nl == 64) {
-        mx_error(name, 0, "label image: more than 64 labels; merge or skip some");
-        st = MX_EINPUT;
-        break;
+  uint64_t *hist = st ? NULL : mx_calloc(2 * 65536 * sizeof *hist);
+  if (!st && !hist) st = MX_ENOMEM;
+  int oom = 0;
+  if (!st) {
+#pragma omp parallel
+    {
+      uint64_t *h = mx_calloc(2 * 65536 * sizeof *h);
+      if (!h) {
+#pragma omp atomic write
+        oom = 1;
       }
-      L[nl] = lab[v];
-      cnt[nl++] = 0;
+      const int64_t st3[3] = {1, n[0], n[0] * n[1]};
+#pragma omp for schedule(static)
+      for (int64_t v = 0; v < (int64_t)total; v++) {
+        if (!h) continue;
+        const int32_t a = lab[v];
+        h[a]++;
+        for (int x = 0; x < 3; x++) {
+          const int64_t w = v + st3[x];
+          if (w < (int64_t)total && lab[w] != a) {
+            h[65536 + a]++;
+            h[65536 + lab[w]]++;
+          }
+        }
+      }
+      if (h) {
+#pragma omp critical
+        for (int k = 0; k < 2 * 65536; k++) hist[k] += h[k];
+      }
+      mx_free(h);
     }
-    cnt[k]++;
+    if (oom) st = MX_ENOMEM;
   }
+  for (int32_t a = 1; !st && a < 65536; a++) {
+    if (!hist[a]) continue;
+    if (nl == 64) {
+      mx_error(name, 0, "label image: more than 64 labels; merge or skip some");
+      st = MX_EINPUT;
+      break;
+    }
+    L[nl] = a;
+    info->faces[nl] = hist[65536 + a];
+    cnt[nl++] = hist[a];
+  }
+  mx_free(hist);
   if (!st && nl == 0) {
     mx_error(name, 0, "label image: no voxel of any label (all background)");
     st = MX_EINPUT;
-  }
-  for (int x = 1; x < nl; x++) /* ascending labels */
-    for (int y = x; y > 0 && L[y] < L[y - 1]; y--) {
-      const int32_t t = L[y];
-      L[y] = L[y - 1];
-      L[y - 1] = t;
-      const size_t c = cnt[y];
-      cnt[y] = cnt[y - 1];
-      cnt[y - 1] = c;
-    }
-  /* each label's voxel faces on an interface: the volume's tolerance */
-  memset(info->faces, 0, sizeof info->faces);
-  for (int64_t v = 0; !st && v < (int64_t)total; v++) {
-    const int64_t st3[3] = {1, n[0], n[0] * n[1]};
-    for (int a = 0; a < 3; a++) {
-      const int64_t w = v + st3[a];
-      if (w >= (int64_t)total || lab[v] == lab[w]) continue;
-      for (int k = 0; k < nl; k++) {
-        if (L[k] == lab[v]) info->faces[k]++;
-        if (L[k] == lab[w]) info->faces[k]++;
-      }
-    }
   }
   /* the lattice: roots of 2^R voxels, at most 4 along the longest axis */
   int64_t dmax = dims[0] > dims[1] ? dims[0] : dims[1];
