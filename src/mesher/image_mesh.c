@@ -52,7 +52,7 @@ static double cell_jens(const mx_mesh *M, size_t c, const double *xyz) {
 static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
   mx_mesh *M = &m->M;
   mx_label_surface S;
-  MX_CHECK(mx_label_surface_build(m->image_lab, m->image_n, m->image_A, m->image_rounds, 0.35,
+  MX_CHECK(mx_label_surface_build(m->image_lab, m->image_n, m->image_rounds, 0.35,
                                   &S));
   const size_t nn = M->nnodes;
   double *d = mx_calloc((3 * nn + 1) * sizeof *d);
