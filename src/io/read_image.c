@@ -261,32 +261,24 @@ static void voxel_ijk(const mx_label_image *img, size_t v, long long ijk[3]) {
   ijk[2] = (long long)(v / ((size_t)img->nx * (size_t)img->ny));
 }
 
-static uint64_t get_uint(const unsigned char *p, int bytes, int big) {
-  uint64_t x = 0;
-  if (big)
-    for (int b = 0; b < bytes; b++) x = x << 8 | p[b];
-  else
-    for (int b = bytes - 1; b >= 0; b--) x = x << 8 | p[b];
-  return x;
-}
 
 /* The value of one voxel as a double (exact for every integer type). */
 static double voxel_value(const unsigned char *p, int type, int big) {
   switch (type) {
   case MX_VT_U8: return p[0];
   case MX_VT_I8: return (int8_t)p[0];
-  case MX_VT_I16: return (int16_t)(uint16_t)get_uint(p, 2, big);
-  case MX_VT_U16: return (uint16_t)get_uint(p, 2, big);
-  case MX_VT_I32: return (int32_t)(uint32_t)get_uint(p, 4, big);
-  case MX_VT_U32: return (uint32_t)get_uint(p, 4, big);
+  case MX_VT_I16: return (int16_t)(uint16_t)mx_image_get_uint(p, 2, big);
+  case MX_VT_U16: return (uint16_t)mx_image_get_uint(p, 2, big);
+  case MX_VT_I32: return (int32_t)(uint32_t)mx_image_get_uint(p, 4, big);
+  case MX_VT_U32: return (uint32_t)mx_image_get_uint(p, 4, big);
   case MX_VT_F32: {
-    const uint32_t u = (uint32_t)get_uint(p, 4, big);
+    const uint32_t u = (uint32_t)mx_image_get_uint(p, 4, big);
     float f;
     memcpy(&f, &u, 4);
     return f;
   }
   default: {
-    const uint64_t u = get_uint(p, 8, big);
+    const uint64_t u = mx_image_get_uint(p, 8, big);
     double f;
     memcpy(&f, &u, 8);
     return f;

@@ -10,25 +10,17 @@
 #include "base/common.h"
 #include "io/image_src.h"
 
-static uint64_t get_u(const unsigned char *p, int bytes, int big) {
-  uint64_t x = 0;
-  if (big)
-    for (int b = 0; b < bytes; b++) x = x << 8 | p[b];
-  else
-    for (int b = bytes - 1; b >= 0; b--) x = x << 8 | p[b];
-  return x;
-}
-static int64_t get_i16(const unsigned char *p, int big) { return (int16_t)(uint16_t)get_u(p, 2, big); }
-static int64_t get_i32(const unsigned char *p, int big) { return (int32_t)(uint32_t)get_u(p, 4, big); }
-static int64_t get_i64(const unsigned char *p, int big) { return (int64_t)get_u(p, 8, big); }
+static int64_t get_i16(const unsigned char *p, int big) { return (int16_t)(uint16_t)mx_image_get_uint(p, 2, big); }
+static int64_t get_i32(const unsigned char *p, int big) { return (int32_t)(uint32_t)mx_image_get_uint(p, 4, big); }
+static int64_t get_i64(const unsigned char *p, int big) { return (int64_t)mx_image_get_uint(p, 8, big); }
 static double get_f32(const unsigned char *p, int big) {
-  const uint32_t u = (uint32_t)get_u(p, 4, big);
+  const uint32_t u = (uint32_t)mx_image_get_uint(p, 4, big);
   float f;
   memcpy(&f, &u, 4);
   return f;
 }
 static double get_f64(const unsigned char *p, int big) {
-  const uint64_t u = get_u(p, 8, big);
+  const uint64_t u = mx_image_get_uint(p, 8, big);
   double f;
   memcpy(&f, &u, 8);
   return f;
@@ -160,7 +152,7 @@ int mx_read_nifti(mx_isrc *s, mx_label_image *img) {
   }
   nifti_hdr n;
   memset(&n, 0, sizeof n);
-  const uint64_t le = get_u(h, 4, 0), be = get_u(h, 4, 1);
+  const uint64_t le = mx_image_get_uint(h, 4, 0), be = mx_image_get_uint(h, 4, 1);
   if (le == 348 || be == 348)
     n.version = 1;
   else if (le == 540 || be == 540)
