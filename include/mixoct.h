@@ -207,6 +207,11 @@ typedef struct {
   int nmerge;
   const char *label_names; /* a file of "LABEL NAME ..." lines (FreeSurfer's
                             * lookup tables read as they are); NULL: "label L" */
+  const int32_t *label_size; /* pairs (label, voxels): inside that label no
+                              * element wider than that many voxels (a power
+                              * of two: rounded down; 1 = the voxels'
+                              * level), nlabel_size of them */
+  int nlabel_size;
 } mx_image_params;
 void mx_image_params_default(mx_image_params *ip);
 /* 1 when path names a label image by its extension. */

@@ -294,6 +294,9 @@ static uint64_t hash_bytes(uint64_t h, const void *p, size_t n) {
 }
 
 static int image_as_given = 1; /* 0: the contacts' repair changed voxels */
+static const int32_t *label_size; /* --label-size pairs for the next meshes */
+static int nlabel_size;
+static int label1_coarse;         /* elements of label 1 above the finest level */
 
 static int mesh_image_opt(const int32_t *img, const double A[12], int voxel, int threads,
                           double vol[4], double cen[4][3], uint64_t *hash) {
@@ -305,6 +308,8 @@ static int mesh_image_opt(const int32_t *img, const double A[12], int voxel, int
   mx_image_params ip;
   mx_image_params_default(&ip);
   ip.voxel = voxel;
+  ip.label_size = label_size;
+  ip.nlabel_size = nlabel_size;
   int st = mx_mesher_add_label_array(m, "synthetic", img, dims, A, &ip);
   if (!st) st = mx_mesher_mesh(m);
   memset(vol, 0, 4 * sizeof *vol);
@@ -321,6 +326,10 @@ static int mesh_image_opt(const int32_t *img, const double A[12], int voxel, int
     h = hash_bytes(h, a.material, a.nelements * sizeof *a.material);
     if (hash) *hash = h;
     size_t across = 0;
+    int top = 0;
+    for (size_t e = 0; e < a.nelements; e++) top = a.level[e] > top ? a.level[e] : top;
+    label1_coarse = 0;
+    for (size_t e = 0; e < a.nelements; e++) label1_coarse += a.material[e] == 1 && a.level[e] < top;
     for (size_t e = 0; e < a.nelements; e++) {
       const int L = a.material[e];
       CHECK(L >= 1 && L <= 3);
@@ -400,6 +409,17 @@ static void test_meshes(void) {
   CHECK(mesh_image(img, I, vol, cen) == MX_OK);
   check_volumes("balls", img, vol, 1.0);
   for (int x = 0; x < 3; x++) CHECK(fabs(cen[3][x] - c) < 0.3);
+  /* a size inside label 1: every element of it at the voxels' level (and
+   * not without) */
+  CHECK(label1_coarse > 0);
+  const int32_t one[2] = {1, 1};
+  label_size = one;
+  nlabel_size = 1;
+  CHECK(mesh_image(img, I, vol, cen) == MX_OK);
+  CHECK(label1_coarse == 0);
+  check_volumes("balls, label 1 at the voxels", img, vol, 1.0);
+  label_size = NULL;
+  nlabel_size = 0;
   /* voxel faces kept: the volumes are the voxels' exactly, every element
    * in a voxel of its label */
   uint64_t h1 = 0, h2 = 1;

@@ -282,7 +282,9 @@ class _ImageParams(ctypes.Structure):
                 ("nskip", ctypes.c_int),
                 ("merge", ctypes.POINTER(ctypes.c_int32)),
                 ("nmerge", ctypes.c_int),
-                ("label_names", ctypes.c_char_p)]
+                ("label_names", ctypes.c_char_p),
+                ("label_size", ctypes.POINTER(ctypes.c_int32)),
+                ("nlabel_size", ctypes.c_int)]
 
 
 class _Params2D(ctypes.Structure):
@@ -1005,7 +1007,7 @@ class Mesher(_MesherBase):
 
     def add_label_image(self, labels, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0),
                         affine=None, voxel=False, min_island=0, skip=(), merge=None,
-                        label_names=None, smoothing=None, name="labels"):
+                        label_names=None, smoothing=None, label_size=None, name="labels"):
         """A segmented 3D image to mesh (0 background, each other label a
         material of that number): a file (.nii, .nii.gz, .mha, .mhd, .inr,
         .inr.gz) or an integer array indexed [i, j, k] as nibabel gives it
@@ -1018,7 +1020,8 @@ class Mesher(_MesherBase):
         (``voxel=True`` keeps the voxel faces); ``min_island`` drops the
         parts of a label of fewer voxels; ``skip`` labels are background;
         ``merge`` maps labels ({from: to}); ``label_names`` a file of "LABEL
-        NAME" lines; ``smoothing`` the interfaces' smoothing rounds."""
+        NAME" lines; ``smoothing`` the interfaces' smoothing rounds;
+        ``label_size`` {label: voxels}: no element wider inside it."""
         ip = _ImageParams()
         self._lib.mx_image_params_default(ctypes.byref(ip))
         ip.voxel = 1 if voxel else 0
@@ -1039,6 +1042,12 @@ class Mesher(_MesherBase):
         ip.merge = mg.ctypes.data_as(ctypes.POINTER(ctypes.c_int32))
         ip.nmerge = len(pairs)
         ip.label_names = None if label_names is None else _fspath(label_names)
+        spairs = sorted((label_size or {}).items())
+        ls = np.ascontiguousarray([x for p in spairs for x in p], dtype=np.int32)
+        if len(spairs) > 64:
+            raise InputError("%s: at most 64 label sizes" % name, EINPUT)
+        ip.label_size = ls.ctypes.data_as(ctypes.POINTER(ctypes.c_int32))
+        ip.nlabel_size = len(spairs)
         if isinstance(labels, (str, bytes, os.PathLike)):
             self._call("mx_mesher_add_label_image", _fspath(labels), ctypes.byref(ip))
             return

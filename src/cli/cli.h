@@ -50,9 +50,10 @@ typedef struct {
   int input_slevel[MX_MAX_INPUTS];          /* --level L after -i (0: none) */
   int input_ilevel[MX_MAX_INPUTS];          /* --inside-level L after -i (0: none) */
   /* label images: --voxel, --min-island N, --skip-labels, --merge-labels,
-   * --label-names FILE, --interface-smoothing N (the arrays below) */
+   * --label-names FILE, --interface-smoothing N, --label-size (the arrays
+   * below) */
   mx_image_params image;
-  int32_t image_skip[64], image_merge[128];
+  int32_t image_skip[64], image_merge[128], image_lsize[128];
 } mx_options;
 
 /* Parses argv; on --help/--version prints and sets *exit_now = 1. Returns

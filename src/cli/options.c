@@ -70,6 +70,8 @@ static const char *usage_text =
     "      --merge-labels A:B,...  label A meshed as label B\n"
     "      --min-island N          parts of a label of fewer than N voxels take\n"
     "                              the label around them\n"
+    "      --label-size L:S,...    inside label L no element wider than S voxels\n"
+    "                              (a power of two; 1: every voxel of L)\n"
     "\n"
     "Refinement requests (an octant takes the largest level asked; levels 0 to\n"
     "15, each one halves the octant size):\n"
@@ -478,41 +480,48 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
         o->image.min_island = v;
       else
         o->image.smooth_rounds = (int)v;
-    } else if (strcmp(a, "--skip-labels") == 0 || strcmp(a, "--merge-labels") == 0) {
+    } else if (strcmp(a, "--skip-labels") == 0 || strcmp(a, "--merge-labels") == 0 ||
+               strcmp(a, "--label-size") == 0) {
       MX_CHECK(need_arg(i, argc, a));
-      const int merge = a[2] == 'm';
+      /* kind 0: labels; 1: pairs FROM:TO; 2: pairs LABEL:VOXELS */
+      const int kind = a[2] == 's' ? 0 : a[2] == 'm' ? 1 : 2;
+      int *count = kind == 0 ? &o->image.nskip : kind == 1 ? &o->image.nmerge
+                                                            : &o->image.nlabel_size;
+      int32_t *into = kind == 0 ? o->image_skip : kind == 1 ? o->image_merge : o->image_lsize;
       const char *c = argv[++i];
       while (*c) {
         char *end = NULL;
         const long x = strtol(c, &end, 10);
         long y = 0;
         int ok = end != c && x >= 0 && x <= 2147483647L;
-        if (ok && merge) {
+        if (ok && kind) {
           ok = *end == ':';
           if (ok) {
             c = end + 1;
             y = strtol(c, &end, 10);
-            ok = end != c && y >= 0 && y <= 65535;
+            ok = end != c && (kind == 1 ? y >= 0 && y <= 65535 : y >= 1 && y <= (1L << 20));
           }
         }
-        ok = ok && (*end == ',' || !*end);
-        if (ok && (merge ? o->image.nmerge == 64 : o->image.nskip == 64)) ok = 0;
+        ok = ok && (*end == ',' || !*end) && *count < 64;
         if (!ok) {
           mx_error(NULL, 0, "%s needs %s (at most 64), not '%s'", a,
-                   merge ? "pairs FROM:TO separated by commas, e.g. 4:3,5:3"
-                         : "labels separated by commas, e.g. 4,5", argv[i]);
+                   kind == 0 ? "labels separated by commas, e.g. 4,5"
+                   : kind == 1 ? "pairs FROM:TO separated by commas, e.g. 4:3,5:3"
+                               : "pairs LABEL:VOXELS separated by commas, e.g. 2:1,3:2",
+                   argv[i]);
           return MX_EINPUT;
         }
-        if (merge) {
-          o->image_merge[2 * o->image.nmerge] = (int32_t)x;
-          o->image_merge[2 * o->image.nmerge++ + 1] = (int32_t)y;
+        if (kind) {
+          into[2 * *count] = (int32_t)x;
+          into[2 * (*count)++ + 1] = (int32_t)y;
         } else {
-          o->image_skip[o->image.nskip++] = (int32_t)x;
+          into[(*count)++] = (int32_t)x;
         }
         c = *end ? end + 1 : end;
       }
       o->image.skip = o->image_skip;
       o->image.merge = o->image_merge;
+      o->image.label_size = o->image_lsize;
     } else if (strcmp(a, "--material") == 0) {
       MX_CHECK(need_arg(i, argc, a));
       const char *spec = argv[++i];

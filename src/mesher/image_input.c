@@ -29,6 +29,7 @@ void mx_image_params_release(mx_image_params *ip) {
   mx_free((void *)ip->skip);
   mx_free((void *)ip->merge);
   mx_free((void *)ip->label_names);
+  mx_free((void *)ip->label_size);
   mx_image_params_default(ip);
 }
 
@@ -53,20 +54,26 @@ int mx_mesher_set_image_params(mx_mesher *m, const mx_image_params *ip) {
     c.skip = NULL;
     c.merge = NULL;
     c.label_names = NULL;
-    if (ip->nskip < 0 || ip->nmerge < 0 || (ip->nskip && !ip->skip) ||
-        (ip->nmerge && !ip->merge)) {
+    c.label_size = NULL;
+    if (ip->nskip < 0 || ip->nmerge < 0 || ip->nlabel_size < 0 || (ip->nskip && !ip->skip) ||
+        (ip->nmerge && !ip->merge) || (ip->nlabel_size && !ip->label_size)) {
       mx_error(NULL, 0, "image options: bad label lists");
       return MX_EINPUT;
     }
     int32_t *sk = ip->nskip ? mx_alloc((size_t)ip->nskip * sizeof *sk) : NULL;
     int32_t *mg = ip->nmerge ? mx_alloc((size_t)ip->nmerge * 2 * sizeof *mg) : NULL;
     char *names = ip->label_names ? mx_strdup(ip->label_names) : NULL;
-    if ((ip->nskip && !sk) || (ip->nmerge && !mg) || (ip->label_names && !names)) {
+    int32_t *ls = ip->nlabel_size ? mx_alloc((size_t)ip->nlabel_size * 2 * sizeof *ls) : NULL;
+    if ((ip->nskip && !sk) || (ip->nmerge && !mg) || (ip->label_names && !names) ||
+        (ip->nlabel_size && !ls)) {
       mx_free(sk);
       mx_free(mg);
       mx_free(names);
+      mx_free(ls);
       return MX_ENOMEM;
     }
+    if (ls) memcpy(ls, ip->label_size, (size_t)ip->nlabel_size * 2 * sizeof *ls);
+    c.label_size = ls;
     if (sk) memcpy(sk, ip->skip, (size_t)ip->nskip * sizeof *sk);
     if (mg) memcpy(mg, ip->merge, (size_t)ip->nmerge * 2 * sizeof *mg);
     c.skip = sk;
@@ -152,7 +159,8 @@ static int map_labels(const char *name, const int32_t *in, const int64_t d[3],
  * label, found by halving (a pyramid of "one label or -1" per level, from
  * the voxels up). MX_ENOMEM. */
 static int lattice_leaves(const int32_t *lab, const int64_t n[3], int R, const int dims[3],
-                          uint64_t **key_out, uint8_t **level_out, size_t *nleaves) {
+                          const uint8_t *want, uint64_t **key_out, uint8_t **level_out,
+                          size_t *nleaves) {
   int64_t D[16][3];
   int32_t *pyr[16] = {NULL};
   int st = MX_OK;
@@ -202,7 +210,7 @@ static int lattice_leaves(const int32_t *lab, const int64_t n[3], int R, const i
     while (sp && !st) {
       const blk q = stack[--sp];
       const int32_t v = pyr[q.l][q.b[0] + D[q.l][0] * (q.b[1] + D[q.l][1] * q.b[2])];
-      if (v >= 0 || q.l == R) {
+      if ((v >= 0 && q.l >= want[v]) || q.l == R) {
         if (q.l == 0) continue; /* a root of one label: nothing to split */
         if (nl == cap) {
           uint64_t *k2 = mx_realloc(key, 2 * cap * sizeof *key);
@@ -407,7 +415,23 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
   uint64_t *key = NULL;
   uint8_t *lev = NULL;
   size_t nleaves = 0;
-  if (!st) st = lattice_leaves(lab, n, R, g.dims, &key, &lev, &nleaves);
+  /* the level each label asks inside it (--label-size: 2^(R - level) voxels) */
+  uint8_t *want = st ? NULL : mx_calloc(65536);
+  if (!st && !want) st = MX_ENOMEM;
+  for (int t = 0; !st && t < ip->nlabel_size; t++) {
+    const int32_t Lb = ip->label_size[2 * t], S = ip->label_size[2 * t + 1];
+    if (Lb < 1 || Lb > 65535 || S < 1) {
+      mx_error(name, 0, "label size %d:%d: a label 1 .. 65535 and a size of 1 voxel or more",
+               (int)Lb, (int)S);
+      st = MX_EINPUT;
+      break;
+    }
+    int l = R;
+    while (l > 0 && ((int64_t)1 << (R - l + 1)) <= S) l--;
+    want[Lb] = (uint8_t)l;
+  }
+  if (!st) st = lattice_leaves(lab, n, R, g.dims, want, &key, &lev, &nleaves);
+  mx_free(want);
   /* the mesh from the leaves (balance adds about a sixth), the labels kept,
    * with a fifth more (the brain of 256^3: 703 MB against 707 estimated) */
   if (!st)
