@@ -196,6 +196,15 @@ for path in (bad, junk, empty):
           "%s: exit 2 naming the file, nothing written (%d: %s)" % (os.path.basename(path), rc,
                                                                     se.strip()[:160]))
 
+# a size inside a label: more leaves, all of label 1's at the finest level
+r1 = run("-i", nii, "-o", os.path.join(tmp, "s.vtu"), "--json")
+r2 = run("-i", nii, "-o", os.path.join(tmp, "s.vtu"), "--label-size", "1:1", "--json")
+l1 = json.loads(r1[1].strip().splitlines()[-1]).get("leaves", 0) if r1[0] == 0 else 0
+l2 = json.loads(r2[1].strip().splitlines()[-1]).get("leaves", 0) if r2[0] == 0 else 0
+check(r2[0] == 0 and l2 > l1 > 0, "--label-size 1:1: more leaves (%d against %d)" % (l2, l1))
+rc, so, se = run("-i", nii, "-o", os.path.join(tmp, "s.vtu"), "--label-size", "1:0")
+check(rc == 2 and "--label-size" in se, "--label-size 1:0 refused")
+
 # what does not apply to an image is refused, not ignored; the budget
 o = os.path.join(tmp, "r.vtu")
 rc, so, se = run("-i", nii, "-s", "5", "-o", o)
