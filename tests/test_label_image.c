@@ -28,6 +28,7 @@
 #include "check.h"
 #include "geom/label_fix.h"
 #include "geom/label_surface.h"
+#include "geom/quality.h"
 #include "mixoct.h"
 
 enum { N = 24 };
@@ -325,6 +326,17 @@ static int mesh_image_opt(const int32_t *img, const double A[12], int voxel, int
     h = hash_bytes(h, a.conn, 8 * a.nelements * sizeof *a.conn);
     h = hash_bytes(h, a.material, a.nelements * sizeof *a.material);
     if (hash) *hash = h;
+    /* every element's J_ENS as measured here from its nodes (the library
+     * measures only the moved ones again under a similarity) */
+    size_t jens_off = 0;
+    for (size_t e = 0; e < a.nelements; e++) {
+      double p[8][3];
+      const int nv = a.type[e] == MX_TET ? 4 : a.type[e] == MX_PYRAMID ? 5 : a.type[e] == MX_PRISM ? 6 : 8;
+      for (int k = 0; k < nv; k++)
+        for (int x = 0; x < 3; x++) p[k][x] = a.xyz[3 * a.conn[8 * e + k] + x];
+      jens_off += fabs(mx_jens(a.type[e], (const double(*)[3])p) - a.jens[e]) > 1e-5;
+    }
+    CHECK(jens_off == 0);
     size_t across = 0;
     int top = 0;
     for (size_t e = 0; e < a.nelements; e++) top = a.level[e] > top ? a.level[e] : top;

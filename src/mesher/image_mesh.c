@@ -98,6 +98,7 @@ static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
   mx_label_surface_free(&S);
   /* the elements around a moved node, once */
   size_t nb = 0;
+#pragma omp parallel for schedule(static) reduction(+ : nb)
   for (size_t c = 0; c < M->ncells; c++) {
     int any = 0;
     for (int q = 0; q < mx_cell_nodes[M->type[c]]; q++) any |= mv[M->conn[8 * c + q]];
@@ -116,6 +117,16 @@ static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
   nb = 0;
   for (size_t c = 0; c < M->ncells; c++)
     if (bad[c]) band[nb++] = (uint32_t)c;
+  float *jb = mx_alloc((nb + 1) * sizeof *jb); /* the J_ENS each last measured */
+  if (!jb) {
+    mx_free(band);
+    mx_free(d);
+    mx_free(x);
+    mx_free(mv);
+    mx_free(bad);
+    mx_free(j0);
+    return MX_ENOMEM;
+  }
 #pragma omp parallel for schedule(static)
   for (size_t b = 0; b < nb; b++) j0[b] = M->jens[band[b]]; /* the transition's */
   memcpy(x, M->xyz, 3 * nn * sizeof *x);
@@ -143,8 +154,10 @@ static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
         }
       }
       const double floor_q = j0[b] < 0.1f ? 0.5 * j0[b] : 0.1;
-      bad[b] = cell_jens(M, c, x) < floor_q;
+      const double q = cell_jens(M, c, x);
+      bad[b] = q < floor_q;
       nbad += bad[b];
+      jb[b] = (float)q;
     }
 #pragma omp parallel for schedule(static)
     for (size_t v = 0; v < nn; v++) mv[v] = mv[v] ? 1 : 0;
@@ -162,11 +175,11 @@ static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
         }
       }
   }
-  /* where the last round left the moves (its halvings and undoings) */
+  /* the last round measured every element whose nodes it changed: the
+   * positions and J_ENS (in voxel units) as they stand */
 #pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < nn; v++)
-    if (mv[v])
-      for (int a = 0; a < 3; a++) x[3 * v + a] = M->xyz[3 * v + a] + d[3 * v + a];
+  for (size_t b = 0; b < nb; b++) M->jens[band[b]] = jb[b];
+  mx_free(jb);
   mx_free(band);
   memcpy(M->xyz, x, 3 * nn * sizeof *x);
   mx_free(d);
@@ -266,8 +279,6 @@ int mx_image_mesh_finish(mx_mesher *m) {
   uint8_t *mv = NULL;
   if (m->image_rounds > 0) MX_CHECK(move_nodes(m, &moved, &mv));
   to_world(m);
-  /* J_ENS does not change under a rotation, a uniform scaling and a shift:
-   * then only the elements around a moved node are measured again */
   const double *T = m->image_A;
   double col[3][3], nrm[3];
   for (int a = 0; a < 3; a++) {
@@ -279,7 +290,9 @@ int mx_image_mesh_finish(mx_mesher *m) {
     for (int b = a + 1; b < 3; b++)
       similar &= fabs(col[a][0] * col[b][0] + col[a][1] * col[b][1] + col[a][2] * col[b][2]) <=
                  1e-12 * nrm[a] * nrm[b];
-  if (!similar || mv) mx_mesh_update_jens(M, similar ? mv : NULL);
+  /* J_ENS does not change under a similarity: the moves' rounds measured
+   * the elements they moved; otherwise every element is measured again */
+  if (!similar) mx_mesh_update_jens(M, NULL);
   mx_free(mv);
   mx_mesh_summarize(M);
   m->nmaterials = nl;
