@@ -205,6 +205,17 @@ check(r2[0] == 0 and l2 > l1 > 0, "--label-size 1:1: more leaves (%d against %d)
 rc, so, se = run("-i", nii, "-o", os.path.join(tmp, "s.vtu"), "--label-size", "1:0")
 check(rc == 2 and "--label-size" in se, "--label-size 1:0 refused")
 
+# a size field in the world (voxels of 0.8 x 0.8 x 1.2 mm): 0.5 mm asks
+# for every voxel, 100 mm for nothing more
+r3 = run("-i", nii, "-o", os.path.join(tmp, "s.vtu"), "--size", "0.5", "--json")
+r4 = run("-i", nii, "-o", os.path.join(tmp, "s.vtu"), "--size", "100", "--json")
+l3 = json.loads(r3[1].strip().splitlines()[-1]).get("leaves", 0) if r3[0] == 0 else 0
+l4 = json.loads(r4[1].strip().splitlines()[-1]).get("leaves", 0) if r4[0] == 0 else 0
+check(l3 > l1 and l4 == l1, "--size 0.5: more leaves (%d), --size 100: the same (%d = %d)"
+      % (l3, l4, l1))
+rc, so, se = run("-i", nii, "-o", os.path.join(tmp, "s.vtu"), "--curvature", "10")
+check(rc == 2 and "curvature" in se, "--curvature with an image refused (no surface)")
+
 # what does not apply to an image is refused, not ignored; the budget
 o = os.path.join(tmp, "r.vtu")
 rc, so, se = run("-i", nii, "-s", "5", "-o", o)

@@ -298,6 +298,7 @@ static int image_as_given = 1; /* 0: the contacts' repair changed voxels */
 static const int32_t *label_size; /* --label-size pairs for the next meshes */
 static int nlabel_size;
 static int label1_coarse;         /* elements of label 1 above the finest level */
+static const char *size_expr;     /* a size field for the next meshes */
 
 static int mesh_image_opt(const int32_t *img, const double A[12], int voxel, int threads,
                           double vol[4], double cen[4][3], uint64_t *hash) {
@@ -312,6 +313,7 @@ static int mesh_image_opt(const int32_t *img, const double A[12], int voxel, int
   ip.label_size = label_size;
   ip.nlabel_size = nlabel_size;
   int st = mx_mesher_add_label_array(m, "synthetic", img, dims, A, &ip);
+  if (!st && size_expr) st = mx_mesher_set_size_expr(m, size_expr);
   if (!st) st = mx_mesher_mesh(m);
   memset(vol, 0, 4 * sizeof *vol);
   memset(cen, 0, 4 * sizeof *cen);
@@ -432,6 +434,15 @@ static void test_meshes(void) {
   check_volumes("balls, label 1 at the voxels", img, vol, 1.0);
   label_size = NULL;
   nlabel_size = 0;
+  /* a size field in the world: 0.9 (the transform's voxels are 1): every
+   * element at the voxels' level too; a field of 100 changes nothing */
+  size_expr = "0.9";
+  CHECK(mesh_image(img, I, vol, cen) == MX_OK);
+  CHECK(label1_coarse == 0);
+  size_expr = "100";
+  CHECK(mesh_image(img, I, vol, cen) == MX_OK);
+  CHECK(label1_coarse > 0);
+  size_expr = NULL;
   /* voxel faces kept: the volumes are the voxels' exactly, every element
    * in a voxel of its label */
   uint64_t h1 = 0, h2 = 1;

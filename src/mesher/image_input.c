@@ -158,9 +158,35 @@ static int map_labels(const char *name, const int32_t *in, const int64_t d[3],
  * face), and the leaves whose ancestors must be split: blocks of one
  * label, found by halving (a pyramid of "one label or -1" per level, from
  * the voxels up). MX_ENOMEM. */
+/* A block of one label is split further while it is coarser than its
+ * label asks (want) or, with a size field F, wider in the world than the
+ * least size the field takes over its world box (A: voxels to the world),
+ * down to the voxels. */
+static int finer(const mx_size_field *F, const double A[12], int R, int l, const int64_t b[3]) {
+  if (!F) return 0;
+  const double side = (double)((int64_t)1 << (R - l));
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  double wide = 0.0;
+  for (int a = 0; a < 3; a++) {
+    const double sp = sqrt(A[a] * A[a] + A[4 + a] * A[4 + a] + A[8 + a] * A[8 + a]);
+    wide = fmax(wide, side * sp);
+  }
+  for (int c = 0; c < 8; c++) {
+    const double u[3] = {(double)b[0] * side - 0.5 + ((c & 1) ? side : 0.0),
+                         (double)b[1] * side - 0.5 + ((c & 2) ? side : 0.0),
+                         (double)b[2] * side - 0.5 + ((c & 4) ? side : 0.0)};
+    for (int r = 0; r < 3; r++) {
+      const double x = A[4 * r] * u[0] + A[4 * r + 1] * u[1] + A[4 * r + 2] * u[2] + A[4 * r + 3];
+      lo[r] = fmin(lo[r], x);
+      hi[r] = fmax(hi[r], x);
+    }
+  }
+  return wide > mx_size_field_min_box(F, lo, hi);
+}
+
 static int lattice_leaves(const int32_t *lab, const int64_t n[3], int R, const int dims[3],
-                          const uint8_t *want, uint64_t **key_out, uint8_t **level_out,
-                          size_t *nleaves) {
+                          const uint8_t *want, const mx_size_field *F, const double A[12],
+                          uint64_t **key_out, uint8_t **level_out, size_t *nleaves) {
   int64_t D[16][3];
   int32_t *pyr[16] = {NULL};
   int st = MX_OK;
@@ -210,7 +236,7 @@ static int lattice_leaves(const int32_t *lab, const int64_t n[3], int R, const i
     while (sp && !st) {
       const blk q = stack[--sp];
       const int32_t v = pyr[q.l][q.b[0] + D[q.l][0] * (q.b[1] + D[q.l][1] * q.b[2])];
-      if ((v >= 0 && q.l >= want[v]) || q.l == R) {
+      if ((v >= 0 && q.l >= want[v] && !finer(F, A, R, q.l, q.b)) || q.l == R) {
         if (q.l == 0) continue; /* a root of one label: nothing to split */
         if (nl == cap) {
           uint64_t *k2 = mx_realloc(key, 2 * cap * sizeof *key);
@@ -412,9 +438,6 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
     g.origin[a] = -0.5;
     g.dims[a] = (int)((dims[a] + ((int64_t)1 << R) - 1) >> R);
   }
-  uint64_t *key = NULL;
-  uint8_t *lev = NULL;
-  size_t nleaves = 0;
   /* the level each label asks inside it (--label-size: 2^(R - level) voxels) */
   uint8_t *want = st ? NULL : mx_calloc(65536);
   if (!st && !want) st = MX_ENOMEM;
@@ -430,23 +453,14 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
     while (l > 0 && ((int64_t)1 << (R - l + 1)) <= S) l--;
     want[Lb] = (uint8_t)l;
   }
-  if (!st) st = lattice_leaves(lab, n, R, g.dims, want, &key, &lev, &nleaves);
-  mx_free(want);
-  /* the mesh from the leaves (balance adds about a sixth), the labels kept,
-   * with a fifth more (the brain of 256^3: 703 MB against 707 estimated) */
-  if (!st)
-    st = image_budget(m, name,
-                      1.2 * (mx_estimate_bytes_leaves((size_t)(1.2 * (double)nleaves), 12,
-                                                      MX_STAGE_FULL) + 8.0 * total),
-                      "its octree's leaves and voxels");
   if (!st) st = add_box(m, name, dims);
-  if (!st && nleaves) st = mx_mesher_set_split_keys(m, key, lev, nleaves);
-  mx_free(key);
-  mx_free(lev);
   if (st) {
+    mx_free(want);
     mx_free(lab);
     return st;
   }
+  mx_free(m->image_want);
+  m->image_want = want;
   /* materials: label k + 1 .. as the user's numbers and names */
   for (int k = 0; k < nl && !st; k++) {
     st = label_name(ip->label_names, L[k], info->names[k], sizeof info->names[k]);
@@ -486,6 +500,51 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
     mx_warning(name, 0, "%zu island(s) of fewer than %lld voxels (%zu voxels) given the label "
                         "around them", f->islands, ip->min_island, f->island_voxels);
   return MX_OK;
+}
+
+void mx_image_world_box(const mx_mesher *m, double lo[3], double hi[3]) {
+  const double *A = m->image_A;
+  for (int r = 0; r < 3; r++) {
+    lo[r] = INFINITY;
+    hi[r] = -INFINITY;
+  }
+  for (int c = 0; c < 8; c++) {
+    const double u[3] = {(c & 1) ? (double)(m->image_n[0] - 2) - 0.5 : -0.5,
+                         (c & 2) ? (double)(m->image_n[1] - 2) - 0.5 : -0.5,
+                         (c & 4) ? (double)(m->image_n[2] - 2) - 0.5 : -0.5};
+    for (int r = 0; r < 3; r++) {
+      const double x = A[4 * r] * u[0] + A[4 * r + 1] * u[1] + A[4 * r + 2] * u[2] + A[4 * r + 3];
+      lo[r] = fmin(lo[r], x);
+      hi[r] = fmax(hi[r], x);
+    }
+  }
+}
+
+int mx_image_split_keys(mx_mesher *m) {
+  const char *name = m->domain_name[0];
+  if (m->size_curvature > 0.0 || m->size_thickness > 0.0) {
+    mx_error(name, 0, "a label image has no input surface: --curvature and --thickness do "
+                      "not apply (a size field --size does)");
+    return MX_EINPUT;
+  }
+  const mx_size_field *F = (m->size_F.cs || m->size_F.src) ? &m->size_F : NULL;
+  uint64_t *key = NULL;
+  uint8_t *lev = NULL;
+  size_t nleaves = 0;
+  int st = lattice_leaves(m->image_lab, m->image_n, m->image_R, m->image_grid.dims,
+                          m->image_want, F, m->image_A, &key, &lev, &nleaves);
+  /* the mesh from the leaves (balance adds about a sixth), the labels kept,
+   * with a fifth more (the brain of 256^3: 703 MB against 707 estimated) */
+  const double total = (double)m->image_n[0] * (double)m->image_n[1] * (double)m->image_n[2];
+  if (!st)
+    st = image_budget(m, name,
+                      1.2 * (mx_estimate_bytes_leaves((size_t)(1.2 * (double)nleaves), 12,
+                                                      MX_STAGE_FULL) + 8.0 * total),
+                      "its octree's leaves and voxels");
+  if (!st && nleaves) st = mx_mesher_set_split_keys(m, key, lev, nleaves);
+  mx_free(key);
+  mx_free(lev);
+  return st;
 }
 
 int mx_mesher_add_label_image(mx_mesher *m, const char *path, const mx_image_params *ip) {

@@ -132,6 +132,7 @@ void mx_mesher_free(mx_mesher *m) {
   for (int i = 0; i < 64; i++) mx_free(m->input_material_name[i]);
   mx_image_params_release(&m->image_params);
   mx_free(m->image_lab);
+  mx_free(m->image_want);
   for (int r = 0; r < m->nregions; r++) {
     mx_trisoup_free(&m->region[r]);
     mx_free(m->region_name[r]);
@@ -275,13 +276,17 @@ int mx_build_tree(mx_mesher *m) {
     m->rec->S.size_seconds = in.seconds;
   }
   mx_requests req = mx_mesher_requests(m);
-  if (m->image_lattice && (req.s_level >= 0 || req.a_level >= 0 || req.nboxes || req.nregions ||
-                           req.size_field)) {
-    /* not yet: the image's own lattice decides every split */
+  if (m->image_lattice && (req.s_level >= 0 || req.a_level >= 0 || req.nboxes || req.nregions)) {
+    /* not yet: the image's lattice, its labels' sizes and a size field decide */
     mx_error(m->domain_name[0], 0, "a label image is refined to its voxels at the interfaces "
-                                   "and as coarse as balance allows inside; levels, boxes, "
-                                   "region surfaces and size fields do not apply to it yet");
+                                   "and as coarse as balance allows inside (finer with "
+                                   "--label-size or a size field); levels, boxes and region "
+                                   "surfaces do not apply to it yet");
     return MX_EINPUT;
+  }
+  if (m->image_lattice) { /* its split keys, the size field read in the world */
+    req.size_field = NULL;
+    MX_CHECK(mx_image_split_keys(m));
   }
   /* a restart file's octree is made again as it was: a size field applies
    * after it, with the re-mesh's other requests (mesher/remesh.c) */

@@ -227,6 +227,7 @@ struct mx_mesher {
    * padded labels made ready, the transform, the voxel level, the grid */
   int image_lattice, image_R, image_rounds;
   int32_t *image_lab;
+  uint8_t *image_want; /* per label: the level asked inside it (65536) */
   int64_t image_n[3];
   double image_A[12];
   mx_grid image_grid;

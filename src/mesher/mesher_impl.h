@@ -52,6 +52,13 @@ int mx_remesh_after_refine(mx_mesher *m);
  * stay valid), the world by the image's transform, the volume judged
  * against the voxels'. MX_ENOMEM, MX_EINVALID. */
 int mx_image_mesh_finish(mx_mesher *m);
+/* A label image's octree (image_input.c): the split keys of its blocks of
+ * one label, each split further while coarser than its label asks or
+ * wider in the world than the size field (m->size_F, built) over it;
+ * MX_EINPUT for curvature or thickness sources (no surface), MX_ENOMEM
+ * over the budget. The world box of the image (the size field's). */
+int mx_image_split_keys(mx_mesher *m);
+void mx_image_world_box(const mx_mesher *m, double lo[3], double hi[3]);
 /* The arrays and file name an mx_image_params holds (image_input.c). */
 void mx_image_params_release(mx_image_params *ip);
 /* One domain input appended to m->domain under name (copied; s is left

@@ -364,7 +364,10 @@ static int build_sources(mx_mesher *m, const double lo[3], const double hi[3]) {
 int mx_mesher_size_space(mx_mesher *m) {
   if (!mx_mesher_has_size(m) || m->size.cs || m->size_src) return MX_OK;
   double lo[3], hi[3];
-  mx_trisoup_bbox(&m->domain, lo, hi);
+  if (m->image_lattice)
+    mx_image_world_box(m, lo, hi); /* the domain soup is the image's box in voxels */
+  else
+    mx_trisoup_bbox(&m->domain, lo, hi);
   MX_CHECK(mx_size_source_build(&m->size, lo, hi, NULL, NULL));
   if (m->size.cs) { /* its box: the domain's, a flat axis widened */
     memcpy(lo, m->size.params.lo, sizeof lo);
