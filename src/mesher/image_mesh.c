@@ -52,25 +52,21 @@ static double cell_jens(const mx_mesh *M, size_t c, const double *xyz) {
 static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
   mx_mesh *M = &m->M;
   mx_label_surface S;
-  MX_CHECK(mx_label_surface_build(m->image_lab, m->image_n, m->image_rounds, 0.35,
-                                  &S));
+  MX_CHECK(mx_label_surface_build(m->image_lab, m->image_n, m->image_rounds, 0.35, &S));
   const size_t nn = M->nnodes;
   double *d = mx_calloc((3 * nn + 1) * sizeof *d);
   double *x = mx_alloc((3 * nn + 1) * sizeof *x);
   uint8_t *mv = mx_calloc(nn + 1);
   uint8_t *bad = mx_alloc(M->ncells + 1);
-  float *j0 = mx_alloc((M->ncells + 1) * sizeof *j0);
-  if (!d || !x || !mv || !bad || !j0) {
-    mx_free(d);
-    mx_free(x);
-    mx_free(mv);
-    mx_free(bad);
-    mx_free(j0);
-    mx_label_surface_free(&S);
-    return MX_ENOMEM;
-  }
+  float *j0 = NULL, *jb = NULL; /* per band element: the transition's J_ENS, the last measured */
+  uint32_t *band = NULL;
+  int st = d && x && mv && bad ? MX_OK : MX_ENOMEM;
   const int64_t *n = m->image_n;
   size_t moved = 0;
+  if (st) {
+    mx_label_surface_free(&S);
+    goto done;
+  }
 #pragma omp parallel for schedule(static) reduction(+ : moved)
   for (size_t v = 0; v < nn; v++) {
     /* voxel units: corner c of the padded lattice is at c - 1.5 */
@@ -105,28 +101,16 @@ static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
     bad[c] = (uint8_t)any;
     nb += (size_t)any;
   }
-  uint32_t *band = mx_alloc((nb + 1) * sizeof *band);
-  if (!band) {
-    mx_free(d);
-    mx_free(x);
-    mx_free(mv);
-    mx_free(bad);
-    mx_free(j0);
-    return MX_ENOMEM;
+  band = mx_alloc((nb + 1) * sizeof *band);
+  j0 = mx_alloc((nb + 1) * sizeof *j0);
+  jb = mx_alloc((nb + 1) * sizeof *jb);
+  if (!band || !j0 || !jb) {
+    st = MX_ENOMEM;
+    goto done;
   }
   nb = 0;
   for (size_t c = 0; c < M->ncells; c++)
     if (bad[c]) band[nb++] = (uint32_t)c;
-  float *jb = mx_alloc((nb + 1) * sizeof *jb); /* the J_ENS each last measured */
-  if (!jb) {
-    mx_free(band);
-    mx_free(d);
-    mx_free(x);
-    mx_free(mv);
-    mx_free(bad);
-    mx_free(j0);
-    return MX_ENOMEM;
-  }
 #pragma omp parallel for schedule(static)
   for (size_t b = 0; b < nb; b++) j0[b] = M->jens[band[b]]; /* the transition's */
   memcpy(x, M->xyz, 3 * nn * sizeof *x);
@@ -179,14 +163,19 @@ static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
    * positions and J_ENS (in voxel units) as they stand */
 #pragma omp parallel for schedule(static)
   for (size_t b = 0; b < nb; b++) M->jens[band[b]] = jb[b];
-  mx_free(jb);
-  mx_free(band);
   memcpy(M->xyz, x, 3 * nn * sizeof *x);
+done:
+  mx_free(band);
+  mx_free(jb);
+  mx_free(j0);
   mx_free(d);
   mx_free(x);
-  *moved_mask = mv;
   mx_free(bad);
-  mx_free(j0);
+  if (st) {
+    mx_free(mv);
+    return st;
+  }
+  *moved_mask = mv;
   *moved_out = moved;
   return MX_OK;
 }
