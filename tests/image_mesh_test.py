@@ -189,7 +189,10 @@ with open(junk, "w") as f:
     f.write("ObjectType = Image\nNDims = 3\nDimSize = 4 4\nElementType = MET_UCHAR\n")
 empty = os.path.join(tmp, "empty.nii")
 nib.save(nib.Nifti1Image(np.zeros((4, 4, 4), np.uint8), np.eye(4)), empty)
-for path in (bad, junk, empty):
+ct = os.path.join(tmp, "intensity.nii")  # an intensity image, not labels
+nib.save(nib.Nifti1Image((np.arange(4096).reshape(16, 16, 16) % 1000).astype(np.int16),
+                         np.eye(4)), ct)
+for path in (bad, junk, empty, ct):
     o = os.path.join(tmp, "bad.vtu")
     rc, so, se = run("-i", path, "-o", o)
     check(rc == 2 and os.path.basename(path) in se and not os.path.exists(o),

@@ -153,6 +153,43 @@ static int map_labels(const char *name, const int32_t *in, const int64_t d[3],
   return st;
 }
 
+/* hist[L]: voxels of label L, hist[65536 + L]: its voxel faces on an
+ * interface; per-thread histograms summed (the same whatever the threads).
+ * MX_ENOMEM. */
+static int label_histogram(const int32_t *lab, double total, const int64_t n[3],
+                           uint64_t *hist) {
+  memset(hist, 0, 2 * 65536 * sizeof *hist);
+  int oom = 0;
+#pragma omp parallel
+  {
+    uint64_t *h = mx_calloc(2 * 65536 * sizeof *h);
+    if (!h) {
+#pragma omp atomic write
+      oom = 1;
+    }
+    const int64_t st3[3] = {1, n[0], n[0] * n[1]};
+#pragma omp for schedule(static)
+    for (int64_t v = 0; v < (int64_t)total; v++) {
+      if (!h) continue;
+      const int32_t a = lab[v];
+      h[a]++;
+      for (int x = 0; x < 3; x++) {
+        const int64_t w = v + st3[x];
+        if (w < (int64_t)total && lab[w] != a) {
+          h[65536 + a]++;
+          h[65536 + lab[w]]++;
+        }
+      }
+    }
+    if (h) {
+#pragma omp critical
+      for (int k = 0; k < 2 * 65536; k++) hist[k] += h[k];
+    }
+    mx_free(h);
+  }
+  return oom ? MX_ENOMEM : MX_OK;
+}
+
 /* The octree of the image's lattice: grid (roots of 2^R voxels from the
  * image's first corner, in voxel units: x = i - 0.5 at the voxel's low
  * face), and the leaves whose ancestors must be split: blocks of one
@@ -363,48 +400,30 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
   mx_image_info *info = &m->image;
   memset(&info->fix, 0, sizeof info->fix);
   int st = map_labels(name, labels, dims, ip, lab, n);
+  if (!st) { /* more than 64 labels: refused before the contacts' repair ranks them */
+    uint64_t *h = mx_alloc(2 * 65536 * sizeof *h);
+    st = h ? label_histogram(lab, total, n, h) : MX_ENOMEM;
+    int k = 0;
+    for (int32_t a = 1; !st && a < 65536; a++) k += h[a] != 0;
+    if (!st && k > 64) {
+      mx_error(name, 0, "label image: %d labels, at most 64; merge or skip some (is this a "
+                        "segmentation? an intensity image has thousands of values)", k);
+      st = MX_EINPUT;
+    }
+    mx_free(h);
+  }
   if (!st && ip->min_island > 1)
     st = mx_labels_drop_islands(lab, n, (size_t)ip->min_island, &info->fix);
   if (!st) st = mx_labels_fix_contacts(lab, n, name, &info->fix);
   /* the labels left, their voxels and their voxel faces on an interface
-   * (the volume's tolerance): per-thread histograms over the 65536 labels,
-   * summed (the same sums whatever the threads) */
+   * (the volume's tolerance); at most 64 (checked before the contacts'
+   * repair too, which ranks the labels) */
   int nl = 0;
   int32_t L[64];
   size_t cnt[64];
-  uint64_t *hist = st ? NULL : mx_calloc(2 * 65536 * sizeof *hist);
+  uint64_t *hist = st ? NULL : mx_alloc(2 * 65536 * sizeof *hist);
   if (!st && !hist) st = MX_ENOMEM;
-  int oom = 0;
-  if (!st) {
-#pragma omp parallel
-    {
-      uint64_t *h = mx_calloc(2 * 65536 * sizeof *h);
-      if (!h) {
-#pragma omp atomic write
-        oom = 1;
-      }
-      const int64_t st3[3] = {1, n[0], n[0] * n[1]};
-#pragma omp for schedule(static)
-      for (int64_t v = 0; v < (int64_t)total; v++) {
-        if (!h) continue;
-        const int32_t a = lab[v];
-        h[a]++;
-        for (int x = 0; x < 3; x++) {
-          const int64_t w = v + st3[x];
-          if (w < (int64_t)total && lab[w] != a) {
-            h[65536 + a]++;
-            h[65536 + lab[w]]++;
-          }
-        }
-      }
-      if (h) {
-#pragma omp critical
-        for (int k = 0; k < 2 * 65536; k++) hist[k] += h[k];
-      }
-      mx_free(h);
-    }
-    if (oom) st = MX_ENOMEM;
-  }
+  if (!st) st = label_histogram(lab, total, n, hist);
   for (int32_t a = 1; !st && a < 65536; a++) {
     if (!hist[a]) continue;
     if (nl == 64) {

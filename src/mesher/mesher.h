@@ -39,9 +39,7 @@ typedef struct {
   double seconds_mesh;  /* labels, moves, world (mx_image_mesh_finish) */
   double voxel_volume;  /* |det A|: one voxel in the world */
   mx_label_fix_stats fix;
-  size_t triangles;     /* of the interfaces */
-  double max_move;      /* the smoothing's largest move, voxels */
-  double seconds;
+  double seconds;       /* the labels made ready (mx_mesher_add_label_array) */
 } mx_image_info;
 
 typedef struct {
