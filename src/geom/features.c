@@ -1,0 +1,194 @@
+/* Sharp features of an input surface (geom/features.h). The welds come
+ * from the vertices sorted by coordinates; the edges from their packed
+ * welded ends sorted (radix), which gives each edge its triangles; the
+ * chains from a union-find over the ridge edges joined at the vertices
+ * that are not corners. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "base/common.h"
+#include "base/scan.h"
+#include "base/union_find.h"
+#include "geom/features.h"
+
+void mx_features_free(mx_features *F) {
+  mx_free(F->edge);
+  mx_free(F->corner);
+  memset(F, 0, sizeof *F);
+}
+
+/* A double as an unsigned key of the same order (-0 as 0). */
+static uint64_t order_key(double x) {
+  if (x == 0.0) x = 0.0;
+  uint64_t u;
+  memcpy(&u, &x, sizeof u);
+  return u >> 63 ? ~u : u | (uint64_t)1 << 63;
+}
+
+static void normal(const mx_trisoup *s, const uint32_t *t, double n[3]) {
+  const double u[3] = {s->x[t[1]] - s->x[t[0]], s->y[t[1]] - s->y[t[0]], s->z[t[1]] - s->z[t[0]]};
+  const double v[3] = {s->x[t[2]] - s->x[t[0]], s->y[t[2]] - s->y[t[0]], s->z[t[2]] - s->z[t[0]]};
+  n[0] = u[1] * v[2] - u[2] * v[1];
+  n[1] = u[2] * v[0] - u[0] * v[2];
+  n[2] = u[0] * v[1] - u[1] * v[0];
+  const double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  for (int a = 0; a < 3 && l > 0; a++) n[a] /= l;
+}
+
+int mx_features_detect(const mx_trisoup *s, size_t nt, double angle_deg, mx_features *F) {
+  memset(F, 0, sizeof *F);
+  const size_t nv = s->nv;
+  const double cos_max = cos(angle_deg * M_PI / 180.0);
+  uint32_t *weld = mx_alloc((nv + 1) * sizeof *weld), *order = mx_alloc((nv + 1) * sizeof *order);
+  uint64_t *key = mx_alloc((3 * nt + 1) * sizeof *key);
+  uint32_t *val = mx_alloc((3 * nt + 1) * sizeof *val);
+  uint32_t *deg = mx_calloc((nv + 1) * sizeof *deg), *up = mx_alloc((3 * nt + 1) * sizeof *up);
+  uint64_t *ck = mx_alloc((nv + 1) * sizeof *ck);
+  uint32_t *e = NULL;
+  int st = weld && order && key && val && deg && up && ck ? MX_OK : MX_ENOMEM;
+  if (st) goto done;
+  /* welds: the first vertex (by index) of each run of equal coordinates */
+  /* by x, then y, then z (stable radix passes from the last key), then index */
+  for (size_t v = 0; v < nv; v++) order[v] = (uint32_t)v;
+  const double *coord[3] = {s->z, s->y, s->x};
+  for (int a = 0; a < 3 && !st; a++) {
+    for (size_t i = 0; i < nv; i++) ck[i] = order_key(coord[a][order[i]]);
+    if (mx_sort_u64(ck, order, nv)) st = MX_ENOMEM;
+  }
+  if (st) goto done;
+  for (size_t i = 0; i < nv;) {
+    size_t j = i + 1;
+    while (j < nv && s->x[order[j]] == s->x[order[i]] && s->y[order[j]] == s->y[order[i]] &&
+           s->z[order[j]] == s->z[order[i]])
+      j++;
+    for (size_t k = i; k < j; k++) weld[order[k]] = order[i]; /* the least index: sorted */
+    i = j;
+  }
+  /* edges: (least end, other end), each with its triangle's side */
+  for (size_t t = 0; t < nt; t++)
+    for (int k = 0; k < 3; k++) {
+      uint32_t a = weld[s->tri[3 * t + k]], b = weld[s->tri[3 * t + (k + 1) % 3]];
+      if (a > b) {
+        const uint32_t c = a;
+        a = b;
+        b = c;
+      }
+      key[3 * t + k] = (uint64_t)a << 32 | b;
+      val[3 * t + k] = (uint32_t)t;
+    }
+  if (mx_sort_u64(key, val, 3 * nt)) {
+    st = MX_ENOMEM;
+    goto done;
+  }
+  size_t cap = 64;
+  e = mx_alloc(2 * cap * sizeof *e);
+  if (!e) {
+    st = MX_ENOMEM;
+    goto done;
+  }
+  for (size_t g = 0; g < 3 * nt;) {
+    size_t h = g + 1;
+    while (h < 3 * nt && key[h] == key[g]) h++;
+    const uint32_t a = (uint32_t)(key[g] >> 32), b = (uint32_t)key[g];
+    int ridge = h - g != 2 || a == b;
+    if (!ridge) {
+      double n0[3], n1[3];
+      normal(s, s->tri + 3 * (size_t)val[g], n0);
+      normal(s, s->tri + 3 * (size_t)val[g + 1], n1);
+      ridge = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < cos_max;
+    }
+    if (ridge && a != b) {
+      if (F->nedges == cap) {
+        uint32_t *g2 = mx_realloc(e, 4 * cap * sizeof *e);
+        if (!g2) {
+          st = MX_ENOMEM;
+          goto done;
+        }
+        e = g2;
+        cap *= 2;
+      }
+      e[2 * F->nedges] = a;
+      e[2 * F->nedges + 1] = b;
+      F->nedges++;
+      deg[a]++;
+      deg[b]++;
+      F->length += sqrt((s->x[a] - s->x[b]) * (s->x[a] - s->x[b]) +
+                        (s->y[a] - s->y[b]) * (s->y[a] - s->y[b]) +
+                        (s->z[a] - s->z[b]) * (s->z[a] - s->z[b]));
+    }
+    g = h;
+  }
+  F->edge = e;
+  e = NULL;
+  /* corners: ends, junctions, and turns by more than the angle */
+  double *dir = mx_calloc((6 * (size_t)nv + 1) * sizeof *dir); /* two edge directions a vertex */
+  if (!dir) {
+    st = MX_ENOMEM;
+    goto done;
+  }
+  for (size_t i = 0; i < F->nedges; i++)
+    for (int end = 0; end < 2; end++) {
+      const uint32_t v = F->edge[2 * i + end], w = F->edge[2 * i + 1 - end];
+      if (deg[v] != 2) continue;
+      double *d = dir + 6 * (size_t)v + (dir[6 * (size_t)v] != 0.0 || dir[6 * (size_t)v + 1] != 0.0 ||
+                                                 dir[6 * (size_t)v + 2] != 0.0
+                                             ? 3
+                                             : 0);
+      d[0] = s->x[w] - s->x[v];
+      d[1] = s->y[w] - s->y[v];
+      d[2] = s->z[w] - s->z[v];
+    }
+  size_t nc = 0;
+  for (size_t v = 0; v < nv; v++) {
+    int corner = deg[v] == 1 || deg[v] >= 3;
+    if (deg[v] == 2) {
+      const double *d = dir + 6 * v;
+      const double l0 = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      const double l1 = sqrt(d[3] * d[3] + d[4] * d[4] + d[5] * d[5]);
+      /* straight on: the two directions opposed; a turn departs from that */
+      const double c = -(d[0] * d[3] + d[1] * d[4] + d[2] * d[5]) / (l0 * l1);
+      corner = c < cos_max;
+    }
+    deg[v] = corner ? UINT32_MAX : deg[v];
+    nc += (size_t)corner;
+  }
+  mx_free(dir);
+  F->corner = mx_alloc((nc + 1) * sizeof *F->corner);
+  if (!F->corner) {
+    st = MX_ENOMEM;
+    goto done;
+  }
+  for (size_t v = 0; v < nv; v++)
+    if (deg[v] == UINT32_MAX) F->corner[F->ncorners++] = (uint32_t)v;
+  /* ridges: edges joined through the vertices that are not corners */
+  for (size_t i = 0; i < F->nedges; i++) up[i] = (uint32_t)i;
+  uint32_t *first = mx_alloc((nv + 1) * sizeof *first); /* an edge at each vertex */
+  if (!first) {
+    st = MX_ENOMEM;
+    goto done;
+  }
+  for (size_t v = 0; v < nv; v++) first[v] = UINT32_MAX;
+  for (size_t i = 0; i < F->nedges; i++)
+    for (int end = 0; end < 2; end++) {
+      const uint32_t v = F->edge[2 * i + end];
+      if (deg[v] == UINT32_MAX) continue;
+      if (first[v] == UINT32_MAX)
+        first[v] = (uint32_t)i;
+      else
+        mx_uf_join(up, first[v], (uint32_t)i);
+    }
+  mx_free(first);
+  for (size_t i = 0; i < F->nedges; i++) F->nridges += mx_uf_find(up, (uint32_t)i) == i;
+done:
+  mx_free(weld);
+  mx_free(order);
+  mx_free(key);
+  mx_free(val);
+  mx_free(deg);
+  mx_free(up);
+  mx_free(ck);
+  mx_free(e);
+  if (st) mx_features_free(F);
+  return st;
+}
