@@ -53,6 +53,7 @@ typedef struct {
    * --label-names FILE, --interface-smoothing N, --label-size (the arrays
    * below) */
   mx_image_params image;
+  double feature_angle; /* --feature-angle DEG, --no-features (0); -1: the default */
   int32_t image_skip[64], image_merge[128], image_lsize[128];
 } mx_options;
 

@@ -69,6 +69,7 @@ static int setup(const mx_options *o, mx_mesher **out) {
   mx_mesher_release_edges_early(m, 1); /* one run: their memory goes to the mesh */
   mx_progress_stage("read");
   MX_CHECK(mx_mesher_set_image_params(m, &o->image));
+  if (o->feature_angle >= 0.0) MX_CHECK(mx_mesher_set_feature_angle(m, o->feature_angle));
   return mx_add_inputs(o, m);
 }
 

@@ -52,6 +52,11 @@ static const char *usage_text =
     "      --inside-level L        after -i FILE: octants meeting or inside FILE\n"
     "                              go to level L (with --materials: a level\n"
     "                              everywhere in the material(s) FILE holds)\n"
+    "      --feature-angle DEG     sharp features: ridges where the input's normals\n"
+    "                              part by more than DEG (default 30), corners where\n"
+    "                              they end, meet or turn; found and reported (not\n"
+    "                              yet kept in the mesh)\n"
+    "      --no-features           no feature search\n"
     "      --material ID[:NAME]    after -i FILE: the number (1..65535) and name\n"
     "                              of the material inside FILE (default: its\n"
     "                              nesting depth, named after FILE)\n"
@@ -344,6 +349,7 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
   if (!argv) return MX_ENOMEM;
   memset(o, 0, sizeof *o);
   o->s_level = -1;
+  o->feature_angle = -1.0;
   mx_image_params_default(&o->image);
   o->a_level = -1;
   o->stage = MX_STAGE_FULL;
@@ -462,6 +468,18 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       o->repair_input = 1;
     } else if (strcmp(a, "--materials") == 0) {
       o->materials = 1;
+    } else if (strcmp(a, "--no-features") == 0) {
+      o->feature_angle = 0.0;
+    } else if (strcmp(a, "--feature-angle") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      char *end = NULL;
+      const double v = strtod(argv[++i], &end);
+      if (end == argv[i] || *end || !(v > 0.0 && v < 180.0)) {
+        mx_error(NULL, 0, "--feature-angle needs an angle in degrees above 0 and below 180 "
+                          "(e.g. 30), not '%s'", argv[i]);
+        return MX_EINPUT;
+      }
+      o->feature_angle = v;
     } else if (strcmp(a, "--voxel") == 0) {
       o->image.voxel = 1;
     } else if (strcmp(a, "--label-names") == 0) {

@@ -4,6 +4,7 @@
  * inputs.c, the repair in repair.c, re-meshing in remesh.c, the restart
  * file in restart_octree.c, the files in output.c. */
 #include "mesher/materials.h"
+#include "geom/features.h"
 #include "mesher/mesher_impl.h"
 #include "mesher/pipeline.h"
 
@@ -90,6 +91,7 @@ mx_mesher *mx_mesher_new(const mx_params *p) {
   if (m->p.staircase_quality <= 0) m->p.staircase_quality = 0.2;
   if (m->p.repair_rounds < 0) m->p.repair_rounds = 0;
   m->mesh_stage = -1;
+  m->feature_angle = -1.0;
   mx_image_params_default(&m->image_params);
   return m;
 }
@@ -237,11 +239,41 @@ int mx_mesher_domain_side(mx_mesher *m, mx_builder *B) {
   return MX_OK;
 }
 
+int mx_mesher_set_feature_angle(mx_mesher *m, double angle_deg) {
+  if (!(angle_deg >= 0.0 && angle_deg < 180.0)) {
+    mx_error(NULL, 0, "feature angle %g: from 0 (no features) to below 180 degrees", angle_deg);
+    return MX_EINPUT;
+  }
+  m->feature_angle = angle_deg;
+  return MX_OK;
+}
+
+/* The domain input's sharp features, found and counted for the report
+ * (not yet kept in the mesh: issue 29). */
+int mx_mesher_features(mx_mesher *m) {
+  mx_summary *S = &m->rec->S;
+  const double angle = m->feature_angle < 0.0 ? 30.0 : m->feature_angle;
+  S->feature_angle = 0.0;
+  if (!(angle > 0.0) || m->image_lattice || !m->nt_domain) return MX_OK;
+  const double t = mx_wtime();
+  mx_features F;
+  MX_CHECK(mx_features_detect(&m->soup, m->nt_domain, angle, &F));
+  S->feature_angle = angle;
+  S->feature_edges = F.nedges;
+  S->feature_ridges = F.nridges;
+  S->feature_corners = F.ncorners;
+  S->feature_length = F.length;
+  mx_features_free(&F);
+  S->feature_seconds = mx_wtime() - t;
+  return MX_OK;
+}
+
 int mx_build_tree(mx_mesher *m) {
   mx_tree_clear(m);
   const double t0 = mx_wtime();
   mx_mesher_stage(m, "grid");
   MX_CHECK(mx_mesher_assemble_inputs(m));
+  MX_CHECK(mx_mesher_features(m));
   const double ts = mx_wtime();
   MX_CHECK(mx_mesher_size_space(m));
   m->rec->S.size_field = m->size.cs || m->size_src;

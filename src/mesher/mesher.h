@@ -76,6 +76,10 @@ typedef struct {
   size_t reoriented;        /* input triangles flipped by the input policy */
   double volume_error;      /* (mesh - enclosed) / enclosed, one closed input */
   int input_repaired;       /* the domain is the winding number's (repair_input) */
+  /* sharp features of the domain's input (geom/features.h; angle 0: none) */
+  double feature_angle;
+  size_t feature_edges, feature_ridges, feature_corners;
+  double feature_length, feature_seconds;
   const mx_image_info *image; /* a label image's mesh (image_mesh.c), NULL otherwise */
   mx_winding_boundary_stats winding; /* its boundary (input_repaired) */
   int local;                /* 1: every re-mesh of the call was local */
@@ -221,6 +225,7 @@ struct mx_mesher {
    * what the image gave */
   mx_image_params image_params;
   mx_image_info image;
+  double feature_angle;     /* mx_mesher_set_feature_angle (-1: the default, 30) */
   /* a label image meshed on its voxel lattice (mesher/image_mesh.c): the
    * padded labels made ready, the transform, the voxel level, the grid */
   int image_lattice, image_R, image_rounds;

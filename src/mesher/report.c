@@ -181,6 +181,13 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
                s->size_graded_n, s->size_beta, s->size_src_kb, s->size_src_seconds);
     }
   }
+  char feat[256] = "";
+  if (s->feature_angle > 0.0)
+    snprintf(feat, sizeof feat,
+             "\"features\": {\"angle\": %.6g, \"ridges\": %zu, \"edges\": %zu, "
+             "\"corners\": %zu, \"length\": %.9g, \"kept\": false, \"seconds\": %.6f}, ",
+             s->feature_angle, s->feature_ridges, s->feature_edges, s->feature_corners,
+             s->feature_length, s->feature_seconds);
   char img[12288] = "";
   if (s->image) {
     const mx_image_info *g = s->image;
@@ -219,7 +226,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
          "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"memory_estimate_mb\": %.1f, "
          "\"memory_estimate_prior_mb\": %.1f, "
          "\"threads\": %d, \"wait_policy\": \"%s\", "
-         "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, %s%s%s"
+         "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, %s%s%s%s"
          "\"topology\": \"%s\"}\n",
          s->leaves, s->leaves_hash, nodes, elements, hex,
          s->mesh ? s->by_type[2] : 0, s->mesh ? s->by_type[1] : 0,
@@ -233,7 +240,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
          s->local ? s->patch_leaves : 0, s->local ? s->core_leaves : 0, s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->memory_prior_mb, s->threads,
          ri->wait_policy ? ri->wait_policy : "default",
          s->mesh ? s->jens_min : 1.0,
-         s->mesh ? s->invalid : 0, qual, bnd, mat, img, ri->topology ? ri->topology : "");
+         s->mesh ? s->invalid : 0, qual, bnd, mat, img, feat, ri->topology ? ri->topology : "");
 }
 
 /* The summary printed after a run (unless --quiet or --json): what was
@@ -286,6 +293,11 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
     printf("  elements     %12zu hexahedra (the leaves, hanging nodes kept)\n",
            s->leaves);
   }
+  if (s->feature_angle > 0.0)
+    printf("  features     %12zu ridge(s) of %zu edges, %.6g long; %zu corner(s) (at %.4g "
+           "degrees; found, not yet kept in the mesh)\n",
+           s->feature_ridges, s->feature_edges, s->feature_length, s->feature_corners,
+           s->feature_angle);
   if (s->image) {
     const mx_image_info *g = s->image;
     printf("  image        %s, %lld x %lld x %lld voxels of %.4g x %.4g x %.4g%s; %.3f s "
