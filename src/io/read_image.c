@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 
 #include "base/common.h"
+#include "geom/affine.h"
 #include "io/image_src.h"
 
 enum { ZCHUNK = 1 << 16 };
@@ -394,8 +395,7 @@ int mx_image_finish(const char *path, mx_label_image *img) {
     const int along = (fabs(x) > 1e-6 * h) + (fabs(y) > 1e-6 * h) + (fabs(z) > 1e-6 * h);
     if (along > 1) img->oblique = 1;
   }
-  const double det = A[0] * (A[5] * A[10] - A[6] * A[9]) - A[1] * (A[4] * A[10] - A[6] * A[8]) +
-                     A[2] * (A[4] * A[9] - A[5] * A[8]);
+  const double det = mx_affine_det(A);
   if (!(fabs(det) > 1e-9 * img->spacing[0] * img->spacing[1] * img->spacing[2])) {
     mx_error(path, 0, "the voxel-to-world transform is degenerate (its axes are not independent)");
     return MX_EINPUT;

@@ -14,6 +14,7 @@
 #include <strings.h>
 
 #include "base/common.h"
+#include "geom/affine.h"
 #include "geom/label_fix.h"
 #include "io/read_image.h"
 #include "base/morton.h"
@@ -85,10 +86,12 @@ int mx_mesher_set_image_params(mx_mesher *m, const mx_image_params *ip) {
   return MX_OK;
 }
 
-/* The name of label L from a lookup-table file: lines "L NAME ...", '#'
- * comments. MX_EINPUT for a line that does not start with a label. */
-static int label_name(const char *path, int32_t L, char *buf, size_t n) {
-  snprintf(buf, n, "label %d", (int)L);
+/* The names of labels L[0 .. nl) (names[k], "label L" by default) from a
+ * lookup-table file read once: lines "L NAME ...", '#' comments; a line
+ * that does not start with a label is an error while a label is still
+ * unnamed. MX_EINPUT. */
+static int label_names(const char *path, const int32_t *L, int nl, char (*names)[64]) {
+  for (int k = 0; k < nl; k++) snprintf(names[k], 64, "label %d", (int)L[k]);
   if (!path) return MX_OK;
   FILE *f = fopen(path, "r");
   if (!f) {
@@ -97,8 +100,9 @@ static int label_name(const char *path, int32_t L, char *buf, size_t n) {
   }
   char line[1024];
   long no = 0;
-  int st = MX_OK;
-  while (fgets(line, sizeof line, f)) {
+  int st = MX_OK, left = nl;
+  uint8_t named[64] = {0};
+  while (left && fgets(line, sizeof line, f)) {
     no++;
     char *s = line;
     while (isspace((unsigned char)*s)) s++;
@@ -110,13 +114,16 @@ static int label_name(const char *path, int32_t L, char *buf, size_t n) {
       st = MX_EINPUT;
       break;
     }
-    if (v != L) continue;
+    int k = 0;
+    while (k < nl && (L[k] != v || named[k])) k++;
+    if (k == nl) continue;
+    named[k] = 1;
+    left--;
     s = end;
     while (isspace((unsigned char)*s)) s++;
     size_t len = 0;
     while (s[len] && !isspace((unsigned char)s[len])) len++;
-    if (len) snprintf(buf, n, "%.*s", (int)len, s);
-    break;
+    if (len) snprintf(names[k], 64, "%.*s", (int)len, s);
   }
   fclose(f);
   return st;
@@ -202,22 +209,13 @@ static int label_histogram(const int32_t *lab, double total, const int64_t n[3],
 static int finer(const mx_size_field *F, const double A[12], int R, int l, const int64_t b[3]) {
   if (!F) return 0;
   const double side = (double)((int64_t)1 << (R - l));
-  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  double wide = 0.0;
+  double wide = 0.0, ulo[3], uhi[3], lo[3], hi[3];
   for (int a = 0; a < 3; a++) {
-    const double sp = sqrt(A[a] * A[a] + A[4 + a] * A[4 + a] + A[8 + a] * A[8 + a]);
-    wide = fmax(wide, side * sp);
+    wide = fmax(wide, side * mx_affine_column(A, a));
+    ulo[a] = (double)b[a] * side - 0.5;
+    uhi[a] = ulo[a] + side;
   }
-  for (int c = 0; c < 8; c++) {
-    const double u[3] = {(double)b[0] * side - 0.5 + ((c & 1) ? side : 0.0),
-                         (double)b[1] * side - 0.5 + ((c & 2) ? side : 0.0),
-                         (double)b[2] * side - 0.5 + ((c & 4) ? side : 0.0)};
-    for (int r = 0; r < 3; r++) {
-      const double x = A[4 * r] * u[0] + A[4 * r + 1] * u[1] + A[4 * r + 2] * u[2] + A[4 * r + 3];
-      lo[r] = fmin(lo[r], x);
-      hi[r] = fmax(hi[r], x);
-    }
-  }
+  mx_affine_box(A, ulo, uhi, lo, hi);
   return wide > mx_size_field_min_box(F, lo, hi);
 }
 
@@ -376,10 +374,9 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
       mx_error(name, 0, "label image: the voxel-to-world transform is not finite");
       return MX_EINPUT;
     }
-  const double det = A[0] * (A[5] * A[10] - A[6] * A[9]) - A[1] * (A[4] * A[10] - A[6] * A[8]) +
-                     A[2] * (A[4] * A[9] - A[5] * A[8]);
+  const double det = mx_affine_det(A);
   double sp[3];
-  for (int a = 0; a < 3; a++) sp[a] = sqrt(A[a] * A[a] + A[4 + a] * A[4 + a] + A[8 + a] * A[8 + a]);
+  for (int a = 0; a < 3; a++) sp[a] = mx_affine_column(A, a);
   if (!(fabs(det) > 1e-12 * sp[0] * sp[1] * sp[2]) || !(sp[0] > 0 && sp[1] > 0 && sp[2] > 0)) {
     mx_error(name, 0, "label image: the voxel-to-world transform is singular (spacing %g %g %g)",
              sp[0], sp[1], sp[2]);
@@ -481,8 +478,8 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
   mx_free(m->image_want);
   m->image_want = want;
   /* materials: label k + 1 .. as the user's numbers and names */
+  st = label_names(ip->label_names, L, nl, info->names);
   for (int k = 0; k < nl && !st; k++) {
-    st = label_name(ip->label_names, L[k], info->names[k], sizeof info->names[k]);
     m->depth_material[k + 1] = L[k];
     m->depth_material_name[k + 1] = info->names[k];
   }
@@ -522,21 +519,12 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
 }
 
 void mx_image_world_box(const mx_mesher *m, double lo[3], double hi[3]) {
-  const double *A = m->image_A;
-  for (int r = 0; r < 3; r++) {
-    lo[r] = INFINITY;
-    hi[r] = -INFINITY;
+  double ulo[3], uhi[3];
+  for (int a = 0; a < 3; a++) {
+    ulo[a] = -0.5;
+    uhi[a] = (double)(m->image_n[a] - 2) - 0.5;
   }
-  for (int c = 0; c < 8; c++) {
-    const double u[3] = {(c & 1) ? (double)(m->image_n[0] - 2) - 0.5 : -0.5,
-                         (c & 2) ? (double)(m->image_n[1] - 2) - 0.5 : -0.5,
-                         (c & 4) ? (double)(m->image_n[2] - 2) - 0.5 : -0.5};
-    for (int r = 0; r < 3; r++) {
-      const double x = A[4 * r] * u[0] + A[4 * r + 1] * u[1] + A[4 * r + 2] * u[2] + A[4 * r + 3];
-      lo[r] = fmin(lo[r], x);
-      hi[r] = fmax(hi[r], x);
-    }
-  }
+  mx_affine_box(m->image_A, ulo, uhi, lo, hi);
 }
 
 int mx_image_split_keys(mx_mesher *m) {

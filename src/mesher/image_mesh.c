@@ -20,6 +20,7 @@
 
 #include "base/common.h"
 #include "base/morton.h"
+#include "geom/affine.h"
 #include "geom/label_surface.h"
 #include "geom/quality.h"
 #include "kernels/boundary.h"
@@ -187,12 +188,9 @@ static void to_world(mx_mesher *m) {
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < M->nnodes; v++) {
     const double u[3] = {M->xyz[3 * v], M->xyz[3 * v + 1], M->xyz[3 * v + 2]};
-    for (int r = 0; r < 3; r++)
-      M->xyz[3 * v + r] = A[4 * r] * u[0] + A[4 * r + 1] * u[1] + A[4 * r + 2] * u[2] + A[4 * r + 3];
+    mx_affine_apply(A, u, M->xyz + 3 * v);
   }
-  const double det = A[0] * (A[5] * A[10] - A[6] * A[9]) - A[1] * (A[4] * A[10] - A[6] * A[8]) +
-                     A[2] * (A[4] * A[9] - A[5] * A[8]);
-  if (det > 0) return;
+  if (mx_affine_det(A) > 0) return;
   /* the mirrored order of each type (tet 0 2 1 3, pyramid 0 3 2 1 4, prism
    * and hexahedron: the two end faces exchanged) */
   static const int8_t perm[4][8] = {{0, 2, 1, 3}, {0, 3, 2, 1, 4}, {3, 4, 5, 0, 1, 2},
@@ -268,20 +266,9 @@ int mx_image_mesh_finish(mx_mesher *m) {
   uint8_t *mv = NULL;
   if (m->image_rounds > 0) MX_CHECK(move_nodes(m, &moved, &mv));
   to_world(m);
-  const double *T = m->image_A;
-  double col[3][3], nrm[3];
-  for (int a = 0; a < 3; a++) {
-    for (int r = 0; r < 3; r++) col[a][r] = T[4 * r + a];
-    nrm[a] = sqrt(col[a][0] * col[a][0] + col[a][1] * col[a][1] + col[a][2] * col[a][2]);
-  }
-  int similar = fabs(nrm[0] - nrm[1]) <= 1e-12 * nrm[0] && fabs(nrm[0] - nrm[2]) <= 1e-12 * nrm[0];
-  for (int a = 0; a < 3 && similar; a++)
-    for (int b = a + 1; b < 3; b++)
-      similar &= fabs(col[a][0] * col[b][0] + col[a][1] * col[b][1] + col[a][2] * col[b][2]) <=
-                 1e-12 * nrm[a] * nrm[b];
   /* J_ENS does not change under a similarity: the moves' rounds measured
    * the elements they moved; otherwise every element is measured again */
-  if (!similar) mx_mesh_update_jens(M, NULL);
+  if (!mx_affine_similar(m->image_A)) mx_mesh_update_jens(M, NULL);
   mx_free(mv);
   mx_mesh_summarize(M);
   m->nmaterials = nl;
@@ -303,8 +290,7 @@ int mx_image_mesh_finish(mx_mesher *m) {
   }
   mx_free(slot);
   const double *A = m->image_A;
-  const double vox = fabs(A[0] * (A[5] * A[10] - A[6] * A[9]) - A[1] * (A[4] * A[10] - A[6] * A[8]) +
-                          A[2] * (A[4] * A[9] - A[5] * A[8]));
+  const double vox = fabs(mx_affine_det(A));
   for (int l = 0; l < nl; l++) {
     m->image.volume[l] = vol[l];
     const double want = (double)m->image.voxels[l] * vox;
