@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <zlib.h>
 
+#include "io/bytes.h"
 #include "io/read_image.h"
 
 typedef struct {
@@ -65,16 +66,6 @@ int mx_image_voxels(mx_isrc *s, int type, int big, int scale, double slope, doub
 
 /* img->A set: checks it finite and not degenerate; sets spacing, oblique. */
 int mx_image_finish(const char *path, mx_label_image *img);
-
-/* The unsigned integer of `bytes` bytes at p, big-endian when big. */
-static inline uint64_t mx_image_get_uint(const unsigned char *p, int bytes, int big) {
-  uint64_t x = 0;
-  if (big)
-    for (int b = 0; b < bytes; b++) x = x << 8 | p[b];
-  else
-    for (int b = bytes - 1; b >= 0; b--) x = x << 8 | p[b];
-  return x;
-}
 
 int mx_read_nifti(mx_isrc *s, mx_label_image *img);
 int mx_read_metaimage(mx_isrc *s, int from_mem, mx_label_image *img);

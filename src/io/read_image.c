@@ -268,18 +268,18 @@ static double voxel_value(const unsigned char *p, int type, int big) {
   switch (type) {
   case MX_VT_U8: return p[0];
   case MX_VT_I8: return (int8_t)p[0];
-  case MX_VT_I16: return (int16_t)(uint16_t)mx_image_get_uint(p, 2, big);
-  case MX_VT_U16: return (uint16_t)mx_image_get_uint(p, 2, big);
-  case MX_VT_I32: return (int32_t)(uint32_t)mx_image_get_uint(p, 4, big);
-  case MX_VT_U32: return (uint32_t)mx_image_get_uint(p, 4, big);
+  case MX_VT_I16: return (int16_t)(uint16_t)mx_load_uint(p, 2, big);
+  case MX_VT_U16: return (uint16_t)mx_load_uint(p, 2, big);
+  case MX_VT_I32: return (int32_t)(uint32_t)mx_load_uint(p, 4, big);
+  case MX_VT_U32: return (uint32_t)mx_load_uint(p, 4, big);
   case MX_VT_F32: {
-    const uint32_t u = (uint32_t)mx_image_get_uint(p, 4, big);
+    const uint32_t u = (uint32_t)mx_load_uint(p, 4, big);
     float f;
     memcpy(&f, &u, 4);
     return f;
   }
   default: {
-    const uint64_t u = mx_image_get_uint(p, 8, big);
+    const uint64_t u = mx_load_uint(p, 8, big);
     double f;
     memcpy(&f, &u, 8);
     return f;
@@ -429,8 +429,7 @@ static int sniff(mx_isrc *s, int *fmt) {
   unsigned char b[16] = {0};
   size_t got;
   MX_CHECK(mx_isrc_read(s, b, sizeof b, &got));
-  const uint32_t le = (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
-  const uint32_t be = (uint32_t)b[3] | (uint32_t)b[2] << 8 | (uint32_t)b[1] << 16 | (uint32_t)b[0] << 24;
+  const uint32_t le = (uint32_t)mx_load_uint(b, 4, 0), be = (uint32_t)mx_load_uint(b, 4, 1);
   if (got >= 4 && (le == 348 || be == 348 || le == 540 || be == 540)) {
     *fmt = F_NIFTI;
   } else if (got >= 9 && memcmp(b, "#INRIMAGE", 9) == 0) {

@@ -10,17 +10,17 @@
 #include "base/common.h"
 #include "io/image_src.h"
 
-static int64_t get_i16(const unsigned char *p, int big) { return (int16_t)(uint16_t)mx_image_get_uint(p, 2, big); }
-static int64_t get_i32(const unsigned char *p, int big) { return (int32_t)(uint32_t)mx_image_get_uint(p, 4, big); }
-static int64_t get_i64(const unsigned char *p, int big) { return (int64_t)mx_image_get_uint(p, 8, big); }
+static int64_t get_i16(const unsigned char *p, int big) { return (int16_t)(uint16_t)mx_load_uint(p, 2, big); }
+static int64_t get_i32(const unsigned char *p, int big) { return (int32_t)(uint32_t)mx_load_uint(p, 4, big); }
+static int64_t get_i64(const unsigned char *p, int big) { return (int64_t)mx_load_uint(p, 8, big); }
 static double get_f32(const unsigned char *p, int big) {
-  const uint32_t u = (uint32_t)mx_image_get_uint(p, 4, big);
+  const uint32_t u = (uint32_t)mx_load_uint(p, 4, big);
   float f;
   memcpy(&f, &u, 4);
   return f;
 }
 static double get_f64(const unsigned char *p, int big) {
-  const uint64_t u = mx_image_get_uint(p, 8, big);
+  const uint64_t u = mx_load_uint(p, 8, big);
   double f;
   memcpy(&f, &u, 8);
   return f;
@@ -152,7 +152,7 @@ int mx_read_nifti(mx_isrc *s, mx_label_image *img) {
   }
   nifti_hdr n;
   memset(&n, 0, sizeof n);
-  const uint64_t le = mx_image_get_uint(h, 4, 0), be = mx_image_get_uint(h, 4, 1);
+  const uint64_t le = mx_load_uint(h, 4, 0), be = mx_load_uint(h, 4, 1);
   if (le == 348 || be == 348)
     n.version = 1;
   else if (le == 540 || be == 540)

@@ -19,6 +19,7 @@
 #include "base/common.h"
 #include "soa/trisoup.h"
 
+#include "io/bytes.h"
 #include "io/polygon_split.h"
 #include "io/text_scan.h"
 #include "io/read_surface.h"
@@ -449,36 +450,27 @@ static int check_sizes(const ply_file *f) {
 
 /* ---- binary data ------------------------------------------------------ */
 
-static inline uint64_t load(const unsigned char *b, int size, int big) {
-  uint64_t v = 0;
-  if (big)
-    for (int i = 0; i < size; i++) v = v << 8 | b[i];
-  else
-    for (int i = size - 1; i >= 0; i--) v = v << 8 | b[i];
-  return v;
-}
-
 /* The value at b (in bounds) of an integer type. */
 static inline int64_t bin_int(const unsigned char *b, int type, int big) {
   switch (type) {
   case T_CHAR: return (int8_t)b[0];
   case T_UCHAR: return b[0];
-  case T_SHORT: return (int16_t)(uint16_t)load(b, 2, big);
-  case T_USHORT: return (uint16_t)load(b, 2, big);
-  case T_INT: return (int32_t)(uint32_t)load(b, 4, big);
-  default: return (uint32_t)load(b, 4, big);
+  case T_SHORT: return (int16_t)(uint16_t)mx_load_uint(b, 2, big);
+  case T_USHORT: return (uint16_t)mx_load_uint(b, 2, big);
+  case T_INT: return (int32_t)(uint32_t)mx_load_uint(b, 4, big);
+  default: return (uint32_t)mx_load_uint(b, 4, big);
   }
 }
 
 static inline double bin_double(const unsigned char *b, int type, int big) {
   if (type == T_FLOAT) {
-    uint32_t u = (uint32_t)load(b, 4, big);
+    uint32_t u = (uint32_t)mx_load_uint(b, 4, big);
     float v;
     memcpy(&v, &u, sizeof v);
     return (double)v;
   }
   if (type == T_DOUBLE) {
-    uint64_t u = load(b, 8, big);
+    uint64_t u = mx_load_uint(b, 8, big);
     double v;
     memcpy(&v, &u, sizeof v);
     return v;

@@ -1,0 +1,18 @@
+/* Binary numbers in files: the unsigned integer of `bytes` bytes (1 to 8)
+ * at p, big-endian when big, else little-endian (binary PLY, the label
+ * images' headers and voxels). */
+#ifndef MX_BYTES_H
+#define MX_BYTES_H
+
+#include <stdint.h>
+
+static inline uint64_t mx_load_uint(const unsigned char *p, int bytes, int big) {
+  uint64_t x = 0;
+  if (big)
+    for (int b = 0; b < bytes; b++) x = x << 8 | p[b];
+  else
+    for (int b = bytes - 1; b >= 0; b--) x = x << 8 | p[b];
+  return x;
+}
+
+#endif
