@@ -5,12 +5,11 @@
  * their faces. Here:
  *   1. each element takes its leaf's label (the voxel at the leaf's low
  *      corner), the background's elements go;
- *   2. the interfaces as one smoothed surface (geom/label_surface.h): a
- *      node at a lattice corner of that surface moves where the smoothing
- *      put it (within 0.35 voxel on each axis), unless --voxel; where an
- *      element around a moved node would fall below J_ENS 0.1 (or its
- *      unmoved value), the moves of its nodes are halved, six times, then
- *      undone;
+ *   2. the interfaces' corners smoothed (geom/label_surface.h): a node at
+ *      such a lattice corner moves where the smoothing put it (within 0.35
+ *      voxel on each axis), unless --voxel; where an element around a moved
+ *      node would fall below J_ENS 0.1 (or half its unmoved value), the
+ *      moves of its nodes are halved, six times, then undone until none is;
  *   3. the voxel units to the world by the image's transform (a mirror
  *      turns the elements' node order over);
  *   4. each label's volume against its voxels': off by more than half a
@@ -41,6 +40,17 @@ static int32_t leaf_label(const mx_mesher *m, uint32_t leaf) {
   return m->image_lab[(v[0] + 1) + n[0] * ((v[1] + 1) + n[1] * (v[2] + 1))];
 }
 
+/* The padded lattice corner a node (in voxel units) stands on: corner c is
+ * at c - 1.5 on each axis; 0 when the node is on none. */
+static int node_corner(const double *x, const int64_t n[3], int64_t c[3]) {
+  for (int a = 0; a < 3; a++) {
+    const double y = x[a] + 1.5;
+    c[a] = (int64_t)y;
+    if (!(y == (double)c[a] && c[a] >= 1 && c[a] < n[a])) return 0;
+  }
+  return 1;
+}
+
 static double cell_jens(const mx_mesh *M, size_t c, const double *xyz) {
   double p[8][3];
   const int nv = mx_cell_nodes[M->type[c]];
@@ -50,7 +60,7 @@ static double cell_jens(const mx_mesh *M, size_t c, const double *xyz) {
 }
 
 /* Nodes onto the smoothed interfaces, as far as the elements allow. */
-static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
+static int move_nodes(mx_mesher *m, size_t *moved_out) {
   mx_mesh *M = &m->M;
   mx_label_surface S;
   MX_CHECK(mx_label_surface_build(m->image_lab, m->image_n, m->image_rounds, 0.35, &S));
@@ -70,15 +80,9 @@ static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
   }
 #pragma omp parallel for schedule(static) reduction(+ : moved)
   for (size_t v = 0; v < nn; v++) {
-    /* voxel units: corner c of the padded lattice is at c - 1.5 */
-    double c[3];
-    int corner = 1;
-    for (int a = 0; a < 3; a++) {
-      c[a] = M->xyz[3 * v + a] + 1.5;
-      corner &= c[a] == floor(c[a]) && c[a] >= 1 && c[a] < (double)n[a];
-    }
-    if (!corner) continue;
-    const int64_t id = (int64_t)c[0] + n[0] * ((int64_t)c[1] + n[1] * (int64_t)c[2]);
+    int64_t c[3];
+    if (!node_corner(M->xyz + 3 * v, n, c)) continue;
+    const int64_t id = c[0] + n[0] * (c[1] + n[1] * c[2]);
     size_t lo = 0, hi = S.nv;
     while (lo < hi) {
       const size_t mid = (lo + hi) / 2;
@@ -88,7 +92,7 @@ static int move_nodes(mx_mesher *m, size_t *moved_out, uint8_t **moved_mask) {
         hi = mid;
     }
     if (lo == S.nv || S.corner[lo] != id) continue;
-    for (int a = 0; a < 3; a++) d[3 * v + a] = S.lat[3 * lo + a] - c[a];
+    for (int a = 0; a < 3; a++) d[3 * v + a] = S.lat[3 * lo + a] - (double)c[a];
     mv[v] = 1;
     moved++;
   }
@@ -172,13 +176,9 @@ done:
   mx_free(d);
   mx_free(x);
   mx_free(bad);
-  if (st) {
-    mx_free(mv);
-    return st;
-  }
-  *moved_mask = mv;
-  *moved_out = moved;
-  return MX_OK;
+  mx_free(mv);
+  if (!st) *moved_out = moved;
+  return st;
 }
 
 /* Voxel units to the world; a mirror turns each element over. */
@@ -246,12 +246,7 @@ int mx_image_mesh_finish(mx_mesher *m) {
 #pragma omp parallel for schedule(static)
     for (size_t v = 0; v < M->nnodes; v++) {
       int64_t c[3];
-      int corner = 1;
-      for (int a = 0; a < 3 && corner; a++) {
-        const double x = M->xyz[3 * v + a] + 1.5;
-        c[a] = (int64_t)x;
-        corner = x == (double)c[a] && c[a] >= 1 && c[a] < n[a];
-      }
+      const int corner = node_corner(M->xyz + 3 * v, n, c);
       int zero = 0, label = 0;
       for (int b = 0; b < 8 && corner; b++) {
         const int32_t L = lab[(c[0] - 1 + (b & 1)) + n[0] * ((c[1] - 1 + ((b >> 1) & 1)) +
@@ -263,13 +258,11 @@ int mx_image_mesh_finish(mx_mesher *m) {
     }
   }
   size_t moved = 0;
-  uint8_t *mv = NULL;
-  if (m->image_rounds > 0) MX_CHECK(move_nodes(m, &moved, &mv));
+  if (m->image_rounds > 0) MX_CHECK(move_nodes(m, &moved));
   to_world(m);
   /* J_ENS does not change under a similarity: the moves' rounds measured
    * the elements they moved; otherwise every element is measured again */
   if (!mx_affine_similar(m->image_A)) mx_mesh_update_jens(M, NULL);
-  mx_free(mv);
   mx_mesh_summarize(M);
   m->nmaterials = nl;
   m->rec->S.nmaterials = nl;
