@@ -234,44 +234,34 @@ static int repair_block(int32_t *lab, const int64_t n[3], const uint32_t *rank, 
   return changed;
 }
 
-int mx_labels_fix_contacts(int32_t *lab, const int64_t n[3], const char *name,
-                           mx_label_fix_stats *st) {
+int mx_labels_fix_contacts(int32_t *lab, const int64_t n[3], const uint64_t *count,
+                           const char *name, mx_label_fix_stats *st) {
   st->contact_at[0] = st->contact_at[1] = st->contact_at[2] = -1;
   /* blocks: the vertex at the far corner of voxel (i, j, k), i < n0 - 1 ... */
   const int64_t nb0 = n[0] - 1, nb1 = n[1] - 1, nb2 = n[2] - 1;
+  /* the labels present, most voxels first (ties: the smaller label first);
+   * rank = place + 1, background 0 */
+  int32_t order[64];
+  int nl = 0;
+  for (int32_t L = 1; L < 65536; L++) {
+    if (!count[L]) continue;
+    if (nl == 64) {
+      mx_error(name, 0, "labels: more than 64 (merge or skip some)");
+      return MX_EINPUT;
+    }
+    int y = nl++;
+    for (; y > 0 && count[order[y - 1]] < count[L]; y--) order[y] = order[y - 1];
+    order[y] = L;
+  }
   size_t cap = 1024, nbad = 0;
   int64_t *bad = mx_alloc(cap * sizeof *bad);
   uint32_t *rank = mx_calloc(65536 * sizeof *rank);
-  uint64_t *count = mx_calloc(65536 * sizeof *count);
-  if (!bad || !rank || !count) {
+  if (!bad || !rank) {
     mx_free(bad);
     mx_free(rank);
-    mx_free(count);
     return MX_ENOMEM;
   }
-  /* labels are 0 .. 65535 here (mesher/image_input.c) */
-  const int64_t total = n[0] * n[1] * n[2];
-  for (int64_t v = 0; v < total; v++) count[lab[v] & 0xffff]++;
-  {
-    uint32_t nl = 0;
-    int32_t *order = (int32_t *)rank; /* labels present, then ranked in place below */
-    for (int32_t L = 1; L < 65536; L++)
-      if (count[L]) order[nl++] = L;
-    /* fewer voxels rank higher; ties: the larger label higher */
-    for (uint32_t x = 1; x < nl; x++)
-      for (uint32_t y = x; y > 0; y--) {
-        const int32_t a = order[y - 1], b = order[y];
-        if (count[a] > count[b] || (count[a] == count[b] && a < b)) break;
-        order[y - 1] = b;
-        order[y] = a;
-      }
-    int32_t sorted[64 + 1];
-    const uint32_t keep = nl < 64 ? nl : 64;
-    memcpy(sorted, order, keep * sizeof *sorted);
-    memset(rank, 0, 65536 * sizeof *rank);
-    for (uint32_t x = 0; x < keep; x++) rank[sorted[x]] = x + 1;
-  }
-  mx_free(count);
+  for (int x = 0; x < nl; x++) rank[order[x]] = (uint32_t)x + 1;
   int st_ok = MX_OK;
   for (int round = 0;; round++) {
     nbad = 0;

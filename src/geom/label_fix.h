@@ -27,12 +27,15 @@ int mx_labels_drop_islands(int32_t *lab, const int64_t n[3], size_t min_voxels,
  * face-connected among the 8, so must what is not that label, and no
  * lattice edge may have four different labels in turn around it (two
  * labels, or two parts of one, would meet at a point or along an edge
- * only). A vertex breaking this gets one voxel relabelled (background
- * first, to the label of a face neighbour, so thin structures are joined
- * rather than cut), or failing that its 8 voxels the most common label;
- * repeated until none is left. MX_OK, MX_ENOMEM, MX_EINPUT when 64
- * passes leave contacts (message naming a voxel). */
-int mx_labels_fix_contacts(int32_t *lab, const int64_t n[3], const char *name,
-                           mx_label_fix_stats *st);
+ * only). A vertex breaking this gets one voxel relabelled to a label of a
+ * face neighbour ranked above its own, or failing that its 8 voxels the
+ * highest-ranked label among them; repeated until none is left. Ranks:
+ * background lowest, then by count[L] (the voxels of label L, 65536
+ * entries), fewer voxels higher, ties to the larger label; labels only
+ * climb, so the repair ends. MX_OK, MX_ENOMEM, MX_EINPUT when more than
+ * 64 labels are present or 64 passes leave contacts (message naming a
+ * voxel). */
+int mx_labels_fix_contacts(int32_t *lab, const int64_t n[3], const uint64_t *count,
+                           const char *name, mx_label_fix_stats *st);
 
 #endif

@@ -397,21 +397,21 @@ int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *lab
   mx_image_info *info = &m->image;
   memset(&info->fix, 0, sizeof info->fix);
   int st = map_labels(name, labels, dims, ip, lab, n);
-  if (!st) { /* more than 64 labels: refused before the contacts' repair ranks them */
-    uint64_t *h = mx_alloc(2 * 65536 * sizeof *h);
-    st = h ? label_histogram(lab, total, n, h) : MX_ENOMEM;
-    int k = 0;
-    for (int32_t a = 1; !st && a < 65536; a++) k += h[a] != 0;
-    if (!st && k > 64) {
-      mx_error(name, 0, "label image: %d labels, at most 64; merge or skip some (is this a "
-                        "segmentation? an intensity image has thousands of values)", k);
-      st = MX_EINPUT;
-    }
-    mx_free(h);
-  }
   if (!st && ip->min_island > 1)
     st = mx_labels_drop_islands(lab, n, (size_t)ip->min_island, &info->fix);
-  if (!st) st = mx_labels_fix_contacts(lab, n, name, &info->fix);
+  /* more than 64 labels refused before the contacts' repair, which ranks
+   * them by their voxels */
+  uint64_t *h = st ? NULL : mx_alloc(2 * 65536 * sizeof *h);
+  if (!st) st = h ? label_histogram(lab, total, n, h) : MX_ENOMEM;
+  int present = 0;
+  for (int32_t a = 1; !st && a < 65536; a++) present += h[a] != 0;
+  if (!st && present > 64) {
+    mx_error(name, 0, "label image: %d labels, at most 64; merge or skip some (is this a "
+                      "segmentation? an intensity image has thousands of values)", present);
+    st = MX_EINPUT;
+  }
+  if (!st) st = mx_labels_fix_contacts(lab, n, h, name, &info->fix);
+  mx_free(h);
   /* the labels left, their voxels and their voxel faces on an interface
    * (the volume's tolerance); at most 64 (checked before the contacts'
    * repair too, which ranks the labels) */
