@@ -32,6 +32,33 @@ static void soup_of(const double *x, size_t nv, const uint32_t *t, size_t nt, in
   }
 }
 
+/* The lines of F: nlines open lines of npts points each, from a corner to
+ * another, whose lengths add up to the ridges' length. */
+static void check_lines(const mx_trisoup *s, const mx_features *F, size_t nlines, size_t npts) {
+  mx_feature_lines L;
+  CHECK(mx_feature_lines_of(s, F, &L) == MX_OK);
+  CHECK(L.nlines == nlines && L.ncorners == F->ncorners);
+  double len = 0.0;
+  for (size_t i = 0; i < L.nlines; i++) {
+    CHECK(!L.loop[i] && L.first[i + 1] - L.first[i] == npts);
+    for (size_t p = L.first[i]; p + 1 < L.first[i + 1]; p++) {
+      const double *a = L.xyz + 3 * p, *b = a + 3;
+      len += sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                  (a[2] - b[2]) * (a[2] - b[2]));
+    }
+    for (int end = 0; end < 2; end++) { /* a corner at each end */
+      const double *e = L.xyz + 3 * (end ? L.first[i + 1] - 1 : L.first[i]);
+      int found = 0;
+      for (size_t c = 0; c < L.ncorners; c++)
+        found |= e[0] == L.corner[3 * c] && e[1] == L.corner[3 * c + 1] &&
+                 e[2] == L.corner[3 * c + 2];
+      CHECK(found);
+    }
+  }
+  CHECK(fabs(len - F->length) < 1e-9 * F->length);
+  mx_feature_lines_free(&L);
+}
+
 int main(void) {
   mx_features F;
   mx_trisoup s;
@@ -47,6 +74,8 @@ int main(void) {
            F.nedges, F.nridges, F.ncorners, F.length);
     CHECK(F.nedges == 12 * 4 && F.nridges == 12 && F.ncorners == 8);
     CHECK(fabs(F.length - 4 * (1 + 2 + 3)) < 1e-12);
+    CHECK(F.npatches == 6);
+    check_lines(&s, &F, 12, 5);
     mx_features_free(&F);
     CHECK(mx_features_detect(&s, s.nt, 95.0, &F) == MX_OK);
     CHECK(F.nedges == 0 && F.ncorners == 0 && F.nridges == 0);
@@ -62,6 +91,8 @@ int main(void) {
   CHECK(mx_features_detect(&s, s.nt, 30.0, &F) == MX_OK);
   CHECK(F.nedges == 6 && F.nridges == 6 && F.ncorners == 4);
   CHECK(fabs(F.length - 6 * sqrt(8.0)) < 1e-12);
+  CHECK(F.npatches == 4);
+  check_lines(&s, &F, 6, 2);
   mx_features_free(&F);
   CHECK(mx_features_detect(&s, s.nt, 110.0, &F) == MX_OK);
   CHECK(F.nedges == 0 && F.ncorners == 0);

@@ -15,6 +15,7 @@
 void mx_features_free(mx_features *F) {
   mx_free(F->edge);
   mx_free(F->corner);
+  mx_free(F->patch);
   memset(F, 0, sizeof *F);
 }
 
@@ -45,8 +46,9 @@ int mx_features_detect(const mx_trisoup *s, size_t nt, double angle_deg, mx_feat
   uint32_t *val = mx_alloc((3 * nt + 1) * sizeof *val);
   uint32_t *deg = mx_calloc((nv + 1) * sizeof *deg), *up = mx_alloc((3 * nt + 1) * sizeof *up);
   uint64_t *ck = mx_alloc((nv + 1) * sizeof *ck);
-  uint32_t *e = NULL;
-  int st = weld && order && key && val && deg && up && ck ? MX_OK : MX_ENOMEM;
+  uint32_t *e = NULL, *tup = mx_alloc((nt + 1) * sizeof *tup);
+  F->patch = mx_alloc((nt + 1) * sizeof *F->patch);
+  int st = weld && order && key && val && deg && up && ck && tup && F->patch ? MX_OK : MX_ENOMEM;
   if (st) goto done;
   /* welds: the first vertex (by index) of each run of equal coordinates */
   /* by x, then y, then z (stable radix passes from the last key), then index */
@@ -81,6 +83,7 @@ int mx_features_detect(const mx_trisoup *s, size_t nt, double angle_deg, mx_feat
     st = MX_ENOMEM;
     goto done;
   }
+  for (size_t t = 0; t < nt; t++) tup[t] = (uint32_t)t;
   size_t cap = 64;
   e = mx_alloc(2 * cap * sizeof *e);
   if (!e) {
@@ -97,6 +100,7 @@ int mx_features_detect(const mx_trisoup *s, size_t nt, double angle_deg, mx_feat
       normal(s, s->tri + 3 * (size_t)val[g], n0);
       normal(s, s->tri + 3 * (size_t)val[g + 1], n1);
       ridge = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < cos_max;
+      if (!ridge) mx_uf_join(tup, val[g], val[g + 1]); /* one patch across it */
     }
     if (ridge && a != b) {
       if (F->nedges == cap) {
@@ -121,6 +125,11 @@ int mx_features_detect(const mx_trisoup *s, size_t nt, double angle_deg, mx_feat
   }
   F->edge = e;
   e = NULL;
+  /* patches: numbered at their least triangle, which is their root */
+  for (size_t t = 0; t < nt; t++) {
+    const uint32_t r = mx_uf_find(tup, (uint32_t)t);
+    F->patch[t] = r == t ? (uint32_t)F->npatches++ : F->patch[r];
+  }
   /* corners: ends, junctions, and turns by more than the angle */
   double *dir = mx_calloc((6 * (size_t)nv + 1) * sizeof *dir); /* two edge directions a vertex */
   if (!dir) {
@@ -189,6 +198,92 @@ done:
   mx_free(up);
   mx_free(ck);
   mx_free(e);
+  mx_free(tup);
   if (st) mx_features_free(F);
   return st;
+}
+
+void mx_feature_lines_free(mx_feature_lines *L) {
+  mx_free(L->first);
+  mx_free(L->xyz);
+  mx_free(L->loop);
+  mx_free(L->corner);
+  memset(L, 0, sizeof *L);
+}
+
+static void put_point(const mx_trisoup *s, uint32_t v, double *x) {
+  x[0] = s->x[v];
+  x[1] = s->y[v];
+  x[2] = s->z[v];
+}
+
+int mx_feature_lines_of(const mx_trisoup *s, const mx_features *F, mx_feature_lines *L) {
+  memset(L, 0, sizeof *L);
+  const size_t ne = F->nedges, nv = s->nv;
+  /* each vertex's ridge edges (CSR), its corner flag, each edge's use */
+  uint32_t *start = mx_calloc((nv + 2) * sizeof *start), *inc = mx_alloc((2 * ne + 1) * sizeof *inc);
+  uint8_t *corner = mx_calloc(nv + 1), *used = mx_calloc(ne + 1);
+  L->first = mx_alloc((ne + 2) * sizeof *L->first); /* at most one line an edge */
+  L->xyz = mx_alloc(3 * (2 * ne + 1) * sizeof *L->xyz);
+  L->loop = mx_alloc(ne + 1);
+  L->corner = mx_alloc(3 * (F->ncorners + 1) * sizeof *L->corner);
+  if (!start || !inc || !corner || !used || !L->first || !L->xyz || !L->loop || !L->corner) {
+    mx_free(start);
+    mx_free(inc);
+    mx_free(corner);
+    mx_free(used);
+    mx_feature_lines_free(L);
+    return MX_ENOMEM;
+  }
+  for (size_t i = 0; i < 2 * ne; i++) start[F->edge[i] + 1]++;
+  for (size_t v = 0; v < nv; v++) start[v + 1] += start[v];
+  for (size_t i = 0; i < 2 * ne; i++) inc[start[F->edge[i]]++] = (uint32_t)(i / 2);
+  for (size_t v = nv; v > 0; v--) start[v] = start[v - 1];
+  start[0] = 0;
+  for (size_t c = 0; c < F->ncorners; c++) {
+    corner[F->corner[c]] = 1;
+    put_point(s, F->corner[c], L->corner + 3 * c);
+  }
+  L->ncorners = F->ncorners;
+  size_t np = 0;
+  /* from every corner along each of its unused edges, then the loops from
+   * their least vertex (the first end of their first edge in edge order) */
+  for (int pass = 0; pass < 2; pass++)
+    for (size_t k = 0; k < (pass ? ne : F->ncorners); k++) {
+      uint32_t v, i;
+      if (pass == 0) {
+        v = F->corner[k];
+        i = UINT32_MAX;
+        for (uint32_t j = start[v]; j < start[v + 1] && i == UINT32_MAX; j++)
+          if (!used[inc[j]]) i = inc[j];
+        if (i == UINT32_MAX) continue;
+        k--; /* this corner again for its next edge */
+      } else {
+        if (used[k]) continue;
+        i = (uint32_t)k;
+        v = F->edge[2 * k];
+      }
+      L->first[L->nlines] = np;
+      L->loop[L->nlines] = (uint8_t)pass;
+      const uint32_t v0 = v;
+      put_point(s, v, L->xyz + 3 * np++);
+      for (;;) {
+        used[i] = 1;
+        v = F->edge[2 * i] == v ? F->edge[2 * i + 1] : F->edge[2 * i];
+        if (corner[v] || v == v0) break;
+        put_point(s, v, L->xyz + 3 * np++);
+        i = UINT32_MAX; /* the other edge of v (not a corner: two) */
+        for (uint32_t j = start[v]; j < start[v + 1]; j++)
+          if (!used[inc[j]]) i = inc[j];
+        if (i == UINT32_MAX) break;
+      }
+      if (corner[v]) put_point(s, v, L->xyz + 3 * np++);
+      L->nlines++;
+    }
+  L->first[L->nlines] = np;
+  mx_free(start);
+  mx_free(inc);
+  mx_free(corner);
+  mx_free(used);
+  return MX_OK;
 }

@@ -22,6 +22,9 @@ typedef struct {
   uint32_t *corner; /* ncorners vertices, ascending */
   size_t nridges;   /* chains and loops */
   double length;    /* of all ridge edges */
+  size_t npatches;  /* the surface cut along its ridges: */
+  uint32_t *patch;  /* per triangle of [0, nt), its patch 0..npatches-1 (numbered
+                     * in the order of their first triangle) */
 } mx_features;
 
 /* The features of triangles [0, nt) of s at angle_deg (0 < angle < 180).
