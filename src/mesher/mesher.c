@@ -118,6 +118,11 @@ void mx_tree_clear(mx_mesher *m) {
   mx_free(m->file_leaf);
   m->file_leaf = NULL;
   m->file_nelem = 0;
+  if (m->have_features) {
+    mx_features_free(&m->feat);
+    mx_feature_lines_free(&m->feat_lines);
+  }
+  m->have_features = 0;
 }
 
 void mx_mesher_free(mx_mesher *m) {
@@ -248,22 +253,27 @@ int mx_mesher_set_feature_angle(mx_mesher *m, double angle_deg) {
   return MX_OK;
 }
 
-/* The domain input's sharp features, found and counted for the report
- * (not yet kept in the mesh: issue 29). */
+/* The domain input's sharp features, found, counted for the report and
+ * kept (m->feat, m->feat_lines) for the boundary stage to place. */
 int mx_mesher_features(mx_mesher *m) {
   mx_summary *S = &m->rec->S;
   const double angle = m->feature_angle < 0.0 ? 30.0 : m->feature_angle;
   S->feature_angle = 0.0;
   if (!(angle > 0.0) || m->image_lattice || !m->nt_domain) return MX_OK;
   const double t = mx_wtime();
-  mx_features F;
-  MX_CHECK(mx_features_detect(&m->soup, m->nt_domain, angle, &F));
+  mx_features *F = &m->feat;
+  MX_CHECK(mx_features_detect(&m->soup, m->nt_domain, angle, F));
+  const int st = mx_feature_lines_of(&m->soup, F, &m->feat_lines);
+  if (st) {
+    mx_features_free(F);
+    return st;
+  }
+  m->have_features = 1;
   S->feature_angle = angle;
-  S->feature_edges = F.nedges;
-  S->feature_ridges = F.nridges;
-  S->feature_corners = F.ncorners;
-  S->feature_length = F.length;
-  mx_features_free(&F);
+  S->feature_edges = F->nedges;
+  S->feature_ridges = F->nridges;
+  S->feature_corners = F->ncorners;
+  S->feature_length = F->length;
   S->feature_seconds = mx_wtime() - t;
   return MX_OK;
 }

@@ -8,6 +8,7 @@
 #include "mixoct.h"
 
 #include "kernels/boundary_stage.h"
+#include "kernels/feature_place.h"
 #include "kernels/contacts.h"
 #include "geom/distance.h"
 #include "geom/quality.h"
@@ -80,6 +81,8 @@ typedef struct {
   double feature_angle;
   size_t feature_edges, feature_ridges, feature_corners;
   double feature_length, feature_seconds;
+  mx_feature_stats feature_place; /* placed in the mesh (kernels/feature_place.h) */
+  int features_kept;              /* the placement ran */
   const mx_image_info *image; /* a label image's mesh (image_mesh.c), NULL otherwise */
   mx_winding_boundary_stats winding; /* its boundary (input_repaired) */
   int local;                /* 1: every re-mesh of the call was local */
@@ -226,6 +229,11 @@ struct mx_mesher {
   mx_image_params image_params;
   mx_image_info image;
   double feature_angle;     /* mx_mesher_set_feature_angle (-1: the default, 30) */
+  /* the domain's features, found with the tree (mx_mesher_features), and
+   * their lines, placed after the boundary stage (pipeline.c) */
+  int have_features;
+  mx_features feat;
+  mx_feature_lines feat_lines;
   /* a label image meshed on its voxel lattice (mesher/image_mesh.c): the
    * padded labels made ready, the transform, the voxel level, the grid */
   int image_lattice, image_R, image_rounds;

@@ -1,6 +1,8 @@
 /* The stages after refinement, chained once: see mesher/pipeline.h. */
 #include "mesher/pipeline.h"
 
+#include "kernels/untangle.h"
+
 #include "base/common.h"
 #include "kernels/edges_lazy.h"
 #include "kernels/mesh_edit.h"
@@ -50,6 +52,30 @@ int mx_pipeline_transition(mx_mesher *m, const uint32_t *leaves, size_t n, int r
   return mx_transition_build(&m->B.tree, leaves, n, &lm, M);
 }
 
+/* The features placed on the boundary (kernels/feature_place.h), then the
+ * elements they spoilt untangled with the feature nodes fixed. */
+static int place_features(mx_mesher *m, mx_mesh *M, const uint8_t *states) {
+  if (!m->have_features || !states || m->p.materials) return MX_OK;
+  const mx_features *F = &m->feat;
+  const mx_feature_input in = {&m->feat_lines, &m->soup, m->nt_domain, F->patch, F->npatches};
+  uint8_t *fixed = mx_alloc(M->nnodes + 1);
+  if (!fixed) return MX_ENOMEM;
+  mx_feature_stats *fs = &m->rec->S.feature_place;
+  int st = mx_feature_place(M, states, &m->SI, &in, fixed, fs);
+  if (!st) {
+    for (size_t v = 0; v < M->nnodes; v++) fixed[v] = !fixed[v];
+    const mx_untangle_opts o = {m->p.staircase_quality, 20, 0, fixed, NULL, NULL, NULL, NULL, NULL};
+    size_t moved = 0;
+    const double t = mx_wtime();
+    st = mx_untangle_with(M, states, &m->SI, &o, &moved);
+    fs->seconds += mx_wtime() - t;
+  }
+  if (!st) mx_mesh_summarize(M);
+  m->rec->S.features_kept = !st;
+  mx_free(fixed);
+  return st;
+}
+
 int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh *M,
                          uint8_t **states, mx_boundary_stats *bs) {
   if (!m->have_index) {
@@ -60,5 +86,6 @@ int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh
   MX_CHECK(mx_boundary_stage(&m->B.tree, leaves, &m->SI, M,
                              m->IF.npasses ? &m->IF : NULL, m->p.close_ratio,
                              m->p.staircase_quality, bs, states));
+  MX_CHECK(place_features(m, M, *states));
   return mx_mesh_sort_by_leaf(M, n);
 }

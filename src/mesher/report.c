@@ -181,13 +181,18 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
                s->size_graded_n, s->size_beta, s->size_src_kb, s->size_src_seconds);
     }
   }
-  char feat[256] = "";
+  char feat[512] = "";
+  const mx_feature_stats *fp = &s->feature_place;
   if (s->feature_angle > 0.0)
     snprintf(feat, sizeof feat,
              "\"features\": {\"angle\": %.6g, \"ridges\": %zu, \"edges\": %zu, "
-             "\"corners\": %zu, \"length\": %.9g, \"kept\": false, \"seconds\": %.6f}, ",
+             "\"corners\": %zu, \"length\": %.9g, \"kept\": %s, \"corners_placed\": %zu, "
+             "\"corners_missed\": %zu, \"lines_followed\": %zu, \"lines_missed\": %zu, "
+             "\"nodes\": %zu, \"side_moves\": %zu, \"seconds\": %.6f}, ",
              s->feature_angle, s->feature_ridges, s->feature_edges, s->feature_corners,
-             s->feature_length, s->feature_seconds);
+             s->feature_length, s->features_kept ? "true" : "false", fp->corners,
+             fp->corners_missed, fp->lines, fp->lines_missed, fp->nodes, fp->sides,
+             s->feature_seconds + fp->seconds);
   char img[12288] = "";
   if (s->image) {
     const mx_image_info *g = s->image;
@@ -293,11 +298,18 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
     printf("  elements     %12zu hexahedra (the leaves, hanging nodes kept)\n",
            s->leaves);
   }
-  if (s->feature_angle > 0.0)
+  if (s->feature_angle > 0.0) {
     printf("  features     %12zu ridge(s) of %zu edges, %.6g long; %zu corner(s) (at %.4g "
-           "degrees; found, not yet kept in the mesh)\n",
+           "degrees)\n",
            s->feature_ridges, s->feature_edges, s->feature_length, s->feature_corners,
            s->feature_angle);
+    const mx_feature_stats *fp = &s->feature_place;
+    if (s->features_kept)
+      printf("    kept       %12zu of %zu corner(s), %zu of %zu line(s) followed by mesh edges; "
+             "%zu node(s) on them, %zu moved to their side (%.3f s)\n",
+             fp->corners, fp->corners + fp->corners_missed, fp->lines,
+             fp->lines + fp->lines_missed, fp->nodes, fp->sides, fp->seconds);
+  }
   if (s->image) {
     const mx_image_info *g = s->image;
     printf("  image        %s, %lld x %lld x %lld voxels of %.4g x %.4g x %.4g%s; %.3f s "

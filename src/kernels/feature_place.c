@@ -1,0 +1,695 @@
+/* Sharp features placed in the mesh (kernels/feature_place.h). */
+#include "kernels/feature_place.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "base/common.h"
+#include "base/scan.h"
+#include "base/union_find.h"
+#include "io/boundary_faces.h"
+#include "kernels/boundary.h"
+#include "kernels/mesh_edit.h"
+
+/* The boundary as a graph, with a grid of its nodes. */
+typedef struct {
+  mx_mesh *M;
+  const uint8_t *fixed;
+  mx_boundary_faces bf;
+  size_t nf;             /* faces: triangles, then quadrilaterals */
+  size_t nrun;           /* edge-face pairs, sorted by edge */
+  uint64_t *rkey;        /* their edges (least node << 32 | other) */
+  uint32_t *rface;       /* their faces */
+  size_t ne;             /* distinct edges */
+  uint32_t *estart;      /* ne + 1: edge e's pairs */
+  uint8_t *eline;        /* per edge: on a placed line */
+  uint32_t *aoff, *adj, *aedge; /* per node: neighbours and the edges to them */
+  size_t nb;             /* boundary nodes, sorted by grid cell */
+  uint64_t *bkey;
+  uint32_t *bnode;
+  double lo[3], h;       /* the grid: cells of side h from lo */
+  uint32_t *loc;         /* per node: its place in the current tube, or UINT32_MAX */
+} graph;
+
+static const uint32_t *face_nodes(const graph *G, size_t f, int *n) {
+  if (f < G->bf.ntri) {
+    *n = 3;
+    return G->bf.tri + 3 * f;
+  }
+  *n = 4;
+  return G->bf.quad + 4 * (f - G->bf.ntri);
+}
+
+static double dist3(const double *a, const double *b) {
+  return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+              (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+static uint64_t cell_key(int64_t i, int64_t j, int64_t k) {
+  return (uint64_t)i << 42 | (uint64_t)j << 21 | (uint64_t)k;
+}
+
+static void cell_of(const graph *G, const double *x, int64_t c[3]) {
+  for (int a = 0; a < 3; a++) {
+    const double t = floor((x[a] - G->lo[a]) / G->h);
+    c[a] = t < 0 ? 0 : t > 2097151 ? 2097151 : (int64_t)t;
+  }
+}
+
+static size_t lower(const uint64_t *k, size_t n, uint64_t key) {
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (k[mid] < key) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
+
+static int graph_build(graph *G) {
+  mx_mesh *M = G->M;
+  const size_t nf = G->nf = G->bf.ntri + G->bf.nquad;
+  size_t n = 3 * G->bf.ntri + 4 * G->bf.nquad;
+  G->nrun = n;
+  G->rkey = mx_alloc((n + 1) * sizeof *G->rkey);
+  G->rface = mx_alloc((n + 1) * sizeof *G->rface);
+  G->aoff = mx_calloc((M->nnodes + 2) * sizeof *G->aoff);
+  G->loc = mx_alloc((M->nnodes + 1) * sizeof *G->loc);
+  if (!G->rkey || !G->rface || !G->aoff || !G->loc) return MX_ENOMEM;
+  for (size_t v = 0; v < M->nnodes; v++) G->loc[v] = UINT32_MAX;
+  size_t r = 0;
+  for (size_t f = 0; f < nf; f++) {
+    int k;
+    const uint32_t *p = face_nodes(G, f, &k);
+    for (int i = 0; i < k; i++) {
+      uint32_t a = p[i], b = p[(i + 1) % k];
+      if (a > b) {
+        const uint32_t c = a;
+        a = b;
+        b = c;
+      }
+      G->rkey[r] = (uint64_t)a << 32 | b;
+      G->rface[r++] = (uint32_t)f;
+    }
+  }
+  if (mx_sort_u64(G->rkey, G->rface, n)) return MX_ENOMEM;
+  size_t ne = 0;
+  for (size_t i = 0; i < n; i++) ne += i == 0 || G->rkey[i] != G->rkey[i - 1];
+  G->ne = ne;
+  G->estart = mx_alloc((ne + 1) * sizeof *G->estart);
+  G->eline = mx_calloc(ne + 1);
+  G->adj = mx_alloc((2 * ne + 1) * sizeof *G->adj);
+  G->aedge = mx_alloc((2 * ne + 1) * sizeof *G->aedge);
+  if (!G->estart || !G->eline || !G->adj || !G->aedge) return MX_ENOMEM;
+  ne = 0;
+  double hsum = 0.0;
+  for (size_t i = 0; i < n; i++)
+    if (i == 0 || G->rkey[i] != G->rkey[i - 1]) {
+      G->estart[ne++] = (uint32_t)i;
+      const uint32_t a = (uint32_t)(G->rkey[i] >> 32), b = (uint32_t)G->rkey[i];
+      G->aoff[a + 1]++;
+      G->aoff[b + 1]++;
+      hsum += dist3(M->xyz + 3 * (size_t)a, M->xyz + 3 * (size_t)b);
+    }
+  G->estart[ne] = (uint32_t)n;
+  for (size_t v = 0; v < M->nnodes; v++) G->aoff[v + 1] += G->aoff[v];
+  uint32_t *fill = G->loc; /* borrowed as a cursor, put back below */
+  for (size_t v = 0; v < M->nnodes; v++) fill[v] = G->aoff[v];
+  for (size_t e = 0; e < ne; e++) {
+    const uint64_t key = G->rkey[G->estart[e]];
+    const uint32_t a = (uint32_t)(key >> 32), b = (uint32_t)key;
+    G->adj[fill[a]] = b;
+    G->aedge[fill[a]++] = (uint32_t)e;
+    G->adj[fill[b]] = a;
+    G->aedge[fill[b]++] = (uint32_t)e;
+  }
+  for (size_t v = 0; v < M->nnodes; v++) G->loc[v] = UINT32_MAX;
+  /* the grid: cells of the mean edge length over the boundary nodes' box */
+  size_t nb = 0;
+  for (size_t v = 0; v < M->nnodes; v++) nb += G->aoff[v + 1] > G->aoff[v];
+  G->nb = nb;
+  G->bkey = mx_alloc((nb + 1) * sizeof *G->bkey);
+  G->bnode = mx_alloc((nb + 1) * sizeof *G->bnode);
+  if (!G->bkey || !G->bnode) return MX_ENOMEM;
+  G->h = ne ? hsum / (double)ne : 1.0;
+  for (int a = 0; a < 3; a++) G->lo[a] = INFINITY;
+  for (size_t v = 0; v < M->nnodes; v++)
+    if (G->aoff[v + 1] > G->aoff[v])
+      for (int a = 0; a < 3; a++) G->lo[a] = fmin(G->lo[a], M->xyz[3 * v + a]);
+  nb = 0;
+  for (size_t v = 0; v < M->nnodes; v++)
+    if (G->aoff[v + 1] > G->aoff[v]) {
+      int64_t c[3];
+      cell_of(G, M->xyz + 3 * v, c);
+      G->bkey[nb] = cell_key(c[0], c[1], c[2]);
+      G->bnode[nb++] = (uint32_t)v;
+    }
+  return mx_sort_u64(G->bkey, G->bnode, nb) ? MX_ENOMEM : MX_OK;
+}
+
+static void graph_free(graph *G) {
+  mx_boundary_faces_free(&G->bf);
+  mx_free(G->rkey);
+  mx_free(G->rface);
+  mx_free(G->estart);
+  mx_free(G->eline);
+  mx_free(G->aoff);
+  mx_free(G->adj);
+  mx_free(G->aedge);
+  mx_free(G->bkey);
+  mx_free(G->bnode);
+  mx_free(G->loc);
+}
+
+/* Calls fn(ctx, v) for the boundary nodes of the cells within ring k of x. */
+static void cells_around(const graph *G, const double *x, int64_t k,
+                         void (*fn)(void *ctx, uint32_t v), void *ctx) {
+  int64_t c[3];
+  cell_of(G, x, c);
+  for (int64_t i = c[0] - k; i <= c[0] + k; i++)
+    for (int64_t j = c[1] - k; j <= c[1] + k; j++) {
+      if (i < 0 || j < 0) continue;
+      const int64_t k0 = c[2] - k < 0 ? 0 : c[2] - k;
+      const uint64_t a = cell_key(i, j, k0), b = cell_key(i, j, c[2] + k) + 1;
+      for (size_t p = lower(G->bkey, G->nb, a); p < G->nb && G->bkey[p] < b; p++)
+        fn(ctx, G->bnode[p]);
+    }
+}
+
+typedef struct {
+  const graph *G;
+  const double *x;
+  double best;
+  uint32_t node;
+} nearest_ctx;
+
+static void nearest_fn(void *ctx, uint32_t v) {
+  nearest_ctx *c = ctx;
+  if (c->G->fixed[v]) return;
+  const double d = dist3(c->x, c->G->M->xyz + 3 * (size_t)v);
+  if (d < c->best || (d == c->best && v < c->node)) {
+    c->best = d;
+    c->node = v;
+  }
+}
+
+/* The closest boundary node to x not fixed yet (UINT32_MAX: none). */
+static uint32_t nearest_free(const graph *G, const double *x) {
+  nearest_ctx c = {G, x, INFINITY, UINT32_MAX};
+  for (int64_t k = 1; k < (int64_t)1 << 22; k *= 2) {
+    cells_around(G, x, k, nearest_fn, &c);
+    if (c.best <= (double)k * G->h) break; /* nothing closer beyond ring k */
+    if ((double)k * G->h > 1e3 * G->h * (double)(G->nb + 1)) break;
+  }
+  return c.node;
+}
+
+/* ---- lines ------------------------------------------------------------- */
+
+/* Closest point of x on the polyline p[0..n): the distance, the point q and
+ * its arc length s from p[0]. */
+static double on_polyline(const double *p, size_t n, const double *x, double *q, double *s) {
+  double best = INFINITY, acc = 0.0;
+  for (size_t i = 0; i + 1 < n; i++) {
+    const double *a = p + 3 * i, *b = a + 3;
+    const double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double l2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2], l = sqrt(l2);
+    double t = l2 > 0 ? ((x[0] - a[0]) * d[0] + (x[1] - a[1]) * d[1] + (x[2] - a[2]) * d[2]) / l2 : 0;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    const double y[3] = {a[0] + t * d[0], a[1] + t * d[1], a[2] + t * d[2]};
+    const double e = dist3(x, y);
+    if (e < best) {
+      best = e;
+      if (q) memcpy(q, y, sizeof y);
+      if (s) *s = acc + t * l;
+    }
+    acc += l;
+  }
+  return best;
+}
+
+typedef struct {
+  graph *G;
+  uint32_t *tube;
+  size_t n, cap;
+  int nomem;
+} tube_ctx;
+
+static void tube_fn(void *ctx, uint32_t v) {
+  tube_ctx *c = ctx;
+  if (c->G->loc[v] != UINT32_MAX || c->nomem) return;
+  if (c->n == c->cap) {
+    const size_t cap = c->cap ? 2 * c->cap : 256;
+    uint32_t *t = mx_realloc(c->tube, cap * sizeof *t);
+    if (!t) {
+      c->nomem = 1;
+      return;
+    }
+    c->tube = t;
+    c->cap = cap;
+  }
+  c->G->loc[v] = (uint32_t)c->n;
+  c->tube[c->n++] = v;
+}
+
+/* The work arrays of one search, grown as needed. */
+typedef struct {
+  uint32_t *tube;
+  size_t cap;
+  double *cost, *d;
+  uint32_t *prev, *heap;
+  size_t wcap;
+  uint32_t *path;
+  size_t pcap;
+} search;
+
+static int grow(void **p, size_t *cap, size_t n, size_t size) {
+  if (n <= *cap) return MX_OK;
+  void *q = mx_realloc(*p, n * size);
+  if (!q) return MX_ENOMEM;
+  *p = q;
+  *cap = n;
+  return MX_OK;
+}
+
+static void heap_push(uint32_t *h, size_t *n, const double *key, uint32_t x) {
+  size_t i = (*n)++;
+  while (i > 0) {
+    const size_t p = (i - 1) / 2;
+    if (key[h[p]] < key[x] || (key[h[p]] == key[x] && h[p] < x)) break;
+    h[i] = h[p];
+    i = p;
+  }
+  h[i] = x;
+}
+
+static uint32_t heap_pop(uint32_t *h, size_t *n, const double *key) {
+  const uint32_t top = h[0], x = h[--*n];
+  size_t i = 0;
+  for (;;) {
+    size_t c = 2 * i + 1;
+    if (c >= *n) break;
+    if (c + 1 < *n && (key[h[c + 1]] < key[h[c]] || (key[h[c + 1]] == key[h[c]] && h[c + 1] < h[c])))
+      c++;
+    if (key[x] < key[h[c]] || (key[x] == key[h[c]] && x < h[c])) break;
+    h[i] = h[c];
+    i = c;
+  }
+  if (*n) h[i] = x;
+  return top;
+}
+
+/* The path of boundary edges from node a to node b near the polyline
+ * p[0..n) (a and b excepted, through nodes not fixed): its nodes a .. b in
+ * W->path, their count returned (0: none). */
+static size_t find_path(graph *G, search *W, const double *p, size_t n, uint32_t a, uint32_t b,
+                        int *nomem) {
+  const double *X = G->M->xyz;
+  /* the tube: boundary nodes within 2 cells of points every half cell */
+  tube_ctx tc = {G, W->tube, 0, W->cap, 0};
+  for (size_t i = 0; i + 1 < n; i++) {
+    const double *u = p + 3 * i, *v = u + 3;
+    const size_t steps = 1 + (size_t)(2.0 * dist3(u, v) / G->h);
+    for (size_t s = 0; s <= steps; s++) {
+      const double t = (double)s / (double)steps;
+      const double x[3] = {u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1]), u[2] + t * (v[2] - u[2])};
+      cells_around(G, x, 2, tube_fn, &tc);
+    }
+  }
+  tube_fn(&tc, a);
+  tube_fn(&tc, b);
+  W->tube = tc.tube;
+  W->cap = tc.cap;
+  const size_t m = tc.n;
+  size_t got = 0;
+  if (tc.nomem || grow((void **)&W->cost, &W->wcap, m, sizeof *W->cost)) {
+    *nomem = 1;
+    goto out;
+  }
+  size_t hcap = 1; /* each directed edge pushes once at most */
+  for (size_t i = 0; i < m; i++) hcap += G->aoff[W->tube[i] + 1] - G->aoff[W->tube[i]];
+  {
+    double *d = mx_realloc(W->d, (m + 1) * sizeof *W->d);
+    if (d) W->d = d;
+    uint32_t *pr = mx_realloc(W->prev, (m + 1) * sizeof *W->prev);
+    if (pr) W->prev = pr;
+    uint32_t *hp = mx_realloc(W->heap, hcap * sizeof *W->heap);
+    if (hp) W->heap = hp;
+    if (!d || !pr || !hp) {
+      *nomem = 1;
+      goto out;
+    }
+  }
+  for (size_t i = 0; i < m; i++) {
+    W->cost[i] = INFINITY;
+    W->prev[i] = UINT32_MAX;
+    W->d[i] = on_polyline(p, n, X + 3 * (size_t)W->tube[i], NULL, NULL);
+  }
+  size_t nh = 0;
+  const uint32_t la = G->loc[a], lb = G->loc[b];
+  W->cost[la] = 0.0;
+  heap_push(W->heap, &nh, W->cost, la);
+  while (nh) {
+    const uint32_t i = heap_pop(W->heap, &nh, W->cost);
+    if (i == lb) break;
+    const uint32_t u = W->tube[i];
+    for (uint32_t k = G->aoff[u]; k < G->aoff[u + 1]; k++) {
+      const uint32_t w = G->adj[k], j = G->loc[w];
+      if (j == UINT32_MAX || (G->fixed[w] && w != b)) continue;
+      const double c = W->cost[i] + dist3(X + 3 * (size_t)u, X + 3 * (size_t)w) +
+                       2.0 * (W->d[i] + W->d[j]);
+      if (c < W->cost[j]) {
+        W->cost[j] = c;
+        W->prev[j] = i;
+        heap_push(W->heap, &nh, W->cost, j); /* stale entries are popped later, harmless */
+      }
+    }
+  }
+  if (W->cost[lb] < INFINITY) {
+    size_t k = 0;
+    for (uint32_t i = lb; i != UINT32_MAX; i = W->prev[i]) k++;
+    if (grow((void **)&W->path, &W->pcap, k, sizeof *W->path)) {
+      *nomem = 1;
+      goto out;
+    }
+    got = k;
+    for (uint32_t i = lb; i != UINT32_MAX; i = W->prev[i]) W->path[--k] = W->tube[i];
+  }
+out:
+  for (size_t i = 0; i < m; i++) G->loc[W->tube[i]] = UINT32_MAX;
+  return got;
+}
+
+/* The path's nodes onto the polyline when their places along it keep the
+ * path's order (each step advancing by a tenth of its length at least);
+ * the path's edges marked. 1: placed, 0: not. */
+static int place_path(graph *G, uint8_t *fixed, uint8_t *moved, const uint32_t *path, size_t k,
+                      const double *p, size_t n, size_t *nodes) {
+  double *X = G->M->xyz, s_prev = 0.0, total = 0.0;
+  for (size_t i = 0; i + 1 < n; i++) total += dist3(p + 3 * i, p + 3 * i + 3);
+  for (size_t i = 1; i + 1 < k; i++) {
+    double s;
+    on_polyline(p, n, X + 3 * (size_t)path[i], NULL, &s);
+    if (!(s - s_prev > 0.1 * dist3(X + 3 * (size_t)path[i], X + 3 * (size_t)path[i - 1]) * 0.5))
+      return 0;
+    s_prev = s;
+  }
+  if (k > 2 && !(total - s_prev > 0.05 * dist3(X + 3 * (size_t)path[k - 1], X + 3 * (size_t)path[k - 2])))
+    return 0;
+  for (size_t i = 1; i + 1 < k; i++) {
+    double q[3];
+    on_polyline(p, n, X + 3 * (size_t)path[i], q, NULL);
+    memcpy(X + 3 * (size_t)path[i], q, sizeof q);
+    fixed[path[i]] = 1;
+    moved[path[i]] = 1;
+    (*nodes)++;
+  }
+  for (size_t i = 0; i + 1 < k; i++) {
+    uint32_t a = path[i], b = path[i + 1];
+    if (a > b) {
+      const uint32_t c = a;
+      a = b;
+      b = c;
+    }
+    const size_t r = lower(G->rkey, G->nrun, (uint64_t)a << 32 | b);
+    /* the edge of pair r: the last edge starting at or before r */
+    size_t lo = 0, hi = G->ne;
+    while (hi - lo > 1) {
+      const size_t mid = lo + (hi - lo) / 2;
+      if (G->estart[mid] <= r) lo = mid;
+      else hi = mid;
+    }
+    G->eline[lo] = 1;
+  }
+  return 1;
+}
+
+/* Places node v onto corner point x (taking it); 0 when no node is free. */
+static uint32_t take_point(graph *G, uint8_t *fixed, uint8_t *moved, const double *x) {
+  const uint32_t v = nearest_free(G, x);
+  if (v == UINT32_MAX) return v;
+  memcpy(G->M->xyz + 3 * (size_t)v, x, 3 * sizeof *x);
+  fixed[v] = 1;
+  moved[v] = 1;
+  return v;
+}
+
+/* ---- sides ------------------------------------------------------------- */
+
+typedef struct {
+  mx_surface_index S;
+  mx_trisoup sub; /* the patch's triangles over the soup's vertices */
+  int built;
+} patch_index;
+
+static int patch_closest(const mx_feature_input *in, patch_index *pi, uint32_t patch,
+                         const double *x, double *q) {
+  patch_index *P = pi + patch;
+  if (!P->built) {
+    size_t n = 0;
+    for (size_t t = 0; t < in->nt; t++) n += in->patch[t] == patch;
+    memset(&P->sub, 0, sizeof P->sub);
+    P->sub.tri = mx_alloc((3 * n + 1) * sizeof *P->sub.tri);
+    if (!P->sub.tri) return MX_ENOMEM;
+    for (size_t t = 0; t < in->nt; t++)
+      if (in->patch[t] == patch) memcpy(P->sub.tri + 3 * P->sub.nt++, in->soup->tri + 3 * t, 3 * sizeof *P->sub.tri);
+    P->sub.nv = in->soup->nv;
+    P->sub.x = in->soup->x;
+    P->sub.y = in->soup->y;
+    P->sub.z = in->soup->z;
+    const int st = mx_surface_index_build(&P->S, &P->sub, 0, (uint32_t)P->sub.nt);
+    if (st) {
+      mx_free(P->sub.tri);
+      return st;
+    }
+    P->built = 1;
+  }
+  mx_closest_point(&P->S, x, q, NULL, NULL);
+  return MX_OK;
+}
+
+static int cmp_u64(const void *a, const void *b) {
+  const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+  return (x > y) - (x < y);
+}
+
+/* Each region's patch by its nodes' votes; nodes of a region closest to
+ * another patch moved onto the region's. near[v]: the nodes looked at. */
+static int sides(graph *G, const mx_feature_input *in, const mx_surface_index *S,
+                 const uint8_t *near, uint8_t *moved, size_t *count) {
+  mx_mesh *M = G->M;
+  const size_t nf = G->nf;
+  uint32_t *up = mx_alloc((nf + 1) * sizeof *up), *np = mx_alloc((M->nnodes + 1) * sizeof *np);
+  uint32_t *reg = mx_alloc((M->nnodes + 1) * sizeof *reg);
+  uint64_t *vote = NULL;
+  patch_index *pi = mx_calloc((in->npatches + 1) * sizeof *pi);
+  int st = up && np && reg && pi ? MX_OK : MX_ENOMEM;
+  if (st) goto done;
+  for (size_t f = 0; f < nf; f++) up[f] = (uint32_t)f;
+  for (size_t e = 0; e < G->ne; e++)
+    if (!G->eline[e])
+      for (uint32_t r = G->estart[e] + 1; r < G->estart[e + 1]; r++)
+        mx_uf_join(up, G->rface[G->estart[e]], G->rface[r]);
+  /* each near node's closest patch and region (UINT32_MAX - 1: two regions) */
+  size_t nv = 0;
+  for (size_t v = 0; v < M->nnodes; v++) {
+    reg[v] = UINT32_MAX;
+    np[v] = UINT32_MAX;
+    if (near[v] && !G->fixed[v]) {
+      uint32_t t;
+      mx_closest_point(S, M->xyz + 3 * v, NULL, &t, NULL);
+      np[v] = t < in->nt ? in->patch[t] : UINT32_MAX;
+      nv++;
+    }
+  }
+  for (size_t f = 0; f < nf; f++) {
+    int k;
+    const uint32_t *p = face_nodes(G, f, &k);
+    const uint32_t r = mx_uf_find(up, (uint32_t)f);
+    for (int i = 0; i < k; i++)
+      if (np[p[i]] != UINT32_MAX)
+        reg[p[i]] = reg[p[i]] == UINT32_MAX || reg[p[i]] == r ? r : UINT32_MAX - 1;
+  }
+  /* the votes: (region, patch) pairs sorted, the longest run per region */
+  vote = mx_alloc((nv + 1) * sizeof *vote);
+  if (!vote) {
+    st = MX_ENOMEM;
+    goto done;
+  }
+  size_t n = 0;
+  for (size_t v = 0; v < M->nnodes; v++)
+    if (np[v] != UINT32_MAX && reg[v] < UINT32_MAX - 1) vote[n++] = (uint64_t)reg[v] << 32 | np[v];
+  qsort(vote, n, sizeof *vote, cmp_u64);
+  /* the winner of each region, in place at the region's face id (up[] of
+   * roots is theirs: roots keep up[r] == r, so the winner goes to np-like
+   * storage: reuse up[] only for roots after the last find) */
+  uint32_t *win = mx_alloc((nf + 1) * sizeof *win);
+  if (!win) {
+    st = MX_ENOMEM;
+    goto done;
+  }
+  for (size_t f = 0; f < nf; f++) win[f] = UINT32_MAX;
+  for (size_t i = 0, best = 0; i < n;) {
+    const uint32_t r = (uint32_t)(vote[i] >> 32);
+    size_t j = i;
+    best = 0;
+    while (j < n && vote[j] >> 32 == r) {
+      size_t l = j;
+      while (l < n && vote[l] == vote[j]) l++;
+      if (l - j > best) {
+        best = l - j;
+        win[r] = (uint32_t)vote[j];
+      }
+      j = l;
+    }
+    i = j;
+  }
+  for (size_t v = 0; v < M->nnodes && !st; v++) {
+    if (np[v] == UINT32_MAX || reg[v] >= UINT32_MAX - 1) continue;
+    const uint32_t want = win[reg[v]];
+    if (want == UINT32_MAX || want == np[v]) continue;
+    double q[3];
+    st = patch_closest(in, pi, want, M->xyz + 3 * v, q);
+    if (st) break;
+    memcpy(M->xyz + 3 * v, q, sizeof q);
+    moved[v] = 1;
+    (*count)++;
+  }
+  mx_free(win);
+done:
+  for (size_t p = 0; pi && p < in->npatches; p++)
+    if (pi[p].built) {
+      mx_surface_index_free(&pi[p].S);
+      mx_free(pi[p].sub.tri);
+    }
+  mx_free(pi);
+  mx_free(up);
+  mx_free(np);
+  mx_free(reg);
+  mx_free(vote);
+  return st;
+}
+
+/* ---- the pass ---------------------------------------------------------- */
+
+int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
+                     const mx_feature_input *in, uint8_t *fixed, mx_feature_stats *st) {
+  memset(st, 0, sizeof *st);
+  memset(fixed, 0, M->nnodes);
+  const double t0 = mx_wtime();
+  const mx_feature_lines *L = in->L;
+  if (!L || (!L->nlines && !L->ncorners) || !M->ncells) return MX_OK;
+  graph G;
+  memset(&G, 0, sizeof G);
+  G.M = M;
+  G.fixed = fixed;
+  search W;
+  memset(&W, 0, sizeof W);
+  uint8_t *mask = mx_alloc(M->nnodes + 1), *moved = mx_calloc(M->nnodes + 1);
+  double *sub = NULL;
+  int rc = mask && moved ? MX_OK : MX_ENOMEM;
+  if (rc) goto done;
+  for (size_t v = 0; v < M->nnodes; v++) mask[v] = states[v] == MX_NODE_OUTSIDE;
+  {
+    const mx_mesh_view view = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
+                               .type = M->type, .conn = M->conn};
+    rc = mx_boundary_faces_extract_masked(&view, mask, &G.bf);
+  }
+  if (!rc) rc = graph_build(&G);
+  if (rc) goto done;
+  /* corners */
+  for (size_t c = 0; c < L->ncorners; c++) {
+    if (take_point(&G, fixed, moved, L->corner + 3 * c) == UINT32_MAX) st->corners_missed++;
+    else st->corners++;
+  }
+  st->nodes = st->corners;
+  /* lines: open ones between their corners' nodes, loops in two halves */
+  for (size_t i = 0; i < L->nlines && !rc; i++) {
+    const double *p = L->xyz + 3 * L->first[i];
+    const size_t n = L->first[i + 1] - L->first[i];
+    int ok = 1, nomem = 0;
+    if (!L->loop[i]) {
+      /* the corners' nodes are fixed: the nodes at the ends' points */
+      uint32_t ea = UINT32_MAX, eb = UINT32_MAX;
+      for (int end = 0; end < 2; end++) {
+        const double *x = end ? p + 3 * (n - 1) : p;
+        double best = INFINITY;
+        uint32_t node = UINT32_MAX;
+        /* the fixed node at x: exactly there */
+        int64_t cc[3];
+        cell_of(&G, x, cc);
+        for (int64_t di = -1; di <= 1; di++)
+          for (int64_t dj = -1; dj <= 1; dj++)
+            for (int64_t dk = -1; dk <= 1; dk++) {
+              if (cc[0] + di < 0 || cc[1] + dj < 0 || cc[2] + dk < 0) continue;
+              const uint64_t key = cell_key(cc[0] + di, cc[1] + dj, cc[2] + dk);
+              for (size_t q = lower(G.bkey, G.nb, key); q < G.nb && G.bkey[q] == key; q++) {
+                const uint32_t v = G.bnode[q];
+                const double d = dist3(x, M->xyz + 3 * (size_t)v);
+                if (fixed[v] && d < best) {
+                  best = d;
+                  node = v;
+                }
+              }
+            }
+        if (best != 0.0) node = UINT32_MAX;
+        if (end) eb = node;
+        else ea = node;
+      }
+      size_t k = ea != UINT32_MAX && eb != UINT32_MAX && ea != eb ? find_path(&G, &W, p, n, ea, eb, &nomem) : 0;
+      ok = k >= 2 && place_path(&G, fixed, moved, W.path, k, p, n, &st->nodes);
+    } else if (n >= 3) {
+      const size_t mid = n / 2;
+      sub = mx_realloc(sub, 3 * (n - mid + 2) * sizeof *sub);
+      if (!sub) {
+        rc = MX_ENOMEM;
+        break;
+      }
+      const uint32_t a = take_point(&G, fixed, moved, p);
+      const uint32_t b = a == UINT32_MAX ? a : take_point(&G, fixed, moved, p + 3 * mid);
+      if (b == UINT32_MAX) ok = 0;
+      else {
+        st->nodes += 2;
+        size_t k = find_path(&G, &W, p, mid + 1, a, b, &nomem);
+        ok = k >= 2 && place_path(&G, fixed, moved, W.path, k, p, mid + 1, &st->nodes);
+        memcpy(sub, p + 3 * mid, 3 * (n - mid) * sizeof *sub);
+        memcpy(sub + 3 * (n - mid), p, 3 * sizeof *sub);
+        k = ok && !nomem ? find_path(&G, &W, sub, n - mid + 1, b, a, &nomem) : 0;
+        ok = ok && k >= 2 && place_path(&G, fixed, moved, W.path, k, sub, n - mid + 1, &st->nodes);
+      }
+    }
+    if (nomem) rc = MX_ENOMEM;
+    if (ok) st->lines++;
+    else st->lines_missed++;
+  }
+  /* sides, near the placed lines (the nodes of the edges around theirs) */
+  if (!rc && in->patch && in->npatches > 1) {
+    memset(mask, 0, M->nnodes);
+    for (size_t v = 0; v < M->nnodes; v++)
+      if (fixed[v])
+        for (uint32_t k = G.aoff[v]; k < G.aoff[v + 1]; k++) {
+          const uint32_t w = G.adj[k];
+          mask[w] = 1;
+          for (uint32_t j = G.aoff[w]; j < G.aoff[w + 1]; j++) mask[G.adj[j]] = 1;
+        }
+    rc = sides(&G, in, S, mask, moved, &st->sides);
+  }
+  if (!rc) {
+    mx_mesh_update_jens(M, moved);
+    mx_mesh_summarize(M);
+  }
+done:
+  graph_free(&G);
+  mx_free(W.tube);
+  mx_free(W.cost);
+  mx_free(W.d);
+  mx_free(W.prev);
+  mx_free(W.heap);
+  mx_free(W.path);
+  mx_free(mask);
+  mx_free(moved);
+  mx_free(sub);
+  st->seconds = mx_wtime() - t0;
+  return rc;
+}
