@@ -8,6 +8,7 @@
 #include "base/common.h"
 #include "base/scan.h"
 #include "base/union_find.h"
+#include "geom/quality.h"
 #include "io/boundary_faces.h"
 #include "kernels/boundary.h"
 #include "kernels/mesh_edit.h"
@@ -543,6 +544,9 @@ static int sides(graph *G, const mx_feature_input *in, const mx_surface_index *S
       }
       j = l;
     }
+    /* a clear winner only: two patches about even mean the region runs
+     * round a line that was not placed, its sides unknown */
+    if (3 * best < 2 * (j - i)) win[r] = UINT32_MAX;
     i = j;
   }
   for (size_t v = 0; v < M->nnodes && !st; v++) {
@@ -692,4 +696,30 @@ done:
   mx_free(sub);
   st->seconds = mx_wtime() - t0;
   return rc;
+}
+
+int mx_feature_give_up(mx_mesh *M, const double *before, size_t *count) {
+  uint8_t *back = mx_alloc(M->nnodes + 1);
+  if (!back) return MX_ENOMEM;
+  for (int round = 0; round < 64 && M->invalid; round++) {
+    memset(back, 0, M->nnodes);
+    size_t n = 0;
+    for (size_t c = 0; c < M->ncells; c++) {
+      if (!mx_jens_invalid(M->jens[c])) continue;
+      for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
+        const uint32_t v = M->conn[8 * c + k];
+        if (memcmp(M->xyz + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof *before)) {
+          memcpy(M->xyz + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof *before);
+          back[v] = 1;
+          n++;
+        }
+      }
+    }
+    if (!n) break;
+    *count += n;
+    mx_mesh_update_jens(M, back);
+    mx_mesh_summarize(M);
+  }
+  mx_free(back);
+  return MX_OK;
 }

@@ -47,6 +47,7 @@ typedef struct {
   size_t lines, lines_missed;     /* lines followed by mesh edges; not */
   size_t nodes;                   /* nodes moved onto corners and lines */
   size_t sides;                   /* nodes moved onto their region's patch */
+  size_t given_up;                /* nodes put back (mx_feature_give_up) */
   double seconds;
 } mx_feature_stats;
 
@@ -55,5 +56,12 @@ typedef struct {
  * node). MX_OK, MX_ENOMEM. */
 int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
                      const mx_feature_input *in, uint8_t *fixed, mx_feature_stats *st);
+
+/* The nodes of the elements left invalid (J_ENS < MX_JENS_VALID) put back
+ * where they were before the placement (before: 3 * nnodes), until no
+ * element is invalid or none of its nodes moved: the features there are
+ * given up rather than the mesh. *count: nodes put back. J_ENS and the
+ * summary updated. MX_OK, MX_ENOMEM. */
+int mx_feature_give_up(mx_mesh *M, const double *before, size_t *count);
 
 #endif

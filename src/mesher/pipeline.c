@@ -1,6 +1,8 @@
 /* The stages after refinement, chained once: see mesher/pipeline.h. */
 #include "mesher/pipeline.h"
 
+#include <string.h>
+
 #include "kernels/untangle.h"
 
 #include "base/common.h"
@@ -53,26 +55,35 @@ int mx_pipeline_transition(mx_mesher *m, const uint32_t *leaves, size_t n, int r
 }
 
 /* The features placed on the boundary (kernels/feature_place.h), then the
- * elements they spoilt untangled with the feature nodes fixed. */
+ * elements they spoilt untangled with the feature nodes fixed; what stays
+ * invalid gives its features up (mx_feature_give_up). */
 static int place_features(mx_mesher *m, mx_mesh *M, const uint8_t *states) {
   if (!m->have_features || !states || m->p.materials) return MX_OK;
   const mx_features *F = &m->feat;
   const mx_feature_input in = {&m->feat_lines, &m->soup, m->nt_domain, F->patch, F->npatches};
   uint8_t *fixed = mx_alloc(M->nnodes + 1);
-  if (!fixed) return MX_ENOMEM;
+  double *before = mx_alloc((3 * M->nnodes + 1) * sizeof *before);
+  if (!fixed || !before) {
+    mx_free(fixed);
+    mx_free(before);
+    return MX_ENOMEM;
+  }
+  memcpy(before, M->xyz, 3 * M->nnodes * sizeof *before);
   mx_feature_stats *fs = &m->rec->S.feature_place;
   int st = mx_feature_place(M, states, &m->SI, &in, fixed, fs);
-  if (!st) {
+  const double t = mx_wtime();
+  if (!st && M->invalid) {
     for (size_t v = 0; v < M->nnodes; v++) fixed[v] = !fixed[v];
     const mx_untangle_opts o = {m->p.staircase_quality, 20, 0, fixed, NULL, NULL, NULL, NULL, NULL};
     size_t moved = 0;
-    const double t = mx_wtime();
     st = mx_untangle_with(M, states, &m->SI, &o, &moved);
-    fs->seconds += mx_wtime() - t;
+    if (!st) mx_mesh_summarize(M);
   }
-  if (!st) mx_mesh_summarize(M);
+  if (!st && M->invalid) st = mx_feature_give_up(M, before, &fs->given_up);
+  fs->seconds += mx_wtime() - t;
   m->rec->S.features_kept = !st;
   mx_free(fixed);
+  mx_free(before);
   return st;
 }
 

@@ -188,10 +188,10 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              "\"features\": {\"angle\": %.6g, \"ridges\": %zu, \"edges\": %zu, "
              "\"corners\": %zu, \"length\": %.9g, \"kept\": %s, \"corners_placed\": %zu, "
              "\"corners_missed\": %zu, \"lines_followed\": %zu, \"lines_missed\": %zu, "
-             "\"nodes\": %zu, \"side_moves\": %zu, \"seconds\": %.6f}, ",
+             "\"nodes\": %zu, \"side_moves\": %zu, \"given_up\": %zu, \"seconds\": %.6f}, ",
              s->feature_angle, s->feature_ridges, s->feature_edges, s->feature_corners,
              s->feature_length, s->features_kept ? "true" : "false", fp->corners,
-             fp->corners_missed, fp->lines, fp->lines_missed, fp->nodes, fp->sides,
+             fp->corners_missed, fp->lines, fp->lines_missed, fp->nodes, fp->sides, fp->given_up,
              s->feature_seconds + fp->seconds);
   char img[12288] = "";
   if (s->image) {
@@ -306,9 +306,9 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
     const mx_feature_stats *fp = &s->feature_place;
     if (s->features_kept)
       printf("    kept       %12zu of %zu corner(s), %zu of %zu line(s) followed by mesh edges; "
-             "%zu node(s) on them, %zu moved to their side (%.3f s)\n",
+             "%zu node(s) on them, %zu moved to their side, %zu put back (%.3f s)\n",
              fp->corners, fp->corners + fp->corners_missed, fp->lines,
-             fp->lines + fp->lines_missed, fp->nodes, fp->sides, fp->seconds);
+             fp->lines + fp->lines_missed, fp->nodes, fp->sides, fp->given_up, fp->seconds);
   }
   if (s->image) {
     const mx_image_info *g = s->image;
