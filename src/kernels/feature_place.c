@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <stdio.h>
 
 #include "base/common.h"
 #include "base/scan.h"
@@ -436,6 +437,27 @@ static uint32_t take_point(graph *G, uint8_t *fixed, uint8_t *moved, const doubl
   return v;
 }
 
+/* A point's coordinates hashed (FNV-1a over their bits, -0 as 0). */
+static uint64_t point_key(const double *x) {
+  uint64_t h = 1469598103934665603u;
+  for (int a = 0; a < 3; a++) {
+    const double y = x[a] == 0.0 ? 0.0 : x[a];
+    uint64_t u;
+    memcpy(&u, &y, sizeof u);
+    for (int b = 0; b < 8; b++) h = (h ^ (u >> (8 * b) & 255)) * 1099511628211u;
+  }
+  return h;
+}
+
+/* The node the corner at x took (keys sorted with their nodes), or
+ * UINT32_MAX (no corner there, or it took none). */
+static uint32_t taken_at(const uint64_t *key, const uint32_t *node, size_t n, const double *x) {
+  const uint64_t k = point_key(x);
+  uint32_t v = UINT32_MAX;
+  for (size_t i = lower(key, n, k); i < n && key[i] == k && v == UINT32_MAX; i++) v = node[i];
+  return v;
+}
+
 /* ---- sides ------------------------------------------------------------- */
 
 typedef struct {
@@ -592,6 +614,8 @@ int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *
   memset(&W, 0, sizeof W);
   uint8_t *mask = mx_alloc(M->nnodes + 1), *moved = mx_calloc(M->nnodes + 1);
   double *sub = NULL;
+  uint64_t *ckey = NULL;
+  uint32_t *cnode = NULL;
   int rc = mask && moved ? MX_OK : MX_ENOMEM;
   if (rc) goto done;
   for (size_t v = 0; v < M->nnodes; v++) mask[v] = states[v] == MX_NODE_OUTSIDE;
@@ -602,10 +626,22 @@ int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *
   }
   if (!rc) rc = graph_build(&G);
   if (rc) goto done;
-  /* corners */
+  /* corners, and the node each took by the corner's coordinates */
+  ckey = mx_alloc((L->ncorners + 1) * sizeof *ckey);
+  cnode = mx_alloc((L->ncorners + 1) * sizeof *cnode);
+  if (!ckey || !cnode) {
+    rc = MX_ENOMEM;
+    goto done;
+  }
   for (size_t c = 0; c < L->ncorners; c++) {
-    if (take_point(&G, fixed, moved, L->corner + 3 * c) == UINT32_MAX) st->corners_missed++;
+    cnode[c] = take_point(&G, fixed, moved, L->corner + 3 * c);
+    ckey[c] = point_key(L->corner + 3 * c);
+    if (cnode[c] == UINT32_MAX) st->corners_missed++;
     else st->corners++;
+  }
+  if (mx_sort_u64(ckey, cnode, L->ncorners)) {
+    rc = MX_ENOMEM;
+    goto done;
   }
   st->nodes = st->corners;
   /* lines: open ones between their corners' nodes, loops in two halves */
@@ -614,35 +650,12 @@ int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *
     const size_t n = L->first[i + 1] - L->first[i];
     int ok = 1, nomem = 0;
     if (!L->loop[i]) {
-      /* the corners' nodes are fixed: the nodes at the ends' points */
-      uint32_t ea = UINT32_MAX, eb = UINT32_MAX;
-      for (int end = 0; end < 2; end++) {
-        const double *x = end ? p + 3 * (n - 1) : p;
-        double best = INFINITY;
-        uint32_t node = UINT32_MAX;
-        /* the fixed node at x: exactly there */
-        int64_t cc[3];
-        cell_of(&G, x, cc);
-        for (int64_t di = -1; di <= 1; di++)
-          for (int64_t dj = -1; dj <= 1; dj++)
-            for (int64_t dk = -1; dk <= 1; dk++) {
-              if (cc[0] + di < 0 || cc[1] + dj < 0 || cc[2] + dk < 0) continue;
-              const uint64_t key = cell_key(cc[0] + di, cc[1] + dj, cc[2] + dk);
-              for (size_t q = lower(G.bkey, G.nb, key); q < G.nb && G.bkey[q] == key; q++) {
-                const uint32_t v = G.bnode[q];
-                const double d = dist3(x, M->xyz + 3 * (size_t)v);
-                if (fixed[v] && d < best) {
-                  best = d;
-                  node = v;
-                }
-              }
-            }
-        if (best != 0.0) node = UINT32_MAX;
-        if (end) eb = node;
-        else ea = node;
-      }
+      /* the nodes the corners at its ends took */
+      const uint32_t ea = taken_at(ckey, cnode, L->ncorners, p);
+      const uint32_t eb = taken_at(ckey, cnode, L->ncorners, p + 3 * (n - 1));
       size_t k = ea != UINT32_MAX && eb != UINT32_MAX && ea != eb ? find_path(&G, &W, p, n, ea, eb, &nomem) : 0;
       ok = k >= 2 && place_path(&G, fixed, moved, W.path, k, p, n, &st->nodes);
+      if (getenv("MX_FDEBUG")) fprintf(stderr, "line %zu: ends %u %u path %zu ok %d\n", i, ea, eb, k, ok);
     } else if (n >= 3) {
       const size_t mid = n / 2;
       sub = mx_realloc(sub, 3 * (n - mid + 2) * sizeof *sub);
@@ -694,6 +707,8 @@ done:
   mx_free(mask);
   mx_free(moved);
   mx_free(sub);
+  mx_free(ckey);
+  mx_free(cnode);
   st->seconds = mx_wtime() - t0;
   return rc;
 }
