@@ -16,6 +16,7 @@ void mx_features_free(mx_features *F) {
   mx_free(F->edge);
   mx_free(F->corner);
   mx_free(F->patch);
+  mx_free(F->open);
   memset(F, 0, sizeof *F);
 }
 
@@ -37,6 +38,98 @@ static void normal(const mx_trisoup *s, const uint32_t *t, double n[3]) {
   for (int a = 0; a < 3 && l > 0; a++) n[a] /= l;
 }
 
+static double edge_length(const mx_trisoup *s, const uint32_t *e) {
+  const uint32_t a = e[0], b = e[1];
+  return sqrt((s->x[a] - s->x[b]) * (s->x[a] - s->x[b]) + (s->y[a] - s->y[b]) * (s->y[a] - s->y[b]) +
+              (s->z[a] - s->z[b]) * (s->z[a] - s->z[b]));
+}
+
+/* Peels the ridge edges with an end no other ridge edge meets, until none
+ * is left (the ridges' 2-core: loops and the chains between them stay),
+ * then the networks shorter than MX_FEATURE_MIN of the diagonal; deg[] and
+ * the length follow. */
+static int peel_dangling(const mx_trisoup *s, mx_features *F, uint32_t *deg) {
+  const size_t ne = F->nedges, nv = s->nv;
+  uint32_t *start = mx_calloc((nv + 2) * sizeof *start), *inc = mx_alloc((2 * ne + 1) * sizeof *inc);
+  uint32_t *queue = mx_alloc((nv + 1) * sizeof *queue);
+  uint8_t *gone = mx_calloc(ne + 1);
+  if (!start || !inc || !queue || !gone) {
+    mx_free(start);
+    mx_free(inc);
+    mx_free(queue);
+    mx_free(gone);
+    return MX_ENOMEM;
+  }
+  for (size_t i = 0; i < 2 * ne; i++) start[F->edge[i] + 1]++;
+  for (size_t v = 0; v < nv; v++) start[v + 1] += start[v];
+  for (size_t i = 0; i < 2 * ne; i++) inc[start[F->edge[i]]++] = (uint32_t)(i / 2);
+  for (size_t v = nv; v > 0; v--) start[v] = start[v - 1];
+  start[0] = 0;
+  size_t nq = 0;
+  for (size_t v = 0; v < nv; v++)
+    if (deg[v] == 1) queue[nq++] = (uint32_t)v;
+  while (nq) {
+    const uint32_t v = queue[--nq];
+    if (deg[v] != 1) continue;
+    for (uint32_t j = start[v]; j < start[v + 1]; j++) {
+      const uint32_t i = inc[j];
+      if (gone[i]) continue;
+      gone[i] = 1;
+      const uint32_t w = F->edge[2 * i] == v ? F->edge[2 * i + 1] : F->edge[2 * i];
+      deg[v]--;
+      deg[w]--;
+      if (deg[w] == 1) queue[nq++] = w;
+      break;
+    }
+  }
+  /* what is left, by connected network: those shorter than MX_FEATURE_MIN
+   * of the surface's box diagonal go too (clusters of noise edges) */
+  {
+    double lo[3], hi[3];
+    mx_trisoup_bbox(s, lo, hi);
+    const double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                             (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    double *len = mx_calloc((nv + 1) * sizeof *len);
+    uint32_t *up = queue; /* reused: a union-find over the vertices */
+    if (!len) {
+      mx_free(start);
+      mx_free(inc);
+      mx_free(queue);
+      mx_free(gone);
+      return MX_ENOMEM;
+    }
+    for (size_t v = 0; v < nv; v++) up[v] = (uint32_t)v;
+    for (size_t i = 0; i < ne; i++)
+      if (!gone[i]) mx_uf_join(up, F->edge[2 * i], F->edge[2 * i + 1]);
+    for (size_t i = 0; i < ne; i++)
+      if (!gone[i]) len[mx_uf_find(up, F->edge[2 * i])] += edge_length(s, F->edge + 2 * i);
+    for (size_t i = 0; i < ne; i++)
+      if (!gone[i] && len[mx_uf_find(up, F->edge[2 * i])] < MX_FEATURE_MIN * diag) {
+        gone[i] = 1;
+        deg[F->edge[2 * i]]--;
+        deg[F->edge[2 * i + 1]]--;
+      }
+    mx_free(len);
+  }
+  size_t n = 0;
+  F->length = 0.0;
+  for (size_t i = 0; i < ne; i++) {
+    if (gone[i]) continue;
+    const uint32_t a = F->edge[2 * i], b = F->edge[2 * i + 1];
+    F->edge[2 * n] = a;
+    F->edge[2 * n + 1] = b;
+    F->open[n++] = F->open[i];
+    F->length += edge_length(s, F->edge + 2 * (n - 1));
+  }
+  F->dangling = ne - n;
+  F->nedges = n;
+  mx_free(start);
+  mx_free(inc);
+  mx_free(queue);
+  mx_free(gone);
+  return MX_OK;
+}
+
 int mx_features_detect(const mx_trisoup *s, size_t nt, double angle_deg, mx_features *F) {
   memset(F, 0, sizeof *F);
   const size_t nv = s->nv;
@@ -48,7 +141,8 @@ int mx_features_detect(const mx_trisoup *s, size_t nt, double angle_deg, mx_feat
   uint64_t *ck = mx_alloc((nv + 1) * sizeof *ck);
   uint32_t *e = NULL, *tup = mx_alloc((nt + 1) * sizeof *tup);
   F->patch = mx_alloc((nt + 1) * sizeof *F->patch);
-  int st = weld && order && key && val && deg && up && ck && tup && F->patch ? MX_OK : MX_ENOMEM;
+  F->open = mx_alloc(3 * nt + 1);
+  int st = weld && order && key && val && deg && up && ck && tup && F->patch && F->open ? MX_OK : MX_ENOMEM;
   if (st) goto done;
   /* welds: the first vertex (by index) of each run of equal coordinates */
   /* by x, then y, then z (stable radix passes from the last key), then index */
@@ -114,7 +208,7 @@ int mx_features_detect(const mx_trisoup *s, size_t nt, double angle_deg, mx_feat
       }
       e[2 * F->nedges] = a;
       e[2 * F->nedges + 1] = b;
-      F->nedges++;
+      F->open[F->nedges++] = h - g != 2;
       deg[a]++;
       deg[b]++;
       F->length += sqrt((s->x[a] - s->x[b]) * (s->x[a] - s->x[b]) +
@@ -130,6 +224,10 @@ int mx_features_detect(const mx_trisoup *s, size_t nt, double angle_deg, mx_feat
     const uint32_t r = mx_uf_find(tup, (uint32_t)t);
     F->patch[t] = r == t ? (uint32_t)F->npatches++ : F->patch[r];
   }
+  /* dangling ridges (a free end in a smooth part of the surface: the
+   * noise of a scanned or segmented surface) peeled off, leaf by leaf */
+  st = peel_dangling(s, F, deg);
+  if (st) goto done;
   /* corners: ends, junctions, and turns by more than the angle */
   double *dir = mx_calloc((6 * (size_t)nv + 1) * sizeof *dir); /* two edge directions a vertex */
   if (!dir) {

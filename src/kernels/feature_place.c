@@ -713,28 +713,56 @@ done:
   return rc;
 }
 
-int mx_feature_give_up(mx_mesh *M, const double *before, size_t *count) {
-  uint8_t *back = mx_alloc(M->nnodes + 1);
-  if (!back) return MX_ENOMEM;
-  for (int round = 0; round < 64 && M->invalid; round++) {
-    memset(back, 0, M->nnodes);
+static int node_moved(const mx_mesh *M, const double *before, uint32_t v) {
+  return memcmp(M->xyz + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof *before) != 0;
+}
+
+int mx_feature_give_up(mx_mesh *M, const double *before, const float *q_before, double floor,
+                       size_t *count) {
+  /* the elements with a moved node: the only ones that can be spoilt */
+  size_t nc = 0, cap = 1024;
+  uint32_t *cand = mx_alloc(cap * sizeof *cand);
+  if (!cand) return MX_ENOMEM;
+  for (size_t c = 0; c < M->ncells; c++) {
+    int mv = 0;
+    for (int k = 0; k < mx_cell_nodes[M->type[c]] && !mv; k++) mv = node_moved(M, before, M->conn[8 * c + k]);
+    if (!mv) continue;
+    if (nc == cap) {
+      uint32_t *g = mx_realloc(cand, 2 * cap * sizeof *cand);
+      if (!g) {
+        mx_free(cand);
+        return MX_ENOMEM;
+      }
+      cand = g;
+      cap *= 2;
+    }
+    cand[nc++] = (uint32_t)c;
+  }
+  for (int round = 0; round < 64; round++) {
     size_t n = 0;
-    for (size_t c = 0; c < M->ncells; c++) {
-      if (!mx_jens_invalid(M->jens[c])) continue;
+    for (size_t i = 0; i < nc; i++) {
+      const size_t c = cand[i];
+      const double q = M->jens[c];
+      if (!mx_jens_invalid(q) && !(q < floor && q < q_before[c])) continue;
       for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
         const uint32_t v = M->conn[8 * c + k];
-        if (memcmp(M->xyz + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof *before)) {
+        if (node_moved(M, before, v)) {
           memcpy(M->xyz + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof *before);
-          back[v] = 1;
           n++;
         }
       }
     }
     if (!n) break;
     *count += n;
-    mx_mesh_update_jens(M, back);
-    mx_mesh_summarize(M);
+    for (size_t i = 0; i < nc; i++) {
+      const size_t c = cand[i];
+      double x[8][3];
+      for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+        memcpy(x[k], M->xyz + 3 * (size_t)M->conn[8 * c + k], sizeof x[k]);
+      M->jens[c] = (float)mx_jens(M->type[c], (const double(*)[3])x);
+    }
   }
-  mx_free(back);
+  mx_mesh_summarize(M);
+  mx_free(cand);
   return MX_OK;
 }

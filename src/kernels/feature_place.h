@@ -57,11 +57,13 @@ typedef struct {
 int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
                      const mx_feature_input *in, uint8_t *fixed, mx_feature_stats *st);
 
-/* The nodes of the elements left invalid (J_ENS < MX_JENS_VALID) put back
- * where they were before the placement (before: 3 * nnodes), until no
- * element is invalid or none of its nodes moved: the features there are
- * given up rather than the mesh. *count: nodes put back. J_ENS and the
+/* The nodes of the elements the placement spoilt put back where they were
+ * before it (before: 3 * nnodes; q_before: the elements' J_ENS then), until
+ * none is left or none of its nodes moved: the features there are given up
+ * rather than the mesh. Spoilt: invalid (J_ENS < MX_JENS_VALID), or below
+ * floor and below its J_ENS before. *count: nodes put back. J_ENS and the
  * summary updated. MX_OK, MX_ENOMEM. */
-int mx_feature_give_up(mx_mesh *M, const double *before, size_t *count);
+int mx_feature_give_up(mx_mesh *M, const double *before, const float *q_before, double floor,
+                       size_t *count);
 
 #endif
