@@ -472,11 +472,16 @@ int mx_mesher_set_size_thickness(mx_mesher *m, double elements);
  * the discrete sources and none for the function). Given, it applies to the
  * function's control space too: its leaves become sources. */
 int mx_mesher_set_size_gradation(mx_mesher *m, double beta);
-/* Sharp features (issue 29, first part: found and reported, not yet kept
- * in the mesh): ridges where the input's normals part by more than
- * angle_deg (default 30; 0: none, --no-features), corners where ridges end,
- * meet or turn by more. MX_EINPUT outside [0, 180). */
+/* Sharp features (issue 29): ridges where the input's normals part by more
+ * than angle_deg (default 30; 0: none, --no-features), corners where
+ * ridges end, meet or turn by more; kept in the mesh (corners on nodes,
+ * ridges along element edges) where that leaves every element valid and
+ * at J_ENS 0.1 or more (or what it had). MX_EINPUT outside [0, 180). */
 int mx_mesher_set_feature_angle(mx_mesher *m, double angle_deg);
+/* The level of the octants meeting a ridge or a corner (--feature-level;
+ * 0, the default: the surface level, nothing more). MX_EINPUT outside
+ * [0, MX_MAX_LEVEL]. */
+int mx_mesher_set_feature_level(mx_mesher *m, int level);
 /* A size map: n points (xyz, 3 each) with sizes h (finite, positive),
  * copied; they must lie in the domain's box (grown by 5% of its diagonal)
  * when the octree is built. name: where they came from, for messages (or

@@ -70,6 +70,7 @@ static int setup(const mx_options *o, mx_mesher **out) {
   mx_progress_stage("read");
   MX_CHECK(mx_mesher_set_image_params(m, &o->image));
   if (o->feature_angle >= 0.0) MX_CHECK(mx_mesher_set_feature_angle(m, o->feature_angle));
+  if (o->feature_level > 0) MX_CHECK(mx_mesher_set_feature_level(m, o->feature_level));
   return mx_add_inputs(o, m);
 }
 

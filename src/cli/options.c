@@ -54,9 +54,12 @@ static const char *usage_text =
     "                              everywhere in the material(s) FILE holds)\n"
     "      --feature-angle DEG     sharp features: ridges where the input's normals\n"
     "                              part by more than DEG (default 30), corners where\n"
-    "                              they end, meet or turn; found and reported (not\n"
-    "                              yet kept in the mesh)\n"
-    "      --no-features           no feature search\n"
+    "                              they end, meet or turn; kept in the mesh (corners\n"
+    "                              on nodes, ridges along element edges) where every\n"
+    "                              element stays at J_ENS 0.1 or more\n"
+    "      --feature-level L       octants meeting a ridge or corner refined to L\n"
+    "                              (default: the surface level)\n"
+    "      --no-features           no feature search: the boundary as without them\n"
     "      --material ID[:NAME]    after -i FILE: the number (1..65535) and name\n"
     "                              of the material inside FILE (default: its\n"
     "                              nesting depth, named after FILE)\n"
@@ -468,6 +471,9 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       o->repair_input = 1;
     } else if (strcmp(a, "--materials") == 0) {
       o->materials = 1;
+    } else if (strcmp(a, "--feature-level") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      MX_CHECK(parse_level(a, argv[++i], &o->feature_level));
     } else if (strcmp(a, "--no-features") == 0) {
       o->feature_angle = 0.0;
     } else if (strcmp(a, "--feature-angle") == 0) {

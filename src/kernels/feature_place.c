@@ -655,7 +655,6 @@ int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *
       const uint32_t eb = taken_at(ckey, cnode, L->ncorners, p + 3 * (n - 1));
       size_t k = ea != UINT32_MAX && eb != UINT32_MAX && ea != eb ? find_path(&G, &W, p, n, ea, eb, &nomem) : 0;
       ok = k >= 2 && place_path(&G, fixed, moved, W.path, k, p, n, &st->nodes);
-      if (getenv("MX_FDEBUG")) fprintf(stderr, "line %zu: ends %u %u path %zu ok %d\n", i, ea, eb, k, ok);
     } else if (n >= 3) {
       const size_t mid = n / 2;
       sub = mx_realloc(sub, 3 * (n - mid + 2) * sizeof *sub);

@@ -92,6 +92,7 @@ mx_mesher *mx_mesher_new(const mx_params *p) {
   if (m->p.repair_rounds < 0) m->p.repair_rounds = 0;
   m->mesh_stage = -1;
   m->feature_angle = -1.0;
+  m->feature_region = -1;
   mx_image_params_default(&m->image_params);
   return m;
 }
@@ -253,6 +254,47 @@ int mx_mesher_set_feature_angle(mx_mesher *m, double angle_deg) {
   return MX_OK;
 }
 
+int mx_mesher_set_feature_level(mx_mesher *m, int level) {
+  if (level < 0 || level > MX_MAX_LEVEL) {
+    mx_error(NULL, 0, "feature level %d: from 0 (the surface level) to %d", level, MX_MAX_LEVEL);
+    return MX_EINPUT;
+  }
+  m->feature_level = level;
+  return MX_OK;
+}
+
+/* The ridges as a region surface refined where met to the feature level:
+ * a degenerate triangle (a, b, b) per ridge edge, appended to the soup
+ * after the other regions, once. */
+static int feature_region(mx_mesher *m) {
+  if (m->feature_level <= 0 || m->feature_region >= 0 || !m->feat.nedges) return MX_OK;
+  if (m->nregions >= MX_MAX_REGIONS) {
+    mx_error(NULL, 0, "--feature-level: the region surfaces' places (%d) are all taken",
+             MX_MAX_REGIONS);
+    return MX_EINPUT;
+  }
+  const int r = m->nregions;
+  memset(&m->region[r], 0, sizeof m->region[r]);
+  m->region_name[r] = mx_strdup("the features");
+  if (!m->region_name[r]) return MX_ENOMEM;
+  const uint32_t v0 = (uint32_t)m->soup.nv;
+  for (size_t i = 0; i < 2 * m->feat.nedges; i++) {
+    const uint32_t v = m->feat.edge[i];
+    const double c[3] = {m->soup.x[v], m->soup.y[v], m->soup.z[v]};
+    MX_CHECK(mx_trisoup_set_vertex(&m->soup, v0 + i, c));
+  }
+  m->region_t0[r] = (uint32_t)m->soup.nt;
+  for (size_t i = 0; i < m->feat.nedges; i++)
+    MX_CHECK(mx_trisoup_add_triangle(&m->soup, v0 + 2 * (uint32_t)i, v0 + 2 * (uint32_t)i + 1,
+                                     v0 + 2 * (uint32_t)i + 1));
+  m->region_t0[r + 1] = (uint32_t)m->soup.nt;
+  m->region_level[r] = m->feature_level;
+  m->region_meet_only |= 1u << r;
+  m->feature_region = r;
+  m->nregions++;
+  return MX_OK;
+}
+
 /* The domain input's sharp features, found, counted for the report and
  * kept (m->feat, m->feat_lines) for the boundary stage to place. */
 int mx_mesher_features(mx_mesher *m) {
@@ -269,6 +311,7 @@ int mx_mesher_features(mx_mesher *m) {
     return st;
   }
   m->have_features = 1;
+  MX_CHECK(feature_region(m));
   S->feature_angle = angle;
   S->feature_edges = F->nedges;
   S->feature_ridges = F->nridges;

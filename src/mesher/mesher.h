@@ -232,6 +232,8 @@ struct mx_mesher {
   /* the domain's features, found with the tree (mx_mesher_features), and
    * their lines, placed after the boundary stage (pipeline.c) */
   int have_features;
+  int feature_level;  /* mx_mesher_set_feature_level (0: none) */
+  int feature_region; /* the region of the ridges' segments (-1: none yet) */
   mx_features feat;
   mx_feature_lines feat_lines;
   /* a label image meshed on its voxel lattice (mesher/image_mesh.c): the
