@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <stdio.h>
+#include <stdio.h>
 
 #include "base/common.h"
 #include "base/scan.h"
@@ -207,6 +208,10 @@ static uint32_t nearest_free(const graph *G, const double *x) {
   return c.node;
 }
 
+/* A feature takes a node within this many mean boundary edges of it only
+ * (the patch of a local re-mesh does not reach every feature). */
+#define MX_FEATURE_REACH 4.0
+
 /* ---- lines ------------------------------------------------------------- */
 
 /* Closest point of x on the polyline p[0..n): the distance, the point q and
@@ -259,11 +264,12 @@ static void tube_fn(void *ctx, uint32_t v) {
 typedef struct {
   uint32_t *tube;
   size_t cap;
-  double *cost, *d;
+  double *cost, *d, *s; /* per tube node: cost, distance to the line, place along it */
   uint32_t *prev, *heap;
   size_t wcap;
   uint32_t *path;
-  size_t pcap;
+  double *t; /* per path node: its place along the line */
+  size_t pcap, tcap;
 } search;
 
 static int grow(void **p, size_t *cap, size_t n, size_t size) {
@@ -334,11 +340,13 @@ static size_t find_path(graph *G, search *W, const double *p, size_t n, uint32_t
   {
     double *d = mx_realloc(W->d, (m + 1) * sizeof *W->d);
     if (d) W->d = d;
+    double *sp = mx_realloc(W->s, (m + 1) * sizeof *W->s);
+    if (sp) W->s = sp;
     uint32_t *pr = mx_realloc(W->prev, (m + 1) * sizeof *W->prev);
     if (pr) W->prev = pr;
     uint32_t *hp = mx_realloc(W->heap, hcap * sizeof *W->heap);
     if (hp) W->heap = hp;
-    if (!d || !pr || !hp) {
+    if (!d || !sp || !pr || !hp) {
       *nomem = 1;
       goto out;
     }
@@ -346,7 +354,7 @@ static size_t find_path(graph *G, search *W, const double *p, size_t n, uint32_t
   for (size_t i = 0; i < m; i++) {
     W->cost[i] = INFINITY;
     W->prev[i] = UINT32_MAX;
-    W->d[i] = on_polyline(p, n, X + 3 * (size_t)W->tube[i], NULL, NULL);
+    W->d[i] = on_polyline(p, n, X + 3 * (size_t)W->tube[i], NULL, W->s + i);
   }
   size_t nh = 0;
   const uint32_t la = G->loc[a], lb = G->loc[b];
@@ -359,8 +367,13 @@ static size_t find_path(graph *G, search *W, const double *p, size_t n, uint32_t
     for (uint32_t k = G->aoff[u]; k < G->aoff[u + 1]; k++) {
       const uint32_t w = G->adj[k], j = G->loc[w];
       if (j == UINT32_MAX || (G->fixed[w] && w != b)) continue;
-      const double c = W->cost[i] + dist3(X + 3 * (size_t)u, X + 3 * (size_t)w) +
-                       2.0 * (W->d[i] + W->d[j]);
+      /* forward mostly: a step may go back along the line by a quarter of
+       * its length at most, and pays four times what it goes back
+       * (place_path spreads the places along the line) */
+      const double len = dist3(X + 3 * (size_t)u, X + 3 * (size_t)w);
+      const double back = W->s[i] - W->s[j];
+      if (back > 0.25 * len) continue;
+      const double c = W->cost[i] + len + 2.0 * (W->d[i] + W->d[j]) + (back > 0 ? 4.0 * back : 0.0);
       if (c < W->cost[j]) {
         W->cost[j] = c;
         W->prev[j] = i;
@@ -371,7 +384,8 @@ static size_t find_path(graph *G, search *W, const double *p, size_t n, uint32_t
   if (W->cost[lb] < INFINITY) {
     size_t k = 0;
     for (uint32_t i = lb; i != UINT32_MAX; i = W->prev[i]) k++;
-    if (grow((void **)&W->path, &W->pcap, k, sizeof *W->path)) {
+    if (grow((void **)&W->path, &W->pcap, k, sizeof *W->path) ||
+        grow((void **)&W->t, &W->tcap, k, sizeof *W->t)) {
       *nomem = 1;
       goto out;
     }
@@ -383,26 +397,44 @@ out:
   return got;
 }
 
-/* The path's nodes onto the polyline when their places along it keep the
- * path's order (each step advancing by a tenth of its length at least);
- * the path's edges marked. 1: placed, 0: not. */
-static int place_path(graph *G, uint8_t *fixed, uint8_t *moved, const uint32_t *path, size_t k,
-                      const double *p, size_t n, size_t *nodes) {
-  double *X = G->M->xyz, s_prev = 0.0, total = 0.0;
-  for (size_t i = 0; i + 1 < n; i++) total += dist3(p + 3 * i, p + 3 * i + 3);
-  for (size_t i = 1; i + 1 < k; i++) {
-    double s;
-    on_polyline(p, n, X + 3 * (size_t)path[i], NULL, &s);
-    if (!(s - s_prev > 0.1 * dist3(X + 3 * (size_t)path[i], X + 3 * (size_t)path[i - 1]) * 0.5))
-      return 0;
-    s_prev = s;
+/* The point at arc length t along the polyline p[0..n). */
+static void at_arclength(const double *p, size_t n, double t, double *q) {
+  for (size_t i = 0; i + 1 < n; i++) {
+    const double l = dist3(p + 3 * i, p + 3 * i + 3);
+    if (t <= l || i + 2 == n) {
+      const double u = l > 0 ? fmin(1.0, fmax(0.0, t / l)) : 0.0;
+      for (int a = 0; a < 3; a++) q[a] = p[3 * i + a] + u * (p[3 * i + 3 + a] - p[3 * i + a]);
+      return;
+    }
+    t -= l;
   }
-  if (k > 2 && !(total - s_prev > 0.05 * dist3(X + 3 * (size_t)path[k - 1], X + 3 * (size_t)path[k - 2])))
-    return 0;
+  memcpy(q, p, 3 * sizeof *q);
+}
+
+/* The path's nodes onto the polyline, in the path's order: each at its
+ * closest point's arc length, raised to keep a fifth of its edge's length
+ * past the one before and lowered to keep that short of the one after (a
+ * path that steps sideways or back a little is spread along the line);
+ * the path's edges marked. 1: placed, 0: not (no room on the line). */
+static int place_path(graph *G, uint8_t *fixed, uint8_t *moved, const uint32_t *path, size_t k,
+                      const double *p, size_t n, double *t, size_t *nodes) {
+  double *X = G->M->xyz, total = 0.0;
+  for (size_t i = 0; i + 1 < n; i++) total += dist3(p + 3 * i, p + 3 * i + 3);
+  t[0] = 0.0;
+  t[k - 1] = total;
   for (size_t i = 1; i + 1 < k; i++) {
-    double q[3];
-    on_polyline(p, n, X + 3 * (size_t)path[i], q, NULL);
-    memcpy(X + 3 * (size_t)path[i], q, sizeof q);
+    on_polyline(p, n, X + 3 * (size_t)path[i], NULL, t + i);
+    const double gap = 0.2 * dist3(X + 3 * (size_t)path[i], X + 3 * (size_t)path[i - 1]);
+    t[i] = fmax(t[i], t[i - 1] + gap);
+  }
+  for (size_t i = k - 1; i-- > 1;) {
+    const double gap = 0.2 * dist3(X + 3 * (size_t)path[i], X + 3 * (size_t)path[i + 1]);
+    t[i] = fmin(t[i], t[i + 1] - gap);
+  }
+  for (size_t i = 1; i < k; i++)
+    if (!(t[i] > t[i - 1])) return 0;
+  for (size_t i = 1; i + 1 < k; i++) {
+    at_arclength(p, n, t[i], X + 3 * (size_t)path[i]);
     fixed[path[i]] = 1;
     moved[path[i]] = 1;
     (*nodes)++;
@@ -430,11 +462,112 @@ static int place_path(graph *G, uint8_t *fixed, uint8_t *moved, const uint32_t *
 /* Places node v onto corner point x (taking it); 0 when no node is free. */
 static uint32_t take_point(graph *G, uint8_t *fixed, uint8_t *moved, const double *x) {
   const uint32_t v = nearest_free(G, x);
-  if (v == UINT32_MAX) return v;
+  if (v == UINT32_MAX || dist3(x, G->M->xyz + 3 * (size_t)v) > MX_FEATURE_REACH * G->h)
+    return UINT32_MAX;
   memcpy(G->M->xyz + 3 * (size_t)v, x, 3 * sizeof *x);
   fixed[v] = 1;
   moved[v] = 1;
   return v;
+}
+
+static uint32_t taken_at(const uint64_t *key, const uint32_t *node, size_t n, const double *x);
+
+typedef struct {
+  const graph *G;
+  const double *x;
+  const double *dir; /* nd unit directions of the ridges out of the corner */
+  int nd;
+  double reach;      /* candidates within this distance of x */
+  int best_score;
+  double best_d;
+  uint32_t node;
+} corner_ctx;
+
+/* How many of the ridges out of x node v has an edge along (within 60
+ * degrees) once moved to x. */
+static int star_score(const graph *G, uint32_t v, const double *x, const double *dir, int nd) {
+  const double *X = G->M->xyz;
+  int score = 0;
+  for (int r = 0; r < nd; r++) {
+    int has = 0;
+    for (uint32_t k = G->aoff[v]; k < G->aoff[v + 1] && !has; k++) {
+      const double *w = X + 3 * (size_t)G->adj[k];
+      const double u[3] = {w[0] - x[0], w[1] - x[1], w[2] - x[2]};
+      const double l = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+      has = l > 0 && (u[0] * dir[3 * r] + u[1] * dir[3 * r + 1] + u[2] * dir[3 * r + 2]) > 0.5 * l;
+    }
+    score += has;
+  }
+  return score;
+}
+
+static void corner_fn(void *ctx, uint32_t v) {
+  corner_ctx *c = ctx;
+  if (c->G->fixed[v]) return;
+  const double d = dist3(c->x, c->G->M->xyz + 3 * (size_t)v);
+  if (d > c->reach) return;
+  const int sc = star_score(c->G, v, c->x, c->dir, c->nd);
+  if (sc > c->best_score || (sc == c->best_score && (d < c->best_d || (d == c->best_d && v < c->node)))) {
+    c->best_score = sc;
+    c->best_d = d;
+    c->node = v;
+  }
+}
+
+/* The node corner x takes: among the free boundary nodes within a mean
+ * edge of the closest one, the one whose edges go along most of the
+ * corner's ridges (then the closest): a corner whose node has no edge
+ * along one of its ridges cannot be left along it. Moved onto x. */
+static uint32_t take_corner(graph *G, uint8_t *fixed, uint8_t *moved, const double *x,
+                            const double *dir, int nd) {
+  const uint32_t v0 = nearest_free(G, x);
+  if (v0 == UINT32_MAX) return v0;
+  const double d0 = dist3(x, G->M->xyz + 3 * (size_t)v0);
+  if (d0 > MX_FEATURE_REACH * G->h) return UINT32_MAX; /* not this mesh's (a patch's) */
+  corner_ctx c = {G, x, dir, nd, d0 + G->h, star_score(G, v0, x, dir, nd), d0, v0};
+  if (c.best_score < nd) cells_around(G, x, 1 + (int64_t)(c.reach / G->h), corner_fn, &c);
+  memcpy(G->M->xyz + 3 * (size_t)c.node, x, 3 * sizeof *x);
+  fixed[c.node] = 1;
+  moved[c.node] = 1;
+  return c.node;
+}
+
+/* Each corner's ridge directions (unit vectors out of it along each open
+ * line ending there): corner c's are dir[3 * off[c] ...  3 * off[c + 1]). */
+static int corner_dirs(const mx_feature_lines *L, const uint64_t *ckey, const uint32_t *cidx,
+                       uint32_t **off_out, double **dir_out) {
+  uint32_t *off = mx_calloc((L->ncorners + 2) * sizeof *off);
+  double *dir = mx_alloc((6 * L->nlines + 3) * sizeof *dir);
+  if (!off || !dir) {
+    mx_free(off);
+    mx_free(dir);
+    return MX_ENOMEM;
+  }
+  for (int pass = 0; pass < 2; pass++) {
+    for (size_t i = 0; i < L->nlines; i++) {
+      if (L->loop[i]) continue;
+      const size_t f = L->first[i], np = L->first[i + 1] - f;
+      for (int end = 0; end < 2; end++) {
+        const double *p = L->xyz + 3 * (f + (end ? np - 1 : 0)), *q = end ? p - 3 : p + 3;
+        const uint32_t c = taken_at(ckey, cidx, L->ncorners, p);
+        if (c == UINT32_MAX) continue;
+        if (pass == 0) {
+          off[c + 1]++;
+          continue;
+        }
+        const double l = dist3(p, q);
+        double *d = dir + 3 * (size_t)off[c]++;
+        for (int a = 0; a < 3; a++) d[a] = l > 0 ? (q[a] - p[a]) / l : 0.0;
+      }
+    }
+    if (pass == 0)
+      for (size_t c = 0; c < L->ncorners; c++) off[c + 1] += off[c];
+  }
+  for (size_t c = L->ncorners; c > 0; c--) off[c] = off[c - 1];
+  off[0] = 0;
+  *off_out = off;
+  *dir_out = dir;
+  return MX_OK;
 }
 
 /* A point's coordinates hashed (FNV-1a over their bits, -0 as 0). */
@@ -615,7 +748,8 @@ int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *
   uint8_t *mask = mx_alloc(M->nnodes + 1), *moved = mx_calloc(M->nnodes + 1);
   double *sub = NULL;
   uint64_t *ckey = NULL;
-  uint32_t *cnode = NULL;
+  uint32_t *cnode = NULL, *doff = NULL;
+  double *dir = NULL;
   int rc = mask && moved ? MX_OK : MX_ENOMEM;
   if (rc) goto done;
   for (size_t v = 0; v < M->nnodes; v++) mask[v] = states[v] == MX_NODE_OUTSIDE;
@@ -633,15 +767,21 @@ int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *
     rc = MX_ENOMEM;
     goto done;
   }
+  /* first each corner's ridge directions, by the corners' keys */
   for (size_t c = 0; c < L->ncorners; c++) {
-    cnode[c] = take_point(&G, fixed, moved, L->corner + 3 * c);
     ckey[c] = point_key(L->corner + 3 * c);
-    if (cnode[c] == UINT32_MAX) st->corners_missed++;
-    else st->corners++;
+    cnode[c] = (uint32_t)c;
   }
-  if (mx_sort_u64(ckey, cnode, L->ncorners)) {
+  if (mx_sort_u64(ckey, cnode, L->ncorners) || corner_dirs(L, ckey, cnode, &doff, &dir)) {
     rc = MX_ENOMEM;
     goto done;
+  }
+  for (size_t k = 0; k < L->ncorners; k++) {
+    const uint32_t c = cnode[k];
+    cnode[k] = take_corner(&G, fixed, moved, L->corner + 3 * (size_t)c, dir + 3 * (size_t)doff[c],
+                           (int)(doff[c + 1] - doff[c]));
+    if (cnode[k] == UINT32_MAX) st->corners_missed++;
+    else st->corners++;
   }
   st->nodes = st->corners;
   /* lines: open ones between their corners' nodes, loops in two halves */
@@ -654,7 +794,7 @@ int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *
       const uint32_t ea = taken_at(ckey, cnode, L->ncorners, p);
       const uint32_t eb = taken_at(ckey, cnode, L->ncorners, p + 3 * (n - 1));
       size_t k = ea != UINT32_MAX && eb != UINT32_MAX && ea != eb ? find_path(&G, &W, p, n, ea, eb, &nomem) : 0;
-      ok = k >= 2 && place_path(&G, fixed, moved, W.path, k, p, n, &st->nodes);
+      ok = k >= 2 && place_path(&G, fixed, moved, W.path, k, p, n, W.t, &st->nodes);
     } else if (n >= 3) {
       const size_t mid = n / 2;
       sub = mx_realloc(sub, 3 * (n - mid + 2) * sizeof *sub);
@@ -668,11 +808,11 @@ int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *
       else {
         st->nodes += 2;
         size_t k = find_path(&G, &W, p, mid + 1, a, b, &nomem);
-        ok = k >= 2 && place_path(&G, fixed, moved, W.path, k, p, mid + 1, &st->nodes);
+        ok = k >= 2 && place_path(&G, fixed, moved, W.path, k, p, mid + 1, W.t, &st->nodes);
         memcpy(sub, p + 3 * mid, 3 * (n - mid) * sizeof *sub);
         memcpy(sub + 3 * (n - mid), p, 3 * sizeof *sub);
         k = ok && !nomem ? find_path(&G, &W, sub, n - mid + 1, b, a, &nomem) : 0;
-        ok = ok && k >= 2 && place_path(&G, fixed, moved, W.path, k, sub, n - mid + 1, &st->nodes);
+        ok = ok && k >= 2 && place_path(&G, fixed, moved, W.path, k, sub, n - mid + 1, W.t, &st->nodes);
       }
     }
     if (nomem) rc = MX_ENOMEM;
@@ -700,14 +840,18 @@ done:
   mx_free(W.tube);
   mx_free(W.cost);
   mx_free(W.d);
+  mx_free(W.s);
   mx_free(W.prev);
   mx_free(W.heap);
   mx_free(W.path);
+  mx_free(W.t);
   mx_free(mask);
   mx_free(moved);
   mx_free(sub);
   mx_free(ckey);
   mx_free(cnode);
+  mx_free(doff);
+  mx_free(dir);
   st->seconds = mx_wtime() - t0;
   return rc;
 }

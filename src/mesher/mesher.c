@@ -119,6 +119,9 @@ void mx_tree_clear(mx_mesher *m) {
   mx_free(m->file_leaf);
   m->file_leaf = NULL;
   m->file_nelem = 0;
+  mx_free(m->feature_boxes);
+  m->feature_boxes = NULL;
+  m->nfeature_boxes = 0;
   if (m->have_features) {
     mx_features_free(&m->feat);
     mx_feature_lines_free(&m->feat_lines);
@@ -389,6 +392,13 @@ int mx_build_tree(mx_mesher *m) {
   if (m->image_lattice) { /* the image's lattice: roots of 2^R voxels */
     m->B.tree.grid = m->image_grid;
     m->B.req.root_side = m->image_grid.side;
+  }
+  if (!m->image_lattice && !from_keys) { /* features kept apart by boxes */
+    MX_CHECK(mx_feature_apart_boxes(m, m->B.req.root_side));
+    if (m->nfeature_boxes) {
+      m->B.req.boxes = m->feature_boxes;
+      m->B.req.nboxes = m->nfeature_boxes;
+    }
   }
   m->B.on_level = m->progress.on_level;
   m->B.on_level_user = m->progress.user;

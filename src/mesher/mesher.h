@@ -83,6 +83,7 @@ typedef struct {
   double feature_length, feature_seconds;
   mx_feature_stats feature_place; /* placed in the mesh (kernels/feature_place.h) */
   int features_kept;              /* the placement ran */
+  size_t feature_apart_boxes;     /* boxes refining where features come close */
   const mx_image_info *image; /* a label image's mesh (image_mesh.c), NULL otherwise */
   mx_winding_boundary_stats winding; /* its boundary (input_repaired) */
   int local;                /* 1: every re-mesh of the call was local */
@@ -234,6 +235,8 @@ struct mx_mesher {
   int have_features;
   int feature_level;  /* mx_mesher_set_feature_level (0: none) */
   int feature_region; /* the region of the ridges' segments (-1: none yet) */
+  mx_box_region *feature_boxes; /* the user's boxes and those keeping features apart */
+  size_t nfeature_boxes;        /* (mesher/feature_apart.c), with the tree */
   mx_features feat;
   mx_feature_lines feat_lines;
   /* a label image meshed on its voxel lattice (mesher/image_mesh.c): the

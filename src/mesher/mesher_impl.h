@@ -61,6 +61,9 @@ int mx_image_split_keys(mx_mesher *m);
 void mx_image_world_box(const mx_mesher *m, double lo[3], double hi[3]);
 /* The domain input's sharp features counted for the report (mesher.c). */
 int mx_mesher_features(mx_mesher *m);
+/* The boxes that keep the features apart (mesher/feature_apart.c), after
+ * the user's, in m->feature_boxes; root_side: the octree's. */
+int mx_feature_apart_boxes(mx_mesher *m, double root_side);
 /* The arrays and file name an mx_image_params holds (image_input.c). */
 void mx_image_params_release(mx_image_params *ip);
 /* One domain input appended to m->domain under name (copied; s is left

@@ -188,11 +188,12 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              "\"features\": {\"angle\": %.6g, \"ridges\": %zu, \"edges\": %zu, "
              "\"corners\": %zu, \"length\": %.9g, \"kept\": %s, \"corners_placed\": %zu, "
              "\"corners_missed\": %zu, \"lines_followed\": %zu, \"lines_missed\": %zu, "
-             "\"nodes\": %zu, \"side_moves\": %zu, \"given_up\": %zu, \"seconds\": %.6f}, ",
+             "\"nodes\": %zu, \"side_moves\": %zu, \"given_up\": %zu, \"apart_boxes\": %zu, "
+             "\"seconds\": %.6f}, ",
              s->feature_angle, s->feature_ridges, s->feature_edges, s->feature_corners,
              s->feature_length, s->features_kept ? "true" : "false", fp->corners,
              fp->corners_missed, fp->lines, fp->lines_missed, fp->nodes, fp->sides, fp->given_up,
-             s->feature_seconds + fp->seconds);
+             s->feature_apart_boxes, s->feature_seconds + fp->seconds);
   char img[12288] = "";
   if (s->image) {
     const mx_image_info *g = s->image;
@@ -309,6 +310,9 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
              "%zu node(s) on them, %zu moved to their side, %zu put back (%.3f s)\n",
              fp->corners, fp->corners + fp->corners_missed, fp->lines,
              fp->lines + fp->lines_missed, fp->nodes, fp->sides, fp->given_up, fp->seconds);
+    if (s->feature_apart_boxes)
+      printf("    apart      %12zu box(es) refining where features come closer than their "
+             "octants\n", s->feature_apart_boxes);
   }
   if (s->image) {
     const mx_image_info *g = s->image;
