@@ -4,8 +4,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <stdio.h>
-#include <stdio.h>
 
 #include "base/common.h"
 #include "base/scan.h"
