@@ -778,6 +778,17 @@ typedef struct {
    * the same as surface. */
   const char *const *surfaces;
   int nsurfaces;
+  /* 3D: sharp features (issue 29), the distance from them to the mesh's
+   * boundary edges (ridges) and nodes (corners), reported: found on the
+   * surface at feature_angle degrees (0: none; 30 by default), or read from
+   * the polylines file features (n x1 y1 z1 ... xn yn zn a line; its
+   * corners at feature_angle, 0: every turn) instead. feature_tol > 0: a
+   * distance above feature_tol times the diagonal (the surface's bounding
+   * box, else the mesh boundary's) is a defect; 0 (default): reported
+   * only. */
+  double feature_angle;
+  const char *features;
+  double feature_tol;
 } mx_check_params;
 
 /* The defaults above, no file. */

@@ -3,8 +3,9 @@
 #
 #   tools/fuzz.sh [SECONDS_PER_TARGET] [TARGET ...]
 #
-# Targets (all by default): off mdl stl obj ply reg poly (tools/fuzz_readers.c;
-# poly: the 2D readers .poly/.off/.mdl and the domain check),
+# Targets (all by default): off mdl stl obj ply reg poly polylines
+# (tools/fuzz_readers.c; poly: the 2D readers .poly/.off/.mdl and the domain
+# check; polylines: the feature polylines reader and the feature distances),
 # mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d
 # mesh_mvm (mx_read_mesh of `mixoct check`, the input written under that
 # extension; tools/fuzz_readers.c), sizemap_txt sizemap_vtk sizemap_vtu
@@ -36,7 +37,7 @@ set -u
 export LC_ALL=C
 
 root=$(cd "$(dirname "$0")/.." && pwd)
-all_targets="off mdl stl obj ply reg poly mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d mesh_mvm sizemap_txt sizemap_vtk sizemap_vtu sizemap_pos image_nii image_niigz image_mha image_inr image_inrgz restart list"
+all_targets="off mdl stl obj ply reg poly polylines mesh_vtk mesh_vtu mesh_msh mesh_mesh mesh_meshb mesh_getfem mesh_m3d mesh_mvm sizemap_txt sizemap_vtk sizemap_vtu sizemap_pos image_nii image_niigz image_mha image_inr image_inrgz restart list"
 
 secs=60
 case ${1:-} in

@@ -20,6 +20,13 @@
  *                        and size read checked finite (sizes > 0);
  *                        -DFUZZ_EXT=txt|vtk|vtu|pos picks the extension,
  *                        which picks the format (default txt)
+ *   polylines            mx_read_polylines (src/io/read_polylines.c) at
+ *                        30, 0 and 180 degrees: lines of 2 points or more
+ *                        (first[] increasing), finite points, loops with no
+ *                        corner on them; then the feature distances of the
+ *                        lines to a 2 x 2 x 2 hexahedra mesh of the unit
+ *                        cube (verify/check_features.c) when their points
+ *                        lie within 100 of it: finite, >= 0
  *   image                mx_read_label_image_mem (src/io/read_image.c) on
  *                        the input's bytes (no file), named fuzz.EXT with
  *                        -DFUZZ_EXT=nii|nii.gz|mha|inr|inr.gz (default
@@ -64,6 +71,8 @@
 #include "io/read_poly.h"
 #include "io/read_sizemap.h"
 #include "io/read_image.h"
+#include "io/read_polylines.h"
+#include "geom/feature_walk.h"
 
 /* FUZZ_FORMAT as a number, by token pasting: FMT_off and so on. */
 #define FMT_off 1
@@ -76,16 +85,17 @@
 #define FMT_poly 8
 #define FMT_sizemap 9
 #define FMT_image 10
+#define FMT_polylines 11
 #define FUZZ_CAT2(a, b) a##b
 #define FUZZ_CAT(a, b) FUZZ_CAT2(a, b)
 #define FUZZ_STR2(a) #a
 #define FUZZ_STR(a) FUZZ_STR2(a)
 
 #ifndef FUZZ_FORMAT
-#error "compile with -DFUZZ_FORMAT=off|mdl|stl|obj|ply|reg|mesh|poly|sizemap|image"
+#error "compile with -DFUZZ_FORMAT=off|mdl|stl|obj|ply|reg|mesh|poly|sizemap|image|polylines"
 #endif
 #define FUZZ_ID FUZZ_CAT(FMT_, FUZZ_FORMAT)
-#if FUZZ_ID < 1 || FUZZ_ID > 10
+#if FUZZ_ID < 1 || FUZZ_ID > 11
 #error "unknown FUZZ_FORMAT"
 #endif
 
@@ -95,6 +105,8 @@
 #define EXT "nii"
 #elif FUZZ_ID == FMT_mesh
 #define EXT "vtk"
+#elif FUZZ_ID == FMT_polylines
+#define EXT "txt"
 #elif FUZZ_ID == FMT_sizemap
 #define EXT "txt"
 #else
@@ -233,6 +245,70 @@ static void fuzz_file(void) {
     poly_promises(&P);
     poly_use(&P);
     mx_poly_free(&P);
+  }
+}
+
+#elif FUZZ_ID == FMT_polylines
+
+/* The unit cube as 2 x 2 x 2 hexahedra. */
+static void cube_mesh(mx_mesh_data *m, double *xyz, uint8_t *type, uint32_t *conn) {
+  memset(m, 0, sizeof *m);
+  for (int k = 0, v = 0; k < 3; k++)
+    for (int j = 0; j < 3; j++)
+      for (int i = 0; i < 3; i++, v++) {
+        xyz[3 * v] = 0.5 * i;
+        xyz[3 * v + 1] = 0.5 * j;
+        xyz[3 * v + 2] = 0.5 * k;
+      }
+  for (int k = 0, c = 0; k < 2; k++)
+    for (int j = 0; j < 2; j++)
+      for (int i = 0; i < 2; i++, c++) {
+        const uint32_t b = (uint32_t)(9 * k + 3 * j + i);
+        const uint32_t r[8] = {b, b + 1, b + 4, b + 3, b + 9, b + 10, b + 13, b + 12};
+        type[c] = MX_HEX;
+        memcpy(conn + 8 * c, r, sizeof r);
+      }
+  m->nnodes = 27;
+  m->ncells = 8;
+  m->xyz = xyz;
+  m->type = type;
+  m->conn = conn;
+}
+
+static void fuzz_file(void) {
+  static const double angles[3] = {30.0, 0.0, 180.0};
+  double xyz[81];
+  uint8_t type[8];
+  uint32_t conn[64];
+  mx_mesh_data m;
+  cube_mesh(&m, xyz, type, conn);
+  for (int a = 0; a < 3; a++) {
+    mx_feature_lines L;
+    memset(&L, 0x5a, sizeof L); /* must be overwritten */
+    if (mx_read_polylines(path, angles[a], &L) != MX_OK) {
+      REQUIRE(L.nlines == 0 && L.ncorners == 0 && !L.first && !L.xyz && !L.loop && !L.corner);
+      continue;
+    }
+    REQUIRE(L.nlines > 0 && L.first && L.first[0] == 0);
+    for (size_t i = 0; i < L.nlines; i++) {
+      REQUIRE(L.first[i + 1] >= L.first[i] + 2);
+      REQUIRE(L.loop[i] == 0 || L.loop[i] == 1);
+    }
+    int near = 1; /* within 100 of the cube: a few hundred samples a segment */
+    for (size_t k = 0; k < 3 * L.first[L.nlines]; k++) {
+      REQUIRE(isfinite(L.xyz[k]));
+      near &= fabs(L.xyz[k]) <= 100.0;
+    }
+    for (size_t k = 0; k < 3 * L.ncorners; k++) REQUIRE(isfinite(L.corner[k]));
+    if (near && L.first[L.nlines] <= 4096) {
+      mx_check_feature_dist d;
+      REQUIRE(mx_check_features_mesh(&m, &L, &d) == MX_OK);
+      REQUIRE(d.lines == L.nlines && d.corners == L.ncorners);
+      REQUIRE(isfinite(d.ridge_dist) && d.ridge_dist >= 0.0);
+      REQUIRE(L.ncorners == 0 ? isnan(d.corner_dist)
+                              : isfinite(d.corner_dist) && d.corner_dist >= 0.0);
+    }
+    mx_feature_lines_walk_free(&L);
   }
 }
 

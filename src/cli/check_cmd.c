@@ -1,5 +1,6 @@
 /* `mixoct check MESH [--surface FILE ... | --poly FILE] [--volume-tol X]
- * [--dist-tol X] [--threads N] [--json] [--quiet]`: the options read into
+ * [--dist-tol X] [--feature-angle DEG] [--features FILE] [--feature-tol T]
+ * [--threads N] [--json] [--quiet]`: the options read into
  * mx_check_params (--surface repeated: one file per input of the run, the
  * list in surfaces; once: surface, as before), then mx_check_file (include/mixoct.h,
  * src/mesher/check_file.c) reads the mesh (3D, or 2D: triangles and
@@ -23,8 +24,8 @@ static void usage(FILE *f) {
   fprintf(f,
           "usage: mixoct check MESH [--surface FILE ... | --poly FILE] "
           "[--volume-tol X]\n"
-          "                    [--dist-tol X] [--threads N] [--json] "
-          "[--quiet]\n"
+          "                    [--dist-tol X] [--feature-angle DEG] [--features FILE]\n"
+          "                    [--feature-tol T] [--threads N] [--json] [--quiet]\n"
           "  MESH              legacy VTK (.vtk, ASCII or binary), VTU, Gmsh\n"
           "                    MSH 4.1 (ASCII or binary), Medit (.mesh,\n"
           "                    .meshb), GetFEM (.getfem), M3D or MVM volume\n"
@@ -53,6 +54,16 @@ static void usage(FILE *f) {
           "                    --surface (relative to the surface's bounding\n"
           "                    box diagonal; 2D: to the domain's diameter;\n"
           "                    default 1e-6)\n"
+          "  --feature-angle DEG  sharp features of the surface: ridges where its\n"
+          "                    normals part by more than DEG, corners where they\n"
+          "                    end, meet or turn by more (default 30; 0: none);\n"
+          "                    reported: the largest distance from a ridge to\n"
+          "                    the mesh's boundary edges, from a corner to its\n"
+          "                    nodes\n"
+          "  --features FILE   the features as polylines instead ('n x1 y1 z1 ...\n"
+          "                    xn yn zn' a line; corners at --feature-angle)\n"
+          "  --feature-tol T   a feature distance above T (relative to the\n"
+          "                    diagonal) is a defect (default: reported only)\n"
           "  --threads N       OpenMP threads (default: all)\n"
           "  --json            one JSON object on the last line of stdout\n"
           "  --quiet           no report (errors only; JSON if --json)\n"
@@ -128,6 +139,28 @@ int mx_check_main(int argc, char **argv) {
     } else if (!strncmp(a, "--dist-tol=", 11)) {
       if (number_arg("--dist-tol", a + 11, &p.dist_tol) != MX_OK)
         return EXIT_USAGE;
+    } else if (!strcmp(a, "--feature-angle") || !strcmp(a, "--feature-tol") ||
+               !strncmp(a, "--feature-angle=", 16) || !strncmp(a, "--feature-tol=", 14)) {
+      const int angle = !strncmp(a, "--feature-angle", 15);
+      const char *eq = strchr(a, '=');
+      const char *v = eq ? eq + 1 : i + 1 < argc ? argv[++i] : NULL;
+      double x;
+      if (number_arg(angle ? "--feature-angle" : "--feature-tol", v, &x) != MX_OK)
+        return EXIT_USAGE;
+      if (angle ? x >= 180.0 : x == 0.0) {
+        mx_error(NULL, 0, "check: %s", angle ? "--feature-angle needs 0 to 180 degrees "
+                 "(180 excluded; 0: no features)" : "--feature-tol needs a number > 0");
+        return EXIT_USAGE;
+      }
+      *(angle ? &p.feature_angle : &p.feature_tol) = x;
+    } else if (!strcmp(a, "--features")) {
+      if (i + 1 >= argc) {
+        mx_error(NULL, 0, "check: --features needs a file");
+        return EXIT_USAGE;
+      }
+      p.features = argv[++i];
+    } else if (!strncmp(a, "--features=", 11)) {
+      p.features = a + 11;
     } else if (!strcmp(a, "--threads")) {
       char *end = NULL;
       const long n = i + 1 < argc ? strtol(argv[i + 1], &end, 10) : 0;

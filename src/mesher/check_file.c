@@ -14,21 +14,30 @@
  * a report of its own. A 3D surface with a 2D mesh, or polylines (poly, a
  * .poly) with a 3D mesh, are usage errors (status 2).
  *
+ * A 3D mesh's feature distances (issue 29, item 5; verify/check.h): the
+ * ridges and corners found on the surface at the feature angle (default
+ * 30 degrees; geom/features.h), or read from a polylines file
+ * (io/read_polylines.h), measured against the mesh's boundary edges and
+ * nodes; reported, and defects only with a feature tolerance.
+ *
  * A 3D mesh's hash (io/pvtu.h: mx_mesh_hash; the same for any node
  * numbering and cell order, so for a mesh and its .pvtu pieces) is
  * reported with it. Returns the program's exit status: 0 no defect, 3
  * defects found, 2 bad input or usage (the message names the file), 1
  * internal failure. */
+#include <math.h>
 #include <omp.h>
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
 
 #include "base/common.h"
+#include "geom/features.h"
 #include "geom/surface_defects.h"
 #include "io/pvtu.h"
 #include "io/read_mesh.h"
 #include "io/read_poly.h"
+#include "io/read_polylines.h"
 #include "io/read_surface.h"
 #include "mesher/check_file.h"
 #include "mesher/mesher2d.h"
@@ -42,6 +51,7 @@ void mx_check_params_default(mx_check_params *p) {
   memset(p, 0, sizeof *p);
   p->volume_tol = o.volume_tol;
   p->dist_tol = o.boundary_tol;
+  p->feature_angle = 30.0;
 }
 
 /* ---- 2D meshes ------------------------------------------------------------
@@ -175,6 +185,45 @@ static int read_surfaces(const char *const *list, int n, mx_trisoup *s) {
   return st;
 }
 
+/* The feature distances (issue 29, item 5): the lines read from the
+ * polylines file p->features, or found on the surface s (NULL: none) at
+ * p->feature_angle; measured against m's boundary (verify/check_features.c);
+ * over the tolerance, defects. diag: the surface's (NAN: none). */
+static int feature_distances(const mx_check_params *p, const mx_mesh_data *m,
+                             const mx_trisoup *s, double diag, mx_check_file_features *f) {
+  memset(f, 0, sizeof *f);
+  f->file = p->features;
+  f->angle = p->feature_angle;
+  f->tol = p->feature_tol;
+  if (!p->features && (!s || !(p->feature_angle > 0.0))) return MX_OK;
+  if (!(p->feature_angle >= 0.0 && p->feature_angle < 180.0)) {
+    mx_error(NULL, 0, "check: feature angle %g: expected 0 to 180 degrees (exclusive)",
+             p->feature_angle);
+    return MX_EINPUT;
+  }
+  mx_feature_lines L;
+  memset(&L, 0, sizeof L);
+  int st;
+  if (p->features) {
+    st = mx_read_polylines(p->features, p->feature_angle, &L);
+  } else {
+    mx_features F;
+    st = mx_features_detect(s, s->nt, p->feature_angle, &F);
+    if (st == MX_OK) {
+      st = mx_feature_lines_of(s, &F, &L);
+      mx_features_free(&F);
+    }
+  }
+  if (st == MX_OK) st = mx_check_features_mesh(m, &L, &f->d);
+  mx_feature_lines_free(&L);
+  if (st != MX_OK) return st;
+  f->measured = 1;
+  f->diagonal = isfinite(diag) && diag > 0.0 ? diag : f->d.diagonal;
+  if (f->tol > 0.0) /* infinite distances (no boundary) are off too */
+    f->off = (f->d.ridge_dist > f->tol * f->diagonal) + (f->d.corner_dist > f->tol * f->diagonal);
+  return MX_OK;
+}
+
 /* The check and report of the mesh read in m (freed here); the surface
  * files list[0 .. n). */
 static int check_file_3d(const mx_check_params *p, const char *const *list, int n,
@@ -192,6 +241,15 @@ static int check_file_3d(const mx_check_params *p, const char *const *list, int 
   mx_check_tags tags;
   memset(&tags, 0, sizeof tags);
   if (st == MX_OK) st = mx_check_mesh_tags(m, surf ? &s : NULL, &opt, &r, &tags);
+  mx_check_file_features f;
+  double diag = NAN;
+  if (st == MX_OK && surf) {
+    double lo[3], hi[3];
+    mx_trisoup_bbox(&s, lo, hi);
+    diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  }
+  if (st == MX_OK) st = feature_distances(p, m, surf ? &s : NULL, diag, &f);
   const mx_mesh_view hv = mx_mesh_data_view(m);
   const uint64_t hash = st == MX_OK ? mx_mesh_hash(&hv) : 0;
   const double t2 = mx_wtime();
@@ -202,12 +260,12 @@ static int check_file_3d(const mx_check_params *p, const char *const *list, int 
     return st == MX_EINPUT ? EXIT_USAGE : 1;
   }
   if (p->json)
-    mx_check_file_json(&r, &tags, hash);
+    mx_check_file_json(&r, &tags, hash, &f);
   else if (!p->quiet)
-    mx_check_file_text(p->mesh, list, n, &r, &tags, hash, t1 - t0, t2 - t1);
+    mx_check_file_text(p->mesh, list, n, &r, &tags, hash, &f, t1 - t0, t2 - t1);
   fflush(stdout);
   mx_check_tags_free(&tags);
-  return r.defects ? EXIT_DEFECTS : 0;
+  return r.defects + f.off ? EXIT_DEFECTS : 0;
 }
 
 /* ---- The call ------------------------------------------------------------ */
@@ -241,6 +299,12 @@ static int check_file(const mx_check_params *p) {
   mx_mesh_data m;
   int dim = 3;
   int st = mx_read_mesh_dim(p->mesh, &m, &dim);
+  if (st == MX_OK && dim == 2 && p->features) {
+    mx_error(p->features, 0, "check: feature polylines, but %s is a 2D mesh (its features "
+             "are checked against --poly)", p->mesh);
+    mx_mesh_data_free(&m);
+    return EXIT_USAGE;
+  }
   if (st == MX_OK && dim == 2) {
     mx_qmesh q;
     memset(&q, 0, sizeof q);

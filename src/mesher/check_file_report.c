@@ -41,6 +41,16 @@
  * "boundary_max_dist": "hausdorff_mesh_to_surface_max", "..._mean",
  * "hausdorff_surface_to_mesh_max", "..._mean" (over the diagonal) and the
  * same four with "_abs" (absolute), null without a closed surface.
+ * Feature distances (issue 29; check_file.c), when measured: a line
+ * "features" (ridges, corners, the ridge and corner distances absolute and
+ * over the diagonal) and where they come from, the farthest sample and
+ * corner; with a feature tolerance the defect "features off"; in JSON
+ * before "defective_faces": "features" (null when not measured, else
+ * "source" ("surface" or the polylines file), "angle", "ridges", "loops",
+ * "corners", "length", "samples", "boundary_edges", "diagonal",
+ * "ridge_dist" and "corner_dist" (over the diagonal) and "..._abs",
+ * "ridge_at", "ridge_line", "corner_at", "corner", "corner_node",
+ * "tolerance" (null: none), "off"), its "off" counted in "defects".
  * A 3D mesh's hash is printed as 16 hex digits: "mesh hash" in the report,
  * "mesh_hash" (a string) in JSON.
  * A 2D mesh has a report of its own, and in JSON "dimension":2 with the
@@ -181,6 +191,48 @@ static void json_label_defects(const mx_check_report *r) {
 
 /* The skin and the surface, both ways: relative to the surface's diagonal,
  * then absolute. */
+static void json_xyz(const char *key, const double *p) {
+  printf("\"%s\":[", key);
+  for (int a = 0; a < 3; a++) {
+    if (a) printf(",");
+    json_val(p[a]);
+  }
+  printf("],");
+}
+
+/* "features": null when not measured, else the object (see the head). */
+static void json_features(const mx_check_file_features *f) {
+  if (!f->measured) {
+    printf("\"features\":null,");
+    return;
+  }
+  const mx_check_feature_dist *d = &f->d;
+  printf("\"features\":{\"source\":");
+  json_str(f->file ? f->file : "surface");
+  printf(",");
+  json_num("angle", f->angle, 0);
+  printf("\"ridges\":%zu,\"loops\":%zu,\"corners\":%zu,", d->lines, d->loops, d->corners);
+  json_num("length", d->length, 0);
+  printf("\"samples\":%zu,\"boundary_edges\":%zu,", d->samples, d->edges);
+  json_num("diagonal", f->diagonal, 0);
+  json_num("ridge_dist", d->ridge_dist / f->diagonal, 0);
+  json_num("ridge_dist_abs", d->ridge_dist, 0);
+  json_xyz("ridge_at", d->ridge_at);
+  if (d->lines)
+    printf("\"ridge_line\":%zu,", d->ridge_line);
+  else
+    printf("\"ridge_line\":null,");
+  json_num("corner_dist", d->corner_dist / f->diagonal, 0);
+  json_num("corner_dist_abs", d->corner_dist, 0);
+  json_xyz("corner_at", d->corner_at);
+  if (d->corner_node != UINT32_MAX)
+    printf("\"corner\":%zu,\"corner_node\":%u,", d->corner, d->corner_node);
+  else
+    printf("\"corner\":null,\"corner_node\":null,");
+  json_num("tolerance", f->tol > 0.0 ? f->tol : NAN, 0);
+  printf("\"off\":%zu},", f->off);
+}
+
 static void json_two_sided(const mx_check_report *r) {
   const double v[4] = {r->mesh_to_surface_max, r->mesh_to_surface_mean,
                        r->surface_to_mesh_max, r->surface_to_mesh_mean};
@@ -194,7 +246,8 @@ static void json_two_sided(const mx_check_report *r) {
     }
 }
 
-void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64_t hash) {
+void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64_t hash,
+                        const mx_check_file_features *f) {
   printf("{\"nodes\":%zu,\"elements\":%zu,", r->nodes, r->elements);
   printf("\"by_type\":{\"hex\":%zu,\"prism\":%zu,\"pyramid\":%zu,\"tet\":%zu},",
          r->by_type[MX_HEX], r->by_type[MX_PRISM], r->by_type[MX_PYRAMID],
@@ -284,9 +337,10 @@ void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64
     json_label_defects(r);
   }
   json_tags(t);
+  json_features(f);
   printf("\"defective_faces\":{");
   json_ids("tagged_not_boundary", &r->not_boundary_ids, 1);
-  printf("},\"defects\":%zu}\n", r->defects);
+  printf("},\"defects\":%zu}\n", r->defects + f->off);
 }
 
 /* ---- text ---------------------------------------------------------------- */
@@ -402,9 +456,33 @@ static void print_tags(const mx_check_report *r, const mx_check_tags *t) {
   }
 }
 
+/* The features line: counts, distances over the diagonal, then where. */
+static void print_features(const mx_check_file_features *f) {
+  if (!f->measured) return;
+  const mx_check_feature_dist *d = &f->d;
+  const double D = f->diagonal;
+  printf("  features               %zu ridge%s, %zu corner%s; ridge distance %.3g (%.3g of the "
+         "diagonal), corner distance %.3g (%.3g of the diagonal)\n",
+         d->lines, d->lines == 1 ? "" : "s", d->corners, d->corners == 1 ? "" : "s",
+         d->ridge_dist, d->ridge_dist / D, d->corner_dist, d->corner_dist / D);
+  if (f->file)
+    printf("                         from %s (corners at %g degrees)", f->file, f->angle);
+  else
+    printf("                         found on the surface at %g degrees", f->angle);
+  printf("; %zu loops, length %.6g, %zu samples against %zu boundary edges (diagonal %.6g)%s\n",
+         d->loops, d->length, d->samples, d->edges, D,
+         f->tol > 0.0 ? "" : "; indicative, --feature-tol T to judge");
+  if (d->lines && isfinite(d->ridge_dist))
+    printf("                         farthest ridge sample (%.9g, %.9g, %.9g) on ridge %zu\n",
+           d->ridge_at[0], d->ridge_at[1], d->ridge_at[2], d->ridge_line);
+  if (d->corner_node != UINT32_MAX)
+    printf("                         farthest corner %zu (%.9g, %.9g, %.9g), nearest node %u\n",
+           d->corner, d->corner_at[0], d->corner_at[1], d->corner_at[2], d->corner_node);
+}
+
 void mx_check_file_text(const char *mesh, const char *const *surfs, int nsurfs,
                         const mx_check_report *r, const mx_check_tags *t, uint64_t hash,
-                        double t_read, double t_check) {
+                        const mx_check_file_features *f, double t_read, double t_check) {
   char why[160];
   const char *surf = nsurfs ? surfs[0] : NULL;
   printf("mixoct check %s\n", mesh);
@@ -461,6 +539,7 @@ void mx_check_file_text(const char *mesh, const char *const *surfs, int nsurfs,
              "(tolerance %g)\n",
              r->interface_max_dist, r->interface_nodes, r->opt.boundary_tol);
   }
+  print_features(f);
   printf("  non-manifold edges     %zu (parts of the domain touching along an "
          "edge; not a defect)\n", r->nonmanifold_edges);
   print_tags(r, t);
@@ -534,9 +613,14 @@ void mx_check_file_text(const char *mesh, const char *const *surfs, int nsurfs,
                 "(boundary faces no tagged face names)");
     id_line("elements", &r->untagged_ids, SIZE_MAX);
   }
-  if (r->defects)
-    printf("  result                 %zu defect%s\n", r->defects,
-           r->defects == 1 ? "" : "s");
+  if (f->measured && f->tol > 0.0) {
+    snprintf(why, sizeof why, "(the ridge and the corner distance: above %g of the diagonal)",
+             f->tol);
+    defect_line("features off", f->off, why);
+  }
+  const size_t defects = r->defects + f->off;
+  if (defects)
+    printf("  result                 %zu defect%s\n", defects, defects == 1 ? "" : "s");
   else
     printf("  result                 OK, no defect\n");
   printf("  time                   read %.3f s, check %.3f s\n", t_read,

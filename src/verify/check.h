@@ -173,6 +173,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "geom/features.h"
 #include "soa/mesh_data.h"
 #include "soa/trisoup.h"
 
@@ -362,5 +363,58 @@ void mx_check_tags_free(mx_check_tags *tags);
 int mx_check_contacts(const mx_mesh_data *m, const uint32_t *list, size_t n,
                       const uint8_t *node_sel, double tol, uint8_t *node_hit,
                       uint8_t *elem_hit, size_t *found);
+
+/* ---- Feature distances (check_features.c; issue 29, item 5) ---------------
+ *
+ * How far the mesh is from given feature lines (geom/features.h: ridges as
+ * polylines corner to corner, loops, corners as points; found on a surface
+ * or read from a polylines file), measured against the mesh's boundary
+ * edges (the distinct edges of its faces used by one element) alone:
+ *  ridge_dist   the largest distance from a sample point of a line to the
+ *               nearest boundary edge (point to segment). The samples of a
+ *               segment p-q of a line (a loop's closing segment too): p, q
+ *               and the k - 1 points p + (q - p) j / k between, k =
+ *               ceil(4 |q - p| / h) with h the shorter of the boundary
+ *               edges nearest to p and to q (4 samples a mesh edge), at
+ *               least 4, at most 65536; NAN without lines;
+ *  corner_dist  the largest distance from a corner to the nearest node of
+ *               a boundary edge; NAN without corners;
+ * both INFINITY when there are lines (corners) but no boundary edge. Where:
+ * the sample and its line, the corner, its index and its nearest node.
+ * The edges go into a BVH (geom/bvh.h, an edge a-b as the triangle a-b-b),
+ * so the work is O((samples + edges) log edges), in parallel over the
+ * segments; the same numbers for any thread count (the largest distance
+ * kept at its first sample in line order). Not a defect here: the caller
+ * decides (mixoct check --feature-tol). */
+typedef struct {
+  size_t lines, loops, corners; /* of the feature lines */
+  double length;                /* of all lines (a loop's closing segment too) */
+  size_t edges;                 /* boundary edges measured against */
+  double diagonal;              /* of the box of their nodes */
+  size_t samples;               /* ridge sample points (a line's points once) */
+  double ridge_dist;
+  double ridge_at[3];
+  size_t ridge_line;
+  double corner_dist;
+  double corner_at[3];
+  size_t corner;
+  uint32_t corner_node; /* UINT32_MAX: none */
+} mx_check_feature_dist;
+
+/* Against the boundary edges edge[2 e], edge[2 e + 1] (nodes < nnodes of
+ * the interleaved xyz). MX_OK, MX_ENOMEM, MX_EINPUT (message) for an edge
+ * end out of range, a coordinate of an edge's node that is not finite, or
+ * 2^32 - 1 edges or more. */
+int mx_check_features(const mx_feature_lines *L, const double *xyz, size_t nnodes,
+                      const uint32_t *edge, size_t nedges, mx_check_feature_dist *d);
+/* The distinct edges of the faces of m used by exactly one element (faces
+ * matched as check.h defines them: check_faces.c), each as its two nodes,
+ * the smaller first, ascending; *edge allocated (mx_free). MX_OK,
+ * MX_ENOMEM, MX_EINPUT (message) for a cell of a bad type or a node out of
+ * range, or a mesh larger than the checker takes. */
+int mx_check_boundary_edges(const mx_mesh_data *m, uint32_t **edge, size_t *nedges);
+/* Both: the feature distances of mesh m. */
+int mx_check_features_mesh(const mx_mesh_data *m, const mx_feature_lines *L,
+                           mx_check_feature_dist *d);
 
 #endif

@@ -131,7 +131,7 @@ int mx_ck_faces_match(const mx_mesh_data *m, faces *F, const chash *H,
           for (uint64_t x = i; x < j; x++)
             eflag(ef, k[x].slot / 6, MX_CK_OVERSHARED);
         }
-        if ((k[i].hi >> 32) == 4) { /* quad: its centre */
+        if (H && (k[i].hi >> 32) == 4) { /* quad: its centre */
           uint32_t fv[4] = {0, 0, 0, 0};
           face_verts(m, k[i].slot, fv);
           const double *p[4];

@@ -362,7 +362,8 @@ int mx_ck_element_pass(const mx_mesh_data *m, uint8_t *flags, uint8_t *ef,
  * hash H; *dups: the nodes whose point was already there. */
 int mx_ck_chash_build(chash *H, const mx_mesh_data *m, size_t *dups);
 /* Face matching (check_faces.c): the faces into the buckets of their
- * smallest node, then matched: uses, orientation, the quad centres. */
+ * smallest node, then matched: uses, orientation, the quad centres (H NULL:
+ * the uses and orientation only, flags not read; check_features.c). */
 int mx_ck_faces_bucket(const mx_mesh_data *m, faces *F);
 int mx_ck_faces_match(const mx_mesh_data *m, faces *F, const chash *H,
                       uint8_t *flags, uint8_t *ef, face_counts *fc);
