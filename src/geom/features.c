@@ -11,6 +11,7 @@
 #include "base/scan.h"
 #include "base/union_find.h"
 #include "geom/features.h"
+#include "geom/feature_walk.h"
 
 void mx_features_free(mx_features *F) {
   mx_free(F->edge);
@@ -301,87 +302,13 @@ done:
   return st;
 }
 
-void mx_feature_lines_free(mx_feature_lines *L) {
-  mx_free(L->first);
-  mx_free(L->xyz);
-  mx_free(L->loop);
-  mx_free(L->corner);
-  memset(L, 0, sizeof *L);
-}
-
-static void put_point(const mx_trisoup *s, uint32_t v, double *x) {
-  x[0] = s->x[v];
-  x[1] = s->y[v];
-  x[2] = s->z[v];
-}
+void mx_feature_lines_free(mx_feature_lines *L) { mx_feature_lines_walk_free(L); }
 
 int mx_feature_lines_of(const mx_trisoup *s, const mx_features *F, mx_feature_lines *L) {
-  memset(L, 0, sizeof *L);
-  const size_t ne = F->nedges, nv = s->nv;
-  /* each vertex's ridge edges (CSR), its corner flag, each edge's use */
-  uint32_t *start = mx_calloc((nv + 2) * sizeof *start), *inc = mx_alloc((2 * ne + 1) * sizeof *inc);
-  uint8_t *corner = mx_calloc(nv + 1), *used = mx_calloc(ne + 1);
-  L->first = mx_alloc((ne + 2) * sizeof *L->first); /* at most one line an edge */
-  L->xyz = mx_alloc(3 * (2 * ne + 1) * sizeof *L->xyz);
-  L->loop = mx_alloc(ne + 1);
-  L->corner = mx_alloc(3 * (F->ncorners + 1) * sizeof *L->corner);
-  if (!start || !inc || !corner || !used || !L->first || !L->xyz || !L->loop || !L->corner) {
-    mx_free(start);
-    mx_free(inc);
-    mx_free(corner);
-    mx_free(used);
-    mx_feature_lines_free(L);
-    return MX_ENOMEM;
-  }
-  for (size_t i = 0; i < 2 * ne; i++) start[F->edge[i] + 1]++;
-  for (size_t v = 0; v < nv; v++) start[v + 1] += start[v];
-  for (size_t i = 0; i < 2 * ne; i++) inc[start[F->edge[i]]++] = (uint32_t)(i / 2);
-  for (size_t v = nv; v > 0; v--) start[v] = start[v - 1];
-  start[0] = 0;
-  for (size_t c = 0; c < F->ncorners; c++) {
-    corner[F->corner[c]] = 1;
-    put_point(s, F->corner[c], L->corner + 3 * c);
-  }
-  L->ncorners = F->ncorners;
-  size_t np = 0;
-  /* from every corner along each of its unused edges, then the loops from
-   * their least vertex (the first end of their first edge in edge order) */
-  for (int pass = 0; pass < 2; pass++)
-    for (size_t k = 0; k < (pass ? ne : F->ncorners); k++) {
-      uint32_t v, i;
-      if (pass == 0) {
-        v = F->corner[k];
-        i = UINT32_MAX;
-        for (uint32_t j = start[v]; j < start[v + 1] && i == UINT32_MAX; j++)
-          if (!used[inc[j]]) i = inc[j];
-        if (i == UINT32_MAX) continue;
-        k--; /* this corner again for its next edge */
-      } else {
-        if (used[k]) continue;
-        i = (uint32_t)k;
-        v = F->edge[2 * k];
-      }
-      L->first[L->nlines] = np;
-      L->loop[L->nlines] = (uint8_t)pass;
-      const uint32_t v0 = v;
-      put_point(s, v, L->xyz + 3 * np++);
-      for (;;) {
-        used[i] = 1;
-        v = F->edge[2 * i] == v ? F->edge[2 * i + 1] : F->edge[2 * i];
-        if (corner[v] || v == v0) break;
-        put_point(s, v, L->xyz + 3 * np++);
-        i = UINT32_MAX; /* the other edge of v (not a corner: two) */
-        for (uint32_t j = start[v]; j < start[v + 1]; j++)
-          if (!used[inc[j]]) i = inc[j];
-        if (i == UINT32_MAX) break;
-      }
-      if (corner[v]) put_point(s, v, L->xyz + 3 * np++);
-      L->nlines++;
-    }
-  L->first[L->nlines] = np;
-  mx_free(start);
-  mx_free(inc);
+  uint8_t *corner = mx_calloc(s->nv + 1);
+  if (!corner) return MX_ENOMEM;
+  for (size_t c = 0; c < F->ncorners; c++) corner[F->corner[c]] = 1;
+  const int st = mx_feature_lines_walk(s->x, s->y, s->z, 1, s->nv, F->edge, F->nedges, corner, L);
   mx_free(corner);
-  mx_free(used);
-  return MX_OK;
+  return st;
 }
