@@ -482,6 +482,12 @@ int mx_mesher_set_feature_angle(mx_mesher *m, double angle_deg);
  * 0, the default: the surface level, nothing more). MX_EINPUT outside
  * [0, MX_MAX_LEVEL]. */
 int mx_mesher_set_feature_level(mx_mesher *m, int level);
+/* The features given as polylines (--features FILE: one a line, "n x1 y1
+ * z1 ... xn yn zn", CGAL's .polylines.txt; corners at their ends, where
+ * three meet and where they turn by more than the feature angle) instead
+ * of found on the surface; NULL: found. Read when the octree is built
+ * (errors then, with the file and line). MX_OK, MX_ENOMEM. */
+int mx_mesher_set_feature_file(mx_mesher *m, const char *path);
 /* A size map: n points (xyz, 3 each) with sizes h (finite, positive),
  * copied; they must lie in the domain's box (grown by 5% of its diagonal)
  * when the octree is built. name: where they came from, for messages (or

@@ -55,6 +55,7 @@ typedef struct {
   mx_image_params image;
   double feature_angle; /* --feature-angle DEG, --no-features (0); -1: the default */
   int feature_level;    /* --feature-level L (0: the surface level) */
+  const char *feature_file; /* --features FILE (NULL: found on the surface) */
   int32_t image_skip[64], image_merge[128], image_lsize[128];
 } mx_options;
 

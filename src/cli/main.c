@@ -71,6 +71,7 @@ static int setup(const mx_options *o, mx_mesher **out) {
   MX_CHECK(mx_mesher_set_image_params(m, &o->image));
   if (o->feature_angle >= 0.0) MX_CHECK(mx_mesher_set_feature_angle(m, o->feature_angle));
   if (o->feature_level > 0) MX_CHECK(mx_mesher_set_feature_level(m, o->feature_level));
+  if (o->feature_file) MX_CHECK(mx_mesher_set_feature_file(m, o->feature_file));
   return mx_add_inputs(o, m);
 }
 

@@ -57,6 +57,8 @@ static const char *usage_text =
     "                              they end, meet or turn; kept in the mesh (corners\n"
     "                              on nodes, ridges along element edges) where every\n"
     "                              element stays at J_ENS 0.1 or more\n"
+    "      --features FILE         the features as polylines (one a line: n x1 y1 z1\n"
+    "                              ... xn yn zn) instead of found on the surface\n"
     "      --feature-level L       octants meeting a ridge or corner refined to L\n"
     "                              (default: the surface level)\n"
     "      --no-features           no feature search: the boundary as without them\n"
@@ -471,6 +473,9 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       o->repair_input = 1;
     } else if (strcmp(a, "--materials") == 0) {
       o->materials = 1;
+    } else if (strcmp(a, "--features") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      o->feature_file = argv[++i];
     } else if (strcmp(a, "--feature-level") == 0) {
       MX_CHECK(need_arg(i, argc, a));
       MX_CHECK(parse_level(a, argv[++i], &o->feature_level));

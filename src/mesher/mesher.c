@@ -5,6 +5,7 @@
  * file in restart_octree.c, the files in output.c. */
 #include "mesher/materials.h"
 #include "geom/features.h"
+#include "io/read_polylines.h"
 #include "mesher/mesher_impl.h"
 #include "mesher/pipeline.h"
 
@@ -132,6 +133,7 @@ void mx_tree_clear(mx_mesher *m) {
 void mx_mesher_free(mx_mesher *m) {
   if (!m) return;
   mx_tree_clear(m);
+  mx_free(m->feature_file);
   if (m->have_index) mx_surface_index_free(&m->SI);
   mx_interfaces_free(&m->IF);
   mx_trisoup_free(&m->material_src);
@@ -257,6 +259,14 @@ int mx_mesher_set_feature_angle(mx_mesher *m, double angle_deg) {
   return MX_OK;
 }
 
+int mx_mesher_set_feature_file(mx_mesher *m, const char *path) {
+  char *p = path ? mx_strdup(path) : NULL;
+  if (path && !p) return MX_ENOMEM;
+  mx_free(m->feature_file);
+  m->feature_file = p;
+  return MX_OK;
+}
+
 int mx_mesher_set_feature_level(mx_mesher *m, int level) {
   if (level < 0 || level > MX_MAX_LEVEL) {
     mx_error(NULL, 0, "feature level %d: from 0 (the surface level) to %d", level, MX_MAX_LEVEL);
@@ -270,7 +280,8 @@ int mx_mesher_set_feature_level(mx_mesher *m, int level) {
  * a degenerate triangle (a, b, b) per ridge edge, appended to the soup
  * after the other regions, once. */
 static int feature_region(mx_mesher *m) {
-  if (m->feature_level <= 0 || m->feature_region >= 0 || !m->feat.nedges) return MX_OK;
+  const mx_feature_lines *L = &m->feat_lines;
+  if (m->feature_level <= 0 || m->feature_region >= 0 || !L->nlines) return MX_OK;
   if (m->nregions >= MX_MAX_REGIONS) {
     mx_error(NULL, 0, "--feature-level: the region surfaces' places (%d) are all taken",
              MX_MAX_REGIONS);
@@ -280,16 +291,18 @@ static int feature_region(mx_mesher *m) {
   memset(&m->region[r], 0, sizeof m->region[r]);
   m->region_name[r] = mx_strdup("the features");
   if (!m->region_name[r]) return MX_ENOMEM;
+  /* the lines' points as vertices, a triangle (a, b, b) per segment */
   const uint32_t v0 = (uint32_t)m->soup.nv;
-  for (size_t i = 0; i < 2 * m->feat.nedges; i++) {
-    const uint32_t v = m->feat.edge[i];
-    const double c[3] = {m->soup.x[v], m->soup.y[v], m->soup.z[v]};
-    MX_CHECK(mx_trisoup_set_vertex(&m->soup, v0 + i, c));
-  }
+  const size_t np = L->first[L->nlines];
+  for (size_t i = 0; i < np; i++) MX_CHECK(mx_trisoup_set_vertex(&m->soup, v0 + i, L->xyz + 3 * i));
   m->region_t0[r] = (uint32_t)m->soup.nt;
-  for (size_t i = 0; i < m->feat.nedges; i++)
-    MX_CHECK(mx_trisoup_add_triangle(&m->soup, v0 + 2 * (uint32_t)i, v0 + 2 * (uint32_t)i + 1,
-                                     v0 + 2 * (uint32_t)i + 1));
+  for (size_t i = 0; i < L->nlines; i++) {
+    const size_t f = L->first[i], n = L->first[i + 1] - f;
+    for (size_t k = 0; k + 1 < n + (L->loop[i] ? 1 : 0); k++) {
+      const uint32_t a = v0 + (uint32_t)(f + k), b = v0 + (uint32_t)(f + (k + 1) % n);
+      MX_CHECK(mx_trisoup_add_triangle(&m->soup, a, b, b));
+    }
+  }
   m->region_t0[r + 1] = (uint32_t)m->soup.nt;
   m->region_level[r] = m->feature_level;
   m->region_meet_only |= 1u << r;
@@ -308,18 +321,42 @@ int mx_mesher_features(mx_mesher *m) {
   const double t = mx_wtime();
   mx_features *F = &m->feat;
   MX_CHECK(mx_features_detect(&m->soup, m->nt_domain, angle, F));
-  const int st = mx_feature_lines_of(&m->soup, F, &m->feat_lines);
+  int st = m->feature_file ? mx_read_polylines(m->feature_file, angle, &m->feat_lines)
+                           : mx_feature_lines_of(&m->soup, F, &m->feat_lines);
   if (st) {
     mx_features_free(F);
     return st;
   }
   m->have_features = 1;
-  MX_CHECK(feature_region(m));
   S->feature_angle = angle;
   S->feature_edges = F->nedges;
   S->feature_ridges = F->nridges;
   S->feature_corners = F->ncorners;
   S->feature_length = F->length;
+  S->feature_dangling = F->dangling;
+  S->feature_file = m->feature_file != NULL;
+  if (m->feature_file) { /* the lines given: counted as given, no patches */
+    const mx_feature_lines *L = &m->feat_lines;
+    S->feature_ridges = L->nlines;
+    S->feature_corners = L->ncorners;
+    S->feature_edges = L->first[L->nlines] - L->nlines;
+    S->feature_length = 0.0;
+    for (size_t i = 0; i < L->nlines; i++) {
+      const size_t f = L->first[i], np = L->first[i + 1] - f;
+      for (size_t k = 0; k + 1 < np + (L->loop[i] ? 1 : 0); k++) {
+        const double *a = L->xyz + 3 * (f + k), *b = L->xyz + 3 * (f + (k + 1) % np);
+        S->feature_length += sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                                  (a[2] - b[2]) * (a[2] - b[2]));
+      }
+    }
+  } else if (m->feature_angle < 0.0 && F->dangling > F->nedges) {
+    /* most ridges found at the default angle end in the middle of smooth
+     * surface: a scanned or segmented surface with noise (the cortex: 490
+     * of 526), not a part's edges; not kept unless asked for */
+    S->feature_noise = 1;
+    m->have_features = 0;
+  }
+  if (m->have_features) MX_CHECK(feature_region(m));
   S->feature_seconds = mx_wtime() - t;
   return MX_OK;
 }

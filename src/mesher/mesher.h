@@ -83,6 +83,9 @@ typedef struct {
   double feature_length, feature_seconds;
   mx_feature_stats feature_place; /* placed in the mesh (kernels/feature_place.h) */
   int features_kept;              /* the placement ran */
+  int feature_noise;              /* found, mostly dangling: not kept */
+  int feature_file;               /* the lines read from a file */
+  size_t feature_dangling;        /* ridge edges dropped (free ends, short networks) */
   size_t feature_apart_boxes;     /* boxes refining where features come close */
   const mx_image_info *image; /* a label image's mesh (image_mesh.c), NULL otherwise */
   mx_winding_boundary_stats winding; /* its boundary (input_repaired) */
@@ -234,6 +237,7 @@ struct mx_mesher {
    * their lines, placed after the boundary stage (pipeline.c) */
   int have_features;
   int feature_level;  /* mx_mesher_set_feature_level (0: none) */
+  char *feature_file; /* mx_mesher_set_feature_file (NULL: found on the surface) */
   int feature_region; /* the region of the ridges' segments (-1: none yet) */
   mx_box_region *feature_boxes; /* the user's boxes and those keeping features apart */
   size_t nfeature_boxes;        /* (mesher/feature_apart.c), with the tree */

@@ -68,7 +68,9 @@ int mx_pipeline_transition(mx_mesher *m, const uint32_t *leaves, size_t n, int r
 static int place_features(mx_mesher *m, mx_mesh *M, const uint8_t *states) {
   if (!m->have_features || !states || m->p.materials) return MX_OK;
   const mx_features *F = &m->feat;
-  const mx_feature_input in = {&m->feat_lines, &m->soup, m->nt_domain, F->patch, F->npatches};
+  /* lines from a file: no patches (theirs are the ridges found) */
+  const mx_feature_input in = {&m->feat_lines, &m->soup, m->nt_domain,
+                               m->feature_file ? NULL : F->patch, F->npatches};
   uint8_t *fixed = mx_alloc(M->nnodes + 1);
   double *before = mx_alloc((3 * M->nnodes + 1) * sizeof *before);
   if (!fixed || !before) {

@@ -186,12 +186,14 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
   if (s->feature_angle > 0.0)
     snprintf(feat, sizeof feat,
              "\"features\": {\"angle\": %.6g, \"ridges\": %zu, \"edges\": %zu, "
-             "\"corners\": %zu, \"length\": %.9g, \"kept\": %s, \"corners_placed\": %zu, "
+             "\"corners\": %zu, \"length\": %.9g, \"dropped_edges\": %zu, \"noise\": %s, "
+             "\"kept\": %s, \"corners_placed\": %zu, "
              "\"corners_missed\": %zu, \"lines_followed\": %zu, \"lines_missed\": %zu, "
              "\"nodes\": %zu, \"side_moves\": %zu, \"given_up\": %zu, \"apart_boxes\": %zu, "
              "\"seconds\": %.6f}, ",
              s->feature_angle, s->feature_ridges, s->feature_edges, s->feature_corners,
-             s->feature_length, s->features_kept ? "true" : "false", fp->corners,
+             s->feature_length, s->feature_dangling, s->feature_noise ? "true" : "false",
+             s->features_kept ? "true" : "false", fp->corners,
              fp->corners_missed, fp->lines, fp->lines_missed, fp->nodes, fp->sides, fp->given_up,
              s->feature_apart_boxes, s->feature_seconds + fp->seconds);
   char img[12288] = "";
@@ -300,10 +302,16 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
            s->leaves);
   }
   if (s->feature_angle > 0.0) {
-    printf("  features     %12zu ridge(s) of %zu edges, %.6g long; %zu corner(s) (at %.4g "
+    printf("  features     %12zu ridge(s) of %zu edges, %.6g long; %zu corner(s) (%s at %.4g "
            "degrees)\n",
            s->feature_ridges, s->feature_edges, s->feature_length, s->feature_corners,
-           s->feature_angle);
+           s->feature_file ? "read, corners" : "found", s->feature_angle);
+    if (s->feature_dangling)
+      printf("    dropped    %12zu ridge edge(s) ending in smooth surface or in networks "
+             "under 5%% of the diagonal\n", s->feature_dangling);
+    if (s->feature_noise)
+      printf("    not kept   %12s most ridges end in smooth surface: a scanned or segmented "
+             "surface's noise (--feature-angle DEG keeps what is left)\n", "");
     const mx_feature_stats *fp = &s->feature_place;
     if (s->features_kept)
       printf("    kept       %12zu of %zu corner(s), %zu of %zu line(s) followed by mesh edges; "
