@@ -6,6 +6,7 @@
 
 #include <inttypes.h>
 #include <omp.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -46,11 +47,15 @@ static void json_string(FILE *f, const char *t) {
 }
 
 /* Non-finite numbers printed by printf (nan, -nan, inf, -inf) outside
- * strings become null: the line stays valid JSON whatever the values. */
-static void json_finite(char *b) {
+ * strings become null: the line stays valid JSON whatever the values. A
+ * new string (malloc; "nan" grows by one byte as "null"), NULL when memory
+ * runs out. */
+static char *json_finite(const char *b) {
+  char *out = malloc(2 * strlen(b) + 1);
+  if (!out) return NULL;
   int in_str = 0;
-  char *w = b;
-  for (char *p = b; *p;) {
+  char *w = out;
+  for (const char *p = b; *p;) {
     if (in_str) {
       if (*p == '\\' && p[1]) {
         *w++ = *p++;
@@ -70,13 +75,14 @@ static void json_finite(char *b) {
     if (!strncmp(q, "nan", 3) || !strncmp(q, "inf", 3)) {
       memcpy(w, "null", 4);
       w += 4;
-      p = (char *)q + 3;
+      p = q + 3;
       if (!strncmp(p, "inity", 5)) p += 5;
       continue;
     }
     *w++ = *p++;
   }
   *w = '\0';
+  return out;
 }
 
 /* The outcome: valid, exit code, error, warnings, files written. */
@@ -121,9 +127,10 @@ static void print_json(const mx_summary *s, const mx_run_info *ri) {
     fputs("}\n", f);
   }
   fclose(f);
-  json_finite(buf);
-  fputs(buf, stdout);
+  char *clean = json_finite(buf);
+  fputs(clean ? clean : buf, stdout);
   fflush(stdout);
+  free(clean);
   free(buf);
 }
 
@@ -181,7 +188,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
                s->size_graded_n, s->size_beta, s->size_src_kb, s->size_src_seconds);
     }
   }
-  char feat[512] = "";
+  char feat[768] = "";
   const mx_feature_stats *fp = &s->feature_place;
   if (s->feature_angle > 0.0)
     snprintf(feat, sizeof feat,
@@ -190,12 +197,14 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              "\"kept\": %s, \"corners_placed\": %zu, "
              "\"corners_missed\": %zu, \"lines_followed\": %zu, \"lines_missed\": %zu, "
              "\"nodes\": %zu, \"side_moves\": %zu, \"given_up\": %zu, \"apart_boxes\": %zu, "
+             "\"ridge_distance\": %.6g, \"corner_distance\": %.6g, "
              "\"seconds\": %.6f}, ",
              s->feature_angle, s->feature_ridges, s->feature_edges, s->feature_corners,
              s->feature_length, s->feature_dangling, s->feature_noise ? "true" : "false",
              s->features_kept ? "true" : "false", fp->corners,
              fp->corners_missed, fp->lines, fp->lines_missed, fp->nodes, fp->sides, fp->given_up,
-             s->feature_apart_boxes, s->feature_seconds + fp->seconds);
+             s->feature_apart_boxes, s->feature_measured ? s->feature_ridge_dist : NAN,
+             s->feature_measured ? s->feature_corner_dist : NAN, s->feature_seconds + fp->seconds);
   char img[12288] = "";
   if (s->image) {
     const mx_image_info *g = s->image;
@@ -318,6 +327,10 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
              "%zu node(s) on them, %zu moved to their side, %zu put back (%.3f s)\n",
              fp->corners, fp->corners + fp->corners_missed, fp->lines,
              fp->lines + fp->lines_missed, fp->nodes, fp->sides, fp->given_up, fp->seconds);
+    if (s->feature_measured)
+      printf("    distance   %12s ridges %.3g, corners %.3g of the diagonal (farthest ridge sample "
+             "from a boundary edge, corner from a boundary node)\n", "",
+             s->feature_ridge_dist, s->feature_corner_dist);
     if (s->feature_apart_boxes)
       printf("    apart      %12zu box(es) refining where features come closer than their "
              "octants\n", s->feature_apart_boxes);
