@@ -6,6 +6,7 @@
 #include "mesher/materials.h"
 #include "geom/features.h"
 #include "io/read_polylines.h"
+#include "verify/check.h"
 #include "mesher/mesher_impl.h"
 #include "mesher/pipeline.h"
 
@@ -645,6 +646,33 @@ static int volume_check(mx_mesher *m) {
   return mx_volume_verdict(m, mx_mesh_volume(&m->M), m->M.ncells);
 }
 
+/* The distances between the features and the mesh made (verify/check.h:
+ * ridge samples to the nearest boundary edge, corners to the nearest
+ * boundary node), relative to the input's bounding box diagonal. */
+static int feature_distances(mx_mesher *m) {
+  mx_summary *S = &m->rec->S;
+  S->feature_measured = 0;
+  if (!m->have_features || m->mesh_stage != MX_STAGE_FULL || !m->M.ncells) return MX_OK;
+  const mx_mesh *M = &m->M;
+  mx_mesh_data d;
+  memset(&d, 0, sizeof d);
+  d.nnodes = M->nnodes;
+  d.ncells = M->ncells;
+  d.xyz = M->xyz;
+  d.type = M->type;
+  d.conn = M->conn;
+  mx_check_feature_dist fd;
+  MX_CHECK(mx_check_features_mesh(&d, &m->feat_lines, &fd));
+  double lo[3], hi[3];
+  mx_trisoup_bbox(&m->domain, lo, hi);
+  const double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                           (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  S->feature_measured = 1;
+  S->feature_ridge_dist = fd.ridge_dist / diag;
+  S->feature_corner_dist = fd.corner_dist / diag;
+  return MX_OK;
+}
+
 /* Per-node flags, counts and quality of the mesh just made; MX_EINVALID
  * when elements with J_ENS < 1e-6 remain. */
 int mx_mesh_finish(mx_mesher *m) {
@@ -688,7 +716,8 @@ int mx_mesh_finish(mx_mesher *m) {
     return MX_EINVALID;
   }
   const double tv = mx_wtime();
-  st = volume_check(m);
+  st = feature_distances(m);
+  if (!st) st = volume_check(m);
   m->rec->S.ph.verify += mx_wtime() - tv;
   return st;
 }

@@ -86,6 +86,8 @@ typedef struct {
   int feature_noise;              /* found, mostly dangling: not kept */
   int feature_file;               /* the lines read from a file */
   size_t feature_dangling;        /* ridge edges dropped (free ends, short networks) */
+  int feature_measured;           /* the distances below (mx_mesh_finish) */
+  double feature_ridge_dist, feature_corner_dist; /* over the input's diagonal */
   size_t feature_apart_boxes;     /* boxes refining where features come close */
   const mx_image_info *image; /* a label image's mesh (image_mesh.c), NULL otherwise */
   mx_winding_boundary_stats winding; /* its boundary (input_repaired) */
