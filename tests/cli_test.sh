@@ -425,7 +425,7 @@ expect_exit 2 "--curvature 180" "$MIXOCT" -i "$T/sphere.off" -s 2 --curvature 18
 expect_exit 2 "--gradation 1" "$MIXOCT" -i "$T/sphere.off" -s 2 --thickness 2 --gradation 1
 expect_exit 0 "--thickness alone is a request" "$MIXOCT" -i "$T/sphere.off" --thickness 2 --quiet
 
-# sharp features found and reported (issue 29, first part): a box of 12
+# sharp features found and reported (issue 29; kept: features_test.sh): a box of 12
 # triangles has 12 ridges and 8 corners; none without the search
 printf 'OFF\n8 12 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n3 0 2 1\n3 0 3 2\n3 4 5 6\n3 4 6 7\n3 0 1 5\n3 0 5 4\n3 1 2 6\n3 1 6 5\n3 2 3 7\n3 2 7 6\n3 3 0 4\n3 3 4 7\n' >"$T/box12.off"
 "$MIXOCT" -i "$T/box12.off" -s 2 -o "$T/box12.vtu" --json --quiet >"$T/ft.json" 2>/dev/null

@@ -197,7 +197,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              "\"kept\": %s, \"corners_placed\": %zu, "
              "\"corners_missed\": %zu, \"lines_followed\": %zu, \"lines_missed\": %zu, "
              "\"nodes\": %zu, \"side_moves\": %zu, \"given_up\": %zu, \"apart_boxes\": %zu, "
-             "\"ridge_distance\": %.6g, \"corner_distance\": %.6g, "
+             "\"ridge_distance\": %.9g, \"corner_distance\": %.9g, "
              "\"seconds\": %.6f}, ",
              s->feature_angle, s->feature_ridges, s->feature_edges, s->feature_corners,
              s->feature_length, s->feature_dangling, s->feature_noise ? "true" : "false",
