@@ -597,29 +597,86 @@ typedef struct {
   int built;
 } patch_index;
 
-static int patch_closest(const mx_feature_input *in, patch_index *pi, uint32_t patch,
-                         const double *x, double *q) {
+/* The patches' triangles (CSR: patch p's are tri[off[p] .. off[p + 1]))
+ * and a vertex map (nv entries, UINT32_MAX between builds), for building
+ * a patch's index over its own vertices only. */
+typedef struct {
+  uint32_t *off, *tri, *vmap;
+} patch_lists;
+
+static int patch_lists_make(const mx_feature_input *in, patch_lists *pl) {
+  pl->off = mx_calloc((in->npatches + 2) * sizeof *pl->off);
+  pl->tri = mx_alloc((in->nt + 1) * sizeof *pl->tri);
+  pl->vmap = mx_alloc((in->soup->nv + 1) * sizeof *pl->vmap);
+  if (!pl->off || !pl->tri || !pl->vmap) return MX_ENOMEM;
+  for (size_t t = 0; t < in->nt; t++) pl->off[in->patch[t] + 1]++;
+  for (size_t p = 0; p < in->npatches; p++) pl->off[p + 1] += pl->off[p];
+  for (size_t t = 0; t < in->nt; t++) pl->tri[pl->off[in->patch[t]]++] = (uint32_t)t;
+  for (size_t p = in->npatches; p > 0; p--) pl->off[p] = pl->off[p - 1];
+  pl->off[0] = 0;
+  for (size_t v = 0; v < in->soup->nv; v++) pl->vmap[v] = UINT32_MAX;
+  return MX_OK;
+}
+
+static void patch_lists_free(patch_lists *pl) {
+  mx_free(pl->off);
+  mx_free(pl->tri);
+  mx_free(pl->vmap);
+}
+
+#define PATCH_DIRECT 4096 /* triangles a patch is searched without an index up to */
+
+static int patch_closest(const mx_feature_input *in, patch_lists *pl, patch_index *pi,
+                         uint32_t patch, const double *x, double *q) {
   patch_index *P = pi + patch;
   if (!P->built) {
-    size_t n = 0;
-    for (size_t t = 0; t < in->nt; t++) n += in->patch[t] == patch;
+    const mx_trisoup *S0 = in->soup;
     memset(&P->sub, 0, sizeof P->sub);
-    P->sub.tri = mx_alloc((3 * n + 1) * sizeof *P->sub.tri);
-    if (!P->sub.tri) return MX_ENOMEM;
-    for (size_t t = 0; t < in->nt; t++)
-      if (in->patch[t] == patch) memcpy(P->sub.tri + 3 * P->sub.nt++, in->soup->tri + 3 * t, 3 * sizeof *P->sub.tri);
-    P->sub.nv = in->soup->nv;
-    P->sub.x = in->soup->x;
-    P->sub.y = in->soup->y;
-    P->sub.z = in->soup->z;
-    const int st = mx_surface_index_build(&P->S, &P->sub, 0, (uint32_t)P->sub.nt);
+    int st = MX_OK;
+    for (uint32_t k = pl->off[patch]; k < pl->off[patch + 1] && !st; k++) {
+      uint32_t w[3];
+      for (int c = 0; c < 3 && !st; c++) {
+        const uint32_t v = S0->tri[3 * (size_t)pl->tri[k] + c];
+        if (pl->vmap[v] == UINT32_MAX) {
+          pl->vmap[v] = (uint32_t)P->sub.nv;
+          const double y[3] = {S0->x[v], S0->y[v], S0->z[v]};
+          st = mx_trisoup_set_vertex(&P->sub, P->sub.nv, y);
+        }
+        w[c] = pl->vmap[v];
+      }
+      if (!st) st = mx_trisoup_add_triangle(&P->sub, w[0], w[1], w[2]);
+    }
+    for (uint32_t k = pl->off[patch]; k < pl->off[patch + 1]; k++)
+      for (int c = 0; c < 3; c++) pl->vmap[S0->tri[3 * (size_t)pl->tri[k] + c]] = UINT32_MAX;
+    /* an index pays for itself on large patches only (building one has a
+     * fixed cost of about 0.2 s: measured on 8 triangles) */
+    if (!st && P->sub.nt > PATCH_DIRECT)
+      st = mx_surface_index_build(&P->S, &P->sub, 0, (uint32_t)P->sub.nt);
     if (st) {
-      mx_free(P->sub.tri);
+      mx_trisoup_free(&P->sub);
       return st;
     }
     P->built = 1;
   }
-  mx_closest_point(&P->S, x, q, NULL, NULL);
+  if (P->sub.nt > PATCH_DIRECT) {
+    mx_closest_point(&P->S, x, q, NULL, NULL);
+    return MX_OK;
+  }
+  double best = INFINITY; /* a few triangles: each of them */
+  for (size_t t = 0; t < P->sub.nt; t++) {
+    double tri[9], y[3];
+    for (int c = 0; c < 3; c++) {
+      const uint32_t v = P->sub.tri[3 * t + c];
+      tri[3 * c] = P->sub.x[v];
+      tri[3 * c + 1] = P->sub.y[v];
+      tri[3 * c + 2] = P->sub.z[v];
+    }
+    const double d = mx_closest_on_triangle(tri, x, y);
+    if (d < best) {
+      best = d;
+      memcpy(q, y, sizeof y);
+    }
+  }
   return MX_OK;
 }
 
@@ -638,6 +695,7 @@ static int sides(graph *G, const mx_feature_input *in, const mx_surface_index *S
   uint32_t *reg = mx_alloc((M->nnodes + 1) * sizeof *reg);
   uint64_t *vote = NULL;
   patch_index *pi = mx_calloc((in->npatches + 1) * sizeof *pi);
+  patch_lists pl = {NULL, NULL, NULL}; /* made when a patch is first asked for */
   int st = up && np && reg && pi ? MX_OK : MX_ENOMEM;
   if (st) goto done;
   for (size_t f = 0; f < nf; f++) up[f] = (uint32_t)f;
@@ -707,7 +765,8 @@ static int sides(graph *G, const mx_feature_input *in, const mx_surface_index *S
     const uint32_t want = win[reg[v]];
     if (want == UINT32_MAX || want == np[v]) continue;
     double q[3];
-    st = patch_closest(in, pi, want, M->xyz + 3 * v, q);
+    if (!pl.off && (st = patch_lists_make(in, &pl))) break;
+    st = patch_closest(in, &pl, pi, want, M->xyz + 3 * v, q);
     if (st) break;
     memcpy(M->xyz + 3 * v, q, sizeof q);
     moved[v] = 1;
@@ -717,10 +776,11 @@ static int sides(graph *G, const mx_feature_input *in, const mx_surface_index *S
 done:
   for (size_t p = 0; pi && p < in->npatches; p++)
     if (pi[p].built) {
-      mx_surface_index_free(&pi[p].S);
-      mx_free(pi[p].sub.tri);
+      if (pi[p].sub.nt > PATCH_DIRECT) mx_surface_index_free(&pi[p].S);
+      mx_trisoup_free(&pi[p].sub);
     }
   mx_free(pi);
+  patch_lists_free(&pl);
   mx_free(up);
   mx_free(np);
   mx_free(reg);
