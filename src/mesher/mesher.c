@@ -750,6 +750,33 @@ int mx_mesh_stages(mx_mesher *m) {
     MX_CHECK(boundary_once(m));
     MX_CHECK(mx_repair(m));
   }
+  const int broken = m->M.invalid > 0 || m->rec->S.contacts.nodes > 0;
+  if (broken && m->rec->S.features_kept && !m->feature_file && m->feature_angle < 0.0) {
+    /* the features found at the default angle left elements the repair
+     * could not mend (the triple torus of CGAL's data at -s 6: 40 ridges
+     * of a smooth surface's coarse facets): the mesh again without them,
+     * as --no-features would make it */
+    char inputs[MX_INPUTS_LABEL];
+    mx_warning(mx_inputs_label(m, inputs, sizeof inputs), 0,
+               "keeping the %zu sharp ridge(s) found broke the mesh where the repair could not "
+               "mend it; meshed again without features (--no-features; --feature-angle DEG to "
+               "insist)", m->rec->S.feature_ridges);
+    const mx_summary keep = m->rec->S; /* the times go on, the counts start again */
+    memset(&m->rec->S, 0, sizeof m->rec->S);
+    m->rec->S.ph = keep.ph;
+    m->rec->S.t_restart = keep.t_restart;
+    m->feature_angle = 0.0;
+    mx_tree_clear(m);
+    const int st = mx_mesh_stages(m);
+    m->feature_angle = -1.0;
+    m->rec->S.feature_fallback = 1;
+    m->rec->S.feature_angle = keep.feature_angle;
+    m->rec->S.feature_ridges = keep.feature_ridges;
+    m->rec->S.feature_edges = keep.feature_edges;
+    m->rec->S.feature_corners = keep.feature_corners;
+    m->rec->S.feature_length = keep.feature_length;
+    return st;
+  }
   return mx_mesh_finish(m);
 }
 

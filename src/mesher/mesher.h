@@ -84,6 +84,7 @@ typedef struct {
   mx_feature_stats feature_place; /* placed in the mesh (kernels/feature_place.h) */
   int features_kept;              /* the placement ran */
   int feature_noise;              /* found, mostly dangling: not kept */
+  int feature_fallback;           /* kept, broke the mesh: meshed again without */
   int feature_file;               /* the lines read from a file */
   size_t feature_dangling;        /* ridge edges dropped (free ends, short networks) */
   int feature_measured;           /* the distances below (mx_mesh_finish) */

@@ -194,6 +194,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
     snprintf(feat, sizeof feat,
              "\"features\": {\"angle\": %.6g, \"ridges\": %zu, \"edges\": %zu, "
              "\"corners\": %zu, \"length\": %.9g, \"dropped_edges\": %zu, \"noise\": %s, "
+             "\"fallback\": %s, "
              "\"kept\": %s, \"corners_placed\": %zu, "
              "\"corners_missed\": %zu, \"lines_followed\": %zu, \"lines_missed\": %zu, "
              "\"nodes\": %zu, \"side_moves\": %zu, \"given_up\": %zu, \"apart_boxes\": %zu, "
@@ -201,6 +202,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              "\"seconds\": %.6f}, ",
              s->feature_angle, s->feature_ridges, s->feature_edges, s->feature_corners,
              s->feature_length, s->feature_dangling, s->feature_noise ? "true" : "false",
+             s->feature_fallback ? "true" : "false",
              s->features_kept ? "true" : "false", fp->corners,
              fp->corners_missed, fp->lines, fp->lines_missed, fp->nodes, fp->sides, fp->given_up,
              s->feature_apart_boxes, s->feature_measured ? s->feature_ridge_dist : NAN,
@@ -318,6 +320,9 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
     if (s->feature_dangling)
       printf("    dropped    %12zu ridge edge(s) ending in smooth surface or in networks "
              "under 5%% of the diagonal\n", s->feature_dangling);
+    if (s->feature_fallback)
+      printf("    not kept   %12s keeping them broke the mesh where the repair could not mend "
+             "it: meshed without them\n", "");
     if (s->feature_noise)
       printf("    not kept   %12s most ridges end in smooth surface: a scanned or segmented "
              "surface's noise (--feature-angle DEG keeps what is left)\n", "");
