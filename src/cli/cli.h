@@ -54,6 +54,7 @@ typedef struct {
    * below) */
   mx_image_params image;
   double feature_angle; /* --feature-angle DEG, --no-features (0); -1: the default */
+  int smooth_rounds;    /* --smooth N; -1: the library's default */
   int32_t image_skip[64], image_merge[128], image_lsize[128];
 } mx_options;
 
