@@ -87,25 +87,24 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint64_t *off,
    * bounds first. */
   double g[3] = {0.0, 0.0, 0.0};
   {
-    int tight[MAX_GRAD], nt = 0;
+    /* the elements within TIGHT of their bound, then the MAX_GRAD - 1
+     * closest first (a partial selection sort; ties: the list order) */
+    int tight[MAX_INC], nt = 0;
+    double slack[MAX_INC];
     for (int k = 0; k < ne; k++) {
-      if (k == kw) continue;
-      const double slack = Jd[inc[e0 + (uint64_t)k]] - fmax(floor_[k], m0);
-      if (!(slack < TIGHT)) continue;
-      /* insertion by slack (ties: the list order) */
-      int p = nt < MAX_GRAD - 1 ? nt++ : MAX_GRAD - 1;
-      if (p == MAX_GRAD - 1 && nt == MAX_GRAD - 1) {
-        const int l = tight[p - 1];
-        if (!(slack < Jd[inc[e0 + (uint64_t)l]] - fmax(floor_[l], m0))) continue;
-      }
-      while (p > 0) {
-        const int l = tight[p - 1];
-        if (!(slack < Jd[inc[e0 + (uint64_t)l]] - fmax(floor_[l], m0))) break;
-        tight[p] = l;
-        p--;
-      }
-      tight[p] = k;
+      const double sl = Jd[inc[e0 + (uint64_t)k]] - fmax(floor_[k], m0);
+      if (k != kw && sl < TIGHT) tight[nt] = k, slack[nt++] = sl;
     }
+    for (int i = 0; i < nt && i < MAX_GRAD - 1; i++) {
+      int b = i;
+      for (int j = i + 1; j < nt; j++)
+        if (slack[j] < slack[b]) b = j;
+      const int tk = tight[b];
+      const double ts = slack[b];
+      tight[b] = tight[i], slack[b] = slack[i];
+      tight[i] = tk, slack[i] = ts;
+    }
+    if (nt > MAX_GRAD - 1) nt = MAX_GRAD - 1;
     double gt[MAX_GRAD][3];
     const double d = 1e-4 * h;
     for (int i = 0; i <= nt; i++) {
@@ -137,7 +136,8 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint64_t *off,
   const int ng = (int)(sizeof along_grad / sizeof *along_grad);
   double best = m0, bx[3] = {x0[0], x0[1], x0[2]};
   int first = kw; /* the element that stopped the last trial: looked at first */
-  for (int t = 0; t < nc + ng; t++) {
+  const int ntrials = nc + (g[0] != 0.0 || g[1] != 0.0 || g[2] != 0.0 ? ng : 0);
+  for (int t = 0; t < ntrials; t++) {
     for (int a = 0; a < 3; a++)
       x[a] = t < nc ? x0[a] + to_centroid[t] * (c[a] - x0[a]) : x0[a] + along_grad[t - nc] * h * g[a];
     if (on_surface) { /* a boundary node stays on the surface */

@@ -1,6 +1,7 @@
 /* Smoothing after the untangling (issue 29, item 4): each node of the work
  * set moves to the best of a few trial points (towards the centroid of its
- * neighbours; along the gradient of its worst element's J_ENS) when that
+ * neighbours; along the gradient of its worst element's J_ENS, bent away
+ * from the gradients of the elements near their bound below) when that
  * raises the worst J_ENS of its elements. A boundary node (outside, or on
  * the mesh boundary) moves to the closest surface point of each trial, so
  * the boundary stays on the surface.
