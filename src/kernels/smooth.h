@@ -36,7 +36,12 @@ typedef struct {
   const uint8_t *movable; /* per node, 0: fixed (features, interfaces); NULL: all */
 } mx_smooth_opts;
 
-/* The default target: measured on the cortex (bench/smooth_bench.sh). */
+/* The target the boundary stage uses: on the cortex, 0.25 raised nothing
+ * at -s 6 and -s 8, 0.35 +0.0003 at -s 8, 0.5 +0.0046 (one round).
+ * bench/smooth_bench.sh, 2 threads, medians of 3 (-s 9: one run), --smooth
+ * 1 against 0: J_ENS min +0.0013 / +0.0034 / +0.0046 / +0.0000 at -s 6 / 7
+ * / 8 / 9 for 2.6x / 3.3x / 4.1x / 3.6x the wall time; 3 rounds gain no
+ * more than 1. Hence off by default (mixoct.h, MX_SMOOTH_ROUNDS). */
 #define MX_SMOOTH_TARGET 0.5
 
 typedef struct {
