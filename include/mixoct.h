@@ -119,7 +119,16 @@ typedef struct {
                         * their centroid (MX_STAGE_TRANSITION; the full stage
                         * and re-meshing refuse it, MX_EINPUT); 0 (default):
                         * a nested shell is a hole */
+  int smooth_rounds;   /* rounds of the smoothing after the untangling
+                        * (--smooth N): nodes move only where that raises
+                        * the worst J_ENS around them, and never lower any
+                        * node's worst; 0: off (the default, MX_SMOOTH_ROUNDS:
+                        * on the cortex it costs more time than the worst
+                        * element gains, bench/smooth_bench.sh) */
 } mx_params;
+/* The smoothing's default rounds (mx_params_default), measured on the
+ * cortex: bench/smooth_bench.sh. */
+#define MX_SMOOTH_ROUNDS 0
 
 void mx_params_default(mx_params *p);
 

@@ -209,6 +209,17 @@ expect_exit 0 "a dry run" "$MIXOCT" -i "$T/cube.off" -s 3
 has "$T/out" "dry run" "a run without -o says it is a dry run"
 expect_exit 0 "--json with outputs" "$MIXOCT" -i "$T/cube.off" -s 3 -o "$T/j.vtu" --json
 json_ok "$T/out" "d['valid'] is True and d['exit_code'] == 0 and d['outputs'][0]['bytes'] > 0 and d['warnings'] == []" "--json: valid, outputs with sizes"
+# --smooth: 0 is off (the default), 3 rounds never lower the mesh's worst
+# element and say so in the summary and the JSON
+expect_exit 0 "--smooth 0" "$MIXOCT" --demo -s 4 --smooth 0 --json
+json_ok "$T/out" "d['boundary']['smoothing']['rounds'] == 0 and d['boundary']['smoothing']['moved'] == 0 and d['invalid'] == 0" "--smooth 0: no smoothing"
+cp "$T/out" "$T/smooth0.json"
+expect_exit 0 "--smooth 3" "$MIXOCT" --demo -s 4 --smooth 3 --json
+json_ok "$T/out" "d['boundary']['smoothing']['rounds'] >= 1 and d['boundary']['smoothing']['moved'] > 0 and d['boundary']['smoothing']['jens_min_after'] >= d['boundary']['smoothing']['jens_min_before'] and d['invalid'] == 0" "--smooth 3: nodes moved, the worst J_ENS not lowered"
+expect_exit 0 "--smooth 3 summary" "$MIXOCT" --demo -s 4 --smooth 3
+has "$T/out" "smoothing " "--smooth 3: a summary line"
+expect_exit 2 "--smooth -1" "$MIXOCT" --demo -s 4 --smooth -1
+has "$T/err" "--smooth" "a bad --smooth is named"
 start=$(date +%s%N)
 expect_exit 4 "an output directory that does not exist, before meshing" "$MIXOCT" --demo -s 6 -o "$T/nodir/x.vtu" -o "$T/ok.vtu"
 elapsed=$(( ($(date +%s%N) - start) / 1000000 ))

@@ -224,7 +224,8 @@ class _Params(ctypes.Structure):
                 ("repair_rounds", ctypes.c_int),
                 ("repair_input", ctypes.c_int),
                 ("remesh_full", ctypes.c_int),
-                ("materials", ctypes.c_int)]
+                ("materials", ctypes.c_int),
+                ("smooth_rounds", ctypes.c_int)]
 
 
 class _MeshArrays(ctypes.Structure):

@@ -56,6 +56,7 @@ typedef struct {
   double feature_angle; /* --feature-angle DEG, --no-features (0); -1: the default */
   int feature_level;    /* --feature-level L (0: the surface level) */
   const char *feature_file; /* --features FILE (NULL: found on the surface) */
+  int smooth_rounds;    /* --smooth N; -1: the library's default */
   int32_t image_skip[64], image_merge[128], image_lsize[128];
 } mx_options;
 

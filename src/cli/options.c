@@ -127,6 +127,11 @@ static const char *usage_text =
     "      --stage full            the mesh of the domain (the default): nodes\n"
     "                              on the surface, surface patterns, staircase\n"
     "                              reduction, invalid elements repaired\n"
+    "      --smooth N              N rounds of smoothing after the untangling\n"
+    "                              (default 0: off): nodes move where that\n"
+    "                              raises the worst J_ENS around them, never\n"
+    "                              lowering any node's worst; surface nodes\n"
+    "                              stay on the surface\n"
     "      --stage transition      stop after the transition patterns: the\n"
     "                              conforming mixed mesh of the whole octree\n"
     "                              (cell data type, level, jens)\n"
@@ -288,7 +293,8 @@ static const char *const with_arg[][2] = {
     {NULL, "--max-memory"}, {NULL, "--restart"},    {NULL, "--stage"},
     {NULL, "--balance"}, {NULL, "--boundary"},     {NULL, "--size"},
     {NULL, "--size-min"}, {NULL, "--size-max"},    {NULL, "--size-field"},
-    {NULL, "--curvature"}, {NULL, "--thickness"},  {NULL, "--gradation"}};
+    {NULL, "--curvature"}, {NULL, "--thickness"},  {NULL, "--gradation"},
+    {NULL, "--smooth"}};
 
 /* argv with the forms getopt users expect split in two: `--output=x.vtu`
  * and `-s5` / `-ox.vtu` become `--output x.vtu`, `-s 5`, `-o x.vtu`. The
@@ -355,6 +361,7 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
   memset(o, 0, sizeof *o);
   o->s_level = -1;
   o->feature_angle = -1.0;
+  o->smooth_rounds = -1;
   mx_image_params_default(&o->image);
   o->a_level = -1;
   o->stage = MX_STAGE_FULL;
@@ -491,6 +498,16 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
         return MX_EINPUT;
       }
       o->feature_angle = v;
+    } else if (strcmp(a, "--smooth") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      char *end;
+      const long v = strtol(argv[++i], &end, 10);
+      if (end == argv[i] || *end || v < 0 || v > 1000) {
+        mx_error(NULL, 0, "--smooth wants a number of rounds from 0 (off) to 1000, got '%s'",
+                 argv[i]);
+        return MX_EINPUT;
+      }
+      o->smooth_rounds = (int)v;
     } else if (strcmp(a, "--voxel") == 0) {
       o->image.voxel = 1;
     } else if (strcmp(a, "--label-names") == 0) {

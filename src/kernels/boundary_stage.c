@@ -6,6 +6,7 @@
 
 #include "base/common.h"
 #include "kernels/mesh_edit.h"
+#include "kernels/smooth.h"
 #include "kernels/staircase.h"
 #include "kernels/untangle.h"
 
@@ -24,7 +25,7 @@ static double clearance_of(const void *ctx, const double x[3]) {
 int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
                       const mx_surface_index *S, mx_mesh *M,
                       const mx_interfaces *I, double close_ratio, double staircase_q,
-                      mx_boundary_stats *stats, uint8_t **states_out) {
+                      int smooth_rounds, mx_boundary_stats *stats, uint8_t **states_out) {
   memset(stats, 0, sizeof *stats);
   uint8_t *states = mx_alloc(M->nnodes + 1);
   if (!states) return MX_ENOMEM;
@@ -80,11 +81,20 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
   } else if (!st) {
     st = mx_untangle(M, states, S, staircase_q, 20, &stats->smoothed);
   }
+  t = mx_wtime();
+  mx_mem_mark("b.untangle");
+  stats->t_smooth = t - t1;
+  /* the smoothing: every neighbourhood's worst element raised, never
+   * lowered; not with interfaces (their pieces' nodes would need the
+   * untangling's region tests) */
+  if (!st && !piece) { /* (0 rounds: only the figures) */
+    const mx_smooth_opts so = {smooth_rounds, MX_SMOOTH_TARGET, NULL};
+    st = mx_smooth(M, states, S, &so, &stats->smoothing);
+    mx_mem_mark("b.smooth");
+    t = mx_wtime();
+  }
   mx_free(piece);
   mx_free(movable);
-  t = mx_wtime();
-  mx_mem_mark("b.smooth");
-  stats->t_smooth = t - t1;
   if (!st && staircase_q < 1.0) st = mx_staircase(M, &opt, staircase_q, &stats->sp);
   stats->t_staircase = mx_wtime() - t;
   mx_optional_free(&opt);

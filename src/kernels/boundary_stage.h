@@ -8,6 +8,7 @@
 
 #include "kernels/boundary.h"
 #include "kernels/interfaces.h"
+#include "kernels/smooth.h"
 #include "kernels/surface_patterns.h"
 
 typedef struct {
@@ -17,7 +18,8 @@ typedef struct {
   mx_surface_stats sp;   /* surface patterns and staircase */
   size_t shrunk;         /* outside nodes moved onto the surface (line 13) */
   size_t inverted;       /* elements with J_ENS < 1e-6 right after the shrink */
-  size_t smoothed;       /* node moves by the untangling and smoothing */
+  size_t smoothed;       /* node moves by the untangling */
+  mx_smooth_stats smoothing; /* the smoothing after it (kernels/smooth.h) */
   mx_interface_stats ifs; /* the interfaces between materials */
   double t_states, t_close, t_patterns, t_shrink, t_interfaces, t_smooth, t_staircase;
 } mx_boundary_stats;
@@ -34,11 +36,12 @@ typedef struct {
  * target of the untangling/smoothing step. M is edited in place.
  * I (NULL: none): the interfaces between nested materials, meshed after
  * the outer boundary's shrink and before the untangling
- * (kernels/interfaces.h). */
+ * (kernels/interfaces.h). smooth_rounds: rounds of the smoothing after
+ * the untangling (kernels/smooth.h), 0 none; not run with interfaces. */
 #define MX_CLOSE_RATIO 0.5
 int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
                       const mx_surface_index *S, mx_mesh *M,
                       const mx_interfaces *I, double close_ratio, double staircase_q,
-                      mx_boundary_stats *stats, uint8_t **states_out);
+                      int smooth_rounds, mx_boundary_stats *stats, uint8_t **states_out);
 
 #endif

@@ -6,64 +6,16 @@
 
 #include "base/common.h"
 #include "kernels/boundary.h"
-#include "kernels/colouring.h"
 #include "kernels/mesh_edit.h"
+#include "kernels/node_work.h"
 #include "geom/quality.h"
 #include "soa/mesh.h"
-#include "base/scan.h"
 
-
-static double elem_jens(const mx_mesh *M, uint32_t c) {
-  double x[8][3];
-  const int nv = mx_cell_nodes[M->type[c]];
-  for (int k = 0; k < nv; k++) memcpy(x[k], M->xyz + 3 * (size_t)M->conn[8 * (size_t)c + k], sizeof x[k]);
-  return mx_jens(M->type[c], x);
-}
-
-/* 1 when node v lies on a face used by one element only: the mesh boundary.
- * Every element sharing a face through v is incident to v, so the incident
- * list [e0, e1) of `inc` is enough; a face counts as shared when another
- * incident element has all its nodes (in a conforming mesh without
- * overlaps, that is the same face). An inside node can lie on the boundary
- * (a lattice node exactly on a flat part of the surface); it must stay
- * there like a surface node. */
-static int on_mesh_boundary(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1,
-                            uint32_t v) {
-  for (size_t e = e0; e < e1; e++) {
-    const uint32_t c = inc[e];
-    const int t = M->type[c];
-    const uint32_t *row = M->conn + 8 * (size_t)c;
-    for (int f = 0; f < mx_cell_nfaces[t]; f++) {
-      const int8_t *fv = mx_cell_faces[t][f];
-      const int n = fv[3] < 0 ? 3 : 4;
-      int has = 0;
-      for (int i = 0; i < n; i++) has |= row[fv[i]] == v;
-      if (!has) continue;
-      int shared = 0;
-      for (size_t g = e0; g < e1 && !shared; g++) {
-        const uint32_t d = inc[g];
-        if (d == c) continue;
-        const uint32_t *rd = M->conn + 8 * (size_t)d;
-        const int nd = mx_cell_nodes[M->type[d]];
-        int all = 1;
-        for (int i = 0; i < n && all; i++) {
-          const uint32_t w = row[fv[i]];
-          int in = 0;
-          for (int j = 0; j < nd; j++) in |= rd[j] == w;
-          all = in;
-        }
-        shared = all;
-      }
-      if (!shared) return 1;
-    }
-  }
-  return 0;
-}
 
 /* Worst J_ENS of the elements [e0, e1) of list `inc`. */
 static double worst_of(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1) {
   double w = INFINITY;
-  for (size_t i = e0; i < e1; i++) w = fmin(w, elem_jens(M, inc[i]));
+  for (size_t i = e0; i < e1; i++) w = fmin(w, mx_cell_jens(M, inc[i]));
   return w;
 }
 
@@ -73,11 +25,11 @@ static double worst_of(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t 
  * of a trial is often the next trial's). */
 static double worst_above(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1,
                           double floor, size_t *first) {
-  double w = elem_jens(M, inc[*first]);
+  double w = mx_cell_jens(M, inc[*first]);
   if (w <= floor) return w;
   for (size_t i = e0; i < e1; i++) {
     if (i == *first) continue;
-    w = fmin(w, elem_jens(M, inc[i]));
+    w = fmin(w, mx_cell_jens(M, inc[i]));
     if (w <= floor) {
       *first = i;
       return w;
@@ -166,7 +118,7 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
   memcpy(x, bx, sizeof bx);
   if (!(best > w0)) return 0;
   for (size_t e = e0; e < e1; e++) {
-    M->jens[inc[e]] = (float)elem_jens(M, inc[e]);
+    M->jens[inc[e]] = (float)mx_cell_jens(M, inc[e]);
     const uint32_t *cv = M->conn + 8 * (size_t)inc[e];
     for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++)
       if (off[cv[k] + 1] > off[cv[k]]) /* in the work set */
@@ -204,58 +156,16 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
     mx_free(mark);
     return MX_OK;
   }
-  /* Incident elements of the marked nodes */
-  uint64_t *off;
-  uint32_t *inc;
-  if (mx_mesh_incidence(M, mark, &off, &inc)) {
+  mx_node_work W;
+  const int wst = mx_node_work_build(M, states, mark, 0, "untangling", &W);
+  if (wst) {
     mx_free(mark);
-    return MX_ENOMEM;
+    return wst;
   }
-  size_t nw = 0;
-#pragma omp parallel for schedule(static) reduction(+ : nw)
-  for (size_t v = 0; v < nn; v++) nw += mark[v];
-  uint32_t *work = mx_alloc((nw + 1) * sizeof *work);
-  if (!work) {
-    mx_free(inc); mx_free(off); mx_free(mark);
-    return MX_ENOMEM;
-  }
-  /* the work set in id order: counted per block, prefix-summed, filled */
-  {
-    enum { WB = 1 << 16 };
-    const size_t nb = (nn + WB - 1) / WB;
-    uint64_t *boff = mx_alloc((nb + 1) * sizeof *boff);
-    if (!boff) {
-      mx_free(inc); mx_free(work); mx_free(off); mx_free(mark);
-      return MX_ENOMEM;
-    }
-#pragma omp parallel for schedule(static)
-    for (size_t b = 0; b < nb; b++) {
-      uint64_t k = 0;
-      for (size_t v = b * WB; v < nn && v < (b + 1) * WB; v++) k += mark[v];
-      boff[b] = k;
-    }
-    mx_scan_u64(boff, nb);
-#pragma omp parallel for schedule(static)
-    for (size_t b = 0; b < nb; b++) {
-      uint64_t k = boff[b];
-      for (size_t v = b * WB; v < nn && v < (b + 1) * WB; v++)
-        if (mark[v]) work[k++] = (uint32_t)v;
-    }
-    mx_free(boff);
-  }
-  /* Which work nodes stay on the surface: the outside ones, and the inside
-   * ones on the mesh boundary (the topology does not change below). */
-  uint8_t *onsurf = mx_alloc(nw + 1);
-  if (!onsurf) {
-    mx_free(inc); mx_free(work); mx_free(off); mx_free(mark);
-    return MX_ENOMEM;
-  }
-#pragma omp parallel for schedule(dynamic, 1024)
-  for (size_t i = 0; i < nw; i++) {
-    const uint32_t v = work[i];
-    onsurf[i] = (uint8_t)(states[v] != MX_NODE_INSIDE ||
-                          on_mesh_boundary(M, inc, off[v], off[v + 1], v));
-  }
+  const size_t nw = W.nw;
+  const uint64_t *off = W.off;
+  const uint32_t *inc = W.inc, *work = W.work, *byc = W.byc;
+  const uint8_t *onsurf = W.onsurf;
   /* With regions: where each free work node starts, and its clearance (the
    * distance within which no shell lies) */
   double *x_init = NULL, *clear = NULL;
@@ -263,8 +173,9 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
     x_init = mx_alloc((3 * nw + 3) * sizeof *x_init);
     clear = mx_alloc((nw + 1) * sizeof *clear);
     if (!x_init || !clear) {
-      mx_free(x_init); mx_free(clear); mx_free(onsurf);
-      mx_free(inc); mx_free(work); mx_free(off); mx_free(mark);
+      mx_free(x_init); mx_free(clear);
+      mx_node_work_free(&W);
+      mx_free(mark);
       return MX_ENOMEM;
     }
 #pragma omp parallel for schedule(dynamic, 256)
@@ -274,50 +185,17 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
       clear[i] = onsurf[i] || !o->clearance_of ? 0.0 : o->clearance_of(o->region_ctx, x);
     }
   }
-  /* Colours (kernels of the sweep run one colour at a time, its nodes in
-   * parallel: no two of them share an element), and the work nodes grouped
-   * by colour, in id order within one. */
-  uint32_t *widx = mx_alloc((nn + 1) * sizeof *widx);
-  int16_t *colour = mx_alloc((nw + 1) * sizeof *colour);
-  uint32_t *byc = mx_alloc((nw + 1) * sizeof *byc);
-  size_t cstart[MX_MAX_COLOURS + 1];
-  int ncol = -2; /* -2: out of memory; -1: too many colours */
-  if (widx && colour && byc) {
-#pragma omp parallel for schedule(static)
-    for (size_t v = 0; v < nn; v++) widx[v] = UINT32_MAX;
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < nw; i++) widx[work[i]] = (uint32_t)i;
-    ncol = mx_colour_nodes(M, inc, off, work, nw, widx, colour);
-  }
-  mx_free(widx);
-  if (ncol < 0) {
-    mx_free(x_init); mx_free(clear);
-    mx_free(colour); mx_free(byc); mx_free(onsurf);
-    mx_free(inc); mx_free(work); mx_free(off); mx_free(mark);
-    if (ncol == -2) return MX_ENOMEM;
-    mx_error(NULL, 0, "more than %d colours in the untangling", MX_MAX_COLOURS);
-    return MX_EINPUT;
-  }
-  memset(cstart, 0, sizeof cstart);
-  for (size_t i = 0; i < nw; i++) cstart[colour[i] + 1]++;
-  for (int c = 0; c < ncol; c++) cstart[c + 1] += cstart[c];
-  {
-    size_t fill[MX_MAX_COLOURS];
-    memcpy(fill, cstart, sizeof fill);
-    for (size_t i = 0; i < nw; i++) byc[fill[colour[i]]++] = (uint32_t)i;
-  }
-  mx_free(colour);
   /* mark[v] now means "v is in the work set and its neighbourhood changed
    * since it was last looked at". */
   size_t nm = 0;
   for (int s = 0; s < sweeps; s++) {
     size_t changed = 0;
-    for (int c = 0; c < ncol; c++) {
+    for (int c = 0; c < W.ncol; c++) {
       /* a small colour on one thread: no fork and barrier for a few nodes
        * (the same result: its nodes do not interact) */
 #pragma omp parallel for schedule(dynamic, 32) reduction(+ : changed) \
-    if (cstart[c + 1] - cstart[c] >= 64)
-      for (size_t k = cstart[c]; k < cstart[c + 1]; k++) {
+    if (W.cstart[c + 1] - W.cstart[c] >= 64)
+      for (size_t k = W.cstart[c]; k < W.cstart[c + 1]; k++) {
         const size_t i = byc[k];
         const uint32_t v = work[i];
         if (!__atomic_load_n(&mark[v], __ATOMIC_RELAXED)) continue;
@@ -329,13 +207,9 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
     nm += changed;
     if (!changed) break;
   }
-  mx_free(byc);
-  mx_free(onsurf);
   mx_free(x_init);
   mx_free(clear);
-  mx_free(inc);
-  mx_free(off);
-  mx_free(work);
+  mx_node_work_free(&W);
   mx_free(mark);
   *moved = nm;
   mx_mesh_summarize(M);

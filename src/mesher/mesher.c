@@ -75,6 +75,7 @@ void mx_params_default(mx_params *p) {
   p->stage = MX_STAGE_FULL;
   p->balance = MX_BALANCE_EDGES;
   p->repair_rounds = 10;
+  p->smooth_rounds = MX_SMOOTH_ROUNDS;
 }
 
 mx_mesher *mx_mesher_new(const mx_params *p) {
@@ -92,6 +93,7 @@ mx_mesher *mx_mesher_new(const mx_params *p) {
   if (m->p.close_ratio <= 0) m->p.close_ratio = MX_CLOSE_RATIO;
   if (m->p.staircase_quality <= 0) m->p.staircase_quality = 0.2;
   if (m->p.repair_rounds < 0) m->p.repair_rounds = 0;
+  if (m->p.smooth_rounds < 0) m->p.smooth_rounds = 0;
   m->mesh_stage = -1;
   m->feature_angle = -1.0;
   m->feature_region = -1;

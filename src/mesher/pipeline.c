@@ -114,7 +114,7 @@ int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh
   }
   MX_CHECK(mx_boundary_stage(&m->B.tree, leaves, &m->SI, M,
                              m->IF.npasses ? &m->IF : NULL, m->p.close_ratio,
-                             m->p.staircase_quality, bs, states));
+                             m->p.staircase_quality, m->p.smooth_rounds, bs, states));
   MX_CHECK(place_features(m, M, *states));
   return mx_mesh_sort_by_leaf(M, n);
 }

@@ -152,11 +152,15 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              "\"inverted_by_shrink\": %zu, \"repaired\": %zu, \"repair_rounds\": %d, "
              "\"seconds\": {\"states\": %.6f, \"close\": %.6f, \"patterns\": %.6f, "
              "\"shrink\": %.6f, \"smooth\": %.6f, \"staircase\": %.6f}, "
-             "\"smoothed\": %zu}, ",
+             "\"smoothed\": %zu, \"smoothing\": {\"rounds\": %d, \"work\": %zu, "
+             "\"moved\": %zu, \"moves\": %zu, \"jens_min_before\": %.6f, "
+             "\"jens_min_after\": %.6f, \"seconds\": %.6f}}, ",
              b->located, b->moved_close, b->removed, b->sp.patterned, b->sp.kept,
              b->sp.optional, b->sp.centres, b->shrunk, b->sp.restored, b->inverted, s->repaired,
              s->repair_rounds, b->t_states, b->t_close, b->t_patterns, b->t_shrink,
-             b->t_smooth, b->t_staircase, b->smoothed);
+             b->t_smooth, b->t_staircase, b->smoothed, b->smoothing.rounds, b->smoothing.work,
+             b->smoothing.moved, b->smoothing.moves, b->smoothing.jens_min_before,
+             b->smoothing.jens_min_after, b->smoothing.seconds);
   }
   char mat[1024] = "";
   if (s->nmaterials) {
@@ -390,6 +394,11 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
            " %zu restored (staircase)\n",
            b->located, b->moved_close, b->shrunk, b->removed, b->sp.patterned,
            b->sp.kept, b->sp.centres, b->inverted, b->smoothed, b->sp.restored);
+    if (b->smoothing.rounds)
+      printf("  smoothing    %zu nodes moved (%zu moves, %d round(s)); J_ENS min %.4f -> %.4f, "
+             "%.3f s\n",
+             b->smoothing.moved, b->smoothing.moves, b->smoothing.rounds,
+             b->smoothing.jens_min_before, b->smoothing.jens_min_after, b->smoothing.seconds);
     if (s->repair_rounds)
       printf("               %zu invalid element(s) and %zu element(s) at contacts repaired "
              "by %d refinement round(s)\n",

@@ -1,0 +1,168 @@
+/* The node-moving passes' shared work set (kernels/node_work.h). */
+#include "kernels/node_work.h"
+
+#include <string.h>
+
+#include "base/common.h"
+#include "base/scan.h"
+#include "geom/quality.h"
+#include "kernels/boundary.h"
+#include "kernels/mesh_edit.h"
+
+double mx_cell_jens(const mx_mesh *M, uint32_t c) {
+  double x[8][3];
+  const int nv = mx_cell_nodes[M->type[c]];
+  for (int k = 0; k < nv; k++)
+    memcpy(x[k], M->xyz + 3 * (size_t)M->conn[8 * (size_t)c + k], sizeof x[k]);
+  return mx_jens(M->type[c], x);
+}
+
+/* Every element sharing a face through v is incident to v, so the incident
+ * list [e0, e1) of `inc` is enough; a face counts as shared when another
+ * incident element has all its nodes (in a conforming mesh without
+ * overlaps, that is the same face). An inside node can lie on the boundary
+ * (a lattice node exactly on a flat part of the surface); it must stay
+ * there like a surface node. */
+int mx_on_mesh_boundary(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1,
+                        uint32_t v) {
+  for (size_t e = e0; e < e1; e++) {
+    const uint32_t c = inc[e];
+    const int t = M->type[c];
+    const uint32_t *row = M->conn + 8 * (size_t)c;
+    for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+      const int8_t *fv = mx_cell_faces[t][f];
+      const int n = fv[3] < 0 ? 3 : 4;
+      int has = 0;
+      for (int i = 0; i < n; i++) has |= row[fv[i]] == v;
+      if (!has) continue;
+      int shared = 0;
+      for (size_t g = e0; g < e1 && !shared; g++) {
+        const uint32_t d = inc[g];
+        if (d == c) continue;
+        const uint32_t *rd = M->conn + 8 * (size_t)d;
+        const int nd = mx_cell_nodes[M->type[d]];
+        int all = 1;
+        for (int i = 0; i < n && all; i++) {
+          const uint32_t w = row[fv[i]];
+          int in = 0;
+          for (int j = 0; j < nd; j++) in |= rd[j] == w;
+          all = in;
+        }
+        shared = all;
+      }
+      if (!shared) return 1;
+    }
+  }
+  return 0;
+}
+
+void mx_node_work_free(mx_node_work *w) {
+  mx_free(w->off);
+  mx_free(w->inc);
+  mx_free(w->work);
+  mx_free(w->onsurf);
+  mx_free(w->byc);
+  memset(w, 0, sizeof *w);
+}
+
+/* The marked nodes in id order: counted per block, prefix-summed, filled. */
+static int marked_list(const uint8_t *mark, size_t nn, uint32_t **list, size_t *n) {
+  size_t nw = 0;
+#pragma omp parallel for schedule(static) reduction(+ : nw)
+  for (size_t v = 0; v < nn; v++) nw += mark[v] != 0;
+  uint32_t *work = mx_alloc((nw + 1) * sizeof *work);
+  enum { WB = 1 << 16 };
+  const size_t nb = (nn + WB - 1) / WB;
+  uint64_t *boff = mx_alloc((nb + 1) * sizeof *boff);
+  if (!work || !boff) {
+    mx_free(work);
+    mx_free(boff);
+    return MX_ENOMEM;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t b = 0; b < nb; b++) {
+    uint64_t k = 0;
+    for (size_t v = b * WB; v < nn && v < (b + 1) * WB; v++) k += mark[v] != 0;
+    boff[b] = k;
+  }
+  mx_scan_u64(boff, nb);
+#pragma omp parallel for schedule(static)
+  for (size_t b = 0; b < nb; b++) {
+    uint64_t k = boff[b];
+    for (size_t v = b * WB; v < nn && v < (b + 1) * WB; v++)
+      if (mark[v]) work[k++] = (uint32_t)v;
+  }
+  mx_free(boff);
+  *list = work;
+  *n = nw;
+  return MX_OK;
+}
+
+int mx_node_work_build(const mx_mesh *M, const uint8_t *states, const uint8_t *mark, int ring,
+                       const char *what, mx_node_work *w) {
+  const size_t nn = M->nnodes, nc = M->ncells;
+  memset(w, 0, sizeof *w);
+  int st = MX_OK;
+  if (ring) { /* incidence for the work nodes and the other nodes of their elements */
+    uint8_t *im = mx_calloc(nn + 1);
+    if (!im) return MX_ENOMEM;
+#pragma omp parallel for schedule(static)
+    for (size_t c = 0; c < nc; c++) {
+      const int nv = mx_cell_nodes[M->type[c]];
+      const uint32_t *row = M->conn + 8 * c;
+      int any = 0;
+      for (int k = 0; k < nv; k++) any |= mark[row[k]] != 0;
+      if (any)
+        for (int k = 0; k < nv; k++) __atomic_store_n(&im[row[k]], 1, __ATOMIC_RELAXED);
+    }
+    st = mx_mesh_incidence(M, im, &w->off, &w->inc);
+    mx_free(im);
+  } else {
+    st = mx_mesh_incidence(M, mark, &w->off, &w->inc);
+  }
+  if (!st) st = marked_list(mark, nn, &w->work, &w->nw);
+  const size_t nw = w->nw;
+  if (!st && !(w->onsurf = mx_alloc(nw + 1))) st = MX_ENOMEM;
+  if (st) {
+    mx_node_work_free(w);
+    return st;
+  }
+  /* Which work nodes stay on the surface: the outside ones, and the inside
+   * ones on the mesh boundary (the topology does not change below). */
+#pragma omp parallel for schedule(dynamic, 1024)
+  for (size_t i = 0; i < nw; i++) {
+    const uint32_t v = w->work[i];
+    w->onsurf[i] = (uint8_t)(states[v] != MX_NODE_INSIDE ||
+                             mx_on_mesh_boundary(M, w->inc, w->off[v], w->off[v + 1], v));
+  }
+  /* Colours, and the work nodes grouped by colour, in id order within one. */
+  uint32_t *widx = mx_alloc((nn + 1) * sizeof *widx);
+  int16_t *colour = mx_alloc((nw + 1) * sizeof *colour);
+  w->byc = mx_alloc((nw + 1) * sizeof *w->byc);
+  int ncol = -2; /* -2: out of memory; -1: too many colours */
+  if (widx && colour && w->byc) {
+#pragma omp parallel for schedule(static)
+    for (size_t v = 0; v < nn; v++) widx[v] = UINT32_MAX;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < nw; i++) widx[w->work[i]] = (uint32_t)i;
+    ncol = mx_colour_nodes(M, w->inc, w->off, w->work, nw, widx, colour);
+  }
+  mx_free(widx);
+  if (ncol < 0) {
+    mx_free(colour);
+    mx_node_work_free(w);
+    if (ncol == -2) return MX_ENOMEM;
+    mx_error(NULL, 0, "more than %d colours in the %s", MX_MAX_COLOURS, what);
+    return MX_EINPUT;
+  }
+  w->ncol = ncol;
+  for (size_t i = 0; i < nw; i++) w->cstart[colour[i] + 1]++;
+  for (int c = 0; c < ncol; c++) w->cstart[c + 1] += w->cstart[c];
+  {
+    size_t fill[MX_MAX_COLOURS];
+    memcpy(fill, w->cstart, sizeof fill);
+    for (size_t i = 0; i < nw; i++) w->byc[fill[colour[i]]++] = (uint32_t)i;
+  }
+  mx_free(colour);
+  return MX_OK;
+}
