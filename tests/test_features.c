@@ -13,7 +13,7 @@
 #include <string.h>
 
 #include "check.h"
-#include "geom/features.h"
+#include "geom/feature_walk.h"
 #include "soa/trisoup.h"
 #include "test_shapes.h"
 

@@ -14,7 +14,7 @@
 
 #include "check.h"
 #include "base/common.h"
-#include "geom/features.h"
+#include "geom/feature_walk.h"
 #include "io/read_polylines.h"
 
 static char tmpdir[64];

@@ -1,7 +1,7 @@
-/* Feature lines from a graph of feature edges (src/geom/feature_walk.c):
+/* Feature lines (src/geom/feature_walk.c): the type mx_feature_lines, and
  * the walk that turns edges between vertices, some of them corners, into
- * the lines of geom/features.h (mx_feature_lines), for the polylines reader
- * (io/read_polylines.c) and for lines found on a surface.
+ * such lines, for the polylines reader (io/read_polylines.c) and for the
+ * ridges found on a surface (mx_feature_lines_of).
  *
  * A vertex is a corner when flagged so or when its degree (edges at it) is
  * not 2: the ends of open chains and the junctions of three edges or more
@@ -20,6 +20,26 @@
 
 #include "geom/features.h"
 
+/* The features as lines, for placing them in a mesh and measuring how far
+ * the mesh is from them: each line an ordered polyline from a corner to a
+ * corner (its first and last points are corners), or a loop with no corner
+ * on it (its last point joins its first; the first point is not repeated).
+ * Found from a surface (mx_feature_lines_of) or read from a polylines file
+ * (io/read_polylines.h). */
+typedef struct {
+  size_t nlines;
+  size_t *first;  /* nlines + 1: line i is points first[i] .. first[i + 1] - 1 */
+  double *xyz;    /* 3 per point */
+  uint8_t *loop;  /* per line: 1 for a loop */
+  size_t ncorners;
+  double *corner; /* 3 per corner */
+} mx_feature_lines;
+
+/* The lines of F (found on s): each ridge chain walked from a corner, or
+ * from its least vertex when it is a loop. MX_OK, MX_ENOMEM. */
+int mx_feature_lines_of(const mx_trisoup *s, const mx_features *F, mx_feature_lines *L);
+void mx_feature_lines_free(mx_feature_lines *L);
+
 /* Vertex v at (x[stride v], y[stride v], z[stride v]) for v < nv; edge e
  * from edge[2 e] to edge[2 e + 1] (both < nv, different); corner: nv flags
  * (1 a corner) or NULL (only the degree decides). Fills *L (zeroed first;
@@ -30,9 +50,7 @@ int mx_feature_lines_walk(const double *x, const double *y, const double *z, siz
                           size_t nv, const uint32_t *edge, size_t ne, const uint8_t *corner,
                           mx_feature_lines *L);
 
-/* Frees what mx_feature_lines_walk allocated (the same as
- * mx_feature_lines_free of geom/features.h, for code that must not depend
- * on which file defines that). */
+/* Frees what mx_feature_lines_walk allocated (= mx_feature_lines_free). */
 void mx_feature_lines_walk_free(mx_feature_lines *L);
 
 #endif

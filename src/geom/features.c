@@ -11,7 +11,6 @@
 #include "base/scan.h"
 #include "base/union_find.h"
 #include "geom/features.h"
-#include "geom/feature_walk.h"
 
 void mx_features_free(mx_features *F) {
   mx_free(F->edge);
@@ -299,16 +298,5 @@ done:
   mx_free(e);
   mx_free(tup);
   if (st) mx_features_free(F);
-  return st;
-}
-
-void mx_feature_lines_free(mx_feature_lines *L) { mx_feature_lines_walk_free(L); }
-
-int mx_feature_lines_of(const mx_trisoup *s, const mx_features *F, mx_feature_lines *L) {
-  uint8_t *corner = mx_calloc(s->nv + 1);
-  if (!corner) return MX_ENOMEM;
-  for (size_t c = 0; c < F->ncorners; c++) corner[F->corner[c]] = 1;
-  const int st = mx_feature_lines_walk(s->x, s->y, s->z, 1, s->nv, F->edge, F->nedges, corner, L);
-  mx_free(corner);
   return st;
 }

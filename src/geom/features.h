@@ -42,24 +42,5 @@ typedef struct {
 int mx_features_detect(const mx_trisoup *s, size_t nt, double angle_deg, mx_features *F);
 void mx_features_free(mx_features *F);
 
-/* The features as lines, for placing them in a mesh and measuring how far
- * the mesh is from them: each line an ordered polyline from a corner to a
- * corner (its first and last points are corners), or a loop with no corner
- * on it (its last point joins its first; the first point is not repeated).
- * Found from a surface (mx_feature_lines_of) or read from a polylines file
- * (io/read_polylines.h). */
-typedef struct {
-  size_t nlines;
-  size_t *first;  /* nlines + 1: line i is points first[i] .. first[i + 1] - 1 */
-  double *xyz;    /* 3 per point */
-  uint8_t *loop;  /* per line: 1 for a loop */
-  size_t ncorners;
-  double *corner; /* 3 per corner */
-} mx_feature_lines;
-
-/* The lines of F (found on s): each ridge chain walked from a corner, or
- * from its least vertex when it is a loop. MX_OK, MX_ENOMEM. */
-int mx_feature_lines_of(const mx_trisoup *s, const mx_features *F, mx_feature_lines *L);
-void mx_feature_lines_free(mx_feature_lines *L);
 
 #endif

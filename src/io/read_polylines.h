@@ -32,7 +32,7 @@
 #ifndef MX_READ_POLYLINES_H
 #define MX_READ_POLYLINES_H
 
-#include "geom/features.h"
+#include "geom/feature_walk.h"
 
 /* MX_OK, MX_EINPUT, MX_ENOMEM; free *L with mx_feature_lines_free (or
  * mx_feature_lines_walk_free of geom/feature_walk.h). */

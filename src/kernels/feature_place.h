@@ -28,7 +28,7 @@
 #include <stdint.h>
 
 #include "geom/distance.h"
-#include "geom/features.h"
+#include "geom/feature_walk.h"
 #include "soa/mesh.h"
 #include "soa/trisoup.h"
 

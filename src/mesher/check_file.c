@@ -32,7 +32,7 @@
 #include <strings.h>
 
 #include "base/common.h"
-#include "geom/features.h"
+#include "geom/feature_walk.h"
 #include "geom/surface_defects.h"
 #include "io/pvtu.h"
 #include "io/read_mesh.h"

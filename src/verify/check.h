@@ -173,7 +173,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "geom/features.h"
+#include "geom/feature_walk.h"
 #include "soa/mesh_data.h"
 #include "soa/trisoup.h"
 
