@@ -68,6 +68,10 @@ static int setup(const mx_p4est_run_params *p, mx_mesher **out) {
   if (!m) return MX_ENOMEM; /* said by mx_alloc */
   *out = m;
   mx_mesher_set_message_handler(m, on_message, NULL);
+  /* the distributed path does not keep sharp features yet (issue 29): its
+   * octree and mesh, and the single-process octree it compares with, are
+   * those of --no-features */
+  MX_CHECK(mx_mesher_set_feature_angle(m, 0.0));
   return add_inputs(p, m);
 }
 
