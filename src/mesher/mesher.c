@@ -724,6 +724,34 @@ int mx_mesh_finish(mx_mesher *m) {
   return st;
 }
 
+/* The boundary nodes farther than 1e-6 of the input's diagonal from it
+ * (mixoct check --surface's rule), counted after the features were placed:
+ * a repair that meshes a patch again around moved feature nodes has left
+ * such nodes (linear_extrude of the OpenSCAD corpus at -s 5: 4). */
+static int features_off_surface(mx_mesher *m, size_t *off) {
+  const mx_mesh *M = &m->M;
+  int32_t *f = mx_alloc((M->nnodes + 1) * sizeof *f); /* the nodes of faces of one element */
+  if (!f) return MX_ENOMEM;
+  const mx_mesh_view v = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
+                          .type = M->type, .conn = M->conn};
+  const int st = mx_boundary_node_flags(&v, f);
+  if (st) {
+    mx_free(f);
+    return st;
+  }
+  double lo[3], hi[3];
+  mx_trisoup_bbox(&m->domain, lo, hi);
+  const double tol = 1e-6 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                 (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  size_t n = 0;
+#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : n)
+  for (size_t v = 0; v < m->M.nnodes; v++)
+    if (f[v] && mx_closest_point_within(&m->SI, m->M.xyz + 3 * v, 2.0 * tol, NULL) > tol) n++;
+  mx_free(f);
+  *off = n;
+  return MX_OK;
+}
+
 /* Mesh the current octree up to params.stage. */
 int mx_mesh_stages(mx_mesher *m) {
   MX_CHECK(mx_materials_allowed(m, NULL));
@@ -752,7 +780,12 @@ int mx_mesh_stages(mx_mesher *m) {
     MX_CHECK(boundary_once(m));
     MX_CHECK(mx_repair(m));
   }
-  const int broken = m->M.invalid > 0 || m->rec->S.contacts.nodes > 0;
+  int broken = m->M.invalid > 0 || m->rec->S.contacts.nodes > 0;
+  if (!broken && m->rec->S.features_kept && m->p.stage == MX_STAGE_FULL) {
+    size_t off = 0;
+    MX_CHECK(features_off_surface(m, &off));
+    broken = off > 0;
+  }
   if (broken && m->rec->S.features_kept && !m->feature_file && m->feature_angle < 0.0) {
     /* the features found at the default angle left elements the repair
      * could not mend (the triple torus of CGAL's data at -s 6: 40 ridges
@@ -760,9 +793,10 @@ int mx_mesh_stages(mx_mesher *m) {
      * as --no-features would make it */
     char inputs[MX_INPUTS_LABEL];
     mx_warning(mx_inputs_label(m, inputs, sizeof inputs), 0,
-               "keeping the %zu sharp ridge(s) found broke the mesh where the repair could not "
-               "mend it; meshed again without features (--no-features; --feature-angle DEG to "
-               "insist)", m->rec->S.feature_ridges);
+               "keeping the %zu sharp ridge(s) found broke the mesh (invalid elements, contacts "
+               "or boundary nodes off the surface left after the repair); meshed again without "
+               "features (--no-features; --feature-angle DEG to insist)",
+               m->rec->S.feature_ridges);
     const mx_summary keep = m->rec->S; /* the times go on, the counts start again */
     memset(&m->rec->S, 0, sizeof m->rec->S);
     m->rec->S.ph = keep.ph;
