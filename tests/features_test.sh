@@ -18,6 +18,8 @@
 #    distances reported (the placement misses some of their ridges today:
 #    measured, not asserted);
 #  - the summary's distances (--json) agree with check's (9 digits);
+#  - --smooth 1 runs after the features (inside nodes only): the same
+#    distances and volume, a worst element no worse;
 #  - one and two threads write the same file;
 #  - --feature-level refines where the features are (more elements than
 #    without, fewer than the same level everywhere on the surface);
@@ -104,6 +106,17 @@ if lt "$rd" "$("$PY" -c "import math; print((1 - math.cos(4 * math.pi / 48)) / (
   ok "cylinder -s 5: rims within a chord's sagitta ($rd; $rd0 without features)"
 else
   ko "cylinder -s 5: rim distance $rd ($rd0 without)"
+fi
+
+# --smooth 1 after the features: the inside nodes only, so the distances and
+# the volume stay (to rounding: the inside moves change the sum's order),
+# and the worst element does not get worse
+read -r e d rd cd ve jm agree <<<"$(mesh "$T/tet.off" 5)"
+read -r e1 d1 rd1 cd1 ve1 jm1 agree1 <<<"$(mesh "$T/tet.off" 5 --smooth 1)"
+if [ "$e1" = 0 ] && [ "$d1" = 0 ] && [ "$rd1" = "$rd" ] && [ "$cd1" = "$cd" ] && lt "$("$PY" -c "print(abs($ve1 - ($ve)))")" 1e-12 && lt "$jm" "$jm1"; then
+  ok "tet -s 5 --smooth 1: J_ENS min $jm -> $jm1, the same feature distances and volume"
+else
+  ko "tet -s 5 --smooth 1: exit $e1 defects $d1 ridge $rd/$rd1 corner $cd/$cd1 volume $ve/$ve1 J_ENS $jm/$jm1"
 fi
 
 # one and two threads

@@ -3,6 +3,7 @@
 
 #include <string.h>
 
+#include "kernels/smooth.h"
 #include "kernels/untangle.h"
 
 #include "base/common.h"
@@ -64,9 +65,14 @@ int mx_pipeline_transition(mx_mesher *m, const uint32_t *leaves, size_t n, int r
 
 /* The features placed on the boundary (kernels/feature_place.h), then the
  * elements they spoilt untangled with the feature nodes fixed; what stays
- * invalid gives its features up (mx_feature_give_up). */
-static int place_features(mx_mesher *m, mx_mesh *M, const uint8_t *states) {
-  if (!m->have_features || !states || m->p.materials) return MX_OK;
+ * invalid gives its features up (mx_feature_give_up); then the smoothing
+ * (--smooth N) of the inside nodes. */
+static int features_active(const mx_mesher *m) {
+  return m->have_features && !m->p.materials;
+}
+
+static int place_features(mx_mesher *m, mx_mesh *M, const uint8_t *states, mx_boundary_stats *bs) {
+  if (!features_active(m) || !states) return MX_OK;
   const mx_features *F = &m->feat;
   /* lines from a file: no patches (theirs are the ridges found) */
   const mx_feature_input in = {&m->feat_lines, &m->soup, m->nt_domain,
@@ -95,9 +101,17 @@ static int place_features(mx_mesher *m, mx_mesh *M, const uint8_t *states) {
     size_t moved = 0;
     st = mx_untangle_with(M, states, &m->SI, &o, &moved);
     if (!st) mx_mesh_summarize(M);
+    for (size_t v = 0; v < M->nnodes; v++) fixed[v] = !fixed[v]; /* the feature nodes again */
   }
   if (!st) st = mx_feature_give_up(M, before, q_before, MX_FEATURE_FLOOR, &fs->given_up);
   fs->seconds += mx_wtime() - t;
+  if (!st && m->p.smooth_rounds > 0) {
+    /* the smoothing, after the features: the inside nodes only, so the
+     * boundary stays as placed (faces on their side of every ridge) */
+    for (size_t v = 0; v < M->nnodes; v++) fixed[v] = !fixed[v] && states[v] != MX_NODE_OUTSIDE;
+    const mx_smooth_opts so = {m->p.smooth_rounds, MX_SMOOTH_TARGET, fixed};
+    st = mx_smooth(M, states, &m->SI, &so, &bs->smoothing);
+  }
   m->rec->S.features_kept = !st;
   mx_free(fixed);
   mx_free(before);
@@ -114,7 +128,8 @@ int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh
   }
   MX_CHECK(mx_boundary_stage(&m->B.tree, leaves, &m->SI, M,
                              m->IF.npasses ? &m->IF : NULL, m->p.close_ratio,
-                             m->p.staircase_quality, m->p.smooth_rounds, bs, states));
-  MX_CHECK(place_features(m, M, *states));
+                             m->p.staircase_quality,
+                             features_active(m) ? 0 : m->p.smooth_rounds, bs, states));
+  MX_CHECK(place_features(m, M, *states, bs)); /* and the smoothing after them */
   return mx_mesh_sort_by_leaf(M, n);
 }
