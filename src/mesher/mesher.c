@@ -648,6 +648,15 @@ static int volume_check(mx_mesher *m) {
   return mx_volume_verdict(m, mx_mesh_volume(&m->M), m->M.ncells);
 }
 
+/* The diagonal of the domain input's bounding box: what the feature
+ * distances are measured against (as mixoct check --surface does). */
+static double domain_diagonal(const mx_mesher *m) {
+  double lo[3], hi[3];
+  mx_trisoup_bbox(&m->domain, lo, hi);
+  return sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+              (hi[2] - lo[2]) * (hi[2] - lo[2]));
+}
+
 /* The distances between the features and the mesh made (verify/check.h:
  * ridge samples to the nearest boundary edge, corners to the nearest
  * boundary node), relative to the input's bounding box diagonal. */
@@ -665,10 +674,7 @@ static int feature_distances(mx_mesher *m) {
   d.conn = M->conn;
   mx_check_feature_dist fd;
   MX_CHECK(mx_check_features_mesh(&d, &m->feat_lines, &fd));
-  double lo[3], hi[3];
-  mx_trisoup_bbox(&m->domain, lo, hi);
-  const double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                           (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  const double diag = domain_diagonal(m);
   S->feature_measured = 1;
   S->feature_ridge_dist = fd.ridge_dist / diag;
   S->feature_corner_dist = fd.corner_dist / diag;
@@ -739,10 +745,7 @@ static int features_off_surface(mx_mesher *m, size_t *off) {
     mx_free(f);
     return st;
   }
-  double lo[3], hi[3];
-  mx_trisoup_bbox(&m->domain, lo, hi);
-  const double tol = 1e-6 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                                 (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  const double tol = 1e-6 * domain_diagonal(m);
   size_t n = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : n)
   for (size_t v = 0; v < m->M.nnodes; v++)

@@ -79,15 +79,11 @@ static int place_features(mx_mesher *m, mx_mesh *M, const uint8_t *states, mx_bo
                                m->feature_file ? NULL : F->patch, F->npatches};
   uint8_t *fixed = mx_alloc(M->nnodes + 1);
   double *before = mx_alloc((3 * M->nnodes + 1) * sizeof *before);
-  if (!fixed || !before) {
-    mx_free(fixed);
-    mx_free(before);
-    return MX_ENOMEM;
-  }
   float *q_before = mx_alloc((M->ncells + 1) * sizeof *q_before);
-  if (!q_before) {
+  if (!fixed || !before || !q_before) {
     mx_free(fixed);
     mx_free(before);
+    mx_free(q_before);
     return MX_ENOMEM;
   }
   memcpy(before, M->xyz, 3 * M->nnodes * sizeof *before);
