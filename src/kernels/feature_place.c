@@ -11,6 +11,7 @@
 #include "geom/quality.h"
 #include "io/boundary_faces.h"
 #include "kernels/boundary.h"
+#include "kernels/cell_split.h"
 #include "kernels/mesh_edit.h"
 
 /* The boundary as a graph, with a grid of its nodes. */
@@ -25,7 +26,13 @@ typedef struct {
   size_t ne;             /* distinct edges */
   uint32_t *estart;      /* ne + 1: edge e's pairs */
   uint8_t *eline;        /* per edge: on a placed line */
-  uint32_t *aoff, *adj, *aedge; /* per node: neighbours and the edges to them */
+  uint8_t *qdiag;        /* per quadrilateral: 0, or 1 + the diagonal a line takes */
+  size_t nsplit;         /* quadrilaterals with a diagonal taken */
+  uint32_t *aoff, *adj, *aedge; /* per node: neighbours and the edges to them
+                                 * (edge ne + 2 q + d: diagonal d of quad q) */
+  uint32_t *lpair;       /* the placed lines' edges (node pairs), nlpair of them */
+  size_t nlpair, lcap;
+  int nomem;
   size_t nb;             /* boundary nodes, sorted by grid cell */
   uint64_t *bkey;
   uint32_t *bnode;
@@ -98,11 +105,16 @@ static int graph_build(graph *G) {
   size_t ne = 0;
   for (size_t i = 0; i < n; i++) ne += i == 0 || G->rkey[i] != G->rkey[i - 1];
   G->ne = ne;
+  const size_t nq = G->bf.nquad;
   G->estart = mx_alloc((ne + 1) * sizeof *G->estart);
   G->eline = mx_calloc(ne + 1);
-  G->adj = mx_alloc((2 * ne + 1) * sizeof *G->adj);
-  G->aedge = mx_alloc((2 * ne + 1) * sizeof *G->aedge);
-  if (!G->estart || !G->eline || !G->adj || !G->aedge) return MX_ENOMEM;
+  G->qdiag = mx_calloc(nq + 1);
+  G->adj = mx_alloc((2 * ne + 4 * nq + 1) * sizeof *G->adj);
+  G->aedge = mx_alloc((2 * ne + 4 * nq + 1) * sizeof *G->aedge);
+  if (!G->estart || !G->eline || !G->qdiag || !G->adj || !G->aedge) return MX_ENOMEM;
+  G->nsplit = 0;
+  for (size_t q = 0; q < nq; q++)
+    for (int i = 0; i < 4; i++) G->aoff[G->bf.quad[4 * q + i] + 1]++;
   ne = 0;
   double hsum = 0.0;
   for (size_t i = 0; i < n; i++)
@@ -125,6 +137,12 @@ static int graph_build(graph *G) {
     G->adj[fill[b]] = a;
     G->aedge[fill[b]++] = (uint32_t)e;
   }
+  for (size_t q = 0; q < nq; q++)
+    for (int i = 0; i < 4; i++) { /* diagonal i & 1 from node i to node i + 2 */
+      const uint32_t a = G->bf.quad[4 * q + i], b = G->bf.quad[4 * q + (i + 2) % 4];
+      G->adj[fill[a]] = b;
+      G->aedge[fill[a]++] = (uint32_t)(ne + 2 * q + (i & 1));
+    }
   for (size_t v = 0; v < M->nnodes; v++) G->loc[v] = UINT32_MAX;
   /* the grid: cells of the mean edge length over the boundary nodes' box */
   size_t nb = 0;
@@ -155,6 +173,8 @@ static void graph_free(graph *G) {
   mx_free(G->rface);
   mx_free(G->estart);
   mx_free(G->eline);
+  mx_free(G->qdiag);
+  mx_free(G->lpair);
   mx_free(G->aoff);
   mx_free(G->adj);
   mx_free(G->aedge);
@@ -204,6 +224,17 @@ static uint32_t nearest_free(const graph *G, const double *x) {
     if ((double)k * G->h > 1e3 * G->h * (double)(G->nb + 1)) break;
   }
   return c.node;
+}
+
+/* The edge from u to w (a diagonal only while its quadrilateral has none
+ * taken), or UINT32_MAX. */
+static uint32_t edge_between(const graph *G, uint32_t u, uint32_t w) {
+  for (uint32_t k = G->aoff[u]; k < G->aoff[u + 1]; k++)
+    if (G->adj[k] == w) {
+      const uint32_t e = G->aedge[k];
+      if (e < G->ne || !G->qdiag[(e - G->ne) / 2]) return e;
+    }
+  return UINT32_MAX;
 }
 
 /* A feature takes a node within this many mean boundary edges of it only
@@ -306,6 +337,19 @@ static uint32_t heap_pop(uint32_t *h, size_t *n, const double *key) {
   return top;
 }
 
+/* The path without the nodes whose two neighbours on it share an edge or
+ * a quadrilateral's diagonal: three nodes of one face on a line would
+ * flatten it (a triangle) or fold it (a quadrilateral, split along the
+ * diagonal instead). Returns the new count. */
+static size_t shortcut(const graph *G, uint32_t *path, size_t k) {
+  size_t n = 1;
+  for (size_t i = 1; i < k; i++) {
+    while (n >= 2 && edge_between(G, path[n - 2], path[i]) != UINT32_MAX) n--;
+    path[n++] = path[i];
+  }
+  return n;
+}
+
 /* The path of boundary edges from node a to node b near the polyline
  * p[0..n) (a and b excepted, through nodes not fixed): its nodes a .. b in
  * W->path, their count returned (0: none). */
@@ -365,6 +409,7 @@ static size_t find_path(graph *G, search *W, const double *p, size_t n, uint32_t
     for (uint32_t k = G->aoff[u]; k < G->aoff[u + 1]; k++) {
       const uint32_t w = G->adj[k], j = G->loc[w];
       if (j == UINT32_MAX || (G->fixed[w] && w != b)) continue;
+      if (G->aedge[k] >= G->ne) continue; /* diagonals: shortcut() only */
       /* forward mostly: a step may go back along the line by a quarter of
        * its length at most, and pays four times what it goes back
        * (place_path spreads the places along the line) */
@@ -389,6 +434,7 @@ static size_t find_path(graph *G, search *W, const double *p, size_t n, uint32_t
     }
     got = k;
     for (uint32_t i = lb; i != UINT32_MAX; i = W->prev[i]) W->path[--k] = W->tube[i];
+    got = shortcut(G, W->path, got);
   }
 out:
   for (size_t i = 0; i < m; i++) G->loc[W->tube[i]] = UINT32_MAX;
@@ -407,6 +453,30 @@ static void at_arclength(const double *p, size_t n, double t, double *q) {
     t -= l;
   }
   memcpy(q, p, 3 * sizeof *q);
+}
+
+/* Marks the edges of a placed path (a diagonal: its quadrilateral, to be
+ * split) and keeps them as node pairs. MX_OK, MX_ENOMEM. */
+static int mark_path(graph *G, const uint32_t *path, size_t k) {
+  if (G->nlpair + k > G->lcap) {
+    const size_t cap = 2 * (G->nlpair + k);
+    uint32_t *p = mx_realloc(G->lpair, 2 * cap * sizeof *p);
+    if (!p) return MX_ENOMEM;
+    G->lpair = p;
+    G->lcap = cap;
+  }
+  for (size_t i = 0; i + 1 < k; i++) {
+    const uint32_t e = edge_between(G, path[i], path[i + 1]);
+    if (e == UINT32_MAX) continue; /* cannot be: the path's edges exist */
+    if (e < G->ne) G->eline[e] = 1;
+    else {
+      G->qdiag[(e - G->ne) / 2] = (uint8_t)(1 + (e - G->ne) % 2);
+      G->nsplit++;
+    }
+    G->lpair[2 * G->nlpair] = path[i];
+    G->lpair[2 * G->nlpair++ + 1] = path[i + 1];
+  }
+  return MX_OK;
 }
 
 /* The path's nodes onto the polyline, in the path's order: each at its
@@ -437,23 +507,7 @@ static int place_path(graph *G, uint8_t *fixed, uint8_t *moved, const uint32_t *
     moved[path[i]] = 1;
     (*nodes)++;
   }
-  for (size_t i = 0; i + 1 < k; i++) {
-    uint32_t a = path[i], b = path[i + 1];
-    if (a > b) {
-      const uint32_t c = a;
-      a = b;
-      b = c;
-    }
-    const size_t r = lower(G->rkey, G->nrun, (uint64_t)a << 32 | b);
-    /* the edge of pair r: the last edge starting at or before r */
-    size_t lo = 0, hi = G->ne;
-    while (hi - lo > 1) {
-      const size_t mid = lo + (hi - lo) / 2;
-      if (G->estart[mid] <= r) lo = mid;
-      else hi = mid;
-    }
-    G->eline[lo] = 1;
-  }
+  if (mark_path(G, path, k)) G->nomem = 1;
   return 1;
 }
 
@@ -790,9 +844,72 @@ done:
 
 /* ---- the pass ---------------------------------------------------------- */
 
-int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
-                     const mx_feature_input *in, uint8_t *fixed, mx_feature_stats *st) {
+/* The boundary faces (all of whose nodes are on the surface) and their
+ * graph; mask: nnodes bytes of work space. */
+static int graph_open(graph *G, const uint8_t *states, uint8_t *mask) {
+  const mx_mesh *M = G->M;
+  for (size_t v = 0; v < M->nnodes; v++) mask[v] = states[v] == MX_NODE_OUTSIDE;
+  const mx_mesh_view view = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
+                             .type = M->type, .conn = M->conn};
+  const int rc = mx_boundary_faces_extract_masked(&view, mask, &G->bf);
+  return rc ? rc : graph_build(G);
+}
+
+/* The elements of the quadrilaterals whose diagonal a line took split
+ * along it (kernels/cell_split.h), the per-node arrays grown with the new
+ * nodes, the graph built again and the lines' edges marked in it. */
+static int split_quads(graph *G, uint8_t **states, uint8_t **fixed, uint8_t **mask,
+                       uint8_t **moved, mx_feature_stats *st, mx_split_log *log) {
+  mx_mesh *M = G->M;
+  const size_t n0 = M->nnodes;
+  uint64_t *req = mx_alloc((G->nsplit + 1) * sizeof *req);
+  if (!req) return MX_ENOMEM;
+  size_t n = 0;
+  for (size_t q = 0; q < G->bf.nquad; q++)
+    if (G->qdiag[q]) {
+      const uint64_t src = G->bf.quad_src[q]; /* 8 * element + face, in order */
+      req[n++] = mx_split_request((size_t)(src >> 3), (int)(src & 7), G->qdiag[q] - 1);
+    }
+  int rc = mx_mesh_split_quads(M, states, req, n, &st->centres, log);
+  mx_free(req);
+  st->split += n;
+  uint8_t *p[3] = {*fixed, *mask, *moved};
+  for (int i = 0; i < 3 && !rc; i++) {
+    uint8_t *q = mx_realloc(p[i], M->nnodes + 1);
+    if (!q) rc = MX_ENOMEM;
+    else {
+      memset(q + n0, 0, M->nnodes - n0);
+      p[i] = q;
+    }
+  }
+  *fixed = p[0];
+  *mask = p[1];
+  *moved = p[2];
+  if (rc) return rc;
+  /* the graph of the new boundary, the lines' edges marked again */
+  uint32_t *lpair = G->lpair;
+  const size_t nl = G->nlpair, lcap = G->lcap;
+  G->lpair = NULL;
+  graph_free(G);
+  memset(G, 0, sizeof *G);
+  G->M = M;
+  G->fixed = *fixed;
+  G->lpair = lpair;
+  G->nlpair = nl;
+  G->lcap = lcap;
+  rc = graph_open(G, *states, *mask);
+  for (size_t i = 0; i < nl && !rc; i++) {
+    const uint32_t e = edge_between(G, lpair[2 * i], lpair[2 * i + 1]);
+    if (e < G->ne) G->eline[e] = 1;
+  }
+  return rc;
+}
+
+int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
+                     const mx_feature_input *in, uint8_t **fixed_io, mx_feature_stats *st,
+                     mx_split_log *log) {
   memset(st, 0, sizeof *st);
+  uint8_t *fixed = *fixed_io;
   memset(fixed, 0, M->nnodes);
   const double t0 = mx_wtime();
   const mx_feature_lines *L = in->L;
@@ -809,14 +926,7 @@ int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *
   uint32_t *cnode = NULL, *doff = NULL;
   double *dir = NULL;
   int rc = mask && moved ? MX_OK : MX_ENOMEM;
-  if (rc) goto done;
-  for (size_t v = 0; v < M->nnodes; v++) mask[v] = states[v] == MX_NODE_OUTSIDE;
-  {
-    const mx_mesh_view view = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
-                               .type = M->type, .conn = M->conn};
-    rc = mx_boundary_faces_extract_masked(&view, mask, &G.bf);
-  }
-  if (!rc) rc = graph_build(&G);
+  if (!rc) rc = graph_open(&G, *states, mask);
   if (rc) goto done;
   /* corners, and the node each took by the corner's coordinates */
   ckey = mx_alloc((L->ncorners + 1) * sizeof *ckey);
@@ -873,9 +983,13 @@ int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *
         ok = ok && k >= 2 && place_path(&G, fixed, moved, W.path, k, sub, n - mid + 1, W.t, &st->nodes);
       }
     }
-    if (nomem) rc = MX_ENOMEM;
+    if (nomem || G.nomem) rc = MX_ENOMEM;
     if (ok) st->lines++;
     else st->lines_missed++;
+  }
+  if (!rc && G.nsplit) {
+    rc = split_quads(&G, states, fixed_io, &mask, &moved, st, log);
+    fixed = *fixed_io;
   }
   /* sides, near the placed lines (the nodes of the edges around theirs) */
   if (!rc && in->patch && in->npatches > 1) {
@@ -914,24 +1028,75 @@ done:
   return rc;
 }
 
-static int node_moved(const mx_mesh *M, const double *before, uint32_t v) {
-  return memcmp(M->xyz + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof *before) != 0;
+static int node_moved(const mx_mesh *M, const double *before, size_t nb, uint32_t v) {
+  return v < nb && memcmp(M->xyz + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof *before) != 0;
 }
 
-int mx_feature_give_up(mx_mesh *M, const double *before, const float *q_before, double floor,
-                       size_t *count) {
+/* The elements of each node added by the splits (nodes nb ..): pairs
+ * (node << 32 | element) sorted, their count in *n. */
+static uint64_t *new_node_cells(const mx_mesh *M, size_t nb, size_t *n) {
+  size_t k = 0;
+  for (size_t c = 0; c < M->ncells; c++)
+    for (int i = 0; i < mx_cell_nodes[M->type[c]]; i++) k += M->conn[8 * c + i] >= nb;
+  uint64_t *p = mx_alloc((k + 1) * sizeof *p);
+  uint32_t *dummy = mx_alloc((k + 1) * sizeof *dummy);
+  if (!p || !dummy) {
+    mx_free(p);
+    mx_free(dummy);
+    return NULL;
+  }
+  k = 0;
+  for (size_t c = 0; c < M->ncells; c++)
+    for (int i = 0; i < mx_cell_nodes[M->type[c]]; i++)
+      if (M->conn[8 * c + i] >= nb) {
+        dummy[k] = (uint32_t)c;
+        p[k++] = (uint64_t)M->conn[8 * c + i] << 32 | c;
+      }
+  const int st = mx_sort_u64(p, dummy, k);
+  mx_free(dummy);
+  if (st) {
+    mx_free(p);
+    return NULL;
+  }
+  *n = k;
+  return p;
+}
+
+/* Node v (added by a split) moved to the best point of its elements
+ * (mx_mesh_best_point). */
+static int recentre(mx_mesh *M, const uint64_t *pairs, size_t np, uint32_t v) {
+  size_t i = lower(pairs, np, (uint64_t)v << 32), j = i;
+  while (j < np && pairs[j] >> 32 == v) j++;
+  uint32_t cells[64];
+  size_t n = 0;
+  for (size_t k = i; k < j && n < 64; k++) cells[n++] = (uint32_t)pairs[k];
+  mx_mesh_best_point(M, v, cells, n);
+  return n > 0;
+}
+
+static int give_up_pass(mx_mesh *M, const double *before, size_t nb, const float *q_before,
+                        size_t ncb, double floor, size_t *count) {
   /* the elements with a moved node: the only ones that can be spoilt */
-  size_t nc = 0, cap = 1024;
+  size_t nc = 0, cap = 1024, np = 0;
   uint32_t *cand = mx_alloc(cap * sizeof *cand);
-  if (!cand) return MX_ENOMEM;
+  uint64_t *pairs = M->nnodes > nb ? new_node_cells(M, nb, &np) : NULL;
+  if (!cand || (M->nnodes > nb && !pairs)) {
+    mx_free(cand);
+    mx_free(pairs);
+    return MX_ENOMEM;
+  }
   for (size_t c = 0; c < M->ncells; c++) {
     int mv = 0;
-    for (int k = 0; k < mx_cell_nodes[M->type[c]] && !mv; k++) mv = node_moved(M, before, M->conn[8 * c + k]);
+    for (int k = 0; k < mx_cell_nodes[M->type[c]] && !mv; k++) {
+      const uint32_t v = M->conn[8 * c + k];
+      mv = v >= nb || node_moved(M, before, nb, v);
+    }
     if (!mv) continue;
     if (nc == cap) {
       uint32_t *g = mx_realloc(cand, 2 * cap * sizeof *cand);
       if (!g) {
         mx_free(cand);
+        mx_free(pairs);
         return MX_ENOMEM;
       }
       cand = g;
@@ -939,15 +1104,23 @@ int mx_feature_give_up(mx_mesh *M, const double *before, const float *q_before, 
     }
     cand[nc++] = (uint32_t)c;
   }
+#define SPOILT(c) (mx_jens_invalid(M->jens[c]) || \
+                   (M->jens[c] < floor && M->jens[c] < ((c) < ncb ? q_before[c] : 1.0)))
   for (int round = 0; round < 64; round++) {
+    /* the new nodes of spoilt elements moved to their best points first,
+     * then the moved nodes of those still spoilt put back */
+    for (size_t i = 0; i < nc; i++) {
+      const size_t c = cand[i];
+      for (int k = 0; k < mx_cell_nodes[M->type[c]] && SPOILT(c); k++)
+        if (M->conn[8 * c + k] >= nb) recentre(M, pairs, np, M->conn[8 * c + k]);
+    }
     size_t n = 0;
     for (size_t i = 0; i < nc; i++) {
       const size_t c = cand[i];
-      const double q = M->jens[c];
-      if (!mx_jens_invalid(q) && !(q < floor && q < q_before[c])) continue;
+      if (!SPOILT(c)) continue;
       for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
         const uint32_t v = M->conn[8 * c + k];
-        if (node_moved(M, before, v)) {
+        if (node_moved(M, before, nb, v)) {
           memcpy(M->xyz + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof *before);
           n++;
         }
@@ -963,7 +1136,38 @@ int mx_feature_give_up(mx_mesh *M, const double *before, const float *q_before, 
       M->jens[c] = (float)mx_jens(M->type[c], (const double(*)[3])x);
     }
   }
+#undef SPOILT
   mx_mesh_summarize(M);
   mx_free(cand);
+  mx_free(pairs);
   return MX_OK;
+}
+
+int mx_feature_give_up(mx_mesh *M, uint8_t **states, mx_split_log *log, const double *before,
+                       size_t nb, const float *q_before, size_t ncb, double floor,
+                       mx_feature_stats *fs) {
+  size_t *count = &fs->given_up;
+  int st = give_up_pass(M, before, nb, q_before, ncb, floor, count);
+  if (st || !log || !log->n) return st;
+  /* the splits some cone of which is still spoilt undone, and their
+   * elements' moved nodes then put back */
+  uint8_t *undo = mx_calloc(log->n + 1);
+  if (!undo) return MX_ENOMEM;
+  size_t n = 0;
+  for (size_t k = 0; k < log->n; k++) {
+    const mx_split_undo *u = log->job + k;
+    for (uint32_t i = 0; i < u->cones && !undo[k]; i++) {
+      const size_t c = i == 0 ? u->cell : u->first + i - 1;
+      undo[k] = mx_jens_invalid(M->jens[c]) ||
+                (M->jens[c] < floor && M->jens[c] < (c < ncb ? q_before[c] : 1.0));
+    }
+    n += undo[k];
+  }
+  fs->unsplit += n;
+  if (n) {
+    st = mx_mesh_unsplit(M, states, log, undo);
+    if (!st) st = give_up_pass(M, before, nb, q_before, ncb, floor, count);
+  }
+  mx_free(undo);
+  return st;
 }

@@ -11,7 +11,14 @@
  *     the line: an edge costs its length plus twice the distances of its
  *     ends to the line); the path's nodes move onto the line, each to its
  *     closest point, when their places along the line keep the path's
- *     order (else the line is counted as missed and nothing moves);
+ *     order (else the line is counted as missed and nothing moves). The
+ *     path may cross a boundary quadrilateral along its diagonal, and
+ *     never keeps three nodes of one face (a node whose neighbours on the
+ *     path share an edge or a diagonal is left out): three nodes of a face
+ *     on a line would flatten a triangle or fold a quadrilateral;
+ *  2b. the elements of the quadrilaterals a line crosses are split along
+ *     the diagonal (kernels/cell_split.h: cones from a new node at their
+ *     centre), so that the line runs on element edges;
  *  3. sides: the boundary faces cut along the placed lines fall into
  *     regions; each region's patch (the surface cut along its ridges) is
  *     the one most of its nodes are closest to, and a node of the region
@@ -29,6 +36,7 @@
 
 #include "geom/distance.h"
 #include "geom/feature_walk.h"
+#include "kernels/cell_split.h"
 #include "soa/mesh.h"
 #include "soa/trisoup.h"
 
@@ -47,23 +55,34 @@ typedef struct {
   size_t lines, lines_missed;     /* lines followed by mesh edges; not */
   size_t nodes;                   /* nodes moved onto corners and lines */
   size_t sides;                   /* nodes moved onto their region's patch */
+  size_t split, centres;          /* quadrilaterals split along a line, new nodes */
+  size_t unsplit;                 /* elements whose split was undone (give-up) */
   size_t given_up;                /* nodes put back (mx_feature_give_up) */
   double seconds;
 } mx_feature_stats;
 
-/* states: MX_NODE_OUTSIDE for the nodes on the surface (boundary stage);
- * S: the surface's index; fixed: nnodes bytes, set here (1: a feature
- * node). MX_OK, MX_ENOMEM. */
-int mx_feature_place(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
-                     const mx_feature_input *in, uint8_t *fixed, mx_feature_stats *st);
+/* *states: MX_NODE_OUTSIDE for the nodes on the surface (boundary stage);
+ * S: the surface's index; *fixed: nnodes bytes, set here (1: a feature
+ * node). Both grow (mx_realloc) when elements are split (below), the
+ * splits logged in *log (for mx_feature_give_up). MX_OK, MX_ENOMEM. */
+int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
+                     const mx_feature_input *in, uint8_t **fixed, mx_feature_stats *st,
+                     mx_split_log *log);
 
 /* The nodes of the elements the placement spoilt put back where they were
- * before it (before: 3 * nnodes; q_before: the elements' J_ENS then), until
- * none is left or none of its nodes moved: the features there are given up
- * rather than the mesh. Spoilt: invalid (J_ENS < MX_JENS_VALID), or below
- * floor and below its J_ENS before. *count: nodes put back. J_ENS and the
- * summary updated. MX_OK, MX_ENOMEM. */
-int mx_feature_give_up(mx_mesh *M, const double *before, const float *q_before, double floor,
-                       size_t *count);
+ * before it (before: 3 * nb coordinates, for the nodes below nb: those
+ * added since did not move; q_before: the J_ENS of the first ncb elements
+ * then, the others' taken as 1), until none is left or none of its nodes
+ * moved: the features there are given up rather than the mesh. A spoilt
+ * element with a node of a split first has that node moved to its best
+ * point (mx_mesh_best_point); a split (log, may be NULL) whose cones are
+ * still spoilt after all is undone and its element's nodes put back.
+ * Spoilt: invalid (J_ENS < MX_JENS_VALID), or below floor and below its
+ * J_ENS before. fs->given_up: nodes put back, fs->unsplit: splits
+ * undone. J_ENS and the summary updated;
+ * *states follows the nodes. MX_OK, MX_ENOMEM. */
+int mx_feature_give_up(mx_mesh *M, uint8_t **states, mx_split_log *log, const double *before,
+                       size_t nb, const float *q_before, size_t ncb, double floor,
+                       mx_feature_stats *fs);
 
 #endif

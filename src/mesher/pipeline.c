@@ -71,8 +71,8 @@ static int features_active(const mx_mesher *m) {
   return m->have_features && !m->p.materials;
 }
 
-static int place_features(mx_mesher *m, mx_mesh *M, const uint8_t *states, mx_boundary_stats *bs) {
-  if (!features_active(m) || !states) return MX_OK;
+static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boundary_stats *bs) {
+  if (!features_active(m) || !*states_io) return MX_OK;
   const mx_features *F = &m->feat;
   /* lines from a file: no patches (theirs are the ridges found) */
   const mx_feature_input in = {&m->feat_lines, &m->soup, m->nt_domain,
@@ -89,7 +89,10 @@ static int place_features(mx_mesher *m, mx_mesh *M, const uint8_t *states, mx_bo
   memcpy(before, M->xyz, 3 * M->nnodes * sizeof *before);
   memcpy(q_before, M->jens, M->ncells * sizeof *q_before);
   mx_feature_stats *fs = &m->rec->S.feature_place;
-  int st = mx_feature_place(M, states, &m->SI, &in, fixed, fs);
+  const size_t nb = M->nnodes, ncb = M->ncells;
+  mx_split_log log = {0, NULL, 0};
+  int st = mx_feature_place(M, states_io, &m->SI, &in, &fixed, fs, &log);
+  const uint8_t *states = *states_io;
   const double t = mx_wtime();
   if (!st && (M->invalid || M->jens_min < MX_FEATURE_FLOOR)) {
     for (size_t v = 0; v < M->nnodes; v++) fixed[v] = !fixed[v];
@@ -99,7 +102,10 @@ static int place_features(mx_mesher *m, mx_mesh *M, const uint8_t *states, mx_bo
     if (!st) mx_mesh_summarize(M);
     for (size_t v = 0; v < M->nnodes; v++) fixed[v] = !fixed[v]; /* the feature nodes again */
   }
-  if (!st) st = mx_feature_give_up(M, before, q_before, MX_FEATURE_FLOOR, &fs->given_up);
+  if (!st) st = mx_feature_give_up(M, states_io, &log, before, nb, q_before, ncb, MX_FEATURE_FLOOR,
+                                   fs);
+  mx_split_log_free(&log);
+  states = *states_io;
   fs->seconds += mx_wtime() - t;
   if (!st && m->p.smooth_rounds > 0) {
     /* the smoothing, after the features: the inside nodes only, so the
@@ -126,6 +132,6 @@ int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh
                              m->IF.npasses ? &m->IF : NULL, m->p.close_ratio,
                              m->p.staircase_quality,
                              features_active(m) ? 0 : m->p.smooth_rounds, bs, states));
-  MX_CHECK(place_features(m, M, *states, bs)); /* and the smoothing after them */
+  MX_CHECK(place_features(m, M, states, bs)); /* and the smoothing after them */
   return mx_mesh_sort_by_leaf(M, n);
 }

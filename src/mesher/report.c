@@ -201,7 +201,8 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              "\"fallback\": %s, "
              "\"kept\": %s, \"corners_placed\": %zu, "
              "\"corners_missed\": %zu, \"lines_followed\": %zu, \"lines_missed\": %zu, "
-             "\"nodes\": %zu, \"side_moves\": %zu, \"given_up\": %zu, \"apart_boxes\": %zu, "
+             "\"nodes\": %zu, \"side_moves\": %zu, \"given_up\": %zu, \"quads_split\": %zu, "
+             "\"splits_undone\": %zu, \"apart_boxes\": %zu, "
              "\"ridge_distance\": %.9g, \"corner_distance\": %.9g, "
              "\"seconds\": %.6f}, ",
              s->feature_angle, s->feature_ridges, s->feature_edges, s->feature_corners,
@@ -209,7 +210,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              s->feature_fallback ? "true" : "false",
              s->features_kept ? "true" : "false", fp->corners,
              fp->corners_missed, fp->lines, fp->lines_missed, fp->nodes, fp->sides, fp->given_up,
-             s->feature_apart_boxes, s->feature_measured ? s->feature_ridge_dist : NAN,
+             fp->split, fp->unsplit, s->feature_apart_boxes, s->feature_measured ? s->feature_ridge_dist : NAN,
              s->feature_measured ? s->feature_corner_dist : NAN, s->feature_seconds + fp->seconds);
   char img[12288] = "";
   if (s->image) {
@@ -336,6 +337,9 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
              "%zu node(s) on them, %zu moved to their side, %zu put back (%.3f s)\n",
              fp->corners, fp->corners + fp->corners_missed, fp->lines,
              fp->lines + fp->lines_missed, fp->nodes, fp->sides, fp->given_up, fp->seconds);
+    if (s->features_kept && fp->split)
+      printf("    split      %12zu boundary quadrilateral(s) a line crosses along its diagonal: "
+             "their elements split (%zu undone)\n", fp->split, fp->unsplit);
     if (s->feature_measured)
       printf("    distance   %12s ridges %.3g, corners %.3g of the diagonal (farthest ridge sample "
              "from a boundary edge, corner from a boundary node)\n", "",
