@@ -44,6 +44,7 @@ static int32_t face_tag(const mx_mesh_view *v, const mx_tag_inputs *in, const ui
 /* The faces of one list (nv nodes each) stably sorted by tag (counting
  * sort; tags 1..maxtag): a tag's faces become one run. */
 static int sort_list(uint32_t *fv, uint64_t *src, int32_t *tag, size_t n, int nv, int maxtag) {
+  if (!n) return MX_OK; /* the list may be NULL then */
   size_t *start = mx_calloc(((size_t)maxtag + 2) * sizeof *start);
   uint32_t *f2 = mx_alloc((nv * n + 1) * sizeof *f2);
   uint64_t *s2 = mx_alloc((n + 1) * sizeof *s2);
