@@ -380,6 +380,23 @@ typedef struct {
 } mx_stats;
 void mx_mesher_stats(const mx_mesher *m, mx_stats *s);
 
+/* The sharp features of the last run (issue 29): found (ridges as lines
+ * from corner to corner or loops, corners, total length), kept (the
+ * placement ran: not when there are none, when they are a scanned
+ * surface's noise, or when keeping them broke the mesh: fallback), placed
+ * (corners on nodes, lines followed by mesh edges, quadrilaterals split
+ * along a line) and the distances from them to the mesh over the input's
+ * diagonal (NAN when not measured: no mesh, or no features kept). */
+typedef struct {
+  double angle;            /* degrees; 0: no features */
+  size_t ridges, corners;
+  double length;
+  int kept, noise, fallback;
+  size_t corners_placed, lines_followed, lines_missed, quads_split;
+  double ridge_distance, corner_distance;
+} mx_feature_figures;
+void mx_mesher_feature_figures(const mx_mesher *m, mx_feature_figures *f);
+
 
 /* ---- Size fields: the control space (issue 27) ------------------------- */
 

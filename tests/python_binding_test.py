@@ -756,6 +756,42 @@ def size_sources():
     m.close()
 
 
+@check
+def sharp_features():
+    """A cube's ridges and corners kept (issue 29): the figures say so and
+    the nodes agree (a node at every corner, found here from the arrays);
+    angle 0 gives them up (corners rounded off); the smoothing keyword and
+    a bad angle."""
+    xyz, tri = cube(10.0)
+    xyz = xyz + 0.123
+    corners = xyz.copy()
+    diag = np.linalg.norm(xyz.max(axis=0) - xyz.min(axis=0))
+
+    def corner_gap(m):
+        nodes = m.arrays()["nodes"]
+        return max(np.linalg.norm(nodes - c, axis=1).min() for c in corners) / diag
+
+    m = mixoct.Mesher(surface_level=3, smooth_rounds=2)
+    m.add_surface_arrays(xyz, tri, name="cube")
+    m.mesh()
+    f = m.feature_figures()
+    assert f["ridges"] == 12 and f["corners"] == 8 and f["kept"], f
+    assert f["corners_placed"] == 8 and f["lines_followed"] == 12, f
+    assert f["corner_distance"] <= 1e-9 and f["ridge_distance"] <= 1e-6, f
+    assert corner_gap(m) <= 1e-9, corner_gap(m)
+    assert m.stats()["jens_min"] > 0.0
+    m.close()
+    m = mixoct.Mesher(surface_level=3)
+    m.add_surface_arrays(xyz, tri, name="cube")
+    m.set_features(angle=0)
+    m.mesh()
+    f = m.feature_figures()
+    assert f["ridges"] == 0 and not f["kept"], f
+    assert corner_gap(m) > 1e-3, corner_gap(m)
+    raises(mixoct.InputError, m.set_features, angle=200)
+    m.close()
+
+
 M.close()
 npass = sum(1 for _, ok in RESULTS if ok)
 nfail = len(RESULTS) - npass

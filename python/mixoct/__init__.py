@@ -261,6 +261,16 @@ class _Stats(ctypes.Structure):
                    ("remesh_patch_leaves", ctypes.c_size_t)])
 
 
+class _FeatureFigures(ctypes.Structure):
+    _fields_ = ([("angle", ctypes.c_double)]
+                + [(n, ctypes.c_size_t) for n in ("ridges", "corners")]
+                + [("length", ctypes.c_double)]
+                + [(n, ctypes.c_int) for n in ("kept", "noise", "fallback")]
+                + [(n, ctypes.c_size_t) for n in ("corners_placed", "lines_followed",
+                                                  "lines_missed", "quads_split")]
+                + [(n, ctypes.c_double) for n in ("ridge_distance", "corner_distance")])
+
+
 _MESSAGE_FN = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_int,
                                ctypes.c_char_p)
 
@@ -389,6 +399,10 @@ def _declare(lib):
         "mx_mesher_mesh_arrays": (I, [P, ctypes.POINTER(_MeshArrays)]),
         "mx_mesher_written_order": (I, [P, u32p]),
         "mx_mesher_stats": (None, [P, ctypes.POINTER(_Stats)]),
+        "mx_mesher_set_feature_angle": (I, [P, ctypes.c_double]),
+        "mx_mesher_set_feature_level": (I, [P, I]),
+        "mx_mesher_set_feature_file": (I, [P, S]),
+        "mx_mesher_feature_figures": (None, [P, ctypes.POINTER(_FeatureFigures)]),
         # 2D (mx_mesher2d_*)
         "mx_params2d_default": (None, [ctypes.POINTER(_Params2D)]),
         "mx_mesher2d_new": (P, [ctypes.POINTER(_Params2D)]),
@@ -963,7 +977,10 @@ class Mesher(_MesherBase):
     available), ``repair_rounds``, and, as keywords, ``balance`` ("edges" or
     "recursive"), ``close_ratio`` and ``staircase_quality`` (0: defaults),
     ``materials`` (``--materials``: nested shells become materials, not
-    holes, given by the ``material`` view; see the module doc).
+    holes, given by the ``material`` view; see the module doc),
+    ``smooth_rounds`` (``--smooth N``: rounds of the smoothing that only
+    raises the worst J_ENS around each node; 0, the default: off). Sharp
+    features: ``set_features``, ``feature_figures``.
     """
 
     _PREFIX = "mx_mesher"
@@ -975,7 +992,7 @@ class Mesher(_MesherBase):
     def __init__(self, surface_level=-1, all_level=-1, stage="full",
                  threads=0, max_memory_mb=0, repair_rounds=3, *,
                  balance="edges", close_ratio=0.0, staircase_quality=0.0,
-                 materials=False, library=None):
+                 materials=False, smooth_rounds=0, library=None):
         lib = load_library(library)
         p = _Params()
         lib.mx_params_default(ctypes.byref(p))
@@ -991,6 +1008,7 @@ class Mesher(_MesherBase):
         if staircase_quality:
             p.staircase_quality = float(staircase_quality)
         p.materials = 1 if materials else 0
+        p.smooth_rounds = int(smooth_rounds)
         self._start(lib, p)
 
     # ---- inputs ------------------------------------------------------------------
@@ -1152,6 +1170,34 @@ class Mesher(_MesherBase):
         """A size field from the surface's curvature: an element spans at
         most `degrees` of it (--curvature; 0: none)."""
         self._call("mx_mesher_set_size_curvature", float(degrees))
+
+    def set_features(self, angle=None, level=None, path=None):
+        """Sharp features (issue 29): ridges where the surface's normals
+        part by more than ``angle`` degrees (--feature-angle, 30 by default;
+        0: none, --no-features), octants on them refined to ``level``
+        (--feature-level; 0: the surface level), or the ridges read from
+        the polylines file ``path`` (--features: "n x1 y1 z1 ... xn yn zn"
+        a line). Arguments left None are left as they are."""
+        if angle is not None:
+            self._call("mx_mesher_set_feature_angle", float(angle))
+        if level is not None:
+            self._call("mx_mesher_set_feature_level", int(level))
+        if path is not None:
+            self._call("mx_mesher_set_feature_file", _fspath(path))
+
+    def feature_figures(self):
+        """The sharp features of the last run as a dict: found (``ridges``,
+        ``corners``, ``length``), ``kept`` (False when there are none, when
+        they are noise or when keeping them broke the mesh: ``fallback``),
+        placed (``corners_placed``, ``lines_followed``, ``lines_missed``,
+        ``quads_split``) and ``ridge_distance`` / ``corner_distance`` from
+        them to the mesh over the input's diagonal (NaN: not measured)."""
+        f = _FeatureFigures()
+        _function(self._lib, "mx_mesher_feature_figures")(self._ptr, ctypes.byref(f))
+        d = {n: getattr(f, n) for n, _ in f._fields_}
+        for n in ("kept", "noise", "fallback"):
+            d[n] = bool(d[n])
+        return d
 
     def set_thickness(self, elements):
         """At least `elements` (1 to 64) elements across every part and

@@ -925,3 +925,21 @@ void mx_mesher_stats(const mx_mesher *m, mx_stats *s) {
   s->remesh_local = S->local;
   s->remesh_patch_leaves = S->local ? S->patch_leaves : 0;
 }
+
+void mx_mesher_feature_figures(const mx_mesher *m, mx_feature_figures *f) {
+  const mx_summary *S = &m->rec->S;
+  memset(f, 0, sizeof *f);
+  f->angle = S->feature_angle;
+  f->ridges = S->feature_ridges;
+  f->corners = S->feature_corners;
+  f->length = S->feature_length;
+  f->kept = S->features_kept;
+  f->noise = S->feature_noise;
+  f->fallback = S->feature_fallback;
+  f->corners_placed = S->feature_place.corners;
+  f->lines_followed = S->feature_place.lines;
+  f->lines_missed = S->feature_place.lines_missed;
+  f->quads_split = S->feature_place.split;
+  f->ridge_distance = S->feature_measured ? S->feature_ridge_dist : NAN;
+  f->corner_distance = S->feature_measured ? S->feature_corner_dist : NAN;
+}
