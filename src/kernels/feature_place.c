@@ -30,9 +30,6 @@ typedef struct {
   size_t nsplit;         /* quadrilaterals with a diagonal taken */
   uint32_t *aoff, *adj, *aedge; /* per node: neighbours and the edges to them
                                  * (edge ne + 2 q + d: diagonal d of quad q) */
-  uint32_t *lpair;       /* the placed lines' edges (node pairs), nlpair of them */
-  size_t nlpair, lcap;
-  int nomem;
   size_t nb;             /* boundary nodes, sorted by grid cell */
   uint64_t *bkey;
   uint32_t *bnode;
@@ -174,7 +171,6 @@ static void graph_free(graph *G) {
   mx_free(G->estart);
   mx_free(G->eline);
   mx_free(G->qdiag);
-  mx_free(G->lpair);
   mx_free(G->aoff);
   mx_free(G->adj);
   mx_free(G->aedge);
@@ -456,15 +452,8 @@ static void at_arclength(const double *p, size_t n, double t, double *q) {
 }
 
 /* Marks the edges of a placed path (a diagonal: its quadrilateral, to be
- * split) and keeps them as node pairs. MX_OK, MX_ENOMEM. */
-static int mark_path(graph *G, const uint32_t *path, size_t k) {
-  if (G->nlpair + k > G->lcap) {
-    const size_t cap = 2 * (G->nlpair + k);
-    uint32_t *p = mx_realloc(G->lpair, 2 * cap * sizeof *p);
-    if (!p) return MX_ENOMEM;
-    G->lpair = p;
-    G->lcap = cap;
-  }
+ * split). */
+static void mark_path(graph *G, const uint32_t *path, size_t k) {
   for (size_t i = 0; i + 1 < k; i++) {
     const uint32_t e = edge_between(G, path[i], path[i + 1]);
     if (e == UINT32_MAX) continue; /* cannot be: the path's edges exist */
@@ -473,10 +462,7 @@ static int mark_path(graph *G, const uint32_t *path, size_t k) {
       G->qdiag[(e - G->ne) / 2] = (uint8_t)(1 + (e - G->ne) % 2);
       G->nsplit++;
     }
-    G->lpair[2 * G->nlpair] = path[i];
-    G->lpair[2 * G->nlpair++ + 1] = path[i + 1];
   }
-  return MX_OK;
 }
 
 /* The path's nodes onto the polyline, in the path's order: each at its
@@ -507,7 +493,7 @@ static int place_path(graph *G, uint8_t *fixed, uint8_t *moved, const uint32_t *
     moved[path[i]] = 1;
     (*nodes)++;
   }
-  if (mark_path(G, path, k)) G->nomem = 1;
+  mark_path(G, path, k);
   return 1;
 }
 
@@ -739,24 +725,41 @@ static int cmp_u64(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
+/* The half of face f (a quadrilateral split along a line's diagonal: f
+ * for the half with the node after the diagonal's first, nf + q for the
+ * other) that has edge a-b (a == b: node a, off the diagonal); f itself
+ * for a face not split. */
+static uint32_t half_of(const graph *G, uint32_t f, uint32_t a, uint32_t b) {
+  if (f < G->bf.ntri) return f;
+  const size_t q = f - G->bf.ntri;
+  if (!G->qdiag[q]) return f;
+  const uint32_t *p = G->bf.quad + 4 * q;
+  const int s = G->qdiag[q] - 1; /* the diagonal p[s] - p[s + 2] */
+  const uint32_t mid = p[s + 1]; /* the first half: p[s], p[s + 1], p[s + 2] */
+  return a == mid || b == mid ? f : (uint32_t)(G->nf + q);
+}
+
 /* Each region's patch by its nodes' votes; nodes of a region closest to
  * another patch moved onto the region's. near[v]: the nodes looked at. */
 static int sides(graph *G, const mx_feature_input *in, const mx_surface_index *S,
                  const uint8_t *near, uint8_t *moved, size_t *count) {
   mx_mesh *M = G->M;
-  const size_t nf = G->nf;
-  uint32_t *up = mx_alloc((nf + 1) * sizeof *up), *np = mx_alloc((M->nnodes + 1) * sizeof *np);
+  const size_t nf = G->nf, nh = nf + G->bf.nquad; /* faces, and second halves of split quads */
+  uint32_t *up = mx_alloc((nh + 1) * sizeof *up), *np = mx_alloc((M->nnodes + 1) * sizeof *np);
   uint32_t *reg = mx_alloc((M->nnodes + 1) * sizeof *reg);
   uint64_t *vote = NULL;
   patch_index *pi = mx_calloc((in->npatches + 1) * sizeof *pi);
   patch_lists pl = {NULL, NULL, NULL}; /* made when a patch is first asked for */
   int st = up && np && reg && pi ? MX_OK : MX_ENOMEM;
   if (st) goto done;
-  for (size_t f = 0; f < nf; f++) up[f] = (uint32_t)f;
+  for (size_t f = 0; f < nh; f++) up[f] = (uint32_t)f;
   for (size_t e = 0; e < G->ne; e++)
-    if (!G->eline[e])
+    if (!G->eline[e]) {
+      const uint32_t a = (uint32_t)(G->rkey[G->estart[e]] >> 32), b = (uint32_t)G->rkey[G->estart[e]];
+      const uint32_t f0 = half_of(G, G->rface[G->estart[e]], a, b);
       for (uint32_t r = G->estart[e] + 1; r < G->estart[e + 1]; r++)
-        mx_uf_join(up, G->rface[G->estart[e]], G->rface[r]);
+        mx_uf_join(up, f0, half_of(G, G->rface[r], a, b));
+    }
   /* each near node's closest patch and region (UINT32_MAX - 1: two regions) */
   size_t nv = 0;
   for (size_t v = 0; v < M->nnodes; v++) {
@@ -772,10 +775,13 @@ static int sides(graph *G, const mx_feature_input *in, const mx_surface_index *S
   for (size_t f = 0; f < nf; f++) {
     int k;
     const uint32_t *p = face_nodes(G, f, &k);
-    const uint32_t r = mx_uf_find(up, (uint32_t)f);
-    for (int i = 0; i < k; i++)
-      if (np[p[i]] != UINT32_MAX)
-        reg[p[i]] = reg[p[i]] == UINT32_MAX || reg[p[i]] == r ? r : UINT32_MAX - 1;
+    for (int i = 0; i < k; i++) {
+      if (np[p[i]] == UINT32_MAX) continue;
+      /* a node of a split quadrilateral off the diagonal is in one half */
+      const uint32_t h = k == 4 ? half_of(G, (uint32_t)f, p[i], p[i]) : (uint32_t)f;
+      const uint32_t r = mx_uf_find(up, h);
+      reg[p[i]] = reg[p[i]] == UINT32_MAX || reg[p[i]] == r ? r : UINT32_MAX - 1;
+    }
   }
   /* the votes: (region, patch) pairs sorted, the longest run per region */
   vote = mx_alloc((nv + 1) * sizeof *vote);
@@ -790,12 +796,12 @@ static int sides(graph *G, const mx_feature_input *in, const mx_surface_index *S
   /* the winner of each region, in place at the region's face id (up[] of
    * roots is theirs: roots keep up[r] == r, so the winner goes to np-like
    * storage: reuse up[] only for roots after the last find) */
-  uint32_t *win = mx_alloc((nf + 1) * sizeof *win);
+  uint32_t *win = mx_alloc((nh + 1) * sizeof *win);
   if (!win) {
     st = MX_ENOMEM;
     goto done;
   }
-  for (size_t f = 0; f < nf; f++) win[f] = UINT32_MAX;
+  for (size_t f = 0; f < nh; f++) win[f] = UINT32_MAX;
   for (size_t i = 0, best = 0; i < n;) {
     const uint32_t r = (uint32_t)(vote[i] >> 32);
     size_t j = i;
@@ -856,10 +862,10 @@ static int graph_open(graph *G, const uint8_t *states, uint8_t *mask) {
 }
 
 /* The elements of the quadrilaterals whose diagonal a line took split
- * along it (kernels/cell_split.h), the per-node arrays grown with the new
- * nodes, the graph built again and the lines' edges marked in it. */
-static int split_quads(graph *G, uint8_t **states, uint8_t **fixed, uint8_t **mask,
-                       uint8_t **moved, mx_feature_stats *st, mx_split_log *log) {
+ * along it (kernels/cell_split.h); fixed[] and moved[] grown with the new
+ * nodes (not feature nodes; their elements' J_ENS set by the split). */
+static int split_quads(graph *G, uint8_t **states, uint8_t **fixed, uint8_t **moved,
+                       mx_feature_stats *st, mx_split_log *log) {
   mx_mesh *M = G->M;
   const size_t n0 = M->nnodes;
   uint64_t *req = mx_alloc((G->nsplit + 1) * sizeof *req);
@@ -873,8 +879,8 @@ static int split_quads(graph *G, uint8_t **states, uint8_t **fixed, uint8_t **ma
   int rc = mx_mesh_split_quads(M, states, req, n, &st->centres, log);
   mx_free(req);
   st->split += n;
-  uint8_t *p[3] = {*fixed, *mask, *moved};
-  for (int i = 0; i < 3 && !rc; i++) {
+  uint8_t *p[2] = {*fixed, *moved};
+  for (int i = 0; i < 2 && !rc; i++) {
     uint8_t *q = mx_realloc(p[i], M->nnodes + 1);
     if (!q) rc = MX_ENOMEM;
     else {
@@ -883,25 +889,7 @@ static int split_quads(graph *G, uint8_t **states, uint8_t **fixed, uint8_t **ma
     }
   }
   *fixed = p[0];
-  *mask = p[1];
-  *moved = p[2];
-  if (rc) return rc;
-  /* the graph of the new boundary, the lines' edges marked again */
-  uint32_t *lpair = G->lpair;
-  const size_t nl = G->nlpair, lcap = G->lcap;
-  G->lpair = NULL;
-  graph_free(G);
-  memset(G, 0, sizeof *G);
-  G->M = M;
-  G->fixed = *fixed;
-  G->lpair = lpair;
-  G->nlpair = nl;
-  G->lcap = lcap;
-  rc = graph_open(G, *states, *mask);
-  for (size_t i = 0; i < nl && !rc; i++) {
-    const uint32_t e = edge_between(G, lpair[2 * i], lpair[2 * i + 1]);
-    if (e < G->ne) G->eline[e] = 1;
-  }
+  *moved = p[1];
   return rc;
 }
 
@@ -983,13 +971,9 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
         ok = ok && k >= 2 && place_path(&G, fixed, moved, W.path, k, sub, n - mid + 1, W.t, &st->nodes);
       }
     }
-    if (nomem || G.nomem) rc = MX_ENOMEM;
+    if (nomem) rc = MX_ENOMEM;
     if (ok) st->lines++;
     else st->lines_missed++;
-  }
-  if (!rc && G.nsplit) {
-    rc = split_quads(&G, states, fixed_io, &mask, &moved, st, log);
-    fixed = *fixed_io;
   }
   /* sides, near the placed lines (the nodes of the edges around theirs) */
   if (!rc && in->patch && in->npatches > 1) {
@@ -1002,6 +986,11 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
           for (uint32_t j = G.aoff[w]; j < G.aoff[w + 1]; j++) mask[G.adj[j]] = 1;
         }
     rc = sides(&G, in, S, mask, moved, &st->sides);
+  }
+  /* then the splits, once every node is where it goes */
+  if (!rc && G.nsplit) {
+    rc = split_quads(&G, states, fixed_io, &moved, st, log);
+    fixed = *fixed_io;
   }
   if (!rc) {
     mx_mesh_update_jens(M, moved);
