@@ -16,6 +16,18 @@ uint64_t mx_scan_u32(uint32_t *a, size_t n);
  * MX_EINPUT (out of memory). */
 int mx_sort_u64(uint64_t *keys, uint32_t *vals, size_t n);
 
+/* The first index of the sorted keys k[0 .. n) whose key is not below key
+ * (n: none). */
+static inline size_t mx_lower_u64(const uint64_t *k, size_t n, uint64_t key) {
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (k[mid] < key) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
+
 /* Sorts keys and drops repeats; returns how many are left (0 on failure,
  * *st the status). */
 size_t mx_sort_unique_u64(uint64_t *keys, size_t n, int *st);

@@ -69,7 +69,8 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
                      const mx_feature_input *in, uint8_t **fixed, mx_feature_stats *st,
                      mx_split_log *log);
 
-/* The nodes of the elements the placement spoilt put back where they were
+/* (src/kernels/feature_give_up.c) The nodes of the elements the placement
+ * spoilt put back where they were
  * before it (before: 3 * nb coordinates, for the nodes below nb: those
  * added since did not move; q_before: the J_ENS of the first ncb elements
  * then, the others' taken as 1), until none is left or none of its nodes
