@@ -18,6 +18,8 @@
 #    distances reported (the placement misses some of their ridges today:
 #    measured, not asserted);
 #  - the summary's distances (--json) agree with check's (9 digits);
+#  - the step at -s 5 splits quadrilaterals a line crosses along their
+#    diagonal, and check finds no defect in the result;
 #  - --smooth 1 runs after the features (inside nodes only): the same
 #    distances and volume, a worst element no worse;
 #  - one and two threads write the same file;
@@ -93,6 +95,15 @@ for s in 3 4 5; do
     [ "$agree" = 1 ] && ok "$name -s $s: the summary's distances are check's" || ko "$name -s $s: summary and check disagree"
   done
 done
+
+# the splits: the step at -s 5 has lines crossing quadrilaterals along a
+# diagonal (their elements split, kernels/cell_split.c); the file written
+# has no defect for the independent check (conforming, none inverted)
+"$MIXOCT" -i "$T/step.off" -s 5 -o "$T/step_split.vtu" --json --quiet >"$T/split.json" 2>/dev/null
+ns=$("$PY" -c "import json, sys; print(json.load(open(sys.argv[1]))['features']['quads_split'])" "$T/split.json" 2>/dev/null)
+"$MIXOCT" check "$T/step_split.vtu" --surface "$T/step.off" --quiet >/dev/null 2>&1
+ce=$?
+if [ "${ns:-0}" -gt 0 ] && [ $ce -eq 0 ]; then ok "step -s 5: $ns quadrilateral(s) split, check finds no defect"; else ko "step -s 5: split $ns, check exit $ce"; fi
 
 # what the features are for: the cube without them
 read -r e d rd cd ve jm agree <<<"$(mesh "$T/cube.off" 4 --no-features)"
