@@ -56,8 +56,8 @@ static int recentre(mx_mesh *M, const uint64_t *pairs, size_t np, uint32_t v) {
   return n > 0;
 }
 
-static int give_up_pass(mx_mesh *M, const double *before, size_t nb, const float *q_before,
-                        size_t ncb, double floor, size_t *count) {
+static int give_up_pass(mx_mesh *M, const uint8_t *feature, const double *before, size_t nb,
+                        const float *q_before, size_t ncb, double floor, size_t *count) {
   /* the elements with a moved node: the only ones that can be spoilt */
   size_t nc = 0, cap = 1024, np = 0;
   uint32_t *cand = mx_alloc(cap * sizeof *cand);
@@ -100,13 +100,17 @@ static int give_up_pass(mx_mesh *M, const double *before, size_t nb, const float
     for (size_t i = 0; i < nc; i++) {
       const size_t c = cand[i];
       if (!SPOILT(c)) continue;
-      for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
-        const uint32_t v = M->conn[8 * c + k];
-        if (node_moved(M, before, nb, v)) {
-          memcpy(M->xyz + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof *before);
-          n++;
+      /* the nodes moved beside the features first, the feature nodes
+       * only when no other moved node is left */
+      for (int pass = 0, done = 0; pass < 2 && !done; pass++)
+        for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
+          const uint32_t v = M->conn[8 * c + k];
+          if (node_moved(M, before, nb, v) && (pass || !(feature && feature[v]))) {
+            memcpy(M->xyz + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof *before);
+            n++;
+            done = 1;
+          }
         }
-      }
     }
     if (!n) break;
     *count += n;
@@ -125,11 +129,12 @@ static int give_up_pass(mx_mesh *M, const double *before, size_t nb, const float
   return MX_OK;
 }
 
-int mx_feature_give_up(mx_mesh *M, uint8_t **states, mx_split_log *log, const double *before,
+int mx_feature_give_up(mx_mesh *M, uint8_t **states, mx_split_log *log, const uint8_t *feature,
+                       const double *before,
                        size_t nb, const float *q_before, size_t ncb, double floor,
                        mx_feature_stats *fs) {
   size_t *count = &fs->given_up;
-  int st = give_up_pass(M, before, nb, q_before, ncb, floor, count);
+  int st = give_up_pass(M, feature, before, nb, q_before, ncb, floor, count);
   if (st || !log || !log->n) return st;
   /* the splits some cone of which is still spoilt undone, and their
    * elements' moved nodes then put back */
@@ -148,7 +153,7 @@ int mx_feature_give_up(mx_mesh *M, uint8_t **states, mx_split_log *log, const do
   fs->unsplit += n;
   if (n) {
     st = mx_mesh_unsplit(M, states, log, undo);
-    if (!st) st = give_up_pass(M, before, nb, q_before, ncb, floor, count);
+    if (!st) st = give_up_pass(M, feature, before, nb, q_before, ncb, floor, count);
   }
   mx_free(undo);
   return st;

@@ -74,7 +74,9 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
  * before it (before: 3 * nb coordinates, for the nodes below nb: those
  * added since did not move; q_before: the J_ENS of the first ncb elements
  * then, the others' taken as 1), until none is left or none of its nodes
- * moved: the features there are given up rather than the mesh. A spoilt
+ * moved (first the nodes moved beside the features, then, when none is
+ * left, the feature nodes: feature[v] != 0, may be NULL): the features
+ * there are given up rather than the mesh. A spoilt
  * element with a node of a split first has that node moved to its best
  * point (mx_mesh_best_point); a split (log, may be NULL) whose cones are
  * still spoilt after all is undone and its element's nodes put back.
@@ -82,7 +84,8 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
  * J_ENS before. fs->given_up: nodes put back, fs->unsplit: splits
  * undone. J_ENS and the summary updated;
  * *states follows the nodes. MX_OK, MX_ENOMEM. */
-int mx_feature_give_up(mx_mesh *M, uint8_t **states, mx_split_log *log, const double *before,
+int mx_feature_give_up(mx_mesh *M, uint8_t **states, mx_split_log *log, const uint8_t *feature,
+                       const double *before,
                        size_t nb, const float *q_before, size_t ncb, double floor,
                        mx_feature_stats *fs);
 

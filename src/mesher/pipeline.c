@@ -102,7 +102,7 @@ static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boun
     if (!st) mx_mesh_summarize(M);
     for (size_t v = 0; v < M->nnodes; v++) fixed[v] = !fixed[v]; /* the feature nodes again */
   }
-  if (!st) st = mx_feature_give_up(M, states_io, &log, before, nb, q_before, ncb, MX_FEATURE_FLOOR,
+  if (!st) st = mx_feature_give_up(M, states_io, &log, fixed, before, nb, q_before, ncb, MX_FEATURE_FLOOR,
                                    fs);
   mx_split_log_free(&log);
   states = *states_io;
