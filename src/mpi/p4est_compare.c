@@ -7,6 +7,8 @@
 
 #include <string.h>
 
+#include "base/scan.h"
+
 static uint64_t span(int level) { return 1ULL << (3 * (MX_MAX_LEVEL - level)); }
 
 /* Index of the last key <= k, or n when none. */
@@ -92,17 +94,8 @@ static int touch(uint64_t ka, int la, uint64_t kb, int lb) {
   return overlap >= 1;
 }
 
-static size_t lower_bound(const uint64_t *keys, size_t n, uint64_t k) {
-  size_t lo = 0, hi = n;
-  while (lo < hi) {
-    const size_t mid = lo + (hi - lo) / 2;
-    if (keys[mid] < k) lo = mid + 1; else hi = mid;
-  }
-  return lo;
-}
-
 static int in_set(const uint64_t *keys, const uint8_t *lv, size_t n, uint64_t k, int l) {
-  const size_t i = lower_bound(keys, n, k);
+  const size_t i = mx_lower_u64(keys, n, k);
   return i < n && keys[i] == k && lv[i] == l;
 }
 
@@ -114,7 +107,7 @@ void mx_leaf_diff_causes(const uint64_t *qa, const uint8_t *la, const uint8_t *k
     const uint64_t k = kb[j];
     const int l = lb[j];
     /* split in the forest: quadrants keyed inside X other than X itself */
-    const size_t i0 = lower_bound(qa, na, k);
+    const size_t i0 = mx_lower_u64(qa, na, k);
     if (i0 >= na || qa[i0] != k || la[i0] <= l) continue; /* X, or inside a coarser one */
     c->split++;
     int why = 4; /* 1 outside, 2 chain, 3 common, 4 none: keep the smallest */
@@ -125,7 +118,7 @@ void mx_leaf_diff_causes(const uint64_t *qa, const uint8_t *la, const uint8_t *k
           if (nz == 0 || nz == 3) continue; /* X itself, corners */
           const uint64_t n = mx_morton_neighbor(k, l, dx, dy, dz, dims);
           if (n == UINT64_MAX) continue;
-          for (size_t i = lower_bound(qa, na, n); i < na && qa[i] - n < span(l); i++) {
+          for (size_t i = mx_lower_u64(qa, na, n); i < na && qa[i] - n < span(l); i++) {
             if (la[i] < l + 2 || !touch(k, l, qa[i], la[i])) continue;
             int w = !kept[i] ? 1 : in_set(kb, lb, nb, qa[i], la[i]) ? 3 : 2;
             if (w < why) why = w;

@@ -38,8 +38,8 @@
 #include <string.h>
 
 #include "base/common.h"
-#include "quad/qinternal.h"
 #include "base/scan.h"
+#include "quad/qinternal.h"
 
 /* The next and previous corner of a cell of nv corners (no division). */
 static inline int nxt(int k, int nv) { return k + 1 == nv ? 0 : k + 1; }
@@ -414,15 +414,6 @@ static uint32_t feature_target(const qb *B, const uint32_t *cid, size_t lo, size
   }
 }
 
-static size_t lower_bound(const uint64_t *key, size_t m, uint64_t k) {
-  size_t lo = 0, hi = m;
-  while (lo < hi) {
-    const size_t mid = lo + (hi - lo) / 2;
-    if (key[mid] < k) lo = mid + 1; else hi = mid;
-  }
-  return lo;
-}
-
 /* The keys of the leaves that may hold f, in the order they are tried:
  * level by level; a point on a leaf's left or bottom side may belong to the
  * leaf across, hence the nudged tries. UINT64_MAX for a try off the grid. */
@@ -448,10 +439,10 @@ static uint32_t feature_node(const qb *B, const uint64_t *key, const uint32_t *c
   feature_keys(B, f, k);
   for (int t = 0; t < FEATURE_TRIES; t++) {
     if (k[t] == UINT64_MAX) continue;
-    const size_t lo = lower_bound(key, m, k[t]);
+    const size_t lo = mx_lower_u64(key, m, k[t]);
     if (lo == m || key[lo] != k[t]) continue;
     *sure = t <= MX_QMAX_LEVEL && B->open[cid[lo]];
-    return feature_target(B, cid, lo, lower_bound(key, m, k[t] + 1), f);
+    return feature_target(B, cid, lo, mx_lower_u64(key, m, k[t] + 1), f);
   }
   *sure = 0;
   return UINT32_MAX;
@@ -521,7 +512,7 @@ static int take_features(qb *B, const uint32_t *fv, size_t nfeat, const uint32_t
 
 /* Whether k is one of the sorted candidate keys cand[0, nc). */
 static int is_candidate(const uint64_t *cand, size_t nc, uint64_t k) {
-  const size_t i = lower_bound(cand, nc, k);
+  const size_t i = mx_lower_u64(cand, nc, k);
   return i < nc && cand[i] == k;
 }
 
