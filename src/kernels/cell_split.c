@@ -9,6 +9,7 @@
 #include "geom/quality.h"
 #include "kernels/boundary.h"
 #include "kernels/mesh_edit.h"
+#include "kernels/node_work.h"
 
 /* The split element's faces: diag[f] = 0 (kept whole) or 1 + diagonal. */
 typedef struct {
@@ -114,13 +115,7 @@ void mx_mesh_best_point(mx_mesh *M, uint32_t v, const uint32_t *cells, size_t n)
         }
       }
     }
-  for (size_t i = 0; i < n && M->jens; i++) {
-    const size_t c = cells[i];
-    double p[8][3];
-    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
-      memcpy(p[k], M->xyz + 3 * (size_t)M->conn[8 * c + k], sizeof p[k]);
-    M->jens[c] = (float)mx_jens(M->type[c], (const double(*)[3])p);
-  }
+  for (size_t i = 0; i < n && M->jens; i++) M->jens[cells[i]] = (float)mx_cell_jens(M, cells[i]);
 }
 
 static int grow(void **p, size_t n, size_t size) {
@@ -214,25 +209,13 @@ int mx_mesh_split_quads(mx_mesh *M, uint8_t **states, const uint64_t *req, size_
         if (M->material) M->material[d] = M->material[e];
       }
     }
-    if (apex >= M->nnodes && M->jens) mx_mesh_best_point(M, apex, made, (size_t)q);
+    /* the cones' J_ENS: set by the placement of a new apex, else here */
+    if (M->jens && apex >= M->nnodes) mx_mesh_best_point(M, apex, made, (size_t)q);
+    else if (M->jens)
+      for (int i = 0; i < q; i++) M->jens[made[i]] = (float)mx_cell_jens(M, made[i]);
   }
   M->nnodes = N;
   M->ncells = C;
-  if (M->jens) {
-    for (size_t k = 0; k < nj; k++) {
-      double x[8][3];
-      const size_t e = job[k].cell;
-      for (int i = 0; i < mx_cell_nodes[M->type[e]]; i++)
-        memcpy(x[i], M->xyz + 3 * (size_t)M->conn[8 * e + i], sizeof x[i]);
-      M->jens[e] = (float)mx_jens(M->type[e], (const double(*)[3])x);
-    }
-    for (size_t d = C - nc; d < C; d++) {
-      double x[8][3];
-      for (int i = 0; i < mx_cell_nodes[M->type[d]]; i++)
-        memcpy(x[i], M->xyz + 3 * (size_t)M->conn[8 * d + i], sizeof x[i]);
-      M->jens[d] = (float)mx_jens(M->type[d], (const double(*)[3])x);
-    }
-  }
   if (centres) *centres = nn;
   mx_free(job);
   return MX_OK;
@@ -258,10 +241,7 @@ int mx_mesh_unsplit(mx_mesh *M, uint8_t **states, mx_split_log *log, const uint8
     memcpy(M->conn + 8 * (size_t)u->cell, u->conn, sizeof u->conn);
     M->type[u->cell] = u->type;
     for (uint32_t i = 0; i + 1 < u->cones; i++) keep[u->first + i] = 0;
-    double x[8][3];
-    for (int i = 0; i < mx_cell_nodes[u->type]; i++)
-      memcpy(x[i], M->xyz + 3 * (size_t)u->conn[i], sizeof x[i]);
-    M->jens[u->cell] = (float)mx_jens(u->type, (const double(*)[3])x);
+    M->jens[u->cell] = (float)mx_cell_jens(M, u->cell);
   }
   log->n = 0;
   int st = mx_mesh_keep_cells(M, keep);

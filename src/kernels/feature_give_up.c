@@ -4,68 +4,41 @@
 #include <string.h>
 
 #include "base/common.h"
-#include "base/scan.h"
 #include "geom/quality.h"
 #include "kernels/cell_split.h"
 #include "kernels/feature_place.h"
 #include "kernels/mesh_edit.h"
+#include "kernels/node_work.h"
 
 static int node_moved(const mx_mesh *M, const double *before, size_t nb, uint32_t v) {
   return v < nb && memcmp(M->xyz + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof *before) != 0;
 }
 
-/* The elements of each node added by the splits (nodes nb ..): pairs
- * (node << 32 | element) sorted, their count in *n. */
-static uint64_t *new_node_cells(const mx_mesh *M, size_t nb, size_t *n) {
-  size_t k = 0;
-  for (size_t c = 0; c < M->ncells; c++)
-    for (int i = 0; i < mx_cell_nodes[M->type[c]]; i++) k += M->conn[8 * c + i] >= nb;
-  uint64_t *p = mx_alloc((k + 1) * sizeof *p);
-  uint32_t *dummy = mx_alloc((k + 1) * sizeof *dummy);
-  if (!p || !dummy) {
-    mx_free(p);
-    mx_free(dummy);
-    return NULL;
-  }
-  k = 0;
-  for (size_t c = 0; c < M->ncells; c++)
-    for (int i = 0; i < mx_cell_nodes[M->type[c]]; i++)
-      if (M->conn[8 * c + i] >= nb) {
-        dummy[k] = (uint32_t)c;
-        p[k++] = (uint64_t)M->conn[8 * c + i] << 32 | c;
-      }
-  const int st = mx_sort_u64(p, dummy, k);
-  mx_free(dummy);
-  if (st) {
-    mx_free(p);
-    return NULL;
-  }
-  *n = k;
-  return p;
-}
-
-/* Node v (added by a split) moved to the best point of its elements
- * (mx_mesh_best_point). */
-static int recentre(mx_mesh *M, const uint64_t *pairs, size_t np, uint32_t v) {
-  size_t i = mx_lower_u64(pairs, np, (uint64_t)v << 32), j = i;
-  while (j < np && pairs[j] >> 32 == v) j++;
-  uint32_t cells[64];
-  size_t n = 0;
-  for (size_t k = i; k < j && n < 64; k++) cells[n++] = (uint32_t)pairs[k];
-  mx_mesh_best_point(M, v, cells, n);
-  return n > 0;
+/* Spoilt: invalid, or below floor and below its J_ENS before the
+ * placement (q_before, for the first ncb elements; the others' taken as 1). */
+static int spoilt(const mx_mesh *M, size_t c, double floor, const float *q_before, size_t ncb) {
+  const double q = M->jens[c];
+  return mx_jens_invalid(q) || (q < floor && q < (c < ncb ? q_before[c] : 1.0));
 }
 
 static int give_up_pass(mx_mesh *M, const uint8_t *feature, const double *before, size_t nb,
                         const float *q_before, size_t ncb, double floor, size_t *count) {
   /* the elements with a moved node: the only ones that can be spoilt */
-  size_t nc = 0, cap = 1024, np = 0;
+  size_t nc = 0, cap = 1024;
   uint32_t *cand = mx_alloc(cap * sizeof *cand);
-  uint64_t *pairs = M->nnodes > nb ? new_node_cells(M, nb, &np) : NULL;
-  if (!cand || (M->nnodes > nb && !pairs)) {
+  /* the elements of the nodes the splits added (nodes nb ..) */
+  uint64_t *off = NULL;
+  uint32_t *inc = NULL;
+  uint8_t *added = M->nnodes > nb ? mx_alloc(M->nnodes + 1) : NULL;
+  int st = cand && (added || M->nnodes <= nb) ? MX_OK : MX_ENOMEM;
+  if (!st && added) {
+    for (size_t v = 0; v < M->nnodes; v++) added[v] = v >= nb;
+    st = mx_mesh_incidence(M, added, &off, &inc);
+  }
+  mx_free(added);
+  if (st) {
     mx_free(cand);
-    mx_free(pairs);
-    return MX_ENOMEM;
+    return st;
   }
   for (size_t c = 0; c < M->ncells; c++) {
     int mv = 0;
@@ -78,7 +51,8 @@ static int give_up_pass(mx_mesh *M, const uint8_t *feature, const double *before
       uint32_t *g = mx_realloc(cand, 2 * cap * sizeof *cand);
       if (!g) {
         mx_free(cand);
-        mx_free(pairs);
+        mx_free(off);
+        mx_free(inc);
         return MX_ENOMEM;
       }
       cand = g;
@@ -86,20 +60,20 @@ static int give_up_pass(mx_mesh *M, const uint8_t *feature, const double *before
     }
     cand[nc++] = (uint32_t)c;
   }
-#define SPOILT(c) (mx_jens_invalid(M->jens[c]) || \
-                   (M->jens[c] < floor && M->jens[c] < ((c) < ncb ? q_before[c] : 1.0)))
   for (int round = 0; round < 64; round++) {
     /* the new nodes of spoilt elements moved to their best points first,
      * then the moved nodes of those still spoilt put back */
     for (size_t i = 0; i < nc; i++) {
       const size_t c = cand[i];
-      for (int k = 0; k < mx_cell_nodes[M->type[c]] && SPOILT(c); k++)
-        if (M->conn[8 * c + k] >= nb) recentre(M, pairs, np, M->conn[8 * c + k]);
+      for (int k = 0; k < mx_cell_nodes[M->type[c]] && spoilt(M, c, floor, q_before, ncb); k++) {
+        const uint32_t v = M->conn[8 * c + k];
+        if (v >= nb) mx_mesh_best_point(M, v, inc + off[v], (size_t)(off[v + 1] - off[v]));
+      }
     }
     size_t n = 0;
     for (size_t i = 0; i < nc; i++) {
       const size_t c = cand[i];
-      if (!SPOILT(c)) continue;
+      if (!spoilt(M, c, floor, q_before, ncb)) continue;
       /* the nodes moved beside the features first, the feature nodes
        * only when no other moved node is left */
       for (int pass = 0, done = 0; pass < 2 && !done; pass++)
@@ -114,18 +88,12 @@ static int give_up_pass(mx_mesh *M, const uint8_t *feature, const double *before
     }
     if (!n) break;
     *count += n;
-    for (size_t i = 0; i < nc; i++) {
-      const size_t c = cand[i];
-      double x[8][3];
-      for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
-        memcpy(x[k], M->xyz + 3 * (size_t)M->conn[8 * c + k], sizeof x[k]);
-      M->jens[c] = (float)mx_jens(M->type[c], (const double(*)[3])x);
-    }
+    for (size_t i = 0; i < nc; i++) M->jens[cand[i]] = (float)mx_cell_jens(M, cand[i]);
   }
-#undef SPOILT
   mx_mesh_summarize(M);
   mx_free(cand);
-  mx_free(pairs);
+  mx_free(off);
+  mx_free(inc);
   return MX_OK;
 }
 
@@ -143,11 +111,8 @@ int mx_feature_give_up(mx_mesh *M, uint8_t **states, mx_split_log *log, const ui
   size_t n = 0;
   for (size_t k = 0; k < log->n; k++) {
     const mx_split_undo *u = log->job + k;
-    for (uint32_t i = 0; i < u->cones && !undo[k]; i++) {
-      const size_t c = i == 0 ? u->cell : u->first + i - 1;
-      undo[k] = mx_jens_invalid(M->jens[c]) ||
-                (M->jens[c] < floor && M->jens[c] < (c < ncb ? q_before[c] : 1.0));
-    }
+    for (uint32_t i = 0; i < u->cones && !undo[k]; i++)
+      undo[k] = (uint8_t)spoilt(M, i == 0 ? u->cell : u->first + i - 1, floor, q_before, ncb);
     n += undo[k];
   }
   fs->unsplit += n;

@@ -866,7 +866,7 @@ static int split_quads(graph *G, uint8_t **states, uint8_t **fixed, uint8_t **mo
       const uint64_t src = G->bf.quad_src[q]; /* 8 * element + face, in order */
       req[n++] = mx_split_request((size_t)(src >> 3), (int)(src & 7), G->qdiag[q] - 1);
     }
-  int rc = mx_mesh_split_quads(M, states, req, n, &st->centres, log);
+  int rc = mx_mesh_split_quads(M, states, req, n, NULL, log);
   mx_free(req);
   st->split += n;
   uint8_t *p[2] = {*fixed, *moved};

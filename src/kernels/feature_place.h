@@ -55,7 +55,7 @@ typedef struct {
   size_t lines, lines_missed;     /* lines followed by mesh edges; not */
   size_t nodes;                   /* nodes moved onto corners and lines */
   size_t sides;                   /* nodes moved onto their region's patch */
-  size_t split, centres;          /* quadrilaterals split along a line, new nodes */
+  size_t split;                   /* quadrilaterals split along a line */
   size_t unsplit;                 /* elements whose split was undone (give-up) */
   size_t given_up;                /* nodes put back (mx_feature_give_up) */
   double seconds;
