@@ -71,6 +71,16 @@ static int features_active(const mx_mesher *m) {
   return m->have_features && !m->p.materials;
 }
 
+/* The nodes that may move after the placement (mx_alloc; NULL: out of
+ * memory): all but the feature nodes; with states, the inside ones only. */
+static uint8_t *movable_nodes(const mx_mesh *M, const uint8_t *fixed, const uint8_t *states) {
+  uint8_t *mv = mx_alloc(M->nnodes + 1);
+  if (mv)
+    for (size_t v = 0; v < M->nnodes; v++)
+      mv[v] = !fixed[v] && (!states || states[v] != MX_NODE_OUTSIDE);
+  return mv;
+}
+
 static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boundary_stats *bs) {
   if (!features_active(m) || !*states_io) return MX_OK;
   const mx_features *F = &m->feat;
@@ -95,12 +105,12 @@ static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boun
   const uint8_t *states = *states_io;
   const double t = mx_wtime();
   if (!st && (M->invalid || M->jens_min < MX_FEATURE_FLOOR)) {
-    for (size_t v = 0; v < M->nnodes; v++) fixed[v] = !fixed[v];
-    const mx_untangle_opts o = {m->p.staircase_quality, 20, 0, fixed, NULL, NULL, NULL, NULL, NULL};
+    uint8_t *movable = movable_nodes(M, fixed, NULL);
+    const mx_untangle_opts o = {m->p.staircase_quality, 20, 0, movable, NULL, NULL, NULL, NULL, NULL};
     size_t moved = 0;
-    st = mx_untangle_with(M, states, &m->SI, &o, &moved);
+    st = movable ? mx_untangle_with(M, states, &m->SI, &o, &moved) : MX_ENOMEM;
     if (!st) mx_mesh_summarize(M);
-    for (size_t v = 0; v < M->nnodes; v++) fixed[v] = !fixed[v]; /* the feature nodes again */
+    mx_free(movable);
   }
   if (!st) st = mx_feature_give_up(M, states_io, &log, fixed, before, nb, q_before, ncb, MX_FEATURE_FLOOR,
                                    fs);
@@ -110,9 +120,10 @@ static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boun
   if (!st && m->p.smooth_rounds > 0) {
     /* the smoothing, after the features: the inside nodes only, so the
      * boundary stays as placed (faces on their side of every ridge) */
-    for (size_t v = 0; v < M->nnodes; v++) fixed[v] = !fixed[v] && states[v] != MX_NODE_OUTSIDE;
-    const mx_smooth_opts so = {m->p.smooth_rounds, MX_SMOOTH_TARGET, fixed};
-    st = mx_smooth(M, states, &m->SI, &so, &bs->smoothing);
+    uint8_t *movable = movable_nodes(M, fixed, states);
+    const mx_smooth_opts so = {m->p.smooth_rounds, MX_SMOOTH_TARGET, movable};
+    st = movable ? mx_smooth(M, states, &m->SI, &so, &bs->smoothing) : MX_ENOMEM;
+    mx_free(movable);
   }
   m->rec->S.features_kept = !st;
   mx_free(fixed);
