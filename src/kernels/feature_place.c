@@ -35,6 +35,9 @@ typedef struct {
   uint32_t *bnode;
   double lo[3], h;       /* the grid: cells of side h from lo */
   uint32_t *loc;         /* per node: its place in the current tube, or UINT32_MAX */
+  const uint32_t *exit_of; /* NULL, or per node: the line whose corner exit it
+                            * is (UINT32_MAX: none), closed to other lines */
+  uint32_t line;          /* the line being placed */
 } graph;
 
 static const uint32_t *face_nodes(const graph *G, size_t f, int *n) {
@@ -395,6 +398,7 @@ static size_t find_path(graph *G, search *W, const double *p, size_t n, uint32_t
     for (uint32_t k = G->aoff[u]; k < G->aoff[u + 1]; k++) {
       const uint32_t w = G->adj[k], j = G->loc[w];
       if (j == UINT32_MAX || (G->fixed[w] && w != b)) continue;
+      if (G->exit_of && G->exit_of[w] != UINT32_MAX && G->exit_of[w] != G->line) continue;
       if (G->aedge[k] >= G->ne) continue; /* diagonals: shortcut() only */
       /* forward mostly: a step may go back along the line by a quarter of
        * its length at most, and pays four times what it goes back
@@ -617,6 +621,258 @@ static uint32_t taken_at(const uint64_t *key, const uint32_t *node, size_t n, co
   uint32_t v = UINT32_MAX;
   for (size_t i = mx_lower_u64(key, n, k); i < n && key[i] == k && v == UINT32_MAX; i++) v = node[i];
   return v;
+}
+
+/* ---- the lines, and a second try at their corners ----------------------- */
+
+/* The paths placed, line by line (line i's nodes are node[at[i] .. at[i]
+ * + len[i]); none for a line missed or a loop), and whether each was
+ * placed. */
+typedef struct {
+  uint32_t *at, *len, *node;
+  size_t n, cap;
+  uint8_t *ok;
+  double *sub; /* a loop's second half */
+} line_paths;
+
+static int keep_path(line_paths *lp, size_t i, const uint32_t *path, size_t k) {
+  if (lp->n + k > lp->cap &&
+      grow((void **)&lp->node, &lp->cap, lp->n + k > 2 * lp->cap ? lp->n + k : 2 * lp->cap, sizeof *lp->node))
+    return MX_ENOMEM;
+  memcpy(lp->node + lp->n, path, k * sizeof *path);
+  lp->at[i] = (uint32_t)lp->n;
+  lp->len[i] = (uint32_t)k;
+  lp->n += k;
+  return MX_OK;
+}
+
+/* Line i placed (open: between its corners' nodes; a loop: in two halves
+ * from two points taken on it), its paths kept in lp. */
+static int place_line(graph *G, search *W, line_paths *lp, const mx_feature_lines *L, size_t i,
+                      const uint64_t *ckey, const uint32_t *cnode, uint8_t *moved,
+                      mx_feature_stats *st) {
+  uint8_t *fixed = (uint8_t *)G->fixed;
+  const double *p = L->xyz + 3 * L->first[i];
+  const size_t n = L->first[i + 1] - L->first[i];
+  int ok = 1, nomem = 0;
+  G->line = (uint32_t)i;
+  if (!L->loop[i]) {
+    /* the nodes the corners at its ends took */
+    const uint32_t ea = taken_at(ckey, cnode, L->ncorners, p);
+    const uint32_t eb = taken_at(ckey, cnode, L->ncorners, p + 3 * (n - 1));
+    size_t k = ea != UINT32_MAX && eb != UINT32_MAX && ea != eb ? find_path(G, W, p, n, ea, eb, &nomem) : 0;
+    ok = k >= 2 && place_path(G, fixed, moved, W->path, k, p, n, W->t, &st->nodes);
+    if (ok && keep_path(lp, i, W->path, k)) nomem = 1;
+  } else if (n >= 3) {
+    const size_t mid = n / 2;
+    double *sub = mx_realloc(lp->sub, 3 * (n - mid + 2) * sizeof *sub);
+    if (!sub) return MX_ENOMEM;
+    lp->sub = sub;
+    const uint32_t a = take_point(G, fixed, moved, p);
+    const uint32_t b = a == UINT32_MAX ? a : take_point(G, fixed, moved, p + 3 * mid);
+    if (b == UINT32_MAX) ok = 0;
+    else {
+      st->nodes += 2;
+      size_t k = find_path(G, W, p, mid + 1, a, b, &nomem);
+      ok = k >= 2 && place_path(G, fixed, moved, W->path, k, p, mid + 1, W->t, &st->nodes);
+      memcpy(sub, p + 3 * mid, 3 * (n - mid) * sizeof *sub);
+      memcpy(sub + 3 * (n - mid), p, 3 * sizeof *sub);
+      k = ok && !nomem ? find_path(G, W, sub, n - mid + 1, b, a, &nomem) : 0;
+      ok = ok && k >= 2 && place_path(G, fixed, moved, W->path, k, sub, n - mid + 1, W->t, &st->nodes);
+    }
+  }
+  if (nomem) return MX_ENOMEM;
+  lp->ok[i] = (uint8_t)ok;
+  if (ok) st->lines++;
+  else st->lines_missed++;
+  return MX_OK;
+}
+
+/* Line i's path taken back: its inner nodes to their places before (x0),
+ * free again, its edges unmarked. */
+static void unplace_line(graph *G, line_paths *lp, size_t i, uint8_t *moved, const double *x0,
+                         mx_feature_stats *st) {
+  uint8_t *fixed = (uint8_t *)G->fixed;
+  const uint32_t *path = lp->node + lp->at[i];
+  const size_t k = lp->len[i];
+  for (size_t j = 0; j + 1 < k; j++) {
+    const uint32_t e = edge_between(G, path[j], path[j + 1]);
+    if (e == UINT32_MAX) continue;
+    if (e < G->ne) G->eline[e] = 0;
+    else {
+      G->qdiag[(e - G->ne) / 2] = 0;
+      G->nsplit--;
+    }
+  }
+  for (size_t j = 1; j + 1 < k; j++) {
+    const uint32_t v = path[j];
+    memcpy(G->M->xyz + 3 * (size_t)v, x0 + 3 * (size_t)v, 3 * sizeof *x0);
+    fixed[v] = 0;
+    moved[v] = 0;
+    st->nodes--;
+  }
+  lp->ok[i] = 0;
+  lp->len[i] = 0;
+  st->lines--;
+}
+
+/* A line's direction out of its end `end` (a unit vector). */
+static void line_dir(const mx_feature_lines *L, size_t i, int end, double *d) {
+  const size_t f = L->first[i], np = L->first[i + 1] - f;
+  const double *p = L->xyz + 3 * (f + (end ? np - 1 : 0)), *q = end ? p - 3 : p + 3;
+  const double l = dist3(p, q);
+  for (int a = 0; a < 3; a++) d[a] = l > 0 ? (q[a] - p[a]) / l : 0.0;
+}
+
+/* The tries at the corners of the lines missed. Measured: the
+ * tetrahedron at -s 5 places 4 of its 5 lines again on the first try
+ * (another one is then missed: lines wall each other off where they
+ * converge) and all 6 on the second. */
+#define RETRIES 3
+
+/* The open lines missed tried again: every open line at a corner of a
+ * missed one is taken back, each such corner's edges handed out as exits
+ * (each line the free neighbour most along its direction, within 60
+ * degrees, best pairs first), closed to the other lines, and the lines
+ * placed again, the missed ones first. Kept when as many lines are placed
+ * as before or more (another line missed is tried next); otherwise the
+ * placement before is restored. Measured: on the tetrahedron, whose
+ * corners have four edges, the first lines took the edges the last one
+ * needed. */
+static int retry_at_corners(graph *G, search *W, line_paths *lp, const mx_feature_lines *L,
+                            const uint64_t *ckey, const uint32_t *cnode, uint8_t *moved,
+                            const double *x0, mx_feature_stats *st) {
+  const mx_mesh *M = G->M;
+  uint8_t *cmark = mx_calloc(M->nnodes + 1); /* the corners' nodes to open again */
+  uint32_t *exit_of = mx_alloc((M->nnodes + 1) * sizeof *exit_of);
+  uint32_t *redo = mx_alloc((L->nlines + 1) * sizeof *redo);
+  int rc = cmark && exit_of && redo ? MX_OK : MX_ENOMEM;
+  size_t nr = 0, before = 0, after = 0;
+  uint32_t *old = NULL; /* the paths taken back, for a restore: line i's at old[at[i]] */
+  uint32_t *old_at = NULL, *old_len = NULL;
+  if (rc) goto out;
+  for (size_t i = 0; i < L->nlines; i++) {
+    if (L->loop[i] || lp->ok[i]) continue;
+    const double *p = L->xyz + 3 * L->first[i];
+    const size_t n = L->first[i + 1] - L->first[i];
+    const uint32_t ea = taken_at(ckey, cnode, L->ncorners, p);
+    const uint32_t eb = taken_at(ckey, cnode, L->ncorners, p + 3 * (n - 1));
+    if (ea == UINT32_MAX || eb == UINT32_MAX || ea == eb) continue;
+    cmark[ea] = cmark[eb] = 1;
+  }
+  /* the lines to place again: the missed ones first */
+  for (int pass = 0; pass < 2; pass++)
+    for (size_t i = 0; i < L->nlines; i++) {
+      if (L->loop[i] || (size_t)lp->ok[i] != (size_t)pass) continue;
+      const double *p = L->xyz + 3 * L->first[i];
+      const size_t n = L->first[i + 1] - L->first[i];
+      const uint32_t ea = taken_at(ckey, cnode, L->ncorners, p);
+      const uint32_t eb = taken_at(ckey, cnode, L->ncorners, p + 3 * (n - 1));
+      if ((ea != UINT32_MAX && cmark[ea]) || (eb != UINT32_MAX && cmark[eb])) redo[nr++] = (uint32_t)i;
+    }
+  if (!nr) goto out;
+  for (size_t r = 0; r < nr; r++) before += lp->ok[redo[r]];
+  /* the placed ones taken back, their paths kept for a restore */
+  size_t nold = 0;
+  for (size_t r = 0; r < nr; r++) nold += lp->len[redo[r]];
+  old = mx_alloc((nold + 1) * sizeof *old);
+  old_at = mx_alloc((nr + 1) * sizeof *old_at);
+  old_len = mx_alloc((nr + 1) * sizeof *old_len);
+  if (!old || !old_at || !old_len) {
+    rc = MX_ENOMEM;
+    goto out;
+  }
+  nold = 0;
+  for (size_t r = 0; r < nr; r++) {
+    const uint32_t i = redo[r];
+    old_at[r] = (uint32_t)nold;
+    old_len[r] = lp->len[i];
+    memcpy(old + nold, lp->node + lp->at[i], lp->len[i] * sizeof *old);
+    nold += lp->len[i];
+    if (lp->ok[i]) unplace_line(G, lp, i, moved, x0, st);
+    else st->lines_missed--;
+  }
+  /* the exits, best (line, edge) pairs first */
+  for (size_t v = 0; v < M->nnodes; v++) exit_of[v] = UINT32_MAX;
+  for (size_t r = 0; r < nr; r++) { /* at both ends of every line placed again */
+    const uint32_t i = redo[r];
+    for (int end = 0; end < 2; end++) {
+      const double *p = L->xyz + 3 * (L->first[i] + (end ? L->first[i + 1] - L->first[i] - 1 : 0));
+      const uint32_t c = taken_at(ckey, cnode, L->ncorners, p);
+      if (c != UINT32_MAX) cmark[c] = 1;
+    }
+  }
+  for (size_t v = 0; v < M->nnodes; v++) {
+    if (!cmark[v]) continue;
+    /* the lines out of v among those placed again, and their directions */
+    for (;;) {
+      double best = 0.5;
+      uint32_t bi = UINT32_MAX, bw = UINT32_MAX;
+      for (size_t r = 0; r < nr; r++) {
+        const uint32_t i = redo[r];
+        const size_t f = L->first[i], np = L->first[i + 1] - f;
+        for (int end = 0; end < 2; end++) {
+          if (taken_at(ckey, cnode, L->ncorners, L->xyz + 3 * (f + (end ? np - 1 : 0))) != v) continue;
+          int has = 0;
+          for (uint32_t k = G->aoff[v]; k < G->aoff[v + 1] && !has; k++) has = exit_of[G->adj[k]] == i;
+          if (has) continue;
+          double d[3];
+          line_dir(L, i, end, d);
+          for (uint32_t k = G->aoff[v]; k < G->aoff[v + 1]; k++) {
+            const uint32_t w = G->adj[k];
+            if (G->aedge[k] >= G->ne || G->fixed[w] || exit_of[w] != UINT32_MAX) continue;
+            const double *xv = M->xyz + 3 * v, *xw = M->xyz + 3 * (size_t)w;
+            const double u[3] = {xw[0] - xv[0], xw[1] - xv[1], xw[2] - xv[2]};
+            const double l = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+            const double c = l > 0 ? (u[0] * d[0] + u[1] * d[1] + u[2] * d[2]) / l : -1.0;
+            if (c > best || (c == best && bi != UINT32_MAX && (i < bi || (i == bi && w < bw)))) {
+              best = c;
+              bi = i;
+              bw = w;
+            }
+          }
+        }
+      }
+      if (bi == UINT32_MAX) break;
+      exit_of[bw] = bi;
+    }
+  }
+  G->exit_of = exit_of;
+  for (size_t r = 0; r < nr && !rc; r++) rc = place_line(G, W, lp, L, redo[r], ckey, cnode, moved, st);
+  G->exit_of = NULL;
+  if (rc) goto out;
+  for (size_t r = 0; r < nr; r++) after += lp->ok[redo[r]];
+  if (after >= before) goto out;
+  /* fewer: the placement before back, path by path as it was made */
+  for (size_t r = 0; r < nr; r++) {
+    const uint32_t i = redo[r];
+    if (lp->ok[i]) unplace_line(G, lp, i, moved, x0, st);
+    else st->lines_missed--;
+  }
+  for (size_t r = 0; r < nr && !rc; r++) {
+    const uint32_t i = redo[r];
+    if (!old_len[r]) {
+      st->lines_missed++;
+      continue;
+    }
+    const double *p = L->xyz + 3 * L->first[i];
+    const size_t n = L->first[i + 1] - L->first[i];
+    if (grow((void **)&W->t, &W->tcap, old_len[r], sizeof *W->t)) rc = MX_ENOMEM;
+    else if (place_path(G, (uint8_t *)G->fixed, moved, old + old_at[r], old_len[r], p, n, W->t, &st->nodes)) {
+      lp->ok[i] = 1;
+      st->lines++;
+      rc = keep_path(lp, i, old + old_at[r], old_len[r]);
+    } else
+      st->lines_missed++; /* cannot be: the same path from the same places */
+  }
+out:
+  mx_free(cmark);
+  mx_free(exit_of);
+  mx_free(redo);
+  mx_free(old);
+  mx_free(old_at);
+  mx_free(old_len);
+  return rc;
 }
 
 /* ---- sides ------------------------------------------------------------- */
@@ -899,10 +1155,11 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
   search W;
   memset(&W, 0, sizeof W);
   uint8_t *mask = mx_alloc(M->nnodes + 1), *moved = mx_calloc(M->nnodes + 1);
-  double *sub = NULL;
   uint64_t *ckey = NULL;
   uint32_t *cnode = NULL, *doff = NULL;
-  double *dir = NULL;
+  double *dir = NULL, *x0 = NULL;
+  line_paths lp;
+  memset(&lp, 0, sizeof lp);
   int rc = mask && moved ? MX_OK : MX_ENOMEM;
   if (!rc) rc = graph_open(&G, *states, mask);
   if (rc) goto done;
@@ -930,41 +1187,20 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
     else st->corners++;
   }
   st->nodes = st->corners;
-  /* lines: open ones between their corners' nodes, loops in two halves */
-  for (size_t i = 0; i < L->nlines && !rc; i++) {
-    const double *p = L->xyz + 3 * L->first[i];
-    const size_t n = L->first[i + 1] - L->first[i];
-    int ok = 1, nomem = 0;
-    if (!L->loop[i]) {
-      /* the nodes the corners at its ends took */
-      const uint32_t ea = taken_at(ckey, cnode, L->ncorners, p);
-      const uint32_t eb = taken_at(ckey, cnode, L->ncorners, p + 3 * (n - 1));
-      size_t k = ea != UINT32_MAX && eb != UINT32_MAX && ea != eb ? find_path(&G, &W, p, n, ea, eb, &nomem) : 0;
-      ok = k >= 2 && place_path(&G, fixed, moved, W.path, k, p, n, W.t, &st->nodes);
-    } else if (n >= 3) {
-      const size_t mid = n / 2;
-      sub = mx_realloc(sub, 3 * (n - mid + 2) * sizeof *sub);
-      if (!sub) {
-        rc = MX_ENOMEM;
-        break;
-      }
-      const uint32_t a = take_point(&G, fixed, moved, p);
-      const uint32_t b = a == UINT32_MAX ? a : take_point(&G, fixed, moved, p + 3 * mid);
-      if (b == UINT32_MAX) ok = 0;
-      else {
-        st->nodes += 2;
-        size_t k = find_path(&G, &W, p, mid + 1, a, b, &nomem);
-        ok = k >= 2 && place_path(&G, fixed, moved, W.path, k, p, mid + 1, W.t, &st->nodes);
-        memcpy(sub, p + 3 * mid, 3 * (n - mid) * sizeof *sub);
-        memcpy(sub + 3 * (n - mid), p, 3 * sizeof *sub);
-        k = ok && !nomem ? find_path(&G, &W, sub, n - mid + 1, b, a, &nomem) : 0;
-        ok = ok && k >= 2 && place_path(&G, fixed, moved, W.path, k, sub, n - mid + 1, W.t, &st->nodes);
-      }
-    }
-    if (nomem) rc = MX_ENOMEM;
-    if (ok) st->lines++;
-    else st->lines_missed++;
+  x0 = mx_alloc((3 * M->nnodes + 1) * sizeof *x0);
+  if (!x0) {
+    rc = MX_ENOMEM;
+    goto done;
   }
+  memcpy(x0, M->xyz, 3 * M->nnodes * sizeof *x0);
+  /* lines: open ones between their corners' nodes, loops in two halves */
+  lp.at = mx_calloc((L->nlines + 1) * sizeof *lp.at);
+  lp.len = mx_calloc((L->nlines + 1) * sizeof *lp.len);
+  lp.ok = mx_calloc(L->nlines + 1);
+  if (!lp.at || !lp.len || !lp.ok) rc = MX_ENOMEM;
+  for (size_t i = 0; i < L->nlines && !rc; i++) rc = place_line(&G, &W, &lp, L, i, ckey, cnode, moved, st);
+  for (int t = 0; t < RETRIES && !rc && st->lines_missed; t++)
+    rc = retry_at_corners(&G, &W, &lp, L, ckey, cnode, moved, x0, st);
   /* sides, near the placed lines (the nodes of the edges around theirs) */
   if (!rc && in->patch && in->npatches > 1) {
     memset(mask, 0, M->nnodes);
@@ -998,11 +1234,16 @@ done:
   mx_free(W.t);
   mx_free(mask);
   mx_free(moved);
-  mx_free(sub);
   mx_free(ckey);
   mx_free(cnode);
   mx_free(doff);
   mx_free(dir);
+  mx_free(x0);
+  mx_free(lp.at);
+  mx_free(lp.len);
+  mx_free(lp.node);
+  mx_free(lp.ok);
+  mx_free(lp.sub);
   st->seconds = mx_wtime() - t0;
   return rc;
 }
