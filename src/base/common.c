@@ -272,6 +272,13 @@ void *mx_calloc(size_t bytes) {
 
 void *mx_realloc(void *p, size_t bytes) {
   if (hook_fails()) return out_of_memory(bytes);
+  /* a big array (mx_alloc rounds them up to 2 MB) grown or shrunk within
+   * its last 2 MB stays: glibc copies an aligned block it reallocates
+   * (measured: 0.3 s to add 4 elements to a 3.5 million element mesh) */
+  if (p && bytes >= 16 * ((size_t)2 << 20)) {
+    const size_t have = malloc_usable_size(p);
+    if (bytes <= have && have - bytes < ((size_t)2 << 20)) return p;
+  }
   void *q = realloc(p, bytes ? bytes : 1);
   return q ? q : out_of_memory(bytes);
 }
