@@ -5,7 +5,7 @@
 # --surface` (an independent reading of the file written):
 #  - every run exits 0 with a valid mesh (no defect);
 #  - the polyhedra whose features the placement follows entirely today
-#    (cube, wedge, L-bracket; the tetrahedron from -s 4): every corner on a node (distance 0), every
+#    (cube, wedge, L-bracket; the tetrahedron at -s 4 and 6): every corner on a node (distance 0), every
 #    ridge within 1e-9 of the diagonal of a chain of boundary edges, and
 #    the volume within 1e-6 (the boundary faces lie on the input's faces);
 #    without features (--no-features) the same cube misses its corners by
@@ -14,7 +14,7 @@
 #  - the cylinder (ridges on the rims only, no corner): ridge distance
 #    within the chord's sagitta (a mesh edge spans several of the rim's 48
 #    segments) and below what --no-features gives;
-#  - the step (a 0.05 thick ledge) and the tetrahedron at -s 3: valid,
+#  - the step (a 0.05 thick ledge) and the tetrahedron at -s 3 and 5: valid,
 #    the distances reported (the placement misses some of their ridges
 #    today: measured, not asserted);
 #  - the summary's distances (--json) agree with check's (9 digits);
@@ -82,9 +82,9 @@ lt() { "$PY" -c "import sys; sys.exit(0 if float('$1') <= float('$2') else 1)"; 
 for s in 3 4 5; do
   exact="cube lbracket wedge"
   rest="step cylinder"
-  # the tetrahedron from -s 4 (at -s 3 its corners' octants hold 2 of its
-  # lines each and one is missed)
-  if [ "$s" -ge 4 ]; then exact="$exact tet"; else rest="tet $rest"; fi
+  # the tetrahedron at -s 4 (at -s 3 and 5 one of its 6 lines is missed:
+  # its corners have 4 boundary edges for 3 lines; at -s 6: below)
+  if [ "$s" = 4 ]; then exact="$exact tet"; else rest="tet $rest"; fi
   for name in $exact; do
     f="$T/$name.off"
     read -r e d rd cd ve jm agree <<<"$(mesh "$f" "$s")"
@@ -100,6 +100,14 @@ for s in 3 4 5; do
     [ "$agree" = 1 ] && ok "$name -s $s: the summary's distances are check's" || ko "$name -s $s: summary and check disagree"
   done
 done
+
+# the tetrahedron at -s 6: its 6 lines kept, exact
+read -r e d rd cd ve jm agree <<<"$(mesh "$T/tet.off" 6)"
+if [ "$e" = 0 ] && [ "$d" = 0 ] && lt "$cd" 1e-12 && lt "$rd" 1e-9 && lt "${ve#-}" 1e-6; then
+  ok "tet -s 6: corners on nodes ($cd), ridges on edges ($rd), volume error $ve, J_ENS min $jm"
+else
+  ko "tet -s 6: exit $e defects $d corner $cd ridge $rd volume $ve"
+fi
 
 # the splits: the step at -s 5 has lines crossing quadrilaterals along a
 # diagonal (their elements split, kernels/cell_split.c); the file written

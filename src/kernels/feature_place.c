@@ -283,6 +283,9 @@ typedef struct {
   uint32_t *tube;
   size_t cap;
   double *cost, *d, *s; /* per tube node: cost, distance to the line, place along it */
+  double *pen;          /* per tube node: what it costs for being another line's */
+  const double *oth;    /* the other lines at the ends' corners: corner, direction */
+  int noth;
   uint32_t *prev, *heap;
   size_t wcap;
   uint32_t *path;
@@ -339,6 +342,27 @@ static size_t shortcut(const graph *G, uint32_t *path, size_t k) {
   return n;
 }
 
+/* How much closer x is to another line out of a corner at an end of the
+ * one searched (W->oth: the line's first segment as a ray from the corner,
+ * within OTHERS_REACH mean edges of it) than to this one (d): a path that
+ * strays there walls the other line off where they converge (the
+ * tetrahedron's corners: three lines 60 degrees apart). */
+#define OTHERS_REACH 4.0
+#define OTHERS_COST 4.0
+static double others_closer(const search *W, double h, const double *x, double d) {
+  double worst = 0.0;
+  for (int o = 0; o < W->noth; o++) {
+    const double *c = W->oth + 6 * o, *u = c + 3;
+    const double r[3] = {x[0] - c[0], x[1] - c[1], x[2] - c[2]};
+    const double r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+    if (r2 > OTHERS_REACH * OTHERS_REACH * h * h) continue;
+    const double t = r[0] * u[0] + r[1] * u[1] + r[2] * u[2];
+    const double e = t <= 0.0 ? sqrt(r2) : sqrt(fmax(0.0, r2 - t * t));
+    if (d - e > worst) worst = d - e;
+  }
+  return worst;
+}
+
 /* The path of boundary edges from node a to node b near the polyline
  * p[0..n) (a and b excepted, through nodes not fixed): its nodes a .. b in
  * W->path, their count returned (0: none). */
@@ -377,7 +401,9 @@ static size_t find_path(graph *G, search *W, const double *p, size_t n, uint32_t
     if (pr) W->prev = pr;
     uint32_t *hp = mx_realloc(W->heap, hcap * sizeof *W->heap);
     if (hp) W->heap = hp;
-    if (!d || !sp || !pr || !hp) {
+    double *pn = mx_realloc(W->pen, (m + 1) * sizeof *W->pen);
+    if (pn) W->pen = pn;
+    if (!d || !sp || !pr || !hp || !pn) {
       *nomem = 1;
       goto out;
     }
@@ -386,6 +412,7 @@ static size_t find_path(graph *G, search *W, const double *p, size_t n, uint32_t
     W->cost[i] = INFINITY;
     W->prev[i] = UINT32_MAX;
     W->d[i] = on_polyline(p, n, X + 3 * (size_t)W->tube[i], NULL, W->s + i);
+    W->pen[i] = OTHERS_COST * others_closer(W, G->h, X + 3 * (size_t)W->tube[i], W->d[i]);
   }
   size_t nh = 0;
   const uint32_t la = G->loc[a], lb = G->loc[b];
@@ -406,7 +433,7 @@ static size_t find_path(graph *G, search *W, const double *p, size_t n, uint32_t
       const double len = dist3(X + 3 * (size_t)u, X + 3 * (size_t)w);
       const double back = W->s[i] - W->s[j];
       if (back > 0.25 * len) continue;
-      const double c = W->cost[i] + len + 2.0 * (W->d[i] + W->d[j]) + (back > 0 ? 4.0 * back : 0.0);
+      const double c = W->cost[i] + len + 2.0 * (W->d[i] + W->d[j]) + (back > 0 ? 4.0 * back : 0.0) + W->pen[j];
       if (c < W->cost[j]) {
         W->cost[j] = c;
         W->prev[j] = i;
@@ -633,6 +660,12 @@ typedef struct {
   size_t n, cap;
   uint8_t *ok;
   double *sub; /* a loop's second half */
+  /* the open lines' ends at each corner (by its key's rank): line * 2 +
+   * end in cl[cl_off[k] .. cl_off[k + 1]); the other lines at a line's
+   * corners, for the search (search.oth) */
+  uint32_t *cl_off, *cl;
+  double *oth;
+  size_t noth, oth_cap;
 } line_paths;
 
 static int keep_path(line_paths *lp, size_t i, const uint32_t *path, size_t k) {
@@ -643,6 +676,72 @@ static int keep_path(line_paths *lp, size_t i, const uint32_t *path, size_t k) {
   lp->at[i] = (uint32_t)lp->n;
   lp->len[i] = (uint32_t)k;
   lp->n += k;
+  return MX_OK;
+}
+
+/* A line's direction out of its end `end` (a unit vector). */
+static void line_dir(const mx_feature_lines *L, size_t i, int end, double *d) {
+  const size_t f = L->first[i], np = L->first[i + 1] - f;
+  const double *p = L->xyz + 3 * (f + (end ? np - 1 : 0)), *q = end ? p - 3 : p + 3;
+  const double l = dist3(p, q);
+  for (int a = 0; a < 3; a++) d[a] = l > 0 ? (q[a] - p[a]) / l : 0.0;
+}
+
+/* The rank of the corner at x among the sorted keys (n: none). */
+static size_t corner_rank(const uint64_t *ckey, size_t n, const double *x) {
+  const uint64_t key = point_key(x);
+  const size_t k = mx_lower_u64(ckey, n, key);
+  return k < n && ckey[k] == key ? k : n;
+}
+
+/* lp->cl_off, lp->cl: the open lines' ends at each corner. */
+static int corner_lines(line_paths *lp, const mx_feature_lines *L, const uint64_t *ckey) {
+  const size_t nc = L->ncorners;
+  lp->cl_off = mx_calloc((nc + 2) * sizeof *lp->cl_off);
+  lp->cl = mx_alloc((2 * L->nlines + 1) * sizeof *lp->cl);
+  if (!lp->cl_off || !lp->cl) return MX_ENOMEM;
+  for (int pass = 0; pass < 2; pass++) {
+    for (size_t i = 0; i < L->nlines; i++) {
+      if (L->loop[i]) continue;
+      const size_t f = L->first[i], np = L->first[i + 1] - f;
+      for (int end = 0; end < 2; end++) {
+        const size_t k = corner_rank(ckey, nc, L->xyz + 3 * (f + (end ? np - 1 : 0)));
+        if (k == nc) continue;
+        if (pass == 0) lp->cl_off[k + 2]++;
+        else lp->cl[lp->cl_off[k + 1]++] = (uint32_t)(2 * i + (size_t)end);
+      }
+    }
+    if (pass == 0)
+      for (size_t k = 0; k < nc; k++) lp->cl_off[k + 2] += lp->cl_off[k + 1];
+  }
+  return MX_OK;
+}
+
+/* lp->oth: the other open lines at the corners at line i's ends, each as
+ * its corner and its direction out of it. */
+static int others_at_ends(line_paths *lp, const mx_feature_lines *L, size_t i, const uint64_t *ckey) {
+  lp->noth = 0;
+  if (!lp->cl) return MX_OK;
+  const size_t f = L->first[i], np = L->first[i + 1] - f;
+  for (int end = 0; end < 2; end++) {
+    const size_t k = corner_rank(ckey, L->ncorners, L->xyz + 3 * (f + (end ? np - 1 : 0)));
+    if (k == L->ncorners) continue;
+    for (uint32_t q = lp->cl_off[k]; q < lp->cl_off[k + 1]; q++) {
+      const size_t j = lp->cl[q] / 2;
+      if (j == i) continue;
+      if (lp->noth == lp->oth_cap) {
+        const size_t cap = lp->oth_cap ? 2 * lp->oth_cap : 8;
+        double *o = mx_realloc(lp->oth, 6 * cap * sizeof *o);
+        if (!o) return MX_ENOMEM;
+        lp->oth = o;
+        lp->oth_cap = cap;
+      }
+      double *o = lp->oth + 6 * lp->noth++;
+      const int e = (int)(lp->cl[q] & 1);
+      memcpy(o, L->xyz + 3 * (L->first[j] + (e ? L->first[j + 1] - L->first[j] - 1 : 0)), 3 * sizeof *o);
+      line_dir(L, j, e, o + 3);
+    }
+  }
   return MX_OK;
 }
 
@@ -660,7 +759,11 @@ static int place_line(graph *G, search *W, line_paths *lp, const mx_feature_line
     /* the nodes the corners at its ends took */
     const uint32_t ea = taken_at(ckey, cnode, L->ncorners, p);
     const uint32_t eb = taken_at(ckey, cnode, L->ncorners, p + 3 * (n - 1));
+    if (others_at_ends(lp, L, i, ckey)) return MX_ENOMEM;
+    W->oth = lp->oth;
+    W->noth = (int)lp->noth;
     size_t k = ea != UINT32_MAX && eb != UINT32_MAX && ea != eb ? find_path(G, W, p, n, ea, eb, &nomem) : 0;
+    W->noth = 0;
     ok = k >= 2 && place_path(G, fixed, moved, W->path, k, p, n, W->t, &st->nodes);
     if (ok && keep_path(lp, i, W->path, k)) nomem = 1;
   } else if (n >= 3) {
@@ -716,13 +819,6 @@ static void unplace_line(graph *G, line_paths *lp, size_t i, uint8_t *moved, con
   st->lines--;
 }
 
-/* A line's direction out of its end `end` (a unit vector). */
-static void line_dir(const mx_feature_lines *L, size_t i, int end, double *d) {
-  const size_t f = L->first[i], np = L->first[i + 1] - f;
-  const double *p = L->xyz + 3 * (f + (end ? np - 1 : 0)), *q = end ? p - 3 : p + 3;
-  const double l = dist3(p, q);
-  for (int a = 0; a < 3; a++) d[a] = l > 0 ? (q[a] - p[a]) / l : 0.0;
-}
 
 /* The tries at the corners of the lines missed. Measured: the
  * tetrahedron at -s 5 places 4 of its 5 lines again on the first try
@@ -750,6 +846,7 @@ static int retry_at_corners(graph *G, search *W, line_paths *lp, const mx_featur
   size_t nr = 0, before = 0, after = 0;
   uint32_t *old = NULL; /* the paths taken back, for a restore: line i's at old[at[i]] */
   uint32_t *old_at = NULL, *old_len = NULL;
+  uint8_t *inredo = NULL; /* per line: placed again */
   if (rc) goto out;
   for (size_t i = 0; i < L->nlines; i++) {
     if (L->loop[i] || lp->ok[i]) continue;
@@ -802,34 +899,38 @@ static int retry_at_corners(graph *G, search *W, line_paths *lp, const mx_featur
       if (c != UINT32_MAX) cmark[c] = 1;
     }
   }
-  for (size_t v = 0; v < M->nnodes; v++) {
-    if (!cmark[v]) continue;
+  inredo = mx_calloc(L->nlines + 1);
+  if (!inredo) {
+    rc = MX_ENOMEM;
+    goto out;
+  }
+  for (size_t r = 0; r < nr; r++) inredo[redo[r]] = 1;
+  for (size_t kc = 0; kc < L->ncorners; kc++) {
+    const uint32_t v = cnode[kc];
+    if (v == UINT32_MAX || !cmark[v]) continue;
     /* the lines out of v among those placed again, and their directions */
     for (;;) {
       double best = 0.5;
       uint32_t bi = UINT32_MAX, bw = UINT32_MAX;
-      for (size_t r = 0; r < nr; r++) {
-        const uint32_t i = redo[r];
-        const size_t f = L->first[i], np = L->first[i + 1] - f;
-        for (int end = 0; end < 2; end++) {
-          if (taken_at(ckey, cnode, L->ncorners, L->xyz + 3 * (f + (end ? np - 1 : 0))) != v) continue;
-          int has = 0;
-          for (uint32_t k = G->aoff[v]; k < G->aoff[v + 1] && !has; k++) has = exit_of[G->adj[k]] == i;
-          if (has) continue;
-          double d[3];
-          line_dir(L, i, end, d);
-          for (uint32_t k = G->aoff[v]; k < G->aoff[v + 1]; k++) {
-            const uint32_t w = G->adj[k];
-            if (G->aedge[k] >= G->ne || G->fixed[w] || exit_of[w] != UINT32_MAX) continue;
-            const double *xv = M->xyz + 3 * v, *xw = M->xyz + 3 * (size_t)w;
-            const double u[3] = {xw[0] - xv[0], xw[1] - xv[1], xw[2] - xv[2]};
-            const double l = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-            const double c = l > 0 ? (u[0] * d[0] + u[1] * d[1] + u[2] * d[2]) / l : -1.0;
-            if (c > best || (c == best && bi != UINT32_MAX && (i < bi || (i == bi && w < bw)))) {
-              best = c;
-              bi = i;
-              bw = w;
-            }
+      for (uint32_t q = lp->cl_off[kc]; q < lp->cl_off[kc + 1]; q++) {
+        const uint32_t i = lp->cl[q] / 2;
+        const int end = (int)(lp->cl[q] & 1);
+        int has = 0;
+        for (uint32_t k = G->aoff[v]; k < G->aoff[v + 1] && !has; k++) has = exit_of[G->adj[k]] == i;
+        if (!inredo[i] || has) continue;
+        double d[3];
+        line_dir(L, i, end, d);
+        for (uint32_t k = G->aoff[v]; k < G->aoff[v + 1]; k++) {
+          const uint32_t w = G->adj[k];
+          if (G->aedge[k] >= G->ne || G->fixed[w] || exit_of[w] != UINT32_MAX) continue;
+          const double *xv = M->xyz + 3 * (size_t)v, *xw = M->xyz + 3 * (size_t)w;
+          const double u[3] = {xw[0] - xv[0], xw[1] - xv[1], xw[2] - xv[2]};
+          const double l = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+          const double c = l > 0 ? (u[0] * d[0] + u[1] * d[1] + u[2] * d[2]) / l : -1.0;
+          if (c > best || (c == best && bi != UINT32_MAX && (i < bi || (i == bi && w < bw)))) {
+            best = c;
+            bi = i;
+            bw = w;
           }
         }
       }
@@ -872,6 +973,7 @@ out:
   mx_free(old);
   mx_free(old_at);
   mx_free(old_len);
+  mx_free(inredo);
   return rc;
 }
 
@@ -1098,9 +1200,86 @@ done:
 
 /* The boundary faces (all of whose nodes are on the surface) and their
  * graph; mask: nnodes bytes of work space. */
-static int graph_open(graph *G, const uint8_t *states, uint8_t *mask) {
+/* A grid of cells of side r, centred on the origin (2^20 cells each way). */
+static graph near_grid(double r) {
+  graph g = {.h = r};
+  for (int a = 0; a < 3; a++) g.lo[a] = -1048576.0 * r;
+  return g;
+}
+
+/* The keys of the 27 cells around x's appended at k[m ..]; the new count. */
+static size_t add_near(const graph *g, const double *x, uint64_t *k, size_t m) {
+  int64_t c[3];
+  cell_of(g, x, c);
+  for (int64_t i = c[0] - 1; i <= c[0] + 1; i++)
+    for (int64_t j = c[1] - 1; j <= c[1] + 1; j++)
+      for (int64_t l = c[2] - 1; l <= c[2] + 1; l++)
+        k[m++] = cell_key(i < 0 ? 0 : i, j < 0 ? 0 : j, l < 0 ? 0 : l);
+  return m;
+}
+
+/* The cells of side r (keys as cell_key on near_grid(r)) within one cell
+ * of the lines' points (taken every r / 2) and corners, sorted, unique:
+ * a point within r of a line is in one of them. */
+static int near_cells(const mx_feature_lines *L, double r, uint64_t **out, size_t *nout) {
+  size_t n = 27 * L->ncorners, m = 0;
+  for (size_t i = 0; i < L->nlines; i++)
+    for (size_t j = L->first[i]; j + 1 < L->first[i + 1]; j++)
+      n += 27 * (2 + (size_t)(2.0 * dist3(L->xyz + 3 * j, L->xyz + 3 * j + 3) / r));
+  uint64_t *k = mx_alloc((n + 1) * sizeof *k);
+  if (!k) return MX_ENOMEM;
+  const graph g = near_grid(r);
+  for (size_t c = 0; c < L->ncorners; c++) m = add_near(&g, L->corner + 3 * c, k, m);
+  for (size_t i = 0; i < L->nlines; i++)
+    for (size_t j = L->first[i]; j + 1 < L->first[i + 1]; j++) {
+      const double *u = L->xyz + 3 * j, *v = u + 3;
+      const size_t steps = 1 + (size_t)(2.0 * dist3(u, v) / r);
+      for (size_t s = 0; s <= steps; s++) {
+        const double t = (double)s / (double)steps;
+        const double x[3] = {u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1]), u[2] + t * (v[2] - u[2])};
+        m = add_near(&g, x, k, m);
+      }
+    }
+  if (mx_sort_u64(k, NULL, m)) {
+    mx_free(k);
+    return MX_ENOMEM;
+  }
+  size_t u = 0;
+  for (size_t i = 0; i < m; i++)
+    if (!u || k[i] != k[u - 1]) k[u++] = k[i];
+  *out = k;
+  *nout = u;
+  return MX_OK;
+}
+
+int mx_feature_near_nodes(const mx_feature_lines *L, double r, const double *xyz, size_t n,
+                          uint8_t *mask) {
+  uint64_t *cells = NULL;
+  size_t nc = 0;
+  if (near_cells(L, r, &cells, &nc)) return MX_ENOMEM;
+  const graph g = near_grid(r);
+  const int64_t nn = (int64_t)n;
+  #pragma omp parallel for schedule(static)
+  for (int64_t v = 0; v < nn; v++)
+    if (mask[v]) {
+      int64_t c[3];
+      cell_of(&g, xyz + 3 * v, c);
+      const uint64_t key = cell_key(c[0], c[1], c[2]);
+      const size_t at = mx_lower_u64(cells, nc, key);
+      mask[v] = at < nc && cells[at] == key;
+    }
+  mx_free(cells);
+  return MX_OK;
+}
+
+/* The graph of the boundary faces (with near > 0: those whose every node
+ * is within reach of the features; a face shared by two elements still
+ * shows in both, so the interior ones are not taken for boundary). */
+static int graph_open(graph *G, const uint8_t *states, uint8_t *mask, const mx_feature_lines *L,
+                      double near) {
   const mx_mesh *M = G->M;
   for (size_t v = 0; v < M->nnodes; v++) mask[v] = states[v] == MX_NODE_OUTSIDE;
+  if (near > 0.0 && mx_feature_near_nodes(L, near, M->xyz, M->nnodes, mask)) return MX_ENOMEM;
   const mx_mesh_view view = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
                              .type = M->type, .conn = M->conn};
   const int rc = mx_boundary_faces_extract_masked(&view, mask, &G->bf);
@@ -1161,7 +1340,7 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
   line_paths lp;
   memset(&lp, 0, sizeof lp);
   int rc = mask && moved ? MX_OK : MX_ENOMEM;
-  if (!rc) rc = graph_open(&G, *states, mask);
+  if (!rc) rc = graph_open(&G, *states, mask, L, in->near);
   if (rc) goto done;
   /* corners, and the node each took by the corner's coordinates */
   ckey = mx_alloc((L->ncorners + 1) * sizeof *ckey);
@@ -1194,6 +1373,7 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
   }
   memcpy(x0, M->xyz, 3 * M->nnodes * sizeof *x0);
   /* lines: open ones between their corners' nodes, loops in two halves */
+  if (!rc) rc = corner_lines(&lp, L, ckey);
   lp.at = mx_calloc((L->nlines + 1) * sizeof *lp.at);
   lp.len = mx_calloc((L->nlines + 1) * sizeof *lp.len);
   lp.ok = mx_calloc(L->nlines + 1);
@@ -1230,6 +1410,10 @@ done:
   mx_free(W.s);
   mx_free(W.prev);
   mx_free(W.heap);
+  mx_free(W.pen);
+  mx_free(lp.cl_off);
+  mx_free(lp.cl);
+  mx_free(lp.oth);
   mx_free(W.path);
   mx_free(W.t);
   mx_free(mask);

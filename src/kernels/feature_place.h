@@ -48,6 +48,10 @@ typedef struct {
   size_t nt;
   const uint32_t *patch;
   size_t npatches;
+  /* > 0: only the boundary within this distance of the lines and corners
+   * is looked at (a few octants at the feature level: the placement moves
+   * no node farther); 0: all of it */
+  double near;
 } mx_feature_input;
 
 typedef struct {
@@ -60,6 +64,13 @@ typedef struct {
   size_t given_up;                /* nodes put back (mx_feature_give_up) */
   double seconds;
 } mx_feature_stats;
+
+/* mask[v] kept only for the nodes within about r of the lines or corners
+ * of L (all those within 3 r / 4; none farther than 4 r): the region the
+ * placement may touch when r is a few octants at the feature level.
+ * Parallel, O(n log(length / r)). */
+int mx_feature_near_nodes(const mx_feature_lines *L, double r, const double *xyz, size_t n,
+                          uint8_t *mask);
 
 /* *states: MX_NODE_OUTSIDE for the nodes on the surface (boundary stage);
  * S: the surface's index; *fixed: nnodes bytes, set here (1: a feature

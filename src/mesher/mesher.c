@@ -15,6 +15,7 @@
 
 #include "io/boundary_faces.h"
 #include "kernels/estimate.h"
+#include "kernels/feature_place.h"
 #include "kernels/grid.h"
 #include "kernels/mesh_edit.h"
 #include "kernels/closures.h"
@@ -740,17 +741,26 @@ static int features_off_surface(mx_mesher *m, size_t *off) {
   if (!f) return MX_ENOMEM;
   const mx_mesh_view v = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
                           .type = M->type, .conn = M->conn};
-  const int st = mx_boundary_node_flags(&v, f);
+  int st = mx_boundary_node_flags(&v, f);
+  /* near the features only: the others were placed as without them */
+  uint8_t *near = st ? NULL : mx_alloc(M->nnodes + 1);
+  if (!st && !near) st = MX_ENOMEM;
+  if (!st) {
+    for (size_t i = 0; i < M->nnodes; i++) near[i] = f[i] != 0;
+    const double r = mx_feature_reach(m);
+    if (r > 0.0) st = mx_feature_near_nodes(&m->feat_lines, r, M->xyz, M->nnodes, near);
+  }
+  mx_free(f);
   if (st) {
-    mx_free(f);
+    mx_free(near);
     return st;
   }
   const double tol = 1e-6 * domain_diagonal(m);
   size_t n = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : n)
   for (size_t v = 0; v < m->M.nnodes; v++)
-    if (f[v] && mx_closest_point_within(&m->SI, m->M.xyz + 3 * v, 2.0 * tol, NULL) > tol) n++;
-  mx_free(f);
+    if (near[v] && mx_closest_point_within(&m->SI, m->M.xyz + 3 * v, 2.0 * tol, NULL) > tol) n++;
+  mx_free(near);
   *off = n;
   return MX_OK;
 }

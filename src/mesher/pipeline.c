@@ -1,6 +1,7 @@
 /* The stages after refinement, chained once: see mesher/pipeline.h. */
 #include "mesher/pipeline.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "kernels/smooth.h"
@@ -67,6 +68,17 @@ int mx_pipeline_transition(mx_mesher *m, const uint32_t *leaves, size_t n, int r
 #define MX_FEATURE_FLOOR 0.05
 #define MX_FEATURE_UNTANGLE_BELOW 0.1
 
+/* The boundary the features are placed on: within NEAR_OCTANTS octants at
+ * the feature level of them (mx_feature_near_nodes keeps all within 3/4 of
+ * that: 6). Their boundary edges are no longer than an octant's diagonal
+ * there; the placement reaches 5 mean edges from a line or corner. */
+#define NEAR_OCTANTS 8.0
+
+double mx_feature_reach(const mx_mesher *m) {
+  const int base = m->feature_level > m->p.surface_level ? m->feature_level : m->p.surface_level;
+  return base > 0 && m->B.req.root_side > 0 ? NEAR_OCTANTS * ldexp(m->B.req.root_side, -base) : 0.0;
+}
+
 /* The features placed on the boundary (kernels/feature_place.h), then the
  * elements they spoilt untangled with the feature nodes fixed; what stays
  * invalid gives its features up (mx_feature_give_up); then the smoothing
@@ -90,7 +102,7 @@ static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boun
   const mx_features *F = &m->feat;
   /* lines from a file: no patches (theirs are the ridges found) */
   const mx_feature_input in = {&m->feat_lines, &m->soup, m->nt_domain,
-                               m->feature_file ? NULL : F->patch, F->npatches};
+                               m->feature_file ? NULL : F->patch, F->npatches, mx_feature_reach(m)};
   uint8_t *fixed = mx_alloc(M->nnodes + 1);
   double *before = mx_alloc((3 * M->nnodes + 1) * sizeof *before);
   float *q_before = mx_alloc((M->ncells + 1) * sizeof *q_before);

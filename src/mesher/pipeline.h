@@ -29,6 +29,9 @@ int mx_pipeline_transition(mx_mesher *m, const uint32_t *leaves, size_t n, int r
                            mx_mesh *M);
 int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh *M,
                          uint8_t **states, mx_boundary_stats *bs);
+/* The distance from the features within which their placement looks at
+ * the boundary (mx_feature_input.near; 0: everywhere). */
+double mx_feature_reach(const mx_mesher *m);
 /* m->SI over the soup's domain triangles, built the first time it is
  * asked for and kept (the only place it is built): with --repair-input the
  * side of a point is the winding number's. */
