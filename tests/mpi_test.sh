@@ -390,6 +390,10 @@ expect_exit 2 "--p4est --materials: no restart file" mpi 1 --demo -s 3 --materia
   --restart "$T/x.oct"
 has "$T/err" "no -c, --restart, --boundary or --size" "--p4est: the usage message names -c, --restart, --boundary, --size"
 expect_exit 2 "--p4est: no --size (a size field)" mpi 1 --demo --p4est --size "0.1"
+expect_exit 2 "--p4est: no --feature-angle (no sharp features on the distributed path)" mpi 1 --demo -s 3 \
+  --p4est --feature-angle 40 -o "$T/x.pvtu"
+has "$T/err" "keeps no sharp features yet" "--p4est --feature-angle: the message says why"
+expect_exit 2 "--p4est: no --smooth" mpi 1 --demo -s 3 --p4est --smooth 2 -o "$T/x.pvtu"
 expect_exit 2 "--p4est --materials: no -c" mpi 1 --demo --materials --p4est -c "$T/x.oct"
 expect_exit 2 "--p4est --materials: no --boundary" mpi 1 --demo -s 3 --materials --p4est \
   --boundary "$T/b.vtu"

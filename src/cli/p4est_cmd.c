@@ -62,6 +62,13 @@ int mx_p4est_main(int argc, char **argv) {
                       "meshes from the surfaces and levels only)");
     st = MX_EINPUT;
   }
+  if (!st && !exit_now && (o.feature_file || o.feature_angle > 0.0 || o.feature_level > 0 || o.smooth_rounds > 0)) {
+    /* the distributed path places no sharp features yet (issue 29): its
+     * boundary is that of --no-features, which it says it runs */
+    mx_error(NULL, 0, "--p4est: no --features, --feature-angle, --feature-level or --smooth (the distributed "
+                      "path keeps no sharp features yet: its boundary is that of --no-features)");
+    st = MX_EINPUT;
+  }
   if (!st && !exit_now) {
     mx_p4est_run_params p;
     run_params(&o, compare, &p);
