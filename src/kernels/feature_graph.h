@@ -16,7 +16,8 @@
 #include <stdint.h>
 
 #include "io/boundary_faces.h"
-#include "kernels/feature_place.h"
+#include "geom/distance.h"
+#include "kernels/feature_types.h"
 #include "soa/mesh.h"
 
 /* The boundary as a graph, with a grid of its nodes. */
@@ -73,6 +74,13 @@ static inline void mx_fg_cell_of(const mx_fgraph *G, const double *x, int64_t c[
     c[a] = t < 0 ? 0 : t > 2097151 ? 2097151 : (int64_t)t;
   }
 }
+
+/* mask[v] kept only for the nodes within about r of the lines or corners
+ * of L (all those within 3 r / 4; none farther than 4 r): the region the
+ * placement may touch when r is a few octants at the feature level.
+ * Parallel, O(n log(length / r)). */
+int mx_feature_near_nodes(const mx_feature_lines *L, double r, const double *xyz, size_t n,
+                          uint8_t *mask);
 
 /* The boundary faces whose nodes are all on the surface (states
  * MX_NODE_OUTSIDE) and, with near > 0, within that of the features (

@@ -15,7 +15,7 @@
 
 #include "io/boundary_faces.h"
 #include "kernels/estimate.h"
-#include "kernels/feature_place.h"
+#include "kernels/feature_graph.h"
 #include "kernels/grid.h"
 #include "kernels/mesh_edit.h"
 #include "kernels/closures.h"

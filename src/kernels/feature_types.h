@@ -1,0 +1,37 @@
+/* What the feature placement reads and reports (kernels/feature_place.h,
+ * kernels/feature_graph.h). */
+#ifndef MX_FEATURE_TYPES_H
+#define MX_FEATURE_TYPES_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "geom/feature_walk.h"
+#include "soa/trisoup.h"
+
+typedef struct {
+  const mx_feature_lines *L;
+  /* the surface's triangles [0, nt) of soup and their patches (patch NULL:
+   * no side step, the lines were given rather than found) */
+  const mx_trisoup *soup;
+  size_t nt;
+  const uint32_t *patch;
+  size_t npatches;
+  /* > 0: only the boundary within this distance of the lines and corners
+   * is looked at (a few octants at the feature level: the placement moves
+   * no node farther); 0: all of it */
+  double near;
+} mx_feature_input;
+
+typedef struct {
+  size_t corners, corners_missed; /* corners placed; not (no node free near) */
+  size_t lines, lines_missed;     /* lines followed by mesh edges; not */
+  size_t nodes;                   /* nodes moved onto corners and lines */
+  size_t sides;                   /* nodes moved onto their region's patch */
+  size_t split;                   /* quadrilaterals split along a line */
+  size_t unsplit;                 /* elements whose split was undone (give-up) */
+  size_t given_up;                /* nodes put back (mx_feature_give_up) */
+  double seconds;
+} mx_feature_stats;
+
+#endif
