@@ -20,6 +20,8 @@
 #  - the summary's distances (--json) agree with check's (9 digits);
 #  - the step at -s 5 splits quadrilaterals a line crosses along their
 #    diagonal, and check finds no defect in the result;
+#  - a feature node slides along its ridge rather than going back (the
+#    step at -s 3), check finding no defect;
 #  - --smooth 1 runs after the features (inside nodes only): the same
 #    distances and volume, a worst element no worse;
 #  - one and two threads write the same file;
@@ -117,6 +119,15 @@ ns=$("$PY" -c "import json, sys; print(json.load(open(sys.argv[1]))['features'][
 "$MIXOCT" check "$T/step_split.vtu" --surface "$T/step.off" --quiet >/dev/null 2>&1
 ce=$?
 if [ "${ns:-0}" -gt 0 ] && [ $ce -eq 0 ]; then ok "step -s 5: $ns quadrilateral(s) split, check finds no defect"; else ko "step -s 5: split $ns, check exit $ce"; fi
+
+# the slide: a feature node whose elements its place spoils moves along
+# the straight stretch of its chain instead of going back (the step at
+# -s 3 slides one); the file has no defect for the independent check
+"$MIXOCT" -i "$T/step.off" -s 3 -o "$T/step_slide.vtu" --json --quiet >"$T/slide.json" 2>/dev/null
+nsl=$("$PY" -c "import json, sys; print(json.load(open(sys.argv[1]))['features']['slid'])" "$T/slide.json" 2>/dev/null)
+"$MIXOCT" check "$T/step_slide.vtu" --surface "$T/step.off" --quiet >/dev/null 2>&1
+ce=$?
+if [ "${nsl:-0}" -ge 1 ] && [ $ce -eq 0 ]; then ok "step -s 3: $nsl feature node(s) slid along their ridge, check finds no defect"; else ko "step -s 3: slid $nsl, check exit $ce"; fi
 
 # what the features are for: the cube without them
 read -r e d rd cd ve jm agree <<<"$(mesh "$T/cube.off" 4 --no-features)"

@@ -1,6 +1,7 @@
 /* The give-up after the features are placed (kernels/feature_place.h,
  * mx_feature_give_up): nodes put back, split nodes placed again, splits
  * undone, where the placement spoilt elements. */
+#include <math.h>
 #include <string.h>
 
 #include "base/common.h"
@@ -21,18 +22,72 @@ static int spoilt(const mx_mesh *M, size_t c, double floor, const float *q_befor
   return mx_jens_invalid(q) || (q < floor && q < (c < ncb ? q_before[c] : 1.0));
 }
 
-static int give_up_pass(mx_mesh *M, const uint8_t *feature, const double *before, size_t nb,
-                        const float *q_before, size_t ncb, double floor, size_t *count) {
+/* Feature node v (with its elements inc[0 .. n)) slid along the straight
+ * stretch of its chain between its neighbours there, to the place of
+ * SLIDE_TRIES whose worst element is best, when none of them is spoilt
+ * there. 1: slid; 0: left where it was. */
+#define SLIDE_TRIES 7
+static int slide(mx_mesh *M, const mx_feature_chain *chain, uint32_t v, const uint32_t *inc,
+                 size_t n, double floor, const float *q_before, size_t ncb) {
+  if (!chain || !chain->n || !n) return 0;
+  size_t lo = 0, hi = chain->n;
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (chain->node[mid] < v) lo = mid + 1;
+    else hi = mid;
+  }
+  if (lo == chain->n || chain->node[lo] != v) return 0;
+  double *x = M->xyz + 3 * (size_t)v;
+  const double *a = M->xyz + 3 * (size_t)chain->prev[lo], *b = M->xyz + 3 * (size_t)chain->next[lo];
+  const double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, u[3] = {x[0] - a[0], x[1] - a[1], x[2] - a[2]};
+  const double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+  const double c[3] = {u[1] * d[2] - u[2] * d[1], u[2] * d[0] - u[0] * d[2], u[0] * d[1] - u[1] * d[0]};
+  /* straight: v on the segment from a to b (to rounding) */
+  if (!(dd > 0.0) || c[0] * c[0] + c[1] * c[1] + c[2] * c[2] > 1e-24 * dd * dd) return 0;
+  const double keep[3] = {x[0], x[1], x[2]};
+  static const double at[SLIDE_TRIES] = {0.5, 0.35, 0.65, 0.2, 0.8, 0.1, 0.9};
+  double best = -INFINITY;
+  int bk = -1;
+  for (int k = 0; k < SLIDE_TRIES; k++) {
+    for (int a3 = 0; a3 < 3; a3++) x[a3] = a[a3] + at[k] * d[a3];
+    double worst = INFINITY;
+    int ok = 1;
+    for (size_t i = 0; i < n; i++) {
+      const size_t e = inc[i];
+      M->jens[e] = (float)mx_cell_jens(M, e);
+      ok = ok && !spoilt(M, e, floor, q_before, ncb);
+      if (M->jens[e] < worst) worst = M->jens[e];
+    }
+    if (ok && worst > best) {
+      best = worst;
+      bk = k;
+    }
+  }
+  if (bk >= 0)
+    for (int a3 = 0; a3 < 3; a3++) x[a3] = a[a3] + at[bk] * d[a3];
+  else
+    memcpy(x, keep, sizeof keep);
+  for (size_t i = 0; i < n; i++) M->jens[inc[i]] = (float)mx_cell_jens(M, inc[i]);
+  return bk >= 0;
+}
+
+static int give_up_pass(mx_mesh *M, const uint8_t *feature, const mx_feature_chain *chain,
+                        const double *before, size_t nb, const float *q_before, size_t ncb,
+                        double floor, size_t *count, size_t *slid) {
   /* the elements with a moved node: the only ones that can be spoilt */
   size_t nc = 0, cap = 1024;
   uint32_t *cand = mx_alloc(cap * sizeof *cand);
-  /* the elements of the nodes the splits added (nodes nb ..) */
+  /* the elements of the nodes the splits added (nodes nb ..) and of the
+   * feature nodes on chains (they may slide) */
   uint64_t *off = NULL;
   uint32_t *inc = NULL;
-  uint8_t *added = M->nnodes > nb ? mx_alloc(M->nnodes + 1) : NULL;
-  int st = cand && (added || M->nnodes <= nb) ? MX_OK : MX_ENOMEM;
+  const int want = M->nnodes > nb || (chain && chain->n);
+  uint8_t *added = want ? mx_alloc(M->nnodes + 1) : NULL;
+  int st = cand && (added || !want) ? MX_OK : MX_ENOMEM;
   if (!st && added) {
     for (size_t v = 0; v < M->nnodes; v++) added[v] = v >= nb;
+    if (chain)
+      for (size_t k = 0; k < chain->n; k++) added[chain->node[k]] = 1;
     st = mx_mesh_incidence(M, added, &off, &inc);
   }
   mx_free(added);
@@ -75,15 +130,19 @@ static int give_up_pass(mx_mesh *M, const uint8_t *feature, const double *before
       const size_t c = cand[i];
       if (!spoilt(M, c, floor, q_before, ncb)) continue;
       /* the nodes moved beside the features first, the feature nodes
-       * only when no other moved node is left */
+       * only when no other moved node is left, each of those first slid
+       * along its chain */
       for (int pass = 0, done = 0; pass < 2 && !done; pass++)
-        for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
+        for (int k = 0; k < mx_cell_nodes[M->type[c]] && spoilt(M, c, floor, q_before, ncb); k++) {
           const uint32_t v = M->conn[8 * c + k];
-          if (node_moved(M, before, nb, v) && (pass || !(feature && feature[v]))) {
-            memcpy(M->xyz + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof *before);
-            n++;
-            done = 1;
+          if (!node_moved(M, before, nb, v) || !(pass || !(feature && feature[v]))) continue;
+          if (pass && off && slide(M, chain, v, inc + off[v], (size_t)(off[v + 1] - off[v]), floor, q_before, ncb)) {
+            (*slid)++;
+            continue;
           }
+          memcpy(M->xyz + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof *before);
+          n++;
+          done = 1;
         }
     }
     if (!n) break;
@@ -98,11 +157,11 @@ static int give_up_pass(mx_mesh *M, const uint8_t *feature, const double *before
 }
 
 int mx_feature_give_up(mx_mesh *M, uint8_t **states, mx_split_log *log, const uint8_t *feature,
-                       const double *before,
+                       const mx_feature_chain *chain, const double *before,
                        size_t nb, const float *q_before, size_t ncb, double floor,
                        mx_feature_stats *fs) {
   size_t *count = &fs->given_up;
-  int st = give_up_pass(M, feature, before, nb, q_before, ncb, floor, count);
+  int st = give_up_pass(M, feature, chain, before, nb, q_before, ncb, floor, count, &fs->slid);
   if (st || !log || !log->n) return st;
   /* the splits some cone of which is still spoilt undone, and their
    * elements' moved nodes then put back */
@@ -118,7 +177,7 @@ int mx_feature_give_up(mx_mesh *M, uint8_t **states, mx_split_log *log, const ui
   fs->unsplit += n;
   if (n) {
     st = mx_mesh_unsplit(M, states, log, undo);
-    if (!st) st = give_up_pass(M, feature, before, nb, q_before, ncb, floor, count);
+    if (!st) st = give_up_pass(M, feature, chain, before, nb, q_before, ncb, floor, count, &fs->slid);
   }
   mx_free(undo);
   return st;

@@ -100,9 +100,10 @@ uint32_t mx_fgraph_edge(const mx_fgraph *G, uint32_t u, uint32_t w);
 
 /* The corners onto nodes and the lines onto chains of edges
  * (feature_lines.c): fixed (G->fixed) and moved[] set for the nodes placed,
- * st's corner, line and node counts. */
+ * st's corner, line and node counts; *chain (NULL: not wanted) the chains
+ * placed. */
 int mx_fgraph_place_lines(mx_fgraph *G, const mx_feature_lines *L, uint8_t *moved,
-                          mx_feature_stats *st);
+                          mx_feature_stats *st, mx_feature_chain *chain);
 /* The nodes of mask beside the placed lines onto their side's patch
  * (feature_sides.c); *count: how many moved. */
 int mx_fgraph_sides(mx_fgraph *G, const mx_feature_input *in, const mx_surface_index *S,

@@ -441,6 +441,10 @@ typedef struct {
   uint32_t *cl_off, *cl;
   double *oth;
   size_t noth, oth_cap;
+  /* the loops' halves placed (never taken back): their nodes, each path
+   * ended by UINT32_MAX */
+  uint32_t *loops;
+  size_t nloops, loops_cap;
 } line_paths;
 
 static int keep_path(line_paths *lp, size_t i, const uint32_t *path, size_t k) {
@@ -520,6 +524,71 @@ static int others_at_ends(line_paths *lp, const mx_feature_lines *L, size_t i, c
   return MX_OK;
 }
 
+static int keep_loop(line_paths *lp, const uint32_t *path, size_t k) {
+  if (lp->nloops + k + 1 > lp->loops_cap &&
+      grow((void **)&lp->loops, &lp->loops_cap, 2 * (lp->nloops + k + 1), sizeof *lp->loops))
+    return MX_ENOMEM;
+  memcpy(lp->loops + lp->nloops, path, k * sizeof *path);
+  lp->nloops += k;
+  lp->loops[lp->nloops++] = UINT32_MAX;
+  return MX_OK;
+}
+
+static int cmp_triple(const void *a, const void *b) {
+  const uint32_t *x = a, *y = b;
+  return (x[0] > y[0]) - (x[0] < y[0]);
+}
+
+/* The chains of the lines placed: each path's inner nodes with their
+ * neighbours on it, sorted by node. */
+static int chains(const line_paths *lp, const mx_feature_lines *L, mx_feature_chain *c) {
+  size_t n = 0;
+  for (size_t i = 0; i < L->nlines; i++)
+    if (lp->ok[i] && lp->len[i] > 2) n += lp->len[i] - 2;
+  n += lp->nloops;
+  uint32_t *t = mx_alloc((3 * n + 3) * sizeof *t);
+  if (!t) return MX_ENOMEM;
+  size_t m = 0;
+  for (size_t i = 0; i < L->nlines; i++) {
+    if (!lp->ok[i]) continue;
+    const uint32_t *p = lp->node + lp->at[i];
+    for (size_t j = 1; j + 1 < lp->len[i]; j++, m++) {
+      t[3 * m] = p[j];
+      t[3 * m + 1] = p[j - 1];
+      t[3 * m + 2] = p[j + 1];
+    }
+  }
+  for (size_t j = 0; j < lp->nloops; j++) {
+    if (lp->loops[j] == UINT32_MAX || j == 0 || lp->loops[j - 1] == UINT32_MAX ||
+        j + 1 == lp->nloops || lp->loops[j + 1] == UINT32_MAX)
+      continue; /* a path's ends: the points taken on the loop */
+    t[3 * m] = lp->loops[j];
+    t[3 * m + 1] = lp->loops[j - 1];
+    t[3 * m + 2] = lp->loops[j + 1];
+    m++;
+  }
+  qsort(t, m, 3 * sizeof *t, cmp_triple);
+  c->n = m;
+  c->node = mx_alloc((m + 1) * sizeof *c->node);
+  c->prev = mx_alloc((m + 1) * sizeof *c->prev);
+  c->next = mx_alloc((m + 1) * sizeof *c->next);
+  int rc = c->node && c->prev && c->next ? MX_OK : MX_ENOMEM;
+  for (size_t k = 0; k < m && !rc; k++) {
+    c->node[k] = t[3 * k];
+    c->prev[k] = t[3 * k + 1];
+    c->next[k] = t[3 * k + 2];
+  }
+  mx_free(t);
+  return rc;
+}
+
+void mx_feature_chain_free(mx_feature_chain *c) {
+  mx_free(c->node);
+  mx_free(c->prev);
+  mx_free(c->next);
+  memset(c, 0, sizeof *c);
+}
+
 /* Line i placed (open: between its corners' nodes; a loop: in two halves
  * from two points taken on it), its paths kept in lp. */
 static int place_line(mx_fgraph *G, search *W, line_paths *lp, const mx_feature_lines *L, size_t i,
@@ -553,10 +622,12 @@ static int place_line(mx_fgraph *G, search *W, line_paths *lp, const mx_feature_
       st->nodes += 2;
       size_t k = find_path(G, W, p, mid + 1, a, b, &nomem);
       ok = k >= 2 && place_path(G, fixed, moved, W->path, k, p, mid + 1, W->t, &st->nodes);
+      if (ok && keep_loop(lp, W->path, k)) nomem = 1;
       memcpy(sub, p + 3 * mid, 3 * (n - mid) * sizeof *sub);
       memcpy(sub + 3 * (n - mid), p, 3 * sizeof *sub);
       k = ok && !nomem ? find_path(G, W, sub, n - mid + 1, b, a, &nomem) : 0;
       ok = ok && k >= 2 && place_path(G, fixed, moved, W->path, k, sub, n - mid + 1, W->t, &st->nodes);
+      if (ok && keep_loop(lp, W->path, k)) nomem = 1;
     }
   }
   if (nomem) return MX_ENOMEM;
@@ -753,7 +824,7 @@ out:
 }
 
 int mx_fgraph_place_lines(mx_fgraph *G, const mx_feature_lines *L, uint8_t *moved,
-                          mx_feature_stats *st) {
+                          mx_feature_stats *st, mx_feature_chain *chain) {
   mx_mesh *M = G->M;
   uint8_t *fixed = (uint8_t *)G->fixed;
   search W;
@@ -803,6 +874,7 @@ int mx_fgraph_place_lines(mx_fgraph *G, const mx_feature_lines *L, uint8_t *move
   for (size_t i = 0; i < L->nlines && !rc; i++) rc = place_line(G, &W, &lp, L, i, ckey, cnode, moved, st);
   for (int t = 0; t < RETRIES && !rc && st->lines_missed; t++)
     rc = retry_at_corners(G, &W, &lp, L, ckey, cnode, moved, x0, st);
+  if (!rc && chain) rc = chains(&lp, L, chain);
 done:
   mx_free(W.tube);
   mx_free(W.cost);
@@ -821,6 +893,7 @@ done:
   mx_free(lp.node);
   mx_free(lp.ok);
   mx_free(lp.sub);
+  mx_free(lp.loops);
   mx_free(ckey);
   mx_free(cnode);
   mx_free(doff);

@@ -43,7 +43,7 @@ static int split_quads(mx_fgraph *G, uint8_t **states, uint8_t **fixed, uint8_t 
 
 int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
                      const mx_feature_input *in, uint8_t **fixed_io, mx_feature_stats *st,
-                     mx_split_log *log) {
+                     mx_split_log *log, mx_feature_chain *chain) {
   memset(st, 0, sizeof *st);
   uint8_t *fixed = *fixed_io;
   memset(fixed, 0, M->nnodes);
@@ -58,7 +58,7 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
   int rc = mask && moved ? MX_OK : MX_ENOMEM;
   if (!rc) rc = mx_fgraph_open(&G, *states, mask, L, in->near);
   if (rc) goto done;
-  rc = mx_fgraph_place_lines(&G, L, moved, st);
+  rc = mx_fgraph_place_lines(&G, L, moved, st, chain);
   /* sides, near the placed lines (the nodes of the edges around theirs) */
   if (!rc && in->patch && in->npatches > 1) {
     memset(mask, 0, M->nnodes);

@@ -43,10 +43,11 @@
 /* *states: MX_NODE_OUTSIDE for the nodes on the surface (boundary stage);
  * S: the surface's index; *fixed: nnodes bytes, set here (1: a feature
  * node). Both grow (mx_realloc) when elements are split (below), the
- * splits logged in *log (for mx_feature_give_up). MX_OK, MX_ENOMEM. */
+ * splits logged in *log (for mx_feature_give_up), the chains along the
+ * ridges in *chain (mx_feature_chain_free). MX_OK, MX_ENOMEM. */
 int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
                      const mx_feature_input *in, uint8_t **fixed, mx_feature_stats *st,
-                     mx_split_log *log);
+                     mx_split_log *log, mx_feature_chain *chain);
 
 /* (src/kernels/feature_give_up.c) The nodes of the elements the placement
  * spoilt put back where they were
@@ -55,7 +56,10 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
  * then, the others' taken as 1), until none is left or none of its nodes
  * moved (first the nodes moved beside the features, then, when none is
  * left, the feature nodes: feature[v] != 0, may be NULL): the features
- * there are given up rather than the mesh. A spoilt
+ * there are given up rather than the mesh. A feature node on a straight
+ * stretch of its chain (chain, may be NULL) first slides along it, between
+ * its neighbours, to where none of its elements is spoilt: it stays on
+ * its ridge (fs->slid). A spoilt
  * element with a node of a split first has that node moved to its best
  * point (mx_mesh_best_point); a split (log, may be NULL) whose cones are
  * still spoilt after all is undone and its element's nodes put back.
@@ -64,7 +68,7 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
  * undone. J_ENS and the summary updated;
  * *states follows the nodes. MX_OK, MX_ENOMEM. */
 int mx_feature_give_up(mx_mesh *M, uint8_t **states, mx_split_log *log, const uint8_t *feature,
-                       const double *before,
+                       const mx_feature_chain *chain, const double *before,
                        size_t nb, const float *q_before, size_t ncb, double floor,
                        mx_feature_stats *fs);
 

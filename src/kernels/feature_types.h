@@ -31,7 +31,17 @@ typedef struct {
   size_t split;                   /* quadrilaterals split along a line */
   size_t unsplit;                 /* elements whose split was undone (give-up) */
   size_t given_up;                /* nodes put back (mx_feature_give_up) */
+  size_t slid;                    /* feature nodes slid along their ridge instead */
   double seconds;
 } mx_feature_stats;
+
+/* The chains placed along the ridges: node[i]'s neighbours on its chain
+ * are prev[i] and next[i] (sorted by node; the corners are not in it). */
+typedef struct {
+  size_t n;
+  uint32_t *node, *prev, *next;
+} mx_feature_chain;
+
+void mx_feature_chain_free(mx_feature_chain *c);
 
 #endif

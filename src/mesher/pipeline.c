@@ -117,7 +117,8 @@ static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boun
   mx_feature_stats *fs = &m->rec->S.feature_place;
   const size_t nb = M->nnodes, ncb = M->ncells;
   mx_split_log log = {0, NULL, 0};
-  int st = mx_feature_place(M, states_io, &m->SI, &in, &fixed, fs, &log);
+  mx_feature_chain chain = {0, NULL, NULL, NULL};
+  int st = mx_feature_place(M, states_io, &m->SI, &in, &fixed, fs, &log, &chain);
   const uint8_t *states = *states_io;
   const double t = mx_wtime();
   if (!st && (M->invalid || M->jens_min < MX_FEATURE_UNTANGLE_BELOW)) {
@@ -128,9 +129,10 @@ static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boun
     if (!st) mx_mesh_summarize(M);
     mx_free(movable);
   }
-  if (!st) st = mx_feature_give_up(M, states_io, &log, fixed, before, nb, q_before, ncb, MX_FEATURE_FLOOR,
-                                   fs);
+  if (!st) st = mx_feature_give_up(M, states_io, &log, fixed, &chain, before, nb, q_before, ncb,
+                                   MX_FEATURE_FLOOR, fs);
   mx_split_log_free(&log);
+  mx_feature_chain_free(&chain);
   states = *states_io;
   fs->seconds += mx_wtime() - t;
   if (!st && m->p.smooth_rounds > 0) {

@@ -201,7 +201,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              "\"fallback\": %s, "
              "\"kept\": %s, \"corners_placed\": %zu, "
              "\"corners_missed\": %zu, \"lines_followed\": %zu, \"lines_missed\": %zu, "
-             "\"nodes\": %zu, \"side_moves\": %zu, \"given_up\": %zu, \"quads_split\": %zu, "
+             "\"nodes\": %zu, \"side_moves\": %zu, \"given_up\": %zu, \"slid\": %zu, \"quads_split\": %zu, "
              "\"splits_undone\": %zu, \"apart_boxes\": %zu, "
              "\"ridge_distance\": %.9g, \"corner_distance\": %.9g, "
              "\"seconds\": %.6f}, ",
@@ -210,7 +210,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              s->feature_fallback ? "true" : "false",
              s->features_kept ? "true" : "false", fp->corners,
              fp->corners_missed, fp->lines, fp->lines_missed, fp->nodes, fp->sides, fp->given_up,
-             fp->split, fp->unsplit, s->feature_apart_boxes, s->feature_measured ? s->feature_ridge_dist : NAN,
+             fp->slid, fp->split, fp->unsplit, s->feature_apart_boxes, s->feature_measured ? s->feature_ridge_dist : NAN,
              s->feature_measured ? s->feature_corner_dist : NAN, s->feature_seconds + fp->seconds);
   char img[12288] = "";
   if (s->image) {
@@ -334,9 +334,10 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
     const mx_feature_stats *fp = &s->feature_place;
     if (s->features_kept)
       printf("    kept       %12zu of %zu corner(s), %zu of %zu line(s) followed by mesh edges; "
-             "%zu node(s) on them, %zu moved to their side, %zu put back (%.3f s)\n",
+             "%zu node(s) on them, %zu moved to their side, %zu put back, %zu slid along "
+             "their ridge (%.3f s)\n",
              fp->corners, fp->corners + fp->corners_missed, fp->lines,
-             fp->lines + fp->lines_missed, fp->nodes, fp->sides, fp->given_up, fp->seconds);
+             fp->lines + fp->lines_missed, fp->nodes, fp->sides, fp->given_up, fp->slid, fp->seconds);
     if (s->features_kept && fp->split)
       printf("    split      %12zu boundary quadrilateral(s) a line crosses along its diagonal: "
              "their elements split (%zu undone)\n", fp->split, fp->unsplit);
