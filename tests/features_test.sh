@@ -11,9 +11,10 @@
 #    without features (--no-features) the same cube misses its corners by
 #    more than 1e-3 of the diagonal and its volume by more than 1e-3 (what
 #    the features are for);
-#  - the cylinder (ridges on the rims only, no corner): ridge distance
-#    within the chord's sagitta (a mesh edge spans several of the rim's 48
-#    segments) and below what --no-features gives;
+#  - the cylinder (ridges on the rims only, no corner): at -s 5 and 6 the
+#    rims on mesh edges (a node on each of their 48 vertices); at -s 4
+#    within the chord's sagitta (a mesh edge spans several segments) and
+#    below what --no-features gives;
 #  - the step (a 0.05 thick ledge) and the tetrahedron at -s 3 and 5: valid,
 #    the distances reported (the placement misses some of their ridges
 #    today: measured, not asserted);
@@ -133,14 +134,21 @@ if [ "${nsl:-0}" -ge 1 ] && [ $ce -eq 0 ]; then ok "step -s 3: $nsl feature node
 read -r e d rd cd ve jm agree <<<"$(mesh "$T/cube.off" 4 --no-features)"
 if [ "$e" = 0 ] && lt 1e-3 "$cd" && lt 1e-3 "${ve#-}"; then ok "cube -s 4 --no-features: corners $cd off, volume $ve"; else ko "cube --no-features: exit $e corner $cd volume $ve"; fi
 
-# the cylinder's rims: within the sagitta of a mesh edge's chord, better than without
-read -r e d rd cd ve jm agree <<<"$(mesh "$T/cylinder.off" 5)"
-read -r e0 d0 rd0 cd0 ve0 jm0 agree0 <<<"$(mesh "$T/cylinder.off" 5 --no-features)"
-# an edge at -s 5 spans at most 4 rim segments of 2 pi / 48: sagitta r (1 - cos(4 pi / 48)) over the diagonal 2 sqrt 2
-if lt "$rd" "$("$PY" -c "import math; print((1 - math.cos(4 * math.pi / 48)) / (2 * math.sqrt(2)))")" && lt "$rd" "$rd0"; then
-  ok "cylinder -s 5: rims within a chord's sagitta ($rd; $rd0 without features)"
+# the cylinder's rims (loops of 48 segments): where the mesh edges are
+# shorter than the segments (-s 5, 6) a node sits on every vertex and the
+# chains follow the rims exactly; coarser, within a chord's sagitta and
+# below what --no-features gives
+for s in 5 6; do
+  read -r e d rd cd ve jm agree <<<"$(mesh "$T/cylinder.off" $s)"
+  if [ "$e" = 0 ] && [ "$d" = 0 ] && lt "$rd" 1e-9; then ok "cylinder -s $s: rims on mesh edges ($rd)"; else ko "cylinder -s $s: exit $e defects $d rim distance $rd"; fi
+done
+read -r e d rd cd ve jm agree <<<"$(mesh "$T/cylinder.off" 4)"
+read -r e0 d0 rd0 cd0 ve0 jm0 agree0 <<<"$(mesh "$T/cylinder.off" 4 --no-features)"
+# an edge at -s 4 spans at most 8 rim segments of 2 pi / 48: sagitta r (1 - cos(8 pi / 48)) over the diagonal 2 sqrt 2
+if lt "$rd" "$("$PY" -c "import math; print((1 - math.cos(8 * math.pi / 48)) / (2 * math.sqrt(2)))")" && lt "$rd" "$rd0"; then
+  ok "cylinder -s 4: rims within a chord's sagitta ($rd; $rd0 without features)"
 else
-  ko "cylinder -s 5: rim distance $rd ($rd0 without)"
+  ko "cylinder -s 4: rim distance $rd ($rd0 without)"
 fi
 
 # --smooth 1 after the features: the inside nodes only, so the distances and

@@ -268,6 +268,26 @@ static void mark_path(mx_fgraph *G, const uint32_t *path, size_t k) {
  * past the one before and lowered to keep that short of the one after (a
  * path that steps sideways or back a little is spread along the line);
  * the path's edges marked. 1: placed, 0: not (no room on the line). */
+/* The places t[1 .. k - 1) of a path's inner nodes along the polyline
+ * p[0..n) moved onto its inner vertices: each vertex onto its nearest
+ * node, when that stays well between the node's neighbours (a tenth of
+ * each gap): the chain then turns where the line does, and
+ * between two such nodes follows a straight stretch exactly (a curved
+ * ridge's facets, when the mesh edges are shorter). The order is kept. */
+static void snap_to_vertices(const double *p, size_t n, double *t, size_t k) {
+  double s = 0.0;
+  size_t i = 1;
+  for (size_t j = 1; j + 1 < n && k > 2; j++) {
+    s += mx_fg_dist3(p + 3 * (j - 1), p + 3 * j);
+    while (i + 2 < k && t[i + 1] <= s) i++;
+    /* the nearer of the inner nodes i and i + 1 around s */
+    size_t b = i;
+    if (i + 2 < k && fabs(t[i + 1] - s) < fabs(t[i] - s)) b = i + 1;
+    const double lo = t[b - 1] + 0.1 * (t[b] - t[b - 1]), hi = t[b + 1] - 0.1 * (t[b + 1] - t[b]);
+    if (s > lo && s < hi) t[b] = s;
+  }
+}
+
 static int place_path(mx_fgraph *G, uint8_t *fixed, uint8_t *moved, const uint32_t *path, size_t k,
                       const double *p, size_t n, double *t, size_t *nodes) {
   double *X = G->M->xyz, total = 0.0;
@@ -285,6 +305,7 @@ static int place_path(mx_fgraph *G, uint8_t *fixed, uint8_t *moved, const uint32
   }
   for (size_t i = 1; i < k; i++)
     if (!(t[i] > t[i - 1])) return 0;
+  snap_to_vertices(p, n, t, k);
   for (size_t i = 1; i + 1 < k; i++) {
     at_arclength(p, n, t[i], X + 3 * (size_t)path[i]);
     fixed[path[i]] = 1;
