@@ -661,6 +661,67 @@ static double domain_diagonal(const mx_mesher *m) {
 /* The distances between the features and the mesh made (verify/check.h:
  * ridge samples to the nearest boundary edge, corners to the nearest
  * boundary node), relative to the input's bounding box diagonal. */
+/* The feature distances of the mesh d from the elements with a node near
+ * the features only (mx_feature_reach: the boundary edges there are those
+ * of the whole mesh, as an edge of a face shared with an element not
+ * taken has no node near), unless the farthest point found is far enough
+ * that a boundary edge beyond could be nearer: then from the whole mesh,
+ * as mixoct check measures it. Measured at -s 5: issue1258 (3.5 million
+ * elements, 21 ridges) 0.83 -> 0.40 s; where the features reach every
+ * element (assert, example023) 5-10% slower. */
+static int near_feature_distances(const mx_mesher *m, const mx_mesh_data *d,
+                                  mx_check_feature_dist *fd) {
+  const double r = mx_feature_reach(m);
+  if (!(r > 0.0)) return mx_check_features_mesh(d, &m->feat_lines, fd);
+  uint8_t *near = mx_alloc(d->nnodes + 1);
+  if (!near) return MX_ENOMEM;
+  memset(near, 1, d->nnodes);
+  int st = mx_feature_near_nodes(&m->feat_lines, r, d->xyz, d->nnodes, near);
+  size_t nc = 0;
+  for (size_t c = 0; c < d->ncells && !st; c++) {
+    int any = 0;
+    for (int k = 0; k < mx_cell_nodes[d->type[c]] && !any; k++) any = near[d->conn[8 * c + k]];
+    nc += (size_t)any;
+  }
+  mx_mesh_data sub = *d;
+  sub.type = st ? NULL : mx_alloc(nc + 1);
+  sub.conn = st ? NULL : mx_alloc((8 * nc + 1) * sizeof *sub.conn);
+  if (!st && (!sub.type || !sub.conn)) st = MX_ENOMEM;
+  uint32_t *edge = NULL;
+  size_t ne = 0;
+  if (!st) {
+    sub.ncells = 0;
+    for (size_t c = 0; c < d->ncells; c++) {
+      int any = 0;
+      for (int k = 0; k < mx_cell_nodes[d->type[c]] && !any; k++) any = near[d->conn[8 * c + k]];
+      if (!any) continue;
+      sub.type[sub.ncells] = d->type[c];
+      memcpy(sub.conn + 8 * sub.ncells++, d->conn + 8 * c, 8 * sizeof *sub.conn);
+    }
+    st = mx_check_boundary_edges(&sub, &edge, &ne);
+  }
+  if (!st) { /* the edges with a node near: those of the whole mesh's boundary */
+    size_t k = 0;
+    for (size_t e = 0; e < ne; e++)
+      if (near[edge[2 * e]] || near[edge[2 * e + 1]]) {
+        edge[2 * k] = edge[2 * e];
+        edge[2 * k + 1] = edge[2 * e + 1];
+        k++;
+      }
+    st = mx_check_features(&m->feat_lines, d->xyz, d->nnodes, edge, k, fd);
+  }
+  mx_free(edge);
+  mx_free(sub.type);
+  mx_free(sub.conn);
+  mx_free(near);
+  /* all within 3 r / 4 are near: a point found farther than r / 4 from
+   * its nearest edge here might be nearer one not taken */
+  const int ok_r = isnan(fd->ridge_dist) || fd->ridge_dist <= 0.25 * r;
+  const int ok_c = isnan(fd->corner_dist) || fd->corner_dist <= 0.25 * r;
+  if (!st && !(ok_r && ok_c)) st = mx_check_features_mesh(d, &m->feat_lines, fd);
+  return st;
+}
+
 static int feature_distances(mx_mesher *m) {
   mx_summary *S = &m->rec->S;
   S->feature_measured = 0;
@@ -674,7 +735,7 @@ static int feature_distances(mx_mesher *m) {
   d.type = M->type;
   d.conn = M->conn;
   mx_check_feature_dist fd;
-  MX_CHECK(mx_check_features_mesh(&d, &m->feat_lines, &fd));
+  MX_CHECK(near_feature_distances(m, &d, &fd));
   const double diag = domain_diagonal(m);
   S->feature_measured = 1;
   S->feature_ridge_dist = fd.ridge_dist / diag;
