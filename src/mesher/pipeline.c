@@ -97,6 +97,30 @@ static uint8_t *movable_nodes(const mx_mesh *M, const uint8_t *fixed, const uint
   return mv;
 }
 
+/* movable[] kept only for the nodes of the elements with a node the
+ * placement moved (or added: index nb and up): the others are as the
+ * boundary stage left them, untangled already. Measured at -s 5: the
+ * untangling after the placement on example023 0.33 -> 0.16 s, the same
+ * worst J_ENS and distances on six corpus parts. */
+static int near_moved(const mx_mesh *M, const double *before, size_t nb, uint8_t *movable) {
+  uint8_t *touch = mx_calloc(M->nnodes + 1);
+  if (!touch) return MX_ENOMEM;
+  const int64_t nc = (int64_t)M->ncells;
+#pragma omp parallel for schedule(static)
+  for (int64_t c = 0; c < nc; c++) {
+    const uint32_t *cn = M->conn + 8 * c;
+    const int k = mx_cell_nodes[M->type[c]];
+    int mv = 0;
+    for (int i = 0; i < k && !mv; i++)
+      mv = cn[i] >= nb || memcmp(M->xyz + 3 * (size_t)cn[i], before + 3 * (size_t)cn[i], 3 * sizeof *before) != 0;
+    if (mv)
+      for (int i = 0; i < k; i++) __atomic_store_n(&touch[cn[i]], 1, __ATOMIC_RELAXED);
+  }
+  for (size_t v = 0; v < M->nnodes; v++) movable[v] = movable[v] && touch[v];
+  mx_free(touch);
+  return MX_OK;
+}
+
 static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boundary_stats *bs) {
   if (!features_active(m) || !*states_io) return MX_OK;
   const mx_features *F = &m->feat;
@@ -123,9 +147,10 @@ static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boun
   const double t = mx_wtime();
   if (!st && (M->invalid || M->jens_min < MX_FEATURE_UNTANGLE_BELOW)) {
     uint8_t *movable = movable_nodes(M, fixed, NULL);
+    st = movable ? near_moved(M, before, nb, movable) : MX_ENOMEM;
     const mx_untangle_opts o = {m->p.staircase_quality, 20, 0, movable, NULL, NULL, NULL, NULL, NULL};
     size_t moved = 0;
-    st = movable ? mx_untangle_with(M, states, &m->SI, &o, &moved) : MX_ENOMEM;
+    if (!st) st = mx_untangle_with(M, states, &m->SI, &o, &moved);
     if (!st) mx_mesh_summarize(M);
     mx_free(movable);
   }
