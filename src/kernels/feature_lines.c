@@ -687,6 +687,49 @@ static void unplace_line(mx_fgraph *G, line_paths *lp, size_t i, uint8_t *moved,
 }
 
 
+/* At each marked corner (cmark, by its node), its edges handed out as
+ * exits to the lines out of it that are placed again (inredo): best
+ * (line, edge) pairs first, within 60 degrees of the line's direction, one
+ * edge a line (exit_of[w]: the line edge w is an exit for). */
+static void hand_out_exits(const mx_fgraph *G, const line_paths *lp, const mx_feature_lines *L,
+                           const uint32_t *cnode, const uint8_t *cmark, const uint8_t *inredo,
+                           uint32_t *exit_of) {
+  const mx_mesh *M = G->M;
+  for (size_t kc = 0; kc < L->ncorners; kc++) {
+    const uint32_t v = cnode[kc];
+    if (v == UINT32_MAX || !cmark[v]) continue;
+    /* the lines out of v among those placed again, and their directions */
+    for (;;) {
+      double best = 0.5;
+      uint32_t bi = UINT32_MAX, bw = UINT32_MAX;
+      for (uint32_t q = lp->cl_off[kc]; q < lp->cl_off[kc + 1]; q++) {
+        const uint32_t i = lp->cl[q] / 2;
+        const int end = (int)(lp->cl[q] & 1);
+        int has = 0;
+        for (uint32_t k = G->aoff[v]; k < G->aoff[v + 1] && !has; k++) has = exit_of[G->adj[k]] == i;
+        if (!inredo[i] || has) continue;
+        double d[3];
+        line_dir(L, i, end, d);
+        for (uint32_t k = G->aoff[v]; k < G->aoff[v + 1]; k++) {
+          const uint32_t w = G->adj[k];
+          if (G->aedge[k] >= G->ne || G->fixed[w] || exit_of[w] != UINT32_MAX) continue;
+          const double *xv = M->xyz + 3 * (size_t)v, *xw = M->xyz + 3 * (size_t)w;
+          const double u[3] = {xw[0] - xv[0], xw[1] - xv[1], xw[2] - xv[2]};
+          const double l = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+          const double c = l > 0 ? (u[0] * d[0] + u[1] * d[1] + u[2] * d[2]) / l : -1.0;
+          if (c > best || (c == best && bi != UINT32_MAX && (i < bi || (i == bi && w < bw)))) {
+            best = c;
+            bi = i;
+            bw = w;
+          }
+        }
+      }
+      if (bi == UINT32_MAX) break;
+      exit_of[bw] = bi;
+    }
+  }
+}
+
 /* The tries at the corners of the lines missed. Measured: the
  * tetrahedron at -s 5 places 4 of its 5 lines again on the first try
  * (another one is then missed: lines wall each other off where they
@@ -772,39 +815,7 @@ static int retry_at_corners(mx_fgraph *G, search *W, line_paths *lp, const mx_fe
     goto out;
   }
   for (size_t r = 0; r < nr; r++) inredo[redo[r]] = 1;
-  for (size_t kc = 0; kc < L->ncorners; kc++) {
-    const uint32_t v = cnode[kc];
-    if (v == UINT32_MAX || !cmark[v]) continue;
-    /* the lines out of v among those placed again, and their directions */
-    for (;;) {
-      double best = 0.5;
-      uint32_t bi = UINT32_MAX, bw = UINT32_MAX;
-      for (uint32_t q = lp->cl_off[kc]; q < lp->cl_off[kc + 1]; q++) {
-        const uint32_t i = lp->cl[q] / 2;
-        const int end = (int)(lp->cl[q] & 1);
-        int has = 0;
-        for (uint32_t k = G->aoff[v]; k < G->aoff[v + 1] && !has; k++) has = exit_of[G->adj[k]] == i;
-        if (!inredo[i] || has) continue;
-        double d[3];
-        line_dir(L, i, end, d);
-        for (uint32_t k = G->aoff[v]; k < G->aoff[v + 1]; k++) {
-          const uint32_t w = G->adj[k];
-          if (G->aedge[k] >= G->ne || G->fixed[w] || exit_of[w] != UINT32_MAX) continue;
-          const double *xv = M->xyz + 3 * (size_t)v, *xw = M->xyz + 3 * (size_t)w;
-          const double u[3] = {xw[0] - xv[0], xw[1] - xv[1], xw[2] - xv[2]};
-          const double l = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-          const double c = l > 0 ? (u[0] * d[0] + u[1] * d[1] + u[2] * d[2]) / l : -1.0;
-          if (c > best || (c == best && bi != UINT32_MAX && (i < bi || (i == bi && w < bw)))) {
-            best = c;
-            bi = i;
-            bw = w;
-          }
-        }
-      }
-      if (bi == UINT32_MAX) break;
-      exit_of[bw] = bi;
-    }
-  }
+  hand_out_exits(G, lp, L, cnode, cmark, inredo, exit_of);
   G->exit_of = exit_of;
   for (size_t r = 0; r < nr && !rc; r++) rc = place_line(G, W, lp, L, redo[r], ckey, cnode, moved, st);
   G->exit_of = NULL;
