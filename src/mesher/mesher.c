@@ -669,6 +669,12 @@ static double domain_diagonal(const mx_mesher *m) {
  * as mixoct check measures it. Measured at -s 5: issue1258 (3.5 million
  * elements, 21 ridges) 0.83 -> 0.40 s; where the features reach every
  * element (assert, example023) 5-10% slower. */
+static int cell_near(const mx_mesh_data *d, size_t c, const uint8_t *near) {
+  for (int k = 0; k < mx_cell_nodes[d->type[c]]; k++)
+    if (near[d->conn[8 * c + k]]) return 1;
+  return 0;
+}
+
 static int near_feature_distances(const mx_mesher *m, const mx_mesh_data *d,
                                   mx_check_feature_dist *fd) {
   const double r = mx_feature_reach(m);
@@ -678,11 +684,7 @@ static int near_feature_distances(const mx_mesher *m, const mx_mesh_data *d,
   memset(near, 1, d->nnodes);
   int st = mx_feature_near_nodes(&m->feat_lines, r, d->xyz, d->nnodes, near);
   size_t nc = 0;
-  for (size_t c = 0; c < d->ncells && !st; c++) {
-    int any = 0;
-    for (int k = 0; k < mx_cell_nodes[d->type[c]] && !any; k++) any = near[d->conn[8 * c + k]];
-    nc += (size_t)any;
-  }
+  for (size_t c = 0; c < d->ncells && !st; c++) nc += (size_t)cell_near(d, c, near);
   mx_mesh_data sub = *d;
   sub.type = st ? NULL : mx_alloc(nc + 1);
   sub.conn = st ? NULL : mx_alloc((8 * nc + 1) * sizeof *sub.conn);
@@ -692,9 +694,7 @@ static int near_feature_distances(const mx_mesher *m, const mx_mesh_data *d,
   if (!st) {
     sub.ncells = 0;
     for (size_t c = 0; c < d->ncells; c++) {
-      int any = 0;
-      for (int k = 0; k < mx_cell_nodes[d->type[c]] && !any; k++) any = near[d->conn[8 * c + k]];
-      if (!any) continue;
+      if (!cell_near(d, c, near)) continue;
       sub.type[sub.ncells] = d->type[c];
       memcpy(sub.conn + 8 * sub.ncells++, d->conn + 8 * c, 8 * sizeof *sub.conn);
     }
