@@ -669,6 +669,7 @@ static double domain_diagonal(const mx_mesher *m) {
  * as mixoct check measures it. Measured at -s 5: issue1258 (3.5 million
  * elements, 21 ridges) 0.83 -> 0.40 s; where the features reach every
  * element (assert, example023) 5-10% slower. */
+/* 1 when element c of d has a node marked in near. */
 static int cell_near(const mx_mesh_data *d, size_t c, const uint8_t *near) {
   for (int k = 0; k < mx_cell_nodes[d->type[c]]; k++)
     if (near[d->conn[8 * c + k]]) return 1;
