@@ -101,8 +101,8 @@ uint32_t mx_fgraph_edge(const mx_fgraph *G, uint32_t u, uint32_t w);
 /* The corners onto nodes and the lines onto chains of edges
  * (feature_lines.c): fixed (G->fixed) and moved[] set for the nodes placed,
  * st's corner, line and node counts; *chain (NULL: not wanted) the chains
- * placed. */
-int mx_fgraph_place_lines(mx_fgraph *G, const mx_feature_lines *L, uint8_t *moved,
+ * placed; at most `retries` tries again at the corners of lines missed. */
+int mx_fgraph_place_lines(mx_fgraph *G, const mx_feature_lines *L, int retries, uint8_t *moved,
                           mx_feature_stats *st, mx_feature_chain *chain);
 /* The nodes of mask beside the placed lines onto their side's patch
  * (feature_sides.c); *count: how many moved. */

@@ -730,12 +730,6 @@ static void hand_out_exits(const mx_fgraph *G, const line_paths *lp, const mx_fe
   }
 }
 
-/* The tries at the corners of the lines missed. Measured: the
- * tetrahedron at -s 5 places 4 of its 5 lines again on the first try
- * (another one is then missed: lines wall each other off where they
- * converge) and all 6 on the second. */
-#define RETRIES 3
-
 /* The open lines missed tried again: every open line at a corner of a
  * missed one is taken back, each such corner's edges handed out as exits
  * (each line the free neighbour most along its direction, within 60
@@ -855,7 +849,7 @@ out:
   return rc;
 }
 
-int mx_fgraph_place_lines(mx_fgraph *G, const mx_feature_lines *L, uint8_t *moved,
+int mx_fgraph_place_lines(mx_fgraph *G, const mx_feature_lines *L, int retries, uint8_t *moved,
                           mx_feature_stats *st, mx_feature_chain *chain) {
   mx_mesh *M = G->M;
   uint8_t *fixed = (uint8_t *)G->fixed;
@@ -904,7 +898,7 @@ int mx_fgraph_place_lines(mx_fgraph *G, const mx_feature_lines *L, uint8_t *move
   lp.ok = mx_calloc(L->nlines + 1);
   if (!lp.at || !lp.len || !lp.ok) rc = MX_ENOMEM;
   for (size_t i = 0; i < L->nlines && !rc; i++) rc = place_line(G, &W, &lp, L, i, ckey, cnode, moved, st);
-  for (int t = 0; t < RETRIES && !rc && st->lines_missed; t++)
+  for (int t = 0; t < retries && !rc && st->lines_missed; t++)
     rc = retry_at_corners(G, &W, &lp, L, ckey, cnode, moved, x0, st);
   if (!rc && chain) rc = chains(&lp, L, chain);
 done:

@@ -58,7 +58,7 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
   int rc = mask && moved ? MX_OK : MX_ENOMEM;
   if (!rc) rc = mx_fgraph_open(&G, *states, mask, L, in->near);
   if (rc) goto done;
-  rc = mx_fgraph_place_lines(&G, L, moved, st, chain);
+  rc = mx_fgraph_place_lines(&G, L, in->retries, moved, st, chain);
   /* sides, near the placed lines (the nodes of the edges around theirs) */
   if (!rc && in->patch && in->npatches > 1) {
     memset(mask, 0, M->nnodes);

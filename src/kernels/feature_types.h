@@ -21,6 +21,9 @@ typedef struct {
    * is looked at (a few octants at the feature level: the placement moves
    * no node farther); 0: all of it */
   double near;
+  /* the tries again at the corners of the lines missed (0: none; a local
+   * re-mesh's patch, whose lines run out of it, takes none) */
+  int retries;
 } mx_feature_input;
 
 typedef struct {
