@@ -863,9 +863,9 @@ int mx_mesh_stages(mx_mesher *m) {
   }
   if (broken && m->rec->S.features_kept && !m->feature_file && m->feature_angle < 0.0) {
     /* the features found at the default angle left elements the repair
-     * could not mend (the triple torus of CGAL's data at -s 6: 40 ridges
-     * of a smooth surface's coarse facets): the mesh again without them,
-     * as --no-features would make it */
+     * could not mend (linear_extrude of the OpenSCAD corpus at -s 5: 1954
+     * ridges of engraved text): the mesh again without them, as
+     * --no-features would make it */
     char inputs[MX_INPUTS_LABEL];
     mx_warning(mx_inputs_label(m, inputs, sizeof inputs), 0,
                "keeping the %zu sharp ridge(s) found broke the mesh (invalid elements, contacts "
