@@ -146,7 +146,11 @@ static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boun
   }
   memcpy(before, M->xyz, 3 * M->nnodes * sizeof *before);
   memcpy(q_before, M->jens, M->ncells * sizeof *q_before);
-  mx_feature_stats *fs = &m->rec->S.feature_place;
+  /* the figures of the whole mesh's placement: a local re-mesh's patch
+   * (the repair) places what of the features it holds, not reported (the
+   * triple torus at -s 6 said "0 of 19 corners", its last patch's) */
+  mx_feature_stats patch_figures;
+  mx_feature_stats *fs = M == &m->M ? &m->rec->S.feature_place : &patch_figures;
   const size_t nb = M->nnodes, ncb = M->ncells;
   mx_split_log log = {0, NULL, 0};
   mx_feature_chain chain = {0, NULL, NULL, NULL};
