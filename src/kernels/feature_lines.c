@@ -389,44 +389,6 @@ static uint32_t take_corner(mx_fgraph *G, uint8_t *fixed, uint8_t *moved, const 
   return c.node;
 }
 
-/* Each corner's ridge directions (unit vectors out of it along each open
- * line ending there): corner c's are dir[3 * off[c] ...  3 * off[c + 1]). */
-static int corner_dirs(const mx_feature_lines *L, const uint64_t *ckey, const uint32_t *cidx,
-                       uint32_t **off_out, double **dir_out) {
-  uint32_t *off = mx_calloc((L->ncorners + 2) * sizeof *off);
-  double *dir = mx_alloc((6 * L->nlines + 3) * sizeof *dir);
-  if (!off || !dir) {
-    mx_free(off);
-    mx_free(dir);
-    return MX_ENOMEM;
-  }
-  for (int pass = 0; pass < 2; pass++) {
-    for (size_t i = 0; i < L->nlines; i++) {
-      if (L->loop[i]) continue;
-      const size_t f = L->first[i], np = L->first[i + 1] - f;
-      for (int end = 0; end < 2; end++) {
-        const double *p = L->xyz + 3 * (f + (end ? np - 1 : 0)), *q = end ? p - 3 : p + 3;
-        const uint32_t c = taken_at(ckey, cidx, L->ncorners, p);
-        if (c == UINT32_MAX) continue;
-        if (pass == 0) {
-          off[c + 1]++;
-          continue;
-        }
-        const double l = mx_fg_dist3(p, q);
-        double *d = dir + 3 * (size_t)off[c]++;
-        for (int a = 0; a < 3; a++) d[a] = l > 0 ? (q[a] - p[a]) / l : 0.0;
-      }
-    }
-    if (pass == 0)
-      for (size_t c = 0; c < L->ncorners; c++) off[c + 1] += off[c];
-  }
-  for (size_t c = L->ncorners; c > 0; c--) off[c] = off[c - 1];
-  off[0] = 0;
-  *off_out = off;
-  *dir_out = dir;
-  return MX_OK;
-}
-
 /* A point's coordinates hashed (FNV-1a over their bits, -0 as 0). */
 static uint64_t point_key(const double *x) {
   uint64_t h = 1469598103934665603u;
@@ -479,10 +441,14 @@ static int keep_path(line_paths *lp, size_t i, const uint32_t *path, size_t k) {
   return MX_OK;
 }
 
+/* Line i's first (end 0) or last (end 1) point. */
+static const double *line_end(const mx_feature_lines *L, size_t i, int end) {
+  return L->xyz + 3 * (end ? L->first[i + 1] - 1 : L->first[i]);
+}
+
 /* A line's direction out of its end `end` (a unit vector). */
 static void line_dir(const mx_feature_lines *L, size_t i, int end, double *d) {
-  const size_t f = L->first[i], np = L->first[i + 1] - f;
-  const double *p = L->xyz + 3 * (f + (end ? np - 1 : 0)), *q = end ? p - 3 : p + 3;
+  const double *p = line_end(L, i, end), *q = end ? p - 3 : p + 3;
   const double l = mx_fg_dist3(p, q);
   for (int a = 0; a < 3; a++) d[a] = l > 0 ? (q[a] - p[a]) / l : 0.0;
 }
@@ -503,9 +469,8 @@ static int corner_lines(line_paths *lp, const mx_feature_lines *L, const uint64_
   for (int pass = 0; pass < 2; pass++) {
     for (size_t i = 0; i < L->nlines; i++) {
       if (L->loop[i]) continue;
-      const size_t f = L->first[i], np = L->first[i + 1] - f;
       for (int end = 0; end < 2; end++) {
-        const size_t k = corner_rank(ckey, nc, L->xyz + 3 * (f + (end ? np - 1 : 0)));
+        const size_t k = corner_rank(ckey, nc, line_end(L, i, end));
         if (k == nc) continue;
         if (pass == 0) lp->cl_off[k + 2]++;
         else lp->cl[lp->cl_off[k + 1]++] = (uint32_t)(2 * i + (size_t)end);
@@ -522,9 +487,8 @@ static int corner_lines(line_paths *lp, const mx_feature_lines *L, const uint64_
 static int others_at_ends(line_paths *lp, const mx_feature_lines *L, size_t i, const uint64_t *ckey) {
   lp->noth = 0;
   if (!lp->cl) return MX_OK;
-  const size_t f = L->first[i], np = L->first[i + 1] - f;
   for (int end = 0; end < 2; end++) {
-    const size_t k = corner_rank(ckey, L->ncorners, L->xyz + 3 * (f + (end ? np - 1 : 0)));
+    const size_t k = corner_rank(ckey, L->ncorners, line_end(L, i, end));
     if (k == L->ncorners) continue;
     for (uint32_t q = lp->cl_off[k]; q < lp->cl_off[k + 1]; q++) {
       const size_t j = lp->cl[q] / 2;
@@ -538,7 +502,7 @@ static int others_at_ends(line_paths *lp, const mx_feature_lines *L, size_t i, c
       }
       double *o = lp->oth + 6 * lp->noth++;
       const int e = (int)(lp->cl[q] & 1);
-      memcpy(o, L->xyz + 3 * (L->first[j] + (e ? L->first[j + 1] - L->first[j] - 1 : 0)), 3 * sizeof *o);
+      memcpy(o, line_end(L, j, e), 3 * sizeof *o);
       line_dir(L, j, e, o + 3);
     }
   }
@@ -798,8 +762,7 @@ static int retry_at_corners(mx_fgraph *G, search *W, line_paths *lp, const mx_fe
   for (size_t r = 0; r < nr; r++) { /* at both ends of every line placed again */
     const uint32_t i = redo[r];
     for (int end = 0; end < 2; end++) {
-      const double *p = L->xyz + 3 * (L->first[i] + (end ? L->first[i + 1] - L->first[i] - 1 : 0));
-      const uint32_t c = taken_at(ckey, cnode, L->ncorners, p);
+      const uint32_t c = taken_at(ckey, cnode, L->ncorners, line_end(L, i, end));
       if (c != UINT32_MAX) cmark[c] = 1;
     }
   }
@@ -856,7 +819,7 @@ int mx_fgraph_place_lines(mx_fgraph *G, const mx_feature_lines *L, int retries, 
   search W;
   memset(&W, 0, sizeof W);
   uint64_t *ckey = NULL;
-  uint32_t *cnode = NULL, *doff = NULL;
+  uint32_t *cnode = NULL;
   double *dir = NULL, *x0 = NULL;
   line_paths lp;
   memset(&lp, 0, sizeof lp);
@@ -868,19 +831,29 @@ int mx_fgraph_place_lines(mx_fgraph *G, const mx_feature_lines *L, int retries, 
     rc = MX_ENOMEM;
     goto done;
   }
-  /* first each corner's ridge directions, by the corners' keys */
+  /* the corners by their keys, and the line ends at each */
   for (size_t c = 0; c < L->ncorners; c++) {
     ckey[c] = point_key(L->corner + 3 * c);
     cnode[c] = (uint32_t)c;
   }
-  if (mx_sort_u64(ckey, cnode, L->ncorners) || corner_dirs(L, ckey, cnode, &doff, &dir)) {
+  if (mx_sort_u64(ckey, cnode, L->ncorners) || corner_lines(&lp, L, ckey)) {
     rc = MX_ENOMEM;
     goto done;
   }
   for (size_t k = 0; k < L->ncorners; k++) {
-    const uint32_t c = cnode[k];
-    cnode[k] = take_corner(G, fixed, moved, L->corner + 3 * (size_t)c, dir + 3 * (size_t)doff[c],
-                           (int)(doff[c + 1] - doff[c]));
+    /* its ridges' directions out of it */
+    const uint32_t c = cnode[k], nd = lp.cl_off[k + 1] - lp.cl_off[k];
+    double *dr = mx_realloc(dir, (3 * (size_t)nd + 3) * sizeof *dir);
+    if (!dr) {
+      rc = MX_ENOMEM;
+      goto done;
+    }
+    dir = dr;
+    for (uint32_t q = 0; q < nd; q++) {
+      const uint32_t e = lp.cl[lp.cl_off[k] + q];
+      line_dir(L, e / 2, (int)(e & 1), dir + 3 * (size_t)q);
+    }
+    cnode[k] = take_corner(G, fixed, moved, L->corner + 3 * (size_t)c, dir, (int)nd);
     if (cnode[k] == UINT32_MAX) st->corners_missed++;
     else st->corners++;
   }
@@ -892,7 +865,6 @@ int mx_fgraph_place_lines(mx_fgraph *G, const mx_feature_lines *L, int retries, 
   }
   memcpy(x0, M->xyz, 3 * M->nnodes * sizeof *x0);
   /* lines: open ones between their corners' nodes, loops in two halves */
-  if (!rc) rc = corner_lines(&lp, L, ckey);
   lp.at = mx_calloc((L->nlines + 1) * sizeof *lp.at);
   lp.len = mx_calloc((L->nlines + 1) * sizeof *lp.len);
   lp.ok = mx_calloc(L->nlines + 1);
@@ -922,7 +894,6 @@ done:
   mx_free(lp.loops);
   mx_free(ckey);
   mx_free(cnode);
-  mx_free(doff);
   mx_free(dir);
   mx_free(x0);
   return rc;
