@@ -135,7 +135,8 @@ static int give_up_pass(mx_mesh *M, const uint8_t *feature, const mx_feature_cha
       for (int pass = 0, done = 0; pass < 2 && !done; pass++)
         for (int k = 0; k < mx_cell_nodes[M->type[c]] && spoilt(M, c, floor, q_before, ncb); k++) {
           const uint32_t v = M->conn[8 * c + k];
-          if (!node_moved(M, before, nb, v) || !(pass || !(feature && feature[v]))) continue;
+          const int on_feature = feature && feature[v];
+          if (!node_moved(M, before, nb, v) || (pass == 0 && on_feature)) continue;
           if (pass && off && slide(M, chain, v, inc + off[v], (size_t)(off[v + 1] - off[v]), floor, q_before, ncb)) {
             (*slid)++;
             continue;

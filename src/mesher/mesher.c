@@ -658,9 +658,13 @@ static double domain_diagonal(const mx_mesher *m) {
               (hi[2] - lo[2]) * (hi[2] - lo[2]));
 }
 
-/* The distances between the features and the mesh made (verify/check.h:
- * ridge samples to the nearest boundary edge, corners to the nearest
- * boundary node), relative to the input's bounding box diagonal. */
+/* 1 when element c of d has a node marked in near. */
+static int cell_near(const mx_mesh_data *d, size_t c, const uint8_t *near) {
+  for (int k = 0; k < mx_cell_nodes[d->type[c]]; k++)
+    if (near[d->conn[8 * c + k]]) return 1;
+  return 0;
+}
+
 /* The feature distances of the mesh d from the elements with a node near
  * the features only (mx_feature_reach: the boundary edges there are those
  * of the whole mesh, as an edge of a face shared with an element not
@@ -669,13 +673,6 @@ static double domain_diagonal(const mx_mesher *m) {
  * as mixoct check measures it. Measured at -s 5: issue1258 (3.5 million
  * elements, 21 ridges) 0.83 -> 0.40 s; where the features reach every
  * element (assert, example023) 5-10% slower. */
-/* 1 when element c of d has a node marked in near. */
-static int cell_near(const mx_mesh_data *d, size_t c, const uint8_t *near) {
-  for (int k = 0; k < mx_cell_nodes[d->type[c]]; k++)
-    if (near[d->conn[8 * c + k]]) return 1;
-  return 0;
-}
-
 static int near_feature_distances(const mx_mesher *m, const mx_mesh_data *d,
                                   mx_check_feature_dist *fd) {
   const double r = mx_feature_reach(m);
@@ -715,14 +712,17 @@ static int near_feature_distances(const mx_mesher *m, const mx_mesh_data *d,
   mx_free(sub.type);
   mx_free(sub.conn);
   mx_free(near);
+  if (st) return st;
   /* all within 3 r / 4 are near: a point found farther than r / 4 from
    * its nearest edge here might be nearer one not taken */
   const int ok_r = isnan(fd->ridge_dist) || fd->ridge_dist <= 0.25 * r;
   const int ok_c = isnan(fd->corner_dist) || fd->corner_dist <= 0.25 * r;
-  if (!st && !(ok_r && ok_c)) st = mx_check_features_mesh(d, &m->feat_lines, fd);
-  return st;
+  return ok_r && ok_c ? MX_OK : mx_check_features_mesh(d, &m->feat_lines, fd);
 }
 
+/* The distances between the features and the mesh made (verify/check.h:
+ * ridge samples to the nearest boundary edge, corners to the nearest
+ * boundary node), relative to the input's bounding box diagonal. */
 static int feature_distances(mx_mesher *m) {
   mx_summary *S = &m->rec->S;
   S->feature_measured = 0;
