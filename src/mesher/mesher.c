@@ -665,20 +665,17 @@ static int cell_near(const mx_mesh_data *d, size_t c, const uint8_t *near) {
   return 0;
 }
 
-/* The feature distances of the mesh d from the elements with a node near
- * the features only (mx_feature_reach: the boundary edges there are those
- * of the whole mesh, as an edge of a face shared with an element not
- * taken has no node near), unless the farthest point found is far enough
- * that a boundary edge beyond could be nearer: then from the whole mesh,
- * as mixoct check measures it. Measured at -s 5: issue1258 (3.5 million
- * elements, 21 ridges) 0.83 -> 0.40 s; where the features reach every
- * element (assert, example023) 5-10% slower. */
-static int near_feature_distances(const mx_mesher *m, const mx_mesh_data *d,
-                                  mx_check_feature_dist *fd) {
-  const double r = mx_feature_reach(m);
-  if (!(r > 0.0)) return mx_check_features_mesh(d, &m->feat_lines, fd);
-  uint8_t *near = mx_alloc(d->nnodes + 1);
-  if (!near) return MX_ENOMEM;
+/* The boundary edges of the mesh d near the features (*edge, *ne: pairs of
+ * nodes; mx_alloc), with near[] (d->nnodes bytes, set here) flagging the
+ * nodes within 3/4 of r = mx_feature_reach of them: the edges of the faces
+ * used by one element among the elements with a node near, kept when a
+ * node of theirs is. Exact for those: a face with a near node has every
+ * element of it among those taken, so a face used once there is a boundary
+ * face of the whole mesh. */
+static int near_boundary_edges(const mx_mesher *m, const mx_mesh_data *d, double r,
+                               uint8_t *near, uint32_t **edge, size_t *ne) {
+  *edge = NULL;
+  *ne = 0;
   memset(near, 1, d->nnodes);
   int st = mx_feature_near_nodes(&m->feat_lines, r, d->xyz, d->nnodes, near);
   size_t nc = 0;
@@ -687,8 +684,6 @@ static int near_feature_distances(const mx_mesher *m, const mx_mesh_data *d,
   sub.type = st ? NULL : mx_alloc(nc + 1);
   sub.conn = st ? NULL : mx_alloc((8 * nc + 1) * sizeof *sub.conn);
   if (!st && (!sub.type || !sub.conn)) st = MX_ENOMEM;
-  uint32_t *edge = NULL;
-  size_t ne = 0;
   if (!st) {
     sub.ncells = 0;
     for (size_t c = 0; c < d->ncells; c++) {
@@ -696,23 +691,33 @@ static int near_feature_distances(const mx_mesher *m, const mx_mesh_data *d,
       sub.type[sub.ncells] = d->type[c];
       memcpy(sub.conn + 8 * sub.ncells++, d->conn + 8 * c, 8 * sizeof *sub.conn);
     }
-    st = mx_check_boundary_edges(&sub, &edge, &ne);
+    st = mx_check_boundary_edges(&sub, edge, ne);
   }
-  if (!st) { /* the edges with a node near: those of the whole mesh's boundary */
-    size_t k = 0;
-    for (size_t e = 0; e < ne; e++)
-      if (near[edge[2 * e]] || near[edge[2 * e + 1]]) {
-        edge[2 * k] = edge[2 * e];
-        edge[2 * k + 1] = edge[2 * e + 1];
-        k++;
-      }
-    st = mx_check_features(&m->feat_lines, d->xyz, d->nnodes, edge, k, fd);
-  }
-  mx_free(edge);
   mx_free(sub.type);
   mx_free(sub.conn);
-  mx_free(near);
   if (st) return st;
+  size_t k = 0;
+  uint32_t *e = *edge;
+  for (size_t i = 0; i < *ne; i++)
+    if (near[e[2 * i]] || near[e[2 * i + 1]]) {
+      e[2 * k] = e[2 * i];
+      e[2 * k + 1] = e[2 * i + 1];
+      k++;
+    }
+  *ne = k;
+  return MX_OK;
+}
+
+/* The feature distances of the mesh d from its boundary edges near the
+ * features (near_boundary_edges), unless the farthest point found is far
+ * enough that a boundary edge beyond could be nearer: then from the whole
+ * mesh, as mixoct check measures it. Measured at -s 5: issue1258 (3.5
+ * million elements, 21 ridges) 0.83 -> 0.40 s; where the features reach
+ * every element (assert, example023) 5-10% slower. */
+static int near_feature_distances(const mx_mesher *m, const mx_mesh_data *d, double r,
+                                  const uint32_t *edge, size_t ne, mx_check_feature_dist *fd) {
+  if (!(r > 0.0)) return mx_check_features_mesh(d, &m->feat_lines, fd);
+  MX_CHECK(mx_check_features(&m->feat_lines, d->xyz, d->nnodes, edge, ne, fd));
   /* all within 3 r / 4 are near: a point found farther than r / 4 from
    * its nearest edge here might be nearer one not taken */
   const int ok_r = isnan(fd->ridge_dist) || fd->ridge_dist <= 0.25 * r;
@@ -720,14 +725,7 @@ static int near_feature_distances(const mx_mesher *m, const mx_mesh_data *d,
   return ok_r && ok_c ? MX_OK : mx_check_features_mesh(d, &m->feat_lines, fd);
 }
 
-/* The distances between the features and the mesh made (verify/check.h:
- * ridge samples to the nearest boundary edge, corners to the nearest
- * boundary node), relative to the input's bounding box diagonal. */
-static int feature_distances(mx_mesher *m) {
-  mx_summary *S = &m->rec->S;
-  S->feature_measured = 0;
-  if (!m->have_features || m->mesh_stage != MX_STAGE_FULL || !m->M.ncells) return MX_OK;
-  const mx_mesh *M = &m->M;
+static mx_mesh_data mesh_data_of(const mx_mesh *M) {
   mx_mesh_data d;
   memset(&d, 0, sizeof d);
   d.nnodes = M->nnodes;
@@ -735,13 +733,40 @@ static int feature_distances(mx_mesher *m) {
   d.xyz = M->xyz;
   d.type = M->type;
   d.conn = M->conn;
-  mx_check_feature_dist fd;
-  MX_CHECK(near_feature_distances(m, &d, &fd));
+  return d;
+}
+
+static void keep_feature_distances(mx_mesher *m, const mx_check_feature_dist *fd) {
+  mx_summary *S = &m->rec->S;
   const double diag = domain_diagonal(m);
   S->feature_measured = 1;
-  S->feature_ridge_dist = fd.ridge_dist / diag;
-  S->feature_corner_dist = fd.corner_dist / diag;
-  return MX_OK;
+  S->feature_ridge_dist = fd->ridge_dist / diag;
+  S->feature_corner_dist = fd->corner_dist / diag;
+}
+
+/* The distances between the features and the mesh made (verify/check.h:
+ * ridge samples to the nearest boundary edge, corners to the nearest
+ * boundary node), relative to the input's bounding box diagonal. */
+static int feature_distances(mx_mesher *m) {
+  mx_summary *S = &m->rec->S;
+  const int fresh = m->feature_dist_fresh;
+  m->feature_dist_fresh = 0;
+  if (fresh) return MX_OK; /* measured with the boundary check (mx_mesh_stages) */
+  S->feature_measured = 0;
+  if (!m->have_features || m->mesh_stage != MX_STAGE_FULL || !m->M.ncells) return MX_OK;
+  const mx_mesh_data d = mesh_data_of(&m->M);
+  const double r = mx_feature_reach(m);
+  uint8_t *near = mx_alloc(d.nnodes + 1);
+  if (!near) return MX_ENOMEM;
+  uint32_t *edge = NULL;
+  size_t ne = 0;
+  mx_check_feature_dist fd;
+  int st = r > 0.0 ? near_boundary_edges(m, &d, r, near, &edge, &ne) : MX_OK;
+  if (!st) st = near_feature_distances(m, &d, r, edge, ne, &fd);
+  mx_free(near);
+  mx_free(edge);
+  if (!st) keep_feature_distances(m, &fd);
+  return st;
 }
 
 /* Per-node flags, counts and quality of the mesh just made; MX_EINVALID
@@ -798,25 +823,41 @@ int mx_mesh_finish(mx_mesher *m) {
  * a repair that meshes a patch again around moved feature nodes has left
  * such nodes (linear_extrude of the OpenSCAD corpus at -s 5: 4). */
 static int features_off_surface(mx_mesher *m, size_t *off) {
-  const mx_mesh *M = &m->M;
-  int32_t *f = mx_alloc((M->nnodes + 1) * sizeof *f); /* the nodes of faces of one element */
-  if (!f) return MX_ENOMEM;
-  const mx_mesh_view v = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
-                          .type = M->type, .conn = M->conn};
-  int st = mx_boundary_node_flags(&v, f);
-  /* near the features only: the others were placed as without them */
-  uint8_t *near = st ? NULL : mx_alloc(M->nnodes + 1);
-  if (!st && !near) st = MX_ENOMEM;
-  if (!st) {
-    for (size_t i = 0; i < M->nnodes; i++) near[i] = f[i] != 0;
-    const double r = mx_feature_reach(m);
-    if (r > 0.0) st = mx_feature_near_nodes(&m->feat_lines, r, M->xyz, M->nnodes, near);
+  const mx_mesh_data d = mesh_data_of(&m->M);
+  const double r = mx_feature_reach(m);
+  uint8_t *near = mx_alloc(d.nnodes + 1);
+  if (!near) return MX_ENOMEM;
+  uint32_t *edge = NULL;
+  size_t ne = 0;
+  int st = MX_OK;
+  if (r > 0.0) {
+    st = near_boundary_edges(m, &d, r, near, &edge, &ne);
+  } else { /* no reach: every boundary node */
+    int32_t *f = mx_alloc((d.nnodes + 1) * sizeof *f);
+    const mx_mesh_view v = {.nnodes = d.nnodes, .xyz = d.xyz, .ncells = d.ncells,
+                            .type = d.type, .conn = d.conn};
+    st = f ? mx_boundary_node_flags(&v, f) : MX_ENOMEM;
+    for (size_t i = 0; i < d.nnodes && !st; i++) near[i] = f[i] != 0;
+    mx_free(f);
   }
-  mx_free(f);
+  if (!st && r > 0.0) { /* the near nodes on those edges: the near boundary nodes */
+    uint8_t *on = mx_calloc(d.nnodes + 1);
+    if (!on) st = MX_ENOMEM;
+    for (size_t i = 0; i < 2 * ne && !st; i++) on[edge[i]] = 1;
+    for (size_t v = 0; v < d.nnodes && !st; v++) near[v] = near[v] && on[v];
+    mx_free(on);
+  }
+  /* the distances from the same edges, for mx_mesh_finish (the mesh does
+   * not change before it when nothing is off) */
+  mx_check_feature_dist fd;
+  if (!st) st = near_feature_distances(m, &d, r, edge, ne, &fd);
+  mx_free(edge);
   if (st) {
     mx_free(near);
     return st;
   }
+  keep_feature_distances(m, &fd);
+  m->feature_dist_fresh = 1;
   const double tol = 1e-6 * domain_diagonal(m);
   size_t n = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : n)
@@ -877,6 +918,7 @@ int mx_mesh_stages(mx_mesher *m) {
     m->rec->S.ph = keep.ph;
     m->rec->S.t_restart = keep.t_restart;
     m->feature_angle = 0.0;
+    m->feature_dist_fresh = 0; /* of the mesh given up */
     mx_tree_clear(m);
     const int st = mx_mesh_stages(m);
     m->feature_angle = -1.0;

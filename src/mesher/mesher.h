@@ -246,6 +246,9 @@ struct mx_mesher {
   size_t nfeature_boxes;        /* (mesher/feature_apart.c), with the tree */
   mx_features feat;
   mx_feature_lines feat_lines;
+  /* the feature distances measured on the mesh as it is (by the check of
+   * its boundary near them, mx_mesh_stages), for mx_mesh_finish to take */
+  int feature_dist_fresh;
   /* a label image meshed on its voxel lattice (mesher/image_mesh.c): the
    * padded labels made ready, the transform, the voxel level, the grid */
   int image_lattice, image_R, image_rounds;
