@@ -746,14 +746,12 @@ static void keep_feature_distances(mx_mesher *m, const mx_check_feature_dist *fd
 
 /* The distances between the features and the mesh made (verify/check.h:
  * ridge samples to the nearest boundary edge, corners to the nearest
- * boundary node), relative to the input's bounding box diagonal. */
-static int feature_distances(mx_mesher *m) {
-  mx_summary *S = &m->rec->S;
-  const int fresh = m->feature_dist_fresh;
-  m->feature_dist_fresh = 0;
-  if (fresh) return MX_OK; /* measured with the boundary check (mx_mesh_stages) */
-  S->feature_measured = 0;
-  if (!m->have_features || m->mesh_stage != MX_STAGE_FULL || !m->M.ncells) return MX_OK;
+ * boundary node), relative to the input's bounding box diagonal, of the
+ * mesh as it is, kept in the summary; with near_out, the near flags and
+ * edges of near_boundary_edges handed over (mx_free; no edges when the
+ * reach is 0). */
+static int measure_features(mx_mesher *m, uint8_t **near_out, uint32_t **edge_out,
+                            size_t *ne_out) {
   const mx_mesh_data d = mesh_data_of(&m->M);
   const double r = mx_feature_reach(m);
   uint8_t *near = mx_alloc(d.nnodes + 1);
@@ -763,10 +761,25 @@ static int feature_distances(mx_mesher *m) {
   mx_check_feature_dist fd;
   int st = r > 0.0 ? near_boundary_edges(m, &d, r, near, &edge, &ne) : MX_OK;
   if (!st) st = near_feature_distances(m, &d, r, edge, ne, &fd);
+  if (!st) keep_feature_distances(m, &fd);
+  if (!st && near_out) {
+    *near_out = near;
+    *edge_out = edge;
+    *ne_out = ne;
+    return MX_OK;
+  }
   mx_free(near);
   mx_free(edge);
-  if (!st) keep_feature_distances(m, &fd);
   return st;
+}
+
+static int feature_distances(mx_mesher *m) {
+  const int fresh = m->feature_dist_fresh;
+  m->feature_dist_fresh = 0;
+  if (fresh) return MX_OK; /* measured with the boundary check (mx_mesh_stages) */
+  m->rec->S.feature_measured = 0;
+  if (!m->have_features || m->mesh_stage != MX_STAGE_FULL || !m->M.ncells) return MX_OK;
+  return measure_features(m, NULL, NULL, NULL);
 }
 
 /* Per-node flags, counts and quality of the mesh just made; MX_EINVALID
@@ -821,48 +834,43 @@ int mx_mesh_finish(mx_mesher *m) {
 /* The boundary nodes farther than 1e-6 of the input's diagonal from it
  * (mixoct check --surface's rule), counted after the features were placed:
  * a repair that meshes a patch again around moved feature nodes has left
- * such nodes (linear_extrude of the OpenSCAD corpus at -s 5: 4). */
+ * such nodes (linear_extrude of the OpenSCAD corpus at -s 5: 4). Near the
+ * features only (the others were placed as without them), from the edges
+ * the feature distances are measured on, which are kept for
+ * mx_mesh_finish (the mesh does not change before it when none is off). */
 static int features_off_surface(mx_mesher *m, size_t *off) {
-  const mx_mesh_data d = mesh_data_of(&m->M);
-  const double r = mx_feature_reach(m);
-  uint8_t *near = mx_alloc(d.nnodes + 1);
-  if (!near) return MX_ENOMEM;
+  const mx_mesh *M = &m->M;
+  *off = 0;
+  if (!M->ncells) return MX_OK; /* mx_mesh_finish says so */
+  uint8_t *near = NULL;
   uint32_t *edge = NULL;
   size_t ne = 0;
-  int st = MX_OK;
-  if (r > 0.0) {
-    st = near_boundary_edges(m, &d, r, near, &edge, &ne);
-  } else { /* no reach: every boundary node */
-    int32_t *f = mx_alloc((d.nnodes + 1) * sizeof *f);
-    const mx_mesh_view v = {.nnodes = d.nnodes, .xyz = d.xyz, .ncells = d.ncells,
-                            .type = d.type, .conn = d.conn};
-    st = f ? mx_boundary_node_flags(&v, f) : MX_ENOMEM;
-    for (size_t i = 0; i < d.nnodes && !st; i++) near[i] = f[i] != 0;
-    mx_free(f);
-  }
-  if (!st && r > 0.0) { /* the near nodes on those edges: the near boundary nodes */
-    uint8_t *on = mx_calloc(d.nnodes + 1);
+  int st = measure_features(m, &near, &edge, &ne);
+  if (!st && mx_feature_reach(m) > 0.0) { /* the near nodes on those edges */
+    uint8_t *on = mx_calloc(M->nnodes + 1);
     if (!on) st = MX_ENOMEM;
     for (size_t i = 0; i < 2 * ne && !st; i++) on[edge[i]] = 1;
-    for (size_t v = 0; v < d.nnodes && !st; v++) near[v] = near[v] && on[v];
+    for (size_t v = 0; v < M->nnodes && !st; v++) near[v] = near[v] && on[v];
     mx_free(on);
+  } else if (!st) { /* no reach: every boundary node */
+    int32_t *f = mx_alloc((M->nnodes + 1) * sizeof *f);
+    const mx_mesh_view v = {.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
+                            .type = M->type, .conn = M->conn};
+    st = f ? mx_boundary_node_flags(&v, f) : MX_ENOMEM;
+    for (size_t i = 0; i < M->nnodes && !st; i++) near[i] = f[i] != 0;
+    mx_free(f);
   }
-  /* the distances from the same edges, for mx_mesh_finish (the mesh does
-   * not change before it when nothing is off) */
-  mx_check_feature_dist fd;
-  if (!st) st = near_feature_distances(m, &d, r, edge, ne, &fd);
   mx_free(edge);
   if (st) {
     mx_free(near);
     return st;
   }
-  keep_feature_distances(m, &fd);
   m->feature_dist_fresh = 1;
   const double tol = 1e-6 * domain_diagonal(m);
   size_t n = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : n)
-  for (size_t v = 0; v < m->M.nnodes; v++)
-    if (near[v] && mx_closest_point_within(&m->SI, m->M.xyz + 3 * v, 2.0 * tol, NULL) > tol) n++;
+  for (size_t v = 0; v < M->nnodes; v++)
+    if (near[v] && mx_closest_point_within(&m->SI, M->xyz + 3 * v, 2.0 * tol, NULL) > tol) n++;
   mx_free(near);
   *off = n;
   return MX_OK;
