@@ -6,6 +6,7 @@
 
 #include "base/common.h"
 #include "geom/quality.h"
+#include "kernels/boundary.h"
 #include "kernels/cell_split.h"
 #include "kernels/feature_place.h"
 #include "kernels/mesh_edit.h"
@@ -71,58 +72,100 @@ static int slide(mx_mesh *M, const mx_feature_chain *chain, uint32_t v, const ui
   return bk >= 0;
 }
 
-static int give_up_pass(mx_mesh *M, const uint8_t *feature, const mx_feature_chain *chain,
-                        const double *before, size_t nb, const float *q_before, size_t ncb,
-                        double floor, size_t *count, size_t *slid) {
-  /* the elements with a moved node: the only ones that can be spoilt */
-  size_t nc = 0, cap = 1024;
-  uint32_t *cand = mx_alloc(cap * sizeof *cand);
-  /* the elements of the nodes the splits added (nodes nb ..) and of the
-   * feature nodes on chains (they may slide) */
+/* The elements with a moved node (or a node added: nb and up), the only
+ * ones the placement can have spoilt, in *cand (mx_alloc). */
+static int moved_cells(const mx_mesh *M, const double *before, size_t nb, uint32_t **cand,
+                       size_t *nc) {
+  size_t n = 0, cap = 1024;
+  uint32_t *c = mx_alloc(cap * sizeof *c);
+  if (!c) return MX_ENOMEM;
+  for (size_t e = 0; e < M->ncells; e++) {
+    int mv = 0;
+    for (int k = 0; k < mx_cell_nodes[M->type[e]] && !mv; k++) {
+      const uint32_t v = M->conn[8 * e + k];
+      mv = v >= nb || node_moved(M, before, nb, v);
+    }
+    if (!mv) continue;
+    if (n == cap) {
+      uint32_t *g = mx_realloc(c, 2 * cap * sizeof *c);
+      if (!g) {
+        mx_free(c);
+        return MX_ENOMEM;
+      }
+      c = g;
+      cap *= 2;
+    }
+    c[n++] = (uint32_t)e;
+  }
+  *cand = c;
+  *nc = n;
+  return MX_OK;
+}
+
+/* An inside node that is no feature node: free to move anywhere. */
+static int free_inside(const uint8_t *states, const uint8_t *feature, size_t nb, uint32_t v) {
+  return v < nb && states && states[v] == MX_NODE_INSIDE && !(feature && feature[v]);
+}
+
+/* Inside node v of a spoilt element moved to where its elements' least
+ * J_ENS is highest (mx_mesh_best_point), kept there only when fewer of its
+ * elements are spoilt than before (none newly): the placement's elements
+ * mended by the nodes beside them before any feature node goes back. */
+static void relax(mx_mesh *M, uint32_t v, const uint32_t *inc, size_t n, double floor,
+                  const float *q_before, size_t ncb) {
+  size_t was = 0, now = 0;
+  for (size_t i = 0; i < n; i++) was += (size_t)spoilt(M, inc[i], floor, q_before, ncb);
+  double keep[3];
+  memcpy(keep, M->xyz + 3 * (size_t)v, sizeof keep);
+  mx_mesh_best_point(M, v, inc, n);
+  for (size_t i = 0; i < n; i++) now += (size_t)spoilt(M, inc[i], floor, q_before, ncb);
+  if (now < was) return;
+  memcpy(M->xyz + 3 * (size_t)v, keep, sizeof keep);
+  for (size_t i = 0; i < n; i++) M->jens[inc[i]] = (float)mx_cell_jens(M, inc[i]);
+}
+
+static int give_up_pass(mx_mesh *M, const uint8_t *states, const uint8_t *feature,
+                        const mx_feature_chain *chain, const double *before, size_t nb,
+                        const float *q_before, size_t ncb, double floor, size_t *count,
+                        size_t *slid) {
+  size_t nc = 0;
+  uint32_t *cand = NULL;
+  MX_CHECK(moved_cells(M, before, nb, &cand, &nc));
+  /* the elements of the nodes the splits added (nodes nb ..), of the
+   * feature nodes on chains (they may slide) and of the free inside nodes
+   * of the candidates (they may relax) */
   uint64_t *off = NULL;
   uint32_t *inc = NULL;
-  const int want = M->nnodes > nb || (chain && chain->n);
-  uint8_t *added = want ? mx_alloc(M->nnodes + 1) : NULL;
-  int st = cand && (added || !want) ? MX_OK : MX_ENOMEM;
-  if (!st && added) {
-    for (size_t v = 0; v < M->nnodes; v++) added[v] = v >= nb;
+  uint8_t *want = mx_calloc(M->nnodes + 1);
+  int st = want ? MX_OK : MX_ENOMEM;
+  if (!st) {
+    for (size_t v = nb; v < M->nnodes; v++) want[v] = 1;
     if (chain)
-      for (size_t k = 0; k < chain->n; k++) added[chain->node[k]] = 1;
-    st = mx_mesh_incidence(M, added, &off, &inc);
+      for (size_t k = 0; k < chain->n; k++) want[chain->node[k]] = 1;
+    for (size_t i = 0; i < nc; i++)
+      for (int k = 0; k < mx_cell_nodes[M->type[cand[i]]]; k++) {
+        const uint32_t v = M->conn[8 * (size_t)cand[i] + k];
+        want[v] = want[v] || free_inside(states, feature, nb, v);
+      }
+    st = mx_mesh_incidence(M, want, &off, &inc);
   }
-  mx_free(added);
+  mx_free(want);
   if (st) {
     mx_free(cand);
     return st;
   }
-  for (size_t c = 0; c < M->ncells; c++) {
-    int mv = 0;
-    for (int k = 0; k < mx_cell_nodes[M->type[c]] && !mv; k++) {
-      const uint32_t v = M->conn[8 * c + k];
-      mv = v >= nb || node_moved(M, before, nb, v);
-    }
-    if (!mv) continue;
-    if (nc == cap) {
-      uint32_t *g = mx_realloc(cand, 2 * cap * sizeof *cand);
-      if (!g) {
-        mx_free(cand);
-        mx_free(off);
-        mx_free(inc);
-        return MX_ENOMEM;
-      }
-      cand = g;
-      cap *= 2;
-    }
-    cand[nc++] = (uint32_t)c;
-  }
   for (int round = 0; round < 64; round++) {
     /* the new nodes of spoilt elements moved to their best points first,
-     * then the moved nodes of those still spoilt put back */
+     * their free inside nodes relaxed, then the moved nodes of those
+     * still spoilt put back */
     for (size_t i = 0; i < nc; i++) {
       const size_t c = cand[i];
       for (int k = 0; k < mx_cell_nodes[M->type[c]] && spoilt(M, c, floor, q_before, ncb); k++) {
         const uint32_t v = M->conn[8 * c + k];
-        if (v >= nb) mx_mesh_best_point(M, v, inc + off[v], (size_t)(off[v + 1] - off[v]));
+        const size_t n = (size_t)(off[v + 1] - off[v]);
+        if (v >= nb) mx_mesh_best_point(M, v, inc + off[v], n);
+        else if (free_inside(states, feature, nb, v))
+          relax(M, v, inc + off[v], n, floor, q_before, ncb);
       }
     }
     size_t n = 0;
@@ -162,7 +205,8 @@ int mx_feature_give_up(mx_mesh *M, uint8_t **states, mx_split_log *log, const ui
                        size_t nb, const float *q_before, size_t ncb, double floor,
                        mx_feature_stats *fs) {
   size_t *count = &fs->given_up;
-  int st = give_up_pass(M, feature, chain, before, nb, q_before, ncb, floor, count, &fs->slid);
+  int st = give_up_pass(M, *states, feature, chain, before, nb, q_before, ncb, floor, count,
+                        &fs->slid);
   if (st || !log || !log->n) return st;
   /* the splits some cone of which is still spoilt undone, and their
    * elements' moved nodes then put back */
@@ -178,7 +222,9 @@ int mx_feature_give_up(mx_mesh *M, uint8_t **states, mx_split_log *log, const ui
   fs->unsplit += n;
   if (n) {
     st = mx_mesh_unsplit(M, states, log, undo);
-    if (!st) st = give_up_pass(M, feature, chain, before, nb, q_before, ncb, floor, count, &fs->slid);
+    if (!st)
+      st = give_up_pass(M, *states, feature, chain, before, nb, q_before, ncb, floor, count,
+                        &fs->slid);
   }
   mx_free(undo);
   return st;

@@ -61,7 +61,9 @@ int mx_feature_place(mx_mesh *M, uint8_t **states, const mx_surface_index *S,
  * its neighbours, to where none of its elements is spoilt: it stays on
  * its ridge (fs->slid). A spoilt
  * element with a node of a split first has that node moved to its best
- * point (mx_mesh_best_point); a split (log, may be NULL) whose cones are
+ * point (mx_mesh_best_point), and its inside nodes that are no feature
+ * nodes (*states) moved to theirs when that leaves fewer of their
+ * elements spoilt and spoils none; a split (log, may be NULL) whose cones are
  * still spoilt after all is undone and its element's nodes put back.
  * Spoilt: invalid (J_ENS < MX_JENS_VALID), or below floor and below its
  * J_ENS before. fs->given_up: nodes put back, fs->unsplit: splits
