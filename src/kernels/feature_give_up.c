@@ -149,8 +149,8 @@ static int give_up_pass(mx_mesh *M, const uint8_t *states, const uint8_t *featur
       }
     st = mx_mesh_incidence(M, want, &off, &inc);
   }
-  mx_free(want);
   if (st) {
+    mx_free(want);
     mx_free(cand);
     return st;
   }
@@ -163,9 +163,12 @@ static int give_up_pass(mx_mesh *M, const uint8_t *states, const uint8_t *featur
       for (int k = 0; k < mx_cell_nodes[M->type[c]] && spoilt(M, c, floor, q_before, ncb); k++) {
         const uint32_t v = M->conn[8 * c + k];
         const size_t n = (size_t)(off[v + 1] - off[v]);
-        if (v >= nb) mx_mesh_best_point(M, v, inc + off[v], n);
-        else if (free_inside(states, feature, nb, v))
+        if (v >= nb) {
+          mx_mesh_best_point(M, v, inc + off[v], n);
+        } else if (want[v] == 1 && free_inside(states, feature, nb, v)) {
           relax(M, v, inc + off[v], n, floor, q_before, ncb);
+          want[v] = 2; /* once a pass */
+        }
       }
     }
     size_t n = 0;
@@ -193,7 +196,13 @@ static int give_up_pass(mx_mesh *M, const uint8_t *states, const uint8_t *featur
     *count += n;
     for (size_t i = 0; i < nc; i++) M->jens[cand[i]] = (float)mx_cell_jens(M, cand[i]);
   }
+  /* the elements of the nodes relaxed that had no moved node (not
+   * candidates) follow them, when they were put back since */
+  for (size_t v = 0; v < nb; v++)
+    if (want[v] == 2)
+      for (uint64_t k = off[v]; k < off[v + 1]; k++) M->jens[inc[k]] = (float)mx_cell_jens(M, inc[k]);
   mx_mesh_summarize(M);
+  mx_free(want);
   mx_free(cand);
   mx_free(off);
   mx_free(inc);
