@@ -18,7 +18,8 @@
 #  - the step (a 0.05 thick ledge) and the tetrahedron at -s 3 and 5: valid,
 #    the distances reported (the placement misses some of their ridges
 #    today: measured, not asserted);
-#  - the summary's distances (--json) agree with check's (9 digits), and its J_ENS min (none left stale by the placement's edits);
+#  - the summary's distances (--json) agree with check's (9 digits), and
+#    its J_ENS min (none left stale by the placement's edits);
 #  - the step at -s 5 splits quadrilaterals a line crosses along their
 #    diagonal, and check finds no defect in the result;
 #  - a feature node slides along its ridge rather than going back (the
