@@ -46,7 +46,7 @@ print(math.dist([min(p[a] for p in v) for a in range(3)], [max(p[a] for p in v) 
   t0=$(date +%s.%N); "$MIXOCT" -i "$f" -s "$LEVEL" -o "$T/m.vtu" --quiet 2>/dev/null; t1=$(date +%s.%N)
   printf '%-10s %-7s %s\n' "$s" mixoct "$(figures "$T/m.vtu" "$f" "$(secs "$t0" "$t1")")"
   if [ -n "$CGAL" ]; then
-    t0=$(date +%s.%N); timeout 300 "$CGAL" "$f" "$T/c.mesh" "$h" 30 >/dev/null 2>&1; t1=$(date +%s.%N)
+    t0=$(date +%s.%N); timeout -k 10 300 "$CGAL" "$f" "$T/c.mesh" "$h" 30 >/dev/null 2>&1; t1=$(date +%s.%N)
     printf '%-10s %-7s %s\n' "$s" cgal "$(figures "$T/c.mesh" "$f" "$(secs "$t0" "$t1")")"
   fi
   if command -v gmsh >/dev/null; then
@@ -59,7 +59,7 @@ Surface Loop(1) = Surface{:};
 Volume(1) = {1};
 Mesh.MeshSizeMax = $h;
 GEO
-    t0=$(date +%s.%N); timeout 300 gmsh "$T/g.geo" -3 -format msh22 -o "$T/g.msh" >/dev/null 2>&1; t1=$(date +%s.%N)
+    t0=$(date +%s.%N); timeout -k 10 300 gmsh "$T/g.geo" -3 -format msh22 -o "$T/g.msh" >/dev/null 2>&1; t1=$(date +%s.%N)
     "$PY" -c "
 import meshio
 m = meshio.read('$T/g.msh')

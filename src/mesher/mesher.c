@@ -907,7 +907,10 @@ int mx_mesh_stages(mx_mesher *m) {
   int broken = m->M.invalid > 0 || m->rec->S.contacts.nodes > 0;
   if (!broken && m->rec->S.features_kept && m->p.stage == MX_STAGE_FULL) {
     size_t off = 0;
-    MX_CHECK(features_off_surface(m, &off));
+    const double t = mx_wtime(); /* verification, and the feature distances */
+    const int st = features_off_surface(m, &off);
+    m->rec->S.ph.verify += mx_wtime() - t;
+    MX_CHECK(st);
     broken = off > 0;
   }
   if (broken && m->rec->S.features_kept && !m->feature_file && m->feature_angle < 0.0) {
