@@ -66,7 +66,7 @@ run_case() {
   rc=$?
   t2=$(now)
   if [ "$rc" -ne 0 ]; then
-    bad "$name: check exit $rc (3 = defects)"; cat "$T/check.err"
+    bad "$name: check exit $rc (5 = defects)"; cat "$T/check.err"
   fi
   # Line 1: the summary; further lines: what is wrong.
   python3 - "$T/mesh.json" "$T/check.json" "$name" "$flags" "$t0" "$t1" "$t2" \

@@ -186,7 +186,7 @@ done
 B=box_a3
 P=$PL/box.poly
 exp=$(TOOL flip "$B.vtk" flip.vtk)
-expect_exit 3 "a cell turned clockwise" "$BIN" check flip.vtk --json
+expect_exit 5 "a cell turned clockwise" "$BIN" check flip.vtk --json
 same "$(J out inverted bad_edges hanging conforming valid)" "1 $exp 0 false false" \
   "clockwise cell: inverted 1, $exp bad edges"
 
@@ -194,24 +194,24 @@ read -r e0 b0 <<<"$("$BIN" check "$B.vtk" --json | tail -1 >ref.json; J ref.json
 nv=$(TOOL delete "$B.vtk" hole.vtk)
 expect_exit 0 "an inner cell removed: still a valid mesh alone" "$BIN" check hole.vtk --json
 same "$(J out euler boundary_edges)" "$((e0 - 1)) $((b0 + nv))" "hole: euler - 1, boundary + $nv"
-expect_exit 3 "an inner cell removed, against the domain" "$BIN" check hole.vtk --poly "$P" --json
+expect_exit 5 "an inner cell removed, against the domain" "$BIN" check hole.vtk --poly "$P" --json
 same "$(J out off_boundary topology_off inverted hanging bad_edges)" "$nv 1 0 0 0" \
   "hole: its $nv nodes off the polylines, topology off"
 
 TOOL hang "$B.vtk" hang.vtk >/dev/null
-expect_exit 3 "a T-junction" "$BIN" check hang.vtk --json
+expect_exit 5 "a T-junction" "$BIN" check hang.vtk --json
 same "$(J out hanging bad_edges inverted conforming)" "1 0 0 false" "T-junction: 1 hanging node"
 
 TOOL move "${B}.vtk" move.vtk >/dev/null
 expect_exit 0 "a boundary node moved inward: valid alone" "$BIN" check move.vtk --json
-expect_exit 3 "a boundary node moved inward, against the domain" "$BIN" check move.vtk --poly "$P" --json
+expect_exit 5 "a boundary node moved inward, against the domain" "$BIN" check move.vtk --poly "$P" --json
 same "$(J out off_boundary missing_features inverted topology_off area_off)" "1 0 0 0 0" \
   "moved node: off_boundary 1"
 
-expect_exit 3 "the wrong domain" "$BIN" check a_s6.vtu --poly "$P" --json
+expect_exit 5 "the wrong domain" "$BIN" check a_s6.vtu --poly "$P" --json
 read -r ob ao <<<"$(J out off_boundary area_off)"
 if [ "$ob" -gt 0 ] && [ "$ao" -eq 1 ]; then ok "wrong domain: $ob off, area off"; else bad "wrong domain: off $ob area_off $ao"; fi
-expect_exit 3 "the wrong domain (text)" "$BIN" check pie_s6.msh --poly "$PL/a.poly"
+expect_exit 5 "the wrong domain (text)" "$BIN" check pie_s6.msh --poly "$PL/a.poly"
 has out "not valid" "report says not valid"
 
 # ---- input errors ----------------------------------------------------------------

@@ -82,7 +82,7 @@ expect_exit 0 "the files in the other order" "$MIXOCT" check "$T/ab.msh" --surfa
 json_ok "$T/out" "d['defects'] == 0 and [m['region'] for m in d['materials']] == [2, 1]" "B given first: its material is region 1, A's region 2"
 # one of the two files: the mesh is twice its volume (a defect), and half
 # of the mesh lies outside it
-expect_exit 3 "check against a.off alone" "$MIXOCT" check "$T/ab.msh" --surface "$T/a.off" --json
+expect_exit 5 "check against a.off alone" "$MIXOCT" check "$T/ab.msh" --surface "$T/a.off" --json
 json_ok "$T/out" "d['volume_off'] == 1 and 'surface_files' not in d" "a.off alone: volume off, the one-file report"
 
 expect_exit 0 "an L of three boxes, --materials" "$MIXOCT" -i "$T/a.off" -i "$T/b.off" -i "$T/c.off" \

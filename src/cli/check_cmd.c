@@ -8,8 +8,9 @@
  * surface or polylines when given, and prints the report, or with --json
  * one JSON object on the last stdout line; --quiet prints nothing but
  * errors (and the JSON object when --json is given) and silences warnings.
- * Exit codes: 0 no defect, 3 defects found, 2 bad input or usage (the
- * message names the file), 1 internal failure. */
+ * Exit codes: 0 no defect, 5 defects found (as the mesher's "breaks the
+ * contract"), 2 bad input or usage (the message names the file), 1
+ * internal failure. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -67,7 +68,7 @@ static void usage(FILE *f) {
           "  --threads N       OpenMP threads (default: all)\n"
           "  --json            one JSON object on the last line of stdout\n"
           "  --quiet           no report (errors only; JSON if --json)\n"
-          "exit: 0 no defect, 3 defects found, 2 bad input or usage\n",
+          "exit: 0 no defect, 5 defects found, 2 bad input or usage\n",
           MX_MAX_INPUTS);
 }
 
