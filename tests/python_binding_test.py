@@ -792,6 +792,32 @@ def sharp_features():
     m.close()
 
 
+
+@check
+def version_defaults_and_ranges():
+    """__version__ is meson's project version; Mesher() takes the C
+    defaults (mx_params_default) for what it is not given; a level or a
+    count out of the command line's range is refused as InputError (a
+    ValueError) whose text names the Python argument."""
+    meson = open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..",
+                              "meson.build")).read()
+    assert "version : '%s'" % mixoct.__version__ in meson, mixoct.__version__
+    lib = mixoct.load_library()
+    p = mixoct._Params()
+    lib.mx_params_default(ctypes.byref(p))
+    with mixoct.Mesher() as m:
+        for f, _ in p._fields_:
+            assert m.params[f] == getattr(p, f), (f, m.params[f], getattr(p, f))
+    assert p.repair_rounds == 10, p.repair_rounds
+    with mixoct.Mesher(surface_level=mixoct.MAX_LEVEL, repair_rounds=0) as m:
+        assert m.params["surface_level"] == 15 and m.params["repair_rounds"] == 0
+    for kw in ({"surface_level": 16}, {"surface_level": -2}, {"all_level": 20},
+               {"surface_level": 2.5}, {"repair_rounds": -1}, {"threads": -1},
+               {"max_memory_mb": -5}, {"smooth_rounds": -1}, {"surface_level": True}):
+        e = raises(mixoct.InputError, mixoct.Mesher, **kw)
+        assert isinstance(e, ValueError) and list(kw)[0] in str(e), (kw, str(e))
+        assert "--" not in str(e) and "mx_" not in str(e), str(e)
+
 M.close()
 npass = sum(1 for _, ok in RESULTS if ok)
 nfail = len(RESULTS) - npass

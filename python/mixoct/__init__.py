@@ -107,6 +107,12 @@ before mixoct)"``. :func:`last_call_threads` gives the thread count the
 last call ran with.
 """
 
+__version__ = "0.1.0"  # meson.build's project version (tests/python_binding_test.py)
+
+# The deepest level a request may ask for (mixoct.h: MX_MAX_LEVEL - 1, the
+# command line's -s/-a range).
+MAX_LEVEL = 15
+
 import os
 
 
@@ -968,13 +974,29 @@ class _MesherBase:
         return False
 
 
+def _check_levels(**levels):
+    """Each level -1 (none) or 0 .. MAX_LEVEL, as the command line's -s/-a."""
+    for name, v in levels.items():
+        if isinstance(v, bool) or int(v) != v or not -1 <= int(v) <= MAX_LEVEL:
+            raise InputError("%s must be -1 (none) or a level from 0 to %d, not %r"
+                             % (name, MAX_LEVEL, v), EINPUT)
+
+
+def _check_at_least(low, **values):
+    """Each value a number no less than low."""
+    for name, v in values.items():
+        if isinstance(v, bool) or not float(v) >= low:
+            raise InputError("%s must be %s or more, not %r" % (name, low, v), EINPUT)
+
+
 class Mesher(_MesherBase):
     """One mesher: inputs, requests, the octree, the mesh (see the module doc).
 
     Parameters are those of ``mx_params``: ``surface_level`` (-s, -1 none),
     ``all_level`` (-a), ``stage`` ("octree", "transition", "full" or 0..2),
     ``threads`` (0: OpenMP's default), ``max_memory_mb`` (0: the memory
-    available), ``repair_rounds``, and, as keywords, ``balance`` ("edges" or
+    available), ``repair_rounds`` (None: the library's default, 10), and, as
+    keywords, ``balance`` ("edges" or
     "recursive"), ``close_ratio`` and ``staircase_quality`` (0: defaults),
     ``materials`` (``--materials``: nested shells become materials, not
     holes, given by the ``material`` view; see the module doc),
@@ -990,9 +1012,15 @@ class Mesher(_MesherBase):
                   "boundary", "material")
 
     def __init__(self, surface_level=-1, all_level=-1, stage="full",
-                 threads=0, max_memory_mb=0, repair_rounds=3, *,
+                 threads=0, max_memory_mb=0, repair_rounds=None, *,
                  balance="edges", close_ratio=0.0, staircase_quality=0.0,
                  materials=False, smooth_rounds=0, library=None):
+        _check_levels(surface_level=surface_level, all_level=all_level)
+        _check_at_least(0, threads=threads, max_memory_mb=max_memory_mb,
+                        close_ratio=close_ratio, staircase_quality=staircase_quality,
+                        smooth_rounds=smooth_rounds)
+        if repair_rounds is not None:
+            _check_at_least(0, repair_rounds=repair_rounds)
         lib = load_library(library)
         p = _Params()
         lib.mx_params_default(ctypes.byref(p))
@@ -1002,7 +1030,8 @@ class Mesher(_MesherBase):
         p.balance = _balance(balance)
         p.threads = int(threads)
         p.max_memory_mb = float(max_memory_mb)
-        p.repair_rounds = int(repair_rounds)
+        if repair_rounds is not None:  # else the library's default (10)
+            p.repair_rounds = int(repair_rounds)
         if close_ratio:
             p.close_ratio = float(close_ratio)
         if staircase_quality:
