@@ -251,6 +251,41 @@ cp box3.oct loop.oct
 for i in 1 2 3; do "$M2" -p "$PL/box.poly" -c loop.oct -l list.txt -u loop -o --quiet || bad "loop $i"; done
 if [ "$(sed -n 1p loop.oct | awk '{print $3}')" -gt 60 ]; then ok "-c/-l in a loop rewriting its own restart file"; else bad "loop: $(head -1 loop.oct)"; fi
 
+# ---- meshio reads the .msh, ASCII and binary (issue 30, item 4) ---------------
+# Binary element data must come with tags 1, 2, ... in file order (meshio
+# 5.0 refuses the file otherwise): the tags are the cells' positions in the
+# file, per (material,) type. pie.poly alone, and square_with_hole.off's two
+# loops as two materials.
+if /usr/bin/python3 -c 'import meshio, numpy' 2>/dev/null; then
+  for args in "-p $PL/pie.poly -s 4" "-p $PL/square_with_hole.off -s 4 --materials"; do
+    for bin in "" "--binary"; do
+      rm -f mio.msh
+      # shellcheck disable=SC2086
+      "$M2" $args $bin -O mio.msh >/dev/null 2>"$T/err" || { bad "meshio: mesher2d $args $bin failed"; continue; }
+      if /usr/bin/python3 - mio.msh <<'PY' >"$T/mio" 2>&1; then
+import sys
+import meshio
+import numpy as np
+m = meshio.read(sys.argv[1])
+n = {c.type: len(c.data) for c in m.cells}
+lev = m.cell_data["level"]
+assert [len(x) for x in lev] == [len(c.data) for c in m.cells]
+cells = [c for c in m.cells if c.type in ("triangle", "quad")]
+assert cells and all(np.all(np.asarray(x) >= 0) for x in lev), lev
+print(n)
+PY
+        ok "meshio reads mesher2d $args $bin: $(tail -n 1 "$T/mio")"
+      else
+        bad "meshio mesher2d $args $bin: $(tail -n 2 "$T/mio")"
+      fi
+    done
+  done
+elif [ -n "$CI" ]; then
+  bad "python3-meshio missing"
+else
+  echo "SKIP: meshio (python3-meshio python3-numpy)"
+fi
+
 if [ "$fails" -eq 0 ]; then echo "all mesher2d tests passed"; exit 0; fi
 echo "$fails failure(s)"
 exit 1

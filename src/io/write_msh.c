@@ -637,7 +637,9 @@ static int write_body(mx_afile *f, const mx_mesh_view *m, int binary) {
  * physical 2 "boundary") holding the boundary edges (used by one cell) as
  * lines (type 1), oriented as in their cell (the domain on their left);
  * $ElementData per cell field, a line carrying its cell's value. Element
- * tags are a cell's index + 1 (lines follow), node tags index + 1. */
+ * tags are the cells' positions in the file (plane_cell_tags: the
+ * triangles, then the quadrilaterals, each in cell order; the lines
+ * follow), node tags index + 1. */
 
 typedef struct {
   const mx_mesh_view *M;
@@ -649,7 +651,31 @@ typedef struct {
   const uint64_t *bedge;  /* boundary edges, 4 * cell + side (then, with
                            * bodies, the interface edges) */
   size_t base;            /* the first line of this block in bedge */
+  const uint64_t *ctag;   /* per cell: its element tag (plane_cell_tags) */
 } plane_ctx;
+
+/* Each cell's element tag: its position in the file, 1 to ncells, the
+ * blocks written in the order (body, type) (one body without bodies) and
+ * the cells in their order within a block, so that the tags, and the
+ * $ElementData lines that follow the blocks, rise 1, 2, ... through the
+ * file (meshio reads binary element data only so). NULL: out of memory. */
+static uint64_t *plane_cell_tags(const mx_mesh_view *M, int by_body) {
+  const size_t nk = 2 * (size_t)(by_body ? M->nbodies : 1);
+  uint64_t *tag = mx_alloc((M->ncells + 1) * sizeof *tag);
+  size_t *next = mx_calloc((nk + 1) * sizeof *next);
+  if (!tag || !next) {
+    mx_free(tag);
+    mx_free(next);
+    return NULL;
+  }
+  for (size_t c = 0; c < M->ncells; c++)
+    next[2 * (size_t)(by_body ? M->cell_body[c] - 1 : 0) + M->type[c] + 1]++;
+  for (size_t k = 1; k <= nk; k++) next[k] += next[k - 1];
+  for (size_t c = 0; c < M->ncells; c++)
+    tag[c] = ++next[2 * (size_t)(by_body ? M->cell_body[c] - 1 : 0) + M->type[c]];
+  mx_free(next);
+  return tag;
+}
 
 enum { PLANE_SURF = 1, PLANE_CURVE = 1, PHYS_DOMAIN = 1, PHYS_BOUNDARY = 2 };
 
@@ -725,7 +751,7 @@ static size_t fill_plane_cells(const void *v, size_t b, size_t e, char *o) {
   size_t n = 0;
   for (size_t c = b; c < e; c++)
     if (x->M->type[c] == x->type && (!x->body || x->M->cell_body[c] == x->body))
-      n += plane_item(x, c + 1, c, x->M->conn + 4 * c, mx_view_nv2(x->M, c), o + n);
+      n += plane_item(x, x->ctag[c], c, x->M->conn + 4 * c, mx_view_nv2(x->M, c), o + n);
   return n;
 }
 
@@ -878,8 +904,8 @@ static int plane_elements(mx_afile *f, const mx_mesh_view *M, size_t nb, plane_c
  * one per pair of bodies that touch (tags 2, 3, ..., physical the same,
  * "interface A | B" after their names) holding the edges between them,
  * each once, oriented as in the cell of the lower body. The nodes in one
- * block on surface 1. Element tags as above: a cell's index + 1, the lines
- * after, in the order written. */
+ * block on surface 1. Element tags as above: the cells' positions in the
+ * file, per body and type, the lines after, in the order written. */
 
 enum { MAX_PAIRS = 4096 };
 
@@ -998,10 +1024,12 @@ static int write_plane_tagged(mx_afile *f, const mx_mesh_view *M, int binary) {
     T->p0[T->npairs] = nb + ni;
   }
   plane_ctx x = {.M = M, .binary = binary, .bedge = all};
+  if (!st && !(x.ctag = plane_cell_tags(M, 1))) st = MX_ENOMEM;
   if (!st) st = plane_tag_head(f, M, T, binary);
   if (!st) st = plane_nodes(f, M, &x);
   if (!st) st = plane_tag_elements(f, M, T, &x);
   mx_free(bedge), mx_free(iedge), mx_free(all), mx_free(pair), mx_free(T);
+  mx_free((void *)x.ctag);
   return st;
 }
 
@@ -1011,10 +1039,12 @@ static int write_plane_body(mx_afile *f, const mx_mesh_view *M, int binary) {
   size_t nb = 0;
   MX_CHECK(mx_plane_boundary_edges(M, &bedge, &nb));
   plane_ctx x = {.M = M, .binary = binary, .bedge = bedge};
-  int st = plane_head(f, M, binary);
+  int st = (x.ctag = plane_cell_tags(M, 0)) ? MX_OK : MX_ENOMEM;
+  if (!st) st = plane_head(f, M, binary);
   if (!st) st = plane_nodes(f, M, &x);
   if (!st) st = plane_elements(f, M, nb, &x);
   mx_free(bedge);
+  mx_free((void *)x.ctag);
   return st;
 }
 
