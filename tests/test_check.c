@@ -1795,7 +1795,7 @@ static void test_program(void) {
   free(txt);
   snprintf(cmd, sizeof cmd, "'%s' check '%s' --quiet > '%s' 2>&1", mixoct,
            bad, out);
-  CHECK(run(cmd) == 3);
+  CHECK(run(cmd) == 5);
   txt = slurp(out, &n);
   CHECK(txt && n == 0);
   free(txt);
@@ -1881,7 +1881,7 @@ static void test_program(void) {
       "d = json.loads(sys.stdin.read().splitlines()[-1], "
       "parse_constant=bad); ";
   snprintf(cmd, sizeof cmd,
-           "'%s' check '%s' --surface '%s' --json > '%s'; test $? = 3 && "
+           "'%s' check '%s' --surface '%s' --json > '%s'; test $? = 5 && "
            "%s assert d['empty'] == 1 and d['volume_off'] == 1; "
            "assert d['jens_min'] is None and d['volume'] == 0; "
            "assert d['defects'] == 2\" < '%s'",
@@ -1896,7 +1896,7 @@ static void test_program(void) {
   CHECK(mx_write_msh(hang, &v, 0) == MX_OK);
   tm_free(&t);
   snprintf(cmd, sizeof cmd,
-           "'%s' check '%s' --json > '%s'; test $? = 3 && "
+           "'%s' check '%s' --json > '%s'; test $? = 5 && "
            "%s assert d['geometric_hanging_nodes'] == 2, d; "
            "assert d['defective_elements']['geometric_hanging_nodes'] == [0]; "
            "h = d['geometric_hanging_at']; "
@@ -1907,7 +1907,7 @@ static void test_program(void) {
   CHECK(run(cmd) == 0);
   snprintf(cmd, sizeof cmd, "'%s' check '%s' > '%s' 2>&1", mixoct, hang,
            out);
-  CHECK(run(cmd) == 3);
+  CHECK(run(cmd) == 5);
   txt = slurp(out, &n);
   CHECK(txt && strstr(txt, "geometric hanging nodes  2   <-- defect") &&
         strstr(txt, " on the edge ") && strstr(txt, "2 defects"));
@@ -1921,7 +1921,7 @@ static void test_program(void) {
   tm_free(&t);
   snprintf(cmd, sizeof cmd, "'%s' check '%s' --surface '%s' --volume-tol 0.05 > '%s' 2>&1",
            mixoct, shortm, off, out);
-  CHECK(run(cmd) == 3);
+  CHECK(run(cmd) == 5);
   txt = slurp(out, &n);
   if (!txt || !strstr(txt, "volume off               1   <-- defect   "
                            "(|volume error| > 0.05)"))
@@ -2250,7 +2250,7 @@ static const char bad_py[] =
     "import json, subprocess, sys\n"
     "mixoct, bad, named = sys.argv[1:4]\n"
     "p = subprocess.run([mixoct, 'check', bad, '--json'], capture_output=True)\n"
-    "assert p.returncode == 3, p\n"
+    "assert p.returncode == 5, p\n"
     "d = json.loads(p.stdout.decode().splitlines()[-1])\n"
     "assert d['tagged_not_boundary'] == 1 and d['boundary_untagged'] == 1, d\n"
     "assert d['defects'] == 2 and d['tagged_faces'] == 10, d\n"
@@ -2358,7 +2358,7 @@ static void test_tags_program(void) {
   /* The text report names the defects. */
   const char *out = tpath("tags.txt");
   snprintf(cmd, sizeof cmd, "'%s' check '%s' > '%s' 2>&1", mixoct, bad, out);
-  CHECK(run(cmd) == 3);
+  CHECK(run(cmd) == 5);
   size_t len;
   char *txt = slurp(out, &len);
   CHECK(txt && strstr(txt, "boundary tags          2 tags, 10 faces (0 triangles, 10 "
