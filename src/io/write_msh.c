@@ -54,6 +54,7 @@
 #include "base/common.h"
 #include "io/atomic_file.h"
 #include "io/boundary_faces.h"
+#include "io/cell_order.h"
 #include "io/msh_order.h"
 #include "io/plane_mesh.h"
 #include "io/text_num.h"
@@ -655,25 +656,22 @@ typedef struct {
 } plane_ctx;
 
 /* Each cell's element tag: its position in the file, 1 to ncells, the
- * blocks written in the order (body, type) (one body without bodies) and
- * the cells in their order within a block, so that the tags, and the
- * $ElementData lines that follow the blocks, rise 1, 2, ... through the
- * file (meshio reads binary element data only so). NULL: out of memory. */
+ * cells in mx_cells_in_order's order (by body with by_body, then by type,
+ * in index order), the order their blocks are written in, so that the
+ * tags, and the $ElementData lines that follow the blocks, rise 1, 2, ...
+ * through the file (meshio reads binary element data only so). NULL: out
+ * of memory. */
 static uint64_t *plane_cell_tags(const mx_mesh_view *M, int by_body) {
-  const size_t nk = 2 * (size_t)(by_body ? M->nbodies : 1);
   uint64_t *tag = mx_alloc((M->ncells + 1) * sizeof *tag);
-  size_t *next = mx_calloc((nk + 1) * sizeof *next);
-  if (!tag || !next) {
+  uint32_t *order = mx_alloc((M->ncells + 1) * sizeof *order);
+  if (!tag || !order ||
+      mx_cells_in_order(M->type, by_body ? M->cell_body : NULL, M->nbodies, M->ncells, order)) {
     mx_free(tag);
-    mx_free(next);
+    mx_free(order);
     return NULL;
   }
-  for (size_t c = 0; c < M->ncells; c++)
-    next[2 * (size_t)(by_body ? M->cell_body[c] - 1 : 0) + M->type[c] + 1]++;
-  for (size_t k = 1; k <= nk; k++) next[k] += next[k - 1];
-  for (size_t c = 0; c < M->ncells; c++)
-    tag[c] = ++next[2 * (size_t)(by_body ? M->cell_body[c] - 1 : 0) + M->type[c]];
-  mx_free(next);
+  for (size_t i = 0; i < M->ncells; i++) tag[order[i]] = i + 1;
+  mx_free(order);
   return tag;
 }
 
