@@ -202,7 +202,8 @@ static int give_up_pass(mx_mesh *M, const uint8_t *states, const uint8_t *featur
           const uint32_t v = M->conn[8 * c + k];
           const int on_feature = feature && feature[v];
           if (!node_moved(M, before, nb, v) || (pass == 0 && on_feature)) continue;
-          if (pass && off && slide(M, chain, v, inc + off[v], (size_t)(off[v + 1] - off[v]), floor, q_before, ncb)) {
+          if (pass && slide(M, chain, v, inc + off[v], (size_t)(off[v + 1] - off[v]), floor,
+                            q_before, ncb)) {
             (*slid)++;
             continue;
           }

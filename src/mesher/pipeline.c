@@ -132,10 +132,11 @@ static int near_moved(const mx_mesh *M, const double *before, size_t nb, uint8_t
 static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boundary_stats *bs) {
   if (!features_active(m) || !*states_io) return MX_OK;
   const mx_features *F = &m->feat;
+  const int whole = M == &m->M; /* not a local re-mesh's patch */
   /* lines from a file: no patches (theirs are the ridges found) */
   const mx_feature_input in = {&m->feat_lines, &m->soup, m->nt_domain,
                                m->feature_file ? NULL : F->patch, F->npatches, mx_feature_reach(m),
-                               M == &m->M ? FEATURE_RETRIES : 0};
+                               whole ? FEATURE_RETRIES : 0};
   uint8_t *fixed = mx_alloc(M->nnodes + 1);
   double *before = mx_alloc((3 * M->nnodes + 1) * sizeof *before);
   float *q_before = mx_alloc((M->ncells + 1) * sizeof *q_before);
@@ -151,7 +152,7 @@ static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boun
    * (the repair) places what of the features it holds, not reported (the
    * triple torus at -s 6 said "0 of 19 corners", its last patch's) */
   mx_feature_stats patch_figures;
-  mx_feature_stats *fs = M == &m->M ? &m->rec->S.feature_place : &patch_figures;
+  mx_feature_stats *fs = whole ? &m->rec->S.feature_place : &patch_figures;
   const size_t nb = M->nnodes, ncb = M->ncells;
   mx_split_log log = {0, NULL, 0};
   mx_feature_chain chain = {0, NULL, NULL, NULL};
