@@ -339,10 +339,14 @@ typedef struct {
  * only mx_mesher_write writes, as hexahedra). */
 int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a);
 
-/* The boundary faces of a full-stage mesh as a surface VTU of their own
- * (`--boundary FILE.vtu`): triangles and quadrilaterals with the cell
- * fields surface_tag (the input file each lies on, 1 for the first -i) and
- * body, and the point field node (the index in the volume mesh). */
+/* The boundary faces of a full-stage mesh as a surface file of their own
+ * (`--boundary FILE`), by extension: .vtu, triangles and quadrilaterals
+ * with the cell fields surface_tag (the input file each lies on, 1 for the
+ * first -i) and body, and the point field node (the index in the volume
+ * mesh); .ply (binary) the same as vertex and face properties; .off the
+ * faces alone; .stl (binary, single precision) triangles only, each
+ * quadrilateral cut along the diagonal through its vertex of the smallest
+ * node index. Only the nodes the faces use are written. */
 int mx_mesher_write_boundary(const mx_mesher *m, const char *path);
 
 /* The order the mesh files list the elements in: grouped by body (the
@@ -741,6 +745,9 @@ int mx_check_file_uses(const mx_file_use *u, int n);
  * (mx_plane_format_known); else 0. */
 int mx_mesh_format_known(const char *path);
 int mx_plane_format_known(const char *path);
+/* 1 when the extension of path names a format mx_mesher_write_boundary
+ * writes (.vtu, .stl, .off, .ply); else 0. */
+int mx_boundary_format_known(const char *path);
 /* The file of piece `piece` of a parallel VTU "DIR/BASE.pvtu":
  * "DIR/BASE_<piece>.vtu" in buf (at most n bytes; empty when it does not
  * fit). */

@@ -272,7 +272,43 @@ else
   bad "the boundary file: $(head -c 300 "$T/bd_faces.vtu" 2>&1)"
 fi
 if grep -aq '^2 1 "demo"' "$T/bd.msh"; then ok "the .msh names the boundary tag after the input"; else bad "no physical group \"demo\" in the .msh"; fi
-expect_exit 2 "--boundary wants .vtu" "$MIXOCT" --demo -s 3 --boundary "$T/bd.msh"
+expect_exit 2 "--boundary wants .vtu, .stl, .off or .ply" "$MIXOCT" --demo -s 3 --boundary "$T/bd.msh"
+# the same faces as plain surfaces: counts against the .vtu's, the OFF and
+# PLY closed and outward (meshed again; the mesh's boundary lies on them with
+# the volume of the mesh, up to the non-planar quadrilaterals the surface
+# splits in two: 2e-7 at -s 3), the STL's triangles 1 per triangle + 2 per quad
+for e in stl off ply; do
+  expect_exit 0 "--boundary .$e" "$MIXOCT" --demo -s 3 -o "$T/bd.vtu" --boundary "$T/bd_faces.$e" --quiet
+done
+counts=$(python3 - "$T" <<'PY'
+import re, struct, sys
+t = sys.argv[1]
+vtu = open(t + "/bd_faces.vtu").read()
+types = re.search(r'Name="types"[^>]*>([^<]*)<', vtu).group(1).split()
+ntri, nquad = types.count("5"), types.count("9")
+npts = int(re.search(r'NumberOfPoints="(\d+)"', vtu).group(1))
+stl = open(t + "/bd_faces.stl", "rb").read()
+nstl = struct.unpack("<I", stl[80:84])[0]
+off = open(t + "/bd_faces.off").read().split("\n")
+nv, nf = map(int, off[1].split()[:2])
+sizes = sorted(int(l.split()[0]) for l in off[2 + nv:2 + nv + nf])
+ply = open(t + "/bd_faces.ply", "rb").read()
+head = ply[:ply.index(b"end_header")].decode()
+pv = int(re.search(r"element vertex (\d+)", head).group(1))
+pf = int(re.search(r"element face (\d+)", head).group(1))
+print("ok" if (nstl == ntri + 2 * nquad and len(stl) == 84 + 50 * nstl and nv == npts
+               and sizes.count(3) == ntri and sizes.count(4) == nquad and pv == npts
+               and pf == ntri + nquad and ntri + nquad > 0)
+      else "bad vtu %d+%d/%d stl %d off %d/%d ply %d/%d" % (ntri, nquad, npts, nstl, nv, nf, pv, pf))
+PY
+)
+[ "$counts" = ok ] && ok "--boundary .stl/.off/.ply: the .vtu's faces and nodes" || bad "--boundary counts: $counts"
+for e in off ply; do
+  expect_exit 0 "the .$e boundary meshes again (closed, outward)" "$MIXOCT" -i "$T/bd_faces.$e" -s 3 --quiet
+  "$MIXOCT" check "$T/bd.vtu" --surface "$T/bd_faces.$e" --json --quiet >"$T/bdc.json" 2>"$T/err"
+  python3 -c 'import json,sys; c=json.loads(open(sys.argv[1]).read().strip().splitlines()[-1]); sys.exit(not (c["boundary_max_dist"] < 1e-12 and abs(c["volume_error"]) < 1e-5))' "$T/bdc.json" &&
+    ok "the mesh's boundary lies on its .$e boundary, same volume" || bad "check against the .$e boundary: $(tail -c 400 "$T/bdc.json")"
+done
 expect_exit 2 "--boundary needs the full stage" "$MIXOCT" --demo -s 3 --stage transition --boundary "$T/bd2.vtu"
 [ -e "$T/bd2.vtu" ] && bad "a refused --boundary wrote a file" || ok "a refused --boundary writes nothing"
 expect_exit 4 "--boundary into a missing directory fails before meshing" "$MIXOCT" --demo -s 3 --boundary "$T/no/dir/b.vtu"

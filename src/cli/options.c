@@ -143,9 +143,11 @@ static const char *usage_text =
     "      --quiet                 no summary, no warnings, no progress line\n"
     "      --restart FILE.oct      also write the restart file (Appendix A of\n"
     "                              the 2021 paper; .octb: our binary variant)\n"
-    "      --boundary FILE.vtu     also write the boundary faces, tagged by the\n"
-    "                              input file they lie on (cell field\n"
-    "                              surface_tag: 1 for the first -i)\n"
+    "      --boundary FILE         also write the boundary faces: .vtu and .ply\n"
+    "                              tagged by the input file they lie on (cell\n"
+    "                              field surface_tag: 1 for the first -i) and\n"
+    "                              body, .off the faces alone, .stl (binary,\n"
+    "                              single precision) quadrilaterals cut in two\n"
     "      --keep-invalid          write the mesh even when it breaks the\n"
     "                              contract of exit 0 (exit 5 all the same)\n"
     "  Options take their value as the next word, or attached: --output=x.vtu,\n"
@@ -672,17 +674,16 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
   for (int k = 0; k < o->noutputs; k++) MX_CHECK(mx_check_output_path(o->outputs[k], 1));
   if (o->restart_out) MX_CHECK(mx_check_output_path(o->restart_out, 0));
   if (o->boundary_out) {
-    const char *dot = strrchr(o->boundary_out, '.');
-    if (!dot || strcasecmp(dot, ".vtu") != 0) {
-      mx_error(o->boundary_out, 0, "--boundary writes a .vtu file (the boundary faces with "
-                                   "their surface_tag)");
+    if (!mx_boundary_format_known(o->boundary_out)) {
+      mx_error(o->boundary_out, 0, "--boundary writes .vtu (the boundary faces with their "
+                                   "surface_tag and body), .ply (the same), .off or .stl");
       return MX_EINPUT;
     }
     if (o->stage != MX_STAGE_FULL) {
       mx_error(NULL, 0, "--boundary needs the full stage (the boundary on the input)");
       return MX_EINPUT;
     }
-    MX_CHECK(mx_check_output_path(o->boundary_out, 1));
+    MX_CHECK(mx_check_output_path(o->boundary_out, 0));
   }
   return MX_OK;
 }

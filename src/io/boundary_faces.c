@@ -398,3 +398,28 @@ int mx_boundary_node_flags(const mx_mesh_view *m, int32_t *flags) {
   mx_boundary_faces_free(&bf);
   return MX_OK;
 }
+
+int mx_boundary_nodes_number(const mx_boundary_faces *bf, size_t nnodes, mx_boundary_nodes *N) {
+  memset(N, 0, sizeof *N);
+  N->newid = mx_alloc((nnodes + 1) * sizeof *N->newid);
+  if (!N->newid) return MX_ENOMEM;
+  memset(N->newid, 0xff, nnodes * sizeof *N->newid);
+  for (size_t i = 0; i < 3 * bf->ntri; i++) N->newid[bf->tri[i]] = 0;
+  for (size_t i = 0; i < 4 * bf->nquad; i++) N->newid[bf->quad[i]] = 0;
+  for (size_t v = 0; v < nnodes; v++)
+    if (N->newid[v] == 0) N->newid[v] = (uint32_t)N->nused++;
+  N->used = mx_alloc((N->nused + 1) * sizeof *N->used);
+  if (!N->used) {
+    mx_boundary_nodes_free(N);
+    return MX_ENOMEM;
+  }
+  for (size_t v = 0; v < nnodes; v++)
+    if (N->newid[v] != UINT32_MAX) N->used[N->newid[v]] = (uint32_t)v;
+  return MX_OK;
+}
+
+void mx_boundary_nodes_free(mx_boundary_nodes *N) {
+  mx_free(N->used);
+  mx_free(N->newid);
+  memset(N, 0, sizeof *N);
+}

@@ -56,6 +56,16 @@ int mx_interface_faces_extract(const mx_mesh_view *m, const int32_t *label,
                                mx_boundary_faces *bf);
 void mx_boundary_faces_free(mx_boundary_faces *bf);
 
+/* The nodes the faces use, numbered in the mesh's order (the surface files
+ * of the boundary list only those): used[0 .. nused) their mesh indices,
+ * newid[mesh index] their number (UINT32_MAX: not on a face). */
+typedef struct {
+  size_t nused;
+  uint32_t *used, *newid;
+} mx_boundary_nodes;
+int mx_boundary_nodes_number(const mx_boundary_faces *bf, size_t nnodes, mx_boundary_nodes *N);
+void mx_boundary_nodes_free(mx_boundary_nodes *N);
+
 /* flags[i] = 1 when node i lies on a boundary face, 0 otherwise (nnodes
  * values; the VTU point field "boundary"). MX_OK or MX_EINPUT as above. */
 int mx_boundary_node_flags(const mx_mesh_view *m, int32_t *flags);

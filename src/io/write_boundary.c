@@ -124,26 +124,12 @@ int mx_write_boundary_vtu(const char *path, const mx_mesh_view *m) {
     mx_error(path, 0, "internal error: no boundary faces to write");
     return MX_EINTERNAL;
   }
-  uint32_t *newid = mx_alloc((m->nnodes + 1) * sizeof *newid);
-  if (!newid) return MX_ENOMEM;
-  memset(newid, 0xff, m->nnodes * sizeof *newid);
-  for (size_t i = 0; i < 3 * bf->ntri; i++) newid[bf->tri[i]] = 0;
-  for (size_t i = 0; i < 4 * bf->nquad; i++) newid[bf->quad[i]] = 0;
-  size_t nused = 0;
-  for (size_t v = 0; v < m->nnodes; v++)
-    if (newid[v] == 0) newid[v] = (uint32_t)nused++;
-  uint32_t *used = mx_alloc((nused + 1) * sizeof *used);
-  if (!used) {
-    mx_free(newid);
-    return MX_ENOMEM;
-  }
-  for (size_t v = 0; v < m->nnodes; v++)
-    if (newid[v] != UINT32_MAX) used[newid[v]] = (uint32_t)v;
-  bctx c = {m, used, newid, 0};
+  mx_boundary_nodes N;
+  MX_CHECK(mx_boundary_nodes_number(bf, m->nnodes, &N));
+  bctx c = {m, N.used, N.newid, 0};
   mx_afile f;
   int st = mx_afile_open(&f, path);
-  if (!st) st = mx_afile_finish(&f, body(&f, &c, nused));
-  mx_free(used);
-  mx_free(newid);
+  if (!st) st = mx_afile_finish(&f, body(&f, &c, N.nused));
+  mx_boundary_nodes_free(&N);
   return st;
 }

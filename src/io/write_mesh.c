@@ -63,6 +63,14 @@ int mx_mesh_format_known(const char *path) {
   return 0;
 }
 
+int mx_boundary_format_known(const char *path) {
+  static const char *known[] = {".vtu", ".stl", ".off", ".ply"};
+  const char *ext = path ? path_extension(path) : "";
+  for (size_t i = 0; i < sizeof known / sizeof *known; i++)
+    if (strcasecmp(ext, known[i]) == 0) return 1;
+  return 0;
+}
+
 int mx_plane_format_known(const char *path) {
   static const char *known[] = {".vtu", ".vtk", ".msh", ".off", ".getfem", ".m3d"};
   const char *ext = path_extension(path);

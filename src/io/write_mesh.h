@@ -31,6 +31,10 @@ int mx_write_off(const char *path, const mx_mesh_view *m);
 /* The boundary faces of the view (view.bfaces, with their tags) as a
  * surface VTU of their own (src/io/write_boundary.c). */
 int mx_write_boundary_vtu(const char *path, const mx_mesh_view *m);
+/* The same as a plain surface, by extension: binary STL (.stl, quads cut
+ * in two), ASCII OFF (.off), binary PLY (.ply, with surface_tag and body)
+ * (src/io/write_boundary_surface.c). */
+int mx_write_boundary_surface(const char *path, const mx_mesh_view *m);
 /* Dispatch on the extension: .vtk (legacy), .vtu, .msh, .mesh, .meshb,
  * .getfem, .m3d; ascii selects the ASCII variant where a format has both
  * (.vtk, .msh). A 2D view (soa/mesh.h: dim 2) goes to .vtu, .vtk, .msh,

@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <strings.h>
 
 #include "kernels/boundary.h"
 #include "kernels/boundary_tags.h"
@@ -327,7 +328,12 @@ int mx_mesher_write_boundary(const mx_mesher *m, const char *path) {
   mx_call_begin(m, &c);
   const double t = mx_wtime();
   int st = MX_OK;
-  if (path && mx_mesher_spares_inputs(m, path, 0)) {
+  const char *dot = path ? strrchr(path, '.') : NULL;
+  const int vtu = dot && !strcasecmp(dot, ".vtu");
+  if (!mx_boundary_format_known(path)) {
+    mx_error(path, 0, "the boundary faces are written as .vtu, .stl, .off or .ply");
+    st = MX_EINPUT;
+  } else if (mx_mesher_spares_inputs(m, path, 0)) {
     st = MX_EINPUT; /* an input: refused, named */
   } else if (m->mesh_stage != MX_STAGE_FULL) {
     mx_error(path, 0, "the boundary faces are written for a full-stage mesh only");
@@ -336,7 +342,7 @@ int mx_mesher_write_boundary(const mx_mesher *m, const char *path) {
   prepared P;
   memset(&P, 0, sizeof P);
   if (!st) st = prepare(m, &P);
-  if (!st) st = mx_write_boundary_vtu(path, &P.v);
+  if (!st) st = vtu ? mx_write_boundary_vtu(path, &P.v) : mx_write_boundary_surface(path, &P.v);
   release(&P);
   m->rec->S.ph.write += mx_wtime() - t;
   return mx_call_end(m, &c, st);
