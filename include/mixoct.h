@@ -359,6 +359,17 @@ int mx_mesher_write_boundary(const mx_mesher *m, const char *path);
  * to the files' order; mx_mesher_refine_elements takes the arrays'. */
 int mx_mesher_written_order(const mx_mesher *m, uint32_t *order);
 
+/* The element and node data the mesh files carry (`--fields`):
+ * MX_FIELDS_ALL (the default): type, level, jens, the boundary flag, a size
+ * field's target_size and the tags; MX_FIELDS_QUALITY: jens and the tags;
+ * MX_FIELDS_NONE: the tags alone. The tags (surface_tag, body, material)
+ * are written as fields only where the format has no place of its own for
+ * them: .vtu and .vtk keep them, .msh carries them as physical groups and
+ * then writes no $ElementData for them, .mesh as references. MX_EINPUT for
+ * another value. */
+enum { MX_FIELDS_ALL = 0, MX_FIELDS_QUALITY = 1, MX_FIELDS_NONE = 2 };
+int mx_mesher_set_output_fields(mx_mesher *m, int which);
+
 /* Write the current mesh; format by extension: .vtk .vtu .msh .mesh .meshb
  * .getfem .m3d .mvm; ascii: the ASCII variant of .vtk / .msh. Written under a
  * temporary name and renamed. */

@@ -312,6 +312,32 @@ done
 expect_exit 2 "--boundary needs the full stage" "$MIXOCT" --demo -s 3 --stage transition --boundary "$T/bd2.vtu"
 [ -e "$T/bd2.vtu" ] && bad "a refused --boundary wrote a file" || ok "a refused --boundary writes nothing"
 expect_exit 4 "--boundary into a missing directory fails before meshing" "$MIXOCT" --demo -s 3 --boundary "$T/no/dir/b.vtu"
+# --fields: the element data written. The same mesh (the checker's hash)
+# whatever is chosen; .msh keeps its $ElementData for the fields asked only
+# (the tags are its physical groups), .vtu keeps the tags as fields.
+for f in all quality none; do
+  expect_exit 0 "--fields $f" "$MIXOCT" --demo -s 3 -o "$T/fd_$f.msh" -o "$T/fd_$f.vtu" --fields "$f" --quiet
+  for e in msh vtu; do
+    "$MIXOCT" check "$T/fd_$f.$e" --json --quiet 2>/dev/null | tail -1 |
+      python3 -c 'import json,sys; c=json.load(sys.stdin); print(c["mesh_hash"] if c["defects"] == 0 else "defects")' >"$T/fd_$f.$e.hash"
+  done
+done
+if [ "$(cat "$T"/fd_*.hash | sort -u | wc -l)" = 1 ] && ! grep -q defects "$T"/fd_all.msh.hash; then
+  ok "--fields: one mesh in every file, no defect"
+else
+  bad "--fields changed the mesh: $(cat "$T"/fd_*.hash | tr '\n' ' ')"
+fi
+fields_of() { grep -a -A2 '^\$ElementData' "$1" | grep -a '^"' | tr -d '"' | tr '\n' ' '; }
+[ "$(fields_of "$T/fd_all.msh")" = "type level jens body " ] && ok "--fields all: .msh type level jens body" || bad "--fields all .msh: $(fields_of "$T/fd_all.msh")"
+[ "$(fields_of "$T/fd_quality.msh")" = "jens " ] && ok "--fields quality: .msh jens only" || bad "--fields quality .msh: $(fields_of "$T/fd_quality.msh")"
+[ -z "$(fields_of "$T/fd_none.msh")" ] && ok "--fields none: .msh without \$ElementData" || bad "--fields none .msh: $(fields_of "$T/fd_none.msh")"
+names=$(grep -ao 'Name="[a-z_]*"' "$T/fd_none.vtu" | sort -u | tr '\n' ' ')
+case "$names" in
+  *jens*|*level*) bad "--fields none .vtu: $names" ;;
+  *body*surface_tag*) ok "--fields none: .vtu keeps body and surface_tag only" ;;
+  *) bad "--fields none .vtu lost the tags: $names" ;;
+esac
+expect_exit 2 "--fields with another word" "$MIXOCT" --demo -s 3 --fields jens
 # -l LIST: one rule for every word (src/io/element_list.h). The demo at
 # level 3 and its restart file; a list written by numpy.savetxt, with whole
 # reals, CR LF, commas or comments must refine what the same integers do;

@@ -35,6 +35,7 @@ typedef struct {
   int threads;           /* 0: OpenMP default */
   int json, quiet;
   int ascii;             /* --ascii: the ASCII variant of .vtk / .msh */
+  int fields;            /* --fields: MX_FIELDS_* */
   int stage;
   int balance;
   double max_memory_mb; /* 0: the memory available */

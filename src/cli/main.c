@@ -68,6 +68,7 @@ static int setup(const mx_options *o, mx_mesher **out) {
   const mx_progress hooks = {on_stage, mx_progress_on_level, on_round, NULL};
   mx_mesher_set_progress(m, &hooks);
   mx_mesher_release_edges_early(m, 1); /* one run: their memory goes to the mesh */
+  mx_mesher_set_output_fields(m, o->fields); /* checked by the parser */
   mx_progress_stage("read");
   MX_CHECK(mx_mesher_set_image_params(m, &o->image));
   if (o->feature_angle >= 0.0) MX_CHECK(mx_mesher_set_feature_angle(m, o->feature_angle));

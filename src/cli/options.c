@@ -138,6 +138,12 @@ static const char *usage_text =
     "      --stage octree          stop after the balanced octree (leaves as\n"
     "                              hexahedra with their level)\n"
     "      --ascii                 ASCII .vtk / .msh (binary by default)\n"
+    "      --fields all|quality|none\n"
+    "                              the element data written: all (default:\n"
+    "                              type, level, jens, boundary, target_size),\n"
+    "                              quality (jens), none; the tags (surface_tag,\n"
+    "                              body, material) stay: .vtu/.vtk fields,\n"
+    "                              .msh physical groups, .mesh references\n"
     "      --json                  one JSON summary as the last stdout line\n"
     "                              (no summary table, no progress line)\n"
     "      --quiet                 no summary, no warnings, no progress line\n"
@@ -296,7 +302,7 @@ static const char *const with_arg[][2] = {
     {NULL, "--balance"}, {NULL, "--boundary"},     {NULL, "--size"},
     {NULL, "--size-min"}, {NULL, "--size-max"},    {NULL, "--size-field"},
     {NULL, "--curvature"}, {NULL, "--thickness"},  {NULL, "--gradation"},
-    {NULL, "--smooth"}};
+    {NULL, "--smooth"},  {NULL, "--fields"}};
 
 /* argv with the forms getopt users expect split in two: `--output=x.vtu`
  * and `-s5` / `-ox.vtu` become `--output x.vtu`, `-s 5`, `-o x.vtu`. The
@@ -616,6 +622,19 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
         o->stage = MX_STAGE_FULL;
       else {
         mx_error(NULL, 0, "--stage wants octree, transition or full, got '%s'", s);
+        return MX_EINPUT;
+      }
+    } else if (strcmp(a, "--fields") == 0) {
+      MX_CHECK(need_arg(i, argc, a));
+      const char *s = argv[++i];
+      if (strcmp(s, "all") == 0)
+        o->fields = MX_FIELDS_ALL;
+      else if (strcmp(s, "quality") == 0)
+        o->fields = MX_FIELDS_QUALITY;
+      else if (strcmp(s, "none") == 0)
+        o->fields = MX_FIELDS_NONE;
+      else {
+        mx_error(NULL, 0, "--fields wants all, quality or none, got '%s'", s);
         return MX_EINPUT;
       }
     } else if (strcmp(a, "--balance") == 0) {

@@ -173,6 +173,16 @@ void mx_mesher_set_progress(mx_mesher *m, const mx_progress *hooks) {
 
 void mx_mesher_release_edges_early(mx_mesher *m, int early) { m->release_edges = early != 0; }
 
+int mx_mesher_set_output_fields(mx_mesher *m, int which) {
+  if (which != MX_FIELDS_ALL && which != MX_FIELDS_QUALITY && which != MX_FIELDS_NONE) {
+    mx_error(NULL, 0, "the output fields are all (%d), quality (%d) or none (%d), not %d",
+             MX_FIELDS_ALL, MX_FIELDS_QUALITY, MX_FIELDS_NONE, which);
+    return MX_EINPUT;
+  }
+  m->out_fields = which;
+  return MX_OK;
+}
+
 const char *mx_mesher_last_error(const mx_mesher *m) { return m->rec->last_error; }
 
 const mx_summary *mx_mesher_summary(const mx_mesher *m) { return &m->rec->S; }

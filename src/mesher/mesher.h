@@ -219,6 +219,7 @@ struct mx_mesher {
    * library's default): keep them for the refinements of a re-meshing loop
    * (about 90 B per leaf). */
   int release_edges;
+  int out_fields; /* MX_FIELDS_*: the fields the mesh files carry */
   int nmaterials;           /* materials: the deepest nesting (M.material) */
   /* materials as the user numbers and names them (mx_mesher_set_material):
    * per domain input, the number (0: not given) and name of the material

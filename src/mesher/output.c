@@ -315,9 +315,37 @@ static int prepare(const mx_mesher *m, prepared *P) {
   return add_size_field(m, P);
 }
 
+/* --fields: keep the fields asked for (mx_mesher_set_output_fields). A tag
+ * field (surface_tag, body, material) stays where the format has no other
+ * place for it (.vtu, .vtk, .pvtu); .msh and .mesh carry the tags as
+ * physical groups and references. */
+static int is_tag(const char *name) {
+  return !strcmp(name, "surface_tag") || !strcmp(name, "body") || !strcmp(name, "material");
+}
+
+static int keep_field(const char *name, int which, int tags_as_fields) {
+  if (which == MX_FIELDS_ALL) return 1;
+  if (is_tag(name)) return tags_as_fields;
+  return which == MX_FIELDS_QUALITY && !strcmp(name, "jens");
+}
+
+static void select_fields(mx_field *f, int *n, int which, int tags_as_fields) {
+  int k = 0;
+  for (int i = 0; i < *n; i++)
+    if (keep_field(f[i].name, which, tags_as_fields)) f[k++] = f[i];
+  *n = k;
+}
+
 int mx_write_mixed(const mx_mesher *m, const char *path, int ascii) {
   prepared P;
   int st = prepare(m, &P);
+  if (!st && m->out_fields != MX_FIELDS_ALL) {
+    const char *dot = strrchr(path, '.');
+    const int tags_as_fields =
+        dot && (!strcasecmp(dot, ".vtu") || !strcasecmp(dot, ".vtk") || !strcasecmp(dot, ".pvtu"));
+    select_fields(P.f, &P.v.ncell_fields, m->out_fields, tags_as_fields);
+    select_fields(P.pf, &P.v.npoint_fields, m->out_fields, tags_as_fields);
+  }
   if (!st) st = mx_write_mesh(path, &P.v, ascii);
   release(&P);
   return st;
