@@ -2,7 +2,9 @@
 # GetFEM loads the boundary tags of mixoct's .getfem files as regions and
 # solves with them (issue 11): a Laplace patch test with Dirichlet and
 # Neumann conditions on the tags of a spherical shell, of two bodies and of
-# the cortex. The checks are in tests/getfem_tags_test.py.
+# the cortex. The checks are in tests/getfem_tags_test.py. Then
+# tests/getfem_msh_test.py: the .getfem file, not the .msh, is what a GetFEM
+# user loads (GetFEM's Gmsh importer twists pyramids).
 #
 #   bash tests/getfem_tags_test.sh path/to/mixoct
 #
@@ -36,4 +38,7 @@ fi
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/mixoct_getfem_tags.XXXXXX") || exit 1
 trap 'rm -rf "$TMP"' EXIT
 echo "getfem: $("$PY" -c 'import getfem, os; print(os.path.dirname(getfem.__file__))') ($PY)"
-"$PY" "$HERE/getfem_tags_test.py" "$MIXOCT" "$TMP" "$DATA"
+"$PY" "$HERE/getfem_tags_test.py" "$MIXOCT" "$TMP" "$DATA" || exit 1
+# which file a GetFEM user loads: .getfem, not .msh (issue 30)
+"$PY" "$HERE/getfem_msh_test.py" "$MIXOCT" "$TMP" 2>&1 | grep -v "^Level 2 Warning"
+exit "${PIPESTATUS[0]}"
