@@ -27,8 +27,8 @@ static void usage(FILE *f) {
           "[--volume-tol X]\n"
           "                    [--dist-tol X] [--feature-angle DEG] [--features FILE]\n"
           "                    [--feature-tol T] [--threads N] [--json] [--quiet]\n"
-          "  MESH              legacy VTK (.vtk, ASCII or binary), VTU, Gmsh\n"
-          "                    MSH 4.1 (ASCII or binary), Medit (.mesh,\n"
+          "  MESH              legacy VTK (.vtk, ASCII or binary), VTU, parallel\n"
+          "                    VTU (.pvtu), Gmsh MSH 4.1 (ASCII or binary), Medit (.mesh,\n"
           "                    .meshb), GetFEM (.getfem), M3D or MVM volume\n"
           "                    mesh (recognised by content); or a 2D mesh:\n"
           "                    triangles and quadrilaterals at z = 0 in VTK,\n"
@@ -38,8 +38,8 @@ static void usage(FILE *f) {
           "                    distance of the boundary nodes to it; for a\n"
           "                    2D mesh, its polylines as --poly. Repeated\n"
           "                    (at most %d): one file per input as the\n"
-          "                    mesher was given them (-i A -i B\n"
-          "                    --materials: touching or nested inputs); the\n"
+          "                    mesher was given them (-i A -i B, several\n"
+          "                    materials: touching or nested inputs); the\n"
           "                    regions are each file's closed shells', the\n"
           "                    volume their union's, the triangles two files\n"
           "                    share interfaces, not boundary\n"
@@ -67,7 +67,9 @@ static void usage(FILE *f) {
           "                    diagonal) is a defect (default: reported only)\n"
           "  --threads N       OpenMP threads (default: all)\n"
           "  --json            one JSON object on the last line of stdout\n"
-          "  --quiet           no report (errors only; JSON if --json)\n"
+          "  -q, --quiet       no report (errors only; JSON if --json)\n"
+          "  -h, --help        this text\n"
+          "  --list-options    every option, one a line (shell completion)\n"
           "exit: 0 no defect, 5 defects found, 2 bad input or usage\n",
           MX_MAX_INPUTS);
 }
@@ -95,6 +97,22 @@ static int add_surface(const char **list, int *n, const char *file) {
   return MX_OK;
 }
 
+/* Every option of check (long names; -h and -q are --help's and --quiet's
+ * short forms): the parser refuses any other, `--list-options` prints them
+ * (tests/help_test.sh checks them against the usage text). */
+static const char *const check_options[] = {
+    "-h",           "--help",        "--list-options", "--json",       "-q",
+    "--quiet",      "--surface",     "--poly",         "--volume-tol", "--area-tol",
+    "--dist-tol",   "--feature-angle", "--feature-tol", "--features",  "--threads"};
+
+static int is_check_option(const char *a) {
+  const char *eq = strchr(a, '=');
+  const size_t n = eq ? (size_t)(eq - a) : strlen(a);
+  for (size_t k = 0; k < sizeof check_options / sizeof *check_options; k++)
+    if (strlen(check_options[k]) == n && !strncmp(a, check_options[k], n)) return 1;
+  return 0;
+}
+
 int mx_check_main(int argc, char **argv) {
   mx_check_params p;
   mx_check_params_default(&p);
@@ -102,8 +120,16 @@ int mx_check_main(int argc, char **argv) {
   int nsurfaces = 0;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
-    if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+    if (a[0] == '-' && a[1] && !is_check_option(a)) {
+      mx_error(NULL, 0, "check: unknown option '%s'", a);
+      usage(stderr);
+      return EXIT_USAGE;
+    } else if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
       usage(stdout);
+      return 0;
+    } else if (!strcmp(a, "--list-options")) {
+      for (size_t k = 0; k < sizeof check_options / sizeof *check_options; k++)
+        printf("%s\n", check_options[k]);
       return 0;
     } else if (!strcmp(a, "--json")) {
       p.json = 1;

@@ -88,6 +88,8 @@ static const char *usage2d =
     "  -q                 quality fields (always written: type, level, sj)\n"
     "      --binary       binary .vtk / .msh (ASCII by default, as the\n"
     "                     published program writes)\n"
+    "      --ascii        ASCII .vtk / .msh (the default; after --binary:\n"
+    "                     the last one given wins)\n"
     "\n"
     "Execution and report:\n"
     "      --threads N    OpenMP threads (the output does not depend on it)\n"

@@ -17,7 +17,7 @@ static const char *usage_text =
     "usage: mixoct -i FILE [-i FILE2 ...] [requests] [-o OUT] [options]\n"
     "       mixoct --demo [requests] [-o OUT] [options]\n"
     "       mixoct remesh -c FILE.oct -i FILE -l LIST [requests] [-o OUT] [options]\n"
-    "       mixoct check MESH [--surface FILE] [--json] [--quiet]\n"
+    "       mixoct check MESH [check options] (mixoct check --help)\n"
     "       mixoct patterns [--json]\n"
     "\n"
     "Input (OFF, MDL, STL ascii/binary, OBJ, PLY; several -i form one domain, a\n"
@@ -182,17 +182,30 @@ static const char *usage_text =
     "      --balance edges|recursive\n"
     "                              edge infos while refining (default), or the\n"
     "                              original recursive search at the end\n"
+    "      --p4est                 the distributed path (MPI builds): mpirun -n N\n"
+    "                              mixoct --p4est ...; p4est's forest, each rank\n"
+    "                              meshes its leaves; -o OUT.pvtu (a piece per\n"
+    "                              rank) or OUT.msh; not with -c, --restart,\n"
+    "                              --boundary, size fields or features\n"
+    "      --p4est-compare         with --p4est: also compare p4est's leaves\n"
+    "                              with the single-process octree's\n"
     "  -h, --help                  this text\n"
     "      --version               version, build, compiler, threads, topology\n"
+    "      --list-options          every option, one a line (shell completion)\n"
     "  A progress line (stage, level, percentage) is drawn on stderr only when\n"
     "  stderr is a terminal.\n"
     "\n"
     "Subcommands:\n"
-    "  check MESH [--surface FILE] [--json] [--quiet]\n"
-    "                              independent checker of a .vtk / .vtu mesh:\n"
-    "                              J_ENS > 0, faces matched, closed boundary,\n"
-    "                              no hanging node, volume (and its error\n"
-    "                              against FILE); exit 0 clean, 3 defects\n"
+    "  check MESH [--surface FILE ... | --poly FILE] [--volume-tol X]\n"
+    "        [--dist-tol X] [--feature-angle DEG] [--features FILE]\n"
+    "        [--feature-tol T] [--threads N] [--json] [--quiet]\n"
+    "                              independent checker of a 3D mesh (.vtk,\n"
+    "                              .vtu, .pvtu, .msh, .mesh, .meshb, .getfem,\n"
+    "                              .m3d, .mvm) or a 2D one: J_ENS > 0, faces\n"
+    "                              matched, closed boundary, no hanging node,\n"
+    "                              volume, and against FILE the volume error,\n"
+    "                              boundary and feature distances; exit 0\n"
+    "                              clean, 5 defects (mixoct check --help)\n"
     "  patterns [--json]           the transition-pattern table: classes,\n"
     "                              sub-elements per type, worst J_ENS\n"
     "\n"
@@ -293,16 +306,43 @@ static int need_arg(int i, int argc, const char *opt) {
   return MX_OK;
 }
 
-/* The options that take an argument, long and short. */
-static const char *const with_arg[][2] = {
-    {"-i", "--input"},   {"-s", "--surface-level"}, {"-a", "--all-level"},
-    {"-b", "--regions"}, {"-o", "--output"},        {"-c", "--from-restart"},
-    {"-l", "--list"},    {"-r", "--region-surface"}, {NULL, "--threads"},
-    {NULL, "--max-memory"}, {NULL, "--restart"},    {NULL, "--stage"},
-    {NULL, "--balance"}, {NULL, "--boundary"},     {NULL, "--size"},
-    {NULL, "--size-min"}, {NULL, "--size-max"},    {NULL, "--size-field"},
-    {NULL, "--curvature"}, {NULL, "--thickness"},  {NULL, "--gradation"},
-    {NULL, "--smooth"},  {NULL, "--fields"}};
+/* Every option of the mesher (mixoct, mixoct remesh, mixoct --p4est): its
+ * short and long names and the words it takes. The parser refuses any other
+ * word that starts with '-' (unknown option) and splits the attached forms
+ * of those taking words; `--list-options` prints them one a line (for shell
+ * completion); tests/help_test.sh checks that --help documents each and
+ * nothing else. */
+static const struct {
+  const char *sh, *lg;
+  int nargs;
+} option_table[] = {
+    {"-h", "--help", 0},           {NULL, "--version", 0},        {NULL, "--list-options", 0},
+    {"-i", "--input", 1},          {NULL, "--demo", 0},           {NULL, "--repair-input", 0},
+    {NULL, "--materials", 0},      {NULL, "--level", 1},          {NULL, "--inside-level", 1},
+    {NULL, "--feature-angle", 1},  {NULL, "--features", 1},       {NULL, "--feature-level", 1},
+    {NULL, "--no-features", 0},    {NULL, "--material", 1},       {NULL, "--voxel", 0},
+    {NULL, "--interface-smoothing", 1}, {NULL, "--label-names", 1}, {NULL, "--skip-labels", 1},
+    {NULL, "--merge-labels", 1},   {NULL, "--min-island", 1},     {NULL, "--label-size", 1},
+    {"-s", "--surface-level", 1},  {"-a", "--all-level", 1},      {"-b", "--regions", 1},
+    {"-r", "--region-surface", 2}, {NULL, "--size", 1},           {NULL, "--size-min", 1},
+    {NULL, "--size-max", 1},       {NULL, "--size-field", 1},     {NULL, "--curvature", 1},
+    {NULL, "--thickness", 1},      {NULL, "--gradation", 1},      {"-o", "--output", 1},
+    {NULL, "--stage", 1},          {NULL, "--smooth", 1},         {NULL, "--ascii", 0},
+    {NULL, "--fields", 1},         {NULL, "--json", 0},           {NULL, "--quiet", 0},
+    {NULL, "--restart", 1},        {NULL, "--boundary", 1},       {NULL, "--keep-invalid", 0},
+    {"-c", "--from-restart", 1},   {"-l", "--list", 1},           {NULL, "--threads", 1},
+    {NULL, "--max-memory", 1},     {NULL, "--balance", 1},        {NULL, "--p4est", 0},
+    {NULL, "--p4est-compare", 0}};
+enum { NOPTIONS = sizeof option_table / sizeof *option_table };
+
+/* The table's entry of a (its long or short name), or -1. */
+static int option_index(const char *a) {
+  for (int k = 0; k < NOPTIONS; k++)
+    if ((option_table[k].sh && strcmp(a, option_table[k].sh) == 0) ||
+        strcmp(a, option_table[k].lg) == 0)
+      return k;
+  return -1;
+}
 
 /* argv with the forms getopt users expect split in two: `--output=x.vtu`
  * and `-s5` / `-ox.vtu` become `--output x.vtu`, `-s 5`, `-o x.vtu`. The
@@ -321,8 +361,9 @@ static char **split_attached(int argc, char **argv, int *nargc) {
     const char *a = argv[i];
     v[n++] = argv[i];
     if (i == 0 || a[0] != '-') continue;
-    for (size_t k = 0; k < sizeof with_arg / sizeof *with_arg; k++) {
-      const char *sh = with_arg[k][0], *lg = with_arg[k][1];
+    for (int k = 0; k < NOPTIONS; k++) {
+      if (!option_table[k].nargs) continue;
+      const char *sh = option_table[k].sh, *lg = option_table[k].lg;
       const size_t ll = strlen(lg);
       if (strncmp(a, lg, ll) == 0 && a[ll] == '=') {
         char *name = mx_alloc(ll + 1);
@@ -378,7 +419,11 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
 #define IS(s, l) (strcmp(a, s) == 0 || strcmp(a, l) == 0)
-    if (IS("-h", "--help")) {
+    if (option_index(a) < 0) {
+      mx_error(NULL, 0, "%s '%s' (see mixoct --help)",
+               a[0] == '-' ? "unknown option" : "a word that is no option's value", a);
+      return MX_EINPUT;
+    } else if (IS("-h", "--help")) {
       fputs(usage_text, stdout);
       *exit_now = 1;
       return MX_OK;
@@ -386,6 +431,18 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       print_version();
       *exit_now = 1;
       return MX_OK;
+    } else if (strcmp(a, "--list-options") == 0) {
+      for (int k = 0; k < NOPTIONS; k++)
+        printf("%s%s%s\n", option_table[k].sh ? option_table[k].sh : "",
+               option_table[k].sh ? " " : "", option_table[k].lg);
+      *exit_now = 1;
+      return MX_OK;
+    } else if (strcmp(a, "--p4est") == 0 || strcmp(a, "--p4est-compare") == 0) {
+      mx_error(NULL, 0, "%s: %s", a, strcmp(a, "--p4est") == 0
+                                         ? "this mixoct was built without MPI and p4est "
+                                           "(meson setup -Dmpi=enabled)"
+                                         : "only with --p4est (mpirun -n N mixoct --p4est ...)");
+      return MX_EINPUT;
     } else if (IS("-i", "--input")) {
       MX_CHECK(need_arg(i, argc, a));
       if (o->ninputs == MX_MAX_INPUTS) {
