@@ -1,6 +1,7 @@
 #!/bin/bash
 # Every command of the README's Use section runs as written (issue 30): the
-# ```sh blocks between "## Use" and the next "## " heading, one command a
+# ```sh blocks of the sections "## Use", "## Re-meshing" and "## 2D...",
+# up to the next "## " heading, one command a
 # line, run in order from a scratch copy of the layout they assume: the
 # source tree's build directory as build/, the shared data as
 # ../shared/data. Each must exit 0; a command may use the files an earlier
@@ -27,7 +28,8 @@ ln -s "$DATA" "$T/shared/data"
 ln -s "$BUILD" "$T/src/build"
 export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
 
-awk '/^## /{use = ($0 == "## Use")} use && /^```/{inblock = !inblock; next} use && inblock' \
+awk '/^## /{use = ($0 == "## Use" || $0 == "## Re-meshing" || $0 ~ /^## 2D/)}
+     use && /^```/{inblock = !inblock; next} use && inblock' \
   "$ROOT/README.md" >"$T/commands"
 n=$(grep -c . "$T/commands")
 if [ "$n" -lt 5 ]; then
