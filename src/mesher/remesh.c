@@ -23,6 +23,7 @@ static int refine_and_mesh(mx_mesher *m, uint32_t *octs, size_t n) {
   m->rec->S.ph.read = read;
   m->rec->S.t_restart = restart;
   const double t0 = mx_wtime();
+  mx_mesher_untets(m); /* --tets: the mixed mesh is the one re-meshed */
   MX_CHECK(mx_mesher_size_space(m)); /* a size field given since the octree was built */
   const double root_side = B->req.root_side;
   B->req = mx_mesher_requests(m); /* m->boxes may have moved */
