@@ -1,6 +1,7 @@
 /* The mixed mesh split into tetrahedra: see kernels/tet_split.h. */
 #include "kernels/tet_split.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "base/common.h"
@@ -138,6 +139,68 @@ static int candidate_valid(const double p[9][3], const int8_t tets[MAX_TETS][4],
   return 1;
 }
 
+/* The least height of the Steiner node over the boundary triangles of a
+ * cone from it (positive inside): tetrahedron i is triangle
+ * tets[i][0..2] and the node at tets[i][3]. */
+static double cone_height(const double p[9][3], const int8_t tets[MAX_TETS][4], int n) {
+  double lo = INFINITY;
+  for (int i = 0; i < n; i++) {
+    const double *a = p[tets[i][0]], *b = p[tets[i][1]], *c = p[tets[i][2]];
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const double w[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                         u[0] * v[1] - u[1] * v[0]};
+    const double area2 = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    const double h = det3(a, b, c, p[tets[i][3]]) / (area2 > 0.0 ? area2 : 1.0);
+    if (!(h >= lo)) lo = h;
+  }
+  return lo;
+}
+
+/* The Steiner node of a distorted element, when its mean does not do: the
+ * point of the element's kernel (the points that see every boundary
+ * triangle from inside) farthest from the triangles' planes, approached by
+ * a compass search from the mean (steps along the axes and the cube
+ * diagonals, halved when none raises the least height: the least height is
+ * concave, its one local maximum the global one) until the step is a
+ * thousandth of the element. The mean sees all the boundary triangles of a
+ * convex element; a warped quadrilateral face cut along its concave
+ * diagonal (thin prisms at the boundary) can hide a triangle from the
+ * mean, not from the kernel when there is one. Deterministic: the same
+ * point in the count and the fill passes. */
+static void steiner_point(double p[9][3], int nv, const int8_t tets[MAX_TETS][4], int n) {
+  double lo[3], hi[3];
+  for (int d = 0; d < 3; d++) lo[d] = hi[d] = p[0][d];
+  for (int k = 1; k < nv; k++)
+    for (int d = 0; d < 3; d++) {
+      if (p[k][d] < lo[d]) lo[d] = p[k][d];
+      if (p[k][d] > hi[d]) hi[d] = p[k][d];
+    }
+  double h = 0.0;
+  for (int d = 0; d < 3; d++)
+    if (hi[d] - lo[d] > h) h = hi[d] - lo[d];
+  const double stop = 1e-3 * h;
+  h *= 0.25;
+  static const int8_t dir[14][3] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},   {0, -1, 0},  {0, 0, 1},
+                                    {0, 0, -1}, {1, 1, 1},  {-1, -1, -1}, {1, 1, -1}, {-1, -1, 1},
+                                    {1, -1, 1}, {-1, 1, -1}, {-1, 1, 1},  {1, -1, -1}};
+  double best = cone_height(p, tets, n);
+  for (int it = 0; it < 400 && h > stop; it++) {
+    const double c[3] = {p[CENTRE][0], p[CENTRE][1], p[CENTRE][2]};
+    int moved = 0;
+    for (int k = 0; k < 14 && !moved; k++) {
+      const double s = k < 6 ? h : h * 0.57735026918962573;
+      for (int d = 0; d < 3; d++) p[CENTRE][d] = c[d] + s * dir[k][d];
+      const double f = cone_height(p, tets, n);
+      if (f > best) best = f, moved = 1;
+    }
+    if (!moved) {
+      memcpy(p[CENTRE], c, sizeof c);
+      h *= 0.5;
+    }
+  }
+}
+
 /* The element's nodes and mean. */
 static void element_points(const mx_mesh *M, size_t c, double p[9][3]) {
   const int nv = mx_cell_nodes[M->type[c]];
@@ -180,9 +243,24 @@ static uint8_t choose(const mx_mesh *M, size_t c, int8_t tets[MAX_TETS][4], int 
     if (*n && candidate_valid(p, tets, *n)) return (uint8_t)order[i];
   }
   *n = candidate(type, tri, nt, STEINER, tets);
+  if (!candidate_valid(p, tets, *n)) steiner_point(p, nv, tets, *n);
   if (candidate_valid(p, tets, *n)) return STEINER;
   *n = 0;
   return FAILED;
+}
+
+size_t mx_tet_split_flag_failures(const mx_mesh *M, uint8_t *flag) {
+  size_t n = 0;
+#pragma omp parallel for schedule(dynamic, 4096) reduction(+ : n)
+  for (size_t c = 0; c < M->ncells; c++) {
+    int8_t tets[MAX_TETS][4];
+    int k = 0;
+    if (M->type[c] != MX_TET && choose(M, c, tets, &k) == FAILED) {
+      flag[c] = 1;
+      n++;
+    }
+  }
+  return n;
 }
 
 static const char *type_name[4] = {"tetrahedron", "pyramid", "prism", "hexahedron"};
@@ -283,7 +361,8 @@ int mx_mesh_split_tets(const mx_mesh *M, mx_mesh *T, uint32_t **parent,
       n = candidate(type, tri, nt, choice[c], tets);
     }
     if (choice[c] == STEINER) {
-      element_points(M, c, p);
+      element_points(M, c, p); /* the point choose() took */
+      if (!candidate_valid(p, tets, n)) steiner_point(p, mx_cell_nodes[type], tets, n);
       g[CENTRE] = (uint32_t)(M->nnodes + extra[c]);
       memcpy(T->xyz + 3 * (size_t)g[CENTRE], p[CENTRE], sizeof p[CENTRE]);
     }

@@ -49,4 +49,9 @@ typedef struct {
 int mx_mesh_split_tets(const mx_mesh *M, mx_mesh *T, uint32_t **parent,
                        mx_tet_split_stats *stats);
 
+/* flag[c] set to 1 for each element of M that no candidate splits
+ * validly (the others left as they are); returns their count. The repair
+ * rounds refine their leaves (mesher/repair.c, with mx_params.tets). */
+size_t mx_tet_split_flag_failures(const mx_mesh *M, uint8_t *flag);
+
 #endif
