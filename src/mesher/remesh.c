@@ -133,7 +133,8 @@ static int by_type_map(mx_mesher *m, uint32_t **map) {
   for (size_t c = 0; !st && !bad && c < n; c++) bad += cnt[M->leaf[c]]-- == 0;
   if (!st && bad) {
     mx_error(NULL, 0, "the restart file's mesh cannot be made again (%zu elements "
-                      "against the file's %zu): its element list cannot be mapped", n,
+                      "against the file's %zu): its element list cannot be mapped (a mesh "
+                      "written with --tets is made again with --tets, and the reverse)", n,
              m->file_nelem);
     st = MX_EINPUT;
   }

@@ -445,25 +445,24 @@ int mx_mesher_save_restart(const mx_mesher *m, const char *path) {
   memset(&g, 0, sizeof g);
   if (!st) st = restart_from_mesher(m, !binary, &r, &g);
   /* the binary variant carries the mesh too: a re-mesh from it is local */
-  /* --tets: the mixed mesh the tetrahedra were cut from (a re-mesh splices
-   * mixed elements; reading the file splits it again) */
-  const mx_mesh *E = m->have_mix ? &m->Mmix : &m->M;
-  if (!st && binary && m->mesh_stage == MX_STAGE_FULL && E->nkey && m->states) {
+  if (!st && binary && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states &&
+      !m->have_mix) { /* --tets: the octree alone (the element counts per leaf
+                       * are the tetrahedra's; reading meshes it again) */
     r.has_mesh = 1;
-    r.mesh_nn = E->nnodes;
-    r.mesh_nc = E->ncells;
-    r.mesh_xyz = E->xyz;
-    r.mesh_nkey = E->nkey;
+    r.mesh_nn = m->M.nnodes;
+    r.mesh_nc = m->M.ncells;
+    r.mesh_xyz = m->M.xyz;
+    r.mesh_nkey = m->M.nkey;
     r.mesh_state = m->states;
-    r.mesh_type = E->type;
-    r.mesh_conn = E->conn;
-    r.mesh_leaf = E->leaf;
+    r.mesh_type = m->M.type;
+    r.mesh_conn = m->M.conn;
+    r.mesh_leaf = m->M.leaf;
     /* the file keeps J_ENS in double (the mesh holds float) */
-    r.mesh_jens = mx_alloc((E->ncells + 1) * sizeof *r.mesh_jens);
+    r.mesh_jens = mx_alloc((m->M.ncells + 1) * sizeof *r.mesh_jens);
     if (!r.mesh_jens) st = MX_ENOMEM;
     else {
 #pragma omp parallel for schedule(static)
-      for (size_t c = 0; c < E->ncells; c++) r.mesh_jens[c] = E->jens[c];
+      for (size_t c = 0; c < m->M.ncells; c++) r.mesh_jens[c] = m->M.jens[c];
     }
   }
   if (!st) st = binary ? mx_restart_write_binary(path, &r) : mx_restart_write_text(path, &r);
