@@ -323,6 +323,12 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
     if (s->centre_leaves)
       printf("               %12s %zu leaves use their body centre\n", "",
              s->centre_leaves);
+    if (s->tets)
+      printf("  tetrahedra   %12s split from %zu elements (hex %zu, prism %zu, pyramid %zu, "
+             "tet %zu): %zu hex in 5, %zu Steiner node(s); split %.3f s, checked %.3f s\n", "",
+             s->tets_from, s->tets_from_by_type[3], s->tets_from_by_type[2],
+             s->tets_from_by_type[1], s->tets_from_by_type[0], s->tets_five, s->tets_steiner,
+             s->t_tets, s->t_tets_check);
     quality_summary(s);
   } else {
     printf("  elements     %12zu hexahedra (the leaves, hanging nodes kept)\n",
