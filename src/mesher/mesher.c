@@ -105,6 +105,8 @@ mx_mesher *mx_mesher_new(const mx_params *p) {
 void mx_mesh_clear(mx_mesher *m) {
   mx_mesh_free(&m->M);
   mx_mesh_free(&m->Mmix);
+  mx_free(m->tet_parent);
+  m->tet_parent = NULL;
   m->have_mix = 0;
   memset(&m->M, 0, sizeof m->M);
   mx_free(m->states);

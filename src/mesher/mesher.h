@@ -269,6 +269,7 @@ struct mx_mesher {
    * they were cut from (a re-mesh starts from it) */
   int have_mix;
   mx_mesh Mmix;
+  uint32_t *tet_parent; /* per tetrahedron: its element in Mmix */
 };
 
 

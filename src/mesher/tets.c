@@ -75,7 +75,8 @@ int mx_mesher_tets(mx_mesher *m) {
   mx_mesher_stage(m, "tets");
   mx_mesh T;
   mx_tet_split_stats ts;
-  MX_CHECK(mx_mesh_split_tets(&m->M, &T, NULL, &ts));
+  uint32_t *parent = NULL;
+  MX_CHECK(mx_mesh_split_tets(&m->M, &T, &parent, &ts));
   /* the check: the checker's defects (J_ENS, faces matched and oriented,
    * closed boundary, hanging nodes, unused and duplicate nodes), and the
    * volume against the mixed elements' with the same boundary triangles */
@@ -119,6 +120,7 @@ int mx_mesher_tets(mx_mesher *m) {
   }
   if (st) {
     mx_mesh_free(&T);
+    mx_free(parent);
     return st;
   }
   /* the Steiner nodes: inside, off the boundary */
@@ -138,6 +140,7 @@ int mx_mesher_tets(mx_mesher *m) {
   S->tets_volume_fan = mx_mesh_volume(&m->M);
   m->Mmix = m->M;
   m->M = T;
+  m->tet_parent = parent;
   m->have_mix = 1;
   /* the figures of the mesh the caller gets */
   S->nodes = m->M.nnodes;
@@ -155,5 +158,7 @@ void mx_mesher_untets(mx_mesher *m) {
   mx_mesh_free(&m->M);
   m->M = m->Mmix;
   memset(&m->Mmix, 0, sizeof m->Mmix);
+  mx_free(m->tet_parent);
+  m->tet_parent = NULL;
   m->have_mix = 0;
 }
