@@ -20,6 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/common.h" /* mx_alloc_fail_countdown */
 #include "check.h"
 #include "kernels/tet_split.h"
 #include "mixoct.h"
@@ -386,12 +387,44 @@ static void check_split(const mx_mesh_arrays *a, const char *what) {
   mx_mesh_free(&T);
 }
 
+/* The k-th allocation of the split failing, for every k: MX_ENOMEM and
+ * nothing returned, then the split again whole. */
+static void alloc_failures(const mx_mesh_arrays *a) {
+  mx_mesh M;
+  memset(&M, 0, sizeof M);
+  M.nnodes = a->nnodes, M.ncells = a->nelements;
+  M.xyz = (double *)a->xyz, M.type = (uint8_t *)a->type, M.conn = (uint32_t *)a->conn;
+  M.level = (uint8_t *)a->level, M.leaf = (uint32_t *)a->leaf, M.jens = (float *)a->jens;
+  mx_tet_split_stats s;
+  mx_mesh T;
+  uint32_t *parent = NULL;
+  mx_alloc_fail_countdown(-1);
+  CHECK(mx_mesh_split_tets(&M, &T, &parent, &s) == MX_OK);
+  const long n = mx_alloc_count();
+  mx_alloc_fail_countdown(0);
+  mx_mesh_free(&T);
+  mx_free_array(parent);
+  size_t wrong = 0;
+  for (long k = 1; k <= n; k++) {
+    mx_alloc_fail_countdown(k);
+    const int st = mx_mesh_split_tets(&M, &T, &parent, &s);
+    mx_alloc_fail_countdown(0);
+    wrong += st != MX_ENOMEM || T.xyz || T.conn || parent;
+    if (!st) mx_mesh_free(&T), mx_free_array(parent);
+  }
+  CHECK(n >= 10 && wrong == 0);
+  CHECK(mx_mesh_split_tets(&M, &T, &parent, &s) == MX_OK && T.ncells == s.tets);
+  mx_mesh_free(&T);
+  mx_free_array(parent);
+}
+
 static void library(int level) {
   run r1, r2, mixed;
   CHECK(mesh_demo(level, 0, 1, &mixed) == MX_OK);
   char what[64];
   snprintf(what, sizeof what, "demo -s %d", level);
   check_split(&mixed.a, what);
+  if (level == 3) alloc_failures(&mixed.a);
   CHECK(mesh_demo(level, 1, 1, &r1) == MX_OK);
   CHECK(mesh_demo(level, 1, 2, &r2) == MX_OK);
   const mx_mesh_arrays *a = &r1.a, *b = &r2.a;
