@@ -129,8 +129,10 @@ typedef struct {
                         * kernels/tet_split.h): each quadrilateral face cut
                         * by the diagonal through its node of the smallest
                         * index, pyramids into 2, prisms 3, hexahedra 5 or
-                        * 6 (12 around a new node at the mean of a distorted
-                        * element's nodes); per tetrahedron its element's
+                        * 6 (a distorted element: the cone from a new node
+                        * inside it, appended after the nodes; an element
+                        * nothing splits validly has its leaf refined by
+                        * the repair rounds); per tetrahedron its element's
                         * leaf, level and material, so the element lists of
                         * a refinement name tetrahedra; checked again (valid,
                         * conforming, the same volume); 0 (default): mixed */

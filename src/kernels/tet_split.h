@@ -15,11 +15,18 @@
  *    hexahedron 6 tetrahedra (the "pulling" triangulation; the node of the
  *    smallest index always qualifies, so a convex element never needs
  *    more);
- *  - the cone from a new node at the mean of its nodes (a Steiner node)
- *    over all its boundary triangles: pyramid 6, prism 8, hexahedron 12.
+ *  - the cone from a new node (a Steiner node) over all its boundary
+ *    triangles: pyramid 6, prism 8, hexahedron 12; the node at the mean of
+ *    the element's nodes, or when that does not do, at the point of the
+ *    element's kernel farthest from the triangles' planes (a compass
+ *    search; the kernel: the points that see every boundary triangle from
+ *    inside).
  * The first candidate whose every tetrahedron is valid (J_ENS at least
- * MX_JENS_VALID, so a positive volume) is taken; an element with none makes
- * the split fail (MX_EINVALID, the element named). A tetrahedron is kept.
+ * MX_JENS_VALID, so a positive volume) is taken; an element with none (an
+ * empty kernel: a thin prism whose two warped faces are cut along their
+ * concave diagonals) makes the split fail (MX_EINVALID, the element named;
+ * the mesher's repair rounds refine its leaf first,
+ * mx_tet_split_flag_failures). A tetrahedron is kept.
  *
  * Per tetrahedron: its element's leaf, level and material; its own J_ENS.
  * Nodes: the mesh's, then the Steiner nodes in element order (lattice key
