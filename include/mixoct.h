@@ -125,6 +125,17 @@ typedef struct {
                         * node's worst; 0: off (the default, MX_SMOOTH_ROUNDS:
                         * on the cortex it costs more time than the worst
                         * element gains, bench/smooth_bench.sh) */
+  int tets;            /* 1: the final mesh split into tetrahedra (--tets,
+                        * kernels/tet_split.h): each quadrilateral face cut
+                        * by the diagonal through its node of the smallest
+                        * index, pyramids into 2, prisms 3, hexahedra 5 or
+                        * 6 (a distorted element: the cone from a new node
+                        * inside it, appended after the nodes; an element
+                        * nothing splits validly has its leaf refined by
+                        * the repair rounds); per tetrahedron its element's
+                        * leaf, level and material, so the element lists of
+                        * a refinement name tetrahedra; checked again (valid,
+                        * conforming, the same volume); 0 (default): mixed */
 } mx_params;
 /* The smoothing's default rounds (mx_params_default), measured on the
  * cortex: bench/smooth_bench.sh. */

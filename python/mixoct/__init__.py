@@ -231,7 +231,8 @@ class _Params(ctypes.Structure):
                 ("repair_input", ctypes.c_int),
                 ("remesh_full", ctypes.c_int),
                 ("materials", ctypes.c_int),
-                ("smooth_rounds", ctypes.c_int)]
+                ("smooth_rounds", ctypes.c_int),
+                ("tets", ctypes.c_int)]
 
 
 class _MeshArrays(ctypes.Structure):
@@ -1001,7 +1002,8 @@ class Mesher(_MesherBase):
     ``materials`` (``--materials``: nested shells become materials, not
     holes, given by the ``material`` view; see the module doc),
     ``smooth_rounds`` (``--smooth N``: rounds of the smoothing that only
-    raises the worst J_ENS around each node; 0, the default: off). Sharp
+    raises the worst J_ENS around each node; 0, the default: off), ``tets``
+    (``--tets``: the final mesh split into tetrahedra). Sharp
     features: ``set_features``, ``feature_figures``.
     """
 
@@ -1014,7 +1016,7 @@ class Mesher(_MesherBase):
     def __init__(self, surface_level=-1, all_level=-1, stage="full",
                  threads=0, max_memory_mb=0, repair_rounds=None, *,
                  balance="edges", close_ratio=0.0, staircase_quality=0.0,
-                 materials=False, smooth_rounds=0, library=None):
+                 materials=False, smooth_rounds=0, tets=False, library=None):
         _check_levels(surface_level=surface_level, all_level=all_level)
         _check_at_least(0, threads=threads, max_memory_mb=max_memory_mb,
                         close_ratio=close_ratio, staircase_quality=staircase_quality,
@@ -1038,6 +1040,7 @@ class Mesher(_MesherBase):
             p.staircase_quality = float(staircase_quality)
         p.materials = 1 if materials else 0
         p.smooth_rounds = int(smooth_rounds)
+        p.tets = 1 if tets else 0  # --tets: the mesh split into tetrahedra
         self._start(lib, p)
 
     # ---- inputs ------------------------------------------------------------------

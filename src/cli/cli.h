@@ -59,6 +59,7 @@ typedef struct {
   const char *feature_file; /* --features FILE (NULL: found on the surface) */
   int smooth_rounds;    /* --smooth N; -1: the library's default */
   int32_t image_skip[64], image_merge[128], image_lsize[128];
+  int tets;             /* --tets: the final mesh split into tetrahedra */
 } mx_options;
 
 /* Parses argv; on --help/--version prints and sets *exit_now = 1. Returns

@@ -59,6 +59,7 @@ static int setup(const mx_options *o, mx_mesher **out) {
   p.max_memory_mb = o->max_memory_mb;
   p.repair_input = o->repair_input;
   p.materials = o->materials;
+  p.tets = o->tets;
   if (o->smooth_rounds >= 0) p.smooth_rounds = o->smooth_rounds;
   p.threads = o->threads; /* --threads N: N, whatever the load (mixoct.h) */
   mx_mesher *m = mx_mesher_new(&p);

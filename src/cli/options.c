@@ -132,6 +132,11 @@ static const char *usage_text =
     "                              raises the worst J_ENS around them, never\n"
     "                              lowering any node's worst; surface nodes\n"
     "                              stay on the surface\n"
+    "      --tets                  split the final mesh into tetrahedra\n"
+    "                              (pyramid 2, prism 3, hexahedron 5 or 6, each\n"
+    "                              quadrilateral cut through its node of the\n"
+    "                              smallest index), checked again: for solvers\n"
+    "                              that take one cell type (dolfinx)\n"
     "      --stage transition      stop after the transition patterns: the\n"
     "                              conforming mixed mesh of the whole octree\n"
     "                              (cell data type, level, jens)\n"
@@ -543,6 +548,8 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
       o->keep_invalid = 1;
     } else if (strcmp(a, "--repair-input") == 0) {
       o->repair_input = 1;
+    } else if (strcmp(a, "--tets") == 0) {
+      o->tets = 1;
     } else if (strcmp(a, "--materials") == 0) {
       o->materials = 1;
     } else if (strcmp(a, "--features") == 0) {

@@ -69,6 +69,11 @@ int mx_p4est_main(int argc, char **argv) {
                       "path keeps no sharp features yet: its boundary is that of --no-features)");
     st = MX_EINPUT;
   }
+  if (!st && !exit_now && o.tets) {
+    mx_error(NULL, 0, "--p4est: no --tets (the distributed path writes its mixed mesh; split it "
+                      "with the single-process mesher)");
+    st = MX_EINPUT;
+  }
   if (!st && !exit_now) {
     mx_p4est_run_params p;
     run_params(&o, compare, &p);

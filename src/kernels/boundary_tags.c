@@ -25,6 +25,24 @@ static int leaf_shell(const mx_tag_inputs *in, uint32_t o) {
 /* The tag of the face with nodes f[0..n) of cell c. */
 static int32_t face_tag(const mx_mesh_view *v, const mx_tag_inputs *in, const uint32_t *f, int n,
                         size_t c, double off_tol) {
+  uint32_t pf[4];
+  if (in->cell_parent && n == 3) { /* --tets: the face of the element it was cut from */
+    const mx_mesh *P = in->parent;
+    const size_t e = in->cell_parent[c];
+    const uint32_t *row = P->conn + 8 * e;
+    for (int j = 0; j < mx_cell_nfaces[P->type[e]]; j++) {
+      const int8_t *q = mx_cell_faces[P->type[e]][j];
+      const int nq = q[3] < 0 ? 3 : 4;
+      int in_face = 0;
+      for (int k = 0; k < 3; k++)
+        for (int i = 0; i < nq; i++) in_face += f[k] == row[q[i]];
+      if (in_face < 3) continue;
+      for (int i = 0; i < nq; i++) pf[i] = row[q[i]];
+      f = pf;
+      n = nq;
+      break;
+    }
+  }
   if (in->check_off)
     for (int k = 0; k < n; k++)
       if (!(mx_closest_point(in->SI, v->xyz + 3 * (size_t)f[k], NULL, NULL, NULL) <= off_tol))

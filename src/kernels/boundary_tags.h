@@ -33,6 +33,12 @@ typedef struct {
   int nshells;               /* input files of the domain */
   const mx_surface_index *SI;/* the domain's triangles */
   int check_off;             /* faces may lie on no input (see above) */
+  /* a mesh of tetrahedra cut from a mixed mesh (--tets, kernels/tet_split.h),
+   * else NULL: per cell, its element in parent. A boundary triangle takes
+   * the tag of the face of that element it lies in (a quadrilateral's two
+   * triangles the quadrilateral's tag, found as above) */
+  const uint32_t *cell_parent;
+  const mx_mesh *parent;
 } mx_tag_inputs;
 
 /* bf: the boundary faces of v (mx_boundary_faces_extract); their tri_tag

@@ -104,6 +104,10 @@ mx_mesher *mx_mesher_new(const mx_params *p) {
 
 void mx_mesh_clear(mx_mesher *m) {
   mx_mesh_free(&m->M);
+  mx_mesh_free(&m->Mmix);
+  mx_free(m->tet_parent);
+  m->tet_parent = NULL;
+  m->have_mix = 0;
   memset(&m->M, 0, sizeof m->M);
   mx_free(m->states);
   mx_free(m->bnd);
@@ -838,6 +842,7 @@ int mx_mesh_finish(mx_mesher *m) {
   st = feature_distances(m);
   if (!st) st = volume_check(m);
   m->rec->S.ph.verify += mx_wtime() - tv;
+  if (!st) st = mx_mesher_tets(m); /* --tets: the last step, checked again */
   return st;
 }
 

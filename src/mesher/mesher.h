@@ -112,6 +112,14 @@ typedef struct {
    * gradation ratio, the tree's memory and build time (sampling included) */
   size_t size_sources, size_curvature_n, size_thickness_n, size_map_n, size_graded_n;
   double size_beta, size_src_kb, size_src_seconds;
+  /* --tets (kernels/tet_split.h): the mixed mesh split, its elements by
+   * type, the tetrahedra made, Steiner nodes, hexahedra split into 5, the
+   * seconds of the split and of the check of the tetrahedra, and the
+   * volumes (tetrahedra; the mixed elements bounded by the same triangles;
+   * the mixed mesh as mx_element_volume measures it) */
+  int tets;
+  size_t tets_from, tets_from_by_type[4], tets_made, tets_steiner, tets_five;
+  double t_tets, t_tets_check, tets_volume, tets_volume_mixed, tets_volume_fan;
 } mx_summary;
 
 /* What a call records even when it only reads the mesher: the last error,
@@ -258,6 +266,11 @@ struct mx_mesher {
   int64_t image_n[3];
   double image_A[12];
   mx_grid image_grid;
+  /* --tets (mx_params.tets): M holds the tetrahedra, Mmix the mixed mesh
+   * they were cut from (a re-mesh starts from it) */
+  int have_mix;
+  mx_mesh Mmix;
+  uint32_t *tet_parent; /* per tetrahedron: its element in Mmix */
 };
 
 

@@ -33,6 +33,12 @@ int mx_repair_go_on(int round, uint64_t defects, int max_rounds, mx_repair_progr
 enum { MX_INPUTS_LABEL = 512 };
 const char *mx_inputs_label(const mx_mesher *m, char *buf, size_t n);
 int mx_mesh_finish(mx_mesher *m);   /* flags, counts; MX_EINVALID if invalid */
+/* --tets (mesher/tets.c): the mesh split into tetrahedra and checked
+ * again, the mixed mesh kept (nothing without params.tets, or done);
+ * MX_EINVALID when an element cannot be split or the check fails. */
+int mx_mesher_tets(mx_mesher *m);
+/* The mixed mesh back in place of the tetrahedra (a re-mesh edits it). */
+void mx_mesher_untets(mx_mesher *m);
 /* The sum of the elements' signed volumes; the domain volume check on a
  * mesh of that volume and ncells elements (MX_EINVALID, message given,
  * when it holds much more or less than the input encloses). */

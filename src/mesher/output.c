@@ -83,7 +83,8 @@ static int make_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T) {
     return MX_EINTERNAL;
   }
   const mx_tag_inputs in = {&m->B.tree, m->leaves, M->leaf, &m->soup, m->nt_domain,
-                            m->ndomain, &m->SI, m->p.repair_input};
+                            m->ndomain, &m->SI, m->p.repair_input,
+                            m->have_mix ? m->tet_parent : NULL, &m->Mmix};
   size_t off = 0;
   MX_CHECK(mx_boundary_tags(v, &in, &T->bf, T->cell_body, &T->nbodies, &T->body_tag, &off));
   mx_boundary_node_tags(&T->bf, M->nnodes, T->node_tag);

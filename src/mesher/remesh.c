@@ -23,6 +23,7 @@ static int refine_and_mesh(mx_mesher *m, uint32_t *octs, size_t n) {
   m->rec->S.ph.read = read;
   m->rec->S.t_restart = restart;
   const double t0 = mx_wtime();
+  mx_mesher_untets(m); /* --tets: the mixed mesh is the one re-meshed */
   MX_CHECK(mx_mesher_size_space(m)); /* a size field given since the octree was built */
   const double root_side = B->req.root_side;
   B->req = mx_mesher_requests(m); /* m->boxes may have moved */
@@ -132,7 +133,8 @@ static int by_type_map(mx_mesher *m, uint32_t **map) {
   for (size_t c = 0; !st && !bad && c < n; c++) bad += cnt[M->leaf[c]]-- == 0;
   if (!st && bad) {
     mx_error(NULL, 0, "the restart file's mesh cannot be made again (%zu elements "
-                      "against the file's %zu): its element list cannot be mapped", n,
+                      "against the file's %zu): its element list cannot be mapped (a mesh "
+                      "written with --tets is made again with --tets, and the reverse)", n,
              m->file_nelem);
     st = MX_EINPUT;
   }

@@ -9,6 +9,7 @@
 #include "kernels/edges_lazy.h"
 #include "kernels/refine_list.h"
 #include "kernels/splice.h"
+#include "kernels/tet_split.h"
 #include "geom/surface_defects.h"
 #include "soa/mesh.h"
 
@@ -56,17 +57,21 @@ int mx_repair(mx_mesher *m) {
     const double t = mx_wtime();
     mx_mesher_stage(m, "verify");
     int st = mx_find_contacts(&m->M, &m->B.tree.grid, m->states, flag, &m->rec->S.contacts);
+    /* --tets: elements no split into tetrahedra keeps valid (a prism with
+     * two warped faces cut along their concave diagonals) are repaired too */
+    const size_t unsplit = !st && m->p.tets ? mx_tet_split_flag_failures(&m->M, flag) : 0;
     m->rec->S.ph.verify += mx_wtime() - t;
     if (st) {
       mx_free(flag);
       return st;
     }
-    if (!mx_repair_go_on(round, m->M.invalid + m->rec->S.contacts.nodes, m->p.repair_rounds,
-                         &progress))
+    if (!mx_repair_go_on(round, m->M.invalid + m->rec->S.contacts.nodes + unsplit,
+                         m->p.repair_rounds, &progress))
       break;
     if (m->progress.on_round) m->progress.on_round(m->progress.user, round + 1);
     size_t n = 0;
-    uint32_t *octs = mx_alloc((m->M.invalid + m->rec->S.contacts.elements + 1) * sizeof *octs);
+    uint32_t *octs =
+        mx_alloc((m->M.invalid + m->rec->S.contacts.elements + unsplit + 1) * sizeof *octs);
     if (!octs) {
       mx_free(flag);
       return MX_ENOMEM;

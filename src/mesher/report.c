@@ -212,6 +212,17 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              fp->corners_missed, fp->lines, fp->lines_missed, fp->nodes, fp->sides, fp->given_up,
              fp->slid, fp->split, fp->unsplit, s->feature_apart_boxes, s->feature_measured ? s->feature_ridge_dist : NAN,
              s->feature_measured ? s->feature_corner_dist : NAN, s->feature_seconds + fp->seconds);
+  char tets[512] = "";
+  if (s->tets)
+    snprintf(tets, sizeof tets,
+             "\"tets\": {\"from\": %zu, \"from_by_type\": {\"hex\": %zu, \"prism\": %zu, "
+             "\"pyramid\": %zu, \"tet\": %zu}, \"made\": %zu, \"steiner\": %zu, "
+             "\"hex_five\": %zu, \"seconds\": %.6f, \"check_seconds\": %.6f, "
+             "\"volume\": %.17g, \"volume_mixed\": %.17g, \"volume_mixed_fan\": %.17g}, ",
+             s->tets_from, s->tets_from_by_type[3], s->tets_from_by_type[2],
+             s->tets_from_by_type[1], s->tets_from_by_type[0], s->tets_made, s->tets_steiner,
+             s->tets_five, s->t_tets, s->t_tets_check, s->tets_volume, s->tets_volume_mixed,
+             s->tets_volume_fan);
   char img[12288] = "";
   if (s->image) {
     const mx_image_info *g = s->image;
@@ -250,7 +261,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
          "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"memory_estimate_mb\": %.1f, "
          "\"memory_estimate_prior_mb\": %.1f, "
          "\"threads\": %d, \"wait_policy\": \"%s\", "
-         "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, %s%s%s%s"
+         "\"jens_min\": %.6f, \"invalid\": %zu, \"quality\": %s, %s%s%s%s%s"
          "\"topology\": \"%s\"}\n",
          s->leaves, s->leaves_hash, nodes, elements, hex,
          s->mesh ? s->by_type[2] : 0, s->mesh ? s->by_type[1] : 0,
@@ -264,7 +275,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
          s->local ? s->patch_leaves : 0, s->local ? s->core_leaves : 0, s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->memory_prior_mb, s->threads,
          ri->wait_policy ? ri->wait_policy : "default",
          s->mesh ? s->jens_min : 1.0,
-         s->mesh ? s->invalid : 0, qual, bnd, mat, img, feat, ri->topology ? ri->topology : "");
+         s->mesh ? s->invalid : 0, qual, bnd, mat, img, feat, tets, ri->topology ? ri->topology : "");
 }
 
 /* The summary printed after a run (unless --quiet or --json): what was
@@ -312,6 +323,12 @@ static void print_summary(const mx_summary *s, const mx_run_info *ri) {
     if (s->centre_leaves)
       printf("               %12s %zu leaves use their body centre\n", "",
              s->centre_leaves);
+    if (s->tets)
+      printf("  tetrahedra   %12s split from %zu elements (hex %zu, prism %zu, pyramid %zu, "
+             "tet %zu): %zu hex in 5, %zu Steiner node(s); split %.3f s, checked %.3f s\n", "",
+             s->tets_from, s->tets_from_by_type[3], s->tets_from_by_type[2],
+             s->tets_from_by_type[1], s->tets_from_by_type[0], s->tets_five, s->tets_steiner,
+             s->t_tets, s->t_tets_check);
     quality_summary(s);
   } else {
     printf("  elements     %12zu hexahedra (the leaves, hanging nodes kept)\n",

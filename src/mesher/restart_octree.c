@@ -445,7 +445,9 @@ int mx_mesher_save_restart(const mx_mesher *m, const char *path) {
   memset(&g, 0, sizeof g);
   if (!st) st = restart_from_mesher(m, !binary, &r, &g);
   /* the binary variant carries the mesh too: a re-mesh from it is local */
-  if (!st && binary && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states) {
+  if (!st && binary && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states &&
+      !m->have_mix) { /* --tets: the octree alone (the element counts per leaf
+                       * are the tetrahedra's; reading meshes it again) */
     r.has_mesh = 1;
     r.mesh_nn = m->M.nnodes;
     r.mesh_nc = m->M.ncells;
