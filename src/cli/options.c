@@ -337,7 +337,7 @@ static const struct {
     {NULL, "--restart", 1},        {NULL, "--boundary", 1},       {NULL, "--keep-invalid", 0},
     {"-c", "--from-restart", 1},   {"-l", "--list", 1},           {NULL, "--threads", 1},
     {NULL, "--max-memory", 1},     {NULL, "--balance", 1},        {NULL, "--p4est", 0},
-    {NULL, "--p4est-compare", 0}};
+    {NULL, "--p4est-compare", 0}, {NULL, "--tets", 0}};
 enum { NOPTIONS = sizeof option_table / sizeof *option_table };
 
 /* The table's entry of a (its long or short name), or -1. */
