@@ -62,6 +62,7 @@ typedef enum {
   MX_ENOMEM = 3,    /* out of memory, or over the memory budget */
   MX_EIO = 4,       /* an output could not be written (permission, disk) */
   MX_EINVALID = 5,  /* the mesh breaks the validity contract (J_ENS < 1e-6) */
+  MX_ECANCELED = 6, /* cancelled (mx_mesher_cancel): the call made nothing */
 } mx_status;
 
 /* Element types, and their node counts: 4, 5, 6, 8. Node order: VTK's for
@@ -151,6 +152,14 @@ typedef struct {
   void *user;
 } mx_progress;
 void mx_mesher_set_progress(mx_mesher *m, const mx_progress *hooks);
+/* Cancel the call running on m (any thread, any time; a progress hook may
+ * call it): the call checks the flag between its stages, between octree
+ * levels, between the boundary stage's steps and repair rounds, and returns
+ * MX_ECANCELED within about a second; a cancelled mesh leaves no mesh (the
+ * octree is dropped too unless it came from a restart file), and the next
+ * call works as usual (the flag is cleared when a call starts, so a cancel
+ * asked for between two calls stops neither). */
+void mx_mesher_cancel(mx_mesher *m);
 /* early != 0: the edge infos are freed once the transition has read them
  * (their memory goes to the mesh: a single run's peak is lower); the next
  * refinement or re-mesh rebuilds them (time). 0, the default, keeps them. */
@@ -630,6 +639,9 @@ int mx_mesher2d_set_size_limits(mx_mesher2d *m, double hmin, double hmax);
 
 /* Mesh from the requests (and the quadtree of a loaded restart file). */
 int mx_mesher2d_mesh(mx_mesher2d *m);
+/* Cancel the call running on m, as mx_mesher_cancel: checked between the
+ * stages (refine, transition, boundary, materials, check); MX_ECANCELED. */
+void mx_mesher2d_cancel(mx_mesher2d *m);
 /* Re-meshing (section 4.2, Algorithm 3): each quadrant holding one of the
  * listed elements is split once (a quadrant listed twice, once), balance is
  * restored through the edge infos, and the mesh is made again. Indices

@@ -5,6 +5,8 @@
 #ifndef MX_MESHER_H
 #define MX_MESHER_H
 
+#include <stdatomic.h>
+
 #include "mixoct.h"
 
 #include "kernels/boundary_stage.h"
@@ -257,6 +259,7 @@ struct mx_mesher {
   int64_t image_n[3];
   double image_A[12];
   mx_grid image_grid;
+  atomic_int cancel; /* mx_mesher_cancel (base/cancel.h) */
 };
 
 

@@ -389,8 +389,8 @@ int mx_mesher_write(const mx_mesher *m, const char *path, int ascii) {
     mx_error(path, 0, "no mesh to write: call mx_mesher_mesh first");
     st = MX_EINPUT;
   } else {
-    mx_mesher_stage(m, "write");
-    st = mx_write_mixed(m, path, ascii);
+    st = mx_mesher_stage(m, "write");
+    if (!st) st = mx_write_mixed(m, path, ascii);
   }
   m->rec->S.ph.write += mx_wtime() - t;
   return mx_call_end(m, &c, st);

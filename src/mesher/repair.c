@@ -54,8 +54,8 @@ int mx_repair(mx_mesher *m) {
     flag = mx_alloc(m->M.ncells + 1);
     if (!flag) return MX_ENOMEM;
     const double t = mx_wtime();
-    mx_mesher_stage(m, "verify");
-    int st = mx_find_contacts(&m->M, &m->B.tree.grid, m->states, flag, &m->rec->S.contacts);
+    int st = mx_mesher_stage(m, "verify"); /* MX_ECANCELED: cancelled */
+    if (!st) st = mx_find_contacts(&m->M, &m->B.tree.grid, m->states, flag, &m->rec->S.contacts);
     m->rec->S.ph.verify += mx_wtime() - t;
     if (st) {
       mx_free(flag);
