@@ -347,12 +347,46 @@ typedef struct {
  * mixed mesh (none yet, or params.stage == MX_STAGE_OCTREE, whose leaves
  * only mx_mesher_write writes, as hexahedra). */
 int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a);
+/* For bindings whose views of the mesh arrays may outlive the mesh: the
+ * mesher takes copies of the current mesh's arrays (those of
+ * mx_mesh_arrays) and hands the originals, which the last mx_mesh_arrays
+ * pointed to, to the caller: old[] receives up to MX_DETACH_MAX pointers
+ * (NULL-padded), each to free with mx_free_array once nothing reads it.
+ * The next calls change the copies only. MX_ENOMEM (nothing changed). The
+ * same for the 2D mesher (mx_mesh2d_arrays). */
+#define MX_DETACH_MAX 8
+int mx_mesher_detach_mesh_buffers(mx_mesher *m, void *old[MX_DETACH_MAX]);
 
 /* The boundary faces of a full-stage mesh as a surface VTU of their own
  * (`--boundary FILE.vtu`): triangles and quadrilaterals with the cell
  * fields surface_tag (the input file each lies on, 1 for the first -i) and
  * body, and the point field node (the index in the volume mesh). */
 int mx_mesher_write_boundary(const mx_mesher *m, const char *path);
+
+/* The same boundary faces (and the bodies) as arrays, copied into memory
+ * the caller owns (free with mx_boundary_arrays_free): the faces of the
+ * `--boundary` file in its order, triangles first; each face's nodes
+ * (4 a face, a triangle's 4th UINT32_MAX; outward of its element), its
+ * surface tag (the file's surface_tag: the input it lies on, 1 for the
+ * first; with materials 1 the outer boundary, 2.. the interfaces, whose
+ * names the .msh files give), the element it bounds (an index of the mesh
+ * arrays) and that face's local index (mx_cell_faces: VTK's face order);
+ * per element its body (1..nbodies: the parts connected through nodes, in
+ * the order of their smallest node) and, with materials, its material
+ * number (else NULL). MX_EINPUT without a full-stage mesh, MX_ENOMEM. */
+typedef struct {
+  size_t nfaces, ntri, nquad;
+  uint32_t *nodes;      /* 4 * nfaces */
+  int32_t *tag;         /* nfaces */
+  uint32_t *element;    /* nfaces */
+  uint8_t *local_face;  /* nfaces */
+  size_t nelements;
+  int32_t *body;        /* nelements */
+  int32_t *material;    /* nelements, or NULL */
+  int nbodies, ntags;
+} mx_boundary_arrays;
+int mx_mesher_boundary_arrays(const mx_mesher *m, mx_boundary_arrays *b);
+void mx_boundary_arrays_free(mx_boundary_arrays *b);
 
 /* The order the mesh files list the elements in: grouped by body (the
  * parts of the mesh connected through nodes, in the order of their first
@@ -674,6 +708,7 @@ typedef struct {
                            * number; NULL: one material */
 } mx_mesh2d_arrays;
 int mx_mesher2d_mesh_arrays(const mx_mesher2d *m, mx_mesh2d_arrays *a);
+int mx_mesher2d_detach_mesh_buffers(mx_mesher2d *m, void *old[MX_DETACH_MAX]);
 
 typedef struct {
   size_t leaves, quadrants, nodes, cells, tris, quads, invalid;

@@ -342,6 +342,16 @@ int mx_mesher_write_boundary(const mx_mesher *m, const char *path) {
   return mx_call_end(m, &c, st);
 }
 
+int mx_with_written_view(const mx_mesher *m, int (*fn)(void *ctx, const mx_mesh_view *v),
+                         void *ctx) {
+  prepared P;
+  memset(&P, 0, sizeof P);
+  int st = prepare(m, &P);
+  if (!st) st = fn(ctx, &P.v);
+  release(&P);
+  return st;
+}
+
 int mx_written_order(const mx_mesher *m, uint32_t *order) {
   const mx_mesh *M = &m->M;
   if (m->mesh_stage != MX_STAGE_FULL || m->ndomain == 0)
