@@ -964,6 +964,10 @@ class _MesherBase:
             return st
         box = {}
         lib = self._lib
+        # the end is told by an Event, not Thread.join: a join that Ctrl-C
+        # interrupts can take a running thread for stopped (Python 3.11's
+        # _wait_for_tstate_lock releases the lock the thread holds)
+        done = threading.Event()
 
         def work():
             try:
@@ -971,19 +975,22 @@ class _MesherBase:
                 box["threads"] = int(lib.mx_last_call_threads())
             except BaseException as e:  # noqa: BLE001 (given to the caller)
                 box["error"] = e
+            finally:
+                done.set()
 
         t = threading.Thread(target=work, name="mixoct-call", daemon=True)
         t.start()
         try:
-            while t.is_alive():
-                t.join(0.05)
+            while not done.wait(0.05):
+                pass
         except BaseException:
             # KeyboardInterrupt (or another exception raised by a signal
             # handler): stop the library, wait for it, raise
             self._cancel_ptr(ptr)
-            while t.is_alive():
+            while True:
                 try:
-                    t.join(0.05)
+                    if done.wait(0.05):
+                        break
                 except KeyboardInterrupt:
                     pass
             raise

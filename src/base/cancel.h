@@ -24,6 +24,13 @@ void mx_cancel_leave(atomic_int *previous);
 static inline int mx_cancelled(void) {
   return mx_cancel_flag && atomic_load_explicit(mx_cancel_flag, memory_order_relaxed);
 }
+/* Inside a parallel loop (the workers have no flag of their own): read
+ * the caller's pointer before the loop, `atomic_int *cf = mx_cancel_flag;`,
+ * skip the iterations once mx_cancel_seen(cf), and return MX_ECANCELED
+ * after the loop when mx_cancelled(). */
+static inline int mx_cancel_seen(atomic_int *flag) {
+  return flag && atomic_load_explicit(flag, memory_order_relaxed);
+}
 /* MX_ECANCELED when the calling thread's call was cancelled, else MX_OK. */
 static inline int mx_cancel_check(void) { return mx_cancelled() ? MX_ECANCELED : MX_OK; }
 
