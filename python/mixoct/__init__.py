@@ -1722,8 +1722,8 @@ class Mesher(_MesherBase):
 
     def to_meshio(self, boundary=True):
         """The mesh as a ``meshio.Mesh`` (copies): cell blocks by type
-        ("tetra", "pyramid", "wedge", "hexahedron", in meshio's node order,
-        which is VTK's), and with ``boundary`` (full stage) the boundary
+        ("tetra", "pyramid", "wedge", "hexahedron", in meshio's node order:
+        VTK's, and Gmsh's for the wedge, as ours), and with ``boundary`` (full stage) the boundary
         faces as blocks "triangle" and "quad". Point data: ``boundary``
         (1 on the boundary), ``surface_tag`` (the largest tag of the faces
         at the node, 0 inside). Cell data (one array per block, faces
@@ -1754,7 +1754,7 @@ class Mesher(_MesherBase):
             idx = np.flatnonzero(types == t)
             if idx.size == 0:
                 continue
-            rows = conn[idx][:, list(_VTK_ORDER[t])].astype(np.int64)
+            rows = conn[idx][:, list(_MESHIO_ORDER[t])].astype(np.int64)
             cells.append(meshio.CellBlock(name, rows))
             position[idx] = start + np.arange(idx.size)
             start += idx.size
@@ -2033,11 +2033,12 @@ class Mesher2D(_MesherBase):
 
 #: meshio's names of TET, PYRAMID, PRISM, HEX
 _MESHIO_NAMES = ("tetra", "pyramid", "wedge", "hexahedron")
-#: node j of a meshio (VTK) cell is node _VTK_ORDER[type][j] of ours: the
-#: prism's triangle 0 1 2 turns towards 3 4 5 in ours (Gmsh's), away from
-#: it in VTK's (include/mixoct.h; soa/mesh.h's mx_vtk_order)
-_VTK_ORDER = ((0, 1, 2, 3), (0, 1, 2, 3, 4), (0, 2, 1, 3, 5, 4),
-              (0, 1, 2, 3, 4, 5, 6, 7))
+#: node j of a meshio cell is node _MESHIO_ORDER[type][j] of ours: meshio
+#: takes VTK's order, except for the linear wedge, where it takes Gmsh's
+#: (the triangle 0 1 2 turns towards 3 4 5), which is ours (mixoct.h); its
+#: VTK files swap the wedge's nodes themselves
+_MESHIO_ORDER = ((0, 1, 2, 3), (0, 1, 2, 3, 4), (0, 1, 2, 3, 4, 5),
+                 (0, 1, 2, 3, 4, 5, 6, 7))
 
 
 def _import_meshio():
