@@ -29,23 +29,61 @@ build directory this package was copied into (``<build>/python/mixoct`` ->
 ``<build>/libmixoct.so``); the path meson wrote into ``_libpath.py`` at
 install time; the library on the linker's path (``ctypes.util``).
 
+From Python to meshio in one call
+--------------------------------
+``mixoct.generate(surface, surface_level=..., **params)`` meshes a surface
+file, ``"demo"`` or ``(xyz, tri)`` arrays and returns a ``meshio.Mesh``;
+``Mesher.to_meshio()`` (and ``Mesher2D.to_meshio()``) converts the current
+mesh: cell blocks by type in meshio's node order, the boundary faces as
+"triangle"/"quad" blocks with their ``surface_tag``, point data
+``boundary`` and ``surface_tag``, cell data ``J_ENS``, ``leaf``,
+``level``, ``body`` (and ``material``), one array per block.
+``Mesher.boundary_faces()`` gives the boundary faces (nodes, tag, the
+element and local face each bounds) and each element's body as arrays.
+
+Parameters
+----------
+Every field of the library's parameters (``mx_params``, ``mx_params2d``)
+is a keyword of ``Mesher`` (``Mesher2D``); None or left out: the
+library's default (``Mesher.defaults()``). Values are checked against the
+command line's ranges: out of range raises InputError naming the argument.
+
 Mesh arrays are views, not copies
 ---------------------------------
 ``Mesher.nodes``, ``conn``, ``types``, ``jens``, ``leaf``, ``level``,
 ``boundary`` and ``material`` (and ``Mesher2D.nodes``, ``cells``,
 ``types``, ``leaf`` and ``level``) are read-only numpy arrays over the
-library's own memory (no copy). They are valid until the next call that
-changes the mesh: ``mesh``, ``build_octree``, ``transition``,
+library's own memory (no copy). A view never reads freed memory: when a
+call changes the mesh (``mesh``, ``build_octree``, ``transition``,
 ``boundary_stage``, ``refine``, ``refine_elements``, ``refine_leaves``,
-``load_restart`` (successful or not). After such a call the library may have
-freed that memory, and reading an old view gives garbage or crashes the
-process. Each view's ``.base`` chain ends
-in a :class:`MeshBuffer` that records the mesh generation it was taken from:
-``Mesher.is_current(array)`` tells whether it still is valid, and
-``Mesher.generation`` counts the mesh changes. Take ``.copy()`` of whatever
-must outlive a re-mesh. ``close()`` (or leaving the ``with`` block) is safe
-with views alive: the C object is freed when the last view of it is gone.
-All of this holds for ``Mesher2D`` alike.
+``load_restart``) while views of the mesh are alive, the library hands the
+memory of the old mesh's arrays over to the views
+(``mx_mesher_detach_mesh_buffers``: it goes on with a copy, made then and
+only then; with no view alive nothing is copied), and the old views keep
+the values they had; the memory is freed with the last of them. The cost:
+one copy of the mesh arrays per re-mesh while old views are held (42
+bytes an element, 44 with materials, and 25 a node in 3D; 26 and 16 in
+2D), for as long as the old views live. Each view's ``.base`` chain ends
+in a :class:`MeshBuffer` that records the mesh generation it was taken
+from (``detached``: its memory was handed over): ``Mesher.is_current(array)``
+tells whether it shows the current mesh, and ``Mesher.generation`` counts
+the mesh changes. ``close()`` (or leaving the ``with`` block) is safe with
+views alive: the C object is freed when the last view of it is gone. All of
+this holds for ``Mesher2D`` alike.
+
+Progress, cancellation, Ctrl-C
+------------------------------
+``Mesher(..., progress=f)`` or ``set_progress(f)``: ``f(stage, info)`` is
+called before each stage (``info`` None), each octree level (``"level"``,
+``(level, max_level)``) and each repair round (``"repair"``, the round).
+Returning False cancels the call: it raises :class:`CancelledError`
+(status 6) and leaves no mesh; an exception raised by ``f`` cancels the
+call and is raised by it. ``cancel()`` from another thread does the same.
+The long calls (meshing, re-meshing, writing) run, from the main thread,
+in a worker thread while the main thread waits in short slices: Ctrl-C
+(SIGINT) cancels the library's call (it checks the flag between its
+passes and in its longest loops) and raises ``KeyboardInterrupt`` once
+the call has stopped, within about a second. The mesher stays usable.
 
 Several materials
 -----------------
@@ -78,9 +116,12 @@ line for bad input): :class:`InternalError` (1), :class:`InputError` (2,
 also a ``ValueError``), :class:`OutOfMemoryError` (3, also a
 ``MemoryError``), :class:`OutputError` (4), :class:`InvalidMeshError` (5:
 elements with J_ENS <= 0 are left, or in 2D the mesh failed the independent
-check; the mesh is still there to inspect or write). Warnings of the library
-do not go to stderr: they are collected in ``Mesher.warnings`` (a list of
-str).
+check; the mesh is still there to inspect or write), :class:`CancelledError`
+(6). The messages are shared with the command-line programs; the binding
+gives the flags and C functions they name as the Python arguments and
+methods that do the same (``-s`` as ``surface_level``, ``mx_mesher_mesh``
+as ``mesh()``). Warnings of the library do not go to stderr: they are
+collected in ``Mesher.warnings`` (a list of str).
 
 Threads: the library runs its passes with OpenMP threads and the GIL is
 released during each call; one Mesher must not be used from two Python
@@ -1015,7 +1056,7 @@ class _MesherBase:
             errs = [t for lv, t in self.messages if lv == MSG_ERROR]
             msg = errs[-1] if errs else ""
         if not msg:
-            msg = "%s(): %s" % (_pythonic(name), status_string(st))
+            msg = "%s: %s" % (_pythonic(name), status_string(st))
         raise _ERRORS.get(st, InternalError)(_pythonic(msg), st)
 
     def _mesh_call(self, name, allow_invalid, *args):

@@ -263,8 +263,10 @@ int mx_mesher_domain_side(mx_mesher *m, mx_builder *B) {
 
 int mx_mesher_set_feature_angle(mx_mesher *m, double angle_deg) {
   if (!(angle_deg >= 0.0 && angle_deg < 180.0)) {
+    mx_call c; /* the message to the mesher's handler, not to stderr */
+    mx_call_begin(m, &c);
     mx_error(NULL, 0, "feature angle %g: from 0 (no features) to below 180 degrees", angle_deg);
-    return MX_EINPUT;
+    return mx_call_end(m, &c, MX_EINPUT);
   }
   m->feature_angle = angle_deg;
   return MX_OK;
@@ -280,8 +282,10 @@ int mx_mesher_set_feature_file(mx_mesher *m, const char *path) {
 
 int mx_mesher_set_feature_level(mx_mesher *m, int level) {
   if (level < 0 || level > MX_MAX_LEVEL) {
+    mx_call c; /* the message to the mesher's handler, not to stderr */
+    mx_call_begin(m, &c);
     mx_error(NULL, 0, "feature level %d: from 0 (the surface level) to %d", level, MX_MAX_LEVEL);
-    return MX_EINPUT;
+    return mx_call_end(m, &c, MX_EINPUT);
   }
   m->feature_level = level;
   return MX_OK;

@@ -362,11 +362,13 @@ int mx_written_order(const mx_mesher *m, uint32_t *order) {
 }
 
 int mx_mesher_written_order(const mx_mesher *m, uint32_t *order) {
+  mx_call c; /* messages to the mesher's handler, not to stderr */
+  mx_call_begin(m, &c);
   if (m->mesh_stage < MX_STAGE_TRANSITION) {
     mx_error(NULL, 0, "no mixed mesh: mesh first");
-    return MX_EINPUT;
+    return mx_call_end(m, &c, MX_EINPUT);
   }
-  return mx_written_order(m, order);
+  return mx_call_end(m, &c, mx_written_order(m, order));
 }
 
 static int write_octree(const mx_mesher *m, const char *path, int ascii) {
