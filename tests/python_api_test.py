@@ -454,6 +454,42 @@ def ctrl_c_raises_keyboard_interrupt():
 
 
 @check
+def cancel_and_ctrl_c_in_2d():
+    """Mesher2D (no progress hooks): cancel() from another thread stops
+    mesh() with CancelledError between its stages, SIGINT raises
+    KeyboardInterrupt; either way the next mesh() gives the mesh of a fresh
+    mesher. (A cancel may come too late for a fast mesh: a few tries.)"""
+    import threading
+    poly = os.path.join(DATA, "polylines", "a.poly")
+
+    def fresh(level):
+        with mixoct.Mesher2D(surface_level=level) as q:
+            q.set_domain(poly)
+            q.mesh()
+            return q.ncells
+    for how, exc in (("cancel", mixoct.CancelledError), ("sigint", KeyboardInterrupt)):
+        stopped = 0
+        # a SIGINT after the call would hit the test: a mesh long enough
+        for level in ((13, 14, 15) if how == "cancel" else (15,)):
+            m = mixoct.Mesher2D(surface_level=level)
+            m.set_domain(poly)
+            act = m.cancel if how == "cancel" else (lambda: os.kill(os.getpid(), signal.SIGINT))
+            timer = threading.Timer(0.02, act)
+            timer.start()
+            try:
+                m.mesh()
+            except exc:
+                stopped += 1
+            finally:
+                timer.join()
+            m.mesh()
+            assert m.ncells == fresh(level), (how, level)
+            if stopped:
+                break
+        assert stopped, how
+
+
+@check
 def old_views_keep_their_values():
     """Views taken before refine_elements read, afterwards, the values they
     had (equal to copies taken before: their memory was handed over, not
