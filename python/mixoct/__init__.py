@@ -1091,10 +1091,12 @@ class _MesherBase:
         """Change the -s / -a levels (None: no such level, i.e. -1 for
         Mesher, 0 for Mesher2D); after meshing, refine() applies them to
         the existing tree."""
+        check = _level_check(MAX_LEVEL_2D if self._DIM == 2 else MAX_LEVEL)
         self._call(self._c("set_levels"),
                    self._NO_LEVEL if surface_level is None
-                   else int(surface_level),
-                   self._NO_LEVEL if all_level is None else int(all_level))
+                   else check("surface_level", surface_level),
+                   self._NO_LEVEL if all_level is None
+                   else check("all_level", all_level))
 
     # ---- meshing and re-meshing -------------------------------------------------
 
@@ -1335,21 +1337,6 @@ def _fill_params(p, given, checks, who):
                      if fields[name] is ctypes.c_double
                      else _int_check(-2 ** 31, 2 ** 31 - 1))
         setattr(p, name, check(name, v))
-
-
-def _check_levels(**levels):
-    """Each level -1 (none) or 0 .. MAX_LEVEL, as the command line's -s/-a."""
-    for name, v in levels.items():
-        if isinstance(v, bool) or int(v) != v or not -1 <= int(v) <= MAX_LEVEL:
-            raise InputError("%s must be -1 (none) or a level from 0 to %d, not %r"
-                             % (name, MAX_LEVEL, v), EINPUT)
-
-
-def _check_at_least(low, **values):
-    """Each value a number no less than low."""
-    for name, v in values.items():
-        if isinstance(v, bool) or not float(v) >= low:
-            raise InputError("%s must be %s or more, not %r" % (name, low, v), EINPUT)
 
 
 class Mesher(_MesherBase):
@@ -1892,15 +1879,18 @@ class Mesher2D(_MesherBase):
     domain bounded by closed polylines, requests, the quadtree, the mesh of
     counter-clockwise triangles and quadrilaterals (see the module doc).
 
-    Parameters are those of ``mx_params2d``: ``surface_level`` (-s,
-    quadrants meeting the polylines; -1 none), ``all_level`` (-a, every
-    quadrant of the domain; -1 none), ``balance`` ("edges" or "recursive"),
-    ``threads`` (0: OpenMP's default), ``close_ratio`` (the projection of
-    close inside nodes), ``max_memory_mb`` (0: the memory available) and
-    ``feature_levels`` (refine the quadrants holding a feature until the
-    features keep apart), ``materials`` (``--materials``: a loop nested in
-    an outer one is the interface between two materials, not a hole; the
-    cells are cut along it and ``material`` gives each cell's material).
+    Parameters: every field of ``mx_params2d``, by name; None (or left
+    out) is the library's default (``Mesher2D.defaults()``), a value out of
+    ``mesher2d``'s range raises InputError naming it: ``surface_level``
+    (quadrants meeting the polylines; -1 none, else 0 .. MAX_LEVEL_2D),
+    ``all_level`` (every quadrant of the domain; -1 none), ``balance``
+    ("edges" or "recursive"), ``threads`` (0: OpenMP's default),
+    ``close_ratio`` (the projection of close inside nodes, 0 .. 1),
+    ``max_memory_mb`` (0: the memory available), ``feature_levels`` (refine
+    the quadrants holding a feature until the features keep apart),
+    ``materials`` (a loop nested in an outer one is the interface between
+    two materials, not a hole; the cells are cut along it and ``material``
+    gives each cell's material).
     Every mesh is checked by the library's
     independent routine: a mesh that fails it raises InvalidMeshError
     (kept: it can be read and written).
