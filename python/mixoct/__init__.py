@@ -1758,7 +1758,9 @@ class Mesher(_MesherBase):
         included): ``J_ENS`` (NaN on faces), ``leaf`` and ``level`` (-1 on
         faces), ``body``, ``material`` with materials, ``surface_tag`` (0 on
         elements), ``element`` (on faces the element each bounds, -1 on
-        elements: an index of the volume blocks' cells in order)."""
+        elements: an index of the volume blocks' cells in order).
+        ParaView and meshio read such a file whole; ``mixoct check`` takes
+        volume cells only: write ``to_meshio(boundary=False)`` for it."""
         meshio = _import_meshio()
         v = self.arrays(copy=True)
         types, conn = v["types"], v["conn"]
