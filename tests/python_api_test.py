@@ -366,6 +366,8 @@ def messages_speak_python():
     assert "mesh()" in t and "surface_level" in t and "materials=True" in t, t
     assert "--" not in t and "mx_" not in t and " -s" not in t, t
     assert "line 3: -1.5 is negative" in mixoct._pythonic("line 3: -1.5 is negative")
+    t = mixoct._pythonic("no input surface: add one (-i FILE) or the demo (--demo)")
+    assert t == "no input surface: add one (add_surface()) or the demo (add_demo_surface())", t
 
 
 def fresh_counts(level):

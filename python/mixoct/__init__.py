@@ -641,6 +641,9 @@ def _pythonic(text):
         if mt.group(0).startswith("mx_params"):
             return "the parameters" + ("' " + rest if rest else "")
         return (rest + "()") if rest else "the mesher"
+    # "-i FILE", "--feature-angle DEG": the flag's metavariable goes too
+    text = re.sub(r"(?<![\w/.-])(--?[a-zA-Z][a-zA-Z-]*) (?:FILE|DEG|NAME|N|L|MB|RL)\b",
+                  r"\1", text)
     text = _CNAME_RE.sub(cname, text)
     text = re.sub(r"\bmx_([a-z0-9_]+)", r"\1", text)
     return _FLAG_RE.sub(flag, text)
