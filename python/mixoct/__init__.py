@@ -1320,6 +1320,7 @@ _PARAM_CHECKS = {
     "remesh_full": _flag,
     "materials": _flag,
     "smooth_rounds": _int_check(0, 1000, "a number of rounds"),
+    "tets": _flag,          # mx_params.tets (--tets), where _Params has it
 }
 
 
@@ -1358,8 +1359,9 @@ class Mesher(_MesherBase):
     (re-meshing meshes the whole octree again), ``materials`` (nested
     shells become materials, not holes, given by the ``material`` view;
     see the module doc), ``smooth_rounds`` (rounds of the smoothing that
-    only raises the worst J_ENS around each node; 0, the default: off). A
-    value out of range raises InputError naming the argument.
+    only raises the worst J_ENS around each node; 0, the default: off),
+    ``tets`` (the final mesh split into tetrahedra, where the library has
+    it). A value out of range raises InputError naming the argument.
     ``progress``: a callable ``progress(stage, info)`` called from the
     meshing calls (see ``set_progress``). Sharp features: ``set_features``,
     ``feature_figures``.
