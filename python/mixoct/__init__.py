@@ -1136,7 +1136,7 @@ class _MesherBase:
     def save_restart(self, path):
         """The restart file of the current tree and mesh (Mesher: ".octb"
         binary, else text; Mesher2D: text, the quadtree form)."""
-        self._call(self._c("save_restart"), _fspath(path))
+        self._call(self._c("save_restart"), _fspath(path), long=True)
 
     def _load_restart(self, path, elements, allow_invalid):
         self._call(self._c("load_restart"), _fspath(path), changes_mesh=True)
@@ -1738,7 +1738,7 @@ class Mesher(_MesherBase):
         through nodes); ``material`` (nelements,) int32 with materials,
         else None; ``ntri``, ``nquad``, ``nbodies``, ``ntags``."""
         b = _BoundaryArrays()
-        self._call("mx_mesher_boundary_arrays", ctypes.byref(b))
+        self._call("mx_mesher_boundary_arrays", ctypes.byref(b), long=True)
         owner = _BoundaryOwner(self._lib, b)
         nf, ne = b.nfaces, b.nelements
         return {
