@@ -62,7 +62,7 @@ typedef enum {
   MX_ENOMEM = 3,    /* out of memory, or over the memory budget */
   MX_EIO = 4,       /* an output could not be written (permission, disk) */
   MX_EINVALID = 5,  /* the mesh breaks the validity contract (J_ENS < 1e-6) */
-  MX_ECANCELED = 6, /* cancelled (mx_mesher_cancel): the call made nothing */
+  MX_ECANCELED = 6, /* cancelled (mx_mesher_cancel): no mesh is left */
 } mx_status;
 
 /* Element types, and their node counts: 4, 5, 6, 8. Node order: VTK's for
@@ -156,7 +156,8 @@ void mx_mesher_set_progress(mx_mesher *m, const mx_progress *hooks);
  * call it): the call checks the flag between its stages, between octree
  * levels, between the boundary stage's steps and repair rounds, and returns
  * MX_ECANCELED within about a second; a cancelled mesh leaves no mesh (the
- * octree is dropped too unless it came from a restart file), and the next
+ * octree is dropped too unless it came from a restart file; a cancelled
+ * re-mesh keeps the octree with the levels it completed), and the next
  * call works as usual (the flag is cleared when a call starts, so a cancel
  * asked for between two calls stops neither). */
 void mx_mesher_cancel(mx_mesher *m);

@@ -77,7 +77,8 @@ Progress, cancellation, Ctrl-C
 called before each stage (``info`` None), each octree level (``"level"``,
 ``(level, max_level)``) and each repair round (``"repair"``, the round).
 Returning False cancels the call: it raises :class:`CancelledError`
-(status 6) and leaves no mesh; an exception raised by ``f`` cancels the
+(status 6) and leaves no mesh (a cancelled re-mesh keeps the octree with
+the levels it completed: the next ``mesh()`` meshes it); an exception raised by ``f`` cancels the
 call and is raised by it. ``cancel()`` from another thread does the same.
 The long calls (meshing, re-meshing, writing) run, from the main thread,
 in a worker thread while the main thread waits in short slices: Ctrl-C
