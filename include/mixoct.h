@@ -62,6 +62,7 @@ typedef enum {
   MX_ENOMEM = 3,    /* out of memory, or over the memory budget */
   MX_EIO = 4,       /* an output could not be written (permission, disk) */
   MX_EINVALID = 5,  /* the mesh breaks the validity contract (J_ENS < 1e-6) */
+  MX_ECANCELED = 6, /* cancelled (mx_mesher_cancel): no mesh is left */
 } mx_status;
 
 /* Element types, and their node counts: 4, 5, 6, 8. Node order: VTK's for
@@ -162,6 +163,15 @@ typedef struct {
   void *user;
 } mx_progress;
 void mx_mesher_set_progress(mx_mesher *m, const mx_progress *hooks);
+/* Cancel the call running on m (any thread, any time; a progress hook may
+ * call it): the call checks the flag between its stages, between octree
+ * levels, between the boundary stage's steps and repair rounds, and returns
+ * MX_ECANCELED within about a second; a cancelled mesh leaves no mesh (the
+ * octree is dropped too unless it came from a restart file; a cancelled
+ * re-mesh keeps the octree with the levels it completed), and the next
+ * call works as usual (the flag is cleared when a call starts, so a cancel
+ * asked for between two calls stops neither). */
+void mx_mesher_cancel(mx_mesher *m);
 /* early != 0: the edge infos are freed once the transition has read them
  * (their memory goes to the mesh: a single run's peak is lower); the next
  * refinement or re-mesh rebuilds them (time). 0, the default, keeps them. */
@@ -349,6 +359,15 @@ typedef struct {
  * mixed mesh (none yet, or params.stage == MX_STAGE_OCTREE, whose leaves
  * only mx_mesher_write writes, as hexahedra). */
 int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a);
+/* For bindings whose views of the mesh arrays may outlive the mesh: the
+ * mesher takes copies of the current mesh's arrays (those of
+ * mx_mesh_arrays) and hands the originals, which the last mx_mesh_arrays
+ * pointed to, to the caller: old[] receives up to MX_DETACH_MAX pointers
+ * (NULL-padded), each to free with mx_free_array once nothing reads it.
+ * The next calls change the copies only. MX_ENOMEM (nothing changed). The
+ * same for the 2D mesher (mx_mesh2d_arrays). */
+#define MX_DETACH_MAX 8
+int mx_mesher_detach_mesh_buffers(mx_mesher *m, void *old[MX_DETACH_MAX]);
 
 /* The boundary faces of a full-stage mesh as a surface file of their own
  * (`--boundary FILE`), by extension: .vtu, triangles and quadrilaterals
@@ -359,6 +378,31 @@ int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a);
  * quadrilateral cut along the diagonal through its vertex of the smallest
  * node index. Only the nodes the faces use are written. */
 int mx_mesher_write_boundary(const mx_mesher *m, const char *path);
+
+/* The same boundary faces (and the bodies) as arrays, copied into memory
+ * the caller owns (free with mx_boundary_arrays_free): the faces of the
+ * `--boundary` file in its order, triangles first; each face's nodes
+ * (4 a face, a triangle's 4th UINT32_MAX; outward of its element), its
+ * surface tag (the file's surface_tag: the input it lies on, 1 for the
+ * first; with materials 1 the outer boundary, 2.. the interfaces, whose
+ * names the .msh files give), the element it bounds (an index of the mesh
+ * arrays) and that face's local index (mx_cell_faces: VTK's face order);
+ * per element its body (1..nbodies: the parts connected through nodes, in
+ * the order of their smallest node) and, with materials, its material
+ * number (else NULL). MX_EINPUT without a full-stage mesh, MX_ENOMEM. */
+typedef struct {
+  size_t nfaces, ntri, nquad;
+  uint32_t *nodes;      /* 4 * nfaces */
+  int32_t *tag;         /* nfaces */
+  uint32_t *element;    /* nfaces */
+  uint8_t *local_face;  /* nfaces */
+  size_t nelements;
+  int32_t *body;        /* nelements */
+  int32_t *material;    /* nelements, or NULL */
+  int nbodies, ntags;
+} mx_boundary_arrays;
+int mx_mesher_boundary_arrays(const mx_mesher *m, mx_boundary_arrays *b);
+void mx_boundary_arrays_free(mx_boundary_arrays *b);
 
 /* The order the mesh files list the elements in: grouped by body (the
  * parts of the mesh connected through nodes, in the order of their first
@@ -656,6 +700,9 @@ int mx_mesher2d_set_size_limits(mx_mesher2d *m, double hmin, double hmax);
 
 /* Mesh from the requests (and the quadtree of a loaded restart file). */
 int mx_mesher2d_mesh(mx_mesher2d *m);
+/* Cancel the call running on m, as mx_mesher_cancel: checked between the
+ * stages (refine, transition, boundary, materials, check); MX_ECANCELED. */
+void mx_mesher2d_cancel(mx_mesher2d *m);
 /* Re-meshing (section 4.2, Algorithm 3): each quadrant holding one of the
  * listed elements is split once (a quadrant listed twice, once), balance is
  * restored through the edge infos, and the mesh is made again. Indices
@@ -688,6 +735,7 @@ typedef struct {
                            * number; NULL: one material */
 } mx_mesh2d_arrays;
 int mx_mesher2d_mesh_arrays(const mx_mesher2d *m, mx_mesh2d_arrays *a);
+int mx_mesher2d_detach_mesh_buffers(mx_mesher2d *m, void *old[MX_DETACH_MAX]);
 
 typedef struct {
   size_t leaves, quadrants, nodes, cells, tris, quads, invalid;

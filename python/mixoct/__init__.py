@@ -29,23 +29,62 @@ build directory this package was copied into (``<build>/python/mixoct`` ->
 ``<build>/libmixoct.so``); the path meson wrote into ``_libpath.py`` at
 install time; the library on the linker's path (``ctypes.util``).
 
+From Python to meshio in one call
+--------------------------------
+``mixoct.generate(surface, surface_level=..., **params)`` meshes a surface
+file, ``"demo"`` or ``(xyz, tri)`` arrays and returns a ``meshio.Mesh``;
+``Mesher.to_meshio()`` (and ``Mesher2D.to_meshio()``) converts the current
+mesh: cell blocks by type in meshio's node order, the boundary faces as
+"triangle"/"quad" blocks with their ``surface_tag``, point data
+``boundary`` and ``surface_tag``, cell data ``J_ENS``, ``leaf``,
+``level``, ``body`` (and ``material``), one array per block.
+``Mesher.boundary_faces()`` gives the boundary faces (nodes, tag, the
+element and local face each bounds) and each element's body as arrays.
+
+Parameters
+----------
+Every field of the library's parameters (``mx_params``, ``mx_params2d``)
+is a keyword of ``Mesher`` (``Mesher2D``); None or left out: the
+library's default (``Mesher.defaults()``). Values are checked against the
+command line's ranges: out of range raises InputError naming the argument.
+
 Mesh arrays are views, not copies
 ---------------------------------
 ``Mesher.nodes``, ``conn``, ``types``, ``jens``, ``leaf``, ``level``,
 ``boundary`` and ``material`` (and ``Mesher2D.nodes``, ``cells``,
 ``types``, ``leaf`` and ``level``) are read-only numpy arrays over the
-library's own memory (no copy). They are valid until the next call that
-changes the mesh: ``mesh``, ``build_octree``, ``transition``,
+library's own memory (no copy). A view never reads freed memory: when a
+call changes the mesh (``mesh``, ``build_octree``, ``transition``,
 ``boundary_stage``, ``refine``, ``refine_elements``, ``refine_leaves``,
-``load_restart`` (successful or not). After such a call the library may have
-freed that memory, and reading an old view gives garbage or crashes the
-process. Each view's ``.base`` chain ends
-in a :class:`MeshBuffer` that records the mesh generation it was taken from:
-``Mesher.is_current(array)`` tells whether it still is valid, and
-``Mesher.generation`` counts the mesh changes. Take ``.copy()`` of whatever
-must outlive a re-mesh. ``close()`` (or leaving the ``with`` block) is safe
-with views alive: the C object is freed when the last view of it is gone.
-All of this holds for ``Mesher2D`` alike.
+``load_restart``) while views of the mesh are alive, the library hands the
+memory of the old mesh's arrays over to the views
+(``mx_mesher_detach_mesh_buffers``: it goes on with a copy, made then and
+only then; with no view alive nothing is copied), and the old views keep
+the values they had; the memory is freed with the last of them. The cost:
+one copy of the mesh arrays per re-mesh while old views are held (42
+bytes an element, 44 with materials, and 25 a node in 3D; 26 and 16 in
+2D), for as long as the old views live. Each view's ``.base`` chain ends
+in a :class:`MeshBuffer` that records the mesh generation it was taken
+from (``detached``: its memory was handed over): ``Mesher.is_current(array)``
+tells whether it shows the current mesh, and ``Mesher.generation`` counts
+the mesh changes. ``close()`` (or leaving the ``with`` block) is safe with
+views alive: the C object is freed when the last view of it is gone. All of
+this holds for ``Mesher2D`` alike.
+
+Progress, cancellation, Ctrl-C
+------------------------------
+``Mesher(..., progress=f)`` or ``set_progress(f)``: ``f(stage, info)`` is
+called before each stage (``info`` None), each octree level (``"level"``,
+``(level, max_level)``) and each repair round (``"repair"``, the round).
+Returning False cancels the call: it raises :class:`CancelledError`
+(status 6) and leaves no mesh (a cancelled re-mesh keeps the octree with
+the levels it completed: the next ``mesh()`` meshes it); an exception raised by ``f`` cancels the
+call and is raised by it. ``cancel()`` from another thread does the same.
+The long calls (meshing, re-meshing, writing) run, from the main thread,
+in a worker thread while the main thread waits in short slices: Ctrl-C
+(SIGINT) cancels the library's call (it checks the flag between its
+passes and in its longest loops) and raises ``KeyboardInterrupt`` once
+the call has stopped, within about a second. The mesher stays usable.
 
 Several materials
 -----------------
@@ -78,9 +117,12 @@ line for bad input): :class:`InternalError` (1), :class:`InputError` (2,
 also a ``ValueError``), :class:`OutOfMemoryError` (3, also a
 ``MemoryError``), :class:`OutputError` (4), :class:`InvalidMeshError` (5:
 elements with J_ENS <= 0 are left, or in 2D the mesh failed the independent
-check; the mesh is still there to inspect or write). Warnings of the library
-do not go to stderr: they are collected in ``Mesher.warnings`` (a list of
-str).
+check; the mesh is still there to inspect or write), :class:`CancelledError`
+(6). The messages are shared with the command-line programs; the binding
+gives the flags and C functions they name as the Python arguments and
+methods that do the same (``-s`` as ``surface_level``, ``mx_mesher_mesh``
+as ``mesh()``). Warnings of the library do not go to stderr: they are
+collected in ``Mesher.warnings`` (a list of str).
 
 Threads: the library runs its passes with OpenMP threads and the GIL is
 released during each call; one Mesher must not be used from two Python
@@ -112,6 +154,9 @@ __version__ = "0.1.0"  # meson.build's project version (tests/python_binding_tes
 # The deepest level a request may ask for (mixoct.h: MX_MAX_LEVEL - 1, the
 # command line's -s/-a range).
 MAX_LEVEL = 15
+# The deepest level of a 2D request (mixoct.h: MX_MAX_LEVEL2D, mesher2d's
+# -s/-a range).
+MAX_LEVEL_2D = 27
 
 import os
 
@@ -146,6 +191,9 @@ wait_policy = _choose_wait_policy()
 import ctypes  # noqa: E402 (after the wait policy: see above)
 import ctypes.util  # noqa: E402
 import math  # noqa: E402
+import re  # noqa: E402
+import tempfile  # noqa: E402
+import threading  # noqa: E402
 import warnings  # noqa: E402
 import weakref  # noqa: E402
 
@@ -156,12 +204,13 @@ __all__ = [
     "Error", "InternalError", "InputError", "OutOfMemoryError", "OutputError",
     "InvalidMeshError", "TET", "PYRAMID", "PRISM", "HEX", "TYPE_NAMES",
     "NODES_PER_TYPE", "TRI", "QUAD", "NO_NODE", "status_string",
-    "wait_policy", "last_call_threads",
+    "wait_policy", "last_call_threads", "CancelledError", "generate",
+    "MAX_LEVEL", "MAX_LEVEL_2D",
 ]
 
 # ---- constants (include/mixoct.h) ------------------------------------------
 
-OK, EINTERNAL, EINPUT, ENOMEM, EIO, EINVALID = 0, 1, 2, 3, 4, 5
+OK, EINTERNAL, EINPUT, ENOMEM, EIO, EINVALID, ECANCELED = 0, 1, 2, 3, 4, 5, 6
 TET, PYRAMID, PRISM, HEX = 0, 1, 2, 3
 TYPE_NAMES = ("tet", "pyramid", "prism", "hex")
 NODES_PER_TYPE = (4, 5, 6, 8)
@@ -211,9 +260,15 @@ class InvalidMeshError(Error):
     The mesh is kept: its arrays can be read and it can be written."""
 
 
+class CancelledError(Error):
+    """Status 6: the call was cancelled (a progress callback returned False,
+    or ``cancel()`` from another thread); the mesher made nothing and stays
+    usable."""
+
+
 _ERRORS = {EINTERNAL: InternalError, EINPUT: InputError,
            ENOMEM: OutOfMemoryError, EIO: OutputError,
-           EINVALID: InvalidMeshError}
+           EINVALID: InvalidMeshError, ECANCELED: CancelledError}
 
 
 # ---- the C structures --------------------------------------------------------
@@ -280,6 +335,32 @@ class _FeatureFigures(ctypes.Structure):
 
 _MESSAGE_FN = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_int,
                                ctypes.c_char_p)
+# mx_progress: on_stage(user, name), on_level(user, level, max_level),
+# on_round(user, round)
+_STAGE_FN = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p)
+_LEVEL_FN = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_int, ctypes.c_int)
+_ROUND_FN = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_int)
+
+
+class _Progress(ctypes.Structure):
+    _fields_ = [("on_stage", _STAGE_FN), ("on_level", _LEVEL_FN),
+                ("on_round", _ROUND_FN), ("user", ctypes.c_void_p)]
+
+
+class _BoundaryArrays(ctypes.Structure):
+    _fields_ = [("nfaces", ctypes.c_size_t), ("ntri", ctypes.c_size_t),
+                ("nquad", ctypes.c_size_t),
+                ("nodes", ctypes.POINTER(ctypes.c_uint32)),
+                ("tag", ctypes.POINTER(ctypes.c_int32)),
+                ("element", ctypes.POINTER(ctypes.c_uint32)),
+                ("local_face", ctypes.POINTER(ctypes.c_uint8)),
+                ("nelements", ctypes.c_size_t),
+                ("body", ctypes.POINTER(ctypes.c_int32)),
+                ("material", ctypes.POINTER(ctypes.c_int32)),
+                ("nbodies", ctypes.c_int), ("ntags", ctypes.c_int)]
+
+
+_DETACH_MAX = 8  # mixoct.h: MX_DETACH_MAX
 
 
 def _fields(*groups):
@@ -425,6 +506,9 @@ def _declare(lib):
         "mx_mesher2d_restart_elements": (sz, [P]),
         "mx_mesher2d_mesh_arrays": (I, [P, ctypes.POINTER(_MeshArrays2D)]),
         "mx_mesher2d_stats": (None, [P, ctypes.POINTER(_Stats2D)]),
+        "mx_mesher_set_progress": (None, [P, ctypes.POINTER(_Progress)]),
+        "mx_mesher_boundary_arrays": (I, [P, ctypes.POINTER(_BoundaryArrays)]),
+        "mx_boundary_arrays_free": (None, [ctypes.POINTER(_BoundaryArrays)]),
     }
     # the calls the 3D and the 2D mesher share, by name and signature
     shared = {
@@ -440,6 +524,8 @@ def _declare(lib):
         "save_restart": (I, [P, S]),
         "load_restart": (I, [P, S]),
         "write": (I, [P, S, I]),
+        "cancel": (None, [P]),
+        "detach_mesh_buffers": (I, [P, ctypes.POINTER(ctypes.c_void_p)]),
     }
     for prefix in ("mx_mesher_", "mx_mesher2d_"):
         sig.update((prefix + name, s) for name, s in shared.items())
@@ -465,8 +551,9 @@ def _declare(lib):
 
 def _function(lib, name):
     if name in lib.mixoct_missing:
-        raise InternalError("%s lacks %s (an older libmixoct?)"
-                            % (lib._name, name), EINTERNAL)
+        raise InternalError("%s lacks what this method needs (%s: an older "
+                            "libmixoct?)" % (lib._name, name.replace("mx_", "", 1)),
+                            EINTERNAL)
     return getattr(lib, name)
 
 
@@ -500,6 +587,9 @@ def last_call_threads():
     thread) ran with: ``threads`` when given, else OpenMP's default, limited
     to the processors other processes left free when libgomp spins (see the
     module's doc); 0 before any call."""
+    n = getattr(_tls, "threads", None)
+    if n is not None:
+        return n
     return int(_function(load_library(), "mx_last_call_threads")())
 
 
@@ -507,6 +597,85 @@ def status_string(status):
     """The library's name of a status code, e.g. 'bad input'."""
     s = load_library().mx_status_string(int(status))
     return s.decode("utf-8", "replace") if s else str(status)
+
+
+# The library's messages are shared with the command-line programs: the
+# flags and C functions they name are given here by the Python argument or
+# method that does the same (item 5 of issue 30). Flags without an entry
+# become the word without dashes, '-' as '_'.
+_FLAG_WORDS = {
+    "-s": "surface_level", "--surface-level": "surface_level",
+    "-a": "all_level", "--all-level": "all_level",
+    "-b": "add_box()/read_boxes()", "--regions": "read_boxes()",
+    "-r": "add_region_surface()", "--region-surface": "add_region_surface()",
+    "-i": "add_surface()", "--input": "add_surface()",
+    "-c": "load_restart()", "-l": "load_restart(elements=...)",
+    "-f": "add_function()", "-d": "add_surface()", "-o": "add_surface()",
+    "--demo": "add_demo_surface()",
+    "--materials": "materials=True", "--material": "set_material()",
+    "--repair-input": "repair_input=True", "--max-memory": "max_memory_mb",
+    "--stage": "stage", "--threads": "threads", "--smooth": "smooth_rounds",
+    "--size": "set_size()", "--size-min": "set_size(size_min=...)",
+    "--size-max": "set_size(size_max=...)", "--curvature": "set_curvature()",
+    "--thickness": "set_thickness()", "--gradation": "set_gradation()",
+    "--feature-angle": "set_features(angle=...)",
+    "--feature-level": "set_features(level=...)",
+    "--features": "set_features(path=...)",
+    "--no-features": "set_features(angle=0)",
+    "--level": "set_input_level()", "--inside-level": "set_input_level()",
+    "--label-size": "label_size", "--label-names": "label_names",
+    "--voxel": "voxel=True", "--interface-smoothing": "smoothing",
+    "--min-island": "min_island",
+}
+_FLAG_RE = re.compile(r"(?<![\w/.-])(--[a-zA-Z][a-zA-Z-]*|-[a-zA-Z])(?![\w-])")
+_CNAME_RE = re.compile(r"\bmx_(?:mesher2d|mesher|params2d|params)_?([a-z0-9_]*)")
+
+
+def _pythonic(text):
+    """A library message with the CLI flags and the C names it holds given
+    as the Python arguments and methods that do the same."""
+    def flag(mt):
+        w = mt.group(1)
+        return _FLAG_WORDS.get(w, w.lstrip("-").replace("-", "_"))
+
+    def cname(mt):
+        rest = mt.group(1)
+        if mt.group(0).startswith("mx_params"):
+            return "the parameters" + ("' " + rest if rest else "")
+        return (rest + "()") if rest else "the mesher"
+    # "-i FILE", "--feature-angle DEG": the flag's metavariable goes too
+    text = re.sub(r"(?<![\w/.-])(--?[a-zA-Z][a-zA-Z-]*) (?:FILE|DEG|NAME|N|L|MB|RL)\b",
+                  r"\1", text)
+    text = _CNAME_RE.sub(cname, text)
+    text = re.sub(r"\bmx_([a-z0-9_]+)", r"\1", text)
+    return _FLAG_RE.sub(flag, text)
+
+
+def _capture_stderr(fn, *args):
+    """Calls fn(*args) with the process's stderr (fd 2) going to a
+    temporary file, for the library calls without a mesher (whose messages
+    go there); returns (result, the text written)."""
+    import sys
+    try:
+        sys.stderr.flush()
+    except Exception:  # noqa: BLE001
+        pass
+    with tempfile.TemporaryFile() as tmp:
+        saved = os.dup(2)
+        try:
+            os.dup2(tmp.fileno(), 2)
+            r = fn(*args)
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+        tmp.seek(0)
+        text = tmp.read().decode("utf-8", "replace")
+    return r, text
+
+
+# The thread count of the last call made from each Python thread (the
+# library's is per C thread, and a long call runs in a worker thread).
+_tls = threading.local()
 
 
 def _fspath(path):
@@ -605,14 +774,33 @@ class MeshBuffer:
     """The owner (``.base``) of the mesh views of one mesh generation.
 
     Keeps the C mesher alive while views exist; ``generation`` is the
-    Mesher's generation when the views were taken."""
+    Mesher's generation when the views were taken. When the mesh changes
+    while views of it are alive, the library hands their memory over to
+    this object (``detached`` becomes True; the mesher goes on with a copy:
+    mx_mesher_detach_mesh_buffers), which frees it when the last view is
+    gone: an old view keeps reading the values of its generation."""
 
-    __slots__ = ("handle", "generation", "mesher_ref", "__weakref__")
+    __slots__ = ("handle", "generation", "mesher_ref", "owned", "free_fn",
+                 "__weakref__")
 
     def __init__(self, handle, generation, mesher):
         self.handle = handle
         self.generation = generation
         self.mesher_ref = weakref.ref(mesher)
+        self.owned = []       # the library's arrays handed over to us
+        self.free_fn = None
+
+    @property
+    def detached(self):
+        return bool(self.owned)
+
+    def __del__(self):
+        owned, self.owned = self.owned, []
+        for ptr in owned:
+            try:
+                self.free_fn(ptr)
+            except Exception:  # noqa: BLE001 (interpreter shutting down)
+                pass
 
     @property
     def current(self):
@@ -671,6 +859,9 @@ class _MesherBase:
     NODES_PER_TYPE = NODES_PER_TYPE
     _handle = None
     _views = None
+    _buffer_ref = None
+    _progress = None
+    _progress_error = None
 
     def _c(self, name):
         return "%s_%s" % (self._PREFIX, name)
@@ -684,7 +875,7 @@ class _MesherBase:
         handle = _Handle(lib, self._PREFIX)
         handle.ptr = new(ctypes.byref(params))
         if not handle.ptr:
-            raise OutOfMemoryError("%s: out of memory" % self._c("new"),
+            raise OutOfMemoryError("%s(): out of memory" % type(self).__name__,
                                    ENOMEM)
         self._handle = handle
         #: warnings of the library, in order (str, without "mixoct: ")
@@ -694,6 +885,8 @@ class _MesherBase:
         #: counts the calls that changed (or may have changed) the mesh
         self.generation = 0
         self._views = None
+        self._buffer_ref = None     # weakref: the MeshBuffer of the views
+        self._progress_error = None
         # the message handler: a closure over a weak reference, so the
         # callback (kept by the handle) does not keep the Mesher alive
         wself = weakref.ref(self)
@@ -702,7 +895,7 @@ class _MesherBase:
             m = wself()
             if m is None:
                 return
-            s = text.decode("utf-8", "replace") if text else ""
+            s = _pythonic(text.decode("utf-8", "replace") if text else "")
             m.messages.append((level, s))
             if level != MSG_ERROR:
                 m.warnings.append(s)
@@ -766,18 +959,101 @@ class _MesherBase:
         s = _function(self._lib, self._c("last_error"))(self._ptr)
         return s.decode("utf-8", "replace") if s else ""
 
-    def _call(self, name, *args, changes_mesh=False):
+    def _call(self, name, *args, changes_mesh=False, long=False):
         ptr = self._ptr
+        fn = _function(self._lib, name)
         if changes_mesh:
-            # the old views may point to freed memory from now on
+            self._keep_old_views()
             self.generation += 1
-            self._views = None
+            long = True
         del self.messages[:]
-        st = _function(self._lib, name)(ptr, *args)
+        self._progress_error = None
+        if long:
+            st = self._run_interruptible(fn, ptr, *args)
+        else:
+            st = fn(ptr, *args)
+            _tls.threads = None
         if st != OK:
+            err, self._progress_error = self._progress_error, None
+            if st == ECANCELED and err is not None:
+                raise err
             self._raise(st, name)
         del self.messages[:]
         return st
+
+    def _keep_old_views(self):
+        """Before a call that changes the mesh: views of the current mesh
+        still alive get its memory (the library goes on with a copy); with
+        none alive nothing is copied."""
+        self._views = None   # our own cache: not a user's view
+        ref, self._buffer_ref = self._buffer_ref, None
+        buf = ref() if ref is not None else None
+        if buf is None or buf.owned or buf.handle is not self._handle:
+            return
+        old = (ctypes.c_void_p * _DETACH_MAX)()
+        detach = _function(self._lib, self._c("detach_mesh_buffers"))
+        st = detach(self._ptr, old)
+        if st != OK:
+            self._raise(st, self._c("detach_mesh_buffers"))
+        buf.free_fn = self._lib.mx_free_array
+        buf.owned = [p for p in old if p]
+
+    def _run_interruptible(self, fn, ptr, *args):
+        """fn(ptr, *args), a long call: from the main thread it runs in a
+        worker thread while the main thread waits in short slices, so that
+        Ctrl-C (SIGINT) raises KeyboardInterrupt at once: the call is
+        cancelled (cancel()), waited for, and the KeyboardInterrupt goes
+        on. From another thread it runs in that thread."""
+        if threading.current_thread() is not threading.main_thread():
+            st = fn(ptr, *args)
+            _tls.threads = None
+            return st
+        box = {}
+        lib = self._lib
+        # the end is told by an Event, not Thread.join: a join that Ctrl-C
+        # interrupts can take a running thread for stopped (Python 3.11's
+        # _wait_for_tstate_lock releases the lock the thread holds)
+        done = threading.Event()
+
+        def work():
+            try:
+                box["st"] = fn(ptr, *args)
+                box["threads"] = int(lib.mx_last_call_threads())
+            except BaseException as e:  # noqa: BLE001 (given to the caller)
+                box["error"] = e
+            finally:
+                done.set()
+
+        t = threading.Thread(target=work, name="mixoct-call", daemon=True)
+        t.start()
+        try:
+            while not done.wait(0.05):
+                pass
+        except BaseException:
+            # KeyboardInterrupt (or another exception raised by a signal
+            # handler): stop the library, wait for it, raise
+            self._cancel_ptr(ptr)
+            while True:
+                try:
+                    if done.wait(0.05):
+                        break
+                except KeyboardInterrupt:
+                    pass
+            raise
+        _tls.threads = box.get("threads")
+        if "error" in box:
+            raise box["error"]
+        return box["st"]
+
+    def _cancel_ptr(self, ptr):
+        _function(self._lib, self._c("cancel"))(ptr)
+
+    def cancel(self):
+        """Cancel the call running on this mesher (from another thread, or
+        from a progress callback): it raises CancelledError within about a
+        second and leaves no mesh; the next call works as usual."""
+        if self._handle is not None and self._handle.ptr:
+            self._cancel_ptr(self._handle.ptr)
 
     def _raise(self, st, name):
         msg = self.last_error
@@ -785,8 +1061,8 @@ class _MesherBase:
             errs = [t for lv, t in self.messages if lv == MSG_ERROR]
             msg = errs[-1] if errs else ""
         if not msg:
-            msg = "%s: %s" % (name, status_string(st))
-        raise _ERRORS.get(st, InternalError)(msg, st)
+            msg = "%s: %s" % (_pythonic(name), status_string(st))
+        raise _ERRORS.get(st, InternalError)(_pythonic(msg), st)
 
     def _mesh_call(self, name, allow_invalid, *args):
         try:
@@ -820,10 +1096,12 @@ class _MesherBase:
         """Change the -s / -a levels (None: no such level, i.e. -1 for
         Mesher, 0 for Mesher2D); after meshing, refine() applies them to
         the existing tree."""
+        check = _level_check(MAX_LEVEL_2D if self._DIM == 2 else MAX_LEVEL)
         self._call(self._c("set_levels"),
                    self._NO_LEVEL if surface_level is None
-                   else int(surface_level),
-                   self._NO_LEVEL if all_level is None else int(all_level))
+                   else check("surface_level", surface_level),
+                   self._NO_LEVEL if all_level is None
+                   else check("all_level", all_level))
 
     # ---- meshing and re-meshing -------------------------------------------------
 
@@ -860,7 +1138,7 @@ class _MesherBase:
     def save_restart(self, path):
         """The restart file of the current tree and mesh (Mesher: ".octb"
         binary, else text; Mesher2D: text, the quadtree form)."""
-        self._call(self._c("save_restart"), _fspath(path))
+        self._call(self._c("save_restart"), _fspath(path), long=True)
 
     def _load_restart(self, path, elements, allow_invalid):
         self._call(self._c("load_restart"), _fspath(path), changes_mesh=True)
@@ -889,7 +1167,7 @@ class _MesherBase:
         """Write the mesh; format by extension (Mesher: .vtk .vtu .msh .mesh
         .meshb .getfem .m3d .mvm; Mesher2D: .vtu .vtk .msh .off .getfem
         .m3d); ascii: the ASCII variant of .vtk / .msh."""
-        self._call(self._c("write"), _fspath(path), 1 if ascii else 0)
+        self._call(self._c("write"), _fspath(path), 1 if ascii else 0, long=True)
 
     def stats(self):
         """The figures of the last run (mx_stats, mx_stats2d) as a dict."""
@@ -911,6 +1189,7 @@ class _MesherBase:
         if self._views is None:
             owner = MeshBuffer(self._handle, self.generation, self)
             self._views = self._make_views(self._arrays(), owner)
+            self._buffer_ref = weakref.ref(owner)
         return self._views
 
     def _make_views(self, a, owner):
@@ -975,36 +1254,118 @@ class _MesherBase:
         return False
 
 
-def _check_levels(**levels):
-    """Each level -1 (none) or 0 .. MAX_LEVEL, as the command line's -s/-a."""
-    for name, v in levels.items():
-        if isinstance(v, bool) or int(v) != v or not -1 <= int(v) <= MAX_LEVEL:
+def _level_check(top):
+    def check(name, v):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer, float)) \
+                or int(v) != v or not -1 <= int(v) <= top:
             raise InputError("%s must be -1 (none) or a level from 0 to %d, not %r"
-                             % (name, MAX_LEVEL, v), EINPUT)
+                             % (name, top, v), EINPUT)
+        return int(v)
+    return check
 
 
-def _check_at_least(low, **values):
-    """Each value a number no less than low."""
-    for name, v in values.items():
-        if isinstance(v, bool) or not float(v) >= low:
-            raise InputError("%s must be %s or more, not %r" % (name, low, v), EINPUT)
+def _int_check(low, high, what="a whole number"):
+    def check(name, v):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer, float)) \
+                or int(v) != v or not low <= int(v) <= high:
+            raise InputError("%s must be %s from %d to %d, not %r"
+                             % (name, what, low, high, v), EINPUT)
+        return int(v)
+    return check
+
+
+def _real_check(low, high=math.inf):
+    def check(name, v):
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            x = math.nan
+        if isinstance(v, bool) or not low <= x <= high:
+            raise InputError("%s must be a number from %s to %s, not %r"
+                             % (name, low, high, v), EINPUT)
+        return x
+    return check
+
+
+def _flag(name, v):
+    if v in (True, False, 0, 1):
+        return 1 if v else 0
+    raise InputError("%s must be True or False, not %r" % (name, v), EINPUT)
+
+
+def _choice(words):
+    def check(name, v):
+        if isinstance(v, str):
+            if v in words:
+                return words[v]
+        elif not isinstance(v, bool) and v in words.values():
+            return int(v)
+        raise InputError("%s must be one of %s, not %r"
+                         % (name, ", ".join(sorted(words, key=words.get)), v), EINPUT)
+    return check
+
+
+#: the validation of each field of mx_params (the command line's ranges); a
+#: field appended to _Params without an entry here takes whole numbers
+#: (c_int) or finite reals (c_double) unchecked
+_PARAM_CHECKS = {
+    "surface_level": _level_check(MAX_LEVEL),
+    "all_level": _level_check(MAX_LEVEL),
+    "stage": _choice(_STAGES),
+    "balance": _choice(_BALANCE),
+    "threads": _int_check(0, 4096, "a thread count (0: OpenMP's default)"),
+    "max_memory_mb": _real_check(0.0),
+    "close_ratio": _real_check(0.0, 1.0),
+    "staircase_quality": _real_check(0.0, 1.0),
+    "repair_rounds": _int_check(0, 1000, "a number of rounds"),
+    "repair_input": _flag,
+    "remesh_full": _flag,
+    "materials": _flag,
+    "smooth_rounds": _int_check(0, 1000, "a number of rounds"),
+    "tets": _flag,          # mx_params.tets (--tets)
+}
+
+
+def _fill_params(p, given, checks, who):
+    """Sets the fields of the ctypes structure p (filled with the library's
+    defaults) from the dict given: None keeps the default; a name that is
+    not a field is a TypeError; each value goes through checks[name]."""
+    fields = dict(p._fields_)
+    for name, v in given.items():
+        if name not in fields:
+            raise TypeError("%s() got an unexpected keyword argument %r"
+                            % (who, name))
+        if v is None:
+            continue
+        check = checks.get(name)
+        if check is None:
+            check = (_real_check(-math.inf, math.inf)
+                     if fields[name] is ctypes.c_double
+                     else _int_check(-2 ** 31, 2 ** 31 - 1))
+        setattr(p, name, check(name, v))
 
 
 class Mesher(_MesherBase):
     """One mesher: inputs, requests, the octree, the mesh (see the module doc).
 
-    Parameters are those of ``mx_params``: ``surface_level`` (-s, -1 none),
-    ``all_level`` (-a), ``stage`` ("octree", "transition", "full" or 0..2),
-    ``threads`` (0: OpenMP's default), ``max_memory_mb`` (0: the memory
-    available), ``repair_rounds`` (None: the library's default, 10), and, as
-    keywords, ``balance`` ("edges" or
-    "recursive"), ``close_ratio`` and ``staircase_quality`` (0: defaults),
-    ``materials`` (``--materials``: nested shells become materials, not
-    holes, given by the ``material`` view; see the module doc),
-    ``smooth_rounds`` (``--smooth N``: rounds of the smoothing that only
-    raises the worst J_ENS around each node; 0, the default: off), ``tets``
-    (``--tets``: the final mesh split into tetrahedra). Sharp
-    features: ``set_features``, ``feature_figures``.
+    Every field of the library's parameters can be given, by name; one
+    left out or given as None takes the library's default
+    (``mixoct.Mesher.defaults()``): ``surface_level`` (octants meeting the
+    surface; -1 none), ``all_level`` (every octant of the domain; -1 none),
+    ``stage`` ("octree", "transition", "full" or 0..2), ``threads`` (0:
+    OpenMP's default), ``max_memory_mb`` (0: the memory available),
+    ``repair_rounds`` (10), and, as keywords, ``balance`` ("edges" or
+    "recursive"), ``close_ratio`` and ``staircase_quality`` (0: the
+    library's 0.5 and 0.2), ``repair_input`` (an input with no
+    well-defined inside meshed by its winding number), ``remesh_full``
+    (re-meshing meshes the whole octree again), ``materials`` (nested
+    shells become materials, not holes, given by the ``material`` view;
+    see the module doc), ``smooth_rounds`` (rounds of the smoothing that
+    only raises the worst J_ENS around each node; 0, the default: off),
+    ``tets`` (the final mesh split into tetrahedra). A value out of range raises InputError naming the argument.
+    ``progress``: a callable ``progress(stage, info)`` called from the
+    meshing calls (see ``set_progress``). Sharp features: ``set_features``,
+    ``feature_figures``.
     """
 
     _PREFIX = "mx_mesher"
@@ -1013,35 +1374,76 @@ class Mesher(_MesherBase):
     _VIEW_KEYS = ("nodes", "conn", "types", "jens", "leaf", "level",
                   "boundary", "material")
 
-    def __init__(self, surface_level=-1, all_level=-1, stage="full",
-                 threads=0, max_memory_mb=0, repair_rounds=None, *,
-                 balance="edges", close_ratio=0.0, staircase_quality=0.0,
-                 materials=False, smooth_rounds=0, tets=False, library=None):
-        _check_levels(surface_level=surface_level, all_level=all_level)
-        _check_at_least(0, threads=threads, max_memory_mb=max_memory_mb,
-                        close_ratio=close_ratio, staircase_quality=staircase_quality,
-                        smooth_rounds=smooth_rounds)
-        if repair_rounds is not None:
-            _check_at_least(0, repair_rounds=repair_rounds)
+    def __init__(self, surface_level=None, all_level=None, stage=None,
+                 threads=None, max_memory_mb=None, repair_rounds=None, *,
+                 library=None, progress=None, **params):
+        params.update(surface_level=surface_level, all_level=all_level,
+                      stage=stage, threads=threads, max_memory_mb=max_memory_mb,
+                      repair_rounds=repair_rounds)
         lib = load_library(library)
         p = _Params()
         lib.mx_params_default(ctypes.byref(p))
-        p.surface_level = int(surface_level)
-        p.all_level = int(all_level)
-        p.stage = _STAGES[stage] if isinstance(stage, str) else int(stage)
-        p.balance = _balance(balance)
-        p.threads = int(threads)
-        p.max_memory_mb = float(max_memory_mb)
-        if repair_rounds is not None:  # else the library's default (10)
-            p.repair_rounds = int(repair_rounds)
-        if close_ratio:
-            p.close_ratio = float(close_ratio)
-        if staircase_quality:
-            p.staircase_quality = float(staircase_quality)
-        p.materials = 1 if materials else 0
-        p.smooth_rounds = int(smooth_rounds)
-        p.tets = 1 if tets else 0  # --tets: the mesh split into tetrahedra
+        _fill_params(p, params, _PARAM_CHECKS, type(self).__name__)
         self._start(lib, p)
+        self._progress_cb = None
+        if progress is not None:
+            self.set_progress(progress)
+
+    @staticmethod
+    def defaults(library=None):
+        """The library's default parameters (mx_params_default) as a dict."""
+        p = _Params()
+        load_library(library).mx_params_default(ctypes.byref(p))
+        return {f: getattr(p, f) for f, _ in p._fields_}
+
+    def set_progress(self, progress):
+        """``progress(stage, info)`` is called from the meshing calls, in
+        the calling thread: ``(name, None)`` before each stage ("grid",
+        "refine", "transition", "index", "boundary", "verify", "quality",
+        "write", ...), ``("level", (level, max_level))`` before each octree
+        level is refined, ``("repair", round)`` before each repair round.
+        Returning False cancels the call (CancelledError); an exception
+        raised by it cancels the call and is raised by it. None removes
+        it."""
+        if progress is not None and not callable(progress):
+            raise InputError("set_progress: progress must be callable or None, not %r"
+                             % (progress,), EINPUT)
+        wself = weakref.ref(self)
+
+        def event(stage, info):
+            m = wself()
+            f = m._progress if m is not None else None
+            if f is None:
+                return
+            try:
+                r = f(stage, info)
+            except BaseException as e:  # noqa: BLE001 (raised by the call)
+                m._progress_error = e
+                m.cancel()
+                return
+            if r is False:
+                m.cancel()
+
+        def on_stage(user, name):
+            event(name.decode("utf-8", "replace") if name else "", None)
+
+        def on_level(user, level, top):
+            event("level", (int(level), int(top)))
+
+        def on_round(user, rnd):
+            event("repair", int(rnd))
+
+        self._progress = progress
+        setp = _function(self._lib, "mx_mesher_set_progress")
+        if progress is None:
+            self._progress_cb = None
+            setp(self._ptr, None)
+            return
+        hooks = _Progress(_STAGE_FN(on_stage), _LEVEL_FN(on_level),
+                          _ROUND_FN(on_round), None)
+        self._progress_cb = hooks      # the callbacks live as long as we do
+        self._handle.progress = hooks  # and as long as the C mesher
+        setp(self._ptr, ctypes.byref(hooks))
 
     # ---- inputs ------------------------------------------------------------------
 
@@ -1319,6 +1721,112 @@ class Mesher(_MesherBase):
                    order.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)))
         return order
 
+    # ---- the boundary and meshio ----------------------------------------------------
+
+    def boundary_faces(self):
+        """The boundary faces of a full-stage mesh (those of ``--boundary``
+        files), their tags and the bodies, as a dict of read-only numpy
+        arrays (copies the library made for us: they do not go stale):
+
+        ``nodes`` (nfaces, 4) uint32, outward, a triangle's 4th NO_NODE
+        (triangles first: ``ntri`` of them, then the quadrilaterals);
+        ``tag`` (nfaces,) int32, the surface each face lies on (1 for the
+        first surface added; with materials 1 the outer boundary and 2..
+        the interfaces); ``element`` (nfaces,) uint32, the element it
+        bounds (an index of the mesh arrays), ``local_face`` (nfaces,)
+        uint8 which face of it (VTK's face order); ``body`` (nelements,)
+        int32, each element's body (1..``nbodies``: the parts connected
+        through nodes); ``material`` (nelements,) int32 with materials,
+        else None; ``ntri``, ``nquad``, ``nbodies``, ``ntags``."""
+        b = _BoundaryArrays()
+        self._call("mx_mesher_boundary_arrays", ctypes.byref(b), long=True)
+        owner = _BoundaryOwner(self._lib, b)
+        nf, ne = b.nfaces, b.nelements
+        return {
+            "nodes": _view(b.nodes, 4 * nf, np.uint32, (nf, 4), owner),
+            "tag": _view(b.tag, nf, np.int32, (nf,), owner),
+            "element": _view(b.element, nf, np.uint32, (nf,), owner),
+            "local_face": _view(b.local_face, nf, np.uint8, (nf,), owner),
+            "body": _view(b.body, ne, np.int32, (ne,), owner),
+            "material": (_view(b.material, ne, np.int32, (ne,), owner)
+                         if b.material else None),
+            "ntri": int(b.ntri), "nquad": int(b.nquad),
+            "nbodies": int(b.nbodies), "ntags": int(b.ntags),
+        }
+
+    def to_meshio(self, boundary=True):
+        """The mesh as a ``meshio.Mesh`` (copies): cell blocks by type
+        ("tetra", "pyramid", "wedge", "hexahedron", in meshio's node order:
+        VTK's, and Gmsh's for the wedge, as ours), and with ``boundary`` (full stage) the boundary
+        faces as blocks "triangle" and "quad". Point data: ``boundary``
+        (1 on the boundary), ``surface_tag`` (the largest tag of the faces
+        at the node, 0 inside). Cell data (one array per block, faces
+        included): ``J_ENS`` (NaN on faces), ``leaf`` and ``level`` (-1 on
+        faces), ``body``, ``material`` with materials, ``surface_tag`` (0 on
+        elements), ``element`` (on faces the element each bounds, -1 on
+        elements: an index of the volume blocks' cells in order).
+        ParaView and meshio read such a file whole; ``mixoct check`` takes
+        volume cells only: write ``to_meshio(boundary=False)`` for it."""
+        meshio = _import_meshio()
+        v = self.arrays(copy=True)
+        types, conn = v["types"], v["conn"]
+        bf = None
+        if boundary:
+            try:
+                bf = self.boundary_faces()
+            except InputError:
+                bf = None   # not a full-stage mesh of surfaces: no faces
+        cells, cdata = [], {"J_ENS": [], "leaf": [], "level": [], "body": []}
+        mat = v["material"]
+        if mat is not None:
+            cdata["material"] = []
+        if bf is not None:
+            cdata["surface_tag"] = []
+            cdata["element"] = []
+        position = np.empty(len(types), dtype=np.int64)  # index in the blocks
+        start = 0
+        body = bf["body"] if bf is not None else np.ones(len(types), np.int32)
+        for t, name in enumerate(_MESHIO_NAMES):
+            idx = np.flatnonzero(types == t)
+            if idx.size == 0:
+                continue
+            rows = conn[idx][:, list(_MESHIO_ORDER[t])].astype(np.int64)
+            cells.append(meshio.CellBlock(name, rows))
+            position[idx] = start + np.arange(idx.size)
+            start += idx.size
+            cdata["J_ENS"].append(v["jens"][idx].astype(np.float64))
+            cdata["leaf"].append(v["leaf"][idx].astype(np.int64))
+            cdata["level"].append(v["level"][idx].astype(np.int64))
+            cdata["body"].append(body[idx].astype(np.int64))
+            if mat is not None:
+                cdata["material"].append(mat[idx].astype(np.int64))
+            if bf is not None:
+                cdata["surface_tag"].append(np.zeros(idx.size, np.int64))
+                cdata["element"].append(np.full(idx.size, -1, np.int64))
+        pdata = {"boundary": v["boundary"].astype(np.int64)}
+        if bf is not None:
+            nt = bf["ntri"]
+            ntag = np.zeros(len(v["nodes"]), dtype=np.int64)
+            for name, sl, k in (("triangle", slice(0, nt), 3),
+                                ("quad", slice(nt, None), 4)):
+                rows = bf["nodes"][sl, :k].astype(np.int64)
+                if rows.shape[0] == 0:
+                    continue
+                tag, el = bf["tag"][sl], bf["element"][sl]
+                np.maximum.at(ntag, rows.ravel(), np.repeat(tag, k).astype(np.int64))
+                cells.append(meshio.CellBlock(name, rows))
+                n = rows.shape[0]
+                cdata["J_ENS"].append(np.full(n, np.nan))
+                for key in ("leaf", "level"):
+                    cdata[key].append(np.full(n, -1, np.int64))
+                cdata["body"].append(body[el].astype(np.int64))
+                if mat is not None:
+                    cdata["material"].append(mat[el].astype(np.int64))
+                cdata["surface_tag"].append(tag.astype(np.int64))
+                cdata["element"].append(position[el])
+            pdata["surface_tag"] = ntag
+        return meshio.Mesh(v["nodes"], cells, point_data=pdata, cell_data=cdata)
+
     # ---- figures and arrays --------------------------------------------------------
 
     def stats(self):
@@ -1361,20 +1869,36 @@ class Mesher(_MesherBase):
     invalid = _mesh_view("invalid", "how many elements have J_ENS <= 0")
 
 
+#: the validation of each field of mx_params2d (mesher2d's ranges)
+_PARAM2D_CHECKS = {
+    "surface_level": _level_check(MAX_LEVEL_2D),
+    "all_level": _level_check(MAX_LEVEL_2D),
+    "balance": _choice(_BALANCE),
+    "threads": _int_check(0, 4096, "a thread count (0: OpenMP's default)"),
+    "close_ratio": _real_check(0.0, 1.0),
+    "max_memory_mb": _real_check(0.0),
+    "feature_levels": _flag,
+    "materials": _flag,
+}
+
+
 class Mesher2D(_MesherBase):
     """One 2D mesher (the ``mesher2d`` program's calls, mx_mesher2d_*): a
     domain bounded by closed polylines, requests, the quadtree, the mesh of
     counter-clockwise triangles and quadrilaterals (see the module doc).
 
-    Parameters are those of ``mx_params2d``: ``surface_level`` (-s,
-    quadrants meeting the polylines; -1 none), ``all_level`` (-a, every
-    quadrant of the domain; -1 none), ``balance`` ("edges" or "recursive"),
-    ``threads`` (0: OpenMP's default), ``close_ratio`` (the projection of
-    close inside nodes), ``max_memory_mb`` (0: the memory available) and
-    ``feature_levels`` (refine the quadrants holding a feature until the
-    features keep apart), ``materials`` (``--materials``: a loop nested in
-    an outer one is the interface between two materials, not a hole; the
-    cells are cut along it and ``material`` gives each cell's material).
+    Parameters: every field of ``mx_params2d``, by name; None (or left
+    out) is the library's default (``Mesher2D.defaults()``), a value out of
+    ``mesher2d``'s range raises InputError naming it: ``surface_level``
+    (quadrants meeting the polylines; -1 none, else 0 .. MAX_LEVEL_2D),
+    ``all_level`` (every quadrant of the domain; -1 none), ``balance``
+    ("edges" or "recursive"), ``threads`` (0: OpenMP's default),
+    ``close_ratio`` (the projection of close inside nodes, 0 .. 1),
+    ``max_memory_mb`` (0: the memory available), ``feature_levels`` (refine
+    the quadrants holding a feature until the features keep apart),
+    ``materials`` (a loop nested in an outer one is the interface between
+    two materials, not a hole; the cells are cut along it and ``material``
+    gives each cell's material).
     Every mesh is checked by the library's
     independent routine: a mesh that fails it raises InvalidMeshError
     (kept: it can be read and written).
@@ -1393,21 +1917,26 @@ class Mesher2D(_MesherBase):
     TYPE_NAMES = ("tri", "quad")
     NODES_PER_TYPE = (3, 4)
 
-    def __init__(self, surface_level=-1, all_level=-1, balance="edges",
-                 threads=0, close_ratio=0.3, max_memory_mb=0,
-                 feature_levels=True, materials=False, *, library=None):
+    def __init__(self, surface_level=None, all_level=None, balance=None,
+                 threads=None, close_ratio=None, max_memory_mb=None,
+                 feature_levels=None, materials=None, *, library=None,
+                 **params):
+        params.update(surface_level=surface_level, all_level=all_level,
+                      balance=balance, threads=threads, close_ratio=close_ratio,
+                      max_memory_mb=max_memory_mb, feature_levels=feature_levels,
+                      materials=materials)
         lib = load_library(library)
         p = _Params2D()
         _function(lib, "mx_params2d_default")(ctypes.byref(p))
-        p.surface_level = int(surface_level)
-        p.all_level = int(all_level)
-        p.balance = _balance(balance)
-        p.threads = int(threads)
-        p.close_ratio = float(close_ratio)
-        p.max_memory_mb = float(max_memory_mb)
-        p.feature_levels = 1 if feature_levels else 0
-        p.materials = 1 if materials else 0
+        _fill_params(p, params, _PARAM2D_CHECKS, type(self).__name__)
         self._start(lib, p)
+
+    @staticmethod
+    def defaults(library=None):
+        """The library's default parameters (mx_params2d_default) as a dict."""
+        p = _Params2D()
+        _function(load_library(library), "mx_params2d_default")(ctypes.byref(p))
+        return {f: getattr(p, f) for f, _ in p._fields_}
 
     # ---- the domain and the requests -------------------------------------------
 
@@ -1518,6 +2047,83 @@ class Mesher2D(_MesherBase):
     def ncells(self):
         return self.nelements
 
+    def to_meshio(self):
+        """The mesh as a ``meshio.Mesh`` (copies; 2D points): blocks
+        "triangle" and "quad" (counter-clockwise), cell data ``leaf``,
+        ``level`` and, with materials, ``material``."""
+        meshio = _import_meshio()
+        v = self.arrays(copy=True)
+        cells, cdata = [], {"leaf": [], "level": []}
+        if v["material"] is not None:
+            cdata["material"] = []
+        for t, (name, k) in enumerate((("triangle", 3), ("quad", 4))):
+            idx = np.flatnonzero(v["types"] == t)
+            if idx.size == 0:
+                continue
+            cells.append(meshio.CellBlock(name, v["cells"][idx, :k].astype(np.int64)))
+            cdata["leaf"].append(v["leaf"][idx].astype(np.int64))
+            cdata["level"].append(v["level"][idx].astype(np.int64))
+            if v["material"] is not None:
+                cdata["material"].append(v["material"][idx].astype(np.int64))
+        return meshio.Mesh(v["nodes"], cells, cell_data=cdata)
+
+
+# ---- meshio --------------------------------------------------------------------------
+
+#: meshio's names of TET, PYRAMID, PRISM, HEX
+_MESHIO_NAMES = ("tetra", "pyramid", "wedge", "hexahedron")
+#: node j of a meshio cell is node _MESHIO_ORDER[type][j] of ours: meshio
+#: takes VTK's order, except for the linear wedge, where it takes Gmsh's
+#: (the triangle 0 1 2 turns towards 3 4 5), which is ours (mixoct.h); its
+#: VTK files swap the wedge's nodes themselves
+_MESHIO_ORDER = ((0, 1, 2, 3), (0, 1, 2, 3, 4), (0, 1, 2, 3, 4, 5),
+                 (0, 1, 2, 3, 4, 5, 6, 7))
+
+
+def _import_meshio():
+    try:
+        import meshio
+    except ImportError as e:
+        raise ImportError("to_meshio needs meshio (Debian: python3-meshio; "
+                          "pip: meshio)") from e
+    return meshio
+
+
+class _BoundaryOwner:
+    """Owns the arrays of one mx_mesher_boundary_arrays call."""
+
+    def __init__(self, lib, b):
+        self.free = lib.mx_boundary_arrays_free
+        self.b = b
+
+    def __del__(self):
+        try:
+            self.free(ctypes.byref(self.b))
+        except Exception:  # noqa: BLE001 (interpreter shutting down)
+            pass
+
+
+def generate(surface, surface_level=None, boundary=True, **params):
+    """Mesh a closed surface and return a ``meshio.Mesh`` (see
+    ``Mesher.to_meshio``): ``surface`` is a file path, ``"demo"`` (the
+    built-in surface) or ``(xyz, tri)`` arrays; the other arguments are
+    Mesher's. For example::
+
+        import mixoct
+        mesh = mixoct.generate("demo", surface_level=4)
+        mesh.write("demo.vtu")
+    """
+    with Mesher(surface_level=surface_level, **params) as m:
+        if isinstance(surface, str) and surface == "demo":
+            m.add_demo_surface()
+        elif isinstance(surface, (str, bytes, os.PathLike)):
+            m.add_surface(surface)
+        else:
+            xyz, tri = surface
+            m.add_surface_arrays(xyz, tri)
+        m.mesh()
+        return m.to_meshio(boundary=boundary)
+
 
 # ---- element lists ---------------------------------------------------------------
 
@@ -1527,21 +2133,30 @@ def read_element_list(path, limit):
     separate indices, '#' starts a comment. Each word is a whole number
     >= 0, as an integer or a real with a whole value (numpy.savetxt's
     1.200000000000000000e+01 is 12); any other word (not a number, a
-    fraction, a negative number, NaN, an index >= limit) raises InputError,
-    the message (file, line and word) on stderr. An empty list is read,
-    with a warning on stderr. One rule with the command line's -l (the
-    library reads the file)."""
+    fraction, a negative number, NaN, an index >= limit) raises InputError
+    whose message names the file, the line and the word. An empty list is read,
+    with a warning (``warnings.warn``). One rule with the command line's
+    list files (the library reads the file; its messages are caught)."""
     lib = load_library()
     out = ctypes.POINTER(ctypes.c_uint64)()
     n = ctypes.c_size_t(0)
     read = _function(lib, "mx_read_element_list")
-    st = read(_fspath(path), ctypes.c_uint64(int(limit)), ctypes.byref(out),
-              ctypes.byref(n))
+    st, text = _capture_stderr(read, _fspath(path), ctypes.c_uint64(int(limit)),
+                               ctypes.byref(out), ctypes.byref(n))
+    # no mesher, so no handler: the library's messages, caught on fd 2
+    lines = [ln[len("mixoct: "):] if ln.startswith("mixoct: ") else ln
+             for ln in text.splitlines() if ln.strip()]
+    errs = []
+    for ln in lines:   # "[file:line: ]error: text" or "...warning: text"
+        mt = re.match(r"(.*?)(error|warning): (.*)$", ln)
+        kind, ln = (mt.group(2), mt.group(1) + mt.group(3)) if mt else ("warning", ln)
+        if kind == "error":
+            errs.append(ln)
+        else:
+            warnings.warn(_pythonic(ln))
     if st != OK:
-        # no mesher, so no last_error: the message went to stderr
-        raise _ERRORS.get(st, InternalError)(
-            "%s: %s (the message is on stderr)" % (os.fspath(path),
-                                                   status_string(st)), st)
+        msg = errs[-1] if errs else "%s: %s" % (os.fspath(path), status_string(st))
+        raise _ERRORS.get(st, InternalError)(_pythonic(msg), st)
     try:
         if n.value == 0 or not out:
             return np.zeros(0, dtype=np.uint64)

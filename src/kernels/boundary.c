@@ -1,3 +1,4 @@
+#include "base/cancel.h"
 #include "kernels/boundary.h"
 
 #include "base/common.h"
@@ -107,8 +108,10 @@ int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
     return MX_ENOMEM;
   }
   size_t nmoved = 0;
+  atomic_int *cf = mx_cancel_flag; /* base/cancel.h: the longest loop */
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : nmoved)
   for (size_t v = 0; v < nn; v++) {
+    if (mx_cancel_seen(cf)) continue;
     cand[v] = cand[v] ? 1 : 0;
     if (!cand[v] || !cnt[v]) {
       cand[v] = 0;
@@ -120,6 +123,13 @@ int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
       cand[v] = 2;
       nmoved++;
     }
+  }
+  if (mx_cancelled()) { /* nothing moved yet */
+    mx_free(target);
+    mx_free(cand);
+    mx_free(len);
+    mx_free(cnt);
+    return MX_ECANCELED;
   }
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < nn; v++)

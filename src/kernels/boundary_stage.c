@@ -1,3 +1,4 @@
+#include "base/cancel.h"
 #include "kernels/boundary_stage.h"
 
 #include <string.h>
@@ -35,11 +36,13 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
   double t1 = mx_wtime();
   mx_mem_mark("b.states");
   stats->t_states = t1 - t;
+  if (!st) st = mx_cancel_check(); /* between the steps: base/cancel.h */
   if (!st)
     st = mx_move_close_nodes(M, states, S, close_ratio, &stats->moved_close, &moved);
   t = mx_wtime();
   mx_mem_mark("b.close");
   stats->t_close = t - t1;
+  if (!st) st = mx_cancel_check();
   mx_optional opt;
   memset(&opt, 0, sizeof opt);
   if (!st) st = mx_surface_patterns(M, &states, moved, &opt, &stats->sp);
@@ -48,10 +51,12 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
   t1 = mx_wtime();
   mx_mem_mark("b.patterns");
   stats->t_patterns = t1 - t;
+  if (!st) st = mx_cancel_check();
   if (!st) st = mx_shrink_to_boundary(tr, leaves, M, states, &stats->shrunk);
   t = mx_wtime();
   mx_mem_mark("b.shrink");
   stats->t_shrink = t - t1;
+  if (!st) st = mx_cancel_check();
   t1 = t;
   uint16_t *piece = NULL; /* with interfaces: each node's piece, kept by the untangling */
   uint8_t *movable = NULL; /* and the nodes it may move: not those on an interface */

@@ -20,6 +20,7 @@
  * corner; a node at exactly the point of one of the element's nodes is a
  * duplicate, not a contact. The checker (src/verify) searches the same
  * contacts with code of its own; tests/test_contacts.c compares the two. */
+#include "base/cancel.h"
 #include "kernels/contacts.h"
 
 #include <math.h>
@@ -511,10 +512,11 @@ int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
   if (nl) {
     lattice_cells L;
     st = lattice_cells_build(&L, G, M, list, (size_t)nl);
+    atomic_int *cf = mx_cancel_flag; /* base/cancel.h: the longest loop */
     if (st == MX_OK) {
 #pragma omp parallel for schedule(dynamic, 2048) reduction(+ : found) if (nn > CHUNK)
       for (size_t v = 0; v < nn; v++) {
-        if (states[v] != MX_NODE_OUTSIDE) continue;
+        if (states[v] != MX_NODE_OUTSIDE || mx_cancel_seen(cf)) continue;
         if (node_contacts(&L, M, (uint32_t)v, ehit)) {
           hit[v] = 1;
           found++;
@@ -522,6 +524,7 @@ int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
       }
     }
     lattice_cells_free(&L);
+    if (st == MX_OK) st = mx_cancel_check();
   }
   mx_free(list);
   if (st == MX_OK && found) {

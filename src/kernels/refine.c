@@ -1,3 +1,4 @@
+#include "base/cancel.h"
 #include "kernels/refine.h"
 #include "kernels/edges_lazy.h"
 
@@ -550,6 +551,10 @@ static int refine_levels(mx_builder *B, int balance_now) {
     if (B->on_level)
       B->on_level(B->on_level_user, T->level[cand[0]] + 1,
                   mx_max_requested_level(&B->req));
+    if (mx_cancelled()) { /* base/cancel.h: before each level */
+      mx_free(cand);
+      return MX_ECANCELED;
+    }
     double t0 = mx_wtime();
     int st = mx_split_octants(B, cand, n, 0);
     double t1 = mx_wtime();

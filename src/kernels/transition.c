@@ -1,3 +1,4 @@
+#include "base/cancel.h"
 #include "kernels/transition.h"
 
 #include <math.h>
@@ -338,6 +339,7 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
     if (!H.overflow) break;
   }
   if (!st && H.cap >= UINT32_MAX) st = MX_EINPUT;
+  if (!st) st = mx_cancel_check(); /* base/cancel.h: between the passes */
   /* Owners count their nodes; every leaf counts its elements. */
   if (!st) {
 #pragma omp parallel for schedule(static)
@@ -357,6 +359,7 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
     out->nkey = mx_alloc((out->nnodes + 1) * sizeof *out->nkey);
     if (!out->xyz || !out->nkey) st = MX_ENOMEM;
   }
+  if (!st) st = mx_cancel_check();
   /* Number the nodes: owners in leaf order, points in lattice order. */
   if (!st) {
 #pragma omp parallel for schedule(static)
@@ -397,6 +400,7 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
     out->jens = mx_alloc((out->ncells + 1) * sizeof *out->jens);
     if (!out->type || !out->conn || !out->level || !out->leaf || !out->jens) st = MX_ENOMEM;
   }
+  if (!st) st = mx_cancel_check();
   if (!st) {
     /* Elements. */
     size_t bt[4] = {0, 0, 0, 0}, invalid = 0;

@@ -8,6 +8,8 @@
 #ifndef MX_CALL_H
 #define MX_CALL_H
 
+#include <stdatomic.h>
+
 #include "mixoct.h"
 
 typedef struct {
@@ -16,6 +18,7 @@ typedef struct {
   int threads;
   int outer_default; /* the enclosing call's, restored on leaving */
   unsigned long errors; /* mx_msg_errors on entering */
+  atomic_int *cancel_prev; /* the enclosing call's cancel flag (base/cancel.h) */
   int level;            /* mx_msg_level on entering */
 } mx_call;
 

@@ -344,9 +344,9 @@ static int add_box(mx_mesher *m, const char *name, const int64_t d[3]) {
   return st;
 }
 
-int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *labels,
-                              const int64_t dims[3], const double A[12],
-                              const mx_image_params *ip) {
+static int add_label_array(mx_mesher *m, const char *name, const int32_t *labels,
+                           const int64_t dims[3], const double A[12],
+                           const mx_image_params *ip) {
   const double t0 = mx_wtime();
   if (!ip) ip = &m->image_params;
   if (!name) name = "(label array)";
@@ -571,4 +571,12 @@ int mx_mesher_add_label_image(mx_mesher *m, const char *path, const mx_image_par
   }
   mx_label_image_free(&img);
   return st;
+}
+
+int mx_mesher_add_label_array(mx_mesher *m, const char *name, const int32_t *labels,
+                              const int64_t dims[3], const double A[12],
+                              const mx_image_params *ip) {
+  mx_call c; /* messages to the mesher's handler, not to stderr */
+  mx_call_begin(m, &c);
+  return mx_call_end(m, &c, add_label_array(m, name, labels, dims, A, ip));
 }

@@ -8,6 +8,7 @@
 #include "io/read_polylines.h"
 #include "verify/check.h"
 #include "mesher/mesher_impl.h"
+#include "base/cancel.h"
 #include "mesher/pipeline.h"
 
 #include "kernels/splice.h"
@@ -49,11 +50,14 @@ static void collect_message(void *user, int level, const char *text) {
 
 void mx_call_begin(const mx_mesher *m, mx_call *c) {
   mx_call_enter(c, collect_message, m->rec, m->p.threads);
+  c->cancel_prev = mx_cancel_enter((atomic_int *)&m->cancel);
   m->rec->last_error[0] = 0;
 }
 
 int mx_call_end(const mx_mesher *m, mx_call *c, int status) {
   (void)m;
+  mx_cancel_leave(c->cancel_prev);
+  if (status == MX_ECANCELED && mx_msg_errors == c->errors) mx_error(NULL, 0, "cancelled");
   return mx_call_leave(c, status);
 }
 
@@ -65,6 +69,7 @@ const char *mx_status_string(int status) {
     case MX_ENOMEM: return "out of memory";
     case MX_EIO: return "output failure";
     case MX_EINVALID: return "invalid mesh";
+    case MX_ECANCELED: return "cancelled";
     default: return "unknown status";
   }
 }
@@ -175,6 +180,8 @@ void mx_mesher_set_progress(mx_mesher *m, const mx_progress *hooks) {
   else memset(&m->progress, 0, sizeof m->progress);
 }
 
+void mx_mesher_cancel(mx_mesher *m) { atomic_store(&m->cancel, 1); }
+
 void mx_mesher_release_edges_early(mx_mesher *m, int early) { m->release_edges = early != 0; }
 
 int mx_mesher_set_output_fields(mx_mesher *m, int which) {
@@ -270,8 +277,10 @@ int mx_mesher_domain_side(mx_mesher *m, mx_builder *B) {
 
 int mx_mesher_set_feature_angle(mx_mesher *m, double angle_deg) {
   if (!(angle_deg >= 0.0 && angle_deg < 180.0)) {
+    mx_call c; /* the message to the mesher's handler, not to stderr */
+    mx_call_begin(m, &c);
     mx_error(NULL, 0, "feature angle %g: from 0 (no features) to below 180 degrees", angle_deg);
-    return MX_EINPUT;
+    return mx_call_end(m, &c, MX_EINPUT);
   }
   m->feature_angle = angle_deg;
   return MX_OK;
@@ -287,8 +296,10 @@ int mx_mesher_set_feature_file(mx_mesher *m, const char *path) {
 
 int mx_mesher_set_feature_level(mx_mesher *m, int level) {
   if (level < 0 || level > MX_MAX_LEVEL) {
+    mx_call c; /* the message to the mesher's handler, not to stderr */
+    mx_call_begin(m, &c);
     mx_error(NULL, 0, "feature level %d: from 0 (the surface level) to %d", level, MX_MAX_LEVEL);
-    return MX_EINPUT;
+    return mx_call_end(m, &c, MX_EINPUT);
   }
   m->feature_level = level;
   return MX_OK;
@@ -382,7 +393,7 @@ int mx_mesher_features(mx_mesher *m) {
 int mx_build_tree(mx_mesher *m) {
   mx_tree_clear(m);
   const double t0 = mx_wtime();
-  mx_mesher_stage(m, "grid");
+  MX_CHECK(mx_mesher_stage(m, "grid"));
   MX_CHECK(mx_mesher_assemble_inputs(m));
   MX_CHECK(mx_mesher_features(m));
   const double ts = mx_wtime();
@@ -466,7 +477,7 @@ int mx_build_tree(mx_mesher *m) {
   MX_CHECK(check_memory(m, &req));
   MX_CHECK(mx_build_roots(&m->B));
   m->rec->S.ph.grid += mx_wtime() - t0;
-  mx_mesher_stage(m, "refine");
+  MX_CHECK(mx_mesher_stage(m, "refine"));
   if (use_edges) {
     MX_CHECK(mx_refine_balanced(&m->B));
     MX_CHECK(mx_resolve_closures(&m->B));
@@ -479,7 +490,7 @@ int mx_build_tree(mx_mesher *m) {
     }
   } else {
     MX_CHECK(mx_refine_unbalanced(&m->B));
-    mx_mesher_stage(m, "balance");
+    MX_CHECK(mx_mesher_stage(m, "balance"));
     MX_CHECK(mx_balance_recursive(&m->B));
     /* the baseline balances without edge infos; the closures and the
      * transition masks read them: registered once for the balanced tree,
@@ -551,7 +562,7 @@ static void count_mesh(mx_mesher *m) {
   S->centre_leaves = M->centre_leaves;
   S->mesh = 1;
   const double t = mx_wtime();
-  mx_mesher_stage(m, "quality");
+  (void)mx_mesher_stage(m, "quality"); /* short: not a cancel point */
   mx_quality_tabulate(M->type, M->jens, M->ncells, &S->quality);
   S->ph.quality += mx_wtime() - t;
 }
@@ -560,7 +571,7 @@ static int transition(mx_mesher *m) {
   if (!m->have_tree) MX_CHECK(mx_build_tree(m));
   mx_mesh_clear(m);
   const double t = mx_wtime();
-  mx_mesher_stage(m, "transition");
+  MX_CHECK(mx_mesher_stage(m, "transition"));
   /* nothing reads the edge infos again until the octree is split: their
    * memory goes to the mesh (rebuilt by the next split) */
   MX_CHECK(mx_pipeline_transition(m, m->leaves, m->nleaves, m->release_edges, &m->M));
@@ -583,7 +594,7 @@ int mx_mesher_transition(mx_mesher *m) {
  * (the restart file's element -> octant map). */
 static int boundary_once(mx_mesher *m) {
   const double t = mx_wtime();
-  mx_mesher_stage(m, "boundary");
+  MX_CHECK(mx_mesher_stage(m, "boundary"));
   mx_boundary_stats bs;
   MX_CHECK(mx_pipeline_boundary(m, m->leaves, m->nleaves, &m->M, &m->states, &bs));
   m->rec->S.boundary = bs;
@@ -1007,6 +1018,7 @@ int mx_mesher_mesh(mx_mesher *m) {
   mx_fill_tree_stats(m);
   m->rec->S.ph.total += mx_wtime() - t0;
   if (st && st != MX_EINVALID) mx_mesh_clear(m);
+  if (st == MX_ECANCELED && !keep) mx_tree_clear(m); /* a tree cut short */
   return mx_call_end(m, &c, st);
 }
 

@@ -5,6 +5,8 @@
 #ifndef MX_MESHER_H
 #define MX_MESHER_H
 
+#include <stdatomic.h>
+
 #include "mixoct.h"
 
 #include "kernels/boundary_stage.h"
@@ -271,6 +273,7 @@ struct mx_mesher {
   int have_mix;
   mx_mesh Mmix;
   uint32_t *tet_parent; /* per tetrahedron: its element in Mmix */
+  atomic_int cancel; /* mx_mesher_cancel (base/cancel.h) */
 };
 
 

@@ -3,6 +3,7 @@
  * independent check of every mesh, list refinement (Algorithm 3), the
  * memory estimate, the writers. The steps themselves live in src/quad/
  * (one file each); the restart file's conversion in restart_quadtree.c. */
+#include "base/cancel.h"
 #include "mesher/mesher2d.h"
 
 #include <math.h>
@@ -52,8 +53,12 @@ static void collect_message(void *user, int level, const char *text) {
   do {                                                                  \
     mx_call c_;                                                         \
     mx_call_enter(&c_, collect_message, (m)->rec, (m)->p.threads);      \
+    c_.cancel_prev = mx_cancel_enter((atomic_int *)&(m)->cancel);       \
     (m)->rec->last_error[0] = 0;                                        \
-    return mx_call_leave(&c_, (expr));                                  \
+    int st_ = (expr);                                                   \
+    mx_cancel_leave(c_.cancel_prev);                                    \
+    if (st_ == MX_ECANCELED) mx_error(NULL, 0, "cancelled");            \
+    return mx_call_leave(&c_, st_);                                     \
   } while (0)
 
 void mx_params2d_default(mx_params2d *p) {
@@ -578,6 +583,7 @@ static int stage(mx_mesher2d *m, int st, const char *name) {
   if (st == MX_EINTERNAL && !m->rec->last_error[0])
     mx_error(NULL, 0, "internal failure in the %s stage", name);
   mx_call_recheck();
+  if (!st) st = mx_cancel_check(); /* base/cancel.h */
   return st;
 }
 
@@ -667,6 +673,8 @@ static int mesh(mx_mesher2d *m) {
 }
 
 int mx_mesher2d_mesh(mx_mesher2d *m) { CALL(m, mesh(m)); }
+
+void mx_mesher2d_cancel(mx_mesher2d *m) { atomic_store(&m->cancel, 1); }
 
 /* ---- re-meshing ---------------------------------------------------------------------- */
 

@@ -12,6 +12,7 @@
 #ifndef MX_MESHER2D_H
 #define MX_MESHER2D_H
 
+#include <stdatomic.h>
 #include "mixoct.h"
 #include "mesher/size_source.h"
 #include "quad/quad.h"
@@ -100,6 +101,7 @@ struct mx_mesher2d {
   mx_qcleave_stats cs;
   mx_mat2d_report *mat_report;
   double t_materials;
+  atomic_int cancel; /* mx_mesher2d_cancel (base/cancel.h) */
 };
 
 /* restart_quadtree.c */

@@ -115,4 +115,10 @@ int mx_written_order(const mx_mesher *m, uint32_t *order);
 /* The octree's figures (leaves, hash, octants, edges, splits) into m->rec->S. */
 void mx_fill_tree_stats(mx_mesher *m);
 
+/* The view of the mesh the writers get (mesher/output.c: bodies, boundary
+ * faces and their tags, materials), handed to fn for the time of the call
+ * (mesher/boundary_arrays.c reads it). */
+int mx_with_written_view(const mx_mesher *m, int (*fn)(void *ctx, const mx_mesh_view *v),
+                         void *ctx);
+
 #endif

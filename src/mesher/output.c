@@ -377,6 +377,16 @@ int mx_mesher_write_boundary(const mx_mesher *m, const char *path) {
   return mx_call_end(m, &c, st);
 }
 
+int mx_with_written_view(const mx_mesher *m, int (*fn)(void *ctx, const mx_mesh_view *v),
+                         void *ctx) {
+  prepared P;
+  memset(&P, 0, sizeof P);
+  int st = prepare(m, &P);
+  if (!st) st = fn(ctx, &P.v);
+  release(&P);
+  return st;
+}
+
 int mx_written_order(const mx_mesher *m, uint32_t *order) {
   const mx_mesh *M = &m->M;
   if (m->mesh_stage != MX_STAGE_FULL || m->ndomain == 0)
@@ -387,11 +397,13 @@ int mx_written_order(const mx_mesher *m, uint32_t *order) {
 }
 
 int mx_mesher_written_order(const mx_mesher *m, uint32_t *order) {
+  mx_call c; /* messages to the mesher's handler, not to stderr */
+  mx_call_begin(m, &c);
   if (m->mesh_stage < MX_STAGE_TRANSITION) {
     mx_error(NULL, 0, "no mixed mesh: mesh first");
-    return MX_EINPUT;
+    return mx_call_end(m, &c, MX_EINPUT);
   }
-  return mx_written_order(m, order);
+  return mx_call_end(m, &c, mx_written_order(m, order));
 }
 
 static int write_octree(const mx_mesher *m, const char *path, int ascii) {
@@ -424,8 +436,8 @@ int mx_mesher_write(const mx_mesher *m, const char *path, int ascii) {
     mx_error(path, 0, "no mesh to write: call mx_mesher_mesh first");
     st = MX_EINPUT;
   } else {
-    mx_mesher_stage(m, "write");
-    st = mx_write_mixed(m, path, ascii);
+    st = mx_mesher_stage(m, "write");
+    if (!st) st = mx_write_mixed(m, path, ascii);
   }
   m->rec->S.ph.write += mx_wtime() - t;
   return mx_call_end(m, &c, st);

@@ -13,11 +13,13 @@
 #include "kernels/transition.h"
 #include "mesher/call.h"
 #include "mesher/mesher_impl.h"
+#include "base/cancel.h"
 
-void mx_mesher_stage(const mx_mesher *m, const char *name) {
+int mx_mesher_stage(const mx_mesher *m, const char *name) {
   mx_mem_mark(name);
   mx_call_recheck();
   if (m->progress.on_stage) m->progress.on_stage(m->progress.user, name);
+  return mx_cancel_check(); /* after the hook: it may cancel */
 }
 
 int mx_mesher_index(mx_mesher *m) {
@@ -52,6 +54,10 @@ int mx_pipeline_transition(mx_mesher *m, const uint32_t *leaves, size_t n, int r
   MX_CHECK(mx_edges_restore(&m->B));
   mx_leaf_masks lm;
   MX_CHECK(mx_transition_masks(&m->B.tree, leaves, n, &lm));
+  if (mx_cancelled()) { /* between the masks and the elements */
+    mx_free(lm.mask);
+    return MX_ECANCELED;
+  }
   if (release_edges) mx_edges_release(&m->B);
   return mx_transition_build(&m->B.tree, leaves, n, &lm, M);
 }
@@ -192,9 +198,9 @@ static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boun
 int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh *M,
                          uint8_t **states, mx_boundary_stats *bs) {
   if (!m->have_index) {
-    mx_mesher_stage(m, "index");
+    MX_CHECK(mx_mesher_stage(m, "index"));
     MX_CHECK(mx_mesher_index(m));
-    mx_mesher_stage(m, "boundary");
+    MX_CHECK(mx_mesher_stage(m, "boundary"));
   }
   MX_CHECK(mx_boundary_stage(&m->B.tree, leaves, &m->SI, M,
                              m->IF.npasses ? &m->IF : NULL, m->p.close_ratio,

@@ -38,6 +38,7 @@ double mx_feature_reach(const mx_mesher *m);
 int mx_mesher_index(mx_mesher *m);
 /* The progress hook and the load limit between two stages (the
  * mesher's on_stage, mx_call_recheck). */
-void mx_mesher_stage(const mx_mesher *m, const char *name);
+/* MX_ECANCELED when the call was cancelled (base/cancel.h), else MX_OK. */
+int mx_mesher_stage(const mx_mesher *m, const char *name);
 
 #endif

@@ -55,8 +55,8 @@ int mx_repair(mx_mesher *m) {
     flag = mx_alloc(m->M.ncells + 1);
     if (!flag) return MX_ENOMEM;
     const double t = mx_wtime();
-    mx_mesher_stage(m, "verify");
-    int st = mx_find_contacts(&m->M, &m->B.tree.grid, m->states, flag, &m->rec->S.contacts);
+    int st = mx_mesher_stage(m, "verify"); /* MX_ECANCELED: cancelled */
+    if (!st) st = mx_find_contacts(&m->M, &m->B.tree.grid, m->states, flag, &m->rec->S.contacts);
     /* --tets: elements no split into tetrahedra keeps valid (a prism with
      * two warped faces cut along their concave diagonals) are repaired too */
     const size_t unsplit = !st && m->p.tets ? mx_tet_split_flag_failures(&m->M, flag) : 0;

@@ -72,7 +72,7 @@ int mx_mesher_tets(mx_mesher *m) {
   mx_summary *S = &m->rec->S;
   char inputs[MX_INPUTS_LABEL];
   const char *name = mx_inputs_label(m, inputs, sizeof inputs);
-  mx_mesher_stage(m, "tets");
+  MX_CHECK(mx_mesher_stage(m, "tets")); /* MX_ECANCELED: cancelled */
   mx_mesh T;
   mx_tet_split_stats ts;
   uint32_t *parent = NULL;
