@@ -30,7 +30,7 @@ typedef struct {
   const char *text; /* parsed from ASCII starting here (for messages) */
 } rawarr;
 
-enum { MAX_TMP = 16, MSG = 512 };
+enum { MAX_TMP = 32, MSG = 512 };
 
 /* What a piece of a .pvtu gives besides its mesh (see mx_rd_pvtu). */
 typedef struct {
