@@ -1,6 +1,8 @@
 /* mixoct: reading VTK XML unstructured grids, .vtu (see read_mesh.h): the
- * points, the cells as offsets + connectivity and the cell types, ASCII or
- * appended raw, cut into parts that io/vtk_cells.c assembles; the point
+ * points, the cells as offsets + connectivity and the cell types, ASCII,
+ * inline base64 or appended (raw or base64), compressed or not (the bytes
+ * of a binary array: io/vtu_decode.c), cut into parts that io/vtk_cells.c
+ * assembles; the point
  * fields surface_tag and (in a piece of a .pvtu) GlobalNodeId, and the cell
  * field material (cell_tag: one component, one value per cell, of any type,
  * whole numbers). A .pvtu master goes to read_pvtu.c.
