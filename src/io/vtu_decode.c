@@ -276,17 +276,34 @@ static int decode_compressed(input *in, mx_vtu_alloc_fn alloc, void *ctx, const 
     out = alloc(ctx, (size_t)total + 1);
     if (!out) st = MX_ENOMEM;
   }
-  uint64_t done = 0, from = 0;
-  for (uint64_t k = 0; k < nb && st == MX_OK; k++) {
-    const uint64_t us = k + 1 < nb ? bs : lastsize;
+  /* the blocks are independent: in parallel, each from its offset (cs
+   * becomes the offsets), the first that fails decompressed again for its
+   * message */
+  uint64_t from = 0;
+  for (uint64_t k = 0; k < nb; k++) {
+    const uint64_t c = cs[k];
+    cs[k] = from;
+    from += c;
+  }
+  size_t bad = SIZE_MAX;
+  if (st == MX_OK) {
+    const size_t n = (size_t)nb;
+#pragma omp parallel for schedule(dynamic, 1) reduction(min : bad) if (n > 1 && total > (1u << 20))
+    for (size_t k = 0; k < n; k++) {
+      const uint64_t us = k + 1 < n ? bs : lastsize;
+      const uint64_t c = (k + 1 < n ? cs[k + 1] : csum) - cs[k];
+      uint64_t got;
+      const char *why = inflate_block(s->comp, src + cs[k], c, out + (uint64_t)k * bs, us, &got);
+      if ((why || got != us) && k < bad) bad = k;
+    }
+  }
+  if (bad != SIZE_MAX) {
+    const uint64_t us = bad + 1 < nb ? bs : lastsize;
+    const uint64_t c = (bad + 1 < nb ? cs[bad + 1] : csum) - cs[bad];
     uint64_t got;
-    const char *why = inflate_block(s->comp, src + from, cs[k], out + done, us, &got);
-    if (why || got != us)
-      st = fail(in, payload, "%s: block %llu of %llu does not decompress to its %llu bytes (%s)",
-                name, (unsigned long long)k, (unsigned long long)nb, (unsigned long long)us,
-                why ? why : "it holds fewer");
-    from += cs[k];
-    done += us;
+    const char *why = inflate_block(s->comp, src + cs[bad], c, out + (uint64_t)bad * bs, us, &got);
+    st = fail(in, payload, "%s: block %zu of %llu does not decompress to its %llu bytes (%s)", name,
+              bad, (unsigned long long)nb, (unsigned long long)us, why ? why : "it holds fewer");
   }
   mx_free(scratch);
   mx_free(cs);
