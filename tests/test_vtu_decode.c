@@ -10,6 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <zlib.h>
+
 #include "base/common.h"
 #include "check.h"
 
@@ -257,6 +259,53 @@ static void test_compressed(void) {
   CHECK(run(b, n, 4, 0, MX_VTU_ZLIB).st == MX_EINPUT);
 }
 
+/* 40 zlib blocks of 32 KiB (more than 1 MiB: decompressed in parallel),
+ * the last one short; then two of them broken: the message names the
+ * first. */
+static void test_many_blocks(void) {
+  enum { NB = 40, BS = 32768, LAST = 1000 };
+  const size_t total = (size_t)(NB - 1) * BS + LAST;
+  unsigned char *data = mx_alloc(total), *file = mx_alloc(total + 8 * (NB + 3) + 1024 * NB);
+  uint64_t cs[NB];
+  unsigned char *streams = mx_alloc((size_t)NB * (BS + 1024));
+  for (size_t i = 0; i < total; i++) data[i] = (unsigned char)((i * 7 + i / 1000) % 251);
+  size_t sum = 0;
+  for (int k = 0; k < NB; k++) {
+    uLongf n = BS + 1024;
+    CHECK(compress(streams + sum, &n, data + (size_t)k * BS, k + 1 < NB ? BS : LAST) == Z_OK);
+    cs[k] = n;
+    sum += n;
+  }
+  const uint64_t head[3] = {NB, BS, LAST};
+  memcpy(file, head, 24);
+  memcpy(file + 24, cs, sizeof cs);
+  memcpy(file + 24 + sizeof cs, streams, sum);
+  const size_t n = 24 + sizeof cs + sum;
+  for (int broken = 0; broken < 2; broken++) {
+    if (broken) {
+      size_t at17 = 24 + sizeof cs;
+      for (int k = 0; k < 17; k++) at17 += cs[k];
+      file[at17 + cs[17] / 2] ^= 0x5a;
+      file[n - cs[NB - 1] / 2] ^= 0x5a; /* in the last block */
+    }
+    void *keep[16] = {0};
+    mx_vtu_src src = {(const char *)file, NULL, (const char *)file + n, 8, 0, MX_VTU_ZLIB};
+    const unsigned char *d = NULL;
+    uint64_t nb = 0;
+    char err[256] = "";
+    const char *at = NULL;
+    const int st = mx_vtu_decode(&src, plain_alloc, keep, &d, &nb, err, sizeof err, &at);
+    if (!broken)
+      CHECK(st == MX_OK && nb == total && memcmp(d, data, total) == 0);
+    else
+      CHECK(st == MX_EINPUT && strstr(err, "block 17 of 40") != NULL);
+    for (int i = 0; i < 16; i++) mx_free(keep[i]);
+  }
+  mx_free(data);
+  mx_free(file);
+  mx_free(streams);
+}
+
 static void test_names(void) {
   CHECK(mx_vtu_compressor("vtkZLibDataCompressor", 21) == MX_VTU_ZLIB);
   CHECK(mx_vtu_compressor("vtkLZ4DataCompressor", 20) == MX_VTU_LZ4);
@@ -269,6 +318,7 @@ int main(void) {
   test_base64();
   test_raw();
   test_compressed();
+  if (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__) test_many_blocks();
   test_names();
   return TEST_DONE();
 }
