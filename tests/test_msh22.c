@@ -210,8 +210,31 @@ static void test_vtk_mixed(void) {
   expect_fail("line.vtk");
 }
 
+/* Every allocation of a read made to fail in turn (the hook of
+ * base/common.h): MX_ENOMEM, or MX_OK once past the last. */
+static void test_alloc_failures(void) {
+  const char *names[4] = {"ascii.msh", "binary.msh", "swapped.msh", "mixed.vtk"};
+  for (int f = 0; f < 4; f++) {
+    mx_mesh_data m;
+    mx_alloc_fail_countdown(-1);
+    int st = mx_read_mesh(path_of(names[f]), &m);
+    const long n = mx_alloc_count();
+    mx_alloc_fail_countdown(0);
+    CHECK(st == MX_OK && n > 3);
+    if (st == MX_OK) mx_mesh_data_free(&m);
+    for (long k = 1; k <= n; k++) {
+      mx_alloc_fail_countdown(k);
+      st = mx_read_mesh(path_of(names[f]), &m);
+      mx_alloc_fail_countdown(0);
+      CHECK(st == MX_ENOMEM || st == MX_OK);
+      if (st == MX_OK) mx_mesh_data_free(&m);
+    }
+  }
+}
+
 int main(void) {
   test_msh22();
   test_vtk_mixed();
+  test_alloc_failures();
   return TEST_DONE();
 }

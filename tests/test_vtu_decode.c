@@ -306,6 +306,31 @@ static void test_many_blocks(void) {
   mx_free(streams);
 }
 
+/* Each allocation of a decode made to fail in turn: MX_ENOMEM. */
+static void test_alloc_failures(void) {
+  unsigned char b[256];
+  const unsigned char *zs[2] = {z_hello_wo, z_rld};
+  uint32_t cs[2] = {16, 12};
+  const size_t n = pack(b, 2, 8, 4, cs, zs);
+  char text[400];
+  encode(b, n, text);
+  for (int k = 1; k <= 3; k++)
+    for (int b64 = 0; b64 < 2; b64++) {
+      void *keep[16] = {0};
+      mx_vtu_src s = {b64 ? NULL : (const char *)b, b64 ? text : NULL,
+                      b64 ? text + strlen(text) : (const char *)b + n, 4, 0, MX_VTU_ZLIB};
+      const unsigned char *d;
+      uint64_t nb;
+      char err[128];
+      const char *at;
+      mx_alloc_fail_countdown(k);
+      const int st = mx_vtu_decode(&s, plain_alloc, keep, &d, &nb, err, sizeof err, &at);
+      mx_alloc_fail_countdown(0);
+      CHECK(st == (k == 3 && !b64 ? MX_OK : MX_ENOMEM)); /* raw: 2 allocations */
+      for (int i = 0; i < 16; i++) mx_free(keep[i]);
+    }
+}
+
 static void test_names(void) {
   CHECK(mx_vtu_compressor("vtkZLibDataCompressor", 21) == MX_VTU_ZLIB);
   CHECK(mx_vtu_compressor("vtkLZ4DataCompressor", 20) == MX_VTU_LZ4);
@@ -320,5 +345,6 @@ int main(void) {
   test_compressed();
   if (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__) test_many_blocks();
   test_names();
+  if (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__) test_alloc_failures();
   return TEST_DONE();
 }
