@@ -279,14 +279,14 @@ static int decode_compressed(input *in, mx_vtu_alloc_fn alloc, void *ctx, const 
   /* the blocks are independent: in parallel, each from its offset (cs
    * becomes the offsets), the first that fails decompressed again for its
    * message */
-  uint64_t from = 0;
-  for (uint64_t k = 0; k < nb; k++) {
-    const uint64_t c = cs[k];
-    cs[k] = from;
-    from += c;
-  }
   size_t bad = SIZE_MAX;
   if (st == MX_OK) {
+    uint64_t from = 0;
+    for (uint64_t k = 0; k < nb; k++) {
+      const uint64_t c = cs[k];
+      cs[k] = from;
+      from += c;
+    }
     const size_t n = (size_t)nb;
 #pragma omp parallel for schedule(dynamic, 1) reduction(min : bad) if (n > 1 && total > (1u << 20))
     for (size_t k = 0; k < n; k++) {
