@@ -73,7 +73,7 @@ objs=$(for s in $srcs; do obj_path "$s"; echo; done)
 bin=$out/test_alloc_fail
 if ! up_to_date "$bin" "$bin.d" || [ -n "$(find $objs -newer "$bin" 2>/dev/null | head -1)" ]; then
   # shellcheck disable=SC2086
-  $cc $flags -MMD -MF "$bin.d" -I"$root/tests" "$root/tests/test_alloc_fail.c" $objs -lm -lz \
+  $cc $flags -MMD -MF "$bin.d" -I"$root/tests" "$root/tests/test_alloc_fail.c" $objs -lm -lz -llz4 -llzma \
     -o "$bin" || { echo "alloc_fail_asan: FAIL: the test did not link"; exit 1; }
 fi
 t1=$(date +%s)

@@ -17,8 +17,10 @@ HERE=$(cd "$(dirname "$0")" && pwd) # before any cd: tests/lib.sh
 #   a boundary node moved inward  off_boundary 1 with the domain, exit 0
 #                                 without
 #   the wrong domain              off_boundary > 0, area off
-# and input errors (exit 2, file and line): a 3D surface with a 2D mesh,
-# polylines with a 3D mesh, 2D and 3D cells mixed, z != 0, pentagons,
+# 2D and 3D cells mixed: a 3D mesh whose triangle is a tagged face (exit 5,
+# it is not on the boundary); and input errors (exit 2, file and line): a
+# 3D surface with a 2D mesh,
+# polylines with a 3D mesh, z != 0, pentagons,
 # truncated files. The argument is the mixoct program.
 BIN=${1:?usage: check2d_test.sh path/to/mixoct}
 BIN=$(readlink -f "$BIN")
@@ -227,8 +229,10 @@ printf 'OFF\n5 1 0\n0 0 0\n1 0 0\n1 1 0\n0.5 1.5 0\n0 1 0\n5 0 1 2 3 4\n' >pent.
 expect_exit 2 "a pentagon" "$BIN" check pent.off
 has err "pent.off:8" "pentagon: names file and line"
 printf '# vtk DataFile Version 3.0\nm\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 5 double\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 1 0\nCELLS 2 9\n4 0 1 2 3\n3 1 4 2\nCELL_TYPES 2\n10\n5\n' >mixed.vtk
-expect_exit 2 "2D and 3D cells mixed" "$BIN" check mixed.vtk
-has err "mixed.vtk:16" "mixed: names file and line"
+# volume cells with 2D cells: a 3D mesh, its triangles tagged faces (as
+# Gmsh's .vtk files have them); this one is not a face of the tetrahedron
+expect_exit 5 "2D and 3D cells mixed: a 3D mesh with a tagged face" "$BIN" check mixed.vtk
+has out "tagged not boundary      1" "mixed: the triangle is a tagged face off the boundary"
 printf '# vtk DataFile Version 3.0\nz\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 3 double\n0 0 0\n1 0 0\n0 1 0.5\nCELLS 1 4\n3 0 1 2\nCELL_TYPES 1\n5\n' >zoff.vtk
 expect_exit 2 "a triangle off the plane" "$BIN" check zoff.vtk
 has err "zoff.vtk:8" "z != 0: names file and line"

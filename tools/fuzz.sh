@@ -121,7 +121,7 @@ link_target() {
   esac
   if up_to_date "$bin" "$bin.d" && [ ! "$lib" -nt "$bin" ]; then return 0; fi
   # shellcheck disable=SC2086
-  if $cc $bin_flags $def -MMD -MF "$bin.d.tmp" "$root/$src" "$lib" -lm -lz -o "$bin.tmp" 2>"$bin.err"; then
+  if $cc $bin_flags $def -MMD -MF "$bin.d.tmp" "$root/$src" "$lib" -lm -lz -llz4 -llzma -o "$bin.tmp" 2>"$bin.err"; then
     mv "$bin.tmp" "$bin" && mv "$bin.d.tmp" "$bin.d" && rm -f "$bin.err"
   else
     [ "${link_quiet:-0}" = 1 ] || cat "$bin.err" >&2

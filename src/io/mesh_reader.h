@@ -30,7 +30,7 @@ typedef struct {
   const char *text; /* parsed from ASCII starting here (for messages) */
 } rawarr;
 
-enum { MAX_TMP = 16, MSG = 512 };
+enum { MAX_TMP = 32, MSG = 512 };
 
 /* What a piece of a .pvtu gives besides its mesh (see mx_rd_pvtu). */
 typedef struct {
@@ -46,6 +46,11 @@ typedef struct {
   int planar; /* VTK triangles and quadrilaterals accepted (mx_read_mesh_planar) */
   piece_info *piece; /* reading a piece of a .pvtu: a VTU file only */
   int merged;        /* a .pvtu was read: its pieces' wedges are ours already */
+  /* A VTK file with volume cells and faces (io/vtk_cells.c): the file's
+   * cell of each volume cell and each face, and its number of cells; NULL
+   * when every cell of the file is a volume cell. */
+  const uint32_t *cell_from, *face_from;
+  size_t file_cells;
 } rd;
 
 /* Prints the message with the line of `at` in a text part, its byte offset

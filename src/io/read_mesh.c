@@ -2,7 +2,7 @@
  * (or loaded) whole, its format recognised from its first bytes (or, for the
  * published mesher's text files, its extension), and the reader of that
  * format called: legacy VTK (read_vtk.c), VTU (read_vtu.c; a .pvtu master:
- * read_pvtu.c), Gmsh MSH 4.1 (read_msh.c), Medit .mesh / .meshb
+ * read_pvtu.c), Gmsh MSH 4.1 and 2.2 (read_msh.c, read_msh22.c), Medit .mesh / .meshb
  * (read_medit.c), M3D and MVM (read_m3d.c), GetFEM (read_getfem.c); and a
  * mesh that is 2D or 3D by its content (mx_read_mesh_dim; an OFF file as a
  * 2D mesh: read_off_plane.c). */
@@ -116,7 +116,7 @@ int mx_rd_file(const char *path, int planar, piece_info *piece, mx_mesh_data *ou
   } else {
     st = mx_rd_fail(&r, p,
                     "unknown mesh format: expected legacy VTK ('# vtk DataFile "
-                    "Version'), VTK XML (.vtu), Gmsh MSH 4.1 ('$MeshFormat'), "
+                    "Version'), VTK XML (.vtu), Gmsh MSH 4.1 or 2.2 ('$MeshFormat'), "
                     "Medit ('MeshVersionFormatted', or a binary .meshb), M3D "
                     "('[Nodes,'), MVM ('MIXED') or GetFEM ('BEGIN POINTS LIST')");
   }

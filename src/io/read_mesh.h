@@ -11,10 +11,12 @@
  *    skipped; of CELL_DATA / POINT_DATA only surface_tag and material are
  *    read (below);
  *  - VTK XML UnstructuredGrid (.vtu), one Piece, byte_order Little- or
- *    BigEndian, header_type UInt32 or UInt64, arrays format="appended" with
- *    <AppendedData encoding="raw"> or format="ascii"; points Float32 or
- *    Float64 with 3 components; connectivity, offsets and types of any
- *    integer type (Int8 .. UInt64). Compressed and base64 data are refused.
+ *    BigEndian, header_type UInt32 or UInt64, arrays format="ascii",
+ *    "binary" (inline base64) or "appended" (<AppendedData encoding="raw"
+ *    or "base64">), uncompressed or compressed by vtkZLibDataCompressor,
+ *    vtkLZ4DataCompressor or vtkLZMADataCompressor (io/vtu_decode.h);
+ *    points Float32 or Float64 with 3 components; connectivity, offsets
+ *    and types of any integer type (Int8 .. UInt64).
  *  - a parallel VTU master (.pvtu: VTKFile type="PUnstructuredGrid"),
  *    read as one mesh: each <Piece Source="..."/> (relative to the
  *    .pvtu's directory unless absolute) a VTU file as above, all with the
@@ -27,7 +29,12 @@
  *    such files). A missing or unreadable piece is an error naming the
  *    .pvtu's line.
  * Cell types: VTK 10 (tetra), 14 (pyramid), 13 (wedge), 12 (hexahedron);
+ * beside them, triangles (5) and quadrilaterals (9) are the tagged faces
+ * (below) and vertices (1) and lines (3) are skipped (Gmsh's .vtk files);
  * any other type is an error. Node order stays VTK's (as in soa/mesh.h);
+ *  - Gmsh MSH 2.2, ASCII or binary (either byte order; src/io/read_msh22.c):
+ *    $Nodes, $Elements and $PhysicalNames read as 4.1's below, an element's
+ *    entity being its physical tag, or its elementary tag when that is 0;
  *  - Gmsh MSH 4.1 ("$MeshFormat" first), ASCII or binary (either byte
  *    order, size_t of 4 or 8 bytes): $Nodes and $Elements, other sections
  *    skipped; linear tetrahedra, hexahedra, prisms and pyramids kept in the
@@ -63,7 +70,9 @@
  *    convex cv, GetFEM's face numbering: io/getfem_tables.h) or "cv" (a
  *    whole convex, not a face: skipped), "END REGION t"; anything else
  *    after the convexes ends the reading, as before regions were read;
- *  - VTK, VTU: no faces; an integer point field named surface_tag (legacy:
+ *  - VTK, VTU: the triangles and quadrilaterals beside volume cells, tagged
+ *    with their value of the cell field material (0 without it); an
+ *    integer point field named surface_tag (legacy:
  *    SCALARS in POINT_DATA; VTU: a DataArray of <PointData>) is returned as
  *    node_tag. Other attributes are skipped; an attribute the legacy reader
  *    does not know ends the attributes (its values are not read).

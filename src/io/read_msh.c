@@ -44,7 +44,7 @@
 #include "base/common.h"
 #include "base/scan.h"
 #include "io/face_tags.h"
-#include "io/text_cursor.h"
+#include "io/msh_reader.h"
 #include "io/text_scan.h"
 
 /* Appends the name s[0, n) of tag (capacity *cap, doubled). */
@@ -111,42 +111,6 @@ static int sort_names(mx_mesh_data *out) {
   return MX_OK;
 }
 
-enum { MSH_TYPES = 32 };
-/* nodes per Gmsh element type (0: unknown) */
-static const int8_t msh_type_nodes[MSH_TYPES] = {
-    0, 2, 3, 4, 4, 8, 6, 5, 3, 6, 9, 10, 27, 18, 14, 1,
-    8, 20, 15, 13, 9, 10, 12, 15, 15, 21, 4, 5, 6, 20, 35, 56};
-
-static int msh_volume_type(int64_t t) {
-  switch (t) {
-    case 4: return MX_TET;
-    case 5: return MX_HEX;
-    case 6: return MX_PRISM;
-    case 7: return MX_PYRAMID;
-    default: return -1;
-  }
-}
-
-typedef struct {
-  cur c;
-  int binary, dsize;
-  int have_nodes;
-  size_t nnodes;
-  uint64_t *ntag;   /* nnodes: tag of each node */
-  uint64_t tmin, tmax;
-  uint32_t *dense;  /* tag - tmin -> index + 1 (0: none), or NULL */
-  uint64_t *sorted; /* or: tags sorted, with */
-  uint32_t *sidx;   /* their indices */
-  uint64_t *etag;   /* per volume element */
-  int32_t *cent;    /* per volume element, its entity's tag */
-  int have_entities;
-  size_t nsurf, nvol;
-  int64_t *surf;    /* $Entities: per surface, its tag and its face tag */
-  int64_t *vol;     /* per volume, its tag and its label (cell_tag) */
-  size_t fcap, ncap; /* capacities of out's faces and names */
-  mx_mesh_data *out;
-} msh;
-
 /* Where the next value starts, for messages (text: after the blanks;
  * binary: here, blanks are data). */
 static const char *msh_at(msh *M) {
@@ -182,7 +146,7 @@ static int msh_int(msh *M, int64_t *v, const char *what) {
 
 /* The line "$End<name>" after a section (text and binary: the binary data
  * is followed by a newline). */
-static int msh_end(msh *M, const char *name) {
+int mx_msh_end(msh *M, const char *name) {
   size_t n;
   const char *t = cur_tok(&M->c, &n);
   char want[64];
@@ -197,9 +161,10 @@ static int msh_format(msh *M) {
   rd *r = M->c.r;
   size_t n;
   const char *t = cur_tok(&M->c, &n);
-  if (!tok_eq(t, n, "4.1"))
+  M->v2 = tok_eq(t, n, "2.2");
+  if (!M->v2 && !tok_eq(t, n, "4.1"))
     return mx_rd_fail(r, t,
-                      "MSH version '%.*s' is not supported (4.1 only: gmsh "
+                      "MSH version '%.*s' is not supported (4.1 or 2.2: gmsh "
                       "-format msh41)",
                       shown(n), t);
   int64_t ft = 0, ds = 0;
@@ -208,8 +173,11 @@ static int msh_format(msh *M) {
   if (ft != 0 && ft != 1)
     return mx_rd_fail(r, t, "$MeshFormat: file type %lld (0 ASCII, 1 binary)",
                       (long long)ft);
-  if (ds != 4 && ds != 8)
+  if (ds != 4 && ds != 8 && !M->v2)
     return mx_rd_fail(r, t, "$MeshFormat: data size %lld (4 or 8)", (long long)ds);
+  if (M->v2 && ds != 8)
+    return mx_rd_fail(r, t, "$MeshFormat: data size %lld (MSH 2.2: 8, the size of a double)",
+                      (long long)ds);
   M->binary = ft == 1;
   M->dsize = (int)ds;
   if (M->binary) {
@@ -231,7 +199,7 @@ static int msh_format(msh *M) {
                         "file?)",
                         one);
   }
-  return msh_end(M, "MeshFormat");
+  return mx_msh_end(M, "MeshFormat");
 }
 
 static int msh_nodes(msh *M) {
@@ -310,7 +278,13 @@ static int msh_nodes(msh *M) {
                       done, (unsigned long long)nn);
   M->tmin = tmin;
   M->tmax = tmax;
-  /* the tag map */
+  MX_CHECK(mx_msh_tag_map(M));
+  return mx_msh_end(M, "Nodes");
+}
+
+int mx_msh_tag_map(msh *M) {
+  rd *r = M->c.r;
+  const uint64_t nn = M->nnodes, tmin = M->tmin, tmax = M->tmax;
   if (nn > 0 && tmax - tmin < 2 * nn + 1024) {
     const size_t span = (size_t)(tmax - tmin) + 1;
     M->dense = mx_calloc(span * sizeof *M->dense);
@@ -336,22 +310,7 @@ static int msh_nodes(msh *M) {
         return mx_rd_fail(r, NULL, "node tag %llu appears twice",
                           (unsigned long long)M->sorted[i]);
   }
-  return msh_end(M, "Nodes");
-}
-
-/* The index of node tag t, or -1. */
-static int64_t msh_node(const msh *M, uint64_t t) {
-  if (t < M->tmin || t > M->tmax || M->nnodes == 0) return -1;
-  if (M->dense) return (int64_t)M->dense[t - M->tmin] - 1;
-  size_t lo = 0, hi = M->nnodes;
-  while (lo < hi) {
-    const size_t mid = lo + (hi - lo) / 2;
-    if (M->sorted[mid] < t)
-      lo = mid + 1;
-    else
-      hi = mid;
-  }
-  return lo < M->nnodes && M->sorted[lo] == t ? (int64_t)M->sidx[lo] : -1;
+  return MX_OK;
 }
 
 /* A double of $Entities (binary: no check of its value, it is not used). */
@@ -434,7 +393,7 @@ static int msh_entities(msh *M) {
   M->nvol = (size_t)n[3];
   qsort(M->surf, M->nsurf, 2 * sizeof *M->surf, surf_cmp);
   qsort(M->vol, M->nvol, 2 * sizeof *M->vol, surf_cmp);
-  return msh_end(M, "Entities");
+  return mx_msh_end(M, "Entities");
 }
 
 /* $PhysicalNames: the names of dimension 2 (boundary tags) are kept. */
@@ -466,7 +425,7 @@ static int msh_names(msh *M) {
     MX_CHECK(add_name(M->out, &M->ncap, (int32_t)tag, q1 + 1,
                       (size_t)(q2 - q1 - 1)));
   }
-  return msh_end(M, "PhysicalNames");
+  return mx_msh_end(M, "PhysicalNames");
 }
 
 /* The entry of tag e in the (tag, value) pairs of tab, sorted by tag, or
@@ -542,7 +501,7 @@ static int msh_elements(msh *M) {
       return mx_rd_fail(r, at,
                         "$Elements block %llu: %llu elements, more than announced",
                         (unsigned long long)b, (unsigned long long)n);
-    const int vt = msh_volume_type(type);
+    const int vt = mx_msh_volume_type(type);
     const int k = type > 0 && type < MSH_TYPES ? msh_type_nodes[type] : 0;
     const int skipped = type == 1 || type == 2 || type == 3 || type == 15;
     const int face = dim == 2 && (type == 2 || type == 3);
@@ -594,7 +553,7 @@ static int msh_elements(msh *M) {
         else
           MX_CHECK(cur_count(&M->c, &t, 1, "$Elements: node tag"));
         if (!row) continue;
-        const int64_t v = msh_node(M, t);
+        const int64_t v = mx_msh_node(M, t);
         if (v < 0)
           return mx_rd_fail(r, nat, "element %llu: node tag %llu is not a node",
                             (unsigned long long)tag, (unsigned long long)t);
@@ -616,7 +575,7 @@ static int msh_elements(msh *M) {
                       (unsigned long long)done, (unsigned long long)ne);
   (void)tmin;
   (void)tmax;
-  return msh_end(M, "Elements");
+  return mx_msh_end(M, "Elements");
 }
 
 /* Volume elements (and their entity tags) in the order of their tags
@@ -697,8 +656,8 @@ int mx_rd_msh(rd *r, const char *p, mx_mesh_data *out) {
     } else if (tok_eq(t, n, "$PhysicalNames")) {
       st = msh_names(&M);
     } else if (tok_eq(t, n, "$Nodes") || tok_eq(t, n, "$Elements") ||
-               tok_eq(t, n, "$Entities")) {
-      if (M.binary) { /* the data starts after the end of the line */
+               (tok_eq(t, n, "$Entities") && !M.v2)) {
+      if (M.binary && !M.v2) { /* the data starts after the end of the line */
         const char *q = M.c.p;
         while (q < r->end && (*q == ' ' || *q == '\t' || *q == '\r')) q++;
         if (q >= r->end || *q != '\n') {
@@ -708,9 +667,12 @@ int mx_rd_msh(rd *r, const char *p, mx_mesh_data *out) {
         }
         M.c.p = q + 1;
       }
-      st = tok_eq(t, n, "$Nodes")      ? msh_nodes(&M)
-           : tok_eq(t, n, "$Elements") ? msh_elements(&M)
-                                       : msh_entities(&M);
+      if (M.v2)
+        st = tok_eq(t, n, "$Nodes") ? mx_msh22_nodes(&M) : mx_msh22_elements(&M);
+      else
+        st = tok_eq(t, n, "$Nodes")      ? msh_nodes(&M)
+             : tok_eq(t, n, "$Elements") ? msh_elements(&M)
+                                         : msh_entities(&M);
     } else { /* skipped up to $End<name> at the start of a line */
       char want[80];
       snprintf(want, sizeof want, "\n$End%.*s", (int)(n > 60 ? 60 : n - 1),

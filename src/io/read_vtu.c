@@ -1,6 +1,8 @@
 /* mixoct: reading VTK XML unstructured grids, .vtu (see read_mesh.h): the
- * points, the cells as offsets + connectivity and the cell types, ASCII or
- * appended raw, cut into parts that io/vtk_cells.c assembles; the point
+ * points, the cells as offsets + connectivity and the cell types, ASCII,
+ * inline base64 or appended (raw or base64), compressed or not (the bytes
+ * of a binary array: io/vtu_decode.c), cut into parts that io/vtk_cells.c
+ * assembles; the point
  * fields surface_tag and (in a piece of a .pvtu) GlobalNodeId, and the cell
  * field material (cell_tag: one component, one value per cell, of any type,
  * whole numbers). A .pvtu master goes to read_pvtu.c.
@@ -21,13 +23,17 @@
 #include "io/vtk_cells.h"
 #include "io/vtk_fields.h"
 #include "io/vtk_xml.h"
+#include "io/vtu_decode.h"
 
 static const char *const vtu_type_name[T_NONE] = {
     "Int8",  "UInt8",  "Int16",  "UInt16",  "Int32",
     "UInt32", "Int64", "UInt64", "Float32", "Float64"};
 
+/* A DataArray's format: ascii, binary (base64 text inline) or appended. */
+enum { F_ASCII, F_BINARY, F_APPENDED };
+
 typedef struct {
-  int present, appended;
+  int present, fmt;
   vtype t;
   uint64_t ncomp, offset;
   const char *tag, *text;
@@ -52,30 +58,67 @@ static int parse_data_array(const rd *r, const xtag *t, xarr *x) {
   if (!mx_rd_xml_attr(t, "format", &v, &n))
     return mx_rd_fail(r, t->start, "<DataArray> has no format attribute");
   if (n == 8 && memcmp(v, "appended", 8) == 0) {
-    x->appended = 1;
+    x->fmt = F_APPENDED;
     return mx_rd_attr_size(r, t, "offset", &x->offset, 1);
   }
-  if (n == 5 && memcmp(v, "ascii", 5) == 0) {
-    if (t->selfclose) return mx_rd_fail(r, t->start, "empty ascii <DataArray/>");
+  const int ascii = n == 5 && memcmp(v, "ascii", 5) == 0;
+  if (ascii || (n == 6 && memcmp(v, "binary", 6) == 0)) {
+    if (t->selfclose) return mx_rd_fail(r, t->start, "empty %s <DataArray/>", ascii ? "ascii" : "binary");
+    x->fmt = ascii ? F_ASCII : F_BINARY;
     x->text = t->after;
     return MX_OK;
   }
   return mx_rd_fail(r, t->start,
-                    "<DataArray> format \"%.*s\" is not supported (appended raw or "
-                    "ascii only)",
+                    "<DataArray> format \"%.*s\" is not supported (ascii, binary or "
+                    "appended)",
                     shown(n), v);
 }
 
 typedef struct {
-  int swap, hsize;
+  int swap, hsize, b64; /* b64: <AppendedData encoding="base64"> */
+  mx_vtu_comp comp;
   const char *base; /* first byte after '_' */
 } vtu_layout;
+
+static void *rd_tmp(void *ctx, size_t bytes) {
+  void *p;
+  return mx_rd_alloc(ctx, bytes, &p) == MX_OK ? p : NULL;
+}
+
+/* The bytes of a binary or appended array x (io/vtu_decode.h). */
+static int decode(rd *r, const xarr *x, const vtu_layout *lay, const unsigned char **data,
+                  uint64_t *nbytes, const char *what) {
+  mx_vtu_src s = {NULL, NULL, r->end, lay->hsize, lay->swap, lay->comp};
+  if (x->fmt == F_BINARY) {
+    const char *lt = memchr(x->text, '<', (size_t)(r->end - x->text));
+    s.text = x->text;
+    s.end = lt ? lt : r->end;
+  } else {
+    if (!lay->base)
+      return mx_rd_fail(r, x->tag, "%s: format=\"appended\" without <AppendedData>", what);
+    const size_t avail = (size_t)(r->end - lay->base);
+    if (x->offset >= avail)
+      return mx_rd_fail(r, x->tag,
+                        "%s: appended offset %llu lies past the end of the file "
+                        "(truncated file?)",
+                        what, (unsigned long long)x->offset);
+    if (lay->b64)
+      s.text = lay->base + x->offset;
+    else
+      s.raw = lay->base + x->offset;
+  }
+  char err[MSG - 64];
+  const char *at = NULL;
+  const int st = mx_vtu_decode(&s, rd_tmp, r, data, nbytes, err, sizeof err, &at);
+  if (st == MX_EINPUT) return mx_rd_fail(r, at, "%s: %s", what, err);
+  return st;
+}
 
 /* The values of x; want is the expected count (SIZE_MAX: any, appended
  * only). */
 static int resolve(rd *r, const xarr *x, const vtu_layout *lay, size_t want,
                    rawarr *out, const char *what) {
-  if (!x->appended) {
+  if (x->fmt == F_ASCII) {
     const char *p = x->text;
     MX_CHECK(mx_rd_ascii_array(r, &p, '<', want, is_float(x->t), out, what));
     p = skip_ws(p, r->end);
@@ -83,33 +126,19 @@ static int resolve(rd *r, const xarr *x, const vtu_layout *lay, size_t want,
       return mx_rd_fail(r, p, "%s: more than the %zu expected values", what, want);
     return MX_OK;
   }
-  if (!lay->base)
-    return mx_rd_fail(r, x->tag, "%s: format=\"appended\" without <AppendedData>",
-                      what);
-  const size_t avail = (size_t)(r->end - lay->base);
-  if (x->offset > avail || avail - x->offset < (size_t)lay->hsize)
-    return mx_rd_fail(r, x->tag,
-                      "%s: appended offset %llu lies past the end of the file "
-                      "(truncated file?)",
-                      what, (unsigned long long)x->offset);
-  const unsigned char *at = (const unsigned char *)lay->base + x->offset;
-  uint64_t nbytes = load_bits(at, lay->hsize, lay->swap);
-  const size_t room = avail - x->offset - (size_t)lay->hsize;
+  const unsigned char *data;
+  uint64_t nbytes;
+  MX_CHECK(decode(r, x, lay, &data, &nbytes, what));
+  const char *at = x->fmt == F_APPENDED ? lay->base + x->offset : x->text;
   const size_t es = (size_t)vsize[x->t];
-  if (nbytes > room)
-    return mx_rd_fail(r, (const char *)at,
-                      "%s: block of %llu bytes but only %zu are left (truncated "
-                      "file?)",
-                      what, (unsigned long long)nbytes, room);
   if (nbytes % es)
-    return mx_rd_fail(r, (const char *)at,
+    return mx_rd_fail(r, at,
                       "%s: block of %llu bytes is not a whole number of %s values",
                       what, (unsigned long long)nbytes, vtu_type_name[x->t]);
   size_t n = (size_t)nbytes / es;
   if (want != SIZE_MAX && n != want)
-    return mx_rd_fail(r, (const char *)at, "%s: %zu values, expected %zu", what, n,
-                      want);
-  *out = (rawarr){at + lay->hsize, n, x->t, lay->swap, NULL};
+    return mx_rd_fail(r, at, "%s: %zu values, expected %zu", what, n, want);
+  *out = (rawarr){data, n, x->t, lay->swap, NULL};
   return MX_OK;
 }
 
@@ -177,32 +206,36 @@ static int vtkfile_layout(const rd *r, const xtag *t, vtu_layout *lay) {
     return mx_rd_fail(r, t->start, "header_type must be UInt32 or UInt64");
   const char *cv;
   size_t cn;
-  if (mx_rd_xml_attr(t, "compressor", &cv, &cn) && cn > 0)
-    return mx_rd_fail(r, t->start,
-                      "compressed data (%.*s) is not supported: write the file "
-                      "uncompressed",
-                      shown(cn), cv);
+  lay->comp = MX_VTU_RAW;
+  if (mx_rd_xml_attr(t, "compressor", &cv, &cn) && cn > 0) {
+    const int c = mx_vtu_compressor(cv, cn);
+    if (c < 0)
+      return mx_rd_fail(r, t->start,
+                        "compressor \"%.*s\" is not supported (vtkZLibDataCompressor, "
+                        "vtkLZ4DataCompressor or vtkLZMADataCompressor)",
+                        shown(cn), cv);
+    lay->comp = (mx_vtu_comp)c;
+  }
   return MX_OK;
 }
 
-/* The '_' that starts the raw appended data after the tag t into lay. */
+/* The '_' that starts the appended data after the tag t into lay. */
 static int appended_start(rd *r, const xtag *t, vtu_layout *lay) {
-  if (!mx_rd_attr_eq(t, "encoding", "raw"))
-    return mx_rd_fail(r, t->start,
-                      "<AppendedData> encoding must be \"raw\" (base64 is not "
-                      "supported)");
+  lay->b64 = mx_rd_attr_eq(t, "encoding", "base64");
+  if (!lay->b64 && !mx_rd_attr_eq(t, "encoding", "raw"))
+    return mx_rd_fail(r, t->start, "<AppendedData> encoding must be \"raw\" or \"base64\"");
   const char *q = skip_ws(t->after, r->end);
   if (q >= r->end || *q != '_')
     return mx_rd_fail(r, q, "expected '_' at the start of the appended data");
   lay->base = q + 1;
-  r->bin_from = lay->base;
+  if (!lay->b64) r->bin_from = lay->base;
   return MX_OK;
 }
 
 int mx_rd_vtu(rd *r, mx_mesh_data *out) {
   const char *p = r->buf;
   int seen = 0, pieces = 0, in_points = 0, in_cells = 0, in_pdata = 0, in_cdata = 0;
-  vtu_layout lay = {0, 4, NULL};
+  vtu_layout lay = {0, 4, 0, MX_VTU_RAW, NULL};
   xarr pts = {0}, con = {0}, offs = {0}, typ = {0}, ntag = {0}, gidx = {0}, mat = {0};
   uint64_t npts = 0, ncells = 0;
   const char *piece_tag = NULL;
@@ -306,7 +339,7 @@ int mx_rd_vtu(rd *r, mx_mesh_data *out) {
     MX_CHECK(resolve(r, &offs, &lay, P.ncells, &P.off, "offsets"));
     MX_CHECK(resolve(r, &typ, &lay, P.ncells, &P.types, "types"));
     size_t want = SIZE_MAX;
-    if (!con.appended) {
+    if (con.fmt == F_ASCII) {
       int64_t last = P.ncells ? raw_int(&P.off, P.ncells - 1) : 0;
       if (last < 0 || (uint64_t)last > 8 * (uint64_t)P.ncells)
         return mx_rd_fail(r, offs.tag, "offsets: the last offset %lld is invalid",
@@ -385,7 +418,7 @@ static int vtu_block(rd *r, const vtu_layout *lay, const xarr *offs, const xarr 
   }
   MX_CHECK(resolve(r, offs, lay, ncells, &c->off, "offsets"));
   size_t want = SIZE_MAX;
-  if (!con->appended) {
+  if (con->fmt == F_ASCII) {
     const int64_t last = raw_int(&c->off, ncells - 1);
     if (last < 0)
       return mx_rd_fail(r, offs->tag, "offsets: the last offset %lld is invalid", (long long)last);
@@ -397,7 +430,7 @@ static int vtu_block(rd *r, const vtu_layout *lay, const xarr *offs, const xarr 
 int mx_rd_vtu_fields(rd *r, rd_fields *f) {
   const char *p = r->buf;
   int seen = 0, poly = 0, pieces = 0, in_points = 0, block = -1, data = -1;
-  vtu_layout lay = {0, 4, NULL};
+  vtu_layout lay = {0, 4, 0, MX_VTU_RAW, NULL};
   xarr pts = {0}, con[RD_MAX_BLOCKS], offs[RD_MAX_BLOCKS];
   memset(con, 0, sizeof con);
   memset(offs, 0, sizeof offs);

@@ -13,27 +13,31 @@
 
 #include "base/common.h"
 
-/* Cell types while assembling: ours (MX_TET .. MX_HEX) and, in a planar
- * read, VTK's triangle and quadrilateral (A_TRI, A_QUAD), which
- * planar_cells then turns into faces. */
-enum { A_TRI = 4, A_QUAD = 5 };
-static const int any_nodes[6] = {4, 5, 6, 8, 3, 4};
+/* Cell types while assembling: ours (MX_TET .. MX_HEX) and VTK's
+ * triangle and quadrilateral (A_TRI, A_QUAD), vertex and line (A_VERT,
+ * A_LINE). Beside volume cells, triangles and quadrilaterals become the
+ * tagged faces and vertices and lines are skipped (mixed_cells: Gmsh's .vtk
+ * has a volume mesh's boundary faces); without volume cells, a planar read
+ * turns triangles and quadrilaterals into a 2D mesh (planar_cells). */
+enum { A_TRI = 4, A_QUAD = 5, A_VERT = 6, A_LINE = 7 };
+static const int any_nodes[8] = {4, 5, 6, 8, 3, 4, 1, 2};
 
-static int vtk_to_mx(int64_t code, int planar) {
+static int vtk_to_mx(int64_t code) {
   switch (code) {
     case 10: return MX_TET;
     case 14: return MX_PYRAMID;
     case 13: return MX_PRISM;
     case 12: return MX_HEX;
-    case 5: return planar ? A_TRI : -1;
-    case 9: return planar ? A_QUAD : -1;
+    case 5: return A_TRI;
+    case 9: return A_QUAD;
+    case 1: return A_VERT;
+    case 3: return A_LINE;
     default: return -1;
   }
 }
 
-static const char *const type_word[6] = {"tetrahedron", "pyramid", "wedge",
-                                         "hexahedron", "triangle",
-                                         "quadrilateral"};
+static const char *const type_word[8] = {"tetrahedron", "pyramid", "wedge", "hexahedron",
+                                         "triangle", "quadrilateral", "vertex", "line"};
 
 /* Cell c of the offsets form into row; 0 if fine, else 1 and (when msg is
  * not NULL) the reason. */
@@ -129,6 +133,70 @@ static int planar_cells(rd *r, const parts *P, mx_mesh_data *out) {
   return MX_OK;
 }
 
+/* Volume cells and others: the triangles and quadrilaterals become the
+ * faces (tag 0; mx_rd_cell_tags gives them their material value), vertices
+ * and lines are dropped, the volume cells kept in order; r->cell_from and
+ * r->face_from remember which cell of the file each one was. Without volume
+ * cells: a 2D mesh in a planar read (planar_cells), else an error. */
+static int mixed_cells(rd *r, const parts *P, mx_mesh_data *out) {
+  const size_t nc = out->ncells;
+  size_t nvol = 0, nflat = 0, first = SIZE_MAX, other = SIZE_MAX;
+#pragma omp parallel for schedule(static) reduction(+ : nvol, nflat) \
+    reduction(min : first, other) if (nc > 65536)
+  for (size_t c = 0; c < nc; c++) {
+    const int t = out->type[c];
+    if (t < A_TRI) {
+      nvol++;
+      continue;
+    }
+    if (c < first) first = c;
+    if (t == A_TRI || t == A_QUAD)
+      nflat++;
+    else if (c < other)
+      other = c;
+  }
+  if (nvol == nc) return MX_OK;
+  if (nvol == 0) {
+    const size_t c = r->planar ? other : first;
+    if (c != SIZE_MAX)
+      return mx_rd_fail(r, mx_rd_arr_at(r, &P->types, c),
+                        "cell %zu is a %s and the file has no volume cell: %s", c,
+                        type_word[out->type[c]],
+                        r->planar ? "a 2D mesh is made of triangles and quadrilaterals"
+                                  : "a volume mesh is expected");
+    return planar_cells(r, P, out);
+  }
+  void *cf, *ff;
+  MX_CHECK(mx_rd_alloc(r, nvol * sizeof(uint32_t), &cf));
+  MX_CHECK(mx_rd_alloc(r, (nflat + 1) * sizeof(uint32_t), &ff));
+  uint32_t *cell_from = cf, *face_from = ff;
+  out->face_nn = mx_alloc(nflat + 1);
+  out->face_conn = mx_alloc((4 * nflat + 1) * sizeof *out->face_conn);
+  out->face_tag = mx_calloc((nflat + 1) * sizeof *out->face_tag);
+  if (!out->face_nn || !out->face_conn || !out->face_tag) return MX_ENOMEM;
+  size_t k = 0, f = 0;
+  for (size_t c = 0; c < nc; c++) {
+    const int t = out->type[c];
+    if (t < A_TRI) {
+      out->type[k] = (uint8_t)t;
+      memmove(out->conn + 8 * k, out->conn + 8 * c, 8 * sizeof *out->conn);
+      cell_from[k++] = (uint32_t)c;
+    } else if (t == A_TRI || t == A_QUAD) {
+      const int n = any_nodes[t];
+      out->face_nn[f] = (uint8_t)n;
+      for (int j = 0; j < 4; j++)
+        out->face_conn[4 * f + (size_t)j] = j < n ? out->conn[8 * c + (size_t)j] : 0;
+      face_from[f++] = (uint32_t)c;
+    }
+  }
+  out->ncells = nvol;
+  out->nfaces = nflat;
+  r->cell_from = cell_from;
+  r->face_from = face_from;
+  r->file_cells = nc;
+  return MX_OK;
+}
+
 int mx_rd_assemble(rd *r, parts *P, mx_mesh_data *out) {
   const size_t nn = P->nnodes, nc = P->ncells;
   if (nn >= UINT32_MAX)
@@ -159,17 +227,19 @@ int mx_rd_assemble(rd *r, parts *P, mx_mesh_data *out) {
   if (!out->type) return MX_ENOMEM;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (nc > 65536)
   for (size_t c = 0; c < nc; c++) {
-    int t = vtk_to_mx(raw_int(&P->types, c), r->planar);
+    int t = vtk_to_mx(raw_int(&P->types, c));
     out->type[c] = (uint8_t)(t < 0 ? 0 : t);
     if (t < 0 && c < bad) bad = c;
   }
   if (bad != SIZE_MAX)
     return mx_rd_fail(r, mx_rd_arr_at(r, &P->types, bad),
                       "cell %zu has VTK type %lld: only tetrahedra (10), pyramids "
-                      "(14), wedges (13) and hexahedra (12)%s are supported",
+                      "(14), wedges (13) and hexahedra (12) are supported, with "
+                      "triangles (5) and quadrilaterals (9) as boundary faces and "
+                      "vertices (1) and lines (3) skipped%s",
                       bad, (long long)raw_int(&P->types, bad),
-                      r->planar ? ", or triangles (5) and quadrilaterals (9) in "
-                            "the plane z = 0 (a 2D mesh)," : "");
+                      r->planar ? ", or triangles and quadrilaterals in "
+                            "the plane z = 0 (a 2D mesh)" : "");
   /* Connectivity. */
   if (P->list_form) {
 #pragma omp parallel for schedule(static) reduction(min : bad) if (nc > 65536)
@@ -221,7 +291,7 @@ int mx_rd_assemble(rd *r, parts *P, mx_mesh_data *out) {
                       "indices)",
                       bad, v, nn);
   }
-  return r->planar ? planar_cells(r, P, out) : MX_OK;
+  return mixed_cells(r, P, out);
 }
 
 /* The point field surface_tag from its raw values (one per node). */
@@ -244,11 +314,14 @@ int mx_rd_node_tags(rd *r, const rawarr *a, mx_mesh_data *out) {
 int mx_rd_cell_tags(rd *r, const rawarr *a, mx_mesh_data *out) {
   const size_t n = out->ncells;
   if (n == 0) return MX_OK; /* no cells (or, in a planar read, faces) */
-  if (a->n != n) /* the readers check it first */
-    return mx_rd_fail(r, NULL, "material: %zu values for %zu cells", a->n, n);
+  const size_t nfile = r->cell_from ? r->file_cells : n;
+  if (a->n != nfile) /* the readers check it first */
+    return mx_rd_fail(r, NULL, "material: %zu values for %zu cells", a->n, nfile);
   out->cell_tag = mx_alloc((n + 1) * sizeof *out->cell_tag);
   if (!out->cell_tag) return MX_ENOMEM;
-  for (size_t i = 0; i < n; i++) {
+  for (size_t k = 0; k < n + (r->cell_from ? out->nfaces : 0); k++) {
+    /* the volume cells, then (a mixed file) the faces */
+    const size_t i = !r->cell_from ? k : k < n ? r->cell_from[k] : r->face_from[k - n];
     int64_t v;
     if (is_float(a->t)) {
       const double d = raw_double(a, i);
@@ -264,7 +337,10 @@ int mx_rd_cell_tags(rd *r, const rawarr *a, mx_mesh_data *out) {
         return mx_rd_fail(r, mx_rd_arr_at(r, a, i),
                           "material: value %zu is out of range (32-bit integers)", i);
     }
-    out->cell_tag[i] = (int32_t)v;
+    if (k < n)
+      out->cell_tag[k] = (int32_t)v;
+    else
+      out->face_tag[k - n] = (int32_t)v;
   }
   return MX_OK;
 }
