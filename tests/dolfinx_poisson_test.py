@@ -25,17 +25,11 @@ Without dolfinx (Debian: python3-dolfinx) it prints SKIP and exits 77
 seconds (dolfinx compiles its forms once, in its cache).
 """
 
-import os
 import sys
 import time
 
-
-def skip(why):
-    if os.environ.get("CI"):
-        print("FAIL: %s (CI is set: the dolfinx test must run)" % why)
-        sys.exit(1)
-    print("SKIP: %s" % why)
-    sys.exit(77)
+import testlib
+from testlib import skip
 
 
 try:
@@ -47,30 +41,20 @@ try:
     from dolfinx.fem.petsc import LinearProblem
 except ImportError as e:
     skip("dolfinx missing (%s; apt-get install --no-install-recommends "
-         "python3-dolfinx)" % e)
+         "python3-dolfinx)" % e, "dolfinx")
 
 import mixoct  # noqa: E402
 
-CUBE_V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
-                   [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], float)
-CUBE_T = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5],
-                   [0, 5, 4], [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6],
-                   [3, 0, 4], [3, 4, 7]], np.uint32)
+CUBE_V = np.array(testlib.CUBE_V, float)
+CUBE_T = np.array(testlib.CUBE_T, np.uint32)
 LEVELS = (2, 3, 4)
 MIN_RATE = 1.5
 
-fails = 0
-
-
-def check(cond, msg):
-    global fails
-    print(("ok   " if cond else "FAIL ") + msg, flush=True)
-    if not cond:
-        fails += 1
+check = testlib.Checks()
 
 
 def exact_np(p):
-    return np.sin(p[0]) * np.exp(p[1]) + p[2] ** 3
+    return testlib.exact(p[0], p[1], p[2], np)
 
 
 def tet_mesh(level):
@@ -131,8 +115,8 @@ def main():
         if len(errors) > 1:
             check(rate > MIN_RATE, "level %d -> %d: L2 rate %.2f > %.1f"
                   % (level - 1, level, rate, MIN_RATE))
-    if fails:
-        print("%d check(s) failed" % fails)
+    if check.fails:
+        print("%d check(s) failed" % check.fails)
         sys.exit(1)
 
 

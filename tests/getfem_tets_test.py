@@ -43,13 +43,8 @@ import sys
 import tempfile
 import time
 
-
-def skip(why):
-    if os.environ.get("CI"):
-        print("FAIL: %s (CI is set: the GetFEM test must run)" % why)
-        sys.exit(1)
-    print("SKIP: %s" % why)
-    sys.exit(77)
+import testlib
+from testlib import skip
 
 
 try:
@@ -57,15 +52,12 @@ try:
     import getfem as gf
 except ImportError as e:
     skip("numpy or getfem missing (%s; apt-get install --no-install-recommends "
-         "python3-numpy python3-getfem)" % e)
+         "python3-numpy python3-getfem)" % e, "GetFEM")
 
 import mixoct  # noqa: E402
 
-CUBE_V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
-                   [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], float)
-CUBE_T = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5],
-                   [0, 5, 4], [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6],
-                   [3, 0, 4], [3, 4, 7]], np.uint32)
+CUBE_V = np.array(testlib.CUBE_V, float)
+CUBE_T = np.array(testlib.CUBE_T, np.uint32)
 FEM = {"GT_PK(3,1)": "FEM_PK(3,1)", "GT_PYRAMID(1)": "FEM_PYRAMID_LAGRANGE(1)",
        "GT_PRISM(3,1)": "FEM_PK_PRISM(3,1)", "GT_QK(3,1)": "FEM_QK(3,1)"}
 EXACT = "(sin(X(1))*exp(X(2))+pow(X(3),3))"
@@ -74,18 +66,11 @@ LEVELS = (2, 3, 4)
 MIN_RATE = 1.5
 MIN_DIFF_RATE = 1.2
 
-fails = 0
-
-
-def check(cond, msg):
-    global fails
-    print(("ok   " if cond else "FAIL ") + msg, flush=True)
-    if not cond:
-        fails += 1
+check = testlib.Checks()
 
 
 def exact(p):
-    return np.sin(p[:, 0]) * np.exp(p[:, 1]) + p[:, 2] ** 3
+    return testlib.exact(p[:, 0], p[:, 1], p[:, 2], np)
 
 
 def outer_face_counts(m):
@@ -179,8 +164,8 @@ def main():
               % (la, lb, rd, MIN_DIFF_RATE))
         check(db < max(na0, na1), "level %d: difference %.3e below level %d's largest nodal "
               "error %.3e" % (lb, db, la, max(na0, na1)))
-    if fails:
-        print("%d check(s) failed" % fails)
+    if check.fails:
+        print("%d check(s) failed" % check.fails)
         sys.exit(1)
 
 

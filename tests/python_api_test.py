@@ -11,7 +11,6 @@ check and "N passed, N failed"; a check whose tool is missing (meshio)
 says SKIP, a failure when CI is set.
 """
 import ast
-import ctypes
 import inspect
 import json
 import os
@@ -20,7 +19,6 @@ import subprocess
 import sys
 import tempfile
 import time
-import traceback
 
 try:
     import numpy as np
@@ -31,6 +29,8 @@ except ImportError:
     print("SKIP: numpy missing (apt-get install python3-numpy)")
     sys.exit(77)
 
+import testlib
+from testlib import Skip, check, raises
 import mixoct  # noqa: E402
 
 MIXOCT = sys.argv[1] if len(sys.argv) > 1 else "mixoct"
@@ -38,36 +38,7 @@ TMP = sys.argv[2] if len(sys.argv) > 2 else tempfile.mkdtemp()
 os.makedirs(TMP, exist_ok=True)
 DATA = os.environ.get("MIXOCT_DATA", os.path.join(os.path.dirname(__file__), "..", "..",
                                                   "shared", "data"))
-RESULTS = []
-
-
-class Skip(Exception):
-    pass
-
-
-def check(fn):
-    try:
-        fn()
-    except Skip as e:
-        ok = not os.environ.get("CI")
-        RESULTS.append((fn.__name__, ok))
-        print("%s %s: %s" % ("SKIP" if ok else "FAIL", fn.__name__, e))
-    except Exception:
-        RESULTS.append((fn.__name__, False))
-        print("FAIL %s" % fn.__name__)
-        traceback.print_exc(file=sys.stdout)
-    else:
-        RESULTS.append((fn.__name__, True))
-        print("ok   %s" % fn.__name__)
-    return fn
-
-
-def raises(exc, fn, *args, **kw):
-    try:
-        fn(*args, **kw)
-    except exc as e:
-        return e
-    raise AssertionError("%s not raised by %s" % (exc.__name__, fn.__name__))
+RESULTS = testlib.RESULTS
 
 
 def meshio_or_skip():
@@ -188,9 +159,7 @@ def boundary_faces_are_the_faces_used_once():
     bf = m.boundary_faces()
     mm = m.to_meshio(boundary=False)
     count = {}
-    vol = 0.0
     for blk in mm.cells:
-        P = mm.points[blk.data]
         for f in VTK_FACES[blk.type]:
             for row in blk.data[:, list(f)]:
                 key = tuple(sorted(row.tolist()))
@@ -203,6 +172,7 @@ def boundary_faces_are_the_faces_used_once():
     for r, e in zip(nodes, bf["element"]):
         assert set(int(v) for v in r if v != mixoct.NO_NODE) <= set(conn[e].tolist())
     x = m.nodes
+    vol = 0.0
     for r in nodes:   # divergence theorem over the (fan-split) faces
         k = 3 if r[3] == mixoct.NO_NODE else 4
         for j in range(1, k - 1):

@@ -10,38 +10,18 @@ import gc
 import os
 import sys
 import tempfile
-import traceback
 import weakref
 
 import numpy as np
 
+import testlib
+from testlib import check, raises
 import mixoct
 
 TMP = sys.argv[1] if len(sys.argv) > 1 else "/tmp/mixoct_pytest"
 os.makedirs(TMP, exist_ok=True)
 
-RESULTS = []
-
-
-def check(fn):
-    try:
-        fn()
-    except Exception:
-        RESULTS.append((fn.__name__, False))
-        print("FAIL %s" % fn.__name__)
-        traceback.print_exc(file=sys.stdout)
-    else:
-        RESULTS.append((fn.__name__, True))
-        print("ok   %s" % fn.__name__)
-    return fn
-
-
-def raises(exc, fn, *args, **kw):
-    try:
-        fn(*args, **kw)
-    except exc as e:
-        return e
-    raise AssertionError("%s not raised by %s" % (exc.__name__, fn.__name__))
+RESULTS = testlib.RESULTS
 
 
 def demo(level=3, **kw):
