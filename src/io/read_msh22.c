@@ -52,20 +52,29 @@ static int count_line(msh *M, uint64_t *n, const char *what) {
   return MX_OK;
 }
 
+/* The count line of a section: n items of at least `least` bytes each
+ * must fit in what is left of the file (and below 2^32). */
+static int section_count(msh *M, const char *section, const char *noun, uint64_t least,
+                         uint64_t *n) {
+  const char *at = cur_skip(&M->c);
+  char what[64];
+  snprintf(what, sizeof what, "%s: number of %s", section, noun);
+  MX_CHECK(count_line(M, n, what));
+  if (*n >= UINT32_MAX || *n > cur_left(&M->c) / least + 1)
+    return mx_rd_fail(M->c.r, at,
+                      "%s: %llu %s announced but the file is too short "
+                      "(truncated file or wrong count)",
+                      section, (unsigned long long)*n, noun);
+  return MX_OK;
+}
+
 int mx_msh22_nodes(msh *M) {
   rd *r = M->c.r;
   if (M->have_nodes) return mx_rd_fail(r, M->c.p, "$Nodes given twice");
   M->have_nodes = 1;
-  const char *at = cur_skip(&M->c);
   uint64_t nn = 0;
-  MX_CHECK(count_line(M, &nn, "$Nodes: number of nodes"));
   /* a node takes an int and 3 doubles (binary), "1 0 0 0\n" (text) */
-  const uint64_t least = M->binary ? 28 : 8;
-  if (nn >= UINT32_MAX || nn > cur_left(&M->c) / least + 1)
-    return mx_rd_fail(r, at,
-                      "$Nodes: %llu nodes announced but the file is too short "
-                      "(truncated file or wrong count)",
-                      (unsigned long long)nn);
+  MX_CHECK(section_count(M, "$Nodes", "nodes", M->binary ? 28 : 8, &nn));
   if (M->binary) MX_CHECK(cur_need(&M->c, nn * 28, "$Nodes"));
   M->nnodes = (size_t)nn;
   M->out->nnodes = (size_t)nn;
@@ -184,24 +193,17 @@ int mx_msh22_elements(msh *M) {
   rd *r = M->c.r;
   if (!M->have_nodes) return mx_rd_fail(r, M->c.p, "$Elements before $Nodes");
   if (M->etag) return mx_rd_fail(r, M->c.p, "$Elements given twice");
-  const char *at = cur_skip(&M->c);
   uint64_t ne = 0;
-  MX_CHECK(count_line(M, &ne, "$Elements: number of elements"));
   /* an element takes at least 4 ints (binary: tag, no tag, one node), or
    * "1 15 0 1\n" */
-  const uint64_t least = M->binary ? 12 : 8;
-  if (ne >= UINT32_MAX || ne > cur_left(&M->c) / least + 1)
-    return mx_rd_fail(r, at,
-                      "$Elements: %llu elements announced but the file is too short "
-                      "(truncated file or wrong count)",
-                      (unsigned long long)ne);
+  MX_CHECK(section_count(M, "$Elements", "elements", M->binary ? 12 : 8, &ne));
   M->etag = mx_alloc(sizeof *M->etag); /* grows with the cells */
   if (!M->etag) return MX_ENOMEM;
   grow22 g = {0, ne};
   uint64_t done = 0;
   while (done < ne) {
     int64_t type = 0, n = 1, ntags = 0, tag = 0;
-    at = at22(M);
+    const char *at = at22(M);
     if (M->binary) {
       MX_CHECK(int22(M, &type, "$Elements: block header"));
       MX_CHECK(int22(M, &n, "$Elements: block header"));
