@@ -36,7 +36,7 @@ if ! (cd "$TMP/src" && "$PY" -m pip install --no-build-isolation --no-deps --no-
   echo "FAIL: pip install"
   exit 1
 fi
-for f in __init__.py __init__.pyi py.typed libmixoct.so; do
+for f in __init__.py _capi.py _mesher.py __init__.pyi py.typed libmixoct.so; do
   [ -f "$TMP/target/mixoct/$f" ] || { echo "FAIL: mixoct/$f not installed"; ls -R "$TMP/target"; exit 1; }
 done
 cd "$TMP" && env -u MIXOCT_LIB PYTHONPATH="$TMP/target" "$PY" - "$TMP/target" <<'PYEOF'
