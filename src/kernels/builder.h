@@ -45,6 +45,11 @@ typedef struct {
    * builder). The program uses it for its progress line. */
   void (*on_level)(void *user, int level, int max_level);
   void *on_level_user;
+  /* 1: a cancel (base/cancel.h) may also stop a level between its split
+   * and its balance, leaving an unbalanced tree: only for a caller that
+   * drops the tree when cancelled (a fresh mesh). 0 by default: levels
+   * are whole. */
+  int cancel_mid_level;
 
   /* scratch of mx_split_octants, grown on demand, reused */
   uint8_t *scratch_mask;

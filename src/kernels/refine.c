@@ -559,6 +559,7 @@ static int refine_levels(mx_builder *B, int balance_now) {
     int st = mx_split_octants(B, cand, n, 0);
     double t1 = mx_wtime();
     B->stats.t_refine += t1 - t0;
+    if (!st && B->cancel_mid_level && mx_cancelled()) st = MX_ECANCELED; /* the tree is dropped */
     if (!st && balance_now) st = mx_balance_drain(B, cand, n);
     double t2 = mx_wtime();
     B->stats.t_balance += t2 - t1;

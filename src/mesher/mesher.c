@@ -478,6 +478,9 @@ int mx_build_tree(mx_mesher *m) {
   MX_CHECK(mx_build_roots(&m->B));
   m->rec->S.ph.grid += mx_wtime() - t0;
   MX_CHECK(mx_mesher_stage(m, "refine"));
+  /* every caller drops a tree whose build failed: a cancel may stop a
+   * level half-way (the last level is the longest step at -s 9) */
+  m->B.cancel_mid_level = 1;
   if (use_edges) {
     MX_CHECK(mx_refine_balanced(&m->B));
     MX_CHECK(mx_resolve_closures(&m->B));
@@ -568,7 +571,13 @@ static void count_mesh(mx_mesher *m) {
 }
 
 static int transition(mx_mesher *m) {
-  if (!m->have_tree) MX_CHECK(mx_build_tree(m));
+  if (!m->have_tree) {
+    const int st = mx_build_tree(m);
+    if (st) { /* no half-built tree left for the next call to take */
+      mx_tree_clear(m);
+      return st;
+    }
+  }
   mx_mesh_clear(m);
   const double t = mx_wtime();
   MX_CHECK(mx_mesher_stage(m, "transition"));
