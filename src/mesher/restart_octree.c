@@ -737,6 +737,7 @@ static int load_restart(mx_mesher *m, const char *path) {
 int mx_mesher_load_restart(mx_mesher *m, const char *path) {
   mx_call c;
   mx_call_begin(m, &c);
+  mx_written_forget(m); /* the mesh changes */
   const double t = mx_wtime();
   const double read = m->rec->S.ph.read;
   memset(&m->rec->S, 0, sizeof m->rec->S);
