@@ -91,6 +91,8 @@ typedef struct {
   const mx_field *fd; /* $ElementData: the field */
   size_t base;        /* faces: the first of the block's run in its list;
                          cells: the written position of item 0 */
+  int dense;          /* cells: every written position of the run is the
+                         block's (the written order groups the blocks) */
 } msh_ctx;
 
 /* ---- binary stores (host byte order) -------------------------------------- */
@@ -148,12 +150,77 @@ static inline int in_block(const msh_ctx *ctx, size_t c) {
   return m->type[c] == ctx->type && (ctx->body == 0 || m->cell_body[c] == ctx->body);
 }
 
+/* A dense block's cells (every position its own) of nn nodes each, the
+ * node order Gmsh's (mx_msh_perm, the identity: io/msh_order.h): tag, then
+ * the nodes, 8 bytes each. Inlined per node count (the loop unrolled). */
+static inline __attribute__((always_inline)) size_t
+put_cells(const mx_mesh_view *m, size_t k0, size_t k1, const int nn, char *out) {
+  uint64_t rec[9];
+  char *o = out;
+  for (size_t k = k0; k < k1; k++) {
+    const uint32_t *row = m->conn + 8 * mx_view_cell(m, k);
+    rec[0] = (uint64_t)k + 1;
+    for (int j = 0; j < nn; j++) rec[1 + j] = (uint64_t)row[j] + 1;
+    memcpy(o, rec, 8 * (size_t)(nn + 1));
+    o += 8 * (size_t)(nn + 1);
+  }
+  return (size_t)(o - out);
+}
+
+static int perm_identity(int t) {
+  for (int j = 0; j < mx_cell_nodes[t]; j++)
+    if (mx_msh_perm[t][j] != j) return 0;
+  return 1;
+}
+
+/* A dense block's $ElementData lines, binary: the int32 tag and the
+ * double value, per source kind of the field (the same doubles as
+ * mx_field_double and mx_field_int give). */
+#define MSH_DATA_LOOP(VALUE)                                          \
+  for (size_t k = k0; k < k1; k++, o += 12) {                         \
+    const size_t c = mx_view_cell(m, k);                              \
+    const int32_t t = (int32_t)(k + 1);                               \
+    const double v = (VALUE);                                         \
+    memcpy(o, &t, 4);                                                 \
+    memcpy(o + 4, &v, 8);                                             \
+  }
+
+static size_t put_data_bin(const mx_mesh_view *m, const mx_field *fd, size_t k0, size_t k1,
+                           char *out) {
+  char *o = out;
+  if (fd->is_double && fd->dvalues) {
+    const double *src = fd->dvalues;
+    MSH_DATA_LOOP(src[c])
+  } else if (fd->is_double) {
+    const float *src = fd->fvalues;
+    MSH_DATA_LOOP((double)src[c])
+  } else if (fd->ivalues) {
+    const int32_t *src = fd->ivalues;
+    MSH_DATA_LOOP((double)src[c])
+  } else {
+    const uint8_t *src = fd->u8values;
+    MSH_DATA_LOOP((double)(int32_t)src[c])
+  }
+  return (size_t)(o - out);
+}
+#undef MSH_DATA_LOOP
+
 static size_t fill_elements_bin(const void *vctx, size_t b, size_t e,
                                 char *out) {
   const msh_ctx *ctx = vctx;
   const mx_mesh_view *m = ctx->m;
   const int t = ctx->type, nn = mx_cell_nodes[t];
   const int8_t *perm = mx_msh_perm[t];
+  if (ctx->dense && ctx->fd) return put_data_bin(m, ctx->fd, ctx->base + b, ctx->base + e, out);
+  if (ctx->dense && perm_identity(t)) {
+    const size_t k0 = ctx->base + b, k1 = ctx->base + e;
+    switch (nn) {
+      case 4: return put_cells(m, k0, k1, 4, out);
+      case 5: return put_cells(m, k0, k1, 5, out);
+      case 6: return put_cells(m, k0, k1, 6, out);
+      default: return put_cells(m, k0, k1, 8, out);
+    }
+  }
   size_t n = 0;
   for (size_t k = ctx->base + b; k < ctx->base + e; k++) {
     const size_t c = mx_view_cell(m, k);
@@ -470,7 +537,7 @@ static int write_nodes(mx_afile *f, const mx_mesh_view *m, int binary) {
   const size_t nn = m->nnodes;
   const size_t nblocks = nn > 0;
   const size_t tag_min = nn > 0, tag_max = nn;
-  msh_ctx ctx = {m, NULL, 0, 0, binary, NULL, 0};
+  msh_ctx ctx = {m, NULL, 0, 0, binary, NULL, 0, 0};
   MX_CHECK(mx_afile_printf(f, "$Nodes\n"));
   if (binary) {
     const uint64_t head[4] = {nblocks, nn, tag_min, tag_max};
@@ -527,8 +594,8 @@ static int block_head(mx_afile *f, int dim, int tag, int type, size_t count, int
 static int cell_block(mx_afile *f, const mx_mesh_view *m, const msh_layout *L, int entity,
                       int body, int t, size_t count, int binary, const mx_field *fd) {
   const size_t r = 4 * (size_t)body + (size_t)t; /* its written positions */
-  msh_ctx ctx = {m, NULL, t, body, binary, fd, L->klo[r]};
   const size_t nitems = L->khi[r] - L->klo[r];
+  msh_ctx ctx = {m, NULL, t, body, binary, fd, L->klo[r], nitems == count};
   const size_t per_cell = (size_t)mx_cell_nodes[t] + 1;
   const size_t data_max = MX_U64_CHARS + MX_DOUBLE_CHARS + 2;
   if (!fd) MX_CHECK(block_head(f, 3, entity, mx_msh_type[t], count, binary));
@@ -539,7 +606,7 @@ static int cell_block(mx_afile *f, const mx_mesh_view *m, const msh_layout *L, i
 
 static int face_block(mx_afile *f, const mx_mesh_view *m, const msh_layout *L, int tag, int nv,
                       size_t count, int binary, const mx_field *fd) {
-  msh_ctx ctx = {m, L, nv, tag, binary, fd, 0};
+  msh_ctx ctx = {m, L, nv, tag, binary, fd, 0, 0};
   /* the tag's run of the sorted list */
   const size_t b = nv == 3 ? L->tri0[tag] : L->quad0[tag];
   if (!fd) MX_CHECK(block_head(f, 2, tag, nv == 3 ? 2 : 3, count, binary));
