@@ -358,13 +358,58 @@ static void box_add(double *box, const double *p) {
   }
 }
 
+/* box grown to hold box o (min and max corners; an empty o, its min above
+ * its max, leaves box as it was) */
+static void box_merge(double *box, const double *o) {
+  for (int a = 0; a < 3; a++) {
+    box[a] = o[a] < box[a] ? o[a] : box[a];
+    box[3 + a] = o[3 + a] > box[3 + a] ? o[3 + a] : box[3 + a];
+  }
+}
+
+/* The faces of one kind (nv nodes) into the tags' counts and boxes and
+ * their bodies' boxes: in parallel, each thread with its own boxes, merged
+ * after (min and max: the same in any order). */
 static void faces_into(const mx_mesh_view *m, msh_layout *L, const uint32_t *fv,
-                       const int32_t *tag, size_t n, int nv, size_t *cnt) {
-  for (size_t i = 0; i < n; i++) {
-    const int t = tag[i] >= 1 && tag[i] <= L->ntags ? tag[i] : 0;
-    if (!t) continue;
-    cnt[t]++;
-    for (int j = 0; j < nv; j++) box_add(L->tbox + 6 * t, m->xyz + 3 * (size_t)fv[(size_t)nv * i + j]);
+                       const int32_t *tag, const uint64_t *src, size_t n, int nv, size_t *cnt) {
+  const size_t nt = (size_t)L->ntags + 1, nb = (size_t)L->nbodies + 1;
+  double *tbox = L->tbox, *bbox = L->bbox;
+  if (nt > 67 || nb > 67) { /* more than the mesher makes: serially */
+    for (size_t i = 0; i < n; i++) {
+      const int t = tag[i] >= 1 && tag[i] <= L->ntags ? tag[i] : 0;
+      const int32_t b = m->cell_body[src[i] >> 3];
+      const int inb = b >= 1 && b <= L->nbodies;
+      if (t) cnt[t]++;
+      for (int j = 0; j < nv; j++) {
+        const double *p = m->xyz + 3 * (size_t)fv[(size_t)nv * i + j];
+        if (t) box_add(tbox + 6 * t, p);
+        if (inb) box_add(bbox + 6 * b, p);
+      }
+    }
+    return;
+  }
+#pragma omp parallel if (n > 65536)
+  {
+    double tb[6 * 67], bb[6 * 67];
+    for (size_t i = 0; i < 6 * nt; i++) tb[i] = i % 6 < 3 ? INFINITY : -INFINITY;
+    for (size_t i = 0; i < 6 * nb; i++) bb[i] = i % 6 < 3 ? INFINITY : -INFINITY;
+#pragma omp for schedule(static) reduction(+ : cnt[:nt])
+    for (size_t i = 0; i < n; i++) {
+      const int t = tag[i] >= 1 && tag[i] <= L->ntags ? tag[i] : 0;
+      const int32_t b = m->cell_body[src[i] >> 3];
+      const int inb = b >= 1 && b <= L->nbodies;
+      if (t) cnt[t]++;
+      for (int j = 0; j < nv; j++) {
+        const double *p = m->xyz + 3 * (size_t)fv[(size_t)nv * i + j];
+        if (t) box_add(tb + 6 * t, p);
+        if (inb) box_add(bb + 6 * b, p);
+      }
+    }
+#pragma omp critical(msh_face_boxes)
+    {
+      for (size_t t = 1; t < nt; t++) box_merge(tbox + 6 * t, tb + 6 * t);
+      for (size_t b = 1; b < nb; b++) box_merge(bbox + 6 * b, bb + 6 * b);
+    }
   }
 }
 
@@ -417,19 +462,8 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
     for (int a = 0; a < 3; a++) L->tbox[6 * i + a] = INFINITY, L->tbox[6 * i + 3 + a] = -INFINITY;
   for (size_t i = 0; i < nb; i++)
     for (int a = 0; a < 3; a++) L->bbox[6 * i + a] = INFINITY, L->bbox[6 * i + 3 + a] = -INFINITY;
-  faces_into(m, L, bf->tri, bf->tri_tag, bf->ntri, 3, L->ntri);
-  faces_into(m, L, bf->quad, bf->quad_tag, bf->nquad, 4, L->nquad);
-  /* bodies' boxes from their boundary faces */
-  for (size_t i = 0; i < bf->ntri; i++) {
-    const int32_t b = m->cell_body[bf->tri_src[i] >> 3];
-    if (b >= 1 && b <= L->nbodies)
-      for (int j = 0; j < 3; j++) box_add(L->bbox + 6 * b, m->xyz + 3 * (size_t)bf->tri[3 * i + j]);
-  }
-  for (size_t i = 0; i < bf->nquad; i++) {
-    const int32_t b = m->cell_body[bf->quad_src[i] >> 3];
-    if (b >= 1 && b <= L->nbodies)
-      for (int j = 0; j < 4; j++) box_add(L->bbox + 6 * b, m->xyz + 3 * (size_t)bf->quad[4 * i + j]);
-  }
+  faces_into(m, L, bf->tri, bf->tri_tag, bf->tri_src, bf->ntri, 3, L->ntri);
+  faces_into(m, L, bf->quad, bf->quad_tag, bf->quad_src, bf->nquad, 4, L->nquad);
   /* the face lists are sorted by tag (kernels/boundary_tags.h): element
    * tags follow the file, triangles then quadrilaterals of each tag */
   L->tri0 = mx_alloc((nt + 1) * sizeof *L->tri0);
@@ -637,9 +671,7 @@ static int all_blocks(mx_afile *f, const mx_mesh_view *m, const msh_layout *L,
 }
 
 static int write_elements(mx_afile *f, const mx_mesh_view *m, const msh_layout *L,
-                          int binary) {
-  size_t count[4];
-  count_types(m, count);
+                          const size_t count[4], int binary) {
   size_t nblocks = 0, ne = m->ncells;
   if (!L->tagged) {
     for (int t = 0; t < 4; t++) nblocks += count[t] > 0;
@@ -671,10 +703,8 @@ static int write_elements(mx_afile *f, const mx_mesh_view *m, const msh_layout *
  * order of the elements in the file (meshio takes them in that order,
  * Gmsh by tag). */
 static int write_element_data(mx_afile *f, const mx_mesh_view *m, const msh_layout *L,
-                              int binary) {
+                              const size_t count[4], int binary) {
   const size_t ne = m->ncells + (L->tagged ? m->bfaces->ntri + m->bfaces->nquad : 0);
-  size_t count[4];
-  count_types(m, count);
   for (int i = 0; i < m->ncell_fields; i++) {
     const mx_field *fd = &m->cell_fields[i];
     MX_CHECK(mx_afile_printf(f, "$ElementData\n1\n\"%s\"\n1\n0\n3\n0\n1\n%zu\n", fd->name,
@@ -689,11 +719,13 @@ static int write_element_data(mx_afile *f, const mx_mesh_view *m, const msh_layo
 static int write_body(mx_afile *f, const mx_mesh_view *m, int binary) {
   msh_layout L;
   MX_CHECK(layout_build(m, &L));
+  size_t count[4]; /* cells per type */
+  count_types(m, count);
   int st = write_header(f, m, &L, binary);
   if (!st) st = write_entities(f, m, &L, binary);
   if (!st) st = write_nodes(f, m, binary);
-  if (!st) st = write_elements(f, m, &L, binary);
-  if (!st) st = write_element_data(f, m, &L, binary);
+  if (!st) st = write_elements(f, m, &L, count, binary);
+  if (!st) st = write_element_data(f, m, &L, count, binary);
   layout_free(&L);
   return st;
 }
