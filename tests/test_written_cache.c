@@ -10,11 +10,16 @@
  *   arrays) are the new mesh's, compared with the faces found here
  *   independently (each element's faces from VTK's tables, a face on the
  *   boundary when one element has it), and the .msh is the bytes of a
- *   fresh mesher that made the same re-mesh without writing before it. */
+ *   fresh mesher that made the same re-mesh without writing before it;
+ * - the .msh boxes of the surface entities, made from the tagged faces
+ *   (io/write_msh.c, per thread then merged): two nested cubes at level 7
+ *   (faces enough for two threads), each tag's box the box of its cube,
+ *   the same bytes for 1 and 2 threads (about a second each). */
 #include "check.h"
 #include "file_util.h"
 #include "mixoct.h"
 
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -123,6 +128,62 @@ static void write_alone(const char *path, int boundary) {
   mx_mesher_free(m);
 }
 
+/* An axis-aligned cube [lo, hi]^3 as an OFF file, faces outward. */
+static void write_cube(const char *path, double lo, double hi) {
+  static const int q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                              {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  FILE *f = fopen(path, "w");
+  CHECK(f != NULL);
+  if (!f) return;
+  fprintf(f, "OFF\n8 12 0\n");
+  for (int i = 0; i < 8; i++)
+    fprintf(f, "%g %g %g\n", i & 1 ? hi : lo, i & 2 ? hi : lo, i & 4 ? hi : lo);
+  for (int k = 0; k < 6; k++)
+    fprintf(f, "3 %d %d %d\n3 %d %d %d\n", q[k][0], q[k][1], q[k][2], q[k][0], q[k][2], q[k][3]);
+  fclose(f);
+}
+
+/* The two cubes meshed with `threads` threads, written as ASCII .msh. */
+static void write_cubes(const char *path, int threads) {
+  mx_params p;
+  mx_params_default(&p);
+  p.surface_level = 7;
+  p.threads = threads;
+  mx_mesher *m = mx_mesher_new(&p);
+  CHECK(m != NULL);
+  if (!m) return;
+  CHECK(mx_mesher_add_surface(m, DIR "/outer.off") == MX_OK);
+  CHECK(mx_mesher_add_surface(m, DIR "/inner.off") == MX_OK);
+  CHECK(mx_mesher_mesh(m) == MX_OK);
+  CHECK(mx_mesher_write(m, path, 1) == MX_OK);
+  mx_mesher_free(m);
+}
+
+/* The surface entities' boxes: tag t's in box[t] (t 1, 2); 1 when the
+ * $Entities section has the two surfaces and one volume. */
+static int surface_boxes(const char *path, double box[3][6]) {
+  size_t len = 0;
+  char *text = slurp(path, &len);
+  const char *e = text ? strstr(text, "$Entities\n") : NULL;
+  int ok = 0;
+  long np, nc, ns, nv;
+  if (e && sscanf(e, "$Entities %ld %ld %ld %ld", &np, &nc, &ns, &nv) == 4 && np == 0 &&
+      nc == 0 && ns == 2 && nv == 1) {
+    const char *line = strchr(strchr(e, '\n') + 1, '\n') + 1;
+    ok = 1;
+    for (int k = 0; k < 2 && ok; k++) {
+      int tag;
+      double b[6];
+      ok = sscanf(line, "%d %lf %lf %lf %lf %lf %lf", &tag, b, b + 1, b + 2, b + 3, b + 4,
+                  b + 5) == 7 && tag == k + 1;
+      if (ok) memcpy(box[tag], b, sizeof b);
+      line = strchr(line, '\n') + 1;
+    }
+  }
+  free(text);
+  return ok;
+}
+
 int main(void) {
   mkdir(DIR, 0755);
   /* one mesher, every file in turn: made once, read four times */
@@ -179,5 +240,19 @@ int main(void) {
   mx_mesher_free(m);
   CHECK(files_equal(DIR "/after.msh", DIR "/fresh.msh"));
   CHECK(!files_equal(DIR "/after.msh", DIR "/all.msh"));
+
+  /* two inputs: each tag's box is its cube's (the faces lie on it and
+   * reach its corners), whatever the threads */
+  write_cube(DIR "/outer.off", 0.0, 1.0);
+  write_cube(DIR "/inner.off", 0.3, 0.7);
+  write_cubes(DIR "/cubes1.msh", 1);
+  write_cubes(DIR "/cubes2.msh", 2);
+  CHECK(files_equal(DIR "/cubes1.msh", DIR "/cubes2.msh"));
+  double box[3][6];
+  CHECK(surface_boxes(DIR "/cubes2.msh", box));
+  for (int a = 0; a < 3; a++) {
+    CHECK(fabs(box[1][a]) < 1e-12 && fabs(box[1][3 + a] - 1.0) < 1e-12);
+    CHECK(fabs(box[2][a] - 0.3) < 1e-12 && fabs(box[2][3 + a] - 0.7) < 1e-12);
+  }
   return TEST_DONE();
 }
