@@ -125,5 +125,8 @@ int mx_with_written_view(const mx_mesher *m, int (*fn)(void *ctx, const mx_mesh_
  * call that changes the mesh (or may) calls it first. */
 typedef struct mx_written mx_written;
 void mx_written_forget(mx_mesher *m);
+/* The same for the memory's sake (the mesh is as it was: the next write
+ * makes them again). */
+void mx_written_release(const mx_mesher *m);
 
 #endif

@@ -61,7 +61,9 @@ static void written_free(mx_written *W) {
   mx_free(W);
 }
 
-void mx_written_forget(mx_mesher *m) {
+void mx_written_forget(mx_mesher *m) { mx_written_release(m); }
+
+void mx_written_release(const mx_mesher *m) {
   written_free(m->rec->written);
   m->rec->written = NULL;
 }
