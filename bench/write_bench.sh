@@ -16,9 +16,9 @@
 # makes the view once per mesh (issue 31) makes it once for the three
 # files, an older one three times.
 #
-#   bench/write_bench.sh BASELINE_MIXOCT MIXOCT [LEVEL] [REPEAT]
+#   bench/write_bench.sh BASELINE_MIXOCT MIXOCT [LEVEL] [REPEAT] [THREADS]
 #
-# LEVEL defaults to 9, REPEAT to 3. Needs ../shared/data (or MIXOCT_DATA)
+# LEVEL defaults to 9, REPEAT to 3, THREADS (--threads) to 2. Needs ../shared/data (or MIXOCT_DATA)
 # and, for the meshio line, /usr/bin/python3 with meshio (python3-meshio).
 # Files go to a temporary directory, removed at the end.
 set -u
@@ -27,6 +27,7 @@ OLD=${1:?usage: write_bench.sh BASELINE_MIXOCT MIXOCT [LEVEL] [REPEAT]}
 NEW=${2:?usage: write_bench.sh BASELINE_MIXOCT MIXOCT [LEVEL] [REPEAT]}
 LEVEL=${3:-9}
 REPEAT=${4:-3}
+THREADS=${5:-2}
 here=$(cd "$(dirname "$0")" && pwd)
 DATA=${MIXOCT_DATA:-$here/../../shared/data}
 SURF=$DATA/surfaces/cortex.off
@@ -36,7 +37,7 @@ trap 'rm -rf "$T"' EXIT
 
 # one run: prints "total write" seconds from the JSON line
 run() { # binary, output file
-  "$1" -i "$SURF" -s "$LEVEL" -o "$2" --json 2>/dev/null | tail -1 |
+  "$1" -i "$SURF" -s "$LEVEL" --threads "$THREADS" -o "$2" --json 2>/dev/null | tail -1 |
     python3 -c 'import json,sys; d=json.loads(sys.stdin.read()); print(d["total_s"], d["phases"]["write"], d["elements"])'
 }
 median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
@@ -53,7 +54,7 @@ plain() {
   echo "$(awk -v a="$t0" -v b="$t1" 'BEGIN{print b - a}') $(( n * 8388608 ))"
 }
 
-echo "# cortex -s $LEVEL, $REPEAT runs each, alternating; seconds (median)"
+echo "# cortex -s $LEVEL, $THREADS threads, $REPEAT runs each, alternating; seconds (median)"
 for fmt in vtu msh; do
   : >"$T/old_$fmt"; : >"$T/new_$fmt"; : >"$T/plain_$fmt"
   for _ in $(seq 1 "$REPEAT"); do
@@ -82,7 +83,8 @@ printf 'msh/vtu write: baseline %.2f, current %.2f\n' \
   "$(awk -v a="$ow_msh" -v b="$ow_vtu" 'BEGIN{print a/b}')" "$(awk -v a="$nw_msh" -v b="$nw_vtu" 'BEGIN{print a/b}')"
 # the three files of one run
 both() { # binary, prefix
-  "$1" -i "$SURF" -s "$LEVEL" -o "$2.vtu" -o "$2.msh" --boundary "$2_b.vtu" --json 2>/dev/null | tail -1 |
+  "$1" -i "$SURF" -s "$LEVEL" --threads "$THREADS" -o "$2.vtu" -o "$2.msh" --boundary "$2_b.vtu" \
+    --json 2>/dev/null | tail -1 |
     python3 -c 'import json,sys; d=json.loads(sys.stdin.read()); print(d["total_s"], d["phases"]["write"])'
 }
 : >"$T/old_both"; : >"$T/new_both"
