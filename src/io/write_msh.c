@@ -413,17 +413,21 @@ static void faces_into(const mx_mesh_view *m, msh_layout *L, const uint32_t *fv,
   }
 }
 
-/* The written positions of each block's cells: one pass over the cells. */
+/* The written positions of each block's cells and their counts (ncell,
+ * per body 0..nbodies and type; the plain layout's all in body 0): one
+ * pass over the cells. */
 static int block_ranges(const mx_mesh_view *m, msh_layout *L) {
   const size_t nb = (size_t)L->nbodies + 1, n4 = 4 * nb;
   size_t *lo = mx_alloc(n4 * sizeof *lo), *hi = mx_alloc(n4 * sizeof *hi);
+  size_t *cnt = mx_calloc(n4 * sizeof *cnt);
   L->klo = lo;
   L->khi = hi;
-  if (!lo || !hi) return MX_ENOMEM;
+  L->ncell = cnt;
+  if (!lo || !hi || !cnt) return MX_ENOMEM;
   for (size_t i = 0; i < n4; i++) lo[i] = SIZE_MAX, hi[i] = 0;
   const int tagged = L->tagged;
 #pragma omp parallel for schedule(static) reduction(min : lo[:n4]) reduction(max : hi[:n4]) \
-    if (m->ncells > 65536)
+    reduction(+ : cnt[:n4]) if (m->ncells > 65536)
   for (size_t k = 0; k < m->ncells; k++) {
     const size_t c = mx_view_cell(m, k);
     const int32_t b = tagged ? m->cell_body[c] : 0;
@@ -431,6 +435,7 @@ static int block_ranges(const mx_mesh_view *m, msh_layout *L) {
     const size_t i = 4 * (size_t)b + (m->type[c] & 3);
     lo[i] = k < lo[i] ? k : lo[i];
     hi[i] = k + 1 > hi[i] ? k + 1 : hi[i];
+    cnt[i]++;
   }
   for (size_t i = 0; i < n4; i++)
     if (lo[i] > hi[i]) lo[i] = hi[i] = 0; /* no cell */
@@ -451,10 +456,9 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
   const size_t nt = (size_t)L->ntags + 1, nb = (size_t)L->nbodies + 1;
   L->ntri = mx_calloc(nt * sizeof *L->ntri);
   L->nquad = mx_calloc(nt * sizeof *L->nquad);
-  L->ncell = mx_calloc(4 * nb * sizeof *L->ncell);
   L->tbox = mx_alloc(6 * nt * sizeof *L->tbox);
   L->bbox = mx_alloc(6 * nb * sizeof *L->bbox);
-  if (!L->ntri || !L->nquad || !L->ncell || !L->tbox || !L->bbox) {
+  if (!L->ntri || !L->nquad || !L->tbox || !L->bbox) {
     layout_free(L);
     return MX_ENOMEM;
   }
@@ -482,13 +486,6 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
     a += L->ntri[t];
     b += L->nquad[t];
     e += L->ntri[t] + L->nquad[t];
-  }
-  size_t *cnt = L->ncell;
-  const size_t n4 = 4 * nb;
-#pragma omp parallel for schedule(static) reduction(+ : cnt[:n4]) if (m->ncells > 65536)
-  for (size_t c = 0; c < m->ncells; c++) {
-    const int32_t b = m->cell_body[c];
-    if (b >= 1 && b <= L->nbodies) cnt[4 * (size_t)b + (m->type[c] & 3)]++;
   }
   const int st = block_ranges(m, L);
   if (st) layout_free(L);
@@ -599,21 +596,6 @@ static int write_nodes(mx_afile *f, const mx_mesh_view *m, int binary) {
   return mx_afile_printf(f, "$EndNodes\n");
 }
 
-static void count_types(const mx_mesh_view *m, size_t count[4]) {
-  size_t c0 = 0, c1 = 0, c2 = 0, c3 = 0;
-#pragma omp parallel for reduction(+ : c0, c1, c2, c3) schedule(static) \
-    if (m->ncells > 65536)
-  for (size_t c = 0; c < m->ncells; c++) {
-    switch (m->type[c]) {
-      case MX_TET: c0++; break;
-      case MX_PYRAMID: c1++; break;
-      case MX_PRISM: c2++; break;
-      default: c3++; break;
-    }
-  }
-  count[0] = c0, count[1] = c1, count[2] = c2, count[3] = c3;
-}
-
 /* One block header: entity dimension and tag, element type, count. */
 static int block_head(mx_afile *f, int dim, int tag, int type, size_t count, int binary) {
   if (!binary) return mx_afile_printf(f, "%d %d %d %zu\n", dim, tag, type, count);
@@ -719,8 +701,8 @@ static int write_element_data(mx_afile *f, const mx_mesh_view *m, const msh_layo
 static int write_body(mx_afile *f, const mx_mesh_view *m, int binary) {
   msh_layout L;
   MX_CHECK(layout_build(m, &L));
-  size_t count[4]; /* cells per type */
-  count_types(m, count);
+  size_t count[4] = {0, 0, 0, 0}; /* cells per type (the plain layout's) */
+  if (!L.tagged) memcpy(count, L.ncell, sizeof count);
   int st = write_header(f, m, &L, binary);
   if (!st) st = write_entities(f, m, &L, binary);
   if (!st) st = write_nodes(f, m, binary);
