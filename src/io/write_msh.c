@@ -47,6 +47,7 @@
  * A 2D view (soa/mesh.h: dim 2) is written by the section "a 2D view"
  * below. */
 #include <math.h>
+#include <omp.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
@@ -368,8 +369,9 @@ static void box_merge(double *box, const double *o) {
 }
 
 /* The faces of one kind (nv nodes) into the tags' counts and boxes and
- * their bodies' boxes: in parallel, each thread with its own boxes, merged
- * after (min and max: the same in any order). */
+ * their bodies' boxes: in parallel, each thread with its own boxes over
+ * its run of faces (schedule static: thread r has the r-th run), merged
+ * after in thread order. */
 static void faces_into(const mx_mesh_view *m, msh_layout *L, const uint32_t *fv,
                        const int32_t *tag, const uint64_t *src, size_t n, int nv, size_t *cnt) {
   const size_t nt = (size_t)L->ntags + 1, nb = (size_t)L->nbodies + 1;
@@ -405,10 +407,16 @@ static void faces_into(const mx_mesh_view *m, msh_layout *L, const uint32_t *fv,
         if (inb) box_add(bb + 6 * b, p);
       }
     }
-#pragma omp critical(msh_face_boxes)
-    {
-      for (size_t t = 1; t < nt; t++) box_merge(tbox + 6 * t, tb + 6 * t);
-      for (size_t b = 1; b < nb; b++) box_merge(bbox + 6 * b, bb + 6 * b);
+    /* merged in thread order, the order of their runs of faces: a tie
+     * (0.0 and -0.0) keeps the first in face order, as one thread does */
+    const int nthr = omp_get_num_threads();
+#pragma omp for ordered schedule(static, 1)
+    for (int r = 0; r < nthr; r++) {
+#pragma omp ordered
+      {
+        for (size_t t = 1; t < nt; t++) box_merge(tbox + 6 * t, tb + 6 * t);
+        for (size_t b = 1; b < nb; b++) box_merge(bbox + 6 * b, bb + 6 * b);
+      }
     }
   }
 }
