@@ -47,6 +47,7 @@
  * A 2D view (soa/mesh.h: dim 2) is written by the section "a 2D view"
  * below. */
 #include <math.h>
+#include <omp.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
@@ -91,6 +92,8 @@ typedef struct {
   const mx_field *fd; /* $ElementData: the field */
   size_t base;        /* faces: the first of the block's run in its list;
                          cells: the written position of item 0 */
+  int dense;          /* cells: every written position of the run is the
+                         block's (the written order groups the blocks) */
 } msh_ctx;
 
 /* ---- binary stores (host byte order) -------------------------------------- */
@@ -148,12 +151,77 @@ static inline int in_block(const msh_ctx *ctx, size_t c) {
   return m->type[c] == ctx->type && (ctx->body == 0 || m->cell_body[c] == ctx->body);
 }
 
+/* A dense block's cells (every position its own) of nn nodes each, the
+ * node order Gmsh's (mx_msh_perm, the identity: io/msh_order.h): tag, then
+ * the nodes, 8 bytes each. Inlined per node count (the loop unrolled). */
+static inline __attribute__((always_inline)) size_t
+put_cells(const mx_mesh_view *m, size_t k0, size_t k1, const int nn, char *out) {
+  uint64_t rec[9];
+  char *o = out;
+  for (size_t k = k0; k < k1; k++) {
+    const uint32_t *row = m->conn + 8 * mx_view_cell(m, k);
+    rec[0] = (uint64_t)k + 1;
+    for (int j = 0; j < nn; j++) rec[1 + j] = (uint64_t)row[j] + 1;
+    memcpy(o, rec, 8 * (size_t)(nn + 1));
+    o += 8 * (size_t)(nn + 1);
+  }
+  return (size_t)(o - out);
+}
+
+static int perm_identity(int t) {
+  for (int j = 0; j < mx_cell_nodes[t]; j++)
+    if (mx_msh_perm[t][j] != j) return 0;
+  return 1;
+}
+
+/* A dense block's $ElementData lines, binary: the int32 tag and the
+ * double value, per source kind of the field (the same doubles as
+ * mx_field_double and mx_field_int give). */
+#define MSH_DATA_LOOP(VALUE)                                          \
+  for (size_t k = k0; k < k1; k++, o += 12) {                         \
+    const size_t c = mx_view_cell(m, k);                              \
+    const int32_t t = (int32_t)(k + 1);                               \
+    const double v = (VALUE);                                         \
+    memcpy(o, &t, 4);                                                 \
+    memcpy(o + 4, &v, 8);                                             \
+  }
+
+static size_t put_data_bin(const mx_mesh_view *m, const mx_field *fd, size_t k0, size_t k1,
+                           char *out) {
+  char *o = out;
+  if (fd->is_double && fd->dvalues) {
+    const double *src = fd->dvalues;
+    MSH_DATA_LOOP(src[c])
+  } else if (fd->is_double) {
+    const float *src = fd->fvalues;
+    MSH_DATA_LOOP((double)src[c])
+  } else if (fd->ivalues) {
+    const int32_t *src = fd->ivalues;
+    MSH_DATA_LOOP((double)src[c])
+  } else {
+    const uint8_t *src = fd->u8values;
+    MSH_DATA_LOOP((double)(int32_t)src[c])
+  }
+  return (size_t)(o - out);
+}
+#undef MSH_DATA_LOOP
+
 static size_t fill_elements_bin(const void *vctx, size_t b, size_t e,
                                 char *out) {
   const msh_ctx *ctx = vctx;
   const mx_mesh_view *m = ctx->m;
   const int t = ctx->type, nn = mx_cell_nodes[t];
   const int8_t *perm = mx_msh_perm[t];
+  if (ctx->dense && ctx->fd) return put_data_bin(m, ctx->fd, ctx->base + b, ctx->base + e, out);
+  if (ctx->dense && perm_identity(t)) {
+    const size_t k0 = ctx->base + b, k1 = ctx->base + e;
+    switch (nn) {
+      case 4: return put_cells(m, k0, k1, 4, out);
+      case 5: return put_cells(m, k0, k1, 5, out);
+      case 6: return put_cells(m, k0, k1, 6, out);
+      default: return put_cells(m, k0, k1, 8, out);
+    }
+  }
   size_t n = 0;
   for (size_t k = ctx->base + b; k < ctx->base + e; k++) {
     const size_t c = mx_view_cell(m, k);
@@ -291,27 +359,83 @@ static void box_add(double *box, const double *p) {
   }
 }
 
-static void faces_into(const mx_mesh_view *m, msh_layout *L, const uint32_t *fv,
-                       const int32_t *tag, size_t n, int nv, size_t *cnt) {
-  for (size_t i = 0; i < n; i++) {
-    const int t = tag[i] >= 1 && tag[i] <= L->ntags ? tag[i] : 0;
-    if (!t) continue;
-    cnt[t]++;
-    for (int j = 0; j < nv; j++) box_add(L->tbox + 6 * t, m->xyz + 3 * (size_t)fv[(size_t)nv * i + j]);
+/* box grown to hold box o (min and max corners; an empty o, its min above
+ * its max, leaves box as it was) */
+static void box_merge(double *box, const double *o) {
+  for (int a = 0; a < 3; a++) {
+    box[a] = o[a] < box[a] ? o[a] : box[a];
+    box[3 + a] = o[3 + a] > box[3 + a] ? o[3 + a] : box[3 + a];
   }
 }
 
-/* The written positions of each block's cells: one pass over the cells. */
+/* The faces of one kind (nv nodes) into the tags' counts and boxes and
+ * their bodies' boxes: in parallel, each thread with its own boxes over
+ * its run of faces (schedule static: thread r has the r-th run), merged
+ * after in thread order. */
+static void faces_into(const mx_mesh_view *m, msh_layout *L, const uint32_t *fv,
+                       const int32_t *tag, const uint64_t *src, size_t n, int nv, size_t *cnt) {
+  const size_t nt = (size_t)L->ntags + 1, nb = (size_t)L->nbodies + 1;
+  double *tbox = L->tbox, *bbox = L->bbox;
+  if (nt > 67 || nb > 67) { /* more than the mesher makes: serially */
+    for (size_t i = 0; i < n; i++) {
+      const int t = tag[i] >= 1 && tag[i] <= L->ntags ? tag[i] : 0;
+      const int32_t b = m->cell_body[src[i] >> 3];
+      const int inb = b >= 1 && b <= L->nbodies;
+      if (t) cnt[t]++;
+      for (int j = 0; j < nv; j++) {
+        const double *p = m->xyz + 3 * (size_t)fv[(size_t)nv * i + j];
+        if (t) box_add(tbox + 6 * t, p);
+        if (inb) box_add(bbox + 6 * b, p);
+      }
+    }
+    return;
+  }
+#pragma omp parallel if (n > 65536)
+  {
+    double tb[6 * 67], bb[6 * 67];
+    for (size_t i = 0; i < 6 * nt; i++) tb[i] = i % 6 < 3 ? INFINITY : -INFINITY;
+    for (size_t i = 0; i < 6 * nb; i++) bb[i] = i % 6 < 3 ? INFINITY : -INFINITY;
+#pragma omp for schedule(static) reduction(+ : cnt[:nt])
+    for (size_t i = 0; i < n; i++) {
+      const int t = tag[i] >= 1 && tag[i] <= L->ntags ? tag[i] : 0;
+      const int32_t b = m->cell_body[src[i] >> 3];
+      const int inb = b >= 1 && b <= L->nbodies;
+      if (t) cnt[t]++;
+      for (int j = 0; j < nv; j++) {
+        const double *p = m->xyz + 3 * (size_t)fv[(size_t)nv * i + j];
+        if (t) box_add(tb + 6 * t, p);
+        if (inb) box_add(bb + 6 * b, p);
+      }
+    }
+    /* merged in thread order, the order of their runs of faces: a tie
+     * (0.0 and -0.0) keeps the first in face order, as one thread does */
+    const int nthr = omp_get_num_threads();
+#pragma omp for ordered schedule(static, 1)
+    for (int r = 0; r < nthr; r++) {
+#pragma omp ordered
+      {
+        for (size_t t = 1; t < nt; t++) box_merge(tbox + 6 * t, tb + 6 * t);
+        for (size_t b = 1; b < nb; b++) box_merge(bbox + 6 * b, bb + 6 * b);
+      }
+    }
+  }
+}
+
+/* The written positions of each block's cells and their counts (ncell,
+ * per body 0..nbodies and type; the plain layout's all in body 0): one
+ * pass over the cells. */
 static int block_ranges(const mx_mesh_view *m, msh_layout *L) {
   const size_t nb = (size_t)L->nbodies + 1, n4 = 4 * nb;
   size_t *lo = mx_alloc(n4 * sizeof *lo), *hi = mx_alloc(n4 * sizeof *hi);
+  size_t *cnt = mx_calloc(n4 * sizeof *cnt);
   L->klo = lo;
   L->khi = hi;
-  if (!lo || !hi) return MX_ENOMEM;
+  L->ncell = cnt;
+  if (!lo || !hi || !cnt) return MX_ENOMEM;
   for (size_t i = 0; i < n4; i++) lo[i] = SIZE_MAX, hi[i] = 0;
   const int tagged = L->tagged;
 #pragma omp parallel for schedule(static) reduction(min : lo[:n4]) reduction(max : hi[:n4]) \
-    if (m->ncells > 65536)
+    reduction(+ : cnt[:n4]) if (m->ncells > 65536)
   for (size_t k = 0; k < m->ncells; k++) {
     const size_t c = mx_view_cell(m, k);
     const int32_t b = tagged ? m->cell_body[c] : 0;
@@ -319,6 +443,7 @@ static int block_ranges(const mx_mesh_view *m, msh_layout *L) {
     const size_t i = 4 * (size_t)b + (m->type[c] & 3);
     lo[i] = k < lo[i] ? k : lo[i];
     hi[i] = k + 1 > hi[i] ? k + 1 : hi[i];
+    cnt[i]++;
   }
   for (size_t i = 0; i < n4; i++)
     if (lo[i] > hi[i]) lo[i] = hi[i] = 0; /* no cell */
@@ -339,10 +464,9 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
   const size_t nt = (size_t)L->ntags + 1, nb = (size_t)L->nbodies + 1;
   L->ntri = mx_calloc(nt * sizeof *L->ntri);
   L->nquad = mx_calloc(nt * sizeof *L->nquad);
-  L->ncell = mx_calloc(4 * nb * sizeof *L->ncell);
   L->tbox = mx_alloc(6 * nt * sizeof *L->tbox);
   L->bbox = mx_alloc(6 * nb * sizeof *L->bbox);
-  if (!L->ntri || !L->nquad || !L->ncell || !L->tbox || !L->bbox) {
+  if (!L->ntri || !L->nquad || !L->tbox || !L->bbox) {
     layout_free(L);
     return MX_ENOMEM;
   }
@@ -350,19 +474,8 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
     for (int a = 0; a < 3; a++) L->tbox[6 * i + a] = INFINITY, L->tbox[6 * i + 3 + a] = -INFINITY;
   for (size_t i = 0; i < nb; i++)
     for (int a = 0; a < 3; a++) L->bbox[6 * i + a] = INFINITY, L->bbox[6 * i + 3 + a] = -INFINITY;
-  faces_into(m, L, bf->tri, bf->tri_tag, bf->ntri, 3, L->ntri);
-  faces_into(m, L, bf->quad, bf->quad_tag, bf->nquad, 4, L->nquad);
-  /* bodies' boxes from their boundary faces */
-  for (size_t i = 0; i < bf->ntri; i++) {
-    const int32_t b = m->cell_body[bf->tri_src[i] >> 3];
-    if (b >= 1 && b <= L->nbodies)
-      for (int j = 0; j < 3; j++) box_add(L->bbox + 6 * b, m->xyz + 3 * (size_t)bf->tri[3 * i + j]);
-  }
-  for (size_t i = 0; i < bf->nquad; i++) {
-    const int32_t b = m->cell_body[bf->quad_src[i] >> 3];
-    if (b >= 1 && b <= L->nbodies)
-      for (int j = 0; j < 4; j++) box_add(L->bbox + 6 * b, m->xyz + 3 * (size_t)bf->quad[4 * i + j]);
-  }
+  faces_into(m, L, bf->tri, bf->tri_tag, bf->tri_src, bf->ntri, 3, L->ntri);
+  faces_into(m, L, bf->quad, bf->quad_tag, bf->quad_src, bf->nquad, 4, L->nquad);
   /* the face lists are sorted by tag (kernels/boundary_tags.h): element
    * tags follow the file, triangles then quadrilaterals of each tag */
   L->tri0 = mx_alloc((nt + 1) * sizeof *L->tri0);
@@ -381,13 +494,6 @@ static int layout_build(const mx_mesh_view *m, msh_layout *L) {
     a += L->ntri[t];
     b += L->nquad[t];
     e += L->ntri[t] + L->nquad[t];
-  }
-  size_t *cnt = L->ncell;
-  const size_t n4 = 4 * nb;
-#pragma omp parallel for schedule(static) reduction(+ : cnt[:n4]) if (m->ncells > 65536)
-  for (size_t c = 0; c < m->ncells; c++) {
-    const int32_t b = m->cell_body[c];
-    if (b >= 1 && b <= L->nbodies) cnt[4 * (size_t)b + (m->type[c] & 3)]++;
   }
   const int st = block_ranges(m, L);
   if (st) layout_free(L);
@@ -470,7 +576,7 @@ static int write_nodes(mx_afile *f, const mx_mesh_view *m, int binary) {
   const size_t nn = m->nnodes;
   const size_t nblocks = nn > 0;
   const size_t tag_min = nn > 0, tag_max = nn;
-  msh_ctx ctx = {m, NULL, 0, 0, binary, NULL, 0};
+  msh_ctx ctx = {m, NULL, 0, 0, binary, NULL, 0, 0};
   MX_CHECK(mx_afile_printf(f, "$Nodes\n"));
   if (binary) {
     const uint64_t head[4] = {nblocks, nn, tag_min, tag_max};
@@ -498,21 +604,6 @@ static int write_nodes(mx_afile *f, const mx_mesh_view *m, int binary) {
   return mx_afile_printf(f, "$EndNodes\n");
 }
 
-static void count_types(const mx_mesh_view *m, size_t count[4]) {
-  size_t c0 = 0, c1 = 0, c2 = 0, c3 = 0;
-#pragma omp parallel for reduction(+ : c0, c1, c2, c3) schedule(static) \
-    if (m->ncells > 65536)
-  for (size_t c = 0; c < m->ncells; c++) {
-    switch (m->type[c]) {
-      case MX_TET: c0++; break;
-      case MX_PYRAMID: c1++; break;
-      case MX_PRISM: c2++; break;
-      default: c3++; break;
-    }
-  }
-  count[0] = c0, count[1] = c1, count[2] = c2, count[3] = c3;
-}
-
 /* One block header: entity dimension and tag, element type, count. */
 static int block_head(mx_afile *f, int dim, int tag, int type, size_t count, int binary) {
   if (!binary) return mx_afile_printf(f, "%d %d %d %zu\n", dim, tag, type, count);
@@ -527,8 +618,8 @@ static int block_head(mx_afile *f, int dim, int tag, int type, size_t count, int
 static int cell_block(mx_afile *f, const mx_mesh_view *m, const msh_layout *L, int entity,
                       int body, int t, size_t count, int binary, const mx_field *fd) {
   const size_t r = 4 * (size_t)body + (size_t)t; /* its written positions */
-  msh_ctx ctx = {m, NULL, t, body, binary, fd, L->klo[r]};
   const size_t nitems = L->khi[r] - L->klo[r];
+  msh_ctx ctx = {m, NULL, t, body, binary, fd, L->klo[r], nitems == count};
   const size_t per_cell = (size_t)mx_cell_nodes[t] + 1;
   const size_t data_max = MX_U64_CHARS + MX_DOUBLE_CHARS + 2;
   if (!fd) MX_CHECK(block_head(f, 3, entity, mx_msh_type[t], count, binary));
@@ -539,7 +630,7 @@ static int cell_block(mx_afile *f, const mx_mesh_view *m, const msh_layout *L, i
 
 static int face_block(mx_afile *f, const mx_mesh_view *m, const msh_layout *L, int tag, int nv,
                       size_t count, int binary, const mx_field *fd) {
-  msh_ctx ctx = {m, L, nv, tag, binary, fd, 0};
+  msh_ctx ctx = {m, L, nv, tag, binary, fd, 0, 0};
   /* the tag's run of the sorted list */
   const size_t b = nv == 3 ? L->tri0[tag] : L->quad0[tag];
   if (!fd) MX_CHECK(block_head(f, 2, tag, nv == 3 ? 2 : 3, count, binary));
@@ -570,9 +661,7 @@ static int all_blocks(mx_afile *f, const mx_mesh_view *m, const msh_layout *L,
 }
 
 static int write_elements(mx_afile *f, const mx_mesh_view *m, const msh_layout *L,
-                          int binary) {
-  size_t count[4];
-  count_types(m, count);
+                          const size_t count[4], int binary) {
   size_t nblocks = 0, ne = m->ncells;
   if (!L->tagged) {
     for (int t = 0; t < 4; t++) nblocks += count[t] > 0;
@@ -604,10 +693,8 @@ static int write_elements(mx_afile *f, const mx_mesh_view *m, const msh_layout *
  * order of the elements in the file (meshio takes them in that order,
  * Gmsh by tag). */
 static int write_element_data(mx_afile *f, const mx_mesh_view *m, const msh_layout *L,
-                              int binary) {
+                              const size_t count[4], int binary) {
   const size_t ne = m->ncells + (L->tagged ? m->bfaces->ntri + m->bfaces->nquad : 0);
-  size_t count[4];
-  count_types(m, count);
   for (int i = 0; i < m->ncell_fields; i++) {
     const mx_field *fd = &m->cell_fields[i];
     MX_CHECK(mx_afile_printf(f, "$ElementData\n1\n\"%s\"\n1\n0\n3\n0\n1\n%zu\n", fd->name,
@@ -622,11 +709,13 @@ static int write_element_data(mx_afile *f, const mx_mesh_view *m, const msh_layo
 static int write_body(mx_afile *f, const mx_mesh_view *m, int binary) {
   msh_layout L;
   MX_CHECK(layout_build(m, &L));
+  size_t count[4] = {0, 0, 0, 0}; /* cells per type (the plain layout's) */
+  if (!L.tagged) memcpy(count, L.ncell, sizeof count);
   int st = write_header(f, m, &L, binary);
   if (!st) st = write_entities(f, m, &L, binary);
   if (!st) st = write_nodes(f, m, binary);
-  if (!st) st = write_elements(f, m, &L, binary);
-  if (!st) st = write_element_data(f, m, &L, binary);
+  if (!st) st = write_elements(f, m, &L, count, binary);
+  if (!st) st = write_element_data(f, m, &L, count, binary);
   layout_free(&L);
   return st;
 }

@@ -8,6 +8,7 @@
 
 #include "base/common.h"
 #include "mesher/mesher.h"
+#include "mesher/mesher_impl.h"
 #include "mesher/mesher2d.h"
 
 /* *p becomes a copy of its `bytes` (one more element's room, as the
@@ -43,6 +44,7 @@ static int detach(void **slots[], const size_t bytes[], const size_t item[], int
 }
 
 int mx_mesher_detach_mesh_buffers(mx_mesher *m, void *old[MX_DETACH_MAX]) {
+  mx_written_forget(m); /* the writers' arrays go with the mesh */
   mx_mesh *M = &m->M;
   const size_t n = M->nnodes, e = M->ncells;
   void **slots[] = {(void **)&M->xyz,  (void **)&M->type,  (void **)&M->conn,

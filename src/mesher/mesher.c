@@ -108,6 +108,7 @@ mx_mesher *mx_mesher_new(const mx_params *p) {
 }
 
 void mx_mesh_clear(mx_mesher *m) {
+  mx_written_forget(m);
   mx_mesh_free(&m->M);
   mx_mesh_free(&m->Mmix);
   mx_free(m->tet_parent);
@@ -518,6 +519,7 @@ int mx_build_tree(mx_mesher *m) {
 int mx_mesher_build_octree(mx_mesher *m) {
   mx_call c;
   mx_call_begin(m, &c);
+  mx_written_forget(m); /* the mesh changes */
   memset(&m->rec->S, 0, sizeof m->rec->S);
   int st = mx_build_tree(m);
   if (st) mx_tree_clear(m);
@@ -592,6 +594,7 @@ static int transition(mx_mesher *m) {
 int mx_mesher_transition(mx_mesher *m) {
   mx_call c;
   mx_call_begin(m, &c);
+  mx_written_forget(m); /* the mesh changes */
   int st = transition(m);
   if (!st) st = boundary_flags(m);
   if (!st) count_mesh(m);
@@ -982,6 +985,7 @@ int mx_mesh_stages(mx_mesher *m) {
 int mx_mesher_boundary(mx_mesher *m) {
   mx_call c;
   mx_call_begin(m, &c);
+  mx_written_forget(m); /* the mesh changes */
   int st = MX_OK;
   if (m->mesh_stage != MX_STAGE_TRANSITION) {
     mx_error(NULL, 0, "the boundary stage runs on the transition mesh: call "
@@ -1015,6 +1019,7 @@ void mx_fill_tree_stats(mx_mesher *m) {
 int mx_mesher_mesh(mx_mesher *m) {
   mx_call c;
   mx_call_begin(m, &c);
+  mx_written_forget(m); /* the mesh changes */
   const double t0 = mx_wtime();
   const double read = m->rec->S.ph.read, restart = m->rec->S.t_restart;
   const int keep = m->have_tree; /* a restart file was read: keep its figures */

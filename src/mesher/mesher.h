@@ -134,6 +134,10 @@ typedef struct {
   mx_summary S;
   mx_mesh hex;              /* MX_STAGE_OCTREE: the leaves as hexahedra */
   int have_hex;
+  /* what the writers add to the mesh (written order, boundary faces, tags,
+   * bodies), made by the first write after the mesh changed; NULL until
+   * then (mesher/output.c, dropped by mx_written_forget) */
+  struct mx_written *written;
 } mx_mesher_record;
 
 

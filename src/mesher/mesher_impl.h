@@ -120,5 +120,13 @@ void mx_fill_tree_stats(mx_mesher *m);
  * (mesher/boundary_arrays.c reads it). */
 int mx_with_written_view(const mx_mesher *m, int (*fn)(void *ctx, const mx_mesh_view *v),
                          void *ctx);
+/* Drops what the writers keep of the mesh (written order, boundary faces
+ * and tags, made once per mesh by the first write: mesher/output.c). Every
+ * call that changes the mesh (or may) calls it first. */
+typedef struct mx_written mx_written;
+void mx_written_forget(mx_mesher *m);
+/* The same for the memory's sake (the mesh is as it was: the next write
+ * makes them again). */
+void mx_written_release(const mx_mesher *m);
 
 #endif

@@ -20,43 +20,82 @@
 #include "io/write_mesh.h"
 #include "io/cell_order.h"
 
-/* The last path component, quotes turned into apostrophes (a name inside
- * the quotes of Gmsh's $PhysicalNames). */
-static char *tag_name(const char *path, const char *suffix) {
-  const char *slash = strrchr(path, '/');
-  const char *base = slash ? slash + 1 : path;
-  while (*base == '-') base++; /* "--demo" */
-  const size_t n = strlen(base) + strlen(suffix) + 1;
-  char *s = mx_alloc(n);
-  if (!s) return NULL;
-  snprintf(s, n, "%s%s", base, suffix);
-  for (char *p = s; *p; p++)
-    if (*p == '"' || (unsigned char)*p < 32) *p = '\'';
-  return s;
-}
-
-typedef struct {
+/* What the writers' view needs beyond the mesh's own arrays, computed
+ * once per mesh (issue 31 item 4) and kept in m->rec->written until the
+ * mesh changes (mx_written_forget): the written order, the boundary faces
+ * with their tags, the bodies, the per-node tags; with materials the
+ * material field and the pairs of materials met. The names of the groups
+ * come from the inputs' names and are made again by each call
+ * (prepare), so that a name set after the mesh is still the one written.
+ * Its size: 4 bytes per cell for the order and 4 for the bodies (4 more
+ * with materials), 4 per node, and per boundary face its nodes, source,
+ * tag and pair (28 bytes a triangle, 36 a quadrilateral). */
+struct mx_written {
+  /* the mesh it was made for: a safety net under mx_written_forget */
+  const void *conn, *xyz, *type, *mat, *states;
+  size_t ncells, nnodes;
+  int stage, ndomain, nmaterials, have_mix;
+  uint32_t *order;
+  int tagged;
   mx_boundary_faces bf;
   int32_t *cell_body, *body_tag, *node_tag;
   int32_t *material; /* materials: the cell field (0: outside every shell) */
-  int nbodies, ntags;
-  char *names[2 * 66];
-  const char *tag_names[66], *body_names[66];
+  int nbodies, ntags; /* bodies written as groups (0: none, over 64) */
+  int nbodies_all;    /* every body found */
+  size_t off;         /* faces on no input */
+  /* materials: the bodies (one per material, and the outside), the pairs
+   * of bodies met in order of first face (tags 2, 3, ...), more than 63 */
+  int nbm, npairs, over;
+  int32_t pa[63], pb[63];
   int32_t body_physical[66];
-} tags;
+};
 
-static void tags_free(tags *T) {
-  mx_boundary_faces_free(&T->bf);
-  mx_free(T->cell_body);
-  mx_free(T->body_tag);
-  mx_free(T->node_tag);
-  mx_free(T->material);
-  for (size_t i = 0; i < sizeof T->names / sizeof *T->names; i++) mx_free(T->names[i]);
+static void written_free(mx_written *W) {
+  if (!W) return;
+  mx_boundary_faces_free(&W->bf);
+  mx_free(W->order);
+  mx_free(W->cell_body);
+  mx_free(W->body_tag);
+  mx_free(W->node_tag);
+  mx_free(W->material);
+  mx_free(W);
 }
 
-static int make_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T) {
-  memset(T, 0, sizeof *T);
+void mx_written_forget(mx_mesher *m) { mx_written_release(m); }
+
+void mx_written_release(const mx_mesher *m) {
+  written_free(m->rec->written);
+  m->rec->written = NULL;
+}
+
+/* The mesh's identity as the cache records it. */
+static void written_stamp(const mx_mesher *m, mx_written *W) {
   const mx_mesh *M = &m->M;
+  W->conn = M->conn, W->xyz = M->xyz, W->type = M->type, W->mat = M->material;
+  W->states = m->states;
+  W->ncells = M->ncells, W->nnodes = M->nnodes;
+  W->stage = m->mesh_stage, W->ndomain = m->ndomain, W->nmaterials = m->nmaterials;
+  W->have_mix = m->have_mix;
+}
+
+static int written_fits(const mx_mesher *m, const mx_written *W) {
+  mx_written now;
+  written_stamp(m, &now);
+  return W->conn == now.conn && W->xyz == now.xyz && W->type == now.type &&
+         W->mat == now.mat && W->states == now.states && W->ncells == now.ncells &&
+         W->nnodes == now.nnodes && W->stage == now.stage && W->ndomain == now.ndomain &&
+         W->nmaterials == now.nmaterials && W->have_mix == now.have_mix;
+}
+
+/* The view of the mesh's own arrays, as the extraction reads it. */
+static mx_mesh_view mesh_view(const mx_mesh *M) {
+  return (mx_mesh_view){.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
+                        .type = M->type, .conn = M->conn};
+}
+
+static int make_tags(const mx_mesher *m, mx_written *T) {
+  const mx_mesh *M = &m->M;
+  const mx_mesh_view v = mesh_view(M);
   /* The boundary faces lie on the surface: their nodes are outside nodes
    * (projected) or lattice nodes on the surface, which belong to leaves
    * meeting the input (a leaf meeting none has its closed box inside the
@@ -72,7 +111,7 @@ static int make_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T) {
       if (meets || (m->states && m->states[row[k]] == MX_NODE_OUTSIDE))
         __atomic_store_n(&near[row[k]], 1, __ATOMIC_RELAXED);
   }
-  int st = mx_boundary_faces_extract_masked(v, near, &T->bf);
+  int st = mx_boundary_faces_extract_masked(&v, near, &T->bf);
   mx_free(near);
   MX_CHECK(st);
   T->cell_body = mx_alloc((M->ncells + 1) * sizeof *T->cell_body);
@@ -85,24 +124,11 @@ static int make_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T) {
   const mx_tag_inputs in = {&m->B.tree, m->leaves, M->leaf, &m->soup, m->nt_domain,
                             m->ndomain, &m->SI, m->p.repair_input,
                             m->have_mix ? m->tet_parent : NULL, &m->Mmix};
-  size_t off = 0;
-  MX_CHECK(mx_boundary_tags(v, &in, &T->bf, T->cell_body, &T->nbodies, &T->body_tag, &off));
+  MX_CHECK(mx_boundary_tags(&v, &in, &T->bf, T->cell_body, &T->nbodies_all, &T->body_tag,
+                            &T->off));
   mx_boundary_node_tags(&T->bf, M->nnodes, T->node_tag);
-  T->ntags = m->ndomain + (off > 0);
-  int k = 0;
-  for (int t = 0; t < m->ndomain; t++) T->tag_names[t] = T->names[k++] = tag_name(m->domain_name[t], "");
-  if (off > 0) T->tag_names[m->ndomain] = T->names[k++] = tag_name("on no input", "");
-  const int nb = T->nbodies < 64 ? T->nbodies : 64;
-  for (int b = 0; b < nb; b++) {
-    const int t = T->body_tag[b];
-    char suffix[32];
-    snprintf(suffix, sizeof suffix, " volume %d", b + 1);
-    T->body_names[b] = T->names[k++] =
-        tag_name(t >= 1 && t <= m->ndomain ? m->domain_name[t - 1] : "mesh", suffix);
-  }
-  for (int i = 0; i < k; i++)
-    if (!T->names[i]) return MX_ENOMEM;
-  if (T->nbodies > 64) T->nbodies = 0; /* named groups for 64 bodies at most */
+  T->ntags = m->ndomain + (T->off > 0);
+  T->nbodies = T->nbodies_all > 64 ? 0 : T->nbodies_all; /* named groups for 64 at most */
   return MX_OK;
 }
 
@@ -146,10 +172,10 @@ static int faces_by_tag(size_t n, int k, uint32_t *nodes, uint64_t *src, int32_t
  * one tag per pair of materials ("interface A-B") on the faces between
  * them, each such face written once, oriented out of the lower material
  * (io/boundary_faces.h). More than 64 materials or 63 pairs: no groups
- * (the material field stays). */
-static int make_material_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T) {
-  memset(T, 0, sizeof *T);
+ * (the material field stays). The names: material_names. */
+static int make_material_tags(const mx_mesher *m, mx_written *T) {
   const mx_mesh *M = &m->M;
+  const mx_mesh_view v = mesh_view(M);
   const int nmat = m->nmaterials;
   T->material = mx_alloc((M->ncells + 1) * sizeof *T->material);
   T->cell_body = mx_alloc((M->ncells + 1) * sizeof *T->cell_body);
@@ -174,12 +200,11 @@ static int make_material_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T
   }
   if (nmat < 65) T->body_physical[nmat] = top + 1; /* outside the inputs */
   mx_boundary_faces *bf = &T->bf;
-  MX_CHECK(mx_interface_faces_extract(v, T->cell_body, bf));
+  MX_CHECK(mx_interface_faces_extract(&v, T->cell_body, bf));
   bf->tri_tag = mx_alloc((bf->ntri + 1) * sizeof *bf->tri_tag);
   bf->quad_tag = mx_alloc((bf->nquad + 1) * sizeof *bf->quad_tag);
   if (!bf->tri_tag || !bf->quad_tag) return MX_ENOMEM;
   /* the pairs met, in order of first face: tags 2, 3, ... */
-  int32_t pa[63], pb[63];
   int npairs = 0, over = 0;
   for (int q = 0; q < 2; q++) {
     const size_t n = q ? bf->nquad : bf->ntri;
@@ -193,10 +218,10 @@ static int make_material_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T
       }
       const int32_t a = T->cell_body[src[i] >> 3], b = pair[i];
       int k = 0;
-      while (k < npairs && !(pa[k] == a && pb[k] == b)) k++;
+      while (k < npairs && !(T->pa[k] == a && T->pb[k] == b)) k++;
       if (k == npairs && npairs < 63) {
-        pa[k] = a;
-        pb[k] = b;
+        T->pa[k] = a;
+        T->pb[k] = b;
         npairs++;
       } else if (k == npairs) {
         over = 1;
@@ -210,46 +235,122 @@ static int make_material_tags(const mx_mesher *m, const mx_mesh_view *v, tags *T
   MX_CHECK(faces_by_tag(bf->nquad, 4, bf->quad, bf->quad_src, bf->quad_tag, bf->quad_pair,
                         ntags));
   mx_boundary_node_tags(bf, M->nnodes, T->node_tag);
-  const int nb = nmat + outside;
-  int k = 0;
-  char name[256], na[120], nb2[120];
-  for (int b = 1; b <= nb && b <= 64; b++) {
-    if (b > nmat)
-      snprintf(name, sizeof name, "outside the inputs");
-    else
-      MX_CHECK(mx_material_name(m, b, name, sizeof name));
-    T->body_names[b - 1] = T->names[k++] = tag_name(name, "");
-  }
-  T->tag_names[0] = T->names[k++] = tag_name("boundary", "");
-  for (int p = 0; p < npairs; p++) {
-    if (pa[p] > nmat) snprintf(na, sizeof na, "outside");
-    else MX_CHECK(mx_material_name(m, pa[p], na, sizeof na));
-    if (pb[p] > nmat) snprintf(nb2, sizeof nb2, "outside");
-    else MX_CHECK(mx_material_name(m, pb[p], nb2, sizeof nb2));
-    snprintf(name, sizeof name, "interface %s | %s", na, nb2);
-    T->tag_names[1 + p] = T->names[k++] = tag_name(name, "");
-  }
-  for (int i = 0; i < k; i++)
-    if (!T->names[i]) return MX_ENOMEM;
-  T->nbodies = nb <= 64 && !over ? nb : 0;
+  T->nbm = nmat + outside;
+  T->npairs = npairs;
+  T->over = over;
+  T->nbodies = T->nbm <= 64 && !over ? T->nbm : 0;
   T->ntags = ntags;
   return MX_OK;
 }
 
-/* The view the writers get, and what it points to. */
+/* The cached part for the mesh as it is now (made at the first call after
+ * a change). */
+static int written_get(const mx_mesher *m, const mx_written **out) {
+  mx_written *W = m->rec->written;
+  if (W && written_fits(m, W)) {
+    *out = W;
+    return MX_OK;
+  }
+  written_free(W);
+  m->rec->written = NULL;
+  W = mx_calloc(sizeof *W);
+  if (!W) return MX_ENOMEM;
+  const mx_mesh *M = &m->M;
+  written_stamp(m, W);
+  W->tagged = (m->mesh_stage == MX_STAGE_FULL && m->ndomain > 0) || M->material;
+  W->order = mx_alloc((M->ncells + 1) * sizeof *W->order);
+  int st = W->order ? MX_OK : MX_ENOMEM;
+  if (!st && !W->tagged) st = mx_cells_by_type(M->type, M->ncells, W->order, NULL);
+  if (!st && W->tagged) st = M->material ? make_material_tags(m, W) : make_tags(m, W);
+  if (!st && W->tagged)
+    st = mx_cells_in_order(M->type, W->cell_body, W->nbodies, M->ncells, W->order);
+  if (st) {
+    written_free(W);
+    return st;
+  }
+  m->rec->written = W;
+  *out = W;
+  return MX_OK;
+}
+
+/* The last path component, quotes turned into apostrophes (a name inside
+ * the quotes of Gmsh's $PhysicalNames). */
+static char *tag_name(const char *path, const char *suffix) {
+  const char *slash = strrchr(path, '/');
+  const char *base = slash ? slash + 1 : path;
+  while (*base == '-') base++; /* "--demo" */
+  const size_t n = strlen(base) + strlen(suffix) + 1;
+  char *s = mx_alloc(n);
+  if (!s) return NULL;
+  snprintf(s, n, "%s%s", base, suffix);
+  for (char *p = s; *p; p++)
+    if (*p == '"' || (unsigned char)*p < 32) *p = '\'';
+  return s;
+}
+
+/* The view the writers get, and what it points to: the cached arrays
+ * (W, the mesher's) and per call the names, fields and size field. */
 typedef struct {
-  uint32_t *order;
-  tags T;
+  const mx_written *W;
+  char *names[2 * 66];
+  const char *tag_names[66], *body_names[66];
   mx_field f[6], pf[2];
   mx_mesh_view v;
-  int tagged;
   double *size; /* a size field's: each cell's target size */
 } prepared;
 
 static void release(prepared *P) {
-  tags_free(&P->T);
-  mx_free(P->order);
+  for (size_t i = 0; i < sizeof P->names / sizeof *P->names; i++) mx_free(P->names[i]);
   mx_free(P->size);
+}
+
+/* The names of the surface groups (one per input, "on no input") and of
+ * the bodies (after their smallest tag's input). */
+static int input_names(const mx_mesher *m, prepared *P) {
+  const mx_written *W = P->W;
+  int k = 0;
+  for (int t = 0; t < m->ndomain; t++)
+    P->tag_names[t] = P->names[k++] = tag_name(m->domain_name[t], "");
+  if (W->off > 0) P->tag_names[m->ndomain] = P->names[k++] = tag_name("on no input", "");
+  const int nb = W->nbodies_all < 64 ? W->nbodies_all : 64;
+  for (int b = 0; b < nb; b++) {
+    const int t = W->body_tag[b];
+    char suffix[32];
+    snprintf(suffix, sizeof suffix, " volume %d", b + 1);
+    P->body_names[b] = P->names[k++] =
+        tag_name(t >= 1 && t <= m->ndomain ? m->domain_name[t - 1] : "mesh", suffix);
+  }
+  for (int i = 0; i < k; i++)
+    if (!P->names[i]) return MX_ENOMEM;
+  return MX_OK;
+}
+
+/* Materials: the bodies after their materials, the tags "boundary" and
+ * "interface A | B". */
+static int material_names(const mx_mesher *m, prepared *P) {
+  const mx_written *W = P->W;
+  const int nmat = m->nmaterials;
+  int k = 0;
+  char name[256], na[120], nb2[120];
+  for (int b = 1; b <= W->nbm && b <= 64; b++) {
+    if (b > nmat)
+      snprintf(name, sizeof name, "outside the inputs");
+    else
+      MX_CHECK(mx_material_name(m, b, name, sizeof name));
+    P->body_names[b - 1] = P->names[k++] = tag_name(name, "");
+  }
+  P->tag_names[0] = P->names[k++] = tag_name("boundary", "");
+  for (int p = 0; p < W->npairs; p++) {
+    if (W->pa[p] > nmat) snprintf(na, sizeof na, "outside");
+    else MX_CHECK(mx_material_name(m, W->pa[p], na, sizeof na));
+    if (W->pb[p] > nmat) snprintf(nb2, sizeof nb2, "outside");
+    else MX_CHECK(mx_material_name(m, W->pb[p], nb2, sizeof nb2));
+    snprintf(name, sizeof name, "interface %s | %s", na, nb2);
+    P->tag_names[1 + p] = P->names[k++] = tag_name(name, "");
+  }
+  for (int i = 0; i < k; i++)
+    if (!P->names[i]) return MX_ENOMEM;
+  return MX_OK;
 }
 
 /* With a size field (issue 27): the cell field target_size, the least of
@@ -275,8 +376,8 @@ static int add_size_field(const mx_mesher *m, prepared *P) {
 static int prepare(const mx_mesher *m, prepared *P) {
   memset(P, 0, sizeof *P);
   const mx_mesh *M = &m->M;
-  P->order = mx_alloc((M->ncells + 1) * sizeof *P->order);
-  if (!P->order) return MX_ENOMEM;
+  MX_CHECK(written_get(m, &P->W));
+  const mx_written *W = P->W;
   /* The fields read the mesh's own arrays: 8-bit types, levels and
    * boundary flags, written as int32 (UInt8 in a VTU), float J_ENS written
    * as double; the writers convert value by value. */
@@ -287,32 +388,24 @@ static int prepare(const mx_mesher *m, prepared *P) {
   P->v = (mx_mesh_view){.nnodes = M->nnodes, .xyz = M->xyz, .ncells = M->ncells,
                         .type = M->type, .conn = M->conn, .ncell_fields = 3,
                         .cell_fields = P->f, .npoint_fields = 1, .point_fields = P->pf,
-                        .order = P->order};
-  P->tagged = (m->mesh_stage == MX_STAGE_FULL && m->ndomain > 0) || M->material;
-  if (!P->tagged) {
-    MX_CHECK(add_size_field(m, P));
-    return mx_cells_by_type(M->type, M->ncells, P->order, NULL);
-  }
-  if (M->material)
-    MX_CHECK(make_material_tags(m, &P->v, &P->T));
-  else
-    MX_CHECK(make_tags(m, &P->v, &P->T));
-  MX_CHECK(mx_cells_in_order(M->type, P->T.cell_body, P->T.nbodies, M->ncells, P->order));
-  P->f[3] = (mx_field){.name = "body", .is_double = 0, .ivalues = P->T.cell_body};
-  P->pf[1] = (mx_field){.name = "surface_tag", .is_double = 0, .ivalues = P->T.node_tag};
+                        .order = W->order};
+  if (!W->tagged) return add_size_field(m, P);
+  MX_CHECK(W->material ? material_names(m, P) : input_names(m, P));
+  P->f[3] = (mx_field){.name = "body", .is_double = 0, .ivalues = W->cell_body};
+  P->pf[1] = (mx_field){.name = "surface_tag", .is_double = 0, .ivalues = W->node_tag};
   P->v.ncell_fields = 4;
-  if (P->T.material) {
-    P->f[4] = (mx_field){.name = "material", .is_double = 0, .ivalues = P->T.material};
+  if (W->material) {
+    P->f[4] = (mx_field){.name = "material", .is_double = 0, .ivalues = W->material};
     P->v.ncell_fields = 5;
   }
   P->v.npoint_fields = 2;
-  P->v.bfaces = &P->T.bf;
-  P->v.ntags = P->T.ntags;
-  P->v.tag_names = P->T.tag_names;
-  P->v.cell_body = P->T.cell_body;
-  P->v.nbodies = P->T.nbodies;
-  P->v.body_names = P->T.body_names;
-  if (P->T.material) P->v.body_physical = P->T.body_physical;
+  P->v.bfaces = &W->bf;
+  P->v.ntags = W->ntags;
+  P->v.tag_names = P->tag_names;
+  P->v.cell_body = W->cell_body;
+  P->v.nbodies = W->nbodies;
+  P->v.body_names = P->body_names;
+  if (W->material) P->v.body_physical = W->body_physical;
   return add_size_field(m, P);
 }
 

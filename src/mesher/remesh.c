@@ -152,6 +152,7 @@ static int by_type_map(mx_mesher *m, uint32_t **map) {
 int mx_mesher_refine_elements(mx_mesher *m, const uint64_t *elements, size_t n) {
   mx_call c;
   mx_call_begin(m, &c);
+  mx_written_forget(m); /* the mesh changes */
   int st = need_tree(m);
   /* the element -> leaf map of the mesh written with the restart file just
    * read, or of the current mesh */
@@ -178,6 +179,7 @@ int mx_mesher_refine_elements(mx_mesher *m, const uint64_t *elements, size_t n) 
 int mx_mesher_refine_leaves(mx_mesher *m, const uint64_t *leaves, size_t n) {
   mx_call c;
   mx_call_begin(m, &c);
+  mx_written_forget(m); /* the mesh changes */
   int st = need_tree(m);
   if (!st) st = refine_indices(m, leaves, n, NULL, m->nleaves, "leaf", "leaves in the octree");
   return mx_call_end(m, &c, st);
@@ -186,6 +188,7 @@ int mx_mesher_refine_leaves(mx_mesher *m, const uint64_t *leaves, size_t n) {
 int mx_mesher_refine(mx_mesher *m) {
   mx_call c;
   mx_call_begin(m, &c);
+  mx_written_forget(m); /* the mesh changes */
   int st = need_tree(m);
   if (!st) st = refine_indices(m, NULL, 0, NULL, 0, "", "");
   return mx_call_end(m, &c, st);

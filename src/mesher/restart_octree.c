@@ -431,6 +431,9 @@ static int ends_with(const char *s, const char *suffix) {
 int mx_mesher_save_restart(const mx_mesher *m, const char *path) {
   mx_call c;
   mx_call_begin(m, &c);
+  /* the restart writer's arrays in place of the writers' (the program
+   * writes the restart file last: its peak stays what it was) */
+  mx_written_release(m);
   const double t = mx_wtime();
   int st = path ? mx_mesher_spares_inputs(m, path, 1) : MX_OK;
   if (!st) st = mx_materials_allowed(m, "a restart file");
@@ -737,6 +740,7 @@ static int load_restart(mx_mesher *m, const char *path) {
 int mx_mesher_load_restart(mx_mesher *m, const char *path) {
   mx_call c;
   mx_call_begin(m, &c);
+  mx_written_forget(m); /* the mesh changes */
   const double t = mx_wtime();
   const double read = m->rec->S.ph.read;
   memset(&m->rec->S, 0, sizeof m->rec->S);

@@ -69,6 +69,7 @@ static double volume_cut_faces(const mx_mesh *M) {
 int mx_mesher_tets(mx_mesher *m) {
   if (!m->p.tets || m->have_mix || m->mesh_stage < MX_STAGE_TRANSITION || !m->M.ncells)
     return MX_OK;
+  mx_written_forget(m); /* the mesh becomes its tetrahedra */
   mx_summary *S = &m->rec->S;
   char inputs[MX_INPUTS_LABEL];
   const char *name = mx_inputs_label(m, inputs, sizeof inputs);
@@ -155,6 +156,7 @@ int mx_mesher_tets(mx_mesher *m) {
 
 void mx_mesher_untets(mx_mesher *m) {
   if (!m->have_mix) return;
+  mx_written_forget(m);
   mx_mesh_free(&m->M);
   m->M = m->Mmix;
   memset(&m->Mmix, 0, sizeof m->Mmix);
