@@ -68,25 +68,34 @@ static const int attempt_rings[2][2] = {{3, 6}, {6, 12}};
  *
  * and the patch is meshed when local + (1 - accept) * full < full, that is
  * local < accept * full. Measured on the cortex (2 threads, the machine
- * shared, so the figures vary by about 1.5x between runs):
- * bench/remesh_bench.c --choice --levels 6,7,8 with each patch's and each
- * full re-mesh's own seconds: full 1293, 2284, 2029 ns per leaf at -s 6, 7,
- * 8 (medians); local, fitted over single spots of 1-99% of the leaves,
- * 268 / 379 / 206 ns per leaf + 1427 / 2901 / 2002 per patch leaf. Only
- * the ratios matter: a patch of one spot pays below about 85% of the
- * leaves. BORDER_SCALE: the leaves of ring 3 (the core's border) against
+ * shared with other work: the figures vary by up to 1.5x between runs)
+ * with bench/remesh_bench.c --choice --levels 6,7,8, two runs (repeat 3,
+ * each patch's and each full re-mesh's own seconds printed by a probe not
+ * kept; repeat 5, the bench's own fit): full 1293, 2284, 2029
+ * and 2229, 1911, 2237 ns per leaf at -s 6, 7, 8; local, fitted over single
+ * spots of 2-99% of the leaves, 268, 379, 206 and 982, 380 ns per leaf +
+ * 1427, 2901, 2002 and 1649, 914 ns per patch leaf (the second run's -s 8
+ * fit is off: its largest box needed two patches). FULL_NS_PER_LEAF and
+ * LOCAL_NS_PER_LEAF are the medians; a patch leaf is counted at the full
+ * path's cost per leaf (the same stages on the same kind of leaves: the
+ * fits range from 0.4x, boxes reaching into the inside mesh, to 1.4x,
+ * spots on the surface; the median 0.8x would let a patch of every leaf
+ * pay). Only the ratios matter: a patch pays below accept - 18% of the
+ * leaves; issue 9's box at -s 8 (33%) up to a border of about 12,000.
+ *
+ * BORDER_SCALE: the leaves of ring 3 (the core's border) against
  * refused splices over 112 first attempts (6 rings) at -s 7 and 8
  * (scattered marks of 1 to 200 elements, spots, boxes of 0.5-12% of the
  * elements, repair rounds; the runs of the bench repeated): refused 23
  * times, at borders of 1,320 to 81,691 leaves, nearly all scattered marks
  * (20 or more scattered elements were refused every time; 5 or 10 in one
  * run of four), accepted 89 times at 169 to 12,947; 19,000 is the maximum
- * likelihood scale. The 50 scattered elements of issue 31 (borders 21,286 at -s 7,
- * 22,878 at -s 8; patches of 80% and 34%) are meshed whole; issue 9's box
- * of 3.8% at -s 8 (border 8,345, a patch of 33%) locally. */
-#define LOCAL_NS_PER_PATCH_LEAF 2000.0
-#define LOCAL_NS_PER_LEAF 270.0
-#define FULL_NS_PER_LEAF 2000.0
+ * likelihood scale. The 50 scattered elements of issue 31 (borders 21,286
+ * at -s 7, 22,878 at -s 8; patches of 80% and 34%) are meshed whole; issue
+ * 9's box of 3.8% at -s 8 (border 8,345, a patch of 33%) locally. */
+#define LOCAL_NS_PER_PATCH_LEAF 2100.0
+#define LOCAL_NS_PER_LEAF 380.0
+#define FULL_NS_PER_LEAF 2100.0
 #define BORDER_SCALE 19000.0
 
 int mx_remesh_local_pays(size_t np, size_t nborder, size_t nl) {
