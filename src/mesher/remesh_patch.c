@@ -108,8 +108,8 @@ int mx_remesh_local_pays(size_t np, size_t nborder, size_t nl) {
 /* mark[i] = the ring of leaf i (1 .. rings), 0 beyond; pos maps octants to
  * leaf positions. *nsplit: the old leaves that were split; *nborder: the
  * leaves of ring core_rings (the core's border). choose: once the core is
- * marked, *declined = 1 and no more rings when the core alone (a lower
- * bound of the patch) does not pay (mx_remesh_local_pays). */
+ * marked, *declined = 1 and no more rings as soon as the leaves marked (a
+ * lower bound of the patch) do not pay (mx_remesh_local_pays). */
 static int mark_rings(mx_mesher *m, const uint32_t *old, size_t nold, const uint32_t *pos,
                       int rings, int core_rings, int choose, uint8_t *mark, size_t *nsplit,
                       size_t *nborder, int *declined) {
@@ -142,12 +142,10 @@ static int mark_rings(mx_mesher *m, const uint32_t *old, size_t nold, const uint
       nlast += mark[i] == ring - 1;
       if (mark[i] == ring - 1 && (ring > 2 || m->leaves[i] <= top)) q[n++] = m->leaves[i];
     }
-    if (ring - 1 == core_rings) {
-      *nborder = nlast;
-      if (choose && !mx_remesh_local_pays(nmarked, nlast, nl)) {
-        *declined = 1;
-        break;
-      }
+    if (ring - 1 == core_rings) *nborder = nlast;
+    if (ring - 1 >= core_rings && choose && !mx_remesh_local_pays(nmarked, *nborder, nl)) {
+      *declined = 1;
+      break;
     }
     st = mx_leaves_touching(&m->B.tree, pos, q, n, mark, (uint8_t)ring);
   }
