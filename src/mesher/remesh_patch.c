@@ -84,7 +84,7 @@ static const int attempt_rings[2][2] = {{3, 6}, {6, 12}};
  * leaves; issue 9's box at -s 8 (33%) up to a border of about 12,000.
  *
  * BORDER_SCALE: the leaves of ring 3 (the core's border) against
- * refused splices over 112 first attempts (6 rings) at -s 7 and 8
+ * refused splices over 112 first attempts (6 rings) at -s 6 to 8
  * (scattered marks of 1 to 200 elements, spots, boxes of 0.5-12% of the
  * elements, repair rounds; the runs of the bench repeated): refused 23
  * times, at borders of 1,320 to 81,691 leaves, nearly all scattered marks
