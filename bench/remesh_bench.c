@@ -11,7 +11,27 @@
  *    re-meshing in memory (mx_mesher_refine_elements) and from the binary
  *    restart file (read .octb, refine, mesh), against the initial run.
  *
+ * 3. --choice (alone): the choice between a local and a full re-mesh
+ *    (issue 31 item 3; src/mesher/remesh_patch.c, mx_remesh_local_pays): at
+ *    each level of --levels (default 6,7,8), three lists on the cortex:
+ *    "scattered" (50 elements spread over it: every (n/50)-th element, the
+ *    elements being in Morton order), "cluster" (50 elements in a row of
+ *    the Morton order: one small clustered spot) and "box" (the elements
+ *    with a node in the box of part 2, about 4%: issue 9's in-memory
+ *    scenario, 3.8% at -s 8), each re-meshed in memory with
+ *    params.remesh_full -1 (local), 1 (full) and 0 (the choice), the modes
+ *    alternated, each run on a mesher meshed just before it (its initial
+ *    time taken in the same run). Per level and list: the medians, the
+ *    ratios to the initial run, the patch; then the per-leaf costs of the
+ *    re-mesh proper (mx_stats t_grid + t_transition + t_boundary: finding
+ *    the patch, its stages and the splice, or the whole octree's): the full path's
+ *    seconds per leaf, and the local path's fitted as
+ *    t = per_leaf * leaves + per_patch_leaf * patch leaves (least squares
+ *    over the three lists, the per-leaf part being the splice and the rings),
+ *    from which the share of the leaves below which a patch pays.
+ *
  * usage: mixoct-remesh-bench [--data DIR] [--level L] [--repeat N] [--out DIR]
+ *        mixoct-remesh-bench --choice [--data DIR] [--levels 6,7,8] [--repeat N]
  * The heap is set up as the mixoct program sets it (src/cli/main.c; MX_HEAP
  * = heap or default as there).
  * Times are the median of N runs (default 3), in seconds; the last line is
@@ -110,22 +130,204 @@ static void write_list(const char *path, const uint64_t *l, size_t n) {
   fclose(f);
 }
 
+/* ---- 3. the choice between a local and a full re-mesh ----------------- */
+
+static const char *const list_names[4] = {"scattered", "cluster", "box", "bigbox"};
+static const int modes[3] = {-1, 1, 0}; /* params.remesh_full */
+
+/* List k of m's mesh (see the head); box: the box of part 2 grown to hold
+ * about 4% of the elements; bigbox: 12%. */
+static uint64_t *choice_list(const mx_mesher *m, int k, const double blo[3], const double bhi[3],
+                             size_t *n) {
+  mx_mesh_arrays a;
+  mx_mesher_mesh_arrays(m, &a);
+  const size_t nc = a.nelements;
+  if (k == 0 || k == 1) {
+    uint64_t *l = malloc(50 * sizeof *l);
+    *n = 0;
+    for (size_t i = 0; i < 50 && i < nc; i++)
+      l[(*n)++] = k == 0 ? (2 * i + 1) * (nc / 100) : nc / 2 + i;
+    return l;
+  }
+  double c[3], h = 0.5 * (bhi[0] - blo[0]);
+  for (int d = 0; d < 3; d++) c[d] = 0.5 * (blo[d] + bhi[d]);
+  uint64_t *l = NULL;
+  const double share = k == 2 ? 0.04 : 0.12;
+  for (int it = 0; it < 40; it++) {
+    double lo[3] = {c[0] - h, c[1] - h, c[2] - h}, hi[3] = {c[0] + h, c[1] + h, c[2] + h};
+    free(l);
+    l = elements_in_box(m, lo, hi, n);
+    const double f = (double)*n / (double)nc;
+    if (fabs(f - share) < 0.1 * share) break;
+    h *= f > 0 ? pow(share / f, 1.0 / 3.0) : 2.0;
+  }
+  return l;
+}
+
+typedef struct {
+  double t_init, t_remesh, t_mesh; /* t_mesh: finding the patch, transition, boundary */
+  size_t leaves, patch, listed;
+  int local, repair_rounds;
+} choice_run;
+
+static choice_run choice_once(const char *surface, int level, int list, int mode,
+                              const double blo[3], const double bhi[3]) {
+  choice_run r;
+  memset(&r, 0, sizeof r);
+  mx_params p;
+  mx_params_default(&p);
+  p.surface_level = level;
+  p.remesh_full = modes[mode];
+  double t0 = now();
+  mx_mesher *m = mx_mesher_new(&p);
+  if (!m) die(NULL, "new", MX_ENOMEM);
+  RUN(m, mx_mesher_add_surface(m, surface), "add_surface");
+  RUN(m, mx_mesher_mesh(m), "mesh");
+  r.t_init = now() - t0;
+  uint64_t *l = choice_list(m, list, blo, bhi, &r.listed);
+  t0 = now();
+  RUN(m, mx_mesher_refine_elements(m, l, r.listed), "refine elements");
+  r.t_remesh = now() - t0;
+  free(l);
+  mx_stats s;
+  mx_mesher_stats(m, &s);
+  r.t_mesh = s.t_grid + s.t_transition + s.t_boundary;
+  r.leaves = s.leaves;
+  r.patch = s.remesh_patch_leaves;
+  r.local = s.remesh_local;
+  r.repair_rounds = s.repair_rounds;
+  if (s.invalid) {
+    fprintf(stderr, "remesh-bench: %zu invalid elements after the re-mesh\n", s.invalid);
+    exit(1);
+  }
+  mx_mesher_free(m);
+  return r;
+}
+
+static int choice_bench(const char *data, const char *levels, int repeat) {
+  char surface[1024], box[1024];
+  snprintf(surface, sizeof surface, "%s/surfaces/cortex.off", data);
+  snprintf(box, sizeof box, "%s/remesh/roi.box", data);
+  double blo[3], bhi[3];
+  FILE *f = fopen(box, "r");
+  if (!f || fscanf(f, "%lf %lf %lf %lf %lf %lf", &blo[0], &blo[1], &blo[2], &bhi[0], &bhi[1],
+                   &bhi[2]) != 6) {
+    fprintf(stderr, "remesh-bench: cannot read %s\n", box);
+    return 1;
+  }
+  fclose(f);
+  printf("choice between local and full re-meshing, cortex, median of %d (modes alternated; "
+         "ratio: re-mesh / initial run of the same mesher, median of the ratios)\n", repeat);
+  static char json[16384];
+  size_t jn = 0;
+  int first = 1;
+  for (const char *q = levels; *q;) {
+    const int level = atoi(q);
+    while (*q && *q != ',') q++;
+    if (*q == ',') q++;
+    choice_run R[4][3][15];
+    for (int r = 0; r < repeat; r++)
+      for (int list = 0; list < 4; list++)
+        for (int k = 0; k < 3; k++) {
+          const int mode = (k + r + list) % 3; /* alternated */
+          R[list][mode][r] = choice_once(surface, level, list, mode, blo, bhi);
+        }
+    /* the re-mesh proper per path: seconds without refinement and balance */
+    double xp[4], xl[4], yl[4], full_per_leaf = 0;
+    for (int list = 0; list < 4; list++) {
+      double v[3][15], ratio[3][15], proper[3][15], init[45];
+      int ni = 0;
+      for (int mode = 0; mode < 3; mode++)
+        for (int r = 0; r < repeat; r++) {
+          const choice_run *c = &R[list][mode][r];
+          v[mode][r] = c->t_remesh;
+          ratio[mode][r] = c->t_remesh / c->t_init;
+          proper[mode][r] = c->t_mesh;
+          init[ni++] = c->t_init;
+        }
+      const choice_run *lo = &R[list][0][0], *fu = &R[list][1][0], *ch = &R[list][2][0];
+      const double mi = median(init, ni);
+      double med[3], rat[3], pro[3];
+      for (int mode = 0; mode < 3; mode++) {
+        med[mode] = median(v[mode], repeat);
+        rat[mode] = median(ratio[mode], repeat);
+        pro[mode] = median(proper[mode], repeat);
+      }
+      /* each repair round is one re-mesh more: a splice of the local path
+       * (a patch of a few leaves), the whole octree on the full path */
+      xp[list] = (double)lo->patch;
+      xl[list] = (double)lo->leaves * (1 + lo->repair_rounds);
+      yl[list] = pro[0];
+      full_per_leaf += pro[1] / ((double)fu->leaves * (1 + fu->repair_rounds)) / 4.0;
+      printf("-s %d %-9s: %zu elements listed, initial %.3f s; %zu leaves after; local: "
+             "patch of %zu leaves (%.1f%%), %.3f s = %.1f%% (re-mesh proper %.3f s, %d repair "
+             "round(s)); full: %.3f s = %.1f%% (proper %.3f s); choice: %s, %.3f s = %.1f%%; "
+             "choice / full %.2f\n",
+             level, list_names[list], lo->listed, mi, lo->leaves, lo->patch,
+             100.0 * (double)lo->patch / (double)lo->leaves, med[0], 100 * rat[0], pro[0],
+             lo->repair_rounds, med[1], 100 * rat[1], pro[1], ch->local ? "local" : "full",
+             med[2], 100 * rat[2], med[2] / med[1]);
+      fflush(stdout);
+      if (jn < sizeof json)
+        jn += (size_t)snprintf(json + jn, sizeof json - jn, "%s{\"level\": %d, \"list\": \"%s\", \"listed\": %zu, "
+              "\"initial_s\": %.4f, \"leaves\": %zu, \"patch\": %zu, \"local_s\": %.4f, "
+              "\"full_s\": %.4f, \"choice_s\": %.4f, \"choice_local\": %d, \"local_ratio\": "
+              "%.4f, \"full_ratio\": %.4f, \"choice_ratio\": %.4f, \"local_proper_s\": %.4f, "
+              "\"full_proper_s\": %.4f}", first ? "" : ", ", level, list_names[list],
+              lo->listed, mi, lo->leaves, lo->patch, med[0], med[1], med[2], ch->local,
+              rat[0], rat[1], rat[2], pro[0], pro[1]);
+      first = 0;
+    }
+    /* t = a * leaves + b * patch, least squares over the lists of one spot
+     * (scattered marks have their first patch refused at times: two
+     * patches) */
+    double sll = 0, slp = 0, spp = 0, sly = 0, spy = 0;
+    for (int i = 1; i < 4; i++) {
+      sll += xl[i] * xl[i];
+      slp += xl[i] * xp[i];
+      spp += xp[i] * xp[i];
+      sly += xl[i] * yl[i];
+      spy += xp[i] * yl[i];
+    }
+    const double det = sll * spp - slp * slp;
+    const double a = det != 0 ? (sly * spp - spy * slp) / det : 0,
+                 b = det != 0 ? (spy * sll - sly * slp) / det : 0;
+    printf("-s %d cost per leaf (ns): full %.0f; local %.0f per leaf of the octree (splice, "
+           "rings) + %.0f per patch leaf: a patch pays below %.1f%% of the leaves\n", level,
+           1e9 * full_per_leaf, 1e9 * a, 1e9 * b,
+           b > 0 ? 100.0 * (full_per_leaf - a) / b : 100.0);
+    if (jn < sizeof json)
+      jn += (size_t)snprintf(json + jn, sizeof json - jn, ", {\"level\": %d, "
+                             "\"full_ns_per_leaf\": %.1f, \"local_ns_per_leaf\": %.1f, "
+                             "\"local_ns_per_patch_leaf\": %.1f}", level, 1e9 * full_per_leaf,
+                             1e9 * a, 1e9 * b);
+  }
+  printf("{\"choice\": [%s]}\n", json);
+  return 0;
+}
+
 int main(int argc, char **argv) {
   mx_heap_setup(); /* as the mixoct program does */
   const char *data = "../shared/data", *out = "/tmp";
-  int level = 8, repeat = 3;
+  int level = 8, repeat = 3, choice = 0;
+  const char *levels = "6,7,8";
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "--data") && i + 1 < argc) data = argv[++i];
+    else if (!strcmp(argv[i], "--choice")) choice = 1;
+    else if (!strcmp(argv[i], "--levels") && i + 1 < argc) levels = argv[++i];
     else if (!strcmp(argv[i], "--level") && i + 1 < argc) level = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
     else {
-      fprintf(stderr, "usage: %s [--data DIR] [--level L] [--repeat N] [--out DIR]\n", argv[0]);
+      fprintf(stderr, "usage: %s [--data DIR] [--level L] [--repeat N] [--out DIR]\n"
+                      "       %s --choice [--data DIR] [--levels 6,7,8] [--repeat N]\n",
+              argv[0], argv[0]);
       return 2;
     }
   }
   if (repeat < 1) repeat = 1;
   if (repeat > 15) repeat = 15;
+  if (choice) return choice_bench(data, levels, repeat);
   char surface[1024], pub_oct[1024], pub_list[1024], box[1024];
   snprintf(surface, sizeof surface, "%s/surfaces/cortex.off", data);
   snprintf(pub_oct, sizeof pub_oct, "%s/remesh/c5.oct", data);

@@ -110,7 +110,10 @@ typedef struct {
                         * 0 (default): such an input is refused (MX_EINPUT) */
   int remesh_full;     /* 1: after a refinement, mesh the whole octree again;
                         * 0 (default): only the leaves around what was split
-                        * (the rest of the mesh is kept as it was) */
+                        * (the rest of the mesh is kept as it was) when that
+                        * is expected to cost less than the whole octree;
+                        * -1: the leaves around what was split, whatever the
+                        * cost (benchmarks, tests) */
   int materials;       /* 1: several materials (--materials): the shells
                         * nested in the outermost are not holes; each
                         * element gets the material of the region it is in,
@@ -292,7 +295,9 @@ int mx_mesher_boundary(mx_mesher *m);     /* boundary stage, with repair */
  * to the current mesh; an index out of range is MX_EINPUT (nothing done).
  * When the current mesh is a full-stage one, only the leaves around what
  * was split are meshed again (the rest of the mesh is kept) and the result
- * is the mesh a full re-mesh gives; params.remesh_full turns this off. */
+ * is the mesh a full re-mesh gives; params.remesh_full turns this off.
+ * A patch too large to pay (scattered marks) is not meshed alone: the whole
+ * octree is (mx_stats.remesh_local 0), with the same mesh. */
 int mx_mesher_refine_elements(mx_mesher *m, const uint64_t *elements,
                               size_t n);
 /* The same with leaf indices (0 .. nleaves-1, Morton order of the leaves). */

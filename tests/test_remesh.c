@@ -213,6 +213,7 @@ static void test_local_vs_full(void) {
   mx_params p;
   mx_params_default(&p);
   p.surface_level = 5;
+  p.remesh_full = -1; /* local whatever the cost: the local path is tested */
   mx_mesher *loc = mx_mesher_new(&p);
   p.threads = 1; /* and the same local re-mesh on one thread, with the edge
                    * infos freed after each transition and rebuilt by the
@@ -262,6 +263,7 @@ static void test_local_vs_full(void) {
   CHECK(mx_mesher_mesh(s) == MX_OK);
   CHECK(same_mesh(loc, s));
   /* the binary file's mesh, read back */
+  p.remesh_full = -1;
   mx_mesher *b = mx_mesher_new(&p);
   CHECK(mx_mesher_add_surface(b, data("surfaces/cortex.off")) == MX_OK);
   CHECK(mx_mesher_load_restart(b, OUT "/local.octb") == MX_OK);
@@ -295,12 +297,62 @@ static void test_local_vs_full(void) {
   mx_mesher_free(b);
 }
 
+/* 1d. The choice between a local and a full re-mesh (params.remesh_full
+ * 0, the default): the cost model's shape (mx_remesh_local_pays: a patch of
+ * every leaf, or one whose border is long enough that its splice is most
+ * likely refused, never pays; a small one with a short border does), then
+ * on the cortex at -s 5: 50 elements spread over it (their patches are
+ * most of the octree) are meshed by the full path, a few elements in a row
+ * of the Morton order (one spot) by the local one; both meshes valid
+ * (mx_check_mesh) and the mesh of a full re-mesh. */
+static void test_choice(void) {
+  CHECK(!mx_remesh_local_pays(100000, 0, 100000));
+  CHECK(!mx_remesh_local_pays(90000, 0, 100000));
+  CHECK(mx_remesh_local_pays(1000, 100, 100000));
+  CHECK(!mx_remesh_local_pays(1000, 1000000, 100000));
+  for (size_t np = 0; np <= 100000; np += 5000) /* increasing in np and the border */
+    for (size_t nb = 0; nb <= 60000; nb += 5000)
+      CHECK(mx_remesh_local_pays(np + 5000, nb, 100000) <= mx_remesh_local_pays(np, nb, 100000) &&
+            mx_remesh_local_pays(np, nb + 5000, 100000) <= mx_remesh_local_pays(np, nb, 100000));
+  for (int list = 0; list < 2; list++) {
+    mx_params p;
+    mx_params_default(&p);
+    p.surface_level = 5;
+    mx_mesher *m = mx_mesher_new(&p);
+    p.remesh_full = 1;
+    mx_mesher *f = mx_mesher_new(&p);
+    CHECK(mx_mesher_add_surface(m, data("surfaces/cortex.off")) == MX_OK &&
+          mx_mesher_add_surface(f, data("surfaces/cortex.off")) == MX_OK);
+    CHECK(mx_mesher_mesh(m) == MX_OK && mx_mesher_mesh(f) == MX_OK);
+    const size_t nc = s_elements(m);
+    uint64_t l[50];
+    const size_t n = list == 0 ? 50 : 4;
+    for (size_t i = 0; i < n; i++) l[i] = list == 0 ? (2 * i + 1) * (nc / 100) : nc / 2 + i;
+    CHECK(mx_mesher_refine_elements(m, l, n) == MX_OK);
+    CHECK(mx_mesher_refine_elements(f, l, n) == MX_OK);
+    mx_stats s;
+    mx_mesher_stats(m, &s);
+    printf("choice, %s: %zu leaves, %s re-mesh (patch %zu leaves), %d repair round(s)\n",
+           list == 0 ? "50 scattered elements" : "4 elements in a row", s.leaves,
+           s.remesh_local ? "local" : "full", s.remesh_patch_leaves, s.repair_rounds);
+    CHECK(s.remesh_local == (list == 1));
+    CHECK(list == 0 ? s.remesh_patch_leaves == 0
+                    : s.remesh_patch_leaves > 0 && s.remesh_patch_leaves < s.leaves);
+    CHECK(mesh_is_valid(m));
+    CHECK(balanced(m));
+    CHECK(same_mesh(m, f));
+    mx_mesher_free(m);
+    mx_mesher_free(f);
+  }
+}
+
 /* 2. Fig. 18: one element refined again and again (the element holding a
  * fixed point), down to the finest level: local, balanced, valid. */
 static void test_repeated(void) {
   mx_params p;
   mx_params_default(&p);
   p.surface_level = 4;
+  p.remesh_full = -1; /* local whatever the cost (the first rounds patch it all) */
   mx_mesher *m = mx_mesher_new(&p);
   CHECK(mx_mesher_add_demo_surface(m) == MX_OK);
   CHECK(mx_mesher_mesh(m) == MX_OK);
@@ -659,6 +711,7 @@ int main(void) {
   test_list_vs_scratch();
   test_full_equals_scratch();
   test_local_vs_full();
+  test_choice();
   test_repeated();
   test_restart_round_trip("oct");
   test_restart_round_trip("octb");

@@ -52,6 +52,12 @@ int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold);
 /* The leaves of the refined octree, then mx_remesh_changed from the leaves
  * the mesher held. */
 int mx_remesh_after_refine(mx_mesher *m);
+/* The choice of mx_remesh_changed (params.remesh_full 0): 1 when a local
+ * re-mesh of a patch of np leaves of the nl leaves, whose core has nborder
+ * leaves on its border, is expected to cost less than meshing all nl again,
+ * a refused splice's cost counted (the cost model in remesh_patch.c).
+ * Increasing in np and nborder. */
+int mx_remesh_local_pays(size_t np, size_t nborder, size_t nl);
 /* A label image's mesh after the transition stage (image_mesh.c): each
  * element the label of its leaf, the background's dropped, the nodes on
  * an interface moved onto the smoothed interface (as far as the elements

@@ -21,11 +21,17 @@
  * only when the patch gave every node it shares with the kept elements
  * the position and state it had (the change did not reach the kept part);
  * otherwise the rings double, and after that the whole octree is meshed.
+ *
+ * Before a patch is meshed, its cost is set against the whole octree's
+ * (mx_remesh_local_pays, the model below): scattered marks make a patch of
+ * most of the leaves with a long border, whose splice is most likely
+ * refused, and the whole octree is meshed at once instead (the same mesh).
  * tests/test_remesh.c and bench/remesh_bench.c compare against a run from
  * scratch. */
 #include "mesher/mesher_impl.h"
 #include "mesher/pipeline.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "kernels/mesh_edit.h"
@@ -49,10 +55,66 @@ static const int attempt_rings[2][2] = {{3, 6}, {6, 12}};
  * tests/test_remesh.c are patched whole, and equal the full runs.) */
 #define PATCH_MAX_SHARE 0.5
 
+/* The choice between a local and a full re-mesh (params.remesh_full 0),
+ * made once the rings are marked (before any patch is meshed):
+ *
+ *   local  = LOCAL_NS_PER_PATCH_LEAF * np + LOCAL_NS_PER_LEAF * nl
+ *            (the patch's stages; finding the rings, the splice and the
+ *            numbering over the whole mesh),
+ *   full   = FULL_NS_PER_LEAF * nl,
+ *   accept = exp(-nborder / BORDER_SCALE): the chance that the splice is
+ *            accepted (a refused one costs the attempt, then the whole
+ *            octree or more rings),
+ *
+ * and the patch is meshed when local + (1 - accept) * full < full, that is
+ * local < accept * full. Measured on the cortex (2 threads, the machine
+ * shared with other work: the figures vary by up to 1.5x between runs)
+ * with bench/remesh_bench.c --choice --levels 6,7,8, two runs (repeat 3,
+ * each patch's and each full re-mesh's own seconds printed by a probe not
+ * kept; repeat 5, the bench's own fit): full 1293, 2284, 2029
+ * and 2229, 1911, 2237 ns per leaf at -s 6, 7, 8; local, fitted over single
+ * spots of 2-99% of the leaves, 268, 379, 206 and 982, 380 ns per leaf +
+ * 1427, 2901, 2002 and 1649, 914 ns per patch leaf (the second run's -s 8
+ * fit is off: its largest box needed two patches). FULL_NS_PER_LEAF and
+ * LOCAL_NS_PER_LEAF are the medians; a patch leaf is counted at the full
+ * path's cost per leaf (the same stages on the same kind of leaves: the
+ * fits range from 0.4x, boxes reaching into the inside mesh, to 1.4x,
+ * spots on the surface; the median 0.8x would let a patch of every leaf
+ * pay). Only the ratios matter: a patch pays below accept - 18% of the
+ * leaves; issue 9's box at -s 8 (33%) up to a border of about 12,000.
+ *
+ * BORDER_SCALE: the leaves of ring 3 (the core's border) against
+ * refused splices over 112 first attempts (6 rings) at -s 6 to 8
+ * (scattered marks of 1 to 200 elements, spots, boxes of 0.5-12% of the
+ * elements, repair rounds; the runs of the bench repeated): refused 23
+ * times, at borders of 1,320 to 81,691 leaves, nearly all scattered marks
+ * (20 or more scattered elements were refused every time; 5 or 10 in one
+ * run of four), accepted 89 times at 169 to 12,947; 19,000 is the maximum
+ * likelihood scale. The 50 scattered elements of issue 31 (borders 21,286
+ * at -s 7, 22,878 at -s 8; patches of 80% and 34%) are meshed whole; issue
+ * 9's box of 3.8% at -s 8 (border 8,345, a patch of 33%) locally. */
+#define LOCAL_NS_PER_PATCH_LEAF 2100.0
+#define LOCAL_NS_PER_LEAF 380.0
+#define FULL_NS_PER_LEAF 2100.0
+#define BORDER_SCALE 19000.0
+
+int mx_remesh_local_pays(size_t np, size_t nborder, size_t nl) {
+  const double local = LOCAL_NS_PER_PATCH_LEAF * (double)np + LOCAL_NS_PER_LEAF * (double)nl;
+  const double full = FULL_NS_PER_LEAF * (double)nl;
+  /* local + (1 - accept) * full < full */
+  return local < exp(-(double)nborder / BORDER_SCALE) * full;
+}
+
 /* mark[i] = the ring of leaf i (1 .. rings), 0 beyond; pos maps octants to
- * leaf positions. *nsplit: the old leaves that were split. */
+ * leaf positions. *nsplit: the old leaves that were split; *nborder: the
+ * leaves of ring core_rings (the core's border). choose: once the core is
+ * marked, *declined = 1 and no more rings as soon as the leaves marked (a
+ * lower bound of the patch) do not pay (mx_remesh_local_pays). */
 static int mark_rings(mx_mesher *m, const uint32_t *old, size_t nold, const uint32_t *pos,
-                      int rings, uint8_t *mark, size_t *nsplit) {
+                      int rings, int core_rings, int choose, uint8_t *mark, size_t *nsplit,
+                      size_t *nborder, int *declined) {
+  *nborder = 0;
+  *declined = 0;
   const mx_octree *T = &m->B.tree.oct;
   const size_t nl = m->nleaves;
   size_t n = 0;
@@ -72,10 +134,19 @@ static int mark_rings(mx_mesher *m, const uint32_t *old, size_t nold, const uint
   int st = mx_leaves_touching(&m->B.tree, pos, q, n, mark, 1);
   for (int ring = 2; !st && ring <= rings; ring++) {
     n = 0;
+    size_t nmarked = 0, nlast = 0;
     /* new leaves lie in a split old leaf: whatever touches them touches
      * it, and is in ring 1 already */
-    for (size_t i = 0; i < nl; i++)
+    for (size_t i = 0; i < nl; i++) {
+      nmarked += mark[i] != 0;
+      nlast += mark[i] == ring - 1;
       if (mark[i] == ring - 1 && (ring > 2 || m->leaves[i] <= top)) q[n++] = m->leaves[i];
+    }
+    if (ring - 1 == core_rings) *nborder = nlast;
+    if (ring - 1 >= core_rings && choose && !mx_remesh_local_pays(nmarked, *nborder, nl)) {
+      *declined = 1;
+      break;
+    }
     st = mx_leaves_touching(&m->B.tree, pos, q, n, mark, (uint8_t)ring);
   }
   mx_free(q);
@@ -83,10 +154,13 @@ static int mark_rings(mx_mesher *m, const uint32_t *old, size_t nold, const uint
 }
 
 /* *done = 1: meshed locally; 0: the rings missed a change (the caller
- * retries with more rings or meshes everything). */
+ * retries with more rings or meshes everything); -1: not tried, the whole
+ * octree costs less (choose: the cost model decides) or the patch cannot
+ * be meshed alone. */
+enum { LOCAL_RETRY = 0, LOCAL_DONE = 1, LOCAL_DECLINED = -1 };
 static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core_rings,
-                        int patch_rings, int last, int *done) {
-  *done = 0;
+                        int patch_rings, int last, int choose, int *done) {
+  *done = LOCAL_RETRY;
   mx_octree *T = &m->B.tree.oct;
   const double t0 = mx_wtime();
   const size_t nl = m->nleaves;
@@ -96,17 +170,19 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
   uint32_t *from_patch = mx_alloc((nl + 1) * sizeof *from_patch);
   uint32_t *P = mx_alloc((nl + 1) * sizeof *P);
   int st = (!pos || !mark || !from_old || !from_patch || !P) ? MX_ENOMEM : MX_OK;
-  size_t nsplit = 0;
+  size_t nsplit = 0, nborder = 0;
+  int declined = 0;
   if (!st) {
 #pragma omp parallel for schedule(static)
     for (size_t o = 0; o < T->n; o++) pos[o] = MX_NONE;
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < nl; i++) pos[m->leaves[i]] = (uint32_t)i;
-    st = mark_rings(m, old, nold, pos, patch_rings, mark, &nsplit);
+    st = mark_rings(m, old, nold, pos, patch_rings, core_rings, choose, mark, &nsplit, &nborder,
+                    &declined);
   }
   /* the patch in leaf order; where the others' elements are in the old mesh */
   size_t np = 0, ncore = 0, lost = 0;
-  if (!st) {
+  if (!st && !declined) {
     for (size_t i = 0; i < nl; i++) {
       from_patch[i] = MX_NONE;
       if (mark[i]) {
@@ -133,7 +209,9 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
   /* lost: a leaf outside the core that is not an old leaf (cannot happen:
    * new leaves are in ring 1); the caller meshes everything */
   const int too_big = m->rec->S.features_kept && (double)np > PATCH_MAX_SHARE * (double)nl;
-  if (!st && !lost && !too_big) {
+  if (!st && (declined || lost || too_big || (choose && !mx_remesh_local_pays(np, nborder, nl))))
+    *done = LOCAL_DECLINED;
+  if (!st && *done == LOCAL_RETRY) {
     mx_mesh Mp;
     uint8_t *pstates = NULL;
     mx_boundary_stats bs;
@@ -171,7 +249,7 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
           m->rec->S.core_leaves = ncore;
         }
         m->rec->S.splice = ss;
-        *done = 1;
+        *done = LOCAL_DONE;
       }
     }
     m->rec->S.ph.boundary += mx_wtime() - t2;
@@ -188,14 +266,14 @@ int mx_remesh_changed(mx_mesher *m, const uint32_t *old_leaves, size_t nold) {
   /* not with interfaces between materials: the nodes the cleaving adds
    * have no lattice key, so the splice could not match those on the
    * patch's border (a crack); the whole octree is meshed again */
-  if (!m->p.remesh_full && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states &&
+  if (m->p.remesh_full != 1 && m->mesh_stage == MX_STAGE_FULL && m->M.nkey && m->states &&
       old_leaves && !m->IF.npasses)
-    for (int a = 0; a < 2 && !done; a++) {
+    for (int a = 0; a < 2 && done == LOCAL_RETRY; a++) {
       m->rec->S.local_attempts++;
       MX_CHECK(remesh_local(m, old_leaves, nold, attempt_rings[a][0], attempt_rings[a][1], 0,
-                            &done));
+                            m->p.remesh_full == 0, &done));
     }
-  if (done) return MX_OK;
+  if (done == LOCAL_DONE) return MX_OK;
   m->rec->S.local = 0;
   return mx_mesh_full(m);
 }
