@@ -130,7 +130,7 @@ class Mesher(_MesherBase):
                  *, library: Optional[_Path] = ..., progress: Optional[_Progress] = ...,
                  balance: Union[None, str, int] = ..., close_ratio: Optional[float] = ...,
                  staircase_quality: Optional[float] = ..., repair_input: Optional[bool] = ...,
-                 remesh_full: Optional[bool] = ..., materials: Optional[bool] = ...,
+                 remesh_full: Optional[int] = ..., materials: Optional[bool] = ...,
                  smooth_rounds: Optional[int] = ..., tets: Optional[bool] = ...,
                  **params: Any) -> None: ...
     def __enter__(self) -> "Mesher": ...

@@ -30,7 +30,8 @@ class Mesher(_MesherBase):
     "recursive"), ``close_ratio`` and ``staircase_quality`` (0: the
     library's 0.5 and 0.2), ``repair_input`` (an input with no
     well-defined inside meshed by its winding number), ``remesh_full``
-    (re-meshing meshes the whole octree again), ``materials`` (nested
+    (1: re-meshing meshes the whole octree again; 0, the default: only the
+    leaves around what was split when that costs less; -1: always those), ``materials`` (nested
     shells become materials, not holes, given by the ``material`` view;
     see the module doc), ``smooth_rounds`` (rounds of the smoothing that
     only raises the worst J_ENS around each node; 0, the default: off),

@@ -47,6 +47,15 @@ def _flag(name, v):
     raise InputError("%s must be True or False, not %r" % (name, v), EINPUT)
 
 
+def _remesh_full(name, v):
+    """True / 1: always the whole octree; False / 0: by cost; -1: always
+    the leaves around what was split."""
+    if v in (True, False, 0, 1, -1) and not (isinstance(v, float) and v != int(v)):
+        return int(v)
+    raise InputError("%s must be True (1: always full), False (0: by cost) or -1 (always "
+                     "local), not %r" % (name, v), EINPUT)
+
+
 def _choice(words):
     def check(name, v):
         if isinstance(v, str):
@@ -73,7 +82,7 @@ _PARAM_CHECKS = {
     "staircase_quality": _real_check(0.0, 1.0),
     "repair_rounds": _int_check(0, 1000, "a number of rounds"),
     "repair_input": _flag,
-    "remesh_full": _flag,
+    "remesh_full": _remesh_full,
     "materials": _flag,
     "smooth_rounds": _int_check(0, 1000, "a number of rounds"),
     "tets": _flag,          # mx_params.tets (--tets)
