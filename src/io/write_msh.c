@@ -368,6 +368,22 @@ static void box_merge(double *box, const double *o) {
   }
 }
 
+/* Face i (nv nodes) into its tag's count and box (tb) and its body's box
+ * (bb). */
+static inline void face_into(const mx_mesh_view *m, const msh_layout *L, const uint32_t *fv,
+                             const int32_t *tag, const uint64_t *src, size_t i, int nv,
+                             size_t *cnt, double *tb, double *bb) {
+  const int t = tag[i] >= 1 && tag[i] <= L->ntags ? tag[i] : 0;
+  const int32_t b = m->cell_body[src[i] >> 3];
+  const int inb = b >= 1 && b <= L->nbodies;
+  if (t) cnt[t]++;
+  for (int j = 0; j < nv; j++) {
+    const double *p = m->xyz + 3 * (size_t)fv[(size_t)nv * i + j];
+    if (t) box_add(tb + 6 * t, p);
+    if (inb) box_add(bb + 6 * b, p);
+  }
+}
+
 /* The faces of one kind (nv nodes) into the tags' counts and boxes and
  * their bodies' boxes: in parallel, each thread with its own boxes over
  * its run of faces (schedule static: thread r has the r-th run), merged
@@ -377,17 +393,7 @@ static void faces_into(const mx_mesh_view *m, msh_layout *L, const uint32_t *fv,
   const size_t nt = (size_t)L->ntags + 1, nb = (size_t)L->nbodies + 1;
   double *tbox = L->tbox, *bbox = L->bbox;
   if (nt > 67 || nb > 67) { /* more than the mesher makes: serially */
-    for (size_t i = 0; i < n; i++) {
-      const int t = tag[i] >= 1 && tag[i] <= L->ntags ? tag[i] : 0;
-      const int32_t b = m->cell_body[src[i] >> 3];
-      const int inb = b >= 1 && b <= L->nbodies;
-      if (t) cnt[t]++;
-      for (int j = 0; j < nv; j++) {
-        const double *p = m->xyz + 3 * (size_t)fv[(size_t)nv * i + j];
-        if (t) box_add(tbox + 6 * t, p);
-        if (inb) box_add(bbox + 6 * b, p);
-      }
-    }
+    for (size_t i = 0; i < n; i++) face_into(m, L, fv, tag, src, i, nv, cnt, tbox, bbox);
     return;
   }
 #pragma omp parallel if (n > 65536)
@@ -396,17 +402,7 @@ static void faces_into(const mx_mesh_view *m, msh_layout *L, const uint32_t *fv,
     for (size_t i = 0; i < 6 * nt; i++) tb[i] = i % 6 < 3 ? INFINITY : -INFINITY;
     for (size_t i = 0; i < 6 * nb; i++) bb[i] = i % 6 < 3 ? INFINITY : -INFINITY;
 #pragma omp for schedule(static) reduction(+ : cnt[:nt])
-    for (size_t i = 0; i < n; i++) {
-      const int t = tag[i] >= 1 && tag[i] <= L->ntags ? tag[i] : 0;
-      const int32_t b = m->cell_body[src[i] >> 3];
-      const int inb = b >= 1 && b <= L->nbodies;
-      if (t) cnt[t]++;
-      for (int j = 0; j < nv; j++) {
-        const double *p = m->xyz + 3 * (size_t)fv[(size_t)nv * i + j];
-        if (t) box_add(tb + 6 * t, p);
-        if (inb) box_add(bb + 6 * b, p);
-      }
-    }
+    for (size_t i = 0; i < n; i++) face_into(m, L, fv, tag, src, i, nv, cnt, tb, bb);
     /* merged in thread order, the order of their runs of faces: a tie
      * (0.0 and -0.0) keeps the first in face order, as one thread does */
     const int nthr = omp_get_num_threads();
