@@ -782,6 +782,9 @@ def version_defaults_and_ranges():
     meson = open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..",
                               "meson.build")).read()
     assert "version : '%s'" % mixoct.__version__ in meson, mixoct.__version__
+    pyproject = open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..",
+                                  "pyproject.toml")).read()
+    assert 'version = "%s"' % mixoct.__version__ in pyproject, "pyproject.toml's version"
     lib = mixoct.load_library()
     p = mixoct._Params()
     lib.mx_params_default(ctypes.byref(p))
