@@ -123,6 +123,29 @@ int mx_mesh_apply_node_ids(mx_mesh *M, uint8_t **states, const uint32_t *newid,
   return MX_OK;
 }
 
+/* mx_mesh_apply_node_ids for ids that keep the order (newid[v] <= v,
+ * rising; mx_mesh_drop_unused_nodes): the node arrays are compacted in
+ * place, front to back. Serial on purpose: a parallel pass
+ * would write where another thread still reads, and the copy into fresh
+ * arrays it replaces took 0.036 s on 1 thread but 0.10-0.17 s on 2 at
+ * cortex -s 9 (the page faults of 86 MB of fresh memory taken by two
+ * threads at once); this pass reads and writes memory already mapped. */
+static void compact_nodes(mx_mesh *M, uint8_t **states, const uint32_t *newid, size_t nu) {
+  uint8_t *st = states ? *states : NULL;
+  for (size_t v = 0; v < M->nnodes; v++) {
+    const uint32_t w = newid[v];
+    if (w == UINT32_MAX || w == v) continue;
+    memcpy(M->xyz + 3 * (size_t)w, M->xyz + 3 * v, 3 * sizeof *M->xyz);
+    if (st) st[w] = st[v];
+    if (M->nkey) M->nkey[w] = M->nkey[v];
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++)
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+      M->conn[8 * c + k] = newid[M->conn[8 * c + k]];
+  M->nnodes = nu; /* the arrays keep their room (a later growth reallocates) */
+}
+
 int mx_mesh_drop_unused_nodes(mx_mesh *M, uint8_t **states, uint32_t **newid_out) {
   const size_t nn = M->nnodes;
   uint64_t *id = mx_calloc((nn + 1) * sizeof *id);
@@ -142,12 +165,12 @@ int mx_mesh_drop_unused_nodes(mx_mesh *M, uint8_t **states, uint32_t **newid_out
   for (size_t v = 0; v < nn; v++)
     if (!newid[v]) newid[v] = (uint32_t)id[v];
   mx_free(id);
-  const int st = mx_mesh_apply_node_ids(M, states, newid, (size_t)nu);
-  if (st || !newid_out)
+  compact_nodes(M, states, newid, (size_t)nu);
+  if (!newid_out)
     mx_free(newid);
   else
     *newid_out = newid;
-  return st;
+  return MX_OK;
 }
 
 void mx_mesh_summarize(mx_mesh *M) {
