@@ -33,14 +33,7 @@ def demo(level=3, **kw):
 
 def cube(h=10.0):
     """A closed cube, outward triangles."""
-    xyz = np.array([[x, y, z] for z in (0, h) for y in (0, h) for x in (0, h)],
-                   dtype=np.float64)
-    quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3),
-             (0, 4, 6, 2), (1, 3, 7, 5)]
-    tri = []
-    for a, b, c, d in quads:
-        tri += [(a, b, c), (a, c, d)]
-    return xyz, np.array(tri, dtype=np.uint32)
+    return testlib.cube_surface(np, h)
 
 
 def uv_sphere(r, n=24):

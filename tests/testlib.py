@@ -77,3 +77,16 @@ CUBE_T = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5],
 def exact(x, y, z, np):
     """u at points given coordinate-wise (numpy arrays)."""
     return np.sin(x) * np.exp(y) + z ** 3
+
+
+def cube_surface(np, h=10.0, lo=(0.0, 0.0, 0.0)):
+    """A closed cube of side h at corner lo as (xyz, tri) arrays, outward
+    triangles (two per face)."""
+    xyz = np.array([[x, y, z] for z in (0, h) for y in (0, h) for x in (0, h)],
+                   dtype=np.float64) + np.asarray(lo, dtype=np.float64)
+    quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3),
+             (0, 4, 6, 2), (1, 3, 7, 5)]
+    tri = []
+    for a, b, c, d in quads:
+        tri += [(a, b, c), (a, c, d)]
+    return xyz, np.array(tri, dtype=np.uint32)
