@@ -762,7 +762,7 @@ static int near_feature_distances(const mx_mesher *m, const mx_mesh_data *d, dou
   return ok_r && ok_c ? MX_OK : mx_check_features_mesh(d, &m->feat_lines, fd);
 }
 
-static mx_mesh_data mesh_data_of(const mx_mesh *M) {
+mx_mesh_data mx_mesh_data_of(const mx_mesh *M) {
   mx_mesh_data d;
   memset(&d, 0, sizeof d);
   d.nnodes = M->nnodes;
@@ -789,7 +789,7 @@ static void keep_feature_distances(mx_mesher *m, const mx_check_feature_dist *fd
  * reach is 0). */
 static int measure_features(mx_mesher *m, uint8_t **near_out, uint32_t **edge_out,
                             size_t *ne_out) {
-  const mx_mesh_data d = mesh_data_of(&m->M);
+  const mx_mesh_data d = mx_mesh_data_of(&m->M);
   const double r = mx_feature_reach(m);
   uint8_t *near = mx_alloc(d.nnodes + 1);
   if (!near) return MX_ENOMEM;

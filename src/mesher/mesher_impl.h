@@ -7,6 +7,7 @@
 #include "base/common.h"
 #include "mesher/call.h"
 #include "mesher/mesher.h"
+#include "soa/mesh_data.h"
 
 void mx_call_begin(const mx_mesher *m, mx_call *c);
 /* Restores what mx_call_begin changed. Returns the status to give the
@@ -134,5 +135,9 @@ void mx_written_forget(mx_mesher *m);
 /* The same for the memory's sake (the mesh is as it was: the next write
  * makes them again). */
 void mx_written_release(const mx_mesher *m);
+
+/* The checker's view (verify/check.h) of a mesh: nodes and elements, no
+ * fields (mesher.c). */
+mx_mesh_data mx_mesh_data_of(const mx_mesh *M);
 
 #endif

@@ -82,13 +82,7 @@ int mx_mesher_tets(mx_mesher *m) {
    * closed boundary, hanging nodes, unused and duplicate nodes), and the
    * volume against the mixed elements' with the same boundary triangles */
   const double t = mx_wtime();
-  mx_mesh_data d;
-  memset(&d, 0, sizeof d);
-  d.nnodes = T.nnodes;
-  d.ncells = T.ncells;
-  d.xyz = T.xyz;
-  d.type = T.type;
-  d.conn = T.conn;
+  const mx_mesh_data d = mx_mesh_data_of(&T);
   mx_check_options o;
   mx_check_defaults(&o);
   mx_check_report r;
