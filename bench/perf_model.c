@@ -60,6 +60,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "bench_util.h"
 #include "mixoct.h"
 #include "kernels/boundary.h"
 #include "kernels/contacts.h"
@@ -492,16 +493,6 @@ static double loadavg(void) {
     fclose(f);
   }
   return l;
-}
-
-static int cmp_double(const void *a, const void *b) {
-  const double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
-static double median(double *v, int n) {
-  qsort(v, (size_t)n, sizeof *v, cmp_double);
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 /* ---- machine figures ------------------------------------------------------ */
@@ -1001,7 +992,7 @@ int main(int argc, char **argv) {
   for (size_t k = 0; k < NROWS; k++) {
     row_out *o = &R[k];
     memset(o, 0, sizeof *o);
-    o->sec = median(sec[k], repeat);
+    o->sec = bench_median(sec[k], repeat);
     model_of(ROWS[k].name, K, &o->r, &o->w, &o->lines);
     if (!ROWS[k].sub) { /* the phases: "boundary" holds its steps */
       tot.r += o->r;
@@ -1044,7 +1035,7 @@ int main(int argc, char **argv) {
   }
 
   /* 4. the table */
-  const double total_s = median(tot_runs, repeat);
+  const double total_s = bench_median(tot_runs, repeat);
   if (!json_only) {
     printf("mixoct performance model: %s -s %d, %d thread%s, median of %d run%s%s; load "
            "average %.2f before, %.2f after\n",

@@ -20,21 +20,7 @@
 #include <time.h>
 #include <unistd.h>
 
-static double now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b) {
-  const double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
-static double median(double *v, int n) {
-  qsort(v, (size_t)n, sizeof *v, cmp_double);
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+#include "bench_util.h"
 
 int main(int argc, char **argv) {
   if (argc < 5) {
@@ -69,9 +55,9 @@ int main(int argc, char **argv) {
   for (int r = 0; r < repeat && !st; r++)
     for (int f = 0; f < 2 && !st; f++) {
       unlink(path[f]); /* not timed: freeing the file before is no part of writing */
-      const double t0 = now();
+      const double t0 = bench_now();
       st = mx_mesher_write(m, path[f], 0);
-      const double dt = now() - t0;
+      const double dt = bench_now() - t0;
       if (r == 0) first[f] = dt;
       else t[f][r - 1] = dt;
     }
@@ -83,7 +69,7 @@ int main(int argc, char **argv) {
   double med[2];
   for (int f = 0; f < 2; f++) {
     struct stat sb;
-    med[f] = median(t[f], repeat - 1);
+    med[f] = bench_median(t[f], repeat - 1);
     printf("%s: first %.3f s, then median %.3f s over %d; %.1f MB\n", ext[f], first[f], med[f],
            repeat - 1, stat(path[f], &sb) ? 0.0 : (double)sb.st_size / 1e6);
     free(t[f]);
