@@ -303,6 +303,25 @@ static int parse_level(const char *opt, const char *s, int *out) {
   return MX_OK;
 }
 
+/* An option's value among n words: *out = values[k] for words[k], else
+ * exit 2 with "OPT wants A, B or C, got 'S'". */
+static int parse_word(const char *opt, const char *s, const char *const *words,
+                      const int *values, int n, int *out) {
+  for (int k = 0; k < n; k++)
+    if (strcmp(s, words[k]) == 0) {
+      *out = values[k];
+      return MX_OK;
+    }
+  char list[256];
+  size_t len = 0;
+  list[0] = '\0';
+  for (int k = 0; k < n && len < sizeof list; k++)
+    len += (size_t)snprintf(list + len, sizeof list - len, "%s%s",
+                            k == 0 ? "" : k + 1 < n ? ", " : " or ", words[k]);
+  mx_error(NULL, 0, "%s wants %s, got '%s'", opt, list, s);
+  return MX_EINPUT;
+}
+
 static int need_arg(int i, int argc, const char *opt) {
   if (i + 1 >= argc) {
     mx_error(NULL, 0, "%s needs an argument (see mixoct --help)", opt);
@@ -676,42 +695,20 @@ int mx_parse_options(int argc0, char **argv0, mx_options *o, int *exit_now) {
     } else if (strcmp(a, "--ascii") == 0) {
       o->ascii = 1;
     } else if (strcmp(a, "--stage") == 0) {
+      static const char *const w[] = {"octree", "transition", "full"};
+      static const int v[] = {MX_STAGE_OCTREE, MX_STAGE_TRANSITION, MX_STAGE_FULL};
       MX_CHECK(need_arg(i, argc, a));
-      const char *s = argv[++i];
-      if (strcmp(s, "octree") == 0)
-        o->stage = MX_STAGE_OCTREE;
-      else if (strcmp(s, "transition") == 0)
-        o->stage = MX_STAGE_TRANSITION;
-      else if (strcmp(s, "full") == 0)
-        o->stage = MX_STAGE_FULL;
-      else {
-        mx_error(NULL, 0, "--stage wants octree, transition or full, got '%s'", s);
-        return MX_EINPUT;
-      }
+      MX_CHECK(parse_word(a, argv[++i], w, v, 3, &o->stage));
     } else if (strcmp(a, "--fields") == 0) {
+      static const char *const w[] = {"all", "quality", "none"};
+      static const int v[] = {MX_FIELDS_ALL, MX_FIELDS_QUALITY, MX_FIELDS_NONE};
       MX_CHECK(need_arg(i, argc, a));
-      const char *s = argv[++i];
-      if (strcmp(s, "all") == 0)
-        o->fields = MX_FIELDS_ALL;
-      else if (strcmp(s, "quality") == 0)
-        o->fields = MX_FIELDS_QUALITY;
-      else if (strcmp(s, "none") == 0)
-        o->fields = MX_FIELDS_NONE;
-      else {
-        mx_error(NULL, 0, "--fields wants all, quality or none, got '%s'", s);
-        return MX_EINPUT;
-      }
+      MX_CHECK(parse_word(a, argv[++i], w, v, 3, &o->fields));
     } else if (strcmp(a, "--balance") == 0) {
+      static const char *const w[] = {"edges", "recursive"};
+      static const int v[] = {MX_BALANCE_EDGES, MX_BALANCE_RECURSIVE};
       MX_CHECK(need_arg(i, argc, a));
-      const char *s = argv[++i];
-      if (strcmp(s, "edges") == 0)
-        o->balance = MX_BALANCE_EDGES;
-      else if (strcmp(s, "recursive") == 0)
-        o->balance = MX_BALANCE_RECURSIVE;
-      else {
-        mx_error(NULL, 0, "--balance wants edges or recursive, got '%s'", s);
-        return MX_EINPUT;
-      }
+      MX_CHECK(parse_word(a, argv[++i], w, v, 2, &o->balance));
     } else {
       mx_error(NULL, 0, "unknown option '%s' (see mixoct --help)", a);
       return MX_EINPUT;
