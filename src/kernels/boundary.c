@@ -10,13 +10,33 @@
 #include <math.h>
 #include <string.h>
 
+/* p located as mx_inside does; near (4 doubles, or NULL) receives the
+ * closest point and its distance when the side came from them, else
+ * a NaN distance. */
+static int locate(const mx_surface_index *S, const double p[3], double *near) {
+  if (near) near[3] = NAN;
+  if (!near || S->side || (!S->closed && !S->outward_closed)) return mx_inside(S, p);
+  const double d = mx_signed_distance(S, p, near);
+  near[3] = fabs(d);
+  return d <= 0.0;
+}
+
 int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
                    const mx_mesh *M, const mx_surface_index *S,
                    uint8_t *states, size_t *queries) {
+  return mx_node_states_near(tr, leaves, M, S, states, queries, NULL);
+}
+
+int mx_node_states_near(const mx_tree *tr, const uint32_t *leaves,
+                        const mx_mesh *M, const mx_surface_index *S,
+                        uint8_t *states, size_t *queries, double *near) {
   const mx_octree *T = &tr->oct;
   enum { UNKNOWN = 2 };
 #pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < M->nnodes; v++) states[v] = UNKNOWN;
+  for (size_t v = 0; v < M->nnodes; v++) {
+    states[v] = UNKNOWN;
+    if (near) near[4 * v + 3] = NAN;
+  }
   /* Elements of leaves that meet no domain triangle: all nodes inside. Two
    * threads may write the same value to a shared node: benign. */
 #pragma omp parallel for schedule(static)
@@ -31,7 +51,8 @@ int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
 #pragma omp parallel for schedule(dynamic, 4096) reduction(+ : q)
   for (size_t v = 0; v < M->nnodes; v++) {
     if (states[v] != UNKNOWN) continue;
-    states[v] = mx_inside(S, M->xyz + 3 * v) ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
+    states[v] = locate(S, M->xyz + 3 * v, near ? near + 4 * v : NULL) ? MX_NODE_INSIDE
+                                                                       : MX_NODE_OUTSIDE;
     q++;
   }
   *queries = q;
@@ -40,17 +61,29 @@ int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
 
 
 
+enum { COUNT_BITS = 12 };
+#define ONE_EDGE ((uint64_t)1 << (64 - COUNT_BITS))
+
 int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
                         double ratio, size_t *moved, uint8_t **moved_flags) {
+  return mx_move_close_nodes_near(M, states, S, ratio, moved, moved_flags, NULL);
+}
+
+int mx_move_close_nodes_near(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
+                             double ratio, size_t *moved, uint8_t **moved_flags,
+                             double *near) {
   const size_t nn = M->nnodes, nc = M->ncells;
   /* Candidates: inside nodes of surface elements. */
   uint8_t *cand = mx_calloc(nn + 1);
-  uint64_t *len = mx_calloc((nn + 1) * sizeof *len); /* fixed point */
-  uint32_t *cnt = mx_calloc((nn + 1) * sizeof *cnt);
-  if (!cand || !len || !cnt) {
+  /* per candidate, its edges' count (the top COUNT_BITS) and their
+   * lengths' sum (fixed point, below), in one word: one atomic addition
+   * an element and node. A node has at most a few hundred element edges
+   * (8 leaves, a few dozen elements each): below 2^12; each length is at
+   * most 2^40 units, so the sum stays below 2^52. */
+  uint64_t *len = mx_calloc((nn + 1) * sizeof *len);
+  if (!cand || !len) {
     mx_free(cand);
     mx_free(len);
-    mx_free(cnt);
     return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
@@ -80,31 +113,36 @@ int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
   for (size_t c = 0; c < nc; c++) {
     const uint32_t *v = M->conn + 8 * c;
     const int t = M->type[c];
+    /* the element's candidates as bits first: most elements have none */
+    unsigned in = 0;
+    for (int k = 0; k < mx_cell_nodes[t]; k++) in |= (unsigned)(cand[v[k]] != 0) << k;
+    if (!in) continue;
+    uint64_t acc[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     for (int e = 0; e < mx_cell_nedges[t]; e++) {
-      const uint32_t a = v[mx_cell_edge[t][e][0]], b = v[mx_cell_edge[t][e][1]];
-      if (!cand[a] && !cand[b]) continue;
-      double d2 = 0.0;
+      const int ka = mx_cell_edge[t][e][0], kb = mx_cell_edge[t][e][1];
+      if (!((in >> ka | in >> kb) & 1u)) continue;
+      const uint32_t a = v[ka], b = v[kb];
+      double d2 = 0.0; /* (the sums are per element first) */
       for (int x = 0; x < 3; x++) {
         const double u = M->xyz[3 * (size_t)a + x] - M->xyz[3 * (size_t)b + x];
         d2 += u * u;
       }
-      const uint64_t l = (uint64_t)llround(sqrt(d2) / unit);
-      if (cand[a]) {
-        __atomic_fetch_add(&len[a], l, __ATOMIC_RELAXED);
-        __atomic_fetch_add(&cnt[a], 1, __ATOMIC_RELAXED);
-      }
-      if (cand[b]) {
-        __atomic_fetch_add(&len[b], l, __ATOMIC_RELAXED);
-        __atomic_fetch_add(&cnt[b], 1, __ATOMIC_RELAXED);
-      }
+      const uint64_t l = (uint64_t)llround(sqrt(d2) / unit) + ONE_EDGE;
+      acc[ka] += in >> ka & 1u ? l : 0;
+      acc[kb] += in >> kb & 1u ? l : 0;
     }
+    for (int k = 0; k < mx_cell_nodes[t]; k++)
+      if (in >> k & 1u) __atomic_fetch_add(&len[v[k]], acc[k], __ATOMIC_RELAXED);
   }
-  /* Decide on the old positions, then move. */
-  double *target = mx_alloc((3 * nn + 3) * sizeof *target);
+  /* Decide on the old positions, then move. The closest points of the
+   * nodes located by mx_node_states_near are theirs: a query within a
+   * radius finds the same point as the full query when it lies within
+   * (what it prunes lies farther), so only the other candidates query. */
+  const int stride = near ? 4 : 3;
+  double *target = near ? near : mx_alloc((3 * nn + 3) * sizeof *target);
   if (!target) {
     mx_free(cand);
     mx_free(len);
-    mx_free(cnt);
     return MX_ENOMEM;
   }
   size_t nmoved = 0;
@@ -113,33 +151,35 @@ int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
   for (size_t v = 0; v < nn; v++) {
     if (mx_cancel_seen(cf)) continue;
     cand[v] = cand[v] ? 1 : 0;
-    if (!cand[v] || !cnt[v]) {
+    const uint64_t cnt = len[v] >> (64 - COUNT_BITS);
+    if (!cand[v] || !cnt) {
       cand[v] = 0;
       continue;
     }
-    const double avg = (double)len[v] * unit / cnt[v];
-    const double d = mx_closest_point_within(S, M->xyz + 3 * v, ratio * avg, target + 3 * v);
+    const double avg = (double)(len[v] & (ONE_EDGE - 1)) * unit / (double)cnt;
+    double *q = target + (size_t)stride * v;
+    const double d = near && !isnan(q[3]) ? q[3]
+                                          : mx_closest_point_within(S, M->xyz + 3 * v,
+                                                                    ratio * avg, q);
     if (d < ratio * avg) {
       cand[v] = 2;
       nmoved++;
     }
   }
   if (mx_cancelled()) { /* nothing moved yet */
-    mx_free(target);
+    if (!near) mx_free(target);
     mx_free(cand);
     mx_free(len);
-    mx_free(cnt);
     return MX_ECANCELED;
   }
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < nn; v++)
     if (cand[v] == 2) {
-      memcpy(M->xyz + 3 * v, target + 3 * v, 3 * sizeof(double));
+      memcpy(M->xyz + 3 * v, target + (size_t)stride * v, 3 * sizeof(double));
       states[v] = MX_NODE_OUTSIDE;
     }
-  mx_free(target);
+  if (!near) mx_free(target);
   mx_free(len);
-  mx_free(cnt);
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < nn; v++) cand[v] = cand[v] == 2;
   if (moved_flags) {
@@ -278,13 +318,13 @@ int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
   for (size_t c = 0; c < nc; c++) {
     const int nv = mx_cell_nodes[M->type[c]];
     int out = 0;
-    double x[8][3];
-    for (int k = 0; k < nv; k++) {
-      const uint32_t v = M->conn[8 * c + k];
-      out |= states[v] == MX_NODE_OUTSIDE;
-      memcpy(x[k], M->xyz + 3 * (size_t)v, sizeof x[k]);
+    for (int k = 0; k < nv; k++) out |= states[M->conn[8 * c + k]] == MX_NODE_OUTSIDE;
+    if (out) { /* the coordinates of those only */
+      double x[8][3];
+      for (int k = 0; k < nv; k++)
+        memcpy(x[k], M->xyz + 3 * (size_t)M->conn[8 * c + k], sizeof x[k]);
+      M->jens[c] = (float)mx_jens(M->type[c], x);
     }
-    if (out) M->jens[c] = (float)mx_jens(M->type[c], x);
     invalid += mx_jens_invalid(M->jens[c]);
     if (M->jens[c] < jmin) jmin = M->jens[c];
   }

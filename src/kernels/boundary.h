@@ -27,6 +27,13 @@ enum { MX_NODE_OUTSIDE = 0, MX_NODE_INSIDE = 1 };
 int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
                    const mx_mesh *M, const mx_surface_index *S,
                    uint8_t *states, size_t *queries);
+/* The same, keeping what the queries found: near (4 doubles a node, or
+ * NULL) receives, for each node located by its closest point (a closed
+ * surface's pseudonormal rule), that point and its distance; a NaN
+ * distance for the others. mx_move_close_nodes_near takes it. */
+int mx_node_states_near(const mx_tree *tr, const uint32_t *leaves,
+                        const mx_mesh *M, const mx_surface_index *S,
+                        uint8_t *states, size_t *queries, double *near);
 
 /* Line 11 of Algorithm 1 (2015 paper), "remove close to boundary": every
  * inside node of a surface element (one with inside and outside nodes) whose
@@ -40,6 +47,12 @@ int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
  * node, 1 where it moved, and the caller recomputes. */
 int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
                         double ratio, size_t *moved, uint8_t **moved_flags);
+/* The same with the closest points mx_node_states_near found (near, of
+ * the same positions; its points are overwritten): the candidates among
+ * those nodes do not query again. The same moves as without. */
+int mx_move_close_nodes_near(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
+                             double ratio, size_t *moved, uint8_t **moved_flags,
+                             double *near);
 
 /* Line 13 of Algorithm 1, "shrink outside nodes": every outside node moves
  * to its closest point among the domain triangles met by the leaves whose
