@@ -10,33 +10,208 @@
 #include <math.h>
 #include <string.h>
 
-/* p located as mx_inside does; near (4 doubles, or NULL) receives the
- * closest point and its distance when the side came from them, else
- * a NaN distance. */
-static int locate(const mx_surface_index *S, const double p[3], double *near) {
-  if (near) near[3] = NAN;
-  if (!near || S->side || (!S->closed && !S->outward_closed)) return mx_inside(S, p);
-  const double d = mx_signed_distance(S, p, near);
-  near[3] = fabs(d);
-  return d <= 0.0;
+/* Elements are in leaf order: each leaf's elements form one run. The runs'
+ * starts (mx_alloc, *nr of them, then nc), counted per block, prefix-summed,
+ * filled; NULL when out of memory. */
+static uint64_t *leaf_runs(const mx_mesh *M, size_t *nr_out) {
+  const size_t nc = M->ncells;
+  enum { RB = 1 << 16 };
+  const size_t nbk = (nc + RB - 1) / RB;
+  uint64_t *run = mx_alloc((nc + 2) * sizeof *run);
+  uint64_t *boff = mx_alloc((nbk + 1) * sizeof *boff);
+  if (!run || !boff) {
+    mx_free(run);
+    mx_free(boff);
+    return NULL;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t b = 0; b < nbk; b++) {
+    uint64_t k = 0;
+    for (size_t c = b * RB; c < nc && c < (b + 1) * RB; c++)
+      k += c == 0 || M->leaf[c] != M->leaf[c - 1];
+    boff[b] = k;
+  }
+  const size_t nr = (size_t)mx_scan_u64(boff, nbk);
+#pragma omp parallel for schedule(static)
+  for (size_t b = 0; b < nbk; b++) {
+    uint64_t k = boff[b];
+    for (size_t c = b * RB; c < nc && c < (b + 1) * RB; c++)
+      if (c == 0 || M->leaf[c] != M->leaf[c - 1]) run[k++] = c;
+  }
+  mx_free(boff);
+  run[nr] = nc;
+  *nr_out = nr;
+  return run;
+}
+
+/* Distinct nodes v of the elements [c0, c1) (one leaf's) with (sel[v] &
+ * mask) == want, in order of first use. */
+static int leaf_nodes(const mx_mesh *M, size_t c0, size_t c1, const uint8_t *sel,
+                      uint8_t mask, uint8_t want, uint32_t out[64]) {
+  int n = 0;
+  for (size_t c = c0; c < c1; c++)
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
+      const uint32_t v = M->conn[8 * c + k];
+      if ((sel[v] & mask) != want) continue;
+      int seen = 0;
+      for (int j = 0; j < n && !seen; j++) seen = out[j] == v;
+      if (!seen && n < 64) out[n++] = v;
+    }
+  return n;
+}
+
+static int same_point(const double a[3], const double b[3]) {
+  return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+}
+
+/* Closest domain triangle of leaf o's list to p: squared distance, id (the
+ * lowest of those as near); *tied (when not NULL) 1 when two of them as
+ * near give two points. */
+static double leaf_closest(const mx_tree *tr, uint32_t o, const double p[3],
+                           uint32_t *tri, int *tied) {
+  const mx_octree *T = &tr->oct;
+  double best = INFINITY, q[3], bq[3] = {0.0, 0.0, 0.0};
+  int tie = 0;
+  *tri = UINT32_MAX;
+  for (uint32_t k = 0; k < T->tri_cnt[o]; k++) {
+    const uint32_t t = T->tri_pool[T->tri_off[o] + k];
+    if (t >= tr->nt_domain) continue;
+    const double d2 = mx_closest_on_triangle(tr->tri_xyz + 9 * (size_t)t, p, q);
+    if (d2 < best) {
+      best = d2;
+      *tri = t;
+      memcpy(bq, q, sizeof bq);
+      tie = 0;
+    } else if (d2 == best) {
+      tie |= !same_point(q, bq);
+      if (t < *tri) {
+        *tri = t;
+        memcpy(bq, q, sizeof bq);
+      }
+    }
+  }
+  if (tied) *tied = tie;
+  return best;
+}
+
+static inline uint64_t dbits(double d) {
+  uint64_t u;
+  memcpy(&u, &d, sizeof u);
+  return u; /* non-negative doubles order as their bits */
+}
+
+/* For every node v with (sel[v] & mask) == want: btri[v] and best[v] (the
+ * bits of the squared distance) of the least (squared distance, triangle
+ * id) over the domain triangles of the leaves whose elements use v
+ * (UINT32_MAX and UINT64_MAX when they list none; other nodes untouched);
+ * tie[v] (when tie is not NULL) 1 when two of those triangles as near give
+ * two points (the surface index might keep the other). One pass over
+ * (leaf, node), compared and stored under a per-node spin lock (a node is
+ * shared by a few leaves: the locks are hardly ever contended). */
+static int leaf_list_closest(const mx_tree *tr, const uint32_t *leaves, const mx_mesh *M,
+                             const uint8_t *sel, uint8_t mask, uint8_t want,
+                             uint64_t *best, uint32_t *btri, uint8_t *tie) {
+  const size_t nn = M->nnodes;
+  size_t nr = 0;
+  uint64_t *run = leaf_runs(M, &nr);
+  uint8_t *lock = run ? mx_calloc(nn + 1) : NULL;
+  if (!lock) {
+    mx_free(run);
+    return MX_ENOMEM;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < nn; v++)
+    if ((sel[v] & mask) == want) {
+      best[v] = UINT64_MAX;
+      btri[v] = UINT32_MAX;
+      if (tie) tie[v] = 0;
+    }
+#pragma omp parallel for schedule(dynamic, 256)
+  for (size_t r = 0; r < nr; r++) {
+    const uint32_t o = leaves[M->leaf[run[r]]];
+    if (!tr->oct.tri_cnt[o]) continue;
+    uint32_t vs[64];
+    const int k = leaf_nodes(M, run[r], run[r + 1], sel, mask, want, vs);
+    for (int j = 0; j < k; j++) {
+      uint32_t t;
+      int tied = 0;
+      const double *p = M->xyz + 3 * (size_t)vs[j];
+      const double d2 = leaf_closest(tr, o, p, &t, tie ? &tied : NULL);
+      if (t == UINT32_MAX) continue;
+      const uint64_t mine = dbits(d2);
+      const uint32_t v = vs[j];
+      while (__atomic_test_and_set(&lock[v], __ATOMIC_ACQUIRE)) {
+      }
+      const int better = mine < best[v], equal = mine == best[v];
+      if (tie && equal && t != btri[v]) { /* as near as another leaf's */
+        double q0[3], q1[3];
+        mx_closest_on_triangle(tr->tri_xyz + 9 * (size_t)t, p, q0);
+        mx_closest_on_triangle(tr->tri_xyz + 9 * (size_t)btri[v], p, q1);
+        tied |= !same_point(q0, q1);
+      }
+      if (tie && (better || equal)) tie[v] = (uint8_t)(better ? tied : tie[v] | tied);
+      if (better || (equal && t < btri[v])) {
+        best[v] = mine;
+        btri[v] = t;
+      }
+      __atomic_clear(&lock[v], __ATOMIC_RELEASE);
+    }
+  }
+  mx_free(lock);
+  mx_free(run);
+  return MX_OK;
+}
+
+enum { COUNT_BITS = 12 };
+#define ONE_EDGE ((uint64_t)1 << (64 - COUNT_BITS))
+/* cand[] of the close nodes: a candidate, one searched in its leaves' lists
+ * (LOCAL; WIDE when at a corner of the finest leaves' lattice), one that
+ * moves */
+enum { CAND = 1, MOVES = 2, LOCAL = 4, WIDE = 8 };
+
+/* 1 when p lies on the lattice of step `step` from the grid's origin
+ * (within a 50th of it, for the rounding of the positions). */
+static int on_lattice(const mx_grid *g, const double p[3], double step) {
+  for (int a = 0; a < 3; a++) {
+    const double f = (p[a] - g->origin[a]) / step;
+    if (!(fabs(f - nearbyint(f)) < 0.02)) return 0;
+  }
+  return 1;
+}
+
+/* The largest leaf level of M's elements (0 without levels). */
+static int finest_level(const mx_mesh *M) {
+  int lmax = 0;
+  const size_t nc = M->level ? M->ncells : 0;
+#pragma omp parallel for schedule(static) reduction(max : lmax)
+  for (size_t c = 0; c < nc; c++) lmax = M->level[c] > lmax ? M->level[c] : lmax;
+  return lmax;
+}
+
+/* The lattice marks of a node at p (half: the finest leaves' half side):
+ * LOCAL at a node of the lattice of step half, LOCAL | WIDE at a corner of
+ * the finest leaves' lattice, 0 elsewhere. A node at LOCAL lies at half or
+ * more from every leaf not holding it (their corners are on the lattice of
+ * step 2 half), at 2 half with WIDE: the leaves holding it (those whose
+ * elements use it, the mesh being conforming) cover the ball about it of
+ * radius cover_of(marks) (0.9 of that). */
+static uint8_t lattice_marks(const mx_grid *g, const double p[3], double half) {
+  if (on_lattice(g, p, 2.0 * half)) return LOCAL | WIDE;
+  return on_lattice(g, p, half) ? LOCAL : 0;
+}
+
+static double cover_of(uint8_t marks, double half) {
+  return marks & WIDE ? 1.8 * half : marks & LOCAL ? 0.9 * half : 0.0;
 }
 
 int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
                    const mx_mesh *M, const mx_surface_index *S,
                    uint8_t *states, size_t *queries) {
-  return mx_node_states_near(tr, leaves, M, S, states, queries, NULL);
-}
-
-int mx_node_states_near(const mx_tree *tr, const uint32_t *leaves,
-                        const mx_mesh *M, const mx_surface_index *S,
-                        uint8_t *states, size_t *queries, double *near) {
   const mx_octree *T = &tr->oct;
+  const size_t nn = M->nnodes;
   enum { UNKNOWN = 2 };
 #pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < M->nnodes; v++) {
-    states[v] = UNKNOWN;
-    if (near) near[4 * v + 3] = NAN;
-  }
+  for (size_t v = 0; v < nn; v++) states[v] = UNKNOWN;
   /* Elements of leaves that meet no domain triangle: all nodes inside. Two
    * threads may write the same value to a shared node: benign. */
 #pragma omp parallel for schedule(static)
@@ -47,31 +222,76 @@ int mx_node_states_near(const mx_tree *tr, const uint32_t *leaves,
       __atomic_store_n(&states[M->conn[8 * c + k]], (uint8_t)MX_NODE_INSIDE,
                        __ATOMIC_RELAXED);
   }
+  /* The others: where the lists of their leaves hold a triangle nearer than
+   * their cover (lattice_marks), that is the nearest of all (the same
+   * arithmetic as the surface index's: the soup's coordinates), and the
+   * pseudonormal rule tells the side from it (mx_inside_given_closest)
+   * without a query; the others are queried, and so are those whose lists
+   * hold two triangles as near with two points (the index might keep
+   * either). */
+  const int by_lists = !S->side && (S->closed || S->outward_closed) && S->nt && M->level &&
+                       S->nt <= tr->nt_domain;
+  const double half = by_lists ? ldexp(tr->grid.side, -finest_level(M) - 1) : 0.0;
+  uint64_t *best = by_lists ? mx_alloc((nn + 1) * sizeof *best) : NULL;
+  uint32_t *btri = by_lists ? mx_alloc((nn + 1) * sizeof *btri) : NULL;
+  uint32_t *slot_of = by_lists ? mx_alloc(((size_t)tr->nt_domain + 1) * sizeof *slot_of) : NULL;
+  uint8_t *tie = by_lists ? mx_alloc(nn + 1) : NULL;
+  if (by_lists && (!best || !btri || !slot_of || !tie)) {
+    mx_free(best);
+    mx_free(btri);
+    mx_free(slot_of);
+    mx_free(tie);
+    return MX_ENOMEM;
+  }
+  if (by_lists) {
+    for (uint32_t t = 0; t < tr->nt_domain; t++) slot_of[t] = UINT32_MAX;
+    for (uint32_t i = 0; i < S->nt; i++)
+      if (S->tri_id[i] < tr->nt_domain) slot_of[S->tri_id[i]] = i;
+#pragma omp parallel for schedule(static)
+    for (size_t v = 0; v < nn; v++)
+      if (states[v] == UNKNOWN)
+        states[v] = (uint8_t)(UNKNOWN | lattice_marks(&tr->grid, M->xyz + 3 * v, half));
+    const int st = leaf_list_closest(tr, leaves, M, states, LOCAL, LOCAL, best, btri, tie);
+    if (st) {
+      mx_free(best);
+      mx_free(btri);
+      mx_free(slot_of);
+      mx_free(tie);
+      return st;
+    }
+  }
   size_t q = 0;
 #pragma omp parallel for schedule(dynamic, 4096) reduction(+ : q)
-  for (size_t v = 0; v < M->nnodes; v++) {
-    if (states[v] != UNKNOWN) continue;
-    states[v] = locate(S, M->xyz + 3 * v, near ? near + 4 * v : NULL) ? MX_NODE_INSIDE
-                                                                       : MX_NODE_OUTSIDE;
+  for (size_t v = 0; v < nn; v++) {
+    const uint8_t marks = states[v];
+    if ((marks & 3) != UNKNOWN) continue;
+    const double *p = M->xyz + 3 * v;
+    int in = -1;
+    if ((marks & LOCAL) && btri[v] != UINT32_MAX && !tie[v] && slot_of[btri[v]] != UINT32_MAX) {
+      double d2;
+      memcpy(&d2, &best[v], sizeof d2);
+      if (sqrt(d2) < cover_of(marks, half)) in = mx_inside_given_closest(S, p, slot_of[btri[v]]);
+    }
+    if (in < 0) in = mx_inside(S, p);
+    states[v] = in ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
     q++;
   }
+  mx_free(best);
+  mx_free(btri);
+  mx_free(slot_of);
+  mx_free(tie);
   *queries = q;
   return MX_OK;
 }
 
-
-
-enum { COUNT_BITS = 12 };
-#define ONE_EDGE ((uint64_t)1 << (64 - COUNT_BITS))
-
 int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
                         double ratio, size_t *moved, uint8_t **moved_flags) {
-  return mx_move_close_nodes_near(M, states, S, ratio, moved, moved_flags, NULL);
+  return mx_move_close_nodes_in(NULL, NULL, M, states, S, ratio, moved, moved_flags);
 }
 
-int mx_move_close_nodes_near(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
-                             double ratio, size_t *moved, uint8_t **moved_flags,
-                             double *near) {
+int mx_move_close_nodes_in(const mx_tree *tr, const uint32_t *leaves, mx_mesh *M,
+                           uint8_t *states, const mx_surface_index *S, double ratio,
+                           size_t *moved, uint8_t **moved_flags) {
   const size_t nn = M->nnodes, nc = M->ncells;
   /* Candidates: inside nodes of surface elements. */
   uint8_t *cand = mx_calloc(nn + 1);
@@ -94,7 +314,7 @@ int mx_move_close_nodes_near(mx_mesh *M, uint8_t *states, const mx_surface_index
     for (int k = 0; k < nv; k++) in += states[v[k]] == MX_NODE_INSIDE;
     if (in == 0 || in == nv) continue;
     for (int k = 0; k < nv; k++)
-      if (states[v[k]] == MX_NODE_INSIDE) __atomic_store_n(&cand[v[k]], 1, __ATOMIC_RELAXED);
+      if (states[v[k]] == MX_NODE_INSIDE) __atomic_store_n(&cand[v[k]], (uint8_t)CAND, __ATOMIC_RELAXED);
   }
   /* Average length of the element edges at each candidate, summed in fixed
    * point (integer additions: the same sums in any order, so the decisions
@@ -134,54 +354,95 @@ int mx_move_close_nodes_near(mx_mesh *M, uint8_t *states, const mx_surface_index
     for (int k = 0; k < mx_cell_nodes[t]; k++)
       if (in >> k & 1u) __atomic_fetch_add(&len[v[k]], acc[k], __ATOMIC_RELAXED);
   }
-  /* Decide on the old positions, then move. The closest points of the
-   * nodes located by mx_node_states_near are theirs: a query within a
-   * radius finds the same point as the full query when it lies within
-   * (what it prunes lies farther), so only the other candidates query. */
-  const int stride = near ? 4 : 3;
-  double *target = near ? near : mx_alloc((3 * nn + 3) * sizeof *target);
-  if (!target) {
-    mx_free(cand);
-    mx_free(len);
-    return MX_ENOMEM;
-  }
-  size_t nmoved = 0;
-  atomic_int *cf = mx_cancel_flag; /* base/cancel.h: the longest loop */
-#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : nmoved)
+  /* A candidate at a node of the lattice of the finest leaves' half side h
+   * lies at h or more from every leaf not holding it (their corners are on
+   * the lattice of side 2h), 2h at a corner of that lattice: the leaves
+   * holding it (those whose elements use it: the mesh is conforming) cover
+   * the ball of radius 0.9 h (1.8 h) about it, its cover. So where its
+   * leaves' lists hold a triangle nearer than the cover (leaf_list_closest),
+   * that is the nearest of all (the same arithmetic as the surface index:
+   * the soup's coordinates, mx_closest_on_triangle), without a query; where
+   * they hold none, none is nearer than the cover, and a radius within it
+   * moves nothing. Two triangles as near with two points: a query (the
+   * index might keep either). */
+  if (!M->level) tr = NULL; /* no leaf levels: every candidate queries */
+  const double half = tr ? ldexp(tr->grid.side, -finest_level(M) - 1) : 0.0;
+  size_t nlocal = 0;
+#pragma omp parallel for schedule(static) reduction(+ : nlocal)
   for (size_t v = 0; v < nn; v++) {
-    if (mx_cancel_seen(cf)) continue;
-    cand[v] = cand[v] ? 1 : 0;
     const uint64_t cnt = len[v] >> (64 - COUNT_BITS);
     if (!cand[v] || !cnt) {
       cand[v] = 0;
       continue;
     }
-    const double avg = (double)(len[v] & (ONE_EDGE - 1)) * unit / (double)cnt;
-    double *q = target + (size_t)stride * v;
-    const double d = near && !isnan(q[3]) ? q[3]
-                                          : mx_closest_point_within(S, M->xyz + 3 * v,
-                                                                    ratio * avg, q);
-    if (d < ratio * avg) {
-      cand[v] = 2;
+    if (tr) cand[v] = (uint8_t)(CAND | lattice_marks(&tr->grid, M->xyz + 3 * v, half));
+    nlocal += (cand[v] & LOCAL) != 0;
+  }
+  double *target = mx_alloc((3 * nn + 3) * sizeof *target);
+  uint64_t *best = nlocal ? mx_alloc((nn + 1) * sizeof *best) : NULL;
+  uint32_t *btri = nlocal ? mx_alloc((nn + 1) * sizeof *btri) : NULL;
+  uint8_t *tie = nlocal ? mx_alloc(nn + 1) : NULL;
+  int st = !target || (nlocal && (!best || !btri || !tie)) ? MX_ENOMEM : MX_OK;
+  if (!st && nlocal) st = leaf_list_closest(tr, leaves, M, cand, LOCAL, LOCAL, best, btri, tie);
+  if (st) {
+    mx_free(target);
+    mx_free(best);
+    mx_free(btri);
+    mx_free(tie);
+    mx_free(cand);
+    mx_free(len);
+    return st;
+  }
+  /* Decide on the old positions, then move. */
+  size_t nmoved = 0;
+  atomic_int *cf = mx_cancel_flag; /* base/cancel.h: the longest loop */
+#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : nmoved)
+  for (size_t v = 0; v < nn; v++) {
+    if (mx_cancel_seen(cf) || !cand[v]) continue;
+    const uint64_t cnt = len[v] >> (64 - COUNT_BITS);
+    const double r = ratio * ((double)(len[v] & (ONE_EDGE - 1)) * unit / (double)cnt);
+    double *q = target + 3 * v;
+    double d = INFINITY;
+    int found = 0;
+    if ((cand[v] & LOCAL) && !tie[v]) {
+      const double cover = cover_of(cand[v], half);
+      if (btri[v] != UINT32_MAX) {
+        double d2;
+        memcpy(&d2, &best[v], sizeof d2);
+        d = sqrt(d2);
+      }
+      if (d < cover) { /* the nearest of all */
+        found = 1;
+        if (d < r) mx_closest_on_triangle(tr->tri_xyz + 9 * (size_t)btri[v], M->xyz + 3 * v, q);
+      } else {
+        found = r <= cover; /* none within r */
+        d = INFINITY;
+      }
+    }
+    if (!found) d = mx_closest_point_within(S, M->xyz + 3 * v, r, q);
+    if (d < r) {
+      cand[v] = MOVES;
       nmoved++;
     }
   }
+  mx_free(best);
+  mx_free(btri);
+  mx_free(tie);
+  mx_free(len);
   if (mx_cancelled()) { /* nothing moved yet */
-    if (!near) mx_free(target);
+    mx_free(target);
     mx_free(cand);
-    mx_free(len);
     return MX_ECANCELED;
   }
 #pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < nn; v++)
-    if (cand[v] == 2) {
-      memcpy(M->xyz + 3 * v, target + (size_t)stride * v, 3 * sizeof(double));
+  for (size_t v = 0; v < nn; v++) {
+    if (cand[v] == MOVES) {
+      memcpy(M->xyz + 3 * v, target + 3 * v, 3 * sizeof(double));
       states[v] = MX_NODE_OUTSIDE;
     }
-  if (!near) mx_free(target);
-  mx_free(len);
-#pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < nn; v++) cand[v] = cand[v] == 2;
+    cand[v] = cand[v] == MOVES;
+  }
+  mx_free(target);
   if (moved_flags) {
     *moved_flags = cand; /* the caller recomputes J_ENS */
   } else {
@@ -192,116 +453,22 @@ int mx_move_close_nodes_near(mx_mesh *M, uint8_t *states, const mx_surface_index
   return MX_OK;
 }
 
-/* Distinct outside nodes of the elements [c0, c1) (one leaf's), in order of
- * first use. */
-static int leaf_outside_nodes(const mx_mesh *M, size_t c0, size_t c1,
-                              const uint8_t *states, uint32_t out[64]) {
-  int n = 0;
-  for (size_t c = c0; c < c1; c++)
-    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
-      const uint32_t v = M->conn[8 * c + k];
-      if (states[v] != MX_NODE_OUTSIDE) continue;
-      int seen = 0;
-      for (int j = 0; j < n && !seen; j++) seen = out[j] == v;
-      if (!seen && n < 64) out[n++] = v;
-    }
-  return n;
-}
-
-/* Closest domain triangle of leaf o's list to p: squared distance, id. */
-static double leaf_closest(const mx_tree *tr, uint32_t o, const double p[3],
-                           uint32_t *tri) {
-  const mx_octree *T = &tr->oct;
-  double best = INFINITY, q[3];
-  *tri = UINT32_MAX;
-  for (uint32_t k = 0; k < T->tri_cnt[o]; k++) {
-    const uint32_t t = T->tri_pool[T->tri_off[o] + k];
-    if (t >= tr->nt_domain) continue;
-    const double d2 = mx_closest_on_triangle(tr->tri_xyz + 9 * (size_t)t, p, q);
-    if (d2 < best || (d2 == best && t < *tri)) {
-      best = d2;
-      *tri = t;
-    }
-  }
-  return best;
-}
-
-static inline uint64_t dbits(double d) {
-  uint64_t u;
-  memcpy(&u, &d, sizeof u);
-  return u; /* non-negative doubles order as their bits */
-}
-
 int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
                           mx_mesh *M, const uint8_t *states, size_t *moved) {
   const size_t nn = M->nnodes, nc = M->ncells;
-  /* Elements are in leaf order: each leaf's elements form one run. */
-  uint64_t *run = mx_alloc((nc + 2) * sizeof *run);
   uint64_t *best = mx_alloc((nn + 1) * sizeof *best);
   uint32_t *btri = mx_alloc((nn + 1) * sizeof *btri);
-  if (!run || !best || !btri) {
-    mx_free(run); mx_free(best); mx_free(btri);
-    return MX_ENOMEM;
-  }
-  /* the runs' starts: counted per block, prefix-summed, filled */
-  enum { RB = 1 << 16 };
-  const size_t nbk = (nc + RB - 1) / RB;
-  uint64_t *boff = mx_alloc((nbk + 1) * sizeof *boff);
-  if (!boff) {
-    mx_free(run); mx_free(best); mx_free(btri);
-    return MX_ENOMEM;
-  }
+  int st = best && btri ? MX_OK : MX_ENOMEM;
+  if (!st) { /* the nodes not outside: no triangle */
 #pragma omp parallel for schedule(static)
-  for (size_t b = 0; b < nbk; b++) {
-    uint64_t k = 0;
-    for (size_t c = b * RB; c < nc && c < (b + 1) * RB; c++)
-      k += c == 0 || M->leaf[c] != M->leaf[c - 1];
-    boff[b] = k;
+    for (size_t v = 0; v < nn; v++) btri[v] = UINT32_MAX;
+    st = leaf_list_closest(tr, leaves, M, states, 0xff, MX_NODE_OUTSIDE, best, btri, NULL);
   }
-  const size_t nr = (size_t)mx_scan_u64(boff, nbk);
-#pragma omp parallel for schedule(static)
-  for (size_t b = 0; b < nbk; b++) {
-    uint64_t k = boff[b];
-    for (size_t c = b * RB; c < nc && c < (b + 1) * RB; c++)
-      if (c == 0 || M->leaf[c] != M->leaf[c - 1]) run[k++] = c;
+  if (st) {
+    mx_free(best);
+    mx_free(btri);
+    return st;
   }
-  mx_free(boff);
-  run[nr] = nc;
-#pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < nn; v++) {
-    best[v] = UINT64_MAX;
-    btri[v] = UINT32_MAX;
-  }
-  /* One pass over (leaf, outside node): the least (distance, triangle id),
-   * compared and stored under a per-node spin lock (a node is shared by a
-   * few leaves: the locks are hardly ever contended). */
-  uint8_t *lock = mx_calloc(nn + 1);
-  if (!lock) {
-    mx_free(run); mx_free(best); mx_free(btri);
-    return MX_ENOMEM;
-  }
-#pragma omp parallel for schedule(dynamic, 256)
-  for (size_t r = 0; r < nr; r++) {
-    const uint32_t o = leaves[M->leaf[run[r]]];
-    if (!tr->oct.tri_cnt[o]) continue;
-    uint32_t vs[64];
-    const int k = leaf_outside_nodes(M, run[r], run[r + 1], states, vs);
-    for (int j = 0; j < k; j++) {
-      uint32_t t;
-      const double d2 = leaf_closest(tr, o, M->xyz + 3 * (size_t)vs[j], &t);
-      if (t == UINT32_MAX) continue;
-      const uint64_t mine = dbits(d2);
-      const uint32_t v = vs[j];
-      while (__atomic_test_and_set(&lock[v], __ATOMIC_ACQUIRE)) {
-      }
-      if (mine < best[v] || (mine == best[v] && t < btri[v])) {
-        best[v] = mine;
-        btri[v] = t;
-      }
-      __atomic_clear(&lock[v], __ATOMIC_RELEASE);
-    }
-  }
-  mx_free(lock);
   size_t nm = 0;
 #pragma omp parallel for schedule(static) reduction(+ : nm)
   for (size_t v = 0; v < nn; v++) {
@@ -330,7 +497,6 @@ int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
   }
   M->invalid = invalid;
   M->jens_min = nc ? jmin : 1.0;
-  mx_free(run);
   mx_free(best);
   mx_free(btri);
   *moved = nm;

@@ -27,14 +27,6 @@ enum { MX_NODE_OUTSIDE = 0, MX_NODE_INSIDE = 1 };
 int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
                    const mx_mesh *M, const mx_surface_index *S,
                    uint8_t *states, size_t *queries);
-/* The same, keeping what the queries found: near (4 doubles a node, or
- * NULL) receives, for each node located by its closest point (a closed
- * surface's pseudonormal rule), that point and its distance; a NaN
- * distance for the others. mx_move_close_nodes_near takes it. */
-int mx_node_states_near(const mx_tree *tr, const uint32_t *leaves,
-                        const mx_mesh *M, const mx_surface_index *S,
-                        uint8_t *states, size_t *queries, double *near);
-
 /* Line 11 of Algorithm 1 (2015 paper), "remove close to boundary": every
  * inside node of a surface element (one with inside and outside nodes) whose
  * closest point on the surface lies within `ratio` (0.3 in the paper) of the
@@ -47,12 +39,15 @@ int mx_node_states_near(const mx_tree *tr, const uint32_t *leaves,
  * node, 1 where it moved, and the caller recomputes. */
 int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
                         double ratio, size_t *moved, uint8_t **moved_flags);
-/* The same with the closest points mx_node_states_near found (near, of
- * the same positions; its points are overwritten): the candidates among
- * those nodes do not query again. The same moves as without. */
-int mx_move_close_nodes_near(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
-                             double ratio, size_t *moved, uint8_t **moved_flags,
-                             double *near);
+/* The same with the octree the mesh was made from (tr, leaves; NULL: as
+ * above): a candidate whose radius is below 0.45 of the finest leaves'
+ * side, at a node of their half lattice, takes its closest point from the
+ * triangle lists of its leaves instead of a query of S (every triangle
+ * that near meets one of them): the same moves, but where two triangles
+ * are exactly as near (the lowest id wins here, the first met there). */
+int mx_move_close_nodes_in(const mx_tree *tr, const uint32_t *leaves, mx_mesh *M,
+                           uint8_t *states, const mx_surface_index *S, double ratio,
+                           size_t *moved, uint8_t **moved_flags);
 
 /* Line 13 of Algorithm 1, "shrink outside nodes": every outside node moves
  * to its closest point among the domain triangles met by the leaves whose

@@ -31,22 +31,15 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
   uint8_t *states = mx_alloc(M->nnodes + 1);
   if (!states) return MX_ENOMEM;
   uint8_t *moved = NULL;
-  /* the closest points the states' queries find, for the close nodes */
-  double *near = mx_alloc((4 * M->nnodes + 4) * sizeof *near);
-  if (!near) {
-    mx_free(states);
-    return MX_ENOMEM;
-  }
   double t = mx_wtime();
-  int st = mx_node_states_near(tr, leaves, M, S, states, &stats->located, near);
+  int st = mx_node_states(tr, leaves, M, S, states, &stats->located);
   double t1 = mx_wtime();
   mx_mem_mark("b.states");
   stats->t_states = t1 - t;
   if (!st) st = mx_cancel_check(); /* between the steps: base/cancel.h */
   if (!st)
-    st = mx_move_close_nodes_near(M, states, S, close_ratio, &stats->moved_close, &moved,
-                                  near);
-  mx_free(near);
+    st = mx_move_close_nodes_in(tr, leaves, M, states, S, close_ratio, &stats->moved_close,
+                                &moved);
   t = mx_wtime();
   mx_mem_mark("b.close");
   stats->t_close = t - t1;
