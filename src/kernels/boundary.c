@@ -8,6 +8,7 @@
 #include "base/scan.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* Elements are in leaf order: each leaf's elements form one run. The runs'
@@ -188,20 +189,92 @@ static int finest_level(const mx_mesh *M) {
   return lmax;
 }
 
-/* The lattice marks of a node at p (half: the finest leaves' half side):
- * LOCAL at a node of the lattice of step half, LOCAL | WIDE at a corner of
- * the finest leaves' lattice, 0 elsewhere. A node at LOCAL lies at half or
- * more from every leaf not holding it (their corners are on the lattice of
- * step 2 half), at 2 half with WIDE: the leaves holding it (those whose
- * elements use it, the mesh being conforming) cover the ball about it of
- * radius cover_of(marks) (0.9 of that). */
-static uint8_t lattice_marks(const mx_grid *g, const double p[3], double half) {
-  if (on_lattice(g, p, 2.0 * half)) return LOCAL | WIDE;
-  return on_lattice(g, p, half) ? LOCAL : 0;
+/* What the triangle lists can be trusted with. The leaves' lists hold the
+ * triangles meeting their closed boxes, but a box is tested as a centre and
+ * half sides, whose rounding can leave a gap of an ulp between two
+ * neighbours: a flat triangle lying in the plane between them (an input
+ * face on a lattice plane: a CAD part's, the step of tests/features_test.sh)
+ * is then in neither list. Any other triangle near a node crosses into the
+ * inside of a leaf holding it and is listed. So the nodes within their cover
+ * of such a plane (one per flat triangle and axis: the triangle's extent
+ * along the axis below tol) query the index. */
+typedef struct {
+  const mx_grid *g;
+  double half, tol;      /* the finest leaves' half side; flatness */
+  double *plane[3];      /* per axis, the flat triangles' planes, sorted */
+  size_t nplane[3];
+} list_frame;
+
+static int cmp_double(const void *a, const void *b) {
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+static void frame_free(list_frame *F) {
+  for (int a = 0; a < 3; a++) mx_free(F->plane[a]);
+  memset(F, 0, sizeof *F);
+}
+
+static int frame_build(const mx_tree *tr, const mx_mesh *M, list_frame *F) {
+  memset(F, 0, sizeof *F);
+  const mx_grid *g = &tr->grid;
+  F->g = g;
+  F->half = ldexp(g->side, -finest_level(M) - 1);
+  double mag = 0.0;
+  for (int a = 0; a < 3; a++)
+    mag = fmax(mag, fabs(g->origin[a]) + g->side * (double)g->dims[a]);
+  F->tol = 1e-9 * F->half + 1e-12 * mag;
+  const uint32_t nt = tr->nt_domain;
+  for (int a = 0; a < 3; a++) {
+    F->plane[a] = mx_alloc(((size_t)nt + 1) * sizeof *F->plane[a]);
+    if (!F->plane[a]) {
+      frame_free(F);
+      return MX_ENOMEM;
+    }
+  }
+  for (uint32_t t = 0; t < nt; t++) {
+    const double *v = tr->tri_xyz + 9 * (size_t)t;
+    for (int a = 0; a < 3; a++) {
+      const double lo = fmin(v[a], fmin(v[3 + a], v[6 + a]));
+      const double hi = fmax(v[a], fmax(v[3 + a], v[6 + a]));
+      if (hi - lo <= F->tol) F->plane[a][F->nplane[a]++] = 0.5 * (lo + hi);
+    }
+  }
+  for (int a = 0; a < 3; a++) qsort(F->plane[a], F->nplane[a], sizeof *F->plane[a], cmp_double);
+  return MX_OK;
+}
+
+/* 1 when a plane of c[0..n) (sorted) lies within r of x. */
+static int near_plane(const double *c, size_t n, double x, double r) {
+  size_t lo = 0, hi = n; /* the first plane at or above x - r */
+  while (lo < hi) {
+    const size_t mid = lo + (hi - lo) / 2;
+    if (c[mid] < x - r) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo < n && c[lo] <= x + r;
 }
 
 static double cover_of(uint8_t marks, double half) {
   return marks & WIDE ? 1.8 * half : marks & LOCAL ? 0.9 * half : 0.0;
+}
+
+/* The lattice marks of a node at p: LOCAL at a node of the lattice of step
+ * half, LOCAL | WIDE at a corner of the finest leaves' lattice, 0 elsewhere
+ * or near a flat triangle's plane (list_frame). A node at LOCAL lies at half
+ * or more from every leaf not holding it (their corners are on the lattice
+ * of step 2 half), at 2 half with WIDE: the leaves holding it (those whose
+ * elements use it, the mesh being conforming) cover the ball about it of
+ * radius cover_of(marks) (0.9 of that). */
+static uint8_t lattice_marks(const list_frame *F, const double p[3]) {
+  const uint8_t m = on_lattice(F->g, p, 2.0 * F->half) ? LOCAL | WIDE
+                    : on_lattice(F->g, p, F->half)     ? LOCAL
+                                                       : 0;
+  if (!m) return 0;
+  const double reach = cover_of(m, F->half) + F->tol;
+  for (int a = 0; a < 3; a++)
+    if (near_plane(F->plane[a], F->nplane[a], p[a], reach)) return 0;
+  return m;
 }
 
 int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
@@ -231,12 +304,16 @@ int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
    * either). */
   const int by_lists = !S->side && (S->closed || S->outward_closed) && S->nt && M->level &&
                        S->nt <= tr->nt_domain;
-  const double half = by_lists ? ldexp(tr->grid.side, -finest_level(M) - 1) : 0.0;
+  list_frame F;
+  memset(&F, 0, sizeof F);
+  if (by_lists) MX_CHECK(frame_build(tr, M, &F));
+  const double half = F.half;
   uint64_t *best = by_lists ? mx_alloc((nn + 1) * sizeof *best) : NULL;
   uint32_t *btri = by_lists ? mx_alloc((nn + 1) * sizeof *btri) : NULL;
   uint32_t *slot_of = by_lists ? mx_alloc(((size_t)tr->nt_domain + 1) * sizeof *slot_of) : NULL;
   uint8_t *tie = by_lists ? mx_alloc(nn + 1) : NULL;
   if (by_lists && (!best || !btri || !slot_of || !tie)) {
+    frame_free(&F);
     mx_free(best);
     mx_free(btri);
     mx_free(slot_of);
@@ -250,9 +327,10 @@ int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
 #pragma omp parallel for schedule(static)
     for (size_t v = 0; v < nn; v++)
       if (states[v] == UNKNOWN)
-        states[v] = (uint8_t)(UNKNOWN | lattice_marks(&tr->grid, M->xyz + 3 * v, half));
+        states[v] = (uint8_t)(UNKNOWN | lattice_marks(&F, M->xyz + 3 * v));
     const int st = leaf_list_closest(tr, leaves, M, states, LOCAL, LOCAL, best, btri, tie);
     if (st) {
+      frame_free(&F);
       mx_free(best);
       mx_free(btri);
       mx_free(slot_of);
@@ -280,6 +358,7 @@ int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
   mx_free(btri);
   mx_free(slot_of);
   mx_free(tie);
+  frame_free(&F);
   *queries = q;
   return MX_OK;
 }
@@ -366,7 +445,14 @@ int mx_move_close_nodes_in(const mx_tree *tr, const uint32_t *leaves, mx_mesh *M
    * moves nothing. Two triangles as near with two points: a query (the
    * index might keep either). */
   if (!M->level) tr = NULL; /* no leaf levels: every candidate queries */
-  const double half = tr ? ldexp(tr->grid.side, -finest_level(M) - 1) : 0.0;
+  list_frame F;
+  memset(&F, 0, sizeof F);
+  if (tr && frame_build(tr, M, &F)) {
+    mx_free(cand);
+    mx_free(len);
+    return MX_ENOMEM;
+  }
+  const double half = F.half;
   size_t nlocal = 0;
 #pragma omp parallel for schedule(static) reduction(+ : nlocal)
   for (size_t v = 0; v < nn; v++) {
@@ -375,7 +461,7 @@ int mx_move_close_nodes_in(const mx_tree *tr, const uint32_t *leaves, mx_mesh *M
       cand[v] = 0;
       continue;
     }
-    if (tr) cand[v] = (uint8_t)(CAND | lattice_marks(&tr->grid, M->xyz + 3 * v, half));
+    if (tr) cand[v] = (uint8_t)(CAND | lattice_marks(&F, M->xyz + 3 * v));
     nlocal += (cand[v] & LOCAL) != 0;
   }
   double *target = mx_alloc((3 * nn + 3) * sizeof *target);
@@ -384,6 +470,7 @@ int mx_move_close_nodes_in(const mx_tree *tr, const uint32_t *leaves, mx_mesh *M
   uint8_t *tie = nlocal ? mx_alloc(nn + 1) : NULL;
   int st = !target || (nlocal && (!best || !btri || !tie)) ? MX_ENOMEM : MX_OK;
   if (!st && nlocal) st = leaf_list_closest(tr, leaves, M, cand, LOCAL, LOCAL, best, btri, tie);
+  frame_free(&F);
   if (st) {
     mx_free(target);
     mx_free(best);
