@@ -264,9 +264,28 @@ void *mx_alloc_aligned(size_t align, size_t bytes) {
   return p ? p : out_of_memory(bytes);
 }
 
+/* A large array is cleared by every thread, in the static schedule's
+ * contiguous parts: its pages are first touched (mapped and cleared by the
+ * kernel) by as many threads as the loops that use it run on, not by one. */
+static void clear_parallel(char *p, size_t bytes) {
+#ifdef _OPENMP
+  enum { PART = 1 << 20 };
+  if (bytes >= 8 * (size_t)PART && !omp_in_parallel() && omp_get_max_threads() > 1) {
+    const long long parts = (long long)((bytes + PART - 1) / PART);
+#pragma omp parallel for schedule(static)
+    for (long long i = 0; i < parts; i++) {
+      const size_t a = (size_t)i * PART, e = a + PART < bytes ? a + PART : bytes;
+      memset(p + a, 0, e - a);
+    }
+    return;
+  }
+#endif
+  memset(p, 0, bytes);
+}
+
 void *mx_calloc(size_t bytes) {
   void *p = mx_alloc(bytes);
-  if (p) memset(p, 0, bytes);
+  if (p) clear_parallel(p, bytes);
   return p;
 }
 
