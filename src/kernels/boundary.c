@@ -560,19 +560,24 @@ int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
 #pragma omp parallel for schedule(static) reduction(+ : nm)
   for (size_t v = 0; v < nn; v++) {
     if (btri[v] == UINT32_MAX) continue;
-    double q[3];
-    mx_closest_on_triangle(tr->tri_xyz + 9 * (size_t)btri[v], M->xyz + 3 * v, q);
-    memcpy(M->xyz + 3 * v, q, sizeof q);
+    double q[3], *x = M->xyz + 3 * v;
+    mx_closest_on_triangle(tr->tri_xyz + 9 * (size_t)btri[v], x, q);
     nm++;
+    if (q[0] == x[0] && q[1] == x[1] && q[2] == x[2]) { /* there already (a close node) */
+      btri[v] = UINT32_MAX;
+      continue;
+    }
+    memcpy(x, q, sizeof q);
   }
-  /* J_ENS of the elements with an outside node. */
+  /* J_ENS of the elements with a node that moved (btri[] left set): the
+   * others' is that of their positions already. */
   size_t invalid = 0;
   double jmin = INFINITY;
 #pragma omp parallel for schedule(static) reduction(+ : invalid) reduction(min : jmin)
   for (size_t c = 0; c < nc; c++) {
     const int nv = mx_cell_nodes[M->type[c]];
     int out = 0;
-    for (int k = 0; k < nv; k++) out |= states[M->conn[8 * c + k]] == MX_NODE_OUTSIDE;
+    for (int k = 0; k < nv; k++) out |= btri[M->conn[8 * c + k]] != UINT32_MAX;
     if (out) { /* the coordinates of those only */
       double x[8][3];
       for (int k = 0; k < nv; k++)
