@@ -22,7 +22,9 @@ enum { MX_NODE_OUTSIDE = 0, MX_NODE_INSIDE = 1 };
  * the domain are inside without a query (the leaf's closed box lies inside
  * the domain); every other node is located once with the surface index of
  * the domain (angle-weighted pseudonormals, or the generalized winding number
- * for a surface that is not closed). *queries receives the number of
+ * for a surface that is not closed), from the nearest triangle of its
+ * leaves' lists where that is the nearest of all (kernels/leaf_lists.h: the
+ * same answer without the index's search). *queries receives the number of
  * located nodes. */
 int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
                    const mx_mesh *M, const mx_surface_index *S,
