@@ -43,14 +43,24 @@ static inline int face_nodes(const mx_mesh_view *m, size_t c, int f,
   return n;
 }
 
-/* 1 when every node of face f of element c is in the mask (no mask: 1). */
-static inline int face_kept(const mx_mesh_view *m, const uint8_t *mask, size_t c, int f) {
-  if (!mask) return 1;
-  uint32_t v[4];
-  const int n = face_nodes(m, c, f, v);
-  for (int j = 0; j < n; j++)
-    if (!mask[v[j]]) return 0;
-  return 1;
+/* The faces of element c whose nodes are all in the mask, one bit per
+ * local face (no mask: every face). */
+static inline unsigned kept_faces(const mx_mesh_view *m, const uint8_t *mask, size_t c) {
+  const unsigned t = m->type[c];
+  const int nf = mx_cell_nfaces[t];
+  if (!mask) return (1u << nf) - 1u;
+  const uint32_t *row = m->conn + 8 * c;
+  unsigned in = 0;
+  for (int j = 0; j < mx_cell_nodes[t]; j++) in |= (unsigned)(mask[row[j]] != 0) << j;
+  if (__builtin_popcount(in) < 3) return 0;
+  unsigned kept = 0;
+  for (int f = 0; f < nf; f++) {
+    const int8_t *fv = mx_cell_faces[t][f];
+    unsigned need = 0;
+    for (int k = 0; k < 4 && fv[k] >= 0; k++) need |= 1u << fv[k];
+    kept |= (unsigned)((in & need) == need) << f;
+  }
+  return kept;
 }
 
 static inline uint32_t face_min_node(const mx_mesh_view *m, size_t c, int f) {
@@ -137,19 +147,25 @@ static int too_large(const mx_mesh_view *m) {
 
 /* ---- pass 1 and 2: the faces filed under their smallest node ------------ */
 
-/* On return (MX_OK) *list_out holds all face slots, node v's being
- * list[end[v-1] .. end[v]) (end[-1] = 0); *end_out has nnodes entries. */
-static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint64_t **end_out,
-                      uint32_t **list_out, size_t *nfaces) {
+/* On return (MX_OK) *list_out holds the kept face slots (kept_faces, also
+ * set in fb: per element, its kept faces' bits), node v's being
+ * list[end[v-1] .. end[v]) (end[-1] = 0); *end_out has nnodes entries.
+ * The mask is read once per element, not once per face node; the second
+ * pass reads only the elements with a kept face (cortex -s 9: 3.8 of 8.8
+ * million). */
+static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint8_t *fb,
+                      uint64_t **end_out, uint32_t **list_out, size_t *nfaces) {
   const size_t nn = m->nnodes, nc = m->ncells;
-  uint64_t *pos = mx_calloc((nn + 1) * sizeof *pos);
+  uint64_t *pos = mx_alloc((nn + 1) * sizeof *pos);
   if (!pos) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
+  for (size_t v = 0; v <= nn; v++) pos[v] = 0;
+#pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
-    const unsigned t = m->type[c];
-    for (int f = 0; f < mx_cell_nfaces[t]; f++) {
-      if (!face_kept(m, mask, c, f)) continue;
-      const uint32_t v = face_min_node(m, c, f);
+    const unsigned kept = kept_faces(m, mask, c);
+    fb[c] = (uint8_t)kept;
+    for (unsigned b = kept; b; b &= b - 1) {
+      const uint32_t v = face_min_node(m, c, __builtin_ctz(b));
 #pragma omp atomic update
       pos[v]++;
     }
@@ -163,9 +179,8 @@ static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint64_t **end
   /* pos[v] walks from the start of v's list to its end (= start of v+1) */
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
-    const unsigned t = m->type[c];
-    for (int f = 0; f < mx_cell_nfaces[t]; f++) {
-      if (!face_kept(m, mask, c, f)) continue;
+    for (unsigned b = fb[c]; b; b &= b - 1) {
+      const int f = __builtin_ctz(b);
       const uint32_t v = face_min_node(m, c, f);
       uint64_t at;
 #pragma omp atomic capture
@@ -187,7 +202,7 @@ static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint64_t **end
 enum { MULT_INTERFACE = 254 };
 
 /* mult[slot] = number of elements using that face (capped at 252), for
- * every slot that is a face; with labels (per element, or NULL), a face of
+ * every slot listed (the kept faces; the others are left as they are); with labels (per element, or NULL), a face of
  * two elements of different labels is an interface face: MULT_INTERFACE
  * on the lower label's side, whose other[slot] receives the other label. */
 static int count_uses(const mx_mesh_view *m, const uint64_t *end,
@@ -256,8 +271,10 @@ static int count_uses(const mx_mesh_view *m, const uint64_t *end,
 
 static inline int gathered(uint8_t mult) { return mult == 1 || mult == MULT_INTERFACE; }
 
-static int gather(const mx_mesh_view *m, const uint8_t *mult, const int32_t *other,
-                  mx_boundary_faces *bf) {
+/* The kept faces (fb: per element, their bits; mult set for them only)
+ * used once, and the interface faces, in element order. */
+static int gather(const mx_mesh_view *m, const uint8_t *fb, const uint8_t *mult,
+                  const int32_t *other, mx_boundary_faces *bf) {
   const size_t nc = m->ncells;
   const size_t nchunks = (nc + OUT_CHUNK - 1) / OUT_CHUNK;
   uint64_t *ntri = mx_calloc((nchunks + 1) * sizeof *ntri);
@@ -272,8 +289,10 @@ static int gather(const mx_mesh_view *m, const uint8_t *mult, const int32_t *oth
     const size_t c1 = (k + 1) * OUT_CHUNK < nc ? (k + 1) * OUT_CHUNK : nc;
     uint64_t a = 0, b = 0;
     for (size_t c = k * OUT_CHUNK; c < c1; c++) {
+      if (!fb[c]) continue;
       const unsigned t = m->type[c];
-      for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+      for (unsigned bits = fb[c]; bits; bits &= bits - 1) {
+        const int f = __builtin_ctz(bits);
         if (!gathered(mult[c * SLOTS + (size_t)f])) continue;
         if (face_size(t, f) == 3)
           a++;
@@ -305,8 +324,8 @@ static int gather(const mx_mesh_view *m, const uint8_t *mult, const int32_t *oth
       const size_t c1 = (k + 1) * OUT_CHUNK < nc ? (k + 1) * OUT_CHUNK : nc;
       uint64_t a = ntri[k], b = nquad[k];
       for (size_t c = k * OUT_CHUNK; c < c1; c++) {
-        const unsigned t = m->type[c];
-        for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+        for (unsigned bits = fb[c]; bits; bits &= bits - 1) {
+          const int f = __builtin_ctz(bits);
           const size_t slot = c * SLOTS + (size_t)f;
           if (!gathered(mult[slot])) continue;
           const int32_t pair = mult[slot] == MULT_INTERFACE ? other[slot] : 0;
@@ -356,15 +375,18 @@ static int extract(const mx_mesh_view *m, const uint8_t *mask, const int32_t *la
   uint64_t *end = NULL;
   uint32_t *list = NULL;
   size_t nfaces = 0;
-  MX_CHECK(file_faces(m, mask, &end, &list, &nfaces));
-  /* faces left out keep multiplicity 0: not boundary faces */
-  uint8_t *mult = mask ? mx_calloc(m->ncells * SLOTS * sizeof *mult)
-                       : mx_alloc(m->ncells * SLOTS * sizeof *mult);
-  int32_t *other = label ? mx_alloc(m->ncells * SLOTS * sizeof *other) : NULL;
-  int st = mult && (!label || other) ? count_uses(m, end, list, label, mult, other) : MX_ENOMEM;
+  uint8_t *fb = mx_alloc(m->ncells);
+  if (!fb) return MX_ENOMEM;
+  int st = file_faces(m, mask, fb, &end, &list, &nfaces);
+  /* mult and other are read for the kept faces only, all of which
+   * count_uses sets: no clearing */
+  uint8_t *mult = st ? NULL : mx_alloc(m->ncells * SLOTS * sizeof *mult);
+  int32_t *other = !st && label ? mx_alloc(m->ncells * SLOTS * sizeof *other) : NULL;
+  if (!st) st = mult && (!label || other) ? count_uses(m, end, list, label, mult, other) : MX_ENOMEM;
   mx_free(end);
   mx_free(list);
-  if (st == MX_OK) st = gather(m, mult, other, bf);
+  if (st == MX_OK) st = gather(m, fb, mult, other, bf);
+  mx_free(fb);
   mx_free(mult);
   mx_free(other);
   if (st != MX_OK) mx_boundary_faces_free(bf);

@@ -463,16 +463,22 @@ int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
   memset(out, 0, sizeof *out);
   out->first_node = UINT32_MAX;
   const size_t nc = M->ncells, nn = M->nnodes;
-  if (elem_flag) memset(elem_flag, 0, nc);
-  if (!nc || !nn || !states) return MX_OK;
-  if (!(G->unit > 0.0)) return MX_EINPUT;
-  /* the elements with a surface face, in id order (chunked count + fill) */
+  if (!nc || !nn || !states || !(G->unit > 0.0)) {
+    if (elem_flag) memset(elem_flag, 0, nc);
+    return nc && nn && states ? MX_EINPUT : MX_OK;
+  }
+  /* the elements with a surface face, in id order: flagged in ehit and
+   * counted per chunk (the one pass over the rows), then listed from the
+   * flags, which go back to 0 for the search */
   const size_t nchunks = (nc + CHUNK - 1) / CHUNK;
   uint64_t *cnt = mx_calloc((nchunks + 1) * sizeof *cnt);
   uint8_t *hit = mx_calloc(nn + 1);
-  if (!cnt || !hit) {
+  uint8_t *ehit = elem_flag ? elem_flag : mx_alloc(nc + 1);
+  if (!cnt || !hit || !ehit) {
     mx_free(cnt);
     mx_free(hit);
+    if (ehit != elem_flag) mx_free(ehit);
+    if (elem_flag) memset(elem_flag, 0, nc);
     return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
@@ -480,7 +486,9 @@ int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
     const size_t end = (k + 1) * CHUNK < nc ? (k + 1) * CHUNK : nc;
     uint64_t n = 0;
     for (size_t c = k * CHUNK; c < end; c++) {
-      n += (uint64_t)mx_surface_face(M, states, c);
+      const int s = mx_surface_face(M, states, c);
+      ehit[c] = (uint8_t)s;
+      n += (uint64_t)s;
     }
     cnt[k] = n;
   }
@@ -489,6 +497,8 @@ int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
   if (!list) {
     mx_free(cnt);
     mx_free(hit);
+    if (ehit != elem_flag) mx_free(ehit);
+    if (elem_flag) memset(elem_flag, 0, nc);
     return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
@@ -496,16 +506,11 @@ int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
     const size_t end = (k + 1) * CHUNK < nc ? (k + 1) * CHUNK : nc;
     uint64_t at = cnt[k];
     for (size_t c = k * CHUNK; c < end; c++) {
-      if (mx_surface_face(M, states, c)) list[at++] = (uint32_t)c;
+      if (ehit[c]) list[at++] = (uint32_t)c;
+      ehit[c] = 0;
     }
   }
   mx_free(cnt);
-  uint8_t *ehit = elem_flag ? elem_flag : mx_calloc(nc + 1);
-  if (!ehit) {
-    mx_free(list);
-    mx_free(hit);
-    return MX_ENOMEM;
-  }
   /* the surface nodes against the elements with a surface face */
   size_t found = 0;
   int st = MX_OK;

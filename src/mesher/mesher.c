@@ -666,14 +666,79 @@ int mx_volume_verdict(mx_mesher *m, double vm, size_t ncells) {
   return MX_EINVALID;
 }
 
+/* 1 when hexahedron p (VTK order) is a box along the axes: nodes 0 3 4 7
+ * at one x and 1 2 5 6 at another, 0 1 4 5 at one y and 2 3 6 7 at
+ * another, 0-3 at one z and 4-7 at another. */
+static int axis_box(const double (*p)[3]) {
+  static const int8_t same[3][2][4] = {{{0, 3, 4, 7}, {1, 2, 5, 6}},
+                                       {{0, 1, 4, 5}, {2, 3, 6, 7}},
+                                       {{0, 1, 2, 3}, {4, 5, 6, 7}}};
+  for (int a = 0; a < 3; a++)
+    for (int s = 0; s < 2; s++)
+      for (int k = 1; k < 4; k++)
+        if (p[same[a][s][k]][a] != p[same[a][s][0]][a]) return 0;
+  return 1;
+}
+
+/* The volume of element c of M as mx_element_volume defines it (geom/
+ * quality.c: the divergence theorem over the faces, a quadrilateral cut
+ * into four triangles at its centroid), the same sum of cones taken from
+ * the element's node 0 instead of the origin (a closed surface: any apex
+ * gives it) in coordinates relative to that node: a triangle through node
+ * 0 adds nothing, the four triangles of a quadrilateral a b c d around its
+ * centroid g add g . ((c - a) x (d - b)) together, and a box along the
+ * axes is the product of its extents. Fewer and smaller terms than from
+ * the origin (cortex -s 9, 8.8 million elements: 0.49 -> 0.06 s on one
+ * thread); the total differs from mx_element_volume's by its rounding
+ * (2e-14 relative there, the volume check's tolerance being 5%). */
+static double cell_volume(const mx_mesh *M, size_t c) {
+  const int t = M->type[c], nv = mx_cell_nodes[t];
+  const uint32_t *row = M->conn + 8 * c;
+  const double *o = M->xyz + 3 * (size_t)row[0];
+  double p[8][3];
+  for (int k = 0; k < nv; k++)
+    for (int a = 0; a < 3; a++) p[k][a] = M->xyz[3 * (size_t)row[k] + a] - o[a];
+  if (t == MX_HEX && axis_box((const double(*)[3])p)) return p[6][0] * p[6][1] * p[6][2];
+  double v = 0.0;
+  for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+    const int8_t *fv = mx_cell_faces[t][f];
+    const double *a = p[fv[0]], *b = p[fv[1]], *d = p[fv[2]];
+    if (fv[3] < 0) {
+      if (fv[0] && fv[1] && fv[2])
+        v += a[0] * (b[1] * d[2] - b[2] * d[1]) - a[1] * (b[0] * d[2] - b[2] * d[0]) +
+             a[2] * (b[0] * d[1] - b[1] * d[0]);
+      continue;
+    }
+    const double *e = p[fv[3]];
+    double g[3], u[3], w[3];
+    for (int x = 0; x < 3; x++) {
+      g[x] = 0.25 * (a[x] + b[x] + d[x] + e[x]);
+      u[x] = d[x] - a[x];
+      w[x] = e[x] - b[x];
+    }
+    v += g[0] * (u[1] * w[2] - u[2] * w[1]) + g[1] * (u[2] * w[0] - u[0] * w[2]) +
+         g[2] * (u[0] * w[1] - u[1] * w[0]);
+  }
+  return v / 6.0;
+}
+
+/* The sum over chunks of VCHUNK elements, their sums added in chunk order
+ * (the same for any thread count; VGROUP chunks at a time, on the stack). */
 double mx_mesh_volume(const mx_mesh *M) {
+  enum { VCHUNK = 4096, VGROUP = 256 };
+  const size_t nc = M->ncells;
   double vm = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : vm)
-  for (size_t c = 0; c < M->ncells; c++) {
-    double p[8][3];
-    const int nv = mx_cell_nodes[M->type[c]];
-    for (int k = 0; k < nv; k++) memcpy(p[k], M->xyz + 3 * (size_t)M->conn[8 * c + k], sizeof p[k]);
-    vm += mx_element_volume(M->type[c], (const double(*)[3])p);
+  for (size_t g = 0; g < nc; g += (size_t)VCHUNK * VGROUP) {
+    double part[VGROUP];
+    const size_t left = (nc - g + VCHUNK - 1) / VCHUNK, nch = left < VGROUP ? left : VGROUP;
+#pragma omp parallel for schedule(static) if (nch > 1)
+    for (size_t k = 0; k < nch; k++) {
+      const size_t c0 = g + k * VCHUNK, c1 = c0 + VCHUNK < nc ? c0 + VCHUNK : nc;
+      double s = 0.0;
+      for (size_t c = c0; c < c1; c++) s += cell_volume(M, c);
+      part[k] = s;
+    }
+    for (size_t k = 0; k < nch; k++) vm += part[k];
   }
   return vm;
 }
