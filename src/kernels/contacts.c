@@ -320,20 +320,20 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
   int st = total < UINT32_MAX ? MX_OK : MX_ENOMEM;
   uint64_t *key = NULL;
   uint32_t *idx = NULL;
-  filed *unsorted = NULL;
   if (st == MX_OK) {
     key = mx_alloc((total + 1) * sizeof *key);
     idx = mx_alloc((total + 1) * sizeof *idx);
-    unsorted = mx_alloc((total + 1) * sizeof *unsorted);
     L->ent = mx_alloc((total + 1) * sizeof *L->ent);
-    if (!key || !idx || !unsorted || !L->ent) st = MX_ENOMEM;
+    if (!key || !idx || !L->ent) st = MX_ENOMEM;
   }
+  /* the entries' cells and elements (by level, then element), sorted by
+   * cell below; an entry is made from them after the sort (the element's
+   * box, the cell from its key), not copied there */
   if (st == MX_OK) {
 #pragma omp parallel for schedule(static) if (n > CHUNK)
     for (size_t k = 0; k < n; k++) {
       const uint32_t i = order[k];
       const uint32_t *c0 = cells + 6 * (size_t)i, *c1 = c0 + 3;
-      const double *b = box + 6 * (size_t)i;
       const int l = lev[i];
       uint32_t c[3];
       size_t e = (size_t)cnt[k];
@@ -341,24 +341,17 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
         for (c[1] = c0[1]; c[1] <= c1[1]; c[1]++)
           for (c[0] = c0[0]; c[0] <= c1[0]; c[0]++, e++) {
             key[e] = cell_key(c, l);
-            idx[e] = (uint32_t)e;
-            for (int a = 0; a < 3; a++) {
-              unsorted[e].lo[a] = float_below(cell_rel(b[a], c[a], l));
-              unsorted[e].hi[a] = float_above(cell_rel(b[3 + a], c[a], l));
-            }
-            unsorted[e].elem = cand[i];
+            idx[e] = i;
           }
     }
   }
-  /* the elements' cells and boxes are in the entries now: their memory
-   * goes back before the sort (the peak of the verify phase) */
   mx_free(cells);
-  mx_free(box);
   mx_free(pad);
   cells = NULL;
-  box = pad = NULL;
+  pad = NULL;
   if (st == MX_OK) {
-    /* per level: entries sorted by cell, the distinct cells indexed */
+    /* per level: entries sorted by cell (stable: an element's entries in
+     * element order, as they were made), the distinct cells indexed */
     size_t k = 0;
     for (int l = 0; l < NLEV && st == MX_OK; l++) {
       const size_t k0 = k;
@@ -369,6 +362,20 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
       if (mx_sort_u64(key + e0, idx + e0, e1 - e0) != MX_OK) {
         st = MX_ENOMEM;
         break;
+      }
+      const int sh = MX_MAX_LEVEL - l;
+#pragma omp parallel for schedule(static) if (e1 - e0 > CHUNK)
+      for (size_t e = e0; e < e1; e++) {
+        const uint32_t i = idx[e];
+        const double *b = box + 6 * (size_t)i;
+        uint32_t c[3];
+        mx_morton_decode(key[e], c);
+        for (int a = 0; a < 3; a++) {
+          c[a] >>= sh;
+          L->ent[e].lo[a] = float_below(cell_rel(b[a], c[a], l));
+          L->ent[e].hi[a] = float_above(cell_rel(b[3 + a], c[a], l));
+        }
+        L->ent[e].elem = cand[i];
       }
       size_t nu = 0;
       for (uint32_t e = e0; e < e1; e++) nu += e == e0 || key[e] != key[e - 1];
@@ -388,13 +395,7 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
       st = mx_key_index_build(&L->index[l], L->ukey[l], nu, 3 * (MX_MAX_LEVEL - l));
     }
   }
-  mx_free(key); /* the distinct cells are indexed */
-  key = NULL;
-  if (st == MX_OK) {
-#pragma omp parallel for schedule(static) if (total > CHUNK)
-    for (size_t e = 0; e < (size_t)total; e++) L->ent[e] = unsorted[idx[e]];
-  }
-  mx_free(unsorted);
+  mx_free(key);
   mx_free(idx);
   mx_free(lev);
   mx_free(cnt);
