@@ -196,17 +196,23 @@ static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint8_t *fb,
 
 /* ---- pass 3: multiplicity of every face ---------------------------------- */
 
-/* The multiplicity given to the lower label's side of an interface face (a
- * face of two elements of different labels), which keeps the face; the
- * other side keeps 2, not gathered. */
-enum { MULT_INTERFACE = 254 };
+/* gb: per element, one bit per local face that the gathering takes (a
+ * face used once; with labels, an interface face on its lower label's
+ * side); set with an atomic OR, as an element's faces are filed under
+ * different nodes. other (labels only): the label on the other side of a
+ * face taken, 0 for a boundary face. Nothing is written for the faces
+ * used twice (most of them), and there is no array per face slot to
+ * clear or fill. */
+static inline void take(uint8_t *gb, uint32_t slot) {
+  __atomic_fetch_or(&gb[slot / SLOTS], (uint8_t)(1u << (slot % SLOTS)), __ATOMIC_RELAXED);
+}
 
-/* mult[slot] = number of elements using that face (capped at 252), for
- * every slot listed (the kept faces; the others are left as they are); with labels (per element, or NULL), a face of
- * two elements of different labels is an interface face: MULT_INTERFACE
- * on the lower label's side, whose other[slot] receives the other label. */
+/* The faces filed under each node compared by their sorted nodes: a face
+ * used once is taken, and with labels (per element, or NULL) a face of two
+ * elements of different labels on the lower label's side, with the other
+ * label (see take). */
 static int count_uses(const mx_mesh_view *m, const uint64_t *end,
-                      const uint32_t *list, const int32_t *label, uint8_t *mult,
+                      const uint32_t *list, const int32_t *label, uint8_t *gb,
                       int32_t *other) {
   const size_t nn = m->nnodes;
   int failed = 0;
@@ -247,14 +253,15 @@ static int count_uses(const mx_mesh_view *m, const uint64_t *end,
       for (size_t i = 0; i < k;) {
         size_t j = i + 1;
         while (j < k && same_face(&keys[j], &keys[i])) j++;
-        const uint8_t uses = (uint8_t)(j - i > 252 ? 252 : j - i);
-        for (size_t r = i; r < j; r++) mult[(uint32_t)keys[r].lo] = uses;
-        if (label && j - i == 2) {
+        if (j - i == 1) {
+          take(gb, (uint32_t)keys[i].lo);
+          if (other) other[(uint32_t)keys[i].lo] = 0;
+        } else if (label && j - i == 2) {
           const uint32_t s0 = (uint32_t)keys[i].lo, s1 = (uint32_t)keys[i + 1].lo;
           const int32_t l0 = label[s0 / SLOTS], l1 = label[s1 / SLOTS];
           if (l0 != l1) {
             const uint32_t keep = l0 < l1 ? s0 : s1;
-            mult[keep] = MULT_INTERFACE;
+            take(gb, keep);
             other[keep] = l0 < l1 ? l1 : l0;
           }
         }
@@ -269,12 +276,9 @@ static int count_uses(const mx_mesh_view *m, const uint64_t *end,
 /* ---- gathering, element by element ----------------------------------------
  */
 
-static inline int gathered(uint8_t mult) { return mult == 1 || mult == MULT_INTERFACE; }
-
-/* The kept faces (fb: per element, their bits; mult set for them only)
- * used once, and the interface faces, in element order. */
-static int gather(const mx_mesh_view *m, const uint8_t *fb, const uint8_t *mult,
-                  const int32_t *other, mx_boundary_faces *bf) {
+/* The faces taken (gb), in element order. */
+static int gather(const mx_mesh_view *m, const uint8_t *gb, const int32_t *other,
+                  mx_boundary_faces *bf) {
   const size_t nc = m->ncells;
   const size_t nchunks = (nc + OUT_CHUNK - 1) / OUT_CHUNK;
   uint64_t *ntri = mx_calloc((nchunks + 1) * sizeof *ntri);
@@ -289,12 +293,10 @@ static int gather(const mx_mesh_view *m, const uint8_t *fb, const uint8_t *mult,
     const size_t c1 = (k + 1) * OUT_CHUNK < nc ? (k + 1) * OUT_CHUNK : nc;
     uint64_t a = 0, b = 0;
     for (size_t c = k * OUT_CHUNK; c < c1; c++) {
-      if (!fb[c]) continue;
+      if (!gb[c]) continue;
       const unsigned t = m->type[c];
-      for (unsigned bits = fb[c]; bits; bits &= bits - 1) {
-        const int f = __builtin_ctz(bits);
-        if (!gathered(mult[c * SLOTS + (size_t)f])) continue;
-        if (face_size(t, f) == 3)
+      for (unsigned bits = gb[c]; bits; bits &= bits - 1) {
+        if (face_size(t, __builtin_ctz(bits)) == 3)
           a++;
         else
           b++;
@@ -324,11 +326,9 @@ static int gather(const mx_mesh_view *m, const uint8_t *fb, const uint8_t *mult,
       const size_t c1 = (k + 1) * OUT_CHUNK < nc ? (k + 1) * OUT_CHUNK : nc;
       uint64_t a = ntri[k], b = nquad[k];
       for (size_t c = k * OUT_CHUNK; c < c1; c++) {
-        for (unsigned bits = fb[c]; bits; bits &= bits - 1) {
+        for (unsigned bits = gb[c]; bits; bits &= bits - 1) {
           const int f = __builtin_ctz(bits);
-          const size_t slot = c * SLOTS + (size_t)f;
-          if (!gathered(mult[slot])) continue;
-          const int32_t pair = mult[slot] == MULT_INTERFACE ? other[slot] : 0;
+          const int32_t pair = other ? other[c * SLOTS + (size_t)f] : 0;
           uint32_t v[4];
           if (face_nodes(m, c, f, v) == 3) {
             memcpy(bf->tri + 3 * a, v, 3 * sizeof *v);
@@ -378,16 +378,18 @@ static int extract(const mx_mesh_view *m, const uint8_t *mask, const int32_t *la
   uint8_t *fb = mx_alloc(m->ncells);
   if (!fb) return MX_ENOMEM;
   int st = file_faces(m, mask, fb, &end, &list, &nfaces);
-  /* mult and other are read for the kept faces only, all of which
-   * count_uses sets: no clearing */
-  uint8_t *mult = st ? NULL : mx_alloc(m->ncells * SLOTS * sizeof *mult);
+  /* fb again, as the faces taken (count_uses) */
+  if (!st) {
+#pragma omp parallel for schedule(static)
+    for (size_t c = 0; c < m->ncells; c++) fb[c] = 0;
+  }
+  /* other is read for the faces taken only, all of which count_uses sets */
   int32_t *other = !st && label ? mx_alloc(m->ncells * SLOTS * sizeof *other) : NULL;
-  if (!st) st = mult && (!label || other) ? count_uses(m, end, list, label, mult, other) : MX_ENOMEM;
+  if (!st) st = !label || other ? count_uses(m, end, list, label, fb, other) : MX_ENOMEM;
   mx_free(end);
   mx_free(list);
-  if (st == MX_OK) st = gather(m, fb, mult, other, bf);
+  if (st == MX_OK) st = gather(m, fb, other, bf);
   mx_free(fb);
-  mx_free(mult);
   mx_free(other);
   if (st != MX_OK) mx_boundary_faces_free(bf);
   return st;
