@@ -441,12 +441,15 @@ static int node_contacts(const lattice_cells *L, const mx_mesh *M, uint32_t v,
           const uint32_t id =
               mx_key_index_find(&L->index[l], key[k] != UINT64_MAX ? key[k] : cell_key(c, l));
           if (id == UINT32_MAX) continue;
-          double r[3];
-          for (int a = 0; a < 3; a++) r[a] = cell_rel(u[a], c[a], l);
+          /* the point in floats, as the boxes: rounding to the nearest
+           * float keeps a point within float bounds within them (a point
+           * just beyond may pass: lies_on decides) */
+          float r[3];
+          for (int a = 0; a < 3; a++) r[a] = (float)cell_rel(u[a], c[a], l);
           for (uint32_t e = L->first[l][id]; e < L->first[l][id + 1]; e++) {
             const filed *f = &L->ent[e];
-            if (r[0] < f->lo[0] || r[0] > f->hi[0] || r[1] < f->lo[1] || r[1] > f->hi[1] ||
-                r[2] < f->lo[2] || r[2] > f->hi[2])
+            if ((r[0] < f->lo[0]) | (r[0] > f->hi[0]) | (r[1] < f->lo[1]) | (r[1] > f->hi[1]) |
+                (r[2] < f->lo[2]) | (r[2] > f->hi[2]))
               continue;
             if (!lies_on(M, f->elem, v, p)) continue;
             hit = 1;
