@@ -43,14 +43,24 @@ static inline int face_nodes(const mx_mesh_view *m, size_t c, int f,
   return n;
 }
 
-/* 1 when every node of face f of element c is in the mask (no mask: 1). */
-static inline int face_kept(const mx_mesh_view *m, const uint8_t *mask, size_t c, int f) {
-  if (!mask) return 1;
-  uint32_t v[4];
-  const int n = face_nodes(m, c, f, v);
-  for (int j = 0; j < n; j++)
-    if (!mask[v[j]]) return 0;
-  return 1;
+/* The faces of element c whose nodes are all in the mask, one bit per
+ * local face (no mask: every face). */
+static inline unsigned kept_faces(const mx_mesh_view *m, const uint8_t *mask, size_t c) {
+  const unsigned t = m->type[c];
+  const int nf = mx_cell_nfaces[t];
+  if (!mask) return (1u << nf) - 1u;
+  const uint32_t *row = m->conn + 8 * c;
+  unsigned in = 0;
+  for (int j = 0; j < mx_cell_nodes[t]; j++) in |= (unsigned)(mask[row[j]] != 0) << j;
+  if (__builtin_popcount(in) < 3) return 0;
+  unsigned kept = 0;
+  for (int f = 0; f < nf; f++) {
+    const int8_t *fv = mx_cell_faces[t][f];
+    unsigned need = 0;
+    for (int k = 0; k < 4 && fv[k] >= 0; k++) need |= 1u << fv[k];
+    kept |= (unsigned)((in & need) == need) << f;
+  }
+  return kept;
 }
 
 static inline uint32_t face_min_node(const mx_mesh_view *m, size_t c, int f) {
@@ -137,19 +147,25 @@ static int too_large(const mx_mesh_view *m) {
 
 /* ---- pass 1 and 2: the faces filed under their smallest node ------------ */
 
-/* On return (MX_OK) *list_out holds all face slots, node v's being
- * list[end[v-1] .. end[v]) (end[-1] = 0); *end_out has nnodes entries. */
-static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint64_t **end_out,
-                      uint32_t **list_out, size_t *nfaces) {
+/* On return (MX_OK) *list_out holds the kept face slots (kept_faces, also
+ * set in fb: per element, its kept faces' bits), node v's being
+ * list[end[v-1] .. end[v]) (end[-1] = 0); *end_out has nnodes entries.
+ * The mask is read once per element, not once per face node; the second
+ * pass reads only the elements with a kept face (cortex -s 9: 3.8 of 8.8
+ * million). */
+static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint8_t *fb,
+                      uint64_t **end_out, uint32_t **list_out, size_t *nfaces) {
   const size_t nn = m->nnodes, nc = m->ncells;
-  uint64_t *pos = mx_calloc((nn + 1) * sizeof *pos);
+  uint64_t *pos = mx_alloc((nn + 1) * sizeof *pos);
   if (!pos) return MX_ENOMEM;
 #pragma omp parallel for schedule(static)
+  for (size_t v = 0; v <= nn; v++) pos[v] = 0;
+#pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
-    const unsigned t = m->type[c];
-    for (int f = 0; f < mx_cell_nfaces[t]; f++) {
-      if (!face_kept(m, mask, c, f)) continue;
-      const uint32_t v = face_min_node(m, c, f);
+    const unsigned kept = kept_faces(m, mask, c);
+    fb[c] = (uint8_t)kept;
+    for (unsigned b = kept; b; b &= b - 1) {
+      const uint32_t v = face_min_node(m, c, __builtin_ctz(b));
 #pragma omp atomic update
       pos[v]++;
     }
@@ -163,9 +179,8 @@ static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint64_t **end
   /* pos[v] walks from the start of v's list to its end (= start of v+1) */
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
-    const unsigned t = m->type[c];
-    for (int f = 0; f < mx_cell_nfaces[t]; f++) {
-      if (!face_kept(m, mask, c, f)) continue;
+    for (unsigned b = fb[c]; b; b &= b - 1) {
+      const int f = __builtin_ctz(b);
       const uint32_t v = face_min_node(m, c, f);
       uint64_t at;
 #pragma omp atomic capture
@@ -181,17 +196,23 @@ static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint64_t **end
 
 /* ---- pass 3: multiplicity of every face ---------------------------------- */
 
-/* The multiplicity given to the lower label's side of an interface face (a
- * face of two elements of different labels), which keeps the face; the
- * other side keeps 2, not gathered. */
-enum { MULT_INTERFACE = 254 };
+/* gb: per element, one bit per local face that the gathering takes (a
+ * face used once; with labels, an interface face on its lower label's
+ * side); set with an atomic OR, as an element's faces are filed under
+ * different nodes. other (labels only): the label on the other side of a
+ * face taken, 0 for a boundary face. Nothing is written for the faces
+ * used twice (most of them), and there is no array per face slot to
+ * clear or fill. */
+static inline void take(uint8_t *gb, uint32_t slot) {
+  __atomic_fetch_or(&gb[slot / SLOTS], (uint8_t)(1u << (slot % SLOTS)), __ATOMIC_RELAXED);
+}
 
-/* mult[slot] = number of elements using that face (capped at 252), for
- * every slot that is a face; with labels (per element, or NULL), a face of
- * two elements of different labels is an interface face: MULT_INTERFACE
- * on the lower label's side, whose other[slot] receives the other label. */
+/* The faces filed under each node compared by their sorted nodes: a face
+ * used once is taken, and with labels (per element, or NULL) a face of two
+ * elements of different labels on the lower label's side, with the other
+ * label (see take). */
 static int count_uses(const mx_mesh_view *m, const uint64_t *end,
-                      const uint32_t *list, const int32_t *label, uint8_t *mult,
+                      const uint32_t *list, const int32_t *label, uint8_t *gb,
                       int32_t *other) {
   const size_t nn = m->nnodes;
   int failed = 0;
@@ -232,14 +253,15 @@ static int count_uses(const mx_mesh_view *m, const uint64_t *end,
       for (size_t i = 0; i < k;) {
         size_t j = i + 1;
         while (j < k && same_face(&keys[j], &keys[i])) j++;
-        const uint8_t uses = (uint8_t)(j - i > 252 ? 252 : j - i);
-        for (size_t r = i; r < j; r++) mult[(uint32_t)keys[r].lo] = uses;
-        if (label && j - i == 2) {
+        if (j - i == 1) {
+          take(gb, (uint32_t)keys[i].lo);
+          if (other) other[(uint32_t)keys[i].lo] = 0;
+        } else if (label && j - i == 2) {
           const uint32_t s0 = (uint32_t)keys[i].lo, s1 = (uint32_t)keys[i + 1].lo;
           const int32_t l0 = label[s0 / SLOTS], l1 = label[s1 / SLOTS];
           if (l0 != l1) {
             const uint32_t keep = l0 < l1 ? s0 : s1;
-            mult[keep] = MULT_INTERFACE;
+            take(gb, keep);
             other[keep] = l0 < l1 ? l1 : l0;
           }
         }
@@ -254,9 +276,8 @@ static int count_uses(const mx_mesh_view *m, const uint64_t *end,
 /* ---- gathering, element by element ----------------------------------------
  */
 
-static inline int gathered(uint8_t mult) { return mult == 1 || mult == MULT_INTERFACE; }
-
-static int gather(const mx_mesh_view *m, const uint8_t *mult, const int32_t *other,
+/* The faces taken (gb), in element order. */
+static int gather(const mx_mesh_view *m, const uint8_t *gb, const int32_t *other,
                   mx_boundary_faces *bf) {
   const size_t nc = m->ncells;
   const size_t nchunks = (nc + OUT_CHUNK - 1) / OUT_CHUNK;
@@ -272,10 +293,10 @@ static int gather(const mx_mesh_view *m, const uint8_t *mult, const int32_t *oth
     const size_t c1 = (k + 1) * OUT_CHUNK < nc ? (k + 1) * OUT_CHUNK : nc;
     uint64_t a = 0, b = 0;
     for (size_t c = k * OUT_CHUNK; c < c1; c++) {
+      if (!gb[c]) continue;
       const unsigned t = m->type[c];
-      for (int f = 0; f < mx_cell_nfaces[t]; f++) {
-        if (!gathered(mult[c * SLOTS + (size_t)f])) continue;
-        if (face_size(t, f) == 3)
+      for (unsigned bits = gb[c]; bits; bits &= bits - 1) {
+        if (face_size(t, __builtin_ctz(bits)) == 3)
           a++;
         else
           b++;
@@ -305,11 +326,9 @@ static int gather(const mx_mesh_view *m, const uint8_t *mult, const int32_t *oth
       const size_t c1 = (k + 1) * OUT_CHUNK < nc ? (k + 1) * OUT_CHUNK : nc;
       uint64_t a = ntri[k], b = nquad[k];
       for (size_t c = k * OUT_CHUNK; c < c1; c++) {
-        const unsigned t = m->type[c];
-        for (int f = 0; f < mx_cell_nfaces[t]; f++) {
-          const size_t slot = c * SLOTS + (size_t)f;
-          if (!gathered(mult[slot])) continue;
-          const int32_t pair = mult[slot] == MULT_INTERFACE ? other[slot] : 0;
+        for (unsigned bits = gb[c]; bits; bits &= bits - 1) {
+          const int f = __builtin_ctz(bits);
+          const int32_t pair = other ? other[c * SLOTS + (size_t)f] : 0;
           uint32_t v[4];
           if (face_nodes(m, c, f, v) == 3) {
             memcpy(bf->tri + 3 * a, v, 3 * sizeof *v);
@@ -356,16 +375,21 @@ static int extract(const mx_mesh_view *m, const uint8_t *mask, const int32_t *la
   uint64_t *end = NULL;
   uint32_t *list = NULL;
   size_t nfaces = 0;
-  MX_CHECK(file_faces(m, mask, &end, &list, &nfaces));
-  /* faces left out keep multiplicity 0: not boundary faces */
-  uint8_t *mult = mask ? mx_calloc(m->ncells * SLOTS * sizeof *mult)
-                       : mx_alloc(m->ncells * SLOTS * sizeof *mult);
-  int32_t *other = label ? mx_alloc(m->ncells * SLOTS * sizeof *other) : NULL;
-  int st = mult && (!label || other) ? count_uses(m, end, list, label, mult, other) : MX_ENOMEM;
+  uint8_t *fb = mx_alloc(m->ncells);
+  if (!fb) return MX_ENOMEM;
+  int st = file_faces(m, mask, fb, &end, &list, &nfaces);
+  /* fb again, as the faces taken (count_uses) */
+  if (!st) {
+#pragma omp parallel for schedule(static)
+    for (size_t c = 0; c < m->ncells; c++) fb[c] = 0;
+  }
+  /* other is read for the faces taken only, all of which count_uses sets */
+  int32_t *other = !st && label ? mx_alloc(m->ncells * SLOTS * sizeof *other) : NULL;
+  if (!st) st = !label || other ? count_uses(m, end, list, label, fb, other) : MX_ENOMEM;
   mx_free(end);
   mx_free(list);
-  if (st == MX_OK) st = gather(m, mult, other, bf);
-  mx_free(mult);
+  if (st == MX_OK) st = gather(m, fb, other, bf);
+  mx_free(fb);
   mx_free(other);
   if (st != MX_OK) mx_boundary_faces_free(bf);
   return st;

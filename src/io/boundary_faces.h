@@ -8,8 +8,10 @@
  * order of mx_cell_faces, so oriented outward of its element. Triangles and
  * quadrilaterals come in two lists, each ordered by element index and then
  * by local face index, so the result does not depend on the number of
- * threads. Work and memory are linear in the number of faces (about 13
- * bytes a face and 8 a node while it runs); every pass is parallel.
+ * threads. Work and memory are linear in the number of faces (about 4
+ * bytes a face, 1 an element and 8 a node while it runs, and 4 per face
+ * slot for the labels of mx_interface_faces_extract); every pass is
+ * parallel.
  *
  * A triangle and a quadrilateral are never the same face, so a quadrilateral
  * facing two triangles (a non-conforming mesh) is a boundary face, and so

@@ -26,20 +26,21 @@ static uint32_t uf_find(uint32_t *p, uint32_t a) {
   }
 }
 
-static void uf_union(uint32_t *p, uint32_t a, uint32_t b) {
-  for (;;) {
+/* Joins the set of a (a node of it) and the set of root b: the larger of
+ * the two under the smaller (a CAS that the larger is still a root), until
+ * they are one set; returns a node of the joined set. Every link goes from
+ * a larger node to a smaller one, so there is never a cycle, even when a
+ * is not a root: a set's root is its smallest node. */
+static uint32_t uf_join(uint32_t *p, uint32_t a, uint32_t b) {
+  while (a != b) {
+    const uint32_t hi = a > b ? a : b, lo = a > b ? b : a;
+    uint32_t expect = hi;
+    if (__atomic_compare_exchange_n(&p[hi], &expect, lo, 0, __ATOMIC_ACQ_REL, __ATOMIC_RELAXED))
+      return lo;
     a = uf_find(p, a);
     b = uf_find(p, b);
-    if (a == b) return;
-    if (a < b) {
-      const uint32_t t = a;
-      a = b;
-      b = t;
-    }
-    uint32_t expect = a;
-    if (__atomic_compare_exchange_n(&p[a], &expect, b, 0, __ATOMIC_ACQ_REL, __ATOMIC_RELAXED))
-      return;
   }
+  return a;
 }
 
 int mx_cell_bodies(const mx_mesh_view *v, int32_t *cell_body, int *nbodies) {
@@ -52,7 +53,9 @@ int mx_cell_bodies(const mx_mesh_view *v, int32_t *cell_body, int *nbodies) {
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
     const uint32_t *row = v->conn + 8 * c;
-    for (int k = 1; k < mx_cell_nodes[v->type[c]]; k++) uf_union(root, row[0], row[k]);
+    /* the set of node 0 found once, then joined with each other node's */
+    uint32_t a = uf_find(root, row[0]);
+    for (int k = 1; k < mx_cell_nodes[v->type[c]]; k++) a = uf_join(root, a, uf_find(root, row[k]));
   }
 #pragma omp parallel for schedule(static)
   for (size_t i = 0; i < nn; i++) root[i] = uf_find(root, (uint32_t)i);

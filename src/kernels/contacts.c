@@ -320,20 +320,20 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
   int st = total < UINT32_MAX ? MX_OK : MX_ENOMEM;
   uint64_t *key = NULL;
   uint32_t *idx = NULL;
-  filed *unsorted = NULL;
   if (st == MX_OK) {
     key = mx_alloc((total + 1) * sizeof *key);
     idx = mx_alloc((total + 1) * sizeof *idx);
-    unsorted = mx_alloc((total + 1) * sizeof *unsorted);
     L->ent = mx_alloc((total + 1) * sizeof *L->ent);
-    if (!key || !idx || !unsorted || !L->ent) st = MX_ENOMEM;
+    if (!key || !idx || !L->ent) st = MX_ENOMEM;
   }
+  /* the entries' cells and elements (by level, then element), sorted by
+   * cell below; an entry is made from them after the sort (the element's
+   * box, the cell from its key), not copied there */
   if (st == MX_OK) {
 #pragma omp parallel for schedule(static) if (n > CHUNK)
     for (size_t k = 0; k < n; k++) {
       const uint32_t i = order[k];
       const uint32_t *c0 = cells + 6 * (size_t)i, *c1 = c0 + 3;
-      const double *b = box + 6 * (size_t)i;
       const int l = lev[i];
       uint32_t c[3];
       size_t e = (size_t)cnt[k];
@@ -341,24 +341,17 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
         for (c[1] = c0[1]; c[1] <= c1[1]; c[1]++)
           for (c[0] = c0[0]; c[0] <= c1[0]; c[0]++, e++) {
             key[e] = cell_key(c, l);
-            idx[e] = (uint32_t)e;
-            for (int a = 0; a < 3; a++) {
-              unsorted[e].lo[a] = float_below(cell_rel(b[a], c[a], l));
-              unsorted[e].hi[a] = float_above(cell_rel(b[3 + a], c[a], l));
-            }
-            unsorted[e].elem = cand[i];
+            idx[e] = i;
           }
     }
   }
-  /* the elements' cells and boxes are in the entries now: their memory
-   * goes back before the sort (the peak of the verify phase) */
   mx_free(cells);
-  mx_free(box);
   mx_free(pad);
   cells = NULL;
-  box = pad = NULL;
+  pad = NULL;
   if (st == MX_OK) {
-    /* per level: entries sorted by cell, the distinct cells indexed */
+    /* per level: entries sorted by cell (stable: an element's entries in
+     * element order, as they were made), the distinct cells indexed */
     size_t k = 0;
     for (int l = 0; l < NLEV && st == MX_OK; l++) {
       const size_t k0 = k;
@@ -369,6 +362,20 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
       if (mx_sort_u64(key + e0, idx + e0, e1 - e0) != MX_OK) {
         st = MX_ENOMEM;
         break;
+      }
+      const int sh = MX_MAX_LEVEL - l;
+#pragma omp parallel for schedule(static) if (e1 - e0 > CHUNK)
+      for (size_t e = e0; e < e1; e++) {
+        const uint32_t i = idx[e];
+        const double *b = box + 6 * (size_t)i;
+        uint32_t c[3];
+        mx_morton_decode(key[e], c);
+        for (int a = 0; a < 3; a++) {
+          c[a] >>= sh;
+          L->ent[e].lo[a] = float_below(cell_rel(b[a], c[a], l));
+          L->ent[e].hi[a] = float_above(cell_rel(b[3 + a], c[a], l));
+        }
+        L->ent[e].elem = cand[i];
       }
       size_t nu = 0;
       for (uint32_t e = e0; e < e1; e++) nu += e == e0 || key[e] != key[e - 1];
@@ -388,13 +395,7 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
       st = mx_key_index_build(&L->index[l], L->ukey[l], nu, 3 * (MX_MAX_LEVEL - l));
     }
   }
-  mx_free(key); /* the distinct cells are indexed */
-  key = NULL;
-  if (st == MX_OK) {
-#pragma omp parallel for schedule(static) if (total > CHUNK)
-    for (size_t e = 0; e < (size_t)total; e++) L->ent[e] = unsorted[idx[e]];
-  }
-  mx_free(unsorted);
+  mx_free(key);
   mx_free(idx);
   mx_free(lev);
   mx_free(cnt);
@@ -440,12 +441,15 @@ static int node_contacts(const lattice_cells *L, const mx_mesh *M, uint32_t v,
           const uint32_t id =
               mx_key_index_find(&L->index[l], key[k] != UINT64_MAX ? key[k] : cell_key(c, l));
           if (id == UINT32_MAX) continue;
-          double r[3];
-          for (int a = 0; a < 3; a++) r[a] = cell_rel(u[a], c[a], l);
+          /* the point in floats, as the boxes: rounding to the nearest
+           * float keeps a point within float bounds within them (a point
+           * just beyond may pass: lies_on decides) */
+          float r[3];
+          for (int a = 0; a < 3; a++) r[a] = (float)cell_rel(u[a], c[a], l);
           for (uint32_t e = L->first[l][id]; e < L->first[l][id + 1]; e++) {
             const filed *f = &L->ent[e];
-            if (r[0] < f->lo[0] || r[0] > f->hi[0] || r[1] < f->lo[1] || r[1] > f->hi[1] ||
-                r[2] < f->lo[2] || r[2] > f->hi[2])
+            if ((r[0] < f->lo[0]) | (r[0] > f->hi[0]) | (r[1] < f->lo[1]) | (r[1] > f->hi[1]) |
+                (r[2] < f->lo[2]) | (r[2] > f->hi[2]))
               continue;
             if (!lies_on(M, f->elem, v, p)) continue;
             hit = 1;
@@ -463,16 +467,22 @@ int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
   memset(out, 0, sizeof *out);
   out->first_node = UINT32_MAX;
   const size_t nc = M->ncells, nn = M->nnodes;
-  if (elem_flag) memset(elem_flag, 0, nc);
-  if (!nc || !nn || !states) return MX_OK;
-  if (!(G->unit > 0.0)) return MX_EINPUT;
-  /* the elements with a surface face, in id order (chunked count + fill) */
+  if (!nc || !nn || !states || !(G->unit > 0.0)) {
+    if (elem_flag) memset(elem_flag, 0, nc);
+    return nc && nn && states ? MX_EINPUT : MX_OK;
+  }
+  /* the elements with a surface face, in id order: flagged in ehit and
+   * counted per chunk (the one pass over the rows), then listed from the
+   * flags, which go back to 0 for the search */
   const size_t nchunks = (nc + CHUNK - 1) / CHUNK;
   uint64_t *cnt = mx_calloc((nchunks + 1) * sizeof *cnt);
   uint8_t *hit = mx_calloc(nn + 1);
-  if (!cnt || !hit) {
+  uint8_t *ehit = elem_flag ? elem_flag : mx_alloc(nc + 1);
+  if (!cnt || !hit || !ehit) {
     mx_free(cnt);
     mx_free(hit);
+    if (ehit != elem_flag) mx_free(ehit);
+    if (elem_flag) memset(elem_flag, 0, nc);
     return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
@@ -480,7 +490,9 @@ int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
     const size_t end = (k + 1) * CHUNK < nc ? (k + 1) * CHUNK : nc;
     uint64_t n = 0;
     for (size_t c = k * CHUNK; c < end; c++) {
-      n += (uint64_t)mx_surface_face(M, states, c);
+      const int s = mx_surface_face(M, states, c);
+      ehit[c] = (uint8_t)s;
+      n += (uint64_t)s;
     }
     cnt[k] = n;
   }
@@ -489,6 +501,8 @@ int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
   if (!list) {
     mx_free(cnt);
     mx_free(hit);
+    if (ehit != elem_flag) mx_free(ehit);
+    if (elem_flag) memset(elem_flag, 0, nc);
     return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
@@ -496,16 +510,11 @@ int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
     const size_t end = (k + 1) * CHUNK < nc ? (k + 1) * CHUNK : nc;
     uint64_t at = cnt[k];
     for (size_t c = k * CHUNK; c < end; c++) {
-      if (mx_surface_face(M, states, c)) list[at++] = (uint32_t)c;
+      if (ehit[c]) list[at++] = (uint32_t)c;
+      ehit[c] = 0;
     }
   }
   mx_free(cnt);
-  uint8_t *ehit = elem_flag ? elem_flag : mx_calloc(nc + 1);
-  if (!ehit) {
-    mx_free(list);
-    mx_free(hit);
-    return MX_ENOMEM;
-  }
   /* the surface nodes against the elements with a surface face */
   size_t found = 0;
   int st = MX_OK;
