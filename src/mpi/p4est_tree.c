@@ -1,0 +1,386 @@
+/* A rank's patch octree straight from the patch's leaves
+ * (src/mpi/p4est_tree.h). */
+#include "mpi/p4est_tree.h"
+
+#include "base/common.h"
+#include "base/scan.h"
+#include "kernels/edges_lazy.h"
+#include "mesher/mesher_impl.h"
+#include "mpi/exchange.h"
+
+#include <string.h>
+
+void mx_patch_leaves_free(mx_patch_leaves *S) {
+  mx_free(S->key);
+  mx_free(S->level);
+  mx_free(S->owner);
+  mx_free(S->pq);
+  mx_free(S->tri);
+  memset(S, 0, sizeof *S);
+}
+
+/* ---- the halo's data from its owners ------------------------------------ */
+
+/* A leaf's data as sent back: its key (checked), triangle count, level and
+ * mx_pq fields. */
+typedef struct {
+  uint64_t key;
+  uint32_t tri_cnt;
+  uint8_t level, flags, target, rmeet, rin, pad[3];
+} leaf_data;
+
+/* This rank's leaves in the domain, sorted by key, with their data (the
+ * forest's: the pointers stay valid while the forest is not changed). */
+typedef struct {
+  uint64_t *key;
+  const mx_pq **pq;
+  uint8_t *level;
+  size_t n;
+} local_leaves;
+
+static void local_free(local_leaves *L) {
+  mx_free(L->key);
+  mx_free((void *)L->pq);
+  mx_free(L->level);
+  memset(L, 0, sizeof *L);
+}
+
+static int local_collect(const mx_p4est_octree *P, local_leaves *L) {
+  memset(L, 0, sizeof *L);
+  p8est_t *p8 = P->p8;
+  const size_t nq = (size_t)p8->local_num_quadrants;
+  uint64_t *key = mx_alloc((nq + 1) * sizeof *key);
+  const mx_pq **pq = mx_alloc((nq + 1) * sizeof *pq);
+  uint8_t *lev = mx_alloc(nq + 1);
+  uint32_t *perm = mx_alloc((nq + 1) * sizeof *perm);
+  L->key = mx_alloc((nq + 1) * sizeof *L->key);
+  L->pq = mx_alloc((nq + 1) * sizeof *L->pq);
+  L->level = mx_alloc(nq + 1);
+  int st = key && pq && lev && perm && L->key && L->pq && L->level ? MX_OK : MX_ENOMEM;
+  size_t n = 0;
+  for (p4est_topidx_t t = p8->first_local_tree; !st && t <= p8->last_local_tree; t++) {
+    p8est_tree_t *tr = p8est_tree_array_index(p8->trees, t);
+    for (size_t i = 0; i < tr->quadrants.elem_count; i++) {
+      const p8est_quadrant_t *q = p8est_quadrant_array_index(&tr->quadrants, i);
+      const mx_pq *d = q->p.user_data;
+      if (!mx_pq_kept(d)) continue;
+      perm[n] = (uint32_t)n;
+      pq[n] = d;
+      lev[n] = (uint8_t)q->level;
+      key[n++] = mx_p4est_key(P, t, q);
+    }
+  }
+  if (!st) {
+    memcpy(L->key, key, n * sizeof *key);
+    st = mx_sort_u64(L->key, perm, n);
+  }
+  if (!st)
+    for (size_t i = 0; i < n; i++) {
+      L->pq[i] = pq[perm[i]];
+      L->level[i] = lev[perm[i]];
+    }
+  L->n = n;
+  mx_free(key);
+  mx_free((void *)pq);
+  mx_free(lev);
+  mx_free(perm);
+  return st;
+}
+
+int mx_patch_leaves_get(const mx_p4est_octree *P, const mx_halo *H, int st, mx_patch_leaves *S,
+                        long long *sent, long long *largest) {
+  memset(S, 0, sizeof *S);
+  const int R = P->size;
+  local_leaves L;
+  memset(&L, 0, sizeof L);
+  if (!st) st = local_collect(P, &L);
+  /* 1. the halo's keys to their owners, grouped by owner (halo order
+   * within each: the order the answers come back in) */
+  const size_t nh = H->n;
+  int *scount = mx_calloc((size_t)(R + 1) * sizeof *scount);
+  size_t *first = mx_calloc((size_t)(R + 1) * sizeof *first);
+  uint64_t *req = mx_alloc((nh + 1) * sizeof *req);
+  uint32_t *slot = mx_alloc((nh + 1) * sizeof *slot); /* request -> halo index */
+  if (!st && !(scount && first && req && slot)) st = MX_ENOMEM;
+  if (!st) {
+    for (size_t i = 0; i < nh; i++) scount[H->owner[i]]++;
+    for (int r = 0; r < R; r++) first[r + 1] = first[r] + (size_t)scount[r];
+    for (size_t i = 0; i < nh; i++) {
+      const size_t k = first[H->owner[i]]++;
+      req[k] = H->key[i];
+      slot[k] = (uint32_t)i;
+    }
+  }
+  void *rv = NULL;
+  int *rcount = NULL, *rdispl = NULL;
+  st = mx_exchange(P->comm, st, sizeof *req, req, scount, &rv, &rcount, &rdispl, sent, largest);
+  mx_free(req);
+  /* 2. the owners answer: each asked leaf's data, then its triangles */
+  size_t nasked = 0;
+  for (int r = 0; !st && r < R; r++) nasked += (size_t)rcount[r];
+  leaf_data *ans = NULL;
+  uint32_t *atri = NULL;
+  int *tcount = NULL;
+  size_t missing = 0;
+  if (!st) {
+    ans = mx_alloc((nasked + 1) * sizeof *ans);
+    tcount = mx_calloc((size_t)(R + 1) * sizeof *tcount);
+    if (!ans || !tcount) st = MX_ENOMEM;
+  }
+  uint64_t ntri_out = 0;
+  const uint64_t *asked = rv;
+  for (int r = 0; !st && r < R; r++)
+    for (int k = rdispl[r]; k < rdispl[r] + rcount[r]; k++) {
+      leaf_data *a = &ans[k];
+      memset(a, 0, sizeof *a);
+      a->key = asked[k];
+      const uint32_t j = mx_find_u64(L.key, L.n, asked[k]);
+      if (j == UINT32_MAX) {
+        a->level = 255; /* not ours: reported by the asking rank */
+        missing++;
+        continue;
+      }
+      const mx_pq *d = L.pq[j];
+      a->level = L.level[j];
+      a->flags = d->flags;
+      a->target = d->target;
+      a->rmeet = d->rmeet;
+      a->rin = d->rin;
+      a->tri_cnt = d->tri_cnt;
+      tcount[r] += (int)d->tri_cnt;
+      ntri_out += d->tri_cnt;
+    }
+  if (!st && ntri_out > (uint64_t)INT32_MAX) st = MX_ENOMEM;
+  if (!st) {
+    atri = mx_alloc((ntri_out + 1) * sizeof *atri);
+    if (!atri) st = MX_ENOMEM;
+  }
+  if (!st) {
+    size_t w = 0;
+    for (size_t k = 0; k < nasked; k++) {
+      if (ans[k].level == 255) continue;
+      const mx_pq *d = L.pq[mx_find_u64(L.key, L.n, ans[k].key)];
+      memcpy(atri + w, P->pool + d->tri_off, (size_t)d->tri_cnt * sizeof *atri);
+      w += d->tri_cnt;
+    }
+  }
+  mx_free(rv);
+  void *dv = NULL, *tv = NULL;
+  int *dcount = NULL, *ddispl = NULL, *tc = NULL, *td = NULL;
+  st = mx_exchange(P->comm, st, sizeof *ans, ans, rcount, &dv, &dcount, &ddispl, sent, largest);
+  st = mx_exchange(P->comm, st, sizeof *atri, atri, tcount, &tv, &tc, &td, sent, largest);
+  mx_free(ans);
+  mx_free(atri);
+  mx_free(rcount);
+  mx_free(rdispl);
+  mx_free(tcount);
+  (void)missing;
+  /* 3. the patch: this rank's leaves and the halo's, sorted by key */
+  const leaf_data *got = dv;
+  const uint32_t *gtri = tv;
+  const size_t n = L.n + nh;
+  uint64_t *toff = NULL; /* per halo leaf: where its triangles start in gtri */
+  uint64_t ntri = 0;
+  if (!st) {
+    toff = mx_alloc((nh + 1) * sizeof *toff);
+    if (!toff) st = MX_ENOMEM;
+  }
+  for (size_t k = 0; !st && k < nh; k++) {
+    /* the answers come back per owner in the order asked: request k */
+    const leaf_data *g = &got[k];
+    const size_t i = slot[k];
+    if (g->level == 255 || g->key != H->key[i] || g->level != H->level[i]) {
+      mx_error(NULL, 0, "internal: rank %d does not hold the leaf of key %llu level %d that "
+                        "its halo names", H->owner[i], (unsigned long long)H->key[i],
+               H->level[i]);
+      st = MX_EINTERNAL;
+      break;
+    }
+    toff[i] = ntri;
+    ntri += g->tri_cnt;
+  }
+  /* the halo's triangles start where this rank's end */
+  uint64_t nlocal_tri = 0;
+  for (size_t j = 0; !st && j < L.n; j++) nlocal_tri += L.pq[j]->tri_cnt;
+  uint32_t *perm = NULL;
+  if (!st) {
+    S->key = mx_alloc((n + 1) * sizeof *S->key);
+    S->level = mx_alloc(n + 1);
+    S->owner = mx_alloc((n + 1) * sizeof *S->owner);
+    S->pq = mx_alloc((n + 1) * sizeof *S->pq);
+    S->tri = mx_alloc((nlocal_tri + ntri + 1) * sizeof *S->tri);
+    perm = mx_alloc((n + 1) * sizeof *perm);
+    if (!S->key || !S->level || !S->owner || !S->pq || !S->tri || !perm) st = MX_ENOMEM;
+  }
+  mx_pq *pq = NULL;
+  if (!st) {
+    pq = mx_alloc((n + 1) * sizeof *pq);
+    if (!pq) st = MX_ENOMEM;
+  }
+  if (!st) {
+    /* the data in this rank's order (its leaves, then the halo's), the
+     * triangles copied as they come */
+    uint64_t w = 0;
+    for (size_t j = 0; j < L.n; j++) {
+      const mx_pq *d = L.pq[j];
+      pq[j] = *d;
+      pq[j].tri_off = w;
+      memcpy(S->tri + w, P->pool + d->tri_off, (size_t)d->tri_cnt * sizeof *S->tri);
+      w += d->tri_cnt;
+    }
+    if (ntri) memcpy(S->tri + w, gtri, ntri * sizeof *S->tri);
+    for (size_t k = 0; k < nh; k++) {
+      const leaf_data *g = &got[k];
+      mx_pq *d = &pq[L.n + slot[k]];
+      memset(d, 0, sizeof *d);
+      d->tri_off = w + toff[slot[k]];
+      d->tri_cnt = g->tri_cnt;
+      d->flags = g->flags;
+      d->target = g->target;
+      d->rmeet = g->rmeet;
+      d->rin = g->rin;
+    }
+    memcpy(S->key, L.key, L.n * sizeof *S->key);
+    memcpy(S->key + L.n, H->key, nh * sizeof *S->key);
+    for (size_t i = 0; i < n; i++) perm[i] = (uint32_t)i;
+    st = mx_sort_u64(S->key, perm, n);
+  }
+  if (!st) {
+    for (size_t i = 0; i < n; i++) {
+      const size_t j = perm[i];
+      S->level[i] = j < L.n ? L.level[j] : H->level[j - L.n];
+      S->owner[i] = j < L.n ? P->rank : H->owner[j - L.n];
+      S->pq[i] = pq[j];
+    }
+    S->n = n;
+    S->ncore = L.n;
+    S->ntri = nlocal_tri + ntri;
+  }
+  mx_free(pq);
+  mx_free(perm);
+  mx_free(toff);
+  mx_free(dv);
+  mx_free(dcount);
+  mx_free(ddispl);
+  mx_free(tv);
+  mx_free(tc);
+  mx_free(td);
+  mx_free(scount);
+  mx_free(first);
+  mx_free(slot);
+  local_free(&L);
+  if (st) mx_patch_leaves_free(S);
+  return st;
+}
+
+/* ---- the octree --------------------------------------------------------- */
+
+static inline uint64_t level_mask(int l) { return ~(uint64_t)0 << (3 * (MX_MAX_LEVEL - l)); }
+
+int mx_patch_tree_build(mx_mesher *m, const mx_patch_leaves *S) {
+  mx_tree_clear(m);
+  MX_CHECK(mx_mesher_assemble_inputs(m));
+  const mx_requests req = mx_mesher_requests(m); /* none: the caller cleared them */
+  int st = mx_builder_init(&m->B, &m->soup, m->nt_domain, m->region_t0, &req, 1,
+                           m->ndomain ? m->domain_name[0] : NULL);
+  if (st) {
+    mx_builder_free(&m->B);
+    return st;
+  }
+  m->have_tree = 1;
+  MX_CHECK(mx_mesher_domain_side(m, &m->B));
+  const size_t n = S->n;
+  int top = 0;
+  for (size_t i = 0; i < n; i++)
+    if (S->level[i] > top) top = S->level[i];
+  /* octants per level: the distinct ancestors of the leaves as deep */
+  size_t first[MX_MAX_LEVEL + 2];
+  first[0] = 0;
+  for (int l = 0; l <= top; l++) {
+    const uint64_t mk = level_mask(l);
+    size_t c = 0;
+    uint64_t prev = 0;
+    for (size_t i = 0; i < n; i++) {
+      if (S->level[i] < l) continue;
+      const uint64_t a = S->key[i] & mk;
+      if (c == 0 || a != prev) c++;
+      prev = a;
+    }
+    first[l + 1] = first[l] + c;
+  }
+  const size_t no = first[top + 1];
+  if (no >= (size_t)MX_NONE) {
+    mx_error(NULL, 0, "too many octants (more than 2^32)");
+    return MX_EINPUT;
+  }
+  mx_octree *T = &m->B.tree.oct;
+  MX_CHECK(mx_octree_reserve(T, no, S->ntri));
+  uint32_t *leaves = mx_alloc((n + 1) * sizeof *leaves);
+  if (!leaves) return MX_ENOMEM;
+  /* each level in key order; a leaf's octant takes its data */
+  for (int l = 0; l <= top; l++) {
+    const uint64_t mk = level_mask(l);
+    size_t o = first[l];
+    int have = 0;
+    for (size_t i = 0; i < n; i++) {
+      if (S->level[i] < l) continue;
+      const uint64_t a = S->key[i] & mk;
+      if (have && a == T->key[o - 1]) continue;
+      have = 1;
+      T->key[o] = a;
+      T->level[o] = (uint8_t)l;
+      T->kept[o] = 0;
+      T->parent[o] = MX_NONE;
+      T->child0[o] = MX_NONE;
+      if (S->level[i] == l) { /* the leaf itself (no leaf descends from it) */
+        const mx_pq *d = &S->pq[i];
+        T->flags[o] = (d->flags & MX_PQ_SURFACE) ? MX_OCT_SURFACE : 0;
+        T->target[o] = d->target;
+        T->rmeet[o] = d->rmeet;
+        T->rin[o] = d->rin;
+        T->tri_off[o] = d->tri_off;
+        T->tri_cnt[o] = d->tri_cnt;
+        leaves[i] = (uint32_t)o;
+      } else {
+        T->flags[o] = MX_OCT_SPLIT;
+        T->target[o] = (uint8_t)(l + 1);
+        T->rmeet[o] = T->rin[o] = 0;
+        T->tri_off[o] = 0;
+        T->tri_cnt[o] = 0;
+      }
+      o++;
+    }
+  }
+  /* parents: a merge walk of each level with the one above; then the
+   * split octants' surface flag and regions from their children, deepest
+   * level first */
+  for (int l = 1; l <= top; l++) {
+    const uint64_t mk = level_mask(l - 1);
+    size_t p = first[l - 1];
+    for (size_t o = first[l]; o < first[l + 1]; o++) {
+      const uint64_t a = T->key[o] & mk;
+      while (T->key[p] != a) p++; /* every octant's parent is there */
+      T->parent[o] = (uint32_t)p;
+      if (T->child0[p] == MX_NONE) T->child0[p] = (uint32_t)o;
+      T->kept[p] |= (uint8_t)(1u << mx_morton_child_id(T->key[o], l));
+    }
+  }
+  for (int l = top; l >= 1; l--)
+    for (size_t o = first[l]; o < first[l + 1]; o++) {
+      const uint32_t p = T->parent[o];
+      T->flags[p] |= T->flags[o] & MX_OCT_SURFACE;
+      T->rmeet[p] |= T->rmeet[o];
+    }
+  T->n = no;
+  memcpy(T->tri_pool, S->tri, S->ntri * sizeof *T->tri_pool);
+  T->tri_n = S->ntri;
+  m->leaves = leaves;
+  m->nleaves = n;
+  /* edge infos for every level with a split octant, as the refinement
+   * keeps them */
+  m->B.tree.use_edges = 1;
+  m->B.tree.edge_levels = top - 1;
+  m->B.tree.edge_lazy_top = -1;
+  m->B.tree.edges_released = 1;
+  return mx_edges_restore(&m->B);
+}
