@@ -121,7 +121,6 @@ int mx_patch_leaves_get(const mx_p4est_octree *P, const mx_halo *H, int st, mx_p
   leaf_data *ans = NULL;
   uint32_t *atri = NULL;
   int *tcount = NULL;
-  size_t missing = 0;
   if (!st) {
     ans = mx_alloc((nasked + 1) * sizeof *ans);
     tcount = mx_calloc((size_t)(R + 1) * sizeof *tcount);
@@ -137,7 +136,6 @@ int mx_patch_leaves_get(const mx_p4est_octree *P, const mx_halo *H, int st, mx_p
       const uint32_t j = mx_find_u64(L.key, L.n, asked[k]);
       if (j == UINT32_MAX) {
         a->level = 255; /* not ours: reported by the asking rank */
-        missing++;
         continue;
       }
       const mx_pq *d = L.pq[j];
@@ -174,7 +172,6 @@ int mx_patch_leaves_get(const mx_p4est_octree *P, const mx_halo *H, int st, mx_p
   mx_free(rcount);
   mx_free(rdispl);
   mx_free(tcount);
-  (void)missing;
   /* 3. the patch: this rank's leaves and the halo's, sorted by key */
   const leaf_data *got = dv;
   const uint32_t *gtri = tv;
@@ -377,10 +374,36 @@ int mx_patch_tree_build(mx_mesher *m, const mx_patch_leaves *S) {
   m->leaves = leaves;
   m->nleaves = n;
   /* edge infos for every level with a split octant, as the refinement
-   * keeps them */
-  m->B.tree.use_edges = 1;
-  m->B.tree.edge_levels = top - 1;
-  m->B.tree.edge_lazy_top = -1;
-  m->B.tree.edges_released = 1;
-  return mx_edges_restore(&m->B);
+   * keeps them: the roots', then each split octant's children's at once
+   * (mx_edges_register_children: the 54 edges of a family looked up once
+   * each), level by level, in key order */
+  mx_tree *tr = &m->B.tree;
+  tr->use_edges = 1;
+  tr->edge_levels = top - 1;
+  tr->edge_lazy_top = -1;
+  if (top - 1 >= 0) {
+    MX_CHECK(mx_edges_reserve(&tr->edges, 0, 4 * (first[1] - first[0]) + 16));
+    size_t created[3] = {0, 0, 0};
+    for (size_t o = first[0]; o < first[1]; o++)
+      mx_edges_register(&tr->edges, (uint32_t)o, T->key[o], 0, created);
+    mx_edges_add_count(&tr->edges, 0, created);
+  }
+  for (int l = 0; l + 1 <= top - 1; l++) {
+    /* at most 4 edges per axis per child */
+    MX_CHECK(mx_edges_reserve(&tr->edges, l + 1, 4 * (first[l + 2] - first[l + 1]) + 16));
+    size_t created[3] = {0, 0, 0};
+    const size_t o0 = first[l], o1 = first[l + 1];
+#pragma omp parallel
+    {
+      size_t mine[3] = {0, 0, 0};
+#pragma omp for schedule(static)
+      for (size_t o = o0; o < o1; o++)
+        if (T->flags[o] & MX_OCT_SPLIT)
+          mx_edges_register_children(&tr->edges, T->child0[o], T->kept[o], T->key[o], l, mine);
+#pragma omp critical
+      for (int a = 0; a < 3; a++) created[a] += mine[a];
+    }
+    mx_edges_add_count(&tr->edges, l + 1, created);
+  }
+  return MX_OK;
 }
