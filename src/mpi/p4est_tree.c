@@ -274,6 +274,49 @@ int mx_patch_leaves_get(const mx_p4est_octree *P, const mx_halo *H, int st, mx_p
 
 static inline uint64_t level_mask(int l) { return ~(uint64_t)0 << (3 * (MX_MAX_LEVEL - l)); }
 
+/* The edge infos of level l + 1: the children of the split octants
+ * [o0, o1) of level l (nchild of them), family by family. A family adds at
+ * most 18 edges per axis, so each parallel chunk of families is given that
+ * much room; the tables start at 1.5 edges per child and axis (the cortex's
+ * patches have 1.3) and grow by what the families so far made per family,
+ * instead of being sized for 4 per child (5x the memory to clear). */
+static int register_families(mx_edges *E, const mx_octree *T, size_t o0, size_t o1, int l,
+                             size_t nchild) {
+  MX_CHECK(mx_edges_reserve(E, l + 1, nchild + nchild / 2 + 1024));
+  for (size_t lo = o0; lo < o1;) {
+    size_t room = SIZE_MAX, made = 0;
+    for (int a = 0; a < 3; a++) {
+      const mx_edge_table *t = &E->t[l + 1][a];
+      const size_t lim = (size_t)(0.75 * (double)t->cap);
+      const size_t r = lim > t->count ? lim - t->count : 0;
+      if (r < room) room = r;
+      if (t->count > made) made = t->count;
+    }
+    size_t chunk = room / 18;
+    if (chunk > o1 - lo) chunk = o1 - lo;
+    if (chunk < 1024 && chunk < o1 - lo) {
+      const size_t done = lo - o0, rest = o1 - lo;
+      const double rate = done ? (double)made / (double)done : 18.0;
+      MX_CHECK(mx_edges_reserve(E, l + 1, (size_t)(1.25 * rate * (double)rest) + 18 * 1024));
+      continue;
+    }
+    size_t created[3] = {0, 0, 0};
+#pragma omp parallel
+    {
+      size_t mine[3] = {0, 0, 0};
+#pragma omp for schedule(static)
+      for (size_t o = lo; o < lo + chunk; o++)
+        if (T->flags[o] & MX_OCT_SPLIT)
+          mx_edges_register_children(E, T->child0[o], T->kept[o], T->key[o], l, mine);
+#pragma omp critical
+      for (int a = 0; a < 3; a++) created[a] += mine[a];
+    }
+    mx_edges_add_count(E, l + 1, created);
+    lo += chunk;
+  }
+  return MX_OK;
+}
+
 int mx_patch_tree_build(mx_mesher *m, const mx_patch_leaves *S) {
   mx_tree_clear(m);
   MX_CHECK(mx_mesher_assemble_inputs(m));
@@ -388,22 +431,8 @@ int mx_patch_tree_build(mx_mesher *m, const mx_patch_leaves *S) {
       mx_edges_register(&tr->edges, (uint32_t)o, T->key[o], 0, created);
     mx_edges_add_count(&tr->edges, 0, created);
   }
-  for (int l = 0; l + 1 <= top - 1; l++) {
-    /* at most 4 edges per axis per child */
-    MX_CHECK(mx_edges_reserve(&tr->edges, l + 1, 4 * (first[l + 2] - first[l + 1]) + 16));
-    size_t created[3] = {0, 0, 0};
-    const size_t o0 = first[l], o1 = first[l + 1];
-#pragma omp parallel
-    {
-      size_t mine[3] = {0, 0, 0};
-#pragma omp for schedule(static)
-      for (size_t o = o0; o < o1; o++)
-        if (T->flags[o] & MX_OCT_SPLIT)
-          mx_edges_register_children(&tr->edges, T->child0[o], T->kept[o], T->key[o], l, mine);
-#pragma omp critical
-      for (int a = 0; a < 3; a++) created[a] += mine[a];
-    }
-    mx_edges_add_count(&tr->edges, l + 1, created);
-  }
+  for (int l = 0; l + 1 <= top - 1; l++)
+    MX_CHECK(register_families(&tr->edges, T, first[l], first[l + 1], l,
+                               first[l + 2] - first[l + 1]));
   return MX_OK;
 }

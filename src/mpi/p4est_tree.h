@@ -21,7 +21,9 @@
  *   regions met of its children (the stages after the octree read neither
  *   on split octants);
  * - the edge infos of the levels that have split octants are registered
- *   from the octants (mx_edges_restore, as after a release).
+ *   family by family, as the refinement registers a split's children
+ *   (mx_edges_register_children), the tables sized from the edges made so
+ *   far rather than for the worst case.
  *
  * What differs from the octree rebuilt by refinement (mx_build_tree from
  * the split set): only octants outside the patch. That one also held the
