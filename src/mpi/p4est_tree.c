@@ -29,71 +29,17 @@ typedef struct {
   uint8_t level, flags, target, rmeet, rin, pad[3];
 } leaf_data;
 
-/* This rank's leaves in the domain, sorted by key, with their data (the
- * forest's: the pointers stay valid while the forest is not changed). */
-typedef struct {
-  uint64_t *key;
-  const mx_pq **pq;
-  uint8_t *level;
-  size_t n;
-} local_leaves;
-
-static void local_free(local_leaves *L) {
-  mx_free(L->key);
-  mx_free((void *)L->pq);
-  mx_free(L->level);
-  memset(L, 0, sizeof *L);
-}
-
-static int local_collect(const mx_p4est_octree *P, local_leaves *L) {
-  memset(L, 0, sizeof *L);
-  p8est_t *p8 = P->p8;
-  const size_t nq = (size_t)p8->local_num_quadrants;
-  uint64_t *key = mx_alloc((nq + 1) * sizeof *key);
-  const mx_pq **pq = mx_alloc((nq + 1) * sizeof *pq);
-  uint8_t *lev = mx_alloc(nq + 1);
-  uint32_t *perm = mx_alloc((nq + 1) * sizeof *perm);
-  L->key = mx_alloc((nq + 1) * sizeof *L->key);
-  L->pq = mx_alloc((nq + 1) * sizeof *L->pq);
-  L->level = mx_alloc(nq + 1);
-  int st = key && pq && lev && perm && L->key && L->pq && L->level ? MX_OK : MX_ENOMEM;
-  size_t n = 0;
-  for (p4est_topidx_t t = p8->first_local_tree; !st && t <= p8->last_local_tree; t++) {
-    p8est_tree_t *tr = p8est_tree_array_index(p8->trees, t);
-    for (size_t i = 0; i < tr->quadrants.elem_count; i++) {
-      const p8est_quadrant_t *q = p8est_quadrant_array_index(&tr->quadrants, i);
-      const mx_pq *d = q->p.user_data;
-      if (!mx_pq_kept(d)) continue;
-      perm[n] = (uint32_t)n;
-      pq[n] = d;
-      lev[n] = (uint8_t)q->level;
-      key[n++] = mx_p4est_key(P, t, q);
-    }
-  }
-  if (!st) {
-    memcpy(L->key, key, n * sizeof *key);
-    st = mx_sort_u64(L->key, perm, n);
-  }
-  if (!st)
-    for (size_t i = 0; i < n; i++) {
-      L->pq[i] = pq[perm[i]];
-      L->level[i] = lev[perm[i]];
-    }
-  L->n = n;
-  mx_free(key);
-  mx_free((void *)pq);
-  mx_free(lev);
-  mx_free(perm);
-  return st;
-}
-
 int mx_patch_leaves_get(const mx_p4est_octree *P, const mx_halo *H, int st, mx_patch_leaves *S,
                         long long *sent, long long *largest) {
   memset(S, 0, sizeof *S);
   const int R = P->size;
-  local_leaves L;
-  memset(&L, 0, sizeof L);
-  if (!st) st = local_collect(P, &L);
+  /* this rank's leaves, sorted by key (the halo's) */
+  const struct {
+    const uint64_t *key;
+    const mx_pq *const *pq;
+    const uint8_t *level;
+    size_t n;
+  } L = {H->lkey, H->lpq, H->llevel, H->nlocal};
   /* 1. the halo's keys to their owners, grouped by owner (halo order
    * within each: the order the answers come back in) */
   const size_t nh = H->n;
@@ -237,10 +183,31 @@ int mx_patch_leaves_get(const mx_p4est_octree *P, const mx_halo *H, int st, mx_p
       d->rmeet = g->rmeet;
       d->rin = g->rin;
     }
-    memcpy(S->key, L.key, L.n * sizeof *S->key);
-    memcpy(S->key + L.n, H->key, nh * sizeof *S->key);
-    for (size_t i = 0; i < n; i++) perm[i] = (uint32_t)i;
-    st = mx_sort_u64(S->key, perm, n);
+    /* this rank's leaves come sorted: the halo's sorted (perm), then the
+     * two merged (perm then indexes pq: this rank's, then the halo's) */
+    memcpy(S->key, H->key, nh * sizeof *S->key);
+    for (size_t k = 0; k < nh; k++) perm[k] = (uint32_t)k;
+    st = mx_sort_u64(S->key, perm, nh);
+  }
+  if (!st) {
+    uint64_t *hk = mx_alloc((nh + 1) * sizeof *hk);
+    uint32_t *hp = mx_alloc((nh + 1) * sizeof *hp);
+    if (!hk || !hp) st = MX_ENOMEM;
+    if (!st) {
+      memcpy(hk, S->key, nh * sizeof *hk);
+      memcpy(hp, perm, nh * sizeof *hp);
+      size_t i = 0, j = 0;
+      for (size_t k = 0; k < n; k++)
+        if (j == nh || (i < L.n && L.key[i] < hk[j])) {
+          S->key[k] = L.key[i];
+          perm[k] = (uint32_t)i++;
+        } else {
+          S->key[k] = hk[j];
+          perm[k] = (uint32_t)(L.n + hp[j++]);
+        }
+    }
+    mx_free(hk);
+    mx_free(hp);
   }
   if (!st) {
     for (size_t i = 0; i < n; i++) {
@@ -265,7 +232,6 @@ int mx_patch_leaves_get(const mx_p4est_octree *P, const mx_halo *H, int st, mx_p
   mx_free(scount);
   mx_free(first);
   mx_free(slot);
-  local_free(&L);
   if (st) mx_patch_leaves_free(S);
   return st;
 }
