@@ -65,12 +65,13 @@ int mx_patch_leaves_get(const mx_p4est_octree *P, const mx_halo *H, int st, mx_p
   size_t nasked = 0;
   for (int r = 0; !st && r < R; r++) nasked += (size_t)rcount[r];
   leaf_data *ans = NULL;
-  uint32_t *atri = NULL;
+  uint32_t *atri = NULL, *at = NULL; /* at: where each asked leaf is in L */
   int *tcount = NULL;
   if (!st) {
     ans = mx_alloc((nasked + 1) * sizeof *ans);
+    at = mx_alloc((nasked + 1) * sizeof *at);
     tcount = mx_calloc((size_t)(R + 1) * sizeof *tcount);
-    if (!ans || !tcount) st = MX_ENOMEM;
+    if (!ans || !at || !tcount) st = MX_ENOMEM;
   }
   uint64_t ntri_out = 0;
   const uint64_t *asked = rv;
@@ -80,6 +81,7 @@ int mx_patch_leaves_get(const mx_p4est_octree *P, const mx_halo *H, int st, mx_p
       memset(a, 0, sizeof *a);
       a->key = asked[k];
       const uint32_t j = mx_find_u64(L.key, L.n, asked[k]);
+      at[k] = j;
       if (j == UINT32_MAX) {
         a->level = 255; /* not ours: reported by the asking rank */
         continue;
@@ -103,7 +105,7 @@ int mx_patch_leaves_get(const mx_p4est_octree *P, const mx_halo *H, int st, mx_p
     size_t w = 0;
     for (size_t k = 0; k < nasked; k++) {
       if (ans[k].level == 255) continue;
-      const mx_pq *d = L.pq[mx_find_u64(L.key, L.n, ans[k].key)];
+      const mx_pq *d = L.pq[at[k]];
       memcpy(atri + w, P->pool + d->tri_off, (size_t)d->tri_cnt * sizeof *atri);
       w += d->tri_cnt;
     }
@@ -114,6 +116,7 @@ int mx_patch_leaves_get(const mx_p4est_octree *P, const mx_halo *H, int st, mx_p
   st = mx_exchange(P->comm, st, sizeof *ans, ans, rcount, &dv, &dcount, &ddispl, sent, largest);
   st = mx_exchange(P->comm, st, sizeof *atri, atri, tcount, &tv, &tc, &td, sent, largest);
   mx_free(ans);
+  mx_free(at);
   mx_free(atri);
   mx_free(rcount);
   mx_free(rdispl);
