@@ -381,7 +381,7 @@ int mx_patch_tree_build(mx_mesher *m, const mx_patch_leaves *S) {
       T->rmeet[p] |= T->rmeet[o];
     }
   T->n = no;
-  memcpy(T->tri_pool, S->tri, S->ntri * sizeof *T->tri_pool);
+  if (S->ntri) memcpy(T->tri_pool, S->tri, S->ntri * sizeof *T->tri_pool);
   T->tri_n = S->ntri;
   m->leaves = leaves;
   m->nleaves = n;
