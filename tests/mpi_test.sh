@@ -207,6 +207,34 @@ else bad "one ring: no shared node differs (the check would see nothing)"; fi
 same "$(field "$T/r1.json" mesh.attempts) $(field "$T/r1.json" mesh.mesh_hash)" \
   "2 $(cut -d' ' -f3 "$T/want_cortex6")" "one ring: meshed again, the single-process mesh"
 
+# Each rank's patch octree is made straight from the patch's leaves and the
+# data they carry (src/mpi/p4est_tree.h); MX_P4EST_CHECK_TREE=1 also refines
+# it again from the leaves' ancestors (the single-process builder) and fails
+# the run unless every patch leaf is there at its level with the same
+# surface flag, regions and triangle list. The leaves compared, summed over
+# the ranks: on 1 rank its leaves (no halo), on 2 and 3 more (the patches
+# overlap); and the mesh is the single-process one.
+for c in "cortex6:$(cut -d' ' -f3 "$T/want_cortex6"):-i $DATA/surfaces/cortex.off -s 6" \
+         "cortex3b:$(cut -d' ' -f3 "$T/want_cortex3b"):-i $DATA/surfaces/cortex.off -s 3 -b $DATA/surfaces/cortex.reg"; do
+  name=${c%%:*} rest=${c#*:}
+  want=${rest%%:*}
+  for n in 1 2 3; do
+    # shellcheck disable=SC2086
+    if ! MX_P4EST_CHECK_TREE=1 "$MPIRUN" --oversubscribe --allow-run-as-root -n "$n" \
+      -x MX_P4EST_CHECK_TREE -x OMP_NUM_THREADS=1 "$MIXOCT" ${rest#*:} --p4est --json \
+      >"$T/ct.json" 2>"$T/err"; then
+      bad "tree from leaves: $name on $n rank(s): the run failed"; head -5 "$T/err"; continue
+    fi
+    lv=$(field "$T/ct.json" mesh.leaves)
+    ck=$(field "$T/ct.json" mesh.tree_checked_leaves)
+    if { [ "$n" = 1 ] && [ "$ck" = "$lv" ]; } || { [ "$n" -gt 1 ] && [ "$ck" -gt "$lv" ]; }; then
+      ok "tree from leaves: $name on $n rank(s): $ck patch leaves as refined again ($lv leaves)"
+    else bad "tree from leaves: $name on $n rank(s): $ck patch leaves compared for $lv leaves"; fi
+    same "$(field "$T/ct.json" mesh.mesh_hash)" "$want" \
+      "tree from leaves: $name on $n rank(s): the single-process mesh"
+  done
+done
+
 # Repair (MX_P4EST_TEST_REPAIR: the leaf of the element with the lowest J_ENS
 # taken as a defect): split in the forest, balanced, meshed again; on 1, 2, 3
 # ranks the mesh of the single-process list refinement (-c, -l: Algorithm 3)

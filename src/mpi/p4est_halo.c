@@ -19,6 +19,7 @@ typedef struct {
 void mx_halo_free(mx_halo *H) {
   mx_free(H->lkey);
   mx_free(H->llevel);
+  mx_free((void *)H->lpq);
   mx_free(H->key);
   mx_free(H->level);
   mx_free(H->owner);
@@ -66,10 +67,12 @@ int mx_halo_init(const mx_p4est_octree *P, mx_halo *H) {
   const size_t nroots = (size_t)dims[0] * (size_t)dims[1] * (size_t)dims[2];
   H->lkey = mx_alloc((nq + 1) * sizeof *H->lkey);
   H->llevel = mx_alloc(nq + 1);
+  H->lpq = mx_alloc((nq + 1) * sizeof *H->lpq);
+  const mx_pq **pq = mx_alloc((nq + 1) * sizeof *pq);
   H->root_tree = mx_alloc((nroots + 1) * sizeof *H->root_tree);
   uint8_t *lev = mx_alloc(nq + 1);
   uint32_t *perm = mx_alloc((nq + 1) * sizeof *perm);
-  int st = H->lkey && H->llevel && H->root_tree && lev && perm ? MX_OK : MX_ENOMEM;
+  int st = H->lkey && H->llevel && H->lpq && pq && H->root_tree && lev && perm ? MX_OK : MX_ENOMEM;
   if (!st) st = halo_reserve(H, ng + 1);
   size_t n = 0;
   for (p4est_topidx_t t = p8->first_local_tree; !st && t <= p8->last_local_tree; t++) {
@@ -78,14 +81,19 @@ int mx_halo_init(const mx_p4est_octree *P, mx_halo *H) {
       const p8est_quadrant_t *q = p8est_quadrant_array_index(&tr->quadrants, i);
       if (!mx_pq_kept(q->p.user_data)) continue;
       perm[n] = (uint32_t)n;
+      pq[n] = q->p.user_data;
       lev[n] = (uint8_t)q->level;
       H->lkey[n++] = mx_p4est_key(P, t, q);
     }
   }
   if (!st) st = mx_sort_u64(H->lkey, perm, n);
   if (!st)
-    for (size_t i = 0; i < n; i++) H->llevel[i] = lev[perm[i]];
+    for (size_t i = 0; i < n; i++) {
+      H->llevel[i] = lev[perm[i]];
+      H->lpq[i] = pq[perm[i]];
+    }
   H->nlocal = n;
+  mx_free((void *)pq);
   mx_free(lev);
   mx_free(perm);
   if (!st) {

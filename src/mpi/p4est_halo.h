@@ -21,9 +21,11 @@
 #include "mpi/p4est_octree.h"
 
 typedef struct {
-  /* this rank's leaves in the domain, sorted by key */
+  /* this rank's leaves in the domain, sorted by key, with their data in
+   * the forest */
   uint64_t *lkey;
   uint8_t *llevel;
+  const mx_pq **lpq;
   size_t nlocal;
   /* the halo: in the order found (ring by ring), ring r's leaves at
    * [ring_start[r], ring_start[r + 1]) for r = 1 .. rings */

@@ -19,6 +19,7 @@
 #include "mpi/exchange.h"
 #include "mpi/p4est_halo.h"
 #include "mpi/p4est_nodes.h"
+#include "mpi/p4est_tree.h"
 #include "base/scan.h"
 
 #include <inttypes.h>
@@ -38,77 +39,74 @@
 static const int attempt_rings[] = {6, 8, 12};
 #define NATTEMPTS ((int)(sizeof attempt_rings / sizeof *attempt_rings))
 
-/* The leaves of the patch sorted by key: this rank's kept leaves and the
- * kept ghosts, with their owner ranks. */
-typedef struct {
-  uint64_t *key;
-  uint8_t *level;
-  int32_t *owner;
-  size_t n, ncore;
-} patch_set;
-
-static void patch_free(patch_set *s) {
-  mx_free(s->key);
-  mx_free(s->level);
-  mx_free(s->owner);
-  memset(s, 0, sizeof *s);
-}
-
-static int collect_patch(const mx_halo *H, patch_set *s, int rank) {
-  const size_t n = H->nlocal + H->n;
-  s->key = mx_alloc((n + 1) * sizeof *s->key);
-  s->level = mx_alloc(n + 1);
-  s->owner = mx_alloc((n + 1) * sizeof *s->owner);
-  uint32_t *perm = mx_alloc((n + 1) * sizeof *perm);
-  int st = s->key && s->level && s->owner && perm ? MX_OK : MX_ENOMEM;
-  if (!st) {
-    memcpy(s->key, H->lkey, H->nlocal * sizeof *s->key);
-    memcpy(s->key + H->nlocal, H->key, H->n * sizeof *s->key);
-    for (size_t i = 0; i < n; i++) perm[i] = (uint32_t)i;
-    st = mx_sort_u64(s->key, perm, n);
-  }
-  if (!st)
-    for (size_t i = 0; i < n; i++) {
-      const size_t j = perm[i];
-      s->level[i] = j < H->nlocal ? H->llevel[j] : H->level[j - H->nlocal];
-      s->owner[i] = j < H->nlocal ? rank : H->owner[j - H->nlocal];
-    }
-  s->n = n;
-  s->ncore = H->nlocal;
-  mx_free(perm);
-  return st;
-}
-
-/* The octree of m rebuilt from the patch's leaves (no requests: the split
- * set alone); pl[np] receives the patch's leaves among its leaves (Morton
- * order), powner their owners. */
-static int patch_tree(mx_mesher *m, const patch_set *s, uint32_t **pl, int32_t **powner) {
+/* The requests of m cleared: the patch's octree is made from its leaves
+ * alone. */
+static void clear_requests(mx_mesher *m) {
   m->p.surface_level = -1;
   m->p.all_level = -1;
   m->nboxes = 0;
   for (int r = 0; r < m->nregions; r++) m->region_level[r] = -1;
-  MX_CHECK(mx_mesher_set_split_keys(m, s->key, s->level, s->n));
+}
+
+/* The patch's octree rebuilt by refinement (the split set of its leaves'
+ * ancestors, as before issue 31), compared with the patch's leaves and
+ * their data: every leaf there at its level, with the same surface flag,
+ * regions and triangle list (in the same order). The tests' check of
+ * p4est_tree.c (MX_P4EST_CHECK_TREE=1); *checked: leaves compared. */
+static int check_tree(mx_mesher *m, const mx_patch_leaves *S, size_t *checked) {
+  MX_CHECK(mx_mesher_set_split_keys(m, S->key, S->level, S->n));
   MX_CHECK(mx_build_tree(m));
-  *pl = mx_alloc((s->n + 1) * sizeof **pl);
-  *powner = mx_alloc((s->n + 1) * sizeof **powner);
-  if (!*pl || !*powner) return MX_ENOMEM;
-  size_t np = 0, wrong = 0;
+  const mx_octree *T = &m->B.tree.oct;
+  size_t np = 0, wrong = 0, first = SIZE_MAX;
   for (size_t i = 0; i < m->nleaves; i++) {
     const uint32_t o = m->leaves[i];
-    const uint32_t j = mx_find_u64(s->key, s->n, m->B.tree.oct.key[o]);
+    const uint32_t j = mx_find_u64(S->key, S->n, T->key[o]);
     if (j == UINT32_MAX) continue;
-    if (s->level[j] != m->B.tree.oct.level[o] || np == s->n) {
+    np++;
+    const mx_pq *d = &S->pq[j];
+    int bad = S->level[j] != T->level[o] ||
+              ((T->flags[o] & MX_OCT_SURFACE) != 0) != ((d->flags & MX_PQ_SURFACE) != 0) ||
+              T->rmeet[o] != d->rmeet || T->rin[o] != d->rin || T->tri_cnt[o] != d->tri_cnt;
+    if (!bad)
+      bad = memcmp(T->tri_pool + T->tri_off[o], S->tri + d->tri_off,
+                   (size_t)d->tri_cnt * sizeof *S->tri) != 0;
+    if (bad) {
       wrong++;
-      continue;
+      if (j < first) first = j;
     }
-    (*pl)[np] = o;
-    (*powner)[np++] = s->owner[j];
   }
-  if (wrong || np != s->n) {
-    mx_error(NULL, 0, "internal: the octree rebuilt from the %zu leaves of a rank's patch "
-                      "holds %zu of them (%zu at another level)", s->n, np, wrong);
+  mx_tree_clear(m);
+  for (int l = 0; l <= MX_MAX_LEVEL; l++) {
+    mx_free(m->split_keys[l]);
+    m->split_keys[l] = NULL;
+    m->nsplit[l] = 0;
+  }
+  if (wrong || np != S->n) {
+    mx_error(NULL, 0, "internal: the octree refined from the %zu leaves of a rank's patch "
+                      "holds %zu of them, %zu with other data than the patch's (the first: "
+                      "key %llu level %d)", S->n, np, wrong,
+             first == SIZE_MAX ? 0ull : (unsigned long long)S->key[first],
+             first == SIZE_MAX ? -1 : S->level[first]);
     return MX_EINTERNAL;
   }
+  *checked = np;
+  return MX_OK;
+}
+
+/* The octree of m made from the patch's leaves (p4est_tree.h); pl[np]
+ * receives the patch's leaves among its leaves (Morton order: all of
+ * them), powner their owners. */
+static int patch_tree(mx_mesher *m, const mx_patch_leaves *S, uint32_t **pl, int32_t **powner,
+                      size_t *checked) {
+  clear_requests(m);
+  if (getenv("MX_P4EST_CHECK_TREE")) MX_CHECK(check_tree(m, S, checked));
+  MX_CHECK(mx_patch_tree_build(m, S));
+  *pl = mx_alloc((S->n + 1) * sizeof **pl);
+  *powner = mx_alloc((S->n + 1) * sizeof **powner);
+  if (!*pl || !*powner) return MX_ENOMEM;
+  if (m->nleaves != S->n) return MX_EINTERNAL;
+  memcpy(*pl, m->leaves, S->n * sizeof **pl);
+  memcpy(*powner, S->owner, S->n * sizeof **powner);
   return MX_OK;
 }
 
@@ -138,21 +136,20 @@ static int defect_leaves(const mx_mesher *m, const uint32_t *pl, const mx_mesh *
  * shared-node records for p4est_nodes.c). */
 static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4est_mesh *D,
                       mx_shared *sh) {
-  patch_set s;
-  memset(&s, 0, sizeof s);
+  mx_patch_leaves s;
   double t = mx_wtime();
-  int st = collect_patch(H, &s, P->rank);
+  int st = mx_patch_leaves_get(P, H, MX_OK, &s, &D->sent_bytes, &D->largest_message);
   D->t_halo += mx_wtime() - t;
   uint32_t *pl = NULL;
   int32_t *powner = NULL;
   t = mx_wtime();
-  if (!st) st = patch_tree(m, &s, &pl, &powner);
+  if (!st) st = patch_tree(m, &s, &pl, &powner, &D->tree_checked);
   D->t_tree += mx_wtime() - t;
   D->core_leaves = s.ncore;
   D->patch_leaves = s.n;
   D->tree_leaves = m->nleaves;
   const size_t np = s.n;
-  patch_free(&s);
+  mx_patch_leaves_free(&s);
   mx_mesh M;
   memset(&M, 0, sizeof M);
   uint8_t *states = NULL;
@@ -227,11 +224,12 @@ static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4e
 
 /* Global counts, quality, defects and volume. */
 static void reduce_figures(const mx_p4est_octree *P, mx_p4est_mesh *D) {
-  uint64_t loc[9] = {D->nowned, D->M.ncells, D->M.by_type[0], D->M.by_type[1],
-                     D->M.by_type[2], D->M.by_type[3], D->invalid, D->contact_cells,
-                     D->core_leaves},
-           glob[9];
-  MPI_Allreduce(loc, glob, 9, MPI_UINT64_T, MPI_SUM, P->comm);
+  uint64_t loc[10] = {D->nowned, D->M.ncells, D->M.by_type[0], D->M.by_type[1],
+                      D->M.by_type[2], D->M.by_type[3], D->invalid, D->contact_cells,
+                      D->core_leaves, D->tree_checked},
+           glob[10];
+  MPI_Allreduce(loc, glob, 10, MPI_UINT64_T, MPI_SUM, P->comm);
+  D->tree_checked = glob[9];
   D->nodes = glob[0];
   D->cells = glob[1];
   for (int k = 0; k < 4; k++) D->by_type[k] = glob[2 + k];

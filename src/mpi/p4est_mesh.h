@@ -7,8 +7,8 @@
  * re-mesh does (src/mesher/remesh_patch.c): its own leaves (the core) and
  * `rings` layers of ghost leaves around them (p8est_ghost_expand), with the
  * single-process pipeline (mx_transition, mx_boundary_stage) on an octree of
- * our own rebuilt from the patch's leaves (their ancestors as split set,
- * mesher/restart_octree.c); it keeps the core's elements.
+ * our own made straight from the patch's leaves and the data they carry
+ * (p4est_tree.h: no second refinement); it keeps the core's elements.
  *
  * Agreement on the partition boundary. A node that elements of two ranks
  * use was computed by both (each has the other's elements next to its core
@@ -77,6 +77,10 @@ typedef struct {
   long long sent_bytes;   /* node records sent to other ranks, every attempt */
   long long largest_message; /* bytes, to one rank in one exchange */
   double t_halo, t_tree, t_transition, t_boundary, t_exchange;
+  /* MX_P4EST_CHECK_TREE (p4est_tree.h): patch leaves whose octree made from
+   * the leaves was compared with the one refined again (this rank, then
+   * summed over the ranks by the mesh's figures) */
+  uint64_t tree_checked;
 } mx_p4est_mesh;
 
 /* Repair, as the single-process mesher does (mx_repair): while elements

@@ -69,6 +69,7 @@ static void mesh_json(const mx_p4est_mesh_report *rep) {
          D->attempts, D->differ_first, D->repair_rounds, D->repaired, rep->sent_bytes,
          rep->largest_message);
   if (D->nmaterials) materials_json(D);
+  if (D->tree_checked) printf("\"tree_checked_leaves\": %" PRIu64 ", ", D->tree_checked);
   printf("\"phases_max\": {\"halo\": %.6f, \"tree\": %.6f, \"transition\": %.6f, "
          "\"boundary\": %.6f, \"exchange\": %.6f, \"mesh\": %.6f, \"write\": %.6f}, ",
          phmax[0], phmax[1], phmax[2], phmax[3], phmax[4], phmax[5], phmax[6]);
