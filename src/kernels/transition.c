@@ -315,6 +315,83 @@ static inline void batch_prefetch(const point_batch *P, const node_hash *H, size
   if (j + NH_AHEAD < P->n) __builtin_prefetch(&H->e[P->slot[j + NH_AHEAD]], 1);
 }
 
+/* Families: a run of consecutive leaves with the same parent (a root leaf
+ * alone) shares most of its points (8 plain leaves: 64 points, 27 nodes),
+ * so passes 1 and 3 take each point of a family once, in the parent's
+ * frame: a 5x5x5 lattice of the leaves' half sides, where lattice point p
+ * of child c is at position fp[c][p]. */
+typedef struct {
+  uint8_t fp[8][27];
+  uint8_t lat[8][125]; /* the inverse: p, or 0xff when child c lacks it */
+  uint64_t off[125];   /* Morton key of the position's coordinates (0..4) */
+} family_frame;
+
+static void family_frame_init(family_frame *F) {
+  memset(F->lat, 0xff, sizeof F->lat);
+  for (int c = 0; c < 8; c++)
+    for (int p = 0; p < 27; p++) {
+      const int x = 2 * (c & 1) + mx_lat_xyz[p][0], y = 2 * ((c >> 1) & 1) + mx_lat_xyz[p][1],
+                z = 2 * (c >> 2) + mx_lat_xyz[p][2];
+      F->fp[c][p] = (uint8_t)(x + 5 * y + 25 * z);
+      F->lat[c][x + 5 * y + 25 * z] = (uint8_t)p;
+    }
+  for (int q = 0; q < 125; q++)
+    F->off[q] = mx_morton_encode((uint32_t)(q % 5), (uint32_t)(q / 5 % 5), (uint32_t)(q / 25));
+}
+
+typedef struct {
+  size_t first;
+  int count, level;
+  uint64_t key;       /* anchor of the parent (of the leaf, for a root) */
+  uint8_t cid[8];     /* each member's child index (0 for a root) */
+  uint64_t used[2];   /* positions some member's mask has */
+  uint8_t user[125];  /* where used: the first member having it */
+} family;
+
+/* The family of leaves from position i on (not past hi); returns its end. */
+static size_t family_at(const mx_octree *T, const uint32_t *leaves, const uint32_t *mask,
+                        size_t i, size_t hi, const family_frame *F, family *f) {
+  const uint32_t o = leaves[i];
+  const int l = T->level[o];
+  const uint32_t parent = l > 0 ? T->parent[o] : MX_NONE;
+  f->first = i;
+  f->level = l;
+  f->key = l > 0 ? mx_morton_parent(T->key[o], l) : T->key[o];
+  f->used[0] = f->used[1] = 0;
+  int k = 0;
+  for (size_t q = i; q < hi && k < 8; q++, k++) {
+    const uint32_t x = leaves[q];
+    if (q > i && (parent == MX_NONE || T->parent[x] != parent)) break;
+    const int c = l > 0 ? mx_morton_child_id(T->key[x], l) : 0;
+    f->cid[k] = (uint8_t)c;
+    for (uint32_t m = mask[q]; m; m &= m - 1) {
+      const int fp = F->fp[c][__builtin_ctz(m)];
+      const uint64_t bit = 1ull << (fp & 63);
+      if (!(f->used[fp >> 6] & bit)) {
+        f->used[fp >> 6] |= bit;
+        f->user[fp] = (uint8_t)k;
+      }
+    }
+  }
+  f->count = k;
+  return i + (size_t)k;
+}
+
+/* The family's used positions (pos) and their keys and home slots (P). */
+static inline void family_points(const family *f, const family_frame *F, const node_hash *H,
+                                 point_batch *P, uint8_t *pos) {
+  const int sh = 3 * (MX_MAX_LEVEL - f->level - 1);
+  P->n = 0;
+  for (int w = 0; w < 2; w++)
+    for (uint64_t u = f->used[w]; u; u &= u - 1) {
+      const int fp = 64 * w + __builtin_ctzll(u);
+      const uint64_t k = mx_morton_add(f->key, F->off[fp] << sh);
+      pos[P->n] = (uint8_t)fp;
+      P->key[P->n] = k;
+      P->slot[P->n++] = nh_slot(k, H->cap);
+    }
+}
+
 /* Pass 0, chunk c: each leaf's class (its final mask gets the body centre
  * where the class uses it); the chunk's elements, points, centres, and
  * leaves whose mask no pattern has. */
@@ -342,37 +419,35 @@ static void pass_classes(size_t n, int nch, int c, uint32_t *mask, chunk_sums *S
   S[c].points = points;
 }
 
-/* Pass 1, chunk c: the points of each leaf inserted with the leaf as owner
- * candidate; own[i] gets the points leaf i became the owner of (a leaf of
- * an earlier chunk may take some over later: that chunk's `lost`). */
+/* Pass 1, chunk c: the points of each family inserted, each with the first
+ * member using it as owner candidate; own[i] gets the points leaf i became
+ * the owner of (a leaf of an earlier chunk may take some over later: that
+ * chunk's `lost`). */
 static void pass_insert(const mx_tree *tr, const uint32_t *leaves, size_t n, int nch, int c,
-                        const lattice_offsets *L, node_hash *H, const uint32_t *mask,
+                        const family_frame *F, node_hash *H, const uint32_t *mask,
                         uint32_t *own, chunk_sums *S) {
   const mx_octree *T = &tr->oct;
   const size_t lo = chunk_lo(n, nch, c), hi = chunk_lo(n, nch, c + 1);
   uint64_t claims = 0;
   point_batch P;
-  for (size_t b = lo; b < hi && !__atomic_load_n(&H->overflow, __ATOMIC_RELAXED); b += BLOCK) {
-    const size_t end = b + BLOCK < hi ? b + BLOCK : hi;
-    P.n = 0;
-    for (size_t i = b; i < end; i++) {
-      const uint32_t o = leaves[i];
-      batch_add(&P, H, L, T->key[o], T->level[o], mask[i]);
+  family f;
+  uint8_t pos[125];
+  for (size_t i = lo; i < hi && !__atomic_load_n(&H->overflow, __ATOMIC_RELAXED);) {
+    const size_t next = family_at(T, leaves, mask, i, hi, F, &f);
+    family_points(&f, F, H, &P, pos);
+    uint32_t mine[8] = {0};
+    for (size_t j = 0; j < P.n; j++) {
+      batch_prefetch(&P, H, j);
+      const int k = f.user[pos[j]];
+      const uint32_t prev = nh_insert(H, P.key[j], P.slot[j], (uint32_t)(i + (size_t)k) + 1);
+      if (prev == NH_KEPT) continue;
+      mine[k] |= 1u << F->lat[f.cid[k]][pos[j]];
+      claims++;
+      if (prev) /* taken over from a leaf after this chunk */
+        __atomic_fetch_add(&S[chunk_of(n, nch, prev - 1)].lost, 1, __ATOMIC_RELAXED);
     }
-    size_t j = 0;
-    for (size_t i = b; i < end; i++) {
-      uint32_t mine = 0;
-      for (uint32_t m = mask[i]; m; m &= m - 1, j++) {
-        batch_prefetch(&P, H, j);
-        const uint32_t prev = nh_insert(H, P.key[j], P.slot[j], (uint32_t)i + 1);
-        if (prev == NH_KEPT) continue;
-        mine |= m & -m;
-        claims++;
-        if (prev) /* taken over from a leaf after this chunk */
-          __atomic_fetch_add(&S[chunk_of(n, nch, prev - 1)].lost, 1, __ATOMIC_RELAXED);
-      }
-      own[i] = mine;
-    }
+    for (int k = 0; k < f.count; k++) own[i + (size_t)k] = mine[k];
+    i = next;
   }
   S[c].claims = claims;
 }
@@ -416,38 +491,38 @@ static void pass_number(const mx_tree *tr, const uint32_t *leaves, size_t n, int
   S[c].missing += missing;
 }
 
-/* Pass 3, chunk c: the ids of the points the chunk's leaves do not own,
- * from the hash, in lattice order at the start of each leaf's own rows of
- * conn (8 words per element: a leaf's elements have room for its points,
- * checked on the class table). Then the hash can go before the other mesh
- * arrays come: they take its memory. */
+/* Pass 3, chunk c: the node ids of each family's points from the hash,
+ * each leaf's in lattice order at the start of its own rows of conn (8
+ * words per element: a leaf's elements have room for its points, checked
+ * on the class table). Then the hash can go before the other mesh arrays
+ * come: they take its memory. */
 static void pass_gather(const mx_tree *tr, const uint32_t *leaves, size_t n, int nch, int c,
-                        const lattice_offsets *L, const node_hash *H, const uint32_t *mask,
-                        const uint32_t *own, chunk_sums *S, uint32_t *conn) {
+                        const family_frame *F, const node_hash *H, const uint32_t *mask,
+                        chunk_sums *S, uint32_t *conn) {
   const mx_octree *T = &tr->oct;
   const size_t lo = chunk_lo(n, nch, c), hi = chunk_lo(n, nch, c + 1);
   size_t cell = S[c].cell0;
   uint64_t missing = 0;
   point_batch P;
-  for (size_t b = lo; b < hi; b += BLOCK) {
-    const size_t end = b + BLOCK < hi ? b + BLOCK : hi;
-    P.n = 0;
-    for (size_t i = b; i < end; i++) {
-      const uint32_t o = leaves[i];
-      batch_add(&P, H, L, T->key[o], T->level[o], mask[i] & ~own[i]);
+  family f;
+  uint8_t pos[125];
+  uint32_t id[125];
+  for (size_t i = lo; i < hi;) {
+    const size_t next = family_at(T, leaves, mask, i, hi, F, &f);
+    family_points(&f, F, H, &P, pos);
+    for (size_t j = 0; j < P.n; j++) {
+      batch_prefetch(&P, H, j);
+      const node_entry *e = nh_find(H, P.key[j], P.slot[j]);
+      if (e) id[pos[j]] = e->id;
+      else missing++;
     }
-    size_t j = 0;
-    for (size_t i = b; i < end; i++) {
-      uint32_t *ids = conn + 8 * cell;
-      for (int k = __builtin_popcount(mask[i] & ~own[i]); k > 0; k--, j++) {
-        batch_prefetch(&P, H, j);
-        const node_entry *e = nh_find(H, P.key[j], P.slot[j]);
-        if (e) *ids++ = e->id;
-        else missing++;
-      }
-      const uint32_t m = mask[i];
+    for (int k = 0; k < f.count; k++) {
+      const uint32_t m = mask[i + (size_t)k];
+      uint32_t *row = conn + 8 * cell;
+      for (uint32_t r = m; r; r &= r - 1) *row++ = id[F->fp[f.cid[k]][__builtin_ctz(r)]];
       cell += mx_pattern_classes[mx_pattern_lookup((m >> 8) & ((1u << MX_CONFIG_BITS) - 1)).cls].count;
     }
+    i = next;
   }
   if (cell != S[c + 1].cell0) missing++;
   S[c].missing += missing;
@@ -467,7 +542,7 @@ static void pass_elements(const mx_tree *tr, const uint32_t *leaves, size_t n, i
   const mx_octree *T = &tr->oct;
   const size_t lo = chunk_lo(n, nch, c), hi = chunk_lo(n, nch, c + 1);
   size_t cell = S[c].cell0;
-  uint64_t node = S[c].node0;
+  uint64_t node = S[c].node0, bad_id = 0;
   for (size_t i = lo; i < hi; i++) {
     const uint32_t o = leaves[i];
     const uint64_t key = T->key[o];
@@ -477,18 +552,17 @@ static void pass_elements(const mx_tree *tr, const uint32_t *leaves, size_t n, i
     const uint32_t *ids = out->conn + 8 * cell; /* from pass 3, read before the rows */
     for (uint32_t r = m; r; r &= r - 1) {
       const int p = __builtin_ctz(r);
-      if (!((own[i] >> p) & 1)) {
-        id27[p] = *ids++;
-        continue;
-      }
-      /* a node of this leaf: numbered by pass 2 in this order */
+      id27[p] = *ids++;
+      if (!((own[i] >> p) & 1)) continue;
+      /* a node of this leaf (numbered by pass 2 in this order) */
       const uint64_t k = point_key(L, key, level, p);
-      id27[p] = (uint32_t)node;
-      out->nkey[node] = k;
+      const uint32_t id = id27[p];
+      out->nkey[id] = k;
       uint32_t x[3];
       mx_morton_decode(k, x);
       for (int a = 0; a < 3; a++)
-        out->xyz[3 * node + a] = tr->grid.origin[a] + (double)x[a] * tr->grid.unit;
+        out->xyz[3 * (size_t)id + a] = tr->grid.origin[a] + (double)x[a] * tr->grid.unit;
+      bad_id += id != node;
       node++;
     }
     mx_pattern_ref ref = mx_pattern_lookup((m >> 8) & ((1u << MX_CONFIG_BITS) - 1));
@@ -510,7 +584,7 @@ static void pass_elements(const mx_tree *tr, const uint32_t *leaves, size_t n, i
       if (jq < acc->jmin) acc->jmin = jq;
     }
   }
-  if (cell != S[c + 1].cell0 || node != S[c + 1].node0) S[c].missing++;
+  if (bad_id || cell != S[c + 1].cell0 || node != S[c + 1].node0) S[c].missing++;
 }
 
 int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
@@ -538,6 +612,8 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
   lattice_offsets L;
   for (int p = 0; p < 27; p++)
     L.off[p] = mx_morton_encode(mx_lat_xyz[p][0], mx_lat_xyz[p][1], mx_lat_xyz[p][2]);
+  family_frame F;
+  family_frame_init(&F);
   size_t points = 0;
   if (!st) {
     /* nodes lie on the lattice of midpoints of the finest leaves */
@@ -586,7 +662,7 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < cap; i++) memset(&H.e[i], 0, sizeof H.e[i]);
 #pragma omp parallel
-    FOR_CHUNKS(c, nch) pass_insert(tr, leaves, n, nch, c, &L, &H, mask, own, S);
+    FOR_CHUNKS(c, nch) pass_insert(tr, leaves, n, nch, c, &F, &H, mask, own, S);
     if (!H.overflow) break;
   }
   if (!st && H.cap >= UINT32_MAX) st = MX_EINPUT;
@@ -615,7 +691,7 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
   }
   if (!st) {
 #pragma omp parallel
-    FOR_CHUNKS(c, nch) pass_gather(tr, leaves, n, nch, c, &L, &H, mask, own, S, out->conn);
+    FOR_CHUNKS(c, nch) pass_gather(tr, leaves, n, nch, c, &F, &H, mask, S, out->conn);
   }
   /* the hash's memory goes to the other mesh arrays */
   mx_free(H.e);
