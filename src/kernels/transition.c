@@ -618,6 +618,7 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
   if (!st) {
     /* nodes lie on the lattice of midpoints of the finest leaves */
     int top = 0;
+#pragma omp parallel for schedule(static) reduction(max : top)
     for (size_t i = 0; i < n; i++)
       if (T->level[leaves[i]] > top) top = T->level[leaves[i]];
     if (top >= MX_MAX_LEVEL) {
