@@ -1,7 +1,8 @@
 /* The transition stage: conforming meshes of whole octrees, checked by the
  * independent checker (src/verify/check.c): no invalid element, faces
- * matched, closed boundary, no hanging node, the volume of the leaves; and
- * the same mesh for 1 and 2 threads. */
+ * matched, closed boundary, no hanging node, the volume of the leaves; the
+ * same mesh for 1, 2, 3 and 7 threads; nodes numbered in the order of the
+ * leaves that first use them. */
 #include <math.h>
 
 #include "check.h"
@@ -38,6 +39,11 @@ static int run_mesh(const mx_trisoup *s, uint32_t ntd, const uint32_t *rt0,
   return st;
 }
 
+static int cmp_u64(const void *a, const void *b) {
+  const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+  return (x > y) - (x < y);
+}
+
 /* Check one configuration; returns the element count. */
 static size_t check_case(const char *what, const mx_trisoup *s, uint32_t ntd,
                          const uint32_t *rt0, const mx_requests *req) {
@@ -51,6 +57,54 @@ static size_t check_case(const char *what, const mx_trisoup *s, uint32_t ntd,
     CHECK(memcmp(A.xyz, C.xyz, 3 * A.nnodes * sizeof *A.xyz) == 0);
     CHECK(memcmp(A.conn, C.conn, 8 * A.ncells * sizeof *A.conn) == 0);
     CHECK(memcmp(A.type, C.type, A.ncells) == 0);
+  }
+  /* 3 and 7 threads: the leaves cut into more ranges, families split at
+   * their ends, owners taken over across them: the same mesh again */
+  for (int t = 3; t <= 7; t += 4) {
+    mx_mesh D;
+    double vd = 0;
+    CHECK(run_mesh(s, ntd, rt0, req, t, &D, &vd) == MX_OK);
+    CHECK(D.nnodes == A.nnodes && D.ncells == A.ncells);
+    if (D.nnodes == A.nnodes && D.ncells == A.ncells) {
+      CHECK(memcmp(A.xyz, D.xyz, 3 * A.nnodes * sizeof *A.xyz) == 0);
+      CHECK(memcmp(A.nkey, D.nkey, A.nnodes * sizeof *A.nkey) == 0);
+      CHECK(memcmp(A.conn, D.conn, 8 * A.ncells * sizeof *A.conn) == 0);
+      CHECK(memcmp(A.type, D.type, A.ncells) == 0);
+    }
+    mx_mesh_free(&D);
+  }
+  /* Nodes numbered by their owner, the first leaf using them, in leaf
+   * order: the leaf whose element first names a node (elements come in
+   * leaf order) never decreases with the node number; every node is used;
+   * no two nodes share a lattice point. */
+  {
+    uint32_t *first = malloc((A.nnodes + 1) * sizeof *first);
+    uint64_t *keys = malloc((A.nnodes + 1) * sizeof *keys);
+    CHECK(first && keys);
+    if (first && keys) {
+      for (size_t v = 0; v < A.nnodes; v++) first[v] = UINT32_MAX;
+      int sorted = 1;
+      for (size_t c = 0; c < A.ncells; c++) {
+        if (c && A.leaf[c] < A.leaf[c - 1]) sorted = 0;
+        for (int k = 0; k < mx_cell_nodes[A.type[c]]; k++) {
+          const uint32_t v = A.conn[8 * c + k];
+          if (v < A.nnodes && first[v] == UINT32_MAX) first[v] = A.leaf[c];
+        }
+      }
+      CHECK(sorted);
+      size_t unused = 0, backwards = 0, same = 0;
+      for (size_t v = 0; v < A.nnodes; v++) {
+        unused += first[v] == UINT32_MAX;
+        if (v && first[v] < first[v - 1]) backwards++;
+      }
+      CHECK(unused == 0 && backwards == 0);
+      memcpy(keys, A.nkey, A.nnodes * sizeof *keys);
+      qsort(keys, A.nnodes, sizeof *keys, cmp_u64);
+      for (size_t v = 1; v < A.nnodes; v++) same += keys[v] == keys[v - 1];
+      CHECK(same == 0);
+    }
+    free(first);
+    free(keys);
   }
   mx_mesh_data m = {.nnodes = A.nnodes, .ncells = A.ncells, .xyz = A.xyz, .type = A.type,
                     .conn = A.conn};

@@ -10,10 +10,13 @@
  *    comes with all four midpoints in the patterns.
  * 2. (class, rotation) from the precomputed table: O(1).
  * 3. Nodes: every lattice point a pattern uses is inserted in a concurrent
- *    hash with its owner, the first leaf (in Morton order) using it; owners
- *    count their nodes, a prefix sum gives the numbering, so node numbers
- *    follow the leaves' Morton order whatever the thread count.
- * 4. Elements: counted, prefix-summed, filled in parallel, with J_ENS. */
+ *    hash with its owner, the first leaf (in Morton order) using it; node
+ *    numbers follow the owners' Morton order whatever the thread count.
+ * 4. Elements: filled in parallel, with J_ENS.
+ * The passes of 2-4 cut the leaves into one Morton range per thread, the
+ * same in every pass, and keep running offsets within it (no per-leaf
+ * offset arrays); the hash is freed before most of the mesh is allocated,
+ * which takes its memory (see mx_transition_build in transition.c). */
 #ifndef MX_TRANSITION_H
 #define MX_TRANSITION_H
 
@@ -29,7 +32,8 @@ int mx_transition(const mx_tree *tr, const uint32_t *leaves, size_t n,
                   mx_mesh *out);
 /* The same in two steps, so that the caller can free the edge infos in
  * between (only step 1 reads them): the masks (with the closures), then
- * everything else; mx_transition_build takes over lm->mask (freed). */
+ * everything else; mx_transition_build takes over lm->mask (freed): n + 1
+ * masks, then n + 1 words of scratch for the build, one allocation. */
 typedef struct {
   uint32_t *mask;
   size_t closures;
