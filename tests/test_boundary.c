@@ -4,12 +4,12 @@
 #include <math.h>
 
 #include "check.h"
-#include "io/demo_surface.h"
 #include "kernels/boundary.h"
 #include "kernels/transition.h"
 #include "kernels/mesh_edit.h"
 #include "verify/check.h"
 #include "geom/locate.h"
+#include "geom/quality.h"
 #include "soa/mesh.h"
 #include "octree_util.h"
 
@@ -211,6 +211,17 @@ int main(void) {
              "boundary distance %.2e\n", shrunk, outside, far, r.invalid,
              100.0 * r.volume_error, r.boundary_max_dist);
       CHECK(far == 0 && inside_moved == 0 && shrunk == outside);
+      /* the J_ENS the shrink keeps (recomputed only where a node moved) is
+       * every element's J_ENS from its positions */
+      size_t stale = 0;
+      for (size_t c = 0; c < b.M.ncells; c++) {
+        double x[8][3];
+        for (int k = 0; k < mx_cell_nodes[b.M.type[c]]; k++)
+          memcpy(x[k], b.M.xyz + 3 * (size_t)b.M.conn[8 * c + k], sizeof x[k]);
+        stale += b.M.jens[c] != (float)mx_jens(b.M.type[c], x);
+      }
+      printf("shrink: %zu element(s) with a stale J_ENS\n", stale);
+      CHECK(stale == 0);
       keep[th - 1] = b.M;
       memset(&b.M, 0, sizeof b.M);
       mx_free(st);
@@ -225,46 +236,6 @@ int main(void) {
     mx_mesh_free(&keep[1]);
     mx_surface_index_free(&S);
     mx_trisoup_free(&s);
-  }
-  /* The close nodes from their leaves' triangle lists (mx_move_close_nodes_in)
-   * against the surface index's queries alone (mx_move_close_nodes): the
-   * same moves, to the same bits, on the cortex at -s 6 and on the demo
-   * surface at -s 5 (its symmetries put nodes exactly as near two triangles:
-   * the lists' lowest id once moved them elsewhere than the index). */
-  for (int shape = 0; shape < 2; shape++) {
-    mx_trisoup c;
-    memset(&c, 0, sizeof c);
-    if (shape == 0) {
-      if (!load_shared_surface("cortex.off", &c)) continue;
-    } else {
-      CHECK(mx_demo_surface(&c, 3) == MX_OK);
-    }
-    mx_surface_index S;
-    CHECK(mx_surface_index_build(&S, &c, 0, (uint32_t)c.nt) == MX_OK);
-    built b[2];
-    uint8_t *st[2];
-    size_t moved[2] = {0, 0};
-    for (int k = 0; k < 2; k++) {
-      CHECK(build(&c, shape == 0 ? 6 : 5, &b[k]) == MX_OK);
-      st[k] = mx_alloc(b[k].M.nnodes + 1);
-      size_t q = 0;
-      CHECK(mx_node_states(&b[k].B.tree, b[k].leaves, &b[k].M, &S, st[k], &q) == MX_OK);
-    }
-    CHECK(mx_move_close_nodes(&b[0].M, st[0], &S, 0.3, &moved[0], NULL) == MX_OK);
-    CHECK(mx_move_close_nodes_in(&b[1].B.tree, b[1].leaves, &b[1].M, st[1], &S, 0.3, &moved[1],
-                                 NULL) == MX_OK);
-    const size_t nn = b[0].M.nnodes;
-    printf("close nodes, %s: %zu and %zu moved\n", shape == 0 ? "cortex -s 6" : "demo -s 5",
-           moved[0], moved[1]);
-    CHECK(moved[0] > 0 && moved[0] == moved[1] && nn == b[1].M.nnodes);
-    CHECK(memcmp(b[0].M.xyz, b[1].M.xyz, 3 * nn * sizeof(double)) == 0);
-    CHECK(memcmp(st[0], st[1], nn) == 0);
-    for (int k = 0; k < 2; k++) {
-      mx_free(st[k]);
-      release(&b[k]);
-    }
-    mx_surface_index_free(&S);
-    mx_trisoup_free(&c);
   }
   return TEST_DONE();
 }

@@ -383,18 +383,6 @@ double mx_signed_distance(const mx_surface_index *S, const double p[3],
   return mx_winding_number(S, p) > 0.5 ? -d : d;
 }
 
-int mx_inside_given_closest(const mx_surface_index *S, const double p[3], uint32_t slot) {
-  if (S->side || !S->nt || slot >= S->nt || (!S->closed && !S->outward_closed)) return -1;
-  double q[3];
-  int f = MX_FEATURE_FACE;
-  const double d2 = closest_on_triangle(S->tv + 9 * (size_t)slot, p, q, &f);
-  if (d2 == 0.0) return 1; /* on the surface: in */
-  const double g = side_of(S, p, q, slot, f);
-  if (g == 0.0) return -1; /* the winding number tells */
-  if (S->outward_closed) return (int)S->shell_depth[S->shell_of[slot]] + (g < 0.0) >= 1;
-  return g < 0.0;
-}
-
 int mx_inside(const mx_surface_index *S, const double p[3]) {
   if (S->side) return mx_winding_number(S->side, p) > 0.5;
   if (!S->closed && !S->outward_closed) return mx_winding_number(S, p) > 0.5;

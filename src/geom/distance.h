@@ -242,11 +242,5 @@ double mx_winding_number_direct(const mx_surface_index *S, const double p[3]);
 /* 1 if p is in the domain, 0 if not: the pseudonormal sign for a closed
  * surface, winding number > 1/2 otherwise. Points on the surface are in. */
 int mx_inside(const mx_surface_index *S, const double p[3]);
-/* mx_inside(S, p) when p's closest triangle is known to be the one at
- * `slot` (an index of S->tri_id): the same side from the same arithmetic,
- * without the search; -1 when the winding number would tell (no
- * pseudonormal rule: S->side, a surface not closed; or p at a right angle
- * to the pseudonormal): then call mx_inside. */
-int mx_inside_given_closest(const mx_surface_index *S, const double p[3], uint32_t slot);
 
 #endif

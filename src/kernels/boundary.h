@@ -22,13 +22,12 @@ enum { MX_NODE_OUTSIDE = 0, MX_NODE_INSIDE = 1 };
  * the domain are inside without a query (the leaf's closed box lies inside
  * the domain); every other node is located once with the surface index of
  * the domain (angle-weighted pseudonormals, or the generalized winding number
- * for a surface that is not closed), from the nearest triangle of its
- * leaves' lists where that is the nearest of all (kernels/leaf_lists.h: the
- * same answer without the index's search). *queries receives the number of
+ * for a surface that is not closed). *queries receives the number of
  * located nodes. */
 int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
                    const mx_mesh *M, const mx_surface_index *S,
                    uint8_t *states, size_t *queries);
+
 /* Line 11 of Algorithm 1 (2015 paper), "remove close to boundary": every
  * inside node of a surface element (one with inside and outside nodes) whose
  * closest point on the surface lies within `ratio` (0.3 in the paper) of the
@@ -41,15 +40,6 @@ int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
  * node, 1 where it moved, and the caller recomputes. */
 int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
                         double ratio, size_t *moved, uint8_t **moved_flags);
-/* The same with the octree the mesh was made from (tr, leaves; NULL: as
- * above): a candidate whose radius is below 0.45 of the finest leaves'
- * side, at a node of their half lattice, takes its closest point from the
- * triangle lists of its leaves instead of a query of S (every triangle
- * that near meets one of them): the same moves, but where two triangles
- * are exactly as near (the lowest id wins here, the first met there). */
-int mx_move_close_nodes_in(const mx_tree *tr, const uint32_t *leaves, mx_mesh *M,
-                           uint8_t *states, const mx_surface_index *S, double ratio,
-                           size_t *moved, uint8_t **moved_flags);
 
 /* Line 13 of Algorithm 1, "shrink outside nodes": every outside node moves
  * to its closest point among the domain triangles met by the leaves whose

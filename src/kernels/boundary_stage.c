@@ -38,8 +38,7 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
   stats->t_states = t1 - t;
   if (!st) st = mx_cancel_check(); /* between the steps: base/cancel.h */
   if (!st)
-    st = mx_move_close_nodes_in(tr, leaves, M, states, S, close_ratio, &stats->moved_close,
-                                &moved);
+    st = mx_move_close_nodes(M, states, S, close_ratio, &stats->moved_close, &moved);
   t = mx_wtime();
   mx_mem_mark("b.close");
   stats->t_close = t - t1;
