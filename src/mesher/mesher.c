@@ -719,19 +719,18 @@ static double cell_volume(const mx_mesh *M, size_t c) {
   for (int k = 0; k < nv; k++)
     for (int a = 0; a < 3; a++) p[k][a] = M->xyz[3 * (size_t)row[k] + a] - o[a];
   const double(*q)[3] = (const double(*)[3])p;
-  switch (t) {
-  case MX_TET: /* {1 2 3}; the others hold node 0 */
-    return cone3(q, 1, 2, 3) / 6.0;
-  case MX_PYRAMID: /* {0 3 2 1}, {1 2 4}, {2 3 4} */
-    return (cone4(q, 0, 3, 2, 1) + cone3(q, 1, 2, 4) + cone3(q, 2, 3, 4)) / 6.0;
-  case MX_PRISM: /* {3 4 5}, {0 1 4 3}, {1 2 5 4}, {2 0 3 5} */
-    return (cone3(q, 3, 4, 5) + cone4(q, 0, 1, 4, 3) + cone4(q, 1, 2, 5, 4) +
-            cone4(q, 2, 0, 3, 5)) / 6.0;
-  default:
-    if (axis_box(q)) return p[6][0] * p[6][1] * p[6][2];
-    return (cone4(q, 0, 3, 2, 1) + cone4(q, 4, 5, 6, 7) + cone4(q, 0, 1, 5, 4) +
-            cone4(q, 1, 2, 6, 5) + cone4(q, 2, 3, 7, 6) + cone4(q, 3, 0, 4, 7)) / 6.0;
+  if (t == MX_HEX && axis_box(q)) return p[6][0] * p[6][1] * p[6][2];
+  /* the faces of mx_cell_faces in their order, less the triangles through
+   * node 0 (their cones are 0) */
+  const int8_t(*f)[4] = mx_cell_faces[t];
+  double v = 0.0;
+  for (int i = 0; i < mx_cell_nfaces[t]; i++) {
+    if (f[i][3] >= 0)
+      v += cone4(q, f[i][0], f[i][1], f[i][2], f[i][3]);
+    else if (f[i][0] && f[i][1] && f[i][2])
+      v += cone3(q, f[i][0], f[i][1], f[i][2]);
   }
+  return v / 6.0;
 }
 
 /* The sum over chunks of VCHUNK elements, their sums added in chunk order
