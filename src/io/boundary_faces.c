@@ -156,10 +156,8 @@ static int too_large(const mx_mesh_view *m) {
 static int file_faces(const mx_mesh_view *m, const uint8_t *mask, uint8_t *fb,
                       uint64_t **end_out, uint32_t **list_out, size_t *nfaces) {
   const size_t nn = m->nnodes, nc = m->ncells;
-  uint64_t *pos = mx_alloc((nn + 1) * sizeof *pos);
+  uint64_t *pos = mx_calloc((nn + 1) * sizeof *pos); /* cleared by every thread */
   if (!pos) return MX_ENOMEM;
-#pragma omp parallel for schedule(static)
-  for (size_t v = 0; v <= nn; v++) pos[v] = 0;
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++) {
     const unsigned kept = kept_faces(m, mask, c);
