@@ -40,23 +40,29 @@ int mx_colour_nodes(const mx_mesh *M, const uint32_t *inc, const uint64_t *off,
                        int16_t *colour) {
   uint8_t *pick = mx_alloc(nw + 1);
   uint64_t *prio = mx_alloc((nw + 1) * sizeof *prio);
-  if (!pick || !prio) {
+  uint32_t *todo = mx_alloc((nw + 1) * sizeof *todo); /* the nodes still uncoloured */
+  if (!pick || !prio || !todo) {
     mx_free(pick);
     mx_free(prio);
+    mx_free(todo);
     return -2; /* out of memory */
   }
 #pragma omp parallel for schedule(static) if (nw > MX_PAR_MIN)
   for (size_t i = 0; i < nw; i++) {
     colour[i] = -1;
     prio[i] = mx_node_identity(M, work[i]);
+    todo[i] = (uint32_t)i;
   }
   size_t left = nw;
   int ncol = 0, overflow = 0;
+  /* Rounds: an uncoloured node whose uncoloured neighbours all come after
+   * it takes the least colour its neighbours do not have (two nodes picked
+   * in one round are never neighbours: the same colours for any thread
+   * count and any order of the list) */
   while (left && !overflow) {
-#pragma omp parallel for schedule(dynamic, 256) if (nw >= 4096)
-    for (size_t i = 0; i < nw; i++) {
-      pick[i] = 0;
-      if (colour[i] >= 0) continue;
+#pragma omp parallel for schedule(dynamic, 256) if (left >= 4096)
+    for (size_t t = 0; t < left; t++) {
+      const size_t i = todo[t];
       const uint32_t v = work[i];
       int best = 1;
       for (uint64_t e = off[v]; e < off[v + 1] && best; e++) {
@@ -72,10 +78,9 @@ int mx_colour_nodes(const mx_mesh *M, const uint32_t *inc, const uint64_t *off,
       }
       pick[i] = (uint8_t)best;
     }
-    size_t got = 0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(+ : got) reduction(| : overflow) \
-    if (nw >= 4096)
-    for (size_t i = 0; i < nw; i++) {
+#pragma omp parallel for schedule(dynamic, 256) reduction(| : overflow) if (left >= 4096)
+    for (size_t t = 0; t < left; t++) {
+      const size_t i = todo[t];
       if (!pick[i]) continue;
       uint64_t used[MX_MAX_COLOURS / 64] = {0, 0, 0, 0};
       const uint32_t v = work[i];
@@ -95,12 +100,15 @@ int mx_colour_nodes(const mx_mesh *M, const uint32_t *inc, const uint64_t *off,
         c = 0;
       }
       colour[i] = (int16_t)c;
-      got++;
     }
-    left -= got;
+    size_t kept = 0; /* the list less the nodes just coloured, in order */
+    for (size_t t = 0; t < left; t++)
+      if (!pick[todo[t]]) todo[kept++] = todo[t];
+    left = kept;
   }
   mx_free(pick);
   mx_free(prio);
+  mx_free(todo);
   if (overflow) return -1;
   for (size_t i = 0; i < nw; i++)
     if (colour[i] + 1 > ncol) ncol = colour[i] + 1;

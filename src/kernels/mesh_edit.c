@@ -15,39 +15,102 @@ static int cmp_u32(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
+/* Elements with a marked node, in increasing order: one pass over the
+ * elements sets a bit per element (each block of IB elements its own
+ * words), then the bits are counted per block, prefix-summed and listed. */
+static int marked_cells(const mx_mesh *M, const uint8_t *mark, uint32_t **list, size_t *n) {
+  const size_t nc = M->ncells;
+  enum { IB = 1 << 14 };
+  const size_t nb = (nc + IB - 1) / IB, nw = (nc + 63) / 64;
+  uint64_t *boff = mx_alloc((nb + 1) * sizeof *boff);
+  uint64_t *bits = mx_alloc((nw + 1) * sizeof *bits);
+  if (!boff || !bits) {
+    mx_free(boff);
+    mx_free(bits);
+    return MX_ENOMEM;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t b = 0; b < nb; b++) {
+    uint64_t k = 0;
+    for (size_t w = b * (IB / 64); w < nw && w < (b + 1) * (IB / 64); w++) {
+      uint64_t word = 0;
+      for (size_t c = 64 * w; c < nc && c < 64 * (w + 1); c++) {
+        int any = 0;
+        for (int i = 0; i < mx_cell_nodes[M->type[c]]; i++) any |= mark[M->conn[8 * c + i]];
+        word |= (uint64_t)(any != 0) << (c & 63);
+      }
+      bits[w] = word;
+      k += (uint64_t)__builtin_popcountll(word);
+    }
+    boff[b] = k;
+  }
+  const uint64_t total = mx_scan_u64(boff, nb);
+  uint32_t *cl = mx_alloc((total + 1) * sizeof *cl);
+  if (!cl) {
+    mx_free(boff);
+    mx_free(bits);
+    return MX_ENOMEM;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t b = 0; b < nb; b++) {
+    uint64_t k = boff[b];
+    for (size_t w = b * (IB / 64); w < nw && w < (b + 1) * (IB / 64); w++)
+      for (uint64_t word = bits[w]; word; word &= word - 1)
+        cl[k++] = (uint32_t)(64 * w + (size_t)__builtin_ctzll(word));
+  }
+  mx_free(boff);
+  mx_free(bits);
+  *list = cl;
+  *n = (size_t)total;
+  return MX_OK;
+}
+
 int mx_mesh_incidence(const mx_mesh *M, const uint8_t *mark, uint64_t **off_out,
                       uint32_t **inc_out) {
-  const size_t nn = M->nnodes, nc = M->ncells;
+  const size_t nn = M->nnodes;
   *off_out = NULL;
   *inc_out = NULL;
+  /* the elements of the marked nodes first: the counts and the fill walk
+   * those only (a band, when few nodes are marked) */
+  uint32_t *cl = NULL;
+  size_t ncl = 0;
+  int st = marked_cells(M, mark, &cl, &ncl);
+  if (st) return st;
   uint64_t *off = mx_calloc((nn + 1) * sizeof *off);
-  if (!off) return MX_ENOMEM;
-  /* count, prefix sum, fill, then sort each list (the fill order depends
-   * on the threads) */
+  if (!off) {
+    mx_free(cl);
+    return MX_ENOMEM;
+  }
+  /* count, prefix sum, fill (off[v] the cursor: it ends at v's end, that
+   * is v + 1's start, and moves up one place), then sort each list (the
+   * fill order depends on the threads) */
 #pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < nc; c++)
+  for (size_t i = 0; i < ncl; i++) {
+    const size_t c = cl[i];
     for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
       const uint32_t v = M->conn[8 * c + k];
       if (mark[v]) __atomic_fetch_add(&off[v], 1, __ATOMIC_RELAXED);
     }
+  }
   const uint64_t total = mx_scan_u64(off, nn);
   off[nn] = total;
   uint32_t *inc = mx_alloc((total + 1) * sizeof *inc);
-  uint64_t *cur = mx_alloc((nn + 1) * sizeof *cur);
-  if (!inc || !cur) {
-    mx_free(inc);
-    mx_free(cur);
+  if (!inc) {
     mx_free(off);
+    mx_free(cl);
     return MX_ENOMEM;
   }
-  memcpy(cur, off, nn * sizeof *cur);
 #pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < nc; c++)
+  for (size_t i = 0; i < ncl; i++) {
+    const size_t c = cl[i];
     for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
       const uint32_t v = M->conn[8 * c + k];
-      if (mark[v]) inc[__atomic_fetch_add(&cur[v], 1, __ATOMIC_RELAXED)] = (uint32_t)c;
+      if (mark[v]) inc[__atomic_fetch_add(&off[v], 1, __ATOMIC_RELAXED)] = (uint32_t)c;
     }
-  mx_free(cur);
+  }
+  mx_free(cl);
+  memmove(off + 1, off, nn * sizeof *off);
+  off[0] = 0;
 #pragma omp parallel for schedule(dynamic, 1024)
   for (size_t v = 0; v < nn; v++)
     if (off[v + 1] - off[v] > 1) qsort(inc + off[v], off[v + 1] - off[v], sizeof *inc, cmp_u32);

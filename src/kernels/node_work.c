@@ -23,8 +23,8 @@ double mx_cell_jens(const mx_mesh *M, uint32_t c) {
  * overlaps, that is the same face). An inside node can lie on the boundary
  * (a lattice node exactly on a flat part of the surface); it must stay
  * there like a surface node. */
-int mx_on_mesh_boundary(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1,
-                        uint32_t v) {
+static int on_boundary_by_search(const mx_mesh *M, const uint32_t *inc, size_t e0,
+                                 size_t e1, uint32_t v) {
   for (size_t e = e0; e < e1; e++) {
     const uint32_t c = inc[e];
     const int t = M->type[c];
@@ -50,6 +50,60 @@ int mx_on_mesh_boundary(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t
         }
         shared = all;
       }
+      if (!shared) return 1;
+    }
+  }
+  return 0;
+}
+
+enum { NB_MAX_CELLS = 128, NB_HASH = 128 };
+
+/* The same test with the elements' nodes as bits: the distinct nodes of
+ * the incident elements numbered (at most 64, in a small hash table), each
+ * element a 64-bit set, a face shared when another element's set holds the
+ * face's. Back to the search above for a larger neighbourhood. */
+int mx_on_mesh_boundary(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1,
+                        uint32_t v) {
+  const size_t ne = e1 - e0;
+  if (ne > NB_MAX_CELLS) return on_boundary_by_search(M, inc, e0, e1, v);
+  uint32_t key[NB_HASH];
+  uint8_t id[NB_HASH];
+  uint64_t set[NB_MAX_CELLS];
+  memset(key, 0xff, sizeof key); /* UINT32_MAX: empty */
+  int nid = 0;
+  for (size_t e = 0; e < ne; e++) {
+    const uint32_t *row = M->conn + 8 * (size_t)inc[e0 + e];
+    uint64_t m = 0;
+    for (int k = 0; k < mx_cell_nodes[M->type[inc[e0 + e]]]; k++) {
+      unsigned h = (row[k] * 2654435761u) >> 25; /* 7 bits */
+      while (key[h] != UINT32_MAX && key[h] != row[k]) h = (h + 1) & (NB_HASH - 1);
+      if (key[h] == UINT32_MAX) {
+        if (nid == 64) return on_boundary_by_search(M, inc, e0, e1, v);
+        key[h] = row[k];
+        id[h] = (uint8_t)nid++;
+      }
+      m |= (uint64_t)1 << id[h];
+    }
+    set[e] = m;
+  }
+  for (size_t e = 0; e < ne; e++) {
+    const uint32_t c = inc[e0 + e];
+    const int t = M->type[c];
+    const uint32_t *row = M->conn + 8 * (size_t)c;
+    for (int f = 0; f < mx_cell_nfaces[t]; f++) {
+      const int8_t *fv = mx_cell_faces[t][f];
+      const int n = fv[3] < 0 ? 3 : 4;
+      int has = 0;
+      uint64_t fm = 0;
+      for (int i = 0; i < n; i++) {
+        has |= row[fv[i]] == v;
+        unsigned h = (row[fv[i]] * 2654435761u) >> 25;
+        while (key[h] != row[fv[i]]) h = (h + 1) & (NB_HASH - 1);
+        fm |= (uint64_t)1 << id[h];
+      }
+      if (!has) continue;
+      int shared = 0;
+      for (size_t g = 0; g < ne && !shared; g++) shared = g != e && (set[g] & fm) == fm;
       if (!shared) return 1;
     }
   }

@@ -1,5 +1,6 @@
 #include "kernels/surface_patterns.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 #include "base/common.h"
@@ -74,6 +75,25 @@ static const mx_surface_case *element_counts(const mx_mesh *M, const uint8_t *st
  * block again from its block's offsets. */
 enum { SP_BLOCK = 2048, SP_WINDOW = 128 };
 
+/* The element arrays a block's output goes to. */
+typedef struct {
+  uint8_t *type, *level;
+  uint32_t *conn, *leaf;
+  float *jens;
+} cell_arrays;
+
+/* What the fill of one block needs besides the destination. */
+typedef struct {
+  const mx_mesh *M; /* the input elements (M->type ... M->jens) */
+  const uint8_t *states, *moved;
+  const uint64_t *bout, *bopt, *bcen; /* per block: first output, optional, centre */
+  size_t nc, nn;
+  double *xyz; /* grown by the centres */
+  uint8_t *st2;
+  uint64_t *nkey;
+  mx_optional *opt;
+} fill_ctx;
+
 /* Elements [from, to) of M are read for good: their pages go. */
 static void release_cells(const mx_mesh *M, size_t from, size_t to) {
   mx_release_range(M->type, from, to);
@@ -81,6 +101,104 @@ static void release_cells(const mx_mesh *M, size_t from, size_t to) {
   mx_release_range(M->conn, 8 * from * sizeof *M->conn, 8 * to * sizeof *M->conn);
   mx_release_range(M->leaf, from * sizeof *M->leaf, to * sizeof *M->leaf);
   mx_release_range(M->jens, from * sizeof *M->jens, to * sizeof *M->jens);
+}
+
+/* Block b's elements, what each becomes, written from output position
+ * bout[b] on in d (the block's input is read before its output is
+ * written only when the two do not overlap: the caller's rule). */
+static void fill_block(const fill_ctx *F, size_t b, const cell_arrays *d) {
+  const mx_mesh *M = F->M;
+  const uint8_t *states = F->st2;
+  const double *xyz = F->xyz;
+  mx_optional *opt = F->opt;
+  const size_t end = (b + 1) * SP_BLOCK < F->nc ? (b + 1) * SP_BLOCK : F->nc;
+  uint64_t w = F->bout[b], o = F->bopt[b], cnext = F->bcen[b];
+  for (size_t c = b * SP_BLOCK; c < end; c++) {
+    uint32_t kc, oc, need;
+    const mx_surface_case *sc = element_counts(M, states, c, &kc, &oc, &need);
+    if (sc == &gone) continue;
+    const uint32_t *v = M->conn + 8 * c;
+    if (!sc) {
+      d->type[w] = M->type[c];
+      memmove(d->conn + 8 * w, v, 8 * sizeof *d->conn); /* (the same row when w = c) */
+      d->level[w] = M->level[c];
+      d->leaf[w] = M->leaf[c];
+      int mv = 0;
+      for (int k = 0; F->moved && k < mx_cell_nodes[M->type[c]]; k++) mv |= F->moved[v[k]];
+      if (mv) {
+        double x[8][3];
+        for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+          memcpy(x[k], xyz + 3 * (size_t)v[k], sizeof x[k]);
+        d->jens[w] = (float)mx_jens(M->type[c], x);
+      } else {
+        d->jens[w] = M->jens[c];
+      }
+      w++;
+      continue;
+    }
+    const int nv = mx_cell_nodes[M->type[c]];
+    uint32_t centre = UINT32_MAX;
+    if (need) {
+      centre = (uint32_t)(F->nn + cnext++);
+      double p[3] = {0.0, 0.0, 0.0};
+      for (int k = 0; k < nv; k++)
+        for (int a = 0; a < 3; a++) p[a] += xyz[3 * (size_t)v[k] + a];
+      for (int a = 0; a < 3; a++) F->xyz[3 * (size_t)centre + a] = p[a] / nv;
+      F->st2[centre] = sc->centre == 1 ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
+      if (F->nkey) F->nkey[centre] = MX_NKEY_NONE;
+    }
+    /* the input row and its level and leaf first: the sub-elements may be
+     * written over them */
+    uint32_t in[8];
+    memcpy(in, v, sizeof in);
+    const uint8_t lev = M->level[c];
+    const uint32_t lf = M->leaf[c];
+    for (int i = 0; i < sc->count; i++) {
+      const mx_pattern_elem *e = &mx_surface_elems[sc->first + i];
+      int uc;
+      const int kept = sub_kept(sc, e, &uc);
+      if (!kept && uc) continue;
+      const int ne = mx_cell_nodes[e->type];
+      uint32_t g[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+      for (int k = 0; k < ne; k++) g[k] = e->v[k] == MX_SURFACE_CENTRE ? centre : in[e->v[k]];
+      if (kept) {
+        d->type[w] = e->type;
+        memcpy(d->conn + 8 * w, g, sizeof g);
+        d->level[w] = lev;
+        d->leaf[w] = lf;
+        double x[8][3];
+        for (int k = 0; k < ne; k++) memcpy(x[k], xyz + 3 * (size_t)g[k], sizeof x[k]);
+        d->jens[w] = (float)mx_jens(e->type, x);
+        w++;
+      } else {
+        opt->type[o] = e->type;
+        memcpy(opt->conn + 8 * o, g, sizeof g);
+        opt->leaf[o] = lf;
+        opt->level[o] = lev;
+        o++;
+      }
+    }
+  }
+}
+
+/* The first output position of block b (the total past the last). */
+static uint64_t out_at(const uint64_t *bout, size_t nb, uint64_t total, size_t b) {
+  return b < nb ? bout[b] : total;
+}
+
+/* The element arrays grown to n elements (mremap: not copied). */
+static int grow_cells(mx_mesh *M, size_t n) {
+  uint8_t *type = mx_realloc(M->type, n + 1);
+  if (type) M->type = type;
+  uint8_t *level = type ? mx_realloc(M->level, n + 1) : NULL;
+  if (level) M->level = level;
+  uint32_t *conn = level ? mx_realloc(M->conn, (8 * n + 1) * sizeof *conn) : NULL;
+  if (conn) M->conn = conn;
+  uint32_t *leaf = conn ? mx_realloc(M->leaf, (n + 1) * sizeof *leaf) : NULL;
+  if (leaf) M->leaf = leaf;
+  float *jens = leaf ? mx_realloc(M->jens, (n + 1) * sizeof *jens) : NULL;
+  if (jens) M->jens = jens;
+  return jens ? MX_OK : MX_ENOMEM;
 }
 
 int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
@@ -114,14 +232,16 @@ int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
   const uint64_t total = mx_scan_u64(bout, nb);
   const uint64_t total_opt = mx_scan_u64(bopt, nb);
   const uint64_t total_cen = mx_scan_u64(bcen, nb);
-  /* 2. Fill. */
-  uint8_t *type = mx_alloc(total + 1);
-  uint32_t *conn = mx_alloc((8 * total + 1) * sizeof *conn);
-  uint8_t *level = mx_alloc((total + 1) * sizeof *level);
-  uint32_t *leaf = mx_alloc((total + 1) * sizeof *leaf);
-  float *jens = mx_alloc((total + 1) * sizeof *jens);
+  /* 2. Fill. From the end, window by window, in place: a window's output
+   * lies right of its whole input (the patterns add elements: the output
+   * drifts right of the input as the mesh goes on), so it overwrites only
+   * elements already read; the blocks before the first window where that
+   * fails (the mesh's start, where the drift is still small) are filled
+   * into new arrays, then copied to their place. */
   double *xyz = mx_realloc(M->xyz, (3 * (nn + total_cen) + 3) * sizeof *xyz);
+  if (xyz) M->xyz = xyz;
   uint8_t *st2 = xyz ? mx_realloc(*states_io, nn + total_cen + 1) : NULL;
+  if (st2) *states_io = st2;
   uint64_t *nkey = M->nkey && st2 ? mx_realloc(M->nkey, (nn + total_cen + 1) * sizeof *nkey)
                                   : NULL;
   if (nkey) M->nkey = nkey;
@@ -129,102 +249,78 @@ int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
   opt->conn = mx_alloc((8 * total_opt + 1) * sizeof *opt->conn);
   opt->leaf = mx_alloc((total_opt + 1) * sizeof *opt->leaf);
   opt->level = mx_alloc((total_opt + 1) * sizeof *opt->level);
-  if (xyz) M->xyz = xyz;
-  if (st2) *states_io = st2;
-  if (!type || !conn || !level || !leaf || !jens || !xyz || !st2 || (M->nkey && !nkey) ||
-      !opt->type ||
-      !opt->conn || !opt->leaf || !opt->level) {
-    mx_free(type); mx_free(conn); mx_free(level); mx_free(leaf); mx_free(jens);
+  int st = !xyz || !st2 || (M->nkey && !nkey) || !opt->type || !opt->conn || !opt->leaf ||
+                   !opt->level
+               ? MX_ENOMEM
+               : MX_OK;
+  if (!st && total > nc) st = grow_cells(M, total);
+  if (st) {
     mx_free(bout);
     mx_optional_free(opt);
-    return MX_ENOMEM;
+    return st;
   }
-  states = st2;
-  /* By windows of blocks: the elements read go back to the system at each
-   * window's end, so the old and new element arrays are not both whole in
-   * memory (the stage's peak otherwise). */
-  size_t released = 0;
-  for (size_t w0 = 0; w0 < nb; w0 += SP_WINDOW) {
-  const size_t w1 = w0 + SP_WINDOW < nb ? w0 + SP_WINDOW : nb;
+  const fill_ctx F = {M, st2, moved, bout, bopt, bcen, nc, nn, xyz, st2, nkey, opt};
+  const cell_arrays in_place = {M->type, M->level, M->conn, M->leaf, M->jens};
+  size_t w1 = nb; /* blocks [w1, nb) done */
+  const char *copy = getenv("MX_PATTERNS_COPY");
+  while (w1 > 0 && !(copy && strcmp(copy, "1") == 0)) {
+    /* the window: at most SP_WINDOW blocks, its output from where its
+     * input ends (out_at(w0) >= the input end of block w1 - 1) */
+    const uint64_t in_end = w1 * SP_BLOCK < nc ? w1 * SP_BLOCK : nc;
+    size_t w0 = w1 > SP_WINDOW ? w1 - SP_WINDOW : 0;
+    while (w0 < w1 && out_at(bout, nb, total, w0) < in_end) w0++;
+    if (w1 - w0 < 16) break; /* too small a window to share: the rest copied */
 #pragma omp parallel for schedule(dynamic, 4)
-  for (size_t b = w0; b < w1; b++) {
-    const size_t end = (b + 1) * SP_BLOCK < nc ? (b + 1) * SP_BLOCK : nc;
-    uint64_t w = bout[b], o = bopt[b], cnext = bcen[b];
-    for (size_t c = b * SP_BLOCK; c < end; c++) {
-      uint32_t kc, oc, need;
-      const mx_surface_case *sc = element_counts(M, states, c, &kc, &oc, &need);
-      if (sc == &gone) continue;
-      const uint32_t *v = M->conn + 8 * c;
-      if (!sc) {
-        type[w] = M->type[c];
-        memcpy(conn + 8 * w, v, 8 * sizeof *conn);
-        level[w] = M->level[c];
-        leaf[w] = M->leaf[c];
-        int mv = 0;
-        for (int k = 0; moved && k < mx_cell_nodes[M->type[c]]; k++) mv |= moved[v[k]];
-        if (mv) {
-          double x[8][3];
-          for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
-            memcpy(x[k], xyz + 3 * (size_t)v[k], sizeof x[k]);
-          jens[w] = (float)mx_jens(M->type[c], x);
-        } else {
-          jens[w] = M->jens[c];
-        }
-        w++;
-        continue;
-      }
-      const int nv = mx_cell_nodes[M->type[c]];
-      uint32_t centre = UINT32_MAX;
-      if (need) {
-        centre = (uint32_t)(nn + cnext++);
-        double p[3] = {0.0, 0.0, 0.0};
-        for (int k = 0; k < nv; k++)
-          for (int a = 0; a < 3; a++) p[a] += xyz[3 * (size_t)v[k] + a];
-        for (int a = 0; a < 3; a++) xyz[3 * (size_t)centre + a] = p[a] / nv;
-        st2[centre] = sc->centre == 1 ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
-        if (nkey) nkey[centre] = MX_NKEY_NONE;
-      }
-      for (int i = 0; i < sc->count; i++) {
-        const mx_pattern_elem *e = &mx_surface_elems[sc->first + i];
-        int uc;
-        const int kept = sub_kept(sc, e, &uc);
-        if (!kept && uc) continue;
-        const int ne = mx_cell_nodes[e->type];
-        uint32_t g[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-        for (int k = 0; k < ne; k++) g[k] = e->v[k] == MX_SURFACE_CENTRE ? centre : v[e->v[k]];
-        if (kept) {
-          type[w] = e->type;
-          memcpy(conn + 8 * w, g, sizeof g);
-          level[w] = M->level[c];
-          leaf[w] = M->leaf[c];
-          double x[8][3];
-          for (int k = 0; k < ne; k++) memcpy(x[k], xyz + 3 * (size_t)g[k], sizeof x[k]);
-          jens[w] = (float)mx_jens(e->type, x);
-          w++;
-        } else {
-          opt->type[o] = e->type;
-          memcpy(opt->conn + 8 * o, g, sizeof g);
-          opt->leaf[o] = M->leaf[c];
-          opt->level[o] = M->level[c];
-          o++;
-        }
-      }
+    for (size_t b = w0; b < w1; b++) fill_block(&F, b, &in_place);
+    w1 = w0;
+  }
+  if (w1 > 0) {
+    /* blocks [0, w1) into new arrays by windows, their input released as
+     * they go (not the old and new arrays whole at once), then moved to
+     * the start of M's */
+    const size_t n = out_at(bout, nb, total, w1);
+    cell_arrays d = {mx_alloc(n + 1), mx_alloc(n + 1), mx_alloc((8 * n + 1) * sizeof *d.conn),
+                     mx_alloc((n + 1) * sizeof *d.leaf), mx_alloc((n + 1) * sizeof *d.jens)};
+    if (!d.type || !d.level || !d.conn || !d.leaf || !d.jens) {
+      mx_free(d.type); mx_free(d.level); mx_free(d.conn); mx_free(d.leaf); mx_free(d.jens);
+      mx_free(bout);
+      mx_optional_free(opt);
+      return MX_ENOMEM;
+    }
+    size_t released = 0;
+    for (size_t a = 0; a < w1; a += SP_WINDOW) {
+      const size_t e = a + SP_WINDOW < w1 ? a + SP_WINDOW : w1;
+#pragma omp parallel for schedule(dynamic, 4)
+      for (size_t b = a; b < e; b++) fill_block(&F, b, &d);
+      const size_t done = e * SP_BLOCK < nc ? e * SP_BLOCK : nc;
+      /* (not the part the in-place windows wrote: from out_at(w1) on) */
+      const size_t upto = done < n ? done : n;
+      if (upto > released) release_cells(M, released, upto);
+      released = upto > released ? upto : released;
+    }
+    if (w1 == nb) { /* all of it: the new arrays are the mesh's */
+      mx_free(M->type); mx_free(M->level); mx_free(M->conn); mx_free(M->leaf);
+      mx_free(M->jens);
+      M->type = d.type; M->level = d.level; M->conn = d.conn; M->leaf = d.leaf;
+      M->jens = d.jens;
+    } else {
+      memcpy(M->type, d.type, n);
+      memcpy(M->level, d.level, n);
+      memcpy(M->conn, d.conn, 8 * n * sizeof *d.conn);
+      memcpy(M->leaf, d.leaf, n * sizeof *d.leaf);
+      memcpy(M->jens, d.jens, n * sizeof *d.jens);
+      mx_free(d.type); mx_free(d.level); mx_free(d.conn); mx_free(d.leaf); mx_free(d.jens);
     }
   }
-  const size_t done = w1 * SP_BLOCK < nc ? w1 * SP_BLOCK : nc;
-  release_cells(M, released, done);
-  released = done;
-  }
+  stats->in_place = total - out_at(bout, nb, total, w1);
   mx_free(bout);
-  mx_free(M->type); mx_free(M->conn); mx_free(M->level); mx_free(M->leaf); mx_free(M->jens);
-  M->type = type; M->conn = conn; M->level = level; M->leaf = leaf; M->jens = jens;
   M->ncells = total;
   M->nnodes = nn + total_cen;
   opt->n = total_opt;
   /* 3. Nodes only dropped elements used go; the optional elements keep
    * only those whose nodes all remain. */
   uint32_t *newid = NULL;
-  int st = mx_mesh_drop_unused_nodes(M, states_io, &newid);
+  st = mx_mesh_drop_unused_nodes(M, states_io, &newid);
   if (st) {
     mx_optional_free(opt);
     return st;

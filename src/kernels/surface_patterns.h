@@ -38,6 +38,8 @@ typedef struct {
   size_t kept;       /* sub-elements kept */
   size_t optional;   /* sub-elements dropped (candidates for the staircase) */
   size_t centres;    /* element centres added (patterns that need one) */
+  size_t in_place;   /* elements written over the elements already read, not
+                        into new arrays (the rest: the mesh's start, copied) */
   size_t restored;   /* optional elements put back by the staircase step */
 } mx_surface_stats;
 
@@ -54,7 +56,11 @@ static inline int mx_surface_diagonal(int ia, int ib, int ic, int id) {
  * dropped sub-elements whose nodes all remain in the mesh go to *opt
  * (allocated here, node ids of the final mesh). moved (may be NULL): nodes
  * moved since J_ENS was computed; the elements kept as they are and using
- * one get their J_ENS recomputed. */
+ * one get their J_ENS recomputed. The elements are written in place from the
+ * end where the output lies right of the input (most of the mesh: the
+ * patterns add elements), the rest into new arrays copied to their place;
+ * MX_PATTERNS_COPY=1 in the environment copies all of it (for the tests,
+ * which compare both). */
 int mx_surface_patterns(mx_mesh *M, uint8_t **states, const uint8_t *moved,
                         mx_optional *opt, mx_surface_stats *stats);
 

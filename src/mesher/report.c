@@ -148,7 +148,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
     snprintf(bnd, sizeof bnd,
              "\"boundary\": {\"located\": %zu, \"moved_close\": %zu, \"removed\": %zu, "
              "\"patterned\": %zu, \"sub_elements\": %zu, \"optional\": %zu, "
-             "\"centres\": %zu, \"shrunk\": %zu, \"restored\": %zu, "
+             "\"centres\": %zu, \"in_place\": %zu, \"shrunk\": %zu, \"restored\": %zu, "
              "\"inverted_by_shrink\": %zu, \"repaired\": %zu, \"repair_rounds\": %d, "
              "\"seconds\": {\"states\": %.6f, \"close\": %.6f, \"patterns\": %.6f, "
              "\"shrink\": %.6f, \"smooth\": %.6f, \"staircase\": %.6f}, "
@@ -156,7 +156,8 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              "\"moved\": %zu, \"moves\": %zu, \"jens_min_before\": %.6f, "
              "\"jens_min_after\": %.6f, \"seconds\": %.6f}}, ",
              b->located, b->moved_close, b->removed, b->sp.patterned, b->sp.kept,
-             b->sp.optional, b->sp.centres, b->shrunk, b->sp.restored, b->inverted, s->repaired,
+             b->sp.optional, b->sp.centres, b->sp.in_place, b->shrunk, b->sp.restored,
+             b->inverted, s->repaired,
              s->repair_rounds, b->t_states, b->t_close, b->t_patterns, b->t_shrink,
              b->t_smooth, b->t_staircase, b->smoothed, b->smoothing.rounds, b->smoothing.work,
              b->smoothing.moved, b->smoothing.moves, b->smoothing.jens_min_before,
