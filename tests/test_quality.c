@@ -7,6 +7,72 @@
 
 static int near(double a, double b) { return fabs(a - b) < 1e-12; }
 
+/* J_ENS from its definition, corner by corner (2015 paper): at corner i
+ * with neighbours a, b, c, J_S = (u_a x u_b) . u_c with u_x the unit vector
+ * from i to x (normalized from i's end: (p_x - p_i) / |p_x - p_i|), -1 when
+ * one is collapsed; scaled by k (J_S > k: 1 + k - J_S, J_S < -k: -(1 + k) -
+ * J_S, else J_S / k); the least if all are positive, else the largest
+ * negative one. The pyramid's apex: the least positive of its four corners
+ * (consecutive base nodes), else their largest. mx_jens computes each edge
+ * once and negates it for the other end: the same values. */
+static double ref_js(const double (*p)[3], int i, int a, int b, int c) {
+  double u[3][3];
+  const int nb[3] = {a, b, c};
+  for (int k = 0; k < 3; k++) {
+    double l = 0.0;
+    for (int x = 0; x < 3; x++) {
+      u[k][x] = p[nb[k]][x] - p[i][x];
+      l += u[k][x] * u[k][x];
+    }
+    l = sqrt(l);
+    if (!(l > 0.0)) return -1.0;
+    for (int x = 0; x < 3; x++) u[k][x] /= l;
+  }
+  const double cx = u[0][1] * u[1][2] - u[0][2] * u[1][1];
+  const double cy = u[0][2] * u[1][0] - u[0][0] * u[1][2];
+  const double cz = u[0][0] * u[1][1] - u[0][1] * u[1][0];
+  return cx * u[2][0] + cy * u[2][1] + cz * u[2][2];
+}
+
+static double ref_scale(double j, double k) {
+  return j > k ? (1.0 + k) - j : j < -k ? -(1.0 + k) - j : j / k;
+}
+
+static double ref_jens(int t, const double (*p)[3]) {
+  static const int tet[4][3] = {{1, 2, 3}, {2, 0, 3}, {0, 1, 3}, {2, 1, 0}};
+  static const int pyr[4][3] = {{1, 3, 4}, {2, 0, 4}, {3, 1, 4}, {0, 2, 4}};
+  static const int pri[6][3] = {{1, 2, 3}, {2, 0, 4}, {0, 1, 5}, {5, 4, 0}, {3, 5, 1}, {4, 3, 2}};
+  static const int hex[8][3] = {{1, 3, 4}, {2, 0, 5}, {3, 1, 6}, {0, 2, 7},
+                                {7, 5, 0}, {4, 6, 1}, {5, 7, 2}, {6, 4, 3}};
+  const int(*nb)[3] = t == MX_TET ? tet : t == MX_PYRAMID ? pyr : t == MX_PRISM ? pri : hex;
+  const int n = t == MX_TET || t == MX_PYRAMID ? 4 : t == MX_PRISM ? 6 : 8;
+  const double k = t == MX_HEX ? 1.0 : t == MX_PRISM ? sqrt(3.0) / 2.0 : sqrt(2.0) / 2.0;
+  double q[9];
+  for (int i = 0; i < n; i++) q[i] = ref_scale(ref_js(p, i, nb[i][0], nb[i][1], nb[i][2]), k);
+  int m = n;
+  if (t == MX_PYRAMID) {
+    double pos = INFINITY, neg = -INFINITY;
+    for (int i = 0; i < 4; i++) {
+      const double j = ref_js(p, 4, (i + 2) % 4, (i + 1) % 4, i);
+      if (j > 0.0)
+        pos = fmin(pos, j);
+      else if (j > neg)
+        neg = j;
+    }
+    q[m++] = ref_scale(isfinite(pos) ? pos : neg, k);
+  }
+  double mn = INFINITY, worst_neg = -INFINITY;
+  int any_neg = 0;
+  for (int i = 0; i < m; i++) {
+    mn = fmin(mn, q[i]);
+    if (q[i] <= 0.0) {
+      any_neg = 1;
+      if (q[i] > worst_neg) worst_neg = q[i];
+    }
+  }
+  return any_neg ? worst_neg : mn;
+}
+
 int main(void) {
   /* Unit cube hexahedron: J_S = 1 at every corner, k = 1: J_ENS 1. */
   const double hex[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
@@ -57,6 +123,36 @@ int main(void) {
   /* Apex below the base: invalid. */
   const double pdown[5][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5, 0.5, -s}};
   CHECK(mx_jens_pyramid(pdown) < 0.0);
+  /* mx_jens against the definition on elements drawn around the unit cube's
+   * corners (4 spreads), on lattice points (collapsed edges, flat corners)
+   * and with a node doubled: the same values */
+  {
+    static const double cube[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                      {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    uint64_t r = 0x9E3779B97F4A7C15ull;
+    long differ = 0, invalid = 0, n = 0;
+    for (int it = 0; it < 200000; it++) {
+      const int t = it % 4, mode = (it / 4) % 6;
+      const double spread[4] = {10.0, 0.3, 0.01, 1e-9};
+      double p[8][3];
+      for (int v = 0; v < 8; v++)
+        for (int x = 0; x < 3; x++) {
+          r = r * 6364136223846793005ull + 1442695040888963407ull;
+          const double u = (double)(r >> 11) * 0x1p-53 - 0.5;
+          p[v][x] = mode < 4 ? cube[v][x] + spread[mode] * u : floor(2.0 * cube[v][x] + 2.0 * u);
+        }
+      if (mode == 5) memcpy(p[1], p[0], sizeof p[0]);
+      const double a = mx_jens(t, (const double(*)[3])p);
+      const double b = ref_jens(t, (const double(*)[3])p);
+      differ += !(a == b); /* (0 and -0 alike: a flat corner's sign of zero
+                              depends on the end its edges are taken from) */
+      invalid += mx_jens_invalid(a);
+      n++;
+    }
+    printf("J_ENS: %ld elements against the definition, %ld differ, %ld invalid\n", n, differ,
+           invalid);
+    CHECK(differ == 0 && invalid > 0 && invalid < n);
+  }
   /* The quality table: bins of Table IV, per-type min / max / mean. */
   {
     const uint8_t type[8] = {MX_TET, MX_TET, MX_PYRAMID, MX_PRISM, MX_HEX, MX_HEX, MX_TET, MX_TET};

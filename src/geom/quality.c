@@ -8,41 +8,52 @@
 static const double K_TET = 0.70710678118654752440;
 static const double K_PRISM = 0.86602540378443864676;
 
-/* Unit edge vectors of an element, each edge normalized once: u[i][j] is
- * the unit vector from node i to node j, ok[i][j] 0 for a collapsed edge.
- * u[j][i] = -u[i][j] holds exactly in floating point (a - b = -(b - a), the
- * same sum of squares, (-d) / l = -(d / l)), so the values are those of
- * normalizing from each end. */
+/* Unit edge vectors of an element, each edge normalized once, as arrays
+ * of components (the square roots and divisions of all edges at once, two
+ * to a vector instruction): u_e = (p[b] - p[a]) / |p[b] - p[a]| for edge
+ * e = (a, b); ok[e] 0 for a collapsed edge. The vector from b to a is -u_e
+ * exactly (a - b = -(b - a), the same sum of squares, (-d) / l = -(d / l)),
+ * so the values are those of normalizing from each end. */
+enum { MAX_EDGES = 12 };
 typedef struct {
-  double u[8][8][3];
-  uint8_t ok[8][8];
+  double x[MAX_EDGES], y[MAX_EDGES], z[MAX_EDGES];
+  int ok[MAX_EDGES];
 } unit_edges;
 
-static void add_edge(unit_edges *E, const double (*p)[3], int i, int j) {
-  double d[3], l = 0.0;
-  for (int x = 0; x < 3; x++) {
-    d[x] = p[j][x] - p[i][x];
-    l += d[x] * d[x];
+static inline void unit_vectors(const double (*p)[3], const int8_t (*ed)[2], int ne,
+                                unit_edges *U) {
+  double dx[MAX_EDGES], dy[MAX_EDGES], dz[MAX_EDGES], l[MAX_EDGES];
+  for (int e = 0; e < ne; e++) {
+    dx[e] = p[ed[e][1]][0] - p[ed[e][0]][0];
+    dy[e] = p[ed[e][1]][1] - p[ed[e][0]][1];
+    dz[e] = p[ed[e][1]][2] - p[ed[e][0]][2];
   }
-  l = sqrt(l);
-  const int ok = l > 0.0;
-  E->ok[i][j] = E->ok[j][i] = (uint8_t)ok;
-  if (!ok) return;
-  for (int x = 0; x < 3; x++) {
-    E->u[i][j][x] = d[x] / l;
-    E->u[j][i][x] = -E->u[i][j][x];
+  for (int e = 0; e < ne; e++) l[e] = sqrt(dx[e] * dx[e] + dy[e] * dy[e] + dz[e] * dz[e]);
+  for (int e = 0; e < ne; e++) {
+    U->x[e] = dx[e] / l[e];
+    U->y[e] = dy[e] / l[e];
+    U->z[e] = dz[e] / l[e];
+    U->ok[e] = l[e] > 0.0;
   }
 }
 
-/* J_S at node i with neighbours a, b, c: (d_a x d_b) . d_c, unit vectors;
- * -1 when an edge is collapsed (invalid). */
-static double js(const unit_edges *E, int i, int a, int b, int c) {
-  if (!E->ok[i][a] || !E->ok[i][b] || !E->ok[i][c]) return -1.0;
-  const double *d0 = E->u[i][a], *d1 = E->u[i][b], *d2 = E->u[i][c];
-  const double cx = d0[1] * d1[2] - d0[2] * d1[1];
-  const double cy = d0[2] * d1[0] - d0[0] * d1[2];
-  const double cz = d0[0] * d1[1] - d0[1] * d1[0];
-  return cx * d2[0] + cy * d2[1] + cz * d2[2];
+/* J_S at a corner whose three neighbours are along edges r[0..2]: r = e + 1
+ * for the edge's direction, -(e + 1) for the opposite one. (d_a x d_b) . d_c
+ * of the unit vectors; -1 when an edge is collapsed (invalid). */
+static inline double js(const unit_edges *U, const int8_t r[3]) {
+  double d[3][3];
+  for (int k = 0; k < 3; k++) {
+    const int e = (r[k] > 0 ? r[k] : -r[k]) - 1;
+    if (!U->ok[e]) return -1.0;
+    const double s = r[k] > 0 ? 1.0 : -1.0; /* (exact: -u is u times -1) */
+    d[k][0] = s * U->x[e];
+    d[k][1] = s * U->y[e];
+    d[k][2] = s * U->z[e];
+  }
+  const double cx = d[0][1] * d[1][2] - d[0][2] * d[1][1];
+  const double cy = d[0][2] * d[1][0] - d[0][0] * d[1][2];
+  const double cz = d[0][0] * d[1][1] - d[0][1] * d[1][0];
+  return cx * d[2][0] + cy * d[2][1] + cz * d[2][2];
 }
 
 static double ens(double j, double k) {
@@ -65,33 +76,46 @@ static double combine(const double *q, int n) {
   return any_neg ? neg : mn;
 }
 
-/* The corners' neighbour triples and the element's edges, per type. */
-static void corners(const double (*p)[3], const int (*nb)[3], int n, const int (*edges)[2],
-                    int ne, double k, double *q, unit_edges *E) {
-  for (int e = 0; e < ne; e++) add_edge(E, p, edges[e][0], edges[e][1]);
-  for (int i = 0; i < n; i++) q[i] = ens(js(E, i, nb[i][0], nb[i][1], nb[i][2]), k);
-}
+/* Per type: the edges (a, b), and each corner's three neighbours as edges
+ * (e + 1 along edge e, -(e + 1) against it), in the order of the corner's
+ * (d_a x d_b) . d_c. */
+static const int8_t tet_ed[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+/* neighbours {1,2,3} {2,0,3} {0,1,3} {2,1,0} */
+static const int8_t tet_cr[4][3] = {{1, 2, 3}, {4, -1, 5}, {-2, -4, 6}, {-6, -5, -3}};
+static const int8_t pyr_ed[8][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0},
+                                    {0, 4}, {1, 4}, {2, 4}, {3, 4}};
+/* base neighbours {1,3,4} {2,0,4} {3,1,4} {0,2,4}; then the apex's four
+ * tetrahedra of consecutive base nodes: {i+2, i+1, i} (mod 4) */
+static const int8_t pyr_cr[8][3] = {{1, -4, 5},   {2, -1, 6},   {3, -2, 7},   {4, -3, 8},
+                                    {-7, -6, -5}, {-8, -7, -6}, {-5, -8, -7}, {-6, -5, -8}};
+static const int8_t pri_ed[9][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5},
+                                    {5, 3}, {0, 3}, {1, 4}, {2, 5}};
+/* neighbours {1,2,3} {2,0,4} {0,1,5} {5,4,0} {3,5,1} {4,3,2} */
+static const int8_t pri_cr[6][3] = {{1, -3, 7},  {2, -1, 8}, {3, -2, 9},
+                                    {-6, 4, -7}, {-4, 5, -8}, {-5, 6, -9}};
+static const int8_t hex_ed[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
+                                     {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+/* neighbours {1,3,4} {2,0,5} {3,1,6} {0,2,7} {7,5,0} {4,6,1} {5,7,2} {6,4,3} */
+static const int8_t hex_cr[8][3] = {{1, -4, 9},   {2, -1, 10},  {3, -2, 11},  {4, -3, 12},
+                                    {-8, 5, -9},  {-5, 6, -10}, {-6, 7, -11}, {-7, 8, -12}};
 
 double mx_jens_tet(const double p[4][3]) {
-  static const int nb[4][3] = {{1, 2, 3}, {2, 0, 3}, {0, 1, 3}, {2, 1, 0}};
-  static const int ed[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  unit_edges U;
+  unit_vectors(p, tet_ed, 6, &U);
   double q[4];
-  unit_edges E;
-  corners(p, nb, 4, ed, 6, K_TET, q, &E);
+  for (int i = 0; i < 4; i++) q[i] = ens(js(&U, tet_cr[i]), K_TET);
   return combine(q, 4);
 }
 
 double mx_jens_pyramid(const double p[5][3]) {
-  static const int nb[4][3] = {{1, 3, 4}, {2, 0, 4}, {3, 1, 4}, {0, 2, 4}};
-  static const int ed[8][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0},
-                               {0, 4}, {1, 4}, {2, 4}, {3, 4}};
+  unit_edges U;
+  unit_vectors(p, pyr_ed, 8, &U);
   double q[5];
-  unit_edges E;
-  corners(p, nb, 4, ed, 8, K_TET, q, &E);
+  for (int i = 0; i < 4; i++) q[i] = ens(js(&U, pyr_cr[i]), K_TET);
   /* Apex: the four tetrahedra of consecutive base nodes. */
   double best_pos = INFINITY, best_neg = -INFINITY;
   for (int i = 0; i < 4; i++) {
-    double j = js(&E, 4, (i + 2) % 4, (i + 1) % 4, i);
+    const double j = js(&U, pyr_cr[4 + i]);
     if (j > 0.0) {
       if (j < best_pos) best_pos = j;
     } else if (j > best_neg) {
@@ -103,24 +127,18 @@ double mx_jens_pyramid(const double p[5][3]) {
 }
 
 double mx_jens_prism(const double p[6][3]) {
-  static const int nb[6][3] = {{1, 2, 3}, {2, 0, 4}, {0, 1, 5},
-                               {5, 4, 0}, {3, 5, 1}, {4, 3, 2}};
-  static const int ed[9][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5},
-                               {5, 3}, {0, 3}, {1, 4}, {2, 5}};
+  unit_edges U;
+  unit_vectors(p, pri_ed, 9, &U);
   double q[6];
-  unit_edges E;
-  corners(p, nb, 6, ed, 9, K_PRISM, q, &E);
+  for (int i = 0; i < 6; i++) q[i] = ens(js(&U, pri_cr[i]), K_PRISM);
   return combine(q, 6);
 }
 
 double mx_jens_hex(const double p[8][3]) {
-  static const int nb[8][3] = {{1, 3, 4}, {2, 0, 5}, {3, 1, 6}, {0, 2, 7},
-                               {7, 5, 0}, {4, 6, 1}, {5, 7, 2}, {6, 4, 3}};
-  static const int ed[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
-                                {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+  unit_edges U;
+  unit_vectors(p, hex_ed, 12, &U);
   double q[8];
-  unit_edges E;
-  corners(p, nb, 8, ed, 12, 1.0, q, &E);
+  for (int i = 0; i < 8; i++) q[i] = ens(js(&U, hex_cr[i]), 1.0);
   return combine(q, 8);
 }
 

@@ -106,11 +106,16 @@ int mx_leaves_touching(const mx_tree *tr, const uint32_t *pos, const uint32_t *o
 /* ---- numbering by first use --------------------------------------------- */
 
 /* newid[v] for v < nn: the rank of node v in the order of first use in
- * conn (UINT32_MAX when unused); *nused: the nodes used. */
+ * conn (UINT32_MAX when unused); *nused: the nodes used. Each node's first
+ * element (the least element using it: a node is in an element once, so
+ * the element and the order of its slots tell the rank), the new nodes
+ * counted per block of elements, prefix-summed, numbered block by block. */
 static int first_use_ids(const uint8_t *type, const uint32_t *conn, size_t nc, size_t nn,
                          uint32_t **newid_out, size_t *nused) {
-  uint64_t *first = mx_alloc((nn + 1) * sizeof *first);
-  uint64_t *cnt = mx_alloc((nc + 1) * sizeof *cnt);
+  enum { FB = 1 << 14 };
+  const size_t nb = (nc + FB - 1) / FB;
+  uint32_t *first = mx_alloc((nn + 1) * sizeof *first);
+  uint64_t *cnt = mx_alloc((nb + 1) * sizeof *cnt);
   uint32_t *newid = mx_alloc((nn + 1) * sizeof *newid);
   if (!first || !cnt || !newid) {
     mx_free(first); mx_free(cnt); mx_free(newid);
@@ -118,36 +123,37 @@ static int first_use_ids(const uint8_t *type, const uint32_t *conn, size_t nc, s
   }
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < nn; v++) {
-    first[v] = UINT64_MAX;
+    first[v] = UINT32_MAX;
     newid[v] = UINT32_MAX;
   }
-  /* the smallest slot 8c+k holding each node; in increasing c per thread,
-   * so a node is written about once per thread */
+  /* the least element using each node; in increasing c per thread, so a
+   * node is written about once per thread */
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < nc; c++)
     for (int k = 0; k < mx_cell_nodes[type[c]]; k++) {
-      uint64_t *f = &first[conn[8 * c + k]];
-      const uint64_t slot = 8 * (uint64_t)c + (uint64_t)k;
-      uint64_t cur = __atomic_load_n(f, __ATOMIC_RELAXED);
-      while (slot < cur &&
-             !__atomic_compare_exchange_n(f, &cur, slot, 1, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+      uint32_t *f = &first[conn[8 * c + k]];
+      uint32_t cur = __atomic_load_n(f, __ATOMIC_RELAXED);
+      while ((uint32_t)c < cur &&
+             !__atomic_compare_exchange_n(f, &cur, (uint32_t)c, 1, __ATOMIC_RELAXED,
+                                          __ATOMIC_RELAXED)) {
       }
     }
 #pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < nc; c++) {
+  for (size_t b = 0; b < nb; b++) {
     uint64_t n = 0;
-    for (int k = 0; k < mx_cell_nodes[type[c]]; k++)
-      n += first[conn[8 * c + k]] == 8 * (uint64_t)c + (uint64_t)k;
-    cnt[c] = n;
+    for (size_t c = b * FB; c < nc && c < (b + 1) * FB; c++)
+      for (int k = 0; k < mx_cell_nodes[type[c]]; k++) n += first[conn[8 * c + k]] == c;
+    cnt[b] = n;
   }
-  *nused = mx_scan_u64(cnt, nc);
+  *nused = mx_scan_u64(cnt, nb);
 #pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < nc; c++) {
-    uint64_t id = cnt[c];
-    for (int k = 0; k < mx_cell_nodes[type[c]]; k++) {
-      const uint32_t v = conn[8 * c + k];
-      if (first[v] == 8 * (uint64_t)c + (uint64_t)k) newid[v] = (uint32_t)id++;
-    }
+  for (size_t b = 0; b < nb; b++) {
+    uint64_t id = cnt[b];
+    for (size_t c = b * FB; c < nc && c < (b + 1) * FB; c++)
+      for (int k = 0; k < mx_cell_nodes[type[c]]; k++) {
+        const uint32_t v = conn[8 * c + k];
+        if (first[v] == c) newid[v] = (uint32_t)id++;
+      }
   }
   mx_free(first);
   mx_free(cnt);
