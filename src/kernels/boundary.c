@@ -108,47 +108,37 @@ int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
     for (int k = 0; k < mx_cell_nodes[t]; k++)
       if (in >> k & 1u) __atomic_fetch_add(&len[v[k]], acc[k], __ATOMIC_RELAXED);
   }
-  /* Decide on the old positions, then move. */
-  double *target = mx_alloc((3 * nn + 3) * sizeof *target);
-  if (!target) {
-    mx_free(cand);
-    mx_free(len);
-    return MX_ENOMEM;
-  }
+  /* Each candidate moved as soon as it is decided: a decision reads the
+   * node's own position and the sums above only, so the moves of the
+   * others do not change it (the same as deciding all on the old positions
+   * first). cand: 2 for a node that moved. */
   size_t nmoved = 0;
   atomic_int *cf = mx_cancel_flag; /* base/cancel.h: the longest loop */
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : nmoved)
   for (size_t v = 0; v < nn; v++) {
     if (mx_cancel_seen(cf)) continue;
     const uint64_t cnt = len[v] >> (64 - COUNT_BITS);
-    cand[v] = cand[v] ? 1 : 0;
     if (!cand[v] || !cnt) {
       cand[v] = 0;
       continue;
     }
     const double avg = (double)(len[v] & (ONE_EDGE - 1)) * unit / (double)cnt;
-    const double d = mx_closest_point_within(S, M->xyz + 3 * v, ratio * avg, target + 3 * v);
+    double q[3];
+    const double d = mx_closest_point_within(S, M->xyz + 3 * v, ratio * avg, q);
     if (d < ratio * avg) {
-      cand[v] = 2;
+      memcpy(M->xyz + 3 * v, q, sizeof q);
+      states[v] = MX_NODE_OUTSIDE;
+      cand[v] = 1;
       nmoved++;
+    } else {
+      cand[v] = 0;
     }
   }
-  if (mx_cancelled()) { /* nothing moved yet */
-    mx_free(target);
+  mx_free(len);
+  if (mx_cancelled()) { /* (the caller drops the mesh: some nodes moved) */
     mx_free(cand);
-    mx_free(len);
     return MX_ECANCELED;
   }
-#pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < nn; v++)
-    if (cand[v] == 2) {
-      memcpy(M->xyz + 3 * v, target + 3 * v, 3 * sizeof(double));
-      states[v] = MX_NODE_OUTSIDE;
-    }
-  mx_free(target);
-  mx_free(len);
-#pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < nn; v++) cand[v] = cand[v] == 2;
   if (moved_flags) {
     *moved_flags = cand; /* the caller recomputes J_ENS */
   } else {

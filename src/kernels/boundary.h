@@ -37,7 +37,8 @@ int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
  * removed by the surface patterns (kernels/surface_patterns.h) in their
  * pass. With moved_flags NULL, J_ENS is
  * recomputed here; otherwise *moved_flags receives (mx_alloc) one byte per
- * node, 1 where it moved, and the caller recomputes. */
+ * node, 1 where it moved, and the caller recomputes. MX_ECANCELED leaves
+ * some nodes moved (the caller drops the mesh, as for any failure). */
 int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
                         double ratio, size_t *moved, uint8_t **moved_flags);
 
