@@ -1,8 +1,11 @@
-/* base/scan: the searches in sorted keys, against a plain linear scan. */
+/* base/scan: the searches in sorted keys, against a plain linear scan; the
+ * sort of keys mostly in order against the radix sort (the same keys and
+ * values: both stable). */
 #include "base/scan.h"
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 static int failures;
 #define CHECK(c)                                                      \
@@ -49,6 +52,37 @@ int main(void) {
       CHECK(mx_find_u64_near(v, n, key, &hint) == want);
       CHECK(hint == at);
     }
+  }
+  /* mostly in order: runs of equal keys rising, a share of them (none, a
+   * few, a tenth, half: the whole radix sort) anywhere below; the values
+   * the positions, so that a tie broken the other way shows */
+  {
+    enum { M = 200000 };
+    uint64_t *a = malloc(M * sizeof *a), *b = malloc(M * sizeof *b);
+    uint32_t *va = malloc(M * sizeof *va), *vb = malloc(M * sizeof *vb);
+    const unsigned share[4] = {0, 1000, 10, 2};
+    for (int k = 0; k < 4 && a && b && va && vb; k++)
+      for (size_t n = 1; n <= M; n *= 7) {
+        uint64_t x = 0;
+        size_t out = 0;
+        for (size_t i = 0; i < n; i++) {
+          x += next() % 3 == 0;
+          const int below = share[k] && next() % share[k] == 0 && x > 0;
+          a[i] = below ? next() % x : x;
+          out += below;
+          va[i] = (uint32_t)i;
+        }
+        memcpy(b, a, n * sizeof *a);
+        memcpy(vb, va, n * sizeof *va);
+        CHECK(mx_sort_u64_mostly_sorted(a, va, n) == 0);
+        CHECK(mx_sort_u64(b, vb, n) == 0);
+        CHECK(memcmp(a, b, n * sizeof *a) == 0 && memcmp(va, vb, n * sizeof *va) == 0);
+        if (n == 117649) printf("mostly sorted, 1 in %u below: %zu of %zu\n", share[k], out, n);
+      }
+    free(a);
+    free(b);
+    free(va);
+    free(vb);
   }
   printf("%s\n", failures ? "FAIL" : "ok");
   return failures != 0;

@@ -134,6 +134,68 @@ int mx_sort_u64(uint64_t *keys, uint32_t *vals, size_t n) {
   return MX_OK;
 }
 
+int mx_sort_u64_mostly_sorted(uint64_t *keys, uint32_t *vals, size_t n) {
+  if (n < 2) return MX_OK;
+  /* the keys below the running maximum: counted, then taken out with
+   * their positions (a serial pass each: the order is the point) */
+  size_t nx = 0;
+  uint64_t top = keys[0];
+  for (size_t i = 1; i < n; i++) {
+    if (keys[i] < top) nx++;
+    else top = keys[i];
+  }
+  if (nx == 0) return MX_OK;
+  if (nx > n / 4) return mx_sort_u64(keys, vals, n);
+  uint64_t *xk = mx_alloc((nx + 1) * sizeof *xk);
+  uint32_t *xp = mx_alloc((nx + 1) * sizeof *xp); /* their positions */
+  uint64_t *mk = mx_alloc((n + 1) * sizeof *mk);
+  uint32_t *mv = mx_alloc((n + 1) * sizeof *mv);
+  if (!xk || !xp || !mk || !mv) {
+    mx_free(xk); mx_free(xp); mx_free(mk); mx_free(mv);
+    return MX_ENOMEM;
+  }
+  /* the rest (in order, with the positions) compacted into mk, mv */
+  size_t nr = 0, j = 0;
+  top = keys[0];
+  for (size_t i = 0; i < n; i++) {
+    if (i > 0 && keys[i] < top) {
+      xk[j] = keys[i];
+      xp[j++] = (uint32_t)i;
+    } else {
+      top = keys[i];
+      mk[nr] = keys[i];
+      mv[nr++] = (uint32_t)i;
+    }
+  }
+  int st = mx_sort_u64(xk, xp, nx); /* stable: equal keys by position */
+  if (st) {
+    mx_free(xk); mx_free(xp); mx_free(mk); mx_free(mv);
+    return st;
+  }
+  /* merged by (key, position): the order a stable sort gives; the values
+   * gathered by position, from a copy (they are overwritten) */
+  uint32_t *v0 = mx_alloc((n + 1) * sizeof *v0);
+  if (!v0) {
+    mx_free(xk); mx_free(xp); mx_free(mk); mx_free(mv);
+    return MX_ENOMEM;
+  }
+  memcpy(v0, vals, n * sizeof *vals);
+  size_t a = 0, b = 0;
+  for (size_t o = 0; o < n; o++) {
+    const int from_x =
+        b < nx && (a == nr || xk[b] < mk[a] || (xk[b] == mk[a] && xp[b] < mv[a]));
+    if (from_x) {
+      keys[o] = xk[b];
+      vals[o] = v0[xp[b++]];
+    } else {
+      keys[o] = mk[a];
+      vals[o] = v0[mv[a++]];
+    }
+  }
+  mx_free(xk); mx_free(xp); mx_free(mk); mx_free(mv); mx_free(v0);
+  return MX_OK;
+}
+
 size_t mx_sort_unique_u64(uint64_t *k, size_t n, int *st) {
   *st = mx_sort_u64(k, NULL, n);
   if (*st || n == 0) return 0;

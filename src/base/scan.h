@@ -15,6 +15,11 @@ uint64_t mx_scan_u32(uint32_t *a, size_t n);
  * NULL it is permuted along. tmp arrays are allocated inside. MX_OK or
  * MX_EINPUT (out of memory). */
 int mx_sort_u64(uint64_t *keys, uint32_t *vals, size_t n);
+/* The same result (stable: equal keys keep their order) for keys mostly in
+ * order already (made along the Morton order): the keys below the running
+ * maximum are taken out, radix-sorted alone and merged back; the whole
+ * radix sort when they are more than a quarter. vals may not be NULL. */
+int mx_sort_u64_mostly_sorted(uint64_t *keys, uint32_t *vals, size_t n);
 
 /* The first index of the sorted keys k[0 .. n) whose key is not below key
  * (n: none). */

@@ -90,9 +90,12 @@ static int within_triangle(const double p[3], const double *a, const double *b,
 static int lies_on(const mx_mesh *M, size_t c, uint32_t v, const double p[3]) {
   const int t = M->type[c], nn = mx_cell_nodes[t];
   const uint32_t *row = M->conn + 8 * c;
+  /* v's own elements first, from the ids alone (most of the elements a
+   * node's cells give: their boxes hold it), before any coordinate */
+  for (int j = 0; j < nn; j++)
+    if (row[j] == v) return 0;
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (int j = 0; j < nn; j++) {
-    if (row[j] == v) return 0;
     const double *P = M->xyz + 3 * (size_t)row[j];
     if (P[0] == p[0] && P[1] == p[1] && P[2] == p[2]) return 0; /* a duplicate */
     for (int a = 0; a < 3; a++) {
@@ -351,7 +354,9 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
   pad = NULL;
   if (st == MX_OK) {
     /* per level: entries sorted by cell (stable: an element's entries in
-     * element order, as they were made), the distinct cells indexed */
+     * element order, as they were made; the elements come in the Morton
+     * order, each mostly in the cell of its leaf's: the keys are mostly in
+     * order), the distinct cells indexed */
     size_t k = 0;
     for (int l = 0; l < NLEV && st == MX_OK; l++) {
       const size_t k0 = k;
@@ -359,7 +364,7 @@ static int lattice_cells_build(lattice_cells *L, const mx_grid *G, const mx_mesh
       const uint32_t e0 = (uint32_t)cnt[k0], e1 = (uint32_t)cnt[k];
       if (e1 == e0) continue;
       L->levels |= 1u << l;
-      if (mx_sort_u64(key + e0, idx + e0, e1 - e0) != MX_OK) {
+      if (mx_sort_u64_mostly_sorted(key + e0, idx + e0, e1 - e0) != MX_OK) {
         st = MX_ENOMEM;
         break;
       }
