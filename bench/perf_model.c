@@ -45,9 +45,11 @@
  * (the per-item constants with what they count) and exits.
  *
  * The constants were read from the code of commit e755045 (8-bit levels,
- * float J_ENS, closest points reused by the close step, sort by leaf by
- * merging the tail); a change to a phase's passes needs its rows here
- * changed too (sizes follow by themselves). */
+ * float J_ENS, sort by leaf by merging the tail), the transition, close,
+ * patterns and untangling rows again from the passes of issue 31 (Morton
+ * ranges and families; moves at the decision; patterns in place; sparse
+ * incidence); a change to a phase's passes needs its rows here changed too
+ * (sizes follow by themselves). */
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -250,18 +252,18 @@ static const term MODEL[] = {
     {"transition", K_LEAF_E, 18 * (O_FLAGS + O_KEPT), 0, 12,
      "masks of leaves with edge infos: 12 edge entries (1 line each); flags + kept of the "
      "18 face/edge neighbours"},
-    {"transition", K_LEAF, IDX + IDX + SCAN_R, IDX + PATREF + U64 + SCAN_W, 0,
-     "pattern lookup: mask read, mask + mx_pattern_ref written; point offsets poff written "
-     "and prefix-summed"},
-    {"transition", K_LEAF, 2 * IDX + O_KEY + O_LEVEL + U64, 0, 0,
-     "node hash inserts: leaves, key, level, mask, poff read"},
-    {"transition", K_LEAF, IDX + U64 + PATREF + 2 * SCAN_R, 2 * U64 + 2 * SCAN_W, 0,
-     "owners: mask, poff, ref read; noff + eoff written and prefix-summed"},
-    {"transition", K_LEAF, IDX + 2 * U64 + 2 * IDX + PATREF + 2 * U64 + O_LEVEL, 0, 0,
-     "numbering: mask, noff, poff read; elements: leaves, ref, mask, poff, eoff, level read"},
-    {"transition", K_POINT, 3 * IDX, IDX + NODE_ENTRY / 3, 4,
-     "per point: slot written then read 3 times; the node entry (16 B) touched by insert, "
-     "owner, numbering and ids (1 line each); the hash zeroed (16 B per 3 points)"},
+    {"transition", K_LEAF, IDX, IDX, 0,
+     "classes (pass 0): mask read, the body-centre bit written back (counts per Morton "
+     "range of leaves only)"},
+    {"transition", K_LEAF, 6 * IDX + 3 * (O_KEY + O_LEVEL), 2 * IDX, 0,
+     "passes 1-3 by family (insert, numbering, gather): leaves, key, level read by each; "
+     "mask read by insert and gather; own written by insert, read and written by numbering"},
+    {"transition", K_LEAF, 3 * IDX + O_KEY + O_LEVEL, 0, 0,
+     "elements (pass 4): leaves, key, level, mask, own read"},
+    {"transition", K_POINT, IDX, IDX + NODE_ENTRY / 3, 3,
+     "per point: the node entry (16 B) touched by the insert, the gather and, for its "
+     "owner, the numbering (1 line each: an upper bound); its id written into the leaf's "
+     "rows by the gather, read by pass 4; the hash zeroed (16 B per 3 points)"},
     {"transition", K_NODE_T, 0, M_NKEY + M_XYZ, 0, "per node: nkey + xyz written"},
     {"transition", K_ELEM_T, M_TYPE, CELL_ROW, 0,
      "per element: type + conn[8] + level + leaf + jens written; type read (by-type count)"},
@@ -277,19 +279,19 @@ static const term MODEL[] = {
     {"b.states", K_LOCATE_B, M_XYZ, STATE, 0,
      "per located node: xyz read, state written (a signed-distance query)"},
 
-    {"b.close", K_NODE_T, 2 * STATE + 2 * M_XYZ + 3 + U64 + 1, 1 + U64 + IDX + 2, 0,
-     "mx_move_close_nodes per node: cand + len + cnt zeroed; states, cand, xyz gathered "
-     "(2 passes); bounding box reads xyz; decide/move/final passes read cand x3, cnt, len, "
-     "write cand x2"},
+    {"b.close", K_NODE_T, STATE + 2 + 2 * M_XYZ + U64, 2 + U64, 0,
+     "mx_move_close_nodes per node: cand + len zeroed; states gathered by the candidates "
+     "pass, cand + xyz by the edge-length pass; bounding box reads xyz; the decision reads "
+     "cand + len, writes cand"},
     {"b.close", K_ELEM_T, 2 * (M_TYPE + M_CONN), 0, 0,
      "per element: type + conn read (candidates pass, edge-length pass)"},
-    {"b.close", K_CAND, U64 + IDX + U64 + IDX, U64 + IDX + M_XYZ, 0,
-     "per candidate: len + cnt atomic adds; len + cnt read at the decision; target "
-     "written"},
+    {"b.close", K_CAND, 2 * U64, U64, 0,
+     "per candidate: count + length (one word) added atomically once per element; read at "
+     "the decision"},
     {"b.close", K_CAND_Q, M_XYZ, 0, 0,
      "per candidate (each a closest-point query): xyz read"},
-    {"b.close", K_MOVED_C, M_XYZ, M_XYZ + STATE, 0,
-     "per node moved: target read, xyz + state written"},
+    {"b.close", K_MOVED_C, 0, M_XYZ + STATE, 0,
+     "per node moved (at its decision): xyz + state written"},
 
     {"b.patterns", K_ELEM_T, 2 * (M_TYPE + M_CONN) + M_LEVEL + M_LEAF + M_JENS, 0, 0,
      "mx_surface_patterns per element in: type + conn read by the count and the fill "
@@ -297,7 +299,8 @@ static const term MODEL[] = {
     {"b.patterns", K_NODE_T, 2 * STATE + 1 + M_XYZ, 0, 0,
      "per node: states (2 passes) + moved gathered, xyz gathered for the J_ENS"},
     {"b.patterns", K_SUB, 2 * (M_TYPE + M_CONN) + M_TYPE + M_JENS, CELL_ROW + M_CONN, 0,
-     "per element out: type + conn[8] + level + leaf + jens written; drop-unused-nodes "
+     "per element out: type + conn[8] + level + leaf + jens written (in place from the "
+     "end; the mesh's start, a few %, through new arrays); drop-unused-nodes "
      "reads type + conn twice, writes conn; summary reads type + jens"},
     {"b.patterns", K_OPT, OPT_ROW, 2 * OPT_ROW, 0,
      "per optional element: type, conn, leaf, level written, then compacted (serial)"},
@@ -321,12 +324,13 @@ static const term MODEL[] = {
      "and written"},
     {"b.shrink", K_SHRUNK, M_XYZ, M_XYZ, 0, "per node moved: xyz read + written"},
 
-    {"b.smooth", K_ELEM, M_JENS + 2 * (M_TYPE + M_CONN) + M_TYPE + M_JENS, 0, 0,
-     "mx_untangle per element: jens read (work set), type + conn read (count and fill "
-     "of the incidence lists), summary reads type + jens"},
-    {"b.smooth", K_NODE, 2 * 1 + SCAN_R + U64 + 3 * 1, 1 + U64 + SCAN_W + U64 + IDX, 0,
-     "per node: mark + off zeroed, mark gathered x2, prefix sum, cur copied, mark read by "
-     "3 passes (count, work list count + fill); widx initialised"},
+    {"b.smooth", K_ELEM, M_JENS + (M_TYPE + M_CONN) + M_TYPE + M_JENS, 0, 0,
+     "mx_untangle per element: jens read (work set), type + conn read once (a bit per "
+     "element with a marked node; the incidence then walks those only), summary reads "
+     "type + jens"},
+    {"b.smooth", K_NODE, 1 + SCAN_R + U64 + 2 * 1, 1 + U64 + SCAN_W + U64 + IDX, 0,
+     "per node: mark + off zeroed, mark gathered once, prefix sum, off moved up one place, "
+     "mark read by the work list's count + fill; widx initialised"},
 
     {"b.staircase", K_OPT, FSZ(mx_optional, type) + 8 * FSZ(mx_optional, conn) + 2 + 8, 1 + 8,
      0, "mx_staircase per optional element: type + conn read, ok + q written and read"},
@@ -671,9 +675,8 @@ static int probe(const char *input, int level, int threads, double *K, double fi
     }
     /* the node states (mx_node_states' rule: the nodes of leaves meeting no
      * triangle are inside, the others located), then the candidates of the
-     * close-to-boundary step: inside nodes of elements with both kinds; a
-     * candidate that was located has its closest point already (closed
-     * surface), the others are queried */
+     * close-to-boundary step: inside nodes of elements with both kinds, each
+     * queried (few were located: most are corners of inside leaves too) */
     mx_surface_index SI;
     uint8_t *states = malloc(M->nnodes + 1);
     uint8_t *cand = calloc(M->nnodes + 1, 1);
