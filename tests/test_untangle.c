@@ -3,7 +3,10 @@
  * the block so that elements are inverted, one boundary node is slid along
  * its face; the step must make every element valid again, keep every
  * boundary node on the cube's surface, leave the volume of the block
- * unchanged, and give the same positions on a second run. */
+ * unchanged, and give the same positions on a second run. Also the test of
+ * a node on the mesh's boundary (mx_on_mesh_boundary) on fans of
+ * tetrahedra around a node, small (its nodes as bits) and large (more than
+ * 64 nodes: the rows searched). */
 #include <math.h>
 #include <string.h>
 
@@ -11,6 +14,7 @@
 #include "kernels/boundary.h"
 #include "kernels/mesh_edit.h"
 #include "geom/quality.h"
+#include "kernels/node_work.h"
 #include "kernels/untangle.h"
 #include "soa/mesh.h"
 #include "octree_util.h"
@@ -60,8 +64,58 @@ static double volume(const mx_mesh *M) {
   return v;
 }
 
+/* A closed fan of 2k tetrahedra around node 0: a ring of k nodes (1 .. k)
+ * between two poles (k + 1, k + 2); `drop` (< 2k) tetrahedra left out. */
+static void fan(mx_mesh *M, int k, int drop) {
+  memset(M, 0, sizeof *M);
+  M->nnodes = (size_t)k + 3;
+  M->ncells = (size_t)(2 * k - drop);
+  M->xyz = mx_calloc(3 * M->nnodes * sizeof(double));
+  M->type = mx_alloc(M->ncells);
+  M->conn = mx_calloc(8 * M->ncells * sizeof(uint32_t));
+  size_t c = 0;
+  for (int i = 0; i < k && M->type && M->conn; i++) {
+    const uint32_t a = (uint32_t)(1 + i), b = (uint32_t)(1 + (i + 1) % k);
+    const uint32_t t[2][4] = {{0, a, b, (uint32_t)k + 1}, {0, b, a, (uint32_t)k + 2}};
+    for (int h = 0; h < 2; h++) {
+      if (2 * i + h < drop) continue;
+      M->type[c] = MX_TET;
+      memcpy(M->conn + 8 * c, t[h], sizeof t[h]);
+      c++;
+    }
+  }
+}
+
+/* mx_on_mesh_boundary of node v of M, from the incidence of every node */
+static int on_boundary(const mx_mesh *M, uint32_t v) {
+  uint8_t *all = mx_alloc(M->nnodes);
+  memset(all, 1, M->nnodes);
+  uint64_t *off = NULL;
+  uint32_t *inc = NULL;
+  CHECK(mx_mesh_incidence(M, all, &off, &inc) == MX_OK);
+  const int b = mx_on_mesh_boundary(M, inc, off[v], off[v + 1], v);
+  mx_free(off);
+  mx_free(inc);
+  mx_free(all);
+  return b;
+}
+
 int main(void) {
   (void)no_requests;
+  /* fans of 2 x 20 tetrahedra (23 nodes) and 2 x 80 (83 nodes, 160
+   * elements): the centre is inside when the fan is closed, on the
+   * boundary with one tetrahedron left out; a ring node is on it */
+  for (int k = 20; k <= 80; k += 60) {
+    mx_mesh F;
+    fan(&F, k, 0);
+    CHECK(on_boundary(&F, 0) == 0);
+    CHECK(on_boundary(&F, 1) == 1);
+    CHECK(on_boundary(&F, (uint32_t)k + 1) == 1);
+    mx_mesh_free(&F);
+    fan(&F, k, 1);
+    CHECK(on_boundary(&F, 0) == 1);
+    mx_mesh_free(&F);
+  }
   mx_trisoup cube;
   memset(&cube, 0, sizeof cube);
   const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};

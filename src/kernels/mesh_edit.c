@@ -119,6 +119,20 @@ int mx_mesh_incidence(const mx_mesh *M, const uint8_t *mark, uint64_t **off_out,
   return MX_OK;
 }
 
+int mx_mesh_grow_cells(mx_mesh *M, size_t n) {
+  uint8_t *type = mx_realloc(M->type, n + 1);
+  if (type) M->type = type;
+  uint8_t *level = type ? mx_realloc(M->level, n + 1) : NULL;
+  if (level) M->level = level;
+  uint32_t *conn = level ? mx_realloc(M->conn, (8 * n + 1) * sizeof *conn) : NULL;
+  if (conn) M->conn = conn;
+  uint32_t *leaf = conn ? mx_realloc(M->leaf, (n + 1) * sizeof *leaf) : NULL;
+  if (leaf) M->leaf = leaf;
+  float *jens = leaf ? mx_realloc(M->jens, (n + 1) * sizeof *jens) : NULL;
+  if (jens) M->jens = jens;
+  return jens ? MX_OK : MX_ENOMEM;
+}
+
 int mx_mesh_keep_cells(mx_mesh *M, const uint8_t *keep) {
   const size_t nc = M->ncells;
   uint64_t *dst = mx_alloc((nc + 1) * sizeof *dst);

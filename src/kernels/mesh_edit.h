@@ -12,6 +12,11 @@
 /* Keep the elements c with keep[c] != 0, in order. */
 int mx_mesh_keep_cells(mx_mesh *M, const uint8_t *keep);
 
+/* The per-element arrays (type, level, conn, leaf, jens) reallocated for n
+ * elements (a big array grows by remapping, not copying); ncells is left
+ * as it is. MX_ENOMEM (the arrays that grew stay M's). */
+int mx_mesh_grow_cells(mx_mesh *M, size_t n);
+
 /* Renumber the nodes: node v becomes newid[v] (UINT32_MAX: dropped; the
  * others take the ids 0 .. nu-1); coordinates, lattice keys and *states
  * (may be NULL) follow, connectivity is rewritten. */

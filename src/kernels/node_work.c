@@ -22,9 +22,82 @@ double mx_cell_jens(const mx_mesh *M, uint32_t c) {
  * incident element has all its nodes (in a conforming mesh without
  * overlaps, that is the same face). An inside node can lie on the boundary
  * (a lattice node exactly on a flat part of the surface); it must stay
- * there like a surface node. */
-static int on_boundary_by_search(const mx_mesh *M, const uint32_t *inc, size_t e0,
-                                 size_t e1, uint32_t v) {
+ * there like a surface node.
+ *
+ * The test runs on the neighbourhood's nodes as bits: its distinct nodes
+ * numbered (at most 64, in a small hash table), each element a 64-bit set,
+ * a face shared when another element's set holds the face's; a larger
+ * neighbourhood searches the other elements' rows instead. */
+enum { NB_MAX_CELLS = 128, NB_HASH = 128 };
+
+typedef struct {
+  uint32_t key[NB_HASH]; /* node ids, UINT32_MAX: empty */
+  uint8_t id[NB_HASH];   /* their numbers */
+  uint64_t set[NB_MAX_CELLS];
+} node_sets;
+
+static inline unsigned ns_slot(const node_sets *S, uint32_t v) {
+  unsigned h = (v * 2654435761u) >> 25; /* 7 bits */
+  while (S->key[h] != UINT32_MAX && S->key[h] != v) h = (h + 1) & (NB_HASH - 1);
+  return h;
+}
+
+/* The sets of the elements [e0, e1); 0 when the neighbourhood is too large. */
+static int node_sets_build(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1,
+                           node_sets *S) {
+  if (e1 - e0 > NB_MAX_CELLS) return 0;
+  memset(S->key, 0xff, sizeof S->key);
+  int nid = 0;
+  for (size_t e = e0; e < e1; e++) {
+    const uint32_t *row = M->conn + 8 * (size_t)inc[e];
+    uint64_t m = 0;
+    for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++) {
+      const unsigned h = ns_slot(S, row[k]);
+      if (S->key[h] == UINT32_MAX) {
+        if (nid == 64) return 0;
+        S->key[h] = row[k];
+        S->id[h] = (uint8_t)nid++;
+      }
+      m |= (uint64_t)1 << S->id[h];
+    }
+    S->set[e - e0] = m;
+  }
+  return 1;
+}
+
+/* Whether an element of [e0, e1) other than c holds the face fv (n nodes) of
+ * c (row): with the sets when S is not NULL, else by the rows. */
+static int face_shared(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1,
+                       uint32_t c, const uint32_t *row, const int8_t *fv, int n,
+                       const node_sets *S) {
+  if (S) {
+    uint64_t fm = 0; /* the face's nodes as bits */
+    for (int i = 0; i < n; i++) fm |= (uint64_t)1 << S->id[ns_slot(S, row[fv[i]])];
+    for (size_t g = e0; g < e1; g++)
+      if (inc[g] != c && (S->set[g - e0] & fm) == fm) return 1;
+    return 0;
+  }
+  for (size_t g = e0; g < e1; g++) {
+    const uint32_t d = inc[g];
+    if (d == c) continue;
+    const uint32_t *rd = M->conn + 8 * (size_t)d;
+    const int nd = mx_cell_nodes[M->type[d]];
+    int all = 1;
+    for (int i = 0; i < n && all; i++) {
+      const uint32_t w = row[fv[i]];
+      int in = 0;
+      for (int j = 0; j < nd; j++) in |= rd[j] == w;
+      all = in;
+    }
+    if (all) return 1;
+  }
+  return 0;
+}
+
+int mx_on_mesh_boundary(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1,
+                        uint32_t v) {
+  node_sets sets;
+  const node_sets *S = node_sets_build(M, inc, e0, e1, &sets) ? &sets : NULL;
   for (size_t e = e0; e < e1; e++) {
     const uint32_t c = inc[e];
     const int t = M->type[c];
@@ -34,77 +107,7 @@ static int on_boundary_by_search(const mx_mesh *M, const uint32_t *inc, size_t e
       const int n = fv[3] < 0 ? 3 : 4;
       int has = 0;
       for (int i = 0; i < n; i++) has |= row[fv[i]] == v;
-      if (!has) continue;
-      int shared = 0;
-      for (size_t g = e0; g < e1 && !shared; g++) {
-        const uint32_t d = inc[g];
-        if (d == c) continue;
-        const uint32_t *rd = M->conn + 8 * (size_t)d;
-        const int nd = mx_cell_nodes[M->type[d]];
-        int all = 1;
-        for (int i = 0; i < n && all; i++) {
-          const uint32_t w = row[fv[i]];
-          int in = 0;
-          for (int j = 0; j < nd; j++) in |= rd[j] == w;
-          all = in;
-        }
-        shared = all;
-      }
-      if (!shared) return 1;
-    }
-  }
-  return 0;
-}
-
-enum { NB_MAX_CELLS = 128, NB_HASH = 128 };
-
-/* The same test with the elements' nodes as bits: the distinct nodes of
- * the incident elements numbered (at most 64, in a small hash table), each
- * element a 64-bit set, a face shared when another element's set holds the
- * face's. Back to the search above for a larger neighbourhood. */
-int mx_on_mesh_boundary(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1,
-                        uint32_t v) {
-  const size_t ne = e1 - e0;
-  if (ne > NB_MAX_CELLS) return on_boundary_by_search(M, inc, e0, e1, v);
-  uint32_t key[NB_HASH];
-  uint8_t id[NB_HASH];
-  uint64_t set[NB_MAX_CELLS];
-  memset(key, 0xff, sizeof key); /* UINT32_MAX: empty */
-  int nid = 0;
-  for (size_t e = 0; e < ne; e++) {
-    const uint32_t *row = M->conn + 8 * (size_t)inc[e0 + e];
-    uint64_t m = 0;
-    for (int k = 0; k < mx_cell_nodes[M->type[inc[e0 + e]]]; k++) {
-      unsigned h = (row[k] * 2654435761u) >> 25; /* 7 bits */
-      while (key[h] != UINT32_MAX && key[h] != row[k]) h = (h + 1) & (NB_HASH - 1);
-      if (key[h] == UINT32_MAX) {
-        if (nid == 64) return on_boundary_by_search(M, inc, e0, e1, v);
-        key[h] = row[k];
-        id[h] = (uint8_t)nid++;
-      }
-      m |= (uint64_t)1 << id[h];
-    }
-    set[e] = m;
-  }
-  for (size_t e = 0; e < ne; e++) {
-    const uint32_t c = inc[e0 + e];
-    const int t = M->type[c];
-    const uint32_t *row = M->conn + 8 * (size_t)c;
-    for (int f = 0; f < mx_cell_nfaces[t]; f++) {
-      const int8_t *fv = mx_cell_faces[t][f];
-      const int n = fv[3] < 0 ? 3 : 4;
-      int has = 0;
-      uint64_t fm = 0;
-      for (int i = 0; i < n; i++) {
-        has |= row[fv[i]] == v;
-        unsigned h = (row[fv[i]] * 2654435761u) >> 25;
-        while (key[h] != row[fv[i]]) h = (h + 1) & (NB_HASH - 1);
-        fm |= (uint64_t)1 << id[h];
-      }
-      if (!has) continue;
-      int shared = 0;
-      for (size_t g = 0; g < ne && !shared; g++) shared = g != e && (set[g] & fm) == fm;
-      if (!shared) return 1;
+      if (has && !face_shared(M, inc, e0, e1, c, row, fv, n, S)) return 1;
     }
   }
   return 0;

@@ -31,17 +31,7 @@ int mx_staircase(mx_mesh *M, const mx_optional *opt, double q_min,
     n += ok[i];
   }
   const size_t nc = M->ncells, nt = nc + n;
-  uint8_t *type = mx_realloc(M->type, nt + 1);
-  if (type) M->type = type;
-  uint32_t *conn = type ? mx_realloc(M->conn, (8 * nt + 1) * sizeof *conn) : NULL;
-  if (conn) M->conn = conn;
-  uint8_t *level = conn ? mx_realloc(M->level, (nt + 1) * sizeof *level) : NULL;
-  if (level) M->level = level;
-  uint32_t *leaf = level ? mx_realloc(M->leaf, (nt + 1) * sizeof *leaf) : NULL;
-  if (leaf) M->leaf = leaf;
-  float *jens = leaf ? mx_realloc(M->jens, (nt + 1) * sizeof *jens) : NULL;
-  if (jens) M->jens = jens;
-  if (!jens) {
+  if (mx_mesh_grow_cells(M, nt)) {
     mx_free(ok);
     mx_free(q);
     return MX_ENOMEM;

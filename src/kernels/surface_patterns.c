@@ -186,21 +186,6 @@ static uint64_t out_at(const uint64_t *bout, size_t nb, uint64_t total, size_t b
   return b < nb ? bout[b] : total;
 }
 
-/* The element arrays grown to n elements (mremap: not copied). */
-static int grow_cells(mx_mesh *M, size_t n) {
-  uint8_t *type = mx_realloc(M->type, n + 1);
-  if (type) M->type = type;
-  uint8_t *level = type ? mx_realloc(M->level, n + 1) : NULL;
-  if (level) M->level = level;
-  uint32_t *conn = level ? mx_realloc(M->conn, (8 * n + 1) * sizeof *conn) : NULL;
-  if (conn) M->conn = conn;
-  uint32_t *leaf = conn ? mx_realloc(M->leaf, (n + 1) * sizeof *leaf) : NULL;
-  if (leaf) M->leaf = leaf;
-  float *jens = leaf ? mx_realloc(M->jens, (n + 1) * sizeof *jens) : NULL;
-  if (jens) M->jens = jens;
-  return jens ? MX_OK : MX_ENOMEM;
-}
-
 int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
                         mx_optional *opt, mx_surface_stats *stats) {
   const size_t nc = M->ncells, nn = M->nnodes;
@@ -253,7 +238,7 @@ int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
                    !opt->level
                ? MX_ENOMEM
                : MX_OK;
-  if (!st && total > nc) st = grow_cells(M, total);
+  if (!st && total > nc) st = mx_mesh_grow_cells(M, total);
   if (st) {
     mx_free(bout);
     mx_optional_free(opt);
