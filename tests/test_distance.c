@@ -553,6 +553,93 @@ static void test_cortex(void) {
   mx_trisoup_free(&s);
 }
 
+/* The block queries (mx_inside_block, mx_closest_point_block) against the
+ * single ones on the index S: clusters of 40 points (more than a block)
+ * within `spread` of a point of the box lo..hi grown by 5 %, clusters of
+ * points far apart (loose blocks), and points on lattice planes through the
+ * box's middle (ties between triangles at the same distance, for the
+ * cubes); rmax infinite, then about the distances. The same states, and
+ * bit for bit the same distances and points below rmax. */
+static void check_blocks(const char *name, const mx_surface_index *S, const double lo[3],
+                         const double hi[3], double spread) {
+  enum { C = 40, NCL = 400 };
+  double *xyz = malloc(3 * C * sizeof *xyz);
+  uint32_t ids[C];
+  uint8_t in[C];
+  double rmax[C], dist[C], q[C][3];
+  size_t n = 0, in_bad = 0, d_bad = 0, below = 0;
+  for (int cl = 0; cl < NCL; cl++) {
+    const int kind = cl % 4; /* 0, 1: cluster; 2: far apart; 3: on middle planes */
+    double c[3];
+    for (int a = 0; a < 3; a++) {
+      const double m = 0.05 * (hi[a] - lo[a]);
+      c[a] = uniform(lo[a] - m, hi[a] + m);
+    }
+    for (int i = 0; i < C; i++) {
+      ids[i] = (uint32_t)(C - 1 - i); /* (not in order: the ids name the points) */
+      for (int a = 0; a < 3; a++) {
+        const double m = 0.05 * (hi[a] - lo[a]);
+        double x = kind == 2 ? uniform(lo[a] - m, hi[a] + m) : c[a] + uniform(-spread, spread);
+        if (kind == 3 && a == i % 3) x = 0.5 * (lo[a] + hi[a]);
+        xyz[3 * i + a] = x;
+      }
+    }
+    for (int pass = 0; pass < 2; pass++) {
+      for (int i = 0; i < C; i++)
+        rmax[i] = pass == 0 ? INFINITY
+                            : fabs(mx_signed_distance(S, xyz + 3 * (size_t)ids[i], NULL)) *
+                                  (i % 2 ? 1.5 : 0.5);
+      if (pass == 0) mx_inside_block(S, xyz, ids, C, in);
+      mx_closest_point_block(S, xyz, ids, C, rmax, dist, q);
+      for (int i = 0; i < C; i++) {
+        const double *p = xyz + 3 * (size_t)ids[i];
+        if (pass == 0) in_bad += in[i] != (uint8_t)mx_inside(S, p);
+        double q1[3];
+        const double d1 = mx_closest_point_within(S, p, rmax[i], q1);
+        if (d1 < rmax[i]) {
+          below++;
+          d_bad += memcmp(&d1, &dist[i], sizeof d1) != 0 || memcmp(q1, q[i], sizeof q1) != 0;
+        } else {
+          d_bad += dist[i] < rmax[i];
+        }
+        n++;
+      }
+    }
+  }
+  printf("%s: %zu block queries (%zu below rmax): %zu states and %zu closest points differ "
+         "from the single queries\n", name, n, below, in_bad, d_bad);
+  CHECK(in_bad == 0 && d_bad == 0 && below > n / 4);
+  free(xyz);
+}
+
+static void test_blocks(void) {
+  {
+    const box b[2] = {{{0, 0, 0}, {1, 1, 1}}, {{0.3, 0.25, 0.4}, {0.7, 0.6, 0.8}}};
+    const int in[2] = {0, 0};
+    mx_trisoup s;
+    mx_surface_index S;
+    soup_of_boxes(&s, b, in, 1);
+    CHECK(mx_surface_index_build(&S, &s, 0, (uint32_t)s.nt) == MX_OK);
+    check_blocks("blocks, unit cube", &S, b[0].lo, b[0].hi, 0.05);
+    mx_surface_index_free(&S);
+    mx_trisoup_free(&s);
+    soup_of_boxes(&s, b, in, 2);
+    CHECK(mx_surface_index_build(&S, &s, 0, (uint32_t)s.nt) == MX_OK);
+    check_blocks("blocks, nested cubes", &S, b[0].lo, b[0].hi, 0.05);
+    mx_surface_index_free(&S);
+    mx_trisoup_free(&s);
+  }
+  mx_trisoup s;
+  if (!load_shared_surface("cortex.off", &s)) return;
+  mx_surface_index S;
+  CHECK(mx_surface_index_build(&S, &s, 0, (uint32_t)s.nt) == MX_OK);
+  double lo[3], hi[3];
+  mx_trisoup_bbox(&s, lo, hi);
+  check_blocks("blocks, cortex", &S, lo, hi, 0.01 * (hi[0] - lo[0]));
+  mx_surface_index_free(&S);
+  mx_trisoup_free(&s);
+}
+
 static void test_empty(void) {
   mx_trisoup s;
   memset(&s, 0, sizeof s);
@@ -642,5 +729,6 @@ int main(int argc, char **argv) {
   test_empty();
   test_scales();
   test_cortex();
+  test_blocks();
   return TEST_DONE();
 }

@@ -151,6 +151,59 @@ double mx_closest_on_triangle(const double t[9], const double p[3], double q[3])
   return closest_on_triangle(t, p, q, &feat);
 }
 
+/* Float lower bounds of the squared distance from (px, py, pz): to the
+ * triangles of leaf pack P (its four lanes), and to the four children's
+ * oriented boxes of wide node W (0 inside; unused children infinite). */
+static inline void pack_bounds(const mx_leaf_pack *P, float px, float py, float pz,
+                               float d[4]) {
+#pragma omp simd
+  for (int l = 0; l < 4; l++) {
+    const float h = P->v[0][l] * px + P->v[1][l] * py + P->v[2][l] * pz - P->v[3][l];
+    const float g0 = P->v[4][l] * px + P->v[5][l] * py + P->v[6][l] * pz - P->v[7][l];
+    const float g1 = P->v[8][l] * px + P->v[9][l] * py + P->v[10][l] * pz - P->v[11][l];
+    const float g2 = P->v[12][l] * px + P->v[13][l] * py + P->v[14][l] * pz - P->v[15][l];
+    const float g = fmax_f(fmax_f(g0, g1), fmax_f(g2, 0.0f));
+    d[l] = h * h + g * g;
+  }
+}
+
+static inline void node_bounds(const mx_bvh4_node *W, float px, float py, float pz,
+                               float d[4]) {
+#pragma omp simd
+  for (int c = 0; c < 4; c++) {
+    const float dx = px - W->c[0][c], dy = py - W->c[1][c], dz = pz - W->c[2][c];
+    const float ux = W->a[0][c], uy = W->a[1][c], uz = W->a[2][c];
+    const float vx = W->a[3][c], vy = W->a[4][c], vz = W->a[5][c];
+    const float wx = uy * vz - uz * vy, wy = uz * vx - ux * vz, wz = ux * vy - uy * vx;
+    /* excess over the half extents; max(x, 0) = (x + |x|) / 2 exactly,
+     * written so that the loop vectorizes */
+    const float x0 = fabsf(ux * dx + uy * dy + uz * dz) - W->h[0][c];
+    const float x1 = fabsf(vx * dx + vy * dy + vz * dz) - W->h[1][c];
+    const float x2 = fabsf(wx * dx + wy * dy + wz * dz) - W->h[2][c];
+    const float e0 = 0.5f * (x0 + fabsf(x0)), e1 = 0.5f * (x1 + fabsf(x1)),
+                e2 = 0.5f * (x2 + fabsf(x2));
+    d[c] = e0 * e0 + e1 * e1 + e2 * e2;
+  }
+}
+
+/* The float bounds are safe (squared distances in float range) for points
+ * and triangles within this magnitude, and the rounding allowance there. */
+static inline int float_bounds_safe(const mx_surface_index *S, double pm) {
+  return pm + S->coord_max < 1e15 && S->coord_max > 1e-15;
+}
+
+/* The hint grid's triangle for p (the index has a grid: S->hint). */
+static inline uint32_t hint_slot(const mx_surface_index *S, const double p[3]) {
+  size_t cell = 0;
+  for (int a = 2; a >= 0; a--) {
+    const double f = (p[a] - S->hint_lo[a]) * S->hint_inv[a];
+    const int n = S->hint_n[a];
+    const int c = !(f > 0.0) ? 0 : f >= n - 1 ? n - 1 : (int)f;
+    cell = cell * (size_t)n + (size_t)c;
+  }
+  return S->hint[cell];
+}
+
 /* Closest point over all triangles: squared distance, slot and feature.
  * Descends the 4-wide BVH, nearest child first. A subtree or a triangle is
  * skipped when a lower bound of its squared distance, computed in single
@@ -163,7 +216,7 @@ double mx_index_closest_slot(const mx_surface_index *S, const double p[3],
   double best = INFINITY, thr = INFINITY;
   if (!S->nt) return best;
   const double pm = mx_max(fabs(p[0]), mx_max(fabs(p[1]), fabs(p[2])));
-  if (!(pm + S->coord_max < 1e15 && S->coord_max > 1e-15)) {
+  if (!float_bounds_safe(S, pm)) {
     /* Beyond the range where the float bounds (squared distances) are safe,
      * or NaN: every triangle. */
     for (uint32_t i = 0; i < S->nt; i++) {
@@ -182,14 +235,7 @@ double mx_index_closest_slot(const mx_surface_index *S, const double p[3],
   const double delta = 0x1p-17 * (pm + S->coord_max);
   const float px = (float)p[0], py = (float)p[1], pz = (float)p[2];
   if (S->hint) {
-    size_t cell = 0;
-    for (int a = 2; a >= 0; a--) {
-      const double f = (p[a] - S->hint_lo[a]) * S->hint_inv[a];
-      const int n = S->hint_n[a];
-      const int c = !(f > 0.0) ? 0 : f >= n - 1 ? n - 1 : (int)f;
-      cell = cell * (size_t)n + (size_t)c;
-    }
-    const uint32_t i = S->hint[cell];
+    const uint32_t i = hint_slot(S, p);
     int f = MX_FEATURE_FACE;
     best = closest_on_triangle(S->tv + 9 * (size_t)i, p, q, &f);
     const double r = sqrt(best) + delta;
@@ -217,20 +263,7 @@ double mx_index_closest_slot(const mx_surface_index *S, const double p[3],
     float d[4];
     uint64_t k[4];
     if (cnt) { /* a leaf: pack idx, lanes 0 .. cnt-1 */
-      const mx_leaf_pack *P = &S->packs[idx];
-#pragma omp simd
-      for (int l = 0; l < 4; l++) {
-        const float h = P->v[0][l] * px + P->v[1][l] * py + P->v[2][l] * pz -
-                        P->v[3][l];
-        const float g0 = P->v[4][l] * px + P->v[5][l] * py +
-                         P->v[6][l] * pz - P->v[7][l];
-        const float g1 = P->v[8][l] * px + P->v[9][l] * py +
-                         P->v[10][l] * pz - P->v[11][l];
-        const float g2 = P->v[12][l] * px + P->v[13][l] * py +
-                         P->v[14][l] * pz - P->v[15][l];
-        const float g = fmax_f(fmax_f(g0, g1), fmax_f(g2, 0.0f));
-        d[l] = h * h + g * g;
-      }
+      pack_bounds(&S->packs[idx], px, py, pz, d);
       for (int l = 0; l < 4; l++)
         k[l] = lane_key(l < cnt ? d[l] : INFINITY, l);
       sort4_down(k);
@@ -253,23 +286,7 @@ double mx_index_closest_slot(const mx_surface_index *S, const double p[3],
       continue;
     }
     const mx_bvh4_node *W = &S->wide[idx];
-#pragma omp simd
-    for (int c = 0; c < 4; c++) {
-      const float dx = px - W->c[0][c], dy = py - W->c[1][c],
-                  dz = pz - W->c[2][c];
-      const float ux = W->a[0][c], uy = W->a[1][c], uz = W->a[2][c];
-      const float vx = W->a[3][c], vy = W->a[4][c], vz = W->a[5][c];
-      const float wx = uy * vz - uz * vy, wy = uz * vx - ux * vz,
-                  wz = ux * vy - uy * vx;
-      /* excess over the half extents; max(x, 0) = (x + |x|) / 2 exactly,
-       * written so that the loop vectorizes */
-      const float x0 = fabsf(ux * dx + uy * dy + uz * dz) - W->h[0][c];
-      const float x1 = fabsf(vx * dx + vy * dy + vz * dz) - W->h[1][c];
-      const float x2 = fabsf(wx * dx + wy * dy + wz * dz) - W->h[2][c];
-      const float e0 = 0.5f * (x0 + fabsf(x0)), e1 = 0.5f * (x1 + fabsf(x1)),
-                  e2 = 0.5f * (x2 + fabsf(x2));
-      d[c] = e0 * e0 + e1 * e1 + e2 * e2;
-    }
+    node_bounds(W, px, py, pz, d);
     for (int c = 0; c < 4; c++) k[c] = lane_key(d[c], c);
     sort4_down(k);
     /* Push the children within the bound, farthest first, so that the
@@ -357,15 +374,26 @@ int mx_region_depth(const mx_surface_index *S, const double p[3]) {
   return d < 0 ? 0 : (int)d;
 }
 
+/* The side of p from its closest point q (squared distance > 0, slot,
+ * feature f) on an index with triangles and no side index: -1 inside, 1
+ * outside. Closed shells built outward: the closest shell's depth, plus one
+ * on its inner side (the pseudonormal's), inside from 1 on; a closed
+ * surface: the pseudonormal's sign; else, or when that sign is 0, the
+ * winding number. */
+static int side_from_closest(const mx_surface_index *S, const double p[3],
+                             const double q[3], uint32_t slot, int f) {
+  if (S->outward_closed || S->closed) {
+    const double g = side_of(S, p, q, slot, f);
+    if (g != 0.0) {
+      if (!S->outward_closed) return g < 0.0 ? -1 : 1;
+      return (int)S->shell_depth[S->shell_of[slot]] + (g < 0.0) >= 1 ? -1 : 1;
+    }
+  }
+  return mx_winding_number(S, p) > 0.5 ? -1 : 1;
+}
+
 double mx_signed_distance(const mx_surface_index *S, const double p[3],
                           double q[3]) {
-  if (S->outward_closed && S->nt && !S->side) { /* inside: within a shell */
-    double d;
-    const int depth = depth_by_closest(S, p, &d, q);
-    if (d == 0.0) return 0.0;
-    if (depth >= 0) return depth >= 1 ? -d : d;
-    return mx_winding_number(S, p) > 0.5 ? -d : d;
-  }
   double qq[3] = {INFINITY, INFINITY, INFINITY};
   uint32_t slot = 0;
   int f = MX_FEATURE_FACE;
@@ -375,18 +403,176 @@ double mx_signed_distance(const mx_surface_index *S, const double p[3],
   const double d = sqrt(d2);
   if (S->side) return mx_winding_number(S->side, p) > 0.5 ? -d : d;
   if (!S->nt) return d;
-  if (S->closed) {
-    const double g = side_of(S, p, qq, slot, f);
-    if (g > 0.0) return d;
-    if (g < 0.0) return -d;
-  }
-  return mx_winding_number(S, p) > 0.5 ? -d : d;
+  return side_from_closest(S, p, qq, slot, f) < 0 ? -d : d;
 }
 
 int mx_inside(const mx_surface_index *S, const double p[3]) {
   if (S->side) return mx_winding_number(S->side, p) > 0.5;
   if (!S->closed && !S->outward_closed) return mx_winding_number(S, p) > 0.5;
   return mx_signed_distance(S, p, NULL) <= 0.0;
+}
+
+/* ---- many points at once ------------------------------------------------ */
+
+enum { BLOCK_PACKS = 48 };
+
+/* The closest points of the points xyz + 3 ids[i], i < n <= MX_BLOCK: the
+ * squared distance d2[i], point q[i], slot and feature, the same as
+ * mx_index_closest_slot's with rmax[i] (rmax NULL: infinite) whenever the
+ * distance is below rmax[i] (otherwise d2[i] is not below rmax[i]^2 either).
+ * The 4-wide tree is walked once for the block: the leaf packs with a
+ * triangle within ub of the block's box (ub: the farthest of the points'
+ * first bounds, their hints' distances or rmax), found from its centre
+ * with ub + its half diagonal; then each point starts from its hint, as the
+ * single query, and tests the packs' triangles whose float bound is below
+ * its best so far plus the allowance, exactly. Where two triangles are at
+ * exactly the least distance the single query decides which (the tree's
+ * order); so does a block too loose for BLOCK_PACKS packs (its points far
+ * apart) and a range where float bounds are not safe. */
+static void closest_block(const mx_surface_index *S, const double *xyz, const uint32_t *ids,
+                          int n, const double *rmax, double *d2, double (*q)[3],
+                          uint32_t *slot, int *feat) {
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  double pm = 0.0;
+  for (int i = 0; i < n; i++) {
+    const double *p = xyz + 3 * (size_t)ids[i];
+    for (int a = 0; a < 3; a++) {
+      lo[a] = fmin(lo[a], p[a]);
+      hi[a] = fmax(hi[a], p[a]);
+      pm = fmax(pm, fabs(p[a]));
+    }
+  }
+  int alone = n < 2 || !S->hint || !float_bounds_safe(S, pm); /* one by one */
+  const double delta = 0x1p-17 * (pm + S->coord_max);
+  double ub = 0.0;
+  for (int i = 0; i < n && !alone; i++) {
+    const double *p = xyz + 3 * (size_t)ids[i];
+    slot[i] = hint_slot(S, p);
+    feat[i] = MX_FEATURE_FACE;
+    d2[i] = closest_on_triangle(S->tv + 9 * (size_t)slot[i], p, q[i], &feat[i]);
+    ub = fmax(ub, rmax ? fmin(sqrt(d2[i]), rmax[i]) : sqrt(d2[i]));
+  }
+  uint32_t pack[BLOCK_PACKS];
+  uint8_t pcnt[BLOCK_PACKS]; /* their lanes in use */
+  int np = 0;
+  if (!alone) {
+    double c[3], rb = 0.0;
+    for (int a = 0; a < 3; a++) {
+      c[a] = 0.5 * (lo[a] + hi[a]);
+      rb += 0.25 * (hi[a] - lo[a]) * (hi[a] - lo[a]);
+    }
+    const double r = ub + sqrt(rb) + delta, thr = r * r;
+    const float cx = (float)c[0], cy = (float)c[1], cz = (float)c[2];
+    uint32_t stack[4 * STACK_MAX];
+    uint8_t scnt[4 * STACK_MAX];
+    int sp = 0;
+    stack[sp] = 0;
+    scnt[sp++] = 0;
+    while (sp && !alone) {
+      sp--;
+      const uint32_t idx = stack[sp];
+      float d[4];
+      if (scnt[sp]) { /* a leaf pack: kept when a lane is near */
+        pack_bounds(&S->packs[idx], cx, cy, cz, d);
+        int near = 0;
+        for (int l = 0; l < scnt[sp]; l++) near |= d[l] < thr;
+        if (!near) continue;
+        if (np == BLOCK_PACKS) {
+          alone = 1;
+        } else {
+          pcnt[np] = scnt[sp];
+          pack[np++] = idx;
+        }
+        continue;
+      }
+      const mx_bvh4_node *W = &S->wide[idx];
+      node_bounds(W, cx, cy, cz, d);
+      for (int k = 0; k < 4; k++) {
+        stack[sp] = W->child[k];
+        scnt[sp] = W->count[k];
+        sp += d[k] < thr;
+      }
+    }
+  }
+  for (int i = 0; i < n; i++) {
+    const double *p = xyz + 3 * (size_t)ids[i];
+    const double rm = rmax ? rmax[i] : INFINITY;
+    int tie = 0;
+    if (!alone && d2[i] > 0.0) {
+      const double r0 = fmin(sqrt(d2[i]), rm) + delta;
+      double t = r0 * r0;
+      const float px = (float)p[0], py = (float)p[1], pz = (float)p[2];
+      for (int k = 0; k < np; k++) {
+        float d[4];
+        pack_bounds(&S->packs[pack[k]], px, py, pz, d);
+        const uint32_t first = S->leaf_first[pack[k]];
+        for (int l = 0; l < pcnt[k]; l++) {
+          if (!(d[l] < t)) continue;
+          const uint32_t sl = first + (uint32_t)l;
+          double qi[3];
+          int f = MX_FEATURE_FACE;
+          const double e = closest_on_triangle(S->tv + 9 * (size_t)sl, p, qi, &f);
+          if (e < d2[i]) {
+            d2[i] = e;
+            memcpy(q[i], qi, sizeof qi);
+            slot[i] = sl;
+            feat[i] = f;
+            tie = 0;
+            const double ri = fmin(sqrt(e), rm) + delta;
+            t = ri * ri;
+          } else if (e == d2[i] && sl != slot[i]) {
+            tie = 1;
+          }
+        }
+      }
+    }
+    if (alone || tie) d2[i] = mx_index_closest_slot(S, p, q[i], &slot[i], &feat[i], rm);
+  }
+}
+
+/* mx_inside of each point, one by one */
+static void inside_each(const mx_surface_index *S, const double *xyz, const uint32_t *ids,
+                        int n, uint8_t *inside) {
+  for (int i = 0; i < n; i++) inside[i] = (uint8_t)mx_inside(S, xyz + 3 * (size_t)ids[i]);
+}
+
+void mx_inside_block(const mx_surface_index *S, const double *xyz, const uint32_t *ids,
+                     int n, uint8_t *inside) {
+  if (n > MX_BLOCK) {
+    for (int i = 0; i < n; i += MX_BLOCK)
+      mx_inside_block(S, xyz, ids + i, n - i < MX_BLOCK ? n - i : MX_BLOCK, inside + i);
+    return;
+  }
+  if (S->side || (!S->closed && !S->outward_closed) || !S->nt) {
+    inside_each(S, xyz, ids, n, inside);
+    return;
+  }
+  double d2[MX_BLOCK], q[MX_BLOCK][3];
+  uint32_t slot[MX_BLOCK];
+  int feat[MX_BLOCK];
+  closest_block(S, xyz, ids, n, NULL, d2, q, slot, feat);
+  for (int i = 0; i < n; i++) /* (mx_inside: on the surface is in) */
+    inside[i] = (uint8_t)(d2[i] == 0.0 ||
+                          side_from_closest(S, xyz + 3 * (size_t)ids[i], q[i], slot[i],
+                                            feat[i]) < 0);
+}
+
+void mx_closest_point_block(const mx_surface_index *S, const double *xyz, const uint32_t *ids,
+                            int n, const double *rmax, double *dist, double (*q)[3]) {
+  if (n > MX_BLOCK) {
+    for (int i = 0; i < n; i += MX_BLOCK)
+      mx_closest_point_block(S, xyz, ids + i, n - i < MX_BLOCK ? n - i : MX_BLOCK,
+                             rmax ? rmax + i : NULL, dist + i, q + i);
+    return;
+  }
+  uint32_t slot[MX_BLOCK];
+  int feat[MX_BLOCK];
+  if (!S->nt) {
+    for (int i = 0; i < n; i++) dist[i] = INFINITY;
+    return;
+  }
+  closest_block(S, xyz, ids, n, rmax, dist, q, slot, feat);
+  for (int i = 0; i < n; i++) dist[i] = sqrt(dist[i]);
 }
 
 /* Face normals, edge pseudonormals (sum of the normals of the faces of the

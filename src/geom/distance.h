@@ -243,4 +243,18 @@ double mx_winding_number_direct(const mx_surface_index *S, const double p[3]);
  * surface, winding number > 1/2 otherwise. Points on the surface are in. */
 int mx_inside(const mx_surface_index *S, const double p[3]);
 
+/* Many points near each other at once, by blocks of up to MX_BLOCK: the
+ * 4-wide tree walked once a block for the triangles near its box, then each
+ * point against those (the same answers as the single queries: where two
+ * triangles are at exactly the least distance, and for a block whose points
+ * lie far apart, the single query is asked). mx_inside of the points
+ * xyz + 3 ids[i], i < n, into inside[i] (0 or 1). */
+#define MX_BLOCK 32
+void mx_inside_block(const mx_surface_index *S, const double *xyz, const uint32_t *ids,
+                     int n, uint8_t *inside);
+/* mx_closest_point_within of the same points, with rmax[i] (NULL: no
+ * bound): dist[i], and q[i] when dist[i] < rmax[i]. */
+void mx_closest_point_block(const mx_surface_index *S, const double *xyz, const uint32_t *ids,
+                            int n, const double *rmax, double *dist, double (*q)[3]);
+
 #endif

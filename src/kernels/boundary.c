@@ -27,12 +27,22 @@ int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
       __atomic_store_n(&states[M->conn[8 * c + k]], (uint8_t)MX_NODE_INSIDE,
                        __ATOMIC_RELAXED);
   }
+  /* the others located a run of node ids at a time (nodes are numbered
+   * leaf by leaf: a run's unknown nodes lie near each other), by blocks
+   * (mx_inside_block: the tree walked once a block) */
+  enum { RUN = 2 * MX_BLOCK };
+  const size_t nruns = (M->nnodes + RUN - 1) / RUN;
   size_t q = 0;
-#pragma omp parallel for schedule(dynamic, 4096) reduction(+ : q)
-  for (size_t v = 0; v < M->nnodes; v++) {
-    if (states[v] != UNKNOWN) continue;
-    states[v] = mx_inside(S, M->xyz + 3 * v) ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
-    q++;
+#pragma omp parallel for schedule(dynamic, 64) reduction(+ : q)
+  for (size_t r = 0; r < nruns; r++) {
+    uint32_t ids[RUN];
+    uint8_t in[RUN];
+    int n = 0;
+    for (size_t v = r * RUN; v < M->nnodes && v < (r + 1) * RUN; v++)
+      if (states[v] == UNKNOWN) ids[n++] = (uint32_t)v;
+    mx_inside_block(S, M->xyz, ids, n, in);
+    for (int i = 0; i < n; i++) states[ids[i]] = in[i] ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
+    q += (size_t)n;
   }
   *queries = q;
   return MX_OK;
@@ -111,27 +121,40 @@ int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
   /* Each candidate moved as soon as it is decided: a decision reads the
    * node's own position and the sums above only, so the moves of the
    * others do not change it (the same as deciding all on the old positions
-   * first). cand: 2 for a node that moved. */
+   * first). The closest points by runs of node ids (nodes are numbered leaf
+   * by leaf: a run's candidates lie near each other), a block at a time
+   * (mx_closest_point_block). cand: 1 for a node that moved. */
+  enum { RUN = 2 * MX_BLOCK };
+  const size_t nruns = (nn + RUN - 1) / RUN;
   size_t nmoved = 0;
   atomic_int *cf = mx_cancel_flag; /* base/cancel.h: the longest loop */
-#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : nmoved)
-  for (size_t v = 0; v < nn; v++) {
+#pragma omp parallel for schedule(dynamic, 16) reduction(+ : nmoved)
+  for (size_t r = 0; r < nruns; r++) {
     if (mx_cancel_seen(cf)) continue;
-    const uint64_t cnt = len[v] >> (64 - COUNT_BITS);
-    if (!cand[v] || !cnt) {
-      cand[v] = 0;
-      continue;
+    uint32_t ids[RUN];
+    double rmax[RUN], dist[RUN], q[RUN][3];
+    int n = 0;
+    for (size_t v = r * RUN; v < nn && v < (r + 1) * RUN; v++) {
+      const uint64_t cnt = len[v] >> (64 - COUNT_BITS);
+      if (!cand[v] || !cnt) {
+        cand[v] = 0;
+        continue;
+      }
+      const double avg = (double)(len[v] & (ONE_EDGE - 1)) * unit / (double)cnt;
+      rmax[n] = ratio * avg;
+      ids[n++] = (uint32_t)v;
     }
-    const double avg = (double)(len[v] & (ONE_EDGE - 1)) * unit / (double)cnt;
-    double q[3];
-    const double d = mx_closest_point_within(S, M->xyz + 3 * v, ratio * avg, q);
-    if (d < ratio * avg) {
-      memcpy(M->xyz + 3 * v, q, sizeof q);
-      states[v] = MX_NODE_OUTSIDE;
-      cand[v] = 1;
-      nmoved++;
-    } else {
-      cand[v] = 0;
+    mx_closest_point_block(S, M->xyz, ids, n, rmax, dist, q);
+    for (int i = 0; i < n; i++) {
+      const uint32_t v = ids[i];
+      if (dist[i] < rmax[i]) {
+        memcpy(M->xyz + 3 * (size_t)v, q[i], sizeof q[i]);
+        states[v] = MX_NODE_OUTSIDE;
+        cand[v] = 1;
+        nmoved++;
+      } else {
+        cand[v] = 0;
+      }
     }
   }
   mx_free(len);
