@@ -223,20 +223,20 @@ static void compact_nodes(mx_mesh *M, uint8_t **states, const uint32_t *newid, s
   M->nnodes = nu; /* the arrays keep their room (a later growth reallocates) */
 }
 
-int mx_mesh_drop_unused_nodes(mx_mesh *M, uint8_t **states, uint32_t **newid_out) {
+int mx_mesh_drop_nodes(mx_mesh *M, uint8_t **states, const uint8_t *used,
+                       uint32_t **newid_out) {
   const size_t nn = M->nnodes;
-  uint64_t *id = mx_calloc((nn + 1) * sizeof *id);
+  uint64_t *id = mx_alloc((nn + 1) * sizeof *id);
   uint32_t *newid = mx_alloc((nn + 1) * sizeof *newid);
   if (!id || !newid) {
     mx_free(id); mx_free(newid);
     return MX_ENOMEM;
   }
 #pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < M->ncells; c++)
-    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
-      __atomic_store_n(&id[M->conn[8 * c + k]], 1, __ATOMIC_RELAXED);
-#pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < nn; v++) newid[v] = id[v] ? 0 : UINT32_MAX;
+  for (size_t v = 0; v < nn; v++) {
+    id[v] = used[v] != 0;
+    newid[v] = used[v] ? 0 : UINT32_MAX;
+  }
   const uint64_t nu = mx_scan_u64(id, nn); /* new ids, in order */
 #pragma omp parallel for schedule(static)
   for (size_t v = 0; v < nn; v++)
@@ -248,6 +248,18 @@ int mx_mesh_drop_unused_nodes(mx_mesh *M, uint8_t **states, uint32_t **newid_out
   else
     *newid_out = newid;
   return MX_OK;
+}
+
+int mx_mesh_drop_unused_nodes(mx_mesh *M, uint8_t **states, uint32_t **newid_out) {
+  uint8_t *used = mx_calloc(M->nnodes + 1);
+  if (!used) return MX_ENOMEM;
+#pragma omp parallel for schedule(static)
+  for (size_t c = 0; c < M->ncells; c++)
+    for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+      __atomic_store_n(&used[M->conn[8 * c + k]], 1, __ATOMIC_RELAXED);
+  const int st = mx_mesh_drop_nodes(M, states, used, newid_out);
+  mx_free(used);
+  return st;
 }
 
 void mx_mesh_summarize(mx_mesh *M) {

@@ -27,6 +27,10 @@ int mx_mesh_apply_node_ids(mx_mesh *M, uint8_t **states, const uint32_t *newid,
  * (one byte per node, may be NULL) follows. When newid is not NULL it
  * receives (mx_alloc) the new id of every old node, UINT32_MAX if dropped. */
 int mx_mesh_drop_unused_nodes(mx_mesh *M, uint8_t **states, uint32_t **newid);
+/* The same with the nodes in use given: used[v] != 0 for each node an
+ * element uses (a pass that writes the elements marks them on the way). */
+int mx_mesh_drop_nodes(mx_mesh *M, uint8_t **states, const uint8_t *used,
+                       uint32_t **newid);
 
 /* The elements of each marked node (mark[v] != 0) in increasing order:
  * those of v are inc[off[v] .. off[v + 1]) (off: nnodes + 1 entries; an

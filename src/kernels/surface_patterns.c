@@ -92,6 +92,7 @@ typedef struct {
   uint8_t *st2;
   uint64_t *nkey;
   mx_optional *opt;
+  uint8_t *used; /* the nodes the written elements use, marked */
 } fill_ctx;
 
 /* Elements [from, to) of M are read for good: their pages go. */
@@ -120,6 +121,8 @@ static void fill_block(const fill_ctx *F, size_t b, const cell_arrays *d) {
     const uint32_t *v = M->conn + 8 * c;
     if (!sc) {
       d->type[w] = M->type[c];
+      for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
+        __atomic_store_n(&F->used[v[k]], 1, __ATOMIC_RELAXED);
       memmove(d->conn + 8 * w, v, 8 * sizeof *d->conn); /* (the same row when w = c) */
       d->level[w] = M->level[c];
       d->leaf[w] = M->leaf[c];
@@ -162,6 +165,7 @@ static void fill_block(const fill_ctx *F, size_t b, const cell_arrays *d) {
       uint32_t g[8] = {0, 0, 0, 0, 0, 0, 0, 0};
       for (int k = 0; k < ne; k++) g[k] = e->v[k] == MX_SURFACE_CENTRE ? centre : in[e->v[k]];
       if (kept) {
+        for (int k = 0; k < ne; k++) __atomic_store_n(&F->used[g[k]], 1, __ATOMIC_RELAXED);
         d->type[w] = e->type;
         memcpy(d->conn + 8 * w, g, sizeof g);
         d->level[w] = lev;
@@ -239,12 +243,14 @@ int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
                ? MX_ENOMEM
                : MX_OK;
   if (!st && total > nc) st = mx_mesh_grow_cells(M, total);
+  uint8_t *used = st ? NULL : mx_calloc(nn + total_cen + 1);
+  if (!st && !used) st = MX_ENOMEM;
   if (st) {
     mx_free(bout);
     mx_optional_free(opt);
     return st;
   }
-  const fill_ctx F = {M, st2, moved, bout, bopt, bcen, nc, nn, xyz, st2, nkey, opt};
+  const fill_ctx F = {M, st2, moved, bout, bopt, bcen, nc, nn, xyz, st2, nkey, opt, used};
   const cell_arrays in_place = {M->type, M->level, M->conn, M->leaf, M->jens};
   size_t w1 = nb; /* blocks [w1, nb) done */
   const char *copy = getenv("MX_PATTERNS_COPY");
@@ -269,6 +275,7 @@ int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
     if (!d.type || !d.level || !d.conn || !d.leaf || !d.jens) {
       mx_free(d.type); mx_free(d.level); mx_free(d.conn); mx_free(d.leaf); mx_free(d.jens);
       mx_free(bout);
+      mx_free(used);
       mx_optional_free(opt);
       return MX_ENOMEM;
     }
@@ -305,7 +312,8 @@ int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
   /* 3. Nodes only dropped elements used go; the optional elements keep
    * only those whose nodes all remain. */
   uint32_t *newid = NULL;
-  st = mx_mesh_drop_unused_nodes(M, states_io, &newid);
+  st = mx_mesh_drop_nodes(M, states_io, used, &newid);
+  mx_free(used);
   if (st) {
     mx_optional_free(opt);
     return st;
