@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "base/common.h"
+#include "base/scan.h"
 #include "soa/mesh.h"
 
 static uint64_t mix64(uint64_t h) {
@@ -35,13 +36,77 @@ static int before(const uint64_t *prio, size_t i, size_t j) {
   return prio[i] != prio[j] ? prio[i] > prio[j] : i < j;
 }
 
+/* Each work node's neighbours among the work nodes (those sharing an
+ * element with it), once each: counted, prefix-summed, listed (a thread's
+ * `seen` bytes, one per work node, reset after each node). */
+static int work_neighbours(const mx_mesh *M, const uint32_t *inc, const uint64_t *off,
+                           const uint32_t *work, size_t nw, const uint32_t *widx,
+                           uint64_t **nb_off_out, uint32_t **nb_out) {
+  uint64_t *nb_off = mx_calloc((nw + 1) * sizeof *nb_off);
+  if (!nb_off) return MX_ENOMEM;
+  uint32_t *nb = NULL;
+  int st = MX_OK;
+  for (int pass = 0; pass < 2 && st == MX_OK; pass++) {
+#pragma omp parallel if (nw >= 4096)
+    {
+      uint8_t *seen = mx_calloc(nw + 1);
+      if (!seen) {
+#pragma omp atomic write
+        st = MX_ENOMEM;
+      }
+#pragma omp for schedule(dynamic, 256)
+      for (size_t i = 0; i < nw; i++) {
+        if (!seen) continue;
+        const uint32_t v = work[i];
+        uint64_t k = pass ? nb_off[i] : 0;
+        for (uint64_t e = off[v]; e < off[v + 1]; e++) {
+          const uint32_t *row = M->conn + 8 * (size_t)inc[e];
+          for (int q = 0; q < mx_cell_nodes[M->type[inc[e]]]; q++) {
+            const uint32_t j = widx[row[q]];
+            if (j == UINT32_MAX || j == i || seen[j]) continue;
+            seen[j] = 1;
+            if (pass) nb[k] = j;
+            k++;
+          }
+        }
+        if (!pass) nb_off[i] = k;
+        for (uint64_t e = off[v]; e < off[v + 1]; e++) { /* reset */
+          const uint32_t *row = M->conn + 8 * (size_t)inc[e];
+          for (int q = 0; q < mx_cell_nodes[M->type[inc[e]]]; q++) {
+            const uint32_t j = widx[row[q]];
+            if (j != UINT32_MAX) seen[j] = 0;
+          }
+        }
+      }
+      mx_free(seen);
+    }
+    if (pass == 0 && st == MX_OK) {
+      const uint64_t total = mx_scan_u64(nb_off, nw);
+      nb_off[nw] = total;
+      nb = mx_alloc((total + 1) * sizeof *nb);
+      if (!nb) st = MX_ENOMEM;
+    }
+  }
+  if (st) {
+    mx_free(nb_off);
+    mx_free(nb);
+    return st;
+  }
+  *nb_off_out = nb_off;
+  *nb_out = nb;
+  return MX_OK;
+}
+
 int mx_colour_nodes(const mx_mesh *M, const uint32_t *inc, const uint64_t *off,
                        const uint32_t *work, size_t nw, const uint32_t *widx,
                        int16_t *colour) {
   uint8_t *pick = mx_alloc(nw + 1);
   uint64_t *prio = mx_alloc((nw + 1) * sizeof *prio);
   uint32_t *todo = mx_alloc((nw + 1) * sizeof *todo); /* the nodes still uncoloured */
-  if (!pick || !prio || !todo) {
+  uint64_t *nb_off = NULL;
+  uint32_t *nb = NULL;
+  if (!pick || !prio || !todo ||
+      work_neighbours(M, inc, off, work, nw, widx, &nb_off, &nb) != MX_OK) {
     mx_free(pick);
     mx_free(prio);
     mx_free(todo);
@@ -63,18 +128,10 @@ int mx_colour_nodes(const mx_mesh *M, const uint32_t *inc, const uint64_t *off,
 #pragma omp parallel for schedule(dynamic, 256) if (left >= 4096)
     for (size_t t = 0; t < left; t++) {
       const size_t i = todo[t];
-      const uint32_t v = work[i];
       int best = 1;
-      for (uint64_t e = off[v]; e < off[v + 1] && best; e++) {
-        const uint32_t *row = M->conn + 8 * (size_t)inc[e];
-        for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++) {
-          const uint32_t j = widx[row[k]];
-          if (j == UINT32_MAX || j == i || colour[j] >= 0) continue;
-          if (before(prio, j, i)) {
-            best = 0;
-            break;
-          }
-        }
+      for (uint64_t e = nb_off[i]; e < nb_off[i + 1] && best; e++) {
+        const uint32_t j = nb[e];
+        best = colour[j] >= 0 || !before(prio, j, i);
       }
       pick[i] = (uint8_t)best;
     }
@@ -83,15 +140,9 @@ int mx_colour_nodes(const mx_mesh *M, const uint32_t *inc, const uint64_t *off,
       const size_t i = todo[t];
       if (!pick[i]) continue;
       uint64_t used[MX_MAX_COLOURS / 64] = {0, 0, 0, 0};
-      const uint32_t v = work[i];
-      for (uint64_t e = off[v]; e < off[v + 1]; e++) {
-        const uint32_t *row = M->conn + 8 * (size_t)inc[e];
-        for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++) {
-          const uint32_t j = widx[row[k]];
-          if (j == UINT32_MAX || j == i) continue;
-          const int cj = colour[j];
-          if (cj >= 0) used[cj / 64] |= 1ull << (cj % 64);
-        }
+      for (uint64_t e = nb_off[i]; e < nb_off[i + 1]; e++) {
+        const int cj = colour[nb[e]];
+        if (cj >= 0) used[cj / 64] |= 1ull << (cj % 64);
       }
       int c = 0;
       while (c < MX_MAX_COLOURS && ((used[c / 64] >> (c % 64)) & 1)) c++;
@@ -109,6 +160,8 @@ int mx_colour_nodes(const mx_mesh *M, const uint32_t *inc, const uint64_t *off,
   mx_free(pick);
   mx_free(prio);
   mx_free(todo);
+  mx_free(nb_off);
+  mx_free(nb);
   if (overflow) return -1;
   for (size_t i = 0; i < nw; i++)
     if (colour[i] + 1 > ncol) ncol = colour[i] + 1;
