@@ -65,13 +65,14 @@ static int marked_cells(const mx_mesh *M, const uint8_t *mark, uint32_t **list, 
   return MX_OK;
 }
 
-int mx_mesh_incidence(const mx_mesh *M, const uint8_t *mark, uint64_t **off_out,
-                      uint32_t **inc_out) {
+int mx_mesh_incidence_band(const mx_mesh *M, const uint8_t *mark, uint64_t **off_out,
+                           uint32_t **inc_out, uint32_t **band_out, size_t *nband,
+                           uint32_t **pos_out) {
   const size_t nn = M->nnodes;
   *off_out = NULL;
   *inc_out = NULL;
-  /* the elements of the marked nodes first: the counts and the fill walk
-   * those only (a band, when few nodes are marked) */
+  /* the elements of the marked nodes first (the band): the counts and the
+   * fill walk those only */
   uint32_t *cl = NULL;
   size_t ncl = 0;
   int st = marked_cells(M, mark, &cl, &ncl);
@@ -94,29 +95,51 @@ int mx_mesh_incidence(const mx_mesh *M, const uint8_t *mark, uint64_t **off_out,
   }
   const uint64_t total = mx_scan_u64(off, nn);
   off[nn] = total;
+  /* the band positions when asked (the band is in element order: sorted
+   * positions are sorted elements), else the elements */
   uint32_t *inc = mx_alloc((total + 1) * sizeof *inc);
-  if (!inc) {
+  uint32_t *pos = pos_out ? mx_alloc((total + 1) * sizeof *pos) : NULL;
+  if (!inc || (pos_out && !pos)) {
+    mx_free(inc);
+    mx_free(pos);
     mx_free(off);
     mx_free(cl);
     return MX_ENOMEM;
   }
+  uint32_t *fill = pos ? pos : inc;
 #pragma omp parallel for schedule(static)
   for (size_t i = 0; i < ncl; i++) {
     const size_t c = cl[i];
     for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
       const uint32_t v = M->conn[8 * c + k];
-      if (mark[v]) inc[__atomic_fetch_add(&off[v], 1, __ATOMIC_RELAXED)] = (uint32_t)c;
+      if (mark[v])
+        fill[__atomic_fetch_add(&off[v], 1, __ATOMIC_RELAXED)] = pos ? (uint32_t)i : (uint32_t)c;
     }
   }
-  mx_free(cl);
   memmove(off + 1, off, nn * sizeof *off);
   off[0] = 0;
 #pragma omp parallel for schedule(dynamic, 1024)
   for (size_t v = 0; v < nn; v++)
-    if (off[v + 1] - off[v] > 1) qsort(inc + off[v], off[v + 1] - off[v], sizeof *inc, cmp_u32);
+    if (off[v + 1] - off[v] > 1) qsort(fill + off[v], off[v + 1] - off[v], sizeof *fill, cmp_u32);
+  if (pos) {
+#pragma omp parallel for schedule(static)
+    for (size_t e = 0; e < total; e++) inc[e] = cl[pos[e]];
+  }
+  if (band_out) {
+    *band_out = cl;
+    *nband = ncl;
+  } else {
+    mx_free(cl);
+  }
+  if (pos_out) *pos_out = pos;
   *off_out = off;
   *inc_out = inc;
   return MX_OK;
+}
+
+int mx_mesh_incidence(const mx_mesh *M, const uint8_t *mark, uint64_t **off_out,
+                      uint32_t **inc_out) {
+  return mx_mesh_incidence_band(M, mark, off_out, inc_out, NULL, NULL, NULL);
 }
 
 int mx_mesh_grow_cells(mx_mesh *M, size_t n) {

@@ -36,6 +36,12 @@ int mx_mesh_drop_nodes(mx_mesh *M, uint8_t **states, const uint8_t *used,
  * those of v are inc[off[v] .. off[v + 1]) (off: nnodes + 1 entries; an
  * unmarked node has none). Both allocated here (mx_alloc). MX_ENOMEM. */
 int mx_mesh_incidence(const mx_mesh *M, const uint8_t *mark, uint64_t **off, uint32_t **inc);
+/* The same, with the band: the elements with a marked node, in increasing
+ * order (*band, *nband; when band is not NULL), and each entry's place in
+ * it (pos[e]: inc[e] = band[pos[e]]; when pos is not NULL), so that a
+ * value per element of the band can be kept beside the lists. */
+int mx_mesh_incidence_band(const mx_mesh *M, const uint8_t *mark, uint64_t **off,
+                           uint32_t **inc, uint32_t **band, size_t *nband, uint32_t **pos);
 
 /* Recount by_type, invalid (J_ENS < 1e-6) and jens_min from M->jens. */
 void mx_mesh_summarize(mx_mesh *M);

@@ -116,6 +116,8 @@ int mx_on_mesh_boundary(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t
 void mx_node_work_free(mx_node_work *w) {
   mx_free(w->off);
   mx_free(w->inc);
+  mx_free(w->band);
+  mx_free(w->pos);
   mx_free(w->work);
   mx_free(w->onsurf);
   mx_free(w->byc);
@@ -172,10 +174,10 @@ int mx_node_work_build(const mx_mesh *M, const uint8_t *states, const uint8_t *m
       if (any)
         for (int k = 0; k < nv; k++) __atomic_store_n(&im[row[k]], 1, __ATOMIC_RELAXED);
     }
-    st = mx_mesh_incidence(M, im, &w->off, &w->inc);
+    st = mx_mesh_incidence_band(M, im, &w->off, &w->inc, &w->band, &w->nband, &w->pos);
     mx_free(im);
   } else {
-    st = mx_mesh_incidence(M, mark, &w->off, &w->inc);
+    st = mx_mesh_incidence_band(M, mark, &w->off, &w->inc, &w->band, &w->nband, &w->pos);
   }
   if (!st) st = marked_list(mark, nn, &w->work, &w->nw);
   const size_t nw = w->nw;

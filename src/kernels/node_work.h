@@ -24,6 +24,9 @@ int mx_on_mesh_boundary(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t
 typedef struct {
   uint64_t *off;   /* the elements of a node v with incidence: inc[off[v] .. off[v + 1]) */
   uint32_t *inc;
+  uint32_t *band;  /* the elements of the lists, in increasing order (nband) */
+  size_t nband;
+  uint32_t *pos;   /* per list entry: its element's place in band */
   size_t nw;       /* the work nodes, in increasing id order */
   uint32_t *work;
   uint8_t *onsurf; /* per work index: the node stays on the surface (outside

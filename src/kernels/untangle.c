@@ -12,10 +12,12 @@
 #include "soa/mesh.h"
 
 
-/* Worst J_ENS of the elements [e0, e1) of list `inc`. */
-static double worst_of(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t e1) {
+/* Worst J_ENS of the elements [e0, e1) of v's list, from the band's values
+ * (jd[pos[e]]: each element's J_ENS at the current positions, kept up to
+ * date by the moves). */
+static double worst_of(const double *jd, const uint32_t *pos, size_t e0, size_t e1) {
   double w = INFINITY;
-  for (size_t i = e0; i < e1; i++) w = fmin(w, mx_cell_jens(M, inc[i]));
+  for (size_t i = e0; i < e1; i++) w = fmin(w, jd[pos[i]]);
   return w;
 }
 
@@ -43,15 +45,17 @@ static double worst_above(const mx_mesh *M, const uint32_t *inc, size_t e0, size
  * J_ENS of its elements; then their J_ENS and the marks of their nodes.
  * Touches only v's position and v's elements: nodes of one colour move at
  * once. Returns 1 when v moved. */
-static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
-                     const uint64_t *off, uint8_t *mark, uint32_t v, int on_surface,
+static int move_node(mx_mesh *M, const mx_surface_index *S, const mx_node_work *W,
+                     double *jd, uint8_t *mark, uint32_t v, int on_surface,
                      const mx_untangle_opts *o, const double *x_init, double clear) {
+  const uint32_t *inc = W->inc, *pos = W->pos;
+  const uint64_t *off = W->off;
   static const double steps[] = {1.0, 0.5, 0.25, 0.125};
   static const double along[] = {0.25, 0.1, 0.04};
   const double q_target = o->q_target;
   const size_t e0 = off[v], e1 = off[v + 1];
   double *x = M->xyz + 3 * (size_t)v;
-  const double w0 = worst_of(M, inc, e0, e1);
+  const double w0 = worst_of(jd, pos, e0, e1);
   if (w0 >= q_target) return 0;
   /* centroid of the other nodes of the incident elements */
   double c[3] = {0.0, 0.0, 0.0};
@@ -118,7 +122,8 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint32_t *inc,
   memcpy(x, bx, sizeof bx);
   if (!(best > w0)) return 0;
   for (size_t e = e0; e < e1; e++) {
-    M->jens[inc[e]] = (float)mx_cell_jens(M, inc[e]);
+    jd[pos[e]] = mx_cell_jens(M, inc[e]);
+    M->jens[inc[e]] = (float)jd[pos[e]];
     const uint32_t *cv = M->conn + 8 * (size_t)inc[e];
     for (int k = 0; k < mx_cell_nodes[M->type[inc[e]]]; k++)
       if (off[cv[k] + 1] > off[cv[k]]) /* in the work set */
@@ -163,9 +168,18 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
     return wst;
   }
   const size_t nw = W.nw;
-  const uint64_t *off = W.off;
-  const uint32_t *inc = W.inc, *work = W.work, *byc = W.byc;
+  const uint32_t *work = W.work, *byc = W.byc;
   const uint8_t *onsurf = W.onsurf;
+  /* the band's J_ENS in double, at the current positions (the moves keep
+   * them so): a node's worst is read, not computed again */
+  double *jd = mx_alloc((W.nband + 1) * sizeof *jd);
+  if (!jd) {
+    mx_node_work_free(&W);
+    mx_free(mark);
+    return MX_ENOMEM;
+  }
+#pragma omp parallel for schedule(static)
+  for (size_t i = 0; i < W.nband; i++) jd[i] = mx_cell_jens(M, W.band[i]);
   /* With regions: where each free work node starts, and its clearance (the
    * distance within which no shell lies) */
   double *x_init = NULL, *clear = NULL;
@@ -174,6 +188,7 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
     clear = mx_alloc((nw + 1) * sizeof *clear);
     if (!x_init || !clear) {
       mx_free(x_init); mx_free(clear);
+      mx_free(jd);
       mx_node_work_free(&W);
       mx_free(mark);
       return MX_ENOMEM;
@@ -200,7 +215,7 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
         const uint32_t v = work[i];
         if (!__atomic_load_n(&mark[v], __ATOMIC_RELAXED)) continue;
         mark[v] = 0;
-        changed += (size_t)move_node(M, S, inc, off, mark, v, onsurf[i], o,
+        changed += (size_t)move_node(M, S, &W, jd, mark, v, onsurf[i], o,
                                      x_init ? x_init + 3 * i : NULL, clear ? clear[i] : 0.0);
       }
     }
@@ -209,6 +224,7 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
   }
   mx_free(x_init);
   mx_free(clear);
+  mx_free(jd);
   mx_node_work_free(&W);
   mx_free(mark);
   *moved = nm;
