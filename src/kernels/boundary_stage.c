@@ -100,7 +100,8 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
   }
   mx_free(piece);
   mx_free(movable);
-  if (!st && staircase_q < 1.0) st = mx_staircase(M, &opt, staircase_q, &stats->sp);
+  const int staircase = !st && staircase_q < 1.0;
+  if (staircase) st = mx_staircase(M, &opt, staircase_q, &stats->sp);
   stats->t_staircase = mx_wtime() - t;
   mx_optional_free(&opt);
   if (states_out && !st) {
@@ -108,6 +109,6 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
     states = NULL;
   }
   mx_free(states);
-  if (!st) mx_mesh_summarize(M);
+  if (!st && !staircase) mx_mesh_summarize(M); /* (the staircase's last step is one) */
   return st;
 }
