@@ -187,9 +187,14 @@ static inline void node_bounds(const mx_bvh4_node *W, float px, float py, float 
 }
 
 /* The float bounds are safe (squared distances in float range) for points
- * and triangles within this magnitude, and the rounding allowance there. */
+ * of this magnitude pm (their largest coordinate) and the index's triangles;
+ * there, the allowance added to a distance before comparing bounds with it
+ * (far above the float errors). */
 static inline int float_bounds_safe(const mx_surface_index *S, double pm) {
   return pm + S->coord_max < 1e15 && S->coord_max > 1e-15;
+}
+static inline double bound_allowance(const mx_surface_index *S, double pm) {
+  return 0x1p-17 * (pm + S->coord_max);
 }
 
 /* The hint grid's triangle for p (the index has a grid: S->hint). */
@@ -232,7 +237,7 @@ double mx_index_closest_slot(const mx_surface_index *S, const double p[3],
     }
     return best;
   }
-  const double delta = 0x1p-17 * (pm + S->coord_max);
+  const double delta = bound_allowance(S, pm);
   const float px = (float)p[0], py = (float)p[1], pz = (float)p[2];
   if (S->hint) {
     const uint32_t i = hint_slot(S, p);
@@ -443,7 +448,7 @@ static void closest_block(const mx_surface_index *S, const double *xyz, const ui
     }
   }
   int alone = n < 2 || !S->hint || !float_bounds_safe(S, pm); /* one by one */
-  const double delta = 0x1p-17 * (pm + S->coord_max);
+  const double delta = bound_allowance(S, pm);
   double ub = 0.0;
   for (int i = 0; i < n && !alone; i++) {
     const double *p = xyz + 3 * (size_t)ids[i];

@@ -85,11 +85,11 @@ typedef struct {
 /* What the fill of one block needs besides the destination. */
 typedef struct {
   const mx_mesh *M; /* the input elements (M->type ... M->jens) */
-  const uint8_t *states, *moved;
+  const uint8_t *moved;
   const uint64_t *bout, *bopt, *bcen; /* per block: first output, optional, centre */
   size_t nc, nn;
   double *xyz; /* grown by the centres */
-  uint8_t *st2;
+  uint8_t *st2; /* the states, grown by the centres */
   uint64_t *nkey;
   mx_optional *opt;
   uint8_t *used; /* the nodes the written elements use, marked */
@@ -123,7 +123,7 @@ static void fill_block(const fill_ctx *F, size_t b, const cell_arrays *d) {
       d->type[w] = M->type[c];
       for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
         __atomic_store_n(&F->used[v[k]], 1, __ATOMIC_RELAXED);
-      memmove(d->conn + 8 * w, v, 8 * sizeof *d->conn); /* (the same row when w = c) */
+      memcpy(d->conn + 8 * w, v, 8 * sizeof *d->conn);
       d->level[w] = M->level[c];
       d->leaf[w] = M->leaf[c];
       int mv = 0;
@@ -250,11 +250,12 @@ int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
     mx_optional_free(opt);
     return st;
   }
-  const fill_ctx F = {M, st2, moved, bout, bopt, bcen, nc, nn, xyz, st2, nkey, opt, used};
+  const fill_ctx F = {M, moved, bout, bopt, bcen, nc, nn, xyz, st2, nkey, opt, used};
   const cell_arrays in_place = {M->type, M->level, M->conn, M->leaf, M->jens};
   size_t w1 = nb; /* blocks [w1, nb) done */
   const char *copy = getenv("MX_PATTERNS_COPY");
-  while (w1 > 0 && !(copy && strcmp(copy, "1") == 0)) {
+  const int copy_all = copy && strcmp(copy, "1") == 0;
+  while (w1 > 0 && !copy_all) {
     /* the window: at most SP_WINDOW blocks, its output from where its
      * input ends (out_at(w0) >= the input end of block w1 - 1) */
     const uint64_t in_end = w1 * SP_BLOCK < nc ? w1 * SP_BLOCK : nc;
@@ -286,9 +287,9 @@ int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
       for (size_t b = a; b < e; b++) fill_block(&F, b, &d);
       const size_t done = e * SP_BLOCK < nc ? e * SP_BLOCK : nc;
       /* (not the part the in-place windows wrote: from out_at(w1) on) */
-      const size_t upto = done < n ? done : n;
-      if (upto > released) release_cells(M, released, upto);
-      released = upto > released ? upto : released;
+      const size_t upto = done < n ? done : n; /* (rises with the windows) */
+      release_cells(M, released, upto);
+      released = upto;
     }
     if (w1 == nb) { /* all of it: the new arrays are the mesh's */
       mx_free(M->type); mx_free(M->level); mx_free(M->conn); mx_free(M->leaf);
