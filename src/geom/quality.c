@@ -20,8 +20,9 @@ typedef struct {
   int ok[MAX_EDGES];
 } unit_edges;
 
-static inline void unit_vectors(const double (*p)[3], const int8_t (*ed)[2], int ne,
-                                unit_edges *U) {
+static inline void unit_vectors(const double (*p)[3], int type, unit_edges *U) {
+  const int8_t(*ed)[2] = mx_cell_edge[type];
+  const int ne = mx_cell_nedges[type];
   double dx[MAX_EDGES], dy[MAX_EDGES], dz[MAX_EDGES], l[MAX_EDGES];
   for (int e = 0; e < ne; e++) {
     dx[e] = p[ed[e][1]][0] - p[ed[e][0]][0];
@@ -76,32 +77,25 @@ static double combine(const double *q, int n) {
   return any_neg ? neg : mn;
 }
 
-/* Per type: the edges (a, b), and each corner's three neighbours as edges
- * (e + 1 along edge e, -(e + 1) against it), in the order of the corner's
+/* Per type, each corner's three neighbours as edges of mx_cell_edge (e + 1
+ * along edge e, -(e + 1) against it), in the order of the corner's
  * (d_a x d_b) . d_c. */
-static const int8_t tet_ed[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
 /* neighbours {1,2,3} {2,0,3} {0,1,3} {2,1,0} */
-static const int8_t tet_cr[4][3] = {{1, 2, 3}, {4, -1, 5}, {-2, -4, 6}, {-6, -5, -3}};
-static const int8_t pyr_ed[8][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0},
-                                    {0, 4}, {1, 4}, {2, 4}, {3, 4}};
+static const int8_t tet_cr[4][3] = {{1, -3, 4}, {2, -1, 5}, {3, -2, 6}, {-6, -5, -4}};
 /* base neighbours {1,3,4} {2,0,4} {3,1,4} {0,2,4}; then the apex's four
  * tetrahedra of consecutive base nodes: {i+2, i+1, i} (mod 4) */
 static const int8_t pyr_cr[8][3] = {{1, -4, 5},   {2, -1, 6},   {3, -2, 7},   {4, -3, 8},
                                     {-7, -6, -5}, {-8, -7, -6}, {-5, -8, -7}, {-6, -5, -8}};
-static const int8_t pri_ed[9][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5},
-                                    {5, 3}, {0, 3}, {1, 4}, {2, 5}};
 /* neighbours {1,2,3} {2,0,4} {0,1,5} {5,4,0} {3,5,1} {4,3,2} */
 static const int8_t pri_cr[6][3] = {{1, -3, 7},  {2, -1, 8}, {3, -2, 9},
                                     {-6, 4, -7}, {-4, 5, -8}, {-5, 6, -9}};
-static const int8_t hex_ed[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
-                                     {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
 /* neighbours {1,3,4} {2,0,5} {3,1,6} {0,2,7} {7,5,0} {4,6,1} {5,7,2} {6,4,3} */
 static const int8_t hex_cr[8][3] = {{1, -4, 9},   {2, -1, 10},  {3, -2, 11},  {4, -3, 12},
                                     {-8, 5, -9},  {-5, 6, -10}, {-6, 7, -11}, {-7, 8, -12}};
 
 double mx_jens_tet(const double p[4][3]) {
   unit_edges U;
-  unit_vectors(p, tet_ed, 6, &U);
+  unit_vectors(p, MX_TET, &U);
   double q[4];
   for (int i = 0; i < 4; i++) q[i] = ens(js(&U, tet_cr[i]), K_TET);
   return combine(q, 4);
@@ -109,7 +103,7 @@ double mx_jens_tet(const double p[4][3]) {
 
 double mx_jens_pyramid(const double p[5][3]) {
   unit_edges U;
-  unit_vectors(p, pyr_ed, 8, &U);
+  unit_vectors(p, MX_PYRAMID, &U);
   double q[5];
   for (int i = 0; i < 4; i++) q[i] = ens(js(&U, pyr_cr[i]), K_TET);
   /* Apex: the four tetrahedra of consecutive base nodes. */
@@ -128,7 +122,7 @@ double mx_jens_pyramid(const double p[5][3]) {
 
 double mx_jens_prism(const double p[6][3]) {
   unit_edges U;
-  unit_vectors(p, pri_ed, 9, &U);
+  unit_vectors(p, MX_PRISM, &U);
   double q[6];
   for (int i = 0; i < 6; i++) q[i] = ens(js(&U, pri_cr[i]), K_PRISM);
   return combine(q, 6);
@@ -136,7 +130,7 @@ double mx_jens_prism(const double p[6][3]) {
 
 double mx_jens_hex(const double p[8][3]) {
   unit_edges U;
-  unit_vectors(p, hex_ed, 12, &U);
+  unit_vectors(p, MX_HEX, &U);
   double q[8];
   for (int i = 0; i < 8; i++) q[i] = ens(js(&U, hex_cr[i]), 1.0);
   return combine(q, 8);
