@@ -63,6 +63,7 @@ static void find_unbalanced(mx_builder *B, const uint32_t *run, size_t k,
   const int lp = T->level[p];
   uint32_t anchor[3];
   mx_octant_anchor(T->key[p], lp, anchor);
+  mx_edges_prefetch_octant(&B->tree.edges, T->key[p], lp); /* 12 misses at once */
   for (int a = 0; a < 3; a++) {
     const mx_edge_table *E = &B->tree.edges.t[lp][a];
     for (int j = 0; j < 4; j++) {

@@ -87,10 +87,10 @@ void mx_edges_prefetch_octant(const mx_edges *E, uint64_t key, int level) {
     for (int j = 0; j < 4; j++) mx_edge_prefetch(&E->t[level][a], mx_edge_key(anchor, a, j));
 }
 
-/* Find or create; *created is set to 1 when this call claimed the entry. */
-static size_t edge_insert(mx_edge_table *T, uint64_t key, int *created) {
+/* Find or create, from the home slot i of key; *created is set to 1 when
+ * this call claimed the entry. */
+static size_t edge_insert_at(mx_edge_table *T, uint64_t key, size_t i, int *created) {
   const uint64_t want = key + 1;
-  size_t i = edge_hash(key, T->cap);
   for (;;) {
     uint64_t kw = __atomic_load_n(&T->e[i].kw, __ATOMIC_ACQUIRE);
     if (!kw) {
@@ -114,11 +114,20 @@ void mx_edges_register(mx_edges *E, uint32_t o, uint64_t key, int level,
                        size_t created[3]) {
   uint32_t anchor[3];
   mx_octant_anchor(key, level, anchor);
+  /* the 12 home slots asked for at once, then found or created in order */
+  uint64_t k[3][4];
+  size_t home[3][4];
+  for (int a = 0; a < 3; a++)
+    for (int j = 0; j < 4; j++) {
+      k[a][j] = mx_edge_key(anchor, a, j);
+      home[a][j] = edge_hash(k[a][j], E->t[level][a].cap);
+      __builtin_prefetch(&E->t[level][a].e[home[a][j]], 1);
+    }
   for (int a = 0; a < 3; a++) {
     mx_edge_table *T = &E->t[level][a];
     for (int j = 0; j < 4; j++) {
       int fresh;
-      size_t i = edge_insert(T, mx_edge_key(anchor, a, j), &fresh);
+      const size_t i = edge_insert_at(T, k[a][j], home[a][j], &fresh);
       created[a] += (size_t)fresh;
       __atomic_store_n(&T->e[i].slot[mx_edge_slot(j)], o, __ATOMIC_RELAXED);
     }
@@ -143,8 +152,20 @@ size_t mx_edges_bytes(const mx_edges *E) {
   return n;
 }
 
-void mx_edges_register_children(mx_edges *E, uint32_t child0, uint8_t kept,
-                                uint64_t key, int level, size_t created[3]) {
+/* The edges with a kept child of a split octant: their keys, the children
+ * in their slots, and their home slots, which are asked for at once (each
+ * is a cache miss in a large table: 54 of them overlap instead of
+ * following each other; nothing is written). */
+typedef struct {
+  uint64_t key[54];
+  size_t home[54];
+  uint32_t who[54][4];
+  int ne[3]; /* edges per axis, in key[] axis after axis */
+  int level; /* of the split octant */
+} children_edges;
+
+static void children_prepare(const mx_edges *E, uint32_t child0, uint8_t kept, uint64_t key,
+                             int level, children_edges *C) {
   /* Anchor of the parent on the children's lattice. */
   uint32_t A[3];
   mx_octant_anchor(key, level, A);
@@ -152,13 +173,16 @@ void mx_edges_register_children(mx_edges *E, uint32_t child0, uint8_t kept,
   uint32_t index[8];
   for (int c = 0, k = 0; c < 8; c++)
     index[c] = ((kept >> c) & 1) ? child0 + (uint32_t)k++ : UINT32_MAX;
+  int n = 0;
   for (int a = 0; a < 3; a++) {
     const int b = (a + 1) % 3, d = (a + 2) % 3;
-    mx_edge_table *T = &E->t[level + 1][a];
+    const mx_edge_table *T = &E->t[level + 1][a];
+    C->ne[a] = 0;
     for (int s = 0; s < 2; s++)
       for (int jb = 0; jb < 3; jb++)
         for (int jd = 0; jd < 3; jd++) {
-          uint32_t who[4] = {UINT32_MAX, UINT32_MAX, UINT32_MAX, UINT32_MAX};
+          uint32_t *who = C->who[n];
+          who[0] = who[1] = who[2] = who[3] = UINT32_MAX;
           int any = 0;
           for (int cb = jb - 1; cb <= jb; cb++)
             for (int cd = jd - 1; cd <= jd; cd++) {
@@ -173,12 +197,34 @@ void mx_edges_register_children(mx_edges *E, uint32_t child0, uint8_t kept,
           p[a] += (uint32_t)s;
           p[b] += (uint32_t)jb;
           p[d] += (uint32_t)jd;
-          int fresh;
-          size_t i = edge_insert(T, mx_morton_encode(p[0], p[1], p[2]), &fresh);
-          created[a] += (size_t)fresh;
-          for (int q = 0; q < 4; q++)
-            if (who[q] != UINT32_MAX)
-              __atomic_store_n(&T->e[i].slot[q], who[q], __ATOMIC_RELAXED);
+          C->key[n] = mx_morton_encode(p[0], p[1], p[2]);
+          C->home[n] = edge_hash(C->key[n], T->cap);
+          __builtin_prefetch(&T->e[C->home[n]], 1);
+          n++;
+          C->ne[a]++;
         }
   }
+  C->level = level;
+}
+
+/* Those edges found or created, in order, their slots written. */
+static void children_commit(mx_edges *E, const children_edges *C, size_t created[3]) {
+  for (int a = 0, k = 0; a < 3; a++) {
+    mx_edge_table *T = &E->t[C->level + 1][a];
+    for (int q = 0; q < C->ne[a]; q++, k++) {
+      int fresh;
+      const size_t i = edge_insert_at(T, C->key[k], C->home[k], &fresh);
+      created[a] += (size_t)fresh;
+      for (int w = 0; w < 4; w++)
+        if (C->who[k][w] != UINT32_MAX)
+          __atomic_store_n(&T->e[i].slot[w], C->who[k][w], __ATOMIC_RELAXED);
+    }
+  }
+}
+
+void mx_edges_register_children(mx_edges *E, uint32_t child0, uint8_t kept,
+                                uint64_t key, int level, size_t created[3]) {
+  children_edges C;
+  children_prepare(E, child0, kept, key, level, &C);
+  children_commit(E, &C, created);
 }
