@@ -28,21 +28,23 @@ enum { MAX_GRAD = 9 };
 static const double to_centroid[] = {1.0, 0.5, 0.25};
 static const double along_grad[] = {0.1, 0.03, 0.01, 0.003, 0.001};
 
-/* Least J_ENS of the elements of w (its incidence list) from Jd. */
-static double node_min(const uint64_t *off, const uint32_t *inc, const double *Jd, uint32_t w) {
+/* Least J_ENS of the elements of w (its incidence list) from Jb, the
+ * band's J_ENS (pos: each list entry's place in the band). */
+static double node_min(const uint64_t *off, const uint32_t *pos, const double *Jb, uint32_t w) {
   double m = INFINITY;
-  for (uint64_t e = off[w]; e < off[w + 1]; e++) m = fmin(m, Jd[inc[e]]);
+  for (uint64_t e = off[w]; e < off[w + 1]; e++) m = fmin(m, Jb[pos[e]]);
   return m;
 }
 
 /* One move of work node v: the best trial point, taken when it raises the
  * least J_ENS of v's elements by MIN_GAIN and keeps every element e of v at
  * or above floor(e) = max of m over e's nodes. Writes v's position and its
- * elements' Jd and jens only: the nodes of one colour move at once.
- * Returns 1 when v moved. */
-static int move_node(mx_mesh *M, const mx_surface_index *S, const uint64_t *off,
-                     const uint32_t *inc, const double *m, double *Jd, uint32_t v, int on_surface,
-                     double q_target) {
+ * elements' Jb (the band's J_ENS, W->pos: their places) and jens only: the
+ * nodes of one colour move at once. Returns 1 when v moved. */
+static int move_node(mx_mesh *M, const mx_surface_index *S, const mx_node_work *W,
+                     const double *m, double *Jb, uint32_t v, int on_surface, double q_target) {
+  const uint64_t *off = W->off;
+  const uint32_t *inc = W->inc, *pos = W->pos + off[v];
   const uint64_t e0 = off[v];
   const int ne = (int)(off[v + 1] - e0);
   if (ne == 0 || ne > MAX_INC) return 0;
@@ -63,7 +65,7 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint64_t *off,
       n++;
     }
     floor_[k] = f;
-    if (Jd[e] < Jd[inc[e0 + (uint64_t)kw]]) kw = k;
+    if (Jb[pos[k]] < Jb[pos[kw]]) kw = k;
   }
   double *x = M->xyz + 3 * (size_t)v;
   const double x0[3] = {x[0], x[1], x[2]};
@@ -92,7 +94,7 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint64_t *off,
     int tight[MAX_INC], nt = 0;
     double slack[MAX_INC];
     for (int k = 0; k < ne; k++) {
-      const double sl = Jd[inc[e0 + (uint64_t)k]] - fmax(floor_[k], m0);
+      const double sl = Jb[pos[k]] - fmax(floor_[k], m0);
       if (k != kw && sl < TIGHT) tight[nt] = k, slack[nt++] = sl;
     }
     for (int i = 0; i < nt && i < MAX_GRAD - 1; i++) {
@@ -165,9 +167,8 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const uint64_t *off,
   memcpy(x, bx, sizeof bx);
   if (best == m0) return 0;
   for (int k = 0; k < ne; k++) {
-    const uint32_t e = inc[e0 + (uint64_t)k];
-    Jd[e] = jbest[k];
-    M->jens[e] = (float)jbest[k];
+    Jb[pos[k]] = jbest[k];
+    M->jens[inc[e0 + (uint64_t)k]] = (float)jbest[k];
   }
   return 1;
 }
@@ -183,21 +184,15 @@ int mx_smooth(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
     st->seconds = mx_wtime() - t0;
     return MX_OK;
   }
-  /* J_ENS in double (the mesh keeps floats) and the work set: the movable
-   * nodes of the elements below the target */
+  /* the work set: the movable nodes of the elements below the target (J_ENS
+   * in double: the mesh keeps floats) */
   const double q_target = o->q_target;
-  double *Jd = mx_alloc((nc + 1) * sizeof *Jd);
   uint8_t *mark = mx_calloc(nn + 1);
-  if (!Jd || !mark) {
-    mx_free(Jd);
-    mx_free(mark);
-    return MX_ENOMEM;
-  }
+  if (!mark) return MX_ENOMEM;
   size_t bad = 0;
 #pragma omp parallel for schedule(static) reduction(+ : bad)
   for (size_t c = 0; c < nc; c++) {
-    Jd[c] = mx_cell_jens(M, (uint32_t)c);
-    if (!(Jd[c] < q_target)) continue;
+    if (!(mx_cell_jens(M, (uint32_t)c) < q_target)) continue;
     bad++;
     for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++) {
       const uint32_t v = M->conn[8 * c + k];
@@ -207,20 +202,25 @@ int mx_smooth(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
   mx_node_work W;
   memset(&W, 0, sizeof W);
   int rc = bad ? mx_node_work_build(M, states, mark, 1, "smoothing", &W) : MX_OK;
-  double *m = NULL;
+  double *m = NULL, *Jb = NULL;
   uint8_t *moved = NULL, *ever = NULL;
   if (!rc && W.nw) {
     m = mx_alloc((nn + 1) * sizeof *m);
+    Jb = mx_alloc((W.nband + 1) * sizeof *Jb);
     moved = mx_calloc(W.nw + 1);
     ever = mx_calloc(W.nw + 1);
-    if (!m || !moved || !ever) rc = MX_ENOMEM;
+    if (!m || !Jb || !moved || !ever) rc = MX_ENOMEM;
   }
   st->work = W.nw;
   if (!rc && W.nw) {
+    /* the J_ENS of the band (the elements of the incidence lists) in
+     * double, kept through the moves */
+#pragma omp parallel for schedule(static)
+    for (size_t b = 0; b < W.nband; b++) Jb[b] = mx_cell_jens(M, W.band[b]);
     /* m: the neighbourhood minima of every node with incidence (the work
      * nodes and the other nodes of their elements) */
 #pragma omp parallel for schedule(dynamic, 4096)
-    for (size_t v = 0; v < nn; v++) m[v] = node_min(W.off, W.inc, Jd, (uint32_t)v);
+    for (size_t v = 0; v < nn; v++) m[v] = node_min(W.off, W.pos, Jb, (uint32_t)v);
     /* mark[v]: v is a work node whose neighbourhood changed since it was
      * last looked at (all of them at first) */
     size_t moves = 0;
@@ -237,7 +237,7 @@ int mx_smooth(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
           moved[i] = 0;
           if (!mark[v]) continue;
           mark[v] = 0;
-          moved[i] = (uint8_t)move_node(M, S, W.off, W.inc, m, Jd, v, W.onsurf[i], q_target);
+          moved[i] = (uint8_t)move_node(M, S, &W, m, Jb, v, W.onsurf[i], q_target);
           changed += moved[i];
         }
         /* the minima of the nodes of the changed elements, from the new
@@ -252,7 +252,7 @@ int mx_smooth(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
             const uint32_t *row = M->conn + 8 * (size_t)W.inc[e];
             for (int j = 0; j < mx_cell_nodes[M->type[W.inc[e]]]; j++) {
               const uint32_t w = row[j];
-              double mw = node_min(W.off, W.inc, Jd, w);
+              double mw = node_min(W.off, W.pos, Jb, w);
               __atomic_store(&m[w], &mw, __ATOMIC_RELAXED);
               __atomic_store_n(&mark[w], 1, __ATOMIC_RELAXED);
             }
@@ -272,9 +272,9 @@ int mx_smooth(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
   mx_free(ever);
   mx_free(moved);
   mx_free(m);
+  mx_free(Jb);
   mx_node_work_free(&W);
   mx_free(mark);
-  mx_free(Jd);
   if (rc) return rc;
   mx_mesh_summarize(M);
   st->jens_min_after = M->jens_min;
