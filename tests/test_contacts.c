@@ -14,7 +14,10 @@
  * libcgal-demo, extracted here) at -s 6 after 0, 1, 2, 3 and 4 repair
  * rounds (its first mesh has contacts), two unit cubes touching along a
  * face with --repair-input, and the cortex at -s 5. Without the archive
- * or the shared data those parts are skipped (a failure when CI is set). */
+ * or the shared data those parts are skipped (a failure when CI is set).
+ * Then the search within a region (mx_find_contacts_in, the one after a
+ * local re-mesh) against the search everywhere, on contacts made by moving
+ * a node of the cortex's mesh onto a face. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -284,9 +287,120 @@ static void test_mesher(void) {
   CHECK(system(cmd) == 0);
 }
 
+/* ---- the search around a changed region -------------------------------------- */
+
+/* Both searches (everywhere, and in region) agree on M: 1 when they do. */
+static int same_in_region(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
+                          const double *region, size_t *nodes) {
+  const size_t nc = M->ncells;
+  uint8_t *a = calloc(nc + 1, 1), *b = calloc(nc + 1, 1);
+  mx_contacts ka, kb;
+  CHECK(a && b);
+  CHECK(mx_find_contacts(M, G, states, a, &ka) == MX_OK);
+  CHECK(mx_find_contacts_in(M, G, states, region, b, &kb) == MX_OK);
+  int same = ka.nodes == kb.nodes && ka.elements == kb.elements &&
+             ka.first_node == kb.first_node && memcmp(a, b, nc) == 0;
+  *nodes = ka.nodes;
+  free(a);
+  free(b);
+  return same;
+}
+
+/* The cortex at -s 5 (no contact), then a surface node moved onto the
+ * centre of a surface face of an element it is not a node of, near it: a
+ * contact, which the search in the region of the changed elements (the
+ * moved node's: mx_contact_box) finds as the search everywhere does, for
+ * 20 such moves, each on the mesh as meshed; a region beside it (the same
+ * size, moved by three of its sides) does not. */
+static void test_region(void) {
+  const char *data = find_data();
+  if (!data) {
+    TEST_DATA_MISSING("the shared data (surfaces/cortex.off)");
+    return;
+  }
+  char cortex[700];
+  snprintf(cortex, sizeof cortex, "%s/surfaces/cortex.off", data);
+  mx_params p;
+  mx_params_default(&p);
+  p.surface_level = 5;
+  mx_mesher *m = mx_mesher_new(&p);
+  CHECK(m && mx_mesher_add_surface(m, cortex) == MX_OK && mx_mesher_mesh(m) == MX_OK);
+  if (!m || !m->states) return;
+  mx_mesh *M = &m->M;
+  const mx_grid *G = &m->B.tree.grid;
+  size_t n0 = 1;
+  CHECK(same_in_region(M, G, m->states, NULL, &n0) && n0 == 0);
+  int moves = 0, found = 0, missed_beside = 0;
+  for (size_t e = 0; e < M->ncells && moves < 20; e += M->ncells / 499 + 1) {
+    if (!mx_surface_face(M, m->states, e)) continue;
+    /* a face of e with outside nodes only, its centre */
+    const int t = M->type[e];
+    const uint32_t *row = M->conn + 8 * e;
+    int face = -1;
+    for (int f = 0; f < mx_cell_nfaces[t] && face < 0; f++) {
+      int all = 1;
+      for (int k = 0; k < 4 && mx_cell_faces[t][f][k] >= 0; k++)
+        all &= m->states[row[mx_cell_faces[t][f][k]]] == MX_NODE_OUTSIDE;
+      if (all) face = f;
+    }
+    if (face < 0) continue;
+    double c[3] = {0, 0, 0}, ext = 0;
+    int nf = 0;
+    for (int k = 0; k < 4 && mx_cell_faces[t][face][k] >= 0; k++, nf++)
+      for (int a = 0; a < 3; a++) c[a] += M->xyz[3 * (size_t)row[mx_cell_faces[t][face][k]] + a];
+    for (int a = 0; a < 3; a++) c[a] /= nf;
+    for (int a = 0; a < 3; a++)
+      ext = fmax(ext, fabs(M->xyz[3 * (size_t)row[0] + a] - M->xyz[3 * (size_t)row[1] + a]));
+    /* the nearest outside node not of e, within a few sides of it */
+    uint32_t v = UINT32_MAX;
+    double best = 9.0 * ext * ext;
+    for (size_t w = 0; w < M->nnodes; w++) {
+      if (m->states[w] != MX_NODE_OUTSIDE) continue;
+      int mine = 0;
+      for (int k = 0; k < mx_cell_nodes[t]; k++) mine |= row[k] == w;
+      double d2 = 0;
+      for (int a = 0; a < 3; a++) d2 += (M->xyz[3 * w + a] - c[a]) * (M->xyz[3 * w + a] - c[a]);
+      if (!mine && d2 > 0 && d2 < best) best = d2, v = (uint32_t)w;
+    }
+    if (v == UINT32_MAX) continue;
+    double keep[3];
+    memcpy(keep, M->xyz + 3 * (size_t)v, sizeof keep);
+    memcpy(M->xyz + 3 * (size_t)v, c, sizeof c);
+    /* the region: the padded boxes of v's elements */
+    double R[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
+    for (size_t q = 0; q < M->ncells; q++)
+      for (int k = 0; k < mx_cell_nodes[M->type[q]]; k++)
+        if (M->conn[8 * q + k] == v) {
+          double b[6];
+          mx_contact_box(M, q, b);
+          for (int a = 0; a < 3; a++) R[a] = fmin(R[a], b[a]), R[3 + a] = fmax(R[3 + a], b[3 + a]);
+        }
+    size_t n = 0;
+    CHECK(same_in_region(M, G, m->states, R, &n));
+    found += n > 0;
+    /* beside it: the contact is not found */
+    double S[6];
+    for (int a = 0; a < 3; a++) {
+      const double w = 3.0 * (R[3 + a] - R[a]) + 1e-9;
+      S[a] = R[a] + w;
+      S[3 + a] = R[3 + a] + w;
+    }
+    mx_contacts k;
+    CHECK(mx_find_contacts_in(M, G, m->states, S, NULL, &k) == MX_OK);
+    missed_beside += n > 0 && k.nodes < n;
+    memcpy(M->xyz + 3 * (size_t)v, keep, sizeof keep);
+    moves++;
+  }
+  printf("region: %d moves, %d made contacts, the region beside missed %d\n", moves, found,
+         missed_beside);
+  CHECK(moves == 20 && found >= 15 && missed_beside == found);
+  mx_mesher_free(m);
+}
+
 int main(void) {
   test_small();
   test_mesher();
+  test_region();
   printf("%d meshes compared, %d of them with contacts\n", compared, with_contacts);
   CHECK(with_contacts > 2);
   return TEST_DONE();

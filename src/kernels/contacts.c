@@ -231,10 +231,10 @@ static uint64_t cells_met(const mx_grid *G, const double ulo[3], const double uh
  * every point lies_on accepts (the tolerance twice, and the rounding of the
  * relative coordinates) in lattice units, and the largest pad in lattice
  * units. */
-static int element_cells(const mx_grid *G, const mx_mesh *M, uint32_t c, double b[6],
-                         uint32_t c0[3], uint32_t c1[3], double *pad_max) {
+/* Element c's box (lo, then hi). */
+static void element_box(const mx_mesh *M, size_t c, double b[6]) {
   const int t = M->type[c];
-  const uint32_t *row = M->conn + 8 * (size_t)c;
+  const uint32_t *row = M->conn + 8 * c;
   double *lo = b, *hi = b + 3;
   for (int a = 0; a < 3; a++) {
     lo[a] = INFINITY;
@@ -245,6 +245,29 @@ static int element_cells(const mx_grid *G, const mx_mesh *M, uint32_t c, double 
       lo[a] = mx_min(lo[a], M->xyz[3 * (size_t)row[j] + (size_t)a]);
       hi[a] = mx_max(hi[a], M->xyz[3 * (size_t)row[j] + (size_t)a]);
     }
+}
+
+/* The pad of the box (lo, hi) along axis a: the tolerance twice and the
+ * rounding of the relative coordinates. */
+static inline double box_pad(const double *lo, const double *hi, int a) {
+  const double ext = mx_max(hi[0] - lo[0], mx_max(hi[1] - lo[1], hi[2] - lo[2]));
+  return 2.0 * contact_tol * ext + (fabs(lo[a]) + fabs(hi[a])) * 0x1p-40 + 0x1p-1000;
+}
+
+void mx_contact_box(const mx_mesh *M, size_t c, double box[6]) {
+  double b[6];
+  element_box(M, c, b);
+  for (int a = 0; a < 3; a++) {
+    const double pad = box_pad(b, b + 3, a);
+    box[a] = b[a] - pad;
+    box[3 + a] = b[3 + a] + pad;
+  }
+}
+
+static int element_cells(const mx_grid *G, const mx_mesh *M, uint32_t c, double b[6],
+                         uint32_t c0[3], uint32_t c1[3], double *pad_max) {
+  double *lo = b, *hi = b + 3;
+  element_box(M, c, b);
   double ulo[3], uhi[3], span = 0.0;
   for (int a = 0; a < 3; a++) {
     ulo[a] = lattice_coord(G, lo[a], a);
@@ -266,10 +289,10 @@ static int element_cells(const mx_grid *G, const mx_mesh *M, uint32_t c, double 
       memcpy(c1, f1, sizeof f1);
     }
   }
-  const double ext = mx_max(hi[0] - lo[0], mx_max(hi[1] - lo[1], hi[2] - lo[2]));
-  double pm = 0.0;
+  double pm = 0.0, pads[3];
+  for (int a = 0; a < 3; a++) pads[a] = box_pad(lo, hi, a); /* before lo, hi change */
   for (int a = 0; a < 3; a++) {
-    const double pad = 2.0 * contact_tol * ext + (fabs(lo[a]) + fabs(hi[a])) * 0x1p-40 + 0x1p-1000;
+    const double pad = pads[a];
     lo[a] = lattice_coord(G, lo[a] - pad, a);
     hi[a] = lattice_coord(G, hi[a] + pad, a);
     pm = mx_max(pm, pad);
@@ -467,8 +490,27 @@ static int node_contacts(const lattice_cells *L, const mx_mesh *M, uint32_t v,
 
 /* ---- the search ------------------------------------------------------------ */
 
+/* 1 when the padded box of element c meets the region R (lo, hi). */
+static int box_meets_region(const mx_mesh *M, size_t c, const double *R) {
+  double b[6];
+  mx_contact_box(M, c, b);
+  for (int a = 0; a < 3; a++)
+    if (!(b[a] <= R[3 + a] && b[3 + a] >= R[a])) return 0;
+  return 1;
+}
+
+static int in_region(const double *p, const double *R) {
+  return p[0] >= R[0] && p[0] <= R[3] && p[1] >= R[1] && p[1] <= R[4] && p[2] >= R[2] &&
+         p[2] <= R[5];
+}
+
 int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
                      uint8_t *elem_flag, mx_contacts *out) {
+  return mx_find_contacts_in(M, G, states, NULL, elem_flag, out);
+}
+
+int mx_find_contacts_in(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
+                        const double *region, uint8_t *elem_flag, mx_contacts *out) {
   memset(out, 0, sizeof *out);
   out->first_node = UINT32_MAX;
   const size_t nc = M->ncells, nn = M->nnodes;
@@ -495,7 +537,7 @@ int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
     const size_t end = (k + 1) * CHUNK < nc ? (k + 1) * CHUNK : nc;
     uint64_t n = 0;
     for (size_t c = k * CHUNK; c < end; c++) {
-      const int s = mx_surface_face(M, states, c);
+      const int s = mx_surface_face(M, states, c) && (!region || box_meets_region(M, c, region));
       ehit[c] = (uint8_t)s;
       n += (uint64_t)s;
     }
@@ -531,6 +573,7 @@ int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
 #pragma omp parallel for schedule(dynamic, 2048) reduction(+ : found) if (nn > CHUNK)
       for (size_t v = 0; v < nn; v++) {
         if (states[v] != MX_NODE_OUTSIDE || mx_cancel_seen(cf)) continue;
+        if (region && !in_region(M->xyz + 3 * v, region)) continue;
         if (node_contacts(&L, M, (uint32_t)v, ehit)) {
           hit[v] = 1;
           found++;

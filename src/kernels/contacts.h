@@ -38,6 +38,18 @@ typedef struct {
  * MX_OK, or MX_ENOMEM. */
 int mx_find_contacts(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
                      uint8_t *elem_flag, mx_contacts *out);
+/* The same, searched within the box region (lo x, y, z, then hi; NULL:
+ * everywhere): the surface nodes in it against the elements with a surface
+ * face whose padded box (mx_contact_box) meets it. Every contact of the
+ * mesh is found when every contact has its node or its element changed
+ * since a mesh without contacts, and region holds the changed nodes and the
+ * padded boxes of the changed elements (a local re-mesh: mx_contact_box of
+ * the core's elements). */
+int mx_find_contacts_in(const mx_mesh *M, const mx_grid *G, const uint8_t *states,
+                        const double *region, uint8_t *elem_flag, mx_contacts *out);
+/* Element c's box padded as the search files it (lo, then hi): every point
+ * lying on the element in the sense above is inside. */
+void mx_contact_box(const mx_mesh *M, size_t c, double box[6]);
 /* 1 when a face of element c has surface (outside) nodes only: the
  * elements the search looks at. */
 int mx_surface_face(const mx_mesh *M, const uint8_t *states, size_t c);

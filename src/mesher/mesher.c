@@ -109,6 +109,7 @@ mx_mesher *mx_mesher_new(const mx_params *p) {
 
 void mx_mesh_clear(mx_mesher *m) {
   mx_written_forget(m);
+  m->contacts_clean = m->changed_valid = 0;
   mx_mesh_free(&m->M);
   mx_mesh_free(&m->Mmix);
   mx_free(m->tet_parent);
@@ -585,6 +586,7 @@ static int transition(mx_mesher *m) {
   MX_CHECK(mx_mesher_stage(m, "transition"));
   /* nothing reads the edge infos again until the octree is split: their
    * memory goes to the mesh (rebuilt by the next split) */
+  m->contacts_clean = m->changed_valid = 0; /* a mesh from scratch */
   MX_CHECK(mx_pipeline_transition(m, m->leaves, m->nleaves, m->release_edges, &m->M));
   m->mesh_stage = MX_STAGE_TRANSITION;
   m->rec->S.ph.transition += mx_wtime() - t;

@@ -71,6 +71,7 @@ typedef struct {
   size_t repaired;          /* invalid elements found before a repair round */
   mx_contacts contacts;     /* geometric hanging nodes of the final mesh */
   size_t contacts_repaired; /* elements split for contacts in repair rounds */
+  size_t contacts_local;    /* searches around a local re-mesh's core only */
   int repair_rounds;
   size_t refined_listed;    /* leaves split by the last list refinement */
   size_t remesh_splits;     /* octants split by the last re-mesh (list, balance, requests) */
@@ -225,6 +226,15 @@ struct mx_mesher {
   mx_mesh M;
   uint8_t *states;          /* per node (boundary stage), or NULL */
   uint8_t *bnd;             /* per node: 1 on the boundary */
+  /* the contact search (mx_repair) after a local re-mesh: the last search
+   * found no contact on the mesh whose elements' array was clean_conn
+   * (clean_ncells elements; contacts_clean), and the splice that replaced
+   * that mesh changed only what lies in changed_box (changed_valid; see
+   * mx_find_contacts_in) */
+  int contacts_clean, changed_valid;
+  const uint32_t *clean_conn;
+  size_t clean_ncells;
+  double changed_box[6];
   /* What calls record: behind a pointer, so that the calls that take the
    * mesher const (writing, the arrays) record without casting const away */
   mx_mesher_record *rec;

@@ -36,6 +36,7 @@
 
 #include "kernels/mesh_edit.h"
 #include "kernels/closures.h"
+#include "kernels/contacts.h"
 #include "kernels/edges_lazy.h"
 #include "kernels/refine_list.h"
 #include "kernels/splice.h"
@@ -153,6 +154,25 @@ static int mark_rings(mx_mesher *m, const uint32_t *old, size_t nold, const uint
   return st;
 }
 
+/* The box holding the padded boxes of the elements of the core leaves
+ * (from_patch[leaf] != MX_NONE) of the spliced mesh M (mx_contact_box);
+ * 0 when there is none. */
+static int core_box(const mx_mesh *M, const uint32_t *from_patch, double box[6]) {
+  double lo0 = INFINITY, lo1 = INFINITY, lo2 = INFINITY;
+  double hi0 = -INFINITY, hi1 = -INFINITY, hi2 = -INFINITY;
+#pragma omp parallel for schedule(static) reduction(min : lo0, lo1, lo2) \
+    reduction(max : hi0, hi1, hi2)
+  for (size_t c = 0; c < M->ncells; c++) {
+    if (from_patch[M->leaf[c]] == MX_NONE) continue;
+    double b[6];
+    mx_contact_box(M, c, b);
+    lo0 = fmin(lo0, b[0]), lo1 = fmin(lo1, b[1]), lo2 = fmin(lo2, b[2]);
+    hi0 = fmax(hi0, b[3]), hi1 = fmax(hi1, b[4]), hi2 = fmax(hi2, b[5]);
+  }
+  box[0] = lo0, box[1] = lo1, box[2] = lo2, box[3] = hi0, box[4] = hi1, box[5] = hi2;
+  return lo0 <= hi0;
+}
+
 /* *done = 1: meshed locally; 0: the rings missed a change (the caller
  * retries with more rings or meshes everything); -1: not tried, the whole
  * octree costs less (choose: the cost model decides) or the patch cannot
@@ -234,6 +254,11 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
         mx_mesh_free(&Mn); /* the change reached the kept part: more rings */
         mx_free(nstates);
       } else if (!st) {
+        /* the contact search next looks around the core only, when the
+         * mesh replaced had none (mesher.h) */
+        const int clean = m->contacts_clean && m->clean_conn == m->M.conn &&
+                          m->clean_ncells == m->M.ncells;
+        m->changed_valid = clean && core_box(&Mn, from_patch, m->changed_box);
         mx_mesh_summarize(&Mn);
         Mn.closures = m->M.closures;
         Mn.centre_leaves = m->M.centre_leaves;

@@ -56,7 +56,17 @@ int mx_repair(mx_mesher *m) {
     if (!flag) return MX_ENOMEM;
     const double t = mx_wtime();
     int st = mx_mesher_stage(m, "verify"); /* MX_ECANCELED: cancelled */
-    if (!st) st = mx_find_contacts(&m->M, &m->B.tree.grid, m->states, flag, &m->rec->S.contacts);
+    /* after a local re-mesh of a mesh without contacts: only around what
+     * changed (kernels/contacts.h) */
+    const double *region = m->changed_valid ? m->changed_box : NULL;
+    m->changed_valid = 0;
+    m->rec->S.contacts_local += region != NULL;
+    if (!st)
+      st = mx_find_contacts_in(&m->M, &m->B.tree.grid, m->states, region, flag,
+                               &m->rec->S.contacts);
+    m->contacts_clean = !st && m->rec->S.contacts.nodes == 0;
+    m->clean_conn = m->M.conn;
+    m->clean_ncells = m->M.ncells;
     /* --tets: elements no split into tetrahedra keeps valid (a prism with
      * two warped faces cut along their concave diagonals) are repaired too */
     const size_t unsplit = !st && m->p.tets ? mx_tet_split_flag_failures(&m->M, flag) : 0;
