@@ -323,6 +323,7 @@ static void test_region(void) {
   mx_params p;
   mx_params_default(&p);
   p.surface_level = 5;
+  p.remesh_full = -1; /* re-meshes local (the end of the test) */
   mx_mesher *m = mx_mesher_new(&p);
   CHECK(m && mx_mesher_add_surface(m, cortex) == MX_OK && mx_mesher_mesh(m) == MX_OK);
   if (!m || !m->states) return;
@@ -394,6 +395,18 @@ static void test_region(void) {
   printf("region: %d moves, %d made contacts, the region beside missed %d\n", moves, found,
          missed_beside);
   CHECK(moves == 20 && found >= 15 && missed_beside == found);
+  /* a local re-mesh of 40 elements in a row (the mesh as meshed: no
+   * contact): its search is the region's, and finds what the search
+   * everywhere finds on the result */
+  uint64_t list[40];
+  for (int i = 0; i < 40; i++) list[i] = M->ncells / 3 + (uint64_t)i;
+  CHECK(mx_mesher_refine_elements(m, list, 40) == MX_OK);
+  CHECK(m->rec->S.local && m->rec->S.contacts_local >= 1);
+  mx_contacts all;
+  CHECK(mx_find_contacts(&m->M, G, m->states, NULL, &all) == MX_OK);
+  CHECK(all.nodes == m->rec->S.contacts.nodes && all.elements == m->rec->S.contacts.elements);
+  printf("re-mesh of 40 elements: local %d, %zu region search(es), %zu contact node(s)\n",
+         m->rec->S.local, m->rec->S.contacts_local, all.nodes);
   mx_mesher_free(m);
 }
 

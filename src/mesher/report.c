@@ -259,6 +259,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
          "\"quality\": %.6f, \"write\": %.6f, \"restart\": %.6f}, "
          "\"refined_listed\": %zu, \"repaired\": %zu, \"repair_rounds\": %d, "
          "\"remesh_local\": %s, \"remesh_patch_leaves\": %zu, \"remesh_core_leaves\": %zu, "
+         "\"contacts_searched_locally\": %zu, "
          "\"total_s\": %.6f, \"peak_rss_mb\": %.1f, \"memory_estimate_mb\": %.1f, "
          "\"memory_estimate_prior_mb\": %.1f, "
          "\"threads\": %d, \"wait_policy\": \"%s\", "
@@ -273,7 +274,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
          s->ph.grid, s->ph.refine, s->ph.balance, s->ph.transition,
          s->ph.boundary, s->ph.verify, s->ph.quality, s->ph.write, s->t_restart,
          s->refined_listed, s->repaired, s->repair_rounds, s->local ? "true" : "false",
-         s->local ? s->patch_leaves : 0, s->local ? s->core_leaves : 0, s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->memory_prior_mb, s->threads,
+         s->local ? s->patch_leaves : 0, s->local ? s->core_leaves : 0, s->contacts_local, s->ph.total, s->peak_rss_mb, s->memory_estimate_mb, s->memory_prior_mb, s->threads,
          ri->wait_policy ? ri->wait_policy : "default",
          s->mesh ? s->jens_min : 1.0,
          s->mesh ? s->invalid : 0, qual, bnd, mat, img, feat, tets, ri->topology ? ri->topology : "");
