@@ -63,6 +63,9 @@ static int32_t face_tag(const mx_mesh_view *v, const mx_tag_inputs *in, const ui
  * sort; tags 1..maxtag): a tag's faces become one run. */
 static int sort_list(uint32_t *fv, uint64_t *src, int32_t *tag, size_t n, int nv, int maxtag) {
   if (!n) return MX_OK; /* the list may be NULL then */
+  size_t i0 = 1;
+  while (i0 < n && tag[i0 - 1] <= tag[i0]) i0++;
+  if (i0 == n) return MX_OK; /* in order already (one input: one tag) */
   size_t *start = mx_calloc(((size_t)maxtag + 2) * sizeof *start);
   uint32_t *f2 = mx_alloc((nv * n + 1) * sizeof *f2);
   uint64_t *s2 = mx_alloc((n + 1) * sizeof *s2);
@@ -102,13 +105,21 @@ int mx_boundary_tags(const mx_mesh_view *v, const mx_tag_inputs *in, mx_boundary
       1e-6 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                   (hi[2] - lo[2]) * (hi[2] - lo[2]));
   size_t off = 0;
+  /* one input and no face off it: every face lies on input 1 (what
+   * face_tag finds: the shell of a leaf's triangles or of the closest one
+   * is that input's) */
+  const int one = in->nshells == 1 && !in->check_off;
+#pragma omp parallel for schedule(static) if (one)
+  for (size_t i = 0; i < (one ? bf->ntri : 0); i++) bf->tri_tag[i] = 1;
+#pragma omp parallel for schedule(static) if (one)
+  for (size_t i = 0; i < (one ? bf->nquad : 0); i++) bf->quad_tag[i] = 1;
 #pragma omp parallel for schedule(dynamic, 4096) reduction(+ : off)
-  for (size_t i = 0; i < bf->ntri; i++) {
+  for (size_t i = 0; i < (one ? 0 : bf->ntri); i++) {
     bf->tri_tag[i] = face_tag(v, in, bf->tri + 3 * i, 3, (size_t)(bf->tri_src[i] >> 3), off_tol);
     off += bf->tri_tag[i] == in->nshells + 1;
   }
 #pragma omp parallel for schedule(dynamic, 4096) reduction(+ : off)
-  for (size_t i = 0; i < bf->nquad; i++) {
+  for (size_t i = 0; i < (one ? 0 : bf->nquad); i++) {
     bf->quad_tag[i] =
         face_tag(v, in, bf->quad + 4 * i, 4, (size_t)(bf->quad_src[i] >> 3), off_tol);
     off += bf->quad_tag[i] == in->nshells + 1;
