@@ -25,6 +25,7 @@ void mx_halo_free(mx_halo *H) {
   mx_free(H->owner);
   mx_free(H->known);
   mx_free(H->root_tree);
+  mx_free(H->bucket);
   memset(H, 0, sizeof *H);
 }
 
@@ -55,6 +56,30 @@ static int merge_known(mx_halo *H, const uint64_t *add, size_t n) {
   mx_free(H->known);
   H->known = m;
   H->nknown = k;
+  return MX_OK;
+}
+
+/* H->bucket over the sorted local keys: about one key a bucket (at most
+ * 2^22 buckets), covering every key of the grid's lattice. */
+static int buckets_build(const mx_p4est_octree *P, mx_halo *H) {
+  const int *dims = P->B->tree.grid.dims;
+  const uint64_t kmax =
+      mx_morton_encode(((uint32_t)dims[0] << MX_MAX_LEVEL) - 1,
+                       ((uint32_t)dims[1] << MX_MAX_LEVEL) - 1,
+                       ((uint32_t)dims[2] << MX_MAX_LEVEL) - 1);
+  size_t want = H->nlocal < ((size_t)1 << 22) ? H->nlocal : ((size_t)1 << 22);
+  if (want < 1) want = 1;
+  int sh = 0;
+  while (sh < 63 && (kmax >> sh) + 1 > want) sh++;
+  H->bshift = sh;
+  H->nbucket = (size_t)(kmax >> sh) + 1;
+  H->bucket = mx_alloc((H->nbucket + 1) * sizeof *H->bucket);
+  if (!H->bucket) return MX_ENOMEM;
+  size_t i = 0;
+  for (size_t b = 0; b <= H->nbucket; b++) {
+    while (i < H->nlocal && (H->lkey[i] >> sh) < b) i++;
+    H->bucket[b] = (uint32_t)i;
+  }
   return MX_OK;
 }
 
@@ -93,6 +118,7 @@ int mx_halo_init(const mx_p4est_octree *P, mx_halo *H) {
       H->lpq[i] = pq[perm[i]];
     }
   H->nlocal = n;
+  if (!st) st = buckets_build(P, H);
   mx_free((void *)pq);
   mx_free(lev);
   mx_free(perm);
@@ -195,7 +221,11 @@ static size_t visit(const mx_halo *H, const uint32_t bc[3], int blevel, const ui
                     uint32_t s, uint32_t *out, size_t n, size_t cap) {
   const uint64_t key = mx_morton_encode(bc[0], bc[1], bc[2]);
   const uint64_t vol = (uint64_t)1 << (3 * (MX_MAX_LEVEL - blevel));
-  size_t lo = 0, hi = H->nlocal;
+  /* the first local key at or after key: in key's bucket, or the next
+   * bucket's first */
+  const size_t b = (size_t)(key >> H->bshift);
+  size_t lo = b < H->nbucket ? H->bucket[b] : H->nlocal;
+  size_t hi = b < H->nbucket ? H->bucket[b + 1] : H->nlocal;
   while (lo < hi) {
     const size_t mid = lo + (hi - lo) / 2;
     if (H->lkey[mid] < key) lo = mid + 1;

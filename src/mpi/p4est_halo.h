@@ -27,6 +27,12 @@ typedef struct {
   uint8_t *llevel;
   const mx_pq **lpq;
   size_t nlocal;
+  /* lkey's buckets: the keys with key >> bshift == b are at
+   * [bucket[b], bucket[b + 1]) (nbucket + 1 entries): a search starts
+   * there instead of in the whole array */
+  uint32_t *bucket;
+  size_t nbucket;
+  int bshift;
   /* the halo: in the order found (ring by ring), ring r's leaves at
    * [ring_start[r], ring_start[r + 1]) for r = 1 .. rings */
   uint64_t *key;
