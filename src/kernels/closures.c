@@ -18,12 +18,6 @@ static int kept_on_edge(const mx_octree *T, uint32_t x, int p, int sp, int q, in
   return 0;
 }
 
-/* The transition closes a face that has a centre (a finer neighbour across
- * it) but lacks some edge midpoints (that neighbour's children there were
- * dropped outside the domain) by adding them; every leaf of the same level
- * around such an edge takes the midpoint too. A coarser leaf along that
- * edge cannot: the midpoint would hang on its face (a T-junction). Such
- * coarser leaves are split here, with balance, until none is left. */
 /* The coarser leaves along the face edges of the split octant y (with
  * children dropped, at a level with masks) that would hang a closure's
  * midpoint, in the scan's order, into out (at most 6 faces x 4 edges x 2);
@@ -92,6 +86,12 @@ static int push_u32(uint32_t **a, size_t *n, size_t *cap, uint32_t v) {
   return 0;
 }
 
+/* The transition closes a face that has a centre (a finer neighbour across
+ * it) but lacks some edge midpoints (that neighbour's children there were
+ * dropped outside the domain) by adding them; every leaf of the same level
+ * around such an edge takes the midpoint too. A coarser leaf along that
+ * edge cannot: the midpoint would hang on its face (a T-junction). Such
+ * coarser leaves are split here, with balance, until none is left. */
 int mx_resolve_closures(mx_builder *B) {
   mx_octree *T = &B->tree.oct;
   MX_CHECK(mx_edges_restore(B));
