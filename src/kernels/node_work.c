@@ -113,6 +113,15 @@ int mx_on_mesh_boundary(const mx_mesh *M, const uint32_t *inc, size_t e0, size_t
   return 0;
 }
 
+int mx_node_work_band_jens(const mx_mesh *M, const mx_node_work *w, double **jd) {
+  double *j = mx_alloc((w->nband + 1) * sizeof *j);
+  *jd = j;
+  if (!j) return MX_ENOMEM;
+#pragma omp parallel for schedule(static)
+  for (size_t i = 0; i < w->nband; i++) j[i] = mx_cell_jens(M, w->band[i]);
+  return MX_OK;
+}
+
 void mx_node_work_free(mx_node_work *w) {
   mx_free(w->off);
   mx_free(w->inc);

@@ -46,4 +46,17 @@ int mx_node_work_build(const mx_mesh *M, const uint8_t *states, const uint8_t *m
                        const char *what, mx_node_work *w);
 void mx_node_work_free(mx_node_work *w);
 
+/* The J_ENS of the band's elements in double at the current positions
+ * (*jd: w->nband values, mx_alloc), kept beside the lists by the passes
+ * that move nodes (jd[w->pos[e]] is entry e's element's). MX_ENOMEM. */
+int mx_node_work_band_jens(const mx_mesh *M, const mx_node_work *w, double **jd);
+
+/* The least of jd[pos[e]] over the list entries [e0, e1). */
+static inline double mx_band_min(const double *jd, const uint32_t *pos, uint64_t e0,
+                                 uint64_t e1) {
+  double m = __builtin_inf();
+  for (uint64_t e = e0; e < e1; e++) m = __builtin_fmin(m, jd[pos[e]]);
+  return m;
+}
+
 #endif

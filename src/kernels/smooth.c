@@ -28,14 +28,6 @@ enum { MAX_GRAD = 9 };
 static const double to_centroid[] = {1.0, 0.5, 0.25};
 static const double along_grad[] = {0.1, 0.03, 0.01, 0.003, 0.001};
 
-/* Least J_ENS of the elements of w (its incidence list) from Jb, the
- * band's J_ENS (pos: each list entry's place in the band). */
-static double node_min(const uint64_t *off, const uint32_t *pos, const double *Jb, uint32_t w) {
-  double m = INFINITY;
-  for (uint64_t e = off[w]; e < off[w + 1]; e++) m = fmin(m, Jb[pos[e]]);
-  return m;
-}
-
 /* One move of work node v: the best trial point, taken when it raises the
  * least J_ENS of v's elements by MIN_GAIN and keeps every element e of v at
  * or above floor(e) = max of m over e's nodes. Writes v's position and its
@@ -206,21 +198,17 @@ int mx_smooth(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
   uint8_t *moved = NULL, *ever = NULL;
   if (!rc && W.nw) {
     m = mx_alloc((nn + 1) * sizeof *m);
-    Jb = mx_alloc((W.nband + 1) * sizeof *Jb);
     moved = mx_calloc(W.nw + 1);
     ever = mx_calloc(W.nw + 1);
-    if (!m || !Jb || !moved || !ever) rc = MX_ENOMEM;
+    rc = mx_node_work_band_jens(M, &W, &Jb); /* kept through the moves */
+    if (!m || !moved || !ever) rc = MX_ENOMEM;
   }
   st->work = W.nw;
   if (!rc && W.nw) {
-    /* the J_ENS of the band (the elements of the incidence lists) in
-     * double, kept through the moves */
-#pragma omp parallel for schedule(static)
-    for (size_t b = 0; b < W.nband; b++) Jb[b] = mx_cell_jens(M, W.band[b]);
     /* m: the neighbourhood minima of every node with incidence (the work
      * nodes and the other nodes of their elements) */
 #pragma omp parallel for schedule(dynamic, 4096)
-    for (size_t v = 0; v < nn; v++) m[v] = node_min(W.off, W.pos, Jb, (uint32_t)v);
+    for (size_t v = 0; v < nn; v++) m[v] = mx_band_min(Jb, W.pos, W.off[v], W.off[v + 1]);
     /* mark[v]: v is a work node whose neighbourhood changed since it was
      * last looked at (all of them at first) */
     size_t moves = 0;
@@ -252,7 +240,7 @@ int mx_smooth(mx_mesh *M, const uint8_t *states, const mx_surface_index *S,
             const uint32_t *row = M->conn + 8 * (size_t)W.inc[e];
             for (int j = 0; j < mx_cell_nodes[M->type[W.inc[e]]]; j++) {
               const uint32_t w = row[j];
-              double mw = node_min(W.off, W.pos, Jb, w);
+              double mw = mx_band_min(Jb, W.pos, W.off[w], W.off[w + 1]);
               __atomic_store(&m[w], &mw, __ATOMIC_RELAXED);
               __atomic_store_n(&mark[w], 1, __ATOMIC_RELAXED);
             }

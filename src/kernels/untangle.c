@@ -11,17 +11,8 @@
 #include "geom/quality.h"
 #include "soa/mesh.h"
 
-
-/* Worst J_ENS of the elements [e0, e1) of v's list, from the band's values
- * (jd[pos[e]]: each element's J_ENS at the current positions, kept up to
- * date by the moves). */
-static double worst_of(const double *jd, const uint32_t *pos, size_t e0, size_t e1) {
-  double w = INFINITY;
-  for (size_t i = e0; i < e1; i++) w = fmin(w, jd[pos[i]]);
-  return w;
-}
-
-/* The same, or any value <= floor once one element is there (a trial that
+/* The worst J_ENS of the elements [e0, e1) of list inc at the current
+ * positions, or any value <= floor once one element is there (a trial that
  * cannot win stops at its first element that bad); *first: the element
  * looked at first, which becomes the one that stopped it (the worst one
  * of a trial is often the next trial's). */
@@ -55,7 +46,7 @@ static int move_node(mx_mesh *M, const mx_surface_index *S, const mx_node_work *
   const double q_target = o->q_target;
   const size_t e0 = off[v], e1 = off[v + 1];
   double *x = M->xyz + 3 * (size_t)v;
-  const double w0 = worst_of(jd, pos, e0, e1);
+  const double w0 = mx_band_min(jd, pos, e0, e1); /* the worst */
   if (w0 >= q_target) return 0;
   /* centroid of the other nodes of the incident elements */
   double c[3] = {0.0, 0.0, 0.0};
@@ -172,14 +163,12 @@ int mx_untangle_with(mx_mesh *M, const uint8_t *states, const mx_surface_index *
   const uint8_t *onsurf = W.onsurf;
   /* the band's J_ENS in double, at the current positions (the moves keep
    * them so): a node's worst is read, not computed again */
-  double *jd = mx_alloc((W.nband + 1) * sizeof *jd);
-  if (!jd) {
+  double *jd = NULL;
+  if (mx_node_work_band_jens(M, &W, &jd)) {
     mx_node_work_free(&W);
     mx_free(mark);
     return MX_ENOMEM;
   }
-#pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < W.nband; i++) jd[i] = mx_cell_jens(M, W.band[i]);
   /* With regions: where each free work node starts, and its clearance (the
    * distance within which no shell lies) */
   double *x_init = NULL, *clear = NULL;
