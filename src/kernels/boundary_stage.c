@@ -26,7 +26,8 @@ static double clearance_of(const void *ctx, const double x[3]) {
 int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
                       const mx_surface_index *S, mx_mesh *M,
                       const mx_interfaces *I, double close_ratio, double staircase_q,
-                      int smooth_rounds, mx_boundary_stats *stats, uint8_t **states_out) {
+                      int smooth_rounds, int keep_unused, mx_boundary_stats *stats,
+                      uint8_t **states_out) {
   memset(stats, 0, sizeof *stats);
   uint8_t *states = mx_alloc(M->nnodes + 1);
   if (!states) return MX_ENOMEM;
@@ -45,7 +46,7 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
   if (!st) st = mx_cancel_check();
   mx_optional opt;
   memset(&opt, 0, sizeof opt);
-  if (!st) st = mx_surface_patterns(M, &states, moved, &opt, &stats->sp);
+  if (!st) st = mx_surface_patterns(M, &states, moved, &opt, &stats->sp, keep_unused && !I);
   mx_free(moved);
   stats->removed = stats->sp.removed;
   t1 = mx_wtime();

@@ -37,11 +37,15 @@ typedef struct {
  * I (NULL: none): the interfaces between nested materials, meshed after
  * the outer boundary's shrink and before the untangling
  * (kernels/interfaces.h). smooth_rounds: rounds of the smoothing after
- * the untangling (kernels/smooth.h), 0 none; not run with interfaces. */
+ * the untangling (kernels/smooth.h), 0 none; not run with interfaces.
+ * keep_unused: the nodes no element uses any more may stay (ignored with
+ * interfaces), for a caller that numbers the nodes by first use next
+ * (mx_surface_patterns). */
 #define MX_CLOSE_RATIO 0.5
 int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
                       const mx_surface_index *S, mx_mesh *M,
                       const mx_interfaces *I, double close_ratio, double staircase_q,
-                      int smooth_rounds, mx_boundary_stats *stats, uint8_t **states_out);
+                      int smooth_rounds, int keep_unused, mx_boundary_stats *stats,
+                      uint8_t **states_out);
 
 #endif

@@ -191,7 +191,7 @@ static uint64_t out_at(const uint64_t *bout, size_t nb, uint64_t total, size_t b
 }
 
 int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
-                        mx_optional *opt, mx_surface_stats *stats) {
+                        mx_optional *opt, mx_surface_stats *stats, int keep_unused) {
   const size_t nc = M->ncells, nn = M->nnodes;
   const uint8_t *states = *states_io;
   memset(opt, 0, sizeof *opt);
@@ -310,12 +310,12 @@ int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
   M->ncells = total;
   M->nnodes = nn + total_cen;
   opt->n = total_opt;
-  /* 3. Nodes only dropped elements used go; the optional elements keep
-   * only those whose nodes all remain. */
+  /* 3. Nodes only dropped elements used go (unless kept: keep_unused);
+   * the optional elements keep only those whose nodes all remain. */
   uint32_t *newid = NULL;
-  st = mx_mesh_drop_nodes(M, states_io, used, &newid);
-  mx_free(used);
+  st = keep_unused ? MX_OK : mx_mesh_drop_nodes(M, states_io, used, &newid);
   if (st) {
+    mx_free(used);
     mx_optional_free(opt);
     return st;
   }
@@ -325,7 +325,8 @@ int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
     int ok = 1;
     uint32_t g[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     for (int k = 0; k < ne && ok; k++) {
-      g[k] = newid[opt->conn[8 * i + k]];
+      const uint32_t v = opt->conn[8 * i + k];
+      g[k] = newid ? newid[v] : used[v] ? v : UINT32_MAX;
       ok = g[k] != UINT32_MAX;
     }
     if (!ok) continue;
@@ -336,6 +337,7 @@ int mx_surface_patterns(mx_mesh *M, uint8_t **states_io, const uint8_t *moved,
     no++;
   }
   mx_free(newid);
+  mx_free(used);
   stats->patterned = patterned;
   stats->removed = removed;
   stats->kept = total;

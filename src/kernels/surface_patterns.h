@@ -60,9 +60,14 @@ static inline int mx_surface_diagonal(int ia, int ib, int ic, int id) {
  * end where the output lies right of the input (most of the mesh: the
  * patterns add elements), the rest into new arrays copied to their place;
  * MX_PATTERNS_COPY=1 in the environment copies all of it (for the tests,
- * which compare both). */
+ * which compare both). keep_unused: the nodes only removed elements used
+ * stay (unused, ids unchanged; *opt keeps the dropped sub-elements whose
+ * nodes some kept element uses) for a caller that numbers the nodes by
+ * first use afterwards, which drops them (mx_mesh_renumber_first_use, the
+ * splice): one pass over the elements and the node arrays less (cortex -s
+ * 10: 0.76 s); 0: they go here, the others numbered down in order. */
 int mx_surface_patterns(mx_mesh *M, uint8_t **states, const uint8_t *moved,
-                        mx_optional *opt, mx_surface_stats *stats);
+                        mx_optional *opt, mx_surface_stats *stats, int keep_unused);
 
 void mx_optional_free(mx_optional *opt);
 

@@ -610,7 +610,7 @@ static int boundary_once(mx_mesher *m) {
   const double t = mx_wtime();
   MX_CHECK(mx_mesher_stage(m, "boundary"));
   mx_boundary_stats bs;
-  MX_CHECK(mx_pipeline_boundary(m, m->leaves, m->nleaves, &m->M, &m->states, &bs));
+  MX_CHECK(mx_pipeline_boundary(m, m->leaves, m->nleaves, &m->M, 1, &m->states, &bs));
   m->rec->S.boundary = bs;
   m->rec->S.full = 1;
   MX_CHECK(mx_mesh_renumber_first_use(&m->M, &m->states));

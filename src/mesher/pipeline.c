@@ -196,7 +196,7 @@ static int place_features(mx_mesher *m, mx_mesh *M, uint8_t **states_io, mx_boun
 }
 
 int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh *M,
-                         uint8_t **states, mx_boundary_stats *bs) {
+                         int first_use_next, uint8_t **states, mx_boundary_stats *bs) {
   if (!m->have_index) {
     MX_CHECK(mx_mesher_stage(m, "index"));
     MX_CHECK(mx_mesher_index(m));
@@ -205,7 +205,8 @@ int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh
   MX_CHECK(mx_boundary_stage(&m->B.tree, leaves, &m->SI, M,
                              m->IF.npasses ? &m->IF : NULL, m->p.close_ratio,
                              m->p.staircase_quality,
-                             features_active(m) ? 0 : m->p.smooth_rounds, bs, states));
+                             features_active(m) ? 0 : m->p.smooth_rounds,
+                             first_use_next && !features_active(m), bs, states));
   MX_CHECK(place_features(m, M, states, bs)); /* and the smoothing after them */
   return mx_mesh_sort_by_leaf(M, n);
 }

@@ -12,7 +12,11 @@
  *                         transition patterns' elements;
  * mx_pipeline_boundary    the mesher's surface index (built once, here),
  *                         the boundary stage (kernels/boundary_stage.h),
- *                         the elements grouped by leaf.
+ *                         the elements grouped by leaf; with
+ *                         first_use_next (the caller numbers the nodes by
+ *                         first use next: the whole mesh, the splice), the
+ *                         nodes no element uses may stay
+ *                         (mx_surface_patterns' keep_unused).
  *
  * leaves: octant indices of the mesher's tree, in Morton order. The
  * callers time the steps and keep the results. */
@@ -28,7 +32,7 @@
 int mx_pipeline_transition(mx_mesher *m, const uint32_t *leaves, size_t n, int release_edges,
                            mx_mesh *M);
 int mx_pipeline_boundary(mx_mesher *m, const uint32_t *leaves, size_t n, mx_mesh *M,
-                         uint8_t **states, mx_boundary_stats *bs);
+                         int first_use_next, uint8_t **states, mx_boundary_stats *bs);
 /* The distance from the features within which their placement looks at
  * the boundary (mx_feature_input.near; 0: everywhere). */
 double mx_feature_reach(const mx_mesher *m);

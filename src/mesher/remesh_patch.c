@@ -241,7 +241,7 @@ static int remesh_local(mx_mesher *m, const uint32_t *old, size_t nold, int core
     const double t2 = mx_wtime();
     m->rec->S.ph.transition += t2 - t1;
     if (!st) {
-      st = mx_pipeline_boundary(m, P, np, &Mp, &pstates, &bs);
+      st = mx_pipeline_boundary(m, P, np, &Mp, 1, &pstates, &bs);
       mx_mesh Mn;
       uint8_t *nstates = NULL;
       mx_splice_stats ss;

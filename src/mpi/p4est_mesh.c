@@ -160,7 +160,7 @@ static int mesh_patch(mx_p4est_octree *P, const mx_halo *H, mx_mesher *m, mx_p4e
   D->t_transition += mx_wtime() - t;
   t = mx_wtime();
   mx_boundary_stats bs;
-  if (!st) st = mx_pipeline_boundary(m, pl, np, &M, &states, &bs);
+  if (!st) st = mx_pipeline_boundary(m, pl, np, &M, 0, &states, &bs);
   /* defects of the core's elements, seen with their neighbours */
   uint8_t *flag = NULL, *core = NULL;
   if (!st) {
