@@ -8,6 +8,7 @@
 #include "check.h"
 #include "verify/check.h"
 #include "kernels/transition.h"
+#include "kernels/splice.h"
 #include "soa/mesh.h"
 #include "octree_util.h"
 #include "io/demo_surface.h"
@@ -130,7 +131,88 @@ static size_t check_case(const char *what, const mx_trisoup *s, uint32_t ntd,
   return ne;
 }
 
+/* mx_mesh_renumber_first_use against its definition, written out serially:
+ * a node's new id is its rank in the order of first use (element order,
+ * then slot order), unused nodes dropped. A random mesh of mixed types
+ * with local node ids (as the mesher's) and some nodes used by no element
+ * or only far later; more elements than one chunk of the parallel passes
+ * (16384 elements a block, a chunk per thread), for 1, 2, 3 and 7 threads. */
+static void check_first_use(void) {
+  const size_t nc = 300000, nn = 200000;
+  uint64_t seed = 7;
+  mx_mesh M0;
+  memset(&M0, 0, sizeof M0);
+  M0.ncells = nc;
+  M0.nnodes = nn;
+  M0.type = mx_alloc(nc);
+  M0.conn = mx_alloc(8 * nc * sizeof *M0.conn);
+  M0.xyz = mx_alloc(3 * nn * sizeof *M0.xyz);
+  CHECK(M0.type && M0.conn && M0.xyz);
+  for (size_t v = 0; v < 3 * nn; v++) M0.xyz[v] = (double)v;
+  for (size_t c = 0; c < nc; c++) {
+    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+    const int t = (int)(seed >> 60) & 3;
+    M0.type[c] = (uint8_t)t;
+    const size_t base = c * (nn / 2) / nc; /* ids rise with the elements */
+    for (int k = 0; k < 8; k++) {
+      uint32_t v = 0;
+      int fresh = 0;
+      while (!fresh && k < mx_cell_nodes[t]) {
+        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+        /* mostly near base, sometimes anywhere (a late first use of an
+         * early node, or an early use of a late one) */
+        v = (seed >> 33) % 97 == 0 ? (uint32_t)((seed >> 13) % nn)
+                                   : (uint32_t)((base + (seed >> 40) % 64) % nn);
+        fresh = 1;
+        for (int j = 0; j < k; j++) fresh &= M0.conn[8 * c + j] != v;
+      }
+      M0.conn[8 * c + k] = k < mx_cell_nodes[t] ? v : 0;
+    }
+  }
+  /* the definition */
+  uint32_t *want = malloc(nn * sizeof *want);
+  CHECK(want != NULL);
+  for (size_t v = 0; v < nn; v++) want[v] = UINT32_MAX;
+  uint32_t next = 0;
+  for (size_t c = 0; c < nc; c++)
+    for (int k = 0; k < mx_cell_nodes[M0.type[c]]; k++)
+      if (want[M0.conn[8 * c + k]] == UINT32_MAX) want[M0.conn[8 * c + k]] = next++;
+  CHECK(next < nn); /* some nodes unused */
+  const int threads[4] = {1, 2, 3, 7};
+  for (int i = 0; i < 4; i++) {
+    omp_set_num_threads(threads[i]);
+    mx_mesh M = M0;
+    M.type = mx_alloc(nc);
+    M.conn = mx_alloc(8 * nc * sizeof *M.conn);
+    M.xyz = mx_alloc(3 * nn * sizeof *M.xyz);
+    CHECK(M.type && M.conn && M.xyz);
+    memcpy(M.type, M0.type, nc);
+    memcpy(M.conn, M0.conn, 8 * nc * sizeof *M.conn);
+    memcpy(M.xyz, M0.xyz, 3 * nn * sizeof *M.xyz);
+    uint8_t *states = mx_alloc(nn);
+    CHECK(states != NULL);
+    for (size_t v = 0; v < nn; v++) states[v] = (uint8_t)(v % 3);
+    CHECK(mx_mesh_renumber_first_use(&M, &states) == MX_OK);
+    CHECK(M.nnodes == next);
+    size_t bad = 0;
+    for (size_t c = 0; c < nc; c++)
+      for (int k = 0; k < mx_cell_nodes[M.type[c]]; k++)
+        bad += M.conn[8 * c + k] != want[M0.conn[8 * c + k]];
+    for (size_t v = 0; v < nn; v++)
+      if (want[v] != UINT32_MAX)
+        bad += M.xyz[3 * (size_t)want[v]] != M0.xyz[3 * v] || states[want[v]] != v % 3;
+    if (bad) fprintf(stderr, "first use, %d threads: %zu ids differ\n", threads[i], bad);
+    CHECK(bad == 0);
+    mx_free(states);
+    mx_mesh_free(&M);
+  }
+  free(want);
+  mx_mesh_free(&M0);
+  omp_set_num_threads(2);
+}
+
 int main(void) {
+  check_first_use();
   const double lo[3] = {-0.5, -0.5, -0.5}, hi[3] = {0.5, 0.5, 0.5};
   mx_trisoup cube;
   memset(&cube, 0, sizeof cube);

@@ -1,5 +1,6 @@
 #include "kernels/splice.h"
 
+#include <omp.h>
 #include <string.h>
 
 #include "base/common.h"
@@ -106,56 +107,98 @@ int mx_leaves_touching(const mx_tree *tr, const uint32_t *pos, const uint32_t *o
 /* ---- numbering by first use --------------------------------------------- */
 
 /* newid[v] for v < nn: the rank of node v in the order of first use in
- * conn (UINT32_MAX when unused); *nused: the nodes used. Each node's first
- * element (the least element using it: a node is in an element once, so
- * the element and the order of its slots tell the rank), the new nodes
- * counted per block of elements, prefix-summed, numbered block by block. */
+ * conn (UINT32_MAX when unused); *nused: the nodes used. The elements are
+ * cut into one contiguous chunk per thread (at most FU_CHUNKS); each
+ * thread walks its chunk in order with a bitmap of the nodes it has seen
+ * (nn / 8 bytes: in cache where an array of first elements per node was
+ * not) and flags, per element, the slots whose node it sees first (mask).
+ * A node's first use in the whole mesh is its first in the earliest chunk
+ * using it: the flags of a later chunk are cleared for the nodes some
+ * earlier chunk has seen (the bitmaps turned into their prefix ORs). Then
+ * the flags are counted per block of elements, prefix-summed and numbered
+ * block by block, in slot order within an element: the same ranks for any
+ * number of threads. */
+enum { FU_CHUNKS = 32, FU_BLOCK = 1 << 14 };
+
 static int first_use_ids(const uint8_t *type, const uint32_t *conn, size_t nc, size_t nn,
                          uint32_t **newid_out, size_t *nused) {
-  enum { FB = 1 << 14 };
-  const size_t nb = (nc + FB - 1) / FB;
-  uint32_t *first = mx_alloc((nn + 1) * sizeof *first);
+  const size_t nb = (nc + FU_BLOCK - 1) / FU_BLOCK, words = nn / 64 + 1;
+  int nch = omp_get_max_threads();
+  nch = nch > FU_CHUNKS ? FU_CHUNKS : nch < 1 ? 1 : nch;
+  if (nc < 4 * (size_t)FU_BLOCK) nch = 1;
+  uint64_t *seen = mx_calloc((size_t)nch * words * sizeof *seen);
+  uint8_t *mask = mx_alloc(nc + 1);
   uint64_t *cnt = mx_alloc((nb + 1) * sizeof *cnt);
   uint32_t *newid = mx_alloc((nn + 1) * sizeof *newid);
-  if (!first || !cnt || !newid) {
-    mx_free(first); mx_free(cnt); mx_free(newid);
+  if (!seen || !mask || !cnt || !newid) {
+    mx_free(seen); mx_free(mask); mx_free(cnt); mx_free(newid);
     return MX_ENOMEM;
   }
-#pragma omp parallel for schedule(static)
-  for (size_t v = 0; v < nn; v++) {
-    first[v] = UINT32_MAX;
-    newid[v] = UINT32_MAX;
+#define FU_LO(t) ((size_t)(((unsigned __int128)nc * (unsigned)(t)) / (unsigned)nch))
+  /* each chunk's first uses within it */
+#pragma omp parallel for schedule(static, 1)
+  for (int t = 0; t < nch; t++) {
+    uint64_t *mine = seen + (size_t)t * words;
+    for (size_t c = FU_LO(t); c < FU_LO(t + 1); c++) {
+      unsigned m = 0;
+      for (int k = 0; k < mx_cell_nodes[type[c]]; k++) {
+        const uint32_t v = conn[8 * c + k];
+        const uint64_t bit = 1ull << (v & 63);
+        if (mine[v >> 6] & bit) continue;
+        mine[v >> 6] |= bit;
+        m |= 1u << k;
+      }
+      mask[c] = (uint8_t)m;
+    }
   }
-  /* the least element using each node; in increasing c per thread, so a
-   * node is written about once per thread */
+  /* seen[t] := the nodes chunks 0 .. t-1 use */
+  if (nch > 1) {
 #pragma omp parallel for schedule(static)
-  for (size_t c = 0; c < nc; c++)
-    for (int k = 0; k < mx_cell_nodes[type[c]]; k++) {
-      uint32_t *f = &first[conn[8 * c + k]];
-      uint32_t cur = __atomic_load_n(f, __ATOMIC_RELAXED);
-      while ((uint32_t)c < cur &&
-             !__atomic_compare_exchange_n(f, &cur, (uint32_t)c, 1, __ATOMIC_RELAXED,
-                                          __ATOMIC_RELAXED)) {
+    for (size_t w = 0; w < words; w++) {
+      uint64_t acc = 0;
+      for (int t = 0; t < nch; t++) {
+        const uint64_t x = seen[(size_t)t * words + w];
+        seen[(size_t)t * words + w] = acc;
+        acc |= x;
       }
     }
+  }
+  /* the flags of the nodes an earlier chunk used cleared; counted per block */
 #pragma omp parallel for schedule(static)
   for (size_t b = 0; b < nb; b++) {
+    const size_t c1 = (b + 1) * FU_BLOCK < nc ? (b + 1) * FU_BLOCK : nc;
+    int t = 0;
+    while (t + 1 < nch && FU_LO(t + 1) <= b * FU_BLOCK) t++;
     uint64_t n = 0;
-    for (size_t c = b * FB; c < nc && c < (b + 1) * FB; c++)
-      for (int k = 0; k < mx_cell_nodes[type[c]]; k++) n += first[conn[8 * c + k]] == c;
+    for (size_t c = b * FU_BLOCK; c < c1; c++) {
+      while (t + 1 < nch && FU_LO(t + 1) <= c) t++;
+      unsigned m = mask[c];
+      if (t > 0 && m) {
+        const uint64_t *before = seen + (size_t)t * words;
+        for (unsigned r = m; r; r &= r - 1) {
+          const int k = __builtin_ctz(r);
+          const uint32_t v = conn[8 * c + k];
+          if (before[v >> 6] >> (v & 63) & 1) m &= ~(1u << k);
+        }
+        mask[c] = (uint8_t)m;
+      }
+      n += (uint64_t)__builtin_popcount(m);
+    }
     cnt[b] = n;
   }
+#undef FU_LO
+  mx_free(seen);
   *nused = mx_scan_u64(cnt, nb);
+#pragma omp parallel for schedule(static)
+  for (size_t v = 0; v < nn; v++) newid[v] = UINT32_MAX;
 #pragma omp parallel for schedule(static)
   for (size_t b = 0; b < nb; b++) {
     uint64_t id = cnt[b];
-    for (size_t c = b * FB; c < nc && c < (b + 1) * FB; c++)
-      for (int k = 0; k < mx_cell_nodes[type[c]]; k++) {
-        const uint32_t v = conn[8 * c + k];
-        if (first[v] == c) newid[v] = (uint32_t)id++;
-      }
+    for (size_t c = b * FU_BLOCK; c < nc && c < (b + 1) * FU_BLOCK; c++)
+      for (unsigned r = mask[c]; r; r &= r - 1)
+        newid[conn[8 * c + (size_t)__builtin_ctz(r)]] = (uint32_t)id++;
   }
-  mx_free(first);
+  mx_free(mask);
   mx_free(cnt);
   *newid_out = newid;
   return MX_OK;
