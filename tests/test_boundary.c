@@ -58,7 +58,7 @@ static int remove_close_to_boundary(mx_mesh *M, uint8_t **states_io,
   for (size_t c = 0; c < nc; c++) {
     int in = 0;
     for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
-      in |= states[M->conn[8 * c + k]] == MX_NODE_INSIDE;
+      in |= mx_node_inside(states[M->conn[8 * c + k]]);
     keep[c] = (uint8_t)in;
   }
   int st = mx_mesh_keep_cells(M, keep);
@@ -90,7 +90,7 @@ int main(void) {
     for (size_t v = 0; v < b.M.nnodes; v++) {
       const double *p = b.M.xyz + 3 * v;
       const int in = fabs(p[0]) < 0.5 && fabs(p[1]) < 0.5 && fabs(p[2]) < 0.5;
-      wrong += in != (st[v] == MX_NODE_INSIDE);
+      wrong += in != mx_node_inside(st[v]);
       inside += in;
     }
     printf("cube -s 4: %zu nodes, %zu inside, %zu located, %zu wrong\n", b.M.nnodes,
@@ -122,16 +122,16 @@ int main(void) {
     for (size_t v = 0; v < b.M.nnodes; v++) {
       double cp[3];
       const double *p = b.M.xyz + 3 * v;
-      inside += st[v] == MX_NODE_INSIDE;
+      inside += mx_node_inside(st[v]);
       if (fabs(mx_signed_distance(&S, p, cp)) < 1e-9) continue;
       checked++;
-      wrong += mx_locate(&L, p) != (st[v] == MX_NODE_INSIDE);
+      wrong += mx_locate(&L, p) != mx_node_inside(st[v]);
     }
     size_t bad_inherit = 0;
     for (size_t c = 0; c < b.M.ncells; c++) {
       if (b.B.tree.oct.flags[b.leaves[b.M.leaf[c]]] & MX_OCT_SURFACE) continue;
       for (int k = 0; k < mx_cell_nodes[b.M.type[c]]; k++)
-        bad_inherit += st[b.M.conn[8 * c + k]] != MX_NODE_INSIDE;
+        bad_inherit += !mx_node_inside(st[b.M.conn[8 * c + k]]);
     }
     printf("cortex -s 5: %zu nodes, %zu inside, %zu located in %.3f s, %zu compared, "
            "%zu disagree\n", b.M.nnodes, inside, q, t, checked, wrong);
@@ -169,7 +169,7 @@ int main(void) {
       for (size_t c = 0; c < b.M.ncells; c++) {
         int in = 0;
         for (int k = 0; k < mx_cell_nodes[b.M.type[c]]; k++)
-          in += st[b.M.conn[8 * c + k]] == MX_NODE_INSIDE;
+          in += mx_node_inside(st[b.M.conn[8 * c + k]]);
         no_inside += in == 0;
       }
       for (size_t v = 0; v < b.M.nnodes; v++)

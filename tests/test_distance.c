@@ -589,7 +589,7 @@ static void check_blocks(const char *name, const mx_surface_index *S, const doub
         rmax[i] = pass == 0 ? INFINITY
                             : fabs(mx_signed_distance(S, xyz + 3 * (size_t)ids[i], NULL)) *
                                   (i % 2 ? 1.5 : 0.5);
-      if (pass == 0) mx_inside_block(S, xyz, ids, C, in);
+      if (pass == 0) mx_inside_block(S, xyz, ids, C, in, NULL, 0.0);
       mx_closest_point_block(S, xyz, ids, C, rmax, dist, q);
       for (int i = 0; i < C; i++) {
         const double *p = xyz + 3 * (size_t)ids[i];

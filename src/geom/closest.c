@@ -542,14 +542,16 @@ static void inside_each(const mx_surface_index *S, const double *xyz, const uint
 }
 
 void mx_inside_block(const mx_surface_index *S, const double *xyz, const uint32_t *ids,
-                     int n, uint8_t *inside) {
+                     int n, uint8_t *inside, uint8_t *on, double near2) {
   if (n > MX_BLOCK) {
     for (int i = 0; i < n; i += MX_BLOCK)
-      mx_inside_block(S, xyz, ids + i, n - i < MX_BLOCK ? n - i : MX_BLOCK, inside + i);
+      mx_inside_block(S, xyz, ids + i, n - i < MX_BLOCK ? n - i : MX_BLOCK, inside + i,
+                      on ? on + i : NULL, near2);
     return;
   }
   if (S->side || (!S->closed && !S->outward_closed) || !S->nt) {
     inside_each(S, xyz, ids, n, inside);
+    if (on) memcpy(on, inside, (size_t)n); /* no distance: every inside point */
     return;
   }
   double d2[MX_BLOCK], q[MX_BLOCK][3];
@@ -560,6 +562,8 @@ void mx_inside_block(const mx_surface_index *S, const double *xyz, const uint32_
     inside[i] = (uint8_t)(d2[i] == 0.0 ||
                           side_from_closest(S, xyz + 3 * (size_t)ids[i], q[i], slot[i],
                                             feat[i]) < 0);
+  if (on)
+    for (int i = 0; i < n; i++) on[i] = (uint8_t)(inside[i] && d2[i] <= near2);
 }
 
 void mx_closest_point_block(const mx_surface_index *S, const double *xyz, const uint32_t *ids,

@@ -248,10 +248,13 @@ int mx_inside(const mx_surface_index *S, const double p[3]);
  * point against those (the same answers as the single queries: where two
  * triangles are at exactly the least distance, and for a block whose points
  * lie far apart, the single query is asked). mx_inside of the points
- * xyz + 3 ids[i], i < n, into inside[i] (0 or 1). */
+ * xyz + 3 ids[i], i < n, into inside[i] (0 or 1). on (may be NULL): on[i]
+ * 1 for a point inside within distance sqrt(near2) of the surface (with a
+ * surface that is not closed, or a side test of its own: every point
+ * inside), else 0. */
 #define MX_BLOCK 32
 void mx_inside_block(const mx_surface_index *S, const double *xyz, const uint32_t *ids,
-                     int n, uint8_t *inside);
+                     int n, uint8_t *inside, uint8_t *on, double near2);
 /* mx_closest_point_within of the same points, with rmax[i] (NULL: no
  * bound): dist[i], and q[i] when dist[i] < rmax[i]. */
 void mx_closest_point_block(const mx_surface_index *S, const double *xyz, const uint32_t *ids,

@@ -33,15 +33,17 @@ int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
   enum { RUN = 2 * MX_BLOCK };
   const size_t nruns = (M->nnodes + RUN - 1) / RUN;
   size_t q = 0;
+  const double near = MX_NODE_ON_UNITS * tr->grid.unit;
 #pragma omp parallel for schedule(dynamic, 64) reduction(+ : q)
   for (size_t r = 0; r < nruns; r++) {
     uint32_t ids[RUN];
-    uint8_t in[RUN];
+    uint8_t in[RUN], on[RUN];
     int n = 0;
     for (size_t v = r * RUN; v < M->nnodes && v < (r + 1) * RUN; v++)
       if (states[v] == UNKNOWN) ids[n++] = (uint32_t)v;
-    mx_inside_block(S, M->xyz, ids, n, in);
-    for (int i = 0; i < n; i++) states[ids[i]] = in[i] ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
+    mx_inside_block(S, M->xyz, ids, n, in, on, near * near);
+    for (int i = 0; i < n; i++)
+      states[ids[i]] = on[i] ? MX_NODE_ON : in[i] ? MX_NODE_INSIDE : MX_NODE_OUTSIDE;
     q += (size_t)n;
   }
   *queries = q;
@@ -74,10 +76,10 @@ int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
     const uint32_t *v = M->conn + 8 * c;
     const int nv = mx_cell_nodes[M->type[c]];
     int in = 0;
-    for (int k = 0; k < nv; k++) in += states[v[k]] == MX_NODE_INSIDE;
+    for (int k = 0; k < nv; k++) in += mx_node_inside(states[v[k]]);
     if (in == 0 || in == nv) continue;
     for (int k = 0; k < nv; k++)
-      if (states[v[k]] == MX_NODE_INSIDE) __atomic_store_n(&cand[v[k]], 1, __ATOMIC_RELAXED);
+      if (mx_node_inside(states[v[k]])) __atomic_store_n(&cand[v[k]], 1, __ATOMIC_RELAXED);
   }
   /* Average length of the element edges at each candidate, summed in fixed
    * point (integer additions: the same sums in any order, so the decisions

@@ -15,15 +15,24 @@
 #include "soa/tree.h"
 #include "soa/mesh.h"
 
-enum { MX_NODE_OUTSIDE = 0, MX_NODE_INSIDE = 1 };
+/* A node's state: outside the domain (and, after the boundary stage, on
+ * the surface), or inside; MX_NODE_ON is an inside node that
+ * mx_node_states found on the surface or within MX_NODE_ON_UNITS finest
+ * lattice spacings of it (flat parts of the input in lattice planes): the
+ * only inside nodes a face on the mesh's boundary can have (the boundary
+ * faces are looked for among the faces of outside and MX_NODE_ON nodes:
+ * mesher/output.c). Inside is bit 0 (mx_node_inside). */
+enum { MX_NODE_OUTSIDE = 0, MX_NODE_INSIDE = 1, MX_NODE_ON = 3 };
+#define MX_NODE_ON_UNITS 1e-3
+static inline int mx_node_inside(uint8_t s) { return s & 1; }
 
 /* One state per node of the transition mesh M (built from `leaves`), shared
  * by every element using the node. Nodes of a leaf that meets no triangle of
  * the domain are inside without a query (the leaf's closed box lies inside
  * the domain); every other node is located once with the surface index of
  * the domain (angle-weighted pseudonormals, or the generalized winding number
- * for a surface that is not closed). *queries receives the number of
- * located nodes. */
+ * for a surface that is not closed), the inside ones found on the surface
+ * MX_NODE_ON. *queries receives the number of located nodes. */
 int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
                    const mx_mesh *M, const mx_surface_index *S,
                    uint8_t *states, size_t *queries);

@@ -36,6 +36,10 @@ int mx_boundary_stage(const mx_tree *tr, const uint32_t *leaves,
   int st = mx_node_states(tr, leaves, M, S, states, &stats->located);
   double t1 = mx_wtime();
   mx_mem_mark("b.states");
+  size_t on = 0;
+#pragma omp parallel for schedule(static) reduction(+ : on)
+  for (size_t v = 0; v < M->nnodes; v++) on += states[v] == MX_NODE_ON;
+  stats->on_surface = on;
   stats->t_states = t1 - t;
   if (!st) st = mx_cancel_check(); /* between the steps: base/cancel.h */
   if (!st)

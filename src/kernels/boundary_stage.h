@@ -13,6 +13,7 @@
 
 typedef struct {
   size_t located;        /* nodes located with the surface index */
+  size_t on_surface;     /* of those, inside on the surface (MX_NODE_ON) */
   size_t moved_close;    /* inside nodes moved onto the surface (line 11) */
   size_t removed;        /* elements with no inside node removed */
   mx_surface_stats sp;   /* surface patterns and staircase */

@@ -104,7 +104,7 @@ static int moved_cells(const mx_mesh *M, const double *before, size_t nb, uint32
 
 /* An inside node that is no feature node: free to move anywhere. */
 static int free_inside(const uint8_t *states, const uint8_t *feature, size_t nb, uint32_t v) {
-  return v < nb && states && states[v] == MX_NODE_INSIDE && !(feature && feature[v]);
+  return v < nb && states && mx_node_inside(states[v]) && !(feature && feature[v]);
 }
 
 /* Inside node v of a spoilt element moved to where its elements' least

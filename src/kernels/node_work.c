@@ -200,7 +200,7 @@ int mx_node_work_build(const mx_mesh *M, const uint8_t *states, const uint8_t *m
 #pragma omp parallel for schedule(dynamic, 1024)
   for (size_t i = 0; i < nw; i++) {
     const uint32_t v = w->work[i];
-    w->onsurf[i] = (uint8_t)(states[v] != MX_NODE_INSIDE ||
+    w->onsurf[i] = (uint8_t)(!mx_node_inside(states[v]) ||
                              mx_on_mesh_boundary(M, w->inc, w->off[v], w->off[v + 1], v));
   }
   /* Colours, and the work nodes grouped by colour, in id order within one. */

@@ -23,7 +23,7 @@ static const mx_surface_case *case_of(const mx_mesh *M, const uint8_t *states, s
   const int nv = mx_cell_nodes[t];
   unsigned m = 0;
   for (int k = 0; k < nv; k++)
-    m |= (unsigned)(states[M->conn[8 * c + k]] == MX_NODE_INSIDE) << k;
+    m |= (unsigned)mx_node_inside(states[M->conn[8 * c + k]]) << k;
   if (m == 0) return &gone;
   if (t == MX_TET) return NULL;
   const mx_surface_case *sc = &mx_surface_cases[case_base[t] + (int)m];

@@ -146,7 +146,8 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
   if (s->full) {
     const mx_boundary_stats *b = &s->boundary;
     snprintf(bnd, sizeof bnd,
-             "\"boundary\": {\"located\": %zu, \"moved_close\": %zu, \"removed\": %zu, "
+             "\"boundary\": {\"located\": %zu, \"on_surface\": %zu, \"moved_close\": %zu, "
+             "\"removed\": %zu, "
              "\"patterned\": %zu, \"sub_elements\": %zu, \"optional\": %zu, "
              "\"centres\": %zu, \"in_place\": %zu, \"shrunk\": %zu, \"restored\": %zu, "
              "\"inverted_by_shrink\": %zu, \"repaired\": %zu, \"repair_rounds\": %d, "
@@ -155,7 +156,7 @@ static void print_mesh_json(FILE *out, const mx_summary *s, const mx_run_info *r
              "\"smoothed\": %zu, \"smoothing\": {\"rounds\": %d, \"work\": %zu, "
              "\"moved\": %zu, \"moves\": %zu, \"jens_min_before\": %.6f, "
              "\"jens_min_after\": %.6f, \"seconds\": %.6f}}, ",
-             b->located, b->moved_close, b->removed, b->sp.patterned, b->sp.kept,
+             b->located, b->on_surface, b->moved_close, b->removed, b->sp.patterned, b->sp.kept,
              b->sp.optional, b->sp.centres, b->sp.in_place, b->shrunk, b->sp.restored,
              b->inverted, s->repaired,
              s->repair_rounds, b->t_states, b->t_close, b->t_patterns, b->t_shrink,

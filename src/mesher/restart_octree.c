@@ -456,7 +456,14 @@ int mx_mesher_save_restart(const mx_mesher *m, const char *path) {
     r.mesh_nc = m->M.ncells;
     r.mesh_xyz = m->M.xyz;
     r.mesh_nkey = m->M.nkey;
-    r.mesh_state = m->states;
+    /* the file's states are 0 or 1 (MX_NODE_ON written as inside) */
+    r.mesh_state = mx_alloc(m->M.nnodes + 1);
+    if (!r.mesh_state) {
+      st = MX_ENOMEM;
+    } else {
+#pragma omp parallel for schedule(static)
+      for (size_t v = 0; v < m->M.nnodes; v++) r.mesh_state[v] = m->states[v] & 1;
+    }
     r.mesh_type = m->M.type;
     r.mesh_conn = m->M.conn;
     r.mesh_leaf = m->M.leaf;
@@ -471,7 +478,7 @@ int mx_mesher_save_restart(const mx_mesher *m, const char *path) {
   if (!st) st = binary ? mx_restart_write_binary(path, &r) : mx_restart_write_text(path, &r);
   r.mesh_xyz = NULL; /* the mesher's */
   r.mesh_nkey = NULL;
-  r.mesh_state = r.mesh_type = NULL;
+  r.mesh_type = NULL; /* (mesh_state: the copy, freed with r) */
   r.mesh_conn = r.mesh_leaf = NULL;
   mx_restart_free(&r);
   restart_gen_free(&g);
@@ -587,6 +594,7 @@ static int adopt_mesh(mx_mesher *m, mx_restart *r, const uint64_t *key) {
   M->conn = r->mesh_conn;
   M->leaf = r->mesh_leaf;
   m->states = r->mesh_state;
+  m->states_on = 0; /* 0 or 1: no MX_NODE_ON */
   r->mesh_xyz = NULL; /* the mesher's now */
   r->mesh_nkey = NULL;
   r->mesh_state = r->mesh_type = NULL;
