@@ -297,9 +297,9 @@ int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
     }
     memcpy(x, q, sizeof q);
   }
-  /* J_ENS of the elements with a node that moved (btri[] left set): the
-   * others' is that of their positions already; the coordinates gathered
-   * for those only. */
+  /* J_ENS of the elements with a node that moved (btri[] left set) and of
+   * those the surface patterns made or changed (NaN): the others' is that
+   * of their positions already; the coordinates gathered for those only. */
   size_t invalid = 0;
   double jmin = INFINITY;
 #pragma omp parallel for schedule(static) reduction(+ : invalid) reduction(min : jmin)
@@ -307,7 +307,7 @@ int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
     const int nv = mx_cell_nodes[M->type[c]];
     int out = 0;
     for (int k = 0; k < nv; k++) out |= btri[M->conn[8 * c + k]] != UINT32_MAX;
-    if (out) {
+    if (out || isnan(M->jens[c])) {
       double x[8][3];
       for (int k = 0; k < nv; k++)
         memcpy(x[k], M->xyz + 3 * (size_t)M->conn[8 * c + k], sizeof x[k]);

@@ -54,7 +54,8 @@ int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
 /* Line 13 of Algorithm 1, "shrink outside nodes": every outside node moves
  * to its closest point among the domain triangles met by the leaves whose
  * elements use it (ties: the lowest triangle id); then J_ENS is recomputed
- * for the elements that moved. Deterministic. *moved receives the number of
+ * for the elements that moved and those whose J_ENS is NaN (the surface
+ * patterns' new and changed elements). Deterministic. *moved receives the number of
  * nodes moved. */
 int mx_shrink_to_boundary(const mx_tree *tr, const uint32_t *leaves,
                           mx_mesh *M, const uint8_t *states, size_t *moved);

@@ -1,5 +1,6 @@
 #include "kernels/surface_patterns.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -128,14 +129,7 @@ static void fill_block(const fill_ctx *F, size_t b, const cell_arrays *d) {
       d->leaf[w] = M->leaf[c];
       int mv = 0;
       for (int k = 0; F->moved && k < mx_cell_nodes[M->type[c]]; k++) mv |= F->moved[v[k]];
-      if (mv) {
-        double x[8][3];
-        for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
-          memcpy(x[k], xyz + 3 * (size_t)v[k], sizeof x[k]);
-        d->jens[w] = (float)mx_jens(M->type[c], x);
-      } else {
-        d->jens[w] = M->jens[c];
-      }
+      d->jens[w] = mv ? NAN : M->jens[c]; /* (the shrink measures it) */
       w++;
       continue;
     }
@@ -170,9 +164,7 @@ static void fill_block(const fill_ctx *F, size_t b, const cell_arrays *d) {
         memcpy(d->conn + 8 * w, g, sizeof g);
         d->level[w] = lev;
         d->leaf[w] = lf;
-        double x[8][3];
-        for (int k = 0; k < ne; k++) memcpy(x[k], xyz + 3 * (size_t)g[k], sizeof x[k]);
-        d->jens[w] = (float)mx_jens(e->type, x);
+        d->jens[w] = NAN; /* (the shrink measures it) */
         w++;
       } else {
         opt->type[o] = e->type;

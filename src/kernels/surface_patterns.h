@@ -55,8 +55,10 @@ static inline int mx_surface_diagonal(int ia, int ib, int ic, int id) {
  * nodes, element centres, are appended and *states grows with them). The
  * dropped sub-elements whose nodes all remain in the mesh go to *opt
  * (allocated here, node ids of the final mesh). moved (may be NULL): nodes
- * moved since J_ENS was computed; the elements kept as they are and using
- * one get their J_ENS recomputed. The elements are written in place from the
+ * moved since J_ENS was computed. The sub-elements, and the elements kept
+ * as they are that use a moved node, get J_ENS NaN: the shrink, which
+ * follows, measures them with its own (mx_shrink_to_boundary; M->invalid
+ * and jens_min here count them invalid until then). The elements are written in place from the
  * end where the output lies right of the input (most of the mesh: the
  * patterns add elements), the rest into new arrays copied to their place;
  * MX_PATTERNS_COPY=1 in the environment copies all of it (for the tests,
