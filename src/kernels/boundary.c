@@ -53,6 +53,14 @@ int mx_node_states(const mx_tree *tr, const uint32_t *leaves,
 
 
 enum { COUNT_BITS = 12 };
+
+/* llround(x) for 0 <= x < 2^52 without the library call: the integer part
+ * (exact), then up when the fraction (exact: x less its integer part) is at
+ * least one half. */
+static inline uint64_t round_half_up(double x) {
+  const uint64_t i = (uint64_t)x;
+  return i + (uint64_t)(x - (double)i >= 0.5);
+}
 #define ONE_EDGE ((uint64_t)1 << (64 - COUNT_BITS))
 
 int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
@@ -113,7 +121,7 @@ int mx_move_close_nodes(mx_mesh *M, uint8_t *states, const mx_surface_index *S,
         const double u = M->xyz[3 * (size_t)a + x] - M->xyz[3 * (size_t)b + x];
         d2 += u * u;
       }
-      const uint64_t l = (uint64_t)llround(sqrt(d2) / unit) + ONE_EDGE;
+      const uint64_t l = round_half_up(sqrt(d2) / unit) + ONE_EDGE;
       acc[ka] += in >> ka & 1u ? l : 0;
       acc[kb] += in >> kb & 1u ? l : 0;
     }
