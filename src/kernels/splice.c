@@ -120,6 +120,11 @@ int mx_leaves_touching(const mx_tree *tr, const uint32_t *pos, const uint32_t *o
  * number of threads. */
 enum { FU_CHUNKS = 32, FU_BLOCK = 1 << 14 };
 
+/* The first element of chunk t of nch over nc elements. */
+static inline size_t fu_lo(size_t nc, int nch, int t) {
+  return (size_t)(((unsigned __int128)nc * (unsigned)t) / (unsigned)nch);
+}
+
 static int first_use_ids(const uint8_t *type, const uint32_t *conn, size_t nc, size_t nn,
                          uint32_t **newid_out, size_t *nused) {
   const size_t nb = (nc + FU_BLOCK - 1) / FU_BLOCK, words = nn / 64 + 1;
@@ -134,12 +139,11 @@ static int first_use_ids(const uint8_t *type, const uint32_t *conn, size_t nc, s
     mx_free(seen); mx_free(mask); mx_free(cnt); mx_free(newid);
     return MX_ENOMEM;
   }
-#define FU_LO(t) ((size_t)(((unsigned __int128)nc * (unsigned)(t)) / (unsigned)nch))
   /* each chunk's first uses within it */
 #pragma omp parallel for schedule(static, 1)
   for (int t = 0; t < nch; t++) {
     uint64_t *mine = seen + (size_t)t * words;
-    for (size_t c = FU_LO(t); c < FU_LO(t + 1); c++) {
+    for (size_t c = fu_lo(nc, nch, t); c < fu_lo(nc, nch, t + 1); c++) {
       unsigned m = 0;
       for (int k = 0; k < mx_cell_nodes[type[c]]; k++) {
         const uint32_t v = conn[8 * c + k];
@@ -168,10 +172,10 @@ static int first_use_ids(const uint8_t *type, const uint32_t *conn, size_t nc, s
   for (size_t b = 0; b < nb; b++) {
     const size_t c1 = (b + 1) * FU_BLOCK < nc ? (b + 1) * FU_BLOCK : nc;
     int t = 0;
-    while (t + 1 < nch && FU_LO(t + 1) <= b * FU_BLOCK) t++;
+    while (t + 1 < nch && fu_lo(nc, nch, t + 1) <= b * FU_BLOCK) t++;
     uint64_t n = 0;
     for (size_t c = b * FU_BLOCK; c < c1; c++) {
-      while (t + 1 < nch && FU_LO(t + 1) <= c) t++;
+      while (t + 1 < nch && fu_lo(nc, nch, t + 1) <= c) t++;
       unsigned m = mask[c];
       if (t > 0 && m) {
         const uint64_t *before = seen + (size_t)t * words;
@@ -186,7 +190,6 @@ static int first_use_ids(const uint8_t *type, const uint32_t *conn, size_t nc, s
     }
     cnt[b] = n;
   }
-#undef FU_LO
   mx_free(seen);
   *nused = mx_scan_u64(cnt, nb);
 #pragma omp parallel for schedule(static)
