@@ -275,6 +275,14 @@ void *mx_alloc(size_t bytes) {
   return p ? p : out_of_memory(bytes);
 }
 
+void mx_advise_random(void *p, size_t bytes) {
+  enum { HUGE = 2u << 20 };
+  if (!p || bytes < 8 * (size_t)HUGE) return; /* not 2 MB aligned (mx_alloc) */
+#ifdef MADV_HUGEPAGE
+  madvise(p, (bytes + HUGE - 1) & ~(size_t)(HUGE - 1), MADV_HUGEPAGE);
+#endif
+}
+
 void *mx_alloc_aligned(size_t align, size_t bytes) {
   if (hook_fails()) return out_of_memory(bytes);
   const size_t rounded = (bytes + align - 1) / align * align;

@@ -653,6 +653,7 @@ int mx_transition_build(const mx_tree *tr, const uint32_t *leaves, size_t n,
     H.cap = cap;
     H.overflow = 0;
     H.e = mx_alloc(cap * sizeof *H.e);
+    mx_advise_random(H.e, cap * sizeof *H.e);
     if (!H.e) {
       st = MX_ENOMEM;
       break;
