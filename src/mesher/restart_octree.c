@@ -652,6 +652,90 @@ int mx_mesher_set_split_keys(mx_mesher *m, const uint64_t *key, const uint8_t *l
   return st;
 }
 
+/* The leaves of the rebuilt octree that no octant of the file overlaps
+ * (neither it, nor an ancestor, nor a descendant): the run that wrote the
+ * file had split each of them and dropped every child (an octant meeting
+ * the input only where a triangle lies in its face's plane, outside the
+ * domain: the children's boxes, a rounding apart, miss the triangle), so
+ * its leaves leave that region empty. Its own refinement reached them only
+ * through its level requests, which a re-mesh need not repeat: without
+ * them the rebuilt octree kept them as leaves, a mesh other than the
+ * file's (the L of tests/restart_lattice_test.sh at -s 5, re-meshed
+ * without -s: 11,040 leaves against 10,800, its element list refused).
+ * They are split too, round after round (a child kept is split in its
+ * turn, as that run did), until the leaves are the file's. Only for files
+ * mixoct wrote (r->by_type): the published program's leaves cover the
+ * domain by their own rules. */
+static int split_orphans(mx_mesher *m, const mx_restart *r, const uint64_t *key) {
+  const size_t n = r->no;
+  uint64_t *lo = mx_alloc((n + 1) * sizeof *lo);
+  uint32_t *perm = mx_alloc((n + 1) * sizeof *perm);
+  uint64_t *xkey = NULL;
+  uint8_t *xlev = NULL;
+  size_t nx = 0, cap = 0;
+  int st = lo && perm ? MX_OK : MX_ENOMEM;
+  if (!st) {
+    memcpy(lo, key, n * sizeof *lo);
+    for (size_t i = 0; i < n; i++) perm[i] = (uint32_t)i;
+    st = mx_sort_u64(lo, perm, n);
+  }
+  for (int round = 0; !st && round < MX_MAX_LEVEL; round++) {
+    /* the rebuilt leaves no file octant overlaps, as a child key each */
+    const size_t nx0 = nx;
+    for (size_t i = 0; !st && i < m->nleaves; i++) {
+      const uint32_t o = m->leaves[i];
+      const int l = m->B.tree.oct.level[o];
+      const uint64_t k = m->B.tree.oct.key[o], s = mx_octant_size(l);
+      const uint64_t end = k + s * s * s; /* the Morton keys of its lattice cells */
+      size_t a = 0, b = n; /* the first file octant starting at or after end */
+      while (a < b) {
+        const size_t c = a + (b - a) / 2;
+        if (lo[c] < end) a = c + 1;
+        else b = c;
+      }
+      if (a > 0) {
+        const uint64_t fs = mx_octant_size(r->oct_level[perm[a - 1]]);
+        if (lo[a - 1] + fs * fs * fs > k) continue; /* overlaps */
+      }
+      if (l + 1 >= MX_MAX_LEVEL) continue; /* (cannot be split) */
+      if (nx == cap) {
+        cap = cap ? 2 * cap : 64;
+        uint64_t *k2 = mx_realloc(xkey, cap * sizeof *k2);
+        if (k2) xkey = k2;
+        uint8_t *l2 = k2 ? mx_realloc(xlev, cap) : NULL;
+        if (l2) xlev = l2;
+        if (!k2 || !l2) {
+          st = MX_ENOMEM;
+          break;
+        }
+      }
+      xkey[nx] = k; /* its first child: the octant is its ancestor, split */
+      xlev[nx++] = (uint8_t)(l + 1);
+    }
+    if (st || nx == nx0) break;
+    /* the split set of the file's octants and these, then the octree again */
+    uint64_t *ak = mx_alloc((n + nx + 1) * sizeof *ak);
+    uint8_t *al = mx_alloc(n + nx + 1);
+    if (!ak || !al) st = MX_ENOMEM;
+    if (!st) {
+      memcpy(ak, key, n * sizeof *ak);
+      memcpy(ak + n, xkey, nx * sizeof *ak);
+      memcpy(al, r->oct_level, n);
+      memcpy(al + n, xlev, nx);
+      mx_tree_clear(m);
+      st = mx_mesher_set_split_keys(m, ak, al, n + nx);
+    }
+    mx_free(ak);
+    mx_free(al);
+    if (!st) st = mx_build_tree(m);
+  }
+  mx_free(lo);
+  mx_free(perm);
+  mx_free(xkey);
+  mx_free(xlev);
+  return st;
+}
+
 static int load_restart(mx_mesher *m, const char *path) {
   mx_restart r;
   memset(&r, 0, sizeof r);
@@ -702,6 +786,7 @@ static int load_restart(mx_mesher *m, const char *path) {
   if (!st) st = octant_keys(&r, &g, path, key);
   if (!st) st = mx_mesher_set_split_keys(m, key, r.oct_level, r.no);
   if (!st) st = mx_build_tree(m);
+  if (!st && r.by_type) st = split_orphans(m, &r, key);
   /* the file's elements -> our leaves */
   uint64_t *lkeys = NULL;
   if (!st && r.nsub) {

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+HERE=$(cd "$(dirname "$0")" && pwd) # before any cd: tests/lib.sh
+# Re-meshing from a restart file of an input with faces in lattice planes
+# (mesher/restart_octree.c, split_orphans). The L (tests/make_l_shape.py) at
+# -s 5: its run splits octants outside the L that touch its inner faces and
+# drops all their children; the restart file has no trace of them but their
+# absence. Re-meshed without -s (as the README's re-meshing commands do),
+# the octree rebuilt from the file must be the file's: before the fix it
+# kept those octants as leaves (11,040 against 10,800) and refused the
+# element list (exit 2, "the restart file's mesh cannot be made again").
+# For the text (.oct) and binary (.octb) files: an empty list gives the
+# mesh written with the file (the same mesh hash, leaves and elements), a
+# list of 31 elements gives a valid mesh (mixoct check --surface).
+MIXOCT=${1:?usage: restart_lattice_test.sh path/to/mixoct}
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+. "$HERE/lib.sh"
+PY=$(find_python json) || { echo "SKIP: no python3"; exit 77; }
+"$PY" "$HERE/make_l_shape.py" "$T/L.off" || bad "make_l_shape.py"
+field() { "$PY" -c "import json,sys; print(json.load(open(sys.argv[1])).get(sys.argv[2]))" "$@"; }
+: >"$T/empty.txt"
+seq 2000 2030 >"$T/list.txt"
+for ext in oct octb; do
+  expect_exit 0 "the L at -s 5 with a .$ext" "$MIXOCT" -i "$T/L.off" -s 5 --no-features \
+    --json -o "$T/a.vtu" --restart "$T/L.$ext"
+  tail -1 "$T/out" >"$T/a.json"
+  expect_exit 0 "check the mesh written" "$MIXOCT" check "$T/a.vtu" --json
+  tail -1 "$T/out" >"$T/ca.json"
+  expect_exit 0 "the .$ext re-meshed with an empty list, no -s" "$MIXOCT" remesh -c "$T/L.$ext" \
+    -i "$T/L.off" --no-features -l "$T/empty.txt" --json -o "$T/b.vtu"
+  tail -1 "$T/out" >"$T/b.json"
+  same "$(field "$T/b.json" leaves)" "$(field "$T/a.json" leaves)" ".$ext: the file's leaves"
+  same "$(field "$T/b.json" elements)" "$(field "$T/a.json" elements)" ".$ext: the file's elements"
+  expect_exit 0 "check the re-meshed mesh" "$MIXOCT" check "$T/b.vtu" --json
+  tail -1 "$T/out" >"$T/cb.json"
+  same "$(field "$T/cb.json" mesh_hash)" "$(field "$T/ca.json" mesh_hash)" ".$ext: the mesh written with the file"
+  expect_exit 0 "the .$ext re-meshed with 31 elements listed" "$MIXOCT" remesh -c "$T/L.$ext" \
+    -i "$T/L.off" --no-features -l "$T/list.txt" --json -o "$T/c.vtu"
+  tail -1 "$T/out" >"$T/c.json"
+  "$PY" -c "import json,sys; sys.exit(0 if json.load(open(sys.argv[1]))['refined_listed'] > 0 else 1)" \
+    "$T/c.json" && ok ".$ext: leaves split" || bad ".$ext: no leaf split ($(head -c 300 "$T/c.json"))"
+  expect_exit 0 "check it against the L" "$MIXOCT" check "$T/c.vtu" --surface "$T/L.off"
+done
+echo "$fails failure(s)"
+[ "$fails" -eq 0 ]
