@@ -336,8 +336,10 @@ int mx_mesh_splice(const mx_mesh *O, const uint8_t *ostates, size_t nold_leaves,
       if (w == UINT32_MAX) continue;
       pmap[w] = (uint32_t)v;
       shared++;
+      /* (inside or not: a restart file's states have no MX_NODE_ON, the
+       * patch's have) */
       moved += memcmp(O->xyz + 3 * v, P->xyz + 3 * (size_t)w, 3 * sizeof(double)) != 0 ||
-               ostates[v] != pstates[w];
+               (ostates[v] & 1) != (pstates[w] & 1);
     }
     stats->shared_nodes = shared;
     stats->shared_moved = moved;
