@@ -17,11 +17,15 @@
 
 /* A node's state: outside the domain (and, after the boundary stage, on
  * the surface), or inside; MX_NODE_ON is an inside node that
- * mx_node_states found on the surface or within MX_NODE_ON_UNITS finest
- * lattice spacings of it (flat parts of the input in lattice planes): the
- * only inside nodes a face on the mesh's boundary can have (the boundary
- * faces are looked for among the faces of outside and MX_NODE_ON nodes:
- * mesher/output.c). Inside is bit 0 (mx_node_inside). */
+ * mx_node_states located and found on the surface or within
+ * MX_NODE_ON_UNITS finest lattice spacings of it (flat parts of the input
+ * in lattice planes; JSON boundary.on_surface). The nodes of leaves
+ * meeting no triangle are inside without a query, so an inside node on
+ * the surface may be MX_NODE_INSIDE (a triangle in the plane of a leaf's
+ * face can fall in the rounding gap between the boxes): the boundary tags
+ * do not rely on MX_NODE_ON (mesher/output.c). Inside is bit 0
+ * (mx_node_inside): where inside matters (patterns, close nodes, the
+ * splice's check of the shared nodes), MX_NODE_ON is inside. */
 enum { MX_NODE_OUTSIDE = 0, MX_NODE_INSIDE = 1, MX_NODE_ON = 3 };
 #define MX_NODE_ON_UNITS 1e-3
 static inline int mx_node_inside(uint8_t s) { return s & 1; }

@@ -238,7 +238,6 @@ int mx_image_mesh_finish(mx_mesher *m) {
    * their 8 voxels (every face between the two runs along voxel faces, and
    * its nodes are such corners) */
   mx_free(m->states);
-  m->states_on = 0;
   m->states = mx_alloc(M->nnodes + 1);
   if (!m->states) return MX_ENOMEM;
   {

@@ -119,7 +119,6 @@ void mx_mesh_clear(mx_mesher *m) {
   mx_free(m->states);
   mx_free(m->bnd);
   m->states = m->bnd = NULL;
-  m->states_on = 0;
   if (m->rec->have_hex) mx_mesh_free(&m->rec->hex);
   m->rec->have_hex = 0;
   m->mesh_stage = -1;
@@ -611,9 +610,7 @@ static int boundary_once(mx_mesher *m) {
   const double t = mx_wtime();
   MX_CHECK(mx_mesher_stage(m, "boundary"));
   mx_boundary_stats bs;
-  m->states_on = 0;
   MX_CHECK(mx_pipeline_boundary(m, m->leaves, m->nleaves, &m->M, 1, &m->states, &bs));
-  m->states_on = 1;
   m->rec->S.boundary = bs;
   m->rec->S.full = 1;
   MX_CHECK(mx_mesh_renumber_first_use(&m->M, &m->states));

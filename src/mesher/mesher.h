@@ -226,10 +226,6 @@ struct mx_mesher {
   mx_mesh M;
   uint8_t *states;          /* per node (boundary stage), or NULL */
   uint8_t *bnd;             /* per node: 1 on the boundary */
-  /* every state is a boundary stage's of this mesher (a restart file's are
-   * 0 or 1 only): the inside nodes on the surface are MX_NODE_ON
-   * (kernels/boundary.h), which the boundary tags rely on */
-  int states_on;
   /* the contact search (mx_repair) after a local re-mesh: the last search
    * found no contact on the mesh whose elements' array was clean_conn
    * (clean_ncells elements; contacts_clean), and the splice that replaced

@@ -594,7 +594,6 @@ static int adopt_mesh(mx_mesher *m, mx_restart *r, const uint64_t *key) {
   M->conn = r->mesh_conn;
   M->leaf = r->mesh_leaf;
   m->states = r->mesh_state;
-  m->states_on = 0; /* 0 or 1: no MX_NODE_ON */
   r->mesh_xyz = NULL; /* the mesher's now */
   r->mesh_nkey = NULL;
   r->mesh_state = r->mesh_type = NULL;
