@@ -9,8 +9,11 @@ HERE=$(cd "$(dirname "$0")" && pwd) # before any cd: tests/lib.sh
 # kept those octants as leaves (11,040 against 10,800) and refused the
 # element list (exit 2, "the restart file's mesh cannot be made again").
 # For the text (.oct) and binary (.octb) files: an empty list gives the
-# mesh written with the file (the same mesh hash, leaves and elements), a
-# list of 31 elements gives a valid mesh (mixoct check --surface).
+# mesh written with the file (the same mesh hash, leaves and elements);
+# lists of 31 elements give valid meshes whose boundary faces are all
+# tagged (mixoct check --surface; elements 8000-8030 split leaves beside
+# the notch's floor whose own triangle lists missed it by rounding: 19
+# faces untagged before kernels/leaves.c's mx_leaves_meeting).
 MIXOCT=${1:?usage: restart_lattice_test.sh path/to/mixoct}
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
@@ -19,7 +22,8 @@ PY=$(find_python json) || { echo "SKIP: no python3"; exit 77; }
 "$PY" "$HERE/make_l_shape.py" "$T/L.off" || bad "make_l_shape.py"
 field() { "$PY" -c "import json,sys; print(json.load(open(sys.argv[1])).get(sys.argv[2]))" "$@"; }
 : >"$T/empty.txt"
-seq 2000 2030 >"$T/list.txt"
+seq 2000 2030 >"$T/list2000.txt"
+seq 8000 8030 >"$T/list8000.txt"
 for ext in oct octb; do
   expect_exit 0 "the L at -s 5 with a .$ext" "$MIXOCT" -i "$T/L.off" -s 5 --no-features \
     --json -o "$T/a.vtu" --restart "$T/L.$ext"
@@ -34,12 +38,17 @@ for ext in oct octb; do
   expect_exit 0 "check the re-meshed mesh" "$MIXOCT" check "$T/b.vtu" --json
   tail -1 "$T/out" >"$T/cb.json"
   same "$(field "$T/cb.json" mesh_hash)" "$(field "$T/ca.json" mesh_hash)" ".$ext: the mesh written with the file"
-  expect_exit 0 "the .$ext re-meshed with 31 elements listed" "$MIXOCT" remesh -c "$T/L.$ext" \
-    -i "$T/L.off" --no-features -l "$T/list.txt" --json -o "$T/c.vtu"
-  tail -1 "$T/out" >"$T/c.json"
-  "$PY" -c "import json,sys; sys.exit(0 if json.load(open(sys.argv[1]))['refined_listed'] > 0 else 1)" \
-    "$T/c.json" && ok ".$ext: leaves split" || bad ".$ext: no leaf split ($(head -c 300 "$T/c.json"))"
-  expect_exit 0 "check it against the L" "$MIXOCT" check "$T/c.vtu" --surface "$T/L.off"
+  for first in 2000 8000; do
+    expect_exit 0 "the .$ext re-meshed with elements $first-$((first + 30)) listed" "$MIXOCT" \
+      remesh -c "$T/L.$ext" -i "$T/L.off" --no-features -l "$T/list$first.txt" --json \
+      -o "$T/c.vtu" -o "$T/c.msh"
+    tail -1 "$T/out" >"$T/c.json"
+    "$PY" -c "import json,sys; sys.exit(0 if json.load(open(sys.argv[1]))['refined_listed'] > 0 else 1)" \
+      "$T/c.json" && ok ".$ext: leaves split" || bad ".$ext: no leaf split ($(head -c 300 "$T/c.json"))"
+    for e in vtu msh; do
+      expect_exit 0 "check its .$e against the L" "$MIXOCT" check "$T/c.$e" --surface "$T/L.off"
+    done
+  done
 done
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]

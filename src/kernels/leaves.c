@@ -3,7 +3,11 @@
 #include "base/common.h"
 #include "base/scan.h"
 
+#include <math.h>
 #include <string.h>
+
+#include "geom/intersect.h"
+#include "soa/grid.h"
 
 int mx_leaves_sorted(const mx_tree *tr, uint32_t *leaves, size_t n) {
   uint64_t *k = mx_alloc((n + 1) * sizeof *k);
@@ -136,3 +140,38 @@ oom:
   return MX_ENOMEM;
 }
 
+
+/* Triangle v (9 coordinates) lies in the plane of a face of box [lo, hi],
+ * within eps. */
+static int in_face_plane(const double *v, const double lo[3], const double hi[3], double eps) {
+  for (int a = 0; a < 3; a++)
+    if (v[a] == v[3 + a] && v[a] == v[6 + a] &&
+        (fabs(v[a] - lo[a]) <= eps || fabs(v[a] - hi[a]) <= eps))
+      return 1;
+  return 0;
+}
+
+int mx_leaves_meeting(const mx_tree *tr, const uint32_t *leaves, size_t n, uint8_t *meets) {
+  const mx_octree *T = &tr->oct;
+#pragma omp parallel for schedule(dynamic, 4096)
+  for (size_t i = 0; i < n; i++) {
+    const uint32_t o = leaves[i], p = T->parent[o];
+    int m = T->tri_cnt[o] > 0;
+    if (!m && p != MX_NONE && T->tri_cnt[p] > 0) {
+      double lo[3], hi[3], c[3], h[3];
+      mx_octant_box(&tr->grid, T->key[o], T->level[o], lo, hi);
+      const double eps = 1e-9 * (hi[0] - lo[0]);
+      for (int a = 0; a < 3; a++) {
+        c[a] = 0.5 * (lo[a] + hi[a]);
+        h[a] = 0.5 * (hi[a] - lo[a]) + eps;
+      }
+      const uint32_t *tl = T->tri_pool + T->tri_off[p];
+      for (uint32_t j = 0; j < T->tri_cnt[p] && !m; j++) {
+        const double *v = tr->tri_xyz + 9 * (size_t)tl[j];
+        m = in_face_plane(v, lo, hi, eps) && mx_tri_box_overlap(c, h, v);
+      }
+    }
+    meets[i] = (uint8_t)m;
+  }
+  return MX_OK;
+}

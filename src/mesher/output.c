@@ -16,6 +16,7 @@
 #include "mesher/pipeline.h"
 
 #include "kernels/edges_lazy.h"
+#include "kernels/leaves.h"
 #include "soa/mesh.h"
 #include "io/write_mesh.h"
 #include "io/cell_order.h"
@@ -99,7 +100,9 @@ static int make_tags(const mx_mesher *m, mx_written *T) {
   /* The boundary faces lie on the surface: their nodes are outside nodes
    * (projected) or lattice nodes on the surface, which belong to leaves
    * meeting the input (a leaf meeting none has its closed box inside the
-   * domain). Only faces with all nodes such are matched. (The inside nodes
+   * domain; mx_leaves_meeting: also those touching a triangle in one of
+   * their faces' planes that their lists missed by rounding). Only faces
+   * with all nodes such are matched. (The inside nodes
    * the node states find on the surface, MX_NODE_ON, are not enough: a
    * node of a leaf meeting no triangle is taken inside without a query,
    * and a triangle lying in the plane of a leaf's face can fall in the
@@ -107,16 +110,21 @@ static int make_tags(const mx_mesher *m, mx_written *T) {
    * re-meshed from its restart file, left 52 boundary faces untagged with
    * them against 19 with this rule; see that test.) */
   uint8_t *near = mx_calloc(M->nnodes + 1);
-  if (!near) return MX_ENOMEM;
-  const mx_octree *O = &m->B.tree.oct;
+  uint8_t *leaf_meets = near ? mx_alloc(m->nleaves + 1) : NULL;
+  if (!leaf_meets) {
+    mx_free(near);
+    return MX_ENOMEM;
+  }
+  mx_leaves_meeting(&m->B.tree, m->leaves, m->nleaves, leaf_meets);
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < M->ncells; c++) {
     const uint32_t *row = M->conn + 8 * c;
-    const int meets = O->tri_cnt[m->leaves[M->leaf[c]]] > 0;
+    const int meets = leaf_meets[M->leaf[c]];
     for (int k = 0; k < mx_cell_nodes[M->type[c]]; k++)
       if (meets || (m->states && m->states[row[k]] == MX_NODE_OUTSIDE))
         __atomic_store_n(&near[row[k]], 1, __ATOMIC_RELAXED);
   }
+  mx_free(leaf_meets);
   int st = mx_boundary_faces_extract_masked(&v, near, &T->bf);
   mx_free(near);
   MX_CHECK(st);
