@@ -8,7 +8,10 @@ HERE=$(cd "$(dirname "$0")" && pwd) # before any cd: tests/lib.sh
 # > 0, 0 when the states ignore the distance), and every boundary face of
 # its .msh and .vtu is tagged (mixoct check --surface finds the boundary on
 # its own and counts the faces without a tag as defects). The same at -s 4
-# and for the cortex at -s 5 when ../shared/data is there. (The tags once
+# and for the cortex at -s 5 when ../shared/data is there. The point field
+# "boundary" of the .vtu flags exactly the nodes of the faces used once
+# (tests/boundary_flags_check.py, meshio; with the outside nodes alone it
+# missed the L's 90 inside nodes lying on its faces). (The tags once
 # looked for boundary faces among the faces of outside and MX_NODE_ON nodes
 # only: not enough where a triangle lies in the plane of a leaf's face;
 # see make_tags.)
@@ -17,6 +20,7 @@ T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 . "$HERE/lib.sh"
 PY=$(find_python json) || { echo "SKIP: no python3"; exit 77; }
+MPY=$(find_python meshio,numpy) || MPY=
 
 "$PY" "$HERE/make_l_shape.py" "$T/L.off" || bad "make_l_shape.py"
 
@@ -28,6 +32,15 @@ mesh_check() { # name, input, level
     expect_exit 0 "$1 -s $3: check the .$e against the input" "$MIXOCT" check "$T/a.$e" \
       --surface "$2"
   done
+  if [ -n "$MPY" ]; then
+    if "$MPY" "$HERE/boundary_flags_check.py" "$T/a.vtu" >"$T/bf" 2>&1; then
+      ok "$1 -s $3: the boundary flags are the boundary faces' nodes"
+    else
+      bad "$1 -s $3: boundary flags: $(cat "$T/bf")"
+    fi
+  else
+    echo "skip: the boundary flags (no meshio)"
+  fi
 }
 
 mesh_check "the L" "$T/L.off" 5

@@ -119,6 +119,7 @@ void mx_mesh_clear(mx_mesher *m) {
   mx_free(m->states);
   mx_free(m->bnd);
   m->states = m->bnd = NULL;
+  m->rec->bnd_exact = 0;
   if (m->rec->have_hex) mx_mesh_free(&m->rec->hex);
   m->rec->have_hex = 0;
   m->mesh_stage = -1;
@@ -535,7 +536,8 @@ static int boundary_flags(mx_mesher *m) {
   mx_free(m->bnd);
   m->bnd = mx_alloc(M->nnodes + 1);
   if (!m->bnd) return MX_ENOMEM;
-  if (m->states) {
+  m->rec->bnd_exact = 0;
+  if (m->states) { /* exact from the boundary faces: mx_boundary_flags_exact */
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < M->nnodes; i++) m->bnd[i] = m->states[i] == MX_NODE_OUTSIDE;
     return MX_OK;
@@ -547,6 +549,7 @@ static int boundary_flags(mx_mesher *m) {
 #pragma omp parallel for schedule(static)
   for (size_t i = 0; i < M->nnodes; i++) m->bnd[i] = (uint8_t)f[i];
   mx_free(f);
+  m->rec->bnd_exact = !st;
   return st;
 }
 
@@ -1134,6 +1137,10 @@ int mx_mesher_mesh_arrays(const mx_mesher *m, mx_mesh_arrays *a) {
   a->jens = M->jens;
   a->leaf = M->leaf;
   a->level = M->level;
+  /* the inside nodes lying on the surface too (a first call after the mesh:
+   * its boundary faces found; the writers' tags do it on the way) */
+  const int st = mx_boundary_flags_exact(m);
+  if (st) return st;
   a->boundary = m->bnd;
   memcpy(a->by_type, M->by_type, sizeof a->by_type);
   a->jens_min = M->jens_min;

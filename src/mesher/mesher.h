@@ -139,6 +139,10 @@ typedef struct {
    * bodies), made by the first write after the mesh changed; NULL until
    * then (mesher/output.c, dropped by mx_written_forget) */
   struct mx_written *written;
+  /* m->bnd is the nodes of the faces used once (mx_boundary_flags_exact);
+   * 0: only the outside nodes, which miss the inside nodes lying on the
+   * surface (lattice nodes on flat parts of the input) */
+  int bnd_exact;
 } mx_mesher_record;
 
 
@@ -225,7 +229,7 @@ struct mx_mesher {
   int mesh_stage;
   mx_mesh M;
   uint8_t *states;          /* per node (boundary stage), or NULL */
-  uint8_t *bnd;             /* per node: 1 on the boundary */
+  uint8_t *bnd;             /* per node: 1 on the boundary (rec->bnd_exact) */
   /* the contact search (mx_repair) after a local re-mesh: the last search
    * found no contact on the mesh whose elements' array was clean_conn
    * (clean_ncells elements; contacts_clean), and the splice that replaced

@@ -117,6 +117,13 @@ int mx_mesher_has_size(const mx_mesher *m);
 /* Write the mixed mesh (src/mesher/output.c): written order, boundary tags
  * and bodies, fields. */
 int mx_write_mixed(const mx_mesher *m, const char *path, int ascii);
+/* near[v] = 1 for the nodes a boundary face of the full-stage mesh can have
+ * (src/mesher/output.c): those of leaves meeting the input and the outside
+ * ones. */
+int mx_boundary_candidates(const mx_mesher *m, uint8_t *near);
+/* m->bnd made exact (the nodes of the faces used once) when it is not:
+ * the writers' tags do it on the way (src/mesher/output.c). */
+int mx_boundary_flags_exact(const mx_mesher *m);
 /* The order the mesh files list the cells in (src/mesher/output.c). */
 int mx_written_order(const mx_mesher *m, uint32_t *order);
 /* The octree's figures (leaves, hash, octants, edges, splits) into m->rec->S. */

@@ -94,28 +94,31 @@ static mx_mesh_view mesh_view(const mx_mesh *M) {
                         .type = M->type, .conn = M->conn};
 }
 
-static int make_tags(const mx_mesher *m, mx_written *T) {
+/* A full-stage mesh of surfaces with one material, whose boundary flags
+ * can be made exact from its boundary faces (with materials and label
+ * images the outside nodes are the interfaces' too: their flags stay). */
+static int plain_full(const mx_mesher *m) {
+  return m->states && m->mesh_stage == MX_STAGE_FULL && !m->p.materials && !m->image_lattice &&
+         !m->IF.npasses;
+}
+
+int mx_boundary_candidates(const mx_mesher *m, uint8_t *near) {
   const mx_mesh *M = &m->M;
-  const mx_mesh_view v = mesh_view(M);
   /* The boundary faces lie on the surface: their nodes are outside nodes
    * (projected) or lattice nodes on the surface, which belong to leaves
    * meeting the input (a leaf meeting none has its closed box inside the
    * domain; mx_leaves_meeting: also those touching a triangle in one of
-   * their faces' planes that their lists missed by rounding). Only faces
-   * with all nodes such are matched. (The inside nodes
-   * the node states find on the surface, MX_NODE_ON, are not enough: a
-   * node of a leaf meeting no triangle is taken inside without a query,
-   * and a triangle lying in the plane of a leaf's face can fall in the
-   * rounding gap between the boxes: the L of tests/tag_faces_test.sh,
+   * their faces' planes that their lists missed by rounding). (The inside
+   * nodes the node states find on the surface, MX_NODE_ON, are not
+   * enough: a node of a leaf meeting no triangle is taken inside without a
+   * query, and a triangle lying in the plane of a leaf's face can fall in
+   * the rounding gap between the boxes: the L of tests/tag_faces_test.sh,
    * re-meshed from its restart file, left 52 boundary faces untagged with
-   * them against 19 with this rule; see that test.) */
-  uint8_t *near = mx_calloc(M->nnodes + 1);
-  uint8_t *leaf_meets = near ? mx_alloc(m->nleaves + 1) : NULL;
-  if (!leaf_meets) {
-    mx_free(near);
-    return MX_ENOMEM;
-  }
+   * them against 19 with the leaves' lists alone and none with this.) */
+  uint8_t *leaf_meets = mx_alloc(m->nleaves + 1);
+  if (!leaf_meets) return MX_ENOMEM;
   mx_leaves_meeting(&m->B.tree, m->leaves, m->nleaves, leaf_meets);
+  memset(near, 0, M->nnodes);
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < M->ncells; c++) {
     const uint32_t *row = M->conn + 8 * c;
@@ -125,9 +128,51 @@ static int make_tags(const mx_mesher *m, mx_written *T) {
         __atomic_store_n(&near[row[k]], 1, __ATOMIC_RELAXED);
   }
   mx_free(leaf_meets);
-  int st = mx_boundary_faces_extract_masked(&v, near, &T->bf);
+  return MX_OK;
+}
+
+/* The nodes of the plain full-stage mesh's boundary faces bf into m->bnd,
+ * which then is exact. */
+static void set_boundary_flags(const mx_mesher *m, const mx_boundary_faces *bf) {
+  if (!plain_full(m) || !m->bnd) return;
+  memset(m->bnd, 0, m->M.nnodes);
+  for (size_t i = 0; i < 3 * bf->ntri; i++) m->bnd[bf->tri[i]] = 1;
+  for (size_t i = 0; i < 4 * bf->nquad; i++) m->bnd[bf->quad[i]] = 1;
+  m->rec->bnd_exact = 1;
+}
+
+int mx_boundary_flags_exact(const mx_mesher *m) {
+  if (m->rec->bnd_exact || !plain_full(m) || !m->bnd) return MX_OK;
+  const mx_mesh_view v = mesh_view(&m->M);
+  mx_boundary_faces bf;
+  int st = mx_boundary_candidates(m, m->bnd); /* (the flags are made again) */
+  if (!st) st = mx_boundary_faces_extract_masked(&v, m->bnd, &bf);
+  if (st) return st;
+  set_boundary_flags(m, &bf);
+  mx_boundary_faces_free(&bf);
+  return MX_OK;
+}
+
+static int make_tags(const mx_mesher *m, mx_written *T) {
+  const mx_mesh *M = &m->M;
+  const mx_mesh_view v = mesh_view(M);
+  /* Only faces with all nodes in the mask are looked at: the nodes on the
+   * boundary when they are known (rec->bnd_exact), else those that can be
+   * (mx_boundary_candidates); the faces found make the flags exact. */
+  uint8_t *near = NULL;
+  if (!m->rec->bnd_exact) {
+    near = mx_alloc(M->nnodes + 1);
+    if (!near) return MX_ENOMEM;
+    const int st = mx_boundary_candidates(m, near);
+    if (st) {
+      mx_free(near);
+      return st;
+    }
+  }
+  int st = mx_boundary_faces_extract_masked(&v, near ? near : m->bnd, &T->bf);
   mx_free(near);
   MX_CHECK(st);
+  set_boundary_flags(m, &T->bf);
   T->cell_body = mx_alloc((M->ncells + 1) * sizeof *T->cell_body);
   T->node_tag = mx_alloc((M->nnodes + 1) * sizeof *T->node_tag);
   if (!T->cell_body || !T->node_tag) return MX_ENOMEM;
