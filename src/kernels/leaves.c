@@ -4,6 +4,7 @@
 #include "base/scan.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "geom/intersect.h"
@@ -151,27 +152,84 @@ static int in_face_plane(const double *v, const double lo[3], const double hi[3]
   return 0;
 }
 
+static int cmp_double(const void *pa, const void *pb) {
+  const double a = *(const double *)pa, b = *(const double *)pb;
+  return (a > b) - (a < b);
+}
+
+/* Whether sorted values p[0..n) hold one within eps of x. */
+static int near_value(const double *p, size_t n, double x, double eps) {
+  size_t a = 0, b = n;
+  while (a < b) { /* the first >= x - eps */
+    const size_t c = a + (b - a) / 2;
+    if (p[c] < x - eps) a = c + 1;
+    else b = c;
+  }
+  return a < n && p[a] <= x + eps;
+}
+
 int mx_leaves_meeting(const mx_tree *tr, const uint32_t *leaves, size_t n, uint8_t *meets) {
   const mx_octree *T = &tr->oct;
+  /* the axis planes holding a domain triangle, per axis, sorted (none for
+   * a curved input: then the lists alone) */
+  const size_t nt = tr->nt_domain;
+  double *plane = mx_alloc((nt + 1) * sizeof *plane);
+  if (!plane) return MX_ENOMEM;
+  size_t np[3] = {0, 0, 0};
+  double *pa[3] = {plane, plane, plane};
+  size_t total = 0;
+  for (int a = 0; a < 3; a++) {
+    pa[a] = plane + total;
+    for (size_t t = 0; t < nt; t++) {
+      const double *v = tr->tri_xyz + 9 * t;
+      /* (a triangle flat on two axes is degenerate: counted once) */
+      if (v[a] == v[3 + a] && v[a] == v[6 + a] && total < nt) pa[a][np[a]++] = v[a], total++;
+    }
+    qsort(pa[a], np[a], sizeof *pa[a], cmp_double);
+  }
 #pragma omp parallel for schedule(dynamic, 4096)
   for (size_t i = 0; i < n; i++) {
-    const uint32_t o = leaves[i], p = T->parent[o];
+    const uint32_t o = leaves[i];
     int m = T->tri_cnt[o] > 0;
-    if (!m && p != MX_NONE && T->tri_cnt[p] > 0) {
-      double lo[3], hi[3], c[3], h[3];
+    if (!m && total) {
+      double lo[3], hi[3];
       mx_octant_box(&tr->grid, T->key[o], T->level[o], lo, hi);
       const double eps = 1e-9 * (hi[0] - lo[0]);
+      /* the faces lying in such a plane: bit 2a (low) and 2a + 1 (high) */
+      unsigned touch = 0;
+      for (int a = 0; a < 3; a++) {
+        touch |= (unsigned)near_value(pa[a], np[a], lo[a], eps) << (2 * a);
+        touch |= (unsigned)near_value(pa[a], np[a], hi[a], eps) << (2 * a + 1);
+      }
+      double c[3], h[3];
       for (int a = 0; a < 3; a++) {
         c[a] = 0.5 * (lo[a] + hi[a]);
         h[a] = 0.5 * (hi[a] - lo[a]) + eps;
       }
-      const uint32_t *tl = T->tri_pool + T->tri_off[p];
-      for (uint32_t j = 0; j < T->tri_cnt[p] && !m; j++) {
-        const double *v = tr->tri_xyz + 9 * (size_t)tl[j];
-        m = in_face_plane(v, lo, hi, eps) && mx_tri_box_overlap(c, h, v);
+      /* the ancestors' lists, up to the first whose box holds each of those
+       * planes inside (its list has their triangles there: the plane does
+       * not pass along its faces); the ones between may have missed them
+       * by rounding as the leaf did */
+      for (uint32_t p = T->parent[o]; touch && !m && p != MX_NONE; p = T->parent[p]) {
+        const uint32_t *tl = T->tri_pool + T->tri_off[p];
+        for (uint32_t j = 0; j < T->tri_cnt[p] && !m; j++) {
+          if (tl[j] >= nt) continue; /* a region surface's */
+          const double *v = tr->tri_xyz + 9 * (size_t)tl[j];
+          m = in_face_plane(v, lo, hi, eps) && mx_tri_box_overlap(c, h, v);
+        }
+        double plo[3], phi[3];
+        mx_octant_box(&tr->grid, T->key[p], T->level[p], plo, phi);
+        const double peps = 1e-9 * (phi[0] - plo[0]);
+        int inside = 1;
+        for (int a = 0; a < 3; a++) {
+          if ((touch >> (2 * a) & 1) && !(plo[a] < lo[a] - peps)) inside = 0;
+          if ((touch >> (2 * a + 1) & 1) && !(phi[a] > hi[a] + peps)) inside = 0;
+        }
+        if (inside) break;
       }
     }
     meets[i] = (uint8_t)m;
   }
+  mx_free(plane);
   return MX_OK;
 }

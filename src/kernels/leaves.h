@@ -26,15 +26,16 @@ uint64_t mx_leaf_hash_finish(uint64_t sum, uint64_t n);
 int mx_octants_touch(uint64_t ka, int la, uint64_t kb, int lb);
 
 /* meets[i] = 1 when leaf leaves[i] meets a triangle of the lists: its own
- * list is not empty, or it touches a triangle of its parent's list that
- * lies in the plane of one of its faces. The lists are made with the boxes
- * in floating point (kernels/refine.c), and a triangle in a lattice plane
- * (the faces of a CAD part, aligned with the axes) can fall in the rounding
- * gap of a child's box while its parent's meets it: a leaf inside the
- * domain whose face lies on the surface then has no triangle (its nodes
- * are taken inside without a query; a boundary face of it would be
- * missed). Such triangles are tested against the leaf's box grown by
- * 1e-9 of its side. */
+ * list is not empty, or it touches a domain triangle lying in the plane of
+ * one of its faces (of its first ancestor's list that is not empty). The
+ * lists are made with the boxes in floating point (kernels/refine.c), and a
+ * triangle in a lattice plane (the flat faces of a CAD part, aligned with
+ * the axes) can fall in the rounding gap of a box while a larger box
+ * around it meets it: a leaf inside the domain whose face lies on the
+ * surface then has no triangle (its nodes are taken inside without a
+ * query; a boundary face of it would be missed). Only leaves with a face in
+ * the plane of such a triangle are looked at (none for a curved input),
+ * against their box grown by 1e-9 of its side. MX_ENOMEM or MX_OK. */
 int mx_leaves_meeting(const mx_tree *tr, const uint32_t *leaves, size_t n, uint8_t *meets);
 
 /* The leaves as hexahedra (the octree stage's output, hanging nodes and

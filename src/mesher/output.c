@@ -117,7 +117,10 @@ int mx_boundary_candidates(const mx_mesher *m, uint8_t *near) {
    * them against 19 with the leaves' lists alone and none with this.) */
   uint8_t *leaf_meets = mx_alloc(m->nleaves + 1);
   if (!leaf_meets) return MX_ENOMEM;
-  mx_leaves_meeting(&m->B.tree, m->leaves, m->nleaves, leaf_meets);
+  if (mx_leaves_meeting(&m->B.tree, m->leaves, m->nleaves, leaf_meets)) {
+    mx_free(leaf_meets);
+    return MX_ENOMEM;
+  }
   memset(near, 0, M->nnodes);
 #pragma omp parallel for schedule(static)
   for (size_t c = 0; c < M->ncells; c++) {
