@@ -32,6 +32,8 @@ mesh_check() { # name, input, level
     expect_exit 0 "$1 -s $3: check the .$e against the input" "$MIXOCT" check "$T/a.$e" \
       --surface "$2"
   done
+  expect_exit 0 "$1 -s $3: the .vtu's boundary flags checked" "$MIXOCT" check "$T/a.vtu" --json
+  has "$T/out" '"boundary_flags_off":0,' "$1 -s $3: mixoct check compares the boundary flags"
   if [ -n "$MPY" ]; then
     if "$MPY" "$HERE/boundary_flags_check.py" "$T/a.vtu" >"$T/bf" 2>&1; then
       ok "$1 -s $3: the boundary flags are the boundary faces' nodes"
@@ -50,6 +52,23 @@ else
   bad "the L at -s 5: no inside node on the surface ($(head -c 300 "$T/a.json"))"
 fi
 mesh_check "the L" "$T/L.off" 4
+# one flag turned off by meshio: mixoct check names that node
+if [ -n "$MPY" ]; then
+  "$MPY" - "$T/a.vtu" "$T/flip.vtu" <<'EOS' >"$T/flip"
+import sys, meshio, numpy as np
+m = meshio.read(sys.argv[1])
+b = np.asarray(m.point_data["boundary"]).astype(np.uint8).copy()
+v = int(np.nonzero(b)[0][0])
+b[v] = 0
+m.point_data = {"boundary": b}
+m.cell_data = {}
+meshio.write(sys.argv[2], m, binary=True, compression=None)
+print(v)
+EOS
+  expect_exit 5 "a .vtu with one boundary flag off: a defect" "$MIXOCT" check "$T/flip.vtu" --json
+  has "$T/out" '"boundary_flags_off":1,' "mixoct check counts the flag off"
+  has "$T/out" "\"boundary_flags_off\":\[$(cat "$T/flip")\]" "mixoct check names its node"
+fi
 DATA=${MIXOCT_DATA:-$HERE/../../shared/data}
 [ -d "$DATA/surfaces" ] || DATA=$HERE/../../shared/data
 CORTEX="$DATA/surfaces/cortex.off"

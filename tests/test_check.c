@@ -1853,7 +1853,7 @@ static void test_program(void) {
            "surface_open_edges "
            "volume_off boundary_off_surface tolerances defective_elements "
            "defective_nodes geometric_hanging_at tagged_not_boundary "
-           "boundary_untagged tagged_faces boundary_tags boundary_node_tags "
+           "boundary_untagged boundary_flags_off tagged_faces boundary_tags boundary_node_tags "
            "features defective_faces defects'.split()); "
            "assert d['boundary_tags'] == [] and d['tagged_faces'] == 0; "
            "assert d['features'] is None; "

@@ -237,6 +237,7 @@ int mx_rd_vtu(rd *r, mx_mesh_data *out) {
   int seen = 0, pieces = 0, in_points = 0, in_cells = 0, in_pdata = 0, in_cdata = 0;
   vtu_layout lay = {0, 4, 0, MX_VTU_RAW, NULL};
   xarr pts = {0}, con = {0}, offs = {0}, typ = {0}, ntag = {0}, gidx = {0}, mat = {0};
+  xarr bfl = {0}; /* the point field boundary (its first array) */
   uint64_t npts = 0, ncells = 0;
   const char *piece_tag = NULL;
   for (;;) {
@@ -289,6 +290,8 @@ int mx_rd_vtu(rd *r, mx_mesh_data *out) {
         if (ntag.present)
           return mx_rd_fail(r, t.start, "surface_tag given twice");
         x = &ntag;
+      } else if (in_pdata && !bfl.present && mx_rd_attr_eq(&t, "Name", "boundary")) {
+        x = &bfl;
       } else if (in_cdata && mx_rd_attr_eq(&t, "Name", "material")) {
         if (mat.present) return mx_rd_fail(r, t.start, "material given twice");
         x = &mat;
@@ -358,7 +361,11 @@ int mx_rd_vtu(rd *r, mx_mesh_data *out) {
                         (unsigned long long)mat.ncomp);
     MX_CHECK(resolve(r, &mat, &lay, P.ncells, &labels, "material"));
   }
+  rawarr flags;
+  const int with_flags = bfl.present && !is_float(bfl.t) && bfl.ncomp == 1;
+  if (with_flags) MX_CHECK(resolve(r, &bfl, &lay, P.nnodes, &flags, "boundary"));
   MX_CHECK(mx_rd_assemble(r, &P, out));
+  if (with_flags) MX_CHECK(mx_rd_node_flags(&flags, out));
   if (mat.present) MX_CHECK(mx_rd_cell_tags(r, &labels, out));
   if (gidx.present) MX_CHECK(piece_ids(r, &gidx, &lay, P.nnodes));
   return with_tags ? mx_rd_node_tags(r, &tags, out) : MX_OK;

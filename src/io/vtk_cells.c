@@ -310,6 +310,18 @@ int mx_rd_node_tags(rd *r, const rawarr *a, mx_mesh_data *out) {
   return MX_OK;
 }
 
+int mx_rd_node_flags(const rawarr *a, mx_mesh_data *out) {
+  const size_t n = out->nnodes;
+  for (size_t i = 0; i < n; i++) {
+    const int64_t v = raw_int(a, i);
+    if (v != 0 && v != 1) return MX_OK;
+  }
+  out->node_bnd = mx_alloc(n + 1);
+  if (!out->node_bnd) return MX_ENOMEM;
+  for (size_t i = 0; i < n; i++) out->node_bnd[i] = (uint8_t)raw_int(a, i);
+  return MX_OK;
+}
+
 /* The cell field material from its raw values (one per cell). */
 int mx_rd_cell_tags(rd *r, const rawarr *a, mx_mesh_data *out) {
   const size_t n = out->ncells;

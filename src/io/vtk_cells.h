@@ -21,6 +21,10 @@ typedef struct {
 int mx_rd_assemble(rd *r, parts *P, mx_mesh_data *out);
 /* The point field surface_tag from its raw values (one per node). */
 int mx_rd_node_tags(rd *r, const rawarr *a, mx_mesh_data *out);
+/* The point field boundary from its raw values (one per node) into
+ * out->node_bnd when every value is 0 or 1 (another field of that name is
+ * not mixoct's: left out). */
+int mx_rd_node_flags(const rawarr *a, mx_mesh_data *out);
 /* The cell field material from its raw values (one per cell; integers, or
  * floats that are whole numbers, in the range of an int32) into cell_tag;
  * nothing when there is no cell (a planar read that made the cells faces,

@@ -7,7 +7,10 @@
  * Boundary tags (verify/check.h), when the mesh has them: a "boundary
  * tags" block (per tag: name, triangles, quadrilaterals, whether its faces
  * close up) and the two tag defects; in JSON the counters
- * "tagged_not_boundary" and "boundary_untagged" with the other defects,
+ * "tagged_not_boundary" and "boundary_untagged" with the other defects
+ * (and "boundary_flags_off": the nodes whose point field boundary, in a
+ * VTU file of one material, differs from lying on a boundary face; null
+ * without that field),
  * and after the tolerances "tagged_faces", "boundary_tags" (objects "tag",
  * "name" (null when unnamed), "triangles", "quads", "open_edges",
  * "not_boundary"), "boundary_node_tags" (objects "tag", "name", "nodes":
@@ -288,6 +291,10 @@ void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64
          r->boundary_off_surface);
   printf("\"tagged_not_boundary\":%zu,\"boundary_untagged\":%zu,",
          r->tagged_not_boundary, r->boundary_untagged);
+  if (r->has_boundary_flags)
+    printf("\"boundary_flags_off\":%zu,", r->boundary_flags_off);
+  else
+    printf("\"boundary_flags_off\":null,");
   printf("\"tolerances\":{");
   json_num("degenerate_jens", r->opt.degenerate_below, 0);
   json_num("hanging", r->opt.hang_tol, 0);
@@ -299,8 +306,8 @@ void mx_check_file_json(const mx_check_report *r, const mx_check_tags *t, uint64
   json_ids("boundary_untagged", &r->untagged_ids, 1);
   printf("},\"defective_nodes\":{");
   for (int k = 0; k < MX_CK_NODE_KINDS; k++)
-    json_ids(mx_check_node_kind_name[k], &r->node_ids[k],
-             k == MX_CK_NODE_KINDS - 1);
+    json_ids(mx_check_node_kind_name[k], &r->node_ids[k], 0);
+  json_ids("boundary_flags_off", &r->boundary_flag_ids, 1);
   printf("},\"geometric_hanging_at\":[");
   for (size_t i = 0; i < r->nshown; i++) {
     const mx_check_hang *h = &r->hang_at[i];
@@ -604,6 +611,11 @@ void mx_check_file_text(const char *mesh, const char *const *surfs, int nsurfs,
       printf("    %-24s -   (the surface is not closed: not checked)\n",
              "boundary off the surface");
     }
+  }
+  if (r->has_boundary_flags) {
+    defect_line("boundary flags off", r->boundary_flags_off,
+                "(point field boundary against the boundary faces' nodes)");
+    id_line("nodes", &r->boundary_flag_ids, r->boundary_flags_off);
   }
   if (r->has_tagged_faces) {
     defect_line("tagged not boundary", r->tagged_not_boundary,

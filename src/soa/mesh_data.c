@@ -16,6 +16,7 @@ void mx_mesh_data_free(mx_mesh_data *m) {
   mx_free(m->name_tag);
   mx_free(m->name);
   mx_free(m->node_tag);
+  mx_free(m->node_bnd);
   mx_free(m->cell_tag);
   memset(m, 0, sizeof *m);
 }

@@ -28,6 +28,9 @@ typedef struct {
   /* The point field surface_tag of a VTK or VTU file (nnodes values), or
    * NULL. */
   int32_t *node_tag;
+  /* The point field boundary of a VTU file (mixoct's: 1 on the nodes of
+   * the boundary faces), when all its values are 0 or 1; else NULL. */
+  uint8_t *node_bnd;
   /* Each cell's label when the file gives one (several materials, issue
    * 26): the physical tag of a Gmsh volume entity, the cell field
    * "material" of a VTK or VTU file, a Medit element reference; ncells

@@ -288,6 +288,12 @@ typedef struct {
   /* boundary tags */
   int has_tagged_faces, has_node_tags;
   size_t tagged_faces, tagged_not_boundary, boundary_untagged;
+  /* the point field boundary of the file (mixoct's VTU), one material: the
+   * nodes whose flag differs from lying on a boundary face (a defect), the
+   * first of them */
+  int has_boundary_flags;
+  size_t boundary_flags_off;
+  mx_check_ids boundary_flag_ids;
   size_t tagged_interface; /* tagged faces between cells of two labels */
   /* cell labels (several materials), when the file gives them */
   size_t nlabels, labels_dropped; /* beyond MX_CHECK_LABELS */
