@@ -50,5 +50,33 @@ for ext in oct octb; do
     done
   done
 done
+# A local re-mesh from the .octb (the binding, remesh_full=-1: local or
+# nothing): the file's states say inside or outside, the patch's also say
+# on the surface (MX_NODE_ON); the splice compares the shared nodes as
+# inside or not, and takes the patch (it refused it before: remesh_local 0),
+# the same mesh as a full re-mesh.
+NPY=$(find_python numpy) || NPY=
+BUILD=$(cd "$(dirname "$MIXOCT")" && pwd)
+if [ -n "$NPY" ] && [ -d "$BUILD/python/mixoct" ]; then
+  PYTHONPATH="$BUILD/python" "$NPY" - "$T/L.off" "$T/L.octb" >"$T/py" 2>&1 <<'EOS'
+import sys
+import numpy as np
+import mixoct
+meshes = {}
+for full in (-1, True):
+    m = mixoct.Mesher(remesh_full=full)
+    m.add_surface(sys.argv[1])
+    m.set_features(angle=0)
+    m.load_restart(sys.argv[2], elements=list(range(5000, 5031)))
+    a = m.arrays()
+    meshes[full] = (m.stats()["remesh_local"], np.array(a["nodes"]), np.array(a["conn"]))
+local, x1, c1 = meshes[-1]
+_, x2, c2 = meshes[True]
+print("local", local, "same", np.array_equal(x1, x2) and np.array_equal(c1, c2))
+EOS
+  has "$T/py" "local 1 same True" "a local re-mesh from the .octb, the full re-mesh's mesh"
+else
+  echo "skip: the binding (no numpy or no build/python)"
+fi
 echo "$fails failure(s)"
 [ "$fails" -eq 0 ]
