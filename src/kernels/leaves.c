@@ -173,7 +173,7 @@ int mx_leaves_meeting(const mx_tree *tr, const uint32_t *leaves, size_t n, uint8
   /* the axis planes holding a domain triangle, per axis, sorted (none for
    * a curved input: then the lists alone) */
   const size_t nt = tr->nt_domain;
-  double *plane = mx_alloc((nt + 1) * sizeof *plane);
+  double *plane = mx_alloc((3 * nt + 1) * sizeof *plane); /* (pages touched: the flat ones) */
   if (!plane) return MX_ENOMEM;
   size_t np[3] = {0, 0, 0};
   double *pa[3] = {plane, plane, plane};
@@ -182,8 +182,7 @@ int mx_leaves_meeting(const mx_tree *tr, const uint32_t *leaves, size_t n, uint8
     pa[a] = plane + total;
     for (size_t t = 0; t < nt; t++) {
       const double *v = tr->tri_xyz + 9 * t;
-      /* (a triangle flat on two axes is degenerate: counted once) */
-      if (v[a] == v[3 + a] && v[a] == v[6 + a] && total < nt) pa[a][np[a]++] = v[a], total++;
+      if (v[a] == v[3 + a] && v[a] == v[6 + a]) pa[a][np[a]++] = v[a], total++;
     }
     qsort(pa[a], np[a], sizeof *pa[a], cmp_double);
   }
