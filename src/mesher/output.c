@@ -144,27 +144,15 @@ static void set_boundary_flags(const mx_mesher *m, const mx_boundary_faces *bf) 
   m->rec->bnd_exact = 1;
 }
 
-int mx_boundary_flags_exact(const mx_mesher *m) {
-  if (m->rec->bnd_exact || !plain_full(m) || !m->bnd) return MX_OK;
+/* The boundary faces of the full-stage mesh into *bf, found among the
+ * faces whose nodes are all in a mask: the nodes on the boundary when they
+ * are known (rec->bnd_exact), else those that can be
+ * (mx_boundary_candidates); the faces found make the flags exact. */
+static int boundary_faces(const mx_mesher *m, mx_boundary_faces *bf) {
   const mx_mesh_view v = mesh_view(&m->M);
-  mx_boundary_faces bf;
-  int st = mx_boundary_candidates(m, m->bnd); /* (the flags are made again) */
-  if (!st) st = mx_boundary_faces_extract_masked(&v, m->bnd, &bf);
-  if (st) return st;
-  set_boundary_flags(m, &bf);
-  mx_boundary_faces_free(&bf);
-  return MX_OK;
-}
-
-static int make_tags(const mx_mesher *m, mx_written *T) {
-  const mx_mesh *M = &m->M;
-  const mx_mesh_view v = mesh_view(M);
-  /* Only faces with all nodes in the mask are looked at: the nodes on the
-   * boundary when they are known (rec->bnd_exact), else those that can be
-   * (mx_boundary_candidates); the faces found make the flags exact. */
   uint8_t *near = NULL;
   if (!m->rec->bnd_exact) {
-    near = mx_alloc(M->nnodes + 1);
+    near = mx_alloc(m->M.nnodes + 1);
     if (!near) return MX_ENOMEM;
     const int st = mx_boundary_candidates(m, near);
     if (st) {
@@ -172,10 +160,25 @@ static int make_tags(const mx_mesher *m, mx_written *T) {
       return st;
     }
   }
-  int st = mx_boundary_faces_extract_masked(&v, near ? near : m->bnd, &T->bf);
+  const int st = mx_boundary_faces_extract_masked(&v, near ? near : m->bnd, bf);
   mx_free(near);
   MX_CHECK(st);
-  set_boundary_flags(m, &T->bf);
+  set_boundary_flags(m, bf);
+  return MX_OK;
+}
+
+int mx_boundary_flags_exact(const mx_mesher *m) {
+  if (m->rec->bnd_exact || !plain_full(m) || !m->bnd) return MX_OK;
+  mx_boundary_faces bf;
+  MX_CHECK(boundary_faces(m, &bf));
+  mx_boundary_faces_free(&bf);
+  return MX_OK;
+}
+
+static int make_tags(const mx_mesher *m, mx_written *T) {
+  const mx_mesh *M = &m->M;
+  const mx_mesh_view v = mesh_view(M);
+  MX_CHECK(boundary_faces(m, &T->bf));
   T->cell_body = mx_alloc((M->ncells + 1) * sizeof *T->cell_body);
   T->node_tag = mx_alloc((M->nnodes + 1) * sizeof *T->node_tag);
   if (!T->cell_body || !T->node_tag) return MX_ENOMEM;
