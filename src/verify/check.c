@@ -272,16 +272,7 @@ static int check_body(const mx_mesh_data *m, const mx_trisoup *surface,
   r->hanging_nodes = hang;
   MX_CHECK(mx_ck_boundary_pass(m, &w->F, flags, w->ef, fc.boundary, r));
   MX_CHECK(mx_ck_tag_pass(m, &w->F, r, tags));
-  if (m->node_bnd && !m->cell_tag) { /* (with labels it flags interfaces too) */
-    size_t off = 0;
-#pragma omp parallel for schedule(static) reduction(+ : off) if (nn > SMALL)
-    for (size_t v = 0; v < nn; v++) off += (m->node_bnd[v] != 0) != ((flags[v] & F_BND) != 0);
-    r->has_boundary_flags = 1;
-    r->boundary_flags_off = off;
-    mx_check_ids *l = &r->boundary_flag_ids;
-    for (size_t v = 0; v < nn && off && l->n < MX_CHECK_LIST; v++)
-      if ((m->node_bnd[v] != 0) != ((flags[v] & F_BND) != 0)) l->id[l->n++] = (uint32_t)v;
-  }
+  mx_ck_boundary_flags(m, flags, r);
   if (m->cell_tag) {
     w->other = mx_alloc((6 * m->ncells + 1) * sizeof *w->other);
     if (!w->other) return MX_ENOMEM;

@@ -1,5 +1,6 @@
 /* Pass 5 of the checker, the closed boundary: the faces used once (the
- * boundary faces) flag their nodes as boundary nodes; a boundary quad both
+ * boundary faces) flag their nodes as boundary nodes (against which the
+ * file's own flags, its point field boundary, are checked); a boundary quad both
  * of whose triangles along one diagonal are boundary faces too is a quad
  * against triangles; the edges of the boundary faces are sorted and
  * counted: an edge used an odd number of times leaves the boundary open
@@ -105,4 +106,23 @@ int mx_ck_boundary_pass(const mx_mesh_data *m, const faces *F,
   mx_free(bnd);
   mx_free(ek);
   return st;
+}
+
+/* A node whose flag in the file (the point field boundary) is not its
+ * being a boundary node. */
+static int flag_off(const mx_mesh_data *m, const uint8_t *flags, size_t v) {
+  return (m->node_bnd[v] != 0) != ((flags[v] & F_BND) != 0);
+}
+
+void mx_ck_boundary_flags(const mx_mesh_data *m, const uint8_t *flags, mx_check_report *r) {
+  if (!m->node_bnd || m->cell_tag) return; /* (with labels it flags interfaces too) */
+  const size_t nn = m->nnodes;
+  size_t off = 0;
+#pragma omp parallel for schedule(static) reduction(+ : off) if (nn > SMALL)
+  for (size_t v = 0; v < nn; v++) off += (size_t)flag_off(m, flags, v);
+  r->has_boundary_flags = 1;
+  r->boundary_flags_off = off;
+  mx_check_ids *l = &r->boundary_flag_ids;
+  for (size_t v = 0; v < nn && off && l->n < MX_CHECK_LIST; v++)
+    if (flag_off(m, flags, v)) l->id[l->n++] = (uint32_t)v;
 }

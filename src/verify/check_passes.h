@@ -384,6 +384,10 @@ void mx_ck_edge_midpoints(const mx_mesh_data *m, const chash *H,
  * non-manifold edges of the boundary faces; flags the boundary nodes. */
 int mx_ck_boundary_pass(const mx_mesh_data *m, const faces *F, uint8_t *flags,
                         uint8_t *ef, size_t nbnd, mx_check_report *r);
+/* The file's point field boundary (m->node_bnd; one material) against the
+ * boundary nodes that pass flagged: boundary_flags_off and its first nodes
+ * (check_boundary.c). */
+void mx_ck_boundary_flags(const mx_mesh_data *m, const uint8_t *flags, mx_check_report *r);
 /* Boundary tags (check_tags.c). */
 /* check_labels.c: the labels' elements and volumes, the faces between two
  * labels (their nodes flagged F_IFACE); other (6 ncells): the slot across
